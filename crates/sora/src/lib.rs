@@ -1,0 +1,1 @@
+pub use sora_mie as mie;
