@@ -1,1 +1,25 @@
+//! # sora: physically based spectral atmospheric scattering
+//!
+//! The library behind the `sora` tool. It computes the spectral radiance and
+//! colour of a planet's sky from the physics of its air and aerosols,
+//! following Nakai & Sakai, "Atmospheric Scattering Simulation using Computer
+//! Graphics" (see `../shared/paper/NOTES.md` for its equations and misprints),
+//! and going beyond it.
+//!
+//! The pipeline, and the module of each stage:
+//! 1. [`spectrum`]: wavelengths, spectra as functions and as samples, the sun;
+//! 2. [`mie`] (the `sora-mie` crate): aerosol optics from Mie theory;
+//! 3. [`colour`]: spectral radiance -> CIE XYZ -> RGB (paper §4, eq. 6);
+//! 4. [`output`]: images on disk (PNG, OpenEXR), written atomically; the only
+//!    module that touches files.
+//!
+//! Units are SI unless a name says otherwise (`wavelength_nm`). The library
+//! has no global state and prints nothing.
+
 pub use sora_mie as mie;
+
+pub mod error;
+pub mod spectrum;
+pub mod table;
+
+pub use error::{Error, Result};

@@ -1,0 +1,18 @@
+//! Spectra, kept as three notions (as in pbrt-v4):
+//! - [`Spectrum`]: a quantity as a function of wavelength (constant or tabulated);
+//! - [`WavelengthGrid`]: the wavelengths a computation samples, with their
+//!   quadrature weights (default: the paper's 380-780 nm every 20 nm);
+//! - [`SampledSpectrum`]: the values of a quantity at those wavelengths.
+//!
+//! Plus [`SolarSpectrum`], the sun's spectral irradiance at the top of the
+//! atmosphere. Wavelengths are in nm (vacuum) throughout.
+
+mod function;
+mod sampled;
+mod solar;
+mod wavelength_grid;
+
+pub use function::{Spectrum, TabulatedSpectrum};
+pub use sampled::SampledSpectrum;
+pub use solar::SolarSpectrum;
+pub use wavelength_grid::{MAX_WAVELENGTH_NM, MIN_WAVELENGTH_NM, WavelengthGrid};

@@ -1,0 +1,216 @@
+//! The wavelengths a computation samples, and the quadrature that turns
+//! samples into integrals over wavelength.
+//!
+//! A grid is `start:stop:step` in nanometres (vacuum wavelength), inside the
+//! range of the CIE colour-matching functions, 360-830 nm. The default is the
+//! paper's grid (§4): 380 to 780 nm every 20 nm, 21 samples.
+//!
+//! Quadrature rule: the paper's, a Riemann sum with the same weight `step_nm`
+//! at every sample, so that integral f(lambda) d lambda ≈ sum_i f(lambda_i) *
+//! step. For integrands that vanish at the ends of the visible range (the
+//! colour-matching functions times any radiance) this is the trapezoidal rule
+//! in all but the two end samples, whose weights differ by step/2 times
+//! values below 2e-3 of the peak.
+
+use std::fmt;
+use std::str::FromStr;
+
+use crate::error::{Error, Result};
+
+/// Shortest wavelength a grid may sample, nm (start of the CIE tables).
+pub const MIN_WAVELENGTH_NM: f64 = 360.0;
+/// Longest wavelength a grid may sample, nm (end of the CIE tables).
+pub const MAX_WAVELENGTH_NM: f64 = 830.0;
+
+/// Evenly spaced wavelengths `start_nm, start_nm + step_nm, ..., stop_nm`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WavelengthGrid {
+    start_nm: f64,
+    step_nm: f64,
+    len: usize,
+}
+
+impl WavelengthGrid {
+    /// The grid `start_nm:stop_nm:step_nm`. `stop_nm - start_nm` must be a
+    /// whole number of steps (to 1e-6 of a step); a single wavelength is
+    /// `start == stop` (its quadrature weight is still `step_nm`).
+    pub fn new(start_nm: f64, stop_nm: f64, step_nm: f64) -> Result<WavelengthGrid> {
+        let range = format!("{MIN_WAVELENGTH_NM}..={MAX_WAVELENGTH_NM}");
+        for (name, value) in [("start_nm", start_nm), ("stop_nm", stop_nm)] {
+            if !(MIN_WAVELENGTH_NM..=MAX_WAVELENGTH_NM).contains(&value) {
+                return Err(Error::out_of_range(name, value, "nm", range));
+            }
+        }
+        if stop_nm < start_nm {
+            return Err(Error::out_of_range(
+                "stop_nm",
+                stop_nm,
+                "nm",
+                format!(">= start_nm ({start_nm})"),
+            ));
+        }
+        if !(step_nm.is_finite() && step_nm >= 0.01) {
+            return Err(Error::out_of_range("step_nm", step_nm, "nm", ">= 0.01"));
+        }
+        let steps = (stop_nm - start_nm) / step_nm;
+        if (steps - steps.round()).abs() > 1e-6 {
+            return Err(Error::out_of_range(
+                "stop_nm",
+                stop_nm,
+                "nm",
+                format!("start_nm + a whole number of steps of {step_nm} nm"),
+            ));
+        }
+        Ok(WavelengthGrid {
+            start_nm,
+            step_nm,
+            len: steps.round() as usize + 1,
+        })
+    }
+
+    /// The paper's grid: 380 to 780 nm every 20 nm (21 samples).
+    pub fn paper() -> WavelengthGrid {
+        WavelengthGrid {
+            start_nm: 380.0,
+            step_nm: 20.0,
+            len: 21,
+        }
+    }
+
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Always false: a grid has at least one wavelength.
+    pub fn is_empty(&self) -> bool {
+        false
+    }
+
+    /// First wavelength, nm.
+    pub fn start_nm(&self) -> f64 {
+        self.start_nm
+    }
+
+    /// Last wavelength, nm.
+    pub fn stop_nm(&self) -> f64 {
+        self.wavelength_nm(self.len - 1)
+    }
+
+    /// Spacing, nm.
+    pub fn step_nm(&self) -> f64 {
+        self.step_nm
+    }
+
+    /// The `index`-th wavelength, nm.
+    pub fn wavelength_nm(&self, index: usize) -> f64 {
+        self.start_nm + index as f64 * self.step_nm
+    }
+
+    /// All wavelengths in increasing order, nm.
+    pub fn wavelengths_nm(&self) -> impl ExactSizeIterator<Item = f64> + '_ {
+        (0..self.len).map(|i| self.wavelength_nm(i))
+    }
+
+    /// Quadrature weight of sample `index`, nm: the paper's rule, `step_nm`
+    /// for every sample (see the module docs).
+    pub fn quadrature_weight_nm(&self, index: usize) -> f64 {
+        debug_assert!(index < self.len);
+        self.step_nm
+    }
+}
+
+impl Default for WavelengthGrid {
+    fn default() -> WavelengthGrid {
+        WavelengthGrid::paper()
+    }
+}
+
+impl fmt::Display for WavelengthGrid {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}:{}:{}", self.start_nm, self.stop_nm(), self.step_nm)
+    }
+}
+
+impl FromStr for WavelengthGrid {
+    type Err = Error;
+
+    /// Parses `start:stop:step` in nm (e.g. `380:780:20`), or a single
+    /// wavelength `550` (weight 1 nm).
+    fn from_str(text: &str) -> Result<WavelengthGrid> {
+        let what = "wavelength grid (start_nm:stop_nm:step_nm, e.g. 380:780:20)";
+        let number = |part: &str| {
+            part.trim().parse::<f64>().map_err(|_| {
+                Error::parse(
+                    what,
+                    0,
+                    format!("'{}' in '{text}' is not a number", part.trim()),
+                )
+            })
+        };
+        let parts: Vec<&str> = text.split(':').collect();
+        match parts.as_slice() {
+            [single] => {
+                let nm = number(single)?;
+                WavelengthGrid::new(nm, nm, 1.0)
+            }
+            [start, stop, step] => {
+                WavelengthGrid::new(number(start)?, number(stop)?, number(step)?)
+            }
+            _ => Err(Error::parse(
+                what,
+                0,
+                format!("'{text}' is not of the form start:stop:step"),
+            )),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn paper_grid_has_21_samples_from_380_to_780() {
+        let grid = WavelengthGrid::paper();
+        assert_eq!(grid.len(), 21);
+        assert_eq!(grid.wavelength_nm(0), 380.0);
+        assert_eq!(grid.stop_nm(), 780.0);
+        assert_eq!(grid, "380:780:20".parse().unwrap());
+        assert_eq!(grid.to_string(), "380:780:20");
+        assert_eq!(grid.quadrature_weight_nm(20), 20.0);
+    }
+
+    #[test]
+    fn fine_grid_spans_the_cie_range() {
+        let grid: WavelengthGrid = "360:830:1".parse().unwrap();
+        assert_eq!(grid.len(), 471);
+        assert_eq!(grid.wavelengths_nm().last(), Some(830.0));
+    }
+
+    #[test]
+    fn single_wavelength_grid() {
+        let grid: WavelengthGrid = "550".parse().unwrap();
+        assert_eq!(grid.len(), 1);
+        assert_eq!(grid.wavelength_nm(0), 550.0);
+    }
+
+    #[test]
+    fn bad_grids_are_rejected_with_the_offending_value() {
+        let cases = [
+            ("300:780:20", "start_nm = 300 nm"),
+            ("380:900:20", "stop_nm = 900 nm"),
+            ("780:380:20", "stop_nm = 380 nm"),
+            ("380:780:0", "step_nm = 0 nm"),
+            ("380:780:-20", "step_nm = -20 nm"),
+            ("380:781:20", "stop_nm = 781 nm"),
+            ("380:abc:20", "'abc'"),
+            ("380:780", "start:stop:step"),
+            ("NaN:780:20", "start_nm = NaN"),
+        ];
+        for (text, expected) in cases {
+            let message = text.parse::<WavelengthGrid>().unwrap_err().to_string();
+            assert!(message.contains(expected), "{text}: {message}");
+        }
+    }
+}
