@@ -1,1 +1,40 @@
-fn main() {}
+//! `sora`: the command-line face of the sora library.
+//!
+//! A thin binary: it parses arguments (clap), turns them into validated
+//! library types (see [`arguments`]), calls the library, and prints or
+//! writes the result. Errors end the process with a one-line message on
+//! stderr and exit status 1; argument errors exit with status 2 (clap).
+
+mod arguments;
+mod commands;
+
+use clap::{Parser, Subcommand};
+
+/// Physically based spectral sky simulator: spectra, aerosol optics and colour
+/// of a planet's sky, computed from the physics of its air and aerosols.
+#[derive(Debug, Parser)]
+#[command(name = "sora", version, about, long_about = None, propagate_version = true)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    Colour(commands::colour::ColourArgs),
+    Mie(commands::mie::MieArgs),
+    Atmosphere(commands::atmosphere::AtmosphereArgs),
+}
+
+fn main() {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Colour(args) => commands::colour::run(args),
+        Command::Mie(args) => commands::mie::run(args),
+        Command::Atmosphere(args) => commands::atmosphere::run(args),
+    };
+    if let Err(error) = result {
+        eprintln!("error: {error:#}");
+        std::process::exit(1);
+    }
+}

@@ -1,0 +1,193 @@
+//! `sora mie`: Mie-theory optics of one sphere, of many (batch CSV), or of a
+//! size distribution over wavelengths.
+
+use std::io::{BufRead, BufWriter, Write};
+use std::path::PathBuf;
+
+use anyhow::{Context, bail};
+use clap::Args;
+use sora::mie::Complex64;
+use sora::mie::sphere::{MieSolution, compute_efficiencies};
+
+use crate::arguments::parse_refractive_index;
+
+/// Mie scattering by homogeneous spheres: efficiencies, asymmetry parameter,
+/// phase function.
+///
+/// Examples:
+///   sora mie --m 1.5+0.01i --x 10
+///   sora mie --m 1.5+0.01i --radius-um 0.5 --wavelength-nm 550
+///   sora mie --m 1.33 --x 5 --phase
+///   sora mie --batch spheres.csv > results.csv
+///
+/// The refractive index is relative to the medium; a positive imaginary part
+/// means absorption. The size parameter is x = 2 pi r / lambda.
+#[derive(Debug, Args)]
+#[command(verbatim_doc_comment)]
+pub struct MieArgs {
+    /// Refractive index n+ki relative to the medium, e.g. 1.5+0.01i
+    #[arg(long = "m", value_name = "N+Ki", value_parser = parse_refractive_index, allow_hyphen_values = true)]
+    refractive_index: Option<Complex64>,
+
+    /// Size parameter x = 2 pi r / lambda (dimensionless)
+    #[arg(long = "x", value_name = "X", conflicts_with_all = ["radius_um", "wavelength_nm"])]
+    size_parameter: Option<f64>,
+
+    /// Sphere radius in micrometres (with --wavelength-nm instead of --x)
+    #[arg(long, value_name = "UM", requires = "wavelength_nm")]
+    radius_um: Option<f64>,
+
+    /// Vacuum wavelength in nanometres (with --radius-um)
+    #[arg(long, value_name = "NM", requires = "radius_um")]
+    wavelength_nm: Option<f64>,
+
+    /// Print the phase function table instead: angle_deg, phase function
+    /// (normalised to 1 over 4 pi sr, unit sr^-1), S12/S11
+    #[arg(long)]
+    phase: bool,
+
+    /// Angular step of the --phase table, degrees
+    #[arg(long, value_name = "DEG", default_value_t = 1.0, requires = "phase")]
+    angle_step_deg: f64,
+
+    /// Read spheres from a CSV file with header m_re,m_im,x (one sphere per
+    /// row) and write m_re,m_im,x,qext,qsca,qabs,qback,g to stdout ("-" reads stdin)
+    #[arg(long, value_name = "FILE.csv", conflicts_with_all = ["refractive_index", "size_parameter", "radius_um", "phase"])]
+    batch: Option<PathBuf>,
+}
+
+pub fn run(args: MieArgs) -> anyhow::Result<()> {
+    if let Some(path) = &args.batch {
+        return run_batch(path);
+    }
+    let Some(m) = args.refractive_index else {
+        bail!(
+            "give the refractive index with --m (e.g. --m 1.5+0.01i), or --batch FILE.csv; see sora mie --help"
+        );
+    };
+    let x = match (args.size_parameter, args.radius_um, args.wavelength_nm) {
+        (Some(x), _, _) => x,
+        (None, Some(radius_um), Some(wavelength_nm)) => size_parameter(radius_um, wavelength_nm)?,
+        _ => bail!("give the size parameter with --x, or --radius-um and --wavelength-nm"),
+    };
+    if args.phase {
+        print_phase_table(m, x, args.angle_step_deg)
+    } else {
+        print_efficiencies(m, x)
+    }
+}
+
+/// x = 2 pi r / lambda, both lengths checked.
+fn size_parameter(radius_um: f64, wavelength_nm: f64) -> anyhow::Result<f64> {
+    if !(radius_um.is_finite() && radius_um > 0.0) {
+        bail!("--radius-um = {radius_um} um is out of range: allowed > 0 um");
+    }
+    if !(wavelength_nm.is_finite() && wavelength_nm > 0.0) {
+        bail!("--wavelength-nm = {wavelength_nm} nm is out of range: allowed > 0 nm");
+    }
+    Ok(2.0 * std::f64::consts::PI * radius_um * 1e3 / wavelength_nm)
+}
+
+fn print_efficiencies(m: Complex64, x: f64) -> anyhow::Result<()> {
+    let q = compute_efficiencies(m, x)?;
+    println!("m     = {}{:+}i", m.re, m.im);
+    println!("x     = {x}");
+    println!("qext  = {:.12e}", q.qext);
+    println!("qsca  = {:.12e}", q.qsca);
+    println!("qabs  = {:.12e}", q.qabs);
+    println!("qback = {:.12e}", q.qback);
+    println!("g     = {:.12e}", q.g);
+    let albedo = if q.qext > 0.0 { q.qsca / q.qext } else { 1.0 };
+    println!("single_scattering_albedo = {albedo:.12e}");
+    Ok(())
+}
+
+fn print_phase_table(m: Complex64, x: f64, step_deg: f64) -> anyhow::Result<()> {
+    if !(step_deg.is_finite() && step_deg > 0.0 && step_deg <= 180.0) {
+        bail!("--angle-step-deg = {step_deg} deg is out of range: allowed 0 < step <= 180 deg");
+    }
+    let solution = MieSolution::compute(m, x)?;
+    let count = (180.0 / step_deg).floor() as usize + 1;
+    let angles_deg: Vec<f64> = (0..count)
+        .map(|i| (i as f64 * step_deg).min(180.0))
+        .collect();
+    let cos_theta: Vec<f64> = angles_deg.iter().map(|a| a.to_radians().cos()).collect();
+    let (mut s11, mut s12) = (vec![0.0; count], vec![0.0; count]);
+    solution.s11_s12_table(&cos_theta, &mut s11, &mut s12);
+    // S11 / (pi x^2 Qsca) is the phase function normalised to 1 over 4 pi sr.
+    let normalisation = 1.0 / (std::f64::consts::PI * x * x * solution.efficiencies().qsca);
+    let mut out = BufWriter::new(std::io::stdout().lock());
+    writeln!(out, "angle_deg,phase_function_per_sr,s12_over_s11")?;
+    for i in 0..count {
+        let ratio = if s11[i] > 0.0 { s12[i] / s11[i] } else { 0.0 };
+        writeln!(
+            out,
+            "{},{:.12e},{:.12e}",
+            angles_deg[i],
+            s11[i] * normalisation,
+            ratio
+        )?;
+    }
+    out.flush()?;
+    Ok(())
+}
+
+/// The `--batch` form: CSV in, CSV out, rows in order; a bad row stops the
+/// run with an error naming its line (nothing is written after it).
+fn run_batch(path: &PathBuf) -> anyhow::Result<()> {
+    let reader: Box<dyn BufRead> = if path.as_os_str() == "-" {
+        Box::new(std::io::stdin().lock())
+    } else {
+        let file =
+            std::fs::File::open(path).with_context(|| format!("cannot open {}", path.display()))?;
+        Box::new(std::io::BufReader::new(file))
+    };
+    let name = path.display().to_string();
+    let mut out = BufWriter::with_capacity(1 << 16, std::io::stdout().lock());
+    let mut header_seen = false;
+    for (index, line) in reader.lines().enumerate() {
+        let line_number = index + 1;
+        let line = line.with_context(|| format!("{name}: cannot read line {line_number}"))?;
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+        if !header_seen {
+            if fields != ["m_re", "m_im", "x"] {
+                bail!("{name}, line {line_number}: the header must be m_re,m_im,x, found '{line}'");
+            }
+            header_seen = true;
+            writeln!(out, "m_re,m_im,x,qext,qsca,qabs,qback,g")?;
+            continue;
+        }
+        let [m_re, m_im, x] = fields.as_slice() else {
+            bail!(
+                "{name}, line {line_number}: expected 3 fields m_re,m_im,x, found {}: '{line}'",
+                fields.len()
+            );
+        };
+        let number = |field: &str, column: &str| {
+            field.parse::<f64>().with_context(|| {
+                format!("{name}, line {line_number}: {column} = '{field}' is not a number")
+            })
+        };
+        let (re, im, x) = (
+            number(m_re, "m_re")?,
+            number(m_im, "m_im")?,
+            number(x, "x")?,
+        );
+        let q = compute_efficiencies(Complex64::new(re, im), x)
+            .with_context(|| format!("{name}, line {line_number}"))?;
+        writeln!(
+            out,
+            "{re},{im},{x},{:.16e},{:.16e},{:.16e},{:.16e},{:.16e}",
+            q.qext, q.qsca, q.qabs, q.qback, q.g
+        )?;
+    }
+    if !header_seen {
+        bail!("{name}: empty input, expected the header m_re,m_im,x and one row per sphere");
+    }
+    out.flush()?;
+    Ok(())
+}
