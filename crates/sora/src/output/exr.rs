@@ -1,0 +1,215 @@
+//! OpenEXR output: a [`LinearImage`] written as a single-part, scan-line
+//! OpenEXR file with three linear channels, with the `exr` crate (default
+//! features off, so no threads: blocks are compressed sequentially).
+//!
+//! - Channels: `R, G, B` for [`ChannelKind::Rgb`], `X, Y, Z` for
+//!   [`ChannelKind::Xyz`] (OpenEXR stores channels sorted by name, so an RGB
+//!   file lists them as `B, G, R`; readers look them up by name).
+//! - Samples: 32-bit float ([`ExrSampleType::F32`], the default, exact) or
+//!   16-bit half float ([`ExrSampleType::F16`], rounded to nearest; a value
+//!   whose magnitude rounds beyond the half-float maximum 65504 is rejected
+//!   rather than written as infinity, and values below 2^-14 lose relative
+//!   precision as half-float subnormals).
+//! - Compression: lossless ZIP over blocks of 16 scan lines
+//!   ([`ExrCompression::Zip`], the default) or none. Both are built into
+//!   `exr` without optional features.
+//! - The `chromaticities` header attribute: for RGB, the sRGB / Rec. 709
+//!   primaries and D65 white, (0.64, 0.33), (0.30, 0.60), (0.15, 0.06),
+//!   white (0.3127, 0.3290); for XYZ, the primaries of CIE XYZ itself, red
+//!   (1, 0), green (0, 1), blue (0, 0), white (1/3, 1/3) (equal-energy
+//!   illuminant E), the convention OpenEXR uses to mark XYZ data. Generic
+//!   viewers map `R, G, B` channels to the screen; `X, Y, Z` channels are
+//!   for tools that read them by name (many show `Y` as luminance).
+//! - The `software` attribute is `sora <version>`.
+//!
+//! The file is written atomically, as [`write_file_atomically`] describes.
+
+use std::path::Path;
+
+use ::exr::math::Vec2;
+use ::exr::meta::attribute::{Chromaticities, Compression, LineOrder, Text};
+use ::exr::meta::header::LayerAttributes;
+use ::exr::prelude::{AnyChannel, AnyChannels, Blocks, Encoding, FlatSamples, Image, Layer};
+use ::exr::prelude::{SmallVec, WritableImage, f16};
+
+use super::atomic_file::write_file_atomically;
+use super::image_buffer::{ChannelKind, LinearImage};
+use crate::{Error, Result};
+
+/// The sample type of the channels in an OpenEXR file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum ExrSampleType {
+    /// 32-bit IEEE float: every value of a [`LinearImage`] is stored exactly.
+    #[default]
+    F32,
+    /// 16-bit half float: half the size, 11 significant bits (relative
+    /// rounding error at most 2^-11 for magnitudes in 2^-14..=65504).
+    F16,
+}
+
+/// How the pixel data of an OpenEXR file is compressed; both are lossless.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum ExrCompression {
+    /// Deflate (zlib) over blocks of 16 scan lines: smaller, slower.
+    #[default]
+    Zip,
+    /// Raw samples: largest, fastest, readable by anything.
+    Uncompressed,
+}
+
+/// Options for [`write_exr`]; the default is 32-bit float, ZIP compressed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct ExrOptions {
+    /// Sample type of all three channels.
+    pub sample_type: ExrSampleType,
+    /// Compression of the pixel data.
+    pub compression: ExrCompression,
+}
+
+/// The largest finite half-float value.
+const HALF_FLOAT_MAX: f32 = 65504.0;
+
+/// Writes `image` to `path` as an OpenEXR file with three linear channels
+/// named after its [`ChannelKind`], of the sample type and compression in
+/// `options`, atomically: on any failure, no partial file is left and an
+/// existing file at `path` is unchanged.
+///
+/// Fails (before creating any file) if `options` asks for half floats and a
+/// value would overflow them; the error names the pixel and channel. I/O
+/// and encoder errors name `path`.
+pub fn write_exr(path: impl AsRef<Path>, image: &LinearImage, options: ExrOptions) -> Result<()> {
+    let path = path.as_ref();
+    let names = image.channel_kind().channel_names();
+    let mut channels: SmallVec<[AnyChannel<FlatSamples>; 4]> = SmallVec::new();
+    for (channel, name) in names.into_iter().enumerate() {
+        let samples = channel_samples(image, channel, options.sample_type)?;
+        channels.push(AnyChannel::new(name, samples));
+    }
+
+    let layer_attributes = LayerAttributes {
+        software_name: Some(Text::from(concat!("sora ", env!("CARGO_PKG_VERSION")))),
+        ..LayerAttributes::default()
+    };
+    let layer = Layer::new(
+        Vec2(image.width(), image.height()),
+        layer_attributes,
+        encoding(options.compression),
+        AnyChannels::sort(channels),
+    );
+    let mut exr_image = Image::from_layer(layer);
+    exr_image.attributes.chromaticities = Some(chromaticities(image.channel_kind()));
+
+    write_file_atomically(path, |file| {
+        exr_image
+            .write()
+            .non_parallel()
+            .to_unbuffered(file)
+            .map_err(|error| Error::Io {
+                path: path.display().to_string(),
+                message: format!("cannot write OpenEXR: {error}"),
+            })
+    })
+}
+
+/// One channel of `image` as a flat, row-major sample vector of
+/// `sample_type`, rejecting values that half floats cannot hold.
+fn channel_samples(
+    image: &LinearImage,
+    channel: usize,
+    sample_type: ExrSampleType,
+) -> Result<FlatSamples> {
+    let values = image.pixels().iter().map(|pixel| pixel[channel]);
+    match sample_type {
+        ExrSampleType::F32 => Ok(FlatSamples::F32(values.collect())),
+        ExrSampleType::F16 => {
+            let mut halves = Vec::with_capacity(image.pixels().len());
+            for (index, value) in values.enumerate() {
+                let half = f16::from_f32(value);
+                // Values just above the maximum round down to it; only those
+                // that round to infinity are lost.
+                if half.is_infinite() {
+                    let (x, y) = (index % image.width(), index / image.width());
+                    let name = image.channel_kind().channel_names()[channel];
+                    return Err(Error::out_of_range(
+                        format!("half-float OpenEXR pixel ({x}, {y}) channel {name}"),
+                        f64::from(value),
+                        "1",
+                        format!(
+                            "magnitudes up to {HALF_FLOAT_MAX} (write 32-bit float samples instead)"
+                        ),
+                    ));
+                }
+                halves.push(half);
+            }
+            Ok(FlatSamples::F16(halves))
+        }
+    }
+}
+
+/// The block layout and compression for `compression`: scan lines, top to
+/// bottom, so that files stream in the order of the image rows.
+fn encoding(compression: ExrCompression) -> Encoding {
+    Encoding {
+        compression: match compression {
+            ExrCompression::Zip => Compression::ZIP16,
+            ExrCompression::Uncompressed => Compression::Uncompressed,
+        },
+        blocks: Blocks::ScanLines,
+        line_order: LineOrder::Increasing,
+    }
+}
+
+/// The primaries and white point that the three channels are relative to.
+fn chromaticities(channel_kind: ChannelKind) -> Chromaticities {
+    match channel_kind {
+        ChannelKind::Rgb => Chromaticities {
+            red: Vec2(0.64, 0.33),
+            green: Vec2(0.30, 0.60),
+            blue: Vec2(0.15, 0.06),
+            white: Vec2(0.3127, 0.3290),
+        },
+        ChannelKind::Xyz => Chromaticities {
+            red: Vec2(1.0, 0.0),
+            green: Vec2(0.0, 1.0),
+            blue: Vec2(0.0, 0.0),
+            white: Vec2(1.0 / 3.0, 1.0 / 3.0),
+        },
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn half_float_overflow_is_rejected_naming_pixel_and_channel() {
+        let image =
+            LinearImage::new(2, 1, ChannelKind::Rgb, vec![[1.0; 3], [1.0, 1.0, 70000.0]]).unwrap();
+        let error = channel_samples(&image, 2, ExrSampleType::F16).unwrap_err();
+        let message = error.to_string();
+        assert!(message.contains("pixel (1, 0) channel B"), "{message}");
+        assert!(message.contains("70000"), "{message}");
+        // The same value is fine as a 32-bit float and other channels are
+        // fine as halves.
+        assert!(channel_samples(&image, 2, ExrSampleType::F32).is_ok());
+        assert!(channel_samples(&image, 0, ExrSampleType::F16).is_ok());
+    }
+
+    #[test]
+    fn half_float_maximum_and_values_rounding_to_it_are_kept() {
+        let image = LinearImage::new(
+            3,
+            1,
+            ChannelKind::Xyz,
+            vec![[HALF_FLOAT_MAX; 3], [65519.0; 3], [-65519.0; 3]],
+        )
+        .unwrap();
+        let Ok(FlatSamples::F16(halves)) = channel_samples(&image, 1, ExrSampleType::F16) else {
+            panic!("expected half-float samples");
+        };
+        assert_eq!(
+            halves.iter().map(|h| h.to_f32()).collect::<Vec<_>>(),
+            [HALF_FLOAT_MAX, HALF_FLOAT_MAX, -HALF_FLOAT_MAX]
+        );
+    }
+}
