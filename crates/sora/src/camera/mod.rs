@@ -1,0 +1,221 @@
+//! Cameras: which direction of the sky each pixel of an image sees.
+//!
+//! Pixels are addressed (column, row) from the top-left corner, and a pixel
+//! sees the direction through its centre, (column + 0.5, row + 0.5).
+//! Directions are unit vectors in the observer's east-north-up frame (see
+//! [`crate::geometry::direction`]).
+//!
+//! - [`Camera::Fisheye`]: the whole sky in a disc, equidistant (angular)
+//!   projection: the distance from the image centre is proportional to the
+//!   zenith angle; the zenith is at the centre and the horizon on the
+//!   inscribed circle. Orientation as a sky chart seen from below: **north
+//!   at the top, east on the left, south at the bottom, west on the right**.
+//!   Pixels outside the circle see nothing (black, zero radiance).
+//! - [`Camera::Equirectangular`]: the 360 x 180 degree panorama renderers
+//!   load as an environment map. The column gives the azimuth: the left edge
+//!   is south (180), then west (270) at a quarter, **north (0) at the
+//!   centre**, east (90) at three quarters, south again at the right edge;
+//!   the row gives the elevation, +90 (zenith) at the top to -90 (nadir) at
+//!   the bottom, linearly. A 2:1 aspect ratio gives square pixels.
+//! - [`Camera::Perspective`]: a pinhole camera looking at (elevation,
+//!   azimuth), horizontal field of view in degrees, the image's up as close
+//!   to the zenith as the view direction allows (north when looking
+//!   straight up or down).
+
+use crate::error::{Error, Result};
+use crate::geometry::{Vector3, direction_from_elevation_azimuth};
+
+/// A projection from image pixels to sky directions.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Camera {
+    Fisheye,
+    Equirectangular,
+    Perspective(PerspectiveCamera),
+}
+
+/// A pinhole camera (see the module docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PerspectiveCamera {
+    forward: Vector3,
+    right: Vector3,
+    up: Vector3,
+    /// tan(horizontal field of view / 2).
+    tan_half_fov: f64,
+}
+
+impl PerspectiveCamera {
+    /// Looking toward `elevation_deg` above the horizon at `azimuth_deg`
+    /// (clockwise from north), with `horizontal_fov_deg` across the image's width.
+    pub fn new(
+        elevation_deg: f64,
+        azimuth_deg: f64,
+        horizontal_fov_deg: f64,
+    ) -> Result<PerspectiveCamera> {
+        if !(-90.0..=90.0).contains(&elevation_deg) {
+            return Err(Error::out_of_range(
+                "view elevation",
+                elevation_deg,
+                "deg",
+                "-90..=90",
+            ));
+        }
+        if !azimuth_deg.is_finite() {
+            return Err(Error::out_of_range(
+                "view azimuth",
+                azimuth_deg,
+                "deg",
+                "a finite angle",
+            ));
+        }
+        if !(horizontal_fov_deg > 0.0 && horizontal_fov_deg < 180.0) {
+            return Err(Error::out_of_range(
+                "field of view",
+                horizontal_fov_deg,
+                "deg",
+                "0 < fov < 180",
+            ));
+        }
+        let forward = direction_from_elevation_azimuth(elevation_deg, azimuth_deg);
+        let zenith = Vector3::new(0.0, 0.0, 1.0);
+        // Near the zenith or nadir the horizontal reference is the view
+        // azimuth itself, so the image's up points along it.
+        let right = if forward.cross(zenith).length() > 1e-9 {
+            forward.cross(zenith).normalized()
+        } else {
+            direction_from_elevation_azimuth(0.0, azimuth_deg + 90.0)
+        };
+        let up = right.cross(forward);
+        Ok(PerspectiveCamera {
+            forward,
+            right,
+            up,
+            tan_half_fov: (0.5 * horizontal_fov_deg).to_radians().tan(),
+        })
+    }
+}
+
+impl Camera {
+    /// The unit direction seen through the centre of pixel (column, row) of a
+    /// `width` x `height` image, or None where the camera sees nothing
+    /// (outside the fisheye's circle).
+    pub fn direction_for_pixel(
+        &self,
+        column: u32,
+        row: u32,
+        width: u32,
+        height: u32,
+    ) -> Option<Vector3> {
+        let u = (column as f64 + 0.5) / width as f64;
+        let v = (row as f64 + 0.5) / height as f64;
+        match self {
+            Camera::Fisheye => {
+                // Centred square coordinates in [-1, 1], y up, radius 1 = horizon.
+                let scale = width.min(height) as f64;
+                let sx = (2.0 * (column as f64 + 0.5) - width as f64) / scale;
+                let sy = (height as f64 - 2.0 * (row as f64 + 0.5)) / scale;
+                let radius = (sx * sx + sy * sy).sqrt();
+                if radius > 1.0 {
+                    return None;
+                }
+                let zenith_angle = radius * std::f64::consts::FRAC_PI_2;
+                let (sin_z, cos_z) = zenith_angle.sin_cos();
+                // East on the left: x_east = -sx.
+                let horizontal = if radius > 0.0 { sin_z / radius } else { 0.0 };
+                Some(Vector3::new(-sx * horizontal, sy * horizontal, cos_z))
+            }
+            Camera::Equirectangular => {
+                let azimuth_deg = (u * 360.0 + 180.0).rem_euclid(360.0);
+                let elevation_deg = 90.0 - v * 180.0;
+                Some(direction_from_elevation_azimuth(elevation_deg, azimuth_deg))
+            }
+            Camera::Perspective(camera) => {
+                let aspect = height as f64 / width as f64;
+                let sx = (2.0 * u - 1.0) * camera.tan_half_fov;
+                let sy = (1.0 - 2.0 * v) * camera.tan_half_fov * aspect;
+                Some((camera.forward + camera.right * sx + camera.up * sy).normalized())
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::elevation_azimuth_from_direction;
+
+    fn el_az(camera: &Camera, column: u32, row: u32, width: u32, height: u32) -> (f64, f64) {
+        elevation_azimuth_from_direction(
+            camera
+                .direction_for_pixel(column, row, width, height)
+                .unwrap(),
+        )
+    }
+
+    #[test]
+    fn fisheye_orientation_north_up_east_left() {
+        let c = Camera::Fisheye;
+        let (el, _) = el_az(&c, 50, 50, 101, 101);
+        assert!((el - 90.0).abs() < 1e-9, "centre is the zenith: {el}");
+        let (el, az) = el_az(&c, 50, 0, 101, 101);
+        assert!(
+            el < 2.0 && az.min(360.0 - az) < 1e-9,
+            "top is north: {el} {az}"
+        );
+        let (el, az) = el_az(&c, 0, 50, 101, 101);
+        assert!(
+            el < 2.0 && (az - 90.0).abs() < 1e-9,
+            "left is east: {el} {az}"
+        );
+        let (_, az) = el_az(&c, 100, 50, 101, 101);
+        assert!((az - 270.0).abs() < 1e-9, "right is west: {az}");
+        assert!(
+            c.direction_for_pixel(0, 0, 101, 101).is_none(),
+            "corners see nothing"
+        );
+        // Equidistant: half-way to the edge is 45 deg elevation.
+        let (el, _) = el_az(&c, 75, 50, 101, 101);
+        assert!((el - (90.0 - 90.0 * 50.0 / 101.0)).abs() < 1e-9, "{el}");
+    }
+
+    #[test]
+    fn equirectangular_layout() {
+        let c = Camera::Equirectangular;
+        let (w, h) = (3600, 1800);
+        let (el, az) = el_az(&c, 1800, 0, w, h);
+        assert!(
+            (el - 89.95).abs() < 1e-9 && (az - 0.05).abs() < 1e-9,
+            "{el} {az}"
+        );
+        let (_, az) = el_az(&c, 2700, 900, w, h);
+        assert!((az - 90.05).abs() < 1e-9, "three quarters is east: {az}");
+        let (_, az) = el_az(&c, 0, 900, w, h);
+        assert!((az - 180.05).abs() < 1e-9, "left edge is south: {az}");
+        let (el, _) = el_az(&c, 0, 1799, w, h);
+        assert!((el + 89.95).abs() < 1e-9, "bottom is the nadir: {el}");
+    }
+
+    #[test]
+    fn perspective_centre_and_edges() {
+        let c = Camera::Perspective(PerspectiveCamera::new(17.0, 347.0, 90.0).unwrap());
+        // Even size: the centre falls between pixels; use an odd size.
+        let (el, az) = el_az(&c, 100, 50, 201, 101);
+        assert!(
+            (el - 17.0).abs() < 1e-9 && (az - 347.0).abs() < 1e-9,
+            "{el} {az}"
+        );
+        // The last column's centre, at the horizon level, is atan(200/201) to the right.
+        let level = Camera::Perspective(PerspectiveCamera::new(0.0, 0.0, 90.0).unwrap());
+        let d = level.direction_for_pixel(200, 50, 201, 101).unwrap();
+        let (el, az) = elevation_azimuth_from_direction(d);
+        let expected_az = (200.0f64 / 201.0).atan().to_degrees();
+        assert!(
+            el.abs() < 1e-9 && (az - expected_az).abs() < 1e-9,
+            "{el} {az} vs {expected_az}"
+        );
+        // Looking straight up still works.
+        let up = Camera::Perspective(PerspectiveCamera::new(90.0, 0.0, 60.0).unwrap());
+        assert!(up.direction_for_pixel(0, 0, 10, 10).unwrap().z > 0.8);
+        assert!(PerspectiveCamera::new(0.0, 0.0, 180.0).is_err());
+        assert!(PerspectiveCamera::new(95.0, 0.0, 60.0).is_err());
+    }
+}

@@ -1,0 +1,157 @@
+//! Directions in the observer's local frame, as users give them.
+//!
+//! Frame: x points east, y north, z up (the local zenith), right-handed.
+//! Angles (the paper's Table 1 convention): elevation above the horizon in
+//! degrees (-90 nadir .. 90 zenith), azimuth clockwise from north as seen
+//! from above (0 north, 90 east, 180 south, 270 west).
+
+use std::ops::{Add, Mul, Neg, Sub};
+
+/// A 3-vector of f64 (positions in metres or unit directions).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Vector3 {
+    pub x: f64,
+    pub y: f64,
+    pub z: f64,
+}
+
+impl Vector3 {
+    pub const fn new(x: f64, y: f64, z: f64) -> Vector3 {
+        Vector3 { x, y, z }
+    }
+
+    pub fn dot(self, other: Vector3) -> f64 {
+        self.x * other.x + self.y * other.y + self.z * other.z
+    }
+
+    pub fn cross(self, other: Vector3) -> Vector3 {
+        Vector3::new(
+            self.y * other.z - self.z * other.y,
+            self.z * other.x - self.x * other.z,
+            self.x * other.y - self.y * other.x,
+        )
+    }
+
+    pub fn length(self) -> f64 {
+        self.dot(self).sqrt()
+    }
+
+    /// The unit vector along `self` (self must be non-zero).
+    pub fn normalized(self) -> Vector3 {
+        self * (1.0 / self.length())
+    }
+}
+
+impl Add for Vector3 {
+    type Output = Vector3;
+    fn add(self, o: Vector3) -> Vector3 {
+        Vector3::new(self.x + o.x, self.y + o.y, self.z + o.z)
+    }
+}
+
+impl Sub for Vector3 {
+    type Output = Vector3;
+    fn sub(self, o: Vector3) -> Vector3 {
+        Vector3::new(self.x - o.x, self.y - o.y, self.z - o.z)
+    }
+}
+
+impl Mul<f64> for Vector3 {
+    type Output = Vector3;
+    fn mul(self, s: f64) -> Vector3 {
+        Vector3::new(self.x * s, self.y * s, self.z * s)
+    }
+}
+
+impl Neg for Vector3 {
+    type Output = Vector3;
+    fn neg(self) -> Vector3 {
+        Vector3::new(-self.x, -self.y, -self.z)
+    }
+}
+
+/// Unit direction toward `elevation_deg` above the horizon at
+/// `azimuth_deg` clockwise from north, in the east-north-up frame.
+pub fn direction_from_elevation_azimuth(elevation_deg: f64, azimuth_deg: f64) -> Vector3 {
+    let (sin_el, cos_el) = elevation_deg.to_radians().sin_cos();
+    let (sin_az, cos_az) = azimuth_deg.to_radians().sin_cos();
+    Vector3::new(cos_el * sin_az, cos_el * cos_az, sin_el)
+}
+
+/// Elevation above the horizon and azimuth clockwise from north (0..360),
+/// both in degrees, of a unit direction in the east-north-up frame.
+pub fn elevation_azimuth_from_direction(direction: Vector3) -> (f64, f64) {
+    let elevation_deg = direction.z.clamp(-1.0, 1.0).asin().to_degrees();
+    let azimuth_deg = direction
+        .x
+        .atan2(direction.y)
+        .to_degrees()
+        .rem_euclid(360.0);
+    (elevation_deg, azimuth_deg)
+}
+
+/// Angle between two directions given as (elevation, azimuth) in degrees:
+/// the scattering angle when one is the view and the other the sun
+/// (0 = looking at the sun). Returns degrees.
+pub fn angle_between_deg(
+    elevation_a_deg: f64,
+    azimuth_a_deg: f64,
+    elevation_b_deg: f64,
+    azimuth_b_deg: f64,
+) -> f64 {
+    let a = direction_from_elevation_azimuth(elevation_a_deg, azimuth_a_deg);
+    let b = direction_from_elevation_azimuth(elevation_b_deg, azimuth_b_deg);
+    // atan2 of |a x b| and a.b keeps full precision near 0 and 180 degrees.
+    a.cross(b).length().atan2(a.dot(b)).to_degrees()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn compass_directions() {
+        let close = |a: Vector3, b: Vector3| (a - b).length() < 1e-15;
+        assert!(close(
+            direction_from_elevation_azimuth(0.0, 0.0),
+            Vector3::new(0.0, 1.0, 0.0)
+        ));
+        assert!(close(
+            direction_from_elevation_azimuth(0.0, 90.0),
+            Vector3::new(1.0, 0.0, 0.0)
+        ));
+        assert!(close(
+            direction_from_elevation_azimuth(90.0, 123.0),
+            Vector3::new(0.0, 0.0, 1.0)
+        ));
+        assert!(close(
+            direction_from_elevation_azimuth(0.0, 180.0),
+            Vector3::new(0.0, -1.0, 0.0)
+        ));
+    }
+
+    #[test]
+    fn elevation_azimuth_round_trip() {
+        for (el, az) in [
+            (17.0, 347.0),
+            (36.0, 207.0),
+            (-10.0, 90.0),
+            (0.0, 0.0),
+            (89.0, 271.5),
+        ] {
+            let (el2, az2) =
+                elevation_azimuth_from_direction(direction_from_elevation_azimuth(el, az));
+            assert!(
+                (el - el2).abs() < 1e-12 && (az - az2).abs() < 1e-10,
+                "{el} {az} -> {el2} {az2}"
+            );
+        }
+    }
+
+    #[test]
+    fn paper_table_1_scattering_angle() {
+        // Sun (36, 207), view (17, 347): 114.885824 deg in the reference radiance file.
+        let angle = angle_between_deg(17.0, 347.0, 36.0, 207.0);
+        assert!((angle - 114.885824).abs() < 1e-6, "{angle}");
+    }
+}

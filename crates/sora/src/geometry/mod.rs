@@ -1,0 +1,16 @@
+//! Geometry of a spherical planet and its atmosphere, in f64 metres.
+//!
+//! Two frames: the observer's local east-north-up frame for directions as
+//! users give them ([`direction`]), and the planet-centred frame for
+//! positions, whose z axis passes through the observer, so that a local
+//! direction is used unchanged ([`planet_sphere`]).
+
+pub mod direction;
+pub mod planet_sphere;
+
+pub use direction::{
+    Vector3, angle_between_deg, direction_from_elevation_azimuth, elevation_azimuth_from_direction,
+};
+pub use planet_sphere::{
+    distance_to_ground, distance_to_top_of_atmosphere, ray_sphere_roots, segment_in_atmosphere,
+};
