@@ -18,7 +18,10 @@
 
 pub use sora_mie as mie;
 
+pub mod camera;
 pub mod error;
+pub mod geometry;
+pub mod output;
 pub mod spectrum;
 pub mod table;
 
