@@ -62,7 +62,7 @@ fn d65_grid() -> WavelengthGrid {
 #[test]
 fn d65_with_the_two_degree_observer_is_the_cie_white_point() {
     let white = d65_white_point(&d65_grid(), Observer::Cie1931TwoDegree);
-    // CIE 015:2018 table T.3: (95.04, 100.00, 108.88).
+    // CIE 015:2018's D65 white point, 2-degree: (95.04, 100.00, 108.88).
     assert!((white.x - 95.04).abs() <= 0.05, "{white:?}");
     assert!((white.z - 108.88).abs() <= 0.05, "{white:?}");
     // Measured: (95.0430, 100, 108.8801).
@@ -80,7 +80,7 @@ fn d65_with_the_two_degree_observer_is_the_cie_white_point() {
 #[test]
 fn d65_with_the_ten_degree_observer_is_the_cie_ten_degree_white_point() {
     let white = d65_white_point(&d65_grid(), Observer::Cie1964TenDegree);
-    // CIE 015:2018 table T.3, 10-degree: (94.81, 100.00, 107.32).
+    // CIE 015:2018's D65 white point, 10-degree: (94.81, 100.00, 107.32).
     assert!((white.x - 94.81).abs() <= 0.05, "{white:?}");
     assert!((white.z - 107.32).abs() <= 0.05, "{white:?}");
 }

@@ -1,11 +1,13 @@
 //! Exposure: the factor that scales an image's XYZ (in radiance units × nm)
 //! to display units, where Y = 1 is the display's white.
 //!
-//! Radiative transfer gives absolute numbers: per unit solar irradiance a
-//! clear sky's Y is about 1.6 (see `tests/data/sky_case_a_xyz_srgb.csv`);
-//! with the real sun (~1.8 W m^-2 nm^-1) it is hundreds of times larger, and a
-//! Mars sunset far smaller. Something must choose which radiance is "white";
-//! in the paper that is its constant k (eq. 6). Two rules ([`Exposure`]):
+//! Radiative transfer gives absolute numbers, whose scale depends on the sun
+//! and the scene: per unit top-of-atmosphere irradiance (1 W m^-2 nm^-1) the
+//! clear sky of case (a) has Y ≈ 2.6 W m^-2 sr^-1 (all orders of scattering,
+//! `tests/data/sky_case_a_xyz_srgb.csv`), i.e. 1700 cd/m^2; under the real
+//! sun (≈ 1.8 W m^-2 nm^-1 in the visible) nearly twice that; a Mars sunset
+//! or a twilight sky orders of magnitude less. Something must choose which
+//! radiance is "white"; in the paper that is its constant k (eq. 6). Two rules ([`Exposure`]):
 //!
 //! - [`Exposure::Fixed`]: multiply XYZ by a given factor. For sequences
 //!   (a sunset animation) whose brightness must stay comparable frame to
@@ -29,7 +31,7 @@
 //! exposure, so the rest of the sky turns dark, and jumps when the sun
 //! enters the frame. The geometric mean weighs every pixel's brightness
 //! ratio equally; a bright aureole covering 2 % of the frame at 100 times the
-//! sky's luminance moves it by only 100^0.02 = 1.1 (a tenth of a stop).
+//! sky's luminance moves it by only 100^0.02 = 1.096 (0.13 stop).
 //! What exceeds 1 afterwards is brought into range by
 //! [`crate::colour::GamutMapping`] without changing its hue. For a brighter
 //! rendering (skies are lighter than mid-grey in most photographs), raise the

@@ -4,9 +4,10 @@
 //! white).
 //!
 //! Spectral skies produce both. Any spectrum narrower than the sRGB primaries
-//! is out of gamut: a monochromatic 700 nm light is (R, G, B) ∝ (0.031,
-//! -0.0034, -0.0002), 400 nm is ∝ (0.0057, -0.0006, 0.032) with a negative
-//! green; deep twilight blues and sunset reds come close. And a sky exposed
+//! is out of gamut: per unit of its spectral radiance and nm, a monochromatic
+//! 700 nm light is (R, G, B) = (0.0305, -0.0033, -0.0002), 400 nm is
+//! (0.0119, -0.0103, 0.0724), both with a negative green; deep twilight blues
+//! and sunset reds come close. And a sky exposed
 //! for its average is over range near the sun.
 //!
 //! Two rules ([`GamutMapping`]), applied after exposure, per pixel:

@@ -14,10 +14,11 @@
 //! times nm. For a spectral radiance L in W m^-2 sr^-1 nm^-1, XYZ are in
 //! W m^-2 sr^-1 (ȳ-weighted), and the luminance is
 //! L_v = 683 lm/W × Y in cd/m^2 ([`Xyz::luminance_cd_m2`]; 683 lm/W is
-//! K_m, the maximum luminous efficacy of the photopic observer, exact by the
-//! SI definition of the candela at 540 THz). The 683 is only exact for the
-//! 2-degree observer's ȳ = V(λ); with the 10-degree observer the same product
-//! is the CIE's 10-degree luminance analogue.
+//! K_m, the maximum luminous efficacy of photopic vision as CIE 015 uses it;
+//! the SI fixes K_cd = 683 lm/W exactly at 540 THz, ≈ 555 nm, where
+//! V(λ) ≈ 1). This is photometry proper only for the 2-degree observer,
+//! whose ȳ is V(λ); with the 10-degree observer 683 × Y10 is the CIE's
+//! 10-degree luminance analogue.
 //!
 //! [`SpectrumToXyz`] precomputes the products w_i x̄(λ_i), w_i ȳ(λ_i),
 //! w_i z̄(λ_i) once per grid, so that each conversion is three dot products.
@@ -29,7 +30,7 @@ use crate::error::{Error, Result};
 use crate::spectrum::{SampledSpectrum, WavelengthGrid};
 
 /// K_m, the maximum luminous efficacy of radiation for photopic vision, lm/W
-/// (SI brochure, definition of the candela): luminance in cd/m^2 is
+/// (CIE 015; the SI's K_cd at 540 THz): luminance in cd/m^2 is
 /// K_m × Y when Y was computed from radiance in W m^-2 sr^-1 nm^-1.
 pub const MAXIMUM_LUMINOUS_EFFICACY_LM_PER_W: f64 = 683.0;
 
