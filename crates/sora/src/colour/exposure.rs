@@ -7,7 +7,8 @@
 //! `tests/data/sky_case_a_xyz_srgb.csv`), i.e. 1700 cd/m^2; under the real
 //! sun (≈ 1.8 W m^-2 nm^-1 in the visible) nearly twice that; a Mars sunset
 //! or a twilight sky orders of magnitude less. Something must choose which
-//! radiance is "white"; in the paper that is its constant k (eq. 6). Two rules ([`Exposure`]):
+//! radiance is "white"; in the paper that is its constant k (eq. 6). Two
+//! rules ([`Exposure`]):
 //!
 //! - [`Exposure::Fixed`]: multiply XYZ by a given factor. For sequences
 //!   (a sunset animation) whose brightness must stay comparable frame to
