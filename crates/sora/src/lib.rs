@@ -9,8 +9,12 @@
 //! The pipeline, and the module of each stage:
 //! 1. [`spectrum`]: wavelengths, spectra as functions and as samples, the sun;
 //! 2. [`mie`] (the `sora-mie` crate): aerosol optics from Mie theory;
-//! 3. [`colour`]: spectral radiance -> CIE XYZ -> RGB (paper §4, eq. 6);
-//! 4. [`output`]: images on disk (PNG, OpenEXR), written atomically; the only
+//! 3. [`geometry`] and [`camera`]: the spherical planet, directions as users
+//!    give them (elevation, azimuth clockwise from north), and which
+//!    direction each pixel sees;
+//! 4. [`colour`]: spectral radiance -> CIE XYZ -> RGB (paper §4, eq. 6),
+//!    exposure and gamut mapping;
+//! 5. [`output`]: images on disk (PNG, OpenEXR), written atomically; the only
 //!    module that touches files.
 //!
 //! Units are SI unless a name says otherwise (`wavelength_nm`). The library
@@ -19,6 +23,7 @@
 pub use sora_mie as mie;
 
 pub mod camera;
+pub mod colour;
 pub mod error;
 pub mod geometry;
 pub mod output;
