@@ -86,3 +86,39 @@ mod tests {
         assert!(parse_number_list("0.5,,1", "x").unwrap_err().contains("''"));
     }
 }
+
+/// How spectra become display colours: shared by every command that shows
+/// colour (`sora colour`, and the renderer).
+#[derive(Debug, Clone, clap::Args)]
+pub struct ColourOptions {
+    /// Colour-matching functions: cie1931-2deg (the paper's) or cie1964-10deg
+    #[arg(long, value_name = "NAME", default_value = "cie1931-2deg")]
+    pub observer: sora::colour::Observer,
+
+    /// Display encoding: srgb (IEC 61966-2-1), or the paper's eq. 6,
+    /// paper-smpte-c[:k=K,gamma=G] (SMPTE-C primaries, D65, R = k*255*lin^(1/gamma))
+    #[arg(long, value_name = "NAME", default_value = "srgb")]
+    pub encoding: sora::colour::DisplayEncoding,
+
+    /// Exposure: auto (log-average luminance -> 0.18), auto:KEY, or a fixed
+    /// factor multiplying XYZ
+    #[arg(long, value_name = "auto|auto:KEY|FACTOR", default_value = "auto")]
+    pub exposure: sora::colour::Exposure,
+
+    /// Out-of-gamut and over-range colours: preserve-hue (desaturate toward
+    /// the same luminance, then scale down by the largest channel) or clip
+    /// (clamp each channel to 0..1)
+    #[arg(long, value_name = "NAME", default_value = "preserve-hue")]
+    pub gamut: sora::colour::GamutMapping,
+}
+
+impl ColourOptions {
+    /// The library's display stage for these options.
+    pub fn display_mapping(&self) -> sora::colour::DisplayMapping {
+        sora::colour::DisplayMapping {
+            exposure: self.exposure,
+            gamut_mapping: self.gamut,
+            encoding: self.encoding,
+        }
+    }
+}
