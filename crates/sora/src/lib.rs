@@ -22,6 +22,7 @@
 
 pub use sora_mie as mie;
 
+pub mod atmosphere;
 pub mod camera;
 pub mod colour;
 pub mod error;
@@ -29,5 +30,6 @@ pub mod geometry;
 pub mod output;
 pub mod spectrum;
 pub mod table;
+pub mod transport;
 
 pub use error::{Error, Result};

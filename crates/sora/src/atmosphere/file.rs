@@ -1,0 +1,1252 @@
+//! Atmosphere files: the TOML schema, and the one place where a parsed file
+//! becomes validated model types.
+//!
+//! Every quantity carries its unit in its key (`radius_m`,
+//! `scale_height_m`, `number_density_m3` for m^-3, `wavelength_nm`,
+//! `median_radius_um`); dimensionless keys have none (`ground_albedo`,
+//! `optical_depth`, `g`). Unknown keys are errors (a misspelt key must not
+//! silently fall back to a default). Errors are one line: TOML syntax and
+//! type errors give the line; value errors give the key as a path
+//! (`species[2].profile.exponential.scale_height_m`, species counted from
+//! 0), the value, its unit and the allowed range.
+//!
+//! ```toml
+//! name = "my planet"                 # required
+//! description = "one line"           # optional
+//!
+//! [planet]
+//! radius_m = 6360e3                  # 1e5 ..= 1e10
+//! atmosphere_height_m = 100e3        # top of the atmosphere above the ground, > 0
+//! ground_albedo = 0.3                # Lambertian, 0..=1 (default 0), or a table:
+//! # ground_albedo = { wavelength_nm = [380, 780], albedo = [0.1, 0.3] }
+//!
+//! [sun]
+//! spectrum = "flat"                  # "flat", "astm-e490" or "csv"
+//! irradiance_w_m2_nm = 1.0           # flat only
+//! # csv_file = "sun.csv"             # csv only: wavelength_nm,irradiance_w_m2_nm
+//! irradiance_scale = 1.0             # optional factor (1/d^2 for d in AU), default 1
+//! angular_diameter_deg = 0.53        # optional, 0 = point sun, default 0.53
+//!
+//! [[species]]                        # any number, any order
+//! name = "air"
+//! number_density_m3 = 2.546899e25    # at relative density 1 (the ground for
+//!                                    # exponential profiles and tables, the peak of a tent)
+//! profile.exponential.scale_height_m = 8000
+//! # profile.tent = { peak_altitude_m = 25e3, half_width_m = 15e3 }
+//! # profile.layers = { altitude_m = [...], relative_density = [...] }  # piecewise linear, 0 outside
+//! # profile.table = { altitude_m = [...], relative_density = [...] }   # log-linear, covers 0..=top
+//! scattering.rayleigh = { gas = "air", depolarization = true }       # gas: "air" or "co2"
+//! # scattering.rayleigh = { coefficient_per_m = 1.16e-5, reference_wavelength_nm = 550,
+//! #                         wavelength_exponent = 4.0, depolarization_ratio = 0.0 }
+//!
+//! [[species]]
+//! name = "aerosol"
+//! optical_depth = 0.1                # column extinction optical depth ...
+//! reference_wavelength_nm = 550      # ... at this wavelength
+//! profile.exponential.scale_height_m = 1200
+//! scattering.parametric = { angstrom_exponent = 1.3, single_scattering_albedo = 0.9,
+//!                           phase.henyey_greenstein.g = 0.7 }   # or phase.cornette_shanks.g
+//!
+//! [[species]]
+//! name = "dust"
+//! number_density_m3 = 2.0e6          # or optical_depth + reference_wavelength_nm
+//! profile.exponential.scale_height_m = 11000
+//! scattering.mie.refractive_index = { n = 1.5, k = 0.01 }
+//! # scattering.mie.refractive_index = { wavelength_nm = [...], n = [...], k = [...] }
+//! # scattering.mie.refractive_index = { builtin = "mars-dust-wolff2009" }
+//! scattering.mie.size_distribution.lognormal = { median_radius_um = 0.5, geometric_std_dev = 1.5,
+//!                                                min_radius_um = 0.45, max_radius_um = 0.56 }
+//! # ... lognormal = { effective_radius_um = 1.5, effective_variance = 0.3 }
+//! # ... gamma = { effective_radius_um = 1.5, effective_variance = 0.3 }
+//! scattering.mie.phase = "mie"       # or "paper-hg" (the paper's eq. 3)
+//!
+//! [[species]]
+//! name = "ozone"
+//! column_dobson_units = 300          # or number_density_m3
+//! profile.tent = { peak_altitude_m = 25e3, half_width_m = 15e3 }
+//! absorption.gas = "ozone"           # or { wavelength_nm = [...], cross_section_m2 = [...] }
+//! ```
+//!
+//! Which amount keys a species takes depends on its model: a physical
+//! Rayleigh gas needs `number_density_m3`; a parametric Rayleigh species
+//! none (its coefficient is in `scattering.rayleigh`); a Mie aerosol
+//! `number_density_m3` or `optical_depth` + `reference_wavelength_nm`; a
+//! parametric aerosol `optical_depth` + `reference_wavelength_nm`; an
+//! absorbing gas `column_dobson_units` or `number_density_m3`. Tables that
+//! must cover the wavelength grid (ground albedo, refractive index,
+//! absorption cross-section, solar spectrum) are checked against it when
+//! the optics are computed ([`super::Atmosphere::compute_optics`]).
+
+use std::fmt;
+use std::marker::PhantomData;
+
+use serde::Deserialize;
+use serde::de::{self, MapAccess, SeqAccess, Visitor};
+
+use super::aerosol::{AerosolPhase, ParametricAerosol};
+use super::mie_species::{MieAerosol, ParticleAmount};
+use super::ozone::{AbsorbingGas, AbsorptionCrossSection, BinnedCrossSection, GasAmount};
+use super::planet::Planet;
+use super::profile::{DensityProfile, ProfileTable};
+use super::rayleigh::RayleighGas;
+use super::sun::{EARTH_SUN_ANGULAR_DIAMETER_DEG, Sun};
+use super::{Atmosphere, RayleighScatterer, Species, SpeciesModel};
+use crate::error::{Error, Result};
+use crate::mie::Complex64;
+use crate::mie::distribution::{RadiusWindow, SizeDistribution};
+use crate::mie::paper_phase::AerosolPhaseMode;
+use crate::mie::refractive_index::{RefractiveIndexModel, TabulatedRefractiveIndex};
+use crate::spectrum::{SolarSpectrum, Spectrum, TabulatedSpectrum};
+
+const MARS_DUST_WOLFF2009_CSV: &str =
+    include_str!("../data/mars_dust_refractive_index_wolff2009.csv");
+
+/// Names of the built-in refractive-index tables (`refractive_index.builtin`).
+pub const BUILTIN_REFRACTIVE_INDICES: [&str; 1] = ["mars-dust-wolff2009"];
+
+/// The built-in refractive index table `name`, if there is one.
+pub fn builtin_refractive_index(name: &str) -> Option<TabulatedRefractiveIndex> {
+    match name {
+        "mars-dust-wolff2009" => Some(
+            TabulatedRefractiveIndex::parse_csv(MARS_DUST_WOLFF2009_CSV)
+                .expect("the embedded Mars dust table is valid"),
+        ),
+        _ => None,
+    }
+}
+
+// ---------------------------------------------------------------------------
+// The schema: what serde reads. Every struct rejects unknown keys.
+// ---------------------------------------------------------------------------
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct AtmosphereFile {
+    name: String,
+    description: Option<String>,
+    planet: PlanetFile,
+    sun: SunFile,
+    #[serde(default)]
+    species: Vec<SpeciesFile>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PlanetFile {
+    radius_m: f64,
+    atmosphere_height_m: f64,
+    ground_albedo: Option<NumberOr<AlbedoTableFile>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct AlbedoTableFile {
+    wavelength_nm: Vec<f64>,
+    albedo: Vec<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SunFile {
+    spectrum: String,
+    irradiance_w_m2_nm: Option<f64>,
+    csv_file: Option<String>,
+    irradiance_scale: Option<f64>,
+    angular_diameter_deg: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SpeciesFile {
+    name: String,
+    number_density_m3: Option<f64>,
+    optical_depth: Option<f64>,
+    reference_wavelength_nm: Option<f64>,
+    column_dobson_units: Option<f64>,
+    profile: ProfileFile,
+    scattering: Option<ScatteringFile>,
+    absorption: Option<AbsorptionFile>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ProfileFile {
+    exponential: Option<ExponentialFile>,
+    tent: Option<TentFile>,
+    layers: Option<ProfileTableFile>,
+    table: Option<ProfileTableFile>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ExponentialFile {
+    scale_height_m: f64,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TentFile {
+    peak_altitude_m: f64,
+    half_width_m: f64,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ProfileTableFile {
+    altitude_m: Vec<f64>,
+    relative_density: Vec<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ScatteringFile {
+    rayleigh: Option<RayleighFile>,
+    mie: Option<MieFile>,
+    parametric: Option<ParametricFile>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RayleighFile {
+    gas: Option<String>,
+    depolarization: Option<bool>,
+    coefficient_per_m: Option<f64>,
+    reference_wavelength_nm: Option<f64>,
+    wavelength_exponent: Option<f64>,
+    depolarization_ratio: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ParametricFile {
+    angstrom_exponent: f64,
+    single_scattering_albedo: f64,
+    phase: AerosolPhaseFile,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct AerosolPhaseFile {
+    henyey_greenstein: Option<AsymmetryFile>,
+    cornette_shanks: Option<AsymmetryFile>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct AsymmetryFile {
+    g: f64,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MieFile {
+    refractive_index: RefractiveIndexFile,
+    size_distribution: SizeDistributionFile,
+    phase: Option<String>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RefractiveIndexFile {
+    builtin: Option<String>,
+    wavelength_nm: Option<Vec<f64>>,
+    n: Option<NumberOr<Vec<f64>>>,
+    k: Option<NumberOr<Vec<f64>>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SizeDistributionFile {
+    lognormal: Option<LognormalFile>,
+    gamma: Option<GammaFile>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LognormalFile {
+    median_radius_um: Option<f64>,
+    geometric_std_dev: Option<f64>,
+    effective_radius_um: Option<f64>,
+    effective_variance: Option<f64>,
+    min_radius_um: Option<f64>,
+    max_radius_um: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct GammaFile {
+    effective_radius_um: f64,
+    effective_variance: f64,
+    min_radius_um: Option<f64>,
+    max_radius_um: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct AbsorptionFile {
+    gas: Option<String>,
+    wavelength_nm: Option<Vec<f64>>,
+    cross_section_m2: Option<Vec<f64>>,
+}
+
+/// A key that holds either a number or something else (an array, a table).
+#[derive(Debug)]
+enum NumberOr<T> {
+    Number(f64),
+    Other(T),
+}
+
+impl<'de, T: Deserialize<'de>> Deserialize<'de> for NumberOr<T> {
+    fn deserialize<D: de::Deserializer<'de>>(
+        deserializer: D,
+    ) -> std::result::Result<Self, D::Error> {
+        struct NumberOrVisitor<T>(PhantomData<T>);
+        impl<'de, T: Deserialize<'de>> Visitor<'de> for NumberOrVisitor<T> {
+            type Value = NumberOr<T>;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a number, or an array or table of numbers")
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> std::result::Result<Self::Value, E> {
+                Ok(NumberOr::Number(v as f64))
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> std::result::Result<Self::Value, E> {
+                Ok(NumberOr::Number(v as f64))
+            }
+            fn visit_f64<E: de::Error>(self, v: f64) -> std::result::Result<Self::Value, E> {
+                Ok(NumberOr::Number(v))
+            }
+            fn visit_seq<A: SeqAccess<'de>>(
+                self,
+                seq: A,
+            ) -> std::result::Result<Self::Value, A::Error> {
+                T::deserialize(de::value::SeqAccessDeserializer::new(seq)).map(NumberOr::Other)
+            }
+            fn visit_map<A: MapAccess<'de>>(
+                self,
+                map: A,
+            ) -> std::result::Result<Self::Value, A::Error> {
+                T::deserialize(de::value::MapAccessDeserializer::new(map)).map(NumberOr::Other)
+            }
+        }
+        deserializer.deserialize_any(NumberOrVisitor(PhantomData))
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Validation: file structs -> model types.
+// ---------------------------------------------------------------------------
+
+/// Parses `text` and validates it into an [`Atmosphere`]; `read_file`
+/// supplies the text of files the atmosphere names.
+pub(crate) fn parse_atmosphere(
+    text: &str,
+    read_file: &mut dyn FnMut(&str) -> std::result::Result<String, String>,
+) -> Result<Atmosphere> {
+    let file: AtmosphereFile = toml::from_str(text).map_err(|e| syntax_error(text, &e))?;
+    if file.name.trim().is_empty() {
+        return Err(invalid("name", "must not be empty"));
+    }
+    let planet = convert_planet(file.planet)?;
+    let sun = convert_sun(file.sun, read_file)?;
+    let mut species = Vec::with_capacity(file.species.len());
+    for (index, species_file) in file.species.into_iter().enumerate() {
+        let path = format!("species[{index}]");
+        if species_file.name.trim().is_empty() {
+            return Err(invalid(&format!("{path}.name"), "must not be empty"));
+        }
+        if let Some(first) = species
+            .iter()
+            .position(|s: &Species| s.name == species_file.name)
+        {
+            return Err(invalid(
+                &format!("{path}.name"),
+                &format!(
+                    "'{}' is already the name of species[{first}]",
+                    species_file.name
+                ),
+            ));
+        }
+        species.push(convert_species(species_file, &path, &planet)?);
+    }
+    Ok(Atmosphere {
+        name: file.name,
+        description: file.description.unwrap_or_default(),
+        planet,
+        sun,
+        species,
+    })
+}
+
+/// A TOML syntax or type error as one line with its line number.
+fn syntax_error(text: &str, e: &toml::de::Error) -> Error {
+    let line = e
+        .span()
+        .map(|span| text[..span.start.min(text.len())].matches('\n').count() + 1)
+        .unwrap_or(0);
+    let message = e.message().trim().replace('\n', "; ");
+    Error::parse("atmosphere file", line, message)
+}
+
+/// A structural error at `path` (a missing or conflicting key).
+fn invalid(path: &str, message: &str) -> Error {
+    Error::parse("atmosphere file", 0, format!("{path}: {message}"))
+}
+
+/// `value` must satisfy `ok`; else an out-of-range error at `path`.
+fn check(path: &str, value: f64, unit: &'static str, allowed: &str, ok: bool) -> Result<f64> {
+    if ok && value.is_finite() {
+        Ok(value)
+    } else {
+        Err(Error::out_of_range(path, value, unit, allowed))
+    }
+}
+
+fn check_range(path: &str, value: f64, unit: &'static str, lo: f64, hi: f64) -> Result<f64> {
+    check(
+        path,
+        value,
+        unit,
+        &format!("{lo}..={hi}"),
+        (lo..=hi).contains(&value),
+    )
+}
+
+fn check_wavelength(path: &str, value: f64) -> Result<f64> {
+    check_range(path, value, "nm", 100.0, 100_000.0)
+}
+
+/// `key` is not used by this kind of species.
+fn not_used(path: &str, key: &str, present: bool, kind: &str, instead: &str) -> Result<()> {
+    if present {
+        Err(invalid(
+            &format!("{path}.{key}"),
+            &format!("is not used by {kind} ({instead})"),
+        ))
+    } else {
+        Ok(())
+    }
+}
+
+fn convert_planet(file: PlanetFile) -> Result<Planet> {
+    let albedo = match file.ground_albedo {
+        None => Spectrum::Constant(0.0),
+        Some(NumberOr::Number(a)) => Spectrum::Constant(a),
+        Some(NumberOr::Other(table)) => Spectrum::Tabulated(
+            TabulatedSpectrum::new(table.wavelength_nm, table.albedo, "planet.ground_albedo")
+                .map_err(|e| invalid("planet.ground_albedo", &strip(&e)))?,
+        ),
+    };
+    Planet::new(file.radius_m, file.atmosphere_height_m, albedo)
+}
+
+fn convert_sun(
+    file: SunFile,
+    read_file: &mut dyn FnMut(&str) -> std::result::Result<String, String>,
+) -> Result<Sun> {
+    let spectrum = match file.spectrum.as_str() {
+        "flat" => {
+            not_used(
+                "sun",
+                "csv_file",
+                file.csv_file.is_some(),
+                "a flat sun",
+                "give csv_file with spectrum = \"csv\"",
+            )?;
+            let Some(irradiance) = file.irradiance_w_m2_nm else {
+                return Err(invalid(
+                    "sun.irradiance_w_m2_nm",
+                    "is required with spectrum = \"flat\" (the irradiance at every wavelength, W m^-2 nm^-1)",
+                ));
+            };
+            check(
+                "sun.irradiance_w_m2_nm",
+                irradiance,
+                "W m^-2 nm^-1",
+                "> 0",
+                irradiance > 0.0,
+            )?;
+            SolarSpectrum::flat(irradiance)?
+        }
+        "astm-e490" => {
+            not_used(
+                "sun",
+                "irradiance_w_m2_nm",
+                file.irradiance_w_m2_nm.is_some(),
+                "the ASTM E490 spectrum",
+                "scale it with irradiance_scale",
+            )?;
+            not_used(
+                "sun",
+                "csv_file",
+                file.csv_file.is_some(),
+                "the ASTM E490 spectrum",
+                "give csv_file with spectrum = \"csv\"",
+            )?;
+            SolarSpectrum::astm_e490()
+        }
+        "csv" => {
+            not_used(
+                "sun",
+                "irradiance_w_m2_nm",
+                file.irradiance_w_m2_nm.is_some(),
+                "a CSV spectrum",
+                "scale it with irradiance_scale",
+            )?;
+            let Some(path) = file.csv_file else {
+                return Err(invalid(
+                    "sun.csv_file",
+                    "is required with spectrum = \"csv\" (a table wavelength_nm,irradiance_w_m2_nm)",
+                ));
+            };
+            let text = read_file(&path)
+                .map_err(|reason| invalid("sun.csv_file", &format!("cannot read it: {reason}")))?;
+            SolarSpectrum::parse_csv(&text, &path)?
+        }
+        other => {
+            return Err(invalid(
+                "sun.spectrum",
+                &format!(
+                    "'{other}' is not a known spectrum: use \"flat\", \"astm-e490\" or \"csv\""
+                ),
+            ));
+        }
+    };
+    Sun::new(
+        spectrum,
+        file.irradiance_scale.unwrap_or(1.0),
+        file.angular_diameter_deg
+            .unwrap_or(EARTH_SUN_ANGULAR_DIAMETER_DEG),
+    )
+}
+
+fn convert_profile(file: ProfileFile, path: &str, planet: &Planet) -> Result<DensityProfile> {
+    let path = format!("{path}.profile");
+    let given = [
+        file.exponential.is_some(),
+        file.tent.is_some(),
+        file.layers.is_some(),
+        file.table.is_some(),
+    ];
+    if given.iter().filter(|g| **g).count() != 1 {
+        return Err(invalid(
+            &path,
+            "give exactly one of exponential, tent, layers, table",
+        ));
+    }
+    let top_m = planet.atmosphere_height_m();
+    let profile = if let Some(exponential) = file.exponential {
+        DensityProfile::exponential(
+            exponential.scale_height_m,
+            &format!("{path}.exponential.scale_height_m"),
+        )?
+    } else if let Some(tent) = file.tent {
+        DensityProfile::tent(
+            tent.peak_altitude_m,
+            tent.half_width_m,
+            &format!("{path}.tent"),
+        )?
+    } else if let Some(layers) = file.layers {
+        DensityProfile::PiecewiseLinear(ProfileTable::new(
+            layers.altitude_m,
+            layers.relative_density,
+            false,
+            &format!("{path}.layers"),
+        )?)
+    } else {
+        let table = file.table.expect("exactly one profile kind is present");
+        let name = format!("{path}.table");
+        let table = ProfileTable::new(table.altitude_m, table.relative_density, true, &name)?;
+        let altitudes = table.altitudes_m();
+        if altitudes[0] > 0.0 {
+            return Err(Error::out_of_range(
+                format!("{name}.altitude_m[0]"),
+                altitudes[0],
+                "m",
+                "<= 0: the table must start at or below the ground",
+            ));
+        }
+        let last = altitudes.len() - 1;
+        if altitudes[last] < top_m {
+            return Err(Error::out_of_range(
+                format!("{name}.altitude_m[{last}]"),
+                altitudes[last],
+                "m",
+                format!(
+                    ">= planet.atmosphere_height_m ({top_m}): the table must reach the top of the atmosphere"
+                ),
+            ));
+        }
+        DensityProfile::LogLinear(table)
+    };
+    let column_m = profile.vertical_column_m(top_m);
+    if !(column_m > 0.0 && column_m.is_finite()) {
+        return Err(invalid(
+            &path,
+            &format!(
+                "the profile has no density between the ground and the top of the atmosphere ({top_m} m)"
+            ),
+        ));
+    }
+    Ok(profile)
+}
+
+fn convert_species(file: SpeciesFile, path: &str, planet: &Planet) -> Result<Species> {
+    let profile = convert_profile(file.profile, path, planet)?;
+    if let Some(n) = file.number_density_m3 {
+        check(
+            &format!("{path}.number_density_m3"),
+            n,
+            "m^-3",
+            ">= 0 and <= 1e35",
+            (0.0..=1e35).contains(&n),
+        )?;
+    }
+    if let Some(tau) = file.optical_depth {
+        check_range(&format!("{path}.optical_depth"), tau, "1", 0.0, 1000.0)?;
+    }
+    if let Some(w) = file.reference_wavelength_nm {
+        check_wavelength(&format!("{path}.reference_wavelength_nm"), w)?;
+        if file.optical_depth.is_none() {
+            return Err(invalid(
+                &format!("{path}.reference_wavelength_nm"),
+                "goes with optical_depth (the wavelength at which it is given), which is missing",
+            ));
+        }
+    }
+    if let Some(du) = file.column_dobson_units {
+        check_range(&format!("{path}.column_dobson_units"), du, "DU", 0.0, 1e6)?;
+    }
+    let keys = AmountKeys {
+        number_density_m3: file.number_density_m3,
+        optical_depth: file.optical_depth,
+        reference_wavelength_nm: file.reference_wavelength_nm,
+        column_dobson_units: file.column_dobson_units,
+    };
+    // Each converter takes the amount keys its model uses and rejects the others.
+    let model = match (file.scattering, file.absorption) {
+        (Some(scattering), None) => convert_scattering(scattering, path, &keys)?,
+        (None, Some(absorption)) => convert_absorption(absorption, path, &keys)?,
+        (Some(_), Some(_)) => {
+            return Err(invalid(
+                path,
+                "give either scattering or absorption, not both (make two species)",
+            ));
+        }
+        (None, None) => {
+            return Err(invalid(
+                path,
+                "needs an optical model: scattering.rayleigh, scattering.mie, scattering.parametric or absorption",
+            ));
+        }
+    };
+    Ok(Species {
+        name: file.name,
+        profile,
+        model,
+    })
+}
+
+/// The amount keys of a species (how much of it there is).
+#[derive(Debug, Clone, Copy)]
+struct AmountKeys {
+    number_density_m3: Option<f64>,
+    optical_depth: Option<f64>,
+    reference_wavelength_nm: Option<f64>,
+    column_dobson_units: Option<f64>,
+}
+
+fn convert_scattering(file: ScatteringFile, path: &str, keys: &AmountKeys) -> Result<SpeciesModel> {
+    let given = [
+        file.rayleigh.is_some(),
+        file.mie.is_some(),
+        file.parametric.is_some(),
+    ];
+    if given.iter().filter(|g| **g).count() != 1 {
+        return Err(invalid(
+            &format!("{path}.scattering"),
+            "give exactly one of rayleigh, mie, parametric",
+        ));
+    }
+    not_used(
+        path,
+        "column_dobson_units",
+        keys.column_dobson_units.is_some(),
+        "a scattering species",
+        "only an absorbing gas takes a column in Dobson units",
+    )?;
+    if let Some(rayleigh) = file.rayleigh {
+        return convert_rayleigh(rayleigh, path, keys);
+    }
+    if let Some(parametric) = file.parametric {
+        return convert_parametric(parametric, path, keys);
+    }
+    convert_mie(
+        file.mie.expect("exactly one scattering kind is present"),
+        path,
+        keys,
+    )
+}
+
+fn convert_rayleigh(file: RayleighFile, path: &str, keys: &AmountKeys) -> Result<SpeciesModel> {
+    let here = format!("{path}.scattering.rayleigh");
+    match (file.gas, file.coefficient_per_m) {
+        (Some(gas), None) => {
+            let gas = match gas.as_str() {
+                "air" => RayleighGas::Air,
+                "co2" => RayleighGas::Co2,
+                other => {
+                    return Err(invalid(
+                        &format!("{here}.gas"),
+                        &format!("'{other}' is not a known gas: use \"air\" or \"co2\""),
+                    ));
+                }
+            };
+            let kind = "a Rayleigh gas";
+            for (key, present) in [
+                (
+                    "reference_wavelength_nm",
+                    file.reference_wavelength_nm.is_some(),
+                ),
+                ("wavelength_exponent", file.wavelength_exponent.is_some()),
+                ("depolarization_ratio", file.depolarization_ratio.is_some()),
+            ] {
+                not_used(
+                    &here,
+                    key,
+                    present,
+                    kind,
+                    "they belong to coefficient_per_m; a gas' depolarisation comes from its King factor with depolarization = true",
+                )?;
+            }
+            not_used(
+                path,
+                "optical_depth",
+                keys.optical_depth.is_some(),
+                kind,
+                "give number_density_m3",
+            )?;
+            let Some(number_density_m3) = keys.number_density_m3 else {
+                return Err(invalid(
+                    &format!("{path}.number_density_m3"),
+                    "is required for a Rayleigh gas (molecules per m^3 at relative density 1)",
+                ));
+            };
+            Ok(SpeciesModel::Rayleigh(RayleighScatterer::Gas {
+                gas,
+                number_density_m3,
+                depolarization: file.depolarization.unwrap_or(false),
+            }))
+        }
+        (None, Some(coefficient_per_m)) => {
+            let kind = "a parametric Rayleigh species";
+            not_used(
+                &here,
+                "depolarization",
+                file.depolarization.is_some(),
+                kind,
+                "give depolarization_ratio",
+            )?;
+            not_used(
+                path,
+                "number_density_m3",
+                keys.number_density_m3.is_some(),
+                kind,
+                "its amount is coefficient_per_m",
+            )?;
+            not_used(
+                path,
+                "optical_depth",
+                keys.optical_depth.is_some(),
+                kind,
+                "its amount is coefficient_per_m",
+            )?;
+            check(
+                &format!("{here}.coefficient_per_m"),
+                coefficient_per_m,
+                "m^-1",
+                ">= 0 and finite",
+                coefficient_per_m >= 0.0,
+            )?;
+            let Some(reference_wavelength_nm) = file.reference_wavelength_nm else {
+                return Err(invalid(
+                    &format!("{here}.reference_wavelength_nm"),
+                    "is required with coefficient_per_m (the wavelength at which it is given)",
+                ));
+            };
+            check_wavelength(
+                &format!("{here}.reference_wavelength_nm"),
+                reference_wavelength_nm,
+            )?;
+            let wavelength_exponent = file.wavelength_exponent.unwrap_or(4.0);
+            check_range(
+                &format!("{here}.wavelength_exponent"),
+                wavelength_exponent,
+                "1",
+                -10.0,
+                10.0,
+            )?;
+            let depolarization_ratio = file.depolarization_ratio.unwrap_or(0.0);
+            check_range(
+                &format!("{here}.depolarization_ratio"),
+                depolarization_ratio,
+                "1",
+                0.0,
+                1.0,
+            )?;
+            Ok(SpeciesModel::Rayleigh(RayleighScatterer::Parametric {
+                coefficient_per_m,
+                reference_wavelength_nm,
+                wavelength_exponent,
+                depolarization_ratio,
+            }))
+        }
+        (Some(_), Some(_)) => Err(invalid(
+            &here,
+            "give either gas (physical) or coefficient_per_m (parametric), not both",
+        )),
+        (None, None) => Err(invalid(
+            &here,
+            "give gas (\"air\" or \"co2\", with number_density_m3) or coefficient_per_m",
+        )),
+    }
+}
+
+/// `optical_depth` + `reference_wavelength_nm` of a species, both required.
+fn optical_depth_at_reference(path: &str, keys: &AmountKeys, kind: &str) -> Result<(f64, f64)> {
+    match (keys.optical_depth, keys.reference_wavelength_nm) {
+        (Some(tau), Some(w)) => Ok((tau, w)),
+        (None, _) => Err(invalid(
+            &format!("{path}.optical_depth"),
+            &format!(
+                "is required for {kind} (the column extinction optical depth at reference_wavelength_nm)"
+            ),
+        )),
+        (Some(_), None) => Err(invalid(
+            &format!("{path}.reference_wavelength_nm"),
+            "is required with optical_depth (the wavelength at which it is given)",
+        )),
+    }
+}
+
+fn check_asymmetry(path: &str, g: f64) -> Result<f64> {
+    check(path, g, "1", "-1 < g < 1", g > -1.0 && g < 1.0)
+}
+
+fn convert_parametric(file: ParametricFile, path: &str, keys: &AmountKeys) -> Result<SpeciesModel> {
+    let here = format!("{path}.scattering.parametric");
+    let kind = "a parametric aerosol";
+    not_used(
+        path,
+        "number_density_m3",
+        keys.number_density_m3.is_some(),
+        kind,
+        "its amount is optical_depth",
+    )?;
+    let (optical_depth, reference_wavelength_nm) = optical_depth_at_reference(path, keys, kind)?;
+    let angstrom_exponent = check_range(
+        &format!("{here}.angstrom_exponent"),
+        file.angstrom_exponent,
+        "1",
+        -10.0,
+        10.0,
+    )?;
+    let single_scattering_albedo = check_range(
+        &format!("{here}.single_scattering_albedo"),
+        file.single_scattering_albedo,
+        "1",
+        0.0,
+        1.0,
+    )?;
+    let phase = match (file.phase.henyey_greenstein, file.phase.cornette_shanks) {
+        (Some(hg), None) => AerosolPhase::HenyeyGreenstein {
+            g: check_asymmetry(&format!("{here}.phase.henyey_greenstein.g"), hg.g)?,
+        },
+        (None, Some(cs)) => AerosolPhase::CornetteShanks {
+            g: check_asymmetry(&format!("{here}.phase.cornette_shanks.g"), cs.g)?,
+        },
+        _ => {
+            return Err(invalid(
+                &format!("{here}.phase"),
+                "give exactly one of henyey_greenstein, cornette_shanks",
+            ));
+        }
+    };
+    Ok(SpeciesModel::ParametricAerosol(ParametricAerosol {
+        optical_depth,
+        reference_wavelength_nm,
+        angstrom_exponent,
+        single_scattering_albedo,
+        phase,
+    }))
+}
+
+fn convert_refractive_index(file: RefractiveIndexFile, here: &str) -> Result<RefractiveIndexModel> {
+    let here = format!("{here}.refractive_index");
+    if let Some(name) = file.builtin {
+        if file.n.is_some() || file.k.is_some() || file.wavelength_nm.is_some() {
+            return Err(invalid(&here, "give either builtin or n and k, not both"));
+        }
+        return builtin_refractive_index(&name)
+            .map(RefractiveIndexModel::Tabulated)
+            .ok_or_else(|| {
+                invalid(
+                    &format!("{here}.builtin"),
+                    &format!("'{name}' is not a built-in table: use one of {BUILTIN_REFRACTIVE_INDICES:?}"),
+                )
+            });
+    }
+    let (Some(n), Some(k)) = (file.n, file.k) else {
+        return Err(invalid(
+            &here,
+            "give n and k (numbers, or arrays with wavelength_nm), or builtin",
+        ));
+    };
+    let check_n = |i: Option<usize>, v: f64| {
+        let key = match i {
+            Some(i) => format!("{here}.n[{i}]"),
+            None => format!("{here}.n"),
+        };
+        check(&key, v, "1", "> 0 and <= 10", v > 0.0 && v <= 10.0)
+    };
+    let check_k = |i: Option<usize>, v: f64| {
+        let key = match i {
+            Some(i) => format!("{here}.k[{i}]"),
+            None => format!("{here}.k"),
+        };
+        check(
+            &key,
+            v,
+            "1",
+            ">= 0 and <= 10 (absorption)",
+            (0.0..=10.0).contains(&v),
+        )
+    };
+    match (n, k, file.wavelength_nm) {
+        (NumberOr::Number(n), NumberOr::Number(k), None) => {
+            check_n(None, n)?;
+            check_k(None, k)?;
+            RefractiveIndexModel::constant(Complex64::new(n, k))
+                .map_err(|e| invalid(&here, &e.to_string()))
+        }
+        (NumberOr::Other(n), NumberOr::Other(k), Some(wavelengths)) => {
+            if n.len() != wavelengths.len() || k.len() != wavelengths.len() || wavelengths.len() < 2
+            {
+                return Err(invalid(
+                    &here,
+                    &format!(
+                        "wavelength_nm, n and k need the same number of rows, at least 2 (got {}, {} and {})",
+                        wavelengths.len(),
+                        n.len(),
+                        k.len()
+                    ),
+                ));
+            }
+            for (i, w) in wavelengths.iter().enumerate() {
+                check_wavelength(&format!("{here}.wavelength_nm[{i}]"), *w)?;
+            }
+            for (i, v) in n.iter().enumerate() {
+                check_n(Some(i), *v)?;
+            }
+            for (i, v) in k.iter().enumerate() {
+                check_k(Some(i), *v)?;
+            }
+            TabulatedRefractiveIndex::from_columns(wavelengths, n, k)
+                .map(RefractiveIndexModel::Tabulated)
+                .map_err(|e| invalid(&here, &e.to_string()))
+        }
+        (NumberOr::Number(_), NumberOr::Number(_), Some(_)) => Err(invalid(
+            &format!("{here}.wavelength_nm"),
+            "goes with arrays of n and k; constant n and k need no wavelengths",
+        )),
+        (NumberOr::Other(_), NumberOr::Other(_), None) => Err(invalid(
+            &format!("{here}.wavelength_nm"),
+            "is required when n and k are arrays (one wavelength per row)",
+        )),
+        _ => Err(invalid(
+            &here,
+            "n and k must both be numbers (constant) or both arrays (tabulated)",
+        )),
+    }
+}
+
+fn radius_window(
+    here: &str,
+    min_radius_um: Option<f64>,
+    max_radius_um: Option<f64>,
+) -> Result<Option<RadiusWindow>> {
+    match (min_radius_um, max_radius_um) {
+        (None, None) => Ok(None),
+        (Some(lo), Some(hi)) => {
+            check_range(&format!("{here}.min_radius_um"), lo, "um", 1e-4, 1e3)?;
+            check(
+                &format!("{here}.max_radius_um"),
+                hi,
+                "um",
+                &format!("> min_radius_um ({lo}) and <= 1000"),
+                hi > lo && hi <= 1e3,
+            )?;
+            RadiusWindow::from_micrometres(lo, hi)
+                .map(Some)
+                .map_err(|e| invalid(here, &e.to_string()))
+        }
+        _ => Err(invalid(
+            here,
+            "give both min_radius_um and max_radius_um (a radius window), or neither",
+        )),
+    }
+}
+
+fn convert_size_distribution(file: SizeDistributionFile, here: &str) -> Result<SizeDistribution> {
+    let here = format!("{here}.size_distribution");
+    let (distribution, window, key) = match (file.lognormal, file.gamma) {
+        (Some(lognormal), None) => {
+            let key = format!("{here}.lognormal");
+            let distribution = match (
+                lognormal.median_radius_um,
+                lognormal.geometric_std_dev,
+                lognormal.effective_radius_um,
+                lognormal.effective_variance,
+            ) {
+                (Some(r_m), Some(sigma), None, None) => {
+                    check_range(&format!("{key}.median_radius_um"), r_m, "um", 1e-4, 1e3)?;
+                    check(&format!("{key}.geometric_std_dev"), sigma, "1", "> 1 and <= 10", sigma > 1.0 && sigma <= 10.0)?;
+                    SizeDistribution::log_normal(r_m * 1e-6, sigma)
+                }
+                (None, None, Some(r_eff), Some(v_eff)) => {
+                    check_range(&format!("{key}.effective_radius_um"), r_eff, "um", 1e-4, 1e3)?;
+                    check(&format!("{key}.effective_variance"), v_eff, "1", "> 0 and <= 10", v_eff > 0.0 && v_eff <= 10.0)?;
+                    SizeDistribution::log_normal_from_effective_radius_and_variance(r_eff * 1e-6, v_eff)
+                }
+                _ => {
+                    return Err(invalid(
+                        &key,
+                        "give median_radius_um and geometric_std_dev, or effective_radius_um and effective_variance",
+                    ));
+                }
+            }
+            .map_err(|e| invalid(&key, &e.to_string()))?;
+            let window = radius_window(&key, lognormal.min_radius_um, lognormal.max_radius_um)?;
+            (distribution, window, key)
+        }
+        (None, Some(gamma)) => {
+            let key = format!("{here}.gamma");
+            check_range(
+                &format!("{key}.effective_radius_um"),
+                gamma.effective_radius_um,
+                "um",
+                1e-4,
+                1e3,
+            )?;
+            let v_eff = gamma.effective_variance;
+            check(
+                &format!("{key}.effective_variance"),
+                v_eff,
+                "1",
+                "> 0 and < 0.5",
+                v_eff > 0.0 && v_eff < 0.5,
+            )?;
+            let distribution =
+                SizeDistribution::modified_gamma(gamma.effective_radius_um * 1e-6, v_eff)
+                    .map_err(|e| invalid(&key, &e.to_string()))?;
+            let window = radius_window(&key, gamma.min_radius_um, gamma.max_radius_um)?;
+            (distribution, window, key)
+        }
+        _ => {
+            return Err(invalid(&here, "give exactly one of lognormal, gamma"));
+        }
+    };
+    match window {
+        None => Ok(distribution),
+        Some(window) => distribution
+            .truncated_to(window)
+            .map_err(|e| invalid(&key, &e.to_string())),
+    }
+}
+
+fn convert_mie(file: MieFile, path: &str, keys: &AmountKeys) -> Result<SpeciesModel> {
+    let here = format!("{path}.scattering.mie");
+    let refractive_index = convert_refractive_index(file.refractive_index, &here)?;
+    let size_distribution = convert_size_distribution(file.size_distribution, &here)?;
+    let phase_mode = match file.phase.as_deref() {
+        None | Some("mie") => AerosolPhaseMode::Mie,
+        Some("paper-hg") => AerosolPhaseMode::PaperHenyeyGreenstein,
+        Some(other) => {
+            return Err(invalid(
+                &format!("{here}.phase"),
+                &format!(
+                    "'{other}' is not a phase mode: use \"mie\" (exact) or \"paper-hg\" (the paper's eq. 3)"
+                ),
+            ));
+        }
+    };
+    let amount = match (keys.number_density_m3, keys.optical_depth) {
+        (Some(n), None) => ParticleAmount::NumberDensityM3(n),
+        (None, Some(_)) => {
+            let (optical_depth, reference_wavelength_nm) =
+                optical_depth_at_reference(path, keys, "a Mie aerosol")?;
+            if let RefractiveIndexModel::Tabulated(table) = &refractive_index {
+                let (lo, hi) = table.wavelength_range_nm();
+                if !(lo..=hi).contains(&reference_wavelength_nm) {
+                    return Err(Error::out_of_range(
+                        format!("{path}.reference_wavelength_nm"),
+                        reference_wavelength_nm,
+                        "nm",
+                        format!("{lo}..={hi}, the range of the refractive-index table"),
+                    ));
+                }
+            }
+            ParticleAmount::OpticalDepth {
+                optical_depth,
+                reference_wavelength_nm,
+            }
+        }
+        _ => {
+            return Err(invalid(
+                path,
+                "a Mie aerosol needs exactly one of number_density_m3 or optical_depth (with reference_wavelength_nm)",
+            ));
+        }
+    };
+    Ok(SpeciesModel::Mie(MieAerosol {
+        refractive_index,
+        size_distribution,
+        phase_mode,
+        amount,
+    }))
+}
+
+fn convert_absorption(file: AbsorptionFile, path: &str, keys: &AmountKeys) -> Result<SpeciesModel> {
+    let here = format!("{path}.absorption");
+    let kind = "an absorbing gas";
+    not_used(
+        path,
+        "optical_depth",
+        keys.optical_depth.is_some(),
+        kind,
+        "give column_dobson_units or number_density_m3",
+    )?;
+    let cross_section = match (file.gas, file.wavelength_nm, file.cross_section_m2) {
+        (Some(gas), None, None) => match gas.as_str() {
+            "ozone" => AbsorptionCrossSection::Binned(BinnedCrossSection::ozone_233k()),
+            other => {
+                return Err(invalid(
+                    &format!("{here}.gas"),
+                    &format!(
+                        "'{other}' has no built-in cross-section: use \"ozone\", or give wavelength_nm and cross_section_m2"
+                    ),
+                ));
+            }
+        },
+        (None, Some(wavelengths), Some(values)) => {
+            for (i, v) in values.iter().enumerate() {
+                check(
+                    &format!("{here}.cross_section_m2[{i}]"),
+                    *v,
+                    "m^2",
+                    ">= 0 and finite",
+                    *v >= 0.0,
+                )?;
+            }
+            AbsorptionCrossSection::Tabulated(
+                TabulatedSpectrum::new(wavelengths, values, &here)
+                    .map_err(|e| invalid(&here, &strip(&e)))?,
+            )
+        }
+        _ => {
+            return Err(invalid(
+                &here,
+                "give gas = \"ozone\", or wavelength_nm and cross_section_m2 (a table), not both",
+            ));
+        }
+    };
+    let amount = match (keys.column_dobson_units, keys.number_density_m3) {
+        (Some(du), None) => GasAmount::ColumnDobsonUnits(du),
+        (None, Some(n)) => GasAmount::NumberDensityM3(n),
+        _ => {
+            return Err(invalid(
+                path,
+                "an absorbing gas needs exactly one of column_dobson_units or number_density_m3",
+            ));
+        }
+    };
+    Ok(SpeciesModel::AbsorbingGas(AbsorbingGas {
+        cross_section,
+        amount,
+    }))
+}
+
+fn strip(e: &Error) -> String {
+    match e {
+        Error::InvalidSpectrum(message) => message.clone(),
+        other => other.to_string(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MINIMAL: &str = r#"
+name = "minimal"
+[planet]
+radius_m = 6360e3
+atmosphere_height_m = 100e3
+[sun]
+spectrum = "flat"
+irradiance_w_m2_nm = 1.0
+"#;
+
+    fn parse(text: &str) -> Result<Atmosphere> {
+        Atmosphere::from_toml_str(text)
+    }
+
+    #[test]
+    fn a_minimal_file_has_defaults() {
+        let atmosphere = parse(MINIMAL).unwrap();
+        assert_eq!(atmosphere.name, "minimal");
+        assert_eq!(atmosphere.planet.ground_albedo(), &Spectrum::Constant(0.0));
+        assert_eq!(atmosphere.sun.angular_diameter_deg(), 0.53);
+        assert_eq!(atmosphere.sun.irradiance_scale(), 1.0);
+        assert!(atmosphere.species.is_empty());
+    }
+
+    #[test]
+    fn numbers_may_be_integers_and_albedo_a_table() {
+        let text = MINIMAL.replace("radius_m = 6360e3", "radius_m = 6360000")
+            + "[planet.ground_albedo]\nwavelength_nm = [360, 830]\nalbedo = [0.1, 0.3]\n";
+        // The planet table is reopened after [sun]: TOML allows sub-tables anywhere.
+        let atmosphere = parse(&text).unwrap();
+        assert_eq!(atmosphere.planet.radius_m(), 6.36e6);
+        assert!(matches!(
+            atmosphere.planet.ground_albedo(),
+            Spectrum::Tabulated(_)
+        ));
+    }
+
+    #[test]
+    fn syntax_errors_give_the_line() {
+        let e = parse("name = \"x\"\n[planet\nradius_m = 1\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("atmosphere file, line 2:"), "{e}");
+        assert!(!e.contains('\n'), "{e}");
+        let e = parse(&MINIMAL.replace("atmosphere_height_m", "atmosphere_heigth_m"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("line 5") && e.contains("unknown field `atmosphere_heigth_m`"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn builtin_tables_parse() {
+        let dust = builtin_refractive_index("mars-dust-wolff2009").unwrap();
+        let (lo, hi) = dust.wavelength_range_nm();
+        assert!(
+            (lo - 263.0).abs() < 1e-9 && (hi - 2480.0).abs() < 1e-9,
+            "{lo} {hi}"
+        );
+        assert!(builtin_refractive_index("unobtainium").is_none());
+    }
+}

@@ -1,0 +1,478 @@
+//! Phase functions: the angular distribution of scattered light.
+//!
+//! A phase function p(theta) gives the probability per steradian that light
+//! scattered once leaves at angle theta from its incoming direction
+//! (theta = 0 is straight on). Unit sr^-1, normalised so that
+//! `integral over 4 pi of p dOmega = 2 pi * integral_{-1}^{1} p(mu) dmu = 1`
+//! with mu = cos(theta). Every function here depends on theta only
+//! (randomly oriented particles, unpolarised light).
+//!
+//! - Rayleigh (air, CO2): `p = 3/(16 pi) (1 + mu^2)` (the paper calls it
+//!   "nearly isotropic"; this is the real one), and with the molecular
+//!   depolarisation ratio rho (Chandrasekhar 1950; as in the comment of
+//!   `us-standard-1976-rayleigh.toml`):
+//!   `p = 3/(16 pi) * 2/(2 + rho) * ((1 + rho) + (1 - rho) mu^2)`.
+//! - Henyey-Greenstein, the paper's eq. 3:
+//!   `p = (1 - g^2) / (4 pi (1 + g^2 - 2 g mu)^{3/2})`, mean cosine g.
+//! - Cornette-Shanks (1992), a Henyey-Greenstein with a Rayleigh-like
+//!   factor that gives more side and back scattering for the same g:
+//!   `p = 3/(8 pi) (1 - g^2)(1 + mu^2) / ((2 + g^2)(1 + g^2 - 2 g mu)^{3/2})`.
+//!   Its mean cosine is not g but `3 g (4 + g^2) / (5 (2 + g^2))`.
+//! - Tabulated: values at nodes mu_j, linear in mu between them (the exact
+//!   Mie phase function of a size distribution), renormalised so that the
+//!   interpolant integrates to exactly 1.
+//!
+//! A species' phase function may change with wavelength (the depolarisation
+//! of air, the Mie phase function), so [`PhaseFunction`] holds one set of
+//! parameters per sample of the atmosphere's wavelength grid and every
+//! method takes the wavelength index. [`PhaseFunction::eval_into`]
+//! evaluates all wavelengths at one angle, the renderer's hot path.
+//!
+//! Sampling (for a path tracer, as pbrt's `PhaseFunction::Sample_p`): from
+//! two uniform numbers u in [0, 1)^2, [`PhaseFunction::sample`] returns a
+//! direction as (cos theta, phi) about the incoming direction, with the
+//! value p and the pdf of having chosen it (per steradian). Rayleigh,
+//! Henyey-Greenstein and tabulated functions are sampled exactly (pdf = p);
+//! Cornette-Shanks is sampled with the Henyey-Greenstein of the same g
+//! (pdf != p; the weight is p / pdf).
+
+use std::f64::consts::PI;
+
+/// Isotropic scattering, 1 / (4 pi) sr^-1.
+pub const ISOTROPIC_PHASE_PER_SR: f64 = 1.0 / (4.0 * PI);
+
+/// Rayleigh phase function with depolarisation ratio `depolarization_ratio`
+/// (0 for the classical 3/(16 pi)(1 + mu^2)), sr^-1.
+pub fn rayleigh_phase(depolarization_ratio: f64, cos_theta: f64) -> f64 {
+    let rho = depolarization_ratio;
+    3.0 / (16.0 * PI) * 2.0 / (2.0 + rho) * ((1.0 + rho) + (1.0 - rho) * cos_theta * cos_theta)
+}
+
+/// Henyey-Greenstein phase function with asymmetry parameter `g`, sr^-1
+/// (the paper's eq. 3).
+pub fn henyey_greenstein_phase(g: f64, cos_theta: f64) -> f64 {
+    let denominator = 1.0 + g * g - 2.0 * g * cos_theta;
+    (1.0 - g * g) / (4.0 * PI * denominator * denominator.sqrt())
+}
+
+/// Cornette-Shanks phase function with parameter `g`, sr^-1.
+pub fn cornette_shanks_phase(g: f64, cos_theta: f64) -> f64 {
+    let denominator = 1.0 + g * g - 2.0 * g * cos_theta;
+    3.0 / (8.0 * PI) * (1.0 - g * g) * (1.0 + cos_theta * cos_theta)
+        / ((2.0 + g * g) * denominator * denominator.sqrt())
+}
+
+/// Mean cosine of the Cornette-Shanks function of parameter `g`.
+pub fn cornette_shanks_asymmetry(g: f64) -> f64 {
+    3.0 * g * (4.0 + g * g) / (5.0 * (2.0 + g * g))
+}
+
+/// A sampled scattering direction.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PhaseSample {
+    /// Cosine of the angle from the incoming direction.
+    pub cos_theta: f64,
+    /// Azimuth about the incoming direction, radians in [0, 2 pi).
+    pub phi: f64,
+    /// The phase function there, sr^-1.
+    pub value: f64,
+    /// The probability density of having sampled it, sr^-1.
+    pub pdf: f64,
+}
+
+/// Phase functions at nodes mu_j (increasing, from -1 to 1), one row of
+/// values per wavelength, linear in mu between nodes; each row normalised
+/// so that its interpolant integrates to 1 over the sphere.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TabulatedPhase {
+    cos_theta_nodes: Vec<f64>,
+    /// values[wavelength][node], sr^-1.
+    values: Vec<Vec<f64>>,
+    /// cumulative[wavelength][node]: probability of mu < node (0 .. 1).
+    cumulative: Vec<Vec<f64>>,
+    /// Mean cosine per wavelength, exact for the interpolant.
+    asymmetry: Vec<f64>,
+}
+
+impl TabulatedPhase {
+    /// A table from nodes (strictly increasing, first -1 and last 1) and one
+    /// row of values per wavelength (finite, >= 0, not all zero); each row
+    /// is rescaled to integrate to 1. Returns `None` for an invalid table
+    /// (the callers build tables from computed values, so this is a bug
+    /// check, not a user error).
+    pub fn new(cos_theta_nodes: Vec<f64>, values: Vec<Vec<f64>>) -> Option<TabulatedPhase> {
+        let n = cos_theta_nodes.len();
+        let nodes_ok = n >= 2
+            && cos_theta_nodes[0] == -1.0
+            && cos_theta_nodes[n - 1] == 1.0
+            && cos_theta_nodes.windows(2).all(|w| w[1] > w[0]);
+        if !nodes_ok {
+            return None;
+        }
+        let mut normalised = Vec::with_capacity(values.len());
+        let mut cumulative = Vec::with_capacity(values.len());
+        let mut asymmetry = Vec::with_capacity(values.len());
+        for row in values {
+            if row.len() != n || row.iter().any(|v| !(v.is_finite() && *v >= 0.0)) {
+                return None;
+            }
+            // Trapezoids are the exact integral of the linear interpolant.
+            let mut running = vec![0.0; n];
+            for j in 1..n {
+                let width = cos_theta_nodes[j] - cos_theta_nodes[j - 1];
+                running[j] = running[j - 1] + 0.5 * (row[j] + row[j - 1]) * width;
+            }
+            let total = 2.0 * PI * running[n - 1];
+            if !(total > 0.0) {
+                return None;
+            }
+            let row: Vec<f64> = row.iter().map(|v| v / total).collect();
+            let mut mean_cosine = 0.0;
+            for j in 1..n {
+                // Exact integral of mu * (linear p) over the segment.
+                let (m0, m1) = (cos_theta_nodes[j - 1], cos_theta_nodes[j]);
+                let (p0, p1) = (row[j - 1], row[j]);
+                let w = m1 - m0;
+                mean_cosine += w * (p0 * (2.0 * m0 + m1) + p1 * (m0 + 2.0 * m1)) / 6.0;
+            }
+            asymmetry.push(2.0 * PI * mean_cosine);
+            cumulative.push(running.iter().map(|c| c / running[n - 1]).collect());
+            normalised.push(row);
+        }
+        Some(TabulatedPhase {
+            cos_theta_nodes,
+            values: normalised,
+            cumulative,
+            asymmetry,
+        })
+    }
+
+    /// The nodes, cos theta increasing from -1 to 1.
+    pub fn cos_theta_nodes(&self) -> &[f64] {
+        &self.cos_theta_nodes
+    }
+
+    fn segment(&self, cos_theta: f64) -> usize {
+        let upper = self.cos_theta_nodes.partition_point(|&m| m <= cos_theta);
+        upper.clamp(1, self.cos_theta_nodes.len() - 1) - 1
+    }
+
+    fn eval(&self, wavelength_index: usize, cos_theta: f64) -> f64 {
+        let cos_theta = cos_theta.clamp(-1.0, 1.0);
+        let j = self.segment(cos_theta);
+        let (m0, m1) = (self.cos_theta_nodes[j], self.cos_theta_nodes[j + 1]);
+        let row = &self.values[wavelength_index];
+        row[j] + (cos_theta - m0) / (m1 - m0) * (row[j + 1] - row[j])
+    }
+
+    /// Inverts the cumulative distribution of the linear interpolant.
+    fn sample_cos_theta(&self, wavelength_index: usize, u: f64) -> f64 {
+        let cumulative = &self.cumulative[wavelength_index];
+        let row = &self.values[wavelength_index];
+        let upper = cumulative.partition_point(|&c| c <= u);
+        let j = upper.clamp(1, cumulative.len() - 1) - 1;
+        let (m0, m1) = (self.cos_theta_nodes[j], self.cos_theta_nodes[j + 1]);
+        let segment_probability = cumulative[j + 1] - cumulative[j];
+        if segment_probability <= 0.0 {
+            return m0;
+        }
+        // Within the segment the density is linear, a + b t for t in [0, 1];
+        // solve a t + b t^2 / 2 = s (a + b / 2) for t, stably.
+        let s = ((u - cumulative[j]) / segment_probability).clamp(0.0, 1.0);
+        let (a, b) = (row[j], row[j + 1] - row[j]);
+        let target = s * (a + 0.5 * b);
+        let t = if b.abs() < 1e-12 * a.abs().max(1e-300) {
+            s
+        } else {
+            let discriminant = (a * a + 2.0 * b * target).max(0.0);
+            2.0 * target / (a + discriminant.sqrt())
+        };
+        (m0 + t.clamp(0.0, 1.0) * (m1 - m0)).clamp(-1.0, 1.0)
+    }
+}
+
+/// The phase function of one species, per wavelength of a grid.
+#[derive(Debug, Clone, PartialEq)]
+pub enum PhaseFunction {
+    /// 1 / (4 pi); also the placeholder of species that do not scatter.
+    Isotropic,
+    /// Rayleigh with a depolarisation ratio per wavelength.
+    Rayleigh { depolarization_ratios: Vec<f64> },
+    /// Henyey-Greenstein with g per wavelength.
+    HenyeyGreenstein { asymmetry_g: Vec<f64> },
+    /// Cornette-Shanks with parameter g per wavelength.
+    CornetteShanks { g: Vec<f64> },
+    /// Tabulated in cos theta, one row per wavelength.
+    Tabulated(TabulatedPhase),
+}
+
+impl PhaseFunction {
+    /// p(theta) at wavelength sample `wavelength_index`, sr^-1.
+    pub fn eval(&self, wavelength_index: usize, cos_theta: f64) -> f64 {
+        match self {
+            PhaseFunction::Isotropic => ISOTROPIC_PHASE_PER_SR,
+            PhaseFunction::Rayleigh {
+                depolarization_ratios,
+            } => rayleigh_phase(depolarization_ratios[wavelength_index], cos_theta),
+            PhaseFunction::HenyeyGreenstein { asymmetry_g } => {
+                henyey_greenstein_phase(asymmetry_g[wavelength_index], cos_theta)
+            }
+            PhaseFunction::CornetteShanks { g } => {
+                cornette_shanks_phase(g[wavelength_index], cos_theta)
+            }
+            PhaseFunction::Tabulated(table) => table.eval(wavelength_index, cos_theta),
+        }
+    }
+
+    /// p(theta) at every wavelength, written into `out` (one value per
+    /// wavelength sample; no allocation).
+    pub fn eval_into(&self, cos_theta: f64, out: &mut [f64]) {
+        for (i, value) in out.iter_mut().enumerate() {
+            *value = self.eval(i, cos_theta);
+        }
+    }
+
+    /// The probability density (sr^-1) with which [`PhaseFunction::sample`]
+    /// picks a direction at angle theta.
+    pub fn pdf(&self, wavelength_index: usize, cos_theta: f64) -> f64 {
+        match self {
+            PhaseFunction::CornetteShanks { g } => {
+                henyey_greenstein_phase(g[wavelength_index], cos_theta)
+            }
+            other => other.eval(wavelength_index, cos_theta),
+        }
+    }
+
+    /// Samples a scattering direction from two uniform numbers in [0, 1).
+    pub fn sample(&self, wavelength_index: usize, u: [f64; 2]) -> PhaseSample {
+        let cos_theta = match self {
+            PhaseFunction::Isotropic => 1.0 - 2.0 * u[0],
+            PhaseFunction::Rayleigh {
+                depolarization_ratios,
+            } => sample_rayleigh_cos_theta(depolarization_ratios[wavelength_index], u[0]),
+            PhaseFunction::HenyeyGreenstein { asymmetry_g } => {
+                sample_henyey_greenstein_cos_theta(asymmetry_g[wavelength_index], u[0])
+            }
+            PhaseFunction::CornetteShanks { g } => {
+                sample_henyey_greenstein_cos_theta(g[wavelength_index], u[0])
+            }
+            PhaseFunction::Tabulated(table) => table.sample_cos_theta(wavelength_index, u[0]),
+        };
+        PhaseSample {
+            cos_theta,
+            phi: 2.0 * PI * u[1],
+            value: self.eval(wavelength_index, cos_theta),
+            pdf: self.pdf(wavelength_index, cos_theta),
+        }
+    }
+
+    /// Mean cosine of the scattering angle, <cos theta> (the asymmetry
+    /// parameter g of radiative transfer) at wavelength sample
+    /// `wavelength_index`.
+    pub fn asymmetry_g(&self, wavelength_index: usize) -> f64 {
+        match self {
+            // Both are symmetric about 90 degrees.
+            PhaseFunction::Isotropic | PhaseFunction::Rayleigh { .. } => 0.0,
+            PhaseFunction::HenyeyGreenstein { asymmetry_g } => asymmetry_g[wavelength_index],
+            PhaseFunction::CornetteShanks { g } => cornette_shanks_asymmetry(g[wavelength_index]),
+            PhaseFunction::Tabulated(table) => table.asymmetry[wavelength_index],
+        }
+    }
+
+    /// A short name for listings.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            PhaseFunction::Isotropic => "isotropic",
+            PhaseFunction::Rayleigh { .. } => "Rayleigh",
+            PhaseFunction::HenyeyGreenstein { .. } => "Henyey-Greenstein",
+            PhaseFunction::CornetteShanks { .. } => "Cornette-Shanks",
+            PhaseFunction::Tabulated(_) => "tabulated (Mie)",
+        }
+    }
+}
+
+/// Exact inversion of the Rayleigh distribution in mu: with a = 1 + rho,
+/// b = 1 - rho, the cumulative distribution is
+/// (a (mu + 1) + b (mu^3 + 1) / 3) / (2 a + 2 b / 3) = u, a depressed cubic
+/// in mu with one real root (a, b > 0), found by Cardano's formula.
+fn sample_rayleigh_cos_theta(depolarization_ratio: f64, u: f64) -> f64 {
+    let (a, b) = (1.0 + depolarization_ratio, 1.0 - depolarization_ratio);
+    if b <= 0.0 {
+        return 1.0 - 2.0 * u;
+    }
+    // mu^3 + p mu + q = 0 with p = 3 a / b and
+    // q = 3 (a + b/3 - u (2 a + 2 b / 3)) / b.
+    let p = 3.0 * a / b;
+    let q = 3.0 * (a + b / 3.0 - u * (2.0 * a + 2.0 * b / 3.0)) / b;
+    let root = (q * q / 4.0 + p * p * p / 27.0).sqrt();
+    let mu = (-q / 2.0 + root).cbrt() + (-q / 2.0 - root).cbrt();
+    mu.clamp(-1.0, 1.0)
+}
+
+/// Henyey-Greenstein inversion (pbrt-v4 `SampleHenyeyGreenstein`, with
+/// mu measured from the incoming direction: g > 0 favours mu near 1).
+fn sample_henyey_greenstein_cos_theta(g: f64, u: f64) -> f64 {
+    if g.abs() < 1e-3 {
+        return 1.0 - 2.0 * u;
+    }
+    let s = (1.0 - g * g) / (1.0 + g - 2.0 * g * u);
+    ((1.0 + g * g - s * s) / (2.0 * g)).clamp(-1.0, 1.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// 2 pi * integral_{-1}^{1} f(mu) mu^power dmu by composite Simpson
+    /// in theta (dense where forward peaks are).
+    fn sphere_integral(f: impl Fn(f64) -> f64, power: i32) -> f64 {
+        let n = 200_000;
+        let h = PI / n as f64;
+        let g = |theta: f64| {
+            let mu = theta.cos();
+            f(mu) * mu.powi(power) * theta.sin()
+        };
+        let mut sum = g(0.0) + g(PI);
+        for i in 1..n {
+            sum += if i % 2 == 1 { 4.0 } else { 2.0 } * g(i as f64 * h);
+        }
+        2.0 * PI * sum * h / 3.0
+    }
+
+    #[test]
+    fn analytic_phase_functions_integrate_to_one() {
+        for rho in [0.0, 0.0279, 0.08, 0.5] {
+            let total = sphere_integral(|mu| rayleigh_phase(rho, mu), 0);
+            assert!((total - 1.0).abs() < 1e-10, "rayleigh {rho}: {total}");
+        }
+        for g in [-0.7, 0.0, 0.5, 0.76, 0.9] {
+            let total = sphere_integral(|mu| henyey_greenstein_phase(g, mu), 0);
+            assert!((total - 1.0).abs() < 1e-8, "hg {g}: {total}");
+            let mean = sphere_integral(|mu| henyey_greenstein_phase(g, mu), 1);
+            assert!((mean - g).abs() < 1e-8, "hg mean {g}: {mean}");
+            let total = sphere_integral(|mu| cornette_shanks_phase(g, mu), 0);
+            assert!((total - 1.0).abs() < 1e-8, "cs {g}: {total}");
+            let mean = sphere_integral(|mu| cornette_shanks_phase(g, mu), 1);
+            assert!(
+                (mean - cornette_shanks_asymmetry(g)).abs() < 1e-8,
+                "cs mean {g}: {mean}"
+            );
+        }
+    }
+
+    #[test]
+    fn rayleigh_depolarisation_flattens_the_function() {
+        // 3/(16 pi)(1 + mu^2) at 0 and 90 degrees, and rho = 1 is isotropic.
+        assert!((rayleigh_phase(0.0, 1.0) - 6.0 / (16.0 * PI)).abs() < 1e-15);
+        assert!((rayleigh_phase(0.0, 0.0) - 3.0 / (16.0 * PI)).abs() < 1e-15);
+        assert!((rayleigh_phase(1.0, 0.3) - ISOTROPIC_PHASE_PER_SR).abs() < 1e-15);
+        let ratio = |rho: f64| rayleigh_phase(rho, 1.0) / rayleigh_phase(rho, 0.0);
+        assert!(ratio(0.0279) < ratio(0.0));
+    }
+
+    #[test]
+    fn tabulated_phase_is_normalised_and_has_the_right_mean_cosine() {
+        // Tabulate HG(0.7) on nodes dense in the forward direction.
+        let nodes: Vec<f64> = (0..=400)
+            .map(|j| (PI * (1.0 - j as f64 / 400.0).powi(2)).cos())
+            .collect();
+        let values = nodes
+            .iter()
+            .map(|&mu| henyey_greenstein_phase(0.7, mu) * 3.0)
+            .collect();
+        let table = TabulatedPhase::new(nodes.clone(), vec![values]).unwrap();
+        let phase = PhaseFunction::Tabulated(table);
+        let total = sphere_integral(|mu| phase.eval(0, mu), 0);
+        assert!((total - 1.0).abs() < 1e-6, "{total}");
+        // The exact mean cosine of the interpolant agrees with quadrature
+        // and, for a fine table, with g.
+        let mean = sphere_integral(|mu| phase.eval(0, mu), 1);
+        assert!((phase.asymmetry_g(0) - mean).abs() < 1e-6, "{mean}");
+        assert!(
+            (phase.asymmetry_g(0) - 0.7).abs() < 2e-3,
+            "{}",
+            phase.asymmetry_g(0)
+        );
+        assert!(TabulatedPhase::new(vec![-1.0, 0.5], vec![vec![1.0, 1.0]]).is_none());
+        assert!(TabulatedPhase::new(vec![-1.0, 1.0], vec![vec![0.0, 0.0]]).is_none());
+    }
+
+    /// Histogram of sampled mu against the pdf: each of 20 bins in mu gets
+    /// probability 2 pi integral pdf dmu, within 5 standard deviations.
+    fn check_sampling(phase: &PhaseFunction) {
+        let n = 200_000;
+        let bins = 20;
+        let mut counts = vec![0usize; bins];
+        // A deterministic low-discrepancy sequence (golden ratio).
+        let mut u0 = 0.5f64;
+        for i in 0..n {
+            u0 = (u0 + 0.618_033_988_749_894_9) % 1.0;
+            let sample = phase.sample(0, [u0, (i as f64 * 0.754_877_666) % 1.0]);
+            assert!((-1.0..=1.0).contains(&sample.cos_theta));
+            assert!((sample.pdf - phase.pdf(0, sample.cos_theta)).abs() < 1e-12);
+            let bin = (((sample.cos_theta + 1.0) / 2.0 * bins as f64) as usize).min(bins - 1);
+            counts[bin] += 1;
+        }
+        for (b, &count) in counts.iter().enumerate() {
+            let lo = -1.0 + 2.0 * b as f64 / bins as f64;
+            let hi = lo + 2.0 / bins as f64;
+            let m = 2000;
+            let expected: f64 = (0..m)
+                .map(|k| {
+                    let mu = lo + (k as f64 + 0.5) * (hi - lo) / m as f64;
+                    2.0 * PI * phase.pdf(0, mu) * (hi - lo) / m as f64
+                })
+                .sum();
+            let observed = count as f64 / n as f64;
+            let sigma = (expected * (1.0 - expected) / n as f64).sqrt();
+            assert!(
+                (observed - expected).abs() < 5.0 * sigma + 1e-4,
+                "{}: bin {b}: {observed} vs {expected}",
+                phase.kind()
+            );
+        }
+    }
+
+    #[test]
+    fn sampling_follows_the_pdf() {
+        check_sampling(&PhaseFunction::Isotropic);
+        check_sampling(&PhaseFunction::Rayleigh {
+            depolarization_ratios: vec![0.0],
+        });
+        check_sampling(&PhaseFunction::Rayleigh {
+            depolarization_ratios: vec![0.08],
+        });
+        check_sampling(&PhaseFunction::HenyeyGreenstein {
+            asymmetry_g: vec![0.7],
+        });
+        check_sampling(&PhaseFunction::HenyeyGreenstein {
+            asymmetry_g: vec![-0.3],
+        });
+        check_sampling(&PhaseFunction::CornetteShanks { g: vec![0.6] });
+        let nodes: Vec<f64> = (0..=50)
+            .map(|j| -1.0 + 2.0 * (j as f64 / 50.0).powf(0.5))
+            .collect();
+        let mut nodes = nodes;
+        *nodes.last_mut().unwrap() = 1.0;
+        let values = nodes
+            .iter()
+            .map(|&mu| 1.0 + mu * mu + 4.0 * mu.max(0.0).powi(8))
+            .collect();
+        check_sampling(&PhaseFunction::Tabulated(
+            TabulatedPhase::new(nodes, vec![values]).unwrap(),
+        ));
+    }
+
+    #[test]
+    fn eval_into_fills_every_wavelength() {
+        let phase = PhaseFunction::Rayleigh {
+            depolarization_ratios: vec![0.0, 0.03, 0.1],
+        };
+        let mut out = [0.0; 3];
+        phase.eval_into(1.0, &mut out);
+        for (i, v) in out.iter().enumerate() {
+            assert_eq!(*v, phase.eval(i, 1.0));
+        }
+        assert!(out[0] > out[2]);
+    }
+}

@@ -1,0 +1,244 @@
+//! The planet: a sphere of radius R_ground under a spherical shell of
+//! atmosphere up to R_top = R_ground + atmosphere height, above a
+//! Lambertian ground.
+//!
+//! Geometry follows Bruneton's precomputed atmospheric scattering (2017):
+//! a point is described by its distance r from the planet's centre and a
+//! direction by mu, the cosine of its angle from the local zenith. A ray
+//! from (r, mu) meets the sphere of radius R at distance d where
+//! d^2 + 2 r mu d + r^2 - R^2 = 0. Planets from 1e5 m (an asteroid) to
+//! 1e10 m work; a huge radius approximates a plane-parallel atmosphere.
+//! Everything is f64: at R = 1e10 m a metre is 1e-10 of r, so the
+//! quadratic's roots are written in the forms that do not cancel
+//! (R_top^2 - r^2 = (R_top - r)(R_top + r); the small root as c / q).
+//!
+//! The ground reflects as a Lambertian surface of albedo a(lambda) (a
+//! constant or a table over wavelength): reflected radiance = a E / pi for
+//! an irradiance E.
+
+use crate::error::{Error, Result};
+use crate::spectrum::{SampledSpectrum, Spectrum, WavelengthGrid};
+
+/// Smallest supported planet radius, m.
+pub const MIN_PLANET_RADIUS_M: f64 = 1e5;
+/// Largest supported planet radius, m.
+pub const MAX_PLANET_RADIUS_M: f64 = 1e10;
+/// Largest supported atmosphere height, m.
+pub const MAX_ATMOSPHERE_HEIGHT_M: f64 = 1e8;
+
+/// A validated planet.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Planet {
+    radius_m: f64,
+    atmosphere_height_m: f64,
+    ground_albedo: Spectrum,
+}
+
+impl Planet {
+    /// A planet of radius `radius_m` (1e5..=1e10 m) with an atmosphere
+    /// `atmosphere_height_m` thick (> 0, <= 1e8 m) over a Lambertian ground
+    /// of albedo `ground_albedo` (values in [0, 1]). Errors name the keys
+    /// `planet.radius_m`, `planet.atmosphere_height_m`, `planet.ground_albedo`.
+    pub fn new(radius_m: f64, atmosphere_height_m: f64, ground_albedo: Spectrum) -> Result<Planet> {
+        if !(MIN_PLANET_RADIUS_M..=MAX_PLANET_RADIUS_M).contains(&radius_m) {
+            return Err(Error::out_of_range(
+                "planet.radius_m",
+                radius_m,
+                "m",
+                format!("{MIN_PLANET_RADIUS_M:e}..={MAX_PLANET_RADIUS_M:e}"),
+            ));
+        }
+        if !(atmosphere_height_m > 0.0 && atmosphere_height_m <= MAX_ATMOSPHERE_HEIGHT_M) {
+            return Err(Error::out_of_range(
+                "planet.atmosphere_height_m",
+                atmosphere_height_m,
+                "m",
+                format!("> 0 (the top above the ground) and <= {MAX_ATMOSPHERE_HEIGHT_M:e}"),
+            ));
+        }
+        match &ground_albedo {
+            Spectrum::Constant(a) => check_albedo("planet.ground_albedo", *a)?,
+            Spectrum::Tabulated(table) => {
+                for (i, a) in table.values().iter().enumerate() {
+                    check_albedo(&format!("planet.ground_albedo.albedo[{i}]"), *a)?;
+                }
+            }
+        }
+        Ok(Planet {
+            radius_m,
+            atmosphere_height_m,
+            ground_albedo,
+        })
+    }
+
+    /// Radius of the ground, m.
+    pub fn radius_m(&self) -> f64 {
+        self.radius_m
+    }
+
+    /// Height of the top of the atmosphere above the ground, m.
+    pub fn atmosphere_height_m(&self) -> f64 {
+        self.atmosphere_height_m
+    }
+
+    /// Radius of the top of the atmosphere, m.
+    pub fn top_radius_m(&self) -> f64 {
+        self.radius_m + self.atmosphere_height_m
+    }
+
+    /// Ground albedo as a function of wavelength.
+    pub fn ground_albedo(&self) -> &Spectrum {
+        &self.ground_albedo
+    }
+
+    /// Ground albedo at each wavelength of `grid`; a table must cover it.
+    pub fn sample_ground_albedo(&self, grid: &WavelengthGrid) -> Result<SampledSpectrum> {
+        self.ground_albedo.sample_at_wavelengths(grid).map_err(|e| {
+            Error::InvalidSpectrum(format!("planet.ground_albedo: {}", strip_prefix(&e)))
+        })
+    }
+
+    /// Altitude above the ground of a point at distance `r_m` from the
+    /// centre, m.
+    pub fn altitude_m(&self, r_m: f64) -> f64 {
+        r_m - self.radius_m
+    }
+
+    /// Distance from a point at radius `r_m` (inside the atmosphere) along
+    /// a direction of zenith cosine `mu` to the top of the atmosphere, m.
+    pub fn distance_to_top_of_atmosphere(&self, r_m: f64, mu: f64) -> f64 {
+        let top = self.top_radius_m();
+        // Roots of d^2 + 2 r mu d - (top^2 - r^2) = 0; the positive one.
+        let c = (top - r_m) * (top + r_m);
+        let discriminant = (r_m * mu * r_m * mu + c).max(0.0);
+        if mu >= 0.0 {
+            // -r mu + sqrt(disc) cancels for upward rays: use c / (r mu + sqrt).
+            let q = r_m * mu + discriminant.sqrt();
+            if q > 0.0 { c.max(0.0) / q } else { 0.0 }
+        } else {
+            -r_m * mu + discriminant.sqrt()
+        }
+    }
+
+    /// True when a ray from radius `r_m` with zenith cosine `mu` hits the
+    /// ground.
+    pub fn ray_intersects_ground(&self, r_m: f64, mu: f64) -> bool {
+        mu < 0.0 && self.ground_discriminant(r_m, mu) >= 0.0
+    }
+
+    /// Distance to the ground along (r, mu), m, or `None` when the ray
+    /// misses it.
+    pub fn distance_to_ground(&self, r_m: f64, mu: f64) -> Option<f64> {
+        if !self.ray_intersects_ground(r_m, mu) {
+            return None;
+        }
+        // The near root -r mu - sqrt(disc) cancels for grazing rays; it
+        // equals (r^2 - R^2) / (-r mu + sqrt(disc)).
+        let c = (r_m - self.radius_m) * (r_m + self.radius_m);
+        let q = -r_m * mu + self.ground_discriminant(r_m, mu).sqrt();
+        Some((c / q).max(0.0))
+    }
+
+    fn ground_discriminant(&self, r_m: f64, mu: f64) -> f64 {
+        r_m * mu * r_m * mu - (r_m - self.radius_m) * (r_m + self.radius_m)
+    }
+}
+
+fn check_albedo(name: &str, albedo: f64) -> Result<()> {
+    if (0.0..=1.0).contains(&albedo) {
+        Ok(())
+    } else {
+        Err(Error::out_of_range(name, albedo, "1", "0..=1"))
+    }
+}
+
+fn strip_prefix(e: &Error) -> String {
+    match e {
+        Error::InvalidSpectrum(message) => message.clone(),
+        other => other.to_string(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn earth() -> Planet {
+        Planet::new(6360e3, 100e3, Spectrum::Constant(0.3)).unwrap()
+    }
+
+    #[test]
+    fn vertical_and_horizontal_distances() {
+        let planet = earth();
+        let r = planet.radius_m();
+        assert!((planet.distance_to_top_of_atmosphere(r, 1.0) - 100e3).abs() < 1e-6);
+        assert!((planet.distance_to_top_of_atmosphere(r, -1.0) - (2.0 * r + 100e3)).abs() < 1e-3);
+        // Horizontal from the ground: sqrt(top^2 - r^2).
+        let expected = (planet.top_radius_m().powi(2) - r * r).sqrt();
+        assert!((planet.distance_to_top_of_atmosphere(r, 0.0) - expected).abs() < 1e-6);
+        // From 1 km up, looking straight down: 1 km to the ground.
+        let d = planet.distance_to_ground(r + 1000.0, -1.0).unwrap();
+        assert!((d - 1000.0).abs() < 1e-6, "{d}");
+        assert!(planet.distance_to_ground(r + 1000.0, 0.5).is_none());
+        // A grazing ray from 1 km misses the ground just below the tangent.
+        let mu_horizon = -(1.0 - (r / (r + 1000.0)).powi(2)).sqrt();
+        assert!(planet.ray_intersects_ground(r + 1000.0, mu_horizon - 1e-6));
+        assert!(!planet.ray_intersects_ground(r + 1000.0, mu_horizon + 1e-6));
+    }
+
+    #[test]
+    fn huge_planet_is_plane_parallel() {
+        let planet = Planet::new(1e10, 100e3, Spectrum::Constant(0.0)).unwrap();
+        let r = planet.radius_m() + 2000.0;
+        for mu in [1.0, 0.5, 0.1] {
+            let d = planet.distance_to_top_of_atmosphere(r, mu);
+            let flat = 98e3 / mu;
+            // Curvature shortens the path by ~ H / (2 R mu^2) relatively.
+            let curvature = 98e3 / (2.0 * 1e10 * mu * mu);
+            assert!(
+                (d / flat - 1.0).abs() < 2.0 * curvature + 1e-12,
+                "mu {mu}: {d} vs {flat}"
+            );
+        }
+        for mu in [-1.0, -0.5, -0.1] {
+            let d = planet.distance_to_ground(r, mu).unwrap();
+            assert!((d / (2000.0 / -mu) - 1.0).abs() < 1e-4, "mu {mu}: {d}");
+        }
+    }
+
+    #[test]
+    fn small_planet_works() {
+        let planet = Planet::new(1e5, 1e4, Spectrum::Constant(0.1)).unwrap();
+        assert!((planet.distance_to_top_of_atmosphere(1e5, 1.0) - 1e4).abs() < 1e-9);
+    }
+
+    #[test]
+    fn invalid_planets_name_the_key() {
+        let cases = [
+            (
+                Planet::new(-1.0, 1e5, Spectrum::Constant(0.0)),
+                "planet.radius_m = -1 m",
+            ),
+            (
+                Planet::new(1e4, 1e5, Spectrum::Constant(0.0)),
+                "planet.radius_m = 10000 m",
+            ),
+            (
+                Planet::new(f64::NAN, 1e5, Spectrum::Constant(0.0)),
+                "planet.radius_m = NaN",
+            ),
+            (
+                Planet::new(6e6, -5.0, Spectrum::Constant(0.0)),
+                "planet.atmosphere_height_m = -5 m",
+            ),
+            (
+                Planet::new(6e6, 1e5, Spectrum::Constant(1.5)),
+                "planet.ground_albedo = 1.5",
+            ),
+        ];
+        for (result, expected) in cases {
+            let message = result.unwrap_err().to_string();
+            assert!(message.contains(expected), "{message}");
+        }
+    }
+}

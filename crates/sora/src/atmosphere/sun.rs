@@ -1,0 +1,130 @@
+//! The sun as seen from the planet: its spectral irradiance at the top of
+//! the atmosphere (the `E_sun` of the paper's eq. 4-5) and its disc.
+//!
+//! Irradiance = the solar spectrum (flat, ASTM E490 or a user table, see
+//! [`SolarSpectrum`]) times a scale factor: 1 at Earth's mean distance,
+//! 1/d^2 for a planet at d astronomical units (Mars at 1.524 AU: 0.4306).
+//! The disc has an angular diameter (0.53 deg from Earth, 0.35 deg from
+//! Mars); 0 makes a point sun, as in the reference radiative-transfer
+//! cases.
+
+use std::f64::consts::PI;
+
+use crate::error::{Error, Result};
+use crate::spectrum::{SampledSpectrum, SolarSpectrum, WavelengthGrid};
+
+/// The sun's apparent angular diameter from Earth, degrees.
+pub const EARTH_SUN_ANGULAR_DIAMETER_DEG: f64 = 0.53;
+
+/// Largest angular diameter accepted, degrees.
+pub const MAX_SUN_ANGULAR_DIAMETER_DEG: f64 = 20.0;
+
+/// A validated sun.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sun {
+    spectrum: SolarSpectrum,
+    irradiance_scale: f64,
+    angular_diameter_deg: f64,
+}
+
+impl Sun {
+    /// A sun of spectrum `spectrum` scaled by `irradiance_scale` (> 0) with
+    /// an angular diameter `angular_diameter_deg` (0..=20 deg).
+    pub fn new(
+        spectrum: SolarSpectrum,
+        irradiance_scale: f64,
+        angular_diameter_deg: f64,
+    ) -> Result<Sun> {
+        if !(irradiance_scale.is_finite() && irradiance_scale > 0.0) {
+            return Err(Error::out_of_range(
+                "sun.irradiance_scale",
+                irradiance_scale,
+                "1",
+                "> 0 and finite",
+            ));
+        }
+        if !(0.0..=MAX_SUN_ANGULAR_DIAMETER_DEG).contains(&angular_diameter_deg) {
+            return Err(Error::out_of_range(
+                "sun.angular_diameter_deg",
+                angular_diameter_deg,
+                "deg",
+                format!("0..={MAX_SUN_ANGULAR_DIAMETER_DEG} (0: a point sun)"),
+            ));
+        }
+        Ok(Sun {
+            spectrum,
+            irradiance_scale,
+            angular_diameter_deg,
+        })
+    }
+
+    /// The unscaled solar spectrum.
+    pub fn spectrum(&self) -> &SolarSpectrum {
+        &self.spectrum
+    }
+
+    /// The factor applied to the spectrum.
+    pub fn irradiance_scale(&self) -> f64 {
+        self.irradiance_scale
+    }
+
+    /// Apparent angular diameter, degrees.
+    pub fn angular_diameter_deg(&self) -> f64 {
+        self.angular_diameter_deg
+    }
+
+    /// Apparent angular radius, radians.
+    pub fn angular_radius_rad(&self) -> f64 {
+        0.5 * self.angular_diameter_deg.to_radians()
+    }
+
+    /// Solid angle of the disc, sr: 2 pi (1 - cos(angular radius)).
+    pub fn solid_angle_sr(&self) -> f64 {
+        // 1 - cos x = 2 sin^2(x/2), without cancellation for tiny discs.
+        4.0 * PI * (0.5 * self.angular_radius_rad()).sin().powi(2)
+    }
+
+    /// Top-of-atmosphere irradiance on a plane normal to the sun's rays at
+    /// each wavelength of `grid`, W m^-2 nm^-1 (band averages, scaled).
+    pub fn sample_irradiance_w_m2_nm(&self, grid: &WavelengthGrid) -> Result<SampledSpectrum> {
+        let mut irradiance = self.spectrum.sample(grid)?;
+        irradiance *= self.irradiance_scale;
+        Ok(irradiance)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn disc_geometry() {
+        let sun = Sun::new(SolarSpectrum::flat(1.0).unwrap(), 1.0, 0.53).unwrap();
+        // 6.8e-5 sr for the sun seen from Earth.
+        assert!(
+            (sun.solid_angle_sr() - 6.72e-5).abs() < 1e-6,
+            "{}",
+            sun.solid_angle_sr()
+        );
+        let point = Sun::new(SolarSpectrum::flat(1.0).unwrap(), 1.0, 0.0).unwrap();
+        assert_eq!(point.solid_angle_sr(), 0.0);
+    }
+
+    #[test]
+    fn irradiance_is_scaled() {
+        let sun = Sun::new(SolarSpectrum::flat(2.0).unwrap(), 0.25, 0.35).unwrap();
+        let e = sun
+            .sample_irradiance_w_m2_nm(&WavelengthGrid::paper())
+            .unwrap();
+        assert_eq!(e.values(), &[0.5; 21]);
+    }
+
+    #[test]
+    fn invalid_suns_name_the_key() {
+        let flat = || SolarSpectrum::flat(1.0).unwrap();
+        let e = Sun::new(flat(), -1.0, 0.5).unwrap_err().to_string();
+        assert!(e.contains("sun.irradiance_scale = -1"), "{e}");
+        let e = Sun::new(flat(), 1.0, 90.0).unwrap_err().to_string();
+        assert!(e.contains("sun.angular_diameter_deg = 90 deg"), "{e}");
+    }
+}
