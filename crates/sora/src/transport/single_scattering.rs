@@ -1,0 +1,583 @@
+//! Single scattering: sunlight scattered once toward the eye (the paper's
+//! §4, eq. 4-5, as corrected in `NOTES.md`).
+//!
+//! For a view ray from the eye x0 in direction w, with sun direction s
+//! (unit vector toward the sun) and scattering angle theta, cos theta = w.s:
+//!
+//! ```text
+//! L(lambda) = integral_0^S T(x0, x) sum_j beta_sca,j(x, lambda) p_j(theta, lambda)
+//!                          E_sun(lambda) T_sun(x, lambda) ds        (eq. 5)
+//!           + [ray ends on the ground] T(x0, x_g) albedo(lambda)/pi E_sun(lambda)
+//!                          mu_s(x_g) T_sun(x_g, lambda)
+//! ```
+//!
+//! T is the extinction transmittance (Beer-Lambert, exp of minus the
+//! optical depth; absorption included, unlike the paper), T_sun is the
+//! transmittance from x to the top of the atmosphere toward the sun, and 0
+//! when that path hits the ground (the planet's shadow). Radiance is in
+//! W m^-2 sr^-1 nm^-1 when E_sun is in W m^-2 nm^-1. The second line is the
+//! Lambertian ground lit directly by the sun (zero for a black ground); it
+//! keeps the ground below the horizon from being black in images. The sun
+//! is a point (parallel rays) for the sky; its disc is drawn separately.
+//!
+//! Two ways to compute it, kept side by side (the RustFFT habit):
+//! - the **reference path**, [`SingleScatteringSky::compute_radiance_reference`]:
+//!   the paper's method: a uniform midpoint march along the view ray, and at
+//!   every sample a second uniform march toward the sun. Obviously right,
+//!   second-order in the step, slow.
+//! - the **fast path**, [`SingleScatteringSky::compute_radiance`]: with
+//!   parallel sun rays theta is the same along the whole view ray, so the
+//!   phase functions come out of the integral:
+//!   L = E sum_j beta_sca,j p_j(theta) I_j with
+//!   I_j(lambda) = integral rho_j(x) T(x0, x) T_sun(x) ds (m). Every optical
+//!   depth is sum_j beta_ext,j(lambda) column_j, so the march integrates
+//!   one geometric column per species, not one per wavelength. The view ray
+//!   is cut into Gauss-Legendre panels that crowd toward its start and its
+//!   lowest point ([`super::optical_column::ray_panel`]); the column back to
+//!   the eye at each node comes from the same density samples
+//!   ([`super::quadrature::running_integral_matrix`]). Columns toward the
+//!   sun are exact integrals ([`SunColumns::Exact`]) or a table
+//!   ([`SunColumns::Table`]) for images.
+
+use super::optical_column::{SunColumnTable, compute_columns_along_ray, ray_panel};
+use super::quadrature::{GAUSS_NODES, GAUSS_WEIGHTS, running_integral_matrix};
+use crate::atmosphere::{Atmosphere, AtmosphereOptics, DensityProfile};
+use crate::error::{Error, Result};
+use crate::geometry::{Vector3, direction_from_elevation_azimuth, segment_in_atmosphere};
+use crate::spectrum::{SampledSpectrum, WavelengthGrid};
+
+/// Gauss panels along a view ray in the fast path.
+pub const VIEW_RAY_PANELS: usize = 48;
+/// Gauss panels along each exact path toward the sun.
+pub const SUN_RAY_PANELS: usize = 24;
+
+/// Where the eye is and where the sun is.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Observation {
+    /// Height of the eye above the ground, m (may be above the atmosphere).
+    pub observer_altitude_m: f64,
+    /// Sun elevation above the horizon, degrees (-90..=90).
+    pub sun_elevation_deg: f64,
+    /// Sun azimuth clockwise from north, degrees.
+    pub sun_azimuth_deg: f64,
+}
+
+/// How the fast path gets the columns from a point toward the sun.
+#[derive(Debug, Clone, Copy)]
+pub enum SunColumns<'a> {
+    /// An exact Gauss-Legendre integral at every sample (for one direction).
+    Exact,
+    /// Interpolated in a precomputed table (for images).
+    Table(&'a SunColumnTable),
+}
+
+/// An atmosphere on a wavelength grid, seen from one place with the sun in
+/// one place: everything single scattering needs, precomputed.
+#[derive(Debug, Clone)]
+pub struct SingleScatteringSky {
+    optics: AtmosphereOptics,
+    ground_radius_m: f64,
+    top_radius_m: f64,
+    /// The eye, planet-centred (its local zenith is +z), m.
+    observer: Vector3,
+    /// Unit vector toward the sun in the eye's east-north-up frame, which
+    /// is also the planet-centred frame's orientation.
+    sun_direction: Vector3,
+    sun_angular_radius_rad: f64,
+    running_integral: [[f64; 4]; 4],
+}
+
+/// Per-thread work space of the fast path (no allocation per ray).
+#[derive(Debug, Clone)]
+pub struct SingleScatteringScratch {
+    densities: Vec<f64>,
+    /// Columns from the eye to the start of the current panel.
+    view_columns: Vec<f64>,
+    /// Columns from the eye to the current node.
+    node_view_columns: Vec<f64>,
+    sun_columns: Vec<f64>,
+    panel_densities: Vec<[f64; 4]>,
+    optical_depth: Vec<f64>,
+    phase: Vec<f64>,
+    /// I_j(lambda), species-major: [j * wavelengths + i], m.
+    inscattering_integrals: Vec<f64>,
+    /// The Lambertian ground's radiance times the view transmittance.
+    ground_radiance: Vec<f64>,
+    /// Transmittance of the whole view ray (for the sun's disc).
+    view_transmittance: Vec<f64>,
+}
+
+impl SingleScatteringSky {
+    /// Puts `atmosphere` on `grid` and places the eye and the sun.
+    pub fn new(
+        atmosphere: &Atmosphere,
+        grid: &WavelengthGrid,
+        observation: Observation,
+    ) -> Result<SingleScatteringSky> {
+        let optics = atmosphere.compute_optics(grid)?;
+        SingleScatteringSky::from_optics(
+            optics,
+            atmosphere.planet.radius_m(),
+            atmosphere.planet.top_radius_m(),
+            atmosphere.sun.angular_radius_rad(),
+            observation,
+        )
+    }
+
+    /// From optics already on a grid (e.g. with a ground albedo replaced).
+    pub fn from_optics(
+        optics: AtmosphereOptics,
+        ground_radius_m: f64,
+        top_radius_m: f64,
+        sun_angular_radius_rad: f64,
+        observation: Observation,
+    ) -> Result<SingleScatteringSky> {
+        let Observation {
+            observer_altitude_m,
+            sun_elevation_deg,
+            sun_azimuth_deg,
+        } = observation;
+        if !(observer_altitude_m.is_finite() && observer_altitude_m >= 0.0) {
+            return Err(Error::out_of_range(
+                "observer altitude",
+                observer_altitude_m,
+                "m",
+                ">= 0 (on or above the ground)",
+            ));
+        }
+        if !(-90.0..=90.0).contains(&sun_elevation_deg) {
+            return Err(Error::out_of_range(
+                "sun elevation",
+                sun_elevation_deg,
+                "deg",
+                "-90..=90",
+            ));
+        }
+        if !sun_azimuth_deg.is_finite() {
+            return Err(Error::out_of_range(
+                "sun azimuth",
+                sun_azimuth_deg,
+                "deg",
+                "a finite angle",
+            ));
+        }
+        Ok(SingleScatteringSky {
+            optics,
+            ground_radius_m,
+            top_radius_m,
+            observer: Vector3::new(0.0, 0.0, ground_radius_m + observer_altitude_m),
+            sun_direction: direction_from_elevation_azimuth(sun_elevation_deg, sun_azimuth_deg),
+            sun_angular_radius_rad,
+            running_integral: running_integral_matrix(),
+        })
+    }
+
+    /// The optics on the grid.
+    pub fn optics(&self) -> &AtmosphereOptics {
+        &self.optics
+    }
+
+    /// Unit vector toward the sun (east-north-up).
+    pub fn sun_direction(&self) -> Vector3 {
+        self.sun_direction
+    }
+
+    /// Planet radius and top-of-atmosphere radius, m.
+    pub fn radii_m(&self) -> (f64, f64) {
+        (self.ground_radius_m, self.top_radius_m)
+    }
+
+    fn profiles(&self) -> Vec<&DensityProfile> {
+        self.optics.species.iter().map(|s| &s.profile).collect()
+    }
+
+    /// The sun-column table for images of this sky (altitude x mu nodes).
+    pub fn compute_sun_column_table(
+        &self,
+        altitude_nodes: usize,
+        mu_nodes: usize,
+    ) -> SunColumnTable {
+        SunColumnTable::compute(
+            &self.profiles(),
+            self.ground_radius_m,
+            self.top_radius_m,
+            altitude_nodes,
+            mu_nodes,
+        )
+    }
+
+    /// Work space for [`SingleScatteringSky::compute_radiance`].
+    pub fn scratch(&self) -> SingleScatteringScratch {
+        let (species, wavelengths) = (self.optics.species.len(), self.optics.grid.len());
+        SingleScatteringScratch {
+            densities: vec![0.0; species],
+            view_columns: vec![0.0; species],
+            node_view_columns: vec![0.0; species],
+            sun_columns: vec![0.0; species],
+            panel_densities: vec![[0.0; 4]; species],
+            optical_depth: vec![0.0; wavelengths],
+            phase: vec![0.0; wavelengths],
+            inscattering_integrals: vec![0.0; species * wavelengths],
+            ground_radiance: vec![0.0; wavelengths],
+            view_transmittance: vec![0.0; wavelengths],
+        }
+    }
+
+    /// Columns toward the sun from `point` (planet-centred), into
+    /// `columns`; false when the point is in the planet's shadow.
+    fn columns_to_sun(
+        &self,
+        point: Vector3,
+        sun_columns: SunColumns,
+        profiles: &[&DensityProfile],
+        columns: &mut [f64],
+    ) -> bool {
+        let r = point.length();
+        let mu = point.dot(self.sun_direction) / r;
+        match sun_columns {
+            SunColumns::Table(table) => table.lookup_columns_to_sun(r, mu, columns),
+            SunColumns::Exact => {
+                if crate::geometry::distance_to_ground(
+                    point,
+                    self.sun_direction,
+                    self.ground_radius_m,
+                )
+                .is_some_and(|t| t > 0.0)
+                    || (mu < 0.0
+                        && r * r * (1.0 - mu * mu) <= self.ground_radius_m * self.ground_radius_m)
+                {
+                    return false;
+                }
+                let length = crate::geometry::distance_to_top_of_atmosphere(
+                    point,
+                    self.sun_direction,
+                    self.top_radius_m,
+                );
+                compute_columns_along_ray(
+                    profiles,
+                    self.ground_radius_m,
+                    point,
+                    self.sun_direction,
+                    length,
+                    SUN_RAY_PANELS,
+                    columns,
+                );
+                true
+            }
+        }
+    }
+
+    /// Fast path, first half: fills the scratch's in-scattering integrals
+    /// I_j(lambda) (m), the ground term and the view transmittance for the
+    /// view direction `view` (unit, east-north-up).
+    pub fn compute_inscattering_integrals(
+        &self,
+        view: Vector3,
+        sun_columns: SunColumns,
+        scratch: &mut SingleScatteringScratch,
+    ) {
+        let species = &self.optics.species;
+        let wavelengths = self.optics.grid.len();
+        scratch.inscattering_integrals.fill(0.0);
+        scratch.ground_radiance.fill(0.0);
+        scratch.view_transmittance.fill(1.0);
+        scratch.view_columns.fill(0.0);
+        let Some((enter, exit)) =
+            segment_in_atmosphere(self.observer, view, self.ground_radius_m, self.top_radius_m)
+        else {
+            return;
+        };
+        let start = self.observer + view * enter;
+        let length = exit - enter;
+        if length <= 0.0 {
+            return self.add_ground_term(start, view, sun_columns, scratch);
+        }
+        let profiles = self.profiles();
+        let tangent_distance = -start.dot(view);
+        for k in 0..VIEW_RAY_PANELS {
+            let (a, b) = ray_panel(tangent_distance, length, VIEW_RAY_PANELS, k);
+            let (centre, half) = (0.5 * (a + b), 0.5 * (b - a));
+            let mut points = [Vector3::default(); 4];
+            for (n, x) in GAUSS_NODES.iter().enumerate() {
+                points[n] = start + view * (centre + half * x);
+                let altitude_m = points[n].length() - self.ground_radius_m;
+                for (j, profile) in profiles.iter().enumerate() {
+                    scratch.panel_densities[j][n] = profile.relative_density(altitude_m);
+                }
+            }
+            for n in 0..4 {
+                // Column from the eye to this node: all previous panels plus
+                // the running integral inside this one.
+                for j in 0..species.len() {
+                    let inside: f64 = (0..4)
+                        .map(|m| self.running_integral[n][m] * scratch.panel_densities[j][m])
+                        .sum();
+                    scratch.densities[j] = scratch.panel_densities[j][n];
+                    scratch.node_view_columns[j] = scratch.view_columns[j] + half * inside;
+                }
+                if !self.columns_to_sun(points[n], sun_columns, &profiles, &mut scratch.sun_columns)
+                {
+                    continue;
+                }
+                scratch.optical_depth.fill(0.0);
+                for (j, s) in species.iter().enumerate() {
+                    let column = scratch.node_view_columns[j] + scratch.sun_columns[j];
+                    for (tau, beta) in scratch
+                        .optical_depth
+                        .iter_mut()
+                        .zip(s.extinction_per_m.values())
+                    {
+                        *tau += beta * column;
+                    }
+                }
+                let weight = half * GAUSS_WEIGHTS[n];
+                for (j, s) in species.iter().enumerate() {
+                    let density = scratch.densities[j];
+                    if density <= 0.0 || s.scattering_per_m.values().iter().all(|b| *b == 0.0) {
+                        continue;
+                    }
+                    let row =
+                        &mut scratch.inscattering_integrals[j * wavelengths..(j + 1) * wavelengths];
+                    for (acc, tau) in row.iter_mut().zip(&scratch.optical_depth) {
+                        *acc += weight * density * (-tau).exp();
+                    }
+                }
+            }
+            for j in 0..species.len() {
+                let panel: f64 = (0..4)
+                    .map(|m| GAUSS_WEIGHTS[m] * scratch.panel_densities[j][m])
+                    .sum();
+                scratch.view_columns[j] += half * panel;
+            }
+        }
+        // Transmittance of the whole view ray.
+        for (i, t) in scratch.view_transmittance.iter_mut().enumerate() {
+            let tau: f64 = species
+                .iter()
+                .zip(&scratch.view_columns)
+                .map(|(s, c)| s.extinction_per_m[i] * c)
+                .sum();
+            *t = (-tau).exp();
+        }
+        let end = start + view * length;
+        if end.length() <= self.ground_radius_m * (1.0 + 1e-12) {
+            self.add_ground_term(end, view, sun_columns, scratch);
+        }
+    }
+
+    /// The sunlit Lambertian ground at `ground_point`, seen through the view
+    /// transmittance already in the scratch.
+    fn add_ground_term(
+        &self,
+        ground_point: Vector3,
+        _view: Vector3,
+        sun_columns: SunColumns,
+        scratch: &mut SingleScatteringScratch,
+    ) {
+        let normal = ground_point.normalized();
+        let mu_sun = normal.dot(self.sun_direction);
+        if mu_sun <= 0.0 || self.optics.ground_albedo.values().iter().all(|a| *a == 0.0) {
+            return;
+        }
+        let profiles = self.profiles();
+        let point = normal * self.ground_radius_m;
+        if !self.columns_to_sun(point, sun_columns, &profiles, &mut scratch.sun_columns) {
+            return;
+        }
+        for (i, out) in scratch.ground_radiance.iter_mut().enumerate() {
+            let tau_sun: f64 = self
+                .optics
+                .species
+                .iter()
+                .zip(&scratch.sun_columns)
+                .map(|(s, c)| s.extinction_per_m[i] * c)
+                .sum();
+            *out = self.optics.ground_albedo[i] / std::f64::consts::PI
+                * self.optics.solar_irradiance_w_m2_nm[i]
+                * mu_sun
+                * (-tau_sun).exp()
+                * scratch.view_transmittance[i];
+        }
+    }
+
+    /// Fast path, second half: radiance from the integrals in `scratch`
+    /// for a view at scattering-angle cosine `cos_theta` with the sun,
+    /// W m^-2 sr^-1 nm^-1, into `radiance`.
+    pub fn radiance_from_integrals(
+        &self,
+        cos_theta: f64,
+        integrals: &[f64],
+        ground_radiance: &[f64],
+        phase: &mut [f64],
+        radiance: &mut [f64],
+    ) {
+        let wavelengths = self.optics.grid.len();
+        radiance.copy_from_slice(ground_radiance);
+        for (j, s) in self.optics.species.iter().enumerate() {
+            let row = &integrals[j * wavelengths..(j + 1) * wavelengths];
+            if row.iter().all(|v| *v == 0.0) {
+                continue;
+            }
+            s.phase_function.eval_into(cos_theta, phase);
+            for i in 0..wavelengths {
+                radiance[i] += self.optics.solar_irradiance_w_m2_nm[i]
+                    * s.scattering_per_m[i]
+                    * phase[i]
+                    * row[i];
+            }
+        }
+    }
+
+    /// Fast path: single-scattered sky radiance (plus the sunlit ground) in
+    /// the direction `view` (unit, east-north-up), W m^-2 sr^-1 nm^-1.
+    pub fn compute_radiance(
+        &self,
+        view: Vector3,
+        sun_columns: SunColumns,
+        scratch: &mut SingleScatteringScratch,
+        radiance: &mut SampledSpectrum,
+    ) {
+        self.compute_inscattering_integrals(view, sun_columns, scratch);
+        let cos_theta = view.dot(self.sun_direction);
+        let SingleScatteringScratch {
+            inscattering_integrals,
+            ground_radiance,
+            phase,
+            ..
+        } = scratch;
+        self.radiance_from_integrals(
+            cos_theta,
+            inscattering_integrals,
+            ground_radiance,
+            phase,
+            radiance.values_mut(),
+        );
+    }
+
+    /// The view transmittance of the last ray given to the fast path.
+    pub fn last_view_transmittance<'s>(&self, scratch: &'s SingleScatteringScratch) -> &'s [f64] {
+        &scratch.view_transmittance
+    }
+
+    /// Reference path (the paper's method): uniform midpoint march of
+    /// `view_steps` along the view ray and, from every sample,
+    /// `sun_steps` toward the sun. W m^-2 sr^-1 nm^-1.
+    pub fn compute_radiance_reference(
+        &self,
+        view: Vector3,
+        view_steps: usize,
+        sun_steps: usize,
+    ) -> SampledSpectrum {
+        let optics = &self.optics;
+        let wavelengths = optics.grid.len();
+        let mut radiance = SampledSpectrum::zeros(wavelengths);
+        let Some((enter, exit)) =
+            segment_in_atmosphere(self.observer, view, self.ground_radius_m, self.top_radius_m)
+        else {
+            return radiance;
+        };
+        let cos_theta = view.dot(self.sun_direction);
+        let step = (exit - enter) / view_steps as f64;
+        let mut tau_view = SampledSpectrum::zeros(wavelengths);
+        let mut extinction = SampledSpectrum::zeros(wavelengths);
+        let mut scattering = SampledSpectrum::zeros(wavelengths);
+        let mut tau_sun = SampledSpectrum::zeros(wavelengths);
+        let mut phase_buffer = vec![0.0; wavelengths];
+        for i in 0..view_steps {
+            let point = self.observer + view * (enter + (i as f64 + 0.5) * step);
+            let altitude_m = point.length() - self.ground_radius_m;
+            extinction.fill(0.0);
+            optics.add_extinction_at_altitude(altitude_m, &mut extinction);
+            if self.reference_optical_depth_to_sun(point, sun_steps, &mut tau_sun) {
+                scattering.fill(0.0);
+                optics.add_scattering_at_altitude(
+                    altitude_m,
+                    cos_theta,
+                    &mut phase_buffer,
+                    &mut scattering,
+                );
+                for w in 0..wavelengths {
+                    let tau = tau_view[w] + 0.5 * step * extinction[w] + tau_sun[w];
+                    radiance[w] +=
+                        optics.solar_irradiance_w_m2_nm[w] * scattering[w] * (-tau).exp() * step;
+                }
+            }
+            tau_view.add_scaled(&extinction, step);
+        }
+        // The sunlit ground, when the ray ends there.
+        let end = self.observer + view * exit;
+        let normal = end.normalized();
+        let mu_sun = normal.dot(self.sun_direction);
+        if end.length() <= self.ground_radius_m * (1.0 + 1e-12)
+            && mu_sun > 0.0
+            && self.reference_optical_depth_to_sun(
+                normal * self.ground_radius_m,
+                sun_steps,
+                &mut tau_sun,
+            )
+        {
+            for w in 0..wavelengths {
+                radiance[w] += optics.ground_albedo[w] / std::f64::consts::PI
+                    * optics.solar_irradiance_w_m2_nm[w]
+                    * mu_sun
+                    * (-(tau_sun[w] + tau_view[w])).exp();
+            }
+        }
+        radiance
+    }
+
+    /// Uniform midpoint march toward the sun; false in the planet's shadow.
+    fn reference_optical_depth_to_sun(
+        &self,
+        point: Vector3,
+        steps: usize,
+        tau: &mut SampledSpectrum,
+    ) -> bool {
+        let r = point.length();
+        let mu = point.dot(self.sun_direction) / r;
+        if mu < 0.0 && r * r * (1.0 - mu * mu) <= self.ground_radius_m * self.ground_radius_m {
+            return false;
+        }
+        let length = crate::geometry::distance_to_top_of_atmosphere(
+            point,
+            self.sun_direction,
+            self.top_radius_m,
+        );
+        let step = length / steps as f64;
+        tau.fill(0.0);
+        for k in 0..steps {
+            let altitude_m = (point + self.sun_direction * ((k as f64 + 0.5) * step)).length()
+                - self.ground_radius_m;
+            self.optics.add_extinction_at_altitude(altitude_m, tau);
+        }
+        *tau *= step;
+        true
+    }
+
+    /// Radiance of the sun's disc seen along `view` (zero outside it),
+    /// W m^-2 sr^-1 nm^-1: E_sun / (solid angle) times the view
+    /// transmittance, with linear limb darkening I(mu)/I(1) = 1 - 0.6 (1 - mu)
+    /// normalised so that the disc's integral is E_sun T.
+    pub fn add_sun_disc(&self, view: Vector3, view_transmittance: &[f64], radiance: &mut [f64]) {
+        let radius = self.sun_angular_radius_rad;
+        if radius <= 0.0 {
+            return;
+        }
+        let angle = view
+            .cross(self.sun_direction)
+            .length()
+            .atan2(view.dot(self.sun_direction));
+        if angle >= radius {
+            return;
+        }
+        const LIMB_DARKENING: f64 = 0.6;
+        let mu = (1.0 - (angle / radius).powi(2)).max(0.0).sqrt();
+        let solid_angle_sr = 2.0 * std::f64::consts::PI * (1.0 - radius.cos());
+        let profile = (1.0 - LIMB_DARKENING * (1.0 - mu)) / (1.0 - LIMB_DARKENING / 3.0);
+        for (i, out) in radiance.iter_mut().enumerate() {
+            *out += self.optics.solar_irradiance_w_m2_nm[i] / solid_angle_sr
+                * profile
+                * view_transmittance[i];
+        }
+    }
+}
