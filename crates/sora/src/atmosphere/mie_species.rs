@@ -26,11 +26,15 @@
 //! - `"paper-hg"`: the paper's eq. 3, Henyey-Greenstein with its g(radius)
 //!   rule averaged over the distribution.
 
-use super::phase::PhaseFunction;
+use super::phase::{PhaseFunction, TabulatedPhase};
 use crate::error::{Error, Result};
 use crate::mie::distribution::SizeDistribution;
+use crate::mie::ensemble::{
+    AerosolPhaseFunction, EnsembleError, EnsembleOptics, EnsembleSettings,
+    compute_ensemble_cross_sections, compute_ensemble_optics_spectrum,
+};
 use crate::mie::paper_phase::AerosolPhaseMode;
-use crate::mie::refractive_index::RefractiveIndexModel;
+use crate::mie::refractive_index::{RefractiveIndexError, RefractiveIndexModel};
 use crate::spectrum::{SampledSpectrum, WavelengthGrid};
 
 /// How much aerosol there is.
@@ -65,21 +69,114 @@ pub struct MieOptics {
 
 impl MieAerosol {
     /// Ensemble cross-sections on `grid` and the phase function, scaled to
-    /// the amount (the expensive step: one Mie ensemble per wavelength).
-    /// `name` prefixes errors (`species[1]`).
+    /// the amount (the expensive step: one Mie ensemble per wavelength,
+    /// with `sora-mie`'s validated quadrature settings). `name` prefixes
+    /// errors (`species[1] (dust)`).
     pub fn compute_optics(
         &self,
         grid: &WavelengthGrid,
         column_m: f64,
         name: &str,
     ) -> Result<MieOptics> {
-        let _ = (grid, column_m);
-        Err(Error::parse(
+        let settings = EnsembleSettings {
+            phase_mode: self.phase_mode,
+            ..EnsembleSettings::default()
+        };
+        let wavelengths_nm: Vec<f64> = grid.wavelengths_nm().collect();
+        let per_wavelength = compute_ensemble_optics_spectrum(
+            &wavelengths_nm,
+            &self.refractive_index,
+            &self.size_distribution,
+            &settings,
+        )
+        .map_err(|e| ensemble_error(name, e))?;
+
+        let reference_number_density_m3 = match self.amount {
+            ParticleAmount::NumberDensityM3(n) => n,
+            ParticleAmount::OpticalDepth {
+                optical_depth,
+                reference_wavelength_nm,
+            } => {
+                let m = self
+                    .refractive_index
+                    .refractive_index_at(reference_wavelength_nm)
+                    .map_err(|e| ensemble_error(name, e.into()))?;
+                let reference = compute_ensemble_cross_sections(
+                    reference_wavelength_nm,
+                    m,
+                    &self.size_distribution,
+                    &settings.cross_section_quadrature,
+                )
+                .map_err(|e| ensemble_error(name, e))?;
+                optical_depth / (reference.extinction_cross_section_m2 * column_m)
+            }
+        };
+
+        let n = reference_number_density_m3;
+        let extinction_per_m = per_wavelength
+            .iter()
+            .map(|o| n * o.cross_sections.extinction_cross_section_m2)
+            .collect();
+        let scattering_per_m = per_wavelength
+            .iter()
+            .map(|o| n * o.cross_sections.scattering_cross_section_m2)
+            .collect();
+        let phase_function = phase_on_grid(&per_wavelength).ok_or_else(|| {
+            Error::InvalidSpectrum(format!(
+                "{name}: the Mie phase tables of the wavelengths do not share their angles"
+            ))
+        })?;
+        Ok(MieOptics {
+            extinction_per_m: SampledSpectrum::from_values(extinction_per_m),
+            scattering_per_m: SampledSpectrum::from_values(scattering_per_m),
+            phase_function,
+            reference_number_density_m3,
+        })
+    }
+}
+
+/// The per-wavelength phase functions of the ensembles as one
+/// [`PhaseFunction`]: Henyey-Greenstein with the paper's g per wavelength,
+/// or one table with a row per wavelength (the engine tabulates every
+/// wavelength on the same angles).
+fn phase_on_grid(per_wavelength: &[EnsembleOptics]) -> Option<PhaseFunction> {
+    let mut asymmetry_g = Vec::with_capacity(per_wavelength.len());
+    let mut nodes: Option<&[f64]> = None;
+    let mut rows = Vec::with_capacity(per_wavelength.len());
+    for optics in per_wavelength {
+        match &optics.phase_function {
+            AerosolPhaseFunction::HenyeyGreenstein(hg) => {
+                asymmetry_g.push(hg.asymmetry_parameter());
+            }
+            AerosolPhaseFunction::Tabulated(table) => {
+                let table_nodes = table.cos_theta_nodes();
+                if nodes.is_some_and(|n| n != table_nodes) {
+                    return None;
+                }
+                nodes = Some(table_nodes);
+                rows.push(table.phase_per_sr_nodes().to_vec());
+            }
+        }
+    }
+    match nodes {
+        None => Some(PhaseFunction::HenyeyGreenstein { asymmetry_g }),
+        Some(_) if !asymmetry_g.is_empty() => None,
+        Some(nodes) => TabulatedPhase::new(nodes.to_vec(), rows).map(PhaseFunction::Tabulated),
+    }
+}
+
+/// An engine error as a one-line library error: a refractive-index table
+/// that does not cover a wavelength is a spectrum problem (like any table
+/// that does not cover the grid); the rest are Mie-domain problems.
+fn ensemble_error(name: &str, e: EnsembleError) -> Error {
+    match e {
+        EnsembleError::RefractiveIndex(RefractiveIndexError::WavelengthOutsideTable { .. }) => {
+            Error::InvalidSpectrum(format!("{name}: scattering.mie.refractive_index: {e}"))
+        }
+        other => Error::parse(
             "atmosphere",
             0,
-            format!(
-                "{name}: Mie aerosol optics are not yet available (the sora-mie ensemble is still being written); use scattering.parametric meanwhile"
-            ),
-        ))
+            format!("{name}: Mie aerosol optics: {other}"),
+        ),
     }
 }
