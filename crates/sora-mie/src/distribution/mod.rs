@@ -85,6 +85,14 @@ use special_functions::{
 };
 use std::f64::consts::PI;
 
+/// Size parameter above which the importance model of the quadrature takes
+/// Mie efficiencies as roughly constant (the geometric regime): near the
+/// first extinction maximum, 2 x (n - 1) ~ 4 for n ~ 1.5, where Q_sca ~ 3-4
+/// after rising like x^4 from the Rayleigh regime. Below it the model falls
+/// like x^4, which under-weights x ~ 1-4 relative to reality (Q_sca(1) ~ 0.2
+/// for n = 1.5), the safe direction for where the integral's mass is.
+const GEOMETRIC_REGIME_SIZE_PARAMETER: f64 = 4.0;
+
 /// Why a size distribution could not be built.
 #[derive(Debug, Clone, PartialEq)]
 pub enum SizeDistributionError {
@@ -382,29 +390,33 @@ impl SizeDistributionShape {
         }
     }
 
-    /// ln of the area-weighted density r^2 dN/d ln r at t = ln r, up to an
+    /// ln of the moment-weighted density r^p dN/d ln r at t = ln r, up to an
     /// additive constant; concave in t for both shapes.
-    fn ln_area_weighted_density_unnormalised(&self, ln_radius: f64) -> f64 {
+    fn ln_moment_weighted_density_unnormalised(&self, ln_radius: f64, power: f64) -> f64 {
         match self {
             SizeDistributionShape::LogNormal(d) => {
                 let s = d.ln_geometric_standard_deviation();
                 let z = (ln_radius - d.number_median_radius_m.ln()) / s;
-                2.0 * ln_radius - 0.5 * z * z
+                power * ln_radius - 0.5 * z * z
             }
             SizeDistributionShape::ModifiedGamma(d) => {
-                // r^(k+2) exp(-r/theta), in units of theta.
+                // r^(k+p) exp(-r/theta), with r in units of theta.
                 let t = ln_radius - d.gamma_scale_m().ln();
-                (d.gamma_shape() + 2.0) * t - t.exp()
+                (d.gamma_shape() + power) * t - t.exp()
             }
         }
     }
 
-    /// ln r at the peak of the area-weighted density.
-    fn ln_radius_of_area_weighted_peak(&self) -> f64 {
+    /// ln r at the peak of the moment-weighted density r^p dN/d ln r:
+    /// ln r_m + p s^2 for the log-normal, ln((k + p) theta) for the gamma.
+    fn ln_radius_of_moment_weighted_peak(&self, power: f64) -> f64 {
         match self {
-            SizeDistributionShape::LogNormal(d) => d.area_weighted_median_radius_m().ln(),
+            SizeDistributionShape::LogNormal(d) => {
+                let s = d.ln_geometric_standard_deviation();
+                d.number_median_radius_m.ln() + power * s * s
+            }
             SizeDistributionShape::ModifiedGamma(d) => {
-                ((d.gamma_shape() + 2.0) * d.gamma_scale_m()).ln()
+                ((d.gamma_shape() + power) * d.gamma_scale_m()).ln()
             }
         }
     }
@@ -587,35 +599,69 @@ impl SizeDistribution {
         (effective_radius_m, m4 * m2 / (m3 * m3) - 1.0)
     }
 
-    /// ln r at the peak of this population's area-weighted density (clipped to the window).
-    fn ln_radius_of_area_weighted_peak(&self) -> f64 {
-        let peak = self.shape.ln_radius_of_area_weighted_peak();
+    /// ln of the importance density at t = ln r, up to a constant: the
+    /// integrand of a cross-section modelled as
+    /// `r^2 min(1, x / x_g)^4 dN/d ln r`, `x = k r`, i.e. an efficiency
+    /// constant above [`GEOMETRIC_REGIME_SIZE_PARAMETER`] `x_g` and falling
+    /// like Rayleigh's x^4 below it; or the area-weighted density
+    /// `r^2 dN/d ln r` when `wavenumber_per_m` is 0. A sum of concave functions
+    /// of t, hence concave.
+    fn ln_importance_density(&self, ln_radius: f64, wavenumber_per_m: f64) -> f64 {
+        let rayleigh_suppression = if wavenumber_per_m > 0.0 {
+            4.0 * (ln_radius + (wavenumber_per_m / GEOMETRIC_REGIME_SIZE_PARAMETER).ln()).min(0.0)
+        } else {
+            0.0
+        };
+        self.shape
+            .ln_moment_weighted_density_unnormalised(ln_radius, 2.0)
+            + rayleigh_suppression
+    }
+
+    /// ln r at the peak of the importance density, clipped to the window (the
+    /// maximum of a concave function over an interval).
+    fn ln_radius_of_importance_peak(&self, wavenumber_per_m: f64) -> f64 {
+        let area_peak = self.shape.ln_radius_of_moment_weighted_peak(2.0);
+        let peak = if wavenumber_per_m > 0.0 {
+            // Where x = x_g; below it the importance is r^6 dN/d ln r.
+            let geometric_regime_start = (GEOMETRIC_REGIME_SIZE_PARAMETER / wavenumber_per_m).ln();
+            let rayleigh_peak = self.shape.ln_radius_of_moment_weighted_peak(6.0);
+            if area_peak >= geometric_regime_start {
+                area_peak
+            } else if rayleigh_peak <= geometric_regime_start {
+                rayleigh_peak
+            } else {
+                geometric_regime_start
+            }
+        } else {
+            area_peak
+        };
         match self.radius_window {
             Some(w) => peak.clamp(w.min_radius_m.ln(), w.max_radius_m.ln()),
             None => peak,
         }
     }
 
-    /// How many e-folds the area-weighted density at t = ln r lies below its
+    /// How many e-folds the importance density at t = ln r lies below its
     /// (clipped) peak: >= 0 inside the window.
-    fn area_weighted_depth_below_peak(&self, ln_radius: f64) -> f64 {
-        let peak = self.ln_radius_of_area_weighted_peak();
-        self.shape.ln_area_weighted_density_unnormalised(peak)
-            - self.shape.ln_area_weighted_density_unnormalised(ln_radius)
+    fn importance_depth_below_peak(&self, ln_radius: f64, wavenumber_per_m: f64) -> f64 {
+        let peak = self.ln_radius_of_importance_peak(wavenumber_per_m);
+        self.ln_importance_density(peak, wavenumber_per_m)
+            - self.ln_importance_density(ln_radius, wavenumber_per_m)
     }
 
-    /// The ln-radius interval where the area-weighted density is within
+    /// The ln-radius interval where the importance density is within
     /// exp(-tail_depth) of its peak, clipped to the window. The depth is
-    /// concave-up in t with its minimum at the peak, so each end is found by
+    /// convex in t with its minimum at the peak, so each end is found by
     /// bracketing outwards in steps of the spread and bisecting.
-    fn ln_radius_integration_range(&self, tail_depth: f64) -> (f64, f64) {
-        let peak = self.ln_radius_of_area_weighted_peak();
+    fn ln_radius_integration_range(&self, tail_depth: f64, wavenumber_per_m: f64) -> (f64, f64) {
+        let peak = self.ln_radius_of_importance_peak(wavenumber_per_m);
         let spread = self.shape.ln_radius_spread();
+        let depth = |t: f64| self.importance_depth_below_peak(t, wavenumber_per_m);
         let find_end = |direction: f64| {
             let mut inside = peak;
             let mut step = spread;
             let mut outside = peak + direction * step;
-            while self.area_weighted_depth_below_peak(outside) < tail_depth {
+            while depth(outside) < tail_depth {
                 inside = outside;
                 step *= 2.0;
                 outside = peak + direction * step;
@@ -625,7 +671,7 @@ impl SizeDistribution {
                 if middle == inside || middle == outside {
                     break;
                 }
-                if self.area_weighted_depth_below_peak(middle) < tail_depth {
+                if depth(middle) < tail_depth {
                     inside = middle;
                 } else {
                     outside = middle;
@@ -828,7 +874,7 @@ mod tests {
     #[test]
     fn integration_range_covers_the_area_weighted_log_normal() {
         let d = SizeDistribution::log_normal(0.78 * MICROMETRE, 1.67).unwrap();
-        let (lower, upper) = d.ln_radius_integration_range(25.0);
+        let (lower, upper) = d.ln_radius_integration_range(25.0, 0.0);
         let s = 1.67f64.ln();
         let centre = (0.78 * MICROMETRE).ln() + 2.0 * s * s;
         let half_width = (2.0 * 25.0f64).sqrt() * s;
@@ -838,7 +884,7 @@ mod tests {
         let t = d
             .truncated_to(RadiusWindow::from_micrometres(0.45, 0.56).unwrap())
             .unwrap();
-        let (lower, upper) = t.ln_radius_integration_range(25.0);
+        let (lower, upper) = t.ln_radius_integration_range(25.0, 0.0);
         assert_eq!(
             (lower, upper),
             ((0.45 * MICROMETRE).ln(), (0.56 * MICROMETRE).ln())

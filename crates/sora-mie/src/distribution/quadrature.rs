@@ -56,18 +56,28 @@ pub struct RadiusQuadratureSettings {
     pub max_panel_width_ln_radius: f64,
     /// Largest panel width in units of the distribution's spread s in ln r (> 0).
     pub max_panel_width_in_spreads: f64,
-    /// Largest panel width in size parameter x = 2 pi r / lambda (> 0); a
-    /// panel starting at x is at most this / x wide in ln r. Unused when the
-    /// quadrature is built without a wavelength.
-    pub max_panel_width_size_parameter: f64,
-    /// The range ends where the area-weighted density is this many e-folds
+    /// Node density (nodes per unit of ln r) that resolves the Mie resonance
+    /// structure, at the peak of the area-weighted density (>= 0; 0 disables
+    /// it, as does building the quadrature without a wavelength).
+    pub resonance_nodes_per_unit_ln_radius: f64,
+    /// Decrease of that density per e-fold of depth of the importance
+    /// density below its peak (>= 0): tails need less resolution.
+    pub resonance_density_decrease_per_efold: f64,
+    /// Exponential decay rate of that density per e-fold of depth (>= 0):
+    /// the optimal allocation when errors are noise-like (unresolved
+    /// oscillations, as in the phase function) rather than exponentially
+    /// convergent.
+    pub resonance_density_decay_rate_per_efold: f64,
+    /// Size parameter below which there is no resonance structure to resolve
+    /// (>= 0).
+    pub min_resonant_size_parameter: f64,
+    /// Growth of the smoothness limits (the two maximum panel widths) per
+    /// e-fold of depth below the peak of the importance density (>= 0): the
+    /// tails carry little of the integral and vary smoothly.
+    pub tail_panel_widening_per_efold: f64,
+    /// The range ends where the importance density is this many e-folds
     /// below its peak (> 0).
     pub tail_depth: f64,
-    /// Depth (e-folds below the peak) beyond which the size-parameter limit is
-    /// relaxed (>= 0).
-    pub tail_relaxation_start_depth: f64,
-    /// Rate of that relaxation per e-fold of depth (>= 0; 0 disables it).
-    pub tail_relaxation_rate: f64,
 }
 
 impl RadiusQuadratureSettings {
@@ -81,10 +91,12 @@ impl RadiusQuadratureSettings {
             nodes_per_panel: 8,
             max_panel_width_ln_radius: 0.25,
             max_panel_width_in_spreads: 0.5,
-            max_panel_width_size_parameter: 3.0,
-            tail_depth: 25.0,
-            tail_relaxation_start_depth: 4.5,
-            tail_relaxation_rate: 0.5,
+            resonance_nodes_per_unit_ln_radius: 300.0,
+            resonance_density_decrease_per_efold: 20.0,
+            resonance_density_decay_rate_per_efold: 0.0,
+            min_resonant_size_parameter: 1.0,
+            tail_panel_widening_per_efold: 0.25,
+            tail_depth: 18.0,
         }
     }
 
@@ -96,10 +108,12 @@ impl RadiusQuadratureSettings {
             nodes_per_panel: 8,
             max_panel_width_ln_radius: 0.5,
             max_panel_width_in_spreads: 1.0,
-            max_panel_width_size_parameter: 12.0,
+            resonance_nodes_per_unit_ln_radius: 40.0,
+            resonance_density_decrease_per_efold: 0.0,
+            resonance_density_decay_rate_per_efold: 0.5,
+            min_resonant_size_parameter: 1.0,
+            tail_panel_widening_per_efold: 0.25,
             tail_depth: 14.0,
-            tail_relaxation_start_depth: 3.0,
-            tail_relaxation_rate: 0.5,
         }
     }
 
@@ -110,34 +124,35 @@ impl RadiusQuadratureSettings {
             nodes_per_panel: 16,
             max_panel_width_ln_radius: 0.25,
             max_panel_width_in_spreads: 0.25,
-            max_panel_width_size_parameter: f64::INFINITY,
+            resonance_nodes_per_unit_ln_radius: 0.0,
+            resonance_density_decrease_per_efold: 0.0,
+            resonance_density_decay_rate_per_efold: 0.0,
+            min_resonant_size_parameter: 0.0,
+            tail_panel_widening_per_efold: 0.0,
             tail_depth: 40.0,
-            tail_relaxation_start_depth: 0.0,
-            tail_relaxation_rate: 0.0,
         }
     }
 
     fn validate(&self) -> Result<(), SizeDistributionError> {
-        let positive = |value: f64| value > 0.0; // NaN fails
-        let nonnegative = |value: f64| value >= 0.0 && value.is_finite();
+        let positive_finite = |value: f64| value > 0.0 && value.is_finite(); // NaN fails
+        let nonnegative_finite = |value: f64| value >= 0.0 && value.is_finite();
         let message = if self.nodes_per_panel == 0 {
             Some("nodes_per_panel must be at least 1")
-        } else if !(positive(self.max_panel_width_ln_radius)
-            && self.max_panel_width_ln_radius.is_finite())
-        {
+        } else if !positive_finite(self.max_panel_width_ln_radius) {
             Some("max_panel_width_ln_radius must be finite and > 0")
-        } else if !(positive(self.max_panel_width_in_spreads)
-            && self.max_panel_width_in_spreads.is_finite())
-        {
+        } else if !positive_finite(self.max_panel_width_in_spreads) {
             Some("max_panel_width_in_spreads must be finite and > 0")
-        } else if !positive(self.max_panel_width_size_parameter) {
-            Some("max_panel_width_size_parameter must be > 0")
-        } else if !(positive(self.tail_depth) && self.tail_depth.is_finite()) {
-            Some("tail_depth must be finite and > 0")
-        } else if !(nonnegative(self.tail_relaxation_start_depth)
-            && nonnegative(self.tail_relaxation_rate))
+        } else if !(nonnegative_finite(self.resonance_nodes_per_unit_ln_radius)
+            && nonnegative_finite(self.resonance_density_decrease_per_efold)
+            && nonnegative_finite(self.resonance_density_decay_rate_per_efold)
+            && nonnegative_finite(self.min_resonant_size_parameter)
+            && nonnegative_finite(self.tail_panel_widening_per_efold))
         {
-            Some("tail relaxation depth and rate must be finite and >= 0")
+            Some(
+                "the resonance node density, its decrease and the minimum resonant size parameter and the tail widening must be finite and >= 0",
+            )
+        } else if !positive_finite(self.tail_depth) {
+            Some("tail_depth must be finite and > 0")
         } else {
             None
         };
@@ -175,20 +190,28 @@ impl RadiusQuadrature {
                 message: format!("wavenumber {wavenumber_per_m} m^-1 must be finite and >= 0"),
             });
         }
-        let (lower, upper) = distribution.ln_radius_integration_range(settings.tail_depth);
-        let smooth_limit = settings
+        let (lower, upper) =
+            distribution.ln_radius_integration_range(settings.tail_depth, wavenumber_per_m);
+        let core_smooth_limit = settings
             .max_panel_width_ln_radius
             .min(settings.max_panel_width_in_spreads * distribution.ln_radius_spread());
+        let nodes_per_panel = settings.nodes_per_panel as f64;
         let width_limit_at = |ln_radius: f64| {
+            let depth = distribution.importance_depth_below_peak(ln_radius, wavenumber_per_m);
+            let smooth_limit =
+                core_smooth_limit * (1.0 + settings.tail_panel_widening_per_efold * depth);
             let size_parameter = wavenumber_per_m * ln_radius.exp();
-            if size_parameter <= 0.0 {
+            if wavenumber_per_m <= 0.0 || size_parameter < settings.min_resonant_size_parameter {
                 return smooth_limit;
             }
-            let depth = distribution.area_weighted_depth_below_peak(ln_radius);
-            let relaxation = (settings.tail_relaxation_rate
-                * (depth - settings.tail_relaxation_start_depth).max(0.0))
-            .exp();
-            smooth_limit.min(settings.max_panel_width_size_parameter * relaxation / size_parameter)
+            let resonance_density = (settings.resonance_nodes_per_unit_ln_radius
+                - settings.resonance_density_decrease_per_efold * depth)
+                * (-settings.resonance_density_decay_rate_per_efold * depth).exp();
+            if resonance_density * smooth_limit <= nodes_per_panel {
+                smooth_limit
+            } else {
+                nodes_per_panel / resonance_density
+            }
         };
         let (unit_nodes, unit_weights) = gauss_legendre_rule(settings.nodes_per_panel);
         let mut radius_m = Vec::new();
@@ -229,17 +252,19 @@ impl RadiusQuadrature {
     /// `exp(-tail_depth)` of its peak (clipped to the window).
     pub fn trapezoid(
         distribution: &SizeDistribution,
+        wavenumber_per_m: f64,
         node_count: usize,
         tail_depth: f64,
     ) -> Result<Self, SizeDistributionError> {
-        if node_count < 2 || !(tail_depth > 0.0 && tail_depth.is_finite()) {
+        let valid_wavenumber = wavenumber_per_m.is_finite() && wavenumber_per_m >= 0.0;
+        if node_count < 2 || !(tail_depth > 0.0 && tail_depth.is_finite()) || !valid_wavenumber {
             return Err(SizeDistributionError::InvalidQuadratureSettings {
                 message: format!(
-                    "trapezoid needs at least 2 nodes (got {node_count}) and a finite tail depth > 0 (got {tail_depth})"
+                    "trapezoid needs at least 2 nodes (got {node_count}), a finite tail depth > 0 (got {tail_depth}) and a finite wavenumber >= 0 (got {wavenumber_per_m} m^-1)"
                 ),
             });
         }
-        let (lower, upper) = distribution.ln_radius_integration_range(tail_depth);
+        let (lower, upper) = distribution.ln_radius_integration_range(tail_depth, wavenumber_per_m);
         let step = (upper - lower) / (node_count - 1) as f64;
         let mut radius_m = Vec::with_capacity(node_count);
         let mut weight = Vec::with_capacity(node_count);
@@ -317,7 +342,7 @@ mod tests {
         let wavenumber = 2.0 * std::f64::consts::PI / 380e-9;
         let q = RadiusQuadrature::gauss_legendre(&d, wavenumber, &settings).unwrap();
         let without_relaxation = RadiusQuadratureSettings {
-            tail_relaxation_rate: 0.0,
+            resonance_density_decrease_per_efold: 0.0,
             ..settings
         };
         let q_strict =
@@ -329,7 +354,7 @@ mod tests {
         assert!(q.radii_m().windows(2).all(|w| w[0] < w[1]));
         // All integrate the number of particles in the range (which leaves
         // out 6e-9 of the particles: the small ones that scatter nothing).
-        let (lower, upper) = d.ln_radius_integration_range(settings.tail_depth);
+        let (lower, upper) = d.ln_radius_integration_range(settings.tail_depth, wavenumber);
         let in_range = d.shape().number_fraction_between(lower.exp(), upper.exp());
         assert!((1.0 - in_range) > 1e-9 && (1.0 - in_range) < 1e-8);
         for quadrature in [&q, &q_strict, &q_no_wavelength] {
@@ -350,7 +375,7 @@ mod tests {
         assert!(radii[0] > 0.45 * MICROMETRE && radii[radii.len() - 1] < 0.56 * MICROMETRE);
         // Per particle of the truncated population.
         assert!((q.integrate(|_| 1.0) - 1.0).abs() < 1e-14);
-        let trapezoid = RadiusQuadrature::trapezoid(&d, 20_001, 25.0).unwrap();
+        let trapezoid = RadiusQuadrature::trapezoid(&d, 1e7, 20_001, 25.0).unwrap();
         assert!((trapezoid.integrate(|_| 1.0) - 1.0).abs() < 1e-8);
         let mean_radius = q.integrate(|r| r);
         assert!((trapezoid.integrate(|r| r) / mean_radius - 1.0).abs() < 1e-8);
@@ -380,6 +405,6 @@ mod tests {
             RadiusQuadrature::gauss_legendre(&d, -1.0, &RadiusQuadratureSettings::cross_sections())
                 .is_err()
         );
-        assert!(RadiusQuadrature::trapezoid(&d, 1, 25.0).is_err());
+        assert!(RadiusQuadrature::trapezoid(&d, 1e7, 1, 25.0).is_err());
     }
 }
