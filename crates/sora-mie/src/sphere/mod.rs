@@ -1,0 +1,402 @@
+//! # One homogeneous sphere: Lorenz-Mie theory
+//!
+//! ## The model
+//! A plane wave of wavelength lambda (in the medium) falls on a homogeneous,
+//! isotropic sphere of radius r. Everything depends on two numbers:
+//! - the refractive index m = n + i k *relative to the medium*, k >= 0 meaning
+//!   absorption, with the time dependence exp(-i w t) of Bohren & Huffman
+//!   (1983, "Absorption and Scattering of Light by Small Particles", hereafter
+//!   B&H);
+//! - the size parameter x = 2 pi r / lambda (dimensionless).
+//!
+//! The scattered field is a series of vector spherical harmonics whose
+//! coefficients are (B&H eq. 4.53, 4.88)
+//!
+//! ```text
+//! a_n = [m psi_n(mx) psi_n'(x) - psi_n(x) psi_n'(mx)] / [m psi_n(mx) xi_n'(x) - xi_n(x) psi_n'(mx)]
+//! b_n = [psi_n(mx) psi_n'(x) - m psi_n(x) psi_n'(mx)] / [psi_n(mx) xi_n'(x) - m xi_n(x) psi_n'(mx)]
+//! ```
+//!
+//! with the Riccati-Bessel functions psi_n(z) = z j_n(z), xi_n(z) = z h_n^(1)(z)
+//! = psi_n(z) - i chi_n(z). From them (all dimensionless; an efficiency is a
+//! cross-section divided by the geometric cross-section pi r^2):
+//!
+//! ```text
+//! Q_ext  = (2/x^2) sum (2n+1) Re(a_n + b_n)                          (B&H 4.62)
+//! Q_sca  = (2/x^2) sum (2n+1) (|a_n|^2 + |b_n|^2)                    (B&H 4.61)
+//! Q_abs  = Q_ext - Q_sca, summed as (2/x^2) sum (2n+1) (Re a_n - |a_n|^2 + Re b_n - |b_n|^2)
+//! Q_back = |sum (2n+1) (-1)^n (a_n - b_n)|^2 / x^2                   (B&H 4.82)
+//! g      = (4/(x^2 Q_sca)) [sum n(n+2)/(n+1) Re(a_n a*_{n+1} + b_n b*_{n+1})
+//!                           + sum (2n+1)/(n(n+1)) Re(a_n b*_n)]      (B&H p. 120)
+//! S1(theta) = sum (2n+1)/(n(n+1)) (a_n pi_n + b_n tau_n)              (B&H 4.74)
+//! S2(theta) = sum (2n+1)/(n(n+1)) (a_n tau_n + b_n pi_n)
+//! ```
+//!
+//! In cross-sections, C_sca = lambda^2/(2 pi) sum (2n+1)(|a_n|^2 + |b_n|^2) =
+//! pi r^2 Q_sca (the paper's eq. 2 is misprinted, see `shared/paper/NOTES.md`).
+//! The unpolarised phase function is S11 / (pi x^2 Q_sca) per steradian,
+//! S11 = (|S1|^2 + |S2|^2)/2, and integrates to 1 over the sphere;
+//! S12 = (|S2|^2 - |S1|^2)/2 (B&H eq. 4.77).
+//!
+//! ## The algorithms, and why
+//! The aim is double-precision results (1e-12 typical, 1e-9 guaranteed against
+//! 100-digit references) for x from 1e-6 to 2e4, m from 1.0001 (nearly index
+//! matched) through 0.75 (bubbles) to 10 + 10i, with no allocation in the
+//! efficiency path.
+//!
+//! - **Series length** ([`series_length_converged`]): Wiscombe's n_stop =
+//!   x + 4 x^(1/3) + 2 (Wiscombe 1980, "Improved Mie scattering algorithms",
+//!   Appl. Opt. 19, 1505) leaves terms of ~1e-7 out, visible in Q_back at the
+//!   1e-6 level for x ~ 1000; we sum to x + 7.6 x^(1/3) + 3, where the terms
+//!   are below 1e-18 (Airy argument ~9.6 past the turning point n ~ x).
+//! - **Interior functions** (`bessel_ratio.rs`): not the logarithmic
+//!   derivative D_n(mx) of B&H eq. 4.89 but the ratio
+//!   rho_n(mx) = psi_n(mx)/psi_{n-1}(mx), with D_n = (n+1)/(mx) - rho_{n+1};
+//!   it is computed by the downward recurrence (stable: Kattawar & Plass 1967,
+//!   Wiscombe 1980), started at the top of the series from Lentz's continued
+//!   fraction (Lentz 1976, Appl. Opt. 15, 668), which converges to full
+//!   precision wherever it is started and costs only as many terms as the
+//!   argument needs (a start index max(n_stop, |mx|) + 15 from D = 0, as in
+//!   BHMIE, is not converged for real |mx| >~ 1000, and is needlessly far for
+//!   strongly absorbing spheres: |mx| = 2.8e5 at m = 10 + 10i, x = 2e4).
+//!   Because rho_n(mx) tends to a constant (i) instead of growing like
+//!   psi_n(mx) ~ exp(Im(mx)), nothing overflows for large Im(m) x.
+//! - **Exterior functions**: chi_n(x) by the upward recurrence (B&H 4.89; the
+//!   dominant solution, stable); psi_n(x) upward while n < x (oscillatory,
+//!   neutral), and beyond n = x as products of ratios from the downward
+//!   recurrence, since there the upward recurrence amplifies rounding by
+//!   chi_n/psi_n (1e19 at x = 1, n = 11).
+//! - **Cancellation-free coefficients** (`coefficients.rs`): a_n, b_n written
+//!   with psi_{n+1} instead of psi_{n-1}, so that the (n+1)/x terms of m D_n
+//!   and psi_n'/psi_n cancel algebraically in b_n. For x < 1 every quantity is
+//!   carried scaled by its power of x (a_n / x^3, psi_n / x^(n+1), ...), so
+//!   that the solver is exact to rounding for x = 1e-6 (and finite down to
+//!   1e-300): the naive sin x / x - cos x and eq. 4.88 numerators lose
+//!   1e-16/x^2 there, which reaches g at leading order.
+//! - **Absorption directly**: Re a_n - |a_n|^2 = -Im(A_n)/|denominator|^2 by the
+//!   Wronskian psi_n chi_{n+1} - psi_{n+1} chi_n = 1, so Q_abs is exactly 0 for
+//!   real m and keeps its relative accuracy when Im(m) = 1e-8.
+//! - **One pass**: the efficiency sums are accumulated in the loop that makes
+//!   a_n, b_n (one real division for both quotients of a term); only the ratio
+//!   table rho_n(mx) is stored, on the stack for x up to ~1900 and in a
+//!   reusable [`SphereWorkspace`] beyond.
+//! - **Angular functions** (`amplitude.rs`): pi_n, tau_n by the upward
+//!   recurrences of B&H eq. 4.47 (stable for all angles).
+//!
+//! A plain BHMIE transcription is kept beside the fast path as a test oracle
+//! (`naive.rs`, test builds only).
+
+mod amplitude;
+mod bessel_ratio;
+mod coefficients;
+#[cfg(test)]
+mod naive;
+mod series_length;
+
+pub use series_length::{series_length_converged, series_length_wiscombe};
+
+use crate::Complex64;
+use coefficients::{coefficient_scale, scratch_lengths, solve_series};
+
+/// Why a sphere could not be solved: the input is outside the supported domain.
+#[derive(Debug, Clone, PartialEq)]
+pub enum MieError {
+    /// `x` must be finite and > 0, and at most [`MAX_SIZE_PARAMETER`]
+    /// (supported 1e-6 ..= 2e4 guaranteed; larger allowed but slow).
+    InvalidSizeParameter(f64),
+    /// `m` must be finite, Re(m) > 0, Im(m) >= 0.
+    InvalidRefractiveIndex(Complex64),
+}
+
+impl std::fmt::Display for MieError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            MieError::InvalidSizeParameter(x) => {
+                write!(
+                    f,
+                    "size parameter x = {x} is invalid: it must be finite, greater than 0 and at most {MAX_SIZE_PARAMETER:e}"
+                )
+            }
+            MieError::InvalidRefractiveIndex(m) => write!(
+                f,
+                "refractive index m = {}{:+}i is invalid: the real part must be > 0 and the imaginary part >= 0 (absorption), both finite",
+                m.re, m.im
+            ),
+        }
+    }
+}
+
+impl std::error::Error for MieError {}
+
+/// Largest accepted size parameter. The series has ~x terms, so time and the
+/// ratio table (16 bytes a term) grow linearly; at x = 1e6 (a 100 um droplet
+/// in visible light) that is 16 MB and ~0.1 s. Larger spheres belong to
+/// geometric optics.
+pub const MAX_SIZE_PARAMETER: f64 = 1e6;
+
+/// Efficiencies (dimensionless, cross-section / (pi r^2)) and asymmetry parameter of one sphere.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Efficiencies {
+    pub qext: f64,
+    pub qsca: f64,
+    /// Computed directly (not as qext - qsca) so it keeps its relative accuracy when tiny.
+    pub qabs: f64,
+    /// Backscattering efficiency, B&H eq. 4.82 convention: |sum (2n+1)(-1)^n (a_n - b_n)|^2 / x^2.
+    pub qback: f64,
+    /// Asymmetry parameter <cos theta>, weighted by scattered intensity.
+    pub g: f64,
+}
+
+fn validate(m: Complex64, x: f64) -> Result<(), MieError> {
+    if !(x > 0.0 && x <= MAX_SIZE_PARAMETER) {
+        return Err(MieError::InvalidSizeParameter(x));
+    }
+    if !(m.re > 0.0 && m.re.is_finite() && m.im >= 0.0 && m.im.is_finite()) {
+        return Err(MieError::InvalidRefractiveIndex(m));
+    }
+    Ok(())
+}
+
+/// Ratio-table capacity of the stack tiers of [`compute_efficiencies`]: a
+/// small one for the common small spheres (the table is zeroed on every call,
+/// so its size is time), a larger one up to x ~ 1900.
+const STACK_TERMS_SMALL: usize = 160;
+const STACK_TERMS_LARGE: usize = 2048;
+/// Real-ratio capacity of the stack tiers (about 7.6 x^(1/3) + 5 are needed).
+const STACK_REAL_TERMS: usize = 128;
+
+/// Fast path: efficiencies and g of a sphere of relative refractive index `m`
+/// and size parameter `x`, no allocation for x up to ~1900 (the ratio table
+/// lives on the stack, at most 34 KB); larger spheres allocate one table per
+/// call (use [`compute_efficiencies_with`] to reuse it).
+pub fn compute_efficiencies(m: Complex64, x: f64) -> Result<Efficiencies, MieError> {
+    validate(m, x)?;
+    let (complex_length, real_length) = scratch_lengths(x);
+    if complex_length <= STACK_TERMS_SMALL && real_length <= STACK_REAL_TERMS {
+        Ok(with_stack_scratch::<STACK_TERMS_SMALL>(m, x))
+    } else if complex_length <= STACK_TERMS_LARGE && real_length <= STACK_REAL_TERMS {
+        Ok(with_stack_scratch::<STACK_TERMS_LARGE>(m, x))
+    } else {
+        let mut workspace = SphereWorkspace::new();
+        Ok(solve_in_workspace(&mut workspace, m, x))
+    }
+}
+
+fn with_stack_scratch<const N: usize>(m: Complex64, x: f64) -> Efficiencies {
+    let mut complex_scratch = [Complex64::new(0.0, 0.0); N];
+    let mut real_scratch = [0.0; STACK_REAL_TERMS];
+    solve_series(m, x, &mut complex_scratch, &mut real_scratch, |_, _| {})
+}
+
+/// Scratch memory for [`compute_efficiencies_with`]: the table of Bessel
+/// ratios the solver fills downward and reads upward. Create it once per
+/// thread and reuse it; it grows to the largest sphere it has seen
+/// (16 bytes per series term).
+#[derive(Debug, Clone, Default)]
+pub struct SphereWorkspace {
+    complex_ratios: Vec<Complex64>,
+    real_ratios: Vec<f64>,
+}
+
+impl SphereWorkspace {
+    /// An empty workspace (allocates nothing until first used).
+    pub fn new() -> SphereWorkspace {
+        SphereWorkspace::default()
+    }
+
+    fn reserve_for(&mut self, x: f64) {
+        let (complex_length, real_length) = scratch_lengths(x);
+        if self.complex_ratios.len() < complex_length {
+            self.complex_ratios
+                .resize(complex_length, Complex64::new(0.0, 0.0));
+        }
+        if self.real_ratios.len() < real_length {
+            self.real_ratios.resize(real_length, 0.0);
+        }
+    }
+}
+
+/// Same as [`compute_efficiencies`], with the ratio table in `workspace`:
+/// allocation-free once the workspace has grown to the largest x used.
+pub fn compute_efficiencies_with(
+    workspace: &mut SphereWorkspace,
+    m: Complex64,
+    x: f64,
+) -> Result<Efficiencies, MieError> {
+    validate(m, x)?;
+    Ok(solve_in_workspace(workspace, m, x))
+}
+
+fn solve_in_workspace(workspace: &mut SphereWorkspace, m: Complex64, x: f64) -> Efficiencies {
+    workspace.reserve_for(x);
+    solve_series(
+        m,
+        x,
+        &mut workspace.complex_ratios,
+        &mut workspace.real_ratios,
+        |_, _| {},
+    )
+}
+
+/// The full solution of one sphere: series coefficients kept, so that amplitude
+/// functions can be evaluated at any angle.
+#[derive(Debug, Clone)]
+pub struct MieSolution {
+    /// a_n / scale, b_n / scale for n = 1..=n_terms (never underflow).
+    a_scaled: Vec<Complex64>,
+    b_scaled: Vec<Complex64>,
+    /// a_n, b_n themselves (scale * the above).
+    a: Vec<Complex64>,
+    b: Vec<Complex64>,
+    /// x^3 for x < 1, else 1.
+    scale: f64,
+    /// sum (2n+1)(|a_n|^2 + |b_n|^2) / scale^2 = x^2 Q_sca / (2 scale^2).
+    scattering_sum_scaled: f64,
+    x: f64,
+    efficiencies: Efficiencies,
+    workspace: SphereWorkspace,
+}
+
+impl MieSolution {
+    /// Solve the sphere (allocates the coefficient vectors once).
+    pub fn compute(m: Complex64, x: f64) -> Result<MieSolution, MieError> {
+        let mut solution = MieSolution {
+            a_scaled: Vec::new(),
+            b_scaled: Vec::new(),
+            a: Vec::new(),
+            b: Vec::new(),
+            scale: 1.0,
+            scattering_sum_scaled: 0.0,
+            x,
+            efficiencies: Efficiencies {
+                qext: 0.0,
+                qsca: 0.0,
+                qabs: 0.0,
+                qback: 0.0,
+                g: 0.0,
+            },
+            workspace: SphereWorkspace::new(),
+        };
+        solution.recompute(m, x)?;
+        Ok(solution)
+    }
+
+    /// Solve another sphere in place, reusing this solution's memory (no
+    /// allocation once it has held a sphere at least as large). On error the
+    /// previous solution is left unchanged.
+    pub fn recompute(&mut self, m: Complex64, x: f64) -> Result<(), MieError> {
+        validate(m, x)?;
+        self.workspace.reserve_for(x);
+        self.a_scaled.clear();
+        self.b_scaled.clear();
+        let (a_scaled, b_scaled) = (&mut self.a_scaled, &mut self.b_scaled);
+        self.efficiencies = solve_series(
+            m,
+            x,
+            &mut self.workspace.complex_ratios,
+            &mut self.workspace.real_ratios,
+            |a, b| {
+                a_scaled.push(a);
+                b_scaled.push(b);
+            },
+        );
+        self.x = x;
+        self.scale = coefficient_scale(x);
+        let scale = self.scale;
+        self.a.clear();
+        self.a.extend(self.a_scaled.iter().map(|&a| a * scale));
+        self.b.clear();
+        self.b.extend(self.b_scaled.iter().map(|&b| b * scale));
+        self.scattering_sum_scaled = self
+            .a_scaled
+            .iter()
+            .zip(&self.b_scaled)
+            .enumerate()
+            .map(|(index, (a, b))| (2 * index + 3) as f64 * (a.norm_sqr() + b.norm_sqr()))
+            .sum();
+        Ok(())
+    }
+
+    /// Efficiencies and asymmetry parameter (dimensionless), as
+    /// [`compute_efficiencies`] returns them.
+    pub fn efficiencies(&self) -> Efficiencies {
+        self.efficiencies
+    }
+
+    /// The size parameter x = 2 pi r / lambda this solution is for.
+    pub fn size_parameter(&self) -> f64 {
+        self.x
+    }
+
+    /// Number of series terms kept.
+    pub fn n_terms(&self) -> usize {
+        self.a.len()
+    }
+
+    /// a_n, b_n for n = 1..=n_terms (index 0 is n = 1).
+    pub fn coefficients(&self) -> (&[Complex64], &[Complex64]) {
+        (&self.a, &self.b)
+    }
+
+    /// Amplitude functions (S1, S2) at scattering angle theta with mu = cos(theta), B&H eq. 4.74.
+    /// Dimensionless; the far field is E_s = e^{ikr}/(-ikr) S E_i (B&H eq. 3.12).
+    pub fn amplitudes(&self, cos_theta: f64) -> (Complex64, Complex64) {
+        let (s1, s2) = amplitude::amplitudes(&self.a_scaled, &self.b_scaled, cos_theta);
+        (s1 * self.scale, s2 * self.scale)
+    }
+
+    /// (S11, S12) at mu = cos(theta): S11 = (|S1|^2 + |S2|^2)/2, S12 = (|S2|^2 - |S1|^2)/2.
+    pub fn s11_s12(&self, cos_theta: f64) -> (f64, f64) {
+        let (s1, s2) = self.amplitudes(cos_theta);
+        amplitude::s11_s12_from_amplitudes(s1, s2)
+    }
+
+    /// Unpolarised phase function, normalised to 1 over 4 pi sr (unit: sr^-1):
+    /// S11 / (pi x^2 Qsca).
+    pub fn phase_function_per_sr(&self, cos_theta: f64) -> f64 {
+        // pi x^2 Q_sca = 2 pi sum (2n+1)(|a_n|^2 + |b_n|^2): with the scaled
+        // coefficients both sides carry scale^2, which then cancels, so the
+        // phase function of a 1e-300 sphere is still the Rayleigh one.
+        if self.scattering_sum_scaled <= 0.0 {
+            return 1.0 / (4.0 * std::f64::consts::PI);
+        }
+        let (s1, s2) = amplitude::amplitudes(&self.a_scaled, &self.b_scaled, cos_theta);
+        let (s11_scaled, _) = amplitude::s11_s12_from_amplitudes(s1, s2);
+        s11_scaled / (2.0 * std::f64::consts::PI * self.scattering_sum_scaled)
+    }
+
+    /// Fill `s11` and `s12` at each mu of `cos_theta` (one pass of the angular
+    /// recurrences per angle, no allocation). Slices must have equal lengths.
+    pub fn s11_s12_table(&self, cos_theta: &[f64], s11: &mut [f64], s12: &mut [f64]) {
+        assert!(
+            cos_theta.len() == s11.len() && cos_theta.len() == s12.len(),
+            "s11_s12_table: cos_theta, s11 and s12 must have equal lengths"
+        );
+        amplitude::s11_s12_table(&self.a_scaled, &self.b_scaled, cos_theta, s11, s12);
+        let scale_squared = self.scale * self.scale;
+        if scale_squared != 1.0 {
+            s11.iter_mut().for_each(|v| *v *= scale_squared);
+            s12.iter_mut().for_each(|v| *v *= scale_squared);
+        }
+    }
+
+    /// Fill `phase` with the unpolarised phase function (sr^-1, normalised to
+    /// 1 over 4 pi sr) at each mu of `cos_theta`, without allocation. The
+    /// slices must have equal lengths.
+    pub fn phase_function_table(&self, cos_theta: &[f64], phase: &mut [f64]) {
+        assert_eq!(
+            cos_theta.len(),
+            phase.len(),
+            "phase_function_table: lengths differ"
+        );
+        if self.scattering_sum_scaled <= 0.0 {
+            phase
+                .iter_mut()
+                .for_each(|p| *p = 1.0 / (4.0 * std::f64::consts::PI));
+            return;
+        }
+        let normalisation = 1.0 / (2.0 * std::f64::consts::PI * self.scattering_sum_scaled);
+        amplitude::s11_table(&self.a_scaled, &self.b_scaled, cos_theta, phase);
+        phase.iter_mut().for_each(|p| *p *= normalisation);
+    }
+}
