@@ -60,7 +60,8 @@
 
 use crate::Complex64;
 use crate::distribution::{
-    RadiusQuadrature, RadiusQuadratureSettings, SizeDistribution, SizeDistributionError,
+    RadiusQuadrature, RadiusQuadratureSettings, SharedSizeParameterQuadrature, SizeDistribution,
+    SizeDistributionError,
 };
 use crate::paper_phase::{
     AerosolPhaseMode, HenyeyGreensteinPhaseFunction, paper_asymmetry_parameter_for_radius,
@@ -181,9 +182,77 @@ pub fn compute_ensemble_cross_sections(
     distribution: &SizeDistribution,
     settings: &RadiusQuadratureSettings,
 ) -> Result<EnsembleCrossSections, EnsembleError> {
-    let wavenumber_per_m = validate_wavelength(wavelength_nm)?;
-    let quadrature = RadiusQuadrature::gauss_legendre(distribution, wavenumber_per_m, settings)?;
-    integrate_ensemble_cross_sections(wavelength_nm, refractive_index, distribution, &quadrature)
+    let mut per_wavelength =
+        compute_shared_cross_sections(&[wavelength_nm], refractive_index, distribution, settings)?;
+    Ok(per_wavelength.remove(0))
+}
+
+/// Cross-sections at several wavelengths at which the particles have the
+/// same refractive index, from one Mie solution per node of a
+/// [`SharedSizeParameterQuadrature`].
+fn compute_shared_cross_sections(
+    wavelengths_nm: &[f64],
+    refractive_index: Complex64,
+    distribution: &SizeDistribution,
+    settings: &RadiusQuadratureSettings,
+) -> Result<Vec<EnsembleCrossSections>, EnsembleError> {
+    let wavenumbers_per_m = wavelengths_nm
+        .iter()
+        .map(|&lambda| validate_wavelength(lambda))
+        .collect::<Result<Vec<f64>, EnsembleError>>()?;
+    let quadrature =
+        SharedSizeParameterQuadrature::gauss_legendre(distribution, &wavenumbers_per_m, settings)?;
+    // Per wavelength: sums of w x^2 Q_ext, w x^2 Q_sca, w x^2 Q_abs,
+    // w x^2 Q_sca g and w x^2 Q_sca g_paper(r); pi / k^2 is applied at the end.
+    let mut sums = vec![[0.0f64; 5]; wavelengths_nm.len()];
+    for (node, &size_parameter) in quadrature.size_parameters().iter().enumerate() {
+        let efficiencies =
+            compute_efficiencies(refractive_index, size_parameter).map_err(|error| {
+                EnsembleError::Mie {
+                    wavelength_nm: wavelengths_nm[0],
+                    radius_m: size_parameter / wavenumbers_per_m[0],
+                    error,
+                }
+            })?;
+        let x_squared = size_parameter * size_parameter;
+        for ((sum, &weight), &wavenumber) in sums
+            .iter_mut()
+            .zip(quadrature.weights_at_node(node))
+            .zip(&wavenumbers_per_m)
+        {
+            if weight == 0.0 {
+                continue;
+            }
+            let weighted_area = weight * x_squared;
+            let weighted_scattering = weighted_area * efficiencies.qsca;
+            let radius_m = size_parameter / wavenumber;
+            sum[0] += weighted_area * efficiencies.qext;
+            sum[1] += weighted_scattering;
+            sum[2] += weighted_area * efficiencies.qabs;
+            sum[3] += weighted_scattering * efficiencies.g;
+            sum[4] += weighted_scattering * paper_asymmetry_parameter_for_radius(radius_m);
+        }
+    }
+    Ok(sums
+        .iter()
+        .zip(wavelengths_nm)
+        .zip(&wavenumbers_per_m)
+        .map(|((sum, &wavelength_nm), &wavenumber)| {
+            let area_per_x_squared_m2 = PI / (wavenumber * wavenumber);
+            EnsembleCrossSections {
+                wavelength_nm,
+                refractive_index,
+                extinction_cross_section_m2: sum[0] * area_per_x_squared_m2,
+                scattering_cross_section_m2: sum[1] * area_per_x_squared_m2,
+                absorption_cross_section_m2: sum[2] * area_per_x_squared_m2,
+                single_scattering_albedo: sum[1] / sum[0],
+                asymmetry_parameter: sum[3] / sum[1],
+                paper_asymmetry_parameter: sum[4] / sum[1],
+                number_fraction_in_window: distribution.number_fraction_in_window(),
+                radius_node_count: quadrature.len(),
+            }
+        })
+        .collect())
 }
 
 /// As [`compute_ensemble_cross_sections`] with any quadrature, e.g. the slow
@@ -486,6 +555,9 @@ fn accumulate_weighted_s11(
 struct PhaseTableWorkspace {
     /// cos theta of the table angles, increasing (theta decreasing).
     cos_theta: Vec<f64>,
+    /// S11 of the current node at each angle.
+    node_s11: Vec<f64>,
+    /// sum of w S11 per wavelength, row-major [wavelength][angle].
     accumulated_s11: Vec<f64>,
 }
 
@@ -504,39 +576,82 @@ impl PhaseTableWorkspace {
         let angle_count = cos_theta.len();
         Self {
             cos_theta,
-            accumulated_s11: vec![0.0; angle_count],
+            node_s11: vec![0.0; angle_count],
+            accumulated_s11: Vec::new(),
         }
     }
 
+    /// Phase tables at `wavelengths_nm`, at all of which the particles have
+    /// index `refractive_index`, from one Mie solution per node.
     fn compute(
         &mut self,
-        wavelength_nm: f64,
+        wavelengths_nm: &[f64],
         refractive_index: Complex64,
-        quadrature: &RadiusQuadrature,
-    ) -> Result<TabulatedPhaseFunction, EnsembleError> {
-        let wavenumber_per_m = validate_wavelength(wavelength_nm)?;
-        self.accumulated_s11.fill(0.0);
-        let mut scattering_m2 = 0.0;
-        for (&radius_m, &weight) in quadrature.radii_m().iter().zip(quadrature.weights()) {
-            let solution = MieSolution::compute(refractive_index, wavenumber_per_m * radius_m)
-                .map_err(|error| EnsembleError::Mie {
-                    wavelength_nm,
-                    radius_m,
-                    error,
+        distribution: &SizeDistribution,
+        settings: &RadiusQuadratureSettings,
+    ) -> Result<Vec<TabulatedPhaseFunction>, EnsembleError> {
+        let wavenumbers_per_m = wavelengths_nm
+            .iter()
+            .map(|&lambda| validate_wavelength(lambda))
+            .collect::<Result<Vec<f64>, EnsembleError>>()?;
+        let quadrature = SharedSizeParameterQuadrature::gauss_legendre(
+            distribution,
+            &wavenumbers_per_m,
+            settings,
+        )?;
+        let angle_count = self.cos_theta.len();
+        self.accumulated_s11.clear();
+        self.accumulated_s11
+            .resize(angle_count * wavelengths_nm.len(), 0.0);
+        let mut scattering_x_squared = vec![0.0; wavelengths_nm.len()];
+        for (node, &size_parameter) in quadrature.size_parameters().iter().enumerate() {
+            let solution =
+                MieSolution::compute(refractive_index, size_parameter).map_err(|error| {
+                    EnsembleError::Mie {
+                        wavelength_nm: wavelengths_nm[0],
+                        radius_m: size_parameter / wavenumbers_per_m[0],
+                        error,
+                    }
                 })?;
             let (a, b) = solution.coefficients();
-            accumulate_weighted_s11(&self.cos_theta, a, b, weight, &mut self.accumulated_s11);
-            scattering_m2 += weight * PI * radius_m * radius_m * solution.efficiencies().qsca;
+            self.node_s11.fill(0.0);
+            accumulate_weighted_s11(&self.cos_theta, a, b, 1.0, &mut self.node_s11);
+            let qsca = solution.efficiencies().qsca;
+            for ((table_sums, scattering), &weight) in self
+                .accumulated_s11
+                .chunks_mut(angle_count)
+                .zip(scattering_x_squared.iter_mut())
+                .zip(quadrature.weights_at_node(node))
+            {
+                if weight == 0.0 {
+                    continue;
+                }
+                for (sum, &s11) in table_sums.iter_mut().zip(&self.node_s11) {
+                    *sum += weight * s11;
+                }
+                *scattering += weight * size_parameter * size_parameter * qsca;
+            }
         }
-        // P = integral S11 dN / (k^2 integral C_sca dN), with the same nodes in
-        // both integrals so that the table's own quadrature errors cancel.
-        let scale = 1.0 / (wavenumber_per_m * wavenumber_per_m * scattering_m2);
-        let phase_per_sr: Vec<f64> = self.accumulated_s11.iter().map(|s| s * scale).collect();
-        TabulatedPhaseFunction::from_nodes(self.cos_theta.clone(), phase_per_sr).map_err(|error| {
-            EnsembleError::Distribution(SizeDistributionError::InvalidQuadratureSettings {
-                message: format!("phase table at {wavelength_nm} nm: {error}"),
+        // P = integral S11 dN / (k^2 integral C_sca dN) = sum w S11 / (pi sum w x^2 Q_sca),
+        // with the same nodes in both sums so that their quadrature errors cancel.
+        self.accumulated_s11
+            .chunks(angle_count)
+            .zip(&scattering_x_squared)
+            .zip(wavelengths_nm)
+            .map(|((table_sums, &scattering), &wavelength_nm)| {
+                let scale = 1.0 / (PI * scattering);
+                let phase_per_sr: Vec<f64> = table_sums.iter().map(|s| s * scale).collect();
+                TabulatedPhaseFunction::from_nodes(self.cos_theta.clone(), phase_per_sr).map_err(
+                    |error| {
+                        EnsembleError::Distribution(
+                            SizeDistributionError::InvalidQuadratureSettings {
+                                message: format!("phase table at {wavelength_nm} nm: {error}"),
+                            },
+                        )
+                    },
+                )
             })
-        })
+            .collect()
     }
 }
 
@@ -550,9 +665,13 @@ pub fn compute_ensemble_phase_function(
     distribution: &SizeDistribution,
     settings: &RadiusQuadratureSettings,
 ) -> Result<TabulatedPhaseFunction, EnsembleError> {
-    let wavenumber_per_m = validate_wavelength(wavelength_nm)?;
-    let quadrature = RadiusQuadrature::gauss_legendre(distribution, wavenumber_per_m, settings)?;
-    PhaseTableWorkspace::new().compute(wavelength_nm, refractive_index, &quadrature)
+    let mut tables = PhaseTableWorkspace::new().compute(
+        &[wavelength_nm],
+        refractive_index,
+        distribution,
+        settings,
+    )?;
+    Ok(tables.remove(0))
 }
 
 /// The phase function carried by ensemble optics: the tabulated Mie one or
@@ -632,81 +751,83 @@ pub fn compute_ensemble_optics(
     distribution: &SizeDistribution,
     settings: &EnsembleSettings,
 ) -> Result<EnsembleOptics, EnsembleError> {
-    let mut workspace = None;
-    compute_ensemble_optics_with(
-        wavelength_nm,
+    let mut optics = compute_ensemble_optics_spectrum(
+        &[wavelength_nm],
         refractive_index_model,
         distribution,
         settings,
-        &mut workspace,
-    )
+    )?;
+    Ok(optics.remove(0))
 }
 
 /// [`compute_ensemble_optics`] at each of `wavelengths_nm` (nm), e.g.
-/// [`PAPER_WAVELENGTHS_NM`]; scratch tables are allocated once for all.
-/// Single-threaded and deterministic: parallelise across species or
-/// wavelengths in the caller if needed.
+/// [`PAPER_WAVELENGTHS_NM`], in the order given. Wavelengths at which the
+/// particles have the same refractive index (all of them, for a constant
+/// index) share their Mie solutions: the quadratures are laid out in size
+/// parameter x = 2 pi r / lambda, where a solution at x serves every
+/// wavelength (see the module docs), so 21 wavelengths cost little more than
+/// one. Results are the same as wavelength by wavelength, up to the
+/// quadrature error. Single-threaded and deterministic.
 pub fn compute_ensemble_optics_spectrum(
     wavelengths_nm: &[f64],
     refractive_index_model: &RefractiveIndexModel,
     distribution: &SizeDistribution,
     settings: &EnsembleSettings,
 ) -> Result<Vec<EnsembleOptics>, EnsembleError> {
-    let mut workspace = None;
-    wavelengths_nm
-        .iter()
-        .map(|&wavelength_nm| {
-            compute_ensemble_optics_with(
-                wavelength_nm,
-                refractive_index_model,
-                distribution,
-                settings,
-                &mut workspace,
-            )
-        })
-        .collect()
-}
-
-fn compute_ensemble_optics_with(
-    wavelength_nm: f64,
-    refractive_index_model: &RefractiveIndexModel,
-    distribution: &SizeDistribution,
-    settings: &EnsembleSettings,
-    workspace: &mut Option<PhaseTableWorkspace>,
-) -> Result<EnsembleOptics, EnsembleError> {
-    let wavenumber_per_m = validate_wavelength(wavelength_nm)?;
-    let refractive_index = refractive_index_model.refractive_index_at(wavelength_nm)?;
-    let cross_sections = compute_ensemble_cross_sections(
-        wavelength_nm,
-        refractive_index,
-        distribution,
-        &settings.cross_section_quadrature,
-    )?;
-    let phase_function = match settings.phase_mode {
-        AerosolPhaseMode::Mie => {
-            let quadrature = RadiusQuadrature::gauss_legendre(
-                distribution,
-                wavenumber_per_m,
-                &settings.phase_function_quadrature,
-            )?;
-            let workspace = workspace.get_or_insert_with(PhaseTableWorkspace::new);
-            AerosolPhaseFunction::Tabulated(workspace.compute(
-                wavelength_nm,
-                refractive_index,
-                &quadrature,
-            )?)
+    // Group the wavelengths by refractive index, keeping first-seen order.
+    let mut groups: Vec<(Complex64, Vec<usize>)> = Vec::new();
+    for (index, &wavelength_nm) in wavelengths_nm.iter().enumerate() {
+        validate_wavelength(wavelength_nm)?;
+        let refractive_index = refractive_index_model.refractive_index_at(wavelength_nm)?;
+        match groups.iter_mut().find(|(m, _)| *m == refractive_index) {
+            Some((_, members)) => members.push(index),
+            None => groups.push((refractive_index, vec![index])),
         }
-        AerosolPhaseMode::PaperHenyeyGreenstein => {
-            // The paper's g lies in [0.5, 0.9], so the constructor cannot fail.
-            let hg = HenyeyGreensteinPhaseFunction::new(cross_sections.paper_asymmetry_parameter)
-                .expect("the paper's g(r) lies in [0.5, 0.9]");
-            AerosolPhaseFunction::HenyeyGreenstein(hg)
+    }
+    let mut results: Vec<Option<EnsembleOptics>> = vec![None; wavelengths_nm.len()];
+    let mut workspace = PhaseTableWorkspace::new();
+    for (refractive_index, members) in groups {
+        let group_wavelengths_nm: Vec<f64> = members.iter().map(|&i| wavelengths_nm[i]).collect();
+        let cross_sections = compute_shared_cross_sections(
+            &group_wavelengths_nm,
+            refractive_index,
+            distribution,
+            &settings.cross_section_quadrature,
+        )?;
+        let phase_functions: Vec<AerosolPhaseFunction> = match settings.phase_mode {
+            AerosolPhaseMode::Mie => workspace
+                .compute(
+                    &group_wavelengths_nm,
+                    refractive_index,
+                    distribution,
+                    &settings.phase_function_quadrature,
+                )?
+                .into_iter()
+                .map(AerosolPhaseFunction::Tabulated)
+                .collect(),
+            AerosolPhaseMode::PaperHenyeyGreenstein => cross_sections
+                .iter()
+                .map(|c| {
+                    // The paper's g lies in [0.5, 0.9], so this cannot fail.
+                    let hg = HenyeyGreensteinPhaseFunction::new(c.paper_asymmetry_parameter)
+                        .expect("the paper's g(r) lies in [0.5, 0.9]");
+                    AerosolPhaseFunction::HenyeyGreenstein(hg)
+                })
+                .collect(),
+        };
+        for ((index, cross_sections), phase_function) in
+            members.into_iter().zip(cross_sections).zip(phase_functions)
+        {
+            results[index] = Some(EnsembleOptics {
+                cross_sections,
+                phase_function,
+            });
         }
-    };
-    Ok(EnsembleOptics {
-        cross_sections,
-        phase_function,
-    })
+    }
+    Ok(results
+        .into_iter()
+        .map(|optics| optics.expect("every wavelength belongs to one group"))
+        .collect())
 }
 
 #[cfg(test)]

@@ -78,7 +78,7 @@
 mod quadrature;
 mod special_functions;
 
-pub use quadrature::{RadiusQuadrature, RadiusQuadratureSettings};
+pub use quadrature::{RadiusQuadrature, RadiusQuadratureSettings, SharedSizeParameterQuadrature};
 
 use special_functions::{
     ln_gamma, regularized_incomplete_gamma, standard_normal_probability_between,
@@ -88,9 +88,8 @@ use std::f64::consts::PI;
 /// Size parameter above which the importance model of the quadrature takes
 /// Mie efficiencies as roughly constant (the geometric regime): near the
 /// first extinction maximum, 2 x (n - 1) ~ 4 for n ~ 1.5, where Q_sca ~ 3-4
-/// after rising like x^4 from the Rayleigh regime. Below it the model falls
-/// like x^4, which under-weights x ~ 1-4 relative to reality (Q_sca(1) ~ 0.2
-/// for n = 1.5), the safe direction for where the integral's mass is.
+/// after rising from the Rayleigh regime. Below it the model falls like x
+/// (absorption's law there, the slowest of the efficiencies).
 const GEOMETRIC_REGIME_SIZE_PARAMETER: f64 = 4.0;
 
 /// Why a size distribution could not be built.
@@ -601,14 +600,16 @@ impl SizeDistribution {
 
     /// ln of the importance density at t = ln r, up to a constant: the
     /// integrand of a cross-section modelled as
-    /// `r^2 min(1, x / x_g)^4 dN/d ln r`, `x = k r`, i.e. an efficiency
+    /// `r^2 min(1, x / x_g) dN/d ln r`, `x = k r`, i.e. an efficiency
     /// constant above [`GEOMETRIC_REGIME_SIZE_PARAMETER`] `x_g` and falling
-    /// like Rayleigh's x^4 below it; or the area-weighted density
-    /// `r^2 dN/d ln r` when `wavenumber_per_m` is 0. A sum of concave functions
-    /// of t, hence concave.
+    /// like x below it: the slowest fall-off of any efficiency (absorption,
+    /// Q_abs ~ x in the Rayleigh regime, against Q_sca ~ x^4), so that no
+    /// cross-section has mass where the model says there is none. Or the
+    /// area-weighted density `r^2 dN/d ln r` when `wavenumber_per_m` is 0.
+    /// A sum of concave functions of t, hence concave.
     fn ln_importance_density(&self, ln_radius: f64, wavenumber_per_m: f64) -> f64 {
         let rayleigh_suppression = if wavenumber_per_m > 0.0 {
-            4.0 * (ln_radius + (wavenumber_per_m / GEOMETRIC_REGIME_SIZE_PARAMETER).ln()).min(0.0)
+            (ln_radius + (wavenumber_per_m / GEOMETRIC_REGIME_SIZE_PARAMETER).ln()).min(0.0)
         } else {
             0.0
         };
@@ -622,9 +623,9 @@ impl SizeDistribution {
     fn ln_radius_of_importance_peak(&self, wavenumber_per_m: f64) -> f64 {
         let area_peak = self.shape.ln_radius_of_moment_weighted_peak(2.0);
         let peak = if wavenumber_per_m > 0.0 {
-            // Where x = x_g; below it the importance is r^6 dN/d ln r.
+            // Where x = x_g; below it the importance is r^3 dN/d ln r.
             let geometric_regime_start = (GEOMETRIC_REGIME_SIZE_PARAMETER / wavenumber_per_m).ln();
-            let rayleigh_peak = self.shape.ln_radius_of_moment_weighted_peak(6.0);
+            let rayleigh_peak = self.shape.ln_radius_of_moment_weighted_peak(3.0);
             if area_peak >= geometric_regime_start {
                 area_peak
             } else if rayleigh_peak <= geometric_regime_start {

@@ -91,8 +91,8 @@ impl RadiusQuadratureSettings {
             nodes_per_panel: 8,
             max_panel_width_ln_radius: 0.25,
             max_panel_width_in_spreads: 0.5,
-            resonance_nodes_per_unit_ln_radius: 300.0,
-            resonance_density_decrease_per_efold: 20.0,
+            resonance_nodes_per_unit_ln_radius: 450.0,
+            resonance_density_decrease_per_efold: 30.0,
             resonance_density_decay_rate_per_efold: 0.0,
             min_resonant_size_parameter: 1.0,
             tail_panel_widening_per_efold: 0.25,
@@ -101,19 +101,21 @@ impl RadiusQuadratureSettings {
     }
 
     /// For the ensemble phase-function table, whose per-node cost is a whole
-    /// angular table: a narrower range and coarser panels (see
+    /// angular table (406 angles): a narrower range and a node density that
+    /// decays exponentially with depth, the optimal allocation for the
+    /// noise-like error of unresolved oscillations of S11(theta) in x (see
     /// [`crate::ensemble`] for the measured error).
     pub fn phase_function() -> Self {
         Self {
             nodes_per_panel: 8,
             max_panel_width_ln_radius: 0.5,
             max_panel_width_in_spreads: 1.0,
-            resonance_nodes_per_unit_ln_radius: 40.0,
+            resonance_nodes_per_unit_ln_radius: 150.0,
             resonance_density_decrease_per_efold: 0.0,
             resonance_density_decay_rate_per_efold: 0.5,
             min_resonant_size_parameter: 1.0,
             tail_panel_widening_per_efold: 0.25,
-            tail_depth: 14.0,
+            tail_depth: 12.0,
         }
     }
 
@@ -165,6 +167,199 @@ impl RadiusQuadratureSettings {
     }
 }
 
+/// The widest panel (in ln r) that `settings` allow at t = ln r for a Mie
+/// integrand at wavenumber `wavenumber_per_m` (0: no Mie structure): the
+/// smoothness limit, widened in the tails, and the resonance-resolving node
+/// density where x is above the resonant threshold.
+fn panel_width_limit(
+    distribution: &SizeDistribution,
+    settings: &RadiusQuadratureSettings,
+    ln_radius: f64,
+    wavenumber_per_m: f64,
+) -> f64 {
+    let core_smooth_limit = settings
+        .max_panel_width_ln_radius
+        .min(settings.max_panel_width_in_spreads * distribution.ln_radius_spread());
+    let depth = distribution.importance_depth_below_peak(ln_radius, wavenumber_per_m);
+    let smooth_limit = core_smooth_limit * (1.0 + settings.tail_panel_widening_per_efold * depth);
+    let size_parameter = wavenumber_per_m * ln_radius.exp();
+    if wavenumber_per_m <= 0.0 || size_parameter < settings.min_resonant_size_parameter {
+        return smooth_limit;
+    }
+    let resonance_density = (settings.resonance_nodes_per_unit_ln_radius
+        - settings.resonance_density_decrease_per_efold * depth)
+        * (-settings.resonance_density_decay_rate_per_efold * depth).exp();
+    let nodes_per_panel = settings.nodes_per_panel as f64;
+    if resonance_density * smooth_limit <= nodes_per_panel {
+        smooth_limit
+    } else {
+        nodes_per_panel / resonance_density
+    }
+}
+
+/// Nodes in size parameter `x = k r` shared by several wavelengths, with
+/// one weight per node and wavelength (see the module docs): for particles
+/// whose refractive index is the same at all these wavelengths, one Mie
+/// solution per node serves every wavelength.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SharedSizeParameterQuadrature {
+    size_parameter: Vec<f64>,
+    wavenumber_per_m: Vec<f64>,
+    /// Row-major: `weight[node * wavelength_count + wavelength_index]`.
+    weight: Vec<f64>,
+    panel_count: usize,
+}
+
+impl SharedSizeParameterQuadrature {
+    /// Composite Gauss-Legendre in t = ln x covering every wavelength's
+    /// range (see [`RadiusQuadrature::gauss_legendre`]); a panel is as narrow
+    /// as the narrowest that any wavelength needs there, and every edge of a
+    /// wavelength's radius window is a panel edge. `wavenumbers_per_m` are
+    /// 2 pi / lambda (m^-1, > 0, at least one).
+    pub fn gauss_legendre(
+        distribution: &SizeDistribution,
+        wavenumbers_per_m: &[f64],
+        settings: &RadiusQuadratureSettings,
+    ) -> Result<Self, SizeDistributionError> {
+        settings.validate()?;
+        if wavenumbers_per_m.is_empty()
+            || wavenumbers_per_m
+                .iter()
+                .any(|k| !(k.is_finite() && *k > 0.0))
+        {
+            return Err(SizeDistributionError::InvalidQuadratureSettings {
+                message: format!(
+                    "a shared size-parameter quadrature needs at least one wavenumber, each finite and > 0 (m^-1), got {wavenumbers_per_m:?}"
+                ),
+            });
+        }
+        let ln_wavenumbers: Vec<f64> = wavenumbers_per_m.iter().map(|k| k.ln()).collect();
+        // Each wavelength's range in ln x.
+        let ranges: Vec<(f64, f64)> = wavenumbers_per_m
+            .iter()
+            .zip(&ln_wavenumbers)
+            .map(|(&k, &ln_k)| {
+                let (lower, upper) =
+                    distribution.ln_radius_integration_range(settings.tail_depth, k);
+                (lower + ln_k, upper + ln_k)
+            })
+            .collect();
+        let mut breakpoints: Vec<f64> = Vec::new();
+        if let Some(window) = distribution.radius_window() {
+            for &ln_k in &ln_wavenumbers {
+                breakpoints.push(window.min_radius_m().ln() + ln_k);
+                breakpoints.push(window.max_radius_m().ln() + ln_k);
+            }
+        }
+        let union_end = ranges.iter().map(|r| r.1).fold(f64::NEG_INFINITY, f64::max);
+        breakpoints.push(union_end);
+        breakpoints.sort_by(f64::total_cmp);
+
+        let width_limit_at = |ln_size_parameter: f64| -> Option<f64> {
+            let mut limit: Option<f64> = None;
+            for ((&k, &ln_k), &(lower, upper)) in
+                wavenumbers_per_m.iter().zip(&ln_wavenumbers).zip(&ranges)
+            {
+                if (lower..upper).contains(&ln_size_parameter) {
+                    let width =
+                        panel_width_limit(distribution, settings, ln_size_parameter - ln_k, k);
+                    limit = Some(limit.map_or(width, |l: f64| l.min(width)));
+                }
+            }
+            limit
+        };
+        let (unit_nodes, unit_weights) = gauss_legendre_rule(settings.nodes_per_panel);
+        let wavelength_count = wavenumbers_per_m.len();
+        let mut size_parameter = Vec::new();
+        let mut weight = Vec::new();
+        let mut panel_count = 0;
+        let mut panel_start = ranges.iter().map(|r| r.0).fold(f64::INFINITY, f64::min);
+        while panel_start < union_end {
+            let Some(tentative) = width_limit_at(panel_start) else {
+                // A gap that no wavelength's range covers: skip to the next range.
+                panel_start = ranges
+                    .iter()
+                    .map(|r| r.0)
+                    .filter(|&lower| lower > panel_start)
+                    .fold(union_end, f64::min);
+                continue;
+            };
+            let mut width =
+                width_limit_at(panel_start + tentative).map_or(tentative, |w| w.min(tentative));
+            // Panels end at window edges, never stride them; no sliver before one.
+            let next_stop = breakpoints
+                .iter()
+                .copied()
+                .find(|&b| b > panel_start)
+                .unwrap_or(union_end);
+            if panel_start + 1.25 * width >= next_stop {
+                width = next_stop - panel_start;
+            }
+            let half_width = 0.5 * width;
+            let middle = panel_start + half_width;
+            for (&node, &unit_weight) in unit_nodes.iter().zip(&unit_weights) {
+                let ln_x = middle + half_width * node;
+                size_parameter.push(ln_x.exp());
+                for (&k, &ln_k) in wavenumbers_per_m.iter().zip(&ln_wavenumbers) {
+                    let ln_radius = ln_x - ln_k;
+                    let inside_window = distribution.radius_window().is_none_or(|w| {
+                        ln_radius > w.min_radius_m().ln() && ln_radius < w.max_radius_m().ln()
+                    });
+                    weight.push(if inside_window {
+                        unit_weight
+                            * half_width
+                            * distribution
+                                .number_density_per_ln_radius_inside_window(ln_x.exp() / k)
+                    } else {
+                        0.0
+                    });
+                }
+            }
+            panel_count += 1;
+            panel_start += width;
+        }
+        debug_assert_eq!(weight.len(), size_parameter.len() * wavelength_count);
+        Ok(Self {
+            size_parameter,
+            wavenumber_per_m: wavenumbers_per_m.to_vec(),
+            weight,
+            panel_count,
+        })
+    }
+
+    /// Size parameters of the nodes, increasing.
+    pub fn size_parameters(&self) -> &[f64] {
+        &self.size_parameter
+    }
+
+    /// The wavenumbers 2 pi / lambda (m^-1), in the order given.
+    pub fn wavenumbers_per_m(&self) -> &[f64] {
+        &self.wavenumber_per_m
+    }
+
+    /// Per-particle weights of node `node_index`, one per wavelength (0
+    /// where the node lies outside that wavelength's radius window).
+    pub fn weights_at_node(&self, node_index: usize) -> &[f64] {
+        let count = self.wavenumber_per_m.len();
+        &self.weight[node_index * count..(node_index + 1) * count]
+    }
+
+    /// Number of nodes.
+    pub fn len(&self) -> usize {
+        self.size_parameter.len()
+    }
+
+    /// Whether there are no nodes.
+    pub fn is_empty(&self) -> bool {
+        self.size_parameter.is_empty()
+    }
+
+    /// Number of panels.
+    pub fn panel_count(&self) -> usize {
+        self.panel_count
+    }
+}
+
 /// Nodes and weights of a quadrature over a population's radii:
 /// `<f> = integral f dN / N_window ~ sum_i weight_i f(radius_i)`. The weights
 /// carry the number density and the per-particle normalisation.
@@ -192,27 +387,8 @@ impl RadiusQuadrature {
         }
         let (lower, upper) =
             distribution.ln_radius_integration_range(settings.tail_depth, wavenumber_per_m);
-        let core_smooth_limit = settings
-            .max_panel_width_ln_radius
-            .min(settings.max_panel_width_in_spreads * distribution.ln_radius_spread());
-        let nodes_per_panel = settings.nodes_per_panel as f64;
-        let width_limit_at = |ln_radius: f64| {
-            let depth = distribution.importance_depth_below_peak(ln_radius, wavenumber_per_m);
-            let smooth_limit =
-                core_smooth_limit * (1.0 + settings.tail_panel_widening_per_efold * depth);
-            let size_parameter = wavenumber_per_m * ln_radius.exp();
-            if wavenumber_per_m <= 0.0 || size_parameter < settings.min_resonant_size_parameter {
-                return smooth_limit;
-            }
-            let resonance_density = (settings.resonance_nodes_per_unit_ln_radius
-                - settings.resonance_density_decrease_per_efold * depth)
-                * (-settings.resonance_density_decay_rate_per_efold * depth).exp();
-            if resonance_density * smooth_limit <= nodes_per_panel {
-                smooth_limit
-            } else {
-                nodes_per_panel / resonance_density
-            }
-        };
+        let width_limit_at =
+            |ln_radius: f64| panel_width_limit(distribution, settings, ln_radius, wavenumber_per_m);
         let (unit_nodes, unit_weights) = gauss_legendre_rule(settings.nodes_per_panel);
         let mut radius_m = Vec::new();
         let mut weight = Vec::new();
@@ -352,12 +528,16 @@ mod tests {
         assert!(q.panel_count() < q_strict.panel_count());
         assert_eq!(q.len(), 8 * q.panel_count());
         assert!(q.radii_m().windows(2).all(|w| w[0] < w[1]));
-        // All integrate the number of particles in the range (which leaves
-        // out 6e-9 of the particles: the small ones that scatter nothing).
-        let (lower, upper) = d.ln_radius_integration_range(settings.tail_depth, wavenumber);
-        let in_range = d.shape().number_fraction_between(lower.exp(), upper.exp());
-        assert!((1.0 - in_range) > 1e-9 && (1.0 - in_range) < 1e-8);
-        for quadrature in [&q, &q_strict, &q_no_wavelength] {
+        // Each integrates the number of particles in its range, which leaves
+        // out only small particles that scatter nothing.
+        for (quadrature, k) in [
+            (&q, wavenumber),
+            (&q_strict, wavenumber),
+            (&q_no_wavelength, 0.0),
+        ] {
+            let (lower, upper) = d.ln_radius_integration_range(settings.tail_depth, k);
+            let in_range = d.shape().number_fraction_between(lower.exp(), upper.exp());
+            assert!(1.0 - in_range < 1e-4, "{in_range}");
             assert!((quadrature.integrate(|_| 1.0) / in_range - 1.0).abs() < 1e-13);
         }
     }
