@@ -17,7 +17,7 @@ fn table(text: &str) -> NumericTable {
     NumericTable::parse(text, "reference").unwrap()
 }
 
-fn column<'a>(table: &'a NumericTable, name: &str) -> Vec<f64> {
+fn column(table: &NumericTable, name: &str) -> Vec<f64> {
     let index = table
         .column_names
         .iter()

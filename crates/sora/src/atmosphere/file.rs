@@ -93,7 +93,9 @@ use super::sun::{EARTH_SUN_ANGULAR_DIAMETER_DEG, Sun};
 use super::{Atmosphere, RayleighScatterer, Species, SpeciesModel};
 use crate::error::{Error, Result};
 use crate::mie::Complex64;
-use crate::mie::distribution::{RadiusWindow, SizeDistribution};
+use crate::mie::distribution::{
+    RadiusQuadrature, RadiusQuadratureSettings, RadiusWindow, SizeDistribution,
+};
 use crate::mie::paper_phase::AerosolPhaseMode;
 use crate::mie::refractive_index::{RefractiveIndexModel, TabulatedRefractiveIndex};
 use crate::spectrum::{SolarSpectrum, Spectrum, TabulatedSpectrum};
@@ -433,7 +435,7 @@ fn convert_planet(file: PlanetFile) -> Result<Planet> {
         Some(NumberOr::Number(a)) => Spectrum::Constant(a),
         Some(NumberOr::Other(table)) => Spectrum::Tabulated(
             TabulatedSpectrum::new(table.wavelength_nm, table.albedo, "planet.ground_albedo")
-                .map_err(|e| invalid("planet.ground_albedo", &strip(&e)))?,
+                .map_err(|e| table_error(&e))?,
         ),
     };
     Planet::new(file.radius_m, file.atmosphere_height_m, albedo)
@@ -562,7 +564,7 @@ fn convert_profile(file: ProfileFile, path: &str, planet: &Planet) -> Result<Den
                 format!("{name}.altitude_m[0]"),
                 altitudes[0],
                 "m",
-                "<= 0: the table must start at or below the ground",
+                "the table must start at or below the ground: <= 0",
             ));
         }
         let last = altitudes.len() - 1;
@@ -572,7 +574,7 @@ fn convert_profile(file: ProfileFile, path: &str, planet: &Planet) -> Result<Den
                 altitudes[last],
                 "m",
                 format!(
-                    ">= planet.atmosphere_height_m ({top_m}): the table must reach the top of the atmosphere"
+                    "the table must reach the top of the atmosphere, planet.atmosphere_height_m: >= {top_m}"
                 ),
             ));
         }
@@ -764,7 +766,7 @@ fn convert_rayleigh(file: RayleighFile, path: &str, keys: &AmountKeys) -> Result
                 &format!("{here}.coefficient_per_m"),
                 coefficient_per_m,
                 "m^-1",
-                ">= 0 and finite",
+                ">= 0",
                 coefficient_per_m >= 0.0,
             )?;
             let Some(reference_wavelength_nm) = file.reference_wavelength_nm else {
@@ -1009,7 +1011,7 @@ fn convert_size_distribution(file: SizeDistributionFile, here: &str) -> Result<S
             ) {
                 (Some(r_m), Some(sigma), None, None) => {
                     check_range(&format!("{key}.median_radius_um"), r_m, "um", 1e-4, 1e3)?;
-                    check(&format!("{key}.geometric_std_dev"), sigma, "1", "> 1 and <= 10", sigma > 1.0 && sigma <= 10.0)?;
+                    check(&format!("{key}.geometric_std_dev"), sigma, "1", "> 1 and <= 5", sigma > 1.0 && sigma <= 5.0)?;
                     SizeDistribution::log_normal(r_m * 1e-6, sigma)
                 }
                 (None, None, Some(r_eff), Some(v_eff)) => {
@@ -1055,12 +1057,59 @@ fn convert_size_distribution(file: SizeDistributionFile, here: &str) -> Result<S
             return Err(invalid(&here, "give exactly one of lognormal, gamma"));
         }
     };
-    match window {
-        None => Ok(distribution),
+    let distribution = match window {
+        None => distribution,
         Some(window) => distribution
             .truncated_to(window)
-            .map_err(|e| invalid(&key, &e.to_string())),
+            .map_err(|e| invalid(&key, &e.to_string()))?,
+    };
+    check_radius_range(&distribution, &key)?;
+    Ok(distribution)
+}
+
+/// Largest particle radius sora integrates over, m: size parameter ~1750
+/// at 360 nm. Larger particles are not aerosol (they fall out within
+/// minutes), and their Mie series grow long enough to make a preset slow.
+const MAX_INTEGRATED_RADIUS_M: f64 = 100e-6;
+
+/// Smallest: size parameter 1e-6 at 830 nm, the Mie solver's domain.
+const MIN_INTEGRATED_RADIUS_M: f64 = 1.4e-13;
+
+/// The radii that matter in `distribution` (the nodes of the engine's own
+/// cross-section quadrature at 360 nm, the shortest wavelength of any
+/// grid) must lie in the range the Mie engine handles quickly.
+fn check_radius_range(distribution: &SizeDistribution, key: &str) -> Result<()> {
+    let wavenumber_per_m = 2.0 * std::f64::consts::PI / 360e-9;
+    let quadrature = RadiusQuadrature::gauss_legendre(
+        distribution,
+        wavenumber_per_m,
+        &RadiusQuadratureSettings::cross_sections(),
+    )
+    .map_err(|e| invalid(key, &e.to_string()))?;
+    let radii = quadrature.radii_m();
+    let largest = radii.iter().copied().fold(0.0, f64::max);
+    let smallest = radii.iter().copied().fold(f64::INFINITY, f64::min);
+    if largest > MAX_INTEGRATED_RADIUS_M {
+        return Err(invalid(
+            key,
+            &format!(
+                "particles up to {:.3e} um in radius carry this distribution's cross-section; sora handles up to {} um (narrow it, or cut it with max_radius_um)",
+                largest * 1e6,
+                MAX_INTEGRATED_RADIUS_M * 1e6
+            ),
+        ));
     }
+    if smallest < MIN_INTEGRATED_RADIUS_M {
+        return Err(invalid(
+            key,
+            &format!(
+                "particles down to {:.3e} um in radius carry this distribution's cross-section; sora handles down to {:e} um (narrow it, or cut it with min_radius_um)",
+                smallest * 1e6,
+                MIN_INTEGRATED_RADIUS_M * 1e6
+            ),
+        ));
+    }
+    Ok(())
 }
 
 fn convert_mie(file: MieFile, path: &str, keys: &AmountKeys) -> Result<SpeciesModel> {
@@ -1091,7 +1140,7 @@ fn convert_mie(file: MieFile, path: &str, keys: &AmountKeys) -> Result<SpeciesMo
                         format!("{path}.reference_wavelength_nm"),
                         reference_wavelength_nm,
                         "nm",
-                        format!("{lo}..={hi}, the range of the refractive-index table"),
+                        format!("within the refractive-index table, {lo}..={hi}"),
                     ));
                 }
             }
@@ -1143,13 +1192,12 @@ fn convert_absorption(file: AbsorptionFile, path: &str, keys: &AmountKeys) -> Re
                     &format!("{here}.cross_section_m2[{i}]"),
                     *v,
                     "m^2",
-                    ">= 0 and finite",
+                    ">= 0",
                     *v >= 0.0,
                 )?;
             }
             AbsorptionCrossSection::Tabulated(
-                TabulatedSpectrum::new(wavelengths, values, &here)
-                    .map_err(|e| invalid(&here, &strip(&e)))?,
+                TabulatedSpectrum::new(wavelengths, values, &here).map_err(|e| table_error(&e))?,
             )
         }
         _ => {
@@ -1175,10 +1223,12 @@ fn convert_absorption(file: AbsorptionFile, path: &str, keys: &AmountKeys) -> Re
     }))
 }
 
-fn strip(e: &Error) -> String {
+/// A table that does not make a spectrum, as a file error (the message
+/// already starts with the table's key).
+fn table_error(e: &Error) -> Error {
     match e {
-        Error::InvalidSpectrum(message) => message.clone(),
-        other => other.to_string(),
+        Error::InvalidSpectrum(message) => Error::parse("atmosphere file", 0, message.clone()),
+        other => other.clone(),
     }
 }
 

@@ -107,7 +107,7 @@ impl BinnedCrossSection {
     /// the value of the bin holding `lo_nm` when the band is empty.
     pub fn band_average_m2(&self, lo_nm: f64, hi_nm: f64) -> Result<f64> {
         let (first, end) = self.range_nm();
-        if lo_nm < first || hi_nm > end || !(lo_nm <= hi_nm) {
+        if !(lo_nm >= first && hi_nm <= end && lo_nm <= hi_nm) {
             return Err(Error::InvalidSpectrum(format!(
                 "the cross-section table covers {first}-{end} nm but {lo_nm}-{hi_nm} nm is needed"
             )));

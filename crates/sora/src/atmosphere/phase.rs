@@ -123,7 +123,7 @@ impl TabulatedPhase {
                 running[j] = running[j - 1] + 0.5 * (row[j] + row[j - 1]) * width;
             }
             let total = 2.0 * PI * running[n - 1];
-            if !(total > 0.0) {
+            if !(total > 0.0 && total.is_finite()) {
                 return None;
             }
             let row: Vec<f64> = row.iter().map(|v| v / total).collect();

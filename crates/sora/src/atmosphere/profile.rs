@@ -74,7 +74,7 @@ impl ProfileTable {
     ) -> Result<ProfileTable> {
         if altitudes_m.len() != relative_densities.len() || altitudes_m.len() < 2 {
             return Err(Error::parse(
-                "atmosphere",
+                "atmosphere file",
                 0,
                 format!(
                     "{name}: altitude_m and relative_density need the same number of rows, at least 2 (got {} and {})",
@@ -97,10 +97,7 @@ impl ProfileTable {
                     format!("{name}.altitude_m[{i}]"),
                     h,
                     "m",
-                    format!(
-                        "> the previous row ({} m): altitudes must increase",
-                        altitudes_m[i - 1]
-                    ),
+                    format!("altitudes must increase: > {}", altitudes_m[i - 1]),
                 ));
             }
         }

@@ -48,7 +48,7 @@ impl Sun {
                 "sun.angular_diameter_deg",
                 angular_diameter_deg,
                 "deg",
-                format!("0..={MAX_SUN_ANGULAR_DIAMETER_DEG} (0: a point sun)"),
+                format!("0 (a point sun) to {MAX_SUN_ANGULAR_DIAMETER_DEG}"),
             ));
         }
         Ok(Sun {
