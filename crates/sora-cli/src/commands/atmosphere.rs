@@ -1,11 +1,366 @@
-//! `sora atmosphere`: (stub, being written).
+//! `sora atmosphere`: inspect atmospheres. `presets` lists the built-in
+//! ones; `show` loads one (a preset or a TOML file), puts it on a
+//! wavelength grid and prints, per wavelength and species, the vertical
+//! column optical depths (extinction, scattering), the single-scattering
+//! albedo and the asymmetry parameter, as a table, CSV or JSON.
 
-use clap::Args;
+use std::fmt::Write as _;
+use std::io::Write as _;
 
-/// Inspect atmospheres: presets and per-wavelength optical depths.
+use anyhow::Context;
+use clap::{Args, Subcommand, ValueEnum};
+use sora::atmosphere::presets::PRESETS;
+use sora::atmosphere::{Atmosphere, AtmosphereOptics};
+use sora::spectrum::{Spectrum, WavelengthGrid};
+
+use crate::arguments::AtmosphereSource;
+
+/// What the sky is made of: built-in atmospheres and the optics of any
+/// atmosphere, per wavelength and species.
+///
+/// Examples:
+///   sora atmosphere presets
+///   sora atmosphere show --preset earth-clear
+///   sora atmosphere show --atmosphere my-planet.toml --wavelengths 400:700:50 --format csv
+///
+/// An atmosphere is a planet, a sun and a list of species (gases, aerosols),
+/// each with a density profile and optical properties. Atmosphere files are
+/// TOML; the files in atmospheres/ in the repository (the presets) show the
+/// schema, every key carrying its unit (radius_m, scale_height_m, ...).
 #[derive(Debug, Args)]
-pub struct AtmosphereArgs {}
+#[command(verbatim_doc_comment)]
+pub struct AtmosphereArgs {
+    #[command(subcommand)]
+    command: AtmosphereCommand,
+}
 
-pub fn run(_args: AtmosphereArgs) -> anyhow::Result<()> {
-    anyhow::bail!("not yet available")
+#[derive(Debug, Subcommand)]
+enum AtmosphereCommand {
+    /// List the built-in atmospheres with a one-line description each
+    Presets,
+    /// Optical depths, albedo and asymmetry of each species, per wavelength
+    ///
+    /// For each wavelength and species: tau_extinction and tau_scattering, the
+    /// vertical optical depths from the ground to the top of the atmosphere;
+    /// single_scattering_albedo = scattering / extinction (0 for a gas that
+    /// only absorbs); asymmetry_g = mean cosine of the scattering angle (0 for
+    /// air, towards 1 for aerosol that scatters forward).
+    ///
+    /// Examples:
+    ///   sora atmosphere show --preset mars-dust
+    ///   sora atmosphere show --atmosphere my-planet.toml --format csv > optics.csv
+    #[command(verbatim_doc_comment)]
+    Show(ShowArgs),
+}
+
+/// The options of `sora atmosphere show`.
+#[derive(Debug, Args)]
+struct ShowArgs {
+    #[command(flatten)]
+    source: AtmosphereSource,
+
+    /// Wavelengths, start:stop:step in nm (within 360-830), or one wavelength
+    #[arg(long, value_name = "START:STOP:STEP", default_value = "380:780:20")]
+    wavelengths: WavelengthGrid,
+
+    /// Output format: a readable table, CSV (one row per wavelength and
+    /// species) or JSON
+    #[arg(long, value_enum, default_value_t = Format::Table)]
+    format: Format,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum Format {
+    Table,
+    Csv,
+    Json,
+}
+
+/// The CSV header of `sora atmosphere show --format csv`.
+const CSV_HEADER: &str =
+    "wavelength_nm,species,tau_extinction,tau_scattering,single_scattering_albedo,asymmetry_g";
+
+pub fn run(args: AtmosphereArgs) -> anyhow::Result<()> {
+    let text = match args.command {
+        AtmosphereCommand::Presets => presets_listing(),
+        AtmosphereCommand::Show(show) => {
+            let atmosphere = show.source.load()?;
+            let optics = atmosphere
+                .compute_optics(&show.wavelengths)
+                .with_context(|| format!("atmosphere '{}'", atmosphere.name))?;
+            match show.format {
+                Format::Table => table(&atmosphere, &optics),
+                Format::Csv => csv(&optics),
+                Format::Json => json(&atmosphere, &optics),
+            }
+        }
+    };
+    let mut stdout = std::io::stdout().lock();
+    stdout
+        .write_all(text.as_bytes())
+        .and_then(|()| stdout.flush())
+        .context("writing to stdout")
+}
+
+fn presets_listing() -> String {
+    let width = PRESETS.iter().map(|p| p.name.len()).max().unwrap_or(0);
+    let mut out = String::new();
+    for preset in &PRESETS {
+        let _ = writeln!(out, "{:width$}  {}", preset.name, preset.description);
+    }
+    out
+}
+
+/// A number for CSV and JSON: the shortest text that reads back to the
+/// same f64, in exponent form when tiny or huge; `null` when not finite
+/// (which the library does not produce, but JSON has no NaN).
+fn number(value: f64) -> String {
+    if !value.is_finite() {
+        "null".to_string()
+    } else if value != 0.0 && !(1e-4..1e15).contains(&value.abs()) {
+        format!("{value:e}")
+    } else {
+        format!("{value}")
+    }
+}
+
+/// CSV field: quoted when it holds a comma, a quote or a line break.
+fn csv_field(text: &str) -> String {
+    if text.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", text.replace('"', "\"\""))
+    } else {
+        text.to_string()
+    }
+}
+
+fn csv(optics: &AtmosphereOptics) -> String {
+    let mut out = String::new();
+    let _ = writeln!(out, "{CSV_HEADER}");
+    for row in optics.summary_rows() {
+        let _ = writeln!(
+            out,
+            "{},{},{},{},{},{}",
+            number(row.wavelength_nm),
+            csv_field(row.species),
+            number(row.tau_extinction),
+            number(row.tau_scattering),
+            number(row.single_scattering_albedo),
+            number(row.asymmetry_g)
+        );
+    }
+    out
+}
+
+fn describe_albedo(albedo: &Spectrum) -> String {
+    match albedo {
+        Spectrum::Constant(a) => format!("{a}"),
+        Spectrum::Tabulated(table) => {
+            let (lo, hi) = table.range_nm();
+            format!("tabulated {lo}-{hi} nm")
+        }
+    }
+}
+
+fn table(atmosphere: &Atmosphere, optics: &AtmosphereOptics) -> String {
+    let mut out = String::new();
+    let planet = &atmosphere.planet;
+    let sun = &atmosphere.sun;
+    let _ = writeln!(out, "{}", atmosphere.name);
+    if !atmosphere.description.is_empty() {
+        let _ = writeln!(out, "  {}", atmosphere.description);
+    }
+    let _ = writeln!(
+        out,
+        "planet: radius {} km, atmosphere {} km thick, ground albedo {}",
+        planet.radius_m() / 1e3,
+        planet.atmosphere_height_m() / 1e3,
+        describe_albedo(planet.ground_albedo())
+    );
+    let _ = writeln!(
+        out,
+        "sun: {} x {}, disc {} deg",
+        sun.spectrum().name(),
+        sun.irradiance_scale(),
+        sun.angular_diameter_deg()
+    );
+    let name_width = optics
+        .species
+        .iter()
+        .map(|s| s.name.chars().count())
+        .max()
+        .unwrap_or(0)
+        .max("species".len());
+    let _ = writeln!(out, "species:");
+    for species in &optics.species {
+        let density = match species.reference_number_density_m3 {
+            Some(n) => format!(", {n:.4e} m^-3 at relative density 1"),
+            None => String::new(),
+        };
+        let _ = writeln!(
+            out,
+            "  {:name_width$}  {}; {}; column {:.1} m{}; phase {}",
+            species.name,
+            species.kind,
+            species.profile.describe(),
+            species.vertical_column_m,
+            density,
+            species.phase_function.kind()
+        );
+    }
+    let _ = writeln!(
+        out,
+        "\nvertical optical depths, ground to top of the atmosphere ({} wavelengths):",
+        optics.grid.len()
+    );
+    let _ = writeln!(
+        out,
+        "{:>9}  {:name_width$}  {:>10}  {:>10}  {:>8}  {:>7}",
+        "lambda_nm", "species", "tau_ext", "tau_sca", "albedo", "g"
+    );
+    let total = optics.total_optical_depth_extinction();
+    let rows = optics.summary_rows();
+    for (i, chunk) in rows.chunks(optics.species.len().max(1)).enumerate() {
+        for row in chunk {
+            let _ = writeln!(
+                out,
+                "{:>9}  {:name_width$}  {:>10.6}  {:>10.6}  {:>8.5}  {:>7.4}",
+                row.wavelength_nm,
+                row.species,
+                row.tau_extinction,
+                row.tau_scattering,
+                row.single_scattering_albedo,
+                row.asymmetry_g
+            );
+        }
+        if optics.species.len() > 1 {
+            let _ = writeln!(
+                out,
+                "{:>9}  {:name_width$}  {:>10.6}",
+                "", "(total)", total[i]
+            );
+        }
+    }
+    out
+}
+
+/// A JSON string literal.
+fn json_string(text: &str) -> String {
+    let mut out = String::with_capacity(text.len() + 2);
+    out.push('"');
+    for c in text.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            '\n' => out.push_str("\\n"),
+            '\r' => out.push_str("\\r"),
+            '\t' => out.push_str("\\t"),
+            c if (c as u32) < 0x20 => {
+                let _ = write!(out, "\\u{:04x}", c as u32);
+            }
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+    out
+}
+
+fn json(atmosphere: &Atmosphere, optics: &AtmosphereOptics) -> String {
+    let planet = &atmosphere.planet;
+    let sun = &atmosphere.sun;
+    let mut out = String::new();
+    let _ = writeln!(out, "{{");
+    let _ = writeln!(out, "  \"name\": {},", json_string(&atmosphere.name));
+    let _ = writeln!(
+        out,
+        "  \"description\": {},",
+        json_string(&atmosphere.description)
+    );
+    let _ = writeln!(
+        out,
+        "  \"planet\": {{\"radius_m\": {}, \"atmosphere_height_m\": {}, \"ground_albedo\": {}}},",
+        number(planet.radius_m()),
+        number(planet.atmosphere_height_m()),
+        match planet.ground_albedo() {
+            Spectrum::Constant(a) => number(*a),
+            Spectrum::Tabulated(_) => json_string(&describe_albedo(planet.ground_albedo())),
+        }
+    );
+    let _ = writeln!(
+        out,
+        "  \"sun\": {{\"spectrum\": {}, \"irradiance_scale\": {}, \"angular_diameter_deg\": {}}},",
+        json_string(sun.spectrum().name()),
+        number(sun.irradiance_scale()),
+        number(sun.angular_diameter_deg())
+    );
+    let _ = writeln!(out, "  \"species\": [");
+    for (i, species) in optics.species.iter().enumerate() {
+        let separator = if i + 1 < optics.species.len() {
+            ","
+        } else {
+            ""
+        };
+        let _ = writeln!(
+            out,
+            "    {{\"name\": {}, \"kind\": {}, \"profile\": {}, \"vertical_column_m\": {}, \"reference_number_density_m3\": {}, \"phase_function\": {}}}{separator}",
+            json_string(&species.name),
+            json_string(species.kind),
+            json_string(&species.profile.describe()),
+            number(species.vertical_column_m),
+            species
+                .reference_number_density_m3
+                .map_or("null".to_string(), number),
+            json_string(species.phase_function.kind())
+        );
+    }
+    let _ = writeln!(out, "  ],");
+    let wavelengths: Vec<String> = optics.grid.wavelengths_nm().map(number).collect();
+    let _ = writeln!(out, "  \"wavelengths_nm\": [{}],", wavelengths.join(", "));
+    let _ = writeln!(out, "  \"optics\": [");
+    let rows = optics.summary_rows();
+    for (i, row) in rows.iter().enumerate() {
+        let separator = if i + 1 < rows.len() { "," } else { "" };
+        let _ = writeln!(
+            out,
+            "    {{\"wavelength_nm\": {}, \"species\": {}, \"tau_extinction\": {}, \"tau_scattering\": {}, \"single_scattering_albedo\": {}, \"asymmetry_g\": {}}}{separator}",
+            number(row.wavelength_nm),
+            json_string(row.species),
+            number(row.tau_extinction),
+            number(row.tau_scattering),
+            number(row.single_scattering_albedo),
+            number(row.asymmetry_g)
+        );
+    }
+    let _ = writeln!(out, "  ]");
+    let _ = writeln!(out, "}}");
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_read_back_exactly() {
+        for v in [
+            0.0,
+            1.0,
+            0.4072515344,
+            2.546899e25,
+            1.16e-5,
+            -3.5e-30,
+            780.0,
+        ] {
+            assert_eq!(number(v).parse::<f64>().unwrap(), v, "{}", number(v));
+        }
+        assert_eq!(number(f64::NAN), "null");
+        assert_eq!(number(380.0), "380");
+    }
+
+    #[test]
+    fn strings_are_escaped() {
+        assert_eq!(json_string("a \"b\"\\\n"), "\"a \\\"b\\\"\\\\\\n\"");
+        assert_eq!(json_string("\u{1}"), "\"\\u0001\"");
+        assert_eq!(csv_field("water, soluble"), "\"water, soluble\"");
+        assert_eq!(csv_field("dust"), "dust");
+    }
 }

@@ -1,0 +1,215 @@
+//! `sora atmosphere` end to end: the built binary on presets and files.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn sora(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_sora"))
+        .args(args)
+        .output()
+        .expect("the sora binary runs")
+}
+
+fn stdout(out: &Output) -> String {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout.clone()).unwrap()
+}
+
+/// The one-line error of a failed run (exit status 1).
+fn error(out: &Output) -> String {
+    assert_eq!(out.status.code(), Some(1), "{out:?}");
+    let stderr = String::from_utf8(out.stderr.clone()).unwrap();
+    assert_eq!(stderr.lines().count(), 1, "not one line: {stderr}");
+    stderr
+}
+
+#[test]
+fn presets_are_listed_with_descriptions() {
+    let text = stdout(&sora(&["atmosphere", "presets"]));
+    for name in [
+        "paper-earth",
+        "paper-mars",
+        "earth-clear",
+        "earth-hazy",
+        "mars-dust",
+        "clear-sky-reference",
+    ] {
+        let line = text
+            .lines()
+            .find(|l| l.split_whitespace().next() == Some(name))
+            .unwrap_or_else(|| panic!("{name} missing from:\n{text}"));
+        assert!(line.len() > name.len() + 20, "no description: {line}");
+    }
+}
+
+/// The CSV of the clear-sky reference is the reference's optical depths.
+#[test]
+fn csv_of_the_clear_sky_reference() {
+    let text = stdout(&sora(&[
+        "atmosphere",
+        "show",
+        "--preset",
+        "clear-sky-reference",
+        "--format",
+        "csv",
+    ]));
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next(),
+        Some(
+            "wavelength_nm,species,tau_extinction,tau_scattering,single_scattering_albedo,asymmetry_g"
+        )
+    );
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 42, "21 wavelengths x 2 species");
+    // 380 nm: tau_R = 0.4072515344, aerosol 0.1617159367 / 0.1455443431
+    // (reference/sky/clear_sky_optical_depths.csv).
+    assert_eq!(rows[0][..2], ["380", "air"]);
+    let value = |row: usize, column: usize| rows[row][column].parse::<f64>().unwrap();
+    assert!((value(0, 2) / 4.072515344e-1 - 1.0).abs() < 1e-6);
+    assert_eq!(rows[1][..2], ["380", "aerosol"]);
+    assert!((value(1, 2) / 1.617159367e-1 - 1.0).abs() < 1e-6);
+    assert!((value(1, 3) / 1.455443431e-1 - 1.0).abs() < 1e-6);
+    assert_eq!((value(1, 4), value(1, 5)), (0.9, 0.7));
+    assert_eq!(rows[41][..2], ["780", "aerosol"]);
+}
+
+#[test]
+fn table_and_json_formats() {
+    let text = stdout(&sora(&[
+        "atmosphere",
+        "show",
+        "--preset",
+        "earth-clear",
+        "--wavelengths",
+        "400:700:150",
+    ]));
+    assert!(text.contains("Earth, clear continental sky"), "{text}");
+    assert!(text.contains("ozone") && text.contains("(total)"), "{text}");
+    let json = stdout(&sora(&[
+        "atmosphere",
+        "show",
+        "--preset",
+        "paper-mars",
+        "--wavelengths",
+        "550",
+        "--format",
+        "json",
+    ]));
+    assert!(json.trim_start().starts_with('{') && json.trim_end().ends_with('}'));
+    assert_eq!(json.matches('{').count(), json.matches('}').count());
+    assert_eq!(json.matches('[').count(), json.matches(']').count());
+    assert!(json.contains("\"wavelengths_nm\": [550]"), "{json}");
+    assert!(json.contains("\"species\": \"dust\""), "{json}");
+}
+
+#[test]
+fn a_bad_file_is_one_line_naming_the_key() {
+    let directory = tempfile::tempdir().unwrap();
+    let path = directory.path().join("bad.toml");
+    let good = sora::atmosphere::presets::find_preset("clear-sky-reference")
+        .unwrap()
+        .toml;
+    std::fs::write(
+        &path,
+        good.replace("scale_height_m = 1200", "scale_height_m = -1200"),
+    )
+    .unwrap();
+    let message = error(&sora(&[
+        "atmosphere",
+        "show",
+        "--atmosphere",
+        path.to_str().unwrap(),
+    ]));
+    assert!(
+        message.contains("bad.toml")
+            && message.contains("species[1].profile.exponential.scale_height_m = -1200 m"),
+        "{message}"
+    );
+    std::fs::write(&path, "name = \"x\"\n[planet\n").unwrap();
+    let message = error(&sora(&[
+        "atmosphere",
+        "show",
+        "--atmosphere",
+        path.to_str().unwrap(),
+    ]));
+    assert!(message.contains("line 2"), "{message}");
+    let message = error(&sora(&[
+        "atmosphere",
+        "show",
+        "--atmosphere",
+        directory.path().join("missing.toml").to_str().unwrap(),
+    ]));
+    assert!(message.contains("missing.toml"), "{message}");
+    let message = error(&sora(&["atmosphere", "show", "--preset", "venus"]));
+    assert!(message.contains("'venus' is not a preset"), "{message}");
+}
+
+/// A file's solar CSV is read relative to the file, and every shipped
+/// atmosphere file loads from disk like its preset.
+#[test]
+fn files_on_disk() {
+    let directory = tempfile::tempdir().unwrap();
+    let text = sora::atmosphere::presets::find_preset("clear-sky-reference")
+        .unwrap()
+        .toml
+        .replace(
+            "spectrum = \"flat\"              # the paper's equal-energy sun\nirradiance_w_m2_nm = 1.0",
+            "spectrum = \"csv\"\ncsv_file = \"sun.csv\"",
+        );
+    assert!(text.contains("sun.csv"));
+    std::fs::write(directory.path().join("sky.toml"), text).unwrap();
+    std::fs::write(
+        directory.path().join("sun.csv"),
+        "# a grey sun\nwavelength_nm,irradiance_w_m2_nm\n350,2\n850,2\n",
+    )
+    .unwrap();
+    let path = directory.path().join("sky.toml");
+    stdout(&sora(&[
+        "atmosphere",
+        "show",
+        "--atmosphere",
+        path.to_str().unwrap(),
+    ]));
+
+    let atmospheres = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../atmospheres");
+    let mut count = 0;
+    for entry in std::fs::read_dir(atmospheres).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "toml") {
+            let text = stdout(&sora(&[
+                "atmosphere",
+                "show",
+                "--atmosphere",
+                path.to_str().unwrap(),
+                "--wavelengths",
+                "550",
+                "--format",
+                "csv",
+            ]));
+            assert!(text.lines().count() >= 2, "{}", path.display());
+            count += 1;
+        }
+    }
+    assert!(count >= 6);
+}
+
+#[test]
+fn help_explains_the_commands() {
+    let text = stdout(&sora(&["atmosphere", "--help"]));
+    assert!(text.contains("presets") && text.contains("show"), "{text}");
+    let text = stdout(&sora(&["atmosphere", "show", "--help"]));
+    for fragment in [
+        "--preset",
+        "--atmosphere",
+        "--wavelengths",
+        "--format",
+        "single_scattering_albedo",
+    ] {
+        assert!(text.contains(fragment), "{fragment} in {text}");
+    }
+}
