@@ -2,8 +2,8 @@
 //! given material (complex refractive index m(lambda), constant or
 //! tabulated) and size distribution (log-normal, optionally truncated to
 //! a radius window as in the paper's Tables 1-2, or gamma) have, per
-//! particle, ensemble-averaged cross-sections <C_ext>(lambda),
-//! <C_sca>(lambda) and a phase function, computed by the `sora-mie`
+//! particle, ensemble-averaged cross-sections `<C_ext>(lambda)`,
+//! `<C_sca>(lambda)` and a phase function, computed by the `sora-mie`
 //! engine (eq. 2 with its misprint corrected, integrated over the
 //! distribution instead of the paper's random radius draw). Then
 //!
@@ -15,7 +15,7 @@
 //! particles per m^3 of the population the distribution describes: for a
 //! truncated distribution, the particles inside the window, as the paper's
 //! tables count them) or set by a column optical depth tau at a reference
-//! wavelength: N_ref = tau / (<C_ext>(lambda_ref) column_m), the way
+//! wavelength: `N_ref = tau / (<C_ext>(lambda_ref) column_m)`, the way
 //! aerosol amounts are measured (sun photometers) and the way the Earth
 //! presets are set.
 //!

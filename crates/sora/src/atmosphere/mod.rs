@@ -22,7 +22,7 @@
 //!   single-scattering albedo, Henyey-Greenstein / Cornette-Shanks);
 //! - [`ozone`]: gases that only absorb (ozone, 300 DU on Earth).
 //!
-//! Atmospheres are read from TOML ([`file`], the one place where files
+//! Atmospheres are read from TOML ([`file`](mod@file), the one place where files
 //! become validated model types; [`Atmosphere::from_toml_str`]) or taken
 //! from the built-in [`presets`]. [`Atmosphere::compute_optics`] puts all of
 //! it on a wavelength grid once ([`optical_depth::AtmosphereOptics`]): the
@@ -121,7 +121,7 @@ impl SpeciesModel {
 }
 
 impl Atmosphere {
-    /// Parses and validates an atmosphere file (see [`file`] for the
+    /// Parses and validates an atmosphere file (see [`file`](mod@file) for the
     /// schema). Files it names (a solar spectrum CSV) are refused; use
     /// [`Atmosphere::from_toml_str_with_files`] to supply them.
     pub fn from_toml_str(text: &str) -> Result<Atmosphere> {

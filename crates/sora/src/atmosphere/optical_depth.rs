@@ -3,9 +3,9 @@
 //! summarise an atmosphere.
 //!
 //! For each species s, at each wavelength lambda_i of the grid:
-//! - `extinction_per_m[i]` and `scattering_per_m[i]`: beta_ext and beta_sca
+//! - `extinction_per_m` and `scattering_per_m` at index i: beta_ext and beta_sca
 //!   at relative density 1 (m^-1), so that at altitude h
-//!   beta(h, lambda_i) = relative_density_s(h) * beta[i] (the paper's eq. 1);
+//!   beta(h, lambda_i) = relative_density_s(h) * beta_i (the paper's eq. 1);
 //! - the phase function (sr^-1) at that wavelength;
 //! - the vertical column of its profile, column_m = integral_0^top
 //!   relative_density dh (m).
@@ -13,7 +13,7 @@
 //! Derived per wavelength: the column optical depths
 //! tau_ext = beta_ext column_m and tau_sca = beta_sca column_m (ground to
 //! top, vertical), the single-scattering albedo omega = beta_sca / beta_ext
-//! (0 for a pure absorber), and the asymmetry parameter g = <cos theta>
+//! (0 for a pure absorber), and the asymmetry parameter g = `<cos theta>`
 //! of the phase function. Slant paths and transmittances are the
 //! renderer's business; [`AtmosphereOptics::add_extinction_at_altitude`]
 //! and [`AtmosphereOptics::add_scattering_at_altitude`] are its per-sample
@@ -67,7 +67,7 @@ impl SpeciesOptics {
         )
     }
 
-    /// Asymmetry parameter <cos theta> per wavelength (0 for species that do
+    /// Asymmetry parameter `<cos theta>` per wavelength (0 for species that do
     /// not scatter).
     pub fn asymmetry_g(&self) -> SampledSpectrum {
         SampledSpectrum::from_values(

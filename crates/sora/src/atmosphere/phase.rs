@@ -266,7 +266,7 @@ impl PhaseFunction {
         }
     }
 
-    /// Mean cosine of the scattering angle, <cos theta> (the asymmetry
+    /// Mean cosine of the scattering angle, `<cos theta>` (the asymmetry
     /// parameter g of radiative transfer) at wavelength sample
     /// `wavelength_index`.
     pub fn asymmetry_g(&self, wavelength_index: usize) -> f64 {
