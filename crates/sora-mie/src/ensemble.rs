@@ -976,5 +976,288 @@ mod tests {
         let _ = RadiusWindow::from_micrometres(0.1, 2.5).unwrap();
     }
 
-    // MIE_DEPENDENT_TESTS
+    fn mars_dust() -> SizeDistribution {
+        SizeDistribution::log_normal(0.78 * MICROMETRE, 1.67).unwrap()
+    }
+
+    fn paper_table1_aerosol() -> SizeDistribution {
+        SizeDistribution::log_normal(0.5 * MICROMETRE, 2.0)
+            .unwrap()
+            .truncated_to(RadiusWindow::from_micrometres(0.1, 2.5).unwrap())
+            .unwrap()
+    }
+
+    /// 2 pi integral_{-1}^{1} f(mu) dmu by composite Simpson, independent of
+    /// the table's own (trapezoid-in-mu) integral.
+    fn integrate_over_sphere(f: impl Fn(f64) -> f64, intervals: usize) -> f64 {
+        let h = 2.0 / intervals as f64;
+        let mut sum = f(-1.0) + f(1.0);
+        for i in 1..intervals {
+            sum += if i % 2 == 1 { 4.0 } else { 2.0 } * f(-1.0 + i as f64 * h);
+        }
+        2.0 * PI * sum * h / 3.0
+    }
+
+    /// The blocked angular sums against the sphere module's own S11 table.
+    #[test]
+    fn blocked_angular_sums_match_the_sphere_module() {
+        let cosines = table_cosines();
+        let m = Complex64::new(1.5, 0.005);
+        for x in [0.3, 7.0, 95.0, 400.0] {
+            let solution = MieSolution::compute(m, x).unwrap();
+            let (a, b) = solution.coefficients();
+            let mut blocked = vec![0.0; cosines.len()];
+            accumulate_weighted_s11(&cosines, a, b, 2.0, &mut blocked);
+            let mut s11 = vec![0.0; cosines.len()];
+            let mut s12 = vec![0.0; cosines.len()];
+            solution.s11_s12_table(&cosines, &mut s11, &mut s12);
+            let scale = s11.iter().fold(0.0f64, |acc, &v| acc.max(v));
+            // The two orders of summation round differently: about 1e-16 per
+            // term relative to the largest (forward) value.
+            let tolerance = 1e-14 * solution.n_terms() as f64 * scale;
+            for (i, (&mine, &theirs)) in blocked.iter().zip(&s11).enumerate() {
+                assert!(
+                    (mine / 2.0 - theirs).abs() <= tolerance,
+                    "x {x} mu {}: {mine} vs {theirs}",
+                    cosines[i]
+                );
+            }
+        }
+    }
+
+    /// The Mie ensemble phase function integrates to 1 over 4 pi sr, its raw
+    /// table (exact ensemble values at the nodes) did so to within the
+    /// angular interpolation error, and its mean cosine is the ensemble g
+    /// computed from the cross-sections, to the accuracy of the table.
+    #[test]
+    fn ensemble_phase_function_is_normalised_and_its_mean_cosine_is_g() {
+        let model = RefractiveIndexModel::constant(Complex64::new(1.5, 0.005)).unwrap();
+        for distribution in [
+            mars_dust(),
+            paper_table1_aerosol(),
+            SizeDistribution::log_normal(0.1 * MICROMETRE, 1.5).unwrap(),
+        ] {
+            let spectrum = compute_ensemble_optics_spectrum(
+                &[380.0, 550.0, 780.0],
+                &model,
+                &distribution,
+                &EnsembleSettings::default(),
+            )
+            .unwrap();
+            for optics in &spectrum {
+                let AerosolPhaseFunction::Tabulated(table) = &optics.phase_function else {
+                    panic!("Mie mode gives a table");
+                };
+                let lambda = optics.cross_sections.wavelength_nm;
+                let norm = integrate_over_sphere(
+                    |mu| optics.phase_function.phase_function_per_sr(mu),
+                    400_000,
+                );
+                assert!((norm - 1.0).abs() < 1e-6, "{lambda} nm: integral {norm}");
+                // Measured: 5e-5 to 2.3e-4 (the trapezoid in mu over-counts the convex forward peak).
+                let raw = table.normalisation_before_rescaling();
+                assert!(
+                    (raw - 1.0).abs() < 5e-4,
+                    "{lambda} nm: raw table integral {raw}"
+                );
+                let mean_cosine = optics.phase_function.asymmetry_parameter();
+                let g = optics.cross_sections.asymmetry_parameter;
+                // Measured: within 1.5e-4 (radius quadrature of the table and interpolation).
+                assert!(
+                    (mean_cosine - g).abs() < 4e-4,
+                    "{lambda} nm: <mu> {mean_cosine} vs g {g}"
+                );
+                let independent_mean_cosine = integrate_over_sphere(
+                    |mu| mu * optics.phase_function.phase_function_per_sr(mu),
+                    400_000,
+                );
+                assert!((independent_mean_cosine - mean_cosine).abs() < 1e-6);
+            }
+        }
+    }
+
+    /// A very narrow distribution is one sphere: the ensemble reduces to the
+    /// single-sphere efficiencies and phase function at the median radius.
+    #[test]
+    fn a_narrow_distribution_is_a_single_sphere() {
+        let radius_m = 0.6 * MICROMETRE;
+        let distribution = SizeDistribution::log_normal(radius_m, 1.0001).unwrap();
+        let m = Complex64::new(1.5, 0.01);
+        let wavelength_nm = 550.0;
+        let x = 2.0 * PI * radius_m / (wavelength_nm * 1e-9);
+        let sphere = MieSolution::compute(m, x).unwrap();
+        let q = sphere.efficiencies();
+        let area_m2 = PI * radius_m * radius_m;
+        let c = compute_ensemble_cross_sections(
+            wavelength_nm,
+            m,
+            &distribution,
+            &RadiusQuadratureSettings::cross_sections(),
+        )
+        .unwrap();
+        // sigma_g = 1.0001 spreads the radius by 1e-4: second-order effects ~1e-7 on smooth Q(x).
+        assert!((c.extinction_cross_section_m2 / (area_m2 * q.qext) - 1.0).abs() < 1e-5);
+        assert!((c.scattering_cross_section_m2 / (area_m2 * q.qsca) - 1.0).abs() < 1e-5);
+        assert!((c.absorption_cross_section_m2 / (area_m2 * q.qabs) - 1.0).abs() < 1e-5);
+        assert!((c.asymmetry_parameter - q.g).abs() < 1e-5);
+        let table = compute_ensemble_phase_function(
+            wavelength_nm,
+            m,
+            &distribution,
+            &RadiusQuadratureSettings::phase_function(),
+        )
+        .unwrap();
+        for theta_deg in [0.0f64, 10.0, 45.0, 90.0, 150.0, 180.0] {
+            let mu = theta_deg.to_radians().cos();
+            let node = table
+                .cos_theta_nodes()
+                .iter()
+                .position(|&c| (c - mu).abs() < 1e-15)
+                .unwrap();
+            let exact = sphere.phase_function_per_sr(mu);
+            let tabulated =
+                table.phase_per_sr_nodes()[node] * table.normalisation_before_rescaling();
+            assert!(
+                (tabulated / exact - 1.0).abs() < 1e-4,
+                "{theta_deg} deg: {tabulated} vs {exact}"
+            );
+        }
+    }
+
+    /// Sharing Mie solutions across wavelengths gives the same per-wavelength
+    /// optics as computing each wavelength alone (two different quadratures
+    /// of the same integrals).
+    #[test]
+    fn shared_spectrum_matches_wavelength_by_wavelength() {
+        // At k = 0.01 both quadratures are converged to ~1e-7 (module docs),
+        // so any difference beyond that would be a bug in the sharing.
+        let m = Complex64::new(1.5, 0.01);
+        let model = RefractiveIndexModel::Constant(m);
+        for distribution in [mars_dust(), paper_table1_aerosol()] {
+            let spectrum = compute_ensemble_optics_spectrum(
+                &PAPER_WAVELENGTHS_NM,
+                &model,
+                &distribution,
+                &EnsembleSettings::default(),
+            )
+            .unwrap();
+            for optics in spectrum.iter().step_by(5) {
+                let shared = &optics.cross_sections;
+                let alone = compute_ensemble_cross_sections(
+                    shared.wavelength_nm,
+                    m,
+                    &distribution,
+                    &RadiusQuadratureSettings::cross_sections(),
+                )
+                .unwrap();
+                for (a, b) in [
+                    (
+                        shared.extinction_cross_section_m2,
+                        alone.extinction_cross_section_m2,
+                    ),
+                    (
+                        shared.scattering_cross_section_m2,
+                        alone.scattering_cross_section_m2,
+                    ),
+                    (
+                        shared.absorption_cross_section_m2,
+                        alone.absorption_cross_section_m2,
+                    ),
+                    (shared.asymmetry_parameter, alone.asymmetry_parameter),
+                ] {
+                    assert!(
+                        (a / b - 1.0).abs() < 1e-6,
+                        "{} nm: {a} vs {b}",
+                        shared.wavelength_nm
+                    );
+                }
+            }
+        }
+    }
+
+    /// The paper's mode: an HG function whose g is the scattering-weighted
+    /// paper g(r), between the end values, larger for larger particles.
+    #[test]
+    fn paper_mode_carries_the_weighted_paper_g() {
+        let model = RefractiveIndexModel::constant(Complex64::new(1.5, 0.01)).unwrap();
+        let settings = EnsembleSettings {
+            phase_mode: AerosolPhaseMode::PaperHenyeyGreenstein,
+            ..EnsembleSettings::default()
+        };
+        let small = compute_ensemble_optics(
+            550.0,
+            &model,
+            &SizeDistribution::log_normal(0.01 * MICROMETRE, 1.2).unwrap(),
+            &settings,
+        )
+        .unwrap();
+        let dust = compute_ensemble_optics(550.0, &model, &mars_dust(), &settings).unwrap();
+        for optics in [&small, &dust] {
+            let AerosolPhaseFunction::HenyeyGreenstein(hg) = &optics.phase_function else {
+                panic!("paper mode gives HG");
+            };
+            assert_eq!(
+                hg.asymmetry_parameter(),
+                optics.cross_sections.paper_asymmetry_parameter
+            );
+            assert!((0.5..=0.9).contains(&hg.asymmetry_parameter()));
+        }
+        // Small particles scatter like r^6: their weighted radius is ~0.02 um, g ~ 0.5.
+        assert!(small.cross_sections.paper_asymmetry_parameter < 0.502);
+        let dust_g = dust.cross_sections.paper_asymmetry_parameter;
+        assert!(dust_g > 0.6 && dust_g < 0.9, "{dust_g}");
+        // The same weights by brute force: sum of g_paper(r) C_sca over a fine trapezoid.
+        let distribution = mars_dust();
+        let wavenumber = 2.0 * PI / 550e-9;
+        let quadrature =
+            RadiusQuadrature::trapezoid(&distribution, wavenumber, 20_001, 18.0).unwrap();
+        let m = Complex64::new(1.5, 0.01);
+        let mut weighted = 0.0;
+        let mut total = 0.0;
+        for (&r, &w) in quadrature.radii_m().iter().zip(quadrature.weights()) {
+            let c_sca = w * PI * r * r * compute_efficiencies(m, wavenumber * r).unwrap().qsca;
+            weighted += c_sca * paper_asymmetry_parameter_for_radius(r);
+            total += c_sca;
+        }
+        assert!((weighted / total - dust_g).abs() < 1e-6);
+    }
+
+    /// A tabulated index gives each wavelength its own index, and the
+    /// results match the constant-index computation at that index.
+    #[test]
+    fn tabulated_index_is_used_per_wavelength() {
+        let table = crate::refractive_index::TabulatedRefractiveIndex::parse_csv(include_str!(
+            "../tests/data/mars_dust_refractive_index_wolff2009.csv"
+        ))
+        .unwrap();
+        let model = RefractiveIndexModel::Tabulated(table);
+        let settings = EnsembleSettings {
+            phase_mode: AerosolPhaseMode::PaperHenyeyGreenstein,
+            ..EnsembleSettings::default()
+        };
+        let spectrum =
+            compute_ensemble_optics_spectrum(&[440.0, 700.0], &model, &mars_dust(), &settings)
+                .unwrap();
+        for optics in &spectrum {
+            let c = &optics.cross_sections;
+            let m = model.refractive_index_at(c.wavelength_nm).unwrap();
+            assert_eq!(c.refractive_index, m);
+            let alone = compute_ensemble_cross_sections(
+                c.wavelength_nm,
+                m,
+                &mars_dust(),
+                &settings.cross_section_quadrature,
+            )
+            .unwrap();
+            assert_eq!(
+                c.extinction_cross_section_m2,
+                alone.extinction_cross_section_m2
+            );
+        }
+        // Less absorbing at 700 nm (k 0.00094 against 0.0077 at 440 nm).
+        assert!(
+            spectrum[1].cross_sections.single_scattering_albedo
+                > spectrum[0].cross_sections.single_scattering_albedo
+        );
+    }
 }
