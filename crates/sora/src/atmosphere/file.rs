@@ -35,7 +35,9 @@
 //! # profile.tent = { peak_altitude_m = 25e3, half_width_m = 15e3 }
 //! # profile.layers = { altitude_m = [...], relative_density = [...] }  # piecewise linear, 0 outside
 //! # profile.table = { altitude_m = [...], relative_density = [...] }   # log-linear, covers 0..=top
-//! scattering.rayleigh = { gas = "air", depolarization = true }       # gas: "air" or "co2"
+//! scattering.rayleigh = { gas = "air", depolarization = true }       # gas: "air" or "co2";
+//!                        # depolarization: the phase function with the gas' depolarisation
+//!                        # ratio (default false: 3/(16 pi)(1 + cos^2), the paper's)
 //! # scattering.rayleigh = { coefficient_per_m = 1.16e-5, reference_wavelength_nm = 550,
 //! #                         wavelength_exponent = 4.0, depolarization_ratio = 0.0 }
 //!
