@@ -64,16 +64,16 @@
 //! ## Where the quadrature goes
 //!
 //! Cross-sections weight the number distribution by about `r^2` (area) for
-//! particles larger than the wavelength, and by up to `r^6` below it, so the
-//! radii that matter lie around the peak of the area-weighted density
-//! `r^2 dN/d ln r`: for the log-normal a Gaussian in `ln r` of the same `s`,
+//! particles larger than the wavelength, and by `r^3` (absorption) to `r^6`
+//! (scattering) below it, so the radii that matter lie around the peak of the
+//! importance density `r^2 min(1, x/4) dN/d ln r` (see [`quadrature`]); for
+//! large particles, a log-normal's is a Gaussian in `ln r` of the same `s`,
 //! centred on the area-weighted median `r_m exp(2 s^2)`. The integration range
-//! is where this area-weighted density is within `exp(-tail_depth)` of its
-//! peak (clipped to the window; the peak of a truncated population is the
-//! clipped peak): [`RadiusQuadratureSettings::tail_depth`] of 25 keeps
-//! ±7.07 `s` for the log-normal and drops a fraction below 1e-12 of the area.
-//! The small-radius side sheds even less than that of the cross-sections
-//! (`C ~ r^6` there). The quadrature itself is described in [`quadrature`].
+//! is where the importance density is within `exp(-tail_depth)` of its peak
+//! (clipped to the window; the peak of a truncated population is the clipped
+//! peak): [`RadiusQuadratureSettings::tail_depth`] 18 keeps +-6 `s` for the
+//! log-normal and drops about 1e-9 of the area. The quadrature itself is
+//! described in [`quadrature`].
 
 mod quadrature;
 mod special_functions;
@@ -538,7 +538,8 @@ impl SizeDistribution {
         let number_fraction_in_window = self
             .shape
             .number_fraction_between(window.min_radius_m, window.max_radius_m);
-        if !(number_fraction_in_window > 0.0) {
+        // NaN counts as no particles.
+        if number_fraction_in_window.is_nan() || number_fraction_in_window <= 0.0 {
             return Err(SizeDistributionError::NoParticlesInWindow {
                 min_radius_m: window.min_radius_m,
                 max_radius_m: window.max_radius_m,
@@ -758,6 +759,8 @@ mod tests {
     /// closed form 0.5 (erf(z2/sqrt2) - erf(z1/sqrt2)), values from mpmath
     /// (30 digits) for the paper's windows.
     #[test]
+    // The expected values are mpmath's, written as printed.
+    #[allow(clippy::excessive_precision)]
     fn truncated_log_normal_number_fraction_matches_erf() {
         // (r_m um, sigma_g, window um, mpmath ncdf(z2) - ncdf(z1))
         let cases = [

@@ -206,6 +206,8 @@ pub(crate) fn gauss_legendre_rule(order: usize) -> (Vec<f64>, Vec<f64>) {
 }
 
 #[cfg(test)]
+// The reference values are mpmath's at 30 digits, written as printed.
+#[allow(clippy::excessive_precision)]
 mod tests {
     use super::*;
 
