@@ -122,3 +122,101 @@ impl ColourOptions {
         }
     }
 }
+
+/// Where an atmosphere comes from: a built-in preset or a TOML file.
+#[derive(Debug, Clone, clap::Args)]
+#[group(required = true, multiple = false)]
+pub struct AtmosphereSource {
+    /// A built-in atmosphere (list them with: sora atmosphere presets)
+    #[arg(long, value_name = "NAME")]
+    pub preset: Option<String>,
+
+    /// An atmosphere file (TOML; see atmospheres/ in the repository)
+    #[arg(long, value_name = "FILE.toml")]
+    pub atmosphere: Option<std::path::PathBuf>,
+}
+
+impl AtmosphereSource {
+    /// Loads and validates the atmosphere. Files that an atmosphere file
+    /// names (a solar spectrum CSV) are read relative to its directory.
+    pub fn load(&self) -> anyhow::Result<sora::atmosphere::Atmosphere> {
+        use anyhow::Context;
+        if let Some(name) = &self.preset {
+            return Ok(sora::atmosphere::Atmosphere::preset(name)?);
+        }
+        let path = self
+            .atmosphere
+            .as_ref()
+            .expect("clap requires --preset or --atmosphere");
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("cannot read {}", path.display()))?;
+        let directory = path
+            .parent()
+            .map(std::path::Path::to_path_buf)
+            .unwrap_or_default();
+        let mut read_file = |name: &str| {
+            let named = directory.join(name);
+            std::fs::read_to_string(&named)
+                .map_err(|e| format!("cannot read {}: {e}", named.display()))
+        };
+        sora::atmosphere::Atmosphere::from_toml_str_with_files(&text, &mut read_file)
+            .with_context(|| path.display().to_string())
+    }
+}
+
+/// The eye and the sun: shared by `sora spectrum` and `sora render`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct SunAndObserver {
+    /// Sun elevation above the horizon, degrees (-90..90; negative: twilight)
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
+    pub sun_elevation: f64,
+
+    /// Sun azimuth clockwise from north, degrees (0 N, 90 E, 180 S, 270 W)
+    #[arg(
+        long,
+        value_name = "DEG",
+        default_value_t = 180.0,
+        allow_hyphen_values = true
+    )]
+    pub sun_azimuth: f64,
+
+    /// Height of the eye above the ground, metres
+    #[arg(long, value_name = "M", default_value_t = 0.0)]
+    pub observer_altitude_m: f64,
+
+    /// Replace the atmosphere's ground albedo by this constant (0..1, Lambertian)
+    #[arg(long, value_name = "A")]
+    pub ground_albedo: Option<f64>,
+
+    /// Wavelengths, start:stop:step in nm (within 360-830)
+    #[arg(long, value_name = "START:STOP:STEP", default_value = "380:780:20")]
+    pub wavelengths: sora::spectrum::WavelengthGrid,
+}
+
+impl SunAndObserver {
+    /// The single-scattering sky these options describe.
+    pub fn sky(
+        &self,
+        atmosphere: &mut sora::atmosphere::Atmosphere,
+    ) -> anyhow::Result<sora::transport::SingleScatteringSky> {
+        if let Some(albedo) = self.ground_albedo {
+            let planet = &atmosphere.planet;
+            atmosphere.planet = sora::atmosphere::Planet::new(
+                planet.radius_m(),
+                planet.atmosphere_height_m(),
+                sora::spectrum::Spectrum::Constant(albedo),
+            )
+            .map_err(|e| anyhow::anyhow!("--ground-albedo: {e}"))?;
+        }
+        let observation = sora::transport::Observation {
+            observer_altitude_m: self.observer_altitude_m,
+            sun_elevation_deg: self.sun_elevation,
+            sun_azimuth_deg: self.sun_azimuth,
+        };
+        Ok(sora::transport::SingleScatteringSky::new(
+            atmosphere,
+            &self.wavelengths,
+            observation,
+        )?)
+    }
+}

@@ -24,6 +24,8 @@ enum Command {
     Colour(commands::colour::ColourArgs),
     Mie(commands::mie::MieArgs),
     Atmosphere(commands::atmosphere::AtmosphereArgs),
+    Spectrum(commands::spectrum::SpectrumArgs),
+    Render(commands::render::RenderArgs),
 }
 
 fn main() {
@@ -32,6 +34,8 @@ fn main() {
         Command::Colour(args) => commands::colour::run(args),
         Command::Mie(args) => commands::mie::run(args),
         Command::Atmosphere(args) => commands::atmosphere::run(args),
+        Command::Spectrum(args) => commands::spectrum::run(args),
+        Command::Render(args) => commands::render::run(args),
     };
     if let Err(error) = result {
         eprintln!("error: {error:#}");

@@ -28,6 +28,8 @@ pub mod colour;
 pub mod error;
 pub mod geometry;
 pub mod output;
+mod parallel;
+pub mod render;
 pub mod spectrum;
 pub mod table;
 pub mod transport;

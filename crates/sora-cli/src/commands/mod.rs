@@ -3,3 +3,5 @@
 pub mod atmosphere;
 pub mod colour;
 pub mod mie;
+pub mod render;
+pub mod spectrum;

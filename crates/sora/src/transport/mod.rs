@@ -1,11 +1,21 @@
 //! Light transport: how sunlight reaches the eye through the atmosphere.
 //!
-//! (Being written: single scattering, the paper's eq. 4-5.)
+//! - [`optical_column`]: geometric columns of each species along rays,
+//!   and the table of columns toward the sun (transmittance, Beer-Lambert);
+//! - [`single_scattering`]: sunlight scattered once toward the eye (the
+//!   paper's eq. 4-5), a reference path (the paper's uniform double march)
+//!   and a fast path, tested against each other and against independent
+//!   radiative-transfer results;
+//! - [`sky_view_table`]: the fast path tabulated over view directions, for
+//!   images;
+//! - [`quadrature`]: the Gauss-Legendre rules they share.
 
 pub mod optical_column;
 pub mod quadrature;
 pub mod single_scattering;
+pub mod sky_view_table;
 
 pub use single_scattering::{
     Observation, SingleScatteringScratch, SingleScatteringSky, SunColumns,
 };
+pub use sky_view_table::SkyViewTable;

@@ -103,7 +103,7 @@ pub fn compute_columns_along_ray(
 }
 
 /// Number of panels of the exact column integrals that fill the table.
-const TABLE_RAY_PANELS: usize = 32;
+const TABLE_RAY_PANELS: usize = 16;
 
 /// Columns from any point in the atmosphere to its top toward the sun,
 /// tabulated (see the module docs). Points whose path to the sun hits the
@@ -133,8 +133,6 @@ impl SunColumnTable {
     ) -> SunColumnTable {
         assert!(altitude_nodes >= 2 && mu_nodes >= 2);
         let species = profiles.len();
-        let mut mean_densities = vec![0.0; altitude_nodes * mu_nodes * species];
-        let mut columns = vec![0.0; species];
         let table = SunColumnTable {
             ground_radius_m,
             top_radius_m,
@@ -143,7 +141,11 @@ impl SunColumnTable {
             species,
             mean_densities: Vec::new(),
         };
-        for i in 0..altitude_nodes {
+        let mut mean_densities = vec![0.0; altitude_nodes * mu_nodes * species];
+        // One altitude row per task; each row is the same computation
+        // whatever the thread count.
+        crate::parallel::for_each_chunk_mut(&mut mean_densities, mu_nodes * species, |i, row| {
+            let mut columns = vec![0.0; species];
             let r = table.radius_from_unit(i as f64 / (altitude_nodes - 1) as f64);
             for j in 0..mu_nodes {
                 let mu = table.mu_from_unit(r, j as f64 / (mu_nodes - 1) as f64);
@@ -160,18 +162,17 @@ impl SunColumnTable {
                     TABLE_RAY_PANELS,
                     &mut columns,
                 );
-                let start = (i * mu_nodes + j) * species;
                 for (k, profile) in profiles.iter().enumerate() {
                     // At the top looking up the path is empty: its mean
                     // density is the density there, the limit of column / d.
-                    mean_densities[start + k] = if length > 0.0 {
+                    row[j * species + k] = if length > 0.0 {
                         columns[k] / length
                     } else {
                         profile.relative_density(top_radius_m - ground_radius_m)
                     };
                 }
             }
-        }
+        });
         SunColumnTable {
             mean_densities,
             ..table

@@ -47,9 +47,9 @@ use crate::geometry::{Vector3, direction_from_elevation_azimuth, segment_in_atmo
 use crate::spectrum::{SampledSpectrum, WavelengthGrid};
 
 /// Gauss panels along a view ray in the fast path.
-pub const VIEW_RAY_PANELS: usize = 48;
+pub const VIEW_RAY_PANELS: usize = 16;
 /// Gauss panels along each exact path toward the sun.
-pub const SUN_RAY_PANELS: usize = 24;
+pub const SUN_RAY_PANELS: usize = 12;
 
 /// Where the eye is and where the sun is.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -105,6 +105,24 @@ pub struct SingleScatteringScratch {
     ground_radiance: Vec<f64>,
     /// Transmittance of the whole view ray (for the sun's disc).
     view_transmittance: Vec<f64>,
+}
+
+impl SingleScatteringScratch {
+    /// The integrals I_j(lambda) of the last ray, species-major, m.
+    pub fn inscattering_integrals(&self) -> &[f64] {
+        &self.inscattering_integrals
+    }
+
+    /// The sunlit ground's radiance seen along the last ray (zero when it
+    /// does not end on the ground), W m^-2 sr^-1 nm^-1.
+    pub fn ground_radiance(&self) -> &[f64] {
+        &self.ground_radiance
+    }
+
+    /// The transmittance of the whole last ray.
+    pub fn view_transmittance(&self) -> &[f64] {
+        &self.view_transmittance
+    }
 }
 
 impl SingleScatteringSky {
@@ -180,6 +198,11 @@ impl SingleScatteringSky {
     /// Unit vector toward the sun (east-north-up).
     pub fn sun_direction(&self) -> Vector3 {
         self.sun_direction
+    }
+
+    /// Distance of the eye from the planet's centre, m.
+    pub fn observer_radius_m(&self) -> f64 {
+        self.observer.z
     }
 
     /// Planet radius and top-of-atmosphere radius, m.
@@ -454,11 +477,6 @@ impl SingleScatteringSky {
         );
     }
 
-    /// The view transmittance of the last ray given to the fast path.
-    pub fn last_view_transmittance<'s>(&self, scratch: &'s SingleScatteringScratch) -> &'s [f64] {
-        &scratch.view_transmittance
-    }
-
     /// Reference path (the paper's method): uniform midpoint march of
     /// `view_steps` along the view ray and, from every sample,
     /// `sun_steps` toward the sun. W m^-2 sr^-1 nm^-1.
@@ -552,6 +570,16 @@ impl SingleScatteringSky {
         }
         *tau *= step;
         true
+    }
+
+    /// True when `view` points inside the sun's disc.
+    pub fn is_in_sun_disc(&self, view: Vector3) -> bool {
+        self.sun_angular_radius_rad > 0.0
+            && view
+                .cross(self.sun_direction)
+                .length()
+                .atan2(view.dot(self.sun_direction))
+                < self.sun_angular_radius_rad
     }
 
     /// Radiance of the sun's disc seen along `view` (zero outside it),

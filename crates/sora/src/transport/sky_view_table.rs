@@ -1,0 +1,194 @@
+//! The sky-view table: the fast path's in-scattering integrals tabulated
+//! over view directions, so that an image costs one table read per pixel
+//! instead of one ray march (Hillaire 2020's sky-view LUT, here spectral
+//! and without the phase function).
+//!
+//! What is tabulated, per view direction and wavelength: the integrals
+//! I_j(lambda) of [`super::single_scattering`] (one per species, m) and the
+//! sunlit ground's radiance. Neither contains the phase function: with a
+//! point sun the scattering angle is fixed along each view ray, so the
+//! phase functions, which carry all the sharp structure (the aerosol's
+//! forward peak, the Mie glory), are applied exactly per pixel by
+//! [`SingleScatteringSky::radiance_from_integrals`]. What remains varies
+//! smoothly with direction, except across the horizon.
+//!
+//! Axes: the view's zenith angle and its azimuth relative to the sun's,
+//! 0..180 degrees (the sky is symmetric about the solar meridian). The
+//! zenith axis has two halves that meet at the ground's horizon as seen by
+//! the eye (90 degrees on the ground, lower from above): nodes crowd
+//! toward it from both sides (u = 1 - (1 - v)^2 in each half), and no cell
+//! straddles it, so the jump from sky to ground is never interpolated.
+//! Bilinear interpolation in (v, azimuth).
+
+use super::optical_column::SunColumnTable;
+use super::single_scattering::{SingleScatteringSky, SunColumns};
+use crate::geometry::Vector3;
+
+/// In-scattering integrals over view directions (see the module docs).
+#[derive(Debug, Clone)]
+pub struct SkyViewTable {
+    /// Nodes per half of the zenith axis (sky half, ground half).
+    half_zenith_nodes: usize,
+    azimuth_nodes: usize,
+    /// Zenith angle of the horizon seen by the eye, rad.
+    horizon_zenith_rad: f64,
+    /// Values per node: species * wavelengths integrals, then wavelengths
+    /// ground radiances.
+    values_per_node: usize,
+    /// [(half * half_zenith_nodes + i) * azimuth_nodes + k] * values_per_node.
+    values: Vec<f32>,
+    /// Unit vector of the sun's azimuth in the horizontal plane.
+    sun_horizontal: (f64, f64),
+}
+
+impl SkyViewTable {
+    /// Fills the table with `half_zenith_nodes` nodes above and below the
+    /// horizon and `azimuth_nodes` over 0..180 degrees, with sun columns
+    /// from `sun_columns`. Rows run in parallel with the `parallel` feature;
+    /// the result does not depend on the thread count.
+    pub fn compute(
+        sky: &SingleScatteringSky,
+        sun_columns: &SunColumnTable,
+        half_zenith_nodes: usize,
+        azimuth_nodes: usize,
+    ) -> SkyViewTable {
+        assert!(half_zenith_nodes >= 2 && azimuth_nodes >= 2);
+        let optics = sky.optics();
+        let wavelengths = optics.grid.len();
+        let values_per_node = (optics.species.len() + 1) * wavelengths;
+        let (ground_radius, _) = sky.radii_m();
+        let observer_radius = sky.observer_radius_m();
+        let horizon_zenith_rad =
+            std::f64::consts::PI - (ground_radius / observer_radius).min(1.0).asin();
+        let sun = sky.sun_direction();
+        let horizontal = (sun.x.hypot(sun.y) > 1e-12)
+            .then(|| (sun.x / sun.x.hypot(sun.y), sun.y / sun.x.hypot(sun.y)));
+        let mut table = SkyViewTable {
+            half_zenith_nodes,
+            azimuth_nodes,
+            horizon_zenith_rad,
+            values_per_node,
+            values: Vec::new(),
+            sun_horizontal: horizontal.unwrap_or((0.0, 1.0)),
+        };
+        let row_length = azimuth_nodes * values_per_node;
+        let fill_row = |row: usize, out: &mut [f32]| {
+            let mut scratch = sky.scratch();
+            let zenith = table.zenith_of_node(row);
+            for k in 0..azimuth_nodes {
+                let relative_azimuth = std::f64::consts::PI * k as f64 / (azimuth_nodes - 1) as f64;
+                let view = table.direction(zenith, relative_azimuth);
+                sky.compute_inscattering_integrals(
+                    view,
+                    SunColumns::Table(sun_columns),
+                    &mut scratch,
+                );
+                let node = &mut out[k * values_per_node..(k + 1) * values_per_node];
+                let (integrals, ground) = node.split_at_mut(values_per_node - wavelengths);
+                for (o, v) in integrals.iter_mut().zip(scratch.inscattering_integrals()) {
+                    *o = *v as f32;
+                }
+                for (o, v) in ground.iter_mut().zip(scratch.ground_radiance()) {
+                    *o = *v as f32;
+                }
+            }
+        };
+        let mut values = vec![0.0f32; 2 * half_zenith_nodes * row_length];
+        crate::parallel::for_each_chunk_mut(&mut values, row_length, fill_row);
+        table.values = values;
+        table
+    }
+
+    /// Zenith angle (rad) of zenith-axis node `row` (0 = the zenith,
+    /// half - 1 = just above the horizon, half = just below, 2 half - 1 =
+    /// the nadir).
+    fn zenith_of_node(&self, row: usize) -> f64 {
+        let half = self.half_zenith_nodes;
+        // The nodes next to the horizon sit a hair inside their half so a
+        // ray along them is unambiguously sky or ground.
+        const HORIZON_MARGIN: f64 = 1e-9;
+        if row < half {
+            let v = row as f64 / (half - 1) as f64;
+            let u = 1.0 - (1.0 - v) * (1.0 - v);
+            u * (self.horizon_zenith_rad - HORIZON_MARGIN)
+        } else {
+            let v = (2 * half - 1 - row) as f64 / (half - 1) as f64;
+            let u = 1.0 - (1.0 - v) * (1.0 - v);
+            std::f64::consts::PI
+                - u * (std::f64::consts::PI - self.horizon_zenith_rad - HORIZON_MARGIN)
+        }
+    }
+
+    /// Fractional node coordinate of a zenith angle, and which half.
+    fn zenith_coordinate(&self, zenith: f64) -> f64 {
+        let half = self.half_zenith_nodes;
+        if zenith < self.horizon_zenith_rad {
+            let u = (zenith / self.horizon_zenith_rad).clamp(0.0, 1.0);
+            let v = 1.0 - (1.0 - u).sqrt();
+            v * (half - 1) as f64
+        } else {
+            let u = ((std::f64::consts::PI - zenith)
+                / (std::f64::consts::PI - self.horizon_zenith_rad))
+                .clamp(0.0, 1.0);
+            let v = 1.0 - (1.0 - u).sqrt();
+            (2 * half - 1) as f64 - v * (half - 1) as f64
+        }
+    }
+
+    /// The view direction with this zenith angle and azimuth relative to
+    /// the sun (east-north-up).
+    fn direction(&self, zenith: f64, relative_azimuth: f64) -> Vector3 {
+        let (sin_z, cos_z) = zenith.sin_cos();
+        let (sin_a, cos_a) = relative_azimuth.sin_cos();
+        let (sx, sy) = self.sun_horizontal;
+        // Rotate (sin a, cos a) from the sun's azimuth: the sun's azimuth
+        // direction is (sx, sy) in (east, north).
+        let east = sx * cos_a + sy * sin_a;
+        let north = sy * cos_a - sx * sin_a;
+        Vector3::new(sin_z * east, sin_z * north, cos_z)
+    }
+
+    /// Interpolates the integrals and ground radiance for `view` (unit,
+    /// east-north-up) into `integrals` (species * wavelengths) and `ground`.
+    pub fn lookup(&self, view: Vector3, integrals: &mut [f64], ground: &mut [f64]) {
+        let zenith = view.z.clamp(-1.0, 1.0).acos();
+        let (sx, sy) = self.sun_horizontal;
+        let along = view.x * sx + view.y * sy;
+        let across = view.x * sy - view.y * sx;
+        let relative_azimuth = across.abs().atan2(along);
+        let x = self.zenith_coordinate(zenith);
+        let half = self.half_zenith_nodes;
+        // Stay inside the half the direction belongs to.
+        let (lowest, highest) = if x < (half - 1) as f64 + 0.5 {
+            (0, half - 2)
+        } else {
+            (half, 2 * half - 2)
+        };
+        let i = (x.floor() as usize).clamp(lowest, highest);
+        let fx = (x - i as f64).clamp(0.0, 1.0);
+        let y = relative_azimuth / std::f64::consts::PI * (self.azimuth_nodes - 1) as f64;
+        let k = (y.floor() as usize).min(self.azimuth_nodes - 2);
+        let fy = y - k as f64;
+        let n = self.values_per_node;
+        let node = |row: usize, column: usize| {
+            &self.values[(row * self.azimuth_nodes + column) * n..][..n]
+        };
+        let (a, b, c, d) = (
+            node(i, k),
+            node(i, k + 1),
+            node(i + 1, k),
+            node(i + 1, k + 1),
+        );
+        let split = integrals.len();
+        for m in 0..n {
+            let low = a[m] as f64 + fy * (b[m] as f64 - a[m] as f64);
+            let high = c[m] as f64 + fy * (d[m] as f64 - c[m] as f64);
+            let value = low + fx * (high - low);
+            if m < split {
+                integrals[m] = value;
+            } else {
+                ground[m - split] = value;
+            }
+        }
+    }
+}

@@ -1,0 +1,170 @@
+//! The fast image path (sun-column and sky-view tables) against the exact
+//! fast path and the paper's reference march, pixel by pixel.
+
+use sora::atmosphere::Atmosphere;
+use sora::camera::Camera;
+use sora::colour::{Observer, SpectrumToXyz};
+use sora::geometry::direction_from_elevation_azimuth;
+use sora::render::{FastTableSize, RenderMethod, RenderSettings, render_xyz};
+use sora::spectrum::{SampledSpectrum, WavelengthGrid};
+use sora::transport::{Observation, SingleScatteringSky, SkyViewTable, SunColumns};
+
+/// A deterministic stream of numbers in [0, 1) (64-bit LCG, Knuth's MMIX).
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+fn sky(preset: &str, sun_elevation_deg: f64, observer_altitude_m: f64) -> SingleScatteringSky {
+    let atmosphere = Atmosphere::preset(preset).unwrap();
+    let observation = Observation {
+        observer_altitude_m,
+        sun_elevation_deg,
+        sun_azimuth_deg: 207.0,
+    };
+    SingleScatteringSky::new(&atmosphere, &WavelengthGrid::paper(), observation).unwrap()
+}
+
+/// Worst relative difference between the table lookup and the exact fast
+/// path over random directions, for radiances above 1e-3 of the largest.
+fn worst_table_error(sky: &SingleScatteringSky, directions: usize) -> f64 {
+    let size = FastTableSize::default();
+    let sun_columns =
+        sky.compute_sun_column_table(size.sun_column_nodes.0, size.sun_column_nodes.1);
+    let table = SkyViewTable::compute(
+        sky,
+        &sun_columns,
+        size.sky_view_nodes.0,
+        size.sky_view_nodes.1,
+    );
+    let n = sky.optics().grid.len();
+    let species = sky.optics().species.len();
+    let (mut integrals, mut ground, mut phase, mut looked_up) = (
+        vec![0.0; species * n],
+        vec![0.0; n],
+        vec![0.0; n],
+        vec![0.0; n],
+    );
+    let mut scratch = sky.scratch();
+    let mut exact = SampledSpectrum::zeros(n);
+    let mut random = Lcg(7);
+    let mut samples = Vec::new();
+    for _ in 0..directions {
+        let elevation = (2.0 * random.next() - 1.0).asin().to_degrees();
+        let view = direction_from_elevation_azimuth(elevation, 360.0 * random.next());
+        table.lookup(view, &mut integrals, &mut ground);
+        sky.radiance_from_integrals(
+            view.dot(sky.sun_direction()),
+            &integrals,
+            &ground,
+            &mut phase,
+            &mut looked_up,
+        );
+        sky.compute_radiance(view, SunColumns::Exact, &mut scratch, &mut exact);
+        samples.push((elevation, exact.values().to_vec(), looked_up.clone()));
+    }
+    let largest = samples
+        .iter()
+        .flat_map(|s| s.1.iter().copied())
+        .fold(0.0, f64::max);
+    let mut worst: f64 = 0.0;
+    for (elevation, exact, looked_up) in &samples {
+        for (e, l) in exact.iter().zip(looked_up) {
+            if *e > 1e-3 * largest {
+                let error = (l / e - 1.0).abs();
+                if error > 1e-3 {
+                    eprintln!("elevation {elevation:.3}: {error:.2e} ({l:.4e} vs {e:.4e})");
+                }
+                worst = worst.max(error);
+            }
+        }
+    }
+    worst
+}
+
+#[test]
+fn sky_view_table_matches_the_exact_fast_path() {
+    for (preset, sun, altitude) in [
+        ("clear-sky-reference", 36.0, 0.0),
+        ("clear-sky-reference", 60.0, 0.0),
+        ("clear-sky-reference", 10.0, 0.0),
+        ("clear-sky-reference", 36.0, 10e3),
+    ] {
+        let worst = worst_table_error(&sky(preset, sun, altitude), 3000);
+        eprintln!("{preset} sun {sun} observer {altitude} m: worst relative error {worst:.3e}");
+    }
+}
+
+#[test]
+fn fast_image_matches_the_reference_image() {
+    let sky = sky("clear-sky-reference", 36.0, 0.0);
+    let to_xyz = SpectrumToXyz::new(&WavelengthGrid::paper(), Observer::Cie1931TwoDegree);
+    let mut settings = RenderSettings {
+        camera: Camera::Fisheye,
+        width: 24,
+        height: 24,
+        method: RenderMethod::Fast,
+        draw_sun_disc: false,
+        table_size: FastTableSize::default(),
+    };
+    let fast = render_xyz(&sky, &settings, &to_xyz, &|_| {}).unwrap();
+    settings.method = RenderMethod::Reference {
+        view_steps: 2000,
+        sun_steps: 400,
+    };
+    let reference = render_xyz(&sky, &settings, &to_xyz, &|_| {}).unwrap();
+    let mut worst: f64 = 0.0;
+    for (f, r) in fast.iter().zip(&reference) {
+        for (a, b) in [(f.x, r.x), (f.y, r.y), (f.z, r.z)] {
+            if b > 0.0 {
+                worst = worst.max((a / b - 1.0).abs());
+            } else {
+                assert_eq!(a, 0.0);
+            }
+        }
+    }
+    eprintln!("fisheye 24x24: worst relative XYZ difference fast vs reference {worst:.3e}");
+    assert!(worst < 1e-3, "{worst}");
+}
+
+/// The fast path (exact sun columns) against the paper's reference march,
+/// for random view directions (horizon and ground included) and sun
+/// elevations from 5 to 90 degrees, on the ground and at 10 km.
+#[test]
+fn fast_path_matches_the_reference_path_in_random_directions() {
+    let mut random = Lcg(11);
+    let mut worst: f64 = 0.0;
+    for case in 0..12 {
+        let sun_elevation = 5.0 + 85.0 * random.next();
+        let altitude = if case % 3 == 2 { 10e3 } else { 0.0 };
+        let sky = sky("clear-sky-reference", sun_elevation, altitude);
+        let n = sky.optics().grid.len();
+        let mut scratch = sky.scratch();
+        let mut fast = SampledSpectrum::zeros(n);
+        for _ in 0..4 {
+            let elevation = (2.0 * random.next() - 1.0).asin().to_degrees();
+            let view = direction_from_elevation_azimuth(elevation, 360.0 * random.next());
+            sky.compute_radiance(view, SunColumns::Exact, &mut scratch, &mut fast);
+            let reference = sky.compute_radiance_reference(view, 4000, 800);
+            for (f, r) in fast.values().iter().zip(reference.values()) {
+                if *r > 0.0 {
+                    let error = (f / r - 1.0).abs();
+                    if error > 5e-4 {
+                        eprintln!(
+                            "sun {sun_elevation:.2} altitude {altitude} view elevation {elevation:.3}: {error:.2e}"
+                        );
+                    }
+                    worst = worst.max(error);
+                }
+            }
+        }
+    }
+    eprintln!("random directions: worst relative difference fast vs reference {worst:.3e}");
+    assert!(worst < 1e-3, "{worst}");
+}
