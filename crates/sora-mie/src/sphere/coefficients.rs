@@ -48,18 +48,31 @@
 //!   psi_n(x) has no zero for x < pi, so the ratio products are safe there.
 //!
 //! The efficiency sums (B&H eqs. 4.61-4.62, 4.82 and the g formula of
-//! B&H p. 120) are accumulated in the same loop, so `compute_efficiencies`
-//! never stores a_n, b_n.
+//! B&H p. 120) are accumulated in the same pass that forms a_n, b_n, so
+//! `compute_efficiencies` never stores the coefficients.
+//!
+//! Layout for speed (x >= 1). One loop runs the downward recurrence of the
+//! interior ratio rho_n(mx) and, in the same iterations, the upward
+//! recurrences of psi_n(x) and chi_n(x): three independent dependency chains
+//! that the processor overlaps. They fill four f64 tables (Re rho, Im rho,
+//! psi, chi: structure of arrays). The coefficient pass then reads the tables
+//! in blocks of [`BLOCK`] consecutive terms, as straight-line arithmetic over
+//! arrays that the compiler vectorises, with per-lane partial sums reduced at
+//! the end. On x86-64 the whole solver is also compiled for AVX and chosen at
+//! run time (see [`solve_series`]).
 
 use super::Efficiencies;
 use super::bessel_ratio::{
-    fill_ratios_downward, fill_scaled_ratios_downward, reciprocal, scaled_ratio_continued_fraction,
+    DownwardRatios, fill_scaled_ratios_downward, reciprocal, scaled_ratio_continued_fraction,
 };
-use super::series_length::series_length_converged;
 use crate::Complex64;
 
 /// Below this size parameter the scaled small-x path is used.
 pub(super) const SMALL_SIZE_PARAMETER: f64 = 1.0;
+
+/// Most terms the small-x path ever needs: series_length_converged(x) for
+/// x < 1 is at most 1 + 7.6 + 3.
+const SMALL_PATH_TERMS: usize = 12;
 
 /// The factor s with which [`solve_series`] scales the coefficients it
 /// records: a_n = s * recorded.
@@ -71,14 +84,17 @@ pub(super) fn coefficient_scale(x: f64) -> f64 {
     }
 }
 
-/// Lengths of the two scratch arrays the solver needs for size parameter x:
-/// (complex ratios of mx, real ratios of x).
-pub(super) fn scratch_lengths(x: f64) -> (usize, usize) {
-    let n_cap = series_length_converged(x);
+/// Length of the f64 scratch table the solver needs for size parameter x
+/// with `n_terms` = [`series_length_converged`](super::series_length_converged)`(x)`:
+/// four tables of n_terms + 2 (Re rho_n(mx), Im rho_n(mx), psi_n(x),
+/// chi_n(x)) and the real ratios psi_n(x)/psi_{n-1}(x) beyond n = x.
+/// The small-x path needs none.
+pub(super) fn scratch_length(x: f64, n_terms: usize) -> usize {
     if x < SMALL_SIZE_PARAMETER {
-        (n_cap + 2, n_cap + 2)
+        0
     } else {
-        (n_cap + 2, n_cap + 2 - (x as usize))
+        let table = n_terms + 2;
+        4 * table + table - (x as usize).min(n_terms)
     }
 }
 
@@ -97,6 +113,10 @@ struct SeriesSums {
     asymmetry_cross: f64,
     previous_a: Complex64,
     previous_b: Complex64,
+    /// (-1)^n (2n+1) for the next term.
+    signed_weight: f64,
+    /// 1/n for the next term.
+    inverse_n: f64,
 }
 
 impl SeriesSums {
@@ -110,44 +130,35 @@ impl SeriesSums {
             asymmetry_cross: 0.0,
             previous_a: zero,
             previous_b: zero,
+            signed_weight: -3.0,
+            inverse_n: 1.0,
         }
     }
 
-    /// Add term n. `absorption` is Re a_n - |a_n|^2 + Re b_n - |b_n|^2.
-    /// `inverse_n` = 1/n and `inverse_n_plus_1` = 1/(n+1) (divisions shared).
+    /// Add term n (terms must come in order n = 1, 2, ...). `absorption` is
+    /// Re a_n - |a_n|^2 + Re b_n - |b_n|^2; `inverse_n_plus_1` = 1/(n+1).
     #[inline(always)]
-    fn add(
-        &mut self,
-        n: usize,
-        inverse_n: f64,
-        inverse_n_plus_1: f64,
-        a: Complex64,
-        b: Complex64,
-        absorption: f64,
-    ) {
-        let weight = (2 * n + 1) as f64;
+    fn add(&mut self, n: f64, inverse_n_plus_1: f64, a: Complex64, b: Complex64, absorption: f64) {
+        let weight = 2.0 * n + 1.0;
         self.scattering += weight * (a.re * a.re + a.im * a.im + b.re * b.re + b.im * b.im);
         self.absorption += weight * absorption;
-        let difference = (a - b) * weight;
-        if n % 2 == 0 {
-            self.backscattering += difference;
-        } else {
-            self.backscattering -= difference;
-        }
-        // Term n-1 of the adjacent sum: (n-1)(n+1)/n = n - 1/n.
+        self.backscattering += (a - b) * self.signed_weight;
+        // Term n-1 of the adjacent sum: (n-1)(n+1)/n = n - 1/n (zero for n = 1).
         let adjacent = self.previous_a.re * a.re
             + self.previous_a.im * a.im
             + self.previous_b.re * b.re
             + self.previous_b.im * b.im;
-        self.asymmetry_adjacent += (n as f64 - inverse_n) * adjacent;
+        self.asymmetry_adjacent += (n - self.inverse_n) * adjacent;
         // (2n+1)/(n(n+1)) = 1/n + 1/(n+1).
-        self.asymmetry_cross += (inverse_n + inverse_n_plus_1) * (a.re * b.re + a.im * b.im);
+        self.asymmetry_cross += (self.inverse_n + inverse_n_plus_1) * (a.re * b.re + a.im * b.im);
         self.previous_a = a;
         self.previous_b = b;
+        self.signed_weight = -(self.signed_weight + 2.0f64.copysign(self.signed_weight));
+        self.inverse_n = inverse_n_plus_1;
     }
 
     /// Efficiencies from sums of coefficients that were divided by `scale`
-    /// (a_n = scale * ahat_n): Q_ext = 2/x^2 sum..., Q_back = |sum|^2/x^2, with
+    /// (a_n = scale * ahat_n): Q_sca = 2/x^2 sum..., Q_back = |sum|^2/x^2, with
     /// the scale folded into the prefactors so that nothing underflows first.
     fn finish(&self, x: f64, scale_over_x: f64, scale_squared_over_x_squared: f64) -> Efficiencies {
         let qsca = 2.0 * scale_squared_over_x_squared * self.scattering;
@@ -176,22 +187,61 @@ impl SeriesSums {
     }
 }
 
-/// Solve the series for a validated (m, x): returns the efficiencies and
-/// calls `record(a_n / s, b_n / s)` for n = 1, 2, ... in order, with the
-/// scale s = [`coefficient_scale`]`(x)` (x^3 below x = 1, so that the
-/// recorded values never underflow). `complex_scratch` and `real_scratch`
-/// must have at least the lengths of [`scratch_lengths`].
+/// Solve the series for a validated (m, x) with `n_terms` =
+/// [`series_length_converged`](super::series_length_converged)`(x)`: returns
+/// the efficiencies and calls `record(a_n / s, b_n / s)` for n = 1..=n_terms
+/// in order, with the scale s = [`coefficient_scale`]`(x)` (x^3 below x = 1,
+/// so that the recorded values never underflow). `scratch` must hold at
+/// least [`scratch_length`] values.
 pub(super) fn solve_series<F: FnMut(Complex64, Complex64)>(
     m: Complex64,
     x: f64,
-    complex_scratch: &mut [Complex64],
-    real_scratch: &mut [f64],
+    n_terms: usize,
+    scratch: &mut [f64],
+    record: F,
+) -> Efficiencies {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx") {
+            // SAFETY: the CPU supports AVX, the only requirement of
+            // `solve_series_avx`.
+            return unsafe { solve_series_avx(m, x, n_terms, scratch, record) };
+        }
+    }
+    solve_series_portable(m, x, n_terms, scratch, record)
+}
+
+/// [`solve_series`] compiled for AVX. The source is the same; the three-operand
+/// VEX encoding saves the register copies that two-operand SSE2 needs for
+/// almost every arithmetic instruction, and vectors are 4 wide. FMA is not
+/// enabled and Rust never contracts a * b + c by itself, so both builds
+/// perform the same IEEE operations in the same order: the results are
+/// bit-identical (tested).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+fn solve_series_avx<F: FnMut(Complex64, Complex64)>(
+    m: Complex64,
+    x: f64,
+    n_terms: usize,
+    scratch: &mut [f64],
+    record: F,
+) -> Efficiencies {
+    solve_series_portable(m, x, n_terms, scratch, record)
+}
+
+/// [`solve_series`] for any target (what the AVX build inlines).
+#[inline(always)]
+pub(super) fn solve_series_portable<F: FnMut(Complex64, Complex64)>(
+    m: Complex64,
+    x: f64,
+    n_terms: usize,
+    scratch: &mut [f64],
     record: F,
 ) -> Efficiencies {
     let mut efficiencies = if x < SMALL_SIZE_PARAMETER {
-        solve_small(m, x, complex_scratch, real_scratch, record)
+        solve_small(m, x, n_terms, record)
     } else {
-        solve_large(m, x, complex_scratch, real_scratch, record)
+        solve_large(m, x, n_terms, scratch, record)
     };
     if m.im == 0.0 {
         // Every absorption term is Im(...) of a real number: exactly zero,
@@ -201,98 +251,330 @@ pub(super) fn solve_series<F: FnMut(Complex64, Complex64)>(
     efficiencies
 }
 
-/// The x >= 1 path: unscaled psi, chi; ratios rho_n(mx) stored downward.
-fn solve_large<F: FnMut(Complex64, Complex64)>(
+/// Terms of the x >= 1 series evaluated together (structure of arrays).
+pub(super) const BLOCK: usize = 8;
+
+/// Per-lane partial sums of the x >= 1 series (lane k gets terms n = k mod
+/// BLOCK), reduced at the end: independent accumulators keep the additions
+/// off one dependency chain and let them run as vector instructions.
+struct LaneSums {
+    scattering: [f64; BLOCK],
+    absorption: [f64; BLOCK],
+    backscattering_re: [f64; BLOCK],
+    backscattering_im: [f64; BLOCK],
+    asymmetry_adjacent: [f64; BLOCK],
+    asymmetry_cross: [f64; BLOCK],
+    /// a_{n-1}, b_{n-1} and 1/n for the first term of the next block.
+    previous_a: Complex64,
+    previous_b: Complex64,
+    inverse_n: f64,
+}
+
+impl LaneSums {
+    fn new() -> Self {
+        LaneSums {
+            scattering: [0.0; BLOCK],
+            absorption: [0.0; BLOCK],
+            backscattering_re: [0.0; BLOCK],
+            backscattering_im: [0.0; BLOCK],
+            asymmetry_adjacent: [0.0; BLOCK],
+            asymmetry_cross: [0.0; BLOCK],
+            previous_a: Complex64::new(0.0, 0.0),
+            previous_b: Complex64::new(0.0, 0.0),
+            inverse_n: 1.0,
+        }
+    }
+
+    fn reduce(&self) -> SeriesSums {
+        let total = |lanes: &[f64; BLOCK]| lanes.iter().sum::<f64>();
+        let mut sums = SeriesSums::new();
+        sums.scattering = total(&self.scattering);
+        sums.absorption = total(&self.absorption);
+        sums.backscattering = Complex64::new(
+            total(&self.backscattering_re),
+            total(&self.backscattering_im),
+        );
+        sums.asymmetry_adjacent = total(&self.asymmetry_adjacent);
+        sums.asymmetry_cross = total(&self.asymmetry_cross);
+        sums
+    }
+}
+
+/// The tables of the x >= 1 path, each indexed by n.
+struct Tables<'a> {
+    /// rho_n(mx) = psi_n(mx)/psi_{n-1}(mx), n = 2..=n_terms+1
+    rho_re: &'a [f64],
+    rho_im: &'a [f64],
+    /// psi_n(x), chi_n(x), n = 0..=n_terms+1
+    psi: &'a [f64],
+    chi: &'a [f64],
+}
+
+/// Per-sphere constants of the x >= 1 series.
+struct LargeSphere {
+    m: Complex64,
+    inverse_m: Complex64,
+    /// (1/m^2 - 1)/x
+    a_slope: Complex64,
+}
+
+impl LargeSphere {
+    /// Terms first..first+B-1: a_n, b_n from psi_n, psi_{n+1}, chi_n,
+    /// chi_{n+1} and rho_{n+1}(mx), written to `a`, `b` and added to `sums`.
+    ///
+    /// Each loop below is straight-line arithmetic over the B lanes, which
+    /// the compiler turns into vector instructions; the two complex quotients
+    /// of a term, 1/(n+1) and the absorption terms share one real division.
+    #[inline(always)]
+    fn block<const B: usize>(
+        &self,
+        tables: &Tables<'_>,
+        first: usize,
+        a: &mut [Complex64; B],
+        b: &mut [Complex64; B],
+        sums: &mut LaneSums,
+    ) {
+        let lanes = |table: &[f64], offset: usize| -> [f64; B] {
+            table[first + offset..first + offset + B]
+                .try_into()
+                .expect("B values")
+        };
+        let (psi, psi_next, chi, chi_next) = (
+            lanes(tables.psi, 0),
+            lanes(tables.psi, 1),
+            lanes(tables.chi, 0),
+            lanes(tables.chi, 1),
+        );
+        let (rho_re, rho_im) = (lanes(tables.rho_re, 1), lanes(tables.rho_im, 1));
+        let (m, inverse_m, slope) = (self.m, self.inverse_m, self.a_slope);
+        let mut n = [0.0; B];
+        for (k, value) in n.iter_mut().enumerate() {
+            *value = (first + k) as f64;
+        }
+        let mut a_re = [0.0; B];
+        let mut a_im = [0.0; B];
+        let mut b_re = [0.0; B];
+        let mut b_im = [0.0; B];
+        let mut absorption = [0.0; B];
+        let mut inverse_n_plus_1 = [0.0; B];
+        for k in 0..B {
+            let n_plus_1 = n[k] + 1.0;
+            // A_n = (n+1)/x (1/m^2 - 1) - rho/m, B_n = -m rho.
+            let fa_re = slope.re * n_plus_1 - (rho_re[k] * inverse_m.re - rho_im[k] * inverse_m.im);
+            let fa_im = slope.im * n_plus_1 - (rho_re[k] * inverse_m.im + rho_im[k] * inverse_m.re);
+            let fb_re = rho_im[k] * m.im - rho_re[k] * m.re;
+            let fb_im = -(rho_re[k] * m.im + rho_im[k] * m.re);
+            // numerator = F psi_n + psi_{n+1}; denominator = F xi_n + xi_{n+1}
+            // = numerator - i (F chi_n + chi_{n+1}).
+            let na_re = fa_re * psi[k] + psi_next[k];
+            let na_im = fa_im * psi[k];
+            let da_re = na_re + fa_im * chi[k];
+            let da_im = na_im - (fa_re * chi[k] + chi_next[k]);
+            let nb_re = fb_re * psi[k] + psi_next[k];
+            let nb_im = fb_im * psi[k];
+            let db_re = nb_re + fb_im * chi[k];
+            let db_im = nb_im - (fb_re * chi[k] + chi_next[k]);
+            let norm_a = da_re * da_re + da_im * da_im;
+            let norm_b = db_re * db_re + db_im * db_im;
+            let norms = norm_a * norm_b;
+            let inverse = 1.0 / (norms * n_plus_1);
+            inverse_n_plus_1[k] = norms * inverse;
+            let common = n_plus_1 * inverse;
+            let inverse_norm_a = norm_b * common;
+            let inverse_norm_b = norm_a * common;
+            a_re[k] = (na_re * da_re + na_im * da_im) * inverse_norm_a;
+            a_im[k] = (na_im * da_re - na_re * da_im) * inverse_norm_a;
+            b_re[k] = (nb_re * db_re + nb_im * db_im) * inverse_norm_b;
+            b_im[k] = (nb_im * db_re - nb_re * db_im) * inverse_norm_b;
+            // Re c - |c|^2 = -Im(F) / |denominator|^2 for each coefficient.
+            absorption[k] = -(fa_im * inverse_norm_a + fb_im * inverse_norm_b);
+        }
+        // a_{n-1}, b_{n-1} and 1/n of each lane: the previous lane's values.
+        let mut previous_a_re = [0.0; B];
+        let mut previous_a_im = [0.0; B];
+        let mut previous_b_re = [0.0; B];
+        let mut previous_b_im = [0.0; B];
+        let mut inverse_n = [0.0; B];
+        previous_a_re[0] = sums.previous_a.re;
+        previous_a_im[0] = sums.previous_a.im;
+        previous_b_re[0] = sums.previous_b.re;
+        previous_b_im[0] = sums.previous_b.im;
+        inverse_n[0] = sums.inverse_n;
+        for k in 1..B {
+            previous_a_re[k] = a_re[k - 1];
+            previous_a_im[k] = a_im[k - 1];
+            previous_b_re[k] = b_re[k - 1];
+            previous_b_im[k] = b_im[k - 1];
+            inverse_n[k] = inverse_n_plus_1[k - 1];
+        }
+        // (-1)^n, alternating from the first term's parity.
+        let first_sign = if first % 2 == 0 { 1.0 } else { -1.0 };
+        for k in 0..B {
+            let weight = 2.0 * n[k] + 1.0;
+            let sign = if k % 2 == 0 { first_sign } else { -first_sign };
+            let (are, aim, bre, bim) = (a_re[k], a_im[k], b_re[k], b_im[k]);
+            sums.scattering[k] += weight * (are * are + aim * aim + bre * bre + bim * bim);
+            sums.absorption[k] += weight * absorption[k];
+            sums.backscattering_re[k] += sign * weight * (are - bre);
+            sums.backscattering_im[k] += sign * weight * (aim - bim);
+            // Term n-1 of the adjacent sum: (n-1)(n+1)/n = n - 1/n.
+            let adjacent = previous_a_re[k] * are
+                + previous_a_im[k] * aim
+                + previous_b_re[k] * bre
+                + previous_b_im[k] * bim;
+            sums.asymmetry_adjacent[k] += (n[k] - inverse_n[k]) * adjacent;
+            // (2n+1)/(n(n+1)) = 1/n + 1/(n+1).
+            sums.asymmetry_cross[k] +=
+                (inverse_n[k] + inverse_n_plus_1[k]) * (are * bre + aim * bim);
+        }
+        for k in 0..B {
+            a[k] = Complex64::new(a_re[k], a_im[k]);
+            b[k] = Complex64::new(b_re[k], b_im[k]);
+        }
+        sums.previous_a = a[B - 1];
+        sums.previous_b = b[B - 1];
+        sums.inverse_n = inverse_n_plus_1[B - 1];
+    }
+}
+
+/// Fill the tables of the x >= 1 path.
+///
+/// rho_n(mx) downward from n = n_terms+1 ([`DownwardRatios`]) and, in the
+/// same iterations, psi_n(x) and chi_n(x) upward (B&H eq. 4.89), psi by
+/// ratios beyond `n_switch`: independent dependency chains that overlap.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn fill_tables(
     m: Complex64,
     x: f64,
-    rho_mx: &mut [Complex64],
-    rho_x: &mut [f64],
-    mut record: F,
-) -> Efficiencies {
-    let n_cap = series_length_converged(x);
-    // psi_n(x) > 0 and decreasing for n >= x (its last zero in n is below
-    // x - 1.8 x^(1/3)), so from there on the ratio form is well conditioned.
-    let n_switch = (x as usize).min(n_cap);
-    fill_ratios_downward(m * x, n_cap + 1, rho_mx);
-
-    // rho_x[k] = psi_{n_switch+k}(x) / psi_{n_switch+k-1}(x), k >= 1.
-    let rho_x = &mut rho_x[..n_cap + 2 - n_switch];
-    let mut ratio = x * scaled_ratio_continued_fraction(Complex64::new(x * x, 0.0), n_cap + 1).re;
-    rho_x[n_cap + 1 - n_switch] = ratio;
-    for n in (n_switch + 1..=n_cap).rev() {
-        ratio = x / ((2 * n + 1) as f64 - x * ratio);
-        rho_x[n - n_switch] = ratio;
-    }
+    n_terms: usize,
+    n_switch: usize,
+    rho_re: &mut [f64],
+    rho_im: &mut [f64],
+    psi: &mut [f64],
+    chi: &mut [f64],
+    rho_x: &[f64],
+) {
+    let top = n_terms + 1;
+    let (rho_re, rho_im) = (&mut rho_re[..=top], &mut rho_im[..=top]);
+    let (psi, chi) = (&mut psi[..=top], &mut chi[..=top]);
+    let (mut interior, first) = DownwardRatios::start(m * x, top);
+    rho_re[top] = first.re;
+    rho_im[top] = first.im;
 
     let inverse_x = 1.0 / x;
     let (sin_x, cos_x) = x.sin_cos();
-    // B&H eq. 4.89 starting values (psi_0, psi_1, chi_0, chi_1); for x >= 1
-    // psi_1 = sin x / x - cos x loses at most two bits.
-    let mut psi_previous = sin_x;
-    let mut psi = sin_x * inverse_x - cos_x;
-    let mut chi_previous = cos_x;
-    let mut chi = cos_x * inverse_x + sin_x;
-
-    let inverse_m = reciprocal(m);
-    // (1/m^2 - 1)/x, formed without cancelling for m near 1.
-    let a_slope = -((m - 1.0) * (m + 1.0)) * (inverse_m * inverse_m) * inverse_x;
-    let mut sums = SeriesSums::new();
-    let mut inverse_n = 1.0;
-    for n in 1..=n_cap {
+    // B&H eq. 4.89 starting values; for x >= 1, psi_1 = sin x / x - cos x
+    // loses at most two bits.
+    psi[0] = sin_x;
+    psi[1] = sin_x * inverse_x - cos_x;
+    chi[0] = cos_x;
+    chi[1] = cos_x * inverse_x + sin_x;
+    let (mut psi_previous, mut psi_current) = (psi[0], psi[1]);
+    let (mut chi_previous, mut chi_current) = (chi[0], chi[1]);
+    let mut exterior_step = |n: usize, psi: &mut [f64], chi: &mut [f64]| {
+        // psi_{n+1}, chi_{n+1} from n.
         let step = (2 * n + 1) as f64 * inverse_x;
         let psi_next = if n < n_switch {
-            step * psi - psi_previous
+            step * psi_current - psi_previous
         } else {
-            psi * rho_x[n + 1 - n_switch]
+            psi_current * rho_x[n + 1 - n_switch]
         };
-        let chi_next = step * chi - chi_previous;
-
-        let rho = rho_mx[n + 1];
-        let a_factor = a_slope * (n + 1) as f64 - rho * inverse_m;
-        let b_factor = -(m * rho);
-        // numerator = F psi_n + psi_{n+1}; denominator = F xi_n + xi_{n+1}
-        // = numerator - i (F chi_n + chi_{n+1}).
-        let a_numerator = a_factor * psi + psi_next;
-        let a_chi = a_factor * chi + chi_next;
-        let a_denominator = Complex64::new(a_numerator.re + a_chi.im, a_numerator.im - a_chi.re);
-        let b_numerator = b_factor * psi + psi_next;
-        let b_chi = b_factor * chi + chi_next;
-        let b_denominator = Complex64::new(b_numerator.re + b_chi.im, b_numerator.im - b_chi.re);
-        // One division for both quotients: 1/(|Da|^2 |Db|^2).
-        let a_norm = a_denominator.norm_sqr();
-        let b_norm = b_denominator.norm_sqr();
-        let inverse_both = 1.0 / (a_norm * b_norm);
-        let inverse_a_norm = b_norm * inverse_both;
-        let inverse_b_norm = a_norm * inverse_both;
-        let a = a_numerator * a_denominator.conj() * inverse_a_norm;
-        let b = b_numerator * b_denominator.conj() * inverse_b_norm;
-        let absorption = -a_factor.im * inverse_a_norm - b_factor.im * inverse_b_norm;
-
-        let inverse_n_plus_1 = 1.0 / (n + 1) as f64;
-        sums.add(n, inverse_n, inverse_n_plus_1, a, b, absorption);
-        record(a, b);
-        inverse_n = inverse_n_plus_1;
-        psi_previous = psi;
-        psi = psi_next;
-        chi_previous = chi;
-        chi = chi_next;
+        let chi_next = step * chi_current - chi_previous;
+        psi[n + 1] = psi_next;
+        chi[n + 1] = chi_next;
+        psi_previous = psi_current;
+        psi_current = psi_next;
+        chi_previous = chi_current;
+        chi_current = chi_next;
+    };
+    // Downward n = top-1 ..= 2 and upward n = 1 ..= top-2 side by side.
+    for k in 0..top - 2 {
+        let n = top - 1 - k;
+        let ratio = interior.step();
+        rho_re[n] = ratio.re;
+        rho_im[n] = ratio.im;
+        exterior_step(1 + k, psi, chi);
     }
-    sums.finish(x, inverse_x, inverse_x * inverse_x)
+    exterior_step(top - 1, psi, chi);
+}
+
+/// The x >= 1 path: tables, then the coefficient pass in blocks.
+#[inline(always)]
+fn solve_large<F: FnMut(Complex64, Complex64)>(
+    m: Complex64,
+    x: f64,
+    n_terms: usize,
+    scratch: &mut [f64],
+    mut record: F,
+) -> Efficiencies {
+    // psi_n(x) > 0 and decreasing for n >= x (its last zero in n is below
+    // x - 1.8 x^(1/3)), so from there on the ratio form is well conditioned.
+    let n_switch = (x as usize).min(n_terms);
+    let table = n_terms + 2;
+    let (rho_re, rest) = scratch.split_at_mut(table);
+    let (rho_im, rest) = rest.split_at_mut(table);
+    let (psi, rest) = rest.split_at_mut(table);
+    let (chi, rest) = rest.split_at_mut(table);
+    // rho_x[k] = psi_{n_switch+k}(x) / psi_{n_switch+k-1}(x), k >= 1.
+    let rho_x = &mut rest[..table - n_switch];
+    let mut ratio = x * scaled_ratio_continued_fraction(Complex64::new(x * x, 0.0), n_terms + 1).re;
+    rho_x[n_terms + 1 - n_switch] = ratio;
+    for n in (n_switch + 1..=n_terms).rev() {
+        ratio = x / ((2 * n + 1) as f64 - x * ratio);
+        rho_x[n - n_switch] = ratio;
+    }
+    fill_tables(m, x, n_terms, n_switch, rho_re, rho_im, psi, chi, rho_x);
+    let tables = Tables {
+        rho_re,
+        rho_im,
+        psi,
+        chi,
+    };
+
+    let inverse_m = reciprocal(m);
+    let inverse_x = 1.0 / x;
+    let sphere = LargeSphere {
+        m,
+        inverse_m,
+        // (1/m^2 - 1)/x, formed without cancelling for m near 1.
+        a_slope: -((m - 1.0) * (m + 1.0)) * (inverse_m * inverse_m) * inverse_x,
+    };
+    let mut sums = LaneSums::new();
+    let mut a = [Complex64::new(0.0, 0.0); BLOCK];
+    let mut b = [Complex64::new(0.0, 0.0); BLOCK];
+    let mut n = 1;
+    while n + BLOCK - 1 <= n_terms {
+        sphere.block(&tables, n, &mut a, &mut b, &mut sums);
+        for k in 0..BLOCK {
+            record(a[k], b[k]);
+        }
+        n += BLOCK;
+    }
+    let mut last_a = [Complex64::new(0.0, 0.0)];
+    let mut last_b = [Complex64::new(0.0, 0.0)];
+    while n <= n_terms {
+        sphere.block(&tables, n, &mut last_a, &mut last_b, &mut sums);
+        record(last_a[0], last_b[0]);
+        n += 1;
+    }
+    sums.reduce().finish(x, inverse_x, inverse_x * inverse_x)
 }
 
 /// The x < 1 path: all quantities scaled by powers of x, coefficients
 /// accumulated as ahat_n = a_n / x^3, bhat_n = b_n / x^3.
+#[inline(always)]
 fn solve_small<F: FnMut(Complex64, Complex64)>(
     m: Complex64,
     x: f64,
-    rhot_mx: &mut [Complex64],
-    rhot_x: &mut [f64],
+    n_terms: usize,
     mut record: F,
 ) -> Efficiencies {
-    let n_cap = series_length_converged(x);
+    let n_cap = n_terms.min(SMALL_PATH_TERMS);
     let x_squared = x * x;
-    fill_scaled_ratios_downward(m * x, n_cap + 1, rhot_mx);
-    let rhot_x = &mut rhot_x[..n_cap + 2];
+    let mut rhot_mx = [Complex64::new(0.0, 0.0); SMALL_PATH_TERMS + 2];
+    let mut rhot_x = [0.0; SMALL_PATH_TERMS + 2];
+    fill_scaled_ratios_downward(m * x, n_cap + 1, &mut rhot_mx);
     let mut ratio = scaled_ratio_continued_fraction(Complex64::new(x_squared, 0.0), n_cap + 1).re;
     rhot_x[n_cap + 1] = ratio;
     for n in (1..=n_cap).rev() {
@@ -310,7 +592,6 @@ fn solve_small<F: FnMut(Complex64, Complex64)>(
     let a_slope = -((m - 1.0) * (m + 1.0)) / m_squared;
     let mut power = 1.0; // x^(2n-2)
     let mut sums = SeriesSums::new();
-    let mut inverse_n = 1.0;
     for n in 1..=n_cap {
         psi_scaled *= rhot_x[n];
         let inverse_sigma = reciprocal(sigma_scaled);
@@ -338,10 +619,8 @@ fn solve_small<F: FnMut(Complex64, Complex64)>(
             * (-a_factor.im * inverse_a_denominator.norm_sqr()
                 + x_squared * b_internal.im * inverse_b_denominator.norm_sqr());
 
-        let inverse_n_plus_1 = 1.0 / (n + 1) as f64;
-        sums.add(n, inverse_n, inverse_n_plus_1, a, b, absorption);
+        sums.add(n as f64, 1.0 / (n + 1) as f64, a, b, absorption);
         record(a, b);
-        inverse_n = inverse_n_plus_1;
         power *= x_squared;
     }
     sums.finish(x, x_squared, x_squared * x_squared)

@@ -77,9 +77,9 @@
 //!   Wronskian psi_n chi_{n+1} - psi_{n+1} chi_n = 1, so Q_abs is exactly 0 for
 //!   real m and keeps its relative accuracy when Im(m) = 1e-8.
 //! - **One pass**: the efficiency sums are accumulated in the loop that makes
-//!   a_n, b_n (one real division for both quotients of a term); only the ratio
-//!   table rho_n(mx) is stored, on the stack for x up to ~1900 and in a
-//!   reusable [`SphereWorkspace`] beyond.
+//!   a_n, b_n (one real division for both quotients of a term); only the
+//!   tables of rho_n(mx), psi_n(x) and chi_n(x) are stored, on the stack for
+//!   x up to ~950 and in a reusable [`SphereWorkspace`] beyond.
 //! - **Angular functions** (`amplitude.rs`): pi_n, tau_n by the upward
 //!   recurrences of B&H eq. 4.47 (stable for all angles).
 //!
@@ -96,7 +96,7 @@ mod series_length;
 pub use series_length::{series_length_converged, series_length_wiscombe};
 
 use crate::Complex64;
-use coefficients::{coefficient_scale, scratch_lengths, solve_series};
+use coefficients::{coefficient_scale, scratch_length, solve_series};
 
 /// Why a sphere could not be solved: the input is outside the supported domain.
 #[derive(Debug, Clone, PartialEq)]
@@ -157,45 +157,46 @@ fn validate(m: Complex64, x: f64) -> Result<(), MieError> {
     Ok(())
 }
 
-/// Ratio-table capacity of the stack tiers of [`compute_efficiencies`]: a
-/// small one for the common small spheres (the table is zeroed on every call,
-/// so its size is time), a larger one up to x ~ 1900.
-const STACK_TERMS_SMALL: usize = 160;
-const STACK_TERMS_LARGE: usize = 2048;
-/// Real-ratio capacity of the stack tiers (about 7.6 x^(1/3) + 5 are needed).
-const STACK_REAL_TERMS: usize = 128;
+/// Scratch capacities (f64 values) of the stack tiers of
+/// [`compute_efficiencies`]. The scratch is zeroed on every call, so its size
+/// is time: a small tier for the common small spheres (x up to ~40), a middle
+/// one to x ~ 190 and a large one (40 KB) to x ~ 950. The solver needs about
+/// 5 (x + 7.6 x^(1/3)) values.
+const STACK_SCRATCH_SMALL: usize = 320;
+const STACK_SCRATCH_MIDDLE: usize = 1280;
+const STACK_SCRATCH_LARGE: usize = 5120;
 
 /// Fast path: efficiencies and g of a sphere of relative refractive index `m`
-/// and size parameter `x`, no allocation for x up to ~1900 (the ratio table
-/// lives on the stack, at most 34 KB); larger spheres allocate one table per
+/// and size parameter `x`, without allocation for x up to ~950 (the tables
+/// live on the stack, at most 40 KB); larger spheres allocate one table per
 /// call (use [`compute_efficiencies_with`] to reuse it).
 pub fn compute_efficiencies(m: Complex64, x: f64) -> Result<Efficiencies, MieError> {
     validate(m, x)?;
-    let (complex_length, real_length) = scratch_lengths(x);
-    if complex_length <= STACK_TERMS_SMALL && real_length <= STACK_REAL_TERMS {
-        Ok(with_stack_scratch::<STACK_TERMS_SMALL>(m, x))
-    } else if complex_length <= STACK_TERMS_LARGE && real_length <= STACK_REAL_TERMS {
-        Ok(with_stack_scratch::<STACK_TERMS_LARGE>(m, x))
+    let n_terms = series_length_converged(x);
+    let needed = scratch_length(x, n_terms);
+    Ok(if needed <= STACK_SCRATCH_SMALL {
+        with_stack_scratch::<STACK_SCRATCH_SMALL>(m, x, n_terms)
+    } else if needed <= STACK_SCRATCH_MIDDLE {
+        with_stack_scratch::<STACK_SCRATCH_MIDDLE>(m, x, n_terms)
+    } else if needed <= STACK_SCRATCH_LARGE {
+        with_stack_scratch::<STACK_SCRATCH_LARGE>(m, x, n_terms)
     } else {
-        let mut workspace = SphereWorkspace::new();
-        Ok(solve_in_workspace(&mut workspace, m, x))
-    }
+        solve_in_workspace(&mut SphereWorkspace::new(), m, x)
+    })
 }
 
-fn with_stack_scratch<const N: usize>(m: Complex64, x: f64) -> Efficiencies {
-    let mut complex_scratch = [Complex64::new(0.0, 0.0); N];
-    let mut real_scratch = [0.0; STACK_REAL_TERMS];
-    solve_series(m, x, &mut complex_scratch, &mut real_scratch, |_, _| {})
+fn with_stack_scratch<const N: usize>(m: Complex64, x: f64, n_terms: usize) -> Efficiencies {
+    let mut scratch = [0.0; N];
+    solve_series(m, x, n_terms, &mut scratch, |_, _| {})
 }
 
-/// Scratch memory for [`compute_efficiencies_with`]: the table of Bessel
-/// ratios the solver fills downward and reads upward. Create it once per
-/// thread and reuse it; it grows to the largest sphere it has seen
-/// (16 bytes per series term).
+/// Scratch memory for [`compute_efficiencies_with`]: the tables the solver
+/// fills (Bessel ratios of mx downward, psi and chi of x upward) and then
+/// reads. Create it once per thread and reuse it; it grows to the largest
+/// sphere it has seen (about 40 bytes per series term).
 #[derive(Debug, Clone, Default)]
 pub struct SphereWorkspace {
-    complex_ratios: Vec<Complex64>,
-    real_ratios: Vec<f64>,
+    tables: Vec<f64>,
 }
 
 impl SphereWorkspace {
@@ -204,19 +205,18 @@ impl SphereWorkspace {
         SphereWorkspace::default()
     }
 
-    fn reserve_for(&mut self, x: f64) {
-        let (complex_length, real_length) = scratch_lengths(x);
-        if self.complex_ratios.len() < complex_length {
-            self.complex_ratios
-                .resize(complex_length, Complex64::new(0.0, 0.0));
+    /// Grow the tables for size parameter x; returns the series length.
+    fn reserve_for(&mut self, x: f64) -> usize {
+        let n_terms = series_length_converged(x);
+        let needed = scratch_length(x, n_terms);
+        if self.tables.len() < needed {
+            self.tables.resize(needed, 0.0);
         }
-        if self.real_ratios.len() < real_length {
-            self.real_ratios.resize(real_length, 0.0);
-        }
+        n_terms
     }
 }
 
-/// Same as [`compute_efficiencies`], with the ratio table in `workspace`:
+/// Same as [`compute_efficiencies`], with the tables in `workspace`:
 /// allocation-free once the workspace has grown to the largest x used.
 pub fn compute_efficiencies_with(
     workspace: &mut SphereWorkspace,
@@ -228,14 +228,8 @@ pub fn compute_efficiencies_with(
 }
 
 fn solve_in_workspace(workspace: &mut SphereWorkspace, m: Complex64, x: f64) -> Efficiencies {
-    workspace.reserve_for(x);
-    solve_series(
-        m,
-        x,
-        &mut workspace.complex_ratios,
-        &mut workspace.real_ratios,
-        |_, _| {},
-    )
+    let n_terms = workspace.reserve_for(x);
+    solve_series(m, x, n_terms, &mut workspace.tables, |_, _| {})
 }
 
 /// The full solution of one sphere: series coefficients kept, so that amplitude
@@ -286,20 +280,14 @@ impl MieSolution {
     /// previous solution is left unchanged.
     pub fn recompute(&mut self, m: Complex64, x: f64) -> Result<(), MieError> {
         validate(m, x)?;
-        self.workspace.reserve_for(x);
+        let n_terms = self.workspace.reserve_for(x);
         self.a_scaled.clear();
         self.b_scaled.clear();
         let (a_scaled, b_scaled) = (&mut self.a_scaled, &mut self.b_scaled);
-        self.efficiencies = solve_series(
-            m,
-            x,
-            &mut self.workspace.complex_ratios,
-            &mut self.workspace.real_ratios,
-            |a, b| {
-                a_scaled.push(a);
-                b_scaled.push(b);
-            },
-        );
+        self.efficiencies = solve_series(m, x, n_terms, &mut self.workspace.tables, |a, b| {
+            a_scaled.push(a);
+            b_scaled.push(b);
+        });
         self.x = x;
         self.scale = coefficient_scale(x);
         let scale = self.scale;
