@@ -28,7 +28,7 @@
 //!
 //! The integrals are composite Gauss-Legendre rules in `ln x` whose node
 //! density resolves the absorption-limited Mie resonances and relaxes in the
-//! tails ([`crate::distribution`]'s `quadrature` module). All wavelengths at
+//! tails ([`crate::distribution::quadrature`]). All wavelengths at
 //! which the particles have the same index share one rule and one Mie
 //! solution per node ([`SharedSizeParameterQuadrature`]); a wavelength alone
 //! is the one-wavelength case of the same code. Cross-sections, `g` and the

@@ -119,7 +119,7 @@ impl HenyeyGreensteinPhaseFunction {
         }
     }
 
-    /// The asymmetry parameter g = <cos theta> (dimensionless).
+    /// The asymmetry parameter g = `<cos theta>` (dimensionless).
     pub fn asymmetry_parameter(&self) -> f64 {
         self.asymmetry_parameter
     }

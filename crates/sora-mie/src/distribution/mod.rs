@@ -75,7 +75,7 @@
 //! log-normal and drops about 1e-9 of the area. The quadrature itself is
 //! described in [`quadrature`].
 
-mod quadrature;
+pub mod quadrature;
 mod special_functions;
 
 pub use quadrature::{RadiusQuadrature, RadiusQuadratureSettings, SharedSizeParameterQuadrature};
