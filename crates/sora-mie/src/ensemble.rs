@@ -85,12 +85,13 @@
 //!
 //! ## Cost
 //!
-//! Criterion (`benches/ensemble.rs`, this 2-core machine under load from
-//! other builds): the 21 paper wavelengths of one species with the Mie phase
-//! tables take about 48 ms (Mars dust, constant m = 1.5 + 0.005i) and 64 ms
-//! (Table 1 aerosol, 0.1-2.5 um); 17 ms with the paper's HG phase. With the
-//! Wolff (2009) tabulated index every wavelength has its own `m`, nothing is
-//! shared, and the same build takes about 0.94 s.
+//! Criterion (`benches/ensemble.rs`, this 2-core machine shared with other
+//! builds, so +-20%): the 21 paper wavelengths of one species with the Mie
+//! phase tables take about 50 ms (Mars dust, constant m = 1.5 + 0.005i) and
+//! 46 ms (Table 1 aerosol, 0.1-2.5 um), of which the phase tables are about
+//! three quarters; 12 ms with the paper's HG phase (cross-sections only).
+//! With the Wolff (2009) tabulated index every wavelength has its own `m`,
+//! nothing is shared, and the same build takes about 0.95 s.
 
 use crate::Complex64;
 use crate::distribution::{
@@ -536,7 +537,8 @@ const ANGLE_BLOCK: usize = 16;
 /// tau exchanged (B&H eq. 4.74), pi_n and tau_n by the upward recurrences
 /// (B&H eq. 4.47): the same sums as `MieSolution::s11_s12_table`, ordered
 /// term-outer, angle-inner so that the angles' recurrences run side by side
-/// rather than one long dependent chain per angle (several times faster).
+/// rather than one long dependent chain per angle, and accumulated as
+/// S1 + S2 and S1 - S2 (fewer products per term).
 fn accumulate_weighted_s11(
     cos_theta: &[f64],
     a: &[Complex64],
@@ -550,38 +552,39 @@ fn accumulate_weighted_s11(
     {
         let mut mu = [0.0; ANGLE_BLOCK];
         mu[..block_cos_theta.len()].copy_from_slice(block_cos_theta);
-        // pi_0 = 0, pi_1 = 1.
+        // pi_0 = 0, pi_1 = 1. Accumulated: U = S1 + S2 = sum (A + B)(pi + tau) and
+        // V = S1 - S2 = sum (A - B)(pi - tau), two complex products per term
+        // instead of four; |S1|^2 + |S2|^2 = (|U|^2 + |V|^2) / 2.
         let mut pi_previous = [0.0; ANGLE_BLOCK];
         let mut pi_current = [1.0; ANGLE_BLOCK];
-        let mut s1_re = [0.0; ANGLE_BLOCK];
-        let mut s1_im = [0.0; ANGLE_BLOCK];
-        let mut s2_re = [0.0; ANGLE_BLOCK];
-        let mut s2_im = [0.0; ANGLE_BLOCK];
+        let mut u_re = [0.0; ANGLE_BLOCK];
+        let mut u_im = [0.0; ANGLE_BLOCK];
+        let mut v_re = [0.0; ANGLE_BLOCK];
+        let mut v_im = [0.0; ANGLE_BLOCK];
         for (index, (a_n, b_n)) in a.iter().zip(b).enumerate() {
             let n = (index + 1) as f64;
             let term_factor = (2.0 * n + 1.0) / (n * (n + 1.0));
-            let (ar, ai) = (term_factor * a_n.re, term_factor * a_n.im);
-            let (br, bi) = (term_factor * b_n.re, term_factor * b_n.im);
+            let sum_coefficient = term_factor * (a_n + b_n);
+            let difference_coefficient = term_factor * (a_n - b_n);
             let pi_ratio_current = (2.0 * n + 1.0) / n;
             let pi_ratio_previous = (n + 1.0) / n;
             for i in 0..ANGLE_BLOCK {
                 let pi = pi_current[i];
-                let tau = n * mu[i] * pi - (n + 1.0) * pi_previous[i];
-                s1_re[i] += ar * pi + br * tau;
-                s1_im[i] += ai * pi + bi * tau;
-                s2_re[i] += ar * tau + br * pi;
-                s2_im[i] += ai * tau + bi * pi;
-                let pi_next = pi_ratio_current * mu[i] * pi - pi_ratio_previous * pi_previous[i];
+                let mu_pi = mu[i] * pi;
+                let tau = n * mu_pi - (n + 1.0) * pi_previous[i];
+                let (pi_plus_tau, pi_minus_tau) = (pi + tau, pi - tau);
+                u_re[i] += sum_coefficient.re * pi_plus_tau;
+                u_im[i] += sum_coefficient.im * pi_plus_tau;
+                v_re[i] += difference_coefficient.re * pi_minus_tau;
+                v_im[i] += difference_coefficient.im * pi_minus_tau;
+                let pi_next = pi_ratio_current * mu_pi - pi_ratio_previous * pi_previous[i];
                 pi_previous[i] = pi;
                 pi_current[i] = pi_next;
             }
         }
         for (i, sum) in block_sums.iter_mut().enumerate() {
-            let s11 = 0.5
-                * (s1_re[i] * s1_re[i]
-                    + s1_im[i] * s1_im[i]
-                    + s2_re[i] * s2_re[i]
-                    + s2_im[i] * s2_im[i]);
+            let s11 = 0.25
+                * (u_re[i] * u_re[i] + u_im[i] * u_im[i] + v_re[i] * v_re[i] + v_im[i] * v_im[i]);
             *sum += weight * s11;
         }
     }
