@@ -118,7 +118,8 @@ fn compare(
     for (column, (&value, &expected)) in columns_of(got).iter().zip(&row.expected).enumerate() {
         let relative = (value / expected - 1.0).abs();
         worst[column] = worst[column].max(relative);
-        if !(relative <= TOLERANCE) {
+        // A NaN fails.
+        if relative.is_nan() || relative > TOLERANCE {
             failures.push(format!(
                 "r_m {} um sigma_g {} window {:?} lambda {} nm: {} = {value:e}, reference {expected:e} (relative {relative:e})",
                 row.number_median_radius_um,
