@@ -157,6 +157,18 @@ impl TabulatedPhase {
         upper.clamp(1, self.cos_theta_nodes.len() - 1) - 1
     }
 
+    /// p(theta) at every wavelength row into `out`, the same values as
+    /// [`TabulatedPhase::eval`] row by row.
+    fn eval_all(&self, cos_theta: f64, out: &mut [f64]) {
+        let cos_theta = cos_theta.clamp(-1.0, 1.0);
+        let j = self.segment(cos_theta);
+        let (m0, m1) = (self.cos_theta_nodes[j], self.cos_theta_nodes[j + 1]);
+        let t = (cos_theta - m0) / (m1 - m0);
+        for (value, row) in out.iter_mut().zip(&self.values) {
+            *value = row[j] + t * (row[j + 1] - row[j]);
+        }
+    }
+
     fn eval(&self, wavelength_index: usize, cos_theta: f64) -> f64 {
         let cos_theta = cos_theta.clamp(-1.0, 1.0);
         let j = self.segment(cos_theta);
@@ -227,8 +239,16 @@ impl PhaseFunction {
     /// p(theta) at every wavelength, written into `out` (one value per
     /// wavelength sample; no allocation).
     pub fn eval_into(&self, cos_theta: f64, out: &mut [f64]) {
-        for (i, value) in out.iter_mut().enumerate() {
-            *value = self.eval(i, cos_theta);
+        match self {
+            // Every wavelength shares the table's cos theta nodes: find the
+            // segment once (a binary search per wavelength dominated the
+            // renderer's profile).
+            PhaseFunction::Tabulated(table) => table.eval_all(cos_theta, out),
+            _ => {
+                for (i, value) in out.iter_mut().enumerate() {
+                    *value = self.eval(i, cos_theta);
+                }
+            }
         }
     }
 
@@ -474,5 +494,27 @@ mod tests {
             assert_eq!(*v, phase.eval(i, 1.0));
         }
         assert!(out[0] > out[2]);
+    }
+
+    #[test]
+    fn tabulated_eval_into_equals_eval_at_every_wavelength() {
+        let nodes: Vec<f64> = (0..=40).map(|i| -1.0 + i as f64 / 20.0).collect();
+        let rows: Vec<Vec<f64>> = [0.3, 0.6, 0.85]
+            .iter()
+            .map(|g| {
+                nodes
+                    .iter()
+                    .map(|mu| henyey_greenstein_phase(*g, *mu))
+                    .collect()
+            })
+            .collect();
+        let phase = PhaseFunction::Tabulated(TabulatedPhase::new(nodes, rows).unwrap());
+        let mut out = [0.0; 3];
+        for mu in [-1.0, -0.999, -0.3, 0.0, 0.41, 0.95, 0.9999, 1.0] {
+            phase.eval_into(mu, &mut out);
+            for (i, v) in out.iter().enumerate() {
+                assert_eq!(*v, phase.eval(i, mu), "mu {mu} row {i}");
+            }
+        }
     }
 }

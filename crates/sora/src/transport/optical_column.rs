@@ -116,9 +116,10 @@ pub struct SunColumnTable {
     altitude_nodes: usize,
     mu_nodes: usize,
     species: usize,
-    /// Mean relative density along the path to the top (column_m / d),
-    /// index [(altitude * mu_nodes + mu) * species + s].
-    mean_densities: Vec<f64>,
+    /// ln of the mean relative density along the path to the top
+    /// (column_m / d), -inf where it is zero, index
+    /// [(altitude * mu_nodes + mu) * species + s].
+    log_mean_densities: Vec<f64>,
 }
 
 impl SunColumnTable {
@@ -139,42 +140,50 @@ impl SunColumnTable {
             altitude_nodes,
             mu_nodes,
             species,
-            mean_densities: Vec::new(),
+            log_mean_densities: Vec::new(),
         };
-        let mut mean_densities = vec![0.0; altitude_nodes * mu_nodes * species];
+        let mut log_mean_densities = vec![0.0; altitude_nodes * mu_nodes * species];
         // One altitude row per task; each row is the same computation
         // whatever the thread count.
-        crate::parallel::for_each_chunk_mut(&mut mean_densities, mu_nodes * species, |i, row| {
-            let mut columns = vec![0.0; species];
-            let r = table.radius_from_unit(i as f64 / (altitude_nodes - 1) as f64);
-            for j in 0..mu_nodes {
-                let mu = table.mu_from_unit(r, j as f64 / (mu_nodes - 1) as f64);
-                let origin = Vector3::new(0.0, 0.0, r);
-                let direction = Vector3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
-                let length =
-                    crate::geometry::distance_to_top_of_atmosphere(origin, direction, top_radius_m);
-                compute_columns_along_ray(
-                    profiles,
-                    ground_radius_m,
-                    origin,
-                    direction,
-                    length,
-                    TABLE_RAY_PANELS,
-                    &mut columns,
-                );
-                for (k, profile) in profiles.iter().enumerate() {
-                    // At the top looking up the path is empty: its mean
-                    // density is the density there, the limit of column / d.
-                    row[j * species + k] = if length > 0.0 {
-                        columns[k] / length
-                    } else {
-                        profile.relative_density(top_radius_m - ground_radius_m)
-                    };
+        crate::parallel::for_each_chunk_mut(
+            &mut log_mean_densities,
+            mu_nodes * species,
+            |i, row| {
+                let mut columns = vec![0.0; species];
+                let r = table.radius_from_unit(i as f64 / (altitude_nodes - 1) as f64);
+                for j in 0..mu_nodes {
+                    let mu = table.mu_from_unit(r, j as f64 / (mu_nodes - 1) as f64);
+                    let origin = Vector3::new(0.0, 0.0, r);
+                    let direction = Vector3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
+                    let length = crate::geometry::distance_to_top_of_atmosphere(
+                        origin,
+                        direction,
+                        top_radius_m,
+                    );
+                    compute_columns_along_ray(
+                        profiles,
+                        ground_radius_m,
+                        origin,
+                        direction,
+                        length,
+                        TABLE_RAY_PANELS,
+                        &mut columns,
+                    );
+                    for (k, profile) in profiles.iter().enumerate() {
+                        // At the top looking up the path is empty: its mean
+                        // density is the density there, the limit of column / d.
+                        let mean_density = if length > 0.0 {
+                            columns[k] / length
+                        } else {
+                            profile.relative_density(top_radius_m - ground_radius_m)
+                        };
+                        row[j * species + k] = mean_density.ln();
+                    }
                 }
-            }
-        });
+            },
+        );
         SunColumnTable {
-            mean_densities,
+            log_mean_densities,
             ..table
         }
     }
@@ -249,26 +258,33 @@ impl SunColumnTable {
         let fx = ((r - r0) / (r1 - r0)).clamp(0.0, 1.0);
         let fy = y - j as f64;
         let s = self.species;
-        let at = |ii: usize, jj: usize| &self.mean_densities[(ii * self.mu_nodes + jj) * s..][..s];
+        let at =
+            |ii: usize, jj: usize| &self.log_mean_densities[(ii * self.mu_nodes + jj) * s..][..s];
         let (c00, c01, c10, c11) = (at(i, j), at(i, j + 1), at(i + 1, j), at(i + 1, j + 1));
         let length = distance_to_top_from_radius(r, mu, self.top_radius_m);
-        let bilinear = |a: f64, b: f64, c: f64, d: f64| {
-            let low = a + fy * (b - a);
-            let high = c + fy * (d - c);
-            low + fx * (high - low)
-        };
+        let weights = [
+            (1.0 - fx) * (1.0 - fy),
+            (1.0 - fx) * fy,
+            fx * (1.0 - fy),
+            fx * fy,
+        ];
         for (k, column) in columns_m.iter_mut().enumerate().take(s) {
             let corners = [c00[k], c01[k], c10[k], c11[k]];
-            let mean_density = if corners.iter().all(|v| *v > 0.0) {
-                bilinear(
-                    corners[0].ln(),
-                    corners[1].ln(),
-                    corners[2].ln(),
-                    corners[3].ln(),
-                )
-                .exp()
+            let mean_density = if corners.iter().all(|v| v.is_finite()) {
+                corners
+                    .iter()
+                    .zip(weights)
+                    .map(|(c, w)| c * w)
+                    .sum::<f64>()
+                    .exp()
             } else {
-                bilinear(corners[0], corners[1], corners[2], corners[3])
+                // A layer profile is zero at a corner: interpolate the
+                // density itself.
+                corners
+                    .iter()
+                    .zip(weights)
+                    .map(|(c, w)| c.exp() * w)
+                    .sum::<f64>()
             };
             *column = mean_density * length;
         }

@@ -179,16 +179,19 @@ impl SkyViewTable {
             node(i + 1, k),
             node(i + 1, k + 1),
         );
+        let w = [
+            ((1.0 - fx) * (1.0 - fy)) as f32,
+            ((1.0 - fx) * fy) as f32,
+            (fx * (1.0 - fy)) as f32,
+            (fx * fy) as f32,
+        ];
+        let interpolate = |m: usize| (a[m] * w[0] + b[m] * w[1] + c[m] * w[2] + d[m] * w[3]) as f64;
         let split = integrals.len();
-        for m in 0..n {
-            let low = a[m] as f64 + fy * (b[m] as f64 - a[m] as f64);
-            let high = c[m] as f64 + fy * (d[m] as f64 - c[m] as f64);
-            let value = low + fx * (high - low);
-            if m < split {
-                integrals[m] = value;
-            } else {
-                ground[m - split] = value;
-            }
+        for (m, out) in integrals.iter_mut().enumerate() {
+            *out = interpolate(m);
+        }
+        for (m, out) in ground.iter_mut().enumerate() {
+            *out = interpolate(split + m);
         }
     }
 }
