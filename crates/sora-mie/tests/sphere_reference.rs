@@ -208,3 +208,335 @@ fn phase_tables_agree_with_single_angles() {
         assert!((p[i] - solution.phase_function_per_sr(m)).abs() <= 1e-14 * p[i]);
     }
 }
+
+/// The published values of miepython's test suite (Wiscombe's MIEV0 cases,
+/// the B&H BHMIE example, scattnlay), each row beside its 100-digit value
+/// (`ref_value`). Every plain-sphere row whose reference lies within the
+/// published tolerance must agree with `ref_value`: 1e-9 relative for
+/// Q_ext, Q_sca and g, 1e-8 for Q_back. Amplitude components and the
+/// normalised phase-matrix ratios (S11/S11(0), -S12/S11, S33/S11, S34/S11)
+/// are held to 1e-9 of their natural scale: |S| for a component of S1 or S2
+/// (a component can cross zero), 1 for a ratio to S11.
+///
+/// The S1, S2 components in this file come from MIEV0 printouts, and
+/// MIEV0 (like miepython) uses the time dependence exp(+i w t) with
+/// m = n - i k: its amplitudes are the complex conjugates of Bohren &
+/// Huffman's (the file's m_re_bh, m_im_bh columns convert m, not S). They are
+/// compared with conj(S1), conj(S2); everything else (efficiencies, S11, S12,
+/// S33 = Re(S2 S1*), S34 = Im(S2 S1*), from the B&H printout) is the same in
+/// both conventions or already in B&H's.
+///
+/// Skipped: the perfectly conducting spheres (m_as_written = "PEC"), which
+/// are not dielectric spheres of finite index and which this solver does not
+/// model.
+#[test]
+fn published_test_cases_match_their_100_digit_values() {
+    let table = Table::load(PUBLISHED);
+    let col = |name| table.column(name);
+    let (c_m, c_mre, c_mim, c_x) = (
+        col("m_as_written"),
+        col("m_re_bh"),
+        col("m_im_bh"),
+        col("x"),
+    );
+    let (c_quantity, c_ref, c_within) = (
+        col("quantity"),
+        col("ref_value"),
+        col("ref_within_test_tolerance"),
+    );
+    let mut checked = 0;
+    let mut skipped_conductors = 0;
+    let mut worst = 0.0f64;
+    for row in &table.rows {
+        if row[c_within].trim() != "1" {
+            continue;
+        }
+        if row[c_m].trim() == "PEC" {
+            skipped_conductors += 1;
+            continue;
+        }
+        let m = Complex64::new(number(&row[c_mre]), number(&row[c_mim]));
+        let x = number(&row[c_x]);
+        let quantity = row[c_quantity].trim();
+        let reference = number(&row[c_ref]);
+        let solution = MieSolution::compute(m, x).unwrap();
+        let q = solution.efficiencies();
+        assert_eq!(q, compute_efficiencies(m, x).unwrap());
+        // "S1_re(180deg)" -> ("S1_re", 180)
+        let angle = |q: &str| -> f64 {
+            let inside = &q[q.rfind('(').unwrap() + 1..q.rfind("deg)").unwrap()];
+            number(inside)
+        };
+        let (value, scale, tolerance) = match quantity {
+            "qext" => (q.qext, reference, 1e-9),
+            "qsca" => (q.qsca, reference, 1e-9),
+            "g" => (q.g, reference, 1e-9),
+            "qback" | "qback=|2*S1(180)/x|^2" | "qback=4*|S1(180)|^2/x^2" => {
+                let (s1, _) = solution.amplitudes(-1.0);
+                // Both forms of the published value are the same number
+                // (pi_n(-1) = -tau_n(-1) = (-1)^(n+1) n(n+1)/2), summed in a
+                // different order: they differ by rounding of a cancelling
+                // sum, ~1e-14 per term.
+                let from_amplitude = 4.0 * s1.norm_sqr() / (x * x);
+                let agreement = relative_error(from_amplitude, q.qback);
+                let rounding = 1e-14 * solution.n_terms() as f64;
+                assert!(
+                    agreement < rounding,
+                    "m = {m}, x = {x}: 4|S1(180)|^2/x^2 vs Q_back: {agreement:e}"
+                );
+                (q.qback, reference, 1e-8)
+            }
+            _ if quantity.starts_with("S1_") || quantity.starts_with("S2_") => {
+                let mu = angle(quantity).to_radians().cos();
+                let (s1, s2) = solution.amplitudes(mu);
+                assert!(
+                    row[col("case_label")].contains("MIEV0"),
+                    "amplitude convention of {quantity}"
+                );
+                let s = if quantity.starts_with("S1_") {
+                    s1.conj()
+                } else {
+                    s2.conj()
+                };
+                let part = if quantity[3..].starts_with("re") {
+                    s.re
+                } else {
+                    s.im
+                };
+                (part, s.norm(), 1e-9)
+            }
+            _ => {
+                let mu = angle(quantity).to_radians().cos();
+                let (s1, s2) = solution.amplitudes(mu);
+                let (s11, s12) = solution.s11_s12(mu);
+                let value = if quantity.starts_with("S11/S11(0)") {
+                    s11 / solution.s11_s12(1.0).0
+                } else if quantity.starts_with("POL=-S12/S11") {
+                    -s12 / s11
+                } else if quantity.starts_with("S33/S11") {
+                    (s2 * s1.conj()).re / s11
+                } else if quantity.starts_with("S34/S11") {
+                    (s2 * s1.conj()).im / s11
+                } else {
+                    panic!("unknown published quantity {quantity:?}");
+                };
+                (value, 1.0, 1e-9)
+            }
+        };
+        let error = (value - reference).abs() / scale.abs();
+        worst = worst.max(error / tolerance);
+        assert!(
+            error <= tolerance,
+            "{quantity} at m = {m}, x = {x}: {value} vs {reference} (error {error:e} of scale {scale:e})"
+        );
+        checked += 1;
+    }
+    assert_eq!(checked, 193, "plain-sphere rows checked");
+    assert_eq!(skipped_conductors, 10, "perfect-conductor rows skipped");
+    eprintln!("published cases: {checked} checked, worst error {worst:.2e} of its tolerance");
+}
+
+/// Rayleigh limit: Q_sca -> (8/3) x^4 |(m^2-1)/(m^2+2)|^2 and
+/// Q_abs -> 4 x Im((m^2-1)/(m^2+2)) as x -> 0, with relative corrections of
+/// order x^2: halving x divides the deviation by 4.
+#[test]
+fn rayleigh_limit_is_approached_at_the_right_rate() {
+    for m in [
+        Complex64::new(1.33, 0.0),
+        Complex64::new(1.5, 0.01),
+        Complex64::new(1.75, 0.44),
+        Complex64::new(0.75, 0.0),
+    ] {
+        let k = (m * m - 1.0) / (m * m + 2.0);
+        let deviation = |x: f64| {
+            let q = compute_efficiencies(m, x).unwrap();
+            let sca = q.qsca / (8.0 / 3.0 * x.powi(4) * k.norm_sqr()) - 1.0;
+            let abs = if m.im > 0.0 {
+                q.qabs / (4.0 * x * k.im) - 1.0
+            } else {
+                0.0
+            };
+            (sca, abs)
+        };
+        // The next correction is O(x^4) with a coefficient up to ~13 times
+        // the x^2 one (m = 1.75 + 0.44i), hence x <= 0.01 for a 1 % rate.
+        for x in [0.01, 0.005, 0.0025] {
+            let (big_sca, big_abs) = deviation(x);
+            let (small_sca, small_abs) = deviation(x / 2.0);
+            let rate_sca = big_sca / small_sca;
+            assert!(
+                (rate_sca - 4.0).abs() < 0.04,
+                "m = {m}, x = {x}: Q_sca deviation ratio {rate_sca}"
+            );
+            if m.im > 0.0 {
+                let rate_abs = big_abs / small_abs;
+                assert!(
+                    (rate_abs - 4.0).abs() < 0.04,
+                    "m = {m}, x = {x}: Q_abs deviation ratio {rate_abs}"
+                );
+            }
+        }
+        // Deep in the limit the deviation is ~x^2: below 1e-11 at x = 1e-6
+        // (what is left is rounding).
+        let (sca, abs) = deviation(1e-6);
+        assert!(
+            sca.abs() < 1e-11 && abs.abs() < 1e-11,
+            "m = {m}: {sca:e} {abs:e}"
+        );
+        let q = compute_efficiencies(m, 1e-6).unwrap();
+        // g ~ x^2 and Q_back -> (3/2) Q_sca (dipole) in the limit.
+        assert!(q.g.abs() < 1e-11);
+        assert!((q.qback / q.qsca - 1.5).abs() < 1e-9);
+    }
+}
+
+/// Gauss-Legendre nodes and weights on [-1, 1] (Newton on P_n).
+fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
+    let mut rule = Vec::with_capacity(n);
+    for i in 0..n {
+        let mut mu = (std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
+        let mut derivative = 0.0;
+        for _ in 0..100 {
+            let (mut p0, mut p1) = (1.0, mu);
+            for k in 2..=n {
+                let p2 = ((2 * k - 1) as f64 * mu * p1 - (k - 1) as f64 * p0) / k as f64;
+                p0 = p1;
+                p1 = p2;
+            }
+            derivative = n as f64 * (mu * p1 - p0) / (mu * mu - 1.0);
+            let step = p1 / derivative;
+            mu -= step;
+            if step.abs() < 1e-16 {
+                break;
+            }
+        }
+        rule.push((mu, 2.0 / ((1.0 - mu * mu) * derivative * derivative)));
+    }
+    rule
+}
+
+/// The phase function integrates to 1 over 4 pi sr, and its mu-weighted
+/// integral is g. S11(mu) is a polynomial of degree 2 N in mu (N series
+/// terms), so Gauss-Legendre with N + 2 nodes integrates it exactly: any
+/// difference is rounding, and the tolerance is 1e-12.
+#[test]
+fn phase_function_is_normalised_and_its_mean_cosine_is_g() {
+    for &(m, x) in &[
+        (Complex64::new(1.33, 0.0), 10.0),
+        (Complex64::new(1.5, 0.01), 30.0),
+        (Complex64::new(1.75, 0.44), 100.0),
+        (Complex64::new(0.75, 0.0), 50.0),
+        (Complex64::new(1.5, 0.0), 0.3),
+    ] {
+        let solution = MieSolution::compute(m, x).unwrap();
+        let rule = gauss_legendre(solution.n_terms() + 2);
+        let mu: Vec<f64> = rule.iter().map(|&(mu, _)| mu).collect();
+        let mut phase = vec![0.0; mu.len()];
+        solution.phase_function_table(&mu, &mut phase);
+        let (mut norm, mut mean_cosine) = (0.0, 0.0);
+        for (&(mu, weight), &p) in rule.iter().zip(&phase) {
+            norm += 2.0 * std::f64::consts::PI * weight * p;
+            mean_cosine += 2.0 * std::f64::consts::PI * weight * p * mu;
+        }
+        let g = solution.efficiencies().g;
+        assert!(
+            (norm - 1.0).abs() < 1e-12,
+            "m = {m}, x = {x}: integral {norm}"
+        );
+        assert!(
+            (mean_cosine - g).abs() < 1e-12,
+            "m = {m}, x = {x}: <mu> = {mean_cosine} vs g = {g}"
+        );
+    }
+}
+
+/// Normal-incidence Fresnel reflectance |(m-1)/(m+1)|^2 and its average over
+/// a sphere's projected area, 2 int_0^1 R(mu) mu dmu (unpolarised).
+fn fresnel_reflectances(m: Complex64) -> (f64, f64) {
+    let normal = ((m - 1.0) / (m + 1.0)).norm_sqr();
+    let steps = 20_000;
+    let mut average = 0.0;
+    for i in 0..steps {
+        let mu = (i as f64 + 0.5) / steps as f64;
+        let cos_t = (1.0 - (1.0 - mu * mu) / (m * m)).sqrt();
+        let rs = (mu - m * cos_t) / (mu + m * cos_t);
+        let rp = (m * mu - cos_t) / (m * mu + cos_t);
+        average += (rs.norm_sqr() + rp.norm_sqr()) / 2.0 * 2.0 * mu / steps as f64;
+    }
+    (normal, average)
+}
+
+/// Hand-picked hard cases against limits that theory fixes independently of
+/// the series.
+#[test]
+fn hard_cases_reach_their_physical_limits() {
+    // Metal-like, huge: |mx| = 2.8e5, Im(mx) = 2e5. Nothing enters and comes
+    // back, so geometric optics is exact up to edge terms O(x^(-2/3)):
+    // Q_ext = 2 + O(x^(-2/3)) (extinction paradox plus the edge term),
+    // Q_abs = 1 - (area-averaged Fresnel reflectance), and Q_back = the
+    // normal-incidence reflectance (B&H 4.82 convention).
+    let m = Complex64::new(10.0, 10.0);
+    let x = 2e4;
+    let q = compute_efficiencies(m, x).unwrap();
+    let (normal, average) = fresnel_reflectances(m);
+    // The edge coefficient depends on m (2.0 for 1.5 + 1i, 0.13 for a perfect
+    // conductor in the reference data): only its sign and size are fixed.
+    let edge = (q.qext - 2.0) / x.powf(-2.0 / 3.0);
+    assert!(
+        edge > 0.0 && edge < 4.0,
+        "Q_ext = {} (edge coefficient {edge})",
+        q.qext
+    );
+    assert!(
+        (q.qabs - (1.0 - average)).abs() < 5e-3,
+        "Q_abs = {} vs {}",
+        q.qabs,
+        1.0 - average
+    );
+    assert!(
+        (q.qback - normal).abs() < 1e-4 * normal,
+        "Q_back = {} vs {normal}",
+        q.qback
+    );
+    assert!(q.g > 0.0 && q.g < 1.0);
+
+    // A bubble (Re m < 1) at x = 1e4: lossless, Q_ext -> 2.
+    let q = compute_efficiencies(Complex64::new(0.75, 0.0), 1e4).unwrap();
+    assert_eq!(q.qabs, 0.0);
+    assert_eq!(q.qext, q.qsca);
+    assert!((q.qext - 2.0).abs() < 0.02, "bubble Q_ext = {}", q.qext);
+
+    // Nearly index-matched, large: anomalous diffraction (van de Hulst 1957,
+    // sec. 11.22) with phase shift rho = 2 x (m - 1) = 2:
+    // Q_ext = 2 - (4/rho) sin rho + (4/rho^2)(1 - cos rho).
+    let (m, x) = (Complex64::new(1.0001, 0.0), 1e4);
+    let rho = 2.0 * x * (m.re - 1.0);
+    let anomalous = 2.0 - 4.0 / rho * rho.sin() + 4.0 / (rho * rho) * (1.0 - rho.cos());
+    let q = compute_efficiencies(m, x).unwrap();
+    assert!(
+        (q.qext / anomalous - 1.0).abs() < 2e-3,
+        "Q_ext = {} vs ADT {anomalous}",
+        q.qext
+    );
+    assert!(q.g > 0.99 && q.g < 1.0, "g = {}", q.g);
+
+    // Nearly index-matched, tiny: Rayleigh to ~x^2 = 1e-12.
+    let (m, x) = (Complex64::new(1.0001, 0.0), 1e-6);
+    let k = (m * m - 1.0) / (m * m + 2.0);
+    let q = compute_efficiencies(m, x).unwrap();
+    assert!((q.qsca / (8.0 / 3.0 * x.powi(4) * k.norm_sqr()) - 1.0).abs() < 1e-10);
+
+    // Water with a trace of absorption at x = 1e4: Q_ext -> 2, and the weak
+    // absorption of a large sphere, (8/3) x Im(m) n^2 [1 - (n^2-1)^(3/2)/n^3]
+    // (single pass with refraction, no internal reflections), to ~1 %.
+    let (m, x) = (Complex64::new(1.33, 1e-8), 1e4);
+    let q = compute_efficiencies(m, x).unwrap();
+    let n = m.re;
+    let single_pass = 8.0 / 3.0 * x * m.im * n * n * (1.0 - (n * n - 1.0).powf(1.5) / (n * n * n));
+    assert!(
+        (q.qabs / single_pass - 1.0).abs() < 0.01,
+        "Q_abs = {} vs {single_pass}",
+        q.qabs
+    );
+    assert!((q.qext - 2.0).abs() < 0.01);
+}

@@ -96,11 +96,9 @@ pub(super) fn scaled_ratio_continued_fraction(z_squared: Complex64, n: usize) ->
     let mut b_current = Complex64::new(1.0, 0.0);
     let mut estimate = b_current * reciprocal(a_current);
     // Convergence needs about |z| + 10 |z|^(1/3) + 50 terms at most (real z);
-    // the cap only guards against an endless loop.
+    // the cap (3 |z| + 2000) only guards against an endless loop.
     let size = z_squared.norm_sqr().sqrt().sqrt();
-    let max_blocks = ((2.0 * size + 20.0 * size.cbrt() + 1000.0).min(1e9) as usize)
-        / CONTINUED_FRACTION_BLOCK
-        + 1;
+    let max_blocks = ((3.0 * size + 2000.0).min(1e9) as usize) / CONTINUED_FRACTION_BLOCK + 1;
     let mut b_j = (2 * n + 1) as f64;
     for _ in 0..max_blocks {
         for _ in 0..CONTINUED_FRACTION_BLOCK {
@@ -112,16 +110,11 @@ pub(super) fn scaled_ratio_continued_fraction(z_squared: Complex64, n: usize) ->
             b_previous = b_current;
             b_current = b_next;
         }
-        // Rescale by a power of two (exact) so that A_j stays near 1; the
-        // convergents are ratios and do not change.
+        // Rescale so that A_j stays near 1 (the convergents are ratios and
+        // do not change; the scaling's own rounding is one ulp of a ratio).
         let magnitude = a_current.re.abs().max(a_current.im.abs());
-        if !(magnitude > 1e-100 && magnitude < 1e100) {
-            let exponent = if magnitude > 0.0 && magnitude.is_finite() {
-                -(magnitude.log2().round() as i32)
-            } else {
-                0
-            };
-            let scale = 2f64.powi(exponent.clamp(-1000, 1000));
+        if !(1e-100..=1e100).contains(&magnitude) && magnitude > 0.0 && magnitude.is_finite() {
+            let scale = 1.0 / magnitude;
             a_previous *= scale;
             a_current *= scale;
             b_previous *= scale;

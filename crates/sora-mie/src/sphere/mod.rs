@@ -174,7 +174,9 @@ pub fn compute_efficiencies(m: Complex64, x: f64) -> Result<Efficiencies, MieErr
     validate(m, x)?;
     let n_terms = series_length_converged(x);
     let needed = scratch_length(x, n_terms);
-    Ok(if needed <= STACK_SCRATCH_SMALL {
+    Ok(if needed == 0 {
+        solve_series(m, x, n_terms, &mut [], |_, _| {})
+    } else if needed <= STACK_SCRATCH_SMALL {
         with_stack_scratch::<STACK_SCRATCH_SMALL>(m, x, n_terms)
     } else if needed <= STACK_SCRATCH_MIDDLE {
         with_stack_scratch::<STACK_SCRATCH_MIDDLE>(m, x, n_terms)
