@@ -78,6 +78,7 @@ impl fmt::Display for Error {
                 } else {
                     format!(" {unit}")
                 };
+                let value = format_number(*value);
                 write!(
                     f,
                     "{name} = {value}{unit} is out of range: allowed {allowed}{unit}"
@@ -100,6 +101,17 @@ impl fmt::Display for Error {
 
 impl std::error::Error for Error {}
 
+/// A number as a person would write it in a message: plain when moderate
+/// (`-5`, `0.25`), scientific when very large or small (`-2.55e25`, `3e-9`).
+fn format_number(value: f64) -> String {
+    let magnitude = value.abs();
+    if value.is_finite() && magnitude != 0.0 && !(1e-4..1e6).contains(&magnitude) {
+        format!("{value:e}")
+    } else {
+        format!("{value}")
+    }
+}
+
 impl From<sora_mie::sphere::MieError> for Error {
     fn from(e: sora_mie::sphere::MieError) -> Error {
         Error::Mie(e)
@@ -117,6 +129,13 @@ mod tests {
             e.to_string(),
             "step_nm = -5 nm is out of range: allowed > 0 nm"
         );
+        let e = Error::out_of_range("number_density_m3", -2.55e25, "m^-3", ">= 0");
+        assert_eq!(
+            e.to_string(),
+            "number_density_m3 = -2.55e25 m^-3 is out of range: allowed >= 0 m^-3"
+        );
+        let e = Error::out_of_range("x", 3e-9, "1", "> 1e-6");
+        assert_eq!(e.to_string(), "x = 3e-9 is out of range: allowed > 1e-6");
         let e = Error::out_of_range("asymmetry_g", 1.5, "1", "-1 < g < 1");
         assert_eq!(
             e.to_string(),

@@ -107,40 +107,19 @@ impl Planet {
     /// Distance from a point at radius `r_m` (inside the atmosphere) along
     /// a direction of zenith cosine `mu` to the top of the atmosphere, m.
     pub fn distance_to_top_of_atmosphere(&self, r_m: f64, mu: f64) -> f64 {
-        let top = self.top_radius_m();
-        // Roots of d^2 + 2 r mu d - (top^2 - r^2) = 0; the positive one.
-        let c = (top - r_m) * (top + r_m);
-        let discriminant = (r_m * mu * r_m * mu + c).max(0.0);
-        if mu >= 0.0 {
-            // -r mu + sqrt(disc) cancels for upward rays: use c / (r mu + sqrt).
-            let q = r_m * mu + discriminant.sqrt();
-            if q > 0.0 { c.max(0.0) / q } else { 0.0 }
-        } else {
-            -r_m * mu + discriminant.sqrt()
-        }
+        crate::geometry::distance_to_top_boundary(r_m, mu, self.top_radius_m())
     }
 
     /// True when a ray from radius `r_m` with zenith cosine `mu` hits the
     /// ground.
     pub fn ray_intersects_ground(&self, r_m: f64, mu: f64) -> bool {
-        mu < 0.0 && self.ground_discriminant(r_m, mu) >= 0.0
+        crate::geometry::ray_intersects_ground(r_m, mu, self.radius_m)
     }
 
     /// Distance to the ground along (r, mu), m, or `None` when the ray
     /// misses it.
     pub fn distance_to_ground(&self, r_m: f64, mu: f64) -> Option<f64> {
-        if !self.ray_intersects_ground(r_m, mu) {
-            return None;
-        }
-        // The near root -r mu - sqrt(disc) cancels for grazing rays; it
-        // equals (r^2 - R^2) / (-r mu + sqrt(disc)).
-        let c = (r_m - self.radius_m) * (r_m + self.radius_m);
-        let q = -r_m * mu + self.ground_discriminant(r_m, mu).sqrt();
-        Some((c / q).max(0.0))
-    }
-
-    fn ground_discriminant(&self, r_m: f64, mu: f64) -> f64 {
-        r_m * mu * r_m * mu - (r_m - self.radius_m) * (r_m + self.radius_m)
+        crate::geometry::distance_to_ground_boundary(r_m, mu, self.radius_m)
     }
 }
 

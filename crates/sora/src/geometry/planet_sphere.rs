@@ -82,6 +82,42 @@ pub fn segment_in_atmosphere(
     Some((enter, exit))
 }
 
+/// Distance (m) from a point at radius `r_m` (at or below the top) along
+/// a direction of zenith cosine `mu` to the top boundary of radius
+/// `top_radius_m`: the positive root of d^2 + 2 r mu d - (top^2 - r^2) = 0
+/// (Bruneton 2017, DistanceToTopAtmosphereBoundary), written without the
+/// cancellation of -r mu + sqrt(disc) for upward rays.
+pub fn distance_to_top_boundary(r_m: f64, mu: f64, top_radius_m: f64) -> f64 {
+    let c = (top_radius_m - r_m) * (top_radius_m + r_m);
+    let discriminant = (r_m * mu * r_m * mu + c).max(0.0).sqrt();
+    if mu >= 0.0 {
+        let q = r_m * mu + discriminant;
+        if q > 0.0 { c.max(0.0) / q } else { 0.0 }
+    } else {
+        -r_m * mu + discriminant
+    }
+}
+
+/// True when a ray from radius `r_m` (at or above the ground) with zenith
+/// cosine `mu` hits the ground of radius `ground_radius_m`: it points down
+/// and below the ground's horizon (Bruneton 2017, RayIntersectsGround).
+pub fn ray_intersects_ground(r_m: f64, mu: f64, ground_radius_m: f64) -> bool {
+    mu < 0.0 && r_m * r_m * (1.0 - mu * mu) <= ground_radius_m * ground_radius_m
+}
+
+/// Distance (m) from radius `r_m` along zenith cosine `mu` to the ground,
+/// or None when the ray misses it. The near root -r mu - sqrt(disc) cancels
+/// for grazing rays; it equals (r^2 - R^2) / (-r mu + sqrt(disc)).
+pub fn distance_to_ground_boundary(r_m: f64, mu: f64, ground_radius_m: f64) -> Option<f64> {
+    if !ray_intersects_ground(r_m, mu, ground_radius_m) {
+        return None;
+    }
+    let c = (r_m - ground_radius_m) * (r_m + ground_radius_m);
+    let discriminant = (r_m * mu * r_m * mu - c).max(0.0).sqrt();
+    let q = -r_m * mu + discriminant;
+    Some(if q > 0.0 { (c / q).max(0.0) } else { 0.0 })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -209,7 +209,7 @@ impl SunColumnTable {
         let (ground, top) = (self.ground_radius_m, self.top_radius_m);
         let h = ((top - ground) * (top + ground)).sqrt();
         let rho = ((r - ground) * (r + ground)).max(0.0).sqrt();
-        let d = distance_to_top_from_radius(r, mu, top);
+        let d = crate::geometry::distance_to_top_boundary(r, mu, top);
         let (d_min, d_max) = (top - r, rho + h);
         if d_max > d_min {
             ((d - d_min) / (d_max - d_min)).clamp(0.0, 1.0)
@@ -237,8 +237,7 @@ impl SunColumnTable {
     pub fn lookup_columns_to_sun(&self, r_m: f64, mu: f64, columns_m: &mut [f64]) -> bool {
         let ground = self.ground_radius_m;
         let r = r_m.clamp(ground, self.top_radius_m);
-        // The path hits the ground when it points below the ground's horizon.
-        if mu < 0.0 && r * r * (1.0 - mu * mu) <= ground * ground {
+        if crate::geometry::ray_intersects_ground(r, mu, ground) {
             return false;
         }
         let x = self.unit_from_radius(r) * (self.altitude_nodes - 1) as f64;
@@ -261,7 +260,7 @@ impl SunColumnTable {
         let at =
             |ii: usize, jj: usize| &self.log_mean_densities[(ii * self.mu_nodes + jj) * s..][..s];
         let (c00, c01, c10, c11) = (at(i, j), at(i, j + 1), at(i + 1, j), at(i + 1, j + 1));
-        let length = distance_to_top_from_radius(r, mu, self.top_radius_m);
+        let length = crate::geometry::distance_to_top_boundary(r, mu, self.top_radius_m);
         let weights = [
             (1.0 - fx) * (1.0 - fy),
             (1.0 - fx) * fy,
@@ -289,19 +288,6 @@ impl SunColumnTable {
             *column = mean_density * length;
         }
         true
-    }
-}
-
-/// Distance from radius r along zenith cosine mu to the sphere of radius
-/// `top`, for r <= top (stable for upward and downward rays).
-fn distance_to_top_from_radius(r: f64, mu: f64, top: f64) -> f64 {
-    let c = (top - r) * (top + r);
-    let discriminant = (r * r * mu * mu + c).max(0.0).sqrt();
-    if mu >= 0.0 {
-        let q = r * mu + discriminant;
-        if q > 0.0 { c.max(0.0) / q } else { 0.0 }
-    } else {
-        -r * mu + discriminant
     }
 }
 

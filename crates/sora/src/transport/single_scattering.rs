@@ -260,15 +260,7 @@ impl SingleScatteringSky {
         match sun_columns {
             SunColumns::Table(table) => table.lookup_columns_to_sun(r, mu, columns),
             SunColumns::Exact => {
-                if crate::geometry::distance_to_ground(
-                    point,
-                    self.sun_direction,
-                    self.ground_radius_m,
-                )
-                .is_some_and(|t| t > 0.0)
-                    || (mu < 0.0
-                        && r * r * (1.0 - mu * mu) <= self.ground_radius_m * self.ground_radius_m)
-                {
+                if crate::geometry::ray_intersects_ground(r, mu, self.ground_radius_m) {
                     return false;
                 }
                 let length = crate::geometry::distance_to_top_of_atmosphere(
@@ -553,7 +545,7 @@ impl SingleScatteringSky {
     ) -> bool {
         let r = point.length();
         let mu = point.dot(self.sun_direction) / r;
-        if mu < 0.0 && r * r * (1.0 - mu * mu) <= self.ground_radius_m * self.ground_radius_m {
+        if crate::geometry::ray_intersects_ground(r, mu, self.ground_radius_m) {
             return false;
         }
         let length = crate::geometry::distance_to_top_of_atmosphere(
