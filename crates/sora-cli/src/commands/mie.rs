@@ -7,9 +7,12 @@ use std::path::PathBuf;
 use anyhow::{Context, bail};
 use clap::Args;
 use sora::mie::Complex64;
+use sora::mie::distribution::quadrature::RadiusQuadratureSettings;
+use sora::mie::distribution::{RadiusWindow, SizeDistribution};
+use sora::mie::ensemble::compute_ensemble_cross_sections;
 use sora::mie::sphere::{MieSolution, compute_efficiencies};
 
-use crate::arguments::parse_refractive_index;
+use crate::arguments::{parse_number_list, parse_refractive_index};
 
 /// Mie scattering by homogeneous spheres: efficiencies, asymmetry parameter,
 /// phase function.
@@ -19,6 +22,7 @@ use crate::arguments::parse_refractive_index;
 ///   sora mie --m 1.5+0.01i --radius-um 0.5 --wavelength-nm 550
 ///   sora mie --m 1.33 --x 5 --phase
 ///   sora mie --batch spheres.csv > results.csv
+///   sora mie --m 1.5+0.01i --lognormal 0.1,2.0,0.1,2.5 --wavelengths 380:780:20
 ///
 /// The refractive index is relative to the medium; a positive imaginary part
 /// means absorption. The size parameter is x = 2 pi r / lambda.
@@ -54,6 +58,22 @@ pub struct MieArgs {
     /// row) and write m_re,m_im,x,qext,qsca,qabs,qback,g to stdout ("-" reads stdin)
     #[arg(long, value_name = "FILE.csv", conflicts_with_all = ["refractive_index", "size_parameter", "radius_um", "phase"])]
     batch: Option<PathBuf>,
+
+    /// A log-normal size distribution instead of one sphere: number median
+    /// radius (um), geometric standard deviation, and optionally a radius
+    /// window (um) it is truncated to, e.g. 0.1,2.0 or 0.1,2.0,0.1,2.5.
+    /// Prints the per-particle ensemble optics at each of --wavelengths.
+    #[arg(long, value_name = "MEDIAN_UM,SIGMA_G[,MIN_UM,MAX_UM]", conflicts_with_all = ["size_parameter", "radius_um", "phase", "batch", "gamma"])]
+    lognormal: Option<String>,
+
+    /// A modified gamma size distribution (Hansen & Travis 1974) by effective
+    /// radius (um) and effective variance, e.g. 1.5,0.3
+    #[arg(long, value_name = "REFF_UM,VEFF", conflicts_with_all = ["size_parameter", "radius_um", "phase", "batch"])]
+    gamma: Option<String>,
+
+    /// Wavelengths of the distribution forms, start:stop:step in nm
+    #[arg(long, value_name = "START:STOP:STEP", default_value = "380:780:20")]
+    wavelengths: sora::spectrum::WavelengthGrid,
 }
 
 pub fn run(args: MieArgs) -> anyhow::Result<()> {
@@ -65,6 +85,9 @@ pub fn run(args: MieArgs) -> anyhow::Result<()> {
             "give the refractive index with --m (e.g. --m 1.5+0.01i), or --batch FILE.csv; see sora mie --help"
         );
     };
+    if args.lognormal.is_some() || args.gamma.is_some() {
+        return print_ensemble_table(m, &args);
+    }
     let x = match (args.size_parameter, args.radius_um, args.wavelength_nm) {
         (Some(x), _, _) => x,
         (None, Some(radius_um), Some(wavelength_nm)) => size_parameter(radius_um, wavelength_nm)?,
@@ -75,6 +98,71 @@ pub fn run(args: MieArgs) -> anyhow::Result<()> {
     } else {
         print_efficiencies(m, x)
     }
+}
+
+/// The size distribution of `--lognormal` or `--gamma`.
+fn size_distribution(args: &MieArgs) -> anyhow::Result<SizeDistribution> {
+    if let Some(text) = &args.lognormal {
+        let numbers = parse_number_list(text, "--lognormal").map_err(anyhow::Error::msg)?;
+        let (median_um, sigma_g, window) = match numbers.as_slice() {
+            [median, sigma] => (*median, *sigma, None),
+            [median, sigma, min, max] => (*median, *sigma, Some((*min, *max))),
+            _ => bail!(
+                "--lognormal takes 2 or 4 numbers (MEDIAN_UM,SIGMA_G[,MIN_UM,MAX_UM]), got '{text}'"
+            ),
+        };
+        let distribution =
+            SizeDistribution::log_normal(median_um * 1e-6, sigma_g).context("--lognormal")?;
+        return Ok(match window {
+            None => distribution,
+            Some((min, max)) => distribution
+                .truncated_to(
+                    RadiusWindow::from_micrometres(min, max)
+                        .context("--lognormal radius window")?,
+                )
+                .context("--lognormal")?,
+        });
+    }
+    let text = args
+        .gamma
+        .as_deref()
+        .expect("called with --lognormal or --gamma");
+    let numbers = parse_number_list(text, "--gamma").map_err(anyhow::Error::msg)?;
+    let [effective_radius_um, effective_variance] = numbers.as_slice() else {
+        bail!("--gamma takes 2 numbers (REFF_UM,VEFF), got '{text}'");
+    };
+    Ok(
+        SizeDistribution::modified_gamma(effective_radius_um * 1e-6, *effective_variance)
+            .context("--gamma")?,
+    )
+}
+
+/// The distribution forms: per-particle ensemble optics per wavelength, CSV.
+fn print_ensemble_table(m: Complex64, args: &MieArgs) -> anyhow::Result<()> {
+    let distribution = size_distribution(args)?;
+    let settings = RadiusQuadratureSettings::cross_sections();
+    let mut out = BufWriter::new(std::io::stdout().lock());
+    writeln!(
+        out,
+        "wavelength_nm,c_ext_m2,c_sca_m2,c_abs_m2,single_scattering_albedo,asymmetry_g,paper_hg_asymmetry_g,number_fraction_in_window"
+    )?;
+    for wavelength_nm in args.wavelengths.wavelengths_nm() {
+        let e = compute_ensemble_cross_sections(wavelength_nm, m, &distribution, &settings)
+            .with_context(|| format!("at {wavelength_nm} nm"))?;
+        writeln!(
+            out,
+            "{wavelength_nm},{:.12e},{:.12e},{:.12e},{:.12e},{:.12e},{:.12e},{:.12e}",
+            e.extinction_cross_section_m2,
+            e.scattering_cross_section_m2,
+            e.absorption_cross_section_m2,
+            e.single_scattering_albedo,
+            e.asymmetry_parameter,
+            e.paper_asymmetry_parameter,
+            e.number_fraction_in_window
+        )?;
+    }
+    out.flush()?;
+    Ok(())
 }
 
 /// x = 2 pi r / lambda, both lengths checked.
