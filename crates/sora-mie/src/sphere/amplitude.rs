@@ -10,7 +10,14 @@
 //! ```
 //!
 //! The upward recurrence is stable at every angle (pi_n and tau_n are bounded
-//! by n(n+1)/2, reached in the forward and backward directions). Evaluating
+//! by n(n+1)/2, reached in the forward and backward directions). It is
+//! evaluated in Wiscombe's (1979, MIEV0) arrangement s = mu pi_n,
+//! t = s - pi_{n-1}, tau_n = n t - pi_{n-1}, pi_{n+1} = s + t + t/n, where
+//! the rounded 1/n only touches the small correction t/n: multiplying the
+//! whole right-hand side by a rounded 1/n instead accumulates a relative
+//! error of 2e-11 in pi_n(1) by n = 1e4, while this form is exact at
+//! mu = +-1 and as good elsewhere (checked against 40-digit arithmetic).
+//! Evaluating
 //! many angles, the loops run over blocks of [`LANES`] angles inside the loop
 //! over n, so that the per-n work (weights, divisions, the coefficient loads)
 //! is shared and the per-angle work is a straight line the compiler can
@@ -110,17 +117,16 @@ fn amplitudes_block<const L: usize>(
         // (2n+1)/(n(n+1)) = 1/n + 1/(n+1)
         let weight = inverse_n + inverse_n_plus_1;
         let (wa, wb) = (*a_n * weight, *b_n * weight);
-        let two_n_plus_1 = 2.0 * n + 1.0;
         for lane in 0..L {
-            let tau = n * mu[lane] * pi[lane] - (n + 1.0) * pi_previous[lane];
+            let s = mu[lane] * pi[lane];
+            let t = s - pi_previous[lane];
+            let tau = n * t - pi_previous[lane];
             s1_re[lane] += wa.re * pi[lane] + wb.re * tau;
             s1_im[lane] += wa.im * pi[lane] + wb.im * tau;
             s2_re[lane] += wa.re * tau + wb.re * pi[lane];
             s2_im[lane] += wa.im * tau + wb.im * pi[lane];
-            let pi_next =
-                (two_n_plus_1 * mu[lane] * pi[lane] - (n + 1.0) * pi_previous[lane]) * inverse_n;
             pi_previous[lane] = pi[lane];
-            pi[lane] = pi_next;
+            pi[lane] = s + t + t * inverse_n;
         }
     }
     for lane in 0..L {

@@ -209,13 +209,15 @@ pub(super) fn fill_scaled_ratios_downward(z: Complex64, top: usize, rhot: &mut [
     let z_squared = z * z;
     let mut current = scaled_ratio_continued_fraction(z_squared, top);
     rhot[top] = current;
-    for n in (1..top).rev() {
+    for (n, slot) in rhot.iter_mut().enumerate().take(top).skip(1).rev() {
         current = reciprocal(Complex64::new((2 * n + 1) as f64, 0.0) - z_squared * current);
-        rhot[n] = current;
+        *slot = current;
     }
 }
 
 #[cfg(test)]
+// The reference values are written as mpmath printed them (20 digits).
+#[allow(clippy::excessive_precision)]
 mod tests {
     use super::*;
 
@@ -279,11 +281,11 @@ mod tests {
         let z = c(1e-5, 2e-6);
         let mut rhot = vec![c(0.0, 0.0); 8];
         fill_scaled_ratios_downward(z, 7, &mut rhot);
-        for n in 1..=7 {
+        for (n, &value) in rhot.iter().enumerate().skip(1) {
             let k = (2 * n + 1) as f64;
             let expected = 1.0 / k + z * z / (k * k * (k + 2.0));
-            let err = relative(rhot[n], expected);
-            assert!(err < 3e-16, "n = {n}: {} vs {expected} ({err:e})", rhot[n]);
+            let err = relative(value, expected);
+            assert!(err < 3e-16, "n = {n}: {value} vs {expected} ({err:e})");
         }
     }
 

@@ -23,9 +23,9 @@
 //! is (2n+1)/x psi_n minus almost the same number, leaving (1 - m^2) x/(2n+3)
 //! psi_n and a relative error ~1e-16 / x^2 (1e-8 at x = 1e-4). That error
 //! reaches the asymmetry parameter at leading order (g ~ Re(a_1 conj(b_1))
-//! + Re(a_1 conj(a_2)), both ~x^8), which is why reference codes lose g for
-//! small spheres. 1/m^2 - 1 is formed as -(m-1)(m+1)/m^2 so that m -> 1 keeps
-//! its relative accuracy.
+//! plus Re(a_1 conj(a_2)), both ~x^8), which is why reference codes lose g
+//! for small spheres. 1/m^2 - 1 is formed as -(m-1)(m+1)/m^2 so that m -> 1
+//! keeps its relative accuracy.
 //!
 //! Absorption without cancellation. For any complex A, the Wronskian
 //! psi_n chi_{n+1} - psi_{n+1} chi_n = 1 gives
@@ -159,10 +159,11 @@ impl SeriesSums {
 
     /// Efficiencies from sums of coefficients that were divided by `scale`
     /// (a_n = scale * ahat_n): Q_sca = 2/x^2 sum..., Q_back = |sum|^2/x^2, with
-    /// the scale folded into the prefactors so that nothing underflows first.
-    fn finish(&self, x: f64, scale_over_x: f64, scale_squared_over_x_squared: f64) -> Efficiencies {
+    /// the scale folded into the prefactors (scale/x^2 and scale^2/x^2, given
+    /// directly) so that nothing underflows before it must.
+    fn finish(&self, scale_over_x_squared: f64, scale_squared_over_x_squared: f64) -> Efficiencies {
         let qsca = 2.0 * scale_squared_over_x_squared * self.scattering;
-        let qabs = 2.0 * scale_over_x / x * self.absorption;
+        let qabs = 2.0 * scale_over_x_squared * self.absorption;
         // Q_ext = (2/x^2) sum (2n+1) Re(a_n + b_n) (B&H 4.62), summed as
         // Q_sca + Q_abs: per term Re a_n = |a_n|^2 + (Re a_n - |a_n|^2), and
         // both parts are sums of non-negative, accurately computed terms.
@@ -400,15 +401,13 @@ impl LargeSphere {
         previous_b_re[0] = sums.previous_b.re;
         previous_b_im[0] = sums.previous_b.im;
         inverse_n[0] = sums.inverse_n;
-        for k in 1..B {
-            previous_a_re[k] = a_re[k - 1];
-            previous_a_im[k] = a_im[k - 1];
-            previous_b_re[k] = b_re[k - 1];
-            previous_b_im[k] = b_im[k - 1];
-            inverse_n[k] = inverse_n_plus_1[k - 1];
-        }
+        previous_a_re[1..].copy_from_slice(&a_re[..B - 1]);
+        previous_a_im[1..].copy_from_slice(&a_im[..B - 1]);
+        previous_b_re[1..].copy_from_slice(&b_re[..B - 1]);
+        previous_b_im[1..].copy_from_slice(&b_im[..B - 1]);
+        inverse_n[1..].copy_from_slice(&inverse_n_plus_1[..B - 1]);
         // (-1)^n, alternating from the first term's parity.
-        let first_sign = if first % 2 == 0 { 1.0 } else { -1.0 };
+        let first_sign = if first.is_multiple_of(2) { 1.0 } else { -1.0 };
         for k in 0..B {
             let weight = 2.0 * n[k] + 1.0;
             let sign = if k % 2 == 0 { first_sign } else { -first_sign };
@@ -558,7 +557,8 @@ fn solve_large<F: FnMut(Complex64, Complex64)>(
         record(last_a[0], last_b[0]);
         n += 1;
     }
-    sums.reduce().finish(x, inverse_x, inverse_x * inverse_x)
+    sums.reduce()
+        .finish(inverse_x * inverse_x, inverse_x * inverse_x)
 }
 
 /// The x < 1 path: all quantities scaled by powers of x, coefficients
@@ -623,5 +623,67 @@ fn solve_small<F: FnMut(Complex64, Complex64)>(
         record(a, b);
         power *= x_squared;
     }
-    sums.finish(x, x_squared, x_squared * x_squared)
+    // a_n = x^3 ahat_n: scale/x^2 = x, scale^2/x^2 = x^4.
+    sums.finish(x, x_squared * x_squared)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::series_length_converged;
+    use super::*;
+
+    fn solve_both(
+        m: Complex64,
+        x: f64,
+    ) -> (Efficiencies, Vec<Complex64>, Efficiencies, Vec<Complex64>) {
+        let n_terms = series_length_converged(x);
+        let mut scratch = vec![0.0; scratch_length(x, n_terms)];
+        let mut dispatched = Vec::new();
+        let q = solve_series(m, x, n_terms, &mut scratch, |a, b| {
+            dispatched.extend([a, b])
+        });
+        let mut portable = Vec::new();
+        let p = solve_series_portable(m, x, n_terms, &mut scratch, |a, b| portable.extend([a, b]));
+        (q, dispatched, p, portable)
+    }
+
+    /// The AVX build (when the CPU has AVX) and the portable build perform
+    /// the same operations in the same order: bit-identical results.
+    #[test]
+    fn dispatched_and_portable_builds_agree_bit_for_bit() {
+        for &(re, im) in &[
+            (1.5, 0.01),
+            (0.75, 0.0),
+            (10.0, 10.0),
+            (1.0001, 0.0),
+            (1.33, 1e-8),
+        ] {
+            for &x in &[1e-6, 0.5, 1.0, 7.3, 99.0, 1234.5] {
+                let (q, a, p, b) = solve_both(Complex64::new(re, im), x);
+                assert_eq!(q, p, "m = {re}+{im}i, x = {x}");
+                assert_eq!(a, b, "m = {re}+{im}i, x = {x}");
+            }
+        }
+    }
+
+    #[test]
+    fn terms_are_recorded_in_order_and_all_of_them() {
+        let m = Complex64::new(1.5, 0.01);
+        for &x in &[0.3, 5.0, 17.0, 230.0] {
+            let n_terms = series_length_converged(x);
+            let mut scratch = vec![0.0; scratch_length(x, n_terms)];
+            let mut count = 0;
+            solve_series(m, x, n_terms, &mut scratch, |_, _| count += 1);
+            assert_eq!(count, n_terms);
+        }
+    }
+
+    #[test]
+    fn lossless_spheres_have_exactly_zero_absorption() {
+        for &x in &[1e-5, 0.9, 1.0, 64.0, 3000.0] {
+            let (q, _, _, _) = solve_both(Complex64::new(1.33, 0.0), x);
+            assert!(q.qabs == 0.0 && q.qabs.is_sign_positive());
+            assert_eq!(q.qext, q.qsca);
+        }
+    }
 }

@@ -101,10 +101,14 @@ use coefficients::{coefficient_scale, scratch_length, solve_series};
 /// Why a sphere could not be solved: the input is outside the supported domain.
 #[derive(Debug, Clone, PartialEq)]
 pub enum MieError {
-    /// `x` must be finite and > 0, and at most [`MAX_SIZE_PARAMETER`]
+    /// `x` must be finite and > 0, at most [`MAX_SIZE_PARAMETER`], and with
+    /// |m| x at most [`MAX_INTERIOR_SIZE_PARAMETER`]
     /// (supported 1e-6 ..= 2e4 guaranteed; larger allowed but slow).
     InvalidSizeParameter(f64),
-    /// `m` must be finite, Re(m) > 0, Im(m) >= 0.
+    /// `m` must be finite, Re(m) > 0, Im(m) >= 0, and |m| within
+    /// [`REFRACTIVE_INDEX_MODULUS_RANGE`] (beyond it m^2 and the interior
+    /// recurrences leave double precision; a perfect conductor is not a
+    /// dielectric sphere).
     InvalidRefractiveIndex(Complex64),
 }
 
@@ -114,13 +118,16 @@ impl std::fmt::Display for MieError {
             MieError::InvalidSizeParameter(x) => {
                 write!(
                     f,
-                    "size parameter x = {x} is invalid: it must be finite, greater than 0 and at most {MAX_SIZE_PARAMETER:e}"
+                    "size parameter x = {x} is invalid: it must be finite, greater than 0 and at most {MAX_SIZE_PARAMETER:e}, with |m| x at most {MAX_INTERIOR_SIZE_PARAMETER:e}"
                 )
             }
             MieError::InvalidRefractiveIndex(m) => write!(
                 f,
-                "refractive index m = {}{:+}i is invalid: the real part must be > 0 and the imaginary part >= 0 (absorption), both finite",
-                m.re, m.im
+                "refractive index m = {}{:+}i is invalid: the real part must be > 0 and the imaginary part >= 0 (absorption), both finite, with |m| between {:e} and {:e}",
+                m.re,
+                m.im,
+                REFRACTIVE_INDEX_MODULUS_RANGE.start(),
+                REFRACTIVE_INDEX_MODULUS_RANGE.end()
             ),
         }
     }
@@ -129,10 +136,19 @@ impl std::fmt::Display for MieError {
 impl std::error::Error for MieError {}
 
 /// Largest accepted size parameter. The series has ~x terms, so time and the
-/// ratio table (16 bytes a term) grow linearly; at x = 1e6 (a 100 um droplet
-/// in visible light) that is 16 MB and ~0.1 s. Larger spheres belong to
+/// tables (40 bytes a term) grow linearly; at x = 1e6 (a 100 um droplet in
+/// visible light) that is 40 MB and ~0.1 s. Larger spheres belong to
 /// geometric optics.
 pub const MAX_SIZE_PARAMETER: f64 = 1e6;
+
+/// Largest accepted |m| x. For a weakly absorbing interior the continued
+/// fraction that starts the interior recurrence runs past n = |m x| (see
+/// `bessel_ratio.rs`), ~1e8 steps or about a second at this limit.
+pub const MAX_INTERIOR_SIZE_PARAMETER: f64 = 1e8;
+
+/// Accepted moduli of the relative refractive index. Real materials in the
+/// optical range have 0.01 < |m| < 100.
+pub const REFRACTIVE_INDEX_MODULUS_RANGE: std::ops::RangeInclusive<f64> = 1e-6..=1e6;
 
 /// Efficiencies (dimensionless, cross-section / (pi r^2)) and asymmetry parameter of one sphere.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -148,11 +164,18 @@ pub struct Efficiencies {
 }
 
 fn validate(m: Complex64, x: f64) -> Result<(), MieError> {
-    if !(x > 0.0 && x <= MAX_SIZE_PARAMETER) {
-        return Err(MieError::InvalidSizeParameter(x));
-    }
-    if !(m.re > 0.0 && m.re.is_finite() && m.im >= 0.0 && m.im.is_finite()) {
+    // |m| without hypot: |m|^2 over- or underflows only far outside the range.
+    let modulus = m.norm_sqr().sqrt();
+    if !(m.re > 0.0
+        && m.re.is_finite()
+        && m.im >= 0.0
+        && m.im.is_finite()
+        && REFRACTIVE_INDEX_MODULUS_RANGE.contains(&modulus))
+    {
         return Err(MieError::InvalidRefractiveIndex(m));
+    }
+    if !(x > 0.0 && x <= MAX_SIZE_PARAMETER && modulus * x <= MAX_INTERIOR_SIZE_PARAMETER) {
+        return Err(MieError::InvalidSizeParameter(x));
     }
     Ok(())
 }

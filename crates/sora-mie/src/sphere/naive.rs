@@ -23,6 +23,8 @@ pub(super) struct NaiveSolution {
     pub g: f64,
 }
 
+// Kept in BHMIE's index form, loop variables indexing the arrays.
+#[allow(clippy::needless_range_loop)]
 pub(super) fn bhmie(m: Complex64, x: f64) -> NaiveSolution {
     let n_terms = (x + 12.0 * x.cbrt() + 10.0) as usize;
     let mx = m * x;
