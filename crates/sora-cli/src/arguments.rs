@@ -181,7 +181,12 @@ pub struct SunAndObserver {
     pub sun_azimuth: f64,
 
     /// Height of the eye above the ground, metres
-    #[arg(long, value_name = "M", default_value_t = 0.0)]
+    #[arg(
+        long,
+        value_name = "M",
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
     pub observer_altitude_m: f64,
 
     /// Replace the atmosphere's ground albedo by this constant (0..1, Lambertian)

@@ -1,0 +1,271 @@
+//! `sora spectrum` and `sora render` end to end.
+
+use std::process::{Command, Output};
+
+fn sora(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_sora"))
+        .args(args)
+        .output()
+        .expect("the sora binary runs")
+}
+
+/// Case (a) of ../shared/reference/sky/clear_sky_radiance.csv (sun 36 deg
+/// at azimuth 207, view 17 deg at 347): L_single_spherical at 380, 400, 780 nm.
+const CASE_A_SPHERICAL: [(f64, f64); 3] = [
+    (380.0, 2.319739874e-02),
+    (400.0, 2.364897365e-02),
+    (780.0, 6.343935200e-03),
+];
+
+#[test]
+fn spectrum_csv_is_the_reference_single_scattering() {
+    let out = sora(&[
+        "spectrum",
+        "--preset",
+        "clear-sky-reference",
+        "--sun-elevation",
+        "36",
+        "--sun-azimuth",
+        "207",
+        "--view-elevation",
+        "17",
+        "--view-azimuth",
+        "347",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("wavelength_nm,radiance_w_m2_sr_nm"));
+    let rows: Vec<(f64, f64)> = lines
+        .map(|l| {
+            let (w, v) = l.split_once(',').unwrap();
+            (w.parse().unwrap(), v.parse().unwrap())
+        })
+        .collect();
+    assert_eq!(rows.len(), 21);
+    for (wavelength, expected) in CASE_A_SPHERICAL {
+        let (_, got) = rows.iter().find(|(w, _)| *w == wavelength).unwrap();
+        assert!(
+            (got / expected - 1.0).abs() < 1e-6,
+            "{wavelength} nm: {got} vs {expected}"
+        );
+    }
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("XYZ"),
+        "the colour goes to stderr"
+    );
+
+    let json = sora(&[
+        "spectrum",
+        "--preset",
+        "clear-sky-reference",
+        "--sun-elevation",
+        "36",
+        "--view-elevation",
+        "17",
+        "--view-azimuth",
+        "347",
+        "--format",
+        "json",
+        "--method",
+        "reference",
+        "--wavelengths",
+        "550",
+    ]);
+    let json = String::from_utf8(json.stdout).unwrap();
+    for key in [
+        "\"wavelength_nm\": [550]",
+        "\"radiance_w_m2_sr_nm\"",
+        "\"xyz\"",
+        "\"linear_srgb\"",
+    ] {
+        assert!(json.contains(key), "{key} in {json}");
+    }
+}
+
+#[test]
+fn bad_spectrum_arguments_are_one_line_errors() {
+    let cases: [(&[&str], &str); 4] = [
+        (
+            &[
+                "--preset",
+                "nowhere",
+                "--sun-elevation",
+                "30",
+                "--view-elevation",
+                "10",
+                "--view-azimuth",
+                "0",
+            ],
+            "nowhere",
+        ),
+        (
+            &[
+                "--preset",
+                "clear-sky-reference",
+                "--sun-elevation",
+                "95",
+                "--view-elevation",
+                "10",
+                "--view-azimuth",
+                "0",
+            ],
+            "sun elevation = 95 deg",
+        ),
+        (
+            &[
+                "--preset",
+                "clear-sky-reference",
+                "--sun-elevation",
+                "30",
+                "--view-elevation",
+                "-100",
+                "--view-azimuth",
+                "0",
+            ],
+            "--view-elevation = -100 deg",
+        ),
+        (
+            &[
+                "--preset",
+                "clear-sky-reference",
+                "--sun-elevation",
+                "30",
+                "--view-elevation",
+                "10",
+                "--view-azimuth",
+                "0",
+                "--ground-albedo",
+                "1.5",
+            ],
+            "1.5",
+        ),
+    ];
+    for (args, expected) in cases {
+        let out = sora(&[&["spectrum"], args].concat());
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {stderr}");
+        assert!(
+            stderr.contains(expected) && stderr.trim().lines().count() == 1,
+            "{args:?}: {stderr}"
+        );
+    }
+}
+
+#[test]
+fn render_writes_png_and_exr_and_nothing_on_failure() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("sky.png");
+    let scene = [
+        "render",
+        "--preset",
+        "clear-sky-reference",
+        "--sun-elevation",
+        "30",
+    ];
+    let base = [&scene[..], &["--width", "32"]].concat();
+    let out = sora(&[&base[..], &["-o", png.to_str().unwrap()]].concat());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(&std::fs::read(&png).unwrap()[..8], b"\x89PNG\r\n\x1a\n");
+    assert!(String::from_utf8_lossy(&out.stderr).contains("rendered 32x32"));
+
+    let exr = dir.path().join("sky.exr");
+    let out = sora(
+        &[
+            &base[..],
+            &[
+                "--camera",
+                "equirect",
+                "--exr-half",
+                "-o",
+                exr.to_str().unwrap(),
+            ],
+        ]
+        .concat(),
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(
+        &std::fs::read(&exr).unwrap()[..4],
+        &[0x76, 0x2f, 0x31, 0x01],
+        "OpenEXR magic number"
+    );
+
+    let reference = dir.path().join("reference.png");
+    let out = sora(
+        &[
+            &scene[..],
+            &[
+                "--width",
+                "8",
+                "--method",
+                "reference",
+                "-o",
+                reference.to_str().unwrap(),
+            ],
+        ]
+        .concat(),
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+
+    let before: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    for (extra, expected) in [
+        (vec!["-o", "sky.tiff"], ".tiff"),
+        (
+            vec!["--observer-altitude-m", "-5", "-o", "bad.png"],
+            "observer altitude = -5 m",
+        ),
+        (vec!["--height", "0", "-o", "zero.png"], "image height = 0"),
+        (
+            vec![
+                "--camera",
+                "perspective",
+                "--fov-deg",
+                "200",
+                "-o",
+                "wide.png",
+            ],
+            "field of view = 200 deg",
+        ),
+        (vec!["-o", "missing/sky.png"], "does not exist"),
+    ] {
+        let extra: Vec<String> = extra
+            .iter()
+            .map(|a| {
+                if a.ends_with(".png") || a.ends_with(".tiff") {
+                    dir.path().join(a).display().to_string()
+                } else {
+                    a.to_string()
+                }
+            })
+            .collect();
+        let extra: Vec<&str> = extra.iter().map(String::as_str).collect();
+        let out = sora(&[&base[..], &extra[..]].concat());
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{extra:?}: {stderr}");
+        assert!(stderr.contains(expected), "{extra:?}: {stderr}");
+    }
+    let after: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(before, after, "failed renders leave no file behind");
+}
