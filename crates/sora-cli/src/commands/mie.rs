@@ -131,10 +131,8 @@ fn size_distribution(args: &MieArgs) -> anyhow::Result<SizeDistribution> {
     let [effective_radius_um, effective_variance] = numbers.as_slice() else {
         bail!("--gamma takes 2 numbers (REFF_UM,VEFF), got '{text}'");
     };
-    Ok(
-        SizeDistribution::modified_gamma(effective_radius_um * 1e-6, *effective_variance)
-            .context("--gamma")?,
-    )
+    SizeDistribution::modified_gamma(effective_radius_um * 1e-6, *effective_variance)
+        .context("--gamma")
 }
 
 /// The distribution forms: per-particle ensemble optics per wavelength, CSV.
