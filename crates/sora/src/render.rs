@@ -35,11 +35,14 @@ pub enum RenderMethod {
 }
 
 impl RenderMethod {
-    /// The reference method with step counts that keep it within ~0.1% of
-    /// the converged radiance on the clear-sky reference cases.
+    /// The reference method's default step counts. The uniform midpoint
+    /// march converges as 1/N^2; measured against the converged radiance
+    /// (clear-sky reference and earth-clear, sun 30 deg, five directions
+    /// from the zenith to 0.5 deg): 400/100 steps 3.7e-3, 800/200 9.5e-4,
+    /// so 1000/250 stays within ~0.1%.
     pub const REFERENCE_DEFAULT: RenderMethod = RenderMethod::Reference {
-        view_steps: 400,
-        sun_steps: 100,
+        view_steps: 1000,
+        sun_steps: 250,
     };
 }
 

@@ -221,11 +221,16 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         }
     }
     let total_seconds = started.elapsed().as_secs_f64();
+    let pixels_per_second = (w * h) as f64 / render_seconds;
+    let rate = if pixels_per_second >= 1e5 {
+        format!("{:.2} Mpixel/s", pixels_per_second / 1e6)
+    } else {
+        format!("{pixels_per_second:.0} pixel/s")
+    };
     eprintln!(
-        "rendered {width}x{height} ({} wavelengths, {:?} method) in {render_seconds:.3} s ({:.2} Mpixel/s), wrote {} in {total_seconds:.3} s total",
+        "rendered {width}x{height} ({} wavelengths, {:?} method) in {render_seconds:.3} s ({rate}), wrote {} in {total_seconds:.3} s total",
         args.sun.wavelengths.len(),
         args.method,
-        (w * h) as f64 / render_seconds / 1e6,
         args.output.display()
     );
     Ok(())
