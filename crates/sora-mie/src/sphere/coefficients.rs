@@ -348,9 +348,14 @@ impl LargeSphere {
         );
         let (rho_re, rho_im) = (lanes(tables.rho_re, 1), lanes(tables.rho_im, 1));
         let (m, inverse_m, slope) = (self.m, self.inverse_m, self.a_slope);
+        // n of each lane, from one conversion (integer-to-float conversions
+        // are several instructions each without AVX-512).
+        let first_n = first as f64;
         let mut n = [0.0; B];
-        for (k, value) in n.iter_mut().enumerate() {
-            *value = (first + k) as f64;
+        let mut offset = 0.0;
+        for value in n.iter_mut() {
+            *value = first_n + offset;
+            offset += 1.0;
         }
         let mut a_re = [0.0; B];
         let mut a_im = [0.0; B];
@@ -455,8 +460,6 @@ fn fill_tables(
     rho_x: &[f64],
 ) {
     let top = n_terms + 1;
-    let (rho_re, rho_im) = (&mut rho_re[..=top], &mut rho_im[..=top]);
-    let (psi, chi) = (&mut psi[..=top], &mut chi[..=top]);
     let (mut interior, first) = DownwardRatios::start(m * x, top);
     rho_re[top] = first.re;
     rho_im[top] = first.im;
@@ -471,31 +474,80 @@ fn fill_tables(
     chi[1] = cos_x * inverse_x + sin_x;
     let (mut psi_previous, mut psi_current) = (psi[0], psi[1]);
     let (mut chi_previous, mut chi_current) = (chi[0], chi[1]);
-    let mut exterior_step = |n: usize, psi: &mut [f64], chi: &mut [f64]| {
-        // psi_{n+1}, chi_{n+1} from n.
-        let step = (2 * n + 1) as f64 * inverse_x;
-        let psi_next = if n < n_switch {
+    // Step n (from 1): psi_{n+1}, chi_{n+1} with the factor (2n+1)/x; 2n+1
+    // is counted exactly in floating point (accumulating 2/x instead would
+    // drift by n ulps).
+    let mut two_n_plus_1 = 3.0;
+
+    // Downward n = top-1 ..= 2 writes rho[n]; upward n = 1 ..= top-2 writes
+    // psi[n+1], chi[n+1]: both cover indices 2..top, in opposite orders,
+    // two steps per iteration.
+    let count = top - 2;
+    let (rho_re_range, rho_im_range) = (&mut rho_re[2..top], &mut rho_im[2..top]);
+    let (psi_range, chi_range) = (&mut psi[2..top], &mut chi[2..top]);
+    // Below n_switch psi goes upward by its recurrence, then by ratios
+    // rho_x[1], rho_x[2], ... (psi_{n+1} = psi_n rho_{n+1}(x)).
+    let upward_by_recurrence = n_switch.saturating_sub(1).min(count);
+    let ratios_x = &rho_x[1..];
+    // Upward step k (n = k + 1): psi_{n+1}, chi_{n+1}.
+    let mut exterior_step = |k: usize| -> (f64, f64) {
+        let step = two_n_plus_1 * inverse_x;
+        let psi_next = if k < upward_by_recurrence {
             step * psi_current - psi_previous
         } else {
-            psi_current * rho_x[n + 1 - n_switch]
+            psi_current * ratios_x[k - upward_by_recurrence]
         };
         let chi_next = step * chi_current - chi_previous;
-        psi[n + 1] = psi_next;
-        chi[n + 1] = chi_next;
         psi_previous = psi_current;
         psi_current = psi_next;
         chi_previous = chi_current;
         chi_current = chi_next;
+        two_n_plus_1 += 2.0;
+        (psi_next, chi_next)
     };
-    // Downward n = top-1 ..= 2 and upward n = 1 ..= top-2 side by side.
-    for k in 0..top - 2 {
-        let n = top - 1 - k;
-        let ratio = interior.step();
-        rho_re[n] = ratio.re;
-        rho_im[n] = ratio.im;
-        exterior_step(1 + k, psi, chi);
+    // Batches of eight steps over chunks (no index arithmetic, no bounds
+    // checks): the interior tables from their top end, the exterior from
+    // index 2.
+    let interior_batches = rho_re_range
+        .rchunks_exact_mut(8)
+        .zip(rho_im_range.rchunks_exact_mut(8));
+    let exterior_batches = psi_range
+        .chunks_exact_mut(8)
+        .zip(chi_range.chunks_exact_mut(8));
+    let mut k = 0;
+    for ((rho_re_batch, rho_im_batch), (psi_batch, chi_batch)) in
+        interior_batches.zip(exterior_batches)
+    {
+        let rho_re_batch: &mut [f64; 8] = rho_re_batch.try_into().expect("chunks of 8");
+        let rho_im_batch: &mut [f64; 8] = rho_im_batch.try_into().expect("chunks of 8");
+        interior.batch(rho_re_batch, rho_im_batch);
+        for (psi_slot, chi_slot) in psi_batch.iter_mut().zip(chi_batch.iter_mut()) {
+            let (psi_next, chi_next) = exterior_step(k);
+            *psi_slot = psi_next;
+            *chi_slot = chi_next;
+            k += 1;
+        }
     }
-    exterior_step(top - 1, psi, chi);
+    // The remaining (count mod 8) steps one at a time: interior slots from
+    // (count mod 8) - 1 down to 0, exterior from k on.
+    let remaining = count - k;
+    for j in (0..remaining).rev() {
+        let ratio = interior.step();
+        rho_re_range[j] = ratio.re;
+        rho_im_range[j] = ratio.im;
+        let (psi_next, chi_next) = exterior_step(k);
+        psi_range[k] = psi_next;
+        chi_range[k] = chi_next;
+        k += 1;
+    }
+    // The last exterior step, n = top - 1: psi[top], chi[top].
+    let step = two_n_plus_1 * inverse_x;
+    psi[top] = if top - 1 < n_switch {
+        step * psi_current - psi_previous
+    } else {
+        psi_current * rho_x[top - n_switch]
+    };
+    chi[top] = step * chi_current - chi_previous;
 }
 
 /// The x >= 1 path: tables, then the coefficient pass in blocks.
