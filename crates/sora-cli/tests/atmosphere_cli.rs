@@ -1,31 +1,8 @@
 //! `sora atmosphere` end to end: the built binary on presets and files.
 
-use std::path::Path;
-use std::process::{Command, Output};
+mod common;
 
-fn sora(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sora"))
-        .args(args)
-        .output()
-        .expect("the sora binary runs")
-}
-
-fn stdout(out: &Output) -> String {
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout.clone()).unwrap()
-}
-
-/// The one-line error of a failed run (exit status 1).
-fn error(out: &Output) -> String {
-    assert_eq!(out.status.code(), Some(1), "{out:?}");
-    let stderr = String::from_utf8(out.stderr.clone()).unwrap();
-    assert_eq!(stderr.lines().count(), 1, "not one line: {stderr}");
-    stderr
-}
+use common::{one_line_error as error, sora, stdout};
 
 #[test]
 fn presets_are_listed_with_descriptions() {
@@ -176,7 +153,7 @@ fn files_on_disk() {
         path.to_str().unwrap(),
     ]));
 
-    let atmospheres = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../atmospheres");
+    let atmospheres = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../atmospheres");
     let mut count = 0;
     for entry in std::fs::read_dir(atmospheres).unwrap() {
         let path = entry.unwrap().path();

@@ -1,22 +1,8 @@
 //! `sora colour` end to end: the built binary on real spectra.
 
-use std::path::Path;
-use std::process::{Command, Output};
+mod common;
 
-fn sora(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sora"))
-        .args(args)
-        .output()
-        .expect("the sora binary runs")
-}
-
-fn data(name: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data")
-        .join(name)
-        .display()
-        .to_string()
-}
+use common::{data, sora};
 
 /// The numbers after `label` on the line that starts with it.
 fn numbers_on_line(stdout: &str, label: &str) -> Vec<f64> {

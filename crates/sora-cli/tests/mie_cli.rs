@@ -1,22 +1,8 @@
 //! `sora mie` end to end: the built binary, its CSV contract and its errors.
 
-use std::process::{Command, Output};
+mod common;
 
-fn sora(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sora"))
-        .args(args)
-        .output()
-        .expect("the sora binary runs")
-}
-
-fn stdout(out: &Output) -> String {
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout.clone()).unwrap()
-}
+use common::{sora, stdout};
 
 #[test]
 fn batch_keeps_the_header_order_and_precision() {

@@ -1,13 +1,8 @@
 //! `sora spectrum` and `sora render` end to end.
 
-use std::process::{Command, Output};
+mod common;
 
-fn sora(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_sora"))
-        .args(args)
-        .output()
-        .expect("the sora binary runs")
-}
+use common::sora;
 
 /// Case (a) of ../shared/reference/sky/clear_sky_radiance.csv (sun 36 deg
 /// at azimuth 207, view 17 deg at 347): L_single_spherical at 380, 400, 780 nm.
