@@ -1,0 +1,522 @@
+//! The paper's results, and skies beside them, generated from the library
+//! (deterministic; 10-15 s on two cores after the build):
+//!
+//! ```sh
+//! cargo run --release -p sora --example paper_figures -- docs
+//! ```
+//!
+//! Writes into the directory given (default `docs`, created if missing):
+//! - `table1_spectrum.csv`, `table1_spectrum.png`: the sky spectrum of the
+//!   paper's Table 1 geometry (sun 36 deg elevation, azimuth 207; view 17,
+//!   347), single scattering, each curve normalised to its maximum over
+//!   380-780 nm, as the paper normalised its Fig. 2;
+//! - Earth skies (`earth-clear` at noon, sunset and twilight; `paper-earth`
+//!   at noon) as fisheyes (512 x 512) and equirectangular panoramas
+//!   (1024 x 512);
+//! - the Mars sunset (`paper-mars`, the paper's Table 2, and `mars-dust`)
+//!   as a fisheye and a perspective view toward the sun, and
+//!   `mars_sun_glow.csv`: the colour of the sky near the sun and away from
+//!   it, the numbers behind `docs/README.md`'s remarks on the blue glow;
+//! - `readme_sky.png`: the picture of the README's example command
+//!   (`sora render --preset earth-clear --sun-elevation 30 -o sky.png`),
+//!   identical to what that command writes.
+//!
+//! Every image goes through the same stages as `sora render`:
+//! [`render_xyz`] (fast method, sun disc drawn), then the colour module's
+//! [`DisplayMapping`] (sRGB, hue-preserving gamut mapping) and
+//! [`write_png`]. Exposure: each scene's fisheye gets the default automatic
+//! exposure (log-average luminance -> 0.18), and the same factor is used,
+//! fixed, for the scene's other view, so the two views of one sky compare
+//! directly. Single scattering only (the library's method so far).
+
+#[path = "paper_figures/plot.rs"]
+mod plot;
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use sora::atmosphere::presets::find_preset;
+use sora::atmosphere::{Atmosphere, Sun};
+use sora::camera::{Camera, PerspectiveCamera};
+use sora::colour::{DisplayMapping, Exposure, Observer, RgbColourSpace, SpectrumToXyz};
+use sora::geometry::{angle_between_deg, direction_from_elevation_azimuth};
+use sora::output::{DisplayImage, write_png};
+use sora::render::{FastTableSize, RenderMethod, RenderSettings, render_xyz};
+use sora::spectrum::{SampledSpectrum, SolarSpectrum, WavelengthGrid};
+use sora::transport::{Observation, SingleScatteringSky, SunColumns};
+
+type Result<T> = std::result::Result<T, Box<dyn std::error::Error>>;
+
+/// The paper's Table 1 geometry: (elevation, azimuth) in degrees.
+const TABLE1_SUN: (f64, f64) = (36.0, 207.0);
+const TABLE1_VIEW: (f64, f64) = (17.0, 347.0);
+
+/// Sunsets face west.
+const SUNSET_AZIMUTH: f64 = 270.0;
+/// Sun elevation of the Earth and Mars sunsets, degrees.
+const SUNSET_ELEVATION: f64 = 3.0;
+
+fn main() {
+    let started = Instant::now();
+    let out = PathBuf::from(std::env::args().nth(1).unwrap_or_else(|| "docs".into()));
+    if let Err(e) = run(&out) {
+        eprintln!("paper_figures: {e}");
+        std::process::exit(1);
+    }
+    println!("done in {:.1} s", started.elapsed().as_secs_f64());
+}
+
+fn run(out: &Path) -> Result<()> {
+    std::fs::create_dir_all(out)?;
+    let grid = WavelengthGrid::paper();
+    table1_spectrum(out, &grid)?;
+    for scene in scenes()? {
+        render_scene(out, &grid, &scene)?;
+    }
+    mars_sun_glow(out, &grid)?;
+    Ok(())
+}
+
+/// The single-scattering sky of `atmosphere` with the sun at (elevation,
+/// azimuth), seen from the ground.
+fn sky(
+    atmosphere: &Atmosphere,
+    grid: &WavelengthGrid,
+    sun: (f64, f64),
+) -> Result<SingleScatteringSky> {
+    Ok(SingleScatteringSky::new(
+        atmosphere,
+        grid,
+        Observation {
+            observer_altitude_m: 0.0,
+            sun_elevation_deg: sun.0,
+            sun_azimuth_deg: sun.1,
+        },
+    )?)
+}
+
+/// Spectral radiance toward (elevation, azimuth), W m^-2 sr^-1 nm^-1: the
+/// fast path with exact sun columns, as `sora spectrum` computes it.
+fn radiance(sky: &SingleScatteringSky, view: (f64, f64)) -> SampledSpectrum {
+    let mut scratch = sky.scratch();
+    let mut spectrum = SampledSpectrum::zeros(sky.optics().grid.len());
+    sky.compute_radiance(
+        direction_from_elevation_azimuth(view.0, view.1),
+        SunColumns::Exact,
+        &mut scratch,
+        &mut spectrum,
+    );
+    spectrum
+}
+
+/// A preset with one line of its TOML replaced (a variant for comparison).
+fn preset_variant(name: &str, from: &str, to: &str) -> Result<Atmosphere> {
+    let preset = find_preset(name).ok_or_else(|| format!("no preset {name}"))?;
+    if !preset.toml.contains(from) {
+        return Err(format!("preset {name} has no line '{from}'").into());
+    }
+    Ok(Atmosphere::from_toml_str(&preset.toml.replace(from, to))?)
+}
+
+fn wrote(path: &Path, what: &str, started: Instant) {
+    println!(
+        "wrote {} ({what}, {:.2} s)",
+        path.display(),
+        started.elapsed().as_secs_f64()
+    );
+}
+
+// ---------------------------------------------------------------------------
+// 1. The Table 1 spectrum (the paper's Fig. 2 model curve)
+
+fn table1_spectrum(out: &Path, grid: &WavelengthGrid) -> Result<()> {
+    let started = Instant::now();
+    let paper_earth = Atmosphere::preset("paper-earth")?;
+    let mut paper_earth_e490 = paper_earth.clone();
+    paper_earth_e490.sun = Sun::new(SolarSpectrum::astm_e490(), 1.0, 0.53)?;
+    let earth_clear = Atmosphere::preset("earth-clear")?;
+    // (CSV key, legend, atmosphere, dashed)
+    let curves = [
+        (
+            "paper_earth",
+            "PAPER-EARTH, FLAT SUN (THE PAPER'S)",
+            &paper_earth,
+            false,
+        ),
+        (
+            "paper_earth_e490_sun",
+            "PAPER-EARTH, ASTM E490 SUN",
+            &paper_earth_e490,
+            true,
+        ),
+        (
+            "earth_clear",
+            "EARTH-CLEAR (ASTM E490 SUN, OZONE)",
+            &earth_clear,
+            false,
+        ),
+    ];
+    let colours = [[31, 90, 180], [230, 120, 20], [40, 150, 60]];
+    let mut columns = Vec::new();
+    for (key, _, atmosphere, _) in &curves {
+        let sky = sky(atmosphere, grid, TABLE1_SUN)?;
+        let spectrum = radiance(&sky, TABLE1_VIEW);
+        let peak = spectrum.max_value();
+        let (peak_index, _) =
+            spectrum
+                .values()
+                .iter()
+                .enumerate()
+                .fold(
+                    (0, f64::MIN),
+                    |best, (i, &v)| if v > best.1 { (i, v) } else { best },
+                );
+        // The paper's uniform double march, as a check of the fast path.
+        let reference = sky.compute_radiance_reference(
+            direction_from_elevation_azimuth(TABLE1_VIEW.0, TABLE1_VIEW.1),
+            4000,
+            800,
+        );
+        let worst = spectrum
+            .values()
+            .iter()
+            .zip(reference.values())
+            .map(|(a, b)| (a / b - 1.0).abs())
+            .fold(0.0, f64::max);
+        println!(
+            "table 1, {key}: peak {:.4e} W m^-2 sr^-1 nm^-1 at {} nm, {:.3} of it at 780 nm; fast vs reference march: {:.1e} max relative difference",
+            peak,
+            grid.wavelength_nm(peak_index),
+            spectrum.values()[grid.len() - 1] / peak,
+            worst
+        );
+        columns.push((key, spectrum, peak));
+    }
+    // CSV.
+    let mut csv = String::from("wavelength_nm");
+    for (key, _, _) in &columns {
+        write!(csv, ",radiance_{key}_w_m2_sr_nm,normalised_{key}")?;
+    }
+    csv.push('\n');
+    for (i, wavelength) in grid.wavelengths_nm().enumerate() {
+        write!(csv, "{wavelength}")?;
+        for (_, spectrum, peak) in &columns {
+            let v = spectrum.values()[i];
+            write!(csv, ",{v:.6e},{:.6}", v / peak)?;
+        }
+        csv.push('\n');
+    }
+    let path = out.join("table1_spectrum.csv");
+    std::fs::write(&path, csv)?;
+    wrote(&path, "Table 1 spectra", started);
+    // Plot.
+    let plot = plot::LinePlot {
+        title: "TABLE 1: SUN 36 DEG / AZ 207, VIEW 17 DEG / AZ 347".into(),
+        x_label: "WAVELENGTH (NM)".into(),
+        y_label: "RADIANCE / ITS MAXIMUM".into(),
+        x_range: (370.0, 790.0),
+        y_range: (0.0, 1.05),
+        x_ticks: ((0..8).map(|k| 400.0 + 50.0 * k as f64).collect(), 0),
+        y_ticks: ((0..6).map(|k| 0.2 * k as f64).collect(), 1),
+        series: curves
+            .iter()
+            .zip(&columns)
+            .zip(colours)
+            .map(
+                |(((_, label, _, dashed), (_, spectrum, peak)), colour)| plot::Series {
+                    label: (*label).into(),
+                    colour,
+                    dashed: *dashed,
+                    points: grid
+                        .wavelengths_nm()
+                        .zip(spectrum.values())
+                        .map(|(w, v)| (w, v / peak))
+                        .collect(),
+                },
+            )
+            .collect(),
+        notes: vec![
+            "SINGLE SCATTERING, 20 NM SAMPLES".into(),
+            "EACH CURVE DIVIDED BY ITS MAXIMUM".into(),
+        ],
+    };
+    let (w, h, data) = plot.render(900, 560).into_rgb8();
+    let path = out.join("table1_spectrum.png");
+    write_png(&path, &DisplayImage::new(w, h, data)?)?;
+    wrote(&path, "Table 1 plot", started);
+    Ok(())
+}
+
+// ---------------------------------------------------------------------------
+// 2-3. Skies as images
+
+/// How a view's exposure is chosen.
+#[derive(Clone, Copy, PartialEq)]
+enum ViewExposure {
+    /// The scene's: the automatic exposure of its first view, fixed.
+    Scene,
+    /// The brightest pixel's largest linear sRGB component at full scale,
+    /// so that nothing is clipped (with the sun's disc left out).
+    Unclipped,
+}
+
+/// One image of a scene.
+struct View {
+    suffix: &'static str,
+    camera: Camera,
+    width: u32,
+    height: u32,
+    exposure: ViewExposure,
+}
+
+/// One sky; its first view sets the exposure of its other views.
+struct Scene {
+    name: &'static str,
+    atmosphere: Atmosphere,
+    sun: (f64, f64),
+    /// Draw the sun's disc (not for a sun below the horizon: the library
+    /// draws it on the ground there, see docs/README.md).
+    sun_disc: bool,
+    views: Vec<View>,
+}
+
+fn fisheye() -> View {
+    View {
+        suffix: "fisheye",
+        camera: Camera::Fisheye,
+        width: 512,
+        height: 512,
+        exposure: ViewExposure::Scene,
+    }
+}
+
+fn panorama() -> View {
+    View {
+        suffix: "panorama",
+        camera: Camera::Equirectangular,
+        width: 1024,
+        height: 512,
+        exposure: ViewExposure::Scene,
+    }
+}
+
+/// Toward the setting sun: 90 deg across, looking 15 deg up, so the
+/// horizon is in the lower part.
+fn toward_sunset(exposure: ViewExposure) -> Result<View> {
+    Ok(View {
+        suffix: match exposure {
+            ViewExposure::Scene => "toward_sun",
+            ViewExposure::Unclipped => "toward_sun_unclipped",
+        },
+        camera: Camera::Perspective(PerspectiveCamera::new(15.0, SUNSET_AZIMUTH, 90.0)?),
+        width: 768,
+        height: 512,
+        exposure,
+    })
+}
+
+fn scenes() -> Result<Vec<Scene>> {
+    let preset = Atmosphere::preset;
+    let sunset = (SUNSET_ELEVATION, SUNSET_AZIMUTH);
+    Ok(vec![
+        Scene {
+            name: "readme_sky",
+            atmosphere: preset("earth-clear")?,
+            sun: (30.0, 180.0),
+            sun_disc: true,
+            views: vec![View {
+                suffix: "",
+                ..fisheye()
+            }],
+        },
+        Scene {
+            name: "earth_clear_noon",
+            atmosphere: preset("earth-clear")?,
+            sun: (60.0, 180.0),
+            sun_disc: true,
+            views: vec![fisheye(), panorama()],
+        },
+        Scene {
+            name: "earth_clear_sunset",
+            atmosphere: preset("earth-clear")?,
+            sun: sunset,
+            sun_disc: true,
+            views: vec![fisheye(), panorama()],
+        },
+        Scene {
+            name: "earth_clear_twilight",
+            atmosphere: preset("earth-clear")?,
+            sun: (-2.0, SUNSET_AZIMUTH),
+            sun_disc: false,
+            views: vec![fisheye(), panorama()],
+        },
+        Scene {
+            name: "paper_earth_noon",
+            atmosphere: preset("paper-earth")?,
+            sun: (60.0, 180.0),
+            sun_disc: true,
+            views: vec![fisheye(), panorama()],
+        },
+        Scene {
+            name: "paper_mars_sunset",
+            atmosphere: preset("paper-mars")?,
+            sun: sunset,
+            sun_disc: true,
+            views: vec![
+                fisheye(),
+                toward_sunset(ViewExposure::Scene)?,
+                toward_sunset(ViewExposure::Unclipped)?,
+            ],
+        },
+        Scene {
+            name: "mars_dust_sunset",
+            atmosphere: preset("mars-dust")?,
+            sun: sunset,
+            sun_disc: true,
+            views: vec![
+                fisheye(),
+                toward_sunset(ViewExposure::Scene)?,
+                toward_sunset(ViewExposure::Unclipped)?,
+            ],
+        },
+    ])
+}
+
+fn render_scene(out: &Path, grid: &WavelengthGrid, scene: &Scene) -> Result<()> {
+    let started = Instant::now();
+    let sky = sky(&scene.atmosphere, grid, scene.sun)?;
+    let to_xyz = SpectrumToXyz::new(grid, Observer::Cie1931TwoDegree);
+    let mut scene_exposure = None;
+    for view in &scene.views {
+        let settings = RenderSettings {
+            camera: view.camera,
+            width: view.width,
+            height: view.height,
+            method: RenderMethod::Fast,
+            draw_sun_disc: scene.sun_disc && view.exposure == ViewExposure::Scene,
+            table_size: FastTableSize::default(),
+        };
+        let xyz = render_xyz(&sky, &settings, &to_xyz, &|_| {})?;
+        let scale = match (view.exposure, scene_exposure) {
+            (ViewExposure::Scene, Some(scale)) => scale,
+            (ViewExposure::Scene, None) => {
+                *scene_exposure.insert(Exposure::default().scale_for_image(&xyz)?)
+            }
+            (ViewExposure::Unclipped, _) => {
+                let peak = xyz
+                    .iter()
+                    .map(|c| RgbColourSpace::Srgb.linear_rgb_from_xyz(*c).max_component())
+                    .fold(0.0, f64::max);
+                1.0 / peak
+            }
+        };
+        let mapping = DisplayMapping {
+            exposure: Exposure::Fixed(scale),
+            ..DisplayMapping::default()
+        };
+        let data = mapping.to_u8(&xyz)?.into_iter().flatten().collect();
+        let file = if view.suffix.is_empty() {
+            format!("{}.png", scene.name)
+        } else {
+            format!("{}_{}.png", scene.name, view.suffix)
+        };
+        let path = out.join(file);
+        write_png(
+            &path,
+            &DisplayImage::new(view.width as usize, view.height as usize, data)?,
+        )?;
+        wrote(
+            &path,
+            &format!(
+                "{}x{}, sun {} / {} deg, disc {}, exposure {scale}",
+                view.width,
+                view.height,
+                scene.sun.0,
+                scene.sun.1,
+                if settings.draw_sun_disc {
+                    "drawn"
+                } else {
+                    "not drawn"
+                }
+            ),
+            started,
+        );
+    }
+    Ok(())
+}
+
+// ---------------------------------------------------------------------------
+// 3. The colour of the Mars sky near the setting sun and away from it
+
+fn mars_sun_glow(out: &Path, grid: &WavelengthGrid) -> Result<()> {
+    let started = Instant::now();
+    let variants = [
+        ("paper-mars", Atmosphere::preset("paper-mars")?),
+        (
+            "paper-mars (mie phase)",
+            preset_variant(
+                "paper-mars",
+                r#"scattering.mie.phase = "paper-hg""#,
+                r#"scattering.mie.phase = "mie""#,
+            )?,
+        ),
+        ("mars-dust", Atmosphere::preset("mars-dust")?),
+        (
+            "mars-dust (paper-hg phase)",
+            preset_variant(
+                "mars-dust",
+                r#"scattering.mie.phase = "mie""#,
+                r#"scattering.mie.phase = "paper-hg""#,
+            )?,
+        ),
+    ];
+    let (sun_el, sun_az) = (SUNSET_ELEVATION, SUNSET_AZIMUTH);
+    // Above the sun (same azimuth), then along its almucantar (same elevation).
+    let mut directions: Vec<(String, f64, f64)> = [1.0, 2.0, 5.0, 10.0, 20.0, 45.0]
+        .iter()
+        .map(|d| (format!("{d} deg above the sun"), sun_el + d, sun_az))
+        .collect();
+    directions.push(("zenith".into(), 90.0, sun_az));
+    for d in [5.0, 10.0, 20.0, 45.0, 90.0, 135.0, 180.0] {
+        directions.push((
+            format!("{d} deg in azimuth from the sun"),
+            sun_el,
+            sun_az - d,
+        ));
+    }
+    let to_xyz = SpectrumToXyz::new(grid, Observer::Cie1931TwoDegree);
+    let index_of = |nm: f64| ((nm - grid.start_nm()) / grid.step_nm()).round() as usize;
+    let (blue, red) = (index_of(440.0), index_of(700.0));
+    let mut csv = String::from(
+        "atmosphere,direction,view_elevation_deg,view_azimuth_deg,angle_from_sun_deg,y_luminance,chromaticity_x,chromaticity_y,linear_srgb_r,linear_srgb_g,linear_srgb_b,b_over_r,l440_over_l700_relative_to_sun\n",
+    );
+    for (name, atmosphere) in &variants {
+        let sky = sky(atmosphere, grid, (sun_el, sun_az))?;
+        let sun = &sky.optics().solar_irradiance_w_m2_nm;
+        let sun_ratio = sun[blue] / sun[red];
+        let mut summary = Vec::new();
+        for (label, el, az) in &directions {
+            let spectrum = radiance(&sky, (*el, *az));
+            let xyz = to_xyz.to_xyz(&spectrum)?;
+            let [x, y] = xyz.chromaticity_xy().unwrap_or([f64::NAN, f64::NAN]);
+            let rgb = RgbColourSpace::Srgb.linear_rgb_from_xyz(xyz);
+            let b_over_r = rgb.b / rgb.r;
+            let spectral = spectrum[blue] / spectrum[red] / sun_ratio;
+            let angle = angle_between_deg(*el, *az, sun_el, sun_az);
+            writeln!(
+                csv,
+                "{name},{label},{el},{az},{angle:.2},{:.6e},{x:.4},{y:.4},{:.6e},{:.6e},{:.6e},{b_over_r:.4},{spectral:.4}",
+                xyz.y, rgb.r, rgb.g, rgb.b
+            )?;
+            if label == "2 deg above the sun" || label == "90 deg in azimuth from the sun" {
+                summary.push(format!("{label}: B/R {b_over_r:.3}, xy ({x:.3}, {y:.3})"));
+            }
+        }
+        println!("mars glow, {name}: {}", summary.join("; "));
+    }
+    let path = out.join("mars_sun_glow.csv");
+    std::fs::write(&path, csv)?;
+    wrote(&path, "Mars sky colour near and away from the sun", started);
+    Ok(())
+}
