@@ -149,3 +149,31 @@ fn the_planets_shadow_is_dark() {
         assert!(*t > 0.0 && *t < 1e-3 * s, "{t} vs {s}");
     }
 }
+
+/// The sun's disc is seen only along rays that reach space. From 1 km the
+/// ground's horizon dips acos(R / (R + h)) = 1.01 deg below the
+/// horizontal, so a sun at -0.5 deg is still seen there, one at -3 deg is
+/// not, and from the ground one at -2 deg is not.
+#[test]
+fn the_sun_disc_is_never_drawn_on_the_ground() {
+    let atmosphere = Atmosphere::preset("earth-clear").unwrap();
+    for (altitude, sun_elevation, visible) in [
+        (0.0, -2.0, false),
+        (1000.0, -3.0, false),
+        (1000.0, -0.5, true),
+        (0.0, 10.0, true),
+    ] {
+        let observation = Observation {
+            observer_altitude_m: altitude,
+            sun_elevation_deg: sun_elevation,
+            sun_azimuth_deg: 270.0,
+        };
+        let sky =
+            SingleScatteringSky::new(&atmosphere, &WavelengthGrid::paper(), observation).unwrap();
+        assert_eq!(
+            sky.is_in_sun_disc(sky.sun_direction()),
+            visible,
+            "altitude {altitude} m, sun {sun_elevation} deg"
+        );
+    }
+}

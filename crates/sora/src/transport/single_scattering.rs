@@ -564,9 +564,15 @@ impl SingleScatteringSky {
         true
     }
 
-    /// True when `view` points inside the sun's disc.
+    /// True when `view` points inside the sun's disc and reaches space: a
+    /// ray that ends on the ground never sees the sun, however close to it.
     pub fn is_in_sun_disc(&self, view: Vector3) -> bool {
         self.sun_angular_radius_rad > 0.0
+            && !crate::geometry::ray_intersects_ground(
+                self.observer.z,
+                view.z,
+                self.ground_radius_m,
+            )
             && view
                 .cross(self.sun_direction)
                 .length()
