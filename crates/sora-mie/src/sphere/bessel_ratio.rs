@@ -130,6 +130,48 @@ pub(super) fn scaled_ratio_continued_fraction(z_squared: Complex64, n: usize) ->
     estimate
 }
 
+/// [`scaled_ratio_continued_fraction`] for a real argument (z^2 = x^2 > 0),
+/// in real arithmetic: the same algorithm at half the cost, for the
+/// exterior ratios psi_n(x)/psi_{n-1}(x).
+#[inline(always)]
+pub(super) fn scaled_ratio_continued_fraction_real(x_squared: f64, n: usize) -> f64 {
+    let a = -x_squared;
+    let mut a_previous = 1.0;
+    let mut a_current = (2 * n + 1) as f64;
+    let mut b_previous = 0.0;
+    let mut b_current = 1.0;
+    let mut estimate = b_current / a_current;
+    let max_blocks =
+        ((3.0 * x_squared.sqrt() + 2000.0).min(1e9) as usize) / CONTINUED_FRACTION_BLOCK + 1;
+    let mut b_j = (2 * n + 1) as f64;
+    for _ in 0..max_blocks {
+        for _ in 0..CONTINUED_FRACTION_BLOCK {
+            b_j += 2.0;
+            let a_next = a_current * b_j + a * a_previous;
+            let b_next = b_current * b_j + a * b_previous;
+            a_previous = a_current;
+            a_current = a_next;
+            b_previous = b_current;
+            b_current = b_next;
+        }
+        let magnitude = a_current.abs();
+        if !(1e-100..=1e100).contains(&magnitude) && magnitude > 0.0 && magnitude.is_finite() {
+            let scale = 1.0 / magnitude;
+            a_previous *= scale;
+            a_current *= scale;
+            b_previous *= scale;
+            b_current *= scale;
+        }
+        let next = b_current / a_current;
+        let change = (next - estimate).abs();
+        estimate = next;
+        if change <= CONTINUED_FRACTION_TOLERANCE * next.abs() {
+            break;
+        }
+    }
+    estimate
+}
+
 /// Growth of the unnormalised downward solution beyond which it is rescaled.
 const RESCALE_ABOVE: f64 = 1e100;
 
@@ -435,6 +477,18 @@ mod tests {
                     assert!(err < 1e-13, "z = {z}: slot {slot}: {err:e}");
                 }
             }
+        }
+    }
+
+    #[test]
+    fn real_continued_fraction_is_the_complex_one() {
+        for (x, n) in [(0.3, 5), (12.0, 30), (12.0, 5), (1500.0, 1200)] {
+            let real = scaled_ratio_continued_fraction_real(x * x, n);
+            let complex = scaled_ratio_continued_fraction(c(x * x, 0.0), n);
+            assert!(
+                (real - complex.re).abs() <= 1e-14 * real.abs() && complex.im == 0.0,
+                "x = {x}, n = {n}"
+            );
         }
     }
 

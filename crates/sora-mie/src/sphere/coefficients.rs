@@ -63,12 +63,12 @@
 
 use super::Efficiencies;
 use super::bessel_ratio::{
-    DownwardRatios, fill_scaled_ratios_downward, reciprocal, scaled_ratio_continued_fraction,
+    DownwardRatios, fill_scaled_ratios_downward, reciprocal, scaled_ratio_continued_fraction_real,
 };
 use crate::Complex64;
 
 /// Below this size parameter the scaled small-x path is used.
-pub(super) const SMALL_SIZE_PARAMETER: f64 = 1.0;
+pub(super) const SMALL_SIZE_PARAMETER: f64 = 0.01;
 
 /// Most terms the small-x path ever needs: series_length_converged(x) for
 /// x < 1 is at most 1 + 7.6 + 3.
@@ -311,6 +311,51 @@ struct Tables<'a> {
     chi: &'a [f64],
 }
 
+/// The inputs of one block of BLOCK consecutive terms.
+struct BlockInput {
+    n: [f64; BLOCK],
+    psi: [f64; BLOCK],
+    psi_next: [f64; BLOCK],
+    chi: [f64; BLOCK],
+    chi_next: [f64; BLOCK],
+    /// rho_{n+1}(mx)
+    rho_re: [f64; BLOCK],
+    rho_im: [f64; BLOCK],
+}
+
+impl BlockInput {
+    /// Terms first..first+len-1 (len <= BLOCK) from the tables. Lanes past
+    /// `len` are padding that contributes exactly nothing: n = -1/2 makes the
+    /// weight 2n+1 of every sum zero, and psi = 0, chi = 0, chi_{n+1} = 1,
+    /// rho = 0 keep all their arithmetic finite (a = b = 0, |denominator| = 1).
+    #[inline(always)]
+    fn from_tables(tables: &Tables<'_>, first: usize, len: usize) -> BlockInput {
+        let mut input = BlockInput {
+            n: [-0.5; BLOCK],
+            psi: [0.0; BLOCK],
+            psi_next: [0.0; BLOCK],
+            chi: [0.0; BLOCK],
+            chi_next: [1.0; BLOCK],
+            rho_re: [0.0; BLOCK],
+            rho_im: [0.0; BLOCK],
+        };
+        input.psi[..len].copy_from_slice(&tables.psi[first..first + len]);
+        input.psi_next[..len].copy_from_slice(&tables.psi[first + 1..first + 1 + len]);
+        input.chi[..len].copy_from_slice(&tables.chi[first..first + len]);
+        input.chi_next[..len].copy_from_slice(&tables.chi[first + 1..first + 1 + len]);
+        input.rho_re[..len].copy_from_slice(&tables.rho_re[first + 1..first + 1 + len]);
+        input.rho_im[..len].copy_from_slice(&tables.rho_im[first + 1..first + 1 + len]);
+        // n of each lane from one conversion (integer-to-float conversions
+        // are several instructions each without AVX-512).
+        let mut n = first as f64;
+        for value in input.n[..len].iter_mut() {
+            *value = n;
+            n += 1.0;
+        }
+        input
+    }
+}
+
 /// Per-sphere constants of the x >= 1 series.
 struct LargeSphere {
     m: Complex64,
@@ -320,43 +365,32 @@ struct LargeSphere {
 }
 
 impl LargeSphere {
-    /// Terms first..first+B-1: a_n, b_n from psi_n, psi_{n+1}, chi_n,
-    /// chi_{n+1} and rho_{n+1}(mx), written to `a`, `b` and added to `sums`.
+    /// One block (terms first..first+BLOCK-1, padding lanes included): a_n,
+    /// b_n from psi_n, psi_{n+1}, chi_n, chi_{n+1} and rho_{n+1}(mx), written
+    /// to `a`, `b` and added to `sums`.
     ///
-    /// Each loop below is straight-line arithmetic over the B lanes, which
+    /// Each loop below is straight-line arithmetic over the lanes, which
     /// the compiler turns into vector instructions; the two complex quotients
     /// of a term, 1/(n+1) and the absorption terms share one real division.
     #[inline(always)]
-    fn block<const B: usize>(
+    fn block(
         &self,
-        tables: &Tables<'_>,
+        input: &BlockInput,
         first: usize,
-        a: &mut [Complex64; B],
-        b: &mut [Complex64; B],
+        a: &mut [Complex64; BLOCK],
+        b: &mut [Complex64; BLOCK],
         sums: &mut LaneSums,
     ) {
-        let lanes = |table: &[f64], offset: usize| -> [f64; B] {
-            table[first + offset..first + offset + B]
-                .try_into()
-                .expect("B values")
-        };
-        let (psi, psi_next, chi, chi_next) = (
-            lanes(tables.psi, 0),
-            lanes(tables.psi, 1),
-            lanes(tables.chi, 0),
-            lanes(tables.chi, 1),
+        const B: usize = BLOCK;
+        let (n, psi, psi_next, chi, chi_next) = (
+            &input.n,
+            &input.psi,
+            &input.psi_next,
+            &input.chi,
+            &input.chi_next,
         );
-        let (rho_re, rho_im) = (lanes(tables.rho_re, 1), lanes(tables.rho_im, 1));
+        let (rho_re, rho_im) = (&input.rho_re, &input.rho_im);
         let (m, inverse_m, slope) = (self.m, self.inverse_m, self.a_slope);
-        // n of each lane, from one conversion (integer-to-float conversions
-        // are several instructions each without AVX-512).
-        let first_n = first as f64;
-        let mut n = [0.0; B];
-        let mut offset = 0.0;
-        for value in n.iter_mut() {
-            *value = first_n + offset;
-            offset += 1.0;
-        }
         let mut a_re = [0.0; B];
         let mut a_im = [0.0; B];
         let mut b_re = [0.0; B];
@@ -466,10 +500,15 @@ fn fill_tables(
 
     let inverse_x = 1.0 / x;
     let (sin_x, cos_x) = x.sin_cos();
-    // B&H eq. 4.89 starting values; for x >= 1, psi_1 = sin x / x - cos x
-    // loses at most two bits.
+    // B&H eq. 4.89 starting values. For x >= 1, psi_1 = sin x / x - cos x
+    // loses at most two bits; below, it cancels (~1e-16/x^2 relative) and
+    // psi_1 = psi_0 rho_1(x) is used instead (n_switch = 0 then).
     psi[0] = sin_x;
-    psi[1] = sin_x * inverse_x - cos_x;
+    psi[1] = if n_switch == 0 {
+        sin_x * rho_x[1]
+    } else {
+        sin_x * inverse_x - cos_x
+    };
     chi[0] = cos_x;
     chi[1] = cos_x * inverse_x + sin_x;
     let (mut psi_previous, mut psi_current) = (psi[0], psi[1]);
@@ -485,17 +524,16 @@ fn fill_tables(
     let count = top - 2;
     let (rho_re_range, rho_im_range) = (&mut rho_re[2..top], &mut rho_im[2..top]);
     let (psi_range, chi_range) = (&mut psi[2..top], &mut chi[2..top]);
-    // Below n_switch psi goes upward by its recurrence, then by ratios
-    // rho_x[1], rho_x[2], ... (psi_{n+1} = psi_n rho_{n+1}(x)).
+    // Below n_switch psi goes upward by its recurrence, then by ratios:
+    // step k (n = k + 1) needs rho_{n+1}(x) = rho_x[k + 2 - n_switch].
     let upward_by_recurrence = n_switch.saturating_sub(1).min(count);
-    let ratios_x = &rho_x[1..];
     // Upward step k (n = k + 1): psi_{n+1}, chi_{n+1}.
     let mut exterior_step = |k: usize| -> (f64, f64) {
         let step = two_n_plus_1 * inverse_x;
         let psi_next = if k < upward_by_recurrence {
             step * psi_current - psi_previous
         } else {
-            psi_current * ratios_x[k - upward_by_recurrence]
+            psi_current * rho_x[k + 2 - n_switch]
         };
         let chi_next = step * chi_current - chi_previous;
         psi_previous = psi_current;
@@ -569,7 +607,7 @@ fn solve_large<F: FnMut(Complex64, Complex64)>(
     let (chi, rest) = rest.split_at_mut(table);
     // rho_x[k] = psi_{n_switch+k}(x) / psi_{n_switch+k-1}(x), k >= 1.
     let rho_x = &mut rest[..table - n_switch];
-    let mut ratio = x * scaled_ratio_continued_fraction(Complex64::new(x * x, 0.0), n_terms + 1).re;
+    let mut ratio = x * scaled_ratio_continued_fraction_real(x * x, n_terms + 1);
     rho_x[n_terms + 1 - n_switch] = ratio;
     for n in (n_switch + 1..=n_terms).rev() {
         ratio = x / ((2 * n + 1) as f64 - x * ratio);
@@ -595,19 +633,14 @@ fn solve_large<F: FnMut(Complex64, Complex64)>(
     let mut a = [Complex64::new(0.0, 0.0); BLOCK];
     let mut b = [Complex64::new(0.0, 0.0); BLOCK];
     let mut n = 1;
-    while n + BLOCK - 1 <= n_terms {
-        sphere.block(&tables, n, &mut a, &mut b, &mut sums);
-        for k in 0..BLOCK {
+    while n <= n_terms {
+        let len = BLOCK.min(n_terms + 1 - n);
+        let input = BlockInput::from_tables(&tables, n, len);
+        sphere.block(&input, n, &mut a, &mut b, &mut sums);
+        for k in 0..len {
             record(a[k], b[k]);
         }
         n += BLOCK;
-    }
-    let mut last_a = [Complex64::new(0.0, 0.0)];
-    let mut last_b = [Complex64::new(0.0, 0.0)];
-    while n <= n_terms {
-        sphere.block(&tables, n, &mut last_a, &mut last_b, &mut sums);
-        record(last_a[0], last_b[0]);
-        n += 1;
     }
     sums.reduce()
         .finish(inverse_x * inverse_x, inverse_x * inverse_x)
@@ -627,7 +660,7 @@ fn solve_small<F: FnMut(Complex64, Complex64)>(
     let mut rhot_mx = [Complex64::new(0.0, 0.0); SMALL_PATH_TERMS + 2];
     let mut rhot_x = [0.0; SMALL_PATH_TERMS + 2];
     fill_scaled_ratios_downward(m * x, n_cap + 1, &mut rhot_mx);
-    let mut ratio = scaled_ratio_continued_fraction(Complex64::new(x_squared, 0.0), n_cap + 1).re;
+    let mut ratio = scaled_ratio_continued_fraction_real(x_squared, n_cap + 1);
     rhot_x[n_cap + 1] = ratio;
     for n in (1..=n_cap).rev() {
         ratio = 1.0 / ((2 * n + 1) as f64 - x_squared * ratio);

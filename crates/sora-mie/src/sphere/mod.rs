@@ -182,11 +182,11 @@ fn validate(m: Complex64, x: f64) -> Result<(), MieError> {
 
 /// Scratch capacities (f64 values) of the stack tiers of
 /// [`compute_efficiencies`]. The scratch is zeroed on every call, so its size
-/// is time: a small tier for the common small spheres (x up to ~40), a middle
-/// one to x ~ 190 and a large one (40 KB) to x ~ 950. The solver needs about
+/// is time: a small tier for small spheres (x up to ~7), a middle one to
+/// x ~ 100 and a large one (40 KB) to x ~ 950. The solver needs about
 /// 5 (x + 7.6 x^(1/3)) values.
-const STACK_SCRATCH_SMALL: usize = 320;
-const STACK_SCRATCH_MIDDLE: usize = 1280;
+const STACK_SCRATCH_SMALL: usize = 128;
+const STACK_SCRATCH_MIDDLE: usize = 640;
 const STACK_SCRATCH_LARGE: usize = 5120;
 
 /// Fast path: efficiencies and g of a sphere of relative refractive index `m`
