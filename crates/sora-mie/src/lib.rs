@@ -23,8 +23,8 @@
 
 pub use num_complex::Complex64;
 
-pub mod sphere;
 pub mod distribution;
 pub mod ensemble;
-pub mod refractive_index;
 pub mod paper_phase;
+pub mod refractive_index;
+pub mod sphere;
