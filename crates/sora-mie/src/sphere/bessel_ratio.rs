@@ -43,8 +43,9 @@
 //! step (~30 cycles). Here neither does:
 //! - the fraction is evaluated by the forward (Wallis) recurrence of its
 //!   convergents A_j / B_j (Numerical Recipes 3rd ed. sec. 5.2), rescaled and
-//!   tested for convergence every 8 terms; A_j and B_j are two solutions of the
-//!   same linear recurrence, so the chain is a complex multiply-add;
+//!   tested for convergence (last two convergents agreeing to 1e-16) every 8
+//!   terms; A_j and B_j are two solutions of the same linear recurrence, so
+//!   the chain is a complex multiply-add;
 //! - the table runs the *linear* recurrence u_{n-1} = (2n+1)/z u_n - u_{n+1}
 //!   downward (the same minimal solution, Miller's algorithm, started from the
 //!   fraction's ratio) and forms rho_n = u_n / u_{n-1} off the chain,
@@ -72,8 +73,8 @@ pub(super) fn reciprocal(q: Complex64) -> Complex64 {
     Complex64::new(q.re * s, -q.im * s)
 }
 
-/// Convergence threshold of the continued fraction: successive convergents
-/// (8 terms apart) agreeing to this relative difference.
+/// Convergence threshold of the continued fraction: the last two
+/// convergents of a block agreeing to this relative difference.
 const CONTINUED_FRACTION_TOLERANCE: f64 = 1e-16;
 
 /// Terms of the continued fraction evaluated between convergence tests.
@@ -120,10 +121,15 @@ pub(super) fn scaled_ratio_continued_fraction(z_squared: Complex64, n: usize) ->
             b_previous *= scale;
             b_current *= scale;
         }
-        let next = b_current * reciprocal(a_current);
-        let change = (next - estimate).norm_sqr();
-        estimate = next;
-        if change <= CONTINUED_FRACTION_TOLERANCE * CONTINUED_FRACTION_TOLERANCE * next.norm_sqr() {
+        // Converged when the last two convergents agree: for this fraction
+        // (a Stieltjes-type fraction of a minimal solution) consecutive
+        // convergents bracket-or-bound the limit.
+        estimate = b_current * reciprocal(a_current);
+        let previous = b_previous * reciprocal(a_previous);
+        let change = (estimate - previous).norm_sqr();
+        if change
+            <= CONTINUED_FRACTION_TOLERANCE * CONTINUED_FRACTION_TOLERANCE * estimate.norm_sqr()
+        {
             break;
         }
     }
@@ -162,10 +168,9 @@ pub(super) fn scaled_ratio_continued_fraction_real(x_squared: f64, n: usize) -> 
             b_previous *= scale;
             b_current *= scale;
         }
-        let next = b_current / a_current;
-        let change = (next - estimate).abs();
-        estimate = next;
-        if change <= CONTINUED_FRACTION_TOLERANCE * next.abs() {
+        estimate = b_current / a_current;
+        let change = (estimate - b_previous / a_previous).abs();
+        if change <= CONTINUED_FRACTION_TOLERANCE * estimate.abs() {
             break;
         }
     }

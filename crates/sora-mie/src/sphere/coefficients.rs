@@ -330,8 +330,33 @@ impl BlockInput {
     /// rho = 0 keep all their arithmetic finite (a = b = 0, |denominator| = 1).
     #[inline(always)]
     fn from_tables(tables: &Tables<'_>, first: usize, len: usize) -> BlockInput {
+        // n of each lane from one conversion (integer-to-float conversions
+        // are several instructions each without AVX-512).
+        let mut n = [-0.5; BLOCK];
+        let mut value = first as f64;
+        for lane in n[..len].iter_mut() {
+            *lane = value;
+            value += 1.0;
+        }
+        if len == BLOCK {
+            // Fixed-size copies (a runtime-length copy would call memmove).
+            let lanes = |table: &[f64], offset: usize| -> [f64; BLOCK] {
+                table[first + offset..first + offset + BLOCK]
+                    .try_into()
+                    .expect("BLOCK values")
+            };
+            return BlockInput {
+                n,
+                psi: lanes(tables.psi, 0),
+                psi_next: lanes(tables.psi, 1),
+                chi: lanes(tables.chi, 0),
+                chi_next: lanes(tables.chi, 1),
+                rho_re: lanes(tables.rho_re, 1),
+                rho_im: lanes(tables.rho_im, 1),
+            };
+        }
         let mut input = BlockInput {
-            n: [-0.5; BLOCK],
+            n,
             psi: [0.0; BLOCK],
             psi_next: [0.0; BLOCK],
             chi: [0.0; BLOCK],
@@ -339,18 +364,13 @@ impl BlockInput {
             rho_re: [0.0; BLOCK],
             rho_im: [0.0; BLOCK],
         };
-        input.psi[..len].copy_from_slice(&tables.psi[first..first + len]);
-        input.psi_next[..len].copy_from_slice(&tables.psi[first + 1..first + 1 + len]);
-        input.chi[..len].copy_from_slice(&tables.chi[first..first + len]);
-        input.chi_next[..len].copy_from_slice(&tables.chi[first + 1..first + 1 + len]);
-        input.rho_re[..len].copy_from_slice(&tables.rho_re[first + 1..first + 1 + len]);
-        input.rho_im[..len].copy_from_slice(&tables.rho_im[first + 1..first + 1 + len]);
-        // n of each lane from one conversion (integer-to-float conversions
-        // are several instructions each without AVX-512).
-        let mut n = first as f64;
-        for value in input.n[..len].iter_mut() {
-            *value = n;
-            n += 1.0;
+        for k in 0..len {
+            input.psi[k] = tables.psi[first + k];
+            input.psi_next[k] = tables.psi[first + 1 + k];
+            input.chi[k] = tables.chi[first + k];
+            input.chi_next[k] = tables.chi[first + 1 + k];
+            input.rho_re[k] = tables.rho_re[first + 1 + k];
+            input.rho_im[k] = tables.rho_im[first + 1 + k];
         }
         input
     }
