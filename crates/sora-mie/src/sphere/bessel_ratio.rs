@@ -1,7 +1,7 @@
 //! Ratios of Riccati-Bessel functions, the stable replacement for psi_n itself.
 //!
 //! psi_n(z) = z j_n(z) is the *minimal* solution of the three-term recurrence
-//! psi_{n+1} = (2n+1)/z psi_n - psi_{n-1} (B&H eq. 4.89): once n + 1/2 > |z|
+//! psi_{n+1} = (2n+1)/z psi_n - psi_{n-1} (A&S 10.1.19): once n + 1/2 > |z|
 //! it decays much faster than the other solution chi_n, so any rounding error
 //! in an upward recurrence is amplified by chi_n / psi_n. The ratio
 //!

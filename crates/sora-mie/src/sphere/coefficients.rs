@@ -7,7 +7,7 @@
 //! b_n = [(m D_n + n/x) psi_n - psi_{n-1}] / [(m D_n + n/x) xi_n - xi_{n-1}]
 //! ```
 //!
-//! with psi_n = psi_n(x), xi_n = psi_n - i chi_n (B&H eq. 4.89-4.90, chi_n =
+//! with psi_n = psi_n(x), xi_n = psi_n - i chi_n (B&H sec. 4.8, chi_n =
 //! -x y_n(x)). Using psi_n' = (n+1)/x psi_n - psi_{n+1} instead of
 //! psi_n' = psi_{n-1} - n/x psi_n, and D_n(z) = (n+1)/z - rho_{n+1}(z) with
 //! rho_n(z) = psi_n(z)/psi_{n-1}(z) (see `bessel_ratio.rs`), the same
@@ -35,31 +35,35 @@
 //! the last digits for Im(m) = 1e-8 where Q_ext - Q_sca would keep none.
 //!
 //! Two paths:
-//! - x >= 1: psi_n by the upward recurrence while it is oscillatory (n <= x,
-//!   where the upward recurrence is neutrally stable), then by
+//! - x >= 0.01: psi_n by the upward recurrence while it is oscillatory
+//!   (n < x, where the upward recurrence is neutrally stable), then by
 //!   psi_{n+1} = psi_n rho_{n+1}(x) from a downward ratio recurrence beyond
 //!   the turning point, where the upward recurrence would amplify rounding by
-//!   chi_n/psi_n. chi_n always upward (it is the dominant solution).
-//! - x < 1: every quantity is scaled by its power of x so that nothing
+//!   chi_n/psi_n (for x < 1 psi_1 too comes from its ratio, since
+//!   sin x / x - cos x cancels). chi_n always upward (the dominant solution).
+//! - x < 0.01: every quantity is scaled by its power of x so that nothing
 //!   underflows, overflows or cancels for x down to 1e-300: rhot_n = rho_n/z,
 //!   psit_n = psi_n/x^(n+1), Ut_n = 1/(x^n xi_n) by Ut_n = Ut_{n-1}/sigt_n
 //!   with sigt_n = x xi_n/xi_{n-1} = (2n-1) - x^2/sigt_{n-1} (upward, the
 //!   dominant direction), and the coefficients come out as a_n/x^3, b_n/x^3.
-//!   psi_n(x) has no zero for x < pi, so the ratio products are safe there.
+//!   (Unscaled, chi_n ~ (2n-1)!!/x^n would overflow the denominators' norms
+//!   near x = 1e-30.) psi_n(x) has no zero for x < pi, so the ratio products
+//!   are safe there.
 //!
 //! The efficiency sums (B&H eqs. 4.61-4.62, 4.82 and the g formula of
 //! B&H p. 120) are accumulated in the same pass that forms a_n, b_n, so
 //! `compute_efficiencies` never stores the coefficients.
 //!
-//! Layout for speed (x >= 1). One loop runs the downward recurrence of the
+//! Layout for speed (x >= 0.01). One loop runs the downward recurrence of the
 //! interior ratio rho_n(mx) and, in the same iterations, the upward
 //! recurrences of psi_n(x) and chi_n(x): three independent dependency chains
 //! that the processor overlaps. They fill four f64 tables (Re rho, Im rho,
 //! psi, chi: structure of arrays). The coefficient pass then reads the tables
 //! in blocks of [`BLOCK`] consecutive terms, as straight-line arithmetic over
 //! arrays that the compiler vectorises, with per-lane partial sums reduced at
-//! the end. On x86-64 the whole solver is also compiled for AVX and chosen at
-//! run time (see [`solve_series`]).
+//! the end (the last block is padded with lanes of zero weight). On x86-64
+//! the whole solver is also compiled for AVX and chosen at run time (see
+//! [`solve_series`]).
 
 use super::Efficiencies;
 use super::bessel_ratio::{
@@ -71,7 +75,7 @@ use crate::Complex64;
 pub(super) const SMALL_SIZE_PARAMETER: f64 = 0.01;
 
 /// Most terms the small-x path ever needs: series_length_converged(x) for
-/// x < 1 is at most 1 + 7.6 + 3.
+/// x < 0.01 is at most 4 (0.01 + 7.6 * 0.22 + 3); 12 leaves room.
 const SMALL_PATH_TERMS: usize = 12;
 
 /// The factor s with which [`solve_series`] scales the coefficients it
@@ -252,10 +256,10 @@ pub(super) fn solve_series_portable<F: FnMut(Complex64, Complex64)>(
     efficiencies
 }
 
-/// Terms of the x >= 1 series evaluated together (structure of arrays).
+/// Terms of the x >= 0.01 series evaluated together (structure of arrays).
 pub(super) const BLOCK: usize = 8;
 
-/// Per-lane partial sums of the x >= 1 series (lane k gets terms n = k mod
+/// Per-lane partial sums of the x >= 0.01 series (lane k gets terms n = k mod
 /// BLOCK), reduced at the end: independent accumulators keep the additions
 /// off one dependency chain and let them run as vector instructions.
 struct LaneSums {
@@ -301,7 +305,7 @@ impl LaneSums {
     }
 }
 
-/// The tables of the x >= 1 path, each indexed by n.
+/// The tables of the x >= 0.01 path, each indexed by n.
 struct Tables<'a> {
     /// rho_n(mx) = psi_n(mx)/psi_{n-1}(mx), n = 2..=n_terms+1
     rho_re: &'a [f64],
@@ -376,7 +380,7 @@ impl BlockInput {
     }
 }
 
-/// Per-sphere constants of the x >= 1 series.
+/// Per-sphere constants of the x >= 0.01 series.
 struct LargeSphere {
     m: Complex64,
     inverse_m: Complex64,
@@ -495,10 +499,10 @@ impl LargeSphere {
     }
 }
 
-/// Fill the tables of the x >= 1 path.
+/// Fill the tables of the x >= 0.01 path.
 ///
 /// rho_n(mx) downward from n = n_terms+1 ([`DownwardRatios`]) and, in the
-/// same iterations, psi_n(x) and chi_n(x) upward (B&H eq. 4.89), psi by
+/// same iterations, psi_n(x) and chi_n(x) upward (A&S 10.1.19), psi by
 /// ratios beyond `n_switch`: independent dependency chains that overlap.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
@@ -520,7 +524,7 @@ fn fill_tables(
 
     let inverse_x = 1.0 / x;
     let (sin_x, cos_x) = x.sin_cos();
-    // B&H eq. 4.89 starting values. For x >= 1, psi_1 = sin x / x - cos x
+    // Starting values psi_0, psi_1, chi_0, chi_1. For x >= 1, psi_1 = sin x / x - cos x
     // loses at most two bits; below, it cancels (~1e-16/x^2 relative) and
     // psi_1 = psi_0 rho_1(x) is used instead (n_switch = 0 then).
     psi[0] = sin_x;
@@ -608,7 +612,7 @@ fn fill_tables(
     chi[top] = step * chi_current - chi_previous;
 }
 
-/// The x >= 1 path: tables, then the coefficient pass in blocks.
+/// The x >= 0.01 path: tables, then the coefficient pass in blocks.
 #[inline(always)]
 fn solve_large<F: FnMut(Complex64, Complex64)>(
     m: Complex64,
