@@ -177,7 +177,7 @@ pub struct Efficiencies {
     pub qabs: f64,
     /// Backscattering efficiency, B&H eq. 4.82 convention: |sum (2n+1)(-1)^n (a_n - b_n)|^2 / x^2.
     pub qback: f64,
-    /// Asymmetry parameter <cos theta>, weighted by scattered intensity.
+    /// Asymmetry parameter `<cos theta>`, weighted by scattered intensity.
     pub g: f64,
 }
 
