@@ -127,6 +127,18 @@ proptest! {
         }
     }
 
+    /// Perfect conductors: lossless, physical, and with the conductor's
+    /// limits at both ends of the size range.
+    #[test]
+    fn perfect_conductors_are_physical(x in size_parameter()) {
+        let q = compute_efficiencies_perfect_conductor(x).unwrap();
+        for value in [q.qext, q.qsca, q.qback, q.g] {
+            prop_assert!(value.is_finite(), "x = {}: {:?}", x, q);
+        }
+        prop_assert!(q.qsca > 0.0 && q.qback >= 0.0 && q.g.abs() <= 1.0, "x = {}: {:?}", x, q);
+        prop_assert!(q.qabs == 0.0 && q.qext == q.qsca);
+    }
+
     /// Any finite or non-finite input: an error exactly when it is outside
     /// the documented domain, otherwise finite non-negative efficiencies.
     /// Never a panic.

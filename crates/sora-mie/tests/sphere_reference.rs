@@ -5,7 +5,8 @@
 
 use sora_mie::Complex64;
 use sora_mie::sphere::{
-    MieSolution, SphereWorkspace, compute_efficiencies, compute_efficiencies_with,
+    MieSolution, SphereWorkspace, compute_efficiencies, compute_efficiencies_perfect_conductor,
+    compute_efficiencies_with,
 };
 
 /// Rows of a reference CSV: header names and string fields, '#' lines skipped.
@@ -226,9 +227,9 @@ fn phase_tables_agree_with_single_angles() {
 /// S33 = Re(S2 S1*), S34 = Im(S2 S1*), from the B&H printout) is the same in
 /// both conventions or already in B&H's.
 ///
-/// Skipped: the perfectly conducting spheres (m_as_written = "PEC"), which
-/// are not dielectric spheres of finite index and which this solver does not
-/// model.
+/// The perfectly conducting spheres (m_as_written = "PEC") are checked
+/// against [`compute_efficiencies_perfect_conductor`] with the same
+/// tolerances.
 #[test]
 fn published_test_cases_match_their_100_digit_values() {
     let table = Table::load(PUBLISHED);
@@ -245,14 +246,30 @@ fn published_test_cases_match_their_100_digit_values() {
         col("ref_within_test_tolerance"),
     );
     let mut checked = 0;
-    let mut skipped_conductors = 0;
+    let mut conductors = 0;
     let mut worst = 0.0f64;
     for row in &table.rows {
         if row[c_within].trim() != "1" {
             continue;
         }
         if row[c_m].trim() == "PEC" {
-            skipped_conductors += 1;
+            let x = number(&row[c_x]);
+            let reference = number(&row[c_ref]);
+            let q = compute_efficiencies_perfect_conductor(x).unwrap();
+            let quantity = row[c_quantity].trim();
+            let value = match quantity {
+                "qext" => q.qext,
+                "qsca" => q.qsca,
+                "g" => q.g,
+                _ => panic!("unknown conductor quantity {quantity:?}"),
+            };
+            let error = relative_error(value, reference);
+            worst = worst.max(error / 1e-9);
+            assert!(
+                error <= 1e-9,
+                "conductor {quantity} at x = {x}: {value} vs {reference} ({error:e})"
+            );
+            conductors += 1;
             continue;
         }
         let m = Complex64::new(number(&row[c_mre]), number(&row[c_mim]));
@@ -332,8 +349,10 @@ fn published_test_cases_match_their_100_digit_values() {
         checked += 1;
     }
     assert_eq!(checked, 193, "plain-sphere rows checked");
-    assert_eq!(skipped_conductors, 10, "perfect-conductor rows skipped");
-    eprintln!("published cases: {checked} checked, worst error {worst:.2e} of its tolerance");
+    assert_eq!(conductors, 10, "perfect-conductor rows checked");
+    eprintln!(
+        "published cases: {checked} spheres and {conductors} perfect conductors checked, worst error {worst:.2e} of its tolerance"
+    );
 }
 
 /// Rayleigh limit: Q_sca -> (8/3) x^4 |(m^2-1)/(m^2+2)|^2 and

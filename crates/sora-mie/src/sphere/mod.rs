@@ -97,6 +97,9 @@
 //! - **Angular functions** (`amplitude.rs`): pi_n, tau_n by the upward
 //!   recurrences of B&H eq. 4.47 in Wiscombe's arrangement (exact at
 //!   mu = +-1), for blocks of angles at once.
+//! - **Perfect conductors** (`perfect_conductor.rs`): the limit
+//!   |m| -> infinity, a_n = psi_n'/xi_n', b_n = psi_n/xi_n, as a separate,
+//!   simple path ([`compute_efficiencies_perfect_conductor`]).
 //!
 //! Measured (tests in `tests/sphere_reference.rs`): against the 100-digit
 //! reference table the worst relative errors are 2e-14 (Q_ext, Q_sca, g),
@@ -109,8 +112,12 @@ mod bessel_ratio;
 mod coefficients;
 #[cfg(test)]
 mod naive;
+mod perfect_conductor;
 mod series_length;
 
+pub use perfect_conductor::{
+    MIN_PERFECT_CONDUCTOR_SIZE_PARAMETER, compute_efficiencies_perfect_conductor,
+};
 pub use series_length::{series_length_converged, series_length_wiscombe};
 
 use crate::Complex64;
@@ -125,8 +132,8 @@ pub enum MieError {
     InvalidSizeParameter(f64),
     /// `m` must be finite, Re(m) > 0, Im(m) >= 0, and |m| within
     /// [`REFRACTIVE_INDEX_MODULUS_RANGE`] (beyond it m^2 and the interior
-    /// recurrences leave double precision; a perfect conductor is not a
-    /// dielectric sphere).
+    /// recurrences leave double precision; the limit |m| -> infinity is
+    /// [`compute_efficiencies_perfect_conductor`]).
     InvalidRefractiveIndex(Complex64),
 }
 
