@@ -10,7 +10,7 @@ use sora_mie::Complex64;
 use sora_mie::sphere::{
     Efficiencies, MAX_INTERIOR_SIZE_PARAMETER, MAX_SIZE_PARAMETER, MieError, MieSolution,
     REFRACTIVE_INDEX_MODULUS_RANGE, SphereWorkspace, compute_efficiencies,
-    compute_efficiencies_with,
+    compute_efficiencies_perfect_conductor, compute_efficiencies_with,
 };
 
 fn size_parameter() -> impl Strategy<Value = f64> {

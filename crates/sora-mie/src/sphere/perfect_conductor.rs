@@ -31,7 +31,7 @@ pub const MIN_PERFECT_CONDUCTOR_SIZE_PARAMETER: f64 = 1e-6;
 /// case, |m| -> infinity). `x` must be finite and within
 /// [`MIN_PERFECT_CONDUCTOR_SIZE_PARAMETER`] ..= [`MAX_SIZE_PARAMETER`].
 pub fn compute_efficiencies_perfect_conductor(x: f64) -> Result<Efficiencies, MieError> {
-    if !(x >= MIN_PERFECT_CONDUCTOR_SIZE_PARAMETER && x <= MAX_SIZE_PARAMETER) {
+    if !(MIN_PERFECT_CONDUCTOR_SIZE_PARAMETER..=MAX_SIZE_PARAMETER).contains(&x) {
         return Err(MieError::InvalidSizeParameter(x));
     }
     let n_terms = series_length_converged(x);
