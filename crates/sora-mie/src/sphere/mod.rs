@@ -438,3 +438,84 @@ impl MieSolution {
         phase.iter_mut().for_each(|p| *p *= normalisation);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn invalid_inputs_are_errors_that_name_the_value() {
+        let good = Complex64::new(1.5, 0.01);
+        for x in [0.0, -1.0, f64::NAN, f64::INFINITY, 2e6] {
+            let error = compute_efficiencies(good, x).unwrap_err();
+            // The offending value is carried bit for bit (NaN included).
+            assert!(
+                matches!(error, MieError::InvalidSizeParameter(v) if v.to_bits() == x.to_bits())
+            );
+            assert!(error.to_string().contains("size parameter"));
+        }
+        for m in [
+            Complex64::new(0.0, 1.0),
+            Complex64::new(-1.5, 0.0),
+            Complex64::new(1.5, -0.01),
+            Complex64::new(f64::NAN, 0.0),
+            Complex64::new(1.5, f64::INFINITY),
+            Complex64::new(1e7, 0.0),
+            Complex64::new(1e-7, 0.0),
+        ] {
+            let error = compute_efficiencies(m, 1.0).unwrap_err();
+            assert!(matches!(error, MieError::InvalidRefractiveIndex(_)), "{m}");
+            assert!(error.to_string().contains("refractive index"));
+        }
+        // |m| x beyond the interior limit.
+        assert!(matches!(
+            compute_efficiencies(Complex64::new(1e3, 0.0), 2e5),
+            Err(MieError::InvalidSizeParameter(_))
+        ));
+        assert!(MieSolution::compute(good, 0.0).is_err());
+    }
+
+    #[test]
+    fn recompute_reuses_and_equals_a_fresh_solution() {
+        let mut solution = MieSolution::compute(Complex64::new(1.33, 0.0), 500.0).unwrap();
+        for &(m, x) in &[
+            (Complex64::new(1.5, 0.01), 30.0),
+            (Complex64::new(0.75, 0.0), 0.004),
+        ] {
+            solution.recompute(m, x).unwrap();
+            let fresh = MieSolution::compute(m, x).unwrap();
+            assert_eq!(solution.efficiencies(), fresh.efficiencies());
+            assert_eq!(solution.coefficients(), fresh.coefficients());
+            assert_eq!(solution.n_terms(), series_length_converged(x));
+            assert_eq!(solution.size_parameter(), x);
+            assert_eq!(solution.efficiencies(), compute_efficiencies(m, x).unwrap());
+        }
+        // An invalid sphere leaves the previous solution in place.
+        let before = solution.efficiencies();
+        assert!(solution.recompute(Complex64::new(1.5, 0.0), -1.0).is_err());
+        assert_eq!(solution.efficiencies(), before);
+    }
+
+    #[test]
+    fn tiny_spheres_keep_the_rayleigh_phase_function() {
+        // At x = 1e-200 every a_n underflows, but the phase function is formed
+        // from the scaled coefficients: 3/(16 pi) (1 + mu^2).
+        let solution = MieSolution::compute(Complex64::new(1.5, 0.01), 1e-200).unwrap();
+        assert!(solution.coefficients().0.iter().all(|a| a.norm() == 0.0));
+        for mu in [1.0, 0.5, 0.0, -0.7, -1.0] {
+            let rayleigh = 3.0 / (16.0 * std::f64::consts::PI) * (1.0 + mu * mu);
+            let p = solution.phase_function_per_sr(mu);
+            assert!(
+                (p / rayleigh - 1.0).abs() < 1e-12,
+                "mu = {mu}: {p} vs {rayleigh}"
+            );
+        }
+        // And the amplitudes of a small sphere scale as x^3: S(0) = (3/2) a_1.
+        let x = 1e-3;
+        let solution = MieSolution::compute(Complex64::new(1.5, 0.01), x).unwrap();
+        let (s1, s2) = solution.amplitudes(1.0);
+        let a1 = solution.coefficients().0[0];
+        assert!((s1 - a1 * 1.5).norm() < 1e-5 * s1.norm());
+        assert_eq!(s1, s2);
+    }
+}
