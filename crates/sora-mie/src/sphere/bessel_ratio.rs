@@ -177,7 +177,9 @@ pub(super) fn scaled_ratio_continued_fraction_real(x_squared: f64, n: usize) -> 
     estimate
 }
 
-/// Growth of the unnormalised downward solution beyond which it is rescaled.
+/// Growth of the unnormalised downward solution beyond which
+/// [`DownwardRatios::step`] rescales it.
+#[cfg(test)]
 const RESCALE_ABOVE: f64 = 1e100;
 
 /// The downward recurrence of rho_n(z), n = top, top-1, ..., as a state
@@ -194,7 +196,6 @@ pub(super) struct DownwardRatios {
     /// u_{n+1}, u_n for the n of the next step.
     upper: Complex64,
     current: Complex64,
-    n: usize,
     /// 2n + 1 for the n of the next step, kept as a float (an integer
     /// conversion per step costs more than the recurrence's additions).
     two_n_plus_1: f64,
@@ -212,20 +213,15 @@ impl DownwardRatios {
             inverse_z_squared: inverse_z * inverse_z,
             upper: first,
             current: Complex64::new(1.0, 0.0),
-            n: top - 1,
             two_n_plus_1: (2 * top - 1) as f64,
         };
         (state, first)
     }
 
-    /// The index of the ratio the next call of [`Self::step`] returns.
+    /// rho_n(z) for the next n (top-1, top-2, ...), one step at a time: the
+    /// plain form of the recurrence that [`Self::batch`] reorganises (kept
+    /// as the tests' reference).
     #[cfg(test)]
-    pub(super) fn next_index(&self) -> usize {
-        self.n
-    }
-
-    /// rho_n(z) for the next n (top-1, top-2, ...; n must stay >= 1).
-    #[inline(always)]
     pub(super) fn step(&mut self) -> Complex64 {
         let lower = self.inverse_z * self.two_n_plus_1 * self.current - self.upper;
         let ratio = self.current * reciprocal(lower);
@@ -235,13 +231,13 @@ impl DownwardRatios {
             self.current *= 1.0 / RESCALE_ABOVE;
             self.upper *= 1.0 / RESCALE_ABOVE;
         }
-        self.n -= 1;
         self.two_n_plus_1 -= 2.0;
         ratio
     }
 
     /// Eight steps at once: writes rho_n, ..., rho_{n-7} for the next n to
-    /// `re[7], im[7]` down to `re[0], im[0]` (n - 7 must stay >= 1).
+    /// `re[7], im[7]` down to `re[0], im[0]` (the recurrence is defined for
+    /// any n, negative included, so a batch may run past n = 1).
     ///
     /// The chain runs as four leapfrog double steps,
     /// u_{n-1} = t_n u_n - u_{n+1} and, straight from the same pair,
@@ -278,7 +274,6 @@ impl DownwardRatios {
             self.current = lowest;
             self.two_n_plus_1 -= 4.0;
         }
-        self.n -= 8;
         // rho = u_k / u_{k+1} = u_k conj(u_{k+1}) / |u_{k+1}|^2; slot 7 is
         // the highest n.
         for j in 0..8 {
@@ -310,9 +305,8 @@ const BATCH_RESCALE_ABOVE: f64 = 1e20;
 pub(super) fn fill_ratios_downward(z: Complex64, top: usize, rho: &mut [Complex64]) {
     let (mut state, first) = DownwardRatios::start(z, top);
     rho[top] = first;
-    while state.next_index() >= 2 {
-        let n = state.next_index();
-        rho[n] = state.step();
+    for slot in rho[2..top].iter_mut().rev() {
+        *slot = state.step();
     }
 }
 

@@ -590,17 +590,23 @@ fn fill_tables(
             k += 1;
         }
     }
-    // The remaining (count mod 8) steps one at a time: interior slots from
-    // (count mod 8) - 1 down to 0, exterior from k on.
+    // The remaining (count mod 8) steps, n = remaining + 1 down to 2: one
+    // more batch into a scratch buffer, of which the upper `remaining` slots
+    // are kept (the recurrence runs on harmlessly below n = 2: psi_n(z) is
+    // defined for negative n, and any value there is discarded).
     let remaining = count - k;
-    for j in (0..remaining).rev() {
-        let ratio = interior.step();
-        rho_re_range[j] = ratio.re;
-        rho_im_range[j] = ratio.im;
-        let (psi_next, chi_next) = exterior_step(k);
-        psi_range[k] = psi_next;
-        chi_range[k] = chi_next;
-        k += 1;
+    if remaining > 0 {
+        let (mut batch_re, mut batch_im) = ([0.0; 8], [0.0; 8]);
+        interior.batch(&mut batch_re, &mut batch_im);
+        let kept = 8 - remaining;
+        rho_re_range[..remaining].copy_from_slice(&batch_re[kept..]);
+        rho_im_range[..remaining].copy_from_slice(&batch_im[kept..]);
+        for (psi_slot, chi_slot) in psi_range[k..].iter_mut().zip(chi_range[k..].iter_mut()) {
+            let (psi_next, chi_next) = exterior_step(k);
+            *psi_slot = psi_next;
+            *chi_slot = chi_next;
+            k += 1;
+        }
     }
     // The last exterior step, n = top - 1: psi[top], chi[top].
     let step = two_n_plus_1 * inverse_x;
@@ -610,6 +616,34 @@ fn fill_tables(
         psi_current * rho_x[top - n_switch]
     };
     chi[top] = step * chi_current - chi_previous;
+}
+
+/// rho_x[k] = psi_{n_switch+k}(x) / psi_{n_switch+k-1}(x) for k >= 1 (the
+/// exterior ratios beyond the turning point): the top one from the
+/// continued fraction, the rest by the downward linear recurrence
+/// v_{n-1} = (2n+1)/x v_n - v_{n+1} with the division forming each ratio off
+/// the dependency chain (v is rescaled when large; only ratios of neighbours
+/// are kept, each formed within one scale).
+#[inline(always)]
+fn fill_exterior_ratios(x: f64, n_terms: usize, n_switch: usize, rho_x: &mut [f64]) {
+    let top = n_terms + 1;
+    let first = x * scaled_ratio_continued_fraction_real(x * x, top);
+    rho_x[top - n_switch] = first;
+    // (v_{top-1}, v_top) = (1, rho_top).
+    let inverse_x = 1.0 / x;
+    let (mut upper, mut current) = (first, 1.0);
+    let mut two_n_plus_1 = (2 * top - 1) as f64;
+    for slot in rho_x[1..top - n_switch].iter_mut().rev() {
+        let lower = two_n_plus_1 * inverse_x * current - upper;
+        *slot = current / lower;
+        upper = current;
+        current = lower;
+        if current.abs() > 1e100 {
+            upper *= 1e-100;
+            current *= 1e-100;
+        }
+        two_n_plus_1 -= 2.0;
+    }
 }
 
 /// The x >= 0.01 path: tables, then the coefficient pass in blocks.
@@ -631,12 +665,7 @@ fn solve_large<F: FnMut(Complex64, Complex64)>(
     let (chi, rest) = rest.split_at_mut(table);
     // rho_x[k] = psi_{n_switch+k}(x) / psi_{n_switch+k-1}(x), k >= 1.
     let rho_x = &mut rest[..table - n_switch];
-    let mut ratio = x * scaled_ratio_continued_fraction_real(x * x, n_terms + 1);
-    rho_x[n_terms + 1 - n_switch] = ratio;
-    for n in (n_switch + 1..=n_terms).rev() {
-        ratio = x / ((2 * n + 1) as f64 - x * ratio);
-        rho_x[n - n_switch] = ratio;
-    }
+    fill_exterior_ratios(x, n_terms, n_switch, rho_x);
     fill_tables(m, x, n_terms, n_switch, rho_re, rho_im, psi, chi, rho_x);
     let tables = Tables {
         rho_re,
