@@ -312,7 +312,7 @@ pub(super) fn fill_ratios_downward(z: Complex64, top: usize, rho: &mut [Complex6
 
 /// Fill `rhot[n] = psi_n(z) / (z psi_{n-1}(z))` for n = 1..=top, the scaled
 /// ratio that stays O(1) as z -> 0 (for the small-x path, where top is at
-/// most a dozen: the plain ratio recurrence is used).
+/// most a handful: the plain ratio recurrence is used).
 /// `rhot.len()` must exceed `top`.
 #[inline(always)]
 pub(super) fn fill_scaled_ratios_downward(z: Complex64, top: usize, rhot: &mut [Complex64]) {

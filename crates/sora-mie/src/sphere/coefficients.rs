@@ -195,7 +195,7 @@ impl SeriesSums {
 /// Solve the series for a validated (m, x) with `n_terms` =
 /// [`series_length_converged`](super::series_length_converged)`(x)`: returns
 /// the efficiencies and calls `record(a_n / s, b_n / s)` for n = 1..=n_terms
-/// in order, with the scale s = [`coefficient_scale`]`(x)` (x^3 below x = 1,
+/// in order, with the scale s = [`coefficient_scale`]`(x)` (x^3 below x = 0.01,
 /// so that the recorded values never underflow). `scratch` must hold at
 /// least [`scratch_length`] values.
 pub(super) fn solve_series<F: FnMut(Complex64, Complex64)>(
@@ -699,7 +699,7 @@ fn solve_large<F: FnMut(Complex64, Complex64)>(
         .finish(inverse_x * inverse_x, inverse_x * inverse_x)
 }
 
-/// The x < 1 path: all quantities scaled by powers of x, coefficients
+/// The x < 0.01 path: all quantities scaled by powers of x, coefficients
 /// accumulated as ahat_n = a_n / x^3, bhat_n = b_n / x^3.
 #[inline(always)]
 fn solve_small<F: FnMut(Complex64, Complex64)>(

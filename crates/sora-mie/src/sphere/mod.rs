@@ -82,12 +82,14 @@
 //!   real m and keeps its relative accuracy when Im(m) = 1e-8; Q_ext is then
 //!   Q_sca + Q_abs, two sums of non-negative terms (the direct sum of
 //!   Re(a_n + b_n) loses 1e-16/x^3 for small lossless spheres).
-//! - **Speed** (`coefficients.rs`, `bessel_ratio.rs`): every recurrence is
-//!   arranged so that no division sits on a dependency chain. The fraction is
-//!   evaluated by the forward (Wallis) recurrence of its convergents; the
-//!   interior recurrence runs on unnormalised psi_n(mx) two steps at a time
-//!   (a leapfrog form), forming the ratios in batches of eight; the exterior
-//!   recurrences run in the same loop; and the coefficients and all five
+//! - **Speed** (`coefficients.rs`, `bessel_ratio.rs`): every recurrence of
+//!   the x >= 0.01 path is arranged so that no division sits on a
+//!   dependency chain. The fraction is evaluated by the forward (Wallis)
+//!   recurrence of its convergents; the interior recurrence runs on
+//!   unnormalised psi_n(mx) two steps at a time (a leapfrog form), forming
+//!   the ratios in batches of eight; the exterior ratios run on an
+//!   unnormalised linear recurrence too; the upward exterior recurrences run
+//!   in the same loop as the interior one; and the coefficients and all five
 //!   sums are computed in blocks of eight terms from structure-of-arrays
 //!   tables, with one real division per term, in code the compiler
 //!   vectorises. On x86-64 the solver is also compiled for AVX and selected
@@ -292,7 +294,7 @@ pub struct MieSolution {
     /// a_n, b_n themselves (scale * the above).
     a: Vec<Complex64>,
     b: Vec<Complex64>,
-    /// x^3 for x < 1, else 1.
+    /// x^3 below x = 0.01 (the scaled path), else 1.
     scale: f64,
     /// sum (2n+1)(|a_n|^2 + |b_n|^2) / scale^2 = x^2 Q_sca / (2 scale^2).
     scattering_sum_scaled: f64,
