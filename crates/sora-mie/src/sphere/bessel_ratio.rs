@@ -90,12 +90,17 @@ pub(super) fn scaled_ratio_continued_fraction(z_squared: Complex64, n: usize) ->
     // 1/rhot = b_0 + a/(b_1 + a/(b_2 + ...)) with b_j = 2(n+j)+1, a = -z^2.
     // Convergents f_j = A_j / B_j with A_j = b_j A_{j-1} + a A_{j-2}, same for
     // B, from A_{-1} = 1, A_0 = b_0, B_{-1} = 0, B_0 = 1; we return B_j / A_j.
+    // A and B share the coefficients, so they are carried as one lane array
+    // [Re A, Im A, Re B, Im B] that the compiler keeps in one vector.
     let a = -z_squared;
-    let mut a_previous = Complex64::new(1.0, 0.0);
-    let mut a_current = Complex64::new((2 * n + 1) as f64, 0.0);
-    let mut b_previous = Complex64::new(0.0, 0.0);
-    let mut b_current = Complex64::new(1.0, 0.0);
-    let mut estimate = b_current * reciprocal(a_current);
+    // a * p for a complex pair p = [re, im]: re = a.re p.re - a.im p.im,
+    // im = a.re p.im + a.im p.re, i.e. a.re p[i] + sign[i] a.im p[i ^ 1].
+    let signed_a_im = [-a.im, a.im, -a.im, a.im];
+    let mut previous = [1.0, 0.0, 0.0, 0.0];
+    let mut current = [(2 * n + 1) as f64, 0.0, 1.0, 0.0];
+    let quotient =
+        |v: &[f64; 4]| Complex64::new(v[2], v[3]) * reciprocal(Complex64::new(v[0], v[1]));
+    let mut estimate = quotient(&current);
     // Convergence needs about |z| + 10 |z|^(1/3) + 50 terms at most (real z);
     // the cap (3 |z| + 2000) only guards against an endless loop.
     let size = z_squared.norm_sqr().sqrt().sqrt();
@@ -104,29 +109,28 @@ pub(super) fn scaled_ratio_continued_fraction(z_squared: Complex64, n: usize) ->
     for _ in 0..max_blocks {
         for _ in 0..CONTINUED_FRACTION_BLOCK {
             b_j += 2.0;
-            let a_next = a_current * b_j + a * a_previous;
-            let b_next = b_current * b_j + a * b_previous;
-            a_previous = a_current;
-            a_current = a_next;
-            b_previous = b_current;
-            b_current = b_next;
+            let mut next = [0.0; 4];
+            for i in 0..4 {
+                next[i] = current[i] * b_j + a.re * previous[i] + signed_a_im[i] * previous[i ^ 1];
+            }
+            previous = current;
+            current = next;
         }
         // Rescale so that A_j stays near 1 (the convergents are ratios and
         // do not change; the scaling's own rounding is one ulp of a ratio).
-        let magnitude = a_current.re.abs().max(a_current.im.abs());
+        let magnitude = current[0].abs().max(current[1].abs());
         if !(1e-100..=1e100).contains(&magnitude) && magnitude > 0.0 && magnitude.is_finite() {
             let scale = 1.0 / magnitude;
-            a_previous *= scale;
-            a_current *= scale;
-            b_previous *= scale;
-            b_current *= scale;
+            for i in 0..4 {
+                previous[i] *= scale;
+                current[i] *= scale;
+            }
         }
-        // Converged when the last two convergents agree: for this fraction
-        // (a Stieltjes-type fraction of a minimal solution) consecutive
-        // convergents bracket-or-bound the limit.
-        estimate = b_current * reciprocal(a_current);
-        let previous = b_previous * reciprocal(a_previous);
-        let change = (estimate - previous).norm_sqr();
+        // Converged when the last two convergents agree to the tolerance:
+        // past the turning region the fraction converges geometrically, and
+        // in the oscillatory region consecutive convergents differ by O(1).
+        estimate = quotient(&current);
+        let change = (estimate - quotient(&previous)).norm_sqr();
         if change
             <= CONTINUED_FRACTION_TOLERANCE * CONTINUED_FRACTION_TOLERANCE * estimate.norm_sqr()
         {

@@ -390,21 +390,14 @@ struct LargeSphere {
 
 impl LargeSphere {
     /// One block (terms first..first+BLOCK-1, padding lanes included): a_n,
-    /// b_n from psi_n, psi_{n+1}, chi_n, chi_{n+1} and rho_{n+1}(mx), written
-    /// to `a`, `b` and added to `sums`.
+    /// b_n from psi_n, psi_{n+1}, chi_n, chi_{n+1} and rho_{n+1}(mx), added to
+    /// `sums` and returned.
     ///
     /// Each loop below is straight-line arithmetic over the lanes, which
     /// the compiler turns into vector instructions; the two complex quotients
     /// of a term, 1/(n+1) and the absorption terms share one real division.
     #[inline(always)]
-    fn block(
-        &self,
-        input: &BlockInput,
-        first: usize,
-        a: &mut [Complex64; BLOCK],
-        b: &mut [Complex64; BLOCK],
-        sums: &mut LaneSums,
-    ) {
+    fn block(&self, input: &BlockInput, first: usize, sums: &mut LaneSums) -> BlockOutput {
         const B: usize = BLOCK;
         let (n, psi, psi_next, chi, chi_next) = (
             &input.n,
@@ -489,14 +482,25 @@ impl LargeSphere {
             sums.asymmetry_cross[k] +=
                 (inverse_n[k] + inverse_n_plus_1[k]) * (are * bre + aim * bim);
         }
-        for k in 0..B {
-            a[k] = Complex64::new(a_re[k], a_im[k]);
-            b[k] = Complex64::new(b_re[k], b_im[k]);
-        }
-        sums.previous_a = a[B - 1];
-        sums.previous_b = b[B - 1];
+        sums.previous_a = Complex64::new(a_re[B - 1], a_im[B - 1]);
+        sums.previous_b = Complex64::new(b_re[B - 1], b_im[B - 1]);
         sums.inverse_n = inverse_n_plus_1[B - 1];
+        BlockOutput {
+            a_re,
+            a_im,
+            b_re,
+            b_im,
+        }
     }
+}
+
+/// The coefficients of one block, as arrays (a caller that does not record
+/// them lets the compiler drop them).
+struct BlockOutput {
+    a_re: [f64; BLOCK],
+    a_im: [f64; BLOCK],
+    b_re: [f64; BLOCK],
+    b_im: [f64; BLOCK],
 }
 
 /// Fill the tables of the x >= 0.01 path.
@@ -683,15 +687,16 @@ fn solve_large<F: FnMut(Complex64, Complex64)>(
         a_slope: -((m - 1.0) * (m + 1.0)) * (inverse_m * inverse_m) * inverse_x,
     };
     let mut sums = LaneSums::new();
-    let mut a = [Complex64::new(0.0, 0.0); BLOCK];
-    let mut b = [Complex64::new(0.0, 0.0); BLOCK];
     let mut n = 1;
     while n <= n_terms {
         let len = BLOCK.min(n_terms + 1 - n);
         let input = BlockInput::from_tables(&tables, n, len);
-        sphere.block(&input, n, &mut a, &mut b, &mut sums);
+        let output = sphere.block(&input, n, &mut sums);
         for k in 0..len {
-            record(a[k], b[k]);
+            record(
+                Complex64::new(output.a_re[k], output.a_im[k]),
+                Complex64::new(output.b_re[k], output.b_im[k]),
+            );
         }
         n += BLOCK;
     }
