@@ -243,6 +243,22 @@ pub(super) fn solve_series_portable<F: FnMut(Complex64, Complex64)>(
     scratch: &mut [f64],
     record: F,
 ) -> Efficiencies {
+    if m == Complex64::new(1.0, 0.0) {
+        // An index-matched sphere does not scatter: every a_n, b_n is
+        // exactly zero (computed, they would be rounding noise ~1e-27).
+        let mut record = record;
+        let zero = Complex64::new(0.0, 0.0);
+        for _ in 0..n_terms {
+            record(zero, zero);
+        }
+        return Efficiencies {
+            qext: 0.0,
+            qsca: 0.0,
+            qabs: 0.0,
+            qback: 0.0,
+            g: 0.0,
+        };
+    }
     let mut efficiencies = if x < SMALL_SIZE_PARAMETER {
         solve_small(m, x, n_terms, record)
     } else {
@@ -818,6 +834,26 @@ mod tests {
             let mut count = 0;
             solve_series(m, x, n_terms, &mut scratch, |_, _| count += 1);
             assert_eq!(count, n_terms);
+        }
+    }
+
+    #[test]
+    fn index_matched_spheres_do_not_scatter() {
+        for &x in &[1e-3, 2.0, 1000.0] {
+            let (q, a, p, b) = solve_both(Complex64::new(1.0, 0.0), x);
+            assert_eq!(
+                q,
+                Efficiencies {
+                    qext: 0.0,
+                    qsca: 0.0,
+                    qabs: 0.0,
+                    qback: 0.0,
+                    g: 0.0
+                }
+            );
+            assert_eq!(q, p);
+            assert!(a.iter().chain(&b).all(|c| c.norm() == 0.0));
+            assert_eq!(a.len(), 2 * series_length_converged(x));
         }
     }
 
