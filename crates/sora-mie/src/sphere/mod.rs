@@ -392,7 +392,8 @@ impl MieSolution {
     }
 
     /// Unpolarised phase function, normalised to 1 over 4 pi sr (unit: sr^-1):
-    /// S11 / (pi x^2 Qsca).
+    /// S11 / (pi x^2 Qsca). For a sphere that does not scatter at all
+    /// (m = 1) it is the isotropic 1/(4 pi).
     pub fn phase_function_per_sr(&self, cos_theta: f64) -> f64 {
         // pi x^2 Q_sca = 2 pi sum (2n+1)(|a_n|^2 + |b_n|^2): with the scaled
         // coefficients both sides carry scale^2, which then cancels, so the
