@@ -750,6 +750,184 @@ impl PhaseTableWorkspace {
     }
 }
 
+/// Number of reference values of ln k of the index interpolation (Chebyshev-Lobatto points).
+const INTERPOLATION_ABSORPTION_NODES: usize = 4;
+
+/// Widest spread of the real part n over a spectrum that the index
+/// interpolation (linear in n) accepts; validated on the Wolff et al.
+/// (2009) Mars dust, whose n spans 0.0044 over 380-780 nm.
+pub const MAX_INTERPOLATED_REAL_INDEX_SPREAD: f64 = 0.01;
+
+/// Largest ratio k_max / k_min that the index interpolation (cubic in ln k)
+/// accepts; validated on the Wolff et al. (2009) Mars dust (ratio 10.5).
+pub const MAX_INTERPOLATED_ABSORPTION_RATIO: f64 = 20.0;
+
+/// Whether [`SpectralPhaseMethod::IndexInterpolated`] interpolates for
+/// these distinct indices, rather than computing each exactly: more distinct
+/// indices than the interpolation's reference computations, all absorbing
+/// (k > 0, as ln k is the interpolation variable), n spread at most
+/// [`MAX_INTERPOLATED_REAL_INDEX_SPREAD`] and k_max / k_min at most
+/// [`MAX_INTERPOLATED_ABSORPTION_RATIO`].
+pub fn index_interpolation_applies(distinct_indices: &[Complex64]) -> bool {
+    let Some(plan) = IndexInterpolationPlan::new(distinct_indices) else {
+        return false;
+    };
+    distinct_indices.len() > plan.reference_indices().len()
+}
+
+/// The reference indices of the index interpolation and the weights that
+/// combine their tables for one index (see the module docs).
+#[derive(Debug, Clone, PartialEq)]
+struct IndexInterpolationPlan {
+    /// ln k of the reference indices at n_mid (Chebyshev-Lobatto in [ln k_min, ln k_max]).
+    ln_absorption_nodes: [f64; INTERPOLATION_ABSORPTION_NODES],
+    /// n_mid = (n_min + n_max) / 2.
+    real_mid: f64,
+    /// n_max - n_mid: the step of the n reference (0: n is constant, no n reference).
+    real_half_spread: f64,
+}
+
+impl IndexInterpolationPlan {
+    /// The plan for these indices, or `None` outside the validated range.
+    fn new(indices: &[Complex64]) -> Option<Self> {
+        let first = indices.first()?;
+        let (mut k_min, mut k_max, mut n_min, mut n_max) = (first.im, first.im, first.re, first.re);
+        for m in indices {
+            k_min = k_min.min(m.im);
+            k_max = k_max.max(m.im);
+            n_min = n_min.min(m.re);
+            n_max = n_max.max(m.re);
+        }
+        let valid = k_min > 0.0
+            && k_max.is_finite()
+            && k_max <= MAX_INTERPOLATED_ABSORPTION_RATIO * k_min
+            && n_max - n_min <= MAX_INTERPOLATED_REAL_INDEX_SPREAD
+            // Distinct values of ln k, or the Lagrange basis is singular.
+            && k_max > k_min * (1.0 + 1e-6);
+        if !valid {
+            return None;
+        }
+        let (lower, upper) = (k_min.ln(), k_max.ln());
+        let (centre, half_width) = (0.5 * (lower + upper), 0.5 * (upper - lower));
+        let mut ln_absorption_nodes = [0.0; INTERPOLATION_ABSORPTION_NODES];
+        for (j, node) in ln_absorption_nodes.iter_mut().enumerate() {
+            let angle = PI * j as f64 / (INTERPOLATION_ABSORPTION_NODES - 1) as f64;
+            *node = centre - half_width * angle.cos();
+        }
+        // The end nodes exactly at the ends (cos rounding), so that no weight extrapolates.
+        ln_absorption_nodes[0] = lower;
+        ln_absorption_nodes[INTERPOLATION_ABSORPTION_NODES - 1] = upper;
+        let real_mid = 0.5 * (n_min + n_max);
+        Some(Self {
+            ln_absorption_nodes,
+            real_mid,
+            real_half_spread: n_max - real_mid,
+        })
+    }
+
+    /// Index of the reference that sits beside the n reference (same k, n_mid).
+    const REAL_PARTNER: usize = INTERPOLATION_ABSORPTION_NODES / 2;
+
+    /// The reference indices: n_mid + i k_j for each ln k node, then (if n
+    /// varies) n_max + i k_{REAL_PARTNER}.
+    fn reference_indices(&self) -> Vec<Complex64> {
+        let mut references: Vec<Complex64> = self
+            .ln_absorption_nodes
+            .iter()
+            .map(|&ln_k| Complex64::new(self.real_mid, ln_k.exp()))
+            .collect();
+        if self.real_half_spread > 0.0 {
+            references.push(Complex64::new(
+                self.real_mid + self.real_half_spread,
+                self.ln_absorption_nodes[Self::REAL_PARTNER].exp(),
+            ));
+        }
+        references
+    }
+
+    /// Weight of each reference table for index `m`: the Lagrange basis in
+    /// ln k at n_mid, plus t (P(n_max) - P(n_mid)) at the partner k, t =
+    /// (n - n_mid) / (n_max - n_mid).
+    fn weights(&self, m: Complex64) -> Vec<f64> {
+        let ln_k = m.im.ln();
+        let nodes = &self.ln_absorption_nodes;
+        let mut weights: Vec<f64> = (0..nodes.len())
+            .map(|j| {
+                nodes
+                    .iter()
+                    .enumerate()
+                    .filter(|&(i, _)| i != j)
+                    .map(|(_, &node)| (ln_k - node) / (nodes[j] - node))
+                    .product()
+            })
+            .collect();
+        if self.real_half_spread > 0.0 {
+            let t = (m.re - self.real_mid) / self.real_half_spread;
+            weights[Self::REAL_PARTNER] -= t;
+            weights.push(t);
+        }
+        weights
+    }
+}
+
+impl PhaseTableWorkspace {
+    /// Phase tables at `wavelengths_nm`, where the particles have index
+    /// `indices[i]` at `wavelengths_nm[i]`, by interpolation in the index
+    /// between tables computed for all the wavelengths at a few reference
+    /// indices (see the module docs). `indices` must satisfy
+    /// [`index_interpolation_applies`].
+    fn compute_index_interpolated(
+        &mut self,
+        wavelengths_nm: &[f64],
+        indices: &[Complex64],
+        distribution: &SizeDistribution,
+        settings: &RadiusQuadratureSettings,
+    ) -> Result<Vec<TabulatedPhaseFunction>, EnsembleError> {
+        let plan = IndexInterpolationPlan::new(indices)
+            .expect("the caller checked index_interpolation_applies");
+        let mut reference_tables = Vec::new();
+        for reference in plan.reference_indices() {
+            reference_tables.push(self.compute(
+                wavelengths_nm,
+                reference,
+                distribution,
+                settings,
+            )?);
+        }
+        let angle_count = self.cos_theta.len();
+        let mut tables = Vec::with_capacity(wavelengths_nm.len());
+        for (wavelength, (&wavelength_nm, &m)) in wavelengths_nm.iter().zip(indices).enumerate() {
+            let weights = plan.weights(m);
+            let mut phase_per_sr = vec![0.0; angle_count];
+            for (weight, reference) in weights.iter().zip(&reference_tables) {
+                for (value, &reference_value) in phase_per_sr
+                    .iter_mut()
+                    .zip(reference[wavelength].phase_per_sr_nodes())
+                {
+                    *value += weight * reference_value;
+                }
+            }
+            // The weights sum to 1 and each reference is positive; an
+            // interpolant below 0 (never seen) would be clipped.
+            phase_per_sr.iter_mut().for_each(|p| *p = p.max(0.0));
+            tables.push(
+                TabulatedPhaseFunction::from_nodes(self.cos_theta.clone(), phase_per_sr).map_err(
+                    |error| {
+                        EnsembleError::Distribution(
+                            SizeDistributionError::InvalidQuadratureSettings {
+                                message: format!(
+                                    "interpolated phase table at {wavelength_nm} nm: {error}"
+                                ),
+                            },
+                        )
+                    },
+                )?,
+            );
+        }
+        Ok(tables)
+    }
+}
+
 /// The ensemble Mie phase function of `distribution` at `wavelength_nm`
 /// (nm) for `refractive_index`, tabulated on [`ensemble_phase_table_angles_deg`]
 /// and integrated over radius with `settings`
@@ -818,6 +996,10 @@ pub struct EnsembleSettings {
     pub cross_section_quadrature: RadiusQuadratureSettings,
     /// Quadrature of the phase-function table (Mie mode only).
     pub phase_function_quadrature: RadiusQuadratureSettings,
+    /// How the phase tables of a spectrum are computed when the particles'
+    /// index differs between wavelengths (Mie mode only; see
+    /// [`SpectralPhaseMethod`]).
+    pub spectral_phase_method: SpectralPhaseMethod,
 }
 
 impl Default for EnsembleSettings {
@@ -826,8 +1008,26 @@ impl Default for EnsembleSettings {
             phase_mode: AerosolPhaseMode::Mie,
             cross_section_quadrature: RadiusQuadratureSettings::cross_sections(),
             phase_function_quadrature: RadiusQuadratureSettings::phase_function(),
+            spectral_phase_method: SpectralPhaseMethod::IndexInterpolated,
         }
     }
+}
+
+/// How [`compute_ensemble_optics_spectrum`] computes the phase tables of
+/// wavelengths at which the particles have different indices (a tabulated
+/// m(lambda)). Cross-sections are always computed exactly, per index.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SpectralPhaseMethod {
+    /// One phase computation (Mie solutions and angular sums at every radius
+    /// node) per distinct index: the reference path, and the test oracle of
+    /// the interpolated one.
+    Exact,
+    /// Phase tables at a few reference indices, each one computation shared
+    /// by every wavelength, interpolated per wavelength to its own index
+    /// (see the module docs). Falls back to [`Self::Exact`] where it would
+    /// not save work or lies outside its validated range
+    /// ([`index_interpolation_applies`]).
+    IndexInterpolated,
 }
 
 /// Everything a renderer needs of one aerosol species at one wavelength.
@@ -881,6 +1081,32 @@ pub fn compute_ensemble_optics_spectrum(
     }
     let mut results: Vec<Option<EnsembleOptics>> = vec![None; wavelengths_nm.len()];
     let mut workspace = PhaseTableWorkspace::new();
+    let group_indices: Vec<Complex64> = groups.iter().map(|(m, _)| *m).collect();
+    let mut interpolated_tables = match settings.phase_mode {
+        AerosolPhaseMode::Mie
+            if settings.spectral_phase_method == SpectralPhaseMethod::IndexInterpolated
+                && index_interpolation_applies(&group_indices) =>
+        {
+            let indices: Vec<Complex64> = groups
+                .iter()
+                .flat_map(|(m, members)| members.iter().map(move |_| *m))
+                .collect();
+            let order: Vec<usize> = groups
+                .iter()
+                .flat_map(|(_, members)| members.iter().copied())
+                .collect();
+            let ordered_wavelengths_nm: Vec<f64> =
+                order.iter().map(|&i| wavelengths_nm[i]).collect();
+            let tables = workspace.compute_index_interpolated(
+                &ordered_wavelengths_nm,
+                &indices,
+                distribution,
+                &settings.phase_function_quadrature,
+            )?;
+            Some(tables.into_iter().rev().collect::<Vec<_>>())
+        }
+        _ => None,
+    };
     for (refractive_index, members) in groups {
         let group_wavelengths_nm: Vec<f64> = members.iter().map(|&i| wavelengths_nm[i]).collect();
         let cross_sections = compute_shared_cross_sections(
@@ -890,6 +1116,18 @@ pub fn compute_ensemble_optics_spectrum(
             &settings.cross_section_quadrature,
         )?;
         let phase_functions: Vec<AerosolPhaseFunction> = match settings.phase_mode {
+            AerosolPhaseMode::Mie if interpolated_tables.is_some() => {
+                // The tables come in group order; popped from the reversed list.
+                let tables = interpolated_tables.as_mut().expect("checked");
+                members
+                    .iter()
+                    .map(|_| {
+                        AerosolPhaseFunction::Tabulated(
+                            tables.pop().expect("one table per wavelength"),
+                        )
+                    })
+                    .collect()
+            }
             AerosolPhaseMode::Mie => workspace
                 .compute(
                     &group_wavelengths_nm,
@@ -1118,6 +1356,39 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// The interpolation weights reproduce each reference index exactly,
+    /// sum to 1 and stay bounded inside the range.
+    #[test]
+    fn index_interpolation_weights() {
+        let indices = [
+            Complex64::new(1.4956, 0.00094),
+            Complex64::new(1.5, 0.0099),
+            Complex64::new(1.498, 0.003),
+        ];
+        let plan = IndexInterpolationPlan::new(&indices).unwrap();
+        let references = plan.reference_indices();
+        assert_eq!(references.len(), 5);
+        assert!((references[0].im / 0.00094 - 1.0).abs() < 1e-14);
+        assert!((references[3].im / 0.0099 - 1.0).abs() < 1e-14);
+        for (j, &reference) in references.iter().enumerate() {
+            let weights = plan.weights(reference);
+            for (i, &w) in weights.iter().enumerate() {
+                let expected = if i == j { 1.0 } else { 0.0 };
+                assert!((w - expected).abs() < 1e-12, "reference {j}: {weights:?}");
+            }
+        }
+        for m in indices {
+            let weights = plan.weights(m);
+            assert!((weights.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+            assert!(weights.iter().all(|w| w.abs() <= 2.0), "{weights:?}");
+        }
+        // Constant n: no n reference.
+        let plan =
+            IndexInterpolationPlan::new(&[Complex64::new(1.5, 0.001), Complex64::new(1.5, 0.01)])
+                .unwrap();
+        assert_eq!(plan.reference_indices().len(), 4);
     }
 
     /// The vector builds of the angular sums perform the portable build's
