@@ -7,13 +7,16 @@
 //! v_eff 0.3; m = 1.5 + 0.005i), the paper's Table 1 aerosol (log-normal
 //! r_m 0.5 um, sigma_g 2.0, truncated to 0.1-2.5 um; m = 1.5 + 0.01i), and
 //! Mars dust with the Wolff et al. (2009) tabulated index, where every
-//! wavelength has its own index and so its own Mie solutions.
+//! wavelength has its own index and so its own Mie solutions: with the
+//! default phase tables interpolated between reference indices, with the
+//! exact per-index tables, and with the paper's HG phase (cross-sections
+//! only, which are always computed per index).
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use sora_mie::Complex64;
 use sora_mie::distribution::{RadiusWindow, SizeDistribution};
 use sora_mie::ensemble::{
-    EnsembleSettings, PAPER_WAVELENGTHS_NM, compute_ensemble_optics_spectrum,
+    EnsembleSettings, PAPER_WAVELENGTHS_NM, SpectralPhaseMethod, compute_ensemble_optics_spectrum,
 };
 use sora_mie::paper_phase::AerosolPhaseMode;
 use sora_mie::refractive_index::{RefractiveIndexModel, TabulatedRefractiveIndex};
@@ -39,6 +42,11 @@ fn bench_species(c: &mut Criterion) {
         ..EnsembleSettings::default()
     };
 
+    let exact_phase = EnsembleSettings {
+        spectral_phase_method: SpectralPhaseMethod::Exact,
+        ..EnsembleSettings::default()
+    };
+
     let mut group = c.benchmark_group("ensemble_21_wavelengths");
     group.sample_size(20);
     let cases = [
@@ -50,6 +58,18 @@ fn bench_species(c: &mut Criterion) {
             &mars_dust,
             &wolff,
             &mie,
+        ),
+        (
+            "mars_dust_wolff2009_table_exact_mie_phase",
+            &mars_dust,
+            &wolff,
+            &exact_phase,
+        ),
+        (
+            "mars_dust_wolff2009_table_paper_hg",
+            &mars_dust,
+            &wolff,
+            &paper_hg,
         ),
     ];
     for (name, distribution, index, settings) in cases {

@@ -83,15 +83,92 @@
 //! interpolation); its mean cosine matches the cross-section `g` within
 //! 8.5e-5 (1e-5 for the denser rule: the rest is the table's interpolation).
 //!
+//! The radius rule's noise grows as `k` falls (the resonances narrow like
+//! `k`, as for the cross-sections): for Mars dust with the Wolff (2009)
+//! index, against a rule 16 times denser and deeper (itself converged to
+//! 8e-4), the exact tables are within 1.3e-3 to 2.7e-3 forward and 2e-3 to
+//! 5e-3 backward for k 0.0099-0.0055 (380-500 nm), but 4e-3 to 8.3e-3
+//! forward and 7e-3 to 2.4e-2 backward for k 0.0034-0.00094 (540-780 nm).
+//!
+//! ## A tabulated index: phase tables interpolated in the index
+//!
+//! With m(lambda) tabulated, every wavelength has its own index, so no Mie
+//! solution is shared and the exact phase tables cost one full radius rule
+//! (Mie solution and 406-angle sums per node) per wavelength: 21 times the
+//! work of a constant index. [`SpectralPhaseMethod::IndexInterpolated`] (the
+//! default) instead computes, for all the wavelengths at once with the
+//! shared size-parameter rule, the tables at five reference indices, and
+//! interpolates each wavelength's table from them:
+//!
+//! ```text
+//!     P(lambda; n + ik) = sum_j L_j(ln k) P(lambda; n_mid + i k_j)
+//!                         + t [P(lambda; n_max + i k_2) - P(lambda; n_mid + i k_2)]
+//! ```
+//!
+//! with `k_j` the four Chebyshev-Lobatto points of `[ln k_min, ln k_max]`,
+//! `L_j` their Lagrange basis (cubic in ln k), `n_mid` the middle of the n
+//! range and `t = (n - n_mid) / (n_max - n_mid)` (linear in n); the result is
+//! renormalised like any table. Why in the index and not in wavelength: the
+//! table's strong wavelength dependence is the size parameter's scaling
+//! (the forward peak's width goes like lambda), which each reference gets
+//! exactly because it is computed at every wavelength; what is interpolated
+//! is only the smooth dependence of the ensemble on m at a fixed
+//! wavelength (absorption damps the refracted light like exp(-c k x), smooth
+//! in ln k once averaged over a broad distribution). Interpolating the
+//! tables in wavelength instead (every 4th or 5th wavelength, in ln P, or
+//! along the index path) errs by 1-2e-2 near 400-500 nm, because the Wolff
+//! m(lambda) has kinks at its rows (440, 460, 500, 600, 700 nm). A cubic in
+//! ln k without the n term errs by up to 2.7e-2 backward: n varies by only
+//! 0.0044, but that moves the resonances and the rainbow.
+//!
+//! It applies where it saves work and has been validated: more distinct
+//! indices than references, all absorbing, n spread at most
+//! [`MAX_INTERPOLATED_REAL_INDEX_SPREAD`] and k_max / k_min at most
+//! [`MAX_INTERPOLATED_ABSORPTION_RATIO`] ([`index_interpolation_applies`]);
+//! otherwise each index is computed exactly. Cross-sections, albedo, g and
+//! the paper's g are always computed exactly per index (bit-identical in
+//! both methods). [`SpectralPhaseMethod::Exact`] keeps the exact path, and
+//! the tests check one against the other at every wavelength.
+//!
+//! Measured (Mars dust, Wolff index, 21 wavelengths; against the converged
+//! rule above): the interpolated tables are within 8.8e-4 to 5e-3 forward
+//! and 2.7e-3 to 1e-2 backward at every wavelength, against 1.3e-3 to 8.3e-3
+//! and 2e-3 to 2.4e-2 for the exact path: more accurate in both hemispheres
+//! at 12 of the 21 wavelengths (all of 480-660 nm), worse backward at
+//! 380-460 nm (up to 6.7e-3 against 4.2e-3: there k is large and the exact
+//! tables' noise smallest) and by at most 1.5e-3 in one hemisphere at
+//! 680-740 nm. The reason they are
+//! generally better: the shared size-parameter rule spans the union of the
+//! wavelengths' ranges, so each wavelength gets more nodes than its own
+//! rule. Fast against exact: within 1.2e-2 forward and 2.3e-2 backward,
+//! which is the two paths' radius-rule noise; the tables' mean cosine stays
+//! within 4e-4 of the cross-section g.
+//!
 //! ## Cost
 //!
-//! Criterion (`benches/ensemble.rs`, this 2-core machine shared with other
-//! builds, so +-20%): the 21 paper wavelengths of one species with the Mie
-//! phase tables take about 50 ms (Mars dust, constant m = 1.5 + 0.005i) and
-//! 46 ms (Table 1 aerosol, 0.1-2.5 um), of which the phase tables are about
-//! three quarters; 12 ms with the paper's HG phase (cross-sections only).
-//! With the Wolff (2009) tabulated index every wavelength has its own `m`,
-//! nothing is shared, and the same build takes about 0.95 s.
+//! The angular sums (`accumulate_weighted_s11`) are compiled for AVX-512F
+//! and AVX as well as the portable target, selected at run time
+//! (bit-identical), about 3-5 times faster than the portable SSE2 build.
+//!
+//! Criterion (`benches/ensemble.rs`), 21 paper wavelengths, load average
+//! (`uptime`, this 2-core machine is shared with other builds) given for
+//! each set, so +-30%:
+//!
+//! | case | before (load 4.2) | after (load LOAD_AFTER) |
+//! |---|---|---|
+//! | Mars dust, m = 1.5 + 0.005i, Mie phase | 48.8 ms | MARS_AFTER |
+//! | Mars dust, paper HG (cross-sections only) | 7.9 ms | HG_AFTER |
+//! | Table 1 aerosol 0.1-2.5 um, Mie phase | 53.3 ms | TABLE1_AFTER |
+//! | Mars dust, Wolff index, Mie phase (default: interpolated) | 751 ms | WOLFF_AFTER |
+//! | same, exact per-index tables | 751 ms | WOLFF_EXACT_AFTER |
+//! | same, paper HG (cross-sections only) | - | WOLFF_HG_AFTER |
+//!
+//! With the Wolff index the cross-sections alone (one cross-section rule of
+//! about 1800 nodes per wavelength, 37 800 sphere solutions) now cost about
+//! as much as the interpolated phase tables; they are kept exact, so that
+//! they do not change (bit-identical), and are the next thing to speed up
+//! (a solver batched over nodes or indices; the sphere module is not this
+//! module's to change).
 
 use crate::Complex64;
 use crate::distribution::{
