@@ -11,10 +11,13 @@
 //! - [`quadrature`]: the Gauss-Legendre rules they share.
 
 pub mod optical_column;
+pub mod path_tracing;
 pub mod quadrature;
+pub mod random;
 pub mod single_scattering;
 pub mod sky_view_table;
 
+pub use path_tracing::{PathTracedSpectrum, PathTracer, SpectralEstimate};
 pub use single_scattering::{
     Observation, SingleScatteringScratch, SingleScatteringSky, SunColumns,
 };
