@@ -53,25 +53,35 @@
 //!    every species are integrated by composite 4-point Gauss-Legendre on
 //!    [`SEGMENT_PANELS`] panels crowded toward the segment's start and its
 //!    lowest point ([`super::optical_column::ray_panel`], as the
-//!    single-scattering code). tau_lambda(t) = sum_j beta_ext,j(lambda)
+//!    single-scattering code), and cut where the segment crosses a corner
+//!    of a piecewise-linear profile (tents, layers), where the rule would
+//!    otherwise converge slowly (measured: a 2-4 km tent seen at 10 deg
+//!    elevation came out 1.4% low without the cuts). tau_lambda(t) = sum_j beta_ext,j(lambda)
 //!    C_j(t) for every wavelength at once. Transmittances used in weights
 //!    are exp(-tau) of these integrals at the exact sampled point (the
 //!    panels before it, and a 4-point rule on the part of its own panel),
 //!    so the only approximation in the whole estimator is this quadrature
-//!    of a smooth integrand, relative error ~1e-9 for vertical and 1e-6 for
-//!    grazing rays (see `optical_column`), a thousand times below any
+//!    of a smooth integrand: measured against 1024 panels over rays from
+//!    0-30 km at -90..90 deg, on Earth and in the plane-parallel limit, a
+//!    relative column error below 1e-7 (the worst is a grazing aerosol
+//!    column) and |delta tau| < 2e-6 at 380 nm, a thousand times below any
 //!    Monte Carlo error we can reach: the expectation is the RTE solution.
 //!    Ratio tracking would also be unbiased but adds noise to every weight;
-//!    delta tracking samples exactly but only for one wavelength and a
-//!    majorant (1000 null collisions per real one for aerosols near the
-//!    ground with a per-path majorant).
+//!    delta tracking samples exactly, but for one wavelength and against a
+//!    majorant: with a per-segment majorant a vertical path has ~80 null
+//!    collisions per real one in a 1.2 km aerosol (its mean density along
+//!    100 km is 1% of the ground value).
 //! 2. **Free path.** The sampling density of wavelength k is the free-path
-//!    density of a medium whose optical depth is piecewise linear between
-//!    the panel ends: on panel i, p_k(t) = (dtau_k,i / dt_i)
-//!    exp(-tau~_k(t)) / Z_k, inverted in closed form. It is not the true
-//!    density (the coefficient varies inside a panel), but that only costs
-//!    variance: the weight is the true T_lambda(t) over the mixture of these
-//!    explicit densities. **Forced collisions**: when nothing comes from
+//!    density of a model medium whose optical depth is piecewise linear
+//!    between the panel ends and the Gauss nodes (5 pieces a panel; the
+//!    columns at the nodes are the running integrals of the cubic through
+//!    the panel's four densities, free once they are known): on piece m,
+//!    p_k(t) = (dtau~_k,m / dt_m) exp(-tau~_k(t)) / Z_k, inverted in closed
+//!    form. It is not the true density (the coefficient varies inside a
+//!    piece), but that only costs variance: the weight is the true
+//!    T_lambda(t) over the mixture of these explicit densities (the model
+//!    is floored to stay positive wherever a Gauss node sees the medium,
+//!    which unbiasedness needs). **Forced collisions**: when nothing comes from
 //!    beyond the segment (it ends at the top, where the only light is the
 //!    sun that NEE handles, or on a black ground), the collision is forced
 //!    inside it: Z_k = 1 - exp(-tau_k(S)), and the mixture runs over the
@@ -84,9 +94,9 @@
 //!    below.
 //! 3. **NEE toward the sun** at every scattering vertex:
 //!    beta_lambda sum_j sigma_s,j p_j(w.s) E T_sun, with T_sun from the
-//!    exact column toward the sun ([`compute_columns_along_ray`], the same
-//!    integral as the single-scattering fast path's `SunColumns::Exact`),
-//!    zero in the planet's shadow.
+//!    exact column toward the sun (the same Gauss-Legendre integral as the
+//!    single-scattering fast path's `SunColumns::Exact`), zero in the
+//!    planet's shadow.
 //! 4. **Phase sampling.** A wavelength k is drawn uniformly among those
 //!    that scatter here, a species j with probability
 //!    sigma_s,j(k) / sigma_s(k), a direction from that species' phase
@@ -129,16 +139,18 @@
 //!
 //! # Assumptions and limits
 //! A point sun (parallel rays; the disc is not sampled), unpolarised light,
-//! no refraction, a smooth spherical Lambertian ground, species whose
-//! profiles the Gauss panels resolve (a layer thinner than a panel that no
-//! node touches would be missed, as by the single-scattering code). The
-//! per-path work allocates nothing: every buffer lives in a per-chunk
-//! scratch.
+//! no refraction, a smooth spherical Lambertian ground. Profiles must be
+//! resolved by the Gauss panels between corners: exponentials and
+//! log-linear tables (US Standard Atmosphere) are smooth enough, corners of
+//! piecewise-linear profiles are cut out, but a layer thinner than a panel
+//! that no node touches would be missed, as by the single-scattering code.
+//! The per-path work allocates nothing: every buffer lives in a per-chunk
+//! scratch, sized for the most panel cuts.
 
 use std::f64::consts::PI;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use super::optical_column::{compute_columns_along_ray, ray_panel};
+use super::optical_column::ray_panel;
 use super::quadrature::{GAUSS_NODES, GAUSS_WEIGHTS, running_integral_matrix};
 use super::random::RandomStream;
 use super::single_scattering::{SUN_RAY_PANELS, SingleScatteringSky};
@@ -147,7 +159,7 @@ use crate::atmosphere::{AtmosphereOptics, DensityProfile, PhaseFunction};
 use crate::error::{Error, Result};
 use crate::geometry::{
     Vector3, distance_to_ground_boundary, distance_to_top_boundary, ray_intersects_ground,
-    segment_in_atmosphere,
+    ray_sphere_roots, segment_in_atmosphere,
 };
 use crate::spectrum::SampledSpectrum;
 
@@ -155,9 +167,10 @@ use crate::spectrum::SampledSpectrum;
 /// transmittance).
 pub const SEGMENT_PANELS: usize = 16;
 
-/// Points of the free-path sampling model along a segment: the ends of
-/// the panels and their Gauss nodes.
-const SAMPLING_POINTS: usize = 5 * SEGMENT_PANELS + 1;
+/// The sampling model's column over a piece is at least this fraction of
+/// its length times the density at the piece's Gauss nodes (see
+/// `fill_segment_columns`; smooth profiles never reach the floor).
+const MODEL_DENSITY_FLOOR: f64 = 0.1;
 
 /// Samples per chunk of work: the unit of parallelism and of the fixed
 /// summation order.
@@ -255,20 +268,27 @@ pub struct PathTracer<'a> {
     /// Integrals of the Lagrange basis on the Gauss nodes up to each node
     /// ([`running_integral_matrix`]).
     running_integral: [[f64; 4]; 4],
+    /// Altitudes (m) where a piecewise-linear profile has a corner, inside
+    /// the atmosphere: every ray is cut where it crosses them.
+    kink_altitudes_m: Vec<f64>,
 }
 
 /// Per-chunk work space (no allocation per path).
 #[derive(Debug, Clone)]
 struct PathScratch {
+    /// Distances of the panel ends along the current segment, m.
+    panel_ends_m: Vec<f64>,
     /// Columns from the segment's start to each panel end,
     /// [panel end * species + j], m (Gauss-Legendre).
     panel_columns_m: Vec<f64>,
     /// Distances along the current segment of the points of the sampling
     /// model: every panel end and every Gauss node, m.
-    sampling_distances_m: [f64; SAMPLING_POINTS],
+    sampling_distances_m: Vec<f64>,
     /// The sampling model's columns at those points,
-    /// [point * species + j], m (non-decreasing).
+    /// [point * species + j], m (increasing).
     sampling_columns_m: Vec<f64>,
+    /// Panel ends of a path toward the sun, m.
+    sun_panel_ends_m: Vec<f64>,
     /// Relative density of each species at the four Gauss nodes of the
     /// current panel.
     node_densities: Vec<[f64; 4]>,
@@ -375,10 +395,21 @@ impl<'a> PathTracer<'a> {
         let wavelengths = optics.grid.len();
         let mut extinction_per_m = Vec::with_capacity(optics.species.len() * wavelengths);
         let mut scattering_per_m = Vec::with_capacity(optics.species.len() * wavelengths);
+        let mut kink_altitudes_m = Vec::new();
         for species in &optics.species {
             extinction_per_m.extend_from_slice(species.extinction_per_m.values());
             scattering_per_m.extend_from_slice(species.scattering_per_m.values());
+            if let DensityProfile::PiecewiseLinear(table) = &species.profile {
+                kink_altitudes_m.extend(
+                    table
+                        .altitudes_m()
+                        .iter()
+                        .filter(|h| **h > 0.0 && **h < top_radius_m - ground_radius_m),
+                );
+            }
         }
+        kink_altitudes_m.sort_by(f64::total_cmp);
+        kink_altitudes_m.dedup();
         PathTracer {
             optics,
             profiles: optics.species.iter().map(|s| &s.profile).collect(),
@@ -396,6 +427,7 @@ impl<'a> PathTracer<'a> {
                 .collect(),
             black_ground: optics.ground_albedo.values().iter().all(|a| *a <= 0.0),
             running_integral: running_integral_matrix(),
+            kink_altitudes_m,
         }
     }
 
@@ -502,10 +534,15 @@ impl<'a> PathTracer<'a> {
 
     fn scratch(&self) -> PathScratch {
         let (species, n) = (self.profiles.len(), self.wavelengths);
+        // A ray crosses each kink altitude at most twice.
+        let most_panels = SEGMENT_PANELS + 2 * self.kink_altitudes_m.len();
+        let most_sun_panels = SUN_RAY_PANELS + 2 * self.kink_altitudes_m.len();
         PathScratch {
-            panel_columns_m: vec![0.0; (SEGMENT_PANELS + 1) * species],
-            sampling_distances_m: [0.0; SAMPLING_POINTS],
-            sampling_columns_m: vec![0.0; SAMPLING_POINTS * species],
+            panel_ends_m: Vec::with_capacity(most_panels + 1),
+            panel_columns_m: vec![0.0; (most_panels + 1) * species],
+            sampling_distances_m: vec![0.0; 5 * most_panels + 1],
+            sampling_columns_m: vec![0.0; (5 * most_panels + 1) * species],
+            sun_panel_ends_m: Vec::with_capacity(most_sun_panels + 1),
             node_densities: vec![[0.0; 4]; species],
             point_columns_m: vec![0.0; species],
             sun_columns_m: vec![0.0; species],
@@ -638,28 +675,76 @@ impl<'a> PathTracer<'a> {
         }
     }
 
+    /// The ends of the Gauss panels of a ray from `start` along
+    /// `direction` over [0, `length`] m into `ends` (increasing, from 0 to
+    /// `length`): `panels` panels crowded toward the ray's start and its
+    /// lowest point ([`ray_panel`]), cut where the ray crosses a kink
+    /// altitude, so that every panel integrates a smooth function (4-point
+    /// Gauss-Legendre converges slowly across a corner). No allocation: the
+    /// capacity is reserved for the most cuts.
+    fn set_panel_ends(
+        &self,
+        start: Vector3,
+        direction: Vector3,
+        length: f64,
+        panels: usize,
+        ends: &mut Vec<f64>,
+    ) {
+        ends.clear();
+        ends.push(0.0);
+        let tangent_distance = -start.dot(direction);
+        for k in 0..panels {
+            ends.push(ray_panel(tangent_distance, length, panels, k).1);
+        }
+        let uncut = ends.len();
+        for h in &self.kink_altitudes_m {
+            if let Some((near, far)) = ray_sphere_roots(start, direction, self.ground_radius_m + h)
+            {
+                for t in [near, far] {
+                    if t > 0.0 && t < length {
+                        ends.push(t);
+                    }
+                }
+            }
+        }
+        if ends.len() > uncut {
+            ends.sort_unstable_by(f64::total_cmp);
+            ends.dedup();
+        }
+    }
+
     /// Columns of every species from `start` along `direction` over the
     /// segment of `length` m, into the scratch: exact (Gauss-Legendre) at
     /// each panel end, and the sampling model's at every panel end and
-    /// Gauss node. The model's column at a node is the running integral
-    /// of the cubic through the panel's four densities
-    /// ([`running_integral_matrix`]), free once the densities are known;
-    /// it is kept non-decreasing so that the model is a density even where
-    /// the cubic of a kinked (layer) profile dips below zero.
+    /// Gauss node. The model's column over a piece between those points is
+    /// the integral of the cubic through the panel's four densities
+    /// ([`running_integral_matrix`]), free once the densities are known,
+    /// but at least [`MODEL_DENSITY_FLOOR`] times the piece's length times
+    /// the density at its Gauss nodes: so the model is positive wherever a
+    /// node sees the species, even where the cubic dips below zero, and
+    /// every part of the medium the quadrature sees can be sampled (which
+    /// unbiasedness needs). Returns the number of panels.
     fn fill_segment_columns(
         &self,
         start: Vector3,
         direction: Vector3,
         length: f64,
         scratch: &mut PathScratch,
-    ) {
+    ) -> usize {
         let species = self.profiles.len();
-        let tangent_distance = -start.dot(direction);
+        self.set_panel_ends(
+            start,
+            direction,
+            length,
+            SEGMENT_PANELS,
+            &mut scratch.panel_ends_m,
+        );
+        let panels = scratch.panel_ends_m.len() - 1;
         scratch.panel_columns_m[..species].fill(0.0);
         scratch.sampling_columns_m[..species].fill(0.0);
         scratch.sampling_distances_m[0] = 0.0;
-        for k in 0..SEGMENT_PANELS {
-            let (a, b) = ray_panel(tangent_distance, length, SEGMENT_PANELS, k);
+        for k in 0..panels {
+            let (a, b) = (scratch.panel_ends_m[k], scratch.panel_ends_m[k + 1]);
             let (centre, half) = (0.5 * (a + b), 0.5 * (b - a));
             for (node, x) in GAUSS_NODES.iter().enumerate() {
                 let distance = centre + half * x;
@@ -676,17 +761,32 @@ impl<'a> PathTracer<'a> {
                 let panel: f64 = (0..4).map(|q| GAUSS_WEIGHTS[q] * rho[q]).sum();
                 scratch.panel_columns_m[(k + 1) * species + j] = panel_start + half * panel;
                 let mut model = scratch.sampling_columns_m[5 * k * species + j];
-                for node in 0..4 {
-                    let running: f64 = (0..4)
-                        .map(|q| self.running_integral[node][q] * rho[q])
-                        .sum();
-                    model = model.max(panel_start + half * running);
-                    scratch.sampling_columns_m[(5 * k + 1 + node) * species + j] = model;
+                let mut previous_running = 0.0;
+                for piece in 0..5 {
+                    // The cubic's running integral from the panel start to
+                    // the piece's end (the whole panel for the last piece).
+                    let running = if piece < 4 {
+                        half * (0..4)
+                            .map(|q| self.running_integral[piece][q] * rho[q])
+                            .sum::<f64>()
+                    } else {
+                        half * panel
+                    };
+                    let width = scratch.sampling_distances_m[5 * k + piece + 1]
+                        - scratch.sampling_distances_m[5 * k + piece];
+                    let flanking_density = match piece {
+                        0 => rho[0],
+                        4 => rho[3],
+                        m => rho[m - 1].max(rho[m]),
+                    };
+                    model += (running - previous_running)
+                        .max(MODEL_DENSITY_FLOOR * width * flanking_density);
+                    scratch.sampling_columns_m[(5 * k + piece + 1) * species + j] = model;
+                    previous_running = running;
                 }
-                scratch.sampling_columns_m[(5 * k + 5) * species + j] =
-                    model.max(panel_start + half * panel);
             }
         }
+        panels
     }
 
     /// Optical depth at wavelength `i` of `columns` (one per species).
@@ -719,8 +819,9 @@ impl<'a> PathTracer<'a> {
         if length <= 0.0 {
             return passes;
         }
-        self.fill_segment_columns(start, direction, length, scratch);
-        let last = (SAMPLING_POINTS - 1) * species;
+        let panels = self.fill_segment_columns(start, direction, length, scratch);
+        let sampling_points = 5 * panels + 1;
+        let last = (sampling_points - 1) * species;
         for i in 0..n {
             scratch.segment_optical_depth[i] =
                 self.optical_depth(i, &scratch.sampling_columns_m[last..last + species]);
@@ -766,7 +867,7 @@ impl<'a> PathTracer<'a> {
                     .map(|tau| (-tau).exp())
                     .sum::<f64>()
                     / n as f64;
-                let whole = SEGMENT_PANELS * species;
+                let whole = panels * species;
                 for i in 0..n {
                     let tau =
                         self.optical_depth(i, &scratch.panel_columns_m[whole..whole + species]);
@@ -778,10 +879,10 @@ impl<'a> PathTracer<'a> {
         };
         // The interval of the model where the hero's optical depth reaches
         // the target (intervals where it does not grow are never chosen).
-        let mut interval = SAMPLING_POINTS - 2;
+        let mut interval = sampling_points - 2;
         let (mut lower, mut upper) = (0.0, hero_total);
         let mut previous = 0.0;
-        for m in 0..SAMPLING_POINTS - 1 {
+        for m in 0..sampling_points - 1 {
             let next = self.optical_depth(
                 hero,
                 &scratch.sampling_columns_m[(m + 1) * species..(m + 2) * species],
@@ -892,7 +993,9 @@ impl<'a> PathTracer<'a> {
         }
     }
 
-    /// Columns from `position` to the top toward the sun into the scratch;
+    /// Columns from `position` to the top toward the sun into the scratch
+    /// (Gauss-Legendre on [`SUN_RAY_PANELS`] panels, as the
+    /// single-scattering code's exact sun columns, cut at kink altitudes);
     /// false in the planet's shadow.
     fn set_sun_columns(&self, position: Vector3, scratch: &mut PathScratch) -> bool {
         let r = position.length();
@@ -905,15 +1008,27 @@ impl<'a> PathTracer<'a> {
             mu,
             self.top_radius_m,
         );
-        compute_columns_along_ray(
-            &self.profiles,
-            self.ground_radius_m,
+        scratch.sun_columns_m.fill(0.0);
+        if length <= 0.0 {
+            return true;
+        }
+        self.set_panel_ends(
             position,
             self.sun_direction,
             length,
             SUN_RAY_PANELS,
-            &mut scratch.sun_columns_m,
+            &mut scratch.sun_panel_ends_m,
         );
+        for ends in scratch.sun_panel_ends_m.windows(2) {
+            let (centre, half) = (0.5 * (ends[0] + ends[1]), 0.5 * (ends[1] - ends[0]));
+            for (x, w) in GAUSS_NODES.iter().zip(GAUSS_WEIGHTS) {
+                let altitude_m = (position + self.sun_direction * (centre + half * x)).length()
+                    - self.ground_radius_m;
+                for (column, profile) in scratch.sun_columns_m.iter_mut().zip(&self.profiles) {
+                    *column += half * w * profile.relative_density(altitude_m);
+                }
+            }
+        }
         true
     }
 
@@ -1168,6 +1283,64 @@ mod tests {
             .compute_radiance(direction_from_elevation_azimuth(40.0, 10.0), 100, 1)
             .unwrap();
         assert!(up.total.mean.values().iter().all(|v| *v == 0.0));
+    }
+
+    /// A kinked (tent) scattering layer, 2-4 km: the rays are cut where
+    /// they cross its corners, and the single-scattering part agrees with
+    /// the paper's uniform double march (fine steps, which sees the
+    /// corners), within 3 standard errors at every wavelength, from below,
+    /// inside and at the peak of the layer. (Without the cuts the tracer
+    /// was 1.4% low at 400 nm from the ground at 10 deg elevation; the
+    /// single-scattering fast path, whose Gauss panels are not cut, is
+    /// 0.9% high there.)
+    #[test]
+    fn a_layer_profile_is_sampled_without_bias() {
+        use crate::atmosphere::SpeciesOptics;
+        let grid = WavelengthGrid::new(400.0, 700.0, 100.0).unwrap();
+        let n = grid.len();
+        let layer = SpeciesOptics {
+            name: "layer".into(),
+            kind: "parametric aerosol",
+            profile: DensityProfile::tent(3e3, 1e3, "layer").unwrap(),
+            vertical_column_m: 1e3,
+            reference_number_density_m3: None,
+            extinction_per_m: SampledSpectrum::from_values(vec![3e-4, 2.5e-4, 2e-4, 1.5e-4]),
+            scattering_per_m: SampledSpectrum::from_values(vec![2.7e-4, 2.2e-4, 1.8e-4, 1.4e-4]),
+            phase_function: PhaseFunction::HenyeyGreenstein {
+                asymmetry_g: vec![0.6, 0.65, 0.7, 0.75],
+            },
+        };
+        for (altitude, elevation) in [(0.0, 10.0), (3.5e3, -20.0), (3e3, 2.0)] {
+            let optics = AtmosphereOptics {
+                grid: grid.clone(),
+                solar_irradiance_w_m2_nm: SampledSpectrum::constant(n, 1.0),
+                ground_albedo: SampledSpectrum::zeros(n),
+                species: vec![layer.clone()],
+            };
+            let observation = Observation {
+                observer_altitude_m: altitude,
+                sun_elevation_deg: 40.0,
+                sun_azimuth_deg: 0.0,
+            };
+            let sky =
+                SingleScatteringSky::from_optics(optics, 6360e3, 6460e3, 0.0, observation).unwrap();
+            let view = direction_from_elevation_azimuth(elevation, 150.0);
+            let march = sky.compute_radiance_reference(view, 20_000, 2_000);
+            let traced = PathTracer::new(&sky)
+                .compute_radiance(view, 20_000, 3)
+                .unwrap();
+            let single = &traced.single_scattering;
+            for i in 0..n {
+                let z = (single.mean[i] - march[i]) / single.standard_error[i];
+                assert!(
+                    z.abs() < 3.0 && single.standard_error[i] < 0.01 * march[i],
+                    "eye {altitude} m, view {elevation} deg, {i}: {} +- {} vs {} ({z} sigma)",
+                    single.mean[i],
+                    single.standard_error[i],
+                    march[i]
+                );
+            }
+        }
     }
 
     #[test]
