@@ -1312,7 +1312,7 @@ mod tests {
         };
         for (altitude, elevation) in [(0.0, 10.0), (3.5e3, -20.0), (3e3, 2.0)] {
             let optics = AtmosphereOptics {
-                grid: grid.clone(),
+                grid,
                 solar_irradiance_w_m2_nm: SampledSpectrum::constant(n, 1.0),
                 ground_albedo: SampledSpectrum::zeros(n),
                 species: vec![layer.clone()],
