@@ -137,6 +137,20 @@
 //! is bit-identical whatever the number of threads (rayon, behind the
 //! `parallel` feature).
 //!
+//! # Measured
+//! Against DISORT (`tests/path_tracing_reference.rs`: the clear-sky
+//! reference in the plane-parallel limit, 28 geometries x 21 wavelengths,
+//! 400 000 / 600 000 paths per direction for ground albedo 0 / 0.3): worst
+//! 2.99 / 2.64 standard errors, worst relative error 0.34% / 0.43%. The
+//! single-scattering part agrees with the single-scattering quadrature
+//! (spherical planet, twilight, a view from space, the sunlit ground)
+//! within 1.9 standard errors. Energy: without absorption, over a white
+//! ground, the upward flux at the top equals mu_s E within 1.9 standard
+//! errors at every wavelength. Cost: ~22 us of CPU per path in a clear sky
+//! (2-3 vertices); the paper's Table 1 view (albedo 0.3, 21 wavelengths)
+//! reaches a 1% standard error at its worst wavelength with ~11 000 paths,
+//! 0.28 s on two shared cores (`benches/path_tracing.rs`).
+//!
 //! # Assumptions and limits
 //! A point sun (parallel rays; the disc is not sampled), unpolarised light,
 //! no refraction, a smooth spherical Lambertian ground. Profiles must be
