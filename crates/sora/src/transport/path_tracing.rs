@@ -146,7 +146,7 @@
 //! (spherical planet, twilight, a view from space, the sunlit ground)
 //! within 1.9 standard errors. Energy: without absorption, over a white
 //! ground, the upward flux at the top equals mu_s E within 1.9 standard
-//! errors at every wavelength. Cost: ~22 us of CPU per path in a clear sky
+//! errors at every wavelength. Cost: ~25 us of CPU per path in a clear sky
 //! (2-3 vertices); the paper's Table 1 view (albedo 0.3, 21 wavelengths)
 //! reaches a 1% standard error at its worst wavelength with ~11 000 paths,
 //! 0.28 s on two shared cores (`benches/path_tracing.rs`).
