@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::sora;
+use common::{sora, stdout};
 
 /// Case (a) of ../shared/reference/sky/clear_sky_radiance.csv (sun 36 deg
 /// at azimuth 207, view 17 deg at 347): L_single_spherical at 380, 400, 780 nm.
@@ -263,4 +263,60 @@ fn render_writes_png_and_exr_and_nothing_on_failure() {
         .map(|e| e.unwrap().file_name())
         .collect();
     assert_eq!(before, after, "failed renders leave no file behind");
+}
+
+/// `--method path-tracing`: a third column with the standard error, the
+/// same output for the same seed, and a clear error for a bad sample count.
+#[test]
+fn path_tracing_spectrum_has_standard_errors_and_is_deterministic() {
+    let args = [
+        "spectrum",
+        "--preset",
+        "clear-sky-reference",
+        "--sun-elevation",
+        "36",
+        "--sun-azimuth",
+        "207",
+        "--view-elevation",
+        "17",
+        "--view-azimuth",
+        "347",
+        "--wavelengths",
+        "400:700:100",
+        "--method",
+        "path-tracing",
+        "--samples",
+        "4000",
+        "--seed",
+        "7",
+    ];
+    let first = stdout(&sora(&args));
+    assert_eq!(first, stdout(&sora(&args)), "same seed, same output");
+    let mut lines = first.lines();
+    assert_eq!(
+        lines.next(),
+        Some("wavelength_nm,radiance_w_m2_sr_nm,standard_error_w_m2_sr_nm")
+    );
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|f| f.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 4);
+    for row in &rows {
+        // Multiple scattering adds to single scattering: above the
+        // single-scattering value of the reference file at 400 nm and below
+        // twice DISORT's, with a small positive error bar.
+        assert!(
+            row[1].is_finite() && row[2] > 0.0 && row[2] < 0.1 * row[1],
+            "{row:?}"
+        );
+    }
+    assert!(
+        rows[0][1] > 2.36e-2 && rows[0][1] < 2.0 * 5.48e-2,
+        "{:?}",
+        rows[0]
+    );
+
+    let out = sora(&[&args[..args.len() - 4], &["--samples", "1"]].concat());
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--samples"));
 }
