@@ -164,6 +164,28 @@ impl AtmosphereSource {
     }
 }
 
+/// Which orders of scattering to compute: shared by `sora spectrum` and
+/// `sora render`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Scattering {
+    /// Sunlight scattered once (the paper's model), plus the sunlit ground
+    Single,
+    /// All orders of scattering, and skylight reflected by the ground
+    Multiple,
+}
+
+impl Scattering {
+    /// The library's choice, at the default resolution.
+    pub fn to_render(self) -> sora::render::Scattering {
+        match self {
+            Scattering::Single => sora::render::Scattering::Single,
+            Scattering::Multiple => sora::render::Scattering::Multiple(
+                sora::transport::multiple_scattering::MultipleScatteringSettings::default(),
+            ),
+        }
+    }
+}
+
 /// The eye and the sun: shared by `sora spectrum` and `sora render`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct SunAndObserver {

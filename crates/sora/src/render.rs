@@ -12,6 +12,13 @@
 //! - [`RenderMethod::Reference`]: the paper's uniform double march for every
 //!   pixel (slow; the oracle the fast method is tested against).
 //!
+//! Scattering ([`Scattering`], [`render_xyz_with_scattering`]): single
+//! scattering only (the paper's), or with the multiply scattered light of
+//! [`crate::transport::multiple_scattering`] added: its field and source
+//! table are computed once per image; the fast method stores its radiance
+//! in the sky-view table, the reference method marches the source table
+//! for every pixel.
+//!
 //! Rows are rendered in parallel with the `parallel` feature; every pixel is
 //! computed the same way whatever the thread count, so images are
 //! bit-identical across machines with the same floating-point behaviour.
@@ -22,6 +29,9 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use crate::camera::Camera;
 use crate::colour::{SpectrumToXyz, Xyz};
 use crate::error::{Error, Result};
+use crate::transport::multiple_scattering::{
+    MultipleScatteringField, MultipleScatteringSettings, MultipleScatteringTable,
+};
 use crate::transport::{SingleScatteringSky, SkyViewTable, SunColumns};
 
 /// How each pixel's spectrum is computed.
@@ -44,6 +54,15 @@ impl RenderMethod {
         view_steps: 1000,
         sun_steps: 250,
     };
+}
+
+/// Which orders of scattering an image has.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Scattering {
+    /// Sunlight scattered once (the paper's model).
+    Single,
+    /// All orders, and skylight reflected by the ground, at this resolution.
+    Multiple(MultipleScatteringSettings),
 }
 
 /// Resolution of the fast method's tables.
@@ -79,11 +98,22 @@ pub struct RenderSettings {
 /// Largest image side, pixels.
 pub const MAX_IMAGE_SIDE: u32 = 16384;
 
-/// Renders the sky into XYZ (row-major, top row first); `progress(rows)` is
-/// called as rows complete (from worker threads).
+/// Renders the sky into XYZ (row-major, top row first), single scattering;
+/// `progress(rows)` is called as rows complete (from worker threads).
 pub fn render_xyz(
     sky: &SingleScatteringSky,
     settings: &RenderSettings,
+    to_xyz: &SpectrumToXyz,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Result<Vec<Xyz>> {
+    render_xyz_with_scattering(sky, settings, Scattering::Single, to_xyz, progress)
+}
+
+/// As [`render_xyz`], with the orders of scattering `scattering`.
+pub fn render_xyz_with_scattering(
+    sky: &SingleScatteringSky,
+    settings: &RenderSettings,
+    scattering: Scattering,
     to_xyz: &SpectrumToXyz,
     progress: &(dyn Fn(usize) + Sync),
 ) -> Result<Vec<Xyz>> {
@@ -104,12 +134,27 @@ pub fn render_xyz(
             "the colour conversion and the sky use different wavelength grids".into(),
         ));
     }
+    if let Scattering::Multiple(ms_settings) = scattering {
+        ms_settings.validate()?;
+    }
+    let multiple_scattering = match scattering {
+        Scattering::Single => None,
+        Scattering::Multiple(ms_settings) => Some(MultipleScatteringTable::compute(
+            MultipleScatteringField::compute(sky, ms_settings),
+        )),
+    };
     let tables = match settings.method {
         RenderMethod::Fast => {
             let (altitude_nodes, mu_nodes) = settings.table_size.sun_column_nodes;
             let sun_columns = sky.compute_sun_column_table(altitude_nodes, mu_nodes);
             let (half_zenith, azimuth) = settings.table_size.sky_view_nodes;
-            let sky_view = SkyViewTable::compute(sky, &sun_columns, half_zenith, azimuth);
+            let sky_view = SkyViewTable::compute_with_multiple_scattering(
+                sky,
+                &sun_columns,
+                multiple_scattering.as_ref(),
+                half_zenith,
+                azimuth,
+            );
             Some((sun_columns, sky_view))
         }
         RenderMethod::Reference { .. } => None,
@@ -124,6 +169,10 @@ pub fn render_xyz(
         let mut ground = vec![0.0; wavelengths];
         let mut phase = vec![0.0; wavelengths];
         let mut radiance = vec![0.0; wavelengths];
+        let mut multiple = vec![0.0; wavelengths];
+        let mut ms_scratch = multiple_scattering
+            .as_ref()
+            .map(MultipleScatteringTable::scratch);
         for (column, pixel) in pixels.iter_mut().enumerate() {
             let Some(view) =
                 settings
@@ -134,7 +183,12 @@ pub fn render_xyz(
             };
             match (&tables, settings.method) {
                 (Some((sun_columns, sky_view)), _) => {
-                    sky_view.lookup(view, &mut integrals, &mut ground);
+                    sky_view.lookup_with_multiple_scattering(
+                        view,
+                        &mut integrals,
+                        &mut ground,
+                        &mut multiple,
+                    );
                     sky.radiance_from_integrals(
                         view.dot(sun),
                         &integrals,
@@ -142,6 +196,11 @@ pub fn render_xyz(
                         &mut phase,
                         &mut radiance,
                     );
+                    if sky_view.has_multiple_scattering() {
+                        for (r, m) in radiance.iter_mut().zip(&multiple) {
+                            *r += m;
+                        }
+                    }
                     if settings.draw_sun_disc && sky.is_in_sun_disc(view) {
                         // A handful of pixels: trace them exactly for the
                         // transmittance toward the sun.
@@ -162,6 +221,14 @@ pub fn render_xyz(
                 ) => {
                     let spectrum = sky.compute_radiance_reference(view, view_steps, sun_steps);
                     radiance.copy_from_slice(spectrum.values());
+                    if let (Some(ms), Some(ms_scratch)) =
+                        (multiple_scattering.as_ref(), ms_scratch.as_mut())
+                    {
+                        ms.compute_radiance(view, ms_scratch, &mut multiple);
+                        for (r, m) in radiance.iter_mut().zip(&multiple) {
+                            *r += m;
+                        }
+                    }
                     if settings.draw_sun_disc && sky.is_in_sun_disc(view) {
                         sky.compute_inscattering_integrals(view, SunColumns::Exact, &mut scratch);
                         sky.add_sun_disc(view, scratch.view_transmittance(), &mut radiance);

@@ -12,11 +12,15 @@ use sora::output::{
     ChannelKind, DisplayImage, ExrOptions, ExrSampleType, LinearImage, OutputFormat, write_exr,
     write_png,
 };
-use sora::render::{FastTableSize, RenderMethod, RenderSettings, render_xyz};
+use sora::render::{FastTableSize, RenderMethod, RenderSettings, render_xyz_with_scattering};
 
-use crate::arguments::{AtmosphereSource, ColourOptions, SunAndObserver};
+use crate::arguments::{AtmosphereSource, ColourOptions, Scattering, SunAndObserver};
 
-/// Render the sky to an image (single scattering).
+/// Render the sky to an image.
+///
+/// Scattering: multiple (default) adds to the sun's single scattering all
+/// higher orders and the skylight reflected by the ground (a discrete-
+/// ordinate field solved once per image); single is the paper's model.
 ///
 /// The output format follows the file extension: .png (8-bit sRGB display
 /// colours, or 16-bit with --png-16-bit) or .exr (linear radiance-scaled
@@ -82,6 +86,11 @@ pub struct RenderArgs {
     /// fast (tables per image) or reference (the paper's march per pixel, slow)
     #[arg(long, value_enum, default_value_t = Method::Fast)]
     method: Method,
+
+    /// multiple (all orders of scattering and skylight reflected by the
+    /// ground) or single (sunlight scattered once, the paper's model)
+    #[arg(long, value_enum, default_value_t = Scattering::Multiple)]
+    scattering: Scattering,
 
     /// Do not draw the sun's disc
     #[arg(long)]
@@ -167,9 +176,13 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         table_size: FastTableSize::default(),
     };
     let bar = progress_bar(height as u64);
-    let xyz = render_xyz(&sky, &settings, &to_xyz, &|rows| {
-        bar.set_position(rows as u64)
-    })?;
+    let xyz = render_xyz_with_scattering(
+        &sky,
+        &settings,
+        args.scattering.to_render(),
+        &to_xyz,
+        &|rows| bar.set_position(rows as u64),
+    )?;
     bar.finish_and_clear();
     let render_seconds = started.elapsed().as_secs_f64();
 
@@ -228,9 +241,10 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         format!("{pixels_per_second:.0} pixel/s")
     };
     eprintln!(
-        "rendered {width}x{height} ({} wavelengths, {:?} method) in {render_seconds:.3} s ({rate}), wrote {} in {total_seconds:.3} s total",
+        "rendered {width}x{height} ({} wavelengths, {:?} method, {:?} scattering) in {render_seconds:.3} s ({rate}), wrote {} in {total_seconds:.3} s total",
         args.sun.wavelengths.len(),
         args.method,
+        args.scattering,
         args.output.display()
     );
     Ok(())

@@ -7,9 +7,10 @@ use clap::{Args, ValueEnum};
 use sora::colour::{RgbColourSpace, SpectrumToXyz};
 use sora::geometry::direction_from_elevation_azimuth;
 use sora::spectrum::SampledSpectrum;
+use sora::transport::multiple_scattering::{MultipleScatteringField, MultipleScatteringSettings};
 use sora::transport::{PathTracer, SunColumns};
 
-use crate::arguments::{AtmosphereSource, SunAndObserver};
+use crate::arguments::{AtmosphereSource, Scattering, SunAndObserver};
 
 /// Spectral radiance of the sky in one direction.
 ///
@@ -19,8 +20,10 @@ use crate::arguments::{AtmosphereSource, SunAndObserver};
 /// atmosphere's sun.
 ///
 /// Methods: fast and reference compute single scattering (plus the sunlit
-/// ground); path-tracing is the Monte Carlo reference for all orders of
-/// scattering and ground reflection, and adds a third column,
+/// ground), and with --scattering multiple add all higher orders and the
+/// skylight reflected by the ground (a discrete-ordinate field, synthesised
+/// exactly along the view); path-tracing is the Monte Carlo reference for
+/// all orders of scattering and ground reflection, and adds a third column,
 /// standard_error_w_m2_sr_nm, the standard error of each value (it shrinks
 /// as 1/sqrt(--samples); on a terminal a progress bar shows the time left).
 ///
@@ -51,6 +54,12 @@ pub struct SpectrumArgs {
     /// all orders of scattering, with standard errors
     #[arg(long, value_enum, default_value_t = Method::Fast)]
     method: Method,
+
+    /// fast and reference: single (sunlight scattered once, the paper's
+    /// model) or multiple (adds all higher orders and skylight reflected by
+    /// the ground) [default: single]
+    #[arg(long, value_enum)]
+    scattering: Option<Scattering>,
 
     /// Path tracing: number of paths (the standard error falls as
     /// 1/sqrt(N)) [default: 10000]
@@ -99,6 +108,11 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
     if args.method != Method::PathTracing && (args.samples.is_some() || args.seed.is_some()) {
         anyhow::bail!("--samples and --seed apply to --method path-tracing only");
     }
+    if args.method == Method::PathTracing && args.scattering.is_some() {
+        anyhow::bail!(
+            "--scattering applies to --method fast and reference only (path tracing has all orders)"
+        );
+    }
     let samples = args.samples.unwrap_or(DEFAULT_SAMPLES);
     if samples < 2 {
         anyhow::bail!(
@@ -110,7 +124,7 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
     let sky = args.sun.sky(&mut atmosphere)?;
     let grid = args.sun.wavelengths;
     let view = direction_from_elevation_azimuth(args.view_elevation, args.view_azimuth);
-    let (radiance, standard_error) = match args.method {
+    let (mut radiance, standard_error) = match args.method {
         Method::Fast => {
             let mut scratch = sky.scratch();
             let mut radiance = SampledSpectrum::zeros(grid.len());
@@ -137,6 +151,18 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
             (traced.total.mean, Some(traced.total.standard_error))
         }
     };
+    if args.scattering == Some(Scattering::Multiple) {
+        let field = MultipleScatteringField::compute_for_view(
+            &sky,
+            view,
+            MultipleScatteringSettings::default(),
+        );
+        let mut multiple = vec![0.0; grid.len()];
+        field.compute_radiance(view, &mut field.scratch(), &mut multiple);
+        for (r, m) in radiance.values_mut().iter_mut().zip(&multiple) {
+            *r += m;
+        }
+    }
     let xyz =
         SpectrumToXyz::new(&grid, sora::colour::Observer::Cie1931TwoDegree).to_xyz(&radiance)?;
     let rgb = RgbColourSpace::Srgb.linear_rgb_from_xyz(xyz);

@@ -6,10 +6,14 @@
 //!   paper's eq. 4-5), a reference path (the paper's uniform double march)
 //!   and a fast path, tested against each other and against independent
 //!   radiative-transfer results;
+//! - [`multiple_scattering`]: light scattered more than once (and skylight
+//!   reflected by the ground), by a discrete-ordinate field per image, added
+//!   to single scattering;
 //! - [`sky_view_table`]: the fast path tabulated over view directions, for
 //!   images;
 //! - [`quadrature`]: the Gauss-Legendre rules they share.
 
+pub mod multiple_scattering;
 pub mod optical_column;
 pub mod path_tracing;
 pub mod quadrature;

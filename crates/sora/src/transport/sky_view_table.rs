@@ -19,7 +19,16 @@
 //! toward it from both sides (u = 1 - (1 - v)^2 in each half), and no cell
 //! straddles it, so the jump from sky to ground is never interpolated.
 //! Bilinear interpolation in (v, azimuth).
+//!
+//! Optionally the table also holds the multiply scattered radiance of
+//! [`super::multiple_scattering`] per node (W m^-2 sr^-1 nm^-1, a third
+//! block of values after the ground's). It has no single phase function
+//! to factor out, but it is smooth in direction (a scattering integral of
+//! a diffuse field): it is marched at every other node of each axis
+//! (and the last node of each half) and filled in linearly between them,
+//! which quarters its cost.
 
+use super::multiple_scattering::MultipleScatteringTable;
 use super::optical_column::SunColumnTable;
 use super::single_scattering::{SingleScatteringSky, SunColumns};
 use crate::geometry::Vector3;
@@ -33,8 +42,11 @@ pub struct SkyViewTable {
     /// Zenith angle of the horizon seen by the eye, rad.
     horizon_zenith_rad: f64,
     /// Values per node: species * wavelengths integrals, then wavelengths
-    /// ground radiances.
+    /// ground radiances, then (with multiple scattering) wavelengths
+    /// multiply scattered radiances.
     values_per_node: usize,
+    wavelengths: usize,
+    has_multiple_scattering: bool,
     /// [(half * half_zenith_nodes + i) * azimuth_nodes + k] * values_per_node.
     values: Vec<f32>,
     /// Unit vector of the sun's azimuth in the horizontal plane.
@@ -52,10 +64,30 @@ impl SkyViewTable {
         half_zenith_nodes: usize,
         azimuth_nodes: usize,
     ) -> SkyViewTable {
+        SkyViewTable::compute_with_multiple_scattering(
+            sky,
+            sun_columns,
+            None,
+            half_zenith_nodes,
+            azimuth_nodes,
+        )
+    }
+
+    /// As [`SkyViewTable::compute`], and with `multiple_scattering` the
+    /// multiply scattered radiance at every node too (see the module docs).
+    pub fn compute_with_multiple_scattering(
+        sky: &SingleScatteringSky,
+        sun_columns: &SunColumnTable,
+        multiple_scattering: Option<&MultipleScatteringTable>,
+        half_zenith_nodes: usize,
+        azimuth_nodes: usize,
+    ) -> SkyViewTable {
         assert!(half_zenith_nodes >= 2 && azimuth_nodes >= 2);
         let optics = sky.optics();
         let wavelengths = optics.grid.len();
-        let values_per_node = (optics.species.len() + 1) * wavelengths;
+        let has_multiple_scattering = multiple_scattering.is_some();
+        let blocks = optics.species.len() + 1 + usize::from(has_multiple_scattering);
+        let values_per_node = blocks * wavelengths;
         let (ground_radius, _) = sky.radii_m();
         let observer_radius = sky.observer_radius_m();
         let horizon_zenith_rad =
@@ -68,12 +100,17 @@ impl SkyViewTable {
             azimuth_nodes,
             horizon_zenith_rad,
             values_per_node,
+            wavelengths,
+            has_multiple_scattering,
             values: Vec::new(),
             sun_horizontal: horizontal.unwrap_or((0.0, 1.0)),
         };
         let row_length = azimuth_nodes * values_per_node;
+        let species = optics.species.len();
         let fill_row = |row: usize, out: &mut [f32]| {
             let mut scratch = sky.scratch();
+            let mut ms_work = multiple_scattering.map(|ms| (ms.scratch(), vec![0.0; wavelengths]));
+            let index_in_half = row % half_zenith_nodes;
             let zenith = table.zenith_of_node(row);
             for k in 0..azimuth_nodes {
                 let relative_azimuth = std::f64::consts::PI * k as f64 / (azimuth_nodes - 1) as f64;
@@ -84,19 +121,55 @@ impl SkyViewTable {
                     &mut scratch,
                 );
                 let node = &mut out[k * values_per_node..(k + 1) * values_per_node];
-                let (integrals, ground) = node.split_at_mut(values_per_node - wavelengths);
+                let (integrals, rest) = node.split_at_mut(species * wavelengths);
+                let (ground, multiple) = rest.split_at_mut(wavelengths);
                 for (o, v) in integrals.iter_mut().zip(scratch.inscattering_integrals()) {
                     *o = *v as f32;
                 }
                 for (o, v) in ground.iter_mut().zip(scratch.ground_radiance()) {
                     *o = *v as f32;
                 }
+                if let (Some(ms), Some((ms_scratch, radiance))) =
+                    (multiple_scattering, ms_work.as_mut())
+                    && marched(index_in_half, half_zenith_nodes)
+                    && marched(k, azimuth_nodes)
+                {
+                    ms.compute_radiance(view, ms_scratch, radiance);
+                    for (o, v) in multiple.iter_mut().zip(radiance.iter()) {
+                        *o = *v as f32;
+                    }
+                }
+            }
+            if multiple_scattering.is_some() {
+                // Fill the azimuths between marched ones.
+                fill_between(
+                    out,
+                    azimuth_nodes,
+                    values_per_node,
+                    values_per_node - wavelengths,
+                );
             }
         };
         let mut values = vec![0.0f32; 2 * half_zenith_nodes * row_length];
         crate::parallel::for_each_chunk_mut(&mut values, row_length, fill_row);
+        if multiple_scattering.is_some() {
+            // Fill the rows between marched ones, within each half.
+            for half in [0, 1] {
+                let rows = &mut values[half * half_zenith_nodes * row_length..]
+                    [..half_zenith_nodes * row_length];
+                for k in 0..azimuth_nodes {
+                    let offset = k * values_per_node + values_per_node - wavelengths;
+                    fill_between_strided(rows, half_zenith_nodes, row_length, offset, wavelengths);
+                }
+            }
+        }
         table.values = values;
         table
+    }
+
+    /// True when the table has multiply scattered radiances.
+    pub fn has_multiple_scattering(&self) -> bool {
+        self.has_multiple_scattering
     }
 
     /// Zenith angle (rad) of zenith-axis node `row` (0 = the zenith,
@@ -151,6 +224,33 @@ impl SkyViewTable {
     /// Interpolates the integrals and ground radiance for `view` (unit,
     /// east-north-up) into `integrals` (species * wavelengths) and `ground`.
     pub fn lookup(&self, view: Vector3, integrals: &mut [f64], ground: &mut [f64]) {
+        self.interpolate(view, integrals, ground, None);
+    }
+
+    /// As [`SkyViewTable::lookup`], and the multiply scattered radiance into
+    /// `multiple` (zero when the table has none).
+    pub fn lookup_with_multiple_scattering(
+        &self,
+        view: Vector3,
+        integrals: &mut [f64],
+        ground: &mut [f64],
+        multiple: &mut [f64],
+    ) {
+        if self.has_multiple_scattering {
+            self.interpolate(view, integrals, ground, Some(multiple));
+        } else {
+            self.interpolate(view, integrals, ground, None);
+            multiple.fill(0.0);
+        }
+    }
+
+    fn interpolate(
+        &self,
+        view: Vector3,
+        integrals: &mut [f64],
+        ground: &mut [f64],
+        multiple: Option<&mut [f64]>,
+    ) {
         let zenith = view.z.clamp(-1.0, 1.0).acos();
         let (sx, sy) = self.sun_horizontal;
         let along = view.x * sx + view.y * sy;
@@ -192,6 +292,53 @@ impl SkyViewTable {
         }
         for (m, out) in ground.iter_mut().enumerate() {
             *out = interpolate(split + m);
+        }
+        if let Some(multiple) = multiple {
+            for (m, out) in multiple.iter_mut().enumerate() {
+                *out = interpolate(split + self.wavelengths + m);
+            }
+        }
+    }
+}
+
+/// Whether node `index` of an axis of `count` nodes gets its multiply
+/// scattered radiance marched (the others are interpolated): every other
+/// node and the last.
+fn marched(index: usize, count: usize) -> bool {
+    index.is_multiple_of(2) || index + 1 == count
+}
+
+/// Fills the values at `offset..stride` of the unmarched nodes of a row of
+/// `count` nodes (each `stride` values) with the mean of their neighbours.
+fn fill_between(row: &mut [f32], count: usize, stride: usize, offset: usize) {
+    let width = stride - offset;
+    for i in (1..count.saturating_sub(1)).filter(|i| !marched(*i, count)) {
+        for m in 0..width {
+            let (before, after) = (
+                row[(i - 1) * stride + offset + m],
+                row[(i + 1) * stride + offset + m],
+            );
+            row[i * stride + offset + m] = 0.5 * (before + after);
+        }
+    }
+}
+
+/// As [`fill_between`] along the zenith axis: `count` rows of
+/// `row_length` values, `width` values at `offset` in each.
+fn fill_between_strided(
+    rows: &mut [f32],
+    count: usize,
+    row_length: usize,
+    offset: usize,
+    width: usize,
+) {
+    for i in (1..count.saturating_sub(1)).filter(|i| !marched(*i, count)) {
+        for m in 0..width {
+            let (before, after) = (
+                rows[(i - 1) * row_length + offset + m],
+                rows[(i + 1) * row_length + offset + m],
+            );
+            rows[i * row_length + offset + m] = 0.5 * (before + after);
         }
     }
 }

@@ -1,0 +1,69 @@
+//! Multiple-scattering benchmarks (issue 6): the per-image precomputation
+//! (the discrete-ordinate field at every sun zenith angle the view rays
+//! meet, then its source table), and a whole 512 x 512 all-sky fisheye at
+//! the 21 paper wavelengths with multiple scattering, next to the same
+//! image with single scattering only. Sun at 30 degrees (the fewest sun
+//! angles) and 5 degrees (the most: the sunset steps).
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use sora::atmosphere::Atmosphere;
+use sora::camera::Camera;
+use sora::colour::{Observer, SpectrumToXyz};
+use sora::render::{
+    FastTableSize, RenderMethod, RenderSettings, Scattering, render_xyz_with_scattering,
+};
+use sora::spectrum::WavelengthGrid;
+use sora::transport::multiple_scattering::{
+    MultipleScatteringField, MultipleScatteringSettings, MultipleScatteringTable,
+};
+use sora::transport::{Observation, SingleScatteringSky};
+
+fn sky(sun_elevation_deg: f64) -> SingleScatteringSky {
+    let atmosphere = Atmosphere::preset("clear-sky-reference").expect("preset");
+    let observation = Observation {
+        observer_altitude_m: 0.0,
+        sun_elevation_deg,
+        sun_azimuth_deg: 180.0,
+    };
+    SingleScatteringSky::new(&atmosphere, &WavelengthGrid::paper(), observation).expect("sky")
+}
+
+fn multiple_scattering_benchmarks(c: &mut Criterion) {
+    let settings = MultipleScatteringSettings::default();
+    let to_xyz = SpectrumToXyz::new(&WavelengthGrid::paper(), Observer::Cie1931TwoDegree);
+    for sun_elevation in [30.0, 5.0] {
+        let sky = sky(sun_elevation);
+        let mut group = c.benchmark_group(format!("multiple_scattering_sun_{sun_elevation}"));
+        group.sample_size(10);
+        group.bench_function("field", |b| {
+            b.iter(|| MultipleScatteringField::compute(&sky, settings))
+        });
+        let field = MultipleScatteringField::compute(&sky, settings);
+        group.bench_function("source_table", |b| {
+            b.iter(|| MultipleScatteringTable::compute(field.clone()))
+        });
+        let image = RenderSettings {
+            camera: Camera::Fisheye,
+            width: 512,
+            height: 512,
+            method: RenderMethod::Fast,
+            draw_sun_disc: true,
+            table_size: FastTableSize::default(),
+        };
+        for (name, scattering) in [
+            ("fisheye_512_single", Scattering::Single),
+            ("fisheye_512_multiple", Scattering::Multiple(settings)),
+        ] {
+            group.bench_function(name, |b| {
+                b.iter(|| {
+                    render_xyz_with_scattering(&sky, &image, scattering, &to_xyz, &|_| {})
+                        .expect("render")
+                })
+            });
+        }
+        group.finish();
+    }
+}
+
+criterion_group!(benches, multiple_scattering_benchmarks);
+criterion_main!(benches);

@@ -1,0 +1,226 @@
+//! The multiple-scattering source tabulated for images.
+//!
+//! Synthesising the source J(x, view) from the field's harmonics costs
+//! wavelengths x harmonics x streams x species operations per march node,
+//! too much for the ~400 000 nodes of a sky-view table. The source varies
+//! smoothly with every one of its four local coordinates (it is a
+//! scattering integral of a diffuse field), so it is tabulated once per
+//! image over
+//!
+//! - the altitude: the solver's own levels (no interpolation error at them);
+//! - the sun's zenith angle: the solver's own sun nodes;
+//! - the view's zenith angle, 0..180 degrees, uniform;
+//! - the view's azimuth from the sun's, 0..180 degrees, uniform (the
+//!   field is symmetric about the solar meridian),
+//!
+//! and read by quadrilinear interpolation. What is stored is
+//! R = J / beta*_sca(x) (radiance units: the phase-weighted mean diffuse
+//! radiance, averaged over species by their scattering), which is smooth in
+//! altitude where J itself falls off exponentially; the march multiplies it
+//! back by the scaled scattering coefficient at each node.
+
+use std::f64::consts::PI;
+
+use super::phase_fourier::normalized_associated_legendre;
+use super::{
+    LOG_FLOOR, MultipleScatteringField, MultipleScatteringScratch, NodeGeometry, floored_log,
+};
+use crate::geometry::Vector3;
+
+/// The per-image source table (see the module docs).
+#[derive(Debug, Clone)]
+pub struct MultipleScatteringTable {
+    field: MultipleScatteringField,
+    view_zenith_nodes: usize,
+    azimuth_nodes: usize,
+    /// ln R (R in W m^-2 sr^-1 nm^-1), [(((k * suns + s) * azimuth_nodes + f)
+    /// * view_zenith_nodes + v) * wavelengths + i].
+    values: Vec<f32>,
+}
+
+impl MultipleScatteringTable {
+    /// Tabulates the source of `field` (which it keeps, for the march's
+    /// optics and for exact comparisons), at the table size of its settings.
+    pub fn compute(field: MultipleScatteringField) -> MultipleScatteringTable {
+        let settings = field.settings;
+        let (views, azimuths) = (
+            settings.table_view_zenith_nodes.max(2),
+            settings.table_azimuth_nodes.max(2),
+        );
+        let degrees = field.streams.count();
+        let levels = field.grid.levels();
+        let suns = field.optics.sun_axis.count();
+        let (w, species) = (field.optics.wavelengths, field.optics.species);
+        let per_level = suns * azimuths * views * w;
+        let view_legendre: Vec<Vec<f64>> = (0..views)
+            .map(|v| {
+                let mut table = vec![0.0; degrees * degrees];
+                let zenith = PI * v as f64 / (views - 1) as f64;
+                normalized_associated_legendre(zenith.cos(), degrees, &mut table);
+                table
+            })
+            .collect();
+        let azimuth_cosines: Vec<f64> = (0..azimuths)
+            .flat_map(|f| {
+                let phi = PI * f as f64 / (azimuths - 1) as f64;
+                (0..degrees).map(move |m| (m as f64 * phi).cos())
+            })
+            .collect();
+        let active: Vec<usize> = (0..degrees).filter(|m| field.harmonics[*m]).collect();
+        // 2 pi w_b p*_jm(mu_v, mu_b) by wavelength, species, harmonic and
+        // stream, a row over view nodes:
+        // [(((i * species + j) * degrees + m) * degrees + b) * views + v].
+        let block = degrees * degrees * views;
+        let mut kernel = vec![0.0; w * species * block];
+        crate::parallel::for_each_chunk_mut(&mut kernel, species * block, |i, out| {
+            for j in 0..species {
+                let phase = &field.phases[i * species + j];
+                for &m in &active {
+                    for b in 0..degrees {
+                        let row = &mut out[j * block + (m * degrees + b) * views..][..views];
+                        for (value, legendre) in row.iter_mut().zip(&view_legendre) {
+                            *value = 2.0
+                                * PI
+                                * field.streams.weights()[b]
+                                * phase.harmonic(m, legendre, field.streams.legendre(b));
+                        }
+                    }
+                }
+            }
+        });
+        let sun_nodes = field.reachable_sun_nodes();
+        let mut values = vec![LOG_FLOOR.ln() as f32; levels * per_level];
+        // One level per task; within it one wavelength at a time into a
+        // wavelength-major buffer, transposed at the end (in cache). Only
+        // the sun nodes that view rays reach at the level are filled.
+        crate::parallel::for_each_chunk_mut(&mut values, per_level, |k, out| {
+            let densities = field.grid.densities_at_level(k);
+            let mut combined = vec![0.0; block];
+            let mut harmonics = vec![0.0; degrees * views];
+            let mut sum = vec![0.0; views];
+            let cells = suns * azimuths * views;
+            let mut by_wavelength = vec![LOG_FLOOR.ln() as f32; per_level];
+            let (first_sun, last_sun) = sun_nodes[k];
+            for i in 0..w {
+                let plane = &mut by_wavelength[i * cells..(i + 1) * cells];
+                let total: f64 = (0..species)
+                    .map(|j| densities[j] * field.optics.scaled_scattering[i * species + j])
+                    .sum();
+                if total <= 0.0 {
+                    plane.fill(LOG_FLOOR.ln() as f32);
+                    continue;
+                }
+                combined.fill(0.0);
+                for j in 0..species {
+                    let fraction =
+                        densities[j] * field.optics.scaled_scattering[i * species + j] / total;
+                    if fraction != 0.0 {
+                        let q = &kernel[(i * species + j) * block..][..block];
+                        for (c, q) in combined.iter_mut().zip(q) {
+                            *c += fraction * q;
+                        }
+                    }
+                }
+                for s in first_sun..=last_sun {
+                    let solution =
+                        &field.radiance[(s * w + i) * field.solution_len..][..field.solution_len];
+                    for &m in &active {
+                        let row = &mut harmonics[m * views..(m + 1) * views];
+                        row.fill(0.0);
+                        let radiance = &solution[(m * levels + k) * degrees..][..degrees];
+                        let columns = &combined[m * degrees * views..(m + 1) * degrees * views];
+                        for (l, column) in radiance.iter().zip(columns.chunks_exact(views)) {
+                            for (r, q) in row.iter_mut().zip(column) {
+                                *r += l * q;
+                            }
+                        }
+                    }
+                    let cell = &mut plane[s * azimuths * views..(s + 1) * azimuths * views];
+                    for (f, row) in cell.chunks_exact_mut(views).enumerate() {
+                        let cosines = &azimuth_cosines[f * degrees..(f + 1) * degrees];
+                        sum.fill(0.0);
+                        for &m in &active {
+                            let c = cosines[m];
+                            for (acc, r) in sum.iter_mut().zip(&harmonics[m * views..][..views]) {
+                                *acc += c * r;
+                            }
+                        }
+                        for (o, v) in row.iter_mut().zip(&sum) {
+                            *o = floored_log(*v) as f32;
+                        }
+                    }
+                }
+            }
+            for i in 0..w {
+                for (cell, value) in by_wavelength[i * cells..(i + 1) * cells].iter().enumerate() {
+                    out[cell * w + i] = *value;
+                }
+            }
+        });
+        MultipleScatteringTable {
+            field,
+            view_zenith_nodes: views,
+            azimuth_nodes: azimuths,
+            values,
+        }
+    }
+
+    /// The field the table was made from.
+    pub fn field(&self) -> &MultipleScatteringField {
+        &self.field
+    }
+
+    /// Work space for [`MultipleScatteringTable::compute_radiance`].
+    pub fn scratch(&self) -> MultipleScatteringScratch {
+        self.field.scratch()
+    }
+
+    /// Multiply scattered radiance along `view` (as
+    /// [`MultipleScatteringField::compute_radiance`], with the source read
+    /// from the table), W m^-2 sr^-1 nm^-1.
+    pub fn compute_radiance(
+        &self,
+        view: Vector3,
+        scratch: &mut MultipleScatteringScratch,
+        radiance: &mut [f64],
+    ) {
+        self.field
+            .optics
+            .march(view, scratch, radiance, |node, _, scratch| {
+                self.lookup_log_source(node, &mut scratch.log_source)
+            });
+    }
+
+    /// ln R(x, view) at one march node, into `log_source`: quadrilinear
+    /// in ln R.
+    fn lookup_log_source(&self, node: NodeGeometry, log_source: &mut [f64]) {
+        let optics = &self.field.optics;
+        let w = optics.wavelengths;
+        let suns = optics.sun_axis.count();
+        let (views, azimuths) = (self.view_zenith_nodes, self.azimuth_nodes);
+        let (k, tz) = self.field.grid.locate(node.altitude_m);
+        let (s, ts) = optics.sun_axis.locate(node.sun_cosine);
+        let y = node.view_cosine.acos() / PI * (views - 1) as f64;
+        let v = (y as usize).min(views - 2);
+        let tv = y - v as f64;
+        let x = node.cos_azimuth.acos() / PI * (azimuths - 1) as f64;
+        let f = (x as usize).min(azimuths - 2);
+        let tf = x - f as f64;
+        log_source.fill(0.0);
+        for (kk, wk) in [(k, 1.0 - tz), (k + 1, tz)] {
+            for (ss, ws) in [(s, 1.0 - ts), (s + 1, ts)] {
+                for (ff, wf) in [(f, 1.0 - tf), (f + 1, tf)] {
+                    let node = ((kk * suns + ss) * azimuths + ff) * views + v;
+                    let (low, high) = self.values[node * w..(node + 2) * w].split_at(w);
+                    let (a, b) = (
+                        (wk * ws * wf * (1.0 - tv)) as f32,
+                        (wk * ws * wf * tv) as f32,
+                    );
+                    for ((out, l), h) in log_source.iter_mut().zip(low).zip(high) {
+                        *out += (a * l + b * h) as f64;
+                    }
+                }
+            }
+        }
+    }
+}
