@@ -31,6 +31,7 @@ use crate::colour::{SpectrumToXyz, Xyz};
 use crate::error::{Error, Result};
 use crate::transport::multiple_scattering::{
     MultipleScatteringField, MultipleScatteringSettings, MultipleScatteringTable,
+    forward_peak_cosine,
 };
 use crate::transport::{SingleScatteringSky, SkyViewTable, SunColumns};
 
@@ -170,6 +171,11 @@ pub fn render_xyz_with_scattering(
         let mut phase = vec![0.0; wavelengths];
         let mut radiance = vec![0.0; wavelengths];
         let mut multiple = vec![0.0; wavelengths];
+        let mut forward = vec![0.0; species * wavelengths];
+        let (no_ground, mut forward_radiance) = (vec![0.0; wavelengths], vec![0.0; wavelengths]);
+        let forward_cone = multiple_scattering
+            .as_ref()
+            .map_or(0.0, |ms| ms.field().forward_cone_rad());
         let mut ms_scratch = multiple_scattering
             .as_ref()
             .map(MultipleScatteringTable::scratch);
@@ -188,6 +194,7 @@ pub fn render_xyz_with_scattering(
                         &mut integrals,
                         &mut ground,
                         &mut multiple,
+                        &mut forward,
                     );
                     sky.radiance_from_integrals(
                         view.dot(sun),
@@ -197,8 +204,16 @@ pub fn render_xyz_with_scattering(
                         &mut radiance,
                     );
                     if sky_view.has_multiple_scattering() {
-                        for (r, m) in radiance.iter_mut().zip(&multiple) {
-                            *r += m;
+                        sky.radiance_from_integrals(
+                            forward_peak_cosine(view.dot(sun), forward_cone),
+                            &forward,
+                            &no_ground,
+                            &mut phase,
+                            &mut forward_radiance,
+                        );
+                        for ((r, m), f) in radiance.iter_mut().zip(&multiple).zip(&forward_radiance)
+                        {
+                            *r += m + f;
                         }
                     }
                     if settings.draw_sun_disc && sky.is_in_sun_disc(view) {
@@ -224,7 +239,7 @@ pub fn render_xyz_with_scattering(
                     if let (Some(ms), Some(ms_scratch)) =
                         (multiple_scattering.as_ref(), ms_scratch.as_mut())
                     {
-                        ms.compute_radiance(view, ms_scratch, &mut multiple);
+                        ms.compute_radiance(view, SunColumns::Exact, ms_scratch, &mut multiple);
                         for (r, m) in radiance.iter_mut().zip(&multiple) {
                             *r += m;
                         }

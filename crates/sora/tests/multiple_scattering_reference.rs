@@ -26,6 +26,7 @@ use sora::spectrum::{SampledSpectrum, Spectrum, WavelengthGrid};
 use sora::table::NumericTable;
 use sora::transport::multiple_scattering::{
     MultipleScatteringField, MultipleScatteringSettings, MultipleScatteringTable,
+    forward_peak_cosine,
 };
 use sora::transport::{Observation, PathTracer, SingleScatteringSky, SkyViewTable, SunColumns};
 
@@ -113,6 +114,7 @@ fn worst_errors_against_disort(ground_albedo: f64) -> [f64; 3] {
             vec![0.0; n],
             vec![0.0; n],
         );
+        let (mut forward, mut forward_radiance) = (vec![0.0; species * n], vec![0.0; n]);
         let mut geometries: Vec<(f64, f64)> = rows
             .iter()
             .filter(|r| r.sun_elevation_deg == sun_elevation && r.ground_albedo == ground_albedo)
@@ -122,13 +124,14 @@ fn worst_errors_against_disort(ground_albedo: f64) -> [f64; 3] {
         for (view_elevation, relative_azimuth) in geometries {
             let view = direction_from_elevation_azimuth(view_elevation, relative_azimuth);
             sky.compute_radiance(view, SunColumns::Exact, &mut scratch, &mut single);
-            field.compute_radiance(view, &mut ms_scratch, &mut exact);
-            table.compute_radiance(view, &mut ms_scratch, &mut tabulated);
+            field.compute_radiance(view, SunColumns::Exact, &mut ms_scratch, &mut exact);
+            table.compute_radiance(view, SunColumns::Exact, &mut ms_scratch, &mut tabulated);
             sky_view.lookup_with_multiple_scattering(
                 view,
                 &mut integrals,
                 &mut ground,
                 &mut multiple,
+                &mut forward,
             );
             sky.radiance_from_integrals(
                 view.dot(sky.sun_direction()),
@@ -137,6 +140,19 @@ fn worst_errors_against_disort(ground_albedo: f64) -> [f64; 3] {
                 &mut phase,
                 &mut image,
             );
+            sky.radiance_from_integrals(
+                forward_peak_cosine(
+                    view.dot(sky.sun_direction()),
+                    table.field().forward_cone_rad(),
+                ),
+                &forward,
+                &vec![0.0; n],
+                &mut phase,
+                &mut forward_radiance,
+            );
+            for (r, f) in image.iter_mut().zip(&forward_radiance) {
+                *r += f;
+            }
             for row in rows.iter().filter(|r| {
                 r.sun_elevation_deg == sun_elevation
                     && r.ground_albedo == ground_albedo
@@ -171,10 +187,10 @@ fn black_ground_matches_disort_at_every_row() {
     eprintln!(
         "albedo 0: worst relative error vs DISORT: field {field:.3e}, source table {table:.3e}, sky-view table {image:.3e}"
     );
-    // The target is 2 %; measured: 1.38e-3, 1.47e-3, 1.80e-3.
-    assert!(field < 1.5e-3, "field {field}");
-    assert!(table < 1.6e-3, "source table {table}");
-    assert!(image < 2e-3, "sky-view table {image}");
+    // The target is 2 %; measured: 7.4e-4, 8.9e-4, 1.04e-3.
+    assert!(field < 8e-4, "field {field}");
+    assert!(table < 1e-3, "source table {table}");
+    assert!(image < 1.2e-3, "sky-view table {image}");
 }
 
 #[test]
@@ -183,10 +199,10 @@ fn bright_ground_matches_disort_at_every_row() {
     eprintln!(
         "albedo 0.3: worst relative error vs DISORT: field {field:.3e}, source table {table:.3e}, sky-view table {image:.3e}"
     );
-    // Measured: 7.8e-4, 1.00e-3, 1.07e-3.
-    assert!(field < 9e-4, "field {field}");
-    assert!(table < 1.1e-3, "source table {table}");
-    assert!(image < 1.2e-3, "sky-view table {image}");
+    // Measured: 6.1e-4, 8.5e-4, 1.38e-3.
+    assert!(field < 7e-4, "field {field}");
+    assert!(table < 1e-3, "source table {table}");
+    assert!(image < 1.5e-3, "sky-view table {image}");
 }
 
 /// Directions spread evenly over the sphere (a Fibonacci lattice), none
@@ -212,7 +228,7 @@ fn both(
     let mut single = SampledSpectrum::zeros(n);
     let mut multiple = vec![0.0; n];
     sky.compute_radiance(view, SunColumns::Exact, &mut sky.scratch(), &mut single);
-    field.compute_radiance(view, &mut field.scratch(), &mut multiple);
+    field.compute_radiance(view, SunColumns::Exact, &mut field.scratch(), &mut multiple);
     (single.into_values(), multiple)
 }
 
@@ -251,14 +267,17 @@ fn multiple_scattering_is_finite_and_non_negative_everywhere() {
             let mut scratch = table.scratch();
             let mut radiance = vec![0.0; sky.optics().grid.len()];
             for view in directions(40) {
-                table.compute_radiance(view, &mut scratch, &mut radiance);
+                table.compute_radiance(view, SunColumns::Exact, &mut scratch, &mut radiance);
                 assert!(
                     radiance.iter().all(|r| r.is_finite() && *r >= 0.0),
                     "{preset} sun {sun_elevation} eye {altitude} m view {view:?}: {radiance:?}"
                 );
-                table
-                    .field()
-                    .compute_radiance(view, &mut scratch, &mut radiance);
+                table.field().compute_radiance(
+                    view,
+                    SunColumns::Exact,
+                    &mut scratch,
+                    &mut radiance,
+                );
                 assert!(
                     radiance.iter().all(|r| r.is_finite() && *r >= 0.0),
                     "{preset} sun {sun_elevation} eye {altitude} m view {view:?} (exact): {radiance:?}"
@@ -321,14 +340,14 @@ fn default_resolution_is_converged_on_the_spherical_sky() {
             let (single, expected) = both(&sky, &reference, view);
             table
                 .field()
-                .compute_radiance(view, &mut scratch, &mut radiance);
+                .compute_radiance(view, SunColumns::Exact, &mut scratch, &mut radiance);
             for i in 0..radiance.len() {
                 if single[i] + expected[i] > 0.0 {
                     worst_field = worst_field
                         .max((radiance[i] - expected[i]).abs() / (single[i] + expected[i]));
                 }
             }
-            table.compute_radiance(view, &mut scratch, &mut radiance);
+            table.compute_radiance(view, SunColumns::Exact, &mut scratch, &mut radiance);
             for i in 0..radiance.len() {
                 if single[i] + expected[i] > 0.0 {
                     worst_table = worst_table
@@ -350,12 +369,13 @@ fn default_resolution_is_converged_on_the_spherical_sky() {
 /// `views` (elevation, azimuth from the sun) of each sun, and the worst
 /// excess over `bound` plus three standard errors; prints every view.
 fn compare_with_path_tracer(
+    preset: &str,
     suns: &[f64],
     views: &[(f64, f64)],
     samples: u64,
     bound: f64,
 ) -> (f64, f64) {
-    let atmosphere = Atmosphere::preset("clear-sky-reference").unwrap();
+    let atmosphere = Atmosphere::preset(preset).unwrap();
     let (mut worst, mut worst_excess) = (0.0f64, f64::NEG_INFINITY);
     for (n, &sun_elevation) in suns.iter().enumerate() {
         let sky = sky(&atmosphere, sun_elevation, 0.0);
@@ -372,7 +392,7 @@ fn compare_with_path_tracer(
                 .compute_radiance(view, samples, 1000 * n as u64 + k as u64 + 1)
                 .unwrap();
             let (single, multiple) = both(&sky, table.field(), view);
-            table.compute_radiance(view, &mut scratch, &mut tabulated);
+            table.compute_radiance(view, SunColumns::Exact, &mut scratch, &mut tabulated);
             let (mut row_worst, mut at) = (0.0f64, 0);
             for i in 0..single.len() {
                 let expected = traced.total.mean[i];
@@ -387,7 +407,7 @@ fn compare_with_path_tracer(
             }
             worst = worst.max(row_worst.abs());
             eprintln!(
-                "sun {sun_elevation:>5} view {elevation:>5} at {azimuth:>5} from the sun: worst {:+.2} % at {} nm (path tracer +-{:.2} %)",
+                "{preset}: sun {sun_elevation:>5} view {elevation:>5} at {azimuth:>5} from the sun: worst {:+.2} % at {} nm (path tracer +-{:.2} %)",
                 100.0 * row_worst,
                 sky.optics().grid.wavelength_nm(at),
                 100.0 * traced.total.standard_error[at] / traced.total.mean[at]
@@ -411,9 +431,32 @@ const PATH_TRACER_VIEWS: [(f64, f64); 6] = [
 
 #[test]
 fn spherical_sky_matches_the_path_tracer_within_two_percent() {
-    let (worst, excess) =
-        compare_with_path_tracer(&[90.0, 30.0, 10.0, 5.0], &PATH_TRACER_VIEWS, 20_000, 0.02);
+    let (worst, excess) = compare_with_path_tracer(
+        "clear-sky-reference",
+        &[90.0, 30.0, 10.0, 5.0],
+        &PATH_TRACER_VIEWS,
+        20_000,
+        0.02,
+    );
     eprintln!("sun 90..5 degrees: worst relative difference {worst:.3e}");
+    assert!(excess <= 0.0, "beyond 2 % + 3 sigma by {excess}");
+}
+
+/// Exact Mie phase functions (a hazy Earth: polluted continental aerosol
+/// of optical depth 0.4, ground albedo 0.1) away from the sun, where
+/// delta-M's forward-peak term matters most: measured within 1 % with
+/// 100 000 paths.
+#[test]
+fn mie_aerosols_match_the_path_tracer_away_from_the_sun() {
+    let views = [
+        (90.0, 0.0),
+        (45.0, 0.0),
+        (45.0, 180.0),
+        (10.0, 90.0),
+        (10.0, 180.0),
+    ];
+    let (worst, excess) = compare_with_path_tracer("earth-hazy", &[30.0], &views, 20_000, 0.02);
+    eprintln!("earth-hazy, sun 30 degrees: worst relative difference {worst:.3e}");
     assert!(excess <= 0.0, "beyond 2 % + 3 sigma by {excess}");
 }
 
@@ -439,10 +482,112 @@ fn spherical_sky_matches_the_path_tracer_exhaustively() {
         (1.0, 90.0),
         (1.0, 180.0),
     ];
-    let (worst, excess) =
-        compare_with_path_tracer(&[90.0, 60.0, 36.0, 20.0, 10.0, 5.0], &views, 400_000, 0.02);
+    let (worst, excess) = compare_with_path_tracer(
+        "clear-sky-reference",
+        &[90.0, 60.0, 36.0, 20.0, 10.0, 5.0],
+        &views,
+        400_000,
+        0.02,
+    );
     eprintln!("sun 90..5 degrees: worst relative difference {worst:.3e}");
-    let (twilight, _) = compare_with_path_tracer(&[-2.0, -4.0], &views, 400_000, 0.02);
+    let (hazy, hazy_excess) = compare_with_path_tracer(
+        "earth-hazy",
+        &[30.0, 5.0],
+        &[(90.0, 0.0), (45.0, 180.0), (10.0, 90.0), (10.0, 180.0)],
+        400_000,
+        0.02,
+    );
+    eprintln!("earth-hazy away from the sun: worst relative difference {hazy:.3e}");
+    let (twilight, _) =
+        compare_with_path_tracer("clear-sky-reference", &[-2.0, -4.0], &views, 400_000, 0.02);
     eprintln!("twilight (sun -2, -4 degrees): worst relative difference {twilight:.3e}");
     assert!(excess <= 0.0, "beyond 2 % + 3 sigma by {excess}");
+    assert!(
+        hazy_excess <= 0.0,
+        "earth-hazy beyond 2 % + 3 sigma by {hazy_excess}"
+    );
+}
+
+/// `sora spectrum` solves the field only at the sun angles its one view ray
+/// meets; it must agree with the field solved for the whole sky (to the
+/// interpolation between differently placed sun nodes: measured 4.8e-4 and
+/// 1.7e-3 for suns 36 and 5 degrees high, 2.3e-2 in twilight, where the
+/// field changes by orders of magnitude between nodes).
+#[test]
+fn a_field_for_one_view_agrees_with_the_whole_sky_field() {
+    let atmosphere = Atmosphere::preset("clear-sky-reference").unwrap();
+    for (sun_elevation, bound) in [(36.0, 1e-3), (5.0, 3e-3), (-3.0, 3e-2)] {
+        let sky = sky(&atmosphere, sun_elevation, 0.0);
+        let settings = MultipleScatteringSettings::default();
+        let whole = MultipleScatteringField::compute(&sky, settings);
+        let mut worst: f64 = 0.0;
+        for view in directions(24) {
+            let single = MultipleScatteringField::compute_for_view(&sky, view, settings);
+            let (mut a, mut b) = (vec![0.0; 21], vec![0.0; 21]);
+            whole.compute_radiance(view, SunColumns::Exact, &mut whole.scratch(), &mut a);
+            single.compute_radiance(view, SunColumns::Exact, &mut single.scratch(), &mut b);
+            for (x, y) in a.iter().zip(&b) {
+                if *x > 0.0 {
+                    worst = worst.max((y / x - 1.0).abs());
+                }
+            }
+        }
+        eprintln!("sun {sun_elevation}: one view vs whole sky, worst {worst:.3e}");
+        assert!(worst < bound, "sun {sun_elevation}: {worst}");
+    }
+}
+
+/// The fast image (multiply scattered radiance in the sky-view table,
+/// marched at every other node) against the per-pixel march of the source
+/// table (the reference method's), on a small fisheye.
+#[test]
+fn fast_image_matches_the_per_pixel_march() {
+    use sora::camera::Camera;
+    use sora::colour::{Observer, SpectrumToXyz};
+    use sora::render::{
+        FastTableSize, RenderMethod, RenderSettings, Scattering, render_xyz_with_scattering,
+    };
+    let atmosphere = Atmosphere::preset("clear-sky-reference").unwrap();
+    let to_xyz = SpectrumToXyz::new(&WavelengthGrid::paper(), Observer::Cie1931TwoDegree);
+    let scattering = Scattering::Multiple(MultipleScatteringSettings::default());
+    for sun_elevation in [36.0, 5.0] {
+        let sky = sky(&atmosphere, sun_elevation, 0.0);
+        let mut settings = RenderSettings {
+            camera: Camera::Fisheye,
+            width: 24,
+            height: 24,
+            method: RenderMethod::Fast,
+            draw_sun_disc: false,
+            table_size: FastTableSize::default(),
+        };
+        let fast =
+            render_xyz_with_scattering(&sky, &settings, scattering, &to_xyz, &|_| {}).unwrap();
+        settings.method = RenderMethod::Reference {
+            view_steps: 2000,
+            sun_steps: 400,
+        };
+        let reference =
+            render_xyz_with_scattering(&sky, &settings, scattering, &to_xyz, &|_| {}).unwrap();
+        let single = {
+            settings.method = RenderMethod::Fast;
+            render_xyz_with_scattering(&sky, &settings, Scattering::Single, &to_xyz, &|_| {})
+                .unwrap()
+        };
+        let mut worst: f64 = 0.0;
+        for ((f, r), s) in fast.iter().zip(&reference).zip(&single) {
+            for (a, b, c) in [(f.x, r.x, s.x), (f.y, r.y, s.y), (f.z, r.z, s.z)] {
+                if b > 0.0 {
+                    worst = worst.max((a / b - 1.0).abs());
+                    // Multiple scattering only ever adds light.
+                    assert!(a > c, "{a} vs single {c}");
+                }
+            }
+        }
+        eprintln!(
+            "sun {sun_elevation}: fisheye 24x24 fast vs per-pixel march, worst XYZ {worst:.3e}"
+        );
+        // Measured 1.7e-3 and 2.4e-3 (the single-scattering parts alone
+        // differ by up to 1e-3, see render_accuracy.rs).
+        assert!(worst < 3e-3, "{worst}");
+    }
 }

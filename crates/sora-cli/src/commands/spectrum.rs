@@ -158,7 +158,7 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
             MultipleScatteringSettings::default(),
         );
         let mut multiple = vec![0.0; grid.len()];
-        field.compute_radiance(view, &mut field.scratch(), &mut multiple);
+        field.compute_radiance(view, SunColumns::Exact, &mut field.scratch(), &mut multiple);
         for (r, m) in radiance.values_mut().iter_mut().zip(&multiple) {
             *r += m;
         }

@@ -26,7 +26,12 @@
 //! to factor out, but it is smooth in direction (a scattering integral of
 //! a diffuse field): it is marched at every other node of each axis
 //! (and the last node of each half) and filled in linearly between them,
-//! which quarters its cost.
+//! which quarters its cost. The same march gives the forward-peak
+//! integrals of delta-M (light that the multiple-scattering solver counts
+//! as unscattered and that single scattering with the real transmittances
+//! misses), a fourth block: like single scattering's integrals they take
+//! the phase functions per pixel (at the edge of the forward cone near
+//! the sun, see `MultipleScatteringField::forward_cone_cosine`).
 
 use super::multiple_scattering::MultipleScatteringTable;
 use super::optical_column::SunColumnTable;
@@ -86,7 +91,14 @@ impl SkyViewTable {
         let optics = sky.optics();
         let wavelengths = optics.grid.len();
         let has_multiple_scattering = multiple_scattering.is_some();
-        let blocks = optics.species.len() + 1 + usize::from(has_multiple_scattering);
+        let species = optics.species.len();
+        // Integrals, ground; with multiple scattering its radiance and its
+        // forward-peak integrals.
+        let blocks = if has_multiple_scattering {
+            2 * species + 2
+        } else {
+            species + 1
+        };
         let values_per_node = blocks * wavelengths;
         let (ground_radius, _) = sky.radii_m();
         let observer_radius = sky.observer_radius_m();
@@ -105,8 +117,15 @@ impl SkyViewTable {
             values: Vec::new(),
             sun_horizontal: horizontal.unwrap_or((0.0, 1.0)),
         };
-        let row_length = azimuth_nodes * values_per_node;
-        let species = optics.species.len();
+        let stride = values_per_node;
+        // Marched at every other node: multiple scattering's radiance and
+        // forward-peak integrals, the last blocks of each node.
+        let marched_values = if has_multiple_scattering {
+            (species + 1) * wavelengths
+        } else {
+            0
+        };
+        let row_length = azimuth_nodes * stride;
         let fill_row = |row: usize, out: &mut [f32]| {
             let mut scratch = sky.scratch();
             let mut ms_work = multiple_scattering.map(|ms| (ms.scratch(), vec![0.0; wavelengths]));
@@ -120,9 +139,9 @@ impl SkyViewTable {
                     SunColumns::Table(sun_columns),
                     &mut scratch,
                 );
-                let node = &mut out[k * values_per_node..(k + 1) * values_per_node];
+                let node = &mut out[k * stride..(k + 1) * stride];
                 let (integrals, rest) = node.split_at_mut(species * wavelengths);
-                let (ground, multiple) = rest.split_at_mut(wavelengths);
+                let (ground, rest) = rest.split_at_mut(wavelengths);
                 for (o, v) in integrals.iter_mut().zip(scratch.inscattering_integrals()) {
                     *o = *v as f32;
                 }
@@ -134,32 +153,42 @@ impl SkyViewTable {
                     && marched(index_in_half, half_zenith_nodes)
                     && marched(k, azimuth_nodes)
                 {
-                    ms.compute_radiance(view, ms_scratch, radiance);
+                    ms.compute_radiance_parts(
+                        view,
+                        SunColumns::Table(sun_columns),
+                        ms_scratch,
+                        radiance,
+                    );
+                    let (multiple, forward) = rest.split_at_mut(wavelengths);
                     for (o, v) in multiple.iter_mut().zip(radiance.iter()) {
+                        *o = *v as f32;
+                    }
+                    for (o, v) in forward.iter_mut().zip(ms_scratch.forward_integrals()) {
                         *o = *v as f32;
                     }
                 }
             }
-            if multiple_scattering.is_some() {
+            if has_multiple_scattering {
                 // Fill the azimuths between marched ones.
-                fill_between(
-                    out,
-                    azimuth_nodes,
-                    values_per_node,
-                    values_per_node - wavelengths,
-                );
+                fill_between(out, azimuth_nodes, stride, stride - marched_values);
             }
         };
         let mut values = vec![0.0f32; 2 * half_zenith_nodes * row_length];
         crate::parallel::for_each_chunk_mut(&mut values, row_length, fill_row);
-        if multiple_scattering.is_some() {
+        if has_multiple_scattering {
             // Fill the rows between marched ones, within each half.
             for half in [0, 1] {
                 let rows = &mut values[half * half_zenith_nodes * row_length..]
                     [..half_zenith_nodes * row_length];
                 for k in 0..azimuth_nodes {
-                    let offset = k * values_per_node + values_per_node - wavelengths;
-                    fill_between_strided(rows, half_zenith_nodes, row_length, offset, wavelengths);
+                    let offset = k * stride + stride - marched_values;
+                    fill_between_strided(
+                        rows,
+                        half_zenith_nodes,
+                        row_length,
+                        offset,
+                        marched_values,
+                    );
                 }
             }
         }
@@ -228,19 +257,23 @@ impl SkyViewTable {
     }
 
     /// As [`SkyViewTable::lookup`], and the multiply scattered radiance into
-    /// `multiple` (zero when the table has none).
+    /// `multiple` and its forward-peak integrals (species * wavelengths,
+    /// see [`crate::transport::multiple_scattering::MultipleScatteringScratch::forward_integrals`])
+    /// into `forward` (zeros when the table has none).
     pub fn lookup_with_multiple_scattering(
         &self,
         view: Vector3,
         integrals: &mut [f64],
         ground: &mut [f64],
         multiple: &mut [f64],
+        forward: &mut [f64],
     ) {
         if self.has_multiple_scattering {
-            self.interpolate(view, integrals, ground, Some(multiple));
+            self.interpolate(view, integrals, ground, Some((multiple, forward)));
         } else {
             self.interpolate(view, integrals, ground, None);
             multiple.fill(0.0);
+            forward.fill(0.0);
         }
     }
 
@@ -249,7 +282,7 @@ impl SkyViewTable {
         view: Vector3,
         integrals: &mut [f64],
         ground: &mut [f64],
-        multiple: Option<&mut [f64]>,
+        multiple: Option<(&mut [f64], &mut [f64])>,
     ) {
         let zenith = view.z.clamp(-1.0, 1.0).acos();
         let (sx, sy) = self.sun_horizontal;
@@ -293,9 +326,12 @@ impl SkyViewTable {
         for (m, out) in ground.iter_mut().enumerate() {
             *out = interpolate(split + m);
         }
-        if let Some(multiple) = multiple {
+        if let Some((multiple, forward)) = multiple {
             for (m, out) in multiple.iter_mut().enumerate() {
                 *out = interpolate(split + self.wavelengths + m);
+            }
+            for (m, out) in forward.iter_mut().enumerate() {
+                *out = interpolate(split + 2 * self.wavelengths + m);
             }
         }
     }

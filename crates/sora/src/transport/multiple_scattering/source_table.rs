@@ -26,6 +26,7 @@ use super::{
     LOG_FLOOR, MultipleScatteringField, MultipleScatteringScratch, NodeGeometry, floored_log,
 };
 use crate::geometry::Vector3;
+use crate::transport::SunColumns;
 
 /// The per-image source table (see the module docs).
 #[derive(Debug, Clone)]
@@ -181,12 +182,31 @@ impl MultipleScatteringTable {
     pub fn compute_radiance(
         &self,
         view: Vector3,
+        sun_columns: SunColumns,
+        scratch: &mut MultipleScatteringScratch,
+        radiance: &mut [f64],
+    ) {
+        self.compute_radiance_parts(view, sun_columns, scratch, radiance);
+        self.field
+            .optics
+            .add_forward_peak(&self.field.atmosphere, view, scratch, radiance);
+    }
+
+    /// As [`MultipleScatteringTable::compute_radiance`], without the
+    /// forward-peak term: that is left in the scratch
+    /// ([`MultipleScatteringScratch::forward_integrals`]) as integrals that
+    /// take the phase functions exactly as single scattering's do (the
+    /// sky-view table adds them to its single-scattering integrals).
+    pub fn compute_radiance_parts(
+        &self,
+        view: Vector3,
+        sun_columns: SunColumns,
         scratch: &mut MultipleScatteringScratch,
         radiance: &mut [f64],
     ) {
         self.field
             .optics
-            .march(view, scratch, radiance, |node, _, scratch| {
+            .march(view, sun_columns, scratch, radiance, |node, _, scratch| {
                 self.lookup_log_source(node, &mut scratch.log_source)
             });
     }
