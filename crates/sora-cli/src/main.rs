@@ -38,7 +38,21 @@ fn main() {
         Command::Render(args) => commands::render::run(args),
     };
     if let Err(error) = result {
+        if is_broken_pipe(&error) {
+            // The reader went away (`sora spectrum ... | head`): as
+            // ripgrep does, stop quietly; there is no one left to tell.
+            return;
+        }
         eprintln!("error: {error:#}");
         std::process::exit(1);
     }
+}
+
+/// Whether `error` comes from writing to a pipe whose reader has closed it.
+fn is_broken_pipe(error: &anyhow::Error) -> bool {
+    error.chain().any(|cause| {
+        cause
+            .downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
 }

@@ -20,9 +20,10 @@ use crate::arguments::{AtmosphereSource, Scattering, SunAndObserver};
 /// atmosphere's sun.
 ///
 /// Methods: fast and reference compute single scattering (plus the sunlit
-/// ground), and with --scattering multiple add all higher orders and the
-/// skylight reflected by the ground (a discrete-ordinate field, synthesised
-/// exactly along the view); path-tracing is the Monte Carlo reference for
+/// ground) and, with --scattering multiple (the default), add all higher
+/// orders and the skylight reflected by the ground (a discrete-ordinate
+/// field, synthesised exactly along the view); --scattering single gives the
+/// paper's model. path-tracing is the Monte Carlo reference for
 /// all orders of scattering and ground reflection, and adds a third column,
 /// standard_error_w_m2_sr_nm, the standard error of each value (it shrinks
 /// as 1/sqrt(--samples); on a terminal a progress bar shows the time left).
@@ -49,15 +50,16 @@ pub struct SpectrumArgs {
     #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
     view_azimuth: f64,
 
-    /// fast (Gauss-Legendre column march) or reference (the paper's uniform
-    /// double march, slow): single scattering; path-tracing: Monte Carlo,
-    /// all orders of scattering, with standard errors
+    /// How single scattering is integrated: fast (Gauss-Legendre column
+    /// march) or reference (the paper's uniform double march, slow), each
+    /// plus the higher orders of --scattering; or path-tracing (Monte Carlo,
+    /// all orders of scattering, with standard errors)
     #[arg(long, value_enum, default_value_t = Method::Fast)]
     method: Method,
 
-    /// fast and reference: single (sunlight scattered once, the paper's
-    /// model) or multiple (adds all higher orders and skylight reflected by
-    /// the ground) [default: single]
+    /// fast and reference: multiple (all orders of scattering and skylight
+    /// reflected by the ground) or single (sunlight scattered once, the
+    /// paper's model) [default: multiple]
     #[arg(long, value_enum)]
     scattering: Option<Scattering>,
 
@@ -151,7 +153,11 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
             (traced.total.mean, Some(traced.total.standard_error))
         }
     };
-    if args.scattering == Some(Scattering::Multiple) {
+    let scattering = match args.method {
+        Method::PathTracing => None,
+        _ => Some(args.scattering.unwrap_or(Scattering::Multiple)),
+    };
+    if scattering == Some(Scattering::Multiple) {
         let field = MultipleScatteringField::compute_for_view(
             &sky,
             view,
