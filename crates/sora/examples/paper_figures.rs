@@ -1,33 +1,36 @@
 //! The paper's results, and skies beside them, generated from the library
-//! (deterministic; 10-15 s on two cores after the build):
+//! (deterministic; 35-40 s on two cores after the build):
 //!
 //! ```sh
 //! cargo run --release -p sora --example paper_figures -- docs
 //! ```
 //!
 //! Writes into the directory given (default `docs`, created if missing):
-//! - `table1_spectrum.csv`, `table1_spectrum.png`: the sky spectrum of the
-//!   paper's Table 1 geometry (sun 36 deg elevation, azimuth 207; view 17,
-//!   347), single scattering, each curve normalised to its maximum over
-//!   380-780 nm, as the paper normalised its Fig. 2;
+//! - `table1_spectrum.csv`, `table1_spectrum.png`,
+//!   `table1_spectrum_normalised.png`: the sky spectrum of the paper's
+//!   Table 1 geometry (sun 36 deg elevation, azimuth 207; view 17, 347),
+//!   single scattering beside all orders, absolute and normalised to each
+//!   curve's maximum over 380-780 nm (as the paper normalised its Fig. 2),
+//!   checked against the paper's march and the path tracer;
 //! - Earth skies (`earth-clear` at noon, sunset and twilight; `paper-earth`
 //!   at noon) as fisheyes (512 x 512) and equirectangular panoramas
-//!   (1024 x 512);
+//!   (1024 x 512), each as `*_single.png` and `*_multiple.png`;
 //! - the Mars sunset (`paper-mars`, the paper's Table 2, and `mars-dust`)
-//!   as a fisheye and a perspective view toward the sun, and
-//!   `mars_sun_glow.csv`: the colour of the sky near the sun and away from
-//!   it, the numbers behind `docs/README.md`'s remarks on the blue glow;
+//!   as a fisheye and a perspective view toward the sun, single and
+//!   multiple, and `mars_sun_glow.csv`: the colour of the sky near the sun
+//!   and away from it, the numbers behind `docs/README.md`'s remarks on the
+//!   blue glow;
 //! - `readme_sky.png`: the picture of the README's example command
 //!   (`sora render --preset earth-clear --sun-elevation 30 -o sky.png`),
 //!   identical to what that command writes.
 //!
 //! Every image goes through the same stages as `sora render`:
-//! [`render_xyz`] (fast method, sun disc drawn), then the colour module's
-//! [`DisplayMapping`] (sRGB, hue-preserving gamut mapping) and
-//! [`write_png`]. Exposure: each scene's fisheye gets the default automatic
-//! exposure (log-average luminance -> 0.18), and the same factor is used,
-//! fixed, for the scene's other view, so the two views of one sky compare
-//! directly. Single scattering only (the library's method so far).
+//! [`render_xyz_with_scattering`] (fast method, sun disc drawn), then the
+//! colour module's [`DisplayMapping`] (sRGB, hue-preserving gamut mapping)
+//! and [`write_png`]. Exposure: each scene's multiple-scattering fisheye
+//! gets the default automatic exposure (log-average luminance -> 0.18), and
+//! the same factor is used, fixed, for every other picture of the scene
+//! (its other views, and single scattering), so they compare directly.
 
 #[path = "paper_figures/plot.rs"]
 mod plot;
@@ -42,9 +45,12 @@ use sora::camera::{Camera, PerspectiveCamera};
 use sora::colour::{DisplayMapping, Exposure, Observer, RgbColourSpace, SpectrumToXyz};
 use sora::geometry::{angle_between_deg, direction_from_elevation_azimuth};
 use sora::output::{DisplayImage, write_png};
-use sora::render::{FastTableSize, RenderMethod, RenderSettings, render_xyz};
+use sora::render::{
+    FastTableSize, RenderMethod, RenderSettings, Scattering, render_xyz_with_scattering,
+};
 use sora::spectrum::{SampledSpectrum, SolarSpectrum, WavelengthGrid};
-use sora::transport::{Observation, SingleScatteringSky, SunColumns};
+use sora::transport::multiple_scattering::{MultipleScatteringField, MultipleScatteringSettings};
+use sora::transport::{Observation, PathTracer, SingleScatteringSky, SunColumns};
 
 type Result<T> = std::result::Result<T, Box<dyn std::error::Error>>;
 
@@ -110,6 +116,42 @@ fn radiance(sky: &SingleScatteringSky, view: (f64, f64)) -> SampledSpectrum {
     spectrum
 }
 
+/// As [`radiance`], with all orders of scattering: single scattering plus
+/// the discrete-ordinate field's higher orders and ground-reflected
+/// skylight, as `sora spectrum` (default `--scattering multiple`) computes
+/// it.
+fn radiance_with_multiple_scattering(
+    sky: &SingleScatteringSky,
+    view: (f64, f64),
+) -> SampledSpectrum {
+    let field = MultipleScatteringField::compute_for_view(
+        sky,
+        direction_from_elevation_azimuth(view.0, view.1),
+        MultipleScatteringSettings::default(),
+    );
+    add_multiple_scattering(sky, &field, view)
+}
+
+/// [`radiance`] plus what `field` adds toward (elevation, azimuth).
+fn add_multiple_scattering(
+    sky: &SingleScatteringSky,
+    field: &MultipleScatteringField,
+    view: (f64, f64),
+) -> SampledSpectrum {
+    let mut spectrum = radiance(sky, view);
+    let mut higher_orders = vec![0.0; spectrum.len()];
+    field.compute_radiance(
+        direction_from_elevation_azimuth(view.0, view.1),
+        SunColumns::Exact,
+        &mut field.scratch(),
+        &mut higher_orders,
+    );
+    for (total, added) in spectrum.values_mut().iter_mut().zip(&higher_orders) {
+        *total += added;
+    }
+    spectrum
+}
+
 /// A preset with one line of its TOML replaced (a variant for comparison).
 fn preset_variant(name: &str, from: &str, to: &str) -> Result<Atmosphere> {
     let preset = find_preset(name).ok_or_else(|| format!("no preset {name}"))?;
@@ -136,116 +178,194 @@ fn table1_spectrum(out: &Path, grid: &WavelengthGrid) -> Result<()> {
     let mut paper_earth_e490 = paper_earth.clone();
     paper_earth_e490.sun = Sun::new(SolarSpectrum::astm_e490(), 1.0, 0.53)?;
     let earth_clear = Atmosphere::preset("earth-clear")?;
-    // (CSV key, legend, atmosphere, dashed)
+    // (CSV key, legend, atmosphere, colour)
     let curves = [
         (
             "paper_earth",
             "PAPER-EARTH, FLAT SUN (THE PAPER'S)",
             &paper_earth,
-            false,
+            [31, 90, 180],
         ),
         (
             "paper_earth_e490_sun",
             "PAPER-EARTH, ASTM E490 SUN",
             &paper_earth_e490,
-            true,
+            [230, 120, 20],
         ),
         (
             "earth_clear",
             "EARTH-CLEAR (ASTM E490 SUN, OZONE)",
             &earth_clear,
-            false,
+            [40, 150, 60],
         ),
     ];
-    let colours = [[31, 90, 180], [230, 120, 20], [40, 150, 60]];
+    let view = direction_from_elevation_azimuth(TABLE1_VIEW.0, TABLE1_VIEW.1);
     let mut columns = Vec::new();
     for (key, _, atmosphere, _) in &curves {
         let sky = sky(atmosphere, grid, TABLE1_SUN)?;
-        let spectrum = radiance(&sky, TABLE1_VIEW);
-        let peak = spectrum.max_value();
-        let (peak_index, _) =
-            spectrum
-                .values()
-                .iter()
-                .enumerate()
-                .fold(
-                    (0, f64::MIN),
-                    |best, (i, &v)| if v > best.1 { (i, v) } else { best },
-                );
-        // The paper's uniform double march, as a check of the fast path.
-        let reference = sky.compute_radiance_reference(
-            direction_from_elevation_azimuth(TABLE1_VIEW.0, TABLE1_VIEW.1),
-            4000,
-            800,
-        );
-        let worst = spectrum
-            .values()
-            .iter()
-            .zip(reference.values())
-            .map(|(a, b)| (a / b - 1.0).abs())
-            .fold(0.0, f64::max);
+        let single = radiance(&sky, TABLE1_VIEW);
+        let multiple = radiance_with_multiple_scattering(&sky, TABLE1_VIEW);
+        // Checks printed beside the numbers: the paper's uniform double
+        // march for single scattering, the path tracer for all orders.
+        let reference = sky.compute_radiance_reference(view, 4000, 800);
+        let traced = PathTracer::new(&sky).compute_radiance(view, PATHS_PER_CHECK, 1)?;
+        let worst_single = worst_relative_difference(&single, &reference);
+        let worst_multiple = worst_relative_difference(&multiple, &traced.total.mean);
+        for (name, spectrum) in [("single", &single), ("multiple", &multiple)] {
+            let (peak_nm, peak) = peak_of(grid, spectrum);
+            println!(
+                "table 1, {key}, {name} scattering: peak {peak:.4e} W m^-2 sr^-1 nm^-1 at {peak_nm} nm, {:.3} of it at 380 nm and {:.3} at 780 nm",
+                spectrum[0] / peak,
+                spectrum[grid.len() - 1] / peak,
+            );
+        }
         println!(
-            "table 1, {key}: peak {:.4e} W m^-2 sr^-1 nm^-1 at {} nm, {:.3} of it at 780 nm; fast vs reference march: {:.1e} max relative difference",
-            peak,
-            grid.wavelength_nm(peak_index),
-            spectrum.values()[grid.len() - 1] / peak,
-            worst
+            "table 1, {key}: single scattering vs the reference march {worst_single:.1e}; multiple vs the path tracer ({PATHS_PER_CHECK} paths, {:.2}% standard error at worst) {:.2}% at worst",
+            100.0 * traced.total.worst_relative_standard_error(),
+            100.0 * worst_multiple
         );
-        columns.push((key, spectrum, peak));
+        columns.push((key, single, multiple));
     }
-    // CSV.
+    // CSV: absolute radiances, and each divided by its own maximum (as the
+    // paper normalised its Fig. 2).
     let mut csv = String::from("wavelength_nm");
     for (key, _, _) in &columns {
-        write!(csv, ",radiance_{key}_w_m2_sr_nm,normalised_{key}")?;
+        write!(
+            csv,
+            ",single_{key}_w_m2_sr_nm,multiple_{key}_w_m2_sr_nm,single_{key}_normalised,multiple_{key}_normalised"
+        )?;
     }
     csv.push('\n');
     for (i, wavelength) in grid.wavelengths_nm().enumerate() {
         write!(csv, "{wavelength}")?;
-        for (_, spectrum, peak) in &columns {
-            let v = spectrum.values()[i];
-            write!(csv, ",{v:.6e},{:.6}", v / peak)?;
+        for (_, single, multiple) in &columns {
+            let (s, m) = (single[i], multiple[i]);
+            write!(
+                csv,
+                ",{s:.6e},{m:.6e},{:.6},{:.6}",
+                s / single.max_value(),
+                m / multiple.max_value()
+            )?;
         }
         csv.push('\n');
     }
     let path = out.join("table1_spectrum.csv");
     std::fs::write(&path, csv)?;
     wrote(&path, "Table 1 spectra", started);
-    // Plot.
-    let plot = plot::LinePlot {
+
+    let curve = |spectrum: &SampledSpectrum, scale: f64| -> Vec<(f64, f64)> {
+        grid.wavelengths_nm()
+            .zip(spectrum.values())
+            .map(|(w, v)| (w, v / scale))
+            .collect()
+    };
+    let plot = |series: Vec<plot::Series>, y_label: &str, notes: Vec<String>| plot::LinePlot {
         title: "TABLE 1: SUN 36 DEG / AZ 207, VIEW 17 DEG / AZ 347".into(),
         x_label: "WAVELENGTH (NM)".into(),
-        y_label: "RADIANCE / ITS MAXIMUM".into(),
+        y_label: y_label.into(),
         x_range: (370.0, 790.0),
-        y_range: (0.0, 1.05),
+        // Room above the curves for the legend.
+        y_range: (0.0, 1.65),
         x_ticks: ((0..8).map(|k| 400.0 + 50.0 * k as f64).collect(), 0),
         y_ticks: ((0..6).map(|k| 0.2 * k as f64).collect(), 1),
-        series: curves
-            .iter()
-            .zip(&columns)
-            .zip(colours)
-            .map(
-                |(((_, label, _, dashed), (_, spectrum, peak)), colour)| plot::Series {
-                    label: (*label).into(),
-                    colour,
-                    dashed: *dashed,
-                    points: grid
-                        .wavelengths_nm()
-                        .zip(spectrum.values())
-                        .map(|(w, v)| (w, v / peak))
-                        .collect(),
-                },
-            )
-            .collect(),
-        notes: vec![
-            "SINGLE SCATTERING, 20 NM SAMPLES".into(),
-            "EACH CURVE DIVIDED BY ITS MAXIMUM".into(),
-        ],
+        series,
+        notes,
     };
-    let (w, h, data) = plot.render(900, 560).into_rgb8();
+    // 1. Single beside multiple scattering, for the paper's atmosphere and
+    // sun and for the physical Earth: each pair divided by the maximum of
+    // its multiple-scattering curve, so that both the shape and the light
+    // added by the higher orders show.
+    let mut series = Vec::new();
+    for ((key, label, _, colour), (_, single, multiple)) in curves.iter().zip(&columns) {
+        if *key == "paper_earth_e490_sun" {
+            continue;
+        }
+        let scale = multiple.max_value();
+        let name = label.split(" (").next().unwrap_or(label);
+        for (scattering, spectrum, dashed) in
+            [("MULTIPLE", multiple, false), ("SINGLE", single, true)]
+        {
+            series.push(plot::Series {
+                label: format!("{name}, {scattering} SCATTERING"),
+                colour: *colour,
+                dashed,
+                points: curve(spectrum, scale),
+            });
+        }
+    }
+    let figure = plot(
+        series,
+        "RADIANCE / MAXIMUM OF MULTIPLE",
+        vec![
+            "PAPER-EARTH: FLAT SUN, EARTH-CLEAR: E490 SUN".into(),
+            "EACH PAIR DIVIDED BY ITS MULTIPLE-SCATTERING MAXIMUM".into(),
+        ],
+    );
+    let (w, h, data) = figure.render(900, 640).into_rgb8();
     let path = out.join("table1_spectrum.png");
     write_png(&path, &DisplayImage::new(w, h, data)?)?;
-    wrote(&path, "Table 1 plot", started);
+    wrote(
+        &path,
+        "Table 1 plot, single and multiple scattering",
+        started,
+    );
+
+    // 2. The paper's comparison (each curve divided by its own maximum):
+    // which sun, with which orders of scattering.
+    let mut series = Vec::new();
+    for ((key, label, _, colour), (_, single, multiple)) in curves.iter().zip(&columns) {
+        for (scattering, spectrum, dashed) in [("", multiple, false), (", SINGLE", single, true)] {
+            if *key == "earth_clear" && dashed {
+                continue;
+            }
+            series.push(plot::Series {
+                label: format!("{label}{scattering}"),
+                colour: *colour,
+                dashed,
+                points: curve(spectrum, spectrum.max_value()),
+            });
+        }
+    }
+    let figure = plot(
+        series,
+        "RADIANCE / ITS MAXIMUM",
+        vec![
+            "SOLID: MULTIPLE SCATTERING, DASHED: SINGLE".into(),
+            "EACH CURVE DIVIDED BY ITS MAXIMUM".into(),
+        ],
+    );
+    let (w, h, data) = figure.render(900, 640).into_rgb8();
+    let path = out.join("table1_spectrum_normalised.png");
+    write_png(&path, &DisplayImage::new(w, h, data)?)?;
+    wrote(&path, "Table 1 plot, each curve to its maximum", started);
     Ok(())
+}
+
+/// Paths for each path-traced check of the Table 1 spectra (about 0.5%
+/// standard error).
+const PATHS_PER_CHECK: u64 = 40_000;
+
+/// The wavelength (nm) and value of the largest sample of `spectrum`.
+fn peak_of(grid: &WavelengthGrid, spectrum: &SampledSpectrum) -> (f64, f64) {
+    let (index, peak) =
+        spectrum
+            .values()
+            .iter()
+            .enumerate()
+            .fold(
+                (0, f64::MIN),
+                |best, (i, &v)| if v > best.1 { (i, v) } else { best },
+            );
+    (grid.wavelength_nm(index), peak)
+}
+
+/// The largest |a / b - 1| over the samples.
+fn worst_relative_difference(a: &SampledSpectrum, b: &SampledSpectrum) -> f64 {
+    a.values()
+        .iter()
+        .zip(b.values())
+        .map(|(a, b)| (a / b - 1.0).abs())
+        .fold(0.0, f64::max)
 }
 
 // ---------------------------------------------------------------------------
@@ -275,9 +395,11 @@ struct Scene {
     name: &'static str,
     atmosphere: Atmosphere,
     sun: (f64, f64),
-    /// Draw the sun's disc (not for a sun below the horizon: the library
-    /// draws it on the ground there, see docs/README.md).
+    /// Draw the sun's disc.
     sun_disc: bool,
+    /// Render single scattering beside multiple scattering (`*_single.png`
+    /// and `*_multiple.png`); otherwise multiple only.
+    single_too: bool,
     views: Vec<View>,
 }
 
@@ -325,6 +447,7 @@ fn scenes() -> Result<Vec<Scene>> {
             atmosphere: preset("earth-clear")?,
             sun: (30.0, 180.0),
             sun_disc: true,
+            single_too: false,
             views: vec![View {
                 suffix: "",
                 ..fisheye()
@@ -335,6 +458,7 @@ fn scenes() -> Result<Vec<Scene>> {
             atmosphere: preset("earth-clear")?,
             sun: (60.0, 180.0),
             sun_disc: true,
+            single_too: true,
             views: vec![fisheye(), panorama()],
         },
         Scene {
@@ -342,13 +466,15 @@ fn scenes() -> Result<Vec<Scene>> {
             atmosphere: preset("earth-clear")?,
             sun: sunset,
             sun_disc: true,
+            single_too: true,
             views: vec![fisheye(), panorama()],
         },
         Scene {
             name: "earth_clear_twilight",
             atmosphere: preset("earth-clear")?,
             sun: (-2.0, SUNSET_AZIMUTH),
-            sun_disc: false,
+            sun_disc: true,
+            single_too: true,
             views: vec![fisheye(), panorama()],
         },
         Scene {
@@ -356,6 +482,7 @@ fn scenes() -> Result<Vec<Scene>> {
             atmosphere: preset("paper-earth")?,
             sun: (60.0, 180.0),
             sun_disc: true,
+            single_too: true,
             views: vec![fisheye(), panorama()],
         },
         Scene {
@@ -363,6 +490,7 @@ fn scenes() -> Result<Vec<Scene>> {
             atmosphere: preset("paper-mars")?,
             sun: sunset,
             sun_disc: true,
+            single_too: true,
             views: vec![
                 fisheye(),
                 toward_sunset(ViewExposure::Scene)?,
@@ -374,6 +502,7 @@ fn scenes() -> Result<Vec<Scene>> {
             atmosphere: preset("mars-dust")?,
             sun: sunset,
             sun_disc: true,
+            single_too: true,
             views: vec![
                 fisheye(),
                 toward_sunset(ViewExposure::Scene)?,
@@ -397,51 +526,67 @@ fn render_scene(out: &Path, grid: &WavelengthGrid, scene: &Scene) -> Result<()> 
             draw_sun_disc: scene.sun_disc && view.exposure == ViewExposure::Scene,
             table_size: FastTableSize::default(),
         };
-        let xyz = render_xyz(&sky, &settings, &to_xyz, &|_| {})?;
-        let scale = match (view.exposure, scene_exposure) {
-            (ViewExposure::Scene, Some(scale)) => scale,
-            (ViewExposure::Scene, None) => {
-                *scene_exposure.insert(Exposure::default().scale_for_image(&xyz)?)
-            }
-            (ViewExposure::Unclipped, _) => {
-                let peak = xyz
-                    .iter()
-                    .map(|c| RgbColourSpace::Srgb.linear_rgb_from_xyz(*c).max_component())
-                    .fold(0.0, f64::max);
-                1.0 / peak
-            }
-        };
-        let mapping = DisplayMapping {
-            exposure: Exposure::Fixed(scale),
-            ..DisplayMapping::default()
-        };
-        let data = mapping.to_u8(&xyz)?.into_iter().flatten().collect();
-        let file = if view.suffix.is_empty() {
-            format!("{}.png", scene.name)
-        } else {
-            format!("{}_{}.png", scene.name, view.suffix)
-        };
-        let path = out.join(file);
-        write_png(
-            &path,
-            &DisplayImage::new(view.width as usize, view.height as usize, data)?,
-        )?;
-        wrote(
-            &path,
-            &format!(
-                "{}x{}, sun {} / {} deg, disc {}, exposure {scale}",
-                view.width,
-                view.height,
-                scene.sun.0,
-                scene.sun.1,
-                if settings.draw_sun_disc {
-                    "drawn"
-                } else {
-                    "not drawn"
+        // Multiple scattering first: its exposure is the view's, and the
+        // single-scattering picture beside it shares it.
+        let mut scale = None;
+        for scattering in [
+            Scattering::Multiple(MultipleScatteringSettings::default()),
+            Scattering::Single,
+        ] {
+            let (scattering_name, file_suffix) = match scattering {
+                Scattering::Single if !scene.single_too => continue,
+                Scattering::Single => ("single", "_single"),
+                Scattering::Multiple(_) if scene.single_too => ("multiple", "_multiple"),
+                Scattering::Multiple(_) => ("multiple", ""),
+            };
+            let xyz = render_xyz_with_scattering(&sky, &settings, scattering, &to_xyz, &|_| {})?;
+            let scale = *match (view.exposure, scene_exposure) {
+                (ViewExposure::Scene, Some(scene_scale)) => scale.insert(scene_scale),
+                (ViewExposure::Scene, None) => {
+                    let auto = Exposure::default().scale_for_image(&xyz)?;
+                    scene_exposure = Some(auto);
+                    scale.insert(auto)
                 }
-            ),
-            started,
-        );
+                (ViewExposure::Unclipped, _) => scale.get_or_insert_with(|| {
+                    let peak = xyz
+                        .iter()
+                        .map(|c| RgbColourSpace::Srgb.linear_rgb_from_xyz(*c).max_component())
+                        .fold(0.0, f64::max);
+                    1.0 / peak
+                }),
+            };
+            let mapping = DisplayMapping {
+                exposure: Exposure::Fixed(scale),
+                ..DisplayMapping::default()
+            };
+            let data = mapping.to_u8(&xyz)?.into_iter().flatten().collect();
+            let file = if view.suffix.is_empty() {
+                format!("{}{file_suffix}.png", scene.name)
+            } else {
+                format!("{}_{}{file_suffix}.png", scene.name, view.suffix)
+            };
+            let path = out.join(file);
+            write_png(
+                &path,
+                &DisplayImage::new(view.width as usize, view.height as usize, data)?,
+            )?;
+            wrote(
+                &path,
+                &format!(
+                    "{}x{}, {scattering_name} scattering, sun {} / {} deg, disc {}, exposure {scale}",
+                    view.width,
+                    view.height,
+                    scene.sun.0,
+                    scene.sun.1,
+                    if settings.draw_sun_disc {
+                        "drawn"
+                    } else {
+                        "not drawn"
+                    }
+                ),
+                started,
+            );
+        }
     }
     Ok(())
 }
@@ -489,31 +634,43 @@ fn mars_sun_glow(out: &Path, grid: &WavelengthGrid) -> Result<()> {
     let index_of = |nm: f64| ((nm - grid.start_nm()) / grid.step_nm()).round() as usize;
     let (blue, red) = (index_of(440.0), index_of(700.0));
     let mut csv = String::from(
-        "atmosphere,direction,view_elevation_deg,view_azimuth_deg,angle_from_sun_deg,y_luminance,chromaticity_x,chromaticity_y,linear_srgb_r,linear_srgb_g,linear_srgb_b,b_over_r,l440_over_l700_relative_to_sun\n",
+        "atmosphere,scattering,direction,view_elevation_deg,view_azimuth_deg,angle_from_sun_deg,y_luminance,chromaticity_x,chromaticity_y,linear_srgb_r,linear_srgb_g,linear_srgb_b,b_over_r,l440_over_l700_relative_to_sun\n",
     );
     for (name, atmosphere) in &variants {
         let sky = sky(atmosphere, grid, (sun_el, sun_az))?;
+        let field = MultipleScatteringField::compute(&sky, MultipleScatteringSettings::default());
         let sun = &sky.optics().solar_irradiance_w_m2_nm;
         let sun_ratio = sun[blue] / sun[red];
-        let mut summary = Vec::new();
-        for (label, el, az) in &directions {
-            let spectrum = radiance(&sky, (*el, *az));
-            let xyz = to_xyz.to_xyz(&spectrum)?;
-            let [x, y] = xyz.chromaticity_xy().unwrap_or([f64::NAN, f64::NAN]);
-            let rgb = RgbColourSpace::Srgb.linear_rgb_from_xyz(xyz);
-            let b_over_r = rgb.b / rgb.r;
-            let spectral = spectrum[blue] / spectrum[red] / sun_ratio;
-            let angle = angle_between_deg(*el, *az, sun_el, sun_az);
-            writeln!(
-                csv,
-                "{name},{label},{el},{az},{angle:.2},{:.6e},{x:.4},{y:.4},{:.6e},{:.6e},{:.6e},{b_over_r:.4},{spectral:.4}",
-                xyz.y, rgb.r, rgb.g, rgb.b
-            )?;
-            if label == "2 deg above the sun" || label == "90 deg in azimuth from the sun" {
-                summary.push(format!("{label}: B/R {b_over_r:.3}, xy ({x:.3}, {y:.3})"));
+        for scattering in ["single", "multiple"] {
+            let mut summary = Vec::new();
+            for (label, el, az) in &directions {
+                let spectrum = match scattering {
+                    "single" => radiance(&sky, (*el, *az)),
+                    _ => add_multiple_scattering(&sky, &field, (*el, *az)),
+                };
+                let xyz = to_xyz.to_xyz(&spectrum)?;
+                let [x, y] = xyz.chromaticity_xy().unwrap_or([f64::NAN, f64::NAN]);
+                let rgb = RgbColourSpace::Srgb.linear_rgb_from_xyz(xyz);
+                let b_over_r = rgb.b / rgb.r;
+                let spectral = spectrum[blue] / spectrum[red] / sun_ratio;
+                let angle = angle_between_deg(*el, *az, sun_el, sun_az);
+                writeln!(
+                    csv,
+                    "{name},{scattering},{label},{el},{az},{angle:.2},{:.6e},{x:.4},{y:.4},{:.6e},{:.6e},{:.6e},{b_over_r:.4},{spectral:.4}",
+                    xyz.y, rgb.r, rgb.g, rgb.b
+                )?;
+                if label == "1 deg above the sun" || label == "90 deg in azimuth from the sun" {
+                    summary.push(format!(
+                        "{label}: Y {:.4e}, B/R {b_over_r:.3}, xy ({x:.3}, {y:.3})",
+                        xyz.y
+                    ));
+                }
             }
+            println!(
+                "mars glow, {name}, {scattering} scattering: {}",
+                summary.join("; ")
+            );
         }
-        println!("mars glow, {name}: {}", summary.join("; "));
     }
     let path = out.join("mars_sun_glow.csv");
     std::fs::write(&path, csv)?;
