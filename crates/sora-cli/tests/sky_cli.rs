@@ -341,26 +341,19 @@ fn render_writes_png_and_exr_and_nothing_on_failure() {
 #[test]
 fn path_tracing_spectrum_has_standard_errors_and_is_deterministic() {
     let args = [
-        "spectrum",
-        "--preset",
-        "clear-sky-reference",
-        "--sun-elevation",
-        "36",
-        "--sun-azimuth",
-        "207",
-        "--view-elevation",
-        "17",
-        "--view-azimuth",
-        "347",
-        "--wavelengths",
-        "400:700:100",
-        "--method",
-        "path-tracing",
-        "--samples",
-        "4000",
-        "--seed",
-        "7",
-    ];
+        &CASE_A_SPECTRUM[..],
+        &[
+            "--wavelengths",
+            "400:700:100",
+            "--method",
+            "path-tracing",
+            "--samples",
+            "4000",
+            "--seed",
+            "7",
+        ],
+    ]
+    .concat();
     let first = stdout(&sora(&args));
     assert_eq!(first, stdout(&sora(&args)), "same seed, same output");
     let mut lines = first.lines();

@@ -23,51 +23,15 @@
 use sora::atmosphere::{Atmosphere, Planet};
 use sora::geometry::{Vector3, direction_from_elevation_azimuth};
 use sora::spectrum::{SampledSpectrum, Spectrum, WavelengthGrid};
-use sora::table::NumericTable;
 use sora::transport::multiple_scattering::{
     MultipleScatteringField, MultipleScatteringSettings, MultipleScatteringTable,
     forward_peak_cosine,
 };
 use sora::transport::{Observation, PathTracer, SingleScatteringSky, SkyViewTable, SunColumns};
 
-struct Row {
-    wavelength_nm: f64,
-    sun_elevation_deg: f64,
-    view_elevation_deg: f64,
-    relative_azimuth_deg: f64,
-    ground_albedo: f64,
-    multiple_plane_parallel: f64,
-}
+mod common;
 
-fn reference_rows() -> Vec<Row> {
-    let text = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/tests/data/clear_sky_radiance.csv"
-    ))
-    .unwrap();
-    let table = NumericTable::parse(&text, "clear_sky_radiance.csv").unwrap();
-    let col = |name: &str| table.column_names.iter().position(|c| c == name).unwrap();
-    let (wl, sun, view, rel, albedo, multi) = (
-        col("lambda_nm"),
-        col("sun_elev_deg"),
-        col("view_elev_deg"),
-        col("rel_azimuth_deg"),
-        col("ground_albedo"),
-        col("L_multi_plane_parallel"),
-    );
-    table
-        .rows
-        .iter()
-        .map(|r| Row {
-            wavelength_nm: r[wl],
-            sun_elevation_deg: r[sun],
-            view_elevation_deg: r[view],
-            relative_azimuth_deg: r[rel],
-            ground_albedo: r[albedo],
-            multiple_plane_parallel: r[multi],
-        })
-        .collect()
-}
+use common::reference_rows;
 
 fn sky(
     atmosphere: &Atmosphere,

@@ -36,53 +36,14 @@
 use sora::atmosphere::{Atmosphere, Planet};
 use sora::geometry::{Vector3, direction_from_elevation_azimuth};
 use sora::spectrum::{SampledSpectrum, Spectrum, WavelengthGrid};
-use sora::table::NumericTable;
 use sora::transport::{Observation, PathTracer, SingleScatteringSky, SunColumns};
 
 /// The plane-parallel limit's planet radius, m.
 const PLANE_PARALLEL_RADIUS_M: f64 = 6.36e9;
 
-struct Row {
-    wavelength_nm: f64,
-    sun_elevation_deg: f64,
-    view_elevation_deg: f64,
-    relative_azimuth_deg: f64,
-    ground_albedo: f64,
-    single_plane_parallel: f64,
-    multi_plane_parallel: f64,
-}
+mod common;
 
-fn reference_rows() -> Vec<Row> {
-    let text = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/tests/data/clear_sky_radiance.csv"
-    ))
-    .unwrap();
-    let table = NumericTable::parse(&text, "clear_sky_radiance.csv").unwrap();
-    let col = |name: &str| table.column_names.iter().position(|c| c == name).unwrap();
-    let (wl, sun, view, rel, albedo, single, multi) = (
-        col("lambda_nm"),
-        col("sun_elev_deg"),
-        col("view_elev_deg"),
-        col("rel_azimuth_deg"),
-        col("ground_albedo"),
-        col("L_single_plane_parallel"),
-        col("L_multi_plane_parallel"),
-    );
-    table
-        .rows
-        .iter()
-        .map(|r| Row {
-            wavelength_nm: r[wl],
-            sun_elevation_deg: r[sun],
-            view_elevation_deg: r[view],
-            relative_azimuth_deg: r[rel],
-            ground_albedo: r[albedo],
-            single_plane_parallel: r[single],
-            multi_plane_parallel: r[multi],
-        })
-        .collect()
-}
+use common::reference_rows;
 
 /// The clear-sky reference atmosphere on a planet of `radius_m` with a
 /// constant ground albedo, seen from `observer_altitude_m` with the sun at
@@ -240,7 +201,7 @@ fn compare_with_disort(samples: u64, samples_for_albedo_0_3: u64, base_seed: u64
                 what.clone(),
                 result.total.mean[i],
                 result.total.standard_error[i],
-                row.multi_plane_parallel,
+                row.multiple_plane_parallel,
                 3.0,
                 Some(0.01),
             );
@@ -504,7 +465,7 @@ fn error_bars_are_calibrated_over_many_seeds() {
                     .unwrap();
                 let i = ((wavelength - grid.start_nm()) / grid.step_nm()).round() as usize;
                 z_scores[k].push(
-                    (result.total.mean[i] - row.multi_plane_parallel)
+                    (result.total.mean[i] - row.multiple_plane_parallel)
                         / result.total.standard_error[i],
                 );
             }

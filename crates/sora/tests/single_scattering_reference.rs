@@ -8,49 +8,11 @@
 use sora::atmosphere::{Atmosphere, Planet};
 use sora::geometry::direction_from_elevation_azimuth;
 use sora::spectrum::{SampledSpectrum, Spectrum, WavelengthGrid};
-use sora::table::NumericTable;
 use sora::transport::{Observation, SingleScatteringSky, SunColumns};
 
-struct Row {
-    wavelength_nm: f64,
-    sun_elevation_deg: f64,
-    view_elevation_deg: f64,
-    relative_azimuth_deg: f64,
-    single_plane_parallel: f64,
-    single_spherical: f64,
-}
+mod common;
 
-fn reference_rows() -> Vec<Row> {
-    let text = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/tests/data/clear_sky_radiance.csv"
-    ))
-    .unwrap();
-    let table = NumericTable::parse(&text, "clear_sky_radiance.csv").unwrap();
-    let col = |name: &str| table.column_names.iter().position(|c| c == name).unwrap();
-    let (wl, sun, view, rel, albedo, pp, sph) = (
-        col("lambda_nm"),
-        col("sun_elev_deg"),
-        col("view_elev_deg"),
-        col("rel_azimuth_deg"),
-        col("ground_albedo"),
-        col("L_single_plane_parallel"),
-        col("L_single_spherical"),
-    );
-    table
-        .rows
-        .iter()
-        .filter(|r| r[albedo] == 0.0)
-        .map(|r| Row {
-            wavelength_nm: r[wl],
-            sun_elevation_deg: r[sun],
-            view_elevation_deg: r[view],
-            relative_azimuth_deg: r[rel],
-            single_plane_parallel: r[pp],
-            single_spherical: r[sph],
-        })
-        .collect()
-}
+use common::{ReferenceRow as Row, reference_rows};
 
 fn sky(atmosphere: &Atmosphere, sun_elevation_deg: f64) -> SingleScatteringSky {
     let observation = Observation {
@@ -65,7 +27,10 @@ fn sky(atmosphere: &Atmosphere, sun_elevation_deg: f64) -> SingleScatteringSky {
 /// reference path over all rows, against the column `pick`.
 fn worst_errors(atmosphere: &Atmosphere, pick: fn(&Row) -> f64) -> (f64, f64) {
     let grid = WavelengthGrid::paper();
-    let rows = reference_rows();
+    let rows: Vec<Row> = reference_rows()
+        .into_iter()
+        .filter(|r| r.ground_albedo == 0.0)
+        .collect();
     let (mut worst_fast, mut worst_reference): (f64, f64) = (0.0, 0.0);
     for sun_elevation in [36.0, 60.0] {
         let sky = sky(atmosphere, sun_elevation);

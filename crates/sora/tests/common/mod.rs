@@ -1,0 +1,62 @@
+//! What several reference tests share: the rows of
+//! `data/clear_sky_radiance.csv` (independent radiative-transfer numbers for
+//! the atmosphere `clear-sky-reference`; provenance on the file's first
+//! line). Each test file uses the columns it needs.
+#![allow(dead_code)]
+
+use sora::table::NumericTable;
+
+/// One row: a wavelength, a geometry, a ground albedo and three radiances
+/// per unit top-of-atmosphere solar irradiance, sr^-1 (W m^-2 sr^-1 nm^-1
+/// for a flat sun of 1 W m^-2 nm^-1).
+pub struct ReferenceRow {
+    pub wavelength_nm: f64,
+    pub sun_elevation_deg: f64,
+    pub view_elevation_deg: f64,
+    /// View azimuth minus sun azimuth, degrees.
+    pub relative_azimuth_deg: f64,
+    pub ground_albedo: f64,
+    /// Single scattering, plane-parallel (quadrature).
+    pub single_plane_parallel: f64,
+    /// Single scattering, spherical planet of radius 6360 km (quadrature).
+    pub single_spherical: f64,
+    /// All orders, plane-parallel (DISORT, 32 streams).
+    pub multiple_plane_parallel: f64,
+}
+
+/// Every row of `data/clear_sky_radiance.csv`, in the file's order.
+pub fn reference_rows() -> Vec<ReferenceRow> {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/clear_sky_radiance.csv"
+    ))
+    .unwrap();
+    let table = NumericTable::parse(&text, "clear_sky_radiance.csv").unwrap();
+    let col = |name: &str| table.column_names.iter().position(|c| c == name).unwrap();
+    let (wl, sun, view, rel, albedo) = (
+        col("lambda_nm"),
+        col("sun_elev_deg"),
+        col("view_elev_deg"),
+        col("rel_azimuth_deg"),
+        col("ground_albedo"),
+    );
+    let (single_pp, single_sph, multi_pp) = (
+        col("L_single_plane_parallel"),
+        col("L_single_spherical"),
+        col("L_multi_plane_parallel"),
+    );
+    table
+        .rows
+        .iter()
+        .map(|r| ReferenceRow {
+            wavelength_nm: r[wl],
+            sun_elevation_deg: r[sun],
+            view_elevation_deg: r[view],
+            relative_azimuth_deg: r[rel],
+            ground_albedo: r[albedo],
+            single_plane_parallel: r[single_pp],
+            single_spherical: r[single_sph],
+            multiple_plane_parallel: r[multi_pp],
+        })
+        .collect()
+}
