@@ -22,9 +22,9 @@ use crate::arguments::{AtmosphereSource, Scattering, SunAndObserver};
 /// Methods: fast and reference compute single scattering (plus the sunlit
 /// ground) and, with --scattering multiple (the default), add all higher
 /// orders and the skylight reflected by the ground (a discrete-ordinate
-/// field, synthesised exactly along the view); --scattering single gives the
-/// paper's model. path-tracing is the Monte Carlo reference for
-/// all orders of scattering and ground reflection, and adds a third column,
+/// field, synthesised exactly along the view); --scattering single gives
+/// the paper's model. path-tracing is the Monte Carlo reference for all
+/// orders of scattering and ground reflection, and adds a third column,
 /// standard_error_w_m2_sr_nm, the standard error of each value (it shrinks
 /// as 1/sqrt(--samples); on a terminal a progress bar shows the time left).
 ///
