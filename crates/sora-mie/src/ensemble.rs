@@ -32,8 +32,10 @@
 //! which the particles have the same index share one rule and one Mie
 //! solution per node ([`SharedSizeParameterQuadrature`]); a wavelength alone
 //! is the one-wavelength case of the same code. Cross-sections, `g` and the
-//! paper's HG `g` come from [`compute_efficiencies`] at each node (no
-//! allocation) with [`RadiusQuadratureSettings::cross_sections`]; the phase
+//! paper's HG `g` come from [`compute_efficiencies_many_with`] over the
+//! nodes (eight neighbouring nodes solved side by side in vector lanes,
+//! equal to [`compute_efficiencies`] to rounding) with
+//! [`RadiusQuadratureSettings::cross_sections`]; the phase
 //! function needs a [`MieSolution`] and an angular sum per node, so it has
 //! its own sparser rule, [`RadiusQuadratureSettings::phase_function`].
 //!
@@ -184,7 +186,10 @@ use crate::paper_phase::{
     AerosolPhaseMode, HenyeyGreensteinPhaseFunction, paper_asymmetry_parameter_for_radius,
 };
 use crate::refractive_index::{RefractiveIndexError, RefractiveIndexModel};
-use crate::sphere::{MieError, MieSolution, compute_efficiencies};
+use crate::sphere::{
+    Efficiencies, MieError, MieSolution, SphereWorkspace, compute_efficiencies,
+    compute_efficiencies_many_with,
+};
 use std::f64::consts::PI;
 
 /// The paper's spectral samples: 380 to 780 nm every 20 nm (21 wavelengths, nm).
@@ -322,15 +327,40 @@ fn compute_shared_cross_sections(
     // Per wavelength: sums of w x^2 Q_ext, w x^2 Q_sca, w x^2 Q_abs,
     // w x^2 Q_sca g and w x^2 Q_sca g_paper(r); pi / k^2 is applied at the end.
     let mut sums = vec![[0.0f64; 5]; wavelengths_nm.len()];
-    for (node, &size_parameter) in quadrature.size_parameters().iter().enumerate() {
-        let efficiencies =
-            compute_efficiencies(refractive_index, size_parameter).map_err(|error| {
-                EnsembleError::Mie {
-                    wavelength_nm: wavelengths_nm[0],
-                    radius_m: size_parameter / wavenumbers_per_m[0],
-                    error,
-                }
-            })?;
+    // All nodes at once: the solver runs SPHERE_LANES neighbouring nodes
+    // side by side (see `sphere::compute_efficiencies_many_with`).
+    let size_parameters = quadrature.size_parameters();
+    let mut node_efficiencies = vec![
+        Efficiencies {
+            qext: 0.0,
+            qsca: 0.0,
+            qabs: 0.0,
+            qback: 0.0,
+            g: 0.0,
+        };
+        size_parameters.len()
+    ];
+    compute_efficiencies_many_with(
+        &mut SphereWorkspace::new(),
+        refractive_index,
+        size_parameters,
+        &mut node_efficiencies,
+    )
+    .map_err(|error| {
+        // Name the first node the solver rejects.
+        let node = size_parameters
+            .iter()
+            .position(|&x| compute_efficiencies(refractive_index, x).is_err())
+            .unwrap_or(0);
+        EnsembleError::Mie {
+            wavelength_nm: wavelengths_nm[0],
+            radius_m: size_parameters.get(node).copied().unwrap_or(f64::NAN) / wavenumbers_per_m[0],
+            error,
+        }
+    })?;
+    for (node, (&size_parameter, efficiencies)) in
+        size_parameters.iter().zip(&node_efficiencies).enumerate()
+    {
         let x_squared = size_parameter * size_parameter;
         for ((sum, &weight), &wavenumber) in sums
             .iter_mut()

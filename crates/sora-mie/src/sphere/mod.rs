@@ -110,6 +110,7 @@
 //! oracle (`naive.rs`, test builds only).
 
 mod amplitude;
+mod batch;
 mod bessel_ratio;
 mod coefficients;
 #[cfg(test)]
@@ -117,6 +118,7 @@ mod naive;
 mod perfect_conductor;
 mod series_length;
 
+pub use batch::{SPHERE_LANES, compute_efficiencies_many, compute_efficiencies_many_with};
 pub use perfect_conductor::{
     MIN_PERFECT_CONDUCTOR_SIZE_PARAMETER, compute_efficiencies_perfect_conductor,
 };
@@ -249,6 +251,8 @@ fn with_stack_scratch<const N: usize>(m: Complex64, x: f64, n_terms: usize) -> E
 #[derive(Debug, Clone, Default)]
 pub struct SphereWorkspace {
     tables: Vec<f64>,
+    /// The tables of [`compute_efficiencies_many_with`], one row per n.
+    batch_rows: Vec<batch::BatchRow>,
 }
 
 impl SphereWorkspace {
