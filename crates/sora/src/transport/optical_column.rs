@@ -25,9 +25,11 @@
 //!   close to exponential in both coordinates), or linearly where a layer
 //!   profile makes it zero at a corner.
 
+use std::borrow::Borrow;
+
 use super::quadrature::{GAUSS_NODES, GAUSS_WEIGHTS};
 use crate::atmosphere::DensityProfile;
-use crate::geometry::Vector3;
+use crate::geometry::{Vector3, ray_sphere_roots};
 
 /// How a ray of `length` m with its closest approach to the planet's
 /// centre at `tangent_distance` m along it is cut into `panels` Gauss
@@ -70,33 +72,113 @@ pub fn ray_panel(tangent_distance: f64, length: f64, panels: usize, k: usize) ->
     }
 }
 
-/// Integral of each profile's relative density (m) along the ray from
-/// `origin` (planet-centred, m) in unit direction `direction` over
-/// [0, length_m], by `panels` composite 4-point Gauss-Legendre panels
-/// (see [`ray_panel`]). Altitude is |x| - ground_radius_m. Writes one
-/// column per profile into `columns_m`.
-pub fn compute_columns_along_ray(
-    profiles: &[&DensityProfile],
+/// The altitudes where a density profile has a corner, at which rays are
+/// cut into separate Gauss panels: 4-point Gauss-Legendre converges slowly
+/// across a corner and fast on either side (measured: a 2-4 km tent layer
+/// seen from the ground at 10 degrees elevation was 0.9 % too bright in
+/// single scattering without the cuts, 1e-4 with them).
+/// Piecewise-linear profiles (tent, layers) have corners at their rows;
+/// exponential and log-linear table profiles are smooth enough (measured:
+/// the 50-row US Standard 1976 table gives the same sky as the paper's
+/// uniform march to 1e-4).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ProfileCorners {
+    ground_radius_m: f64,
+    /// Corner altitudes strictly inside the atmosphere, m, increasing.
+    altitudes_m: Vec<f64>,
+}
+
+impl ProfileCorners {
+    /// The corners of `profiles` between the ground (radius
+    /// `ground_radius_m`) and the top of the atmosphere (`top_radius_m`).
+    pub fn new<P: Borrow<DensityProfile>>(
+        profiles: &[P],
+        ground_radius_m: f64,
+        top_radius_m: f64,
+    ) -> ProfileCorners {
+        let height = top_radius_m - ground_radius_m;
+        let mut altitudes_m: Vec<f64> = profiles
+            .iter()
+            .filter_map(|profile| match profile.borrow() {
+                DensityProfile::PiecewiseLinear(table) => Some(table.altitudes_m()),
+                _ => None,
+            })
+            .flatten()
+            .copied()
+            .filter(|h| *h > 0.0 && *h < height)
+            .collect();
+        altitudes_m.sort_by(f64::total_cmp);
+        altitudes_m.dedup();
+        ProfileCorners {
+            ground_radius_m,
+            altitudes_m,
+        }
+    }
+
+    /// The most panel ends [`ProfileCorners::fill_panel_ends`] writes for
+    /// `panels` panels: a ray crosses each corner altitude at most twice.
+    pub fn most_panel_ends(&self, panels: usize) -> usize {
+        panels + 1 + 2 * self.altitudes_m.len()
+    }
+
+    /// The ends of the Gauss panels of a ray from `origin` along the unit
+    /// `direction` over [0, `length_m`] into `ends` (increasing, from 0 to
+    /// `length_m`): `panels` panels crowded toward the ray's start and its
+    /// lowest point ([`ray_panel`]), cut where the ray crosses a corner
+    /// altitude. Allocation-free when `ends` has the capacity of
+    /// [`ProfileCorners::most_panel_ends`].
+    pub fn fill_panel_ends(
+        &self,
+        origin: Vector3,
+        direction: Vector3,
+        length_m: f64,
+        panels: usize,
+        ends: &mut Vec<f64>,
+    ) {
+        ends.clear();
+        ends.push(0.0);
+        let tangent_distance = -origin.dot(direction);
+        for k in 0..panels {
+            ends.push(ray_panel(tangent_distance, length_m, panels, k).1);
+        }
+        let uncut = ends.len();
+        for h in &self.altitudes_m {
+            if let Some((near, far)) = ray_sphere_roots(origin, direction, self.ground_radius_m + h)
+            {
+                for t in [near, far] {
+                    if t > 0.0 && t < length_m {
+                        ends.push(t);
+                    }
+                }
+            }
+        }
+        if ends.len() > uncut {
+            ends.sort_unstable_by(f64::total_cmp);
+            ends.dedup();
+        }
+    }
+}
+
+/// Columns (m) of every species along a ray from `origin` (planet-centred,
+/// m) in the unit `direction`, integrated by 4-point Gauss-Legendre on the
+/// panels between consecutive `panel_ends` (m along the ray, increasing;
+/// see [`ProfileCorners::fill_panel_ends`]), into `columns_m`.
+pub fn compute_columns_along_ray<P: Borrow<DensityProfile>>(
+    profiles: &[P],
     ground_radius_m: f64,
     origin: Vector3,
     direction: Vector3,
-    length_m: f64,
-    panels: usize,
+    panel_ends: &[f64],
     columns_m: &mut [f64],
 ) {
     columns_m.fill(0.0);
-    if length_m <= 0.0 {
-        return;
-    }
-    let tangent_distance = -origin.dot(direction);
-    for k in 0..panels {
-        let (a, b) = ray_panel(tangent_distance, length_m, panels, k);
-        let (centre, half) = (0.5 * (a + b), 0.5 * (b - a));
+    for ends in panel_ends.windows(2) {
+        let (centre, half) = (0.5 * (ends[0] + ends[1]), 0.5 * (ends[1] - ends[0]));
         for (x, w) in GAUSS_NODES.iter().zip(GAUSS_WEIGHTS) {
             let point = origin + direction * (centre + half * x);
             let altitude_m = point.length() - ground_radius_m;
             for (column, profile) in columns_m.iter_mut().zip(profiles) {
-                *column += half * w * profile.relative_density(altitude_m);
+                *column += half * w * profile.borrow().relative_density(altitude_m);
             }
         }
     }
@@ -125,8 +207,8 @@ pub struct SunColumnTable {
 impl SunColumnTable {
     /// Fills the table for these species' profiles: `altitude_nodes` x
     /// `mu_nodes` exact column integrals.
-    pub fn compute(
-        profiles: &[&DensityProfile],
+    pub fn compute<P: Borrow<DensityProfile> + Sync>(
+        profiles: &[P],
         ground_radius_m: f64,
         top_radius_m: f64,
         altitude_nodes: usize,
@@ -134,6 +216,7 @@ impl SunColumnTable {
     ) -> SunColumnTable {
         assert!(altitude_nodes >= 2 && mu_nodes >= 2);
         let species = profiles.len();
+        let corners = ProfileCorners::new(profiles, ground_radius_m, top_radius_m);
         let table = SunColumnTable {
             ground_radius_m,
             top_radius_m,
@@ -150,6 +233,7 @@ impl SunColumnTable {
             mu_nodes * species,
             |i, row| {
                 let mut columns = vec![0.0; species];
+                let mut ends = Vec::with_capacity(corners.most_panel_ends(TABLE_RAY_PANELS));
                 let r = table.radius_from_unit(i as f64 / (altitude_nodes - 1) as f64);
                 for j in 0..mu_nodes {
                     let mu = table.mu_from_unit(r, j as f64 / (mu_nodes - 1) as f64);
@@ -160,13 +244,13 @@ impl SunColumnTable {
                         direction,
                         top_radius_m,
                     );
+                    corners.fill_panel_ends(origin, direction, length, TABLE_RAY_PANELS, &mut ends);
                     compute_columns_along_ray(
                         profiles,
                         ground_radius_m,
                         origin,
                         direction,
-                        length,
-                        TABLE_RAY_PANELS,
+                        &ends,
                         &mut columns,
                     );
                     for (k, profile) in profiles.iter().enumerate() {
@@ -175,7 +259,9 @@ impl SunColumnTable {
                         let mean_density = if length > 0.0 {
                             columns[k] / length
                         } else {
-                            profile.relative_density(top_radius_m - ground_radius_m)
+                            profile
+                                .borrow()
+                                .relative_density(top_radius_m - ground_radius_m)
                         };
                         row[j * species + k] = mean_density.ln();
                     }
@@ -302,14 +388,73 @@ mod tests {
         DensityProfile::Exponential { scale_height_m: h }
     }
 
+    /// Columns along a ray through the test atmosphere (ground R, top
+    /// TOP), cut at the profiles' corners.
+    fn columns_along_ray(
+        profiles: &[&DensityProfile],
+        origin: Vector3,
+        direction: Vector3,
+        length: f64,
+        panels: usize,
+        columns: &mut [f64],
+    ) {
+        let mut ends = Vec::new();
+        ProfileCorners::new(profiles, R, TOP)
+            .fill_panel_ends(origin, direction, length, panels, &mut ends);
+        compute_columns_along_ray(profiles, R, origin, direction, &ends, columns);
+    }
+
     #[test]
     fn vertical_column_of_an_exponential_is_closed_form() {
         let air = exponential(8000.0);
         let mut c = [0.0];
         let up = Vector3::new(0.0, 0.0, 1.0);
-        compute_columns_along_ray(&[&air], R, Vector3::new(0.0, 0.0, R), up, 100e3, 32, &mut c);
+        columns_along_ray(&[&air], Vector3::new(0.0, 0.0, R), up, 100e3, 32, &mut c);
         let exact = 8000.0 * (1.0 - (-100e3f64 / 8000.0).exp());
         assert!((c[0] / exact - 1.0).abs() < 1e-12, "{} vs {exact}", c[0]);
+    }
+
+    /// A tent layer 10-40 km peaking at 25 km: vertically its column is
+    /// exactly its half width, which 4-point Gauss panels reproduce only
+    /// when cut at the corners; along slant rays the cut integral matches
+    /// a fine midpoint sum.
+    #[test]
+    fn columns_of_a_tent_layer_are_exact_when_cut_at_its_corners() {
+        use crate::atmosphere::ProfileTable;
+        let table =
+            ProfileTable::new(vec![10e3, 25e3, 40e3], vec![0.0, 1.0, 0.0], false, "tent").unwrap();
+        let tent = DensityProfile::PiecewiseLinear(table);
+        let origin = Vector3::new(0.0, 0.0, R);
+        let up = Vector3::new(0.0, 0.0, 1.0);
+        let mut cut = [0.0];
+        columns_along_ray(&[&tent], origin, up, TOP - R, 16, &mut cut);
+        assert!((cut[0] / 15e3 - 1.0).abs() < 1e-12, "{}", cut[0]);
+        let mut ends = Vec::new();
+        ProfileCorners::default().fill_panel_ends(origin, up, TOP - R, 16, &mut ends);
+        let mut uncut = [0.0];
+        compute_columns_along_ray(&[&tent], R, origin, up, &ends, &mut uncut);
+        // Without the cuts: 2.6e-4 off.
+        assert!((uncut[0] / 15e3 - 1.0).abs() > 1e-4, "uncut {}", uncut[0]);
+        for elevation_deg in [2.0f64, 10.0, 45.0] {
+            let el = elevation_deg.to_radians();
+            let d = Vector3::new(el.cos(), 0.0, el.sin());
+            let length = crate::geometry::distance_to_top_of_atmosphere(origin, d, TOP);
+            let mut fast = [0.0];
+            columns_along_ray(&[&tent], origin, d, length, 16, &mut fast);
+            let n = 400_000;
+            let step = length / n as f64;
+            let slow: f64 = (0..n)
+                .map(|i| {
+                    let p = origin + d * ((i as f64 + 0.5) * step);
+                    step * tent.relative_density(p.length() - R)
+                })
+                .sum();
+            assert!(
+                (fast[0] / slow - 1.0).abs() < 1e-8,
+                "{elevation_deg} deg: {} vs {slow}",
+                fast[0]
+            );
+        }
     }
 
     #[test]
@@ -354,7 +499,7 @@ mod tests {
                 continue;
             }
             let mut fast = [0.0; 2];
-            compute_columns_along_ray(&refs, R, origin, d, length, 32, &mut fast);
+            columns_along_ray(&refs, origin, d, length, 32, &mut fast);
             let n = 400_000;
             let step = length / n as f64;
             let mut slow = [0.0; 2];
@@ -395,7 +540,7 @@ mod tests {
                 let origin = Vector3::new(0.0, 0.0, r);
                 let d = Vector3::new((1.0 - mu * mu).sqrt(), 0.0, mu);
                 let length = crate::geometry::distance_to_top_of_atmosphere(origin, d, TOP);
-                compute_columns_along_ray(&refs, R, origin, d, length, 64, &mut exact);
+                columns_along_ray(&refs, origin, d, length, 64, &mut exact);
                 let mut looked_up = [0.0; 2];
                 assert!(table.lookup_columns_to_sun(r, mu, &mut looked_up));
                 for k in 0..2 {

@@ -33,13 +33,14 @@
 //!   depth is sum_j beta_ext,j(lambda) column_j, so the march integrates
 //!   one geometric column per species, not one per wavelength. The view ray
 //!   is cut into Gauss-Legendre panels that crowd toward its start and its
-//!   lowest point ([`super::optical_column::ray_panel`]); the column back to
+//!   lowest point ([`super::optical_column::ray_panel`]), and at the
+//!   corners of piecewise-linear profiles ([`ProfileCorners`]); the column back to
 //!   the eye at each node comes from the same density samples
 //!   ([`super::quadrature::running_integral_matrix`]). Columns toward the
 //!   sun are exact integrals ([`SunColumns::Exact`]) or a table
 //!   ([`SunColumns::Table`]) for images.
 
-use super::optical_column::{SunColumnTable, compute_columns_along_ray, ray_panel};
+use super::optical_column::{ProfileCorners, SunColumnTable, compute_columns_along_ray};
 use super::quadrature::{GAUSS_NODES, GAUSS_WEIGHTS, running_integral_matrix};
 use crate::atmosphere::{Atmosphere, AtmosphereOptics, DensityProfile};
 use crate::error::{Error, Result};
@@ -85,6 +86,11 @@ pub struct SingleScatteringSky {
     sun_direction: Vector3,
     sun_angular_radius_rad: f64,
     running_integral: [[f64; 4]; 4],
+    /// The species' density profiles (a copy, so rays need no list of
+    /// references).
+    profiles: Vec<DensityProfile>,
+    /// Where the profiles have corners: rays are cut there.
+    corners: ProfileCorners,
 }
 
 /// Per-thread work space of the fast path (no allocation per ray).
@@ -105,6 +111,10 @@ pub struct SingleScatteringScratch {
     ground_radiance: Vec<f64>,
     /// Transmittance of the whole view ray (for the sun's disc).
     view_transmittance: Vec<f64>,
+    /// Ends of the Gauss panels of the view ray and of a path toward the
+    /// sun, m along each.
+    view_panel_ends: Vec<f64>,
+    sun_panel_ends: Vec<f64>,
 }
 
 impl SingleScatteringScratch {
@@ -179,8 +189,13 @@ impl SingleScatteringSky {
                 "a finite angle",
             ));
         }
+        let profiles: Vec<DensityProfile> =
+            optics.species.iter().map(|s| s.profile.clone()).collect();
+        let corners = ProfileCorners::new(&profiles, ground_radius_m, top_radius_m);
         Ok(SingleScatteringSky {
             optics,
+            profiles,
+            corners,
             ground_radius_m,
             top_radius_m,
             observer: Vector3::new(0.0, 0.0, ground_radius_m + observer_altitude_m),
@@ -210,10 +225,6 @@ impl SingleScatteringSky {
         (self.ground_radius_m, self.top_radius_m)
     }
 
-    fn profiles(&self) -> Vec<&DensityProfile> {
-        self.optics.species.iter().map(|s| &s.profile).collect()
-    }
-
     /// The sun-column table for images of this sky (altitude x mu nodes).
     pub fn compute_sun_column_table(
         &self,
@@ -221,7 +232,7 @@ impl SingleScatteringSky {
         mu_nodes: usize,
     ) -> SunColumnTable {
         SunColumnTable::compute(
-            &self.profiles(),
+            &self.profiles,
             self.ground_radius_m,
             self.top_radius_m,
             altitude_nodes,
@@ -243,16 +254,19 @@ impl SingleScatteringSky {
             inscattering_integrals: vec![0.0; species * wavelengths],
             ground_radiance: vec![0.0; wavelengths],
             view_transmittance: vec![0.0; wavelengths],
+            view_panel_ends: Vec::with_capacity(self.corners.most_panel_ends(VIEW_RAY_PANELS)),
+            sun_panel_ends: Vec::with_capacity(self.corners.most_panel_ends(SUN_RAY_PANELS)),
         }
     }
 
     /// Columns toward the sun from `point` (planet-centred), into
-    /// `columns`; false when the point is in the planet's shadow.
+    /// `columns`; false when the point is in the planet's shadow. `ends`
+    /// is scratch for the exact path's panel ends.
     fn columns_to_sun(
         &self,
         point: Vector3,
         sun_columns: SunColumns,
-        profiles: &[&DensityProfile],
+        ends: &mut Vec<f64>,
         columns: &mut [f64],
     ) -> bool {
         let r = point.length();
@@ -268,13 +282,19 @@ impl SingleScatteringSky {
                     self.sun_direction,
                     self.top_radius_m,
                 );
-                compute_columns_along_ray(
-                    profiles,
-                    self.ground_radius_m,
+                self.corners.fill_panel_ends(
                     point,
                     self.sun_direction,
                     length,
                     SUN_RAY_PANELS,
+                    ends,
+                );
+                compute_columns_along_ray(
+                    &self.profiles,
+                    self.ground_radius_m,
+                    point,
+                    self.sun_direction,
+                    ends,
                     columns,
                 );
                 true
@@ -307,16 +327,16 @@ impl SingleScatteringSky {
         if length <= 0.0 {
             return self.add_ground_term(start, view, sun_columns, scratch);
         }
-        let profiles = self.profiles();
-        let tangent_distance = -start.dot(view);
-        for k in 0..VIEW_RAY_PANELS {
-            let (a, b) = ray_panel(tangent_distance, length, VIEW_RAY_PANELS, k);
-            let (centre, half) = (0.5 * (a + b), 0.5 * (b - a));
+        let mut view_ends = std::mem::take(&mut scratch.view_panel_ends);
+        self.corners
+            .fill_panel_ends(start, view, length, VIEW_RAY_PANELS, &mut view_ends);
+        for ends in view_ends.windows(2) {
+            let (centre, half) = (0.5 * (ends[0] + ends[1]), 0.5 * (ends[1] - ends[0]));
             let mut points = [Vector3::default(); 4];
             for (n, x) in GAUSS_NODES.iter().enumerate() {
                 points[n] = start + view * (centre + half * x);
                 let altitude_m = points[n].length() - self.ground_radius_m;
-                for (j, profile) in profiles.iter().enumerate() {
+                for (j, profile) in self.profiles.iter().enumerate() {
                     scratch.panel_densities[j][n] = profile.relative_density(altitude_m);
                 }
             }
@@ -330,8 +350,12 @@ impl SingleScatteringSky {
                     scratch.densities[j] = scratch.panel_densities[j][n];
                     scratch.node_view_columns[j] = scratch.view_columns[j] + half * inside;
                 }
-                if !self.columns_to_sun(points[n], sun_columns, &profiles, &mut scratch.sun_columns)
-                {
+                if !self.columns_to_sun(
+                    points[n],
+                    sun_columns,
+                    &mut scratch.sun_panel_ends,
+                    &mut scratch.sun_columns,
+                ) {
                     continue;
                 }
                 scratch.optical_depth.fill(0.0);
@@ -365,6 +389,7 @@ impl SingleScatteringSky {
                 scratch.view_columns[j] += half * panel;
             }
         }
+        scratch.view_panel_ends = view_ends;
         // Transmittance of the whole view ray.
         for (i, t) in scratch.view_transmittance.iter_mut().enumerate() {
             let tau: f64 = species
@@ -394,9 +419,13 @@ impl SingleScatteringSky {
         if mu_sun <= 0.0 || self.optics.ground_albedo.values().iter().all(|a| *a == 0.0) {
             return;
         }
-        let profiles = self.profiles();
         let point = normal * self.ground_radius_m;
-        if !self.columns_to_sun(point, sun_columns, &profiles, &mut scratch.sun_columns) {
+        if !self.columns_to_sun(
+            point,
+            sun_columns,
+            &mut scratch.sun_panel_ends,
+            &mut scratch.sun_columns,
+        ) {
             return;
         }
         for (i, out) in scratch.ground_radiance.iter_mut().enumerate() {

@@ -154,7 +154,7 @@ use self::phase_fourier::{
 use self::spherical_paths::StreamPaths;
 use self::successive_orders::{ColumnSystem, ScaledSpecies, Streams};
 use self::vertical_grid::VerticalGrid;
-use super::optical_column::{compute_columns_along_ray, ray_panel};
+use super::optical_column::{ProfileCorners, compute_columns_along_ray};
 use super::quadrature::{GAUSS_NODES, GAUSS_WEIGHTS, running_integral_matrix};
 use super::single_scattering::{SingleScatteringSky, SunColumns};
 use crate::atmosphere::{AtmosphereOptics, DensityProfile};
@@ -357,6 +357,8 @@ struct ViewRayOptics {
     observer: Vector3,
     sun: Vector3,
     profiles: Vec<DensityProfile>,
+    /// Where the profiles have corners: rays are cut there.
+    corners: ProfileCorners,
     /// [i * species + j], m^-1 at relative density 1.
     extinction: Vec<f64>,
     scaled_extinction: Vec<f64>,
@@ -391,6 +393,10 @@ pub struct MultipleScatteringScratch {
     view_kernel: Vec<f64>,
     /// Columns from the current node toward the sun, m.
     sun_columns: Vec<f64>,
+    /// Ends of the Gauss panels of the view ray and of a path toward the
+    /// sun, m along each.
+    view_panel_ends: Vec<f64>,
+    sun_panel_ends: Vec<f64>,
     /// The forward-peak integrals of the last ray, species-major
     /// [j * wavelengths + i], m (see [`MultipleScatteringTable::compute_radiance_parts`]).
     forward_integrals: Vec<f64>,
@@ -428,14 +434,22 @@ impl ViewRayOptics {
             view_legendre: vec![0.0; streams * streams],
             view_kernel: vec![0.0; s * streams * streams],
             sun_columns: vec![0.0; s],
+            view_panel_ends: Vec::with_capacity(self.corners.most_panel_ends(self.panels)),
+            sun_panel_ends: Vec::with_capacity(self.corners.most_panel_ends(SUN_RAY_PANELS)),
             forward_integrals: vec![0.0; s * w],
             phase: vec![0.0; w],
         }
     }
 
     /// Columns from `point` toward the sun into `columns`; false in the
-    /// planet's shadow.
-    fn columns_to_sun(&self, point: Vector3, sun_columns: SunColumns, columns: &mut [f64]) -> bool {
+    /// planet's shadow. `ends` is scratch for the exact path's panel ends.
+    fn columns_to_sun(
+        &self,
+        point: Vector3,
+        sun_columns: SunColumns,
+        ends: &mut Vec<f64>,
+        columns: &mut [f64],
+    ) -> bool {
         let r = point.length();
         let mu = point.dot(self.sun) / r;
         match sun_columns {
@@ -449,14 +463,14 @@ impl ViewRayOptics {
                     self.sun,
                     self.top_radius_m,
                 );
-                let profiles: Vec<&DensityProfile> = self.profiles.iter().collect();
+                self.corners
+                    .fill_panel_ends(point, self.sun, length, SUN_RAY_PANELS, ends);
                 compute_columns_along_ray(
-                    &profiles,
+                    &self.profiles,
                     self.ground_radius_m,
                     point,
                     self.sun,
-                    length,
-                    SUN_RAY_PANELS,
+                    ends,
                     columns,
                 );
                 true
@@ -519,10 +533,11 @@ impl ViewRayOptics {
         let length = exit - enter;
         scratch.view_columns.fill(0.0);
         if length > 0.0 {
-            let tangent_distance = -start.dot(view);
-            for k in 0..self.panels {
-                let (a, b) = ray_panel(tangent_distance, length, self.panels, k);
-                let (centre, half) = (0.5 * (a + b), 0.5 * (b - a));
+            let mut view_ends = std::mem::take(&mut scratch.view_panel_ends);
+            self.corners
+                .fill_panel_ends(start, view, length, self.panels, &mut view_ends);
+            for ends in view_ends.windows(2) {
+                let (centre, half) = (0.5 * (ends[0] + ends[1]), 0.5 * (ends[1] - ends[0]));
                 let mut points = [Vector3::default(); 4];
                 for (n, x) in GAUSS_NODES.iter().enumerate() {
                     points[n] = start + view * (centre + half * x);
@@ -577,7 +592,12 @@ impl ViewRayOptics {
                     // sun's beam and the view's transmittance (see the
                     // module docs, TMS).
                     if self.has_forward_peaks
-                        && self.columns_to_sun(points[n], sun_columns, &mut scratch.sun_columns)
+                        && self.columns_to_sun(
+                            points[n],
+                            sun_columns,
+                            &mut scratch.sun_panel_ends,
+                            &mut scratch.sun_columns,
+                        )
                     {
                         for i in 0..w {
                             let (mut scaled, mut exact) = (0.0, 0.0);
@@ -601,6 +621,7 @@ impl ViewRayOptics {
                     scratch.view_columns[j] += half * panel;
                 }
             }
+            scratch.view_panel_ends = view_ends;
         }
         let end = start + view * length;
         if end.length() <= self.ground_radius_m * (1.0 + 1e-12) {
@@ -778,6 +799,8 @@ impl MultipleScatteringField {
         let paths = StreamPaths::compute(&radii, streams.cosines());
         // Geometric columns toward the sun from every level, per node; None
         // in the planet's shadow.
+        let corners = ProfileCorners::new(&profiles, ground_radius_m, top_radius_m);
+        let mut ends = Vec::with_capacity(corners.most_panel_ends(SUN_RAY_PANELS));
         let mut sun_columns: Vec<Option<Vec<f64>>> = Vec::with_capacity(count * levels);
         for s in 0..count {
             let theta = sun_axis.angle(s);
@@ -792,13 +815,13 @@ impl MultipleScatteringField {
                 let length =
                     crate::geometry::distance_to_top_of_atmosphere(origin, direction, top_radius_m);
                 let mut columns = vec![0.0; species];
+                corners.fill_panel_ends(origin, direction, length, SUN_RAY_PANELS, &mut ends);
                 compute_columns_along_ray(
-                    &profile_refs,
+                    &profiles,
                     ground_radius_m,
                     origin,
                     direction,
-                    length,
-                    SUN_RAY_PANELS,
+                    &ends,
                     &mut columns,
                 );
                 sun_columns.push(Some(columns));
@@ -890,6 +913,7 @@ impl MultipleScatteringField {
                 observer: Vector3::new(0.0, 0.0, sky.observer_radius_m()),
                 sun: sky.sun_direction(),
                 profiles,
+                corners,
                 extinction,
                 scaled_extinction,
                 has_forward_peaks: phases.iter().any(|p| p.forward_fraction > 0.0),
