@@ -187,8 +187,8 @@ use crate::paper_phase::{
 };
 use crate::refractive_index::{RefractiveIndexError, RefractiveIndexModel};
 use crate::sphere::{
-    Efficiencies, MieError, MieSolution, SphereWorkspace, compute_efficiencies,
-    compute_efficiencies_many_with,
+    Efficiencies, GroupCoefficients, MieError, SPHERE_LANES, SphereWorkspace, compute_efficiencies,
+    compute_efficiencies_many_with, compute_group_coefficients,
 };
 use std::f64::consts::PI;
 
@@ -638,121 +638,192 @@ impl TabulatedPhaseFunction {
     }
 }
 
-/// Angles processed together by [`accumulate_weighted_s11`]: the block's
-/// recurrence state lives in registers and L1 while the Mie terms stream
-/// past, and its independent angles vectorise.
-const ANGLE_BLOCK: usize = 16;
+/// Constants of term n of the angular sums, for n = 1, 2, ...: the term
+/// factor (2n+1)/(n(n+1)) of B&H eq. 4.74 and the ratios (2n+1)/n and
+/// (n+1)/n of the pi_n recurrence (B&H eq. 4.47), tabulated once rather than
+/// divided out in every angle block.
+#[derive(Debug, Clone, Copy)]
+struct AngularTermConstants {
+    n: f64,
+    term_factor: f64,
+    pi_ratio_current: f64,
+    pi_ratio_previous: f64,
+}
 
-/// Adds `weight * S11(mu)` of the sphere with coefficients `a`, `b` to
-/// `accumulated_s11` at each `cos_theta`. S11 = (|S1|^2 + |S2|^2) / 2 with
+impl AngularTermConstants {
+    fn new(index: usize) -> Self {
+        let n = (index + 1) as f64;
+        AngularTermConstants {
+            n,
+            term_factor: (2.0 * n + 1.0) / (n * (n + 1.0)),
+            pi_ratio_current: (2.0 * n + 1.0) / n,
+            pi_ratio_previous: (n + 1.0) / n,
+        }
+    }
+}
+
+/// The most spheres (reference indices at one size parameter) whose angular
+/// sums [`accumulate_s11`] evaluates in one pass.
+const MAX_SPHERES_PER_PASS: usize = 5;
+
+/// S11 at each `cos_theta` of several spheres of the same size parameter
+/// (their series have the same length `constants.len()`), added to
+/// `s11[sphere * angles + angle]`. S11 = (|S1|^2 + |S2|^2) / 2 with
 /// S1 = sum (2n+1)/(n(n+1)) (a_n pi_n + b_n tau_n), S2 likewise with pi and
 /// tau exchanged (B&H eq. 4.74), pi_n and tau_n by the upward recurrences
-/// (B&H eq. 4.47): the same sums as `MieSolution::s11_s12_table`, ordered
-/// term-outer, angle-inner so that the angles' recurrences run side by side
-/// rather than one long dependent chain per angle, and accumulated as
-/// S1 + S2 and S1 - S2 (fewer products per term).
-fn accumulate_weighted_s11(
+/// (B&H eq. 4.47). `terms[n * spheres + sphere]` holds the sphere's term
+/// factor times (a_n + b_n) and (a_n - b_n), [re, im, re, im]: S11 is
+/// accumulated as U = S1 + S2 = sum (A + B)(pi + tau) and V = S1 - S2 =
+/// sum (A - B)(pi - tau), two complex products per term instead of four, and
+/// |S1|^2 + |S2|^2 = (|U|^2 + |V|^2) / 2.
+///
+/// Layout for speed: term-outer, angle-inner in blocks of angles whose
+/// recurrences run side by side (independent chains, vector lanes), and
+/// the angular functions pi_n, tau_n, which do not depend on the sphere, are
+/// computed once for all the spheres (the reference indices of the
+/// index-interpolated phase tables share the nodes of their rule). Compiled
+/// for AVX-512F and AVX as well, selected at run time; without FMA, so that
+/// every build performs the same IEEE operations (bit-identical, tested),
+/// and each sphere's sums are those it would get alone.
+fn accumulate_s11(
     cos_theta: &[f64],
-    a: &[Complex64],
-    b: &[Complex64],
-    weight: f64,
-    accumulated_s11: &mut [f64],
+    constants: &[AngularTermConstants],
+    terms: &[[f64; 4]],
+    spheres: usize,
+    s11: &mut [f64],
 ) {
+    assert!(
+        terms.len() == constants.len() * spheres && s11.len() == cos_theta.len() * spheres,
+        "accumulate_s11: table lengths"
+    );
     #[cfg(target_arch = "x86_64")]
     {
         if std::arch::is_x86_feature_detected!("avx512f") {
             // SAFETY: the CPU supports AVX-512F, the only requirement.
-            return unsafe {
-                accumulate_weighted_s11_avx512(cos_theta, a, b, weight, accumulated_s11)
-            };
+            return unsafe { accumulate_s11_avx512(cos_theta, constants, terms, spheres, s11) };
         }
         if std::arch::is_x86_feature_detected!("avx") {
             // SAFETY: the CPU supports AVX, the only requirement.
-            return unsafe {
-                accumulate_weighted_s11_avx(cos_theta, a, b, weight, accumulated_s11)
-            };
+            return unsafe { accumulate_s11_avx(cos_theta, constants, terms, spheres, s11) };
         }
     }
-    accumulate_weighted_s11_portable(cos_theta, a, b, weight, accumulated_s11)
+    accumulate_s11_portable(cos_theta, constants, terms, spheres, s11)
 }
 
-/// [`accumulate_weighted_s11`] compiled for AVX-512F: the same source, 8-wide
-/// vectors and 32 registers, so that a block's recurrence state stays in
-/// registers (no FMA: the same IEEE operations as the portable build).
+/// [`accumulate_s11`] compiled for AVX-512F: 8-wide vectors and 32
+/// registers, so that a block's recurrence state and sums stay in registers.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
-fn accumulate_weighted_s11_avx512(
+fn accumulate_s11_avx512(
     cos_theta: &[f64],
-    a: &[Complex64],
-    b: &[Complex64],
-    weight: f64,
-    accumulated_s11: &mut [f64],
+    constants: &[AngularTermConstants],
+    terms: &[[f64; 4]],
+    spheres: usize,
+    s11: &mut [f64],
 ) {
-    accumulate_weighted_s11_portable(cos_theta, a, b, weight, accumulated_s11)
+    accumulate_s11_portable(cos_theta, constants, terms, spheres, s11)
 }
 
-/// [`accumulate_weighted_s11`] compiled for AVX: 4-wide vectors and
-/// three-operand instructions.
+/// [`accumulate_s11`] compiled for AVX: 4-wide vectors and three-operand
+/// instructions.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx")]
-fn accumulate_weighted_s11_avx(
+fn accumulate_s11_avx(
     cos_theta: &[f64],
-    a: &[Complex64],
-    b: &[Complex64],
-    weight: f64,
-    accumulated_s11: &mut [f64],
+    constants: &[AngularTermConstants],
+    terms: &[[f64; 4]],
+    spheres: usize,
+    s11: &mut [f64],
 ) {
-    accumulate_weighted_s11_portable(cos_theta, a, b, weight, accumulated_s11)
+    accumulate_s11_portable(cos_theta, constants, terms, spheres, s11)
 }
 
+/// Dispatch on the number of spheres (a compile-time count, so that the
+/// per-sphere sums are unrolled into registers): one or two spheres in
+/// blocks of 16 angles (two vectors per sum keep the pi recurrence, a chain
+/// of three dependent operations per term, from setting the pace), more in
+/// blocks of 8 (the sums of five spheres fill 20 of the 32 registers).
 #[inline(always)]
-fn accumulate_weighted_s11_portable(
+fn accumulate_s11_portable(
     cos_theta: &[f64],
-    a: &[Complex64],
-    b: &[Complex64],
-    weight: f64,
-    accumulated_s11: &mut [f64],
+    constants: &[AngularTermConstants],
+    terms: &[[f64; 4]],
+    spheres: usize,
+    s11: &mut [f64],
 ) {
-    for (block_cos_theta, block_sums) in cos_theta
-        .chunks(ANGLE_BLOCK)
-        .zip(accumulated_s11.chunks_mut(ANGLE_BLOCK))
-    {
-        let mut mu = [0.0; ANGLE_BLOCK];
-        mu[..block_cos_theta.len()].copy_from_slice(block_cos_theta);
-        // pi_0 = 0, pi_1 = 1. Accumulated: U = S1 + S2 = sum (A + B)(pi + tau) and
-        // V = S1 - S2 = sum (A - B)(pi - tau), two complex products per term
-        // instead of four; |S1|^2 + |S2|^2 = (|U|^2 + |V|^2) / 2.
-        let mut pi_previous = [0.0; ANGLE_BLOCK];
-        let mut pi_current = [1.0; ANGLE_BLOCK];
-        let mut u_re = [0.0; ANGLE_BLOCK];
-        let mut u_im = [0.0; ANGLE_BLOCK];
-        let mut v_re = [0.0; ANGLE_BLOCK];
-        let mut v_im = [0.0; ANGLE_BLOCK];
-        for (index, (a_n, b_n)) in a.iter().zip(b).enumerate() {
-            let n = (index + 1) as f64;
-            let term_factor = (2.0 * n + 1.0) / (n * (n + 1.0));
-            let sum_coefficient = term_factor * (a_n + b_n);
-            let difference_coefficient = term_factor * (a_n - b_n);
-            let pi_ratio_current = (2.0 * n + 1.0) / n;
-            let pi_ratio_previous = (n + 1.0) / n;
-            for i in 0..ANGLE_BLOCK {
+    let angles = cos_theta.len();
+    let mut first = 0;
+    while first < spheres {
+        let count = (spheres - first).min(MAX_SPHERES_PER_PASS);
+        let out = &mut s11[first * angles..(first + count) * angles];
+        match count {
+            1 => accumulate_s11_spheres::<1, 16>(cos_theta, constants, terms, spheres, first, out),
+            2 => accumulate_s11_spheres::<2, 16>(cos_theta, constants, terms, spheres, first, out),
+            3 => accumulate_s11_spheres::<3, 8>(cos_theta, constants, terms, spheres, first, out),
+            4 => accumulate_s11_spheres::<4, 8>(cos_theta, constants, terms, spheres, first, out),
+            _ => accumulate_s11_spheres::<5, 8>(cos_theta, constants, terms, spheres, first, out),
+        }
+        first += count;
+    }
+}
+
+/// [`accumulate_s11`] for spheres `first..first + S` of `spheres`, in blocks
+/// of `B` angles.
+#[inline(always)]
+fn accumulate_s11_spheres<const S: usize, const B: usize>(
+    cos_theta: &[f64],
+    constants: &[AngularTermConstants],
+    terms: &[[f64; 4]],
+    spheres: usize,
+    first: usize,
+    s11: &mut [f64],
+) {
+    let angles = cos_theta.len();
+    for block_start in (0..angles).step_by(B) {
+        let block_len = B.min(angles - block_start);
+        let mut mu = [0.0; B];
+        mu[..block_len].copy_from_slice(&cos_theta[block_start..block_start + block_len]);
+        // pi_0 = 0, pi_1 = 1.
+        let mut pi_previous = [0.0; B];
+        let mut pi_current = [1.0; B];
+        let mut u_re = [[0.0; B]; S];
+        let mut u_im = [[0.0; B]; S];
+        let mut v_re = [[0.0; B]; S];
+        let mut v_im = [[0.0; B]; S];
+        for (term, sphere_terms) in constants.iter().zip(terms.chunks_exact(spheres)) {
+            let n = term.n;
+            let mut pi_plus_tau = [0.0; B];
+            let mut pi_minus_tau = [0.0; B];
+            for i in 0..B {
                 let pi = pi_current[i];
                 let mu_pi = mu[i] * pi;
                 let tau = n * mu_pi - (n + 1.0) * pi_previous[i];
-                let (pi_plus_tau, pi_minus_tau) = (pi + tau, pi - tau);
-                u_re[i] += sum_coefficient.re * pi_plus_tau;
-                u_im[i] += sum_coefficient.im * pi_plus_tau;
-                v_re[i] += difference_coefficient.re * pi_minus_tau;
-                v_im[i] += difference_coefficient.im * pi_minus_tau;
-                let pi_next = pi_ratio_current * mu_pi - pi_ratio_previous * pi_previous[i];
+                pi_plus_tau[i] = pi + tau;
+                pi_minus_tau[i] = pi - tau;
+                let pi_next =
+                    term.pi_ratio_current * mu_pi - term.pi_ratio_previous * pi_previous[i];
                 pi_previous[i] = pi;
                 pi_current[i] = pi_next;
             }
+            for s in 0..S {
+                let [sum_re, sum_im, difference_re, difference_im] = sphere_terms[first + s];
+                for i in 0..B {
+                    u_re[s][i] += sum_re * pi_plus_tau[i];
+                    u_im[s][i] += sum_im * pi_plus_tau[i];
+                    v_re[s][i] += difference_re * pi_minus_tau[i];
+                    v_im[s][i] += difference_im * pi_minus_tau[i];
+                }
+            }
         }
-        for (i, sum) in block_sums.iter_mut().enumerate() {
-            let s11 = 0.25
-                * (u_re[i] * u_re[i] + u_im[i] * u_im[i] + v_re[i] * v_re[i] + v_im[i] * v_im[i]);
-            *sum += weight * s11;
+        for s in 0..S {
+            let out = &mut s11[s * angles + block_start..s * angles + block_start + block_len];
+            for (i, value) in out.iter_mut().enumerate() {
+                let sum = u_re[s][i] * u_re[s][i]
+                    + u_im[s][i] * u_im[s][i]
+                    + v_re[s][i] * v_re[s][i]
+                    + v_im[s][i] * v_im[s][i];
+                *value += 0.25 * sum;
+            }
         }
     }
 }
@@ -762,9 +833,17 @@ fn accumulate_weighted_s11_portable(
 struct PhaseTableWorkspace {
     /// cos theta of the table angles, increasing (theta decreasing).
     cos_theta: Vec<f64>,
-    /// S11 of the current node at each angle.
+    /// Constants of the angular sums' terms n = 1, 2, ... (grown as needed).
+    term_constants: Vec<AngularTermConstants>,
+    /// The Mie solver's tables.
+    sphere: SphereWorkspace,
+    /// Coefficients of one group of nodes, per reference index.
+    groups: Vec<GroupCoefficients>,
+    /// Term factors times (a_n +- b_n) of one node, [n][reference].
+    terms: Vec<[f64; 4]>,
+    /// S11 of each node of a group, [node][reference][angle].
     node_s11: Vec<f64>,
-    /// sum of w S11 per wavelength, row-major [wavelength][angle].
+    /// sum of w S11, row-major [reference][wavelength][angle].
     accumulated_s11: Vec<f64>,
 }
 
@@ -780,10 +859,13 @@ impl PhaseTableWorkspace {
         let last = cos_theta.len() - 1;
         cos_theta[0] = -1.0;
         cos_theta[last] = 1.0;
-        let angle_count = cos_theta.len();
         Self {
             cos_theta,
-            node_s11: vec![0.0; angle_count],
+            term_constants: Vec::new(),
+            sphere: SphereWorkspace::new(),
+            groups: Vec::new(),
+            terms: Vec::new(),
+            node_s11: Vec::new(),
             accumulated_s11: Vec::new(),
         }
     }
@@ -797,6 +879,24 @@ impl PhaseTableWorkspace {
         distribution: &SizeDistribution,
         settings: &RadiusQuadratureSettings,
     ) -> Result<Vec<TabulatedPhaseFunction>, EnsembleError> {
+        let mut tables =
+            self.compute_for_indices(wavelengths_nm, &[refractive_index], distribution, settings)?;
+        Ok(tables.remove(0))
+    }
+
+    /// Phase tables at `wavelengths_nm` for each of `refractive_indices`
+    /// (`result[index][wavelength]`), each index as if the particles had it
+    /// at every wavelength. The indices share the quadrature (it depends on
+    /// the distribution and the wavelengths only) and with it the angular
+    /// functions of each node; the Mie solutions are computed for groups of
+    /// [`SPHERE_LANES`] neighbouring nodes side by side.
+    fn compute_for_indices(
+        &mut self,
+        wavelengths_nm: &[f64],
+        refractive_indices: &[Complex64],
+        distribution: &SizeDistribution,
+        settings: &RadiusQuadratureSettings,
+    ) -> Result<Vec<Vec<TabulatedPhaseFunction>>, EnsembleError> {
         let wavenumbers_per_m = wavelengths_nm
             .iter()
             .map(|&lambda| validate_wavelength(lambda))
@@ -807,58 +907,114 @@ impl PhaseTableWorkspace {
             settings,
         )?;
         let angle_count = self.cos_theta.len();
+        let index_count = refractive_indices.len();
+        let wavelength_count = wavelengths_nm.len();
         self.accumulated_s11.clear();
         self.accumulated_s11
-            .resize(angle_count * wavelengths_nm.len(), 0.0);
-        let mut scattering_x_squared = vec![0.0; wavelengths_nm.len()];
-        for (node, &size_parameter) in quadrature.size_parameters().iter().enumerate() {
-            let solution =
-                MieSolution::compute(refractive_index, size_parameter).map_err(|error| {
-                    EnsembleError::Mie {
-                        wavelength_nm: wavelengths_nm[0],
-                        radius_m: size_parameter / wavenumbers_per_m[0],
-                        error,
-                    }
-                })?;
-            let (a, b) = solution.coefficients();
-            self.node_s11.fill(0.0);
-            accumulate_weighted_s11(&self.cos_theta, a, b, 1.0, &mut self.node_s11);
-            let qsca = solution.efficiencies().qsca;
-            for ((table_sums, scattering), &weight) in self
-                .accumulated_s11
-                .chunks_mut(angle_count)
-                .zip(scattering_x_squared.iter_mut())
-                .zip(quadrature.weights_at_node(node))
+            .resize(index_count * wavelength_count * angle_count, 0.0);
+        while self.groups.len() < index_count {
+            self.groups.push(GroupCoefficients::new());
+        }
+        // sum of w x^2 Q_sca, [index][wavelength].
+        let mut scattering_x_squared = vec![0.0; index_count * wavelength_count];
+        let size_parameters = quadrature.size_parameters();
+        for (group_index, group_x) in size_parameters.chunks(SPHERE_LANES).enumerate() {
+            let first_node = group_index * SPHERE_LANES;
+            for (&m, group) in refractive_indices.iter().zip(&mut self.groups) {
+                compute_group_coefficients(&mut self.sphere, m, group_x, group).map_err(
+                    |error| {
+                        let node = group_x
+                            .iter()
+                            .position(|&x| compute_efficiencies(m, x).is_err())
+                            .unwrap_or(0);
+                        EnsembleError::Mie {
+                            wavelength_nm: wavelengths_nm[0],
+                            radius_m: group_x[node] / wavenumbers_per_m[0],
+                            error,
+                        }
+                    },
+                )?;
+            }
+            // S11 of each node of the group, all indices at once.
+            self.node_s11.clear();
+            self.node_s11
+                .resize(group_x.len() * index_count * angle_count, 0.0);
+            for (lane, node_s11) in self
+                .node_s11
+                .chunks_exact_mut(index_count * angle_count)
+                .enumerate()
             {
-                if weight == 0.0 {
-                    continue;
+                let n_terms = self.groups[0].a[lane].len();
+                while self.term_constants.len() < n_terms {
+                    let index = self.term_constants.len();
+                    self.term_constants.push(AngularTermConstants::new(index));
                 }
-                for (sum, &s11) in table_sums.iter_mut().zip(&self.node_s11) {
-                    *sum += weight * s11;
+                self.terms.clear();
+                for (index, constants) in self.term_constants[..n_terms].iter().enumerate() {
+                    for group in &self.groups[..index_count] {
+                        let (a_n, b_n) = (group.a[lane][index], group.b[lane][index]);
+                        let sum = constants.term_factor * (a_n + b_n);
+                        let difference = constants.term_factor * (a_n - b_n);
+                        self.terms
+                            .push([sum.re, sum.im, difference.re, difference.im]);
+                    }
                 }
-                *scattering += weight * size_parameter * size_parameter * qsca;
+                accumulate_s11(
+                    &self.cos_theta,
+                    &self.term_constants[..n_terms],
+                    &self.terms,
+                    index_count,
+                    node_s11,
+                );
+            }
+            // Add w S11 to every (index, wavelength) table: the group's
+            // nodes summed per angle before each table entry is touched.
+            for index in 0..index_count {
+                for wavelength in 0..wavelength_count {
+                    let table_start = (index * wavelength_count + wavelength) * angle_count;
+                    let table = &mut self.accumulated_s11[table_start..table_start + angle_count];
+                    for (lane, &x) in group_x.iter().enumerate() {
+                        let weight = quadrature.weights_at_node(first_node + lane)[wavelength];
+                        if weight == 0.0 {
+                            continue;
+                        }
+                        let s11_start = (lane * index_count + index) * angle_count;
+                        let s11 = &self.node_s11[s11_start..s11_start + angle_count];
+                        for (sum, &value) in table.iter_mut().zip(s11) {
+                            *sum += weight * value;
+                        }
+                        let qsca = self.groups[index].efficiencies[lane].qsca;
+                        scattering_x_squared[index * wavelength_count + wavelength] +=
+                            weight * x * x * qsca;
+                    }
+                }
             }
         }
         // P = integral S11 dN / (k^2 integral C_sca dN) = sum w S11 / (pi sum w x^2 Q_sca),
         // with the same nodes in both sums so that their quadrature errors cancel.
-        self.accumulated_s11
-            .chunks(angle_count)
-            .zip(&scattering_x_squared)
-            .zip(wavelengths_nm)
-            .map(|((table_sums, &scattering), &wavelength_nm)| {
-                let scale = 1.0 / (PI * scattering);
+        let mut tables = Vec::with_capacity(index_count);
+        for index in 0..index_count {
+            let mut per_wavelength = Vec::with_capacity(wavelength_count);
+            for (wavelength, &wavelength_nm) in wavelengths_nm.iter().enumerate() {
+                let table_start = (index * wavelength_count + wavelength) * angle_count;
+                let table_sums = &self.accumulated_s11[table_start..table_start + angle_count];
+                let scale =
+                    1.0 / (PI * scattering_x_squared[index * wavelength_count + wavelength]);
                 let phase_per_sr: Vec<f64> = table_sums.iter().map(|s| s * scale).collect();
-                TabulatedPhaseFunction::from_nodes(self.cos_theta.clone(), phase_per_sr).map_err(
-                    |error| {
-                        EnsembleError::Distribution(
-                            SizeDistributionError::InvalidQuadratureSettings {
-                                message: format!("phase table at {wavelength_nm} nm: {error}"),
-                            },
-                        )
-                    },
-                )
-            })
-            .collect()
+                per_wavelength.push(
+                    TabulatedPhaseFunction::from_nodes(self.cos_theta.clone(), phase_per_sr)
+                        .map_err(|error| {
+                            EnsembleError::Distribution(
+                                SizeDistributionError::InvalidQuadratureSettings {
+                                    message: format!("phase table at {wavelength_nm} nm: {error}"),
+                                },
+                            )
+                        })?,
+                );
+            }
+            tables.push(per_wavelength);
+        }
+        Ok(tables)
     }
 }
 
@@ -997,15 +1153,12 @@ impl PhaseTableWorkspace {
     ) -> Result<Vec<TabulatedPhaseFunction>, EnsembleError> {
         let plan = IndexInterpolationPlan::new(indices)
             .expect("the caller checked index_interpolation_applies");
-        let mut reference_tables = Vec::new();
-        for reference in plan.reference_indices() {
-            reference_tables.push(self.compute(
-                wavelengths_nm,
-                reference,
-                distribution,
-                settings,
-            )?);
-        }
+        let reference_tables = self.compute_for_indices(
+            wavelengths_nm,
+            &plan.reference_indices(),
+            distribution,
+            settings,
+        )?;
         let angle_count = self.cos_theta.len();
         let mut tables = Vec::with_capacity(wavelengths_nm.len());
         for (wavelength, (&wavelength_nm, &m)) in wavelengths_nm.iter().zip(indices).enumerate() {
@@ -1280,6 +1433,7 @@ mod tests {
     use super::*;
     use crate::distribution::RadiusWindow;
     use crate::paper_phase::henyey_greenstein_phase_function_per_sr;
+    use crate::sphere::MieSolution;
 
     const MICROMETRE: f64 = 1e-6;
 
@@ -1443,6 +1597,24 @@ mod tests {
         2.0 * PI * sum * h / 3.0
     }
 
+    /// The angular-sum inputs of spheres that share a size parameter:
+    /// constants and [n][sphere] terms.
+    fn angular_terms(solutions: &[MieSolution]) -> (Vec<AngularTermConstants>, Vec<[f64; 4]>) {
+        let n_terms = solutions[0].n_terms();
+        let constants: Vec<AngularTermConstants> =
+            (0..n_terms).map(AngularTermConstants::new).collect();
+        let mut terms = Vec::new();
+        for (index, c) in constants.iter().enumerate() {
+            for solution in solutions {
+                let (a, b) = solution.coefficients();
+                let sum = c.term_factor * (a[index] + b[index]);
+                let difference = c.term_factor * (a[index] - b[index]);
+                terms.push([sum.re, sum.im, difference.re, difference.im]);
+            }
+        }
+        (constants, terms)
+    }
+
     /// The blocked angular sums against the sphere module's own S11 table.
     #[test]
     fn blocked_angular_sums_match_the_sphere_module() {
@@ -1450,9 +1622,9 @@ mod tests {
         let m = Complex64::new(1.5, 0.005);
         for x in [0.3, 7.0, 95.0, 400.0] {
             let solution = MieSolution::compute(m, x).unwrap();
-            let (a, b) = solution.coefficients();
+            let (constants, terms) = angular_terms(std::slice::from_ref(&solution));
             let mut blocked = vec![0.0; cosines.len()];
-            accumulate_weighted_s11(&cosines, a, b, 2.0, &mut blocked);
+            accumulate_s11(&cosines, &constants, &terms, 1, &mut blocked);
             let mut s11 = vec![0.0; cosines.len()];
             let mut s12 = vec![0.0; cosines.len()];
             solution.s11_s12_table(&cosines, &mut s11, &mut s12);
@@ -1462,10 +1634,42 @@ mod tests {
             let tolerance = 1e-14 * solution.n_terms() as f64 * scale;
             for (i, (&mine, &theirs)) in blocked.iter().zip(&s11).enumerate() {
                 assert!(
-                    (mine / 2.0 - theirs).abs() <= tolerance,
+                    (mine - theirs).abs() <= tolerance,
                     "x {x} mu {}: {mine} vs {theirs}",
                     cosines[i]
                 );
+            }
+        }
+    }
+
+    /// The vector builds of the angular sums perform the portable build's
+    /// operations in the same order: bit-identical results; and a sphere's
+    /// sums are the same alone or beside others (one to seven spheres, the
+    /// passes of five, two and one included).
+    #[test]
+    fn angular_sum_builds_are_bit_identical() {
+        let cosines = table_cosines();
+        let angles = cosines.len();
+        let solutions: Vec<MieSolution> = [0.002, 0.004, 0.008, 0.001, 0.003, 0.02, 0.0005]
+            .iter()
+            .map(|&k| MieSolution::compute(Complex64::new(1.5, k), 80.0).unwrap())
+            .collect();
+        let mut alone = Vec::new();
+        for solution in &solutions {
+            let (constants, terms) = angular_terms(std::slice::from_ref(solution));
+            let mut s11 = vec![0.0; angles];
+            accumulate_s11(&cosines, &constants, &terms, 1, &mut s11);
+            alone.push(s11);
+        }
+        for count in 1..=solutions.len() {
+            let (constants, terms) = angular_terms(&solutions[..count]);
+            let mut portable = vec![0.0; count * angles];
+            accumulate_s11_portable(&cosines, &constants, &terms, count, &mut portable);
+            let mut dispatched = vec![0.0; count * angles];
+            accumulate_s11(&cosines, &constants, &terms, count, &mut dispatched);
+            assert_eq!(portable, dispatched);
+            for (sphere, s11) in dispatched.chunks(angles).enumerate() {
+                assert_eq!(s11, &alone[sphere][..], "{count} spheres, sphere {sphere}");
             }
         }
     }
@@ -1501,20 +1705,6 @@ mod tests {
             IndexInterpolationPlan::new(&[Complex64::new(1.5, 0.001), Complex64::new(1.5, 0.01)])
                 .unwrap();
         assert_eq!(plan.reference_indices().len(), 4);
-    }
-
-    /// The vector builds of the angular sums perform the portable build's
-    /// operations in the same order: bit-identical results.
-    #[test]
-    fn angular_sum_builds_are_bit_identical() {
-        let cosines = table_cosines();
-        let solution = MieSolution::compute(Complex64::new(1.5, 0.002), 80.0).unwrap();
-        let (a, b) = solution.coefficients();
-        let mut portable = vec![0.0; cosines.len()];
-        accumulate_weighted_s11_portable(&cosines, a, b, 0.5, &mut portable);
-        let mut dispatched = vec![0.0; cosines.len()];
-        accumulate_weighted_s11(&cosines, a, b, 0.5, &mut dispatched);
-        assert_eq!(portable, dispatched);
     }
 
     /// The Mie ensemble phase function integrates to 1 over 4 pi sr, its raw

@@ -162,6 +162,94 @@ pub fn compute_efficiencies_many_with(
     Ok(())
 }
 
+/// The series coefficients of up to [`SPHERE_LANES`] spheres of one index
+/// (the ensemble's phase tables need them node by node), filled by
+/// [`compute_group_coefficients`]; the vectors are reused.
+#[derive(Debug, Clone)]
+pub(crate) struct GroupCoefficients {
+    /// a_n, b_n of sphere l for n = 1..=its series length
+    /// ([`series_length_converged`]); spheres past the group's count are empty.
+    pub(crate) a: [Vec<Complex64>; L],
+    pub(crate) b: [Vec<Complex64>; L],
+    /// Efficiencies of sphere l.
+    pub(crate) efficiencies: [Efficiencies; L],
+}
+
+impl GroupCoefficients {
+    pub(crate) fn new() -> Self {
+        let zero = Efficiencies {
+            qext: 0.0,
+            qsca: 0.0,
+            qabs: 0.0,
+            qback: 0.0,
+            g: 0.0,
+        };
+        GroupCoefficients {
+            a: std::array::from_fn(|_| Vec::new()),
+            b: std::array::from_fn(|_| Vec::new()),
+            efficiencies: [zero; L],
+        }
+    }
+}
+
+/// a_n, b_n and the efficiencies of the spheres of index `m` at
+/// `size_parameters` (at most [`SPHERE_LANES`]) into `group`, side by side
+/// when they are all on the vectorised path (x >= 0.01, m != 1), else one
+/// by one ([`MieSolution`](super::MieSolution)). Allocation-free once the
+/// vectors have grown.
+pub(crate) fn compute_group_coefficients(
+    workspace: &mut SphereWorkspace,
+    m: Complex64,
+    size_parameters: &[f64],
+    group: &mut GroupCoefficients,
+) -> Result<(), MieError> {
+    let count = size_parameters.len();
+    assert!(
+        (1..=L).contains(&count),
+        "compute_group_coefficients: 1 to SPHERE_LANES spheres"
+    );
+    for &x in size_parameters {
+        validate(m, x)?;
+    }
+    for l in 0..L {
+        group.a[l].clear();
+        group.b[l].clear();
+    }
+    let vectorised =
+        m != Complex64::new(1.0, 0.0) && size_parameters.iter().all(|&x| x >= SMALL_SIZE_PARAMETER);
+    if !vectorised {
+        for (l, &x) in size_parameters.iter().enumerate() {
+            let solution = super::MieSolution::compute(m, x)?;
+            let (a, b) = solution.coefficients();
+            group.a[l].extend_from_slice(a);
+            group.b[l].extend_from_slice(b);
+            group.efficiencies[l] = solution.efficiencies();
+        }
+        return Ok(());
+    }
+    // Padding lanes repeat the last sphere; their results are dropped.
+    let mut x = [size_parameters[count - 1]; L];
+    x[..count].copy_from_slice(size_parameters);
+    let n_terms = x.map(series_length_converged);
+    let (a, b) = (&mut group.a, &mut group.b);
+    let results = solve_lanes(
+        &mut workspace.batch_rows,
+        &[m.re; L],
+        &[m.im; L],
+        &x,
+        |n, c| {
+            for l in 0..count {
+                if n <= n_terms[l] {
+                    a[l].push(Complex64::new(c.a_re[l], c.a_im[l]));
+                    b[l].push(Complex64::new(c.b_re[l], c.b_im[l]));
+                }
+            }
+        },
+    );
+    group.efficiencies[..count].copy_from_slice(&results[..count]);
+    Ok(())
+}
+
 /// Solve [`SPHERE_LANES`] validated spheres (index m_re + i m_im, m != 1,
 /// size parameter x >= 0.01 in every lane): returns their efficiencies and
 /// calls `record(n, coefficients)` for n = 1..=N in order, N the longest

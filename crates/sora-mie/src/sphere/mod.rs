@@ -118,6 +118,7 @@ mod naive;
 mod perfect_conductor;
 mod series_length;
 
+pub(crate) use batch::{GroupCoefficients, compute_group_coefficients};
 pub use batch::{SPHERE_LANES, compute_efficiencies_many, compute_efficiencies_many_with};
 pub use perfect_conductor::{
     MIN_PERFECT_CONDUCTOR_SIZE_PARAMETER, compute_efficiencies_perfect_conductor,
