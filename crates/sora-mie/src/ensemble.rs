@@ -828,6 +828,112 @@ fn accumulate_s11_spheres<const S: usize, const B: usize>(
     }
 }
 
+/// For each wavelength w: `tables[w][i] += weights[w][0] S_0[i] +
+/// weights[w][1] S_1[i] + ...`, added in that order, where node l's S11 row
+/// is `s11[first + l * stride..]` (l < `nodes`) and a table has
+/// `tables.len() / weights.len()` angles. Angle-chunk outer, wavelength
+/// inner, so that the nodes' rows are read once per chunk (not once per
+/// wavelength) and each table entry is loaded and stored once. Compiled for
+/// AVX-512F and AVX as well (bit-identical: no FMA).
+fn add_weighted_group(
+    tables: &mut [f64],
+    s11: &[f64],
+    first: usize,
+    stride: usize,
+    nodes: usize,
+    weights: &[[f64; SPHERE_LANES]],
+) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU supports AVX-512F, the only requirement.
+            return unsafe {
+                add_weighted_group_avx512(tables, s11, first, stride, nodes, weights)
+            };
+        }
+        if std::arch::is_x86_feature_detected!("avx") {
+            // SAFETY: the CPU supports AVX, the only requirement.
+            return unsafe { add_weighted_group_avx(tables, s11, first, stride, nodes, weights) };
+        }
+    }
+    add_weighted_group_portable(tables, s11, first, stride, nodes, weights)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+fn add_weighted_group_avx512(
+    tables: &mut [f64],
+    s11: &[f64],
+    first: usize,
+    stride: usize,
+    nodes: usize,
+    weights: &[[f64; SPHERE_LANES]],
+) {
+    add_weighted_group_portable(tables, s11, first, stride, nodes, weights)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+fn add_weighted_group_avx(
+    tables: &mut [f64],
+    s11: &[f64],
+    first: usize,
+    stride: usize,
+    nodes: usize,
+    weights: &[[f64; SPHERE_LANES]],
+) {
+    add_weighted_group_portable(tables, s11, first, stride, nodes, weights)
+}
+
+#[inline(always)]
+fn add_weighted_group_portable(
+    tables: &mut [f64],
+    s11: &[f64],
+    first: usize,
+    stride: usize,
+    nodes: usize,
+    weights: &[[f64; SPHERE_LANES]],
+) {
+    const CHUNK: usize = 16;
+    let angles = tables.len() / weights.len();
+    for chunk_start in (0..angles).step_by(CHUNK) {
+        let chunk_length = CHUNK.min(angles - chunk_start);
+        // The nodes' values on this chunk (zero beyond `nodes` and the end,
+        // where the weights are zero too: they add exactly +0).
+        let mut rows = [[0.0; CHUNK]; SPHERE_LANES];
+        for (node, row) in rows.iter_mut().enumerate().take(nodes) {
+            let start = first + node * stride + chunk_start;
+            copy_prefix(row, &s11[start..start + chunk_length]);
+        }
+        for (table, node_weights) in tables.chunks_exact_mut(angles).zip(weights) {
+            let entries = &mut table[chunk_start..chunk_start + chunk_length];
+            let mut sums = [0.0; CHUNK];
+            copy_prefix(&mut sums, entries);
+            for (row, &weight) in rows.iter().zip(node_weights) {
+                for (sum, &value) in sums.iter_mut().zip(row) {
+                    *sum += weight * value;
+                }
+            }
+            if let Ok(entries) = <&mut [f64; CHUNK]>::try_from(&mut *entries) {
+                *entries = sums;
+            } else {
+                entries.copy_from_slice(&sums[..chunk_length]);
+            }
+        }
+    }
+}
+
+/// `destination[..source.len()] = source`, as a fixed-size copy when the
+/// lengths match (a variable-length copy is a call to memmove).
+#[inline(always)]
+fn copy_prefix<const N: usize>(destination: &mut [f64; N], source: &[f64]) {
+    if let Ok(full) = <&[f64; N]>::try_from(source) {
+        *destination = *full;
+    } else {
+        destination[..source.len()].copy_from_slice(source);
+    }
+}
+
 /// Scratch tables of the phase-table integration, allocated once per
 /// spectrum rather than per wavelength or node.
 struct PhaseTableWorkspace {
@@ -918,6 +1024,8 @@ impl PhaseTableWorkspace {
         // sum of w x^2 Q_sca, [index][wavelength].
         let mut scattering_x_squared = vec![0.0; index_count * wavelength_count];
         let size_parameters = quadrature.size_parameters();
+        // The group's node weights, [wavelength][node].
+        let mut group_weights: Vec<[f64; SPHERE_LANES]> = Vec::with_capacity(wavelength_count);
         for (group_index, group_x) in size_parameters.chunks(SPHERE_LANES).enumerate() {
             let first_node = group_index * SPHERE_LANES;
             for (&m, group) in refractive_indices.iter().zip(&mut self.groups) {
@@ -967,27 +1075,35 @@ impl PhaseTableWorkspace {
                     node_s11,
                 );
             }
-            // Add w S11 to every (index, wavelength) table: the group's
-            // nodes summed per angle before each table entry is touched.
+            // Add w S11 to every (index, wavelength) table, the group's
+            // nodes in order (a node outside a wavelength's window has
+            // weight 0 and adds exactly 0).
+            group_weights.clear();
+            for wavelength in 0..wavelength_count {
+                let mut weights = [0.0; SPHERE_LANES];
+                for (lane, weight) in weights.iter_mut().enumerate().take(group_x.len()) {
+                    *weight = quadrature.weights_at_node(first_node + lane)[wavelength];
+                }
+                group_weights.push(weights);
+            }
             for index in 0..index_count {
-                for wavelength in 0..wavelength_count {
-                    let table_start = (index * wavelength_count + wavelength) * angle_count;
-                    let table = &mut self.accumulated_s11[table_start..table_start + angle_count];
+                for (wavelength, weights) in group_weights.iter().enumerate() {
                     for (lane, &x) in group_x.iter().enumerate() {
-                        let weight = quadrature.weights_at_node(first_node + lane)[wavelength];
-                        if weight == 0.0 {
-                            continue;
-                        }
-                        let s11_start = (lane * index_count + index) * angle_count;
-                        let s11 = &self.node_s11[s11_start..s11_start + angle_count];
-                        for (sum, &value) in table.iter_mut().zip(s11) {
-                            *sum += weight * value;
-                        }
                         let qsca = self.groups[index].efficiencies[lane].qsca;
                         scattering_x_squared[index * wavelength_count + wavelength] +=
-                            weight * x * x * qsca;
+                            weights[lane] * x * x * qsca;
                     }
                 }
+                let tables_start = index * wavelength_count * angle_count;
+                add_weighted_group(
+                    &mut self.accumulated_s11
+                        [tables_start..tables_start + wavelength_count * angle_count],
+                    &self.node_s11,
+                    index * angle_count,
+                    index_count * angle_count,
+                    group_x.len(),
+                    &group_weights,
+                );
             }
         }
         // P = integral S11 dN / (k^2 integral C_sca dN) = sum w S11 / (pi sum w x^2 Q_sca),
@@ -1672,6 +1788,44 @@ mod tests {
                 assert_eq!(s11, &alone[sphere][..], "{count} spheres, sphere {sphere}");
             }
         }
+    }
+
+    /// The grouped accumulation adds node by node, in order: the same sums
+    /// as one node at a time, in every build.
+    #[test]
+    fn grouped_accumulation_is_the_node_by_node_sum() {
+        let (angles, wavelengths, nodes, stride) = (37, 3, 5, 41);
+        let value = |i: usize| ((i * 7919) % 1000) as f64 / 997.0 + 1e-3 * i as f64;
+        let s11: Vec<f64> = (0..nodes * stride + 2).map(value).collect();
+        let mut weights = vec![[0.0; SPHERE_LANES]; wavelengths];
+        for (w, row) in weights.iter_mut().enumerate() {
+            for (node, weight) in row.iter_mut().enumerate().take(nodes) {
+                // Some nodes outside a wavelength's window: weight 0.
+                *weight = if (w + node) % 4 == 3 {
+                    0.0
+                } else {
+                    value(w * 31 + node)
+                };
+            }
+        }
+        let start: Vec<f64> = (0..wavelengths * angles).map(|i| value(i + 500)).collect();
+        let mut expected = start.clone();
+        for (w, row) in weights.iter().enumerate() {
+            for (node, &weight) in row.iter().enumerate().take(nodes) {
+                if weight == 0.0 {
+                    continue;
+                }
+                for i in 0..angles {
+                    expected[w * angles + i] += weight * s11[2 + node * stride + i];
+                }
+            }
+        }
+        let mut dispatched = start.clone();
+        add_weighted_group(&mut dispatched, &s11, 2, stride, nodes, &weights);
+        let mut portable = start;
+        add_weighted_group_portable(&mut portable, &s11, 2, stride, nodes, &weights);
+        assert_eq!(dispatched, expected);
+        assert_eq!(portable, expected);
     }
 
     /// The interpolation weights reproduce each reference index exactly,

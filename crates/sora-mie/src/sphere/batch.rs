@@ -482,6 +482,161 @@ fn interior_continued_fraction(
 /// rescaled (as in `bessel_ratio.rs`).
 const RESCALE_ABOVE: f64 = 1e100;
 
+/// Per-lane constants of the upward pass.
+struct SphereConstants {
+    m_re: Lanes,
+    m_im: Lanes,
+    inverse_m_re: Lanes,
+    inverse_m_im: Lanes,
+    /// (1/m^2 - 1)/x
+    slope_re: Lanes,
+    slope_im: Lanes,
+    inverse_x: Lanes,
+    /// psi_n(x) upward by its recurrence for n < switch, by ratios beyond.
+    switch: Lanes,
+    /// The lane's series length.
+    terms: Lanes,
+}
+
+/// The state of the upward pass: psi_n(x), chi_n(x), the sums and what the
+/// next term needs of the previous one.
+struct Upward {
+    psi_previous: Lanes,
+    psi_current: Lanes,
+    chi_previous: Lanes,
+    chi_current: Lanes,
+    sums: Sums,
+    /// a_{n-1}, b_{n-1}
+    previous: CoefficientLanes,
+    /// 1/n
+    inverse_n: Lanes,
+    /// n, 2n + 1 and (-1)^n of the next term.
+    n: f64,
+    two_n_plus_1: f64,
+    sign: f64,
+}
+
+impl Upward {
+    /// Term n: the exterior step to psi_{n+1}, chi_{n+1}, a_n and b_n, the
+    /// sums. `rho` is row n + 1. With `PADDED`, lanes past their own series
+    /// take padding inputs (a = b = 0, |denominator| = 1, weight 2n+1 = 0)
+    /// and pin their exterior state to psi = 0, chi = 1, so that they never
+    /// reach the denormals of psi_n or the overflow of chi_n far beyond
+    /// their turning point; up to the shortest series no lane needs it.
+    #[inline(always)]
+    fn term<const PADDED: bool>(
+        &mut self,
+        rho: &BatchRow,
+        constants: &SphereConstants,
+    ) -> CoefficientLanes {
+        let c = constants;
+        let n_float = self.n;
+        let mut coefficients = CoefficientLanes {
+            a_re: [0.0; L],
+            a_im: [0.0; L],
+            b_re: [0.0; L],
+            b_im: [0.0; L],
+        };
+        let mut absorption = [0.0; L];
+        let mut inverse_n_plus_1 = [0.0; L];
+        let mut lane_n = [0.0; L];
+        for l in 0..L {
+            let step = self.two_n_plus_1 * c.inverse_x[l];
+            let psi_next = if n_float < c.switch[l] {
+                step * self.psi_current[l] - self.psi_previous[l]
+            } else {
+                self.psi_current[l] * rho.rho_x[l]
+            };
+            let chi_next = step * self.chi_current[l] - self.chi_previous[l];
+            // (Selects against constants, which stay in registers: a select
+            // against the old value would be compiled as a masked store,
+            // which the next term's load would wait for.)
+            let active = !PADDED || n_float <= c.terms[l];
+            let (psi, psi_up, chi, chi_up, rho_re, rho_im, n_lane) = if active {
+                (
+                    self.psi_current[l],
+                    psi_next,
+                    self.chi_current[l],
+                    chi_next,
+                    rho.rho_re[l],
+                    rho.rho_im[l],
+                    n_float,
+                )
+            } else {
+                (0.0, 0.0, 0.0, 1.0, 0.0, 0.0, -0.5)
+            };
+            self.psi_previous[l] = psi;
+            self.psi_current[l] = psi_up;
+            self.chi_previous[l] = if active { chi } else { 1.0 };
+            self.chi_current[l] = chi_up;
+            lane_n[l] = n_lane;
+            let n_plus_1 = n_lane + 1.0;
+            // A_n = (n+1)/x (1/m^2 - 1) - rho/m, B_n = -m rho.
+            let fa_re = c.slope_re[l] * n_plus_1
+                - (rho_re * c.inverse_m_re[l] - rho_im * c.inverse_m_im[l]);
+            let fa_im = c.slope_im[l] * n_plus_1
+                - (rho_re * c.inverse_m_im[l] + rho_im * c.inverse_m_re[l]);
+            let fb_re = rho_im * c.m_im[l] - rho_re * c.m_re[l];
+            let fb_im = -(rho_re * c.m_im[l] + rho_im * c.m_re[l]);
+            // numerator = F psi_n + psi_{n+1}; denominator = F xi_n + xi_{n+1}
+            // = numerator - i (F chi_n + chi_{n+1}).
+            let na_re = fa_re * psi + psi_up;
+            let na_im = fa_im * psi;
+            let da_re = na_re + fa_im * chi;
+            let da_im = na_im - (fa_re * chi + chi_up);
+            let nb_re = fb_re * psi + psi_up;
+            let nb_im = fb_im * psi;
+            let db_re = nb_re + fb_im * chi;
+            let db_im = nb_im - (fb_re * chi + chi_up);
+            // The two quotients and 1/(n+1) from one division.
+            let norm_a = da_re * da_re + da_im * da_im;
+            let norm_b = db_re * db_re + db_im * db_im;
+            let norms = norm_a * norm_b;
+            let inverse = 1.0 / (norms * n_plus_1);
+            inverse_n_plus_1[l] = norms * inverse;
+            let common = n_plus_1 * inverse;
+            let inverse_norm_a = norm_b * common;
+            let inverse_norm_b = norm_a * common;
+            coefficients.a_re[l] = (na_re * da_re + na_im * da_im) * inverse_norm_a;
+            coefficients.a_im[l] = (na_im * da_re - na_re * da_im) * inverse_norm_a;
+            coefficients.b_re[l] = (nb_re * db_re + nb_im * db_im) * inverse_norm_b;
+            coefficients.b_im[l] = (nb_im * db_re - nb_re * db_im) * inverse_norm_b;
+            // Re c - |c|^2 = -Im(F) / |denominator|^2 for each coefficient.
+            absorption[l] = -(fa_im * inverse_norm_a + fb_im * inverse_norm_b);
+        }
+        let sums = &mut self.sums;
+        let previous = &self.previous;
+        for l in 0..L {
+            let weight = 2.0 * lane_n[l] + 1.0;
+            let (are, aim, bre, bim) = (
+                coefficients.a_re[l],
+                coefficients.a_im[l],
+                coefficients.b_re[l],
+                coefficients.b_im[l],
+            );
+            sums.scattering[l] += weight * (are * are + aim * aim + bre * bre + bim * bim);
+            sums.absorption[l] += weight * absorption[l];
+            sums.backscattering_re[l] += self.sign * weight * (are - bre);
+            sums.backscattering_im[l] += self.sign * weight * (aim - bim);
+            // Term n-1 of the adjacent sum: (n-1)(n+1)/n = n - 1/n.
+            let adjacent = previous.a_re[l] * are
+                + previous.a_im[l] * aim
+                + previous.b_re[l] * bre
+                + previous.b_im[l] * bim;
+            sums.asymmetry_adjacent[l] += (lane_n[l] - self.inverse_n[l]) * adjacent;
+            // (2n+1)/(n(n+1)) = 1/n + 1/(n+1).
+            sums.asymmetry_cross[l] +=
+                (self.inverse_n[l] + inverse_n_plus_1[l]) * (are * bre + aim * bim);
+        }
+        self.previous = coefficients;
+        self.inverse_n = inverse_n_plus_1;
+        self.n += 1.0;
+        self.two_n_plus_1 += 2.0;
+        self.sign = -self.sign;
+        coefficients
+    }
+}
+
 /// Per-lane running sums of the series (see `coefficients.rs`).
 struct Sums {
     scattering: Lanes,
@@ -677,133 +832,53 @@ fn solve_lanes_portable<F: FnMut(usize, &CoefficientLanes)>(
         (inverse_m_re[l], inverse_m_im[l]) = (inverse_m.re, inverse_m.im);
         (slope_re[l], slope_im[l]) = (slope.re, slope.im);
     }
-    let mut sums = Sums {
-        scattering: [0.0; L],
-        absorption: [0.0; L],
-        backscattering_re: [0.0; L],
-        backscattering_im: [0.0; L],
-        asymmetry_adjacent: [0.0; L],
-        asymmetry_cross: [0.0; L],
-    };
-    let mut previous = CoefficientLanes {
-        a_re: [0.0; L],
-        a_im: [0.0; L],
-        b_re: [0.0; L],
-        b_im: [0.0; L],
-    };
-    let mut inverse_n = [1.0; L];
-    let mut n_float = 1.0;
-    let mut two_n_plus_1 = 3.0;
-    let mut sign = -1.0;
-    for n in 1..=longest {
-        let rho = &rows[n + 1];
-        let mut coefficients = CoefficientLanes {
+    let mut upward = Upward {
+        psi_previous,
+        psi_current,
+        chi_previous,
+        chi_current,
+        sums: Sums {
+            scattering: [0.0; L],
+            absorption: [0.0; L],
+            backscattering_re: [0.0; L],
+            backscattering_im: [0.0; L],
+            asymmetry_adjacent: [0.0; L],
+            asymmetry_cross: [0.0; L],
+        },
+        previous: CoefficientLanes {
             a_re: [0.0; L],
             a_im: [0.0; L],
             b_re: [0.0; L],
             b_im: [0.0; L],
+        },
+        inverse_n: [1.0; L],
+        n: 1.0,
+        two_n_plus_1: 3.0,
+        sign: -1.0,
+    };
+    let constants = SphereConstants {
+        m_re: *m_re,
+        m_im: *m_im,
+        inverse_m_re,
+        inverse_m_im,
+        slope_re,
+        slope_im,
+        inverse_x,
+        switch,
+        terms,
+    };
+    // Every lane is inside its series up to the shortest one: no padding
+    // selects there.
+    let shortest = n_terms.iter().copied().min().expect("lanes");
+    for n in 1..=longest {
+        let coefficients = if n <= shortest {
+            upward.term::<false>(&rows[n + 1], &constants)
+        } else {
+            upward.term::<true>(&rows[n + 1], &constants)
         };
-        let mut absorption = [0.0; L];
-        let mut inverse_n_plus_1 = [0.0; L];
-        let mut lane_n = [0.0; L];
-        for l in 0..L {
-            // The exterior step n: psi_{n+1}, chi_{n+1}.
-            let step = two_n_plus_1 * inverse_x[l];
-            let psi_next = if n_float < switch[l] {
-                step * psi_current[l] - psi_previous[l]
-            } else {
-                psi_current[l] * rho.rho_x[l]
-            };
-            let chi_next = step * chi_current[l] - chi_previous[l];
-            // A lane past its own series takes padding inputs (a = b = 0,
-            // |denominator| = 1, weight 2n+1 = 0), and its exterior state is
-            // pinned to psi = 0, chi = 1, so that it never reaches the
-            // denormals of psi_n or the overflow of chi_n far beyond its
-            // turning point. (Selects against constants, which stay in
-            // registers: a select against the old value would be compiled
-            // as a masked store, which the next step's load would wait for.)
-            let active = n_float <= terms[l];
-            let (psi, psi_up, chi, chi_up, rho_re, rho_im, n_lane) = if active {
-                (
-                    psi_current[l],
-                    psi_next,
-                    chi_current[l],
-                    chi_next,
-                    rho.rho_re[l],
-                    rho.rho_im[l],
-                    n_float,
-                )
-            } else {
-                (0.0, 0.0, 0.0, 1.0, 0.0, 0.0, -0.5)
-            };
-            psi_previous[l] = psi;
-            psi_current[l] = psi_up;
-            chi_previous[l] = if active { chi } else { 1.0 };
-            chi_current[l] = chi_up;
-            lane_n[l] = n_lane;
-            let n_plus_1 = n_lane + 1.0;
-            // A_n = (n+1)/x (1/m^2 - 1) - rho/m, B_n = -m rho.
-            let fa_re =
-                slope_re[l] * n_plus_1 - (rho_re * inverse_m_re[l] - rho_im * inverse_m_im[l]);
-            let fa_im =
-                slope_im[l] * n_plus_1 - (rho_re * inverse_m_im[l] + rho_im * inverse_m_re[l]);
-            let fb_re = rho_im * m_im[l] - rho_re * m_re[l];
-            let fb_im = -(rho_re * m_im[l] + rho_im * m_re[l]);
-            // numerator = F psi_n + psi_{n+1}; denominator = F xi_n + xi_{n+1}
-            // = numerator - i (F chi_n + chi_{n+1}).
-            let na_re = fa_re * psi + psi_up;
-            let na_im = fa_im * psi;
-            let da_re = na_re + fa_im * chi;
-            let da_im = na_im - (fa_re * chi + chi_up);
-            let nb_re = fb_re * psi + psi_up;
-            let nb_im = fb_im * psi;
-            let db_re = nb_re + fb_im * chi;
-            let db_im = nb_im - (fb_re * chi + chi_up);
-            // The two quotients and 1/(n+1) from one division.
-            let norm_a = da_re * da_re + da_im * da_im;
-            let norm_b = db_re * db_re + db_im * db_im;
-            let norms = norm_a * norm_b;
-            let inverse = 1.0 / (norms * n_plus_1);
-            inverse_n_plus_1[l] = norms * inverse;
-            let common = n_plus_1 * inverse;
-            let inverse_norm_a = norm_b * common;
-            let inverse_norm_b = norm_a * common;
-            coefficients.a_re[l] = (na_re * da_re + na_im * da_im) * inverse_norm_a;
-            coefficients.a_im[l] = (na_im * da_re - na_re * da_im) * inverse_norm_a;
-            coefficients.b_re[l] = (nb_re * db_re + nb_im * db_im) * inverse_norm_b;
-            coefficients.b_im[l] = (nb_im * db_re - nb_re * db_im) * inverse_norm_b;
-            // Re c - |c|^2 = -Im(F) / |denominator|^2 for each coefficient.
-            absorption[l] = -(fa_im * inverse_norm_a + fb_im * inverse_norm_b);
-        }
-        for l in 0..L {
-            let weight = 2.0 * lane_n[l] + 1.0;
-            let (are, aim, bre, bim) = (
-                coefficients.a_re[l],
-                coefficients.a_im[l],
-                coefficients.b_re[l],
-                coefficients.b_im[l],
-            );
-            sums.scattering[l] += weight * (are * are + aim * aim + bre * bre + bim * bim);
-            sums.absorption[l] += weight * absorption[l];
-            sums.backscattering_re[l] += sign * weight * (are - bre);
-            sums.backscattering_im[l] += sign * weight * (aim - bim);
-            // Term n-1 of the adjacent sum: (n-1)(n+1)/n = n - 1/n.
-            let adjacent = previous.a_re[l] * are
-                + previous.a_im[l] * aim
-                + previous.b_re[l] * bre
-                + previous.b_im[l] * bim;
-            sums.asymmetry_adjacent[l] += (lane_n[l] - inverse_n[l]) * adjacent;
-            // (2n+1)/(n(n+1)) = 1/n + 1/(n+1).
-            sums.asymmetry_cross[l] +=
-                (inverse_n[l] + inverse_n_plus_1[l]) * (are * bre + aim * bim);
-        }
         record(n, &coefficients);
-        previous = coefficients;
-        inverse_n = inverse_n_plus_1;
-        n_float += 1.0;
-        two_n_plus_1 += 2.0;
-        sign = -sign;
     }
+    let sums = upward.sums;
 
     let mut results = [Efficiencies {
         qext: 0.0,
