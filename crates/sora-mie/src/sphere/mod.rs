@@ -92,10 +92,15 @@
 //!   in the same loop as the interior one; and the coefficients and all five
 //!   sums are computed in blocks of eight terms from structure-of-arrays
 //!   tables, with one real division per term, in code the compiler
-//!   vectorises. On x86-64 the solver is also compiled for AVX and selected
-//!   at run time (bit-identical results: no FMA contraction). The tables
+//!   vectorises. On x86-64 the solver is also compiled for AVX and AVX-512F
+//!   and selected at run time (bit-identical results: no FMA contraction).
+//!   The tables
 //!   (about 40 bytes a term) live on the stack up to x ~ 950 and in a
 //!   reusable [`SphereWorkspace`] beyond.
+//! - **Many spheres** (`batch.rs`, [`compute_efficiencies_many_with`]): the
+//!   same algorithms vectorised across eight spheres instead of across
+//!   terms, for quadrature nodes (same m, neighbouring x): every recurrence
+//!   step and the per-sphere set-up are then shared by eight spheres.
 //! - **Angular functions** (`amplitude.rs`): pi_n, tau_n by the upward
 //!   recurrences of B&H eq. 4.47 in Wiscombe's arrangement (exact at
 //!   mu = +-1), for blocks of angles at once.
