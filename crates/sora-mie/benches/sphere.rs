@@ -4,15 +4,17 @@
 //! (b) 1 000 evaluations at x log-spaced over 100 ..= 10 000:
 //!     goal >= 22 000 evaluations/s.
 //! Criterion reports the element throughput, i.e. evaluations per second.
-//! Also timed: the same sweeps through a reused `SphereWorkspace`, and a
-//! 181-angle S11/S12 table.
+//! Also timed: the same sweeps through a reused `SphereWorkspace`, each
+//! sweep in one call of `compute_efficiencies_many_with` (eight spheres
+//! side by side, still one core), and a 181-angle S11/S12 table.
 
 use std::hint::black_box;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use sora_mie::Complex64;
 use sora_mie::sphere::{
-    MieSolution, SphereWorkspace, compute_efficiencies, compute_efficiencies_with,
+    MieSolution, SphereWorkspace, compute_efficiencies, compute_efficiencies_many,
+    compute_efficiencies_many_with, compute_efficiencies_with,
 };
 
 fn log_spaced(count: usize, low: f64, high: f64) -> Vec<f64> {
@@ -56,6 +58,23 @@ fn efficiency_sweeps(c: &mut Criterion) {
                     total += q.qext + q.qsca + q.g;
                 }
                 total
+            })
+        });
+        // The whole sweep in one call: eight spheres side by side.
+        let mut efficiencies = compute_efficiencies_many(m, xs).unwrap();
+        group.bench_function(format!("{name}, all at once"), |bencher| {
+            bencher.iter(|| {
+                compute_efficiencies_many_with(
+                    &mut workspace,
+                    black_box(m),
+                    black_box(xs),
+                    &mut efficiencies,
+                )
+                .unwrap();
+                efficiencies
+                    .iter()
+                    .map(|q| q.qext + q.qsca + q.g)
+                    .sum::<f64>()
             })
         });
     }
