@@ -110,8 +110,11 @@ pub(super) fn scaled_ratio_continued_fraction(z_squared: Complex64, n: usize) ->
         for _ in 0..CONTINUED_FRACTION_BLOCK {
             b_j += 2.0;
             let mut next = [0.0; 4];
+            // The previous convergent's terms first: the chain through the
+            // current one is then one multiply and one add.
             for i in 0..4 {
-                next[i] = current[i] * b_j + a.re * previous[i] + signed_a_im[i] * previous[i ^ 1];
+                next[i] =
+                    current[i] * b_j + (a.re * previous[i] + signed_a_im[i] * previous[i ^ 1]);
             }
             previous = current;
             current = next;

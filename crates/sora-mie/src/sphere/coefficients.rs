@@ -581,37 +581,29 @@ fn fill_tables(
     };
     chi[0] = cos_x;
     chi[1] = cos_x * inverse_x + sin_x;
-    let (mut psi_previous, mut psi_current) = (psi[0], psi[1]);
-    let (mut chi_previous, mut chi_current) = (chi[0], chi[1]);
-    // Step n (from 1): psi_{n+1}, chi_{n+1} with the factor (2n+1)/x; 2n+1
-    // is counted exactly in floating point (accumulating 2/x instead would
-    // drift by n ulps).
-    let mut two_n_plus_1 = 3.0;
-
     // Downward n = top-1 ..= 2 writes rho[n]; upward n = 1 ..= top-2 writes
     // psi[n+1], chi[n+1]: both cover indices 2..top, in opposite orders,
     // two steps per iteration.
     let count = top - 2;
+    let (psi_start, chi_start) = ([psi[0], psi[1]], [chi[0], chi[1]]);
     let (rho_re_range, rho_im_range) = (&mut rho_re[2..top], &mut rho_im[2..top]);
     let (psi_range, chi_range) = (&mut psi[2..top], &mut chi[2..top]);
     // Below n_switch psi goes upward by its recurrence, then by ratios:
     // step k (n = k + 1) needs rho_{n+1}(x) = rho_x[k + 2 - n_switch].
     let upward_by_recurrence = n_switch.saturating_sub(1).min(count);
-    // Upward step k (n = k + 1): psi_{n+1}, chi_{n+1}.
-    let mut exterior_step = |k: usize| -> (f64, f64) {
-        let step = two_n_plus_1 * inverse_x;
-        let psi_next = if k < upward_by_recurrence {
-            step * psi_current - psi_previous
-        } else {
-            psi_current * rho_x[k + 2 - n_switch]
-        };
-        let chi_next = step * chi_current - chi_previous;
-        psi_previous = psi_current;
-        psi_current = psi_next;
-        chi_previous = chi_current;
-        chi_current = chi_next;
-        two_n_plus_1 += 2.0;
-        (psi_next, chi_next)
+    let mut exterior = ExteriorUpward {
+        psi_previous: psi_start[0],
+        psi_current: psi_start[1],
+        chi_previous: chi_start[0],
+        chi_current: chi_start[1],
+        // Step n (from 1): psi_{n+1}, chi_{n+1} with the factor (2n+1)/x;
+        // 2n+1 is counted exactly in floating point (accumulating 2/x
+        // instead would drift by n ulps).
+        two_n_plus_1: 3.0,
+        inverse_x,
+        upward_by_recurrence,
+        n_switch,
+        rho_x,
     };
     // Batches of eight steps over chunks (no index arithmetic, no bounds
     // checks): the interior tables from their top end, the exterior from
@@ -629,11 +621,23 @@ fn fill_tables(
         let rho_re_batch: &mut [f64; 8] = rho_re_batch.try_into().expect("chunks of 8");
         let rho_im_batch: &mut [f64; 8] = rho_im_batch.try_into().expect("chunks of 8");
         interior.batch(rho_re_batch, rho_im_batch);
-        for (psi_slot, chi_slot) in psi_batch.iter_mut().zip(chi_batch.iter_mut()) {
-            let (psi_next, chi_next) = exterior_step(k);
-            *psi_slot = psi_next;
-            *chi_slot = chi_next;
-            k += 1;
+        if k + 8 <= upward_by_recurrence {
+            for (psi_pair, chi_pair) in psi_batch
+                .chunks_exact_mut(2)
+                .zip(chi_batch.chunks_exact_mut(2))
+            {
+                let ((psi_1, chi_1), (psi_2, chi_2)) = exterior.recurrence_pair();
+                (psi_pair[0], psi_pair[1]) = (psi_1, psi_2);
+                (chi_pair[0], chi_pair[1]) = (chi_1, chi_2);
+            }
+            k += 8;
+        } else {
+            for (psi_slot, chi_slot) in psi_batch.iter_mut().zip(chi_batch.iter_mut()) {
+                let (psi_next, chi_next) = exterior.step(k);
+                *psi_slot = psi_next;
+                *chi_slot = chi_next;
+                k += 1;
+            }
         }
     }
     // The remaining (count mod 8) steps, n = remaining + 1 down to 2: one
@@ -648,20 +652,80 @@ fn fill_tables(
         rho_re_range[..remaining].copy_from_slice(&batch_re[kept..]);
         rho_im_range[..remaining].copy_from_slice(&batch_im[kept..]);
         for (psi_slot, chi_slot) in psi_range[k..].iter_mut().zip(chi_range[k..].iter_mut()) {
-            let (psi_next, chi_next) = exterior_step(k);
+            let (psi_next, chi_next) = exterior.step(k);
             *psi_slot = psi_next;
             *chi_slot = chi_next;
             k += 1;
         }
     }
     // The last exterior step, n = top - 1: psi[top], chi[top].
-    let step = two_n_plus_1 * inverse_x;
+    let step = exterior.two_n_plus_1 * inverse_x;
     psi[top] = if top - 1 < n_switch {
-        step * psi_current - psi_previous
+        step * exterior.psi_current - exterior.psi_previous
     } else {
-        psi_current * rho_x[top - n_switch]
+        exterior.psi_current * rho_x[top - n_switch]
     };
-    chi[top] = step * chi_current - chi_previous;
+    chi[top] = step * exterior.chi_current - exterior.chi_previous;
+}
+
+/// The upward recurrences of psi_n(x) and chi_n(x) (A&S 10.1.19), psi by
+/// ratio products beyond the turning point, as a state machine for
+/// [`fill_tables`].
+struct ExteriorUpward<'a> {
+    psi_previous: f64,
+    psi_current: f64,
+    chi_previous: f64,
+    chi_current: f64,
+    /// 2n + 1 of the next step n.
+    two_n_plus_1: f64,
+    inverse_x: f64,
+    /// Steps k (n = k + 1) below this run psi by its recurrence.
+    upward_by_recurrence: usize,
+    n_switch: usize,
+    /// Exterior ratios beyond the turning point (see [`fill_exterior_ratios`]).
+    rho_x: &'a [f64],
+}
+
+impl ExteriorUpward<'_> {
+    /// Step k (n = k + 1): psi_{n+1}, chi_{n+1}.
+    #[inline(always)]
+    fn step(&mut self, k: usize) -> (f64, f64) {
+        let step = self.two_n_plus_1 * self.inverse_x;
+        let psi_next = if k < self.upward_by_recurrence {
+            step * self.psi_current - self.psi_previous
+        } else {
+            self.psi_current * self.rho_x[k + 2 - self.n_switch]
+        };
+        let chi_next = step * self.chi_current - self.chi_previous;
+        self.psi_previous = self.psi_current;
+        self.psi_current = psi_next;
+        self.chi_previous = self.chi_current;
+        self.chi_current = chi_next;
+        self.two_n_plus_1 += 2.0;
+        (psi_next, chi_next)
+    }
+
+    /// Two recurrence steps (both below `upward_by_recurrence`) as a
+    /// leapfrog pair: psi_{n+1} = t_n psi_n - psi_{n-1} and, from the same
+    /// pair, psi_{n+2} = (t_{n+1} t_n - 1) psi_n - t_{n+1} psi_{n-1}, t_k =
+    /// (2k+1)/x, likewise chi; the dependency chain is one multiply-subtract
+    /// per two steps. Returns (psi_{n+1}, chi_{n+1}), (psi_{n+2}, chi_{n+2}).
+    #[inline(always)]
+    fn recurrence_pair(&mut self) -> ((f64, f64), (f64, f64)) {
+        let step = self.two_n_plus_1 * self.inverse_x;
+        let step_next = (self.two_n_plus_1 + 2.0) * self.inverse_x;
+        let coupling = step_next * step - 1.0;
+        let psi_1 = step * self.psi_current - self.psi_previous;
+        let psi_2 = coupling * self.psi_current - step_next * self.psi_previous;
+        let chi_1 = step * self.chi_current - self.chi_previous;
+        let chi_2 = coupling * self.chi_current - step_next * self.chi_previous;
+        self.psi_previous = psi_1;
+        self.psi_current = psi_2;
+        self.chi_previous = chi_1;
+        self.chi_current = chi_2;
+        self.two_n_plus_1 += 4.0;
+        ((psi_1, chi_1), (psi_2, chi_2))
+    }
 }
 
 /// rho_x[k] = psi_{n_switch+k}(x) / psi_{n_switch+k-1}(x) for k >= 1 (the
