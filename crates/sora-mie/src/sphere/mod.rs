@@ -224,10 +224,23 @@ const STACK_SCRATCH_SMALL: usize = 128;
 const STACK_SCRATCH_MIDDLE: usize = 640;
 const STACK_SCRATCH_LARGE: usize = 5120;
 
+/// Largest table (f64 values) that [`compute_efficiencies`] keeps per thread
+/// between calls: 1 MB, spheres up to x ~ 26 000. Larger ones allocate their
+/// own, so that a one-off huge sphere does not pin its memory to the thread.
+const THREAD_SCRATCH_MAX: usize = 1 << 17;
+
+thread_local! {
+    /// The tables of [`compute_efficiencies`] beyond the stack tiers.
+    static THREAD_WORKSPACE: std::cell::RefCell<SphereWorkspace> =
+        std::cell::RefCell::new(SphereWorkspace::new());
+}
+
 /// Fast path: efficiencies and g of a sphere of relative refractive index `m`
 /// and size parameter `x`, without allocation for x up to ~950 (the tables
-/// live on the stack, at most 40 KB); larger spheres allocate one table per
-/// call (use [`compute_efficiencies_with`] to reuse it).
+/// live on the stack, at most 40 KB); larger spheres, up to x ~ 26 000,
+/// reuse a table kept per thread (allocated once, the first time it is
+/// needed), and larger ones still allocate one per call (use
+/// [`compute_efficiencies_with`] to reuse it).
 pub fn compute_efficiencies(m: Complex64, x: f64) -> Result<Efficiencies, MieError> {
     validate(m, x)?;
     let n_terms = series_length_converged(x);
@@ -240,6 +253,13 @@ pub fn compute_efficiencies(m: Complex64, x: f64) -> Result<Efficiencies, MieErr
         with_stack_scratch::<STACK_SCRATCH_MIDDLE>(m, x, n_terms)
     } else if needed <= STACK_SCRATCH_LARGE {
         with_stack_scratch::<STACK_SCRATCH_LARGE>(m, x, n_terms)
+    } else if needed <= THREAD_SCRATCH_MAX {
+        THREAD_WORKSPACE
+            .try_with(|workspace| match workspace.try_borrow_mut() {
+                Ok(mut workspace) => solve_in_workspace(&mut workspace, m, x),
+                Err(_) => solve_in_workspace(&mut SphereWorkspace::new(), m, x),
+            })
+            .unwrap_or_else(|_| solve_in_workspace(&mut SphereWorkspace::new(), m, x))
     } else {
         solve_in_workspace(&mut SphereWorkspace::new(), m, x)
     })
