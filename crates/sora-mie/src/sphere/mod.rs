@@ -93,9 +93,9 @@
 //!   sums are computed in blocks of eight terms from structure-of-arrays
 //!   tables, with one real division per term, in code the compiler
 //!   vectorises. On x86-64 the solver is also compiled for AVX (the same
-//!   operations: bit-identical results) and, for series of 64 terms and
-//!   more, for AVX-512F with the blocks' multiply-adds fused (FMA: a
-//!   different rounding, within ~1e-15 of the others), selected at run time.
+//!   operations: bit-identical results) and for AVX-512F with the blocks'
+//!   multiply-adds fused (FMA: a different rounding, within ~1e-15 of the
+//!   others), selected at run time.
 //!   The tables
 //!   (about 40 bytes a term) live on the stack up to x ~ 950 and in a
 //!   reusable [`SphereWorkspace`] beyond.
