@@ -36,7 +36,7 @@
 //! nodes (eight neighbouring nodes solved side by side in vector lanes,
 //! equal to [`compute_efficiencies`] to rounding) with
 //! [`RadiusQuadratureSettings::cross_sections`]; the phase
-//! function needs a [`MieSolution`] and an angular sum per node, so it has
+//! function needs the series coefficients and an angular sum per node, so it has
 //! its own sparser rule, [`RadiusQuadratureSettings::phase_function`].
 //!
 //! Measured error of the cross-section rule (relative, worst case):
@@ -148,34 +148,50 @@
 //!
 //! ## Cost
 //!
-//! The angular sums (`accumulate_weighted_s11`) are compiled for AVX-512F
-//! and AVX as well as the portable target, selected at run time
-//! (bit-identical), about 3-5 times faster than the portable SSE2 build.
+//! Where the time goes, and how it is kept down:
+//! - Mie solutions: the nodes of a rule are solved eight at a time, side by
+//!   side in vector lanes ([`compute_efficiencies_many_with`] for the
+//!   cross-sections, the same solver recording a_n, b_n for the phase
+//!   tables): the nodes are sorted and neighbouring, so the eight series
+//!   have nearly the same length, and every recurrence step and the
+//!   per-sphere set-up (continued fractions, trigonometry) are shared by
+//!   eight spheres. About 3 times the one-sphere solver's rate on these
+//!   nodes (x 0.6-470, Mars dust, 21 wavelengths).
+//! - Angular sums (`accumulate_s11`): term-outer, angle-inner in blocks
+//!   of angles; the reference indices of the index-interpolated tables
+//!   share their rule's nodes, so pi_n and tau_n are computed once per node
+//!   for all of them, and the per-term constants are tabulated once.
+//! - Accumulating w S11 into the per-wavelength tables: a group of eight
+//!   nodes at a time, each table entry loaded and stored once per group.
+//! - All three are compiled for AVX-512F with FMA and for AVX as well as the
+//!   portable target, selected at run time (the AVX build is bit-identical
+//!   to the portable one; the fused build rounds differently, within 1e-15
+//!   of the others, tested).
 //!
-//! Criterion (`benches/ensemble.rs`), 21 paper wavelengths, load average
-//! (`uptime`, this 2-core machine is shared with other builds) given for
-//! each set, so +-30%:
+//! The radius rules themselves are unchanged by this: the same nodes and
+//! weights, so the measured quadrature errors above still hold (the
+//! cross-sections changed by rounding only, ~1e-15, and the reference tests
+//! pass at the same tolerances).
 //!
-//! | case | before (load 4.2-4.5) | after (load 4.5-5.0) |
+//! Criterion (`benches/ensemble.rs`), 21 paper wavelengths, one thread,
+//! load average (`uptime`, this 2-core machine is shared with other builds)
+//! given for each set, so +-30%:
+//!
+//! | case | one-sphere solver (load 4.2-5.0) | batched (load 1.0-1.8) |
 //! |---|---|---|
-//! | Mars dust, m = 1.5 + 0.005i, Mie phase | 48.8 ms | 30.3 ms |
-//! | Mars dust, paper HG (cross-sections only) | 7.9 ms | 10.2 ms |
-//! | Table 1 aerosol 0.1-2.5 um, Mie phase | 53.3 ms | 24.8 ms |
-//! | Mars dust, Wolff index, Mie phase (default: interpolated) | 751 ms | 155 ms |
-//! | same, exact per-index tables | (the same path) | 388 ms |
-//! | same, paper HG (cross-sections only) | - | 103 ms |
+//! | Mars dust, m = 1.5 + 0.005i, Mie phase | 30.3 ms | 13.0 ms |
+//! | Mars dust, paper HG (cross-sections only) | 10.2 ms | 4.9 ms |
+//! | Table 1 aerosol 0.1-2.5 um, Mie phase | 24.8 ms | 10.3 ms |
+//! | Mars dust, Wolff index, Mie phase (default: interpolated) | 155 ms | 46 ms |
+//! | same, exact per-index tables | 388 ms | 104 ms |
+//! | same, paper HG (cross-sections only) | 103 ms | 22 ms |
 //!
-//! (The "before" Wolff figure is the exact path, then the only one.) With
-//! the Wolff index the Mie-phase build is 4.8 times faster but still above
-//! the 100 ms target under this load: two thirds of it are now the
-//! cross-sections (one cross-section rule of about 1800 nodes per
-//! wavelength, 37 800 sphere solutions at about 30 ns per series term; the
-//! interpolated phase tables are the other 50 ms). They are kept exact so
-//! that they do not change (bit-identical to before), and are the next
-//! thing to speed up: a sphere solver batched over the nodes of one
-//! wavelength (same m, neighbouring x, vectorised across them) would keep
-//! the nodes and the results, which the sphere module's one-sphere API
-//! cannot.
+//! (At load 2.4 the one-sphere figures for the three Wolff cases were 132,
+//! 230 and 71 ms.) With the Wolff index the default build is about 22 ms of
+//! cross-sections (one rule of about 1800 nodes per wavelength, 37 800
+//! sphere solutions, 2.0 million series terms) and about 24 ms of phase
+//! tables (five reference indices on a 520-node rule: 2 600 solutions and
+//! 46 million angle-terms).
 
 use crate::Complex64;
 use crate::distribution::{
