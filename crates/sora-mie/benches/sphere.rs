@@ -7,6 +7,10 @@
 //! Also timed: the same sweeps through a reused `SphereWorkspace`, each
 //! sweep in one call of `compute_efficiencies_many_with` (eight spheres
 //! side by side, still one core), and a 181-angle S11/S12 table.
+//!
+//! Measured (2-core Xeon @ 2.8 GHz with AVX-512, shared; load average
+//! 1.0-1.4): (a) 1.04 M/s one call per sphere, 2.6 M/s in one call;
+//! (b) 29 500/s one call per sphere, 83 000/s in one call.
 
 use std::hint::black_box;
 
