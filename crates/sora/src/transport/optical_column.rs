@@ -84,6 +84,7 @@ pub fn ray_panel(tangent_distance: f64, length: f64, panels: usize, k: usize) ->
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ProfileCorners {
     ground_radius_m: f64,
+    top_radius_m: f64,
     /// Corner altitudes strictly inside the atmosphere, m, increasing.
     altitudes_m: Vec<f64>,
 }
@@ -111,8 +112,14 @@ impl ProfileCorners {
         altitudes_m.dedup();
         ProfileCorners {
             ground_radius_m,
+            top_radius_m,
             altitudes_m,
         }
+    }
+
+    /// The radii of the ground and of the top of the atmosphere, m.
+    pub fn radii_m(&self) -> (f64, f64) {
+        (self.ground_radius_m, self.top_radius_m)
     }
 
     /// The most panel ends [`ProfileCorners::fill_panel_ends`] writes for

@@ -40,6 +40,8 @@
 //!   sun are exact integrals ([`SunColumns::Exact`]) or a table
 //!   ([`SunColumns::Table`]) for images.
 
+use std::borrow::Borrow;
+
 use super::optical_column::{ProfileCorners, SunColumnTable, compute_columns_along_ray};
 use super::quadrature::{GAUSS_NODES, GAUSS_WEIGHTS, running_integral_matrix};
 use crate::atmosphere::{Atmosphere, AtmosphereOptics, DensityProfile};
@@ -70,6 +72,40 @@ pub enum SunColumns<'a> {
     Exact,
     /// Interpolated in a precomputed table (for images).
     Table(&'a SunColumnTable),
+}
+
+impl SunColumns<'_> {
+    /// Columns (m) of `profiles` from `point` (planet-centred, m) to the
+    /// top of the atmosphere toward the unit `sun`, into `columns`: exact
+    /// on [`SUN_RAY_PANELS`] Gauss panels cut at `corners`, or from the
+    /// table. False, with `columns` untouched, when the point is in the
+    /// planet's shadow. `ends` is scratch for the exact path's panel ends.
+    pub(crate) fn compute_columns_to_sun<P: Borrow<DensityProfile>>(
+        self,
+        profiles: &[P],
+        corners: &ProfileCorners,
+        point: Vector3,
+        sun: Vector3,
+        ends: &mut Vec<f64>,
+        columns: &mut [f64],
+    ) -> bool {
+        let (ground_radius_m, top_radius_m) = corners.radii_m();
+        let r = point.length();
+        let mu = point.dot(sun) / r;
+        match self {
+            SunColumns::Table(table) => table.lookup_columns_to_sun(r, mu, columns),
+            SunColumns::Exact => {
+                if crate::geometry::ray_intersects_ground(r, mu, ground_radius_m) {
+                    return false;
+                }
+                let length =
+                    crate::geometry::distance_to_top_of_atmosphere(point, sun, top_radius_m);
+                corners.fill_panel_ends(point, sun, length, SUN_RAY_PANELS, ends);
+                compute_columns_along_ray(profiles, ground_radius_m, point, sun, ends, columns);
+                true
+            }
+        }
+    }
 }
 
 /// An atmosphere on a wavelength grid, seen from one place with the sun in
@@ -259,49 +295,6 @@ impl SingleScatteringSky {
         }
     }
 
-    /// Columns toward the sun from `point` (planet-centred), into
-    /// `columns`; false when the point is in the planet's shadow. `ends`
-    /// is scratch for the exact path's panel ends.
-    fn columns_to_sun(
-        &self,
-        point: Vector3,
-        sun_columns: SunColumns,
-        ends: &mut Vec<f64>,
-        columns: &mut [f64],
-    ) -> bool {
-        let r = point.length();
-        let mu = point.dot(self.sun_direction) / r;
-        match sun_columns {
-            SunColumns::Table(table) => table.lookup_columns_to_sun(r, mu, columns),
-            SunColumns::Exact => {
-                if crate::geometry::ray_intersects_ground(r, mu, self.ground_radius_m) {
-                    return false;
-                }
-                let length = crate::geometry::distance_to_top_of_atmosphere(
-                    point,
-                    self.sun_direction,
-                    self.top_radius_m,
-                );
-                self.corners.fill_panel_ends(
-                    point,
-                    self.sun_direction,
-                    length,
-                    SUN_RAY_PANELS,
-                    ends,
-                );
-                compute_columns_along_ray(
-                    &self.profiles,
-                    self.ground_radius_m,
-                    point,
-                    self.sun_direction,
-                    ends,
-                    columns,
-                );
-                true
-            }
-        }
-    }
-
     /// Fast path, first half: fills the scratch's in-scattering integrals
     /// I_j(lambda) (m), the ground term and the view transmittance for the
     /// view direction `view` (unit, east-north-up).
@@ -350,9 +343,11 @@ impl SingleScatteringSky {
                     scratch.densities[j] = scratch.panel_densities[j][n];
                     scratch.node_view_columns[j] = scratch.view_columns[j] + half * inside;
                 }
-                if !self.columns_to_sun(
+                if !sun_columns.compute_columns_to_sun(
+                    &self.profiles,
+                    &self.corners,
                     points[n],
-                    sun_columns,
+                    self.sun_direction,
                     &mut scratch.sun_panel_ends,
                     &mut scratch.sun_columns,
                 ) {
@@ -420,9 +415,11 @@ impl SingleScatteringSky {
             return;
         }
         let point = normal * self.ground_radius_m;
-        if !self.columns_to_sun(
+        if !sun_columns.compute_columns_to_sun(
+            &self.profiles,
+            &self.corners,
             point,
-            sun_columns,
+            self.sun_direction,
             &mut scratch.sun_panel_ends,
             &mut scratch.sun_columns,
         ) {

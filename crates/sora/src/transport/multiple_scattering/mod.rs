@@ -441,43 +441,6 @@ impl ViewRayOptics {
         }
     }
 
-    /// Columns from `point` toward the sun into `columns`; false in the
-    /// planet's shadow. `ends` is scratch for the exact path's panel ends.
-    fn columns_to_sun(
-        &self,
-        point: Vector3,
-        sun_columns: SunColumns,
-        ends: &mut Vec<f64>,
-        columns: &mut [f64],
-    ) -> bool {
-        let r = point.length();
-        let mu = point.dot(self.sun) / r;
-        match sun_columns {
-            SunColumns::Table(table) => table.lookup_columns_to_sun(r, mu, columns),
-            SunColumns::Exact => {
-                if crate::geometry::ray_intersects_ground(r, mu, self.ground_radius_m) {
-                    return false;
-                }
-                let length = crate::geometry::distance_to_top_of_atmosphere(
-                    point,
-                    self.sun,
-                    self.top_radius_m,
-                );
-                self.corners
-                    .fill_panel_ends(point, self.sun, length, SUN_RAY_PANELS, ends);
-                compute_columns_along_ray(
-                    &self.profiles,
-                    self.ground_radius_m,
-                    point,
-                    self.sun,
-                    ends,
-                    columns,
-                );
-                true
-            }
-        }
-    }
-
     /// Adds E sum_j beta_sca,j p_j(theta') times the scratch's forward-peak
     /// integrals to `radiance`, with the exact phase functions at
     /// theta' = max(theta, the forward cone) (see
@@ -592,9 +555,11 @@ impl ViewRayOptics {
                     // sun's beam and the view's transmittance (see the
                     // module docs, TMS).
                     if self.has_forward_peaks
-                        && self.columns_to_sun(
+                        && sun_columns.compute_columns_to_sun(
+                            &self.profiles,
+                            &self.corners,
                             points[n],
-                            sun_columns,
+                            self.sun,
                             &mut scratch.sun_panel_ends,
                             &mut scratch.sun_columns,
                         )
