@@ -10,7 +10,8 @@
 //!
 //! - [`compute_columns_along_ray`]: the integral by composite 4-point
 //!   Gauss-Legendre on panels that crowd toward the ray's lowest point
-//!   (where the density peaks) and its start.
+//!   (where the density peaks) and its start, cut where the ray crosses a
+//!   corner of a piecewise-linear profile ([`ProfileCorners`]).
 //! - [`SunColumnTable`]: the columns from any point to the top of the
 //!   atmosphere toward the sun, tabulated over (altitude, cos of the sun's
 //!   zenith angle) and read by [`SunColumnTable::lookup_columns_to_sun`].
