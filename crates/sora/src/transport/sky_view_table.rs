@@ -207,8 +207,13 @@ impl SkyViewTable {
     fn zenith_of_node(&self, row: usize) -> f64 {
         let half = self.half_zenith_nodes;
         // The nodes next to the horizon sit a hair inside their half so a
-        // ray along them is unambiguously sky or ground.
-        const HORIZON_MARGIN: f64 = 1e-9;
+        // ray along them is unambiguously sky or ground. A hair of 1e-9 rad
+        // was not enough: the ground test compares |p x d| with R, and
+        // R (1 - 5e-19) rounds either way, so at some azimuths the ground
+        // half's first node took the horizon's sky radiance (an eye on the
+        // ground saw the ground just below the horizon 1.8 times too bright
+        // in the table). At 1e-6 rad, |p x d| = R (1 - 5e-13).
+        const HORIZON_MARGIN: f64 = 1e-6;
         if row < half {
             let v = row as f64 / (half - 1) as f64;
             let u = 1.0 - (1.0 - v) * (1.0 - v);
