@@ -23,8 +23,11 @@
 //!   density along the path, column / d, which stays finite and smooth up
 //!   to the top boundary where both go to zero; it is interpolated
 //!   bilinearly in its logarithm (an exponential profile's mean density is
-//!   close to exponential in both coordinates), or linearly where a layer
-//!   profile makes it zero at a corner.
+//!   close to exponential in both coordinates), or linearly for a layer
+//!   (piecewise-linear) profile, whose column falls to zero quadratically
+//!   where paths leave the layer (measured: a 2-4 km tent aerosol layer's
+//!   image 2.3e-3 from the reference march in the logarithm, 8.2e-4
+//!   linearly).
 
 use std::borrow::Borrow;
 
@@ -206,6 +209,11 @@ pub struct SunColumnTable {
     altitude_nodes: usize,
     mu_nodes: usize,
     species: usize,
+    /// Per species: interpolate ln(mean density) (smooth profiles), or
+    /// the mean density itself (piecewise-linear layers: along paths that
+    /// leave a layer near its top the column falls to zero quadratically,
+    /// and its logarithm to -inf, which no linear blend follows).
+    logarithmic: Vec<bool>,
     /// ln of the mean relative density along the path to the top
     /// (column_m / d), -inf where it is zero, index
     /// [(altitude * mu_nodes + mu) * species + s].
@@ -231,6 +239,10 @@ impl SunColumnTable {
             altitude_nodes,
             mu_nodes,
             species,
+            logarithmic: profiles
+                .iter()
+                .map(|p| !matches!(p.borrow(), DensityProfile::PiecewiseLinear(_)))
+                .collect(),
             log_mean_densities: Vec::new(),
         };
         let mut log_mean_densities = vec![0.0; altitude_nodes * mu_nodes * species];
@@ -363,7 +375,7 @@ impl SunColumnTable {
         ];
         for (k, column) in columns_m.iter_mut().enumerate().take(s) {
             let corners = [c00[k], c01[k], c10[k], c11[k]];
-            let mean_density = if corners.iter().all(|v| v.is_finite()) {
+            let mean_density = if self.logarithmic[k] && corners.iter().all(|v| v.is_finite()) {
                 corners
                     .iter()
                     .zip(weights)
@@ -371,8 +383,7 @@ impl SunColumnTable {
                     .sum::<f64>()
                     .exp()
             } else {
-                // A layer profile is zero at a corner: interpolate the
-                // density itself.
+                // A layer profile: interpolate the density itself.
                 corners
                     .iter()
                     .zip(weights)
