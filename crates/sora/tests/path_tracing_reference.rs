@@ -43,7 +43,7 @@ const PLANE_PARALLEL_RADIUS_M: f64 = 6.36e9;
 
 mod common;
 
-use common::reference_rows;
+use common::{reference_geometries, reference_rows};
 
 /// The clear-sky reference atmosphere on a planet of `radius_m` with a
 /// constant ground albedo, seen from `observer_altitude_m` with the sun at
@@ -158,18 +158,7 @@ impl Agreement {
 fn compare_with_disort(samples: u64, samples_for_albedo_0_3: u64, base_seed: u64) {
     let grid = WavelengthGrid::paper();
     let rows = reference_rows();
-    let mut geometries: Vec<(f64, f64, f64, f64)> = rows
-        .iter()
-        .map(|r| {
-            (
-                r.ground_albedo,
-                r.sun_elevation_deg,
-                r.view_elevation_deg,
-                r.relative_azimuth_deg,
-            )
-        })
-        .collect();
-    geometries.dedup();
+    let geometries = reference_geometries(&rows);
     let mut all_orders: [Agreement; 2] = Default::default();
     let mut single = Agreement::default();
     for (seed, &(albedo, sun, view_elevation, relative_azimuth)) in geometries.iter().enumerate() {
@@ -428,18 +417,7 @@ fn energy_is_conserved_without_absorption() {
 fn error_bars_are_calibrated_over_many_seeds() {
     let grid = WavelengthGrid::paper();
     let rows = reference_rows();
-    let mut geometries: Vec<(f64, f64, f64, f64)> = rows
-        .iter()
-        .map(|r| {
-            (
-                r.ground_albedo,
-                r.sun_elevation_deg,
-                r.view_elevation_deg,
-                r.relative_azimuth_deg,
-            )
-        })
-        .collect();
-    geometries.dedup();
+    let geometries = reference_geometries(&rows);
     let wavelengths = [380.0, 500.0, 780.0];
     let mut z_scores: [Vec<f64>; 3] = Default::default();
     for (g, &(albedo, sun, view_elevation, relative_azimuth)) in geometries.iter().enumerate() {

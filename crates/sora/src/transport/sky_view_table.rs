@@ -31,7 +31,7 @@
 //! as unscattered and that single scattering with the real transmittances
 //! misses), a fourth block: like single scattering's integrals they take
 //! the phase functions per pixel (at the edge of the forward cone near
-//! the sun, see `MultipleScatteringField::forward_cone_cosine`).
+//! the sun, see `MultipleScatteringField::forward_cone_rad`).
 
 use super::multiple_scattering::MultipleScatteringTable;
 use super::optical_column::SunColumnTable;
@@ -46,9 +46,10 @@ pub struct SkyViewTable {
     azimuth_nodes: usize,
     /// Zenith angle of the horizon seen by the eye, rad.
     horizon_zenith_rad: f64,
-    /// Values per node: species * wavelengths integrals, then wavelengths
-    /// ground radiances, then (with multiple scattering) wavelengths
-    /// multiply scattered radiances.
+    /// Values per node: species * wavelengths integrals (m), then
+    /// wavelengths ground radiances, then (with multiple scattering)
+    /// wavelengths multiply scattered radiances (W m^-2 sr^-1 nm^-1) and
+    /// species * wavelengths forward-peak integrals (m).
     values_per_node: usize,
     wavelengths: usize,
     has_multiple_scattering: bool,
@@ -170,7 +171,13 @@ impl SkyViewTable {
             }
             if has_multiple_scattering {
                 // Fill the azimuths between marched ones.
-                fill_between(out, azimuth_nodes, stride, stride - marched_values);
+                fill_unmarched(
+                    out,
+                    azimuth_nodes,
+                    stride,
+                    stride - marched_values,
+                    marched_values,
+                );
             }
         };
         let mut values = vec![0.0f32; 2 * half_zenith_nodes * row_length];
@@ -182,13 +189,7 @@ impl SkyViewTable {
                     [..half_zenith_nodes * row_length];
                 for k in 0..azimuth_nodes {
                     let offset = k * stride + stride - marched_values;
-                    fill_between_strided(
-                        rows,
-                        half_zenith_nodes,
-                        row_length,
-                        offset,
-                        marched_values,
-                    );
+                    fill_unmarched(rows, half_zenith_nodes, row_length, offset, marched_values);
                 }
             }
         }
@@ -349,37 +350,17 @@ fn marched(index: usize, count: usize) -> bool {
     index.is_multiple_of(2) || index + 1 == count
 }
 
-/// Fills the values at `offset..stride` of the unmarched nodes of a row of
-/// `count` nodes (each `stride` values) with the mean of their neighbours.
-fn fill_between(row: &mut [f32], count: usize, stride: usize, offset: usize) {
-    let width = stride - offset;
+/// Along one axis of `count` nodes, `step` values apart in `values`: fills
+/// the `width` values at `offset` of every unmarched node with the mean of
+/// its two neighbours'.
+fn fill_unmarched(values: &mut [f32], count: usize, step: usize, offset: usize, width: usize) {
     for i in (1..count.saturating_sub(1)).filter(|i| !marched(*i, count)) {
         for m in 0..width {
             let (before, after) = (
-                row[(i - 1) * stride + offset + m],
-                row[(i + 1) * stride + offset + m],
+                values[(i - 1) * step + offset + m],
+                values[(i + 1) * step + offset + m],
             );
-            row[i * stride + offset + m] = 0.5 * (before + after);
-        }
-    }
-}
-
-/// As [`fill_between`] along the zenith axis: `count` rows of
-/// `row_length` values, `width` values at `offset` in each.
-fn fill_between_strided(
-    rows: &mut [f32],
-    count: usize,
-    row_length: usize,
-    offset: usize,
-    width: usize,
-) {
-    for i in (1..count.saturating_sub(1)).filter(|i| !marched(*i, count)) {
-        for m in 0..width {
-            let (before, after) = (
-                rows[(i - 1) * row_length + offset + m],
-                rows[(i + 1) * row_length + offset + m],
-            );
-            rows[i * row_length + offset + m] = 0.5 * (before + after);
+            values[i * step + offset + m] = 0.5 * (before + after);
         }
     }
 }

@@ -60,3 +60,22 @@ pub fn reference_rows() -> Vec<ReferenceRow> {
         })
         .collect()
 }
+
+/// The distinct geometries of `rows`, in the file's order:
+/// (ground albedo, sun elevation deg, view elevation deg, relative azimuth
+/// deg). The file lists each geometry's wavelengths together.
+pub fn reference_geometries(rows: &[ReferenceRow]) -> Vec<(f64, f64, f64, f64)> {
+    let mut geometries: Vec<(f64, f64, f64, f64)> = rows
+        .iter()
+        .map(|r| {
+            (
+                r.ground_albedo,
+                r.sun_elevation_deg,
+                r.view_elevation_deg,
+                r.relative_azimuth_deg,
+            )
+        })
+        .collect();
+    geometries.dedup();
+    geometries
+}

@@ -444,7 +444,7 @@ impl ViewRayOptics {
     /// Adds E sum_j beta_sca,j p_j(theta') times the scratch's forward-peak
     /// integrals to `radiance`, with the exact phase functions at
     /// theta' = max(theta, the forward cone) (see
-    /// [`MultipleScatteringField::forward_cone_cosine`]).
+    /// [`MultipleScatteringField::forward_cone_rad`]).
     fn add_forward_peak(
         &self,
         optics: &AtmosphereOptics,
