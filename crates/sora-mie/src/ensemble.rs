@@ -760,11 +760,8 @@ fn accumulate_s11_avx(
     accumulate_s11_portable(cos_theta, constants, terms, spheres, s11)
 }
 
-/// Dispatch on the number of spheres (a compile-time count, so that the
-/// per-sphere sums are unrolled into registers): one or two spheres in
-/// blocks of 16 angles (two vectors per sum keep the pi recurrence, a chain
-/// of three dependent operations per term, from setting the pace), more in
-/// blocks of 8 (the sums of five spheres fill 20 of the 32 registers).
+/// [`accumulate_s11`] for any target (what the AVX build inlines): unfused
+/// multiply-adds.
 #[inline(always)]
 fn accumulate_s11_portable(
     cos_theta: &[f64],
@@ -776,6 +773,11 @@ fn accumulate_s11_portable(
     accumulate_s11_with::<Unfused>(cos_theta, constants, terms, spheres, s11)
 }
 
+/// Dispatch on the number of spheres (a compile-time count, so that the
+/// per-sphere sums are unrolled into registers): one or two spheres in
+/// blocks of 16 angles (two vectors per sum keep the pi recurrence, a chain
+/// of three dependent operations per term, from setting the pace), more in
+/// blocks of 8 (the sums of five spheres fill 20 of the 32 registers).
 #[inline(always)]
 fn accumulate_s11_with<A: MultiplyAdd>(
     cos_theta: &[f64],

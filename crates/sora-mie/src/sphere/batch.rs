@@ -48,8 +48,13 @@
 //! ~1e-15 of the others, and 10-15 % faster) and for AVX (the portable
 //! build's operations: bit-identical), selected at run time.
 
-use super::bessel_ratio::reciprocal;
-use super::coefficients::{Fused, MultiplyAdd, SMALL_SIZE_PARAMETER, Unfused};
+use super::bessel_ratio::{
+    CONTINUED_FRACTION_BLOCK, CONTINUED_FRACTION_TOLERANCE, RESCALE_ABOVE,
+    max_continued_fraction_blocks, reciprocal,
+};
+use super::coefficients::{
+    Fused, LargeSphere, MultiplyAdd, SMALL_SIZE_PARAMETER, SumLanes, Term, Unfused,
+};
 use super::{
     Efficiencies, MieError, SphereWorkspace, compute_efficiencies_with, series_length_converged,
     validate,
@@ -322,18 +327,6 @@ fn solve_lanes_avx<F: FnMut(usize, &CoefficientLanes)>(
     solve_lanes_portable(rows, m_re, m_im, x, n_terms, record)
 }
 
-/// Convergence threshold and block length of the continued fractions (as
-/// in `bessel_ratio.rs`).
-const CONTINUED_FRACTION_TOLERANCE: f64 = 1e-16;
-const CONTINUED_FRACTION_BLOCK: usize = 8;
-
-/// Most blocks of the continued fraction for a sphere of |z| = `size`: the
-/// endless-loop guard of `bessel_ratio.rs`.
-#[inline(always)]
-fn continued_fraction_blocks(size: f64) -> usize {
-    ((3.0 * size + 2000.0).min(1e9) as usize) / CONTINUED_FRACTION_BLOCK + 1
-}
-
 /// The scaled exterior ratio psi_n(x) / (x psi_{n-1}(x)) of every lane at
 /// n = `top`, by the continued fraction of
 /// `bessel_ratio::scaled_ratio_continued_fraction_real` (whose docs give
@@ -346,7 +339,7 @@ fn exterior_continued_fraction(x: &Lanes, top: usize) -> Lanes {
     let mut max_blocks = [0usize; L];
     for l in 0..L {
         a[l] = -(x[l] * x[l]);
-        max_blocks[l] = continued_fraction_blocks(x[l]);
+        max_blocks[l] = max_continued_fraction_blocks(x[l]);
     }
     let start = (2 * top + 1) as f64;
     let mut a_previous = [1.0; L];
@@ -416,7 +409,7 @@ fn interior_continued_fraction(
         let size = (z_squared_re[l] * z_squared_re[l] + z_squared_im[l] * z_squared_im[l])
             .sqrt()
             .sqrt();
-        max_blocks[l] = continued_fraction_blocks(size);
+        max_blocks[l] = max_continued_fraction_blocks(size);
     }
     let start = (2 * top + 1) as f64;
     // A and B, previous and current convergents.
@@ -483,10 +476,6 @@ fn interior_continued_fraction(
     (estimate_re, estimate_im)
 }
 
-/// Growth of the unnormalised downward solutions beyond which they are
-/// rescaled (as in `bessel_ratio.rs`).
-const RESCALE_ABOVE: f64 = 1e100;
-
 /// Per-lane constants of the upward pass.
 struct SphereConstants {
     m_re: Lanes,
@@ -510,7 +499,7 @@ struct Upward {
     psi_current: Lanes,
     chi_previous: Lanes,
     chi_current: Lanes,
-    sums: Sums,
+    sums: SumLanes<L>,
     /// a_{n-1}, b_{n-1}
     previous: CoefficientLanes,
     /// 1/n
@@ -576,77 +565,44 @@ impl Upward {
             self.chi_previous[l] = if active { chi } else { 1.0 };
             self.chi_current[l] = chi_up;
             lane_n[l] = n_lane;
-            let n_plus_1 = n_lane + 1.0;
-            // A_n = (n+1)/x (1/m^2 - 1) - rho/m, B_n = -m rho.
-            let rho_over_m_re = fma(rho_re, c.inverse_m_re[l], -(rho_im * c.inverse_m_im[l]));
-            let rho_over_m_im = fma(rho_re, c.inverse_m_im[l], rho_im * c.inverse_m_re[l]);
-            let fa_re = fma(c.slope_re[l], n_plus_1, -rho_over_m_re);
-            let fa_im = fma(c.slope_im[l], n_plus_1, -rho_over_m_im);
-            let fb_re = fma(rho_im, c.m_im[l], -(rho_re * c.m_re[l]));
-            let fb_im = -fma(rho_re, c.m_im[l], rho_im * c.m_re[l]);
-            // numerator = F psi_n + psi_{n+1}; denominator = F xi_n + xi_{n+1}
-            // = numerator - i (F chi_n + chi_{n+1}).
-            let na_re = fma(fa_re, psi, psi_up);
-            let na_im = fa_im * psi;
-            let da_re = fma(fa_im, chi, na_re);
-            let da_im = na_im - fma(fa_re, chi, chi_up);
-            let nb_re = fma(fb_re, psi, psi_up);
-            let nb_im = fb_im * psi;
-            let db_re = fma(fb_im, chi, nb_re);
-            let db_im = nb_im - fma(fb_re, chi, chi_up);
-            // The two quotients and 1/(n+1) from one division.
-            let norm_a = fma(da_re, da_re, da_im * da_im);
-            let norm_b = fma(db_re, db_re, db_im * db_im);
-            let norms = norm_a * norm_b;
-            let inverse = 1.0 / (norms * n_plus_1);
-            inverse_n_plus_1[l] = norms * inverse;
-            let common = n_plus_1 * inverse;
-            let inverse_norm_a = norm_b * common;
-            let inverse_norm_b = norm_a * common;
-            coefficients.a_re[l] = fma(na_re, da_re, na_im * da_im) * inverse_norm_a;
-            coefficients.a_im[l] = fma(na_im, da_re, -(na_re * da_im)) * inverse_norm_a;
-            coefficients.b_re[l] = fma(nb_re, db_re, nb_im * db_im) * inverse_norm_b;
-            coefficients.b_im[l] = fma(nb_im, db_re, -(nb_re * db_im)) * inverse_norm_b;
-            // Re c - |c|^2 = -Im(F) / |denominator|^2 for each coefficient.
-            absorption[l] = -fma(fa_im, inverse_norm_a, fb_im * inverse_norm_b);
+            let sphere = LargeSphere {
+                m: Complex64::new(c.m_re[l], c.m_im[l]),
+                inverse_m: Complex64::new(c.inverse_m_re[l], c.inverse_m_im[l]),
+                a_slope: Complex64::new(c.slope_re[l], c.slope_im[l]),
+            };
+            let term = sphere.term::<A>(
+                n_lane + 1.0,
+                Complex64::new(rho_re, rho_im),
+                psi,
+                psi_up,
+                chi,
+                chi_up,
+            );
+            coefficients.a_re[l] = term.a_re;
+            coefficients.a_im[l] = term.a_im;
+            coefficients.b_re[l] = term.b_re;
+            coefficients.b_im[l] = term.b_im;
+            absorption[l] = term.absorption;
+            inverse_n_plus_1[l] = term.inverse_n_plus_1;
         }
-        let sums = &mut self.sums;
         let previous = &self.previous;
         for l in 0..L {
-            let weight = fma(2.0, lane_n[l], 1.0);
-            let (are, aim, bre, bim) = (
-                coefficients.a_re[l],
-                coefficients.a_im[l],
-                coefficients.b_re[l],
-                coefficients.b_im[l],
-            );
-            let norms = fma(are, are, fma(aim, aim, fma(bre, bre, bim * bim)));
-            sums.scattering[l] = fma(weight, norms, sums.scattering[l]);
-            sums.absorption[l] = fma(weight, absorption[l], sums.absorption[l]);
-            let signed_weight = self.sign * weight;
-            sums.backscattering_re[l] = fma(signed_weight, are - bre, sums.backscattering_re[l]);
-            sums.backscattering_im[l] = fma(signed_weight, aim - bim, sums.backscattering_im[l]);
-            // Term n-1 of the adjacent sum: (n-1)(n+1)/n = n - 1/n.
-            let adjacent = fma(
+            let term = Term {
+                a_re: coefficients.a_re[l],
+                a_im: coefficients.a_im[l],
+                b_re: coefficients.b_re[l],
+                b_im: coefficients.b_im[l],
+                absorption: absorption[l],
+                inverse_n_plus_1: inverse_n_plus_1[l],
+            };
+            let previous = [
                 previous.a_re[l],
-                are,
-                fma(
-                    previous.a_im[l],
-                    aim,
-                    fma(previous.b_re[l], bre, previous.b_im[l] * bim),
-                ),
-            );
-            sums.asymmetry_adjacent[l] = fma(
-                lane_n[l] - self.inverse_n[l],
-                adjacent,
-                sums.asymmetry_adjacent[l],
-            );
-            // (2n+1)/(n(n+1)) = 1/n + 1/(n+1).
-            sums.asymmetry_cross[l] = fma(
-                self.inverse_n[l] + inverse_n_plus_1[l],
-                fma(are, bre, aim * bim),
-                sums.asymmetry_cross[l],
-            );
+                previous.a_im[l],
+                previous.b_re[l],
+                previous.b_im[l],
+            ];
+            self.sums
+                .add::<A>(l, lane_n[l], self.sign, &term, previous, self.inverse_n[l]);
         }
         self.previous = coefficients;
         self.inverse_n = inverse_n_plus_1;
@@ -655,16 +611,6 @@ impl Upward {
         self.sign = -self.sign;
         coefficients
     }
-}
-
-/// Per-lane running sums of the series (see `coefficients.rs`).
-struct Sums {
-    scattering: Lanes,
-    absorption: Lanes,
-    backscattering_re: Lanes,
-    backscattering_im: Lanes,
-    asymmetry_adjacent: Lanes,
-    asymmetry_cross: Lanes,
 }
 
 /// [`solve_lanes`] for any target (what the AVX build inlines): unfused
@@ -860,25 +806,16 @@ fn solve_lanes_with<F: FnMut(usize, &CoefficientLanes), A: MultiplyAdd>(
     let mut slope_re = [0.0; L];
     let mut slope_im = [0.0; L];
     for l in 0..L {
-        let m = Complex64::new(m_re[l], m_im[l]);
-        let inverse_m = reciprocal(m);
-        let slope = -((m - 1.0) * (m + 1.0)) * (inverse_m * inverse_m) * inverse_x[l];
-        (inverse_m_re[l], inverse_m_im[l]) = (inverse_m.re, inverse_m.im);
-        (slope_re[l], slope_im[l]) = (slope.re, slope.im);
+        let sphere = LargeSphere::new(Complex64::new(m_re[l], m_im[l]), inverse_x[l]);
+        (inverse_m_re[l], inverse_m_im[l]) = (sphere.inverse_m.re, sphere.inverse_m.im);
+        (slope_re[l], slope_im[l]) = (sphere.a_slope.re, sphere.a_slope.im);
     }
     let mut upward = Upward {
         psi_previous,
         psi_current,
         chi_previous,
         chi_current,
-        sums: Sums {
-            scattering: [0.0; L],
-            absorption: [0.0; L],
-            backscattering_re: [0.0; L],
-            backscattering_im: [0.0; L],
-            asymmetry_adjacent: [0.0; L],
-            asymmetry_cross: [0.0; L],
-        },
+        sums: SumLanes::new(),
         previous: CoefficientLanes {
             a_re: [0.0; L],
             a_im: [0.0; L],
@@ -913,42 +850,16 @@ fn solve_lanes_with<F: FnMut(usize, &CoefficientLanes), A: MultiplyAdd>(
         record(n, &coefficients);
     }
     let sums = upward.sums;
-
-    let mut results = [Efficiencies {
-        qext: 0.0,
-        qsca: 0.0,
-        qabs: 0.0,
-        qback: 0.0,
-        g: 0.0,
-    }; L];
-    for (l, result) in results.iter_mut().enumerate() {
-        // As `SeriesSums::finish` with the scale 1: Q_sca = 2/x^2 sum...,
-        // Q_ext = Q_sca + Q_abs, Q_back = |sum|^2 / x^2, g = 2 (adjacent +
-        // cross) / scattering.
+    std::array::from_fn(|l| {
         let inverse_x_squared = inverse_x[l] * inverse_x[l];
-        let qsca = 2.0 * inverse_x_squared * sums.scattering[l];
-        let qabs = if m_im[l] == 0.0 {
-            0.0
-        } else {
-            2.0 * inverse_x_squared * sums.absorption[l]
-        };
-        let qback = inverse_x_squared
-            * (sums.backscattering_re[l] * sums.backscattering_re[l]
-                + sums.backscattering_im[l] * sums.backscattering_im[l]);
-        let g = if sums.scattering[l] > 0.0 {
-            2.0 * (sums.asymmetry_adjacent[l] + sums.asymmetry_cross[l]) / sums.scattering[l]
-        } else {
-            0.0
-        };
-        *result = Efficiencies {
-            qext: qsca + qabs,
-            qsca,
-            qabs,
-            qback,
-            g,
-        };
-    }
-    results
+        let mut result = sums.lane(l).finish(inverse_x_squared, inverse_x_squared);
+        if m_im[l] == 0.0 {
+            // A lossless sphere absorbs exactly +0 (the sum is +-0).
+            result.qabs = 0.0;
+            result.qext = result.qsca;
+        }
+        result
+    })
 }
 
 #[cfg(test)]

@@ -75,10 +75,18 @@ pub(super) fn reciprocal(q: Complex64) -> Complex64 {
 
 /// Convergence threshold of the continued fraction: the last two
 /// convergents of a block agreeing to this relative difference.
-const CONTINUED_FRACTION_TOLERANCE: f64 = 1e-16;
+pub(super) const CONTINUED_FRACTION_TOLERANCE: f64 = 1e-16;
 
 /// Terms of the continued fraction evaluated between convergence tests.
-const CONTINUED_FRACTION_BLOCK: usize = 8;
+pub(super) const CONTINUED_FRACTION_BLOCK: usize = 8;
+
+/// Most blocks of the continued fraction for an argument of modulus `size`:
+/// convergence needs about |z| + 10 |z|^(1/3) + 50 terms at most (real z);
+/// this cap (3 |z| + 2000 terms) only guards against an endless loop.
+#[inline(always)]
+pub(super) fn max_continued_fraction_blocks(size: f64) -> usize {
+    ((3.0 * size + 2000.0).min(1e9) as usize) / CONTINUED_FRACTION_BLOCK + 1
+}
 
 /// The scaled ratio rhot_n(z) = psi_n(z) / (z psi_{n-1}(z)) by Lentz's
 /// continued fraction, for n >= 1 and any complex z (given as z^2).
@@ -101,10 +109,7 @@ pub(super) fn scaled_ratio_continued_fraction(z_squared: Complex64, n: usize) ->
     let quotient =
         |v: &[f64; 4]| Complex64::new(v[2], v[3]) * reciprocal(Complex64::new(v[0], v[1]));
     let mut estimate = quotient(&current);
-    // Convergence needs about |z| + 10 |z|^(1/3) + 50 terms at most (real z);
-    // the cap (3 |z| + 2000) only guards against an endless loop.
-    let size = z_squared.norm_sqr().sqrt().sqrt();
-    let max_blocks = ((3.0 * size + 2000.0).min(1e9) as usize) / CONTINUED_FRACTION_BLOCK + 1;
+    let max_blocks = max_continued_fraction_blocks(z_squared.norm_sqr().sqrt().sqrt());
     let mut b_j = (2 * n + 1) as f64;
     for _ in 0..max_blocks {
         for _ in 0..CONTINUED_FRACTION_BLOCK {
@@ -154,8 +159,7 @@ pub(super) fn scaled_ratio_continued_fraction_real(x_squared: f64, n: usize) -> 
     let mut b_previous = 0.0;
     let mut b_current = 1.0;
     let mut estimate = b_current / a_current;
-    let max_blocks =
-        ((3.0 * x_squared.sqrt() + 2000.0).min(1e9) as usize) / CONTINUED_FRACTION_BLOCK + 1;
+    let max_blocks = max_continued_fraction_blocks(x_squared.sqrt());
     let mut b_j = (2 * n + 1) as f64;
     for _ in 0..max_blocks {
         for _ in 0..CONTINUED_FRACTION_BLOCK {
@@ -184,10 +188,9 @@ pub(super) fn scaled_ratio_continued_fraction_real(x_squared: f64, n: usize) -> 
     estimate
 }
 
-/// Growth of the unnormalised downward solution beyond which
-/// [`DownwardRatios::step`] rescales it.
-#[cfg(test)]
-const RESCALE_ABOVE: f64 = 1e100;
+/// Growth of the unnormalised downward solutions beyond which
+/// [`DownwardRatios::step`] and the batched solver (`batch.rs`) rescale them.
+pub(super) const RESCALE_ABOVE: f64 = 1e100;
 
 /// The downward recurrence of rho_n(z), n = top, top-1, ..., as a state
 /// machine (so that the solver can interleave it with its upward

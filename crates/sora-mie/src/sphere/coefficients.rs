@@ -104,7 +104,7 @@ pub(super) fn scratch_length(x: f64, n_terms: usize) -> usize {
 
 /// Running sums over n of the series for the efficiencies, in units of the
 /// coefficients as passed (which may be scaled by 1/x^3, see `finish`).
-struct SeriesSums {
+pub(super) struct SeriesSums {
     /// sum (2n+1) (|a_n|^2 + |b_n|^2)
     scattering: f64,
     /// sum (2n+1) (Re a_n - |a_n|^2 + Re b_n - |b_n|^2), without cancellation
@@ -165,7 +165,11 @@ impl SeriesSums {
     /// (a_n = scale * ahat_n): Q_sca = 2/x^2 sum..., Q_back = |sum|^2/x^2, with
     /// the scale folded into the prefactors (scale/x^2 and scale^2/x^2, given
     /// directly) so that nothing underflows before it must.
-    fn finish(&self, scale_over_x_squared: f64, scale_squared_over_x_squared: f64) -> Efficiencies {
+    pub(super) fn finish(
+        &self,
+        scale_over_x_squared: f64,
+        scale_squared_over_x_squared: f64,
+    ) -> Efficiencies {
         let qsca = 2.0 * scale_squared_over_x_squared * self.scattering;
         let qabs = 2.0 * scale_over_x_squared * self.absorption;
         // Q_ext = (2/x^2) sum (2n+1) Re(a_n + b_n) (B&H 4.62), summed as
@@ -339,16 +343,103 @@ fn solve_series_with<F: FnMut(Complex64, Complex64), A: MultiplyAdd>(
 /// Terms of the x >= 0.01 series evaluated together (structure of arrays).
 pub(super) const BLOCK: usize = 8;
 
-/// Per-lane partial sums of the x >= 0.01 series (lane k gets terms n = k mod
-/// BLOCK), reduced at the end: independent accumulators keep the additions
-/// off one dependency chain and let them run as vector instructions.
+/// Per-lane running sums of the x >= 0.01 series (the sums of
+/// [`SeriesSums`], one accumulator per lane): independent accumulators keep
+/// the additions off one dependency chain and let them run as vector
+/// instructions. Here lane k gets the terms n = k mod BLOCK of one sphere
+/// (reduced at the end, [`Self::total`]); in `batch.rs` each lane is a
+/// sphere of its own ([`Self::lane`]).
+pub(super) struct SumLanes<const N: usize> {
+    scattering: [f64; N],
+    absorption: [f64; N],
+    backscattering_re: [f64; N],
+    backscattering_im: [f64; N],
+    asymmetry_adjacent: [f64; N],
+    asymmetry_cross: [f64; N],
+}
+
+impl<const N: usize> SumLanes<N> {
+    pub(super) fn new() -> Self {
+        SumLanes {
+            scattering: [0.0; N],
+            absorption: [0.0; N],
+            backscattering_re: [0.0; N],
+            backscattering_im: [0.0; N],
+            asymmetry_adjacent: [0.0; N],
+            asymmetry_cross: [0.0; N],
+        }
+    }
+
+    /// Add term n (`term`) to lane `lane`: `sign` = (-1)^n, `previous` =
+    /// [Re a_{n-1}, Im a_{n-1}, Re b_{n-1}, Im b_{n-1}] and `inverse_n` = 1/n
+    /// (n = -1/2 with a zero term adds exactly nothing: the padding lanes).
+    #[inline(always)]
+    pub(super) fn add<A: MultiplyAdd>(
+        &mut self,
+        lane: usize,
+        n: f64,
+        sign: f64,
+        term: &Term,
+        previous: [f64; 4],
+        inverse_n: f64,
+    ) {
+        let fma = A::mul_add;
+        let k = lane;
+        let weight = fma(2.0, n, 1.0);
+        let (are, aim, bre, bim) = (term.a_re, term.a_im, term.b_re, term.b_im);
+        let norms = fma(are, are, fma(aim, aim, fma(bre, bre, bim * bim)));
+        self.scattering[k] = fma(weight, norms, self.scattering[k]);
+        self.absorption[k] = fma(weight, term.absorption, self.absorption[k]);
+        let signed_weight = sign * weight;
+        self.backscattering_re[k] = fma(signed_weight, are - bre, self.backscattering_re[k]);
+        self.backscattering_im[k] = fma(signed_weight, aim - bim, self.backscattering_im[k]);
+        // Term n-1 of the adjacent sum: (n-1)(n+1)/n = n - 1/n.
+        let [previous_a_re, previous_a_im, previous_b_re, previous_b_im] = previous;
+        let adjacent = fma(
+            previous_a_re,
+            are,
+            fma(
+                previous_a_im,
+                aim,
+                fma(previous_b_re, bre, previous_b_im * bim),
+            ),
+        );
+        self.asymmetry_adjacent[k] = fma(n - inverse_n, adjacent, self.asymmetry_adjacent[k]);
+        // (2n+1)/(n(n+1)) = 1/n + 1/(n+1).
+        self.asymmetry_cross[k] = fma(
+            inverse_n + term.inverse_n_plus_1,
+            fma(are, bre, aim * bim),
+            self.asymmetry_cross[k],
+        );
+    }
+
+    /// The sums of lane `lane` alone.
+    pub(super) fn lane(&self, lane: usize) -> SeriesSums {
+        self.reduce(|lanes| lanes[lane])
+    }
+
+    /// The sums over all lanes.
+    fn total(&self) -> SeriesSums {
+        self.reduce(|lanes| lanes.iter().sum::<f64>())
+    }
+
+    fn reduce(&self, reduce: impl Fn(&[f64; N]) -> f64) -> SeriesSums {
+        let mut sums = SeriesSums::new();
+        sums.scattering = reduce(&self.scattering);
+        sums.absorption = reduce(&self.absorption);
+        sums.backscattering = Complex64::new(
+            reduce(&self.backscattering_re),
+            reduce(&self.backscattering_im),
+        );
+        sums.asymmetry_adjacent = reduce(&self.asymmetry_adjacent);
+        sums.asymmetry_cross = reduce(&self.asymmetry_cross);
+        sums
+    }
+}
+
+/// The sums of one sphere's x >= 0.01 series, split over [`BLOCK`] lanes.
 struct LaneSums {
-    scattering: [f64; BLOCK],
-    absorption: [f64; BLOCK],
-    backscattering_re: [f64; BLOCK],
-    backscattering_im: [f64; BLOCK],
-    asymmetry_adjacent: [f64; BLOCK],
-    asymmetry_cross: [f64; BLOCK],
+    lanes: SumLanes<BLOCK>,
     /// a_{n-1}, b_{n-1} and 1/n for the first term of the next block.
     previous_a: Complex64,
     previous_b: Complex64,
@@ -358,30 +449,11 @@ struct LaneSums {
 impl LaneSums {
     fn new() -> Self {
         LaneSums {
-            scattering: [0.0; BLOCK],
-            absorption: [0.0; BLOCK],
-            backscattering_re: [0.0; BLOCK],
-            backscattering_im: [0.0; BLOCK],
-            asymmetry_adjacent: [0.0; BLOCK],
-            asymmetry_cross: [0.0; BLOCK],
+            lanes: SumLanes::new(),
             previous_a: Complex64::new(0.0, 0.0),
             previous_b: Complex64::new(0.0, 0.0),
             inverse_n: 1.0,
         }
-    }
-
-    fn reduce(&self) -> SeriesSums {
-        let total = |lanes: &[f64; BLOCK]| lanes.iter().sum::<f64>();
-        let mut sums = SeriesSums::new();
-        sums.scattering = total(&self.scattering);
-        sums.absorption = total(&self.absorption);
-        sums.backscattering = Complex64::new(
-            total(&self.backscattering_re),
-            total(&self.backscattering_im),
-        );
-        sums.asymmetry_adjacent = total(&self.asymmetry_adjacent);
-        sums.asymmetry_cross = total(&self.asymmetry_cross);
-        sums
     }
 }
 
@@ -461,22 +533,94 @@ impl BlockInput {
 }
 
 /// Per-sphere constants of the x >= 0.01 series.
-struct LargeSphere {
-    m: Complex64,
-    inverse_m: Complex64,
+pub(super) struct LargeSphere {
+    pub(super) m: Complex64,
+    pub(super) inverse_m: Complex64,
     /// (1/m^2 - 1)/x
-    a_slope: Complex64,
+    pub(super) a_slope: Complex64,
+}
+
+/// a_n, b_n of one term of the x >= 0.01 series and what the sums need.
+pub(super) struct Term {
+    pub(super) a_re: f64,
+    pub(super) a_im: f64,
+    pub(super) b_re: f64,
+    pub(super) b_im: f64,
+    /// Re a_n - |a_n|^2 + Re b_n - |b_n|^2
+    pub(super) absorption: f64,
+    /// 1/(n+1)
+    pub(super) inverse_n_plus_1: f64,
 }
 
 impl LargeSphere {
+    #[inline(always)]
+    pub(super) fn new(m: Complex64, inverse_x: f64) -> Self {
+        let inverse_m = reciprocal(m);
+        LargeSphere {
+            m,
+            inverse_m,
+            // (1/m^2 - 1)/x, formed without cancelling for m near 1.
+            a_slope: -((m - 1.0) * (m + 1.0)) * (inverse_m * inverse_m) * inverse_x,
+        }
+    }
+
+    /// Term n: a_n, b_n from psi_n, psi_{n+1}, chi_n, chi_{n+1} (of x) and
+    /// rho_{n+1}(mx), with `n_plus_1` = n + 1. The two complex quotients,
+    /// 1/(n+1) and the absorption terms share one real division. `A` says
+    /// whether the products-plus-sums are fused ([`MultiplyAdd`]).
+    #[inline(always)]
+    pub(super) fn term<A: MultiplyAdd>(
+        &self,
+        n_plus_1: f64,
+        rho: Complex64,
+        psi: f64,
+        psi_next: f64,
+        chi: f64,
+        chi_next: f64,
+    ) -> Term {
+        let (m, inverse_m, slope) = (self.m, self.inverse_m, self.a_slope);
+        let (rho_re, rho_im) = (rho.re, rho.im);
+        let fma = A::mul_add;
+        // A_n = (n+1)/x (1/m^2 - 1) - rho/m, B_n = -m rho.
+        let rho_over_m_re = fma(rho_re, inverse_m.re, -(rho_im * inverse_m.im));
+        let rho_over_m_im = fma(rho_re, inverse_m.im, rho_im * inverse_m.re);
+        let fa_re = fma(slope.re, n_plus_1, -rho_over_m_re);
+        let fa_im = fma(slope.im, n_plus_1, -rho_over_m_im);
+        let fb_re = fma(rho_im, m.im, -(rho_re * m.re));
+        let fb_im = -fma(rho_re, m.im, rho_im * m.re);
+        // numerator = F psi_n + psi_{n+1}; denominator = F xi_n + xi_{n+1}
+        // = numerator - i (F chi_n + chi_{n+1}).
+        let na_re = fma(fa_re, psi, psi_next);
+        let na_im = fa_im * psi;
+        let da_re = fma(fa_im, chi, na_re);
+        let da_im = na_im - fma(fa_re, chi, chi_next);
+        let nb_re = fma(fb_re, psi, psi_next);
+        let nb_im = fb_im * psi;
+        let db_re = fma(fb_im, chi, nb_re);
+        let db_im = nb_im - fma(fb_re, chi, chi_next);
+        let norm_a = fma(da_re, da_re, da_im * da_im);
+        let norm_b = fma(db_re, db_re, db_im * db_im);
+        let norms = norm_a * norm_b;
+        let inverse = 1.0 / (norms * n_plus_1);
+        let common = n_plus_1 * inverse;
+        let inverse_norm_a = norm_b * common;
+        let inverse_norm_b = norm_a * common;
+        Term {
+            a_re: fma(na_re, da_re, na_im * da_im) * inverse_norm_a,
+            a_im: fma(na_im, da_re, -(na_re * da_im)) * inverse_norm_a,
+            b_re: fma(nb_re, db_re, nb_im * db_im) * inverse_norm_b,
+            b_im: fma(nb_im, db_re, -(nb_re * db_im)) * inverse_norm_b,
+            // Re c - |c|^2 = -Im(F) / |denominator|^2 for each coefficient.
+            absorption: -fma(fa_im, inverse_norm_a, fb_im * inverse_norm_b),
+            inverse_n_plus_1: norms * inverse,
+        }
+    }
+
     /// One block (terms first..first+BLOCK-1, padding lanes included): a_n,
-    /// b_n from psi_n, psi_{n+1}, chi_n, chi_{n+1} and rho_{n+1}(mx), added to
-    /// `sums` and returned.
+    /// b_n ([`Self::term`]), added to `sums` and returned.
     ///
     /// Each loop below is straight-line arithmetic over the lanes, which
-    /// the compiler turns into vector instructions; the two complex quotients
-    /// of a term, 1/(n+1) and the absorption terms share one real division.
-    /// `A` says whether the products-plus-sums are fused ([`MultiplyAdd`]).
+    /// the compiler turns into vector instructions.
     #[inline(always)]
     fn block<A: MultiplyAdd>(
         &self,
@@ -485,55 +629,28 @@ impl LargeSphere {
         sums: &mut LaneSums,
     ) -> BlockOutput {
         const B: usize = BLOCK;
-        let (n, psi, psi_next, chi, chi_next) = (
-            &input.n,
-            &input.psi,
-            &input.psi_next,
-            &input.chi,
-            &input.chi_next,
-        );
-        let (rho_re, rho_im) = (&input.rho_re, &input.rho_im);
-        let (m, inverse_m, slope) = (self.m, self.inverse_m, self.a_slope);
+        let n = &input.n;
         let mut a_re = [0.0; B];
         let mut a_im = [0.0; B];
         let mut b_re = [0.0; B];
         let mut b_im = [0.0; B];
         let mut absorption = [0.0; B];
         let mut inverse_n_plus_1 = [0.0; B];
-        let fma = A::mul_add;
         for k in 0..B {
-            let n_plus_1 = n[k] + 1.0;
-            // A_n = (n+1)/x (1/m^2 - 1) - rho/m, B_n = -m rho.
-            let rho_over_m_re = fma(rho_re[k], inverse_m.re, -(rho_im[k] * inverse_m.im));
-            let rho_over_m_im = fma(rho_re[k], inverse_m.im, rho_im[k] * inverse_m.re);
-            let fa_re = fma(slope.re, n_plus_1, -rho_over_m_re);
-            let fa_im = fma(slope.im, n_plus_1, -rho_over_m_im);
-            let fb_re = fma(rho_im[k], m.im, -(rho_re[k] * m.re));
-            let fb_im = -fma(rho_re[k], m.im, rho_im[k] * m.re);
-            // numerator = F psi_n + psi_{n+1}; denominator = F xi_n + xi_{n+1}
-            // = numerator - i (F chi_n + chi_{n+1}).
-            let na_re = fma(fa_re, psi[k], psi_next[k]);
-            let na_im = fa_im * psi[k];
-            let da_re = fma(fa_im, chi[k], na_re);
-            let da_im = na_im - fma(fa_re, chi[k], chi_next[k]);
-            let nb_re = fma(fb_re, psi[k], psi_next[k]);
-            let nb_im = fb_im * psi[k];
-            let db_re = fma(fb_im, chi[k], nb_re);
-            let db_im = nb_im - fma(fb_re, chi[k], chi_next[k]);
-            let norm_a = fma(da_re, da_re, da_im * da_im);
-            let norm_b = fma(db_re, db_re, db_im * db_im);
-            let norms = norm_a * norm_b;
-            let inverse = 1.0 / (norms * n_plus_1);
-            inverse_n_plus_1[k] = norms * inverse;
-            let common = n_plus_1 * inverse;
-            let inverse_norm_a = norm_b * common;
-            let inverse_norm_b = norm_a * common;
-            a_re[k] = fma(na_re, da_re, na_im * da_im) * inverse_norm_a;
-            a_im[k] = fma(na_im, da_re, -(na_re * da_im)) * inverse_norm_a;
-            b_re[k] = fma(nb_re, db_re, nb_im * db_im) * inverse_norm_b;
-            b_im[k] = fma(nb_im, db_re, -(nb_re * db_im)) * inverse_norm_b;
-            // Re c - |c|^2 = -Im(F) / |denominator|^2 for each coefficient.
-            absorption[k] = -fma(fa_im, inverse_norm_a, fb_im * inverse_norm_b);
+            let term = self.term::<A>(
+                n[k] + 1.0,
+                Complex64::new(input.rho_re[k], input.rho_im[k]),
+                input.psi[k],
+                input.psi_next[k],
+                input.chi[k],
+                input.chi_next[k],
+            );
+            a_re[k] = term.a_re;
+            a_im[k] = term.a_im;
+            b_re[k] = term.b_re;
+            b_im[k] = term.b_im;
+            absorption[k] = term.absorption;
+            inverse_n_plus_1[k] = term.inverse_n_plus_1;
         }
         // a_{n-1}, b_{n-1} and 1/n of each lane: the previous lane's values.
         let mut previous_a_re = [0.0; B];
@@ -554,33 +671,23 @@ impl LargeSphere {
         // (-1)^n, alternating from the first term's parity.
         let first_sign = if first.is_multiple_of(2) { 1.0 } else { -1.0 };
         for k in 0..B {
-            let weight = fma(2.0, n[k], 1.0);
             let sign = if k % 2 == 0 { first_sign } else { -first_sign };
-            let (are, aim, bre, bim) = (a_re[k], a_im[k], b_re[k], b_im[k]);
-            let norms = fma(are, are, fma(aim, aim, fma(bre, bre, bim * bim)));
-            sums.scattering[k] = fma(weight, norms, sums.scattering[k]);
-            sums.absorption[k] = fma(weight, absorption[k], sums.absorption[k]);
-            let signed_weight = sign * weight;
-            sums.backscattering_re[k] = fma(signed_weight, are - bre, sums.backscattering_re[k]);
-            sums.backscattering_im[k] = fma(signed_weight, aim - bim, sums.backscattering_im[k]);
-            // Term n-1 of the adjacent sum: (n-1)(n+1)/n = n - 1/n.
-            let adjacent = fma(
+            let term = Term {
+                a_re: a_re[k],
+                a_im: a_im[k],
+                b_re: b_re[k],
+                b_im: b_im[k],
+                absorption: absorption[k],
+                inverse_n_plus_1: inverse_n_plus_1[k],
+            };
+            let previous = [
                 previous_a_re[k],
-                are,
-                fma(
-                    previous_a_im[k],
-                    aim,
-                    fma(previous_b_re[k], bre, previous_b_im[k] * bim),
-                ),
-            );
-            sums.asymmetry_adjacent[k] =
-                fma(n[k] - inverse_n[k], adjacent, sums.asymmetry_adjacent[k]);
-            // (2n+1)/(n(n+1)) = 1/n + 1/(n+1).
-            sums.asymmetry_cross[k] = fma(
-                inverse_n[k] + inverse_n_plus_1[k],
-                fma(are, bre, aim * bim),
-                sums.asymmetry_cross[k],
-            );
+                previous_a_im[k],
+                previous_b_re[k],
+                previous_b_im[k],
+            ];
+            sums.lanes
+                .add::<A>(k, n[k], sign, &term, previous, inverse_n[k]);
         }
         sums.previous_a = Complex64::new(a_re[B - 1], a_im[B - 1]);
         sums.previous_b = Complex64::new(b_re[B - 1], b_im[B - 1]);
@@ -842,14 +949,8 @@ fn solve_large<F: FnMut(Complex64, Complex64), A: MultiplyAdd>(
         chi,
     };
 
-    let inverse_m = reciprocal(m);
     let inverse_x = 1.0 / x;
-    let sphere = LargeSphere {
-        m,
-        inverse_m,
-        // (1/m^2 - 1)/x, formed without cancelling for m near 1.
-        a_slope: -((m - 1.0) * (m + 1.0)) * (inverse_m * inverse_m) * inverse_x,
-    };
+    let sphere = LargeSphere::new(m, inverse_x);
     let mut sums = LaneSums::new();
     let mut n = 1;
     while n <= n_terms {
@@ -864,7 +965,8 @@ fn solve_large<F: FnMut(Complex64, Complex64), A: MultiplyAdd>(
         }
         n += BLOCK;
     }
-    sums.reduce()
+    sums.lanes
+        .total()
         .finish(inverse_x * inverse_x, inverse_x * inverse_x)
 }
 
