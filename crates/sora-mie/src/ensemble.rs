@@ -164,9 +164,9 @@
 //! - Accumulating w S11 into the per-wavelength tables: a group of eight
 //!   nodes at a time, each table entry loaded and stored once per group.
 //! - All three are compiled for AVX-512F with FMA and for AVX as well as the
-//!   portable target, selected at run time (the AVX build is bit-identical
-//!   to the portable one; the fused build rounds differently, within 1e-15
-//!   of the others, tested).
+//!   portable target, selected at run time (`crate::simd`; the AVX build is
+//!   bit-identical to the portable one; the fused build rounds differently,
+//!   within 1e-15 of the others, tested).
 //!
 //! The radius rules themselves are unchanged by this: the same nodes and
 //! weights, so the measured quadrature errors above still hold (the
@@ -202,9 +202,10 @@ use crate::paper_phase::{
     AerosolPhaseMode, HenyeyGreensteinPhaseFunction, paper_asymmetry_parameter_for_radius,
 };
 use crate::refractive_index::{RefractiveIndexError, RefractiveIndexModel};
+use crate::simd::{self, MultiplyAdd};
 use crate::sphere::{
-    Efficiencies, Fused, GroupCoefficients, MieError, MultiplyAdd, SPHERE_LANES, SphereWorkspace,
-    Unfused, compute_efficiencies, compute_efficiencies_many_with, compute_group_coefficients,
+    Efficiencies, GroupCoefficients, MieError, SPHERE_LANES, SphereWorkspace, compute_efficiencies,
+    compute_efficiencies_many_with, compute_group_coefficients,
 };
 use std::f64::consts::PI;
 
@@ -713,64 +714,43 @@ fn accumulate_s11(
         terms.len() == constants.len() * spheres && s11.len() == cos_theta.len() * spheres,
         "accumulate_s11: table lengths"
     );
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx512f")
-            && std::arch::is_x86_feature_detected!("fma")
-        {
-            // SAFETY: the CPU supports AVX-512F and FMA, the only requirements.
-            return unsafe { accumulate_s11_avx512(cos_theta, constants, terms, spheres, s11) };
-        }
-        if std::arch::is_x86_feature_detected!("avx") {
-            // SAFETY: the CPU supports AVX, the only requirement.
-            return unsafe { accumulate_s11_avx(cos_theta, constants, terms, spheres, s11) };
-        }
+    simd::dispatch(AccumulateS11 {
+        cos_theta,
+        constants,
+        terms,
+        spheres,
+        s11,
+    })
+}
+
+/// The arguments of [`accumulate_s11`], as a kernel compiled for each
+/// [`simd::Build`]: for AVX-512F and FMA, 8-wide vectors and 32 registers,
+/// so that a block's recurrence state and sums stay in registers, and fused
+/// multiply-adds (half the instructions of the sums; a different rounding,
+/// within 2e-14 of the largest value of the other builds, tested); for AVX,
+/// 4-wide vectors and three-operand instructions, the portable build's
+/// operations (bit-identical, tested).
+struct AccumulateS11<'a> {
+    cos_theta: &'a [f64],
+    constants: &'a [AngularTermConstants],
+    terms: &'a [[f64; 4]],
+    spheres: usize,
+    s11: &'a mut [f64],
+}
+
+impl simd::Kernel for AccumulateS11<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn run<A: MultiplyAdd>(self) {
+        accumulate_s11_with::<A>(
+            self.cos_theta,
+            self.constants,
+            self.terms,
+            self.spheres,
+            self.s11,
+        )
     }
-    accumulate_s11_portable(cos_theta, constants, terms, spheres, s11)
-}
-
-/// [`accumulate_s11`] compiled for AVX-512F and FMA: 8-wide vectors and 32
-/// registers, so that a block's recurrence state and sums stay in
-/// registers, and fused multiply-adds (half the instructions of the sums; a
-/// different rounding, within 2e-14 of the largest value of the other
-/// builds, tested).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,fma")]
-fn accumulate_s11_avx512(
-    cos_theta: &[f64],
-    constants: &[AngularTermConstants],
-    terms: &[[f64; 4]],
-    spheres: usize,
-    s11: &mut [f64],
-) {
-    accumulate_s11_with::<Fused>(cos_theta, constants, terms, spheres, s11)
-}
-
-/// [`accumulate_s11`] compiled for AVX: 4-wide vectors and three-operand
-/// instructions.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx")]
-fn accumulate_s11_avx(
-    cos_theta: &[f64],
-    constants: &[AngularTermConstants],
-    terms: &[[f64; 4]],
-    spheres: usize,
-    s11: &mut [f64],
-) {
-    accumulate_s11_portable(cos_theta, constants, terms, spheres, s11)
-}
-
-/// [`accumulate_s11`] for any target (what the AVX build inlines): unfused
-/// multiply-adds.
-#[inline(always)]
-fn accumulate_s11_portable(
-    cos_theta: &[f64],
-    constants: &[AngularTermConstants],
-    terms: &[[f64; 4]],
-    spheres: usize,
-    s11: &mut [f64],
-) {
-    accumulate_s11_with::<Unfused>(cos_theta, constants, terms, spheres, s11)
 }
 
 /// Dispatch on the number of spheres (a compile-time count, so that the
@@ -888,7 +868,7 @@ fn accumulate_s11_spheres<A: MultiplyAdd, const S: usize, const B: usize>(
 /// `tables.len() / weights.len()` angles. Angle-chunk outer, wavelength
 /// inner, so that the nodes' rows are read once per chunk (not once per
 /// wavelength) and each table entry is loaded and stored once. Compiled for
-/// AVX-512F and AVX as well (bit-identical: no FMA).
+/// AVX-512F and AVX as well ([`AddWeightedGroup`]; bit-identical: no FMA).
 fn add_weighted_group(
     tables: &mut [f64],
     s11: &[f64],
@@ -897,81 +877,66 @@ fn add_weighted_group(
     nodes: usize,
     weights: &[[f64; SPHERE_LANES]],
 ) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the CPU supports AVX-512F, the only requirement.
-            return unsafe {
-                add_weighted_group_avx512(tables, s11, first, stride, nodes, weights)
-            };
-        }
-        if std::arch::is_x86_feature_detected!("avx") {
-            // SAFETY: the CPU supports AVX, the only requirement.
-            return unsafe { add_weighted_group_avx(tables, s11, first, stride, nodes, weights) };
-        }
-    }
-    add_weighted_group_portable(tables, s11, first, stride, nodes, weights)
+    simd::dispatch(AddWeightedGroup {
+        tables,
+        s11,
+        first,
+        stride,
+        nodes,
+        weights,
+    })
 }
 
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-fn add_weighted_group_avx512(
-    tables: &mut [f64],
-    s11: &[f64],
+/// The arguments of [`add_weighted_group`], as a kernel compiled for each
+/// [`simd::Build`] (no multiply-add is fused: every build performs the same
+/// operations).
+struct AddWeightedGroup<'a> {
+    tables: &'a mut [f64],
+    s11: &'a [f64],
     first: usize,
     stride: usize,
     nodes: usize,
-    weights: &[[f64; SPHERE_LANES]],
-) {
-    add_weighted_group_portable(tables, s11, first, stride, nodes, weights)
+    weights: &'a [[f64; SPHERE_LANES]],
 }
 
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx")]
-fn add_weighted_group_avx(
-    tables: &mut [f64],
-    s11: &[f64],
-    first: usize,
-    stride: usize,
-    nodes: usize,
-    weights: &[[f64; SPHERE_LANES]],
-) {
-    add_weighted_group_portable(tables, s11, first, stride, nodes, weights)
-}
+impl simd::Kernel for AddWeightedGroup<'_> {
+    type Output = ();
 
-#[inline(always)]
-fn add_weighted_group_portable(
-    tables: &mut [f64],
-    s11: &[f64],
-    first: usize,
-    stride: usize,
-    nodes: usize,
-    weights: &[[f64; SPHERE_LANES]],
-) {
-    const CHUNK: usize = 16;
-    let angles = tables.len() / weights.len();
-    for chunk_start in (0..angles).step_by(CHUNK) {
-        let chunk_length = CHUNK.min(angles - chunk_start);
-        // The nodes' values on this chunk (zero beyond `nodes` and the end,
-        // where the weights are zero too: they add exactly +0).
-        let mut rows = [[0.0; CHUNK]; SPHERE_LANES];
-        for (node, row) in rows.iter_mut().enumerate().take(nodes) {
-            let start = first + node * stride + chunk_start;
-            copy_prefix(row, &s11[start..start + chunk_length]);
-        }
-        for (table, node_weights) in tables.chunks_exact_mut(angles).zip(weights) {
-            let entries = &mut table[chunk_start..chunk_start + chunk_length];
-            let mut sums = [0.0; CHUNK];
-            copy_prefix(&mut sums, entries);
-            for (row, &weight) in rows.iter().zip(node_weights) {
-                for (sum, &value) in sums.iter_mut().zip(row) {
-                    *sum += weight * value;
-                }
+    #[inline(always)]
+    fn run<A: MultiplyAdd>(self) {
+        let AddWeightedGroup {
+            tables,
+            s11,
+            first,
+            stride,
+            nodes,
+            weights,
+        } = self;
+        const CHUNK: usize = 16;
+        let angles = tables.len() / weights.len();
+        for chunk_start in (0..angles).step_by(CHUNK) {
+            let chunk_length = CHUNK.min(angles - chunk_start);
+            // The nodes' values on this chunk (zero beyond `nodes` and the end,
+            // where the weights are zero too: they add exactly +0).
+            let mut rows = [[0.0; CHUNK]; SPHERE_LANES];
+            for (node, row) in rows.iter_mut().enumerate().take(nodes) {
+                let start = first + node * stride + chunk_start;
+                copy_prefix(row, &s11[start..start + chunk_length]);
             }
-            if let Ok(entries) = <&mut [f64; CHUNK]>::try_from(&mut *entries) {
-                *entries = sums;
-            } else {
-                entries.copy_from_slice(&sums[..chunk_length]);
+            for (table, node_weights) in tables.chunks_exact_mut(angles).zip(weights) {
+                let entries = &mut table[chunk_start..chunk_start + chunk_length];
+                let mut sums = [0.0; CHUNK];
+                copy_prefix(&mut sums, entries);
+                for (row, &weight) in rows.iter().zip(node_weights) {
+                    for (sum, &value) in sums.iter_mut().zip(row) {
+                        *sum += weight * value;
+                    }
+                }
+                if let Ok(entries) = <&mut [f64; CHUNK]>::try_from(&mut *entries) {
+                    *entries = sums;
+                } else {
+                    entries.copy_from_slice(&sums[..chunk_length]);
+                }
             }
         }
     }
@@ -1603,9 +1568,31 @@ mod tests {
     use super::*;
     use crate::distribution::RadiusWindow;
     use crate::paper_phase::henyey_greenstein_phase_function_per_sr;
+    use crate::simd::Build;
     use crate::sphere::MieSolution;
 
     const MICROMETRE: f64 = 1e-6;
+
+    /// [`accumulate_s11`] in `build` (which the CPU must support).
+    fn accumulate_s11_as(
+        build: Build,
+        cos_theta: &[f64],
+        constants: &[AngularTermConstants],
+        terms: &[[f64; 4]],
+        spheres: usize,
+        s11: &mut [f64],
+    ) {
+        simd::run_as(
+            build,
+            AccumulateS11 {
+                cos_theta,
+                constants,
+                terms,
+                spheres,
+                s11,
+            },
+        )
+    }
 
     fn table_cosines() -> Vec<f64> {
         PhaseTableWorkspace::new().cos_theta
@@ -1836,7 +1823,14 @@ mod tests {
         for count in 1..=solutions.len() {
             let (constants, terms) = angular_terms(&solutions[..count]);
             let mut portable = vec![0.0; count * angles];
-            accumulate_s11_portable(&cosines, &constants, &terms, count, &mut portable);
+            accumulate_s11_as(
+                Build::Portable,
+                &cosines,
+                &constants,
+                &terms,
+                count,
+                &mut portable,
+            );
             let mut dispatched = vec![0.0; count * angles];
             accumulate_s11(&cosines, &constants, &terms, count, &mut dispatched);
             for (sphere, s11) in dispatched.chunks(angles).enumerate() {
@@ -1846,11 +1840,9 @@ mod tests {
             for (&d, &p) in dispatched.iter().zip(&portable) {
                 assert!((d - p).abs() <= 1e-13 * largest, "{d} vs {p}");
             }
-            #[cfg(target_arch = "x86_64")]
-            if std::arch::is_x86_feature_detected!("avx") {
+            if Build::Avx.is_supported() {
                 let mut avx = vec![0.0; count * angles];
-                // SAFETY: the CPU supports AVX.
-                unsafe { accumulate_s11_avx(&cosines, &constants, &terms, count, &mut avx) };
+                accumulate_s11_as(Build::Avx, &cosines, &constants, &terms, count, &mut avx);
                 assert_eq!(avx, portable);
             }
         }
@@ -1889,7 +1881,17 @@ mod tests {
         let mut dispatched = start.clone();
         add_weighted_group(&mut dispatched, &s11, 2, stride, nodes, &weights);
         let mut portable = start;
-        add_weighted_group_portable(&mut portable, &s11, 2, stride, nodes, &weights);
+        simd::run_as(
+            Build::Portable,
+            AddWeightedGroup {
+                tables: &mut portable,
+                s11: &s11,
+                first: 2,
+                stride,
+                nodes,
+                weights: &weights,
+            },
+        );
         assert_eq!(dispatched, expected);
         assert_eq!(portable, expected);
     }

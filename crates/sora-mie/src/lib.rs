@@ -18,6 +18,8 @@
 //!   (cross-sections, single-scattering albedo, g, phase function table).
 //! - [`refractive_index`]: constant or wavelength-tabulated m(lambda).
 //! - [`paper_phase`]: the paper's Henyey-Greenstein mode (eq. 3, g linear in radius).
+//! - `simd` (private): the hot kernels compiled for AVX-512F with FMA, for
+//!   AVX and portably from one source, the build chosen at run time.
 //!
 //! No global state, no I/O, no allocation in the per-term loops.
 
@@ -27,4 +29,5 @@ pub mod distribution;
 pub mod ensemble;
 pub mod paper_phase;
 pub mod refractive_index;
+mod simd;
 pub mod sphere;

@@ -52,14 +52,13 @@ use super::bessel_ratio::{
     CONTINUED_FRACTION_BLOCK, CONTINUED_FRACTION_TOLERANCE, RESCALE_ABOVE,
     max_continued_fraction_blocks, reciprocal,
 };
-use super::coefficients::{
-    Fused, LargeSphere, MultiplyAdd, SMALL_SIZE_PARAMETER, SumLanes, Term, Unfused,
-};
+use super::coefficients::{LargeSphere, SMALL_SIZE_PARAMETER, SumLanes, Term};
 use super::{
     Efficiencies, MieError, SphereWorkspace, compute_efficiencies_with, series_length_converged,
     validate,
 };
 use crate::Complex64;
+use crate::simd::{self, MultiplyAdd};
 
 /// Spheres solved side by side (one 512-bit vector of f64).
 pub const SPHERE_LANES: usize = 8;
@@ -268,21 +267,46 @@ pub(crate) fn solve_lanes<F: FnMut(usize, &CoefficientLanes)>(
     record: F,
 ) -> [Efficiencies; L] {
     let (top, n_terms) = prepare_rows(rows, x);
-    let rows = &mut rows[..=top];
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx512f")
-            && std::arch::is_x86_feature_detected!("fma")
-        {
-            // SAFETY: the CPU supports AVX-512F and FMA, the only requirements.
-            return unsafe { solve_lanes_avx512(rows, m_re, m_im, x, &n_terms, record) };
-        }
-        if std::arch::is_x86_feature_detected!("avx") {
-            // SAFETY: the CPU supports AVX, the only requirement.
-            return unsafe { solve_lanes_avx(rows, m_re, m_im, x, &n_terms, record) };
-        }
+    simd::dispatch(SolveLanes {
+        rows: &mut rows[..=top],
+        m_re,
+        m_im,
+        x,
+        n_terms: &n_terms,
+        record,
+    })
+}
+
+/// The arguments of [`solve_lanes`] once the tables are grown
+/// ([`prepare_rows`]), as a kernel compiled for each [`simd::Build`]: for
+/// AVX-512F (one vector per lane array, 32 registers) and FMA the
+/// recurrences' and the coefficients' multiply-adds are fused, which changes
+/// the rounding only (within ~1e-15 of the unfused builds, tested); for AVX
+/// two vectors per lane array and the portable build's operations
+/// (bit-identical, tested).
+struct SolveLanes<'a, F> {
+    rows: &'a mut [BatchRow],
+    m_re: &'a Lanes,
+    m_im: &'a Lanes,
+    x: &'a Lanes,
+    n_terms: &'a [usize; L],
+    record: F,
+}
+
+impl<F: FnMut(usize, &CoefficientLanes)> simd::Kernel for SolveLanes<'_, F> {
+    type Output = [Efficiencies; L];
+
+    #[inline(always)]
+    fn run<A: MultiplyAdd>(self) -> [Efficiencies; L] {
+        solve_lanes_with::<F, A>(
+            self.rows,
+            self.m_re,
+            self.m_im,
+            self.x,
+            self.n_terms,
+            self.record,
+        )
     }
-    solve_lanes_portable(rows, m_re, m_im, x, &n_terms, record)
 }
 
 /// Each lane's series length, and the tables grown for the longest; returns
@@ -294,37 +318,6 @@ fn prepare_rows(rows: &mut Vec<BatchRow>, x: &Lanes) -> (usize, [usize; L]) {
         rows.resize(top + 1, BatchRow::default());
     }
     (top, n_terms)
-}
-
-/// [`solve_lanes`] compiled for AVX-512F (one vector per lane array, 32
-/// registers) and FMA: the recurrences' and the coefficients' multiply-adds
-/// are fused ([`Fused`]), which changes the rounding only (within ~1e-15 of
-/// the unfused builds, tested).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,fma")]
-fn solve_lanes_avx512<F: FnMut(usize, &CoefficientLanes)>(
-    rows: &mut [BatchRow],
-    m_re: &Lanes,
-    m_im: &Lanes,
-    x: &Lanes,
-    n_terms: &[usize; L],
-    record: F,
-) -> [Efficiencies; L] {
-    solve_lanes_with::<F, Fused>(rows, m_re, m_im, x, n_terms, record)
-}
-
-/// [`solve_lanes`] compiled for AVX (two vectors per lane array).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx")]
-fn solve_lanes_avx<F: FnMut(usize, &CoefficientLanes)>(
-    rows: &mut [BatchRow],
-    m_re: &Lanes,
-    m_im: &Lanes,
-    x: &Lanes,
-    n_terms: &[usize; L],
-    record: F,
-) -> [Efficiencies; L] {
-    solve_lanes_portable(rows, m_re, m_im, x, n_terms, record)
 }
 
 /// The scaled exterior ratio psi_n(x) / (x psi_{n-1}(x)) of every lane at
@@ -613,20 +606,6 @@ impl Upward {
     }
 }
 
-/// [`solve_lanes`] for any target (what the AVX build inlines): unfused
-/// multiply-adds.
-#[inline(always)]
-fn solve_lanes_portable<F: FnMut(usize, &CoefficientLanes)>(
-    rows: &mut [BatchRow],
-    m_re: &Lanes,
-    m_im: &Lanes,
-    x: &Lanes,
-    n_terms: &[usize; L],
-    record: F,
-) -> [Efficiencies; L] {
-    solve_lanes_with::<F, Unfused>(rows, m_re, m_im, x, n_terms, record)
-}
-
 #[inline(always)]
 fn solve_lanes_with<F: FnMut(usize, &CoefficientLanes), A: MultiplyAdd>(
     rows: &mut [BatchRow],
@@ -867,6 +846,7 @@ mod tests {
     use super::super::compute_efficiencies;
     use super::super::naive::bhmie;
     use super::*;
+    use crate::simd::Build;
 
     fn log_spaced(count: usize, low: f64, high: f64) -> Vec<f64> {
         let ratio = (high / low).ln() / (count - 1) as f64;
@@ -1061,38 +1041,27 @@ mod tests {
             ] {
                 let mut rows = Vec::new();
                 let (top, n_terms) = prepare_rows(&mut rows, &x);
-                let portable =
-                    solve_lanes_portable(&mut rows[..=top], &m_re, &m_im, &x, &n_terms, |_, _| {});
-                #[cfg(target_arch = "x86_64")]
+                let mut solve_as = |build| {
+                    simd::run_as(
+                        build,
+                        SolveLanes {
+                            rows: &mut rows[..=top],
+                            m_re: &m_re,
+                            m_im: &m_im,
+                            x: &x,
+                            n_terms: &n_terms,
+                            record: |_, _: &CoefficientLanes| {},
+                        },
+                    )
+                };
+                let portable = solve_as(Build::Portable);
                 {
-                    if std::arch::is_x86_feature_detected!("avx") {
-                        // SAFETY: the CPU supports AVX.
-                        let avx = unsafe {
-                            solve_lanes_avx(
-                                &mut rows[..=top],
-                                &m_re,
-                                &m_im,
-                                &x,
-                                &n_terms,
-                                |_, _| {},
-                            )
-                        };
+                    if Build::Avx.is_supported() {
+                        let avx = solve_as(Build::Avx);
                         assert_eq!(portable, avx);
                     }
-                    if std::arch::is_x86_feature_detected!("avx512f")
-                        && std::arch::is_x86_feature_detected!("fma")
-                    {
-                        // SAFETY: the CPU supports AVX-512F and FMA.
-                        let fused = unsafe {
-                            solve_lanes_avx512(
-                                &mut rows[..=top],
-                                &m_re,
-                                &m_im,
-                                &x,
-                                &n_terms,
-                                |_, _| {},
-                            )
-                        };
+                    if Build::Avx512Fma.is_supported() {
+                        let fused = solve_as(Build::Avx512Fma);
                         let m = Complex64::new(m_re[0], m_im[0]);
                         for (f, p) in fused.iter().zip(&portable) {
                             for (d, tolerance) in differences(f, p).into_iter().zip(tolerances(m)) {

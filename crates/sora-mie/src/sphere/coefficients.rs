@@ -70,6 +70,7 @@ use super::bessel_ratio::{
     DownwardRatios, fill_scaled_ratios_downward, reciprocal, scaled_ratio_continued_fraction_real,
 };
 use crate::Complex64;
+use crate::simd::{self, MultiplyAdd};
 
 /// Below this size parameter the scaled small-x path is used.
 pub(super) const SMALL_SIZE_PARAMETER: f64 = 0.01;
@@ -209,97 +210,40 @@ pub(super) fn solve_series<F: FnMut(Complex64, Complex64)>(
     scratch: &mut [f64],
     record: F,
 ) -> Efficiencies {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx512f")
-            && std::arch::is_x86_feature_detected!("fma")
-        {
-            // SAFETY: the CPU supports AVX-512F and FMA, the only
-            // requirements of `solve_series_avx512`.
-            return unsafe { solve_series_avx512(m, x, n_terms, scratch, record) };
-        }
-        if std::arch::is_x86_feature_detected!("avx") {
-            // SAFETY: the CPU supports AVX, the only requirement of
-            // `solve_series_avx`.
-            return unsafe { solve_series_avx(m, x, n_terms, scratch, record) };
-        }
-    }
-    solve_series_portable(m, x, n_terms, scratch, record)
+    simd::dispatch(SolveSeries {
+        m,
+        x,
+        n_terms,
+        scratch,
+        record,
+    })
 }
 
-/// [`solve_series`] compiled for AVX-512F and FMA: a block of [`BLOCK`] terms
-/// is one 512-bit vector, 32 registers hold a block's working set, and the
-/// blocks' multiply-adds are fused (one instruction and one rounding each;
-/// [`Fused`]). That changes the rounding, not the algorithm: the results
-/// agree with the other builds to ~1e-15 (tested), and with the reference
-/// tables as well as they do. Faster than the AVX build by ~10 % at
-/// x = 0.1-100 and ~20 % at x = 100-10 000.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,fma")]
-fn solve_series_avx512<F: FnMut(Complex64, Complex64)>(
+/// The arguments of [`solve_series`], as a kernel compiled for each
+/// [`simd::Build`]. For AVX-512F and FMA a block of [`BLOCK`] terms is one
+/// 512-bit vector, 32 registers hold a block's working set, and the blocks'
+/// multiply-adds are fused (one instruction and one rounding each). That
+/// changes the rounding, not the algorithm: the results agree with the
+/// other builds to ~1e-15 (tested), and with the reference tables as well as
+/// they do; faster than the AVX build by ~10 % at x = 0.1-100 and ~20 % at
+/// x = 100-10 000. For AVX the three-operand VEX encoding saves the register
+/// copies that two-operand SSE2 needs for almost every arithmetic
+/// instruction, and vectors are 4 wide; it performs the portable build's
+/// IEEE operations in the same order: bit-identical results (tested).
+struct SolveSeries<'a, F> {
     m: Complex64,
     x: f64,
     n_terms: usize,
-    scratch: &mut [f64],
+    scratch: &'a mut [f64],
     record: F,
-) -> Efficiencies {
-    solve_series_with::<F, Fused>(m, x, n_terms, scratch, record)
 }
 
-/// [`solve_series`] compiled for AVX. The source is the same; the three-operand
-/// VEX encoding saves the register copies that two-operand SSE2 needs for
-/// almost every arithmetic instruction, and vectors are 4 wide. FMA is not
-/// enabled and Rust never contracts a * b + c by itself, so this build and
-/// the portable one perform the same IEEE operations in the same order: the
-/// results are bit-identical (tested).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx")]
-fn solve_series_avx<F: FnMut(Complex64, Complex64)>(
-    m: Complex64,
-    x: f64,
-    n_terms: usize,
-    scratch: &mut [f64],
-    record: F,
-) -> Efficiencies {
-    solve_series_portable(m, x, n_terms, scratch, record)
-}
+impl<F: FnMut(Complex64, Complex64)> simd::Kernel for SolveSeries<'_, F> {
+    type Output = Efficiencies;
 
-/// [`solve_series`] for any target (what the AVX build inlines).
-#[inline(always)]
-pub(super) fn solve_series_portable<F: FnMut(Complex64, Complex64)>(
-    m: Complex64,
-    x: f64,
-    n_terms: usize,
-    scratch: &mut [f64],
-    record: F,
-) -> Efficiencies {
-    solve_series_with::<F, Unfused>(m, x, n_terms, scratch, record)
-}
-
-/// How the coefficient blocks evaluate a * b + c.
-pub(crate) trait MultiplyAdd {
-    fn mul_add(a: f64, b: f64, c: f64) -> f64;
-}
-
-/// Two roundings, a * b then + c: what every target computes at full speed.
-pub(crate) struct Unfused;
-
-impl MultiplyAdd for Unfused {
     #[inline(always)]
-    fn mul_add(a: f64, b: f64, c: f64) -> f64 {
-        a * b + c
-    }
-}
-
-/// One rounding (fused multiply-add): only for builds with the FMA
-/// instruction set, where it is one instruction (elsewhere it is a slow
-/// library call).
-pub(crate) struct Fused;
-
-impl MultiplyAdd for Fused {
-    #[inline(always)]
-    fn mul_add(a: f64, b: f64, c: f64) -> f64 {
-        a.mul_add(b, c)
+    fn run<A: MultiplyAdd>(self) -> Efficiencies {
+        solve_series_with::<F, A>(self.m, self.x, self.n_terms, self.scratch, self.record)
     }
 }
 
@@ -1040,6 +984,28 @@ fn solve_small<F: FnMut(Complex64, Complex64)>(
 mod tests {
     use super::super::series_length_converged;
     use super::*;
+    use crate::simd::Build;
+
+    /// [`solve_series`] in `build` (which the CPU must support).
+    fn solve_series_as<F: FnMut(Complex64, Complex64)>(
+        build: Build,
+        m: Complex64,
+        x: f64,
+        n_terms: usize,
+        scratch: &mut [f64],
+        record: F,
+    ) -> Efficiencies {
+        simd::run_as(
+            build,
+            SolveSeries {
+                m,
+                x,
+                n_terms,
+                scratch,
+                record,
+            },
+        )
+    }
 
     fn solve_both(
         m: Complex64,
@@ -1052,7 +1018,9 @@ mod tests {
             dispatched.extend([a, b])
         });
         let mut portable = Vec::new();
-        let p = solve_series_portable(m, x, n_terms, &mut scratch, |a, b| portable.extend([a, b]));
+        let p = solve_series_as(Build::Portable, m, x, n_terms, &mut scratch, |a, b| {
+            portable.extend([a, b])
+        });
         (q, dispatched, p, portable)
     }
 
@@ -1079,20 +1047,21 @@ mod tests {
                 let (q, _, p, _) = solve_both(m, x);
                 let n_terms = series_length_converged(x);
                 let mut scratch = vec![0.0; scratch_length(x, n_terms)];
-                #[cfg(target_arch = "x86_64")]
                 {
-                    if std::arch::is_x86_feature_detected!("avx") {
-                        // SAFETY: the CPU supports AVX.
+                    if Build::Avx.is_supported() {
                         let avx =
-                            unsafe { solve_series_avx(m, x, n_terms, &mut scratch, |_, _| {}) };
+                            solve_series_as(Build::Avx, m, x, n_terms, &mut scratch, |_, _| {});
                         assert_eq!(avx, p, "AVX: m = {re}+{im}i, x = {x}");
                     }
-                    if std::arch::is_x86_feature_detected!("avx512f")
-                        && std::arch::is_x86_feature_detected!("fma")
-                    {
-                        // SAFETY: the CPU supports AVX-512F and FMA.
-                        let fused =
-                            unsafe { solve_series_avx512(m, x, n_terms, &mut scratch, |_, _| {}) };
+                    if Build::Avx512Fma.is_supported() {
+                        let fused = solve_series_as(
+                            Build::Avx512Fma,
+                            m,
+                            x,
+                            n_terms,
+                            &mut scratch,
+                            |_, _| {},
+                        );
                         let differences = [
                             relative(fused.qext, p.qext),
                             relative(fused.qsca, p.qsca),

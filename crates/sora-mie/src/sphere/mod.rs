@@ -127,7 +127,6 @@ mod series_length;
 
 pub(crate) use batch::{GroupCoefficients, compute_group_coefficients};
 pub use batch::{SPHERE_LANES, compute_efficiencies_many, compute_efficiencies_many_with};
-pub(crate) use coefficients::{Fused, MultiplyAdd, Unfused};
 pub use perfect_conductor::{
     MIN_PERFECT_CONDUCTOR_SIZE_PARAMETER, compute_efficiencies_perfect_conductor,
 };
