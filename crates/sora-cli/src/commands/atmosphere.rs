@@ -25,8 +25,10 @@ use crate::arguments::AtmosphereSource;
 ///
 /// An atmosphere is a planet, a sun and a list of species (gases, aerosols),
 /// each with a density profile and optical properties. Atmosphere files are
-/// TOML; the files in atmospheres/ in the repository (the presets) show the
-/// schema, every key carrying its unit (radius_m, scale_height_m, ...).
+/// TOML, every key carrying its unit (radius_m, scale_height_m, ...); the
+/// format, key by key with units, ranges and defaults, is documented in
+/// docs/atmosphere-file.md in the repository, and the files in atmospheres/
+/// (the presets) are annotated examples.
 #[derive(Debug, Args)]
 #[command(verbatim_doc_comment)]
 pub struct AtmosphereArgs {

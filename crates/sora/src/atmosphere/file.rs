@@ -1,83 +1,36 @@
 //! Atmosphere files: the TOML schema, and the one place where a parsed file
 //! becomes validated model types.
 //!
-//! Every quantity carries its unit in its key (`radius_m`,
-//! `scale_height_m`, `number_density_m3` for m^-3, `wavelength_nm`,
-//! `median_radius_um`); dimensionless keys have none (`ground_albedo`,
-//! `optical_depth`, `g`). Unknown keys are errors (a misspelt key must not
-//! silently fall back to a default). Errors are one line: TOML syntax and
-//! type errors give the line; value errors give the key as a path
-//! (`species[2].profile.exponential.scale_height_m`, species counted from
-//! 0), the value, its unit and the allowed range.
+//! The format, key by key (units, ranges, defaults, examples), is
+//! documented for users in `docs/atmosphere-file.md` in the repository;
+//! the serde structs below are its truth, and a test checks that the page
+//! lists exactly the keys they accept ([`accepted_keys`]). In short: every
+//! quantity carries its unit in its key (`radius_m`, `number_density_m3`,
+//! `wavelength_nm`); unknown keys are errors; errors are one line, giving
+//! the TOML line or the key as a path
+//! (`species[2].profile.exponential.scale_height_m`), the value, its unit
+//! and the allowed range.
 //!
 //! ```toml
-//! name = "my planet"                 # required
-//! description = "one line"           # optional
+//! name = "my planet"
 //!
 //! [planet]
-//! radius_m = 6360e3                  # 1e5 ..= 1e10
-//! atmosphere_height_m = 100e3        # top of the atmosphere above the ground, > 0
-//! ground_albedo = 0.3                # Lambertian, 0..=1 (default 0), or a table:
-//! # ground_albedo = { wavelength_nm = [380, 780], albedo = [0.1, 0.3] }
+//! radius_m = 6360e3
+//! atmosphere_height_m = 100e3
 //!
 //! [sun]
-//! spectrum = "flat"                  # "flat", "astm-e490" or "csv"
-//! irradiance_w_m2_nm = 1.0           # flat only
-//! # csv_file = "sun.csv"             # csv only: wavelength_nm,irradiance_w_m2_nm
-//! irradiance_scale = 1.0             # optional factor (1/d^2 for d in AU), default 1
-//! angular_diameter_deg = 0.53        # optional, 0 = point sun, default 0.53
+//! spectrum = "astm-e490"
 //!
-//! [[species]]                        # any number, any order
+//! [[species]]
 //! name = "air"
-//! number_density_m3 = 2.546899e25    # at relative density 1 (the ground for
-//!                                    # exponential profiles and tables, the peak of a tent)
-//! profile.exponential.scale_height_m = 8000
-//! # profile.tent = { peak_altitude_m = 25e3, half_width_m = 15e3 }
-//! # profile.layers = { altitude_m = [...], relative_density = [...] }  # piecewise linear, 0 outside
-//! # profile.table = { altitude_m = [...], relative_density = [...] }   # log-linear, covers 0..=top
-//! scattering.rayleigh = { gas = "air", depolarization = true }       # gas: "air" or "co2";
-//!                        # depolarization: the phase function with the gas' depolarisation
-//!                        # ratio (default false: 3/(16 pi)(1 + cos^2), the paper's)
-//! # scattering.rayleigh = { coefficient_per_m = 1.16e-5, reference_wavelength_nm = 550,
-//! #                         wavelength_exponent = 4.0, depolarization_ratio = 0.0 }
-//!
-//! [[species]]
-//! name = "aerosol"
-//! optical_depth = 0.1                # column extinction optical depth ...
-//! reference_wavelength_nm = 550      # ... at this wavelength
-//! profile.exponential.scale_height_m = 1200
-//! scattering.parametric = { angstrom_exponent = 1.3, single_scattering_albedo = 0.9,
-//!                           phase.henyey_greenstein.g = 0.7 }   # or phase.cornette_shanks.g
-//!
-//! [[species]]
-//! name = "dust"
-//! number_density_m3 = 2.0e6          # or optical_depth + reference_wavelength_nm
-//! profile.exponential.scale_height_m = 11000
-//! scattering.mie.refractive_index = { n = 1.5, k = 0.01 }
-//! # scattering.mie.refractive_index = { wavelength_nm = [...], n = [...], k = [...] }
-//! # scattering.mie.refractive_index = { builtin = "mars-dust-wolff2009" }
-//! scattering.mie.size_distribution.lognormal = { median_radius_um = 0.5, geometric_std_dev = 1.5,
-//!                                                min_radius_um = 0.45, max_radius_um = 0.56 }
-//! # ... lognormal = { effective_radius_um = 1.5, effective_variance = 0.3 }
-//! # ... gamma = { effective_radius_um = 1.5, effective_variance = 0.3 }
-//! scattering.mie.phase = "mie"       # or "paper-hg" (the paper's eq. 3)
-//!
-//! [[species]]
-//! name = "ozone"
-//! column_dobson_units = 300          # or number_density_m3
-//! profile.tent = { peak_altitude_m = 25e3, half_width_m = 15e3 }
-//! absorption.gas = "ozone"           # or { wavelength_nm = [...], cross_section_m2 = [...] }
+//! number_density_m3 = 2.546899e25
+//! profile.exponential.scale_height_m = 8435
+//! scattering.rayleigh = { gas = "air", depolarization = true }
 //! ```
 //!
-//! Which amount keys a species takes depends on its model: a physical
-//! Rayleigh gas needs `number_density_m3`; a parametric Rayleigh species
-//! none (its coefficient is in `scattering.rayleigh`); a Mie aerosol
-//! `number_density_m3` or `optical_depth` + `reference_wavelength_nm`; a
-//! parametric aerosol `optical_depth` + `reference_wavelength_nm`; an
-//! absorbing gas `column_dobson_units` or `number_density_m3`. Tables that
-//! must cover the wavelength grid (ground albedo, refractive index,
-//! absorption cross-section, solar spectrum) are checked against it when
-//! the optics are computed ([`super::Atmosphere::compute_optics`]).
+//! Tables that must cover the wavelength grid (ground albedo, refractive
+//! index, absorption cross-section, solar spectrum) are checked against it
+//! when the optics are computed ([`super::Atmosphere::compute_optics`]).
 
 use std::fmt;
 use std::marker::PhantomData;
@@ -1234,6 +1187,282 @@ fn table_error(e: &Error) -> Error {
     }
 }
 
+// ---------------------------------------------------------------------------
+// The accepted keys, read off the schema (for the documentation's test).
+// ---------------------------------------------------------------------------
+
+/// Every key an atmosphere file may hold, tables included, as sorted
+/// dotted paths from the top of the file: `planet.radius_m`,
+/// `planet.ground_albedo.wavelength_nm`, and for the keys of a species
+/// `species.profile.tent.peak_altitude_m` (TOML's path to the last
+/// `[[species]]`; errors name one, `species[2].profile...`).
+///
+/// Not a hand-kept list: a tracing deserializer walks the serde structs
+/// above, taking each struct's field names from serde itself (the names
+/// `deserialize_struct` is handed, and those a struct reports when it
+/// rejects an unknown key), so a key added to, renamed in or removed from
+/// the schema changes this list. `docs/atmosphere-file.md`'s test checks
+/// that the page documents exactly these keys.
+#[doc(hidden)]
+pub fn accepted_keys() -> Vec<String> {
+    key_trace::accepted_keys::<AtmosphereFile>()
+}
+
+mod key_trace {
+    //! A `Deserializer` that produces a value of every struct of the schema
+    //! and records the path of every field on the way. Structs name their
+    //! fields to `deserialize_struct`; a key that holds "a number or a
+    //! table" (`NumberOr`) asks for `deserialize_any`, and is probed once
+    //! with an unknown key: a struct (they all deny unknown fields) answers
+    //! with the list of its fields, anything else with another error (a
+    //! leaf). Each probe ends the walk, which then restarts knowing the
+    //! answer; the schema has a handful of such keys.
+
+    use std::collections::{BTreeMap, BTreeSet};
+    use std::fmt;
+
+    use serde::Deserialize;
+    use serde::de::{self, DeserializeSeed, IntoDeserializer, MapAccess, SeqAccess, Visitor};
+
+    /// What a `deserialize_any` key turned out to hold.
+    #[derive(Debug, Clone, Copy)]
+    enum Shape {
+        Table(&'static [&'static str]),
+        Leaf,
+    }
+
+    #[derive(Debug, Default)]
+    struct State {
+        keys: BTreeSet<String>,
+        shapes: BTreeMap<String, Shape>,
+    }
+
+    #[derive(Debug)]
+    pub(super) enum TraceError {
+        /// A struct rejected the probe key; these are its fields.
+        UnknownField(&'static [&'static str]),
+        /// A probe found a key's shape: walk again.
+        Restart,
+        /// A table took the probe key.
+        AcceptsUnknownKeys,
+        Other(String),
+    }
+
+    impl fmt::Display for TraceError {
+        fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+            match self {
+                TraceError::UnknownField(fields) => write!(f, "unknown field, expected {fields:?}"),
+                TraceError::Restart => f.write_str("restart"),
+                TraceError::AcceptsUnknownKeys => {
+                    f.write_str("a table takes unknown keys (deny_unknown_fields is missing)")
+                }
+                TraceError::Other(message) => f.write_str(message),
+            }
+        }
+    }
+
+    impl std::error::Error for TraceError {}
+
+    impl de::Error for TraceError {
+        fn custom<T: fmt::Display>(message: T) -> Self {
+            TraceError::Other(message.to_string())
+        }
+        fn unknown_field(_field: &str, expected: &'static [&'static str]) -> Self {
+            TraceError::UnknownField(expected)
+        }
+    }
+
+    /// A key no struct of the schema has.
+    const PROBE: &str = "\u{0}probe";
+
+    pub(super) fn accepted_keys<T: for<'de> Deserialize<'de>>() -> Vec<String> {
+        let mut state = State::default();
+        // One walk per `deserialize_any` key, plus the last.
+        for _ in 0..100 {
+            state.keys.clear();
+            let tracer = Tracer {
+                path: String::new(),
+                state: &mut state,
+            };
+            match T::deserialize(tracer) {
+                Ok(_) => return state.keys.into_iter().collect(),
+                Err(TraceError::Restart) => {}
+                Err(e) => panic!("the atmosphere file schema cannot be traced: {e}"),
+            }
+        }
+        panic!("the atmosphere file schema did not trace in 100 walks");
+    }
+
+    struct Tracer<'s> {
+        path: String,
+        state: &'s mut State,
+    }
+
+    impl Tracer<'_> {
+        fn visit_fields<'de, V: Visitor<'de>>(
+            self,
+            fields: &'static [&'static str],
+            visitor: V,
+        ) -> Result<V::Value, TraceError> {
+            visitor.visit_map(Fields {
+                fields,
+                next: 0,
+                path: self.path,
+                state: self.state,
+            })
+        }
+    }
+
+    fn child(path: &str, key: &str) -> String {
+        if path.is_empty() {
+            key.to_string()
+        } else {
+            format!("{path}.{key}")
+        }
+    }
+
+    impl<'de> de::Deserializer<'de> for Tracer<'_> {
+        type Error = TraceError;
+
+        fn deserialize_any<V: Visitor<'de>>(self, visitor: V) -> Result<V::Value, TraceError> {
+            match self.state.shapes.get(&self.path).copied() {
+                Some(Shape::Table(fields)) => self.visit_fields(fields, visitor),
+                Some(Shape::Leaf) => visitor.visit_f64(1.0),
+                None => {
+                    let shape = match visitor.visit_map(Probe { asked: false }) {
+                        Err(TraceError::UnknownField(fields)) => Shape::Table(fields),
+                        Err(TraceError::AcceptsUnknownKeys) | Ok(_) => {
+                            return Err(TraceError::Other(format!(
+                                "{}: takes unknown keys (deny_unknown_fields is missing)",
+                                self.path
+                            )));
+                        }
+                        Err(_) => Shape::Leaf,
+                    };
+                    self.state.shapes.insert(self.path, shape);
+                    Err(TraceError::Restart)
+                }
+            }
+        }
+
+        fn deserialize_struct<V: Visitor<'de>>(
+            self,
+            _name: &'static str,
+            fields: &'static [&'static str],
+            visitor: V,
+        ) -> Result<V::Value, TraceError> {
+            self.visit_fields(fields, visitor)
+        }
+
+        fn deserialize_option<V: Visitor<'de>>(self, visitor: V) -> Result<V::Value, TraceError> {
+            visitor.visit_some(self)
+        }
+
+        /// One element, at the path of the sequence (`species.name`).
+        fn deserialize_seq<V: Visitor<'de>>(self, visitor: V) -> Result<V::Value, TraceError> {
+            visitor.visit_seq(OneElement(Some(self)))
+        }
+
+        fn deserialize_f64<V: Visitor<'de>>(self, visitor: V) -> Result<V::Value, TraceError> {
+            visitor.visit_f64(1.0)
+        }
+
+        fn deserialize_bool<V: Visitor<'de>>(self, visitor: V) -> Result<V::Value, TraceError> {
+            visitor.visit_bool(false)
+        }
+
+        fn deserialize_string<V: Visitor<'de>>(self, visitor: V) -> Result<V::Value, TraceError> {
+            visitor.visit_str("x")
+        }
+
+        fn deserialize_str<V: Visitor<'de>>(self, visitor: V) -> Result<V::Value, TraceError> {
+            visitor.visit_str("x")
+        }
+
+        serde::forward_to_deserialize_any! {
+            i8 i16 i32 i64 i128 u8 u16 u32 u64 u128 f32 char bytes byte_buf unit
+            unit_struct newtype_struct tuple tuple_struct map enum identifier ignored_any
+        }
+    }
+
+    /// The fields of a struct, each with a traced value.
+    struct Fields<'s> {
+        fields: &'static [&'static str],
+        next: usize,
+        path: String,
+        state: &'s mut State,
+    }
+
+    impl<'de> MapAccess<'de> for Fields<'_> {
+        type Error = TraceError;
+
+        fn next_key_seed<K: DeserializeSeed<'de>>(
+            &mut self,
+            seed: K,
+        ) -> Result<Option<K::Value>, TraceError> {
+            match self.fields.get(self.next) {
+                Some(&key) => seed.deserialize(key.into_deserializer()).map(Some),
+                None => Ok(None),
+            }
+        }
+
+        fn next_value_seed<V: DeserializeSeed<'de>>(
+            &mut self,
+            seed: V,
+        ) -> Result<V::Value, TraceError> {
+            let path = child(&self.path, self.fields[self.next]);
+            self.next += 1;
+            self.state.keys.insert(path.clone());
+            seed.deserialize(Tracer {
+                path,
+                state: self.state,
+            })
+        }
+    }
+
+    /// A table with one key that no struct has.
+    struct Probe {
+        asked: bool,
+    }
+
+    impl<'de> MapAccess<'de> for Probe {
+        type Error = TraceError;
+
+        fn next_key_seed<K: DeserializeSeed<'de>>(
+            &mut self,
+            seed: K,
+        ) -> Result<Option<K::Value>, TraceError> {
+            if std::mem::replace(&mut self.asked, true) {
+                return Ok(None);
+            }
+            seed.deserialize(PROBE.into_deserializer()).map(Some)
+        }
+
+        fn next_value_seed<V: DeserializeSeed<'de>>(
+            &mut self,
+            _seed: V,
+        ) -> Result<V::Value, TraceError> {
+            Err(TraceError::AcceptsUnknownKeys)
+        }
+    }
+
+    struct OneElement<'s>(Option<Tracer<'s>>);
+
+    impl<'de> SeqAccess<'de> for OneElement<'_> {
+        type Error = TraceError;
+
+        fn next_element_seed<T: DeserializeSeed<'de>>(
+            &mut self,
+            seed: T,
+        ) -> Result<Option<T::Value>, TraceError> {
+            match self.0.take() {
+                Some(tracer) => seed.deserialize(tracer).map(Some),
+                None => Ok(None),
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1289,6 +1518,76 @@ irradiance_w_m2_nm = 1.0
             e.contains("line 5") && e.contains("unknown field `atmosphere_heigth_m`"),
             "{e}"
         );
+    }
+
+    /// A file holding only `path` (dotted, through inline tables; the
+    /// species as a one-element array), set to `value`.
+    fn file_with(path: &str, value: &str) -> String {
+        let mut parts = path.rsplit('.');
+        let mut text = format!("{} = {value}", parts.next().unwrap());
+        let parents: Vec<&str> = parts.collect();
+        for (i, parent) in parents.iter().enumerate() {
+            text = if i + 1 == parents.len() && *parent == "species" {
+                format!("{parent} = [{{ {text} }}]")
+            } else {
+                format!("{parent} = {{ {text} }}")
+            };
+        }
+        text
+    }
+
+    /// The message of the parser's error for `text` ("" when it parses).
+    fn schema_error(text: &str) -> String {
+        match toml::from_str::<AtmosphereFile>(text) {
+            Ok(_) => String::new(),
+            Err(e) => e.message().to_string(),
+        }
+    }
+
+    #[test]
+    fn every_listed_key_is_accepted_and_an_unknown_sibling_rejected() {
+        let keys = accepted_keys();
+        for key in &keys {
+            // The sibling proves the file reaches the key's table ...
+            let sibling = match key.rsplit_once('.') {
+                Some((parent, _)) => format!("{parent}.not_a_key"),
+                None => "not_a_key".to_string(),
+            };
+            let e = schema_error(&file_with(&sibling, "0"));
+            assert!(e.contains("unknown field `not_a_key`"), "{sibling}: {e}");
+            // ... where the key itself is known (its value may be of the wrong type).
+            let e = schema_error(&file_with(key, "0"));
+            assert!(!e.contains("unknown field"), "{key}: {e}");
+        }
+    }
+
+    #[test]
+    fn the_key_list_covers_the_schema() {
+        let keys = accepted_keys();
+        for key in [
+            "name",
+            "description",
+            "planet",
+            "planet.ground_albedo",
+            "planet.ground_albedo.albedo",
+            "sun.csv_file",
+            "species",
+            "species.profile.layers.relative_density",
+            "species.scattering.parametric.phase.cornette_shanks.g",
+            "species.scattering.mie.refractive_index.k",
+            "species.scattering.mie.size_distribution.gamma.max_radius_um",
+            "species.absorption.cross_section_m2",
+        ] {
+            assert!(keys.iter().any(|k| k == key), "{key} missing from {keys:?}");
+        }
+        // A key that holds only a number has no keys under it.
+        assert!(
+            !keys
+                .iter()
+                .any(|k| k.starts_with("species.scattering.mie.refractive_index.n."))
+        );
+        assert!(keys.windows(2).all(|w| w[0] < w[1]), "sorted, no repeats");
+        assert!(keys.len() > 60, "{keys:#?}");
     }
 
     #[test]
