@@ -176,12 +176,10 @@ pub enum Scattering {
 
 impl Scattering {
     /// The library's choice, at the default resolution.
-    pub fn to_render(self) -> sora::render::Scattering {
+    pub fn to_library(self) -> sora::Scattering {
         match self {
-            Scattering::Single => sora::render::Scattering::Single,
-            Scattering::Multiple => sora::render::Scattering::Multiple(
-                sora::transport::multiple_scattering::MultipleScatteringSettings::default(),
-            ),
+            Scattering::Single => sora::Scattering::Single,
+            Scattering::Multiple => sora::Scattering::multiple(),
         }
     }
 }
@@ -221,11 +219,13 @@ pub struct SunAndObserver {
 }
 
 impl SunAndObserver {
-    /// The single-scattering sky these options describe.
+    /// The sky these options describe, with `scattering` by `method`.
     pub fn sky(
         &self,
-        atmosphere: &mut sora::atmosphere::Atmosphere,
-    ) -> anyhow::Result<sora::transport::SingleScatteringSky> {
+        atmosphere: &mut sora::Atmosphere,
+        scattering: sora::Scattering,
+        method: sora::Method,
+    ) -> anyhow::Result<sora::Sky> {
         if let Some(albedo) = self.ground_albedo {
             let planet = &atmosphere.planet;
             atmosphere.planet = sora::atmosphere::Planet::new(
@@ -235,15 +235,116 @@ impl SunAndObserver {
             )
             .map_err(|e| anyhow::anyhow!("--ground-albedo: {e}"))?;
         }
-        let observation = sora::transport::Observation {
-            observer_altitude_m: self.observer_altitude_m,
-            sun_elevation_deg: self.sun_elevation,
-            sun_azimuth_deg: self.sun_azimuth,
-        };
-        Ok(sora::transport::SingleScatteringSky::new(
-            atmosphere,
-            &self.wavelengths,
-            observation,
-        )?)
+        Ok(sora::Sky::builder(atmosphere)
+            .sun_deg(self.sun_elevation, self.sun_azimuth)
+            .observer_altitude_m(self.observer_altitude_m)
+            .wavelengths(self.wavelengths)
+            .scattering(scattering)
+            .method(method)
+            .build()?)
+    }
+}
+
+/// Header of a directions file (`sora spectrum --directions`).
+pub const DIRECTIONS_HEADER: &str = "view_elevation_deg,view_azimuth_deg";
+
+/// Parses a directions file: the header [`DIRECTIONS_HEADER`], then one
+/// direction per line (elevation -90..=90 and azimuth clockwise from north,
+/// degrees). Blank lines are skipped and a UTF-8 byte-order mark is
+/// allowed. Errors name the line (1-based) and the bad value.
+pub fn parse_directions_csv(text: &str) -> Result<Vec<sora::ViewDirection>, String> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .map(|(i, line)| (i + 1, line.trim()))
+        .filter(|(_, line)| !line.is_empty());
+    let Some((number, header)) = lines.next() else {
+        return Err(format!(
+            "the file is empty: expected the header {DIRECTIONS_HEADER} and one direction per line"
+        ));
+    };
+    let columns: Vec<&str> = header.split(',').map(str::trim).collect();
+    if columns != DIRECTIONS_HEADER.split(',').collect::<Vec<_>>() {
+        return Err(format!(
+            "line {number}: the header is '{header}', expected {DIRECTIONS_HEADER}"
+        ));
+    }
+    let mut directions = Vec::new();
+    for (number, line) in lines {
+        let values: Vec<&str> = line.split(',').map(str::trim).collect();
+        if values.len() != 2 {
+            return Err(format!(
+                "line {number}: {} values in '{line}', expected 2 ({DIRECTIONS_HEADER})",
+                values.len()
+            ));
+        }
+        let mut angles = [0.0; 2];
+        for ((angle, text), name) in angles.iter_mut().zip(&values).zip(&columns) {
+            *angle = text
+                .parse()
+                .map_err(|_| format!("line {number}: {name} '{text}' is not a number"))?;
+        }
+        directions.push(
+            sora::ViewDirection::new(angles[0], angles[1])
+                .map_err(|e| format!("line {number}: {e}"))?,
+        );
+    }
+    if directions.is_empty() {
+        return Err(format!(
+            "no directions after the header {DIRECTIONS_HEADER}"
+        ));
+    }
+    Ok(directions)
+}
+
+#[cfg(test)]
+mod direction_tests {
+    use super::*;
+
+    #[test]
+    fn directions_files() {
+        let parsed = parse_directions_csv(
+            "\u{feff}view_elevation_deg, view_azimuth_deg\n\n10,20\n-5.5 , 359\n",
+        )
+        .unwrap();
+        assert_eq!(parsed.len(), 2);
+        assert_eq!(
+            (parsed[1].elevation_deg(), parsed[1].azimuth_deg()),
+            (-5.5, 359.0)
+        );
+        for (text, expected) in [
+            ("", "empty"),
+            ("view_elevation_deg,view_azimuth_deg\n", "no directions"),
+            ("elevation,azimuth\n1,2\n", "line 1: the header"),
+            (
+                "view_elevation_deg,view_azimuth_deg\n1,2\n3\n",
+                "line 3: 1 values",
+            ),
+            (
+                "view_elevation_deg,view_azimuth_deg\n1,2,3\n",
+                "line 2: 3 values",
+            ),
+            (
+                "view_elevation_deg,view_azimuth_deg\nx,2\n",
+                "line 2: view_elevation_deg 'x'",
+            ),
+            (
+                "view_elevation_deg,view_azimuth_deg\n120,2\n",
+                "line 2: view elevation = 120 deg",
+            ),
+            (
+                "view_elevation_deg,view_azimuth_deg\nNaN,2\n",
+                "line 2: view elevation = NaN",
+            ),
+            (
+                "view_elevation_deg,view_azimuth_deg\n1,inf\n",
+                "line 2: view azimuth = inf",
+            ),
+        ] {
+            let error = parse_directions_csv(text).unwrap_err();
+            assert!(error.contains(expected), "{text:?}: {error}");
+            assert!(!error.contains('\n'), "{error}");
+        }
     }
 }

@@ -384,3 +384,141 @@ fn path_tracing_spectrum_has_standard_errors_and_is_deterministic() {
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("--samples"));
 }
+
+/// `sora spectrum` at earth-clear, sun 30 degrees in the south, with these
+/// direction options.
+fn earth_clear_spectrum(directions: &[&str]) -> std::process::Output {
+    let base = [
+        "spectrum",
+        "--preset",
+        "earth-clear",
+        "--sun-elevation",
+        "30",
+        "--sun-azimuth",
+        "180",
+    ];
+    sora(&[&base[..], directions].concat())
+}
+
+/// Many directions in one run give, for every direction, the very numbers
+/// of a one-direction run (the issue asks 1e-12 relative; the same code
+/// makes them equal to the last printed digit), in the long CSV layout.
+#[test]
+fn almucantar_rows_equal_one_direction_runs() {
+    let long = stdout(&earth_clear_spectrum(&["--almucantar", "5"]));
+    let mut lines = long.lines();
+    assert_eq!(
+        lines.next(),
+        Some("view_elevation_deg,view_azimuth_deg,wavelength_nm,radiance_w_m2_sr_nm")
+    );
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 72 * 21);
+    let azimuths: Vec<f64> = rows
+        .iter()
+        .step_by(21)
+        .map(|r| r[1].parse().unwrap())
+        .collect();
+    assert_eq!(azimuths[0], 180.0);
+    assert_eq!(azimuths[1], 185.0);
+    assert_eq!(azimuths[71], 175.0);
+    assert!(rows.iter().all(|r| r[0] == "30"));
+    for azimuth in ["180", "0", "95"] {
+        let one = stdout(&earth_clear_spectrum(&[
+            "--view-elevation",
+            "30",
+            "--view-azimuth",
+            azimuth,
+        ]));
+        let expected: Vec<&str> = one.lines().skip(1).collect();
+        let found: Vec<String> = rows
+            .iter()
+            .filter(|r| r[1] == azimuth)
+            .map(|r| format!("{},{}", r[2], r[3]))
+            .collect();
+        assert_eq!(found, expected, "azimuth {azimuth}");
+    }
+}
+
+#[test]
+fn principal_plane_and_directions_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("views.csv");
+    std::fs::write(&file, "view_elevation_deg,view_azimuth_deg\n90,0\n10,180\n").unwrap();
+    let listed = stdout(&earth_clear_spectrum(&[
+        "--directions",
+        file.to_str().unwrap(),
+        "--format",
+        "json",
+    ]));
+    assert!(listed.contains("\"directions\": [{\"view_elevation_deg\": 90, \"view_azimuth_deg\": 0, \"radiance_w_m2_sr_nm\": ["));
+    assert_eq!(listed.matches("\"xyz\"").count(), 2);
+    // Horizon under the sun, over the zenith, to the opposite horizon.
+    let plane = stdout(&earth_clear_spectrum(&["--principal-plane", "10"]));
+    let directions: Vec<String> = plane
+        .lines()
+        .skip(1)
+        .step_by(21)
+        .map(|l| l.split(',').take(2).collect::<Vec<_>>().join(","))
+        .collect();
+    assert_eq!(directions.len(), 19);
+    assert_eq!(directions[0], "0,180");
+    assert_eq!(directions[9], "90,180");
+    assert_eq!(directions[10], "80,0");
+    assert_eq!(directions[18], "0,0");
+    // The zenith of both runs is the same number.
+    let zenith = |csv: &str, prefix: &str| {
+        csv.lines()
+            .find(|l| l.starts_with(prefix))
+            .map(|l| l.rsplit(',').next().unwrap().parse::<f64>().unwrap())
+            .unwrap()
+    };
+    let listed_csv = stdout(&earth_clear_spectrum(&[
+        "--directions",
+        file.to_str().unwrap(),
+    ]));
+    let (a, b) = (
+        zenith(&listed_csv, "90,0,540,"),
+        zenith(&plane, "90,180,540,"),
+    );
+    assert!((a / b - 1.0).abs() < 1e-8, "{a} vs {b}");
+}
+
+#[test]
+fn bad_directions_are_one_line_errors_and_print_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let header = "view_elevation_deg,view_azimuth_deg\n";
+    for (content, expected) in [
+        (String::new(), "empty"),
+        (header.to_string(), "no directions"),
+        (format!("{header}10,0\n20\n"), "line 3: 1 values"),
+        (format!("{header}NaN,0\n"), "line 2: view elevation = NaN"),
+        (
+            format!("{header}10,0\n120,45\n"),
+            "line 3: view elevation = 120 deg",
+        ),
+        ("elevation,azimuth\n1,2\n".to_string(), "line 1: the header"),
+    ] {
+        let file = dir.path().join("views.csv");
+        std::fs::write(&file, &content).unwrap();
+        let out = earth_clear_spectrum(&["--directions", file.to_str().unwrap()]);
+        let error = common::one_line_error(&out);
+        assert!(
+            error.contains(expected) && error.contains("views.csv"),
+            "{content:?}: {error}"
+        );
+        assert!(out.stdout.is_empty(), "{content:?}");
+    }
+    for (option, value, expected) in [
+        ("--almucantar", "0", "--almucantar = 0 deg"),
+        ("--principal-plane", "-5", "--principal-plane = -5 deg"),
+        ("--almucantar", "NaN", "--almucantar = NaN deg"),
+    ] {
+        let out = earth_clear_spectrum(&[option, value]);
+        let error = common::one_line_error(&out);
+        assert!(error.contains(expected), "{error}");
+        assert!(out.stdout.is_empty());
+    }
+    // One way of naming directions at a time.
+    let out = earth_clear_spectrum(&["--almucantar", "5", "--principal-plane", "5"]);
+    assert_eq!(out.status.code(), Some(2));
+}

@@ -9,14 +9,12 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use sora::atmosphere::Atmosphere;
 use sora::camera::Camera;
 use sora::colour::{Observer, SpectrumToXyz};
-use sora::render::{
-    FastTableSize, RenderMethod, RenderSettings, Scattering, render_xyz_with_scattering,
-};
 use sora::spectrum::WavelengthGrid;
 use sora::transport::multiple_scattering::{
     MultipleScatteringField, MultipleScatteringSettings, MultipleScatteringTable,
 };
 use sora::transport::{Observation, SingleScatteringSky};
+use sora::{FastTableSize, ImageSettings, Method, Scattering, Sky};
 
 fn sky(sun_elevation_deg: f64) -> SingleScatteringSky {
     let atmosphere = Atmosphere::preset("clear-sky-reference").expect("preset");
@@ -42,22 +40,23 @@ fn multiple_scattering_benchmarks(c: &mut Criterion) {
         group.bench_function("source_table", |b| {
             b.iter(|| MultipleScatteringTable::compute(field.clone()))
         });
-        let image = RenderSettings {
-            camera: Camera::Fisheye,
-            width: 512,
-            height: 512,
-            method: RenderMethod::Fast,
-            draw_sun_disc: true,
-            table_size: FastTableSize::default(),
-        };
+        let image = ImageSettings::new(Camera::Fisheye, 512, 512);
         for (name, scattering) in [
             ("fisheye_512_single", Scattering::Single),
             ("fisheye_512_multiple", Scattering::Multiple(settings)),
         ] {
+            // Every image builds its field and tables: a new sky per iteration.
             group.bench_function(name, |b| {
                 b.iter(|| {
-                    render_xyz_with_scattering(&sky, &image, scattering, &to_xyz, &|_| {})
-                        .expect("render")
+                    Sky::from_scene(
+                        sky.clone(),
+                        scattering,
+                        Method::Fast,
+                        FastTableSize::default(),
+                    )
+                    .expect("sky")
+                    .render_xyz(&image, &to_xyz, &|_| {})
+                    .expect("render")
                 })
             });
         }

@@ -5,9 +5,9 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use sora::atmosphere::Atmosphere;
 use sora::camera::Camera;
 use sora::colour::{Observer, SpectrumToXyz};
-use sora::render::{FastTableSize, RenderMethod, RenderSettings, render_xyz};
 use sora::spectrum::WavelengthGrid;
 use sora::transport::{Observation, SingleScatteringSky, SkyViewTable};
+use sora::{FastTableSize, ImageSettings, Method, Scattering, Sky};
 
 fn sky(preset: &str) -> SingleScatteringSky {
     let atmosphere = Atmosphere::preset(preset).expect("preset");
@@ -43,25 +43,19 @@ fn render_benchmarks(c: &mut Criterion) {
                 )
             })
         });
-        let settings = RenderSettings {
-            camera: Camera::Fisheye,
-            width: 256,
-            height: 256,
-            method: RenderMethod::Fast,
-            draw_sun_disc: true,
-            table_size: size,
+        // Every image builds its tables: a new sky per iteration.
+        let render = |width: u32| {
+            Sky::from_scene(sky.clone(), Scattering::Single, Method::Fast, size)
+                .expect("sky")
+                .render_xyz(
+                    &ImageSettings::new(Camera::Fisheye, width, width),
+                    &to_xyz,
+                    &|_| {},
+                )
+                .expect("render")
         };
-        group.bench_function("fisheye_256_fast", |b| {
-            b.iter(|| render_xyz(&sky, &settings, &to_xyz, &|_| {}).expect("render"))
-        });
-        let settings_1024 = RenderSettings {
-            width: 1024,
-            height: 1024,
-            ..settings
-        };
-        group.bench_function("fisheye_1024_fast", |b| {
-            b.iter(|| render_xyz(&sky, &settings_1024, &to_xyz, &|_| {}).expect("render"))
-        });
+        group.bench_function("fisheye_256_fast", |b| b.iter(|| render(256)));
+        group.bench_function("fisheye_1024_fast", |b| b.iter(|| render(1024)));
         group.finish();
     }
 }

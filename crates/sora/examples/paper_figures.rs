@@ -25,7 +25,7 @@
 //!   identical to what that command writes.
 //!
 //! Every image goes through the same stages as `sora render`:
-//! [`render_xyz_with_scattering`] (fast method, sun disc drawn), then the
+//! [`Sky::render_xyz`] (fast method, sun disc drawn), then the
 //! colour module's [`DisplayMapping`] (sRGB, hue-preserving gamut mapping)
 //! and [`write_png`]. Exposure: each scene's multiple-scattering fisheye
 //! gets the default automatic exposure (log-average luminance -> 0.18), and
@@ -43,14 +43,10 @@ use sora::atmosphere::presets::find_preset;
 use sora::atmosphere::{Atmosphere, Sun};
 use sora::camera::{Camera, PerspectiveCamera};
 use sora::colour::{DisplayMapping, Exposure, Observer, RgbColourSpace, SpectrumToXyz};
-use sora::geometry::{angle_between_deg, direction_from_elevation_azimuth};
+use sora::geometry::angle_between_deg;
 use sora::output::{DisplayImage, write_png};
-use sora::render::{
-    FastTableSize, RenderMethod, RenderSettings, Scattering, render_xyz_with_scattering,
-};
 use sora::spectrum::{SampledSpectrum, SolarSpectrum, WavelengthGrid};
-use sora::transport::multiple_scattering::{MultipleScatteringField, MultipleScatteringSettings};
-use sora::transport::{Observation, PathTracer, SingleScatteringSky, SunColumns};
+use sora::{ImageSettings, Method, Scattering, Sky, ViewDirection};
 
 type Result<T> = std::result::Result<T, Box<dyn std::error::Error>>;
 
@@ -84,72 +80,29 @@ fn run(out: &Path) -> Result<()> {
     Ok(())
 }
 
-/// The single-scattering sky of `atmosphere` with the sun at (elevation,
-/// azimuth), seen from the ground.
+/// The sky of `atmosphere` with the sun at (elevation, azimuth), seen
+/// from the ground, with `scattering` by `method`.
 fn sky(
     atmosphere: &Atmosphere,
     grid: &WavelengthGrid,
     sun: (f64, f64),
-) -> Result<SingleScatteringSky> {
-    Ok(SingleScatteringSky::new(
-        atmosphere,
-        grid,
-        Observation {
-            observer_altitude_m: 0.0,
-            sun_elevation_deg: sun.0,
-            sun_azimuth_deg: sun.1,
-        },
-    )?)
+    scattering: Scattering,
+    method: Method,
+) -> Result<Sky> {
+    Ok(Sky::builder(atmosphere)
+        .wavelengths(*grid)
+        .sun_deg(sun.0, sun.1)
+        .scattering(scattering)
+        .method(method)
+        .build()?)
 }
 
-/// Spectral radiance toward (elevation, azimuth), W m^-2 sr^-1 nm^-1: the
-/// fast path with exact sun columns, as `sora spectrum` computes it.
-fn radiance(sky: &SingleScatteringSky, view: (f64, f64)) -> SampledSpectrum {
-    let mut scratch = sky.scratch();
-    let mut spectrum = SampledSpectrum::zeros(sky.optics().grid.len());
-    sky.compute_radiance(
-        direction_from_elevation_azimuth(view.0, view.1),
-        SunColumns::Exact,
-        &mut scratch,
-        &mut spectrum,
-    );
-    spectrum
-}
-
-/// As [`radiance`], with all orders of scattering: single scattering plus
-/// the discrete-ordinate field's higher orders and ground-reflected
-/// skylight, as `sora spectrum` (default `--scattering multiple`) computes
-/// it.
-fn radiance_with_multiple_scattering(
-    sky: &SingleScatteringSky,
-    view: (f64, f64),
-) -> SampledSpectrum {
-    let field = MultipleScatteringField::compute_for_view(
-        sky,
-        direction_from_elevation_azimuth(view.0, view.1),
-        MultipleScatteringSettings::default(),
-    );
-    add_multiple_scattering(sky, &field, view)
-}
-
-/// [`radiance`] plus what `field` adds toward (elevation, azimuth).
-fn add_multiple_scattering(
-    sky: &SingleScatteringSky,
-    field: &MultipleScatteringField,
-    view: (f64, f64),
-) -> SampledSpectrum {
-    let mut spectrum = radiance(sky, view);
-    let mut higher_orders = vec![0.0; spectrum.len()];
-    field.compute_radiance(
-        direction_from_elevation_azimuth(view.0, view.1),
-        SunColumns::Exact,
-        &mut field.scratch(),
-        &mut higher_orders,
-    );
-    for (total, added) in spectrum.values_mut().iter_mut().zip(&higher_orders) {
-        *total += added;
-    }
-    spectrum
+/// Spectral radiance toward (elevation, azimuth), W m^-2 sr^-1 nm^-1, as
+/// `sora spectrum` computes it.
+fn radiance(sky: &Sky, view: (f64, f64)) -> Result<SampledSpectrum> {
+    Ok(sky
+        .radiance(ViewDirection::new(view.0, view.1)?)?
+        .radiance_w_m2_sr_nm)
 }
 
 /// A preset with one line of its TOML replaced (a variant for comparison).
@@ -199,18 +152,33 @@ fn table1_spectrum(out: &Path, grid: &WavelengthGrid) -> Result<()> {
             [40, 150, 60],
         ),
     ];
-    let view = direction_from_elevation_azimuth(TABLE1_VIEW.0, TABLE1_VIEW.1);
     let mut columns = Vec::new();
     for (key, _, atmosphere, _) in &curves {
-        let sky = sky(atmosphere, grid, TABLE1_SUN)?;
-        let single = radiance(&sky, TABLE1_VIEW);
-        let multiple = radiance_with_multiple_scattering(&sky, TABLE1_VIEW);
+        let sky_by = |scattering, method| sky(atmosphere, grid, TABLE1_SUN, scattering, method);
+        let single = radiance(&sky_by(Scattering::Single, Method::Fast)?, TABLE1_VIEW)?;
+        let multiple = radiance(&sky_by(Scattering::multiple(), Method::Fast)?, TABLE1_VIEW)?;
         // Checks printed beside the numbers: the paper's uniform double
         // march for single scattering, the path tracer for all orders.
-        let reference = sky.compute_radiance_reference(view, 4000, 800);
-        let traced = PathTracer::new(&sky).compute_radiance(view, PATHS_PER_CHECK, 1)?;
+        let reference = radiance(
+            &sky_by(
+                Scattering::Single,
+                Method::Reference {
+                    view_steps: 4000,
+                    sun_steps: 800,
+                },
+            )?,
+            TABLE1_VIEW,
+        )?;
+        let traced = sky_by(
+            Scattering::multiple(),
+            Method::PathTracing {
+                samples: PATHS_PER_CHECK,
+                seed: 1,
+            },
+        )?
+        .radiance(ViewDirection::new(TABLE1_VIEW.0, TABLE1_VIEW.1)?)?;
         let worst_single = worst_relative_difference(&single, &reference);
-        let worst_multiple = worst_relative_difference(&multiple, &traced.total.mean);
+        let worst_multiple = worst_relative_difference(&multiple, &traced.radiance_w_m2_sr_nm);
         for (name, spectrum) in [("single", &single), ("multiple", &multiple)] {
             let (peak_nm, peak) = peak_of(grid, spectrum);
             println!(
@@ -221,7 +189,7 @@ fn table1_spectrum(out: &Path, grid: &WavelengthGrid) -> Result<()> {
         }
         println!(
             "table 1, {key}: single scattering vs the reference march {worst_single:.1e}; multiple vs the path tracer ({PATHS_PER_CHECK} paths, {:.2}% standard error at worst) {:.2}% at worst",
-            100.0 * traced.total.worst_relative_standard_error(),
+            100.0 * traced.worst_relative_standard_error(),
             100.0 * worst_multiple
         );
         columns.push((key, single, multiple));
@@ -514,32 +482,42 @@ fn scenes() -> Result<Vec<Scene>> {
 
 fn render_scene(out: &Path, grid: &WavelengthGrid, scene: &Scene) -> Result<()> {
     let started = Instant::now();
-    let sky = sky(&scene.atmosphere, grid, scene.sun)?;
+    // One sky per order of scattering, each building its tables once for
+    // all the scene's views.
+    let multiple_sky = sky(
+        &scene.atmosphere,
+        grid,
+        scene.sun,
+        Scattering::multiple(),
+        Method::Fast,
+    )?;
+    let single_sky = sky(
+        &scene.atmosphere,
+        grid,
+        scene.sun,
+        Scattering::Single,
+        Method::Fast,
+    )?;
     let to_xyz = SpectrumToXyz::new(grid, Observer::Cie1931TwoDegree);
     let mut scene_exposure = None;
     for view in &scene.views {
-        let settings = RenderSettings {
+        let settings = ImageSettings {
             camera: view.camera,
             width: view.width,
             height: view.height,
-            method: RenderMethod::Fast,
             draw_sun_disc: scene.sun_disc && view.exposure == ViewExposure::Scene,
-            table_size: FastTableSize::default(),
         };
         // Multiple scattering first: its exposure is the view's, and the
         // single-scattering picture beside it shares it.
         let mut scale = None;
-        for scattering in [
-            Scattering::Multiple(MultipleScatteringSettings::default()),
-            Scattering::Single,
-        ] {
-            let (scattering_name, file_suffix) = match scattering {
+        for sky in [&multiple_sky, &single_sky] {
+            let (scattering_name, file_suffix) = match sky.scattering() {
                 Scattering::Single if !scene.single_too => continue,
                 Scattering::Single => ("single", "_single"),
                 Scattering::Multiple(_) if scene.single_too => ("multiple", "_multiple"),
                 Scattering::Multiple(_) => ("multiple", ""),
             };
-            let xyz = render_xyz_with_scattering(&sky, &settings, scattering, &to_xyz, &|_| {})?;
+            let xyz = sky.render_xyz(&settings, &to_xyz, &|_| {})?;
             let scale = *match (view.exposure, scene_exposure) {
                 (ViewExposure::Scene, Some(scene_scale)) => scale.insert(scene_scale),
                 (ViewExposure::Scene, None) => {
@@ -637,17 +615,26 @@ fn mars_sun_glow(out: &Path, grid: &WavelengthGrid) -> Result<()> {
         "atmosphere,scattering,direction,view_elevation_deg,view_azimuth_deg,angle_from_sun_deg,y_luminance,chromaticity_x,chromaticity_y,linear_srgb_r,linear_srgb_g,linear_srgb_b,b_over_r,l440_over_l700_relative_to_sun\n",
     );
     for (name, atmosphere) in &variants {
-        let sky = sky(atmosphere, grid, (sun_el, sun_az))?;
-        let field = MultipleScatteringField::compute(&sky, MultipleScatteringSettings::default());
-        let sun = &sky.optics().solar_irradiance_w_m2_nm;
+        let single_sky = sky(
+            atmosphere,
+            grid,
+            (sun_el, sun_az),
+            Scattering::Single,
+            Method::Fast,
+        )?;
+        let multiple_sky = sky(
+            atmosphere,
+            grid,
+            (sun_el, sun_az),
+            Scattering::multiple(),
+            Method::Fast,
+        )?;
+        let sun = &single_sky.optics().solar_irradiance_w_m2_nm;
         let sun_ratio = sun[blue] / sun[red];
-        for scattering in ["single", "multiple"] {
+        for (scattering, sky) in [("single", &single_sky), ("multiple", &multiple_sky)] {
             let mut summary = Vec::new();
             for (label, el, az) in &directions {
-                let spectrum = match scattering {
-                    "single" => radiance(&sky, (*el, *az)),
-                    _ => add_multiple_scattering(&sky, &field, (*el, *az)),
-                };
+                let spectrum = radiance(sky, (*el, *az))?;
                 let xyz = to_xyz.to_xyz(&spectrum)?;
                 let [x, y] = xyz.chromaticity_xy().unwrap_or([f64::NAN, f64::NAN]);
                 let rgb = RgbColourSpace::Srgb.linear_rgb_from_xyz(xyz);

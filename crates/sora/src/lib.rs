@@ -4,17 +4,51 @@
 //! colour of a planet's sky from the physics of its air and aerosols,
 //! following Nakai & Sakai, "Atmospheric Scattering Simulation using Computer
 //! Graphics" (see `../shared/paper/NOTES.md` for its equations and misprints),
-//! and going beyond it.
+//! and going beyond it (all orders of scattering, Mie aerosols, any planet).
+//!
+//! The front door is [`Sky`]: build it once from an [`Atmosphere`], the sun,
+//! the eye, the wavelengths and the choice of physics ([`Scattering`]) and
+//! method ([`Method`]), then ask it for the radiance of one view or many,
+//! or for an image:
+//!
+//! ```
+//! # fn main() -> sora::Result<()> {
+//! use sora::{Atmosphere, Camera, ImageSettings, Sky, ViewDirection};
+//! use sora::colour::{Observer, SpectrumToXyz};
+//! let atmosphere = Atmosphere::preset("earth-clear")?;
+//! let sky = Sky::builder(&atmosphere).sun_deg(30.0, 180.0).build()?;
+//! let north = sky.radiance(ViewDirection::new(20.0, 0.0)?)?;
+//! for (nm, l) in sky.wavelengths().wavelengths_nm().zip(north.radiance_w_m2_sr_nm.values()) {
+//!     println!("{nm} nm: {l:.4e} W m^-2 sr^-1 nm^-1");
+//! }
+//! let to_xyz = SpectrumToXyz::new(sky.wavelengths(), Observer::Cie1931TwoDegree);
+//! let xyz = sky.render_xyz(&ImageSettings::new(Camera::Fisheye, 32, 32), &to_xyz, &|_| {})?;
+//! # assert_eq!(xyz.len(), 32 * 32);
+//! # Ok(())
+//! # }
+//! ```
+//!
+//! `examples/spectrum.rs` and `examples/image.rs` are the same two jobs as
+//! programs (an almucantar, a PNG).
 //!
 //! The pipeline, and the module of each stage:
 //! 1. [`spectrum`]: wavelengths, spectra as functions and as samples, the sun;
-//! 2. [`mie`] (the `sora-mie` crate): aerosol optics from Mie theory;
-//! 3. [`geometry`] and [`camera`]: the spherical planet, directions as users
+//! 2. [`atmosphere`]: the planet, its species (Rayleigh air, ozone,
+//!    parametric and Mie aerosols), their profiles, atmosphere files and
+//!    presets, and their optics on a wavelength grid;
+//! 3. [`mie`] (the `sora-mie` crate): aerosol optics from Mie theory;
+//! 4. [`geometry`] and [`camera`]: the spherical planet, directions as users
 //!    give them (elevation, azimuth clockwise from north), and which
 //!    direction each pixel sees;
-//! 4. [`colour`]: spectral radiance -> CIE XYZ -> RGB (paper §4, eq. 6),
+//! 5. [`sky`]: the [`Sky`], where single scattering (the paper's eq. 4-5)
+//!    and multiple scattering are composed, for views and images;
+//! 6. [`transport`]: the engine underneath it, for those who test or
+//!    extend it (single scattering, its reference march and tables; the
+//!    multiple-scattering field; the Monte Carlo path tracer). Its
+//!    interfaces are not stable: use [`Sky`];
+//! 7. [`colour`]: spectral radiance -> CIE XYZ -> RGB (paper §4, eq. 6),
 //!    exposure and gamut mapping;
-//! 5. [`output`]: images on disk (PNG, OpenEXR), written atomically; the only
+//! 8. [`output`]: images on disk (PNG, OpenEXR), written atomically; the only
 //!    module that touches files.
 //!
 //! Units are SI unless a name says otherwise (`wavelength_nm`). The library
@@ -29,9 +63,14 @@ pub mod error;
 pub mod geometry;
 pub mod output;
 mod parallel;
-pub mod render;
+pub mod sky;
 pub mod spectrum;
 pub mod table;
 pub mod transport;
 
+pub use atmosphere::Atmosphere;
+pub use camera::Camera;
 pub use error::{Error, Result};
+pub use geometry::ViewDirection;
+pub use sky::{FastTableSize, ImageSettings, Method, Scattering, Sky, SkyBuilder, SkyRadiance};
+pub use spectrum::WavelengthGrid;

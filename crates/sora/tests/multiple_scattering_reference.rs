@@ -25,9 +25,9 @@ use sora::geometry::{Vector3, direction_from_elevation_azimuth};
 use sora::spectrum::{SampledSpectrum, Spectrum, WavelengthGrid};
 use sora::transport::multiple_scattering::{
     MultipleScatteringField, MultipleScatteringSettings, MultipleScatteringTable,
-    forward_peak_cosine,
 };
-use sora::transport::{Observation, PathTracer, SingleScatteringSky, SkyViewTable, SunColumns};
+use sora::transport::{Observation, PathTracer, SingleScatteringSky, SunColumns};
+use sora::{FastTableSize, ImageSettings, Method, Scattering, Sky, ViewDirection};
 
 mod common;
 
@@ -59,26 +59,16 @@ fn worst_errors_against_disort(ground_albedo: f64) -> [f64; 3] {
         let sky = sky(&atmosphere, sun_elevation, 0.0);
         let field = MultipleScatteringField::compute(&sky, MultipleScatteringSettings::default());
         let table = MultipleScatteringTable::compute(field.clone());
-        let sun_columns = sky.compute_sun_column_table(128, 256);
-        let sky_view = SkyViewTable::compute_with_multiple_scattering(
-            &sky,
-            &sun_columns,
-            Some(&table),
-            128,
-            48,
-        );
+        let image_sky = Sky::from_scene(
+            sky.clone(),
+            Scattering::multiple(),
+            Method::Fast,
+            FastTableSize::default(),
+        )
+        .unwrap();
         let (mut scratch, mut ms_scratch) = (sky.scratch(), field.scratch());
         let mut single = SampledSpectrum::zeros(n);
         let (mut exact, mut tabulated) = (vec![0.0; n], vec![0.0; n]);
-        let species = sky.optics().species.len();
-        let (mut integrals, mut ground, mut phase, mut multiple, mut image) = (
-            vec![0.0; species * n],
-            vec![0.0; n],
-            vec![0.0; n],
-            vec![0.0; n],
-            vec![0.0; n],
-        );
-        let (mut forward, mut forward_radiance) = (vec![0.0; species * n], vec![0.0; n]);
         let mut geometries: Vec<(f64, f64)> = rows
             .iter()
             .filter(|r| r.sun_elevation_deg == sun_elevation && r.ground_albedo == ground_albedo)
@@ -90,33 +80,12 @@ fn worst_errors_against_disort(ground_albedo: f64) -> [f64; 3] {
             sky.compute_radiance(view, SunColumns::Exact, &mut scratch, &mut single);
             field.compute_radiance(view, SunColumns::Exact, &mut ms_scratch, &mut exact);
             table.compute_radiance(view, SunColumns::Exact, &mut ms_scratch, &mut tabulated);
-            sky_view.lookup_with_multiple_scattering(
-                view,
-                &mut integrals,
-                &mut ground,
-                &mut multiple,
-                &mut forward,
-            );
-            sky.radiance_from_integrals(
-                view.dot(sky.sun_direction()),
-                &integrals,
-                &ground,
-                &mut phase,
-                &mut image,
-            );
-            sky.radiance_from_integrals(
-                forward_peak_cosine(
-                    view.dot(sky.sun_direction()),
-                    table.field().forward_cone_rad(),
-                ),
-                &forward,
-                &vec![0.0; n],
-                &mut phase,
-                &mut forward_radiance,
-            );
-            for (r, f) in image.iter_mut().zip(&forward_radiance) {
-                *r += f;
-            }
+            let image = image_sky
+                .radiance_from_image_tables(
+                    ViewDirection::new(view_elevation, relative_azimuth).unwrap(),
+                )
+                .unwrap()
+                .radiance_w_m2_sr_nm;
             for row in rows.iter().filter(|r| {
                 r.sun_elevation_deg == sun_elevation
                     && r.ground_albedo == ground_albedo
@@ -128,7 +97,7 @@ fn worst_errors_against_disort(ground_albedo: f64) -> [f64; 3] {
                 let errors = [
                     (single[i] + exact[i]) / expected - 1.0,
                     (single[i] + tabulated[i]) / expected - 1.0,
-                    (image[i] + multiple[i]) / expected - 1.0,
+                    image[i] / expected - 1.0,
                 ];
                 if errors.iter().any(|e| e.abs() > 2e-3) {
                     eprintln!(
@@ -504,41 +473,37 @@ fn a_field_for_one_view_agrees_with_the_whole_sky_field() {
 }
 
 /// The fast image (multiply scattered radiance in the sky-view table,
-/// marched at every other node) against the per-pixel march of the source
-/// table (the reference method's), on a small fisheye.
+/// marched at every other node) against the reference method's image (the
+/// paper's march and the field's exact synthesis per pixel), on a small
+/// fisheye.
 #[test]
 fn fast_image_matches_the_per_pixel_march() {
     use sora::camera::Camera;
     use sora::colour::{Observer, SpectrumToXyz};
-    use sora::render::{
-        FastTableSize, RenderMethod, RenderSettings, Scattering, render_xyz_with_scattering,
-    };
     let atmosphere = Atmosphere::preset("clear-sky-reference").unwrap();
     let to_xyz = SpectrumToXyz::new(&WavelengthGrid::paper(), Observer::Cie1931TwoDegree);
-    let scattering = Scattering::Multiple(MultipleScatteringSettings::default());
+    let scattering = Scattering::multiple();
     for sun_elevation in [36.0, 5.0] {
-        let sky = sky(&atmosphere, sun_elevation, 0.0);
-        let mut settings = RenderSettings {
-            camera: Camera::Fisheye,
-            width: 24,
-            height: 24,
-            method: RenderMethod::Fast,
+        let scene = sky(&atmosphere, sun_elevation, 0.0);
+        let image = ImageSettings {
             draw_sun_disc: false,
-            table_size: FastTableSize::default(),
+            ..ImageSettings::new(Camera::Fisheye, 24, 24)
         };
-        let fast =
-            render_xyz_with_scattering(&sky, &settings, scattering, &to_xyz, &|_| {}).unwrap();
-        settings.method = RenderMethod::Reference {
-            view_steps: 2000,
-            sun_steps: 400,
-        };
-        let reference =
-            render_xyz_with_scattering(&sky, &settings, scattering, &to_xyz, &|_| {}).unwrap();
-        let single = {
-            settings.method = RenderMethod::Fast;
-            render_xyz_with_scattering(&sky, &settings, Scattering::Single, &to_xyz, &|_| {})
+        let render = |scattering: Scattering, method: Method| {
+            Sky::from_scene(scene.clone(), scattering, method, FastTableSize::default())
+                .unwrap()
+                .render_xyz(&image, &to_xyz, &|_| {})
                 .unwrap()
         };
+        let fast = render(scattering, Method::Fast);
+        let reference = render(
+            scattering,
+            Method::Reference {
+                view_steps: 2000,
+                sun_steps: 400,
+            },
+        );
+        let single = render(Scattering::Single, Method::Fast);
         let mut worst: f64 = 0.0;
         for ((f, r), s) in fast.iter().zip(&reference).zip(&single) {
             for (a, b, c) in [(f.x, r.x, s.x), (f.y, r.y, s.y), (f.z, r.z, s.z)] {

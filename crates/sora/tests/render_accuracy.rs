@@ -4,10 +4,9 @@
 use sora::atmosphere::Atmosphere;
 use sora::camera::Camera;
 use sora::colour::{Observer, SpectrumToXyz};
-use sora::geometry::direction_from_elevation_azimuth;
-use sora::render::{FastTableSize, RenderMethod, RenderSettings, render_xyz};
-use sora::spectrum::{SampledSpectrum, WavelengthGrid};
-use sora::transport::{Observation, SingleScatteringSky, SkyViewTable, SunColumns};
+use sora::spectrum::WavelengthGrid;
+use sora::transport::{Observation, SingleScatteringSky};
+use sora::{FastTableSize, ImageSettings, Method, Scattering, Sky, ViewDirection};
 
 /// A deterministic stream of numbers in [0, 1) (64-bit LCG, Knuth's MMIX).
 struct Lcg(u64);
@@ -42,43 +41,33 @@ fn sky_of(
     SingleScatteringSky::new(atmosphere, &WavelengthGrid::paper(), observation).unwrap()
 }
 
+/// The single-scattering sky of `scene` by `method`.
+fn single(scene: &SingleScatteringSky, method: Method) -> Sky {
+    Sky::from_scene(
+        scene.clone(),
+        Scattering::Single,
+        method,
+        FastTableSize::default(),
+    )
+    .unwrap()
+}
+
 /// Worst relative difference between the table lookup and the exact fast
 /// path over random directions, for radiances above 1e-3 of the largest.
-fn worst_table_error(sky: &SingleScatteringSky, directions: usize) -> f64 {
-    let size = FastTableSize::default();
-    let sun_columns =
-        sky.compute_sun_column_table(size.sun_column_nodes.0, size.sun_column_nodes.1);
-    let table = SkyViewTable::compute(
-        sky,
-        &sun_columns,
-        size.sky_view_nodes.0,
-        size.sky_view_nodes.1,
-    );
-    let n = sky.optics().grid.len();
-    let species = sky.optics().species.len();
-    let (mut integrals, mut ground, mut phase, mut looked_up) = (
-        vec![0.0; species * n],
-        vec![0.0; n],
-        vec![0.0; n],
-        vec![0.0; n],
-    );
-    let mut scratch = sky.scratch();
-    let mut exact = SampledSpectrum::zeros(n);
+fn worst_table_error(scene: &SingleScatteringSky, directions: usize) -> f64 {
+    let sky = single(scene, Method::Fast);
     let mut random = Lcg(7);
     let mut samples = Vec::new();
     for _ in 0..directions {
         let elevation = (2.0 * random.next() - 1.0).asin().to_degrees();
-        let view = direction_from_elevation_azimuth(elevation, 360.0 * random.next());
-        table.lookup(view, &mut integrals, &mut ground);
-        sky.radiance_from_integrals(
-            view.dot(sky.sun_direction()),
-            &integrals,
-            &ground,
-            &mut phase,
-            &mut looked_up,
-        );
-        sky.compute_radiance(view, SunColumns::Exact, &mut scratch, &mut exact);
-        samples.push((elevation, exact.values().to_vec(), looked_up.clone()));
+        let view = ViewDirection::new(elevation, 360.0 * random.next()).unwrap();
+        let looked_up = sky.radiance_from_image_tables(view).unwrap();
+        let exact = sky.radiance(view).unwrap();
+        samples.push((
+            elevation,
+            exact.radiance_w_m2_sr_nm.into_values(),
+            looked_up.radiance_w_m2_sr_nm.into_values(),
+        ));
     }
     let largest = samples
         .iter()
@@ -143,20 +132,20 @@ fn worst_difference_of_images(
     size: u32,
 ) -> f64 {
     let to_xyz = SpectrumToXyz::new(&WavelengthGrid::paper(), Observer::Cie1931TwoDegree);
-    let mut settings = RenderSettings {
-        camera: Camera::Fisheye,
-        width: size,
-        height: size,
-        method: RenderMethod::Fast,
+    let image = ImageSettings {
         draw_sun_disc: false,
-        table_size: FastTableSize::default(),
+        ..ImageSettings::new(Camera::Fisheye, size, size)
     };
-    let fast = render_xyz(sky, &settings, &to_xyz, &|_| {}).unwrap();
-    settings.method = RenderMethod::Reference {
+    let render = |method| {
+        single(sky, method)
+            .render_xyz(&image, &to_xyz, &|_| {})
+            .unwrap()
+    };
+    let fast = render(Method::Fast);
+    let reference = render(Method::Reference {
         view_steps: 2000,
         sun_steps: 400,
-    };
-    let reference = render_xyz(sky, &settings, &to_xyz, &|_| {}).unwrap();
+    });
     let mut worst: f64 = 0.0;
     for (f, r) in fast.iter().zip(&reference) {
         for (a, b) in [(f.x, r.x), (f.y, r.y), (f.z, r.z)] {
@@ -208,15 +197,22 @@ fn fast_path_matches_the_reference_path_in_random_directions() {
     for case in 0..12 {
         let sun_elevation = 5.0 + 85.0 * random.next();
         let altitude = if case % 3 == 2 { 10e3 } else { 0.0 };
-        let sky = sky("clear-sky-reference", sun_elevation, altitude);
-        let n = sky.optics().grid.len();
-        let mut scratch = sky.scratch();
-        let mut fast = SampledSpectrum::zeros(n);
+        let scene = sky("clear-sky-reference", sun_elevation, altitude);
+        let (fast_sky, reference_sky) = (
+            single(&scene, Method::Fast),
+            single(
+                &scene,
+                Method::Reference {
+                    view_steps: 4000,
+                    sun_steps: 800,
+                },
+            ),
+        );
         for _ in 0..4 {
             let elevation = (2.0 * random.next() - 1.0).asin().to_degrees();
-            let view = direction_from_elevation_azimuth(elevation, 360.0 * random.next());
-            sky.compute_radiance(view, SunColumns::Exact, &mut scratch, &mut fast);
-            let reference = sky.compute_radiance_reference(view, 4000, 800);
+            let view = ViewDirection::new(elevation, 360.0 * random.next()).unwrap();
+            let fast = fast_sky.radiance(view).unwrap().radiance_w_m2_sr_nm;
+            let reference = reference_sky.radiance(view).unwrap().radiance_w_m2_sr_nm;
             for (f, r) in fast.values().iter().zip(reference.values()) {
                 if *r > 0.0 {
                     let error = (f / r - 1.0).abs();

@@ -6,13 +6,13 @@ use std::time::Instant;
 
 use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
+use sora::ImageSettings;
 use sora::camera::{Camera, PerspectiveCamera};
 use sora::colour::{RgbColourSpace, SpectrumToXyz};
 use sora::output::{
     ChannelKind, DisplayImage, ExrOptions, ExrSampleType, LinearImage, OutputFormat, write_exr,
     write_png,
 };
-use sora::render::{FastTableSize, RenderMethod, RenderSettings, render_xyz_with_scattering};
 
 use crate::arguments::{AtmosphereSource, ColourOptions, Scattering, SunAndObserver};
 
@@ -162,27 +162,22 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     }
     let mut atmosphere = args.source.load()?;
     let started = Instant::now();
-    let sky = args.sun.sky(&mut atmosphere)?;
-    let to_xyz = SpectrumToXyz::new(&args.sun.wavelengths, args.colour.observer);
-    let settings = RenderSettings {
+    let method = match args.method {
+        Method::Fast => sora::Method::Fast,
+        Method::Reference => sora::Method::REFERENCE_DEFAULT,
+    };
+    let sky = args
+        .sun
+        .sky(&mut atmosphere, args.scattering.to_library(), method)?;
+    let to_xyz = SpectrumToXyz::new(sky.wavelengths(), args.colour.observer);
+    let image = ImageSettings {
         camera,
         width,
         height,
-        method: match args.method {
-            Method::Fast => RenderMethod::Fast,
-            Method::Reference => RenderMethod::REFERENCE_DEFAULT,
-        },
         draw_sun_disc: !args.no_sun_disc,
-        table_size: FastTableSize::default(),
     };
     let bar = progress_bar(height as u64);
-    let xyz = render_xyz_with_scattering(
-        &sky,
-        &settings,
-        args.scattering.to_render(),
-        &to_xyz,
-        &|rows| bar.set_position(rows as u64),
-    )?;
+    let xyz = sky.render_xyz(&image, &to_xyz, &|rows| bar.set_position(rows as u64))?;
     bar.finish_and_clear();
     let render_seconds = started.elapsed().as_secs_f64();
 

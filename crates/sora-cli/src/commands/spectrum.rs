@@ -1,40 +1,44 @@
-//! `sora spectrum`: the sky's spectral radiance in one direction.
+//! `sora spectrum`: the sky's spectral radiance in one direction or many.
 
 use std::io::Write;
 use std::time::Instant;
 
+use anyhow::Context;
 use clap::{Args, ValueEnum};
 use sora::colour::{RgbColourSpace, SpectrumToXyz};
-use sora::geometry::direction_from_elevation_azimuth;
-use sora::spectrum::SampledSpectrum;
-use sora::transport::multiple_scattering::{MultipleScatteringField, MultipleScatteringSettings};
-use sora::transport::{PathTracer, SunColumns};
+use sora::{SkyRadiance, ViewDirection};
 
-use crate::arguments::{AtmosphereSource, Scattering, SunAndObserver};
+use crate::arguments::{AtmosphereSource, Scattering, SunAndObserver, parse_directions_csv};
 
-/// Spectral radiance of the sky in one direction.
+/// Spectral radiance of the sky in one direction or many.
 ///
-/// Prints CSV wavelength_nm,radiance_w_m2_sr_nm on stdout (the colour of the
-/// spectrum, CIE XYZ and linear sRGB, goes to stderr), or everything as JSON
-/// with --format json. Radiance is in W m^-2 sr^-1 nm^-1 for the
-/// atmosphere's sun.
+/// One direction (--view-elevation and --view-azimuth): CSV
+/// wavelength_nm,radiance_w_m2_sr_nm on stdout (the colour of the spectrum,
+/// CIE XYZ and linear sRGB, goes to stderr), or everything as JSON with
+/// --format json. Many directions (--directions FILE.csv, --almucantar,
+/// --principal-plane): one long CSV,
+/// view_elevation_deg,view_azimuth_deg,wavelength_nm,radiance_w_m2_sr_nm,
+/// or JSON with one object per direction; every table is built once for all
+/// of them. Radiance is in W m^-2 sr^-1 nm^-1 for the atmosphere's sun.
 ///
 /// Methods: fast and reference compute single scattering (plus the sunlit
 /// ground) and, with --scattering multiple (the default), add all higher
 /// orders and the skylight reflected by the ground (a discrete-ordinate
 /// field, synthesised exactly along the view); --scattering single gives
 /// the paper's model. path-tracing is the Monte Carlo reference for all
-/// orders of scattering and ground reflection, and adds a third column,
+/// orders of scattering and ground reflection, and adds a column,
 /// standard_error_w_m2_sr_nm, the standard error of each value (it shrinks
 /// as 1/sqrt(--samples); on a terminal a progress bar shows the time left).
 ///
-/// Example (the paper's Table 1 geometry):
+/// Examples (the paper's Table 1 geometry; an almucantar every 5 degrees):
 ///   sora spectrum --preset paper-earth --sun-elevation 36 --sun-azimuth 207 \
 ///       --view-elevation 17 --view-azimuth 347
 ///   sora spectrum --preset clear-sky-reference --sun-elevation 36 \
 ///       --view-elevation 17 --view-azimuth 347 --method path-tracing --samples 100000
+///   sora spectrum --preset earth-clear --sun-elevation 30 --almucantar 5
 #[derive(Debug, Args)]
 #[command(verbatim_doc_comment)]
+#[group(id = "views", required = true, multiple = false)]
 pub struct SpectrumArgs {
     #[command(flatten)]
     source: AtmosphereSource,
@@ -43,12 +47,49 @@ pub struct SpectrumArgs {
     sun: SunAndObserver,
 
     /// View elevation above the horizon, degrees (-90..90)
-    #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
-    view_elevation: f64,
+    #[arg(
+        long,
+        value_name = "DEG",
+        allow_hyphen_values = true,
+        requires = "view_azimuth",
+        group = "views"
+    )]
+    view_elevation: Option<f64>,
 
     /// View azimuth clockwise from north, degrees
-    #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
-    view_azimuth: f64,
+    #[arg(
+        long,
+        value_name = "DEG",
+        allow_hyphen_values = true,
+        requires = "view_elevation"
+    )]
+    view_azimuth: Option<f64>,
+
+    /// Many directions: a CSV file with the header
+    /// view_elevation_deg,view_azimuth_deg and one direction per line
+    #[arg(long, value_name = "FILE.csv", group = "views")]
+    directions: Option<std::path::PathBuf>,
+
+    /// Many directions: the almucantar (the sun's elevation) at azimuths
+    /// every STEP degrees, starting at the sun's (5 gives 72 directions)
+    #[arg(
+        long,
+        value_name = "STEP_DEG",
+        group = "views",
+        allow_hyphen_values = true
+    )]
+    almucantar: Option<f64>,
+
+    /// Many directions: the principal plane (the sun's vertical) every
+    /// STEP degrees of elevation, from the horizon below the sun over the
+    /// zenith to the opposite horizon
+    #[arg(
+        long,
+        value_name = "STEP_DEG",
+        group = "views",
+        allow_hyphen_values = true
+    )]
+    principal_plane: Option<f64>,
 
     /// How single scattering is integrated: fast (Gauss-Legendre column
     /// march) or reference (the paper's uniform double march, slow), each
@@ -94,19 +135,64 @@ enum Format {
     Json,
 }
 
+/// Directions every `step_deg` over a turn of `span_deg`: how many, checked.
+fn steps_over(option: &str, step_deg: f64, span_deg: f64) -> anyhow::Result<usize> {
+    if !(step_deg.is_finite() && step_deg > 0.0 && step_deg <= 90.0) {
+        anyhow::bail!("{option} = {step_deg} deg is out of range: allowed > 0 and <= 90 deg");
+    }
+    // The last step ends short of (almucantar) or at (principal plane) the span.
+    Ok((span_deg / step_deg + 1e-9).floor() as usize)
+}
+
+/// The directions the options ask for.
+fn directions(args: &SpectrumArgs) -> anyhow::Result<Vec<ViewDirection>> {
+    let (sun_elevation, sun_azimuth) = (args.sun.sun_elevation, args.sun.sun_azimuth);
+    if let (Some(elevation), Some(azimuth)) = (args.view_elevation, args.view_azimuth) {
+        if !(-90.0..=90.0).contains(&elevation) {
+            anyhow::bail!(
+                "--view-elevation = {elevation} deg is out of range: allowed -90..=90 deg"
+            );
+        }
+        if !azimuth.is_finite() {
+            anyhow::bail!("--view-azimuth = {azimuth} deg is not a finite angle");
+        }
+        return Ok(vec![ViewDirection::new(elevation, azimuth)?]);
+    }
+    if let Some(path) = &args.directions {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("cannot read {}", path.display()))?;
+        return parse_directions_csv(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()));
+    }
+    let views: Result<Vec<ViewDirection>, sora::Error> = if let Some(step) = args.almucantar {
+        let count = steps_over("--almucantar", step, 360.0 - 1e-6)? + 1;
+        (0..count)
+            .map(|k| {
+                ViewDirection::new(
+                    sun_elevation,
+                    (sun_azimuth + k as f64 * step).rem_euclid(360.0),
+                )
+            })
+            .collect()
+    } else {
+        let step = args
+            .principal_plane
+            .expect("clap requires one direction option");
+        let count = steps_over("--principal-plane", step, 180.0)? + 1;
+        (0..count)
+            .map(|k| {
+                let e = k as f64 * step;
+                if e <= 90.0 {
+                    ViewDirection::new(e, sun_azimuth.rem_euclid(360.0))
+                } else {
+                    ViewDirection::new(180.0 - e, (sun_azimuth + 180.0).rem_euclid(360.0))
+                }
+            })
+            .collect()
+    };
+    Ok(views?)
+}
+
 pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
-    if !(-90.0..=90.0).contains(&args.view_elevation) {
-        anyhow::bail!(
-            "--view-elevation = {} deg is out of range: allowed -90..=90 deg",
-            args.view_elevation
-        );
-    }
-    if !args.view_azimuth.is_finite() {
-        anyhow::bail!(
-            "--view-azimuth = {} deg is not a finite angle",
-            args.view_azimuth
-        );
-    }
     if args.method != Method::PathTracing && (args.samples.is_some() || args.seed.is_some()) {
         anyhow::bail!("--samples and --seed apply to --method path-tracing only");
     }
@@ -122,117 +208,173 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
         );
     }
     let seed = args.seed.unwrap_or(1);
+    let (scattering, method) = match args.method {
+        Method::Fast => (
+            args.scattering.unwrap_or(Scattering::Multiple),
+            sora::Method::Fast,
+        ),
+        Method::Reference => (
+            args.scattering.unwrap_or(Scattering::Multiple),
+            sora::Method::Reference {
+                view_steps: 4000,
+                sun_steps: 800,
+            },
+        ),
+        Method::PathTracing => (
+            Scattering::Multiple,
+            sora::Method::PathTracing { samples, seed },
+        ),
+    };
     let mut atmosphere = args.source.load()?;
-    let sky = args.sun.sky(&mut atmosphere)?;
-    let grid = args.sun.wavelengths;
-    let view = direction_from_elevation_azimuth(args.view_elevation, args.view_azimuth);
-    let (mut radiance, standard_error) = match args.method {
-        Method::Fast => {
-            let mut scratch = sky.scratch();
-            let mut radiance = SampledSpectrum::zeros(grid.len());
-            sky.compute_radiance(view, SunColumns::Exact, &mut scratch, &mut radiance);
-            (radiance, None)
-        }
-        Method::Reference => (sky.compute_radiance_reference(view, 4000, 800), None),
-        Method::PathTracing => {
-            let started = Instant::now();
-            let bar = progress_bar(samples);
-            let traced = PathTracer::new(&sky).compute_radiance_with_progress(
-                view,
-                samples,
-                seed,
-                &|done| bar.set_position(done),
-            )?;
-            bar.finish_and_clear();
-            let seconds = started.elapsed().as_secs_f64();
-            eprintln!(
-                "path tracing: {samples} paths (seed {seed}) in {seconds:.3} s ({:.0} paths/s); largest relative standard error {:.3}%",
-                samples as f64 / seconds,
-                100.0 * traced.total.worst_relative_standard_error()
-            );
-            (traced.total.mean, Some(traced.total.standard_error))
-        }
-    };
-    let scattering = match args.method {
-        Method::PathTracing => None,
-        _ => Some(args.scattering.unwrap_or(Scattering::Multiple)),
-    };
-    if scattering == Some(Scattering::Multiple) {
-        let field = MultipleScatteringField::compute_for_view(
-            &sky,
-            view,
-            MultipleScatteringSettings::default(),
+    let sky = args
+        .sun
+        .sky(&mut atmosphere, scattering.to_library(), method)?;
+    let grid = *sky.wavelengths();
+    let views = directions(&args)?;
+    let started = Instant::now();
+    let results = if args.method == Method::PathTracing {
+        let bar = progress_bar(samples * views.len() as u64);
+        let results = sky.radiances_with_progress(&views, &|done, _| bar.set_position(done))?;
+        bar.finish_and_clear();
+        let seconds = started.elapsed().as_secs_f64();
+        let worst = results
+            .iter()
+            .map(SkyRadiance::worst_relative_standard_error)
+            .fold(0.0, f64::max);
+        eprintln!(
+            "path tracing: {samples} paths per direction (seed {seed}) in {seconds:.3} s ({:.0} paths/s); largest relative standard error {:.3}%",
+            (samples * views.len() as u64) as f64 / seconds,
+            100.0 * worst
         );
-        let mut multiple = vec![0.0; grid.len()];
-        field.compute_radiance(view, SunColumns::Exact, &mut field.scratch(), &mut multiple);
-        for (r, m) in radiance.values_mut().iter_mut().zip(&multiple) {
-            *r += m;
-        }
-    }
-    let xyz =
-        SpectrumToXyz::new(&grid, sora::colour::Observer::Cie1931TwoDegree).to_xyz(&radiance)?;
-    let rgb = RgbColourSpace::Srgb.linear_rgb_from_xyz(xyz);
-    let mut out = std::io::stdout().lock();
-    match args.format {
-        Format::Csv => {
-            match &standard_error {
-                None => {
-                    writeln!(out, "wavelength_nm,radiance_w_m2_sr_nm")?;
-                    for (wavelength, value) in grid.wavelengths_nm().zip(radiance.values()) {
-                        writeln!(out, "{wavelength},{value:.9e}")?;
+        results
+    } else {
+        sky.radiances(&views)?
+    };
+    let to_xyz = SpectrumToXyz::new(&grid, sora::colour::Observer::Cie1931TwoDegree);
+    let colours = results
+        .iter()
+        .map(|r| {
+            let xyz = to_xyz.to_xyz(&r.radiance_w_m2_sr_nm)?;
+            Ok((xyz, RgbColourSpace::Srgb.linear_rgb_from_xyz(xyz)))
+        })
+        .collect::<sora::Result<Vec<_>>>()?;
+    let path_tracing = args.method == Method::PathTracing;
+    let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+    let number_list = |values: &[f64], format: fn(&f64) -> String| {
+        values.iter().map(format).collect::<Vec<_>>().join(", ")
+    };
+    let wavelengths: Vec<f64> = grid.wavelengths_nm().collect();
+    // A direction's JSON members: its spectrum (and errors), its colour.
+    let json_direction =
+        |r: &SkyRadiance, (xyz, rgb): &(sora::colour::Xyz, sora::colour::LinearRgb)| {
+            let errors = match &r.standard_error_w_m2_sr_nm {
+                None => String::new(),
+                Some(errors) => format!(
+                    ", \"standard_error_w_m2_sr_nm\": [{}]",
+                    number_list(errors.values(), |e| format!("{e:.3e}"))
+                ),
+            };
+            (
+                format!(
+                    "\"radiance_w_m2_sr_nm\": [{}]{errors}",
+                    number_list(r.radiance_w_m2_sr_nm.values(), |v| format!("{v:.9e}"))
+                ),
+                format!(
+                    "\"xyz\": [{:.9e}, {:.9e}, {:.9e}], \"linear_srgb\": [{:.9e}, {:.9e}, {:.9e}]",
+                    xyz.x, xyz.y, xyz.z, rgb.r, rgb.g, rgb.b
+                ),
+            )
+        };
+    let run_json = if path_tracing {
+        format!(", \"samples\": {samples}, \"seed\": {seed}")
+    } else {
+        String::new()
+    };
+    let wavelength_json = number_list(&wavelengths, |w| format!("{w}"));
+    if args.view_elevation.is_some() {
+        // One direction: the two- or three-column spectrum.
+        let (result, (xyz, rgb)) = (&results[0], &colours[0]);
+        match args.format {
+            Format::Csv => {
+                let header = if path_tracing {
+                    "wavelength_nm,radiance_w_m2_sr_nm,standard_error_w_m2_sr_nm"
+                } else {
+                    "wavelength_nm,radiance_w_m2_sr_nm"
+                };
+                writeln!(out, "{header}")?;
+                for (i, wavelength) in wavelengths.iter().enumerate() {
+                    write!(out, "{wavelength},{:.9e}", result.radiance_w_m2_sr_nm[i])?;
+                    if let Some(errors) = &result.standard_error_w_m2_sr_nm {
+                        write!(out, ",{:.3e}", errors[i])?;
                     }
+                    writeln!(out)?;
                 }
-                Some(errors) => {
-                    writeln!(
-                        out,
-                        "wavelength_nm,radiance_w_m2_sr_nm,standard_error_w_m2_sr_nm"
-                    )?;
-                    for ((wavelength, value), error) in grid
-                        .wavelengths_nm()
-                        .zip(radiance.values())
-                        .zip(errors.values())
-                    {
-                        writeln!(out, "{wavelength},{value:.9e},{error:.3e}")?;
+                eprintln!(
+                    "XYZ {:.6e} {:.6e} {:.6e}; linear sRGB {:.6e} {:.6e} {:.6e}",
+                    xyz.x, xyz.y, xyz.z, rgb.r, rgb.g, rgb.b
+                );
+            }
+            Format::Json => {
+                let (spectrum, colour) = json_direction(result, &colours[0]);
+                writeln!(
+                    out,
+                    "{{\"wavelength_nm\": [{wavelength_json}], {spectrum}{run_json}, {colour}}}"
+                )?;
+            }
+        }
+    } else {
+        match args.format {
+            Format::Csv => {
+                let header = if path_tracing {
+                    "view_elevation_deg,view_azimuth_deg,wavelength_nm,radiance_w_m2_sr_nm,standard_error_w_m2_sr_nm"
+                } else {
+                    "view_elevation_deg,view_azimuth_deg,wavelength_nm,radiance_w_m2_sr_nm"
+                };
+                writeln!(out, "{header}")?;
+                for (view, result) in views.iter().zip(&results) {
+                    for (i, wavelength) in wavelengths.iter().enumerate() {
+                        write!(
+                            out,
+                            "{},{},{wavelength},{:.9e}",
+                            view.elevation_deg(),
+                            view.azimuth_deg(),
+                            result.radiance_w_m2_sr_nm[i]
+                        )?;
+                        if let Some(errors) = &result.standard_error_w_m2_sr_nm {
+                            write!(out, ",{:.3e}", errors[i])?;
+                        }
+                        writeln!(out)?;
                     }
                 }
             }
-            eprintln!(
-                "XYZ {:.6e} {:.6e} {:.6e}; linear sRGB {:.6e} {:.6e} {:.6e}",
-                xyz.x, xyz.y, xyz.z, rgb.r, rgb.g, rgb.b
-            );
+            Format::Json => {
+                let directions: Vec<String> = views
+                    .iter()
+                    .zip(&results)
+                    .zip(&colours)
+                    .map(|((view, result), colour)| {
+                        let (spectrum, colour) = json_direction(result, colour);
+                        format!(
+                            "{{\"view_elevation_deg\": {}, \"view_azimuth_deg\": {}, {spectrum}, {colour}}}",
+                            view.elevation_deg(),
+                            view.azimuth_deg(),
+                        )
+                    })
+                    .collect();
+                writeln!(
+                    out,
+                    "{{\"wavelength_nm\": [{wavelength_json}]{run_json}, \"directions\": [{}]}}",
+                    directions.join(", ")
+                )?;
+            }
         }
-        Format::Json => {
-            let values: Vec<String> = radiance
-                .values()
-                .iter()
-                .map(|v| format!("{v:.9e}"))
-                .collect();
-            let wavelengths: Vec<String> = grid.wavelengths_nm().map(|w| format!("{w}")).collect();
-            let errors = match &standard_error {
-                None => String::new(),
-                Some(errors) => {
-                    let errors: Vec<String> =
-                        errors.values().iter().map(|e| format!("{e:.3e}")).collect();
-                    format!(
-                        ", \"standard_error_w_m2_sr_nm\": [{}], \"samples\": {samples}, \"seed\": {seed}",
-                        errors.join(", ")
-                    )
-                }
-            };
-            writeln!(
-                out,
-                "{{\"wavelength_nm\": [{}], \"radiance_w_m2_sr_nm\": [{}]{errors}, \"xyz\": [{:.9e}, {:.9e}, {:.9e}], \"linear_srgb\": [{:.9e}, {:.9e}, {:.9e}]}}",
-                wavelengths.join(", "),
-                values.join(", "),
-                xyz.x,
-                xyz.y,
-                xyz.z,
-                rgb.r,
-                rgb.g,
-                rgb.b
-            )?;
-        }
+        eprintln!(
+            "{} directions in {:.3} s",
+            views.len(),
+            started.elapsed().as_secs_f64()
+        );
     }
+    out.flush()?;
     Ok(())
 }
 

@@ -23,7 +23,7 @@
 //!   straight up or down).
 
 use crate::error::{Error, Result};
-use crate::geometry::{Vector3, direction_from_elevation_azimuth};
+use crate::geometry::{Vector3, ViewDirection, direction_from_elevation_azimuth};
 
 /// A projection from image pixels to sky directions.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -51,22 +51,7 @@ impl PerspectiveCamera {
         azimuth_deg: f64,
         horizontal_fov_deg: f64,
     ) -> Result<PerspectiveCamera> {
-        if !(-90.0..=90.0).contains(&elevation_deg) {
-            return Err(Error::out_of_range(
-                "view elevation",
-                elevation_deg,
-                "deg",
-                "-90..=90",
-            ));
-        }
-        if !azimuth_deg.is_finite() {
-            return Err(Error::out_of_range(
-                "view azimuth",
-                azimuth_deg,
-                "deg",
-                "a finite angle",
-            ));
-        }
+        let forward = ViewDirection::new(elevation_deg, azimuth_deg)?.to_vector();
         if !(horizontal_fov_deg > 0.0 && horizontal_fov_deg < 180.0) {
             return Err(Error::out_of_range(
                 "field of view",
@@ -75,7 +60,6 @@ impl PerspectiveCamera {
                 "0 < fov < 180",
             ));
         }
-        let forward = direction_from_elevation_azimuth(elevation_deg, azimuth_deg);
         let zenith = Vector3::new(0.0, 0.0, 1.0);
         // Near the zenith or nadir the horizontal reference is the view
         // azimuth itself, so the image's up points along it.

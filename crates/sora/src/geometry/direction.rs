@@ -7,6 +7,8 @@
 
 use std::ops::{Add, Mul, Neg, Sub};
 
+use crate::error::{Error, Result};
+
 /// A 3-vector of f64 (positions in metres or unit directions).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Vector3 {
@@ -67,6 +69,56 @@ impl Neg for Vector3 {
     type Output = Vector3;
     fn neg(self) -> Vector3 {
         Vector3::new(-self.x, -self.y, -self.z)
+    }
+}
+
+/// A view direction as users give it: elevation above the horizon and
+/// azimuth clockwise from north, degrees, checked once where it is made.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ViewDirection {
+    elevation_deg: f64,
+    azimuth_deg: f64,
+}
+
+impl ViewDirection {
+    /// `elevation_deg` in -90..=90 (negative: below the horizon) and a
+    /// finite `azimuth_deg` (0 N, 90 E, 180 S, 270 W; any turn is accepted).
+    pub fn new(elevation_deg: f64, azimuth_deg: f64) -> Result<ViewDirection> {
+        if !(-90.0..=90.0).contains(&elevation_deg) {
+            return Err(Error::out_of_range(
+                "view elevation",
+                elevation_deg,
+                "deg",
+                "-90..=90",
+            ));
+        }
+        if !azimuth_deg.is_finite() {
+            return Err(Error::out_of_range(
+                "view azimuth",
+                azimuth_deg,
+                "deg",
+                "a finite angle",
+            ));
+        }
+        Ok(ViewDirection {
+            elevation_deg,
+            azimuth_deg,
+        })
+    }
+
+    /// Elevation above the horizon, degrees.
+    pub fn elevation_deg(self) -> f64 {
+        self.elevation_deg
+    }
+
+    /// Azimuth clockwise from north, degrees, as given.
+    pub fn azimuth_deg(self) -> f64 {
+        self.azimuth_deg
+    }
+
+    /// The unit vector in the east-north-up frame.
+    pub fn to_vector(self) -> Vector3 {
+        direction_from_elevation_azimuth(self.elevation_deg, self.azimuth_deg)
     }
 }
 

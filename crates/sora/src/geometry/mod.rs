@@ -9,7 +9,8 @@ pub mod direction;
 pub mod planet_sphere;
 
 pub use direction::{
-    Vector3, angle_between_deg, direction_from_elevation_azimuth, elevation_azimuth_from_direction,
+    Vector3, ViewDirection, angle_between_deg, direction_from_elevation_azimuth,
+    elevation_azimuth_from_direction,
 };
 pub use planet_sphere::{
     distance_to_ground, distance_to_ground_boundary, distance_to_top_boundary,

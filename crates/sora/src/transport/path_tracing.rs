@@ -210,13 +210,17 @@ impl SpectralEstimate {
     /// The largest standard error relative to the mean over the
     /// wavelengths (0 where both are 0, infinite where only the mean is).
     pub fn worst_relative_standard_error(&self) -> f64 {
-        self.mean
-            .values()
-            .iter()
-            .zip(self.standard_error.values())
-            .map(|(m, e)| if *e == 0.0 { 0.0 } else { e / m.abs() })
-            .fold(0.0, f64::max)
+        worst_relative_error(self.mean.values(), self.standard_error.values())
     }
+}
+
+/// The largest of |error / mean| over paired values (0 where the error is
+/// 0, infinite where only the mean is).
+pub(crate) fn worst_relative_error(mean: &[f64], error: &[f64]) -> f64 {
+    mean.iter()
+        .zip(error)
+        .map(|(m, e)| if *e == 0.0 { 0.0 } else { e / m.abs() })
+        .fold(0.0, f64::max)
 }
 
 /// What [`PathTracer`] returns: the total and its parts by the light's

@@ -386,11 +386,9 @@ pub struct MultipleScatteringScratch {
     /// ln R(x, view) per wavelength at the current node (R = J / beta*_sca,
     /// radiance units).
     log_source: Vec<f64>,
-    /// Lambda table of the view direction (exact synthesis).
+    /// Lambda table of the view direction times cos(m phi) (exact
+    /// synthesis), [m * streams + l].
     view_legendre: Vec<f64>,
-    /// 2 pi w_b p*_jm(mu_view, mu_b) of one wavelength (exact synthesis),
-    /// [(j * harmonics + m) * streams + b].
-    view_kernel: Vec<f64>,
     /// Columns from the current node toward the sun, m.
     sun_columns: Vec<f64>,
     /// Ends of the Gauss panels of the view ray and of a path toward the
@@ -432,7 +430,6 @@ impl ViewRayOptics {
             node_columns: vec![0.0; s],
             log_source: vec![0.0; w],
             view_legendre: vec![0.0; streams * streams],
-            view_kernel: vec![0.0; s * streams * streams],
             sun_columns: vec![0.0; s],
             view_panel_ends: Vec::with_capacity(self.corners.most_panel_ends(self.panels)),
             sun_panel_ends: Vec::with_capacity(self.corners.most_panel_ends(SUN_RAY_PANELS)),
@@ -626,6 +623,9 @@ pub struct MultipleScatteringField {
     /// L_m(z_k, mu_b), [((s * wavelengths + i) * solution) ...].
     radiance: Vec<f64>,
     solution_len: usize,
+    /// The source's Legendre moments for the exact synthesis, made on
+    /// first use ([`MultipleScatteringField::source_moments`]).
+    moments: std::sync::OnceLock<Vec<f64>>,
 }
 
 impl MultipleScatteringField {
@@ -893,7 +893,76 @@ impl MultipleScatteringField {
             harmonics,
             radiance,
             solution_len,
+            moments: std::sync::OnceLock::new(),
         }
+    }
+
+    /// The scattering source's moments per sun node s, wavelength i, level
+    /// k, harmonic m and degree l >= m (the view direction factored out):
+    ///
+    /// ```text
+    /// S[s, i, k, m, l] = c_l(k) sum_b 2 pi w_b Lambda_l^m(mu_b) L_m(z_k, mu_b; s)
+    /// c_l(k) = sum_j (beta*_sca,j(z_k) / beta*_sca(z_k)) c_jl
+    /// ```
+    ///
+    /// so that J / beta*_sca at (k, s) toward a view of zenith cosine mu_v
+    /// and azimuth phi from the sun is sum_m cos(m phi) sum_l
+    /// Lambda_l^m(mu_v) S[s, i, k, m, l]: the same sums as the harmonic
+    /// kernels p*_jm(mu_v, mu_b) of [`MultipleScatteringTable`], reordered so
+    /// that a view costs degrees^2 / 2 products per node and wavelength
+    /// instead of species x degrees^3. Laid out
+    /// [((s * wavelengths + i) * levels + k) * degrees^2 + m * degrees + l];
+    /// zero where the level does not scatter. Made once, on one thread (it
+    /// is called from inside parallel loops).
+    fn source_moments(&self) -> &[f64] {
+        self.moments.get_or_init(|| {
+            let degrees = self.streams.count();
+            let levels = self.grid.levels();
+            let (w, species) = (self.optics.wavelengths, self.optics.species);
+            let square = degrees * degrees;
+            let suns = self.optics.sun_axis.count();
+            let mut moments = vec![0.0; suns * w * levels * square];
+            let mut mixed = vec![0.0; degrees];
+            for s in 0..suns {
+                for i in 0..w {
+                    let solution = &self.radiance[(s * w + i) * self.solution_len..];
+                    for k in 0..levels {
+                        let densities = self.grid.densities_at_level(k);
+                        let scattering = |j: usize| {
+                            densities[j] * self.optics.scaled_scattering[i * species + j]
+                        };
+                        let total: f64 = (0..species).map(scattering).sum();
+                        if total <= 0.0 {
+                            continue;
+                        }
+                        mixed.fill(0.0);
+                        for j in 0..species {
+                            let fraction = scattering(j) / total;
+                            let phase = &self.phases[i * species + j];
+                            for (c, p) in mixed.iter_mut().zip(&phase.coefficients) {
+                                *c += fraction * p;
+                            }
+                        }
+                        let out = &mut moments[((s * w + i) * levels + k) * square..][..square];
+                        for m in (0..degrees).filter(|m| self.harmonics[*m]) {
+                            let radiance = &solution[(m * levels + k) * degrees..][..degrees];
+                            for l in m..degrees {
+                                let moment: f64 = (0..degrees)
+                                    .map(|b| {
+                                        2.0 * PI
+                                            * self.streams.weights()[b]
+                                            * self.streams.legendre(b)[m * degrees + l]
+                                            * radiance[b]
+                                    })
+                                    .sum();
+                                out[m * degrees + l] = mixed[l] * moment;
+                            }
+                        }
+                    }
+                }
+            }
+            moments
+        })
     }
 
     /// For each level, the first and last sun node that a view ray from the
@@ -969,57 +1038,46 @@ impl MultipleScatteringField {
 
     /// ln R(x, view) at one march node into `scratch.log_source`: R synthesised
     /// exactly from the harmonics at the four surrounding (level, sun node)
-    /// corners, interpolated linearly in ln R (as the table does).
+    /// corners ([`MultipleScatteringField::source_moments`]), interpolated
+    /// linearly in ln R (as the table does).
     fn compute_log_source(&self, node: NodeGeometry, scratch: &mut MultipleScatteringScratch) {
         let degrees = self.streams.count();
+        let square = degrees * degrees;
         let levels = self.grid.levels();
-        let (w, species) = (self.optics.wavelengths, self.optics.species);
+        let w = self.optics.wavelengths;
+        let moments = self.source_moments();
         let (k, tz) = self.grid.locate(node.altitude_m);
         let (sun_node, ts) = self.optics.sun_axis.locate(node.sun_cosine);
-        let next_sun = sun_node + 1;
         normalized_associated_legendre(node.view_cosine, degrees, &mut scratch.view_legendre);
-        // cos(m phi) by the Chebyshev recurrence.
-        let mut cosines = [0.0f64; 128];
-        let cosines = &mut cosines[..degrees];
+        // cos(m phi) Lambda_l^m(mu_v) by the Chebyshev recurrence for cos(m phi).
+        let mut cosine = 0.0;
+        let mut previous = 0.0;
         for m in 0..degrees {
-            cosines[m] = match m {
+            let next = match m {
                 0 => 1.0,
                 1 => node.cos_azimuth,
-                _ => 2.0 * node.cos_azimuth * cosines[m - 1] - cosines[m - 2],
+                _ => 2.0 * node.cos_azimuth * cosine - previous,
             };
-        }
-        for i in 0..w {
-            for j in 0..species {
-                let phase = &self.phases[i * species + j];
-                for m in (0..degrees).filter(|m| self.harmonics[*m]) {
-                    for b in 0..degrees {
-                        scratch.view_kernel[(j * degrees + m) * degrees + b] = 2.0
-                            * PI
-                            * self.streams.weights()[b]
-                            * phase.harmonic(m, &scratch.view_legendre, self.streams.legendre(b));
-                    }
-                }
+            (previous, cosine) = (cosine, next);
+            let weight = if self.harmonics[m] { cosine } else { 0.0 };
+            for value in &mut scratch.view_legendre[m * degrees + m..(m + 1) * degrees] {
+                *value *= weight;
             }
+        }
+        let view = &scratch.view_legendre[..square];
+        for i in 0..w {
             let mut log_value = 0.0;
             for (kk, wk) in [(k, 1.0 - tz), (k + 1, tz)] {
-                let densities = self.grid.densities_at_level(kk);
-                let scattering =
-                    |j: usize| densities[j] * self.optics.scaled_scattering[i * species + j];
-                let total: f64 = (0..species).map(scattering).sum();
-                for (ss, ws) in [(sun_node, 1.0 - ts), (next_sun, ts)] {
-                    let solution = &self.radiance[(ss * w + i) * self.solution_len..];
+                for (ss, ws) in [(sun_node, 1.0 - ts), (sun_node + 1, ts)] {
+                    let source = &moments[((ss * w + i) * levels + kk) * square..][..square];
                     let mut value = 0.0;
-                    if total > 0.0 {
-                        for m in (0..degrees).filter(|m| self.harmonics[*m]) {
-                            let radiance = &solution[(m * levels + kk) * degrees..][..degrees];
-                            for j in 0..species {
-                                let kernel =
-                                    &scratch.view_kernel[(j * degrees + m) * degrees..][..degrees];
-                                let integral: f64 =
-                                    kernel.iter().zip(radiance).map(|(q, l)| q * l).sum();
-                                value += cosines[m] * scattering(j) / total * integral;
-                            }
-                        }
+                    for m in 0..degrees {
+                        let range = m * degrees + m..(m + 1) * degrees;
+                        value += view[range.clone()]
+                            .iter()
+                            .zip(&source[range])
+                            .map(|(a, b)| a * b)
+                            .sum::<f64>();
                     }
                     log_value += wk * ws * floored_log(value);
                 }
