@@ -34,9 +34,9 @@ fn multiple_scattering_benchmarks(c: &mut Criterion) {
         let mut group = c.benchmark_group(format!("multiple_scattering_sun_{sun_elevation}"));
         group.sample_size(10);
         group.bench_function("field", |b| {
-            b.iter(|| MultipleScatteringField::compute(&sky, settings))
+            b.iter(|| MultipleScatteringField::compute(&sky, settings).expect("field"))
         });
-        let field = MultipleScatteringField::compute(&sky, settings);
+        let field = MultipleScatteringField::compute(&sky, settings).expect("field");
         group.bench_function("source_table", |b| {
             b.iter(|| MultipleScatteringTable::compute(field.clone()))
         });

@@ -40,7 +40,7 @@ pub type Result<T, E = Error> = std::result::Result<T, E>;
 
 impl Error {
     /// Shorthand for [`Error::OutOfRange`].
-    pub fn out_of_range(
+    pub(crate) fn out_of_range(
         name: impl Into<String>,
         value: f64,
         unit: &'static str,

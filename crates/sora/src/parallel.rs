@@ -5,12 +5,17 @@
 //! depend on the number of threads.
 
 /// Calls `work(chunk_index, chunk)` for every `chunk_length` chunk of
-/// `data` (the last may be shorter), in parallel when enabled.
-pub fn for_each_chunk_mut<T: Send>(
+/// `data` (the last may be shorter), in parallel when enabled. Empty data
+/// (e.g. per-species work for an atmosphere without species) has no chunks,
+/// whatever the chunk length.
+pub(crate) fn for_each_chunk_mut<T: Send>(
     data: &mut [T],
     chunk_length: usize,
     work: impl Fn(usize, &mut [T]) + Sync + Send,
 ) {
+    if data.is_empty() {
+        return;
+    }
     #[cfg(feature = "parallel")]
     {
         use rayon::prelude::*;

@@ -377,21 +377,25 @@ impl Sky {
         self.method
     }
 
-    /// The single-scattering scene underneath (the engine's kernels: for
-    /// tests and benchmarks of the parts).
-    pub fn scene(&self) -> &SingleScatteringSky {
-        &self.scene
+    /// Solves the multiple-scattering field if the sky has one and it is
+    /// not solved yet. Every entry point calls it before its parallel loop:
+    /// a worker that stole work inside the (parallel) solve must not find
+    /// the field half-made, and the loops read it with [`Sky::field`].
+    fn prepare_field(&self) -> Result<()> {
+        if let Scattering::Multiple(settings) = self.scattering
+            && self.field.get().is_none()
+        {
+            let field = MultipleScatteringField::compute(&self.scene, settings)?;
+            // Another thread may have been first: either field is the same.
+            let _ = self.field.set(field);
+        }
+        Ok(())
     }
 
-    /// The multiple-scattering field, solved on first use.
+    /// The multiple-scattering field ([`Sky::prepare_field`] has run).
     fn field(&self) -> Option<&MultipleScatteringField> {
-        match self.scattering {
-            Scattering::Single => None,
-            Scattering::Multiple(settings) => Some(
-                self.field
-                    .get_or_init(|| MultipleScatteringField::compute(&self.scene, settings)),
-            ),
-        }
+        debug_assert!(self.scattering == Scattering::Single || self.field.get().is_some());
+        self.field.get()
     }
 
     /// The field's source table, built on first use.
@@ -486,10 +490,8 @@ impl Sky {
             }
             return Ok(out);
         }
-        // Views in groups, each group with its own buffers. The field is
-        // solved here, before the threads start: a worker that stole work
-        // inside its (parallel) solve must not find it half-made.
-        self.field();
+        // Views in groups, each group with its own buffers.
+        self.prepare_field()?;
         const VIEWS_PER_TASK: usize = 4;
         let mut values = vec![0.0; views.len() * wavelengths];
         if !values.is_empty() {
@@ -522,6 +524,7 @@ impl Sky {
     /// tables, without the sun's disc): within 0.1 % of [`Sky::radiance`]
     /// with [`Method::Fast`], which is what the tests hold it to.
     pub fn radiance_from_image_tables(&self, view: ViewDirection) -> Result<SkyRadiance> {
+        self.prepare_field()?;
         let mut work = self.view_work();
         let mut radiance = SampledSpectrum::zeros(self.wavelengths().len());
         self.compute_pixel_radiance(
@@ -702,7 +705,8 @@ impl Sky {
                     .into(),
             ));
         }
-        // Tables first, outside the parallel loop (see `radiances_with_progress`).
+        // Tables first, outside the parallel loop (see `prepare_field`).
+        self.prepare_field()?;
         let source_table = self.source_table();
         let tables = (self.method == Method::Fast).then(|| self.image_tables());
         let wavelengths = self.wavelengths().len();

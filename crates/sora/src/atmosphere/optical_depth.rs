@@ -132,7 +132,7 @@ impl AtmosphereOptics {
     /// sum_s beta_sca,s(h) p_s(theta), m^-1 sr^-1 (the in-scattering factor of
     /// the paper's eq. 4). `phase_buffer` is scratch space of the grid's
     /// length.
-    pub fn add_scattering_at_altitude(
+    pub(crate) fn add_scattering_at_altitude(
         &self,
         altitude_m: f64,
         cos_theta: f64,

@@ -90,7 +90,7 @@ impl BinnedCrossSection {
     }
 
     /// Ozone at 233 K, 10 nm bins from 360 to 840 nm (embedded).
-    pub fn ozone_233k() -> BinnedCrossSection {
+    pub(crate) fn ozone_233k() -> BinnedCrossSection {
         BinnedCrossSection::parse_csv(OZONE_233K_CSV, "embedded ozone cross-section")
             .expect("the embedded ozone table is valid")
     }
@@ -105,7 +105,7 @@ impl BinnedCrossSection {
 
     /// Mean cross-section over [lo_nm, hi_nm] (inside the range), m^2;
     /// the value of the bin holding `lo_nm` when the band is empty.
-    pub fn band_average_m2(&self, lo_nm: f64, hi_nm: f64) -> Result<f64> {
+    pub(crate) fn band_average_m2(&self, lo_nm: f64, hi_nm: f64) -> Result<f64> {
         let (first, end) = self.range_nm();
         if !(lo_nm >= first && hi_nm <= end && lo_nm <= hi_nm) {
             return Err(Error::InvalidSpectrum(format!(

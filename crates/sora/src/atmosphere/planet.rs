@@ -82,7 +82,7 @@ impl Planet {
     }
 
     /// Radius of the top of the atmosphere, m.
-    pub fn top_radius_m(&self) -> f64 {
+    pub(crate) fn top_radius_m(&self) -> f64 {
         self.radius_m + self.atmosphere_height_m
     }
 
@@ -92,7 +92,7 @@ impl Planet {
     }
 
     /// Ground albedo at each wavelength of `grid`; a table must cover it.
-    pub fn sample_ground_albedo(&self, grid: &WavelengthGrid) -> Result<SampledSpectrum> {
+    pub(crate) fn sample_ground_albedo(&self, grid: &WavelengthGrid) -> Result<SampledSpectrum> {
         self.ground_albedo.sample_at_wavelengths(grid).map_err(|e| {
             Error::InvalidSpectrum(format!("planet.ground_albedo: {}", strip_prefix(&e)))
         })
@@ -106,19 +106,22 @@ impl Planet {
 
     /// Distance from a point at radius `r_m` (inside the atmosphere) along
     /// a direction of zenith cosine `mu` to the top of the atmosphere, m.
-    pub fn distance_to_top_of_atmosphere(&self, r_m: f64, mu: f64) -> f64 {
+    #[cfg(test)]
+    pub(crate) fn distance_to_top_of_atmosphere(&self, r_m: f64, mu: f64) -> f64 {
         crate::geometry::distance_to_top_boundary(r_m, mu, self.top_radius_m())
     }
 
     /// True when a ray from radius `r_m` with zenith cosine `mu` hits the
     /// ground.
-    pub fn ray_intersects_ground(&self, r_m: f64, mu: f64) -> bool {
+    #[cfg(test)]
+    pub(crate) fn ray_intersects_ground(&self, r_m: f64, mu: f64) -> bool {
         crate::geometry::ray_intersects_ground(r_m, mu, self.radius_m)
     }
 
     /// Distance to the ground along (r, mu), m, or `None` when the ray
     /// misses it.
-    pub fn distance_to_ground(&self, r_m: f64, mu: f64) -> Option<f64> {
+    #[cfg(test)]
+    pub(crate) fn distance_to_ground(&self, r_m: f64, mu: f64) -> Option<f64> {
         crate::geometry::distance_to_ground_boundary(r_m, mu, self.radius_m)
     }
 }

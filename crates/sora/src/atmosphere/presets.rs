@@ -70,7 +70,7 @@ pub fn find_preset(name: &str) -> Option<&'static Preset> {
 
 /// Loads the preset called `name`; an unknown name is an error that lists
 /// the known ones.
-pub fn load_preset(name: &str) -> Result<Atmosphere> {
+pub(crate) fn load_preset(name: &str) -> Result<Atmosphere> {
     let Some(preset) = find_preset(name) else {
         let known: Vec<&str> = PRESETS.iter().map(|p| p.name).collect();
         return Err(Error::parse(

@@ -129,13 +129,8 @@ impl ProfileTable {
     }
 
     /// The rows' altitudes, m.
-    pub fn altitudes_m(&self) -> &[f64] {
+    pub(crate) fn altitudes_m(&self) -> &[f64] {
         &self.altitudes_m
-    }
-
-    /// The rows' relative densities.
-    pub fn relative_densities(&self) -> &[f64] {
-        &self.relative_densities
     }
 
     /// Index i of the layer [h_i, h_{i+1}] to use at `altitude_m`, clamped
@@ -227,7 +222,7 @@ impl DensityProfile {
     /// Exact integral of the relative density over altitude from
     /// `lower_altitude_m` to `upper_altitude_m` (m): the equivalent
     /// thickness of that slab. Negative when the bounds are reversed.
-    pub fn column_between_m(&self, lower_altitude_m: f64, upper_altitude_m: f64) -> f64 {
+    pub(crate) fn column_between_m(&self, lower_altitude_m: f64, upper_altitude_m: f64) -> f64 {
         if upper_altitude_m < lower_altitude_m {
             return -self.column_between_m(upper_altitude_m, lower_altitude_m);
         }

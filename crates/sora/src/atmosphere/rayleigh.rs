@@ -80,7 +80,7 @@ impl RayleighGas {
     }
 
     /// King correction factor (dimensionless, >= 1).
-    pub fn king_factor(self, wavelength_nm: f64) -> f64 {
+    pub(crate) fn king_factor(self, wavelength_nm: f64) -> f64 {
         match self {
             RayleighGas::Air => air_king_factor(wavelength_nm),
             RayleighGas::Co2 => co2_king_factor(wavelength_nm),
@@ -90,7 +90,7 @@ impl RayleighGas {
 
 /// Depolarisation ratio rho that goes with a King factor:
 /// F_K = (6 + 3 rho) / (6 - 7 rho)  <=>  rho = 6 (F_K - 1) / (3 + 7 F_K).
-pub fn depolarization_ratio_from_king_factor(king_factor: f64) -> f64 {
+pub(crate) fn depolarization_ratio_from_king_factor(king_factor: f64) -> f64 {
     6.0 * (king_factor - 1.0) / (3.0 + 7.0 * king_factor)
 }
 
@@ -185,7 +185,7 @@ impl AirGas {
 }
 
 /// Rayleigh cross-section of one molecule of dry air (Bates 1984), m^2.
-pub fn air_cross_section_m2(wavelength_nm: f64) -> f64 {
+pub(crate) fn air_cross_section_m2(wavelength_nm: f64) -> f64 {
     let wavelength_um = wavelength_nm * 1e-3;
     AIR_COMPOSITION
         .iter()
@@ -203,7 +203,7 @@ pub fn air_cross_section_m2(wavelength_nm: f64) -> f64 {
 
 /// Effective King factor of dry air: each gas's factor weighted by its
 /// share of the scattering (the factor the mixture's depolarisation obeys).
-pub fn air_king_factor(wavelength_nm: f64) -> f64 {
+pub(crate) fn air_king_factor(wavelength_nm: f64) -> f64 {
     let wavelength_um = wavelength_nm * 1e-3;
     let (weighted, total) =
         AIR_COMPOSITION
@@ -250,7 +250,7 @@ pub fn co2_cross_section_m2(wavelength_nm: f64) -> f64 {
 
 /// Parametric Rayleigh coefficient beta_ref (lambda_ref / lambda)^exponent,
 /// m^-1 (at the reference density).
-pub fn parametric_coefficient_per_m(
+pub(crate) fn parametric_coefficient_per_m(
     coefficient_per_m: f64,
     reference_wavelength_nm: f64,
     wavelength_exponent: f64,

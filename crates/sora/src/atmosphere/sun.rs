@@ -74,7 +74,7 @@ impl Sun {
     }
 
     /// Apparent angular radius, radians.
-    pub fn angular_radius_rad(&self) -> f64 {
+    pub(crate) fn angular_radius_rad(&self) -> f64 {
         0.5 * self.angular_diameter_deg.to_radians()
     }
 
@@ -86,7 +86,10 @@ impl Sun {
 
     /// Top-of-atmosphere irradiance on a plane normal to the sun's rays at
     /// each wavelength of `grid`, W m^-2 nm^-1 (band averages, scaled).
-    pub fn sample_irradiance_w_m2_nm(&self, grid: &WavelengthGrid) -> Result<SampledSpectrum> {
+    pub(crate) fn sample_irradiance_w_m2_nm(
+        &self,
+        grid: &WavelengthGrid,
+    ) -> Result<SampledSpectrum> {
         let mut irradiance = self.spectrum.sample(grid)?;
         irradiance *= self.irradiance_scale;
         Ok(irradiance)

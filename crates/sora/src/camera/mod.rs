@@ -82,7 +82,7 @@ impl Camera {
     /// The unit direction seen through the centre of pixel (column, row) of a
     /// `width` x `height` image, or None where the camera sees nothing
     /// (outside the fisheye's circle).
-    pub fn direction_for_pixel(
+    pub(crate) fn direction_for_pixel(
         &self,
         column: u32,
         row: u32,

@@ -50,7 +50,7 @@ impl DisplayEncoding {
         DisplayEncoding::PaperSmpteC(ScaledPower::PAPER_DEFAULT);
 
     /// The paper's encoding with scale `k` and gamma `gamma` (both > 0).
-    pub fn paper_smpte_c(k: f64, gamma: f64) -> Result<DisplayEncoding> {
+    pub(crate) fn paper_smpte_c(k: f64, gamma: f64) -> Result<DisplayEncoding> {
         Ok(DisplayEncoding::PaperSmpteC(ScaledPower::new(k, gamma)?))
     }
 
@@ -71,7 +71,7 @@ impl DisplayEncoding {
     }
 
     /// The transfer curve from linear components to encoded values.
-    pub fn transfer_curve(self) -> TransferCurve {
+    pub(crate) fn transfer_curve(self) -> TransferCurve {
         match self {
             DisplayEncoding::Srgb => TransferCurve::Srgb,
             DisplayEncoding::PaperSmpteC(curve) => TransferCurve::ScaledPower(curve),
@@ -93,7 +93,7 @@ impl DisplayEncoding {
     }
 
     /// 16-bit display values of `rgb`: round(65535 × V) per component.
-    pub fn encode_u16(self, rgb: LinearRgb) -> [u16; 3] {
+    pub(crate) fn encode_u16(self, rgb: LinearRgb) -> [u16; 3] {
         rgb.to_array()
             .map(|linear| (self.encoded_unit(linear) * 65535.0).round() as u16)
     }

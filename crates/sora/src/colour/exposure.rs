@@ -127,7 +127,7 @@ impl Default for Exposure {
 /// The geometric mean of Y over the pixels of `image` with Y > 0, in Y's
 /// unit; `None` when no pixel has Y > 0. Fails, naming the pixel, if an X, Y
 /// or Z is not finite.
-pub fn log_average_luminance(image: &[Xyz]) -> Result<Option<f64>> {
+pub(crate) fn log_average_luminance(image: &[Xyz]) -> Result<Option<f64>> {
     let mut sum_of_logs = 0.0;
     let mut count = 0usize;
     for (index, xyz) in image.iter().enumerate() {

@@ -58,7 +58,7 @@ mod xyz;
 
 pub use colour_matching::{ColourMatchingFunctions, Observer};
 pub use display::{DisplayEncoding, DisplayMapping};
-pub use exposure::{Exposure, log_average_luminance};
+pub use exposure::Exposure;
 pub use gamut::GamutMapping;
 pub use rgb::{LinearRgb, Matrix3, RgbColourSpace, ScaledPower, TransferCurve};
 pub use xyz::{MAXIMUM_LUMINOUS_EFFICACY_LM_PER_W, SpectrumToXyz, Xyz};

@@ -224,7 +224,7 @@ impl RgbColourSpace {
     }
 
     /// The XYZ -> linear RGB matrix.
-    pub fn linear_rgb_from_xyz_matrix(self) -> &'static Matrix3 {
+    pub(crate) fn linear_rgb_from_xyz_matrix(self) -> &'static Matrix3 {
         match self {
             RgbColourSpace::Srgb => &SRGB_FROM_XYZ,
             RgbColourSpace::PaperSmpteC => &PAPER_SMPTE_C_FROM_XYZ,
@@ -233,7 +233,7 @@ impl RgbColourSpace {
 
     /// The linear RGB -> XYZ matrix, the exact inverse of
     /// [`RgbColourSpace::linear_rgb_from_xyz_matrix`].
-    pub fn xyz_from_linear_rgb_matrix(self) -> &'static Matrix3 {
+    pub(crate) fn xyz_from_linear_rgb_matrix(self) -> &'static Matrix3 {
         match self {
             RgbColourSpace::Srgb => &XYZ_FROM_SRGB,
             RgbColourSpace::PaperSmpteC => &XYZ_FROM_PAPER_SMPTE_C,
@@ -252,7 +252,7 @@ impl RgbColourSpace {
 
     /// The luminance coefficients: Y = c_r R + c_g G + c_b B (the Y row of
     /// the RGB -> XYZ matrix; for sRGB about 0.2126, 0.7152, 0.0722).
-    pub fn luminance_coefficients(self) -> [f64; 3] {
+    pub(crate) fn luminance_coefficients(self) -> [f64; 3] {
         self.xyz_from_linear_rgb_matrix()[1]
     }
 

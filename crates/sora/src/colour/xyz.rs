@@ -111,7 +111,7 @@ impl SpectrumToXyz {
     }
 
     /// The conversion on `grid` with already parsed colour-matching functions.
-    pub fn with_colour_matching_functions(
+    pub(crate) fn with_colour_matching_functions(
         grid: &WavelengthGrid,
         cmfs: &ColourMatchingFunctions,
     ) -> SpectrumToXyz {
@@ -176,7 +176,7 @@ impl SpectrumToXyz {
     /// where spectra come from physics that cannot produce bad values.
     /// Checks the length and the values only in debug builds; a NaN passed
     /// here in a release build propagates into the result.
-    pub fn to_xyz_unchecked(&self, values: &[f64]) -> Xyz {
+    pub(crate) fn to_xyz_unchecked(&self, values: &[f64]) -> Xyz {
         debug_assert_eq!(values.len(), self.weighted_cmfs.len(), "wrong grid");
         debug_assert!(
             values.iter().all(|v| v.is_finite() && *v >= 0.0),

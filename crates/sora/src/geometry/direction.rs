@@ -22,7 +22,7 @@ impl Vector3 {
         Vector3 { x, y, z }
     }
 
-    pub fn dot(self, other: Vector3) -> f64 {
+    pub(crate) fn dot(self, other: Vector3) -> f64 {
         self.x * other.x + self.y * other.y + self.z * other.z
     }
 
@@ -39,7 +39,7 @@ impl Vector3 {
     }
 
     /// The unit vector along `self` (self must be non-zero).
-    pub fn normalized(self) -> Vector3 {
+    pub(crate) fn normalized(self) -> Vector3 {
         self * (1.0 / self.length())
     }
 }
@@ -117,7 +117,7 @@ impl ViewDirection {
     }
 
     /// The unit vector in the east-north-up frame.
-    pub fn to_vector(self) -> Vector3 {
+    pub(crate) fn to_vector(self) -> Vector3 {
         direction_from_elevation_azimuth(self.elevation_deg, self.azimuth_deg)
     }
 }

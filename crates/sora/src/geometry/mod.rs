@@ -12,7 +12,7 @@ pub use direction::{
     Vector3, ViewDirection, angle_between_deg, direction_from_elevation_azimuth,
     elevation_azimuth_from_direction,
 };
-pub use planet_sphere::{
-    distance_to_ground, distance_to_ground_boundary, distance_to_top_boundary,
-    distance_to_top_of_atmosphere, ray_intersects_ground, ray_sphere_roots, segment_in_atmosphere,
+pub(crate) use planet_sphere::{
+    distance_to_ground_boundary, distance_to_top_boundary, distance_to_top_of_atmosphere,
+    ray_intersects_ground, ray_sphere_roots, segment_in_atmosphere,
 };

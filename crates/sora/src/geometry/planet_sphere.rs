@@ -16,7 +16,7 @@ use super::Vector3;
 
 /// The two roots (near, far) of |p + t d| = radius, or None if the ray's
 /// line misses the sphere. `d` must be a unit vector.
-pub fn ray_sphere_roots(p: Vector3, d: Vector3, radius_m: f64) -> Option<(f64, f64)> {
+pub(crate) fn ray_sphere_roots(p: Vector3, d: Vector3, radius_m: f64) -> Option<(f64, f64)> {
     let b = p.dot(d);
     let c = p.dot(p) - radius_m * radius_m;
     // discriminant b^2 - c, written to avoid cancellation of |p|^2 and b^2
@@ -38,7 +38,7 @@ pub fn ray_sphere_roots(p: Vector3, d: Vector3, radius_m: f64) -> Option<(f64, f
 
 /// Distance (m) along the ray from p (inside or on the top sphere) to where
 /// it leaves the atmosphere through the top boundary.
-pub fn distance_to_top_of_atmosphere(p: Vector3, d: Vector3, top_radius_m: f64) -> f64 {
+pub(crate) fn distance_to_top_of_atmosphere(p: Vector3, d: Vector3, top_radius_m: f64) -> f64 {
     match ray_sphere_roots(p, d, top_radius_m) {
         Some((_, far)) => far.max(0.0),
         None => 0.0,
@@ -47,7 +47,8 @@ pub fn distance_to_top_of_atmosphere(p: Vector3, d: Vector3, top_radius_m: f64) 
 
 /// Distance (m) along the ray from p to the ground, or None if the ray does
 /// not hit the ground (it points above the ground's horizon).
-pub fn distance_to_ground(p: Vector3, d: Vector3, ground_radius_m: f64) -> Option<f64> {
+#[cfg(test)]
+pub(crate) fn distance_to_ground(p: Vector3, d: Vector3, ground_radius_m: f64) -> Option<f64> {
     let (near, far) = ray_sphere_roots(p, d, ground_radius_m)?;
     if near >= 0.0 {
         Some(near)
@@ -64,7 +65,7 @@ pub fn distance_to_ground(p: Vector3, d: Vector3, ground_radius_m: f64) -> Optio
 /// between the ground and the top, from a start point anywhere (inside the
 /// atmosphere, or outside it looking at the limb). The segment ends at the
 /// ground when the ray hits it. None when the ray misses the atmosphere.
-pub fn segment_in_atmosphere(
+pub(crate) fn segment_in_atmosphere(
     p: Vector3,
     d: Vector3,
     ground_radius_m: f64,
@@ -87,7 +88,7 @@ pub fn segment_in_atmosphere(
 /// `top_radius_m`: the positive root of d^2 + 2 r mu d - (top^2 - r^2) = 0
 /// (Bruneton 2017, DistanceToTopAtmosphereBoundary), written without the
 /// cancellation of -r mu + sqrt(disc) for upward rays.
-pub fn distance_to_top_boundary(r_m: f64, mu: f64, top_radius_m: f64) -> f64 {
+pub(crate) fn distance_to_top_boundary(r_m: f64, mu: f64, top_radius_m: f64) -> f64 {
     let c = (top_radius_m - r_m) * (top_radius_m + r_m);
     let discriminant = (r_m * mu * r_m * mu + c).max(0.0).sqrt();
     if mu >= 0.0 {
@@ -101,14 +102,14 @@ pub fn distance_to_top_boundary(r_m: f64, mu: f64, top_radius_m: f64) -> f64 {
 /// True when a ray from radius `r_m` (at or above the ground) with zenith
 /// cosine `mu` hits the ground of radius `ground_radius_m`: it points down
 /// and below the ground's horizon (Bruneton 2017, RayIntersectsGround).
-pub fn ray_intersects_ground(r_m: f64, mu: f64, ground_radius_m: f64) -> bool {
+pub(crate) fn ray_intersects_ground(r_m: f64, mu: f64, ground_radius_m: f64) -> bool {
     mu < 0.0 && r_m * r_m * (1.0 - mu * mu) <= ground_radius_m * ground_radius_m
 }
 
 /// Distance (m) from radius `r_m` along zenith cosine `mu` to the ground,
 /// or None when the ray misses it. The near root -r mu - sqrt(disc) cancels
 /// for grazing rays; it equals (r^2 - R^2) / (-r mu + sqrt(disc)).
-pub fn distance_to_ground_boundary(r_m: f64, mu: f64, ground_radius_m: f64) -> Option<f64> {
+pub(crate) fn distance_to_ground_boundary(r_m: f64, mu: f64, ground_radius_m: f64) -> Option<f64> {
     if !ray_intersects_ground(r_m, mu, ground_radius_m) {
         return None;
     }

@@ -32,7 +32,7 @@ const MAX_TEMPORARY_NAME_PREFIX_CHARS: usize = 64;
 /// names `path`. The new file gets default permissions (those of the old
 /// file, if any, are not copied); a symbolic link at `path` is replaced by
 /// the file rather than followed.
-pub fn write_file_atomically(
+pub(crate) fn write_file_atomically(
     path: impl AsRef<Path>,
     write_contents: impl FnOnce(&mut File) -> Result<()>,
 ) -> Result<()> {

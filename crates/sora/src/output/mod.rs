@@ -33,7 +33,6 @@ mod format;
 mod image_buffer;
 mod png;
 
-pub use atomic_file::write_file_atomically;
 pub use exr::{ExrCompression, ExrOptions, ExrSampleType, write_exr};
 pub use format::OutputFormat;
 pub use image_buffer::{

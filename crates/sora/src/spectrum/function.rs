@@ -119,7 +119,7 @@ impl TabulatedSpectrum {
     }
 
     /// Linearly interpolated value at `wavelength_nm` (must be inside the table).
-    pub fn value_at_nm(&self, wavelength_nm: f64) -> Result<f64> {
+    pub(crate) fn value_at_nm(&self, wavelength_nm: f64) -> Result<f64> {
         self.check_covers(wavelength_nm, wavelength_nm)?;
         Ok(self.interpolate(wavelength_nm))
     }
@@ -151,7 +151,7 @@ impl TabulatedSpectrum {
 
     /// Mean value over [lo_nm, hi_nm] (inside the table); the value at lo_nm
     /// when the band is empty.
-    pub fn band_average(&self, lo_nm: f64, hi_nm: f64) -> Result<f64> {
+    pub(crate) fn band_average(&self, lo_nm: f64, hi_nm: f64) -> Result<f64> {
         self.check_covers(lo_nm, hi_nm)?;
         if hi_nm <= lo_nm {
             return Ok(self.interpolate(lo_nm));
@@ -162,7 +162,7 @@ impl TabulatedSpectrum {
 
 impl Spectrum {
     /// Value at `wavelength_nm`.
-    pub fn value_at_nm(&self, wavelength_nm: f64) -> Result<f64> {
+    pub(crate) fn value_at_nm(&self, wavelength_nm: f64) -> Result<f64> {
         match self {
             Spectrum::Constant(v) => Ok(*v),
             Spectrum::Tabulated(table) => table.value_at_nm(wavelength_nm),
@@ -181,7 +181,7 @@ impl Spectrum {
     /// the band clipped to the table where the grid's end bands stick out of
     /// it (the sample's own wavelength must still be inside). A single-sample
     /// grid gets the point value.
-    pub fn sample_band_averaged(&self, grid: &WavelengthGrid) -> Result<SampledSpectrum> {
+    pub(crate) fn sample_band_averaged(&self, grid: &WavelengthGrid) -> Result<SampledSpectrum> {
         let table = match self {
             Spectrum::Constant(v) => return Ok(SampledSpectrum::constant(grid.len(), *v)),
             Spectrum::Tabulated(table) => table,

@@ -56,7 +56,7 @@ impl SampledSpectrum {
     }
 
     /// The values, in grid order, for writing.
-    pub fn values_mut(&mut self) -> &mut [f64] {
+    pub(crate) fn values_mut(&mut self) -> &mut [f64] {
         &mut self.values
     }
 

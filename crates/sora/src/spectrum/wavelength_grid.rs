@@ -93,7 +93,7 @@ impl WavelengthGrid {
     }
 
     /// Last wavelength, nm.
-    pub fn stop_nm(&self) -> f64 {
+    pub(crate) fn stop_nm(&self) -> f64 {
         self.wavelength_nm(self.len - 1)
     }
 
@@ -114,7 +114,7 @@ impl WavelengthGrid {
 
     /// Quadrature weight of sample `index`, nm: the paper's rule, `step_nm`
     /// for every sample (see the module docs).
-    pub fn quadrature_weight_nm(&self, index: usize) -> f64 {
+    pub(crate) fn quadrature_weight_nm(&self, index: usize) -> f64 {
         debug_assert!(index < self.len);
         self.step_nm
     }

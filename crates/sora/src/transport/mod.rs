@@ -1,5 +1,12 @@
 //! Light transport: how sunlight reaches the eye through the atmosphere.
 //!
+//! **The engine underneath [`crate::Sky`], not a stable interface**: its
+//! types and functions are public for the reference tests and benchmarks
+//! that check each part on its own (and for those extending the physics),
+//! and change when the engine does. Use [`crate::Sky`], which composes
+//! them; scratch buffers, quadrature constants and table internals are
+//! private to the crate.
+//!
 //! - [`optical_column`]: geometric columns of each species along rays,
 //!   and the table of columns toward the sun (transmittance, Beer-Lambert);
 //! - [`single_scattering`]: sunlight scattered once toward the eye (the

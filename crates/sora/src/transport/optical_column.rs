@@ -44,7 +44,7 @@ use crate::geometry::{Vector3, ray_sphere_roots};
 /// reaches) when the ray only climbs; toward the tangent point from both
 /// sides when it first descends and then climbs; toward both ends when it
 /// only descends (to the ground or the far side).
-pub fn ray_panel(tangent_distance: f64, length: f64, panels: usize, k: usize) -> (f64, f64) {
+pub(crate) fn ray_panel(tangent_distance: f64, length: f64, panels: usize, k: usize) -> (f64, f64) {
     let crowded_toward_start = |a: f64, b: f64, n: usize, i: usize| {
         let (u0, u1) = (i as f64 / n as f64, (i + 1) as f64 / n as f64);
         (a + (b - a) * u0 * u0, a + (b - a) * u1 * u1)
@@ -96,7 +96,7 @@ pub struct ProfileCorners {
 impl ProfileCorners {
     /// The corners of `profiles` between the ground (radius
     /// `ground_radius_m`) and the top of the atmosphere (`top_radius_m`).
-    pub fn new<P: Borrow<DensityProfile>>(
+    pub(crate) fn new<P: Borrow<DensityProfile>>(
         profiles: &[P],
         ground_radius_m: f64,
         top_radius_m: f64,
@@ -122,13 +122,13 @@ impl ProfileCorners {
     }
 
     /// The radii of the ground and of the top of the atmosphere, m.
-    pub fn radii_m(&self) -> (f64, f64) {
+    pub(crate) fn radii_m(&self) -> (f64, f64) {
         (self.ground_radius_m, self.top_radius_m)
     }
 
     /// The most panel ends [`ProfileCorners::fill_panel_ends`] writes for
     /// `panels` panels: a ray crosses each corner altitude at most twice.
-    pub fn most_panel_ends(&self, panels: usize) -> usize {
+    pub(crate) fn most_panel_ends(&self, panels: usize) -> usize {
         panels + 1 + 2 * self.altitudes_m.len()
     }
 
@@ -138,7 +138,7 @@ impl ProfileCorners {
     /// lowest point ([`ray_panel`]), cut where the ray crosses a corner
     /// altitude. Allocation-free when `ends` has the capacity of
     /// [`ProfileCorners::most_panel_ends`].
-    pub fn fill_panel_ends(
+    pub(crate) fn fill_panel_ends(
         &self,
         origin: Vector3,
         direction: Vector3,
@@ -174,7 +174,7 @@ impl ProfileCorners {
 /// m) in the unit `direction`, integrated by 4-point Gauss-Legendre on the
 /// panels between consecutive `panel_ends` (m along the ray, increasing;
 /// see [`ProfileCorners::fill_panel_ends`]), into `columns_m`.
-pub fn compute_columns_along_ray<P: Borrow<DensityProfile>>(
+pub(crate) fn compute_columns_along_ray<P: Borrow<DensityProfile>>(
     profiles: &[P],
     ground_radius_m: f64,
     origin: Vector3,
@@ -223,7 +223,7 @@ pub struct SunColumnTable {
 impl SunColumnTable {
     /// Fills the table for these species' profiles: `altitude_nodes` x
     /// `mu_nodes` exact column integrals.
-    pub fn compute<P: Borrow<DensityProfile> + Sync>(
+    pub(crate) fn compute<P: Borrow<DensityProfile> + Sync>(
         profiles: &[P],
         ground_radius_m: f64,
         top_radius_m: f64,
@@ -340,7 +340,7 @@ impl SunColumnTable {
     /// atmosphere along a direction with zenith cosine `mu`, interpolated.
     /// Returns false, and leaves `columns_m` alone, when that path hits the
     /// ground (the point is in the planet's shadow).
-    pub fn lookup_columns_to_sun(&self, r_m: f64, mu: f64, columns_m: &mut [f64]) -> bool {
+    pub(crate) fn lookup_columns_to_sun(&self, r_m: f64, mu: f64, columns_m: &mut [f64]) -> bool {
         let ground = self.ground_radius_m;
         let r = r_m.clamp(ground, self.top_radius_m);
         if crate::geometry::ray_intersects_ground(r, mu, ground) {
@@ -514,7 +514,7 @@ mod tests {
             let el: f64 = f64::to_radians(elevation_deg);
             let d = Vector3::new(el.cos(), 0.0, el.sin());
             let length = crate::geometry::distance_to_top_of_atmosphere(origin, d, TOP);
-            if crate::geometry::distance_to_ground(origin, d, R).is_some() {
+            if crate::geometry::planet_sphere::distance_to_ground(origin, d, R).is_some() {
                 continue;
             }
             let mut fast = [0.0; 2];

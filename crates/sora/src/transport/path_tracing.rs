@@ -181,7 +181,7 @@ use crate::spectrum::SampledSpectrum;
 
 /// Gauss-Legendre panels along each path segment (free-path sampling and
 /// transmittance).
-pub const SEGMENT_PANELS: usize = 16;
+pub(crate) const SEGMENT_PANELS: usize = 16;
 
 /// The sampling model's column over a piece is at least this fraction of
 /// its length times the density at the piece's Gauss nodes (see
@@ -190,13 +190,13 @@ const MODEL_DENSITY_FLOOR: f64 = 0.1;
 
 /// Samples per chunk of work: the unit of parallelism and of the fixed
 /// summation order.
-pub const SAMPLES_PER_CHUNK: u64 = 1024;
+pub(crate) const SAMPLES_PER_CHUNK: u64 = 1024;
 
 /// A path whose largest throughput falls below this value plays Russian
 /// roulette (see the module docs). Measured on the clear-sky reference
 /// (albedo 0 and 0.3), CPU time times variance at the worst wavelength,
 /// relative to 0.5: 1.0 -> 1.1-1.25, 0.5 -> 1, 0.3 -> 1.1, 0.1 -> 1.3.
-pub const RUSSIAN_ROULETTE_THRESHOLD: f64 = 0.5;
+pub(crate) const RUSSIAN_ROULETTE_THRESHOLD: f64 = 0.5;
 
 /// A spectrum estimated by Monte Carlo: the sample mean and its standard
 /// error per wavelength (same unit as the mean).
@@ -455,7 +455,7 @@ impl<'a> PathTracer<'a> {
 
     /// [`PathTracer::compute_radiance`], calling `progress(samples_done)`
     /// as chunks of samples complete (from worker threads).
-    pub fn compute_radiance_with_progress(
+    pub(crate) fn compute_radiance_with_progress(
         &self,
         view: Vector3,
         samples: u64,

@@ -52,7 +52,7 @@ pub struct RandomStream {
 impl RandomStream {
     /// The stream of sample `stream_index` for the run seeded `seed`.
     /// Different (seed, index) pairs give unrelated streams.
-    pub fn new(seed: u64, stream_index: u64) -> RandomStream {
+    pub(crate) fn new(seed: u64, stream_index: u64) -> RandomStream {
         // Two rounds of the bijective mixer: seed and index are combined
         // after the seed is mixed, so (s, i) and (i, s) differ.
         let key = mix64(mix64(seed ^ 0x5851_F42D_4C95_7F2D).wrapping_add(stream_index));
@@ -63,20 +63,20 @@ impl RandomStream {
     }
 
     /// The next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
+    pub(crate) fn next_u64(&mut self) -> u64 {
         self.state = self.state.wrapping_add(self.gamma);
         mix64(self.state)
     }
 
     /// A uniform number in [0, 1) with 53 random bits (every double of the
     /// form k / 2^53).
-    pub fn next_f64(&mut self) -> f64 {
+    pub(crate) fn next_f64(&mut self) -> f64 {
         (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
     }
 
     /// A uniform index in 0..n (n > 0), by Lemire's multiply-shift (the
     /// bias, below n / 2^64, is far under any Monte Carlo error).
-    pub fn next_index(&mut self, n: usize) -> usize {
+    pub(crate) fn next_index(&mut self, n: usize) -> usize {
         debug_assert!(n > 0);
         ((self.next_u64() as u128 * n as u128) >> 64) as usize
     }

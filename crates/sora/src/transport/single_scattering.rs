@@ -50,9 +50,9 @@ use crate::geometry::{Vector3, direction_from_elevation_azimuth, segment_in_atmo
 use crate::spectrum::{SampledSpectrum, WavelengthGrid};
 
 /// Gauss panels along a view ray in the fast path.
-pub const VIEW_RAY_PANELS: usize = 16;
+pub(crate) const VIEW_RAY_PANELS: usize = 16;
 /// Gauss panels along each exact path toward the sun.
-pub const SUN_RAY_PANELS: usize = 12;
+pub(crate) const SUN_RAY_PANELS: usize = 12;
 
 /// Where the eye is and where the sun is.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -155,18 +155,18 @@ pub struct SingleScatteringScratch {
 
 impl SingleScatteringScratch {
     /// The integrals I_j(lambda) of the last ray, species-major, m.
-    pub fn inscattering_integrals(&self) -> &[f64] {
+    pub(crate) fn inscattering_integrals(&self) -> &[f64] {
         &self.inscattering_integrals
     }
 
     /// The sunlit ground's radiance seen along the last ray (zero when it
     /// does not end on the ground), W m^-2 sr^-1 nm^-1.
-    pub fn ground_radiance(&self) -> &[f64] {
+    pub(crate) fn ground_radiance(&self) -> &[f64] {
         &self.ground_radiance
     }
 
     /// The transmittance of the whole last ray.
-    pub fn view_transmittance(&self) -> &[f64] {
+    pub(crate) fn view_transmittance(&self) -> &[f64] {
         &self.view_transmittance
     }
 }
@@ -189,7 +189,7 @@ impl SingleScatteringSky {
     }
 
     /// From optics already on a grid (e.g. with a ground albedo replaced).
-    pub fn from_optics(
+    pub(crate) fn from_optics(
         optics: AtmosphereOptics,
         ground_radius_m: f64,
         top_radius_m: f64,
@@ -252,12 +252,12 @@ impl SingleScatteringSky {
     }
 
     /// Distance of the eye from the planet's centre, m.
-    pub fn observer_radius_m(&self) -> f64 {
+    pub(crate) fn observer_radius_m(&self) -> f64 {
         self.observer.z
     }
 
     /// Planet radius and top-of-atmosphere radius, m.
-    pub fn radii_m(&self) -> (f64, f64) {
+    pub(crate) fn radii_m(&self) -> (f64, f64) {
         (self.ground_radius_m, self.top_radius_m)
     }
 
@@ -298,7 +298,7 @@ impl SingleScatteringSky {
     /// Fast path, first half: fills the scratch's in-scattering integrals
     /// I_j(lambda) (m), the ground term and the view transmittance for the
     /// view direction `view` (unit, east-north-up).
-    pub fn compute_inscattering_integrals(
+    pub(crate) fn compute_inscattering_integrals(
         &self,
         view: Vector3,
         sun_columns: SunColumns,
@@ -444,7 +444,7 @@ impl SingleScatteringSky {
     /// Fast path, second half: radiance from the integrals in `scratch`
     /// for a view at scattering-angle cosine `cos_theta` with the sun,
     /// W m^-2 sr^-1 nm^-1, into `radiance`.
-    pub fn radiance_from_integrals(
+    pub(crate) fn radiance_from_integrals(
         &self,
         cos_theta: f64,
         integrals: &[f64],
@@ -610,7 +610,12 @@ impl SingleScatteringSky {
     /// W m^-2 sr^-1 nm^-1: E_sun / (solid angle) times the view
     /// transmittance, with linear limb darkening I(mu)/I(1) = 1 - 0.6 (1 - mu)
     /// normalised so that the disc's integral is E_sun T.
-    pub fn add_sun_disc(&self, view: Vector3, view_transmittance: &[f64], radiance: &mut [f64]) {
+    pub(crate) fn add_sun_disc(
+        &self,
+        view: Vector3,
+        view_transmittance: &[f64],
+        radiance: &mut [f64],
+    ) {
         let radius = self.sun_angular_radius_rad;
         if radius <= 0.0 {
             return;

@@ -81,7 +81,7 @@ impl SkyViewTable {
 
     /// As [`SkyViewTable::compute`], and with `multiple_scattering` the
     /// multiply scattered radiance at every node too (see the module docs).
-    pub fn compute_with_multiple_scattering(
+    pub(crate) fn compute_with_multiple_scattering(
         sky: &SingleScatteringSky,
         sun_columns: &SunColumnTable,
         multiple_scattering: Option<&MultipleScatteringTable>,
@@ -197,11 +197,6 @@ impl SkyViewTable {
         table
     }
 
-    /// True when the table has multiply scattered radiances.
-    pub fn has_multiple_scattering(&self) -> bool {
-        self.has_multiple_scattering
-    }
-
     /// Zenith angle (rad) of zenith-axis node `row` (0 = the zenith,
     /// half - 1 = just above the horizon, half = just below, 2 half - 1 =
     /// the nadir).
@@ -266,7 +261,7 @@ impl SkyViewTable {
     /// `multiple` and its forward-peak integrals (species * wavelengths,
     /// see [`crate::transport::multiple_scattering::MultipleScatteringScratch::forward_integrals`])
     /// into `forward` (zeros when the table has none).
-    pub fn lookup_with_multiple_scattering(
+    pub(crate) fn lookup_with_multiple_scattering(
         &self,
         view: Vector3,
         integrals: &mut [f64],

@@ -68,9 +68,13 @@
 //!    ln(J / beta*_sca) over (altitude, sun zenith angle, view zenith angle,
 //!    azimuth from the sun), read quadrilinearly, only where view rays can
 //!    reach; the sky-view table ([`super::sky_view_table`]) stores the
-//!    resulting L_ms per view direction. `sora spectrum` synthesises J
-//!    exactly at every node ([`MultipleScatteringField::compute_radiance`],
-//!    the slow obvious path the table is tested against).
+//!    resulting L_ms per view direction. Views ([`crate::Sky::radiance`],
+//!    `sora spectrum`) synthesise J exactly at every node
+//!    ([`MultipleScatteringField::compute_radiance`], the obvious path the
+//!    table is tested against), from the field's Legendre moments: the
+//!    same sums as the table's kernels with the view direction factored
+//!    out, so a view costs degrees^2 / 2 products per node and wavelength
+//!    (an almucantar of 72 views about as much as the field itself).
 //!
 //! Interpolations between sun zenith angles and altitudes are linear in
 //! the logarithm of the (positive) source: across sunset the field falls
@@ -214,7 +218,7 @@ impl MultipleScatteringSettings {
     /// Checks that every count and step can make a solver: at least one
     /// stream per hemisphere (at most 32), two layers, two panels, two
     /// nodes per table axis, and positive steps.
-    pub fn validate(&self) -> Result<()> {
+    pub(crate) fn validate(&self) -> Result<()> {
         let counts = [
             ("streams per hemisphere", self.streams_per_hemisphere, 1, 32),
             ("multiple-scattering layers", self.layers, 2, 10_000),
@@ -322,7 +326,7 @@ impl SunZenithAxis {
 /// takes the phase functions for a view at cos(theta) = `cos_theta` from
 /// the sun: theta, or the forward cone's edge within it (see
 /// [`MultipleScatteringField::forward_cone_rad`]).
-pub fn forward_peak_cosine(cos_theta: f64, cone_rad: f64) -> f64 {
+pub(crate) fn forward_peak_cosine(cos_theta: f64, cone_rad: f64) -> f64 {
     cos_theta.min(cone_rad.cos())
 }
 
@@ -406,7 +410,7 @@ impl MultipleScatteringScratch {
     /// (T* T*_sun - T T_sun) ds, species-major [j * wavelengths + i], m,
     /// to be weighted like single scattering's integrals,
     /// E beta_sca,j p_j(theta).
-    pub fn forward_integrals(&self) -> &[f64] {
+    pub(crate) fn forward_integrals(&self) -> &[f64] {
         &self.forward_integrals
     }
 }
@@ -630,12 +634,12 @@ pub struct MultipleScatteringField {
 
 impl MultipleScatteringField {
     /// Solves the field of `sky` for every sun zenith angle seen at a point
-    /// of the atmosphere visible from its eye. Panics on settings that
+    /// of the atmosphere visible from its eye; an error for settings that
     /// [`MultipleScatteringSettings::validate`] rejects.
     pub fn compute(
         sky: &SingleScatteringSky,
         settings: MultipleScatteringSettings,
-    ) -> MultipleScatteringField {
+    ) -> Result<MultipleScatteringField> {
         let (ground, top) = sky.radii_m();
         let r = sky.observer_radius_m();
         // A point of the atmosphere that the eye sees is at most this far
@@ -650,42 +654,13 @@ impl MultipleScatteringField {
         )
     }
 
-    /// Solves the field for the sun zenith angles a single view ray meets.
-    pub fn compute_for_view(
-        sky: &SingleScatteringSky,
-        view: Vector3,
-        settings: MultipleScatteringSettings,
-    ) -> MultipleScatteringField {
-        let (ground, top) = sky.radii_m();
-        let observer = Vector3::new(0.0, 0.0, sky.observer_radius_m());
-        let sun = sky.sun_direction();
-        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-        if let Some((enter, exit)) = segment_in_atmosphere(observer, view, ground, top) {
-            let samples = 64;
-            for k in 0..=samples {
-                let t = enter + (exit - enter) * k as f64 / samples as f64;
-                let p = observer + view * t;
-                let zenith = (sun.dot(p) / p.length()).clamp(-1.0, 1.0).acos();
-                lo = lo.min(zenith);
-                hi = hi.max(zenith);
-            }
-        }
-        if !lo.is_finite() {
-            let zenith = sun.z.clamp(-1.0, 1.0).acos();
-            (lo, hi) = (zenith, zenith);
-        }
-        MultipleScatteringField::compute_for_sun_zenith_range(sky, settings, lo, hi)
-    }
-
     fn compute_for_sun_zenith_range(
         sky: &SingleScatteringSky,
         settings: MultipleScatteringSettings,
         lowest_rad: f64,
         highest_rad: f64,
-    ) -> MultipleScatteringField {
-        if let Err(error) = settings.validate() {
-            panic!("invalid multiple-scattering settings: {error}");
-        }
+    ) -> Result<MultipleScatteringField> {
+        settings.validate()?;
         let optics = sky.optics();
         let (ground_radius_m, top_radius_m) = sky.radii_m();
         let wavelengths = optics.grid.len();
@@ -864,7 +839,7 @@ impl MultipleScatteringField {
                     .any(|(p, b)| *b > 0.0 && !p.harmonic_vanishes(m))
             })
             .collect();
-        MultipleScatteringField {
+        Ok(MultipleScatteringField {
             settings,
             atmosphere: optics.clone(),
             grid,
@@ -894,7 +869,7 @@ impl MultipleScatteringField {
             radiance,
             solution_len,
             moments: std::sync::OnceLock::new(),
-        }
+        })
     }
 
     /// The scattering source's moments per sun node s, wavelength i, level
@@ -1003,7 +978,7 @@ impl MultipleScatteringField {
     /// edge ([`forward_peak_cosine`]; the cone is 1.2 rad over the number
     /// of Legendre terms). Without it a Mars dust aureole 2
     /// degrees from a sun 5 degrees high is 85 % too bright.
-    pub fn forward_cone_rad(&self) -> f64 {
+    pub(crate) fn forward_cone_rad(&self) -> f64 {
         self.optics.forward_cone_rad
     }
 

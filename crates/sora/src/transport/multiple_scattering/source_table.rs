@@ -197,7 +197,7 @@ impl MultipleScatteringTable {
     /// ([`MultipleScatteringScratch::forward_integrals`]) as integrals that
     /// take the phase functions exactly as single scattering's do (the
     /// sky-view table adds them to its single-scattering integrals).
-    pub fn compute_radiance_parts(
+    pub(crate) fn compute_radiance_parts(
         &self,
         view: Vector3,
         sun_columns: SunColumns,

@@ -48,7 +48,7 @@
 /// through the air below 30 km is within 3 % of the slab's, and moving the
 /// limit from 0.3 to 0.5 changes no result against the path tracer by more
 /// than its noise.
-pub const SPHERICAL_STREAM_COSINE: f64 = 0.3;
+pub(crate) const SPHERICAL_STREAM_COSINE: f64 = 0.3;
 
 /// One straight step of a path inside one layer.
 #[derive(Debug, Clone, Copy)]
@@ -81,7 +81,7 @@ impl StreamPaths {
     /// Paths from the levels at `radii_m` (increasing, the first the
     /// ground) along each stream cosine of `cosines` with
     /// |mu| < [`SPHERICAL_STREAM_COSINE`].
-    pub fn compute(radii_m: &[f64], cosines: &[f64]) -> StreamPaths {
+    pub(crate) fn compute(radii_m: &[f64], cosines: &[f64]) -> StreamPaths {
         let levels = radii_m.len();
         let spherical_streams: Vec<usize> = (0..cosines.len())
             .filter(|a| cosines[*a].abs() < SPHERICAL_STREAM_COSINE)
@@ -104,7 +104,7 @@ impl StreamPaths {
     }
 
     /// The streams that take spherical paths.
-    pub fn spherical_streams(&self) -> &[usize] {
+    pub(crate) fn spherical_streams(&self) -> &[usize] {
         &self.spherical_streams
     }
 
@@ -117,7 +117,7 @@ impl StreamPaths {
     /// triangular), and the mean angle at the planet's centre between each
     /// level and the light its path gathers (weighted by what a uniform
     /// source would contribute) into `mean_angles` ([s * levels + k], rad).
-    pub fn compute_transport_matrices(
+    pub(crate) fn compute_transport_matrices(
         &self,
         layer_optical_depth: &[f64],
         out: &mut [f64],
@@ -169,7 +169,7 @@ impl StreamPaths {
 /// (1 - e^{-x}, c) with c = (1 - e^{-x} - x e^{-x}) / x: the weights of a
 /// source linear in optical depth across a step of optical thickness x
 /// (near end: 1 - e^{-x} - c, far end: c), by series for thin steps.
-pub fn linear_source_weights(x: f64) -> (f64, f64) {
+pub(crate) fn linear_source_weights(x: f64) -> (f64, f64) {
     if x < 1e-4 {
         (x - 0.5 * x * x, 0.5 * x - x * x / 3.0)
     } else {

@@ -65,7 +65,7 @@ pub struct Streams {
 }
 
 impl Streams {
-    pub fn new(per_hemisphere: usize) -> Streams {
+    pub(crate) fn new(per_hemisphere: usize) -> Streams {
         let (x, w) = gauss_legendre_unit_interval(per_hemisphere);
         let cosines: Vec<f64> = x.iter().copied().chain(x.iter().map(|v| -v)).collect();
         let weights: Vec<f64> = w.iter().chain(w.iter()).copied().collect();
@@ -88,24 +88,24 @@ impl Streams {
 
     /// Streams in total (both hemispheres): also the number of Legendre
     /// terms and harmonics the solver represents.
-    pub fn count(&self) -> usize {
+    pub(crate) fn count(&self) -> usize {
         2 * self.per_hemisphere
     }
 
-    pub fn per_hemisphere(&self) -> usize {
+    pub(crate) fn per_hemisphere(&self) -> usize {
         self.per_hemisphere
     }
 
-    pub fn cosines(&self) -> &[f64] {
+    pub(crate) fn cosines(&self) -> &[f64] {
         &self.cosines
     }
 
-    pub fn weights(&self) -> &[f64] {
+    pub(crate) fn weights(&self) -> &[f64] {
         &self.weights
     }
 
     /// The Lambda table of stream `a` ([m * degrees + l]).
-    pub fn legendre(&self, a: usize) -> &[f64] {
+    pub(crate) fn legendre(&self, a: usize) -> &[f64] {
         let d = self.count();
         &self.legendre[a * d * d..(a + 1) * d * d]
     }
@@ -153,7 +153,7 @@ pub struct ColumnSystem<'a> {
 }
 
 impl<'a> ColumnSystem<'a> {
-    pub fn new(
+    pub(crate) fn new(
         streams: &'a Streams,
         grid: &'a VerticalGrid,
         paths: Option<&'a StreamPaths>,
@@ -277,7 +277,7 @@ impl<'a> ColumnSystem<'a> {
     /// planet's shadow) into `radiance` (harmonics x levels x streams
     /// values, [(m * levels + k) * streams + b]), with `work` space.
     /// Returns the diffuse downward irradiance at the ground.
-    pub fn solve(
+    pub(crate) fn solve(
         &self,
         sun_cosine: f64,
         sun_transmittance: &[f64],
@@ -393,7 +393,7 @@ impl<'a> ColumnSystem<'a> {
     /// `sun_zenith_rad`, each harmonics x levels x streams) of the
     /// spherical streams toward where their light comes from: see
     /// [`super::spherical_paths`] on horizontal displacement.
-    pub fn shift_toward_sources(&self, sun_zenith_rad: &[f64], fields: &mut [&mut [f64]]) {
+    pub(crate) fn shift_toward_sources(&self, sun_zenith_rad: &[f64], fields: &mut [&mut [f64]]) {
         let Some(paths) = self.paths else {
             return;
         };

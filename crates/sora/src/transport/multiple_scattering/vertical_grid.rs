@@ -37,7 +37,7 @@ impl VerticalGrid {
     /// profiles; `extinction_weights[j]` is species j's largest extinction
     /// coefficient at relative density 1 (m^-1), its weight in the
     /// placement.
-    pub fn compute(
+    pub(crate) fn compute(
         profiles: &[&DensityProfile],
         extinction_weights: &[f64],
         top_altitude_m: f64,
@@ -102,28 +102,28 @@ impl VerticalGrid {
     }
 
     /// Number of levels (layers + 1).
-    pub fn levels(&self) -> usize {
+    pub(crate) fn levels(&self) -> usize {
         self.altitudes_m.len()
     }
 
     /// Level altitudes, m.
-    pub fn altitudes_m(&self) -> &[f64] {
+    pub(crate) fn altitudes_m(&self) -> &[f64] {
         &self.altitudes_m
     }
 
     /// Relative densities of every species at level `k`.
-    pub fn densities_at_level(&self, k: usize) -> &[f64] {
+    pub(crate) fn densities_at_level(&self, k: usize) -> &[f64] {
         &self.densities[k * self.species..(k + 1) * self.species]
     }
 
     /// Columns of every species through layer `k` (level k to k + 1), m.
-    pub fn layer_columns_m(&self, k: usize) -> &[f64] {
+    pub(crate) fn layer_columns_m(&self, k: usize) -> &[f64] {
         &self.layer_columns_m[k * self.species..(k + 1) * self.species]
     }
 
     /// The layer containing `altitude_m` and the fraction of the way up it
     /// (clamped to the grid).
-    pub fn locate(&self, altitude_m: f64) -> (usize, f64) {
+    pub(crate) fn locate(&self, altitude_m: f64) -> (usize, f64) {
         let levels = self.altitudes_m.len();
         let upper = self.altitudes_m.partition_point(|z| *z <= altitude_m);
         let k = upper.clamp(1, levels - 1) - 1;

@@ -1,0 +1,217 @@
+//! The front door, [`sora::Sky`]: one composition point for every method,
+//! many views per call, images as XYZ and as spectra, and its errors.
+
+use sora::colour::{Observer, SpectrumToXyz};
+use sora::{Atmosphere, Camera, ImageSettings, Method, Scattering, Sky, ViewDirection};
+
+fn views() -> Vec<ViewDirection> {
+    [
+        (90.0, 0.0),
+        (30.0, 180.0),
+        (5.0, 90.0),
+        (-20.0, 0.0),
+        (0.5, 300.0),
+    ]
+    .iter()
+    .map(|&(e, a)| ViewDirection::new(e, a).unwrap())
+    .collect()
+}
+
+/// Many views in one call give each view's own numbers to the last bit,
+/// for the fast and reference methods, single and multiple scattering.
+#[test]
+fn many_views_equal_one_view_at_a_time() {
+    let atmosphere = Atmosphere::preset("earth-clear").unwrap();
+    for (scattering, method) in [
+        (Scattering::multiple(), Method::Fast),
+        (Scattering::Single, Method::Fast),
+        (
+            Scattering::multiple(),
+            Method::Reference {
+                view_steps: 200,
+                sun_steps: 50,
+            },
+        ),
+    ] {
+        let sky = Sky::builder(&atmosphere)
+            .sun_deg(20.0, 200.0)
+            .scattering(scattering)
+            .method(method)
+            .build()
+            .unwrap();
+        let together = sky.radiances(&views()).unwrap();
+        for (view, all) in views().into_iter().zip(&together) {
+            let alone = sky.radiance(view).unwrap();
+            assert_eq!(&alone, all, "{view:?} {method:?}");
+            assert!(alone.standard_error_w_m2_sr_nm.is_none());
+            assert!(
+                alone
+                    .radiance_w_m2_sr_nm
+                    .values()
+                    .iter()
+                    .all(|l| l.is_finite() && *l > 0.0)
+            );
+        }
+    }
+}
+
+/// Multiple scattering only adds light, and the path tracer (all orders)
+/// agrees with the fast method within 3 % plus three of its standard errors
+/// at the zenith (a smoke test; the reference tests are thorough).
+#[test]
+fn the_orders_of_scattering_and_the_path_tracer_agree() {
+    let atmosphere = Atmosphere::preset("clear-sky-reference").unwrap();
+    let build = |scattering, method| {
+        Sky::builder(&atmosphere)
+            .sun_deg(40.0, 180.0)
+            .scattering(scattering)
+            .method(method)
+            .build()
+            .unwrap()
+    };
+    let zenith = ViewDirection::new(90.0, 0.0).unwrap();
+    let single = build(Scattering::Single, Method::Fast)
+        .radiance(zenith)
+        .unwrap();
+    let multiple = build(Scattering::multiple(), Method::Fast)
+        .radiance(zenith)
+        .unwrap();
+    let traced = build(
+        Scattering::multiple(),
+        Method::PathTracing {
+            samples: 4000,
+            seed: 3,
+        },
+    )
+    .radiance(zenith)
+    .unwrap();
+    let errors = traced.standard_error_w_m2_sr_nm.clone().unwrap();
+    assert!(traced.worst_relative_standard_error() > 0.0);
+    for i in 0..single.radiance_w_m2_sr_nm.len() {
+        let (s, m, t) = (
+            single.radiance_w_m2_sr_nm[i],
+            multiple.radiance_w_m2_sr_nm[i],
+            traced.radiance_w_m2_sr_nm[i],
+        );
+        assert!(m > s, "{i}: {m} <= {s}");
+        assert!(
+            (m - t).abs() < 0.03 * t + 3.0 * errors[i],
+            "{i}: {m} vs {t} +- {}",
+            errors[i]
+        );
+    }
+}
+
+/// The spectral image's pixels, integrated to XYZ, are the XYZ image's.
+#[test]
+fn spectral_and_xyz_images_agree() {
+    let atmosphere = Atmosphere::preset("earth-clear").unwrap();
+    let sky = Sky::builder(&atmosphere)
+        .sun_deg(10.0, 250.0)
+        .build()
+        .unwrap();
+    let image = ImageSettings::new(Camera::Equirectangular, 24, 12);
+    let to_xyz = SpectrumToXyz::new(sky.wavelengths(), Observer::Cie1931TwoDegree);
+    let rows = std::sync::atomic::AtomicUsize::new(0);
+    let xyz = sky
+        .render_xyz(&image, &to_xyz, &|_| {
+            rows.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        })
+        .unwrap();
+    assert_eq!(rows.into_inner(), 12);
+    let spectral = sky.render_spectral(&image, &|_| {}).unwrap();
+    let n = sky.wavelengths().len();
+    assert_eq!(spectral.len(), 24 * 12 * n);
+    for (pixel, colour) in spectral.chunks(n).zip(&xyz) {
+        let spectrum = sora::spectrum::SampledSpectrum::from_values(pixel.to_vec());
+        assert_eq!(to_xyz.to_xyz(&spectrum).unwrap(), *colour);
+    }
+}
+
+/// An atmosphere without species is vacuum: a black sky, the sunlit
+/// ground below the horizon, and no panic in any table.
+#[test]
+fn a_sky_without_species_is_black_above_the_horizon() {
+    let preset = sora::atmosphere::presets::find_preset("earth-clear").unwrap();
+    let text = &preset.toml[..preset.toml.find("[[species]]").unwrap()];
+    let atmosphere = Atmosphere::from_toml_str(text).unwrap();
+    assert!(atmosphere.species.is_empty());
+    let sky = Sky::builder(&atmosphere)
+        .sun_deg(30.0, 180.0)
+        .build()
+        .unwrap();
+    let up = sky
+        .radiance(ViewDirection::new(45.0, 0.0).unwrap())
+        .unwrap();
+    assert!(up.radiance_w_m2_sr_nm.values().iter().all(|l| *l == 0.0));
+    let down = sky
+        .radiance(ViewDirection::new(-45.0, 0.0).unwrap())
+        .unwrap();
+    assert!(down.radiance_w_m2_sr_nm.values().iter().all(|l| *l > 0.0));
+    let to_xyz = SpectrumToXyz::new(sky.wavelengths(), Observer::Cie1931TwoDegree);
+    let image = sky
+        .render_xyz(&ImageSettings::new(Camera::Fisheye, 8, 8), &to_xyz, &|_| {})
+        .unwrap();
+    assert!(image.iter().all(|c| c.is_finite()));
+}
+
+#[test]
+fn bad_choices_are_errors_not_panics() {
+    let atmosphere = Atmosphere::preset("earth-clear").unwrap();
+    let error = |builder: sora::SkyBuilder| builder.build().unwrap_err().to_string();
+    assert!(error(Sky::builder(&atmosphere).sun_deg(95.0, 0.0)).contains("sun elevation = 95 deg"));
+    assert!(
+        error(Sky::builder(&atmosphere).observer_altitude_m(-1.0)).contains("observer altitude")
+    );
+    assert!(
+        error(Sky::builder(&atmosphere).method(Method::PathTracing {
+            samples: 1,
+            seed: 0
+        }))
+        .contains("samples = 1")
+    );
+    assert!(
+        error(
+            Sky::builder(&atmosphere)
+                .scattering(Scattering::Single)
+                .method(Method::PathTracing {
+                    samples: 10,
+                    seed: 0
+                })
+        )
+        .contains("all orders")
+    );
+    let mut settings = sora::transport::multiple_scattering::MultipleScatteringSettings::default();
+    settings.layers = 1;
+    assert!(
+        error(Sky::builder(&atmosphere).scattering(Scattering::Multiple(settings)))
+            .contains("multiple-scattering layers = 1")
+    );
+    assert!(ViewDirection::new(120.0, 0.0).is_err());
+    assert!(ViewDirection::new(0.0, f64::NAN).is_err());
+    // Images: sizes, and path tracing renders no images.
+    let sky = Sky::builder(&atmosphere).build().unwrap();
+    let to_xyz = SpectrumToXyz::new(sky.wavelengths(), Observer::Cie1931TwoDegree);
+    let zero = ImageSettings::new(Camera::Fisheye, 0, 8);
+    assert!(
+        sky.render_xyz(&zero, &to_xyz, &|_| {})
+            .unwrap_err()
+            .to_string()
+            .contains("image width = 0")
+    );
+    let traced = Sky::builder(&atmosphere)
+        .method(Method::PathTracing {
+            samples: 10,
+            seed: 0,
+        })
+        .build()
+        .unwrap();
+    let image = ImageSettings::new(Camera::Fisheye, 4, 4);
+    assert!(traced.render_xyz(&image, &to_xyz, &|_| {}).is_err());
+    // A colour conversion on another grid.
+    let other = SpectrumToXyz::new(
+        &sora::WavelengthGrid::new(400.0, 700.0, 50.0).unwrap(),
+        Observer::Cie1931TwoDegree,
+    );
+    assert!(sky.render_xyz(&image, &other, &|_| {}).is_err());
+}
