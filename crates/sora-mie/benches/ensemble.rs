@@ -19,7 +19,9 @@ use sora_mie::ensemble::{
     EnsembleSettings, PAPER_WAVELENGTHS_NM, SpectralPhaseMethod, compute_ensemble_optics_spectrum,
 };
 use sora_mie::paper_phase::AerosolPhaseMode;
-use sora_mie::refractive_index::{RefractiveIndexModel, TabulatedRefractiveIndex};
+use sora_mie::refractive_index::{
+    MARS_DUST_WOLFF2009_CSV, RefractiveIndexModel, TabulatedRefractiveIndex,
+};
 use std::hint::black_box;
 
 fn bench_species(c: &mut Criterion) {
@@ -31,10 +33,7 @@ fn bench_species(c: &mut Criterion) {
         .unwrap();
     let table1_index = RefractiveIndexModel::constant(Complex64::new(1.5, 0.01)).unwrap();
     let wolff = RefractiveIndexModel::Tabulated(
-        TabulatedRefractiveIndex::parse_csv(include_str!(
-            "../tests/data/mars_dust_refractive_index_wolff2009.csv"
-        ))
-        .unwrap(),
+        TabulatedRefractiveIndex::parse_csv(MARS_DUST_WOLFF2009_CSV).unwrap(),
     );
     let mie = EnsembleSettings::default();
     let paper_hg = EnsembleSettings {

@@ -27,9 +27,19 @@
 //! The table is never extrapolated: a wavelength outside `[lambda_first,
 //! lambda_last]` is an error that names it and the table's range (nm). A
 //! table is parsed from text ([`TabulatedRefractiveIndex::parse_csv`]);
-//! reading the file is the caller's business (no I/O here).
+//! reading the file is the caller's business (no I/O here). One table is
+//! built in, as text: [`MARS_DUST_WOLFF2009_CSV`].
 
 use crate::Complex64;
+
+/// The Mars dust refractive index of Wolff et al. (2009, JGR 114, E00D04;
+/// CRISM retrieval, with two ultraviolet rows from Wolff's distributed
+/// compilation), as the CSV text [`TabulatedRefractiveIndex::parse_csv`]
+/// reads: wavelength (um), n, k, 263-2480 nm, its provenance in the leading
+/// comment lines. Embedded once, here, for this crate's tests and benches and
+/// for sora's built-in `mars-dust-wolff2009`.
+pub const MARS_DUST_WOLFF2009_CSV: &str =
+    include_str!("data/mars_dust_refractive_index_wolff2009.csv");
 
 /// Why a refractive index could not be given or a table could not be built.
 #[derive(Debug, Clone, PartialEq)]
@@ -438,13 +448,11 @@ mod tests {
         assert!(RefractiveIndexModel::constant(Complex64::new(0.0, 0.0)).is_err());
     }
 
-    /// The Mars dust table of Wolff et al. (2009) as shipped in the tests'
-    /// data folder: the rows this project relies on (380-780 nm) come out as
+    /// The built-in Mars dust table of Wolff et al. (2009): the rows this project relies on (380-780 nm) come out as
     /// the published values at the nodes and geometric means in between.
     #[test]
     fn mars_dust_table_covers_the_visible() {
-        let text = include_str!("../tests/data/mars_dust_refractive_index_wolff2009.csv");
-        let table = TabulatedRefractiveIndex::parse_csv(text).unwrap();
+        let table = TabulatedRefractiveIndex::parse_csv(MARS_DUST_WOLFF2009_CSV).unwrap();
         assert_eq!(table.wavelength_range_nm(), (263.0, 2480.0));
         let model = RefractiveIndexModel::Tabulated(table);
         assert_eq!(

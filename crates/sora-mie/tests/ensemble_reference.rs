@@ -23,7 +23,9 @@ use sora_mie::ensemble::{
     integrate_ensemble_cross_sections,
 };
 use sora_mie::paper_phase::AerosolPhaseMode;
-use sora_mie::refractive_index::{RefractiveIndexModel, TabulatedRefractiveIndex};
+use sora_mie::refractive_index::{
+    MARS_DUST_WOLFF2009_CSV, RefractiveIndexModel, TabulatedRefractiveIndex,
+};
 
 const TOLERANCE: f64 = 1e-6;
 const MICROMETRE: f64 = 1e-6;
@@ -259,10 +261,7 @@ fn mars_dust_wolff() -> (SizeDistribution, RefractiveIndexModel) {
     let distribution =
         SizeDistribution::log_normal_from_effective_radius_and_variance(1.5 * MICROMETRE, 0.3)
             .unwrap();
-    let table = TabulatedRefractiveIndex::parse_csv(include_str!(
-        "data/mars_dust_refractive_index_wolff2009.csv"
-    ))
-    .unwrap();
+    let table = TabulatedRefractiveIndex::parse_csv(MARS_DUST_WOLFF2009_CSV).unwrap();
     (distribution, RefractiveIndexModel::Tabulated(table))
 }
 

@@ -567,9 +567,9 @@ fn paper_mode_carries_the_weighted_paper_g() {
 /// results match the constant-index computation at that index.
 #[test]
 fn tabulated_index_is_used_per_wavelength() {
-    let table = crate::refractive_index::TabulatedRefractiveIndex::parse_csv(include_str!(
-        "../../tests/data/mars_dust_refractive_index_wolff2009.csv"
-    ))
+    let table = crate::refractive_index::TabulatedRefractiveIndex::parse_csv(
+        crate::refractive_index::MARS_DUST_WOLFF2009_CSV,
+    )
     .unwrap();
     let model = RefractiveIndexModel::Tabulated(table);
     let settings = EnsembleSettings {

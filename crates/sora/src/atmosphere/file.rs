@@ -52,11 +52,10 @@ use crate::mie::distribution::{
     RadiusQuadrature, RadiusQuadratureSettings, RadiusWindow, SizeDistribution,
 };
 use crate::mie::paper_phase::AerosolPhaseMode;
-use crate::mie::refractive_index::{RefractiveIndexModel, TabulatedRefractiveIndex};
+use crate::mie::refractive_index::{
+    MARS_DUST_WOLFF2009_CSV, RefractiveIndexModel, TabulatedRefractiveIndex,
+};
 use crate::spectrum::{SolarSpectrum, Spectrum, TabulatedSpectrum};
-
-const MARS_DUST_WOLFF2009_CSV: &str =
-    include_str!("../data/mars_dust_refractive_index_wolff2009.csv");
 
 /// Names of the built-in refractive-index tables (`refractive_index.builtin`).
 pub const BUILTIN_REFRACTIVE_INDICES: [&str; 1] = ["mars-dust-wolff2009"];
