@@ -18,6 +18,8 @@
 //!   (cross-sections, single-scattering albedo, g, phase function table).
 //! - [`refractive_index`]: constant or wavelength-tabulated m(lambda).
 //! - [`paper_phase`]: the paper's Henyey-Greenstein mode (eq. 3, g linear in radius).
+//! - [`quadrature`]: the Gauss-Legendre rule (the radius rules', and sora's
+//!   discrete-ordinate streams').
 //! - `simd` (private): the hot kernels compiled for AVX-512F with FMA, for
 //!   AVX and portably from one source, the build chosen at run time.
 //!
@@ -28,6 +30,7 @@ pub use num_complex::Complex64;
 pub mod distribution;
 pub mod ensemble;
 pub mod paper_phase;
+pub mod quadrature;
 pub mod refractive_index;
 mod simd;
 pub mod sphere;

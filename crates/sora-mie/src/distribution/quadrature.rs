@@ -75,8 +75,8 @@
 //! a uniform trapezoid in `ln r` over the same range, spectrally accurate for
 //! an integrand that vanishes at both ends, free of any panel-width logic.
 
-use super::special_functions::gauss_legendre_rule;
 use super::{SizeDistribution, SizeDistributionError};
+use crate::quadrature::gauss_legendre;
 
 /// How the radius quadrature lays out its panels (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -298,7 +298,7 @@ impl SharedSizeParameterQuadrature {
             }
             limit
         };
-        let (unit_nodes, unit_weights) = gauss_legendre_rule(settings.nodes_per_panel);
+        let (unit_nodes, unit_weights) = gauss_legendre(settings.nodes_per_panel);
         let wavelength_count = wavenumbers_per_m.len();
         let mut size_parameter = Vec::new();
         let mut weight = Vec::new();
@@ -419,7 +419,7 @@ impl RadiusQuadrature {
             distribution.ln_radius_integration_range(settings.tail_depth, wavenumber_per_m);
         let width_limit_at =
             |ln_radius: f64| panel_width_limit(distribution, settings, ln_radius, wavenumber_per_m);
-        let (unit_nodes, unit_weights) = gauss_legendre_rule(settings.nodes_per_panel);
+        let (unit_nodes, unit_weights) = gauss_legendre(settings.nodes_per_panel);
         let mut radius_m = Vec::new();
         let mut weight = Vec::new();
         let mut panel_count = 0;

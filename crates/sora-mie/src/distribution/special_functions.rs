@@ -1,8 +1,8 @@
 //! Special functions the size distributions need, to about 1e-15 relative:
 //! the complementary error function (log-normal number fractions), the log
 //! of the gamma function and the regularised incomplete gamma functions
-//! (gamma-distribution normalisation and number fractions), and the
-//! Gauss-Legendre rule of the radius quadrature.
+//! (gamma-distribution normalisation and number fractions). The
+//! Gauss-Legendre rule of the radius quadrature is [`crate::quadrature`]'s.
 //!
 //! The standard library has none of them. The algorithms are the textbook
 //! ones (Press et al., Numerical Recipes 3rd ed., §6.1-6.2 and §4.6):
@@ -170,41 +170,6 @@ pub(crate) fn standard_normal_probability_between(z_low: f64, z_high: f64) -> f6
     }
 }
 
-/// Gauss-Legendre nodes and weights on [-1, 1] of order `order` (>= 1),
-/// nodes increasing; Newton iteration on the Legendre polynomial from the
-/// Tricomi initial guess, converged to machine precision.
-pub(crate) fn gauss_legendre_rule(order: usize) -> (Vec<f64>, Vec<f64>) {
-    let mut nodes = vec![0.0; order];
-    let mut weights = vec![0.0; order];
-    let n = order as f64;
-    for i in 0..order.div_ceil(2) {
-        let mut z = (PI * (i as f64 + 0.75) / (n + 0.5)).cos();
-        let mut derivative = 1.0;
-        for _ in 0..100 {
-            // Legendre P_n(z) by the three-term recurrence, and P_n'(z).
-            let (mut p_previous, mut p) = (0.0, 1.0);
-            for j in 0..order {
-                let j = j as f64;
-                let p_next = ((2.0 * j + 1.0) * z * p - j * p_previous) / (j + 1.0);
-                p_previous = p;
-                p = p_next;
-            }
-            derivative = n * (z * p - p_previous) / (z * z - 1.0);
-            let step = p / derivative;
-            z -= step;
-            if step.abs() < 1e-16 {
-                break;
-            }
-        }
-        nodes[i] = -z;
-        nodes[order - 1 - i] = z;
-        let weight = 2.0 / ((1.0 - z * z) * derivative * derivative);
-        weights[i] = weight;
-        weights[order - 1 - i] = weight;
-    }
-    (nodes, weights)
-}
-
 #[cfg(test)]
 // The reference values are mpmath's at 30 digits, written as printed.
 #[allow(clippy::excessive_precision)]
@@ -302,29 +267,5 @@ mod tests {
             1e-15,
             "symmetry",
         );
-    }
-
-    #[test]
-    fn gauss_legendre_integrates_polynomials_exactly() {
-        for order in [1, 2, 5, 8, 12, 20] {
-            let (nodes, weights) = gauss_legendre_rule(order);
-            assert!(nodes.windows(2).all(|w| w[0] < w[1]));
-            for degree in 0..2 * order {
-                let integral: f64 = nodes
-                    .iter()
-                    .zip(&weights)
-                    .map(|(x, w)| w * x.powi(degree as i32))
-                    .sum();
-                let exact = if degree % 2 == 1 {
-                    0.0
-                } else {
-                    2.0 / (degree as f64 + 1.0)
-                };
-                assert!(
-                    (integral - exact).abs() < 1e-14,
-                    "order {order} degree {degree}: {integral}"
-                );
-            }
-        }
     }
 }

@@ -11,7 +11,9 @@
 //! same order as the Gauss rule's own error for smooth integrands
 //! (spectral integration, as in Chebyshev/Gauss collocation methods).
 
-/// Nodes of the 4-point Gauss-Legendre rule on [-1, 1].
+/// Nodes of the 4-point Gauss-Legendre rule on [-1, 1]: the values of
+/// [`sora_mie::quadrature::gauss_legendre`](crate::mie::quadrature::gauss_legendre)`(4)`,
+/// kept as constants for the per-ray hot path (tested equal).
 pub const GAUSS_NODES: [f64; 4] = [
     -0.861_136_311_594_052_6,
     -0.339_981_043_584_856_3,
@@ -76,6 +78,15 @@ mod tests {
             .sum();
         assert!((integral - 2.0 / 7.0).abs() < 1e-15);
         assert!((GAUSS_WEIGHTS.iter().sum::<f64>() - 2.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn constants_are_the_generated_rule() {
+        let (nodes, weights) = crate::mie::quadrature::gauss_legendre(4);
+        for k in 0..4 {
+            assert!((nodes[k] - GAUSS_NODES[k]).abs() <= 2e-16, "node {k}");
+            assert!((weights[k] - GAUSS_WEIGHTS[k]).abs() <= 4e-16, "weight {k}");
+        }
     }
 
     #[test]

@@ -42,37 +42,16 @@ use crate::atmosphere::PhaseFunction;
 /// Panels of the moment quadrature in the scattering angle.
 const MOMENT_PANELS: usize = 160;
 
-/// Gauss-Legendre nodes and weights of order `n` on [0, 1] (Newton on the
-/// Legendre polynomial; weights sum to 1), nodes increasing.
+/// Gauss-Legendre nodes and weights of order `n` (>= 1) on [0, 1], nodes
+/// increasing, weights summing to 1: the [-1, 1] rule of
+/// [`sora_mie::quadrature::gauss_legendre`](crate::mie::quadrature::gauss_legendre) mapped to mu = (t + 1) / 2.
 pub fn gauss_legendre_unit_interval(n: usize) -> (Vec<f64>, Vec<f64>) {
     assert!(n >= 1);
-    let mut nodes = vec![0.0; n];
-    let mut weights = vec![0.0; n];
-    for i in 0..n {
-        // Tricomi's initial guess, then Newton.
-        let mut x = (PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
-        let mut derivative = 1.0;
-        for _ in 0..100 {
-            let (mut p0, mut p1) = (1.0, x);
-            for k in 2..=n {
-                let p2 = ((2 * k - 1) as f64 * x * p1 - (k - 1) as f64 * p0) / k as f64;
-                p0 = p1;
-                p1 = p2;
-            }
-            let pn = if n == 1 { x } else { p1 };
-            let pn_minus_1 = if n == 1 { 1.0 } else { p0 };
-            derivative = n as f64 * (x * pn - pn_minus_1) / (x * x - 1.0);
-            let step = pn / derivative;
-            x -= step;
-            if step.abs() < 1e-15 {
-                break;
-            }
-        }
-        // Node i of the [-1, 1] rule is decreasing in i: store it mirrored.
-        nodes[n - 1 - i] = 0.5 * (x + 1.0);
-        weights[n - 1 - i] = 1.0 / ((1.0 - x * x) * derivative * derivative);
-    }
-    (nodes, weights)
+    let (nodes, weights) = crate::mie::quadrature::gauss_legendre(n);
+    (
+        nodes.iter().map(|t| 0.5 * (t + 1.0)).collect(),
+        weights.iter().map(|w| 0.5 * w).collect(),
+    )
 }
 
 /// Normalised associated Legendre functions Lambda_l^m(mu) for
