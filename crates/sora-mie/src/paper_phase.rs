@@ -80,6 +80,23 @@ pub fn henyey_greenstein_phase_function_per_sr(asymmetry_parameter: f64, cos_the
     (1.0 - g * g) / (4.0 * PI * denominator_base * denominator_base.sqrt())
 }
 
+/// The cosine of the scattering angle of a Henyey-Greenstein function with
+/// asymmetry parameter `asymmetry_parameter` (|g| < 1) for a uniform random
+/// number `uniform_sample` in [0, 1] (clamped): the closed-form inverse of
+/// the cumulative distribution F(mu) = 2 pi integral_{-1}^{mu} P dmu', so 0
+/// maps to backscattering (mu = -1) and 1 to the forward direction (mu = 1).
+pub fn sample_henyey_greenstein_cos_theta(asymmetry_parameter: f64, uniform_sample: f64) -> f64 {
+    let g = asymmetry_parameter;
+    let u = uniform_sample.clamp(0.0, 1.0);
+    // The closed-form inverse divides by g: below 1e-8 its round-off
+    // (~1e-16 / g) would exceed the error of using the isotropic inverse (~g).
+    if g.abs() < 1e-8 {
+        return 2.0 * u - 1.0;
+    }
+    let ratio = (1.0 - g * g) / (1.0 - g + 2.0 * g * u);
+    ((1.0 + g * g - ratio * ratio) / (2.0 * g)).clamp(-1.0, 1.0)
+}
+
 /// The asymmetry parameter given to a Henyey-Greenstein function was not in
 /// the open interval (-1, 1), where eq. 3 is a probability density.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -140,15 +157,7 @@ impl HenyeyGreensteinPhaseFunction {
     /// F(mu) = 2 pi integral_{-1}^{mu} P dmu', so 0 maps to backscattering
     /// (mu = -1) and 1 to the forward direction (mu = 1).
     pub fn sample_cos_theta(&self, uniform_sample: f64) -> f64 {
-        let g = self.asymmetry_parameter;
-        let u = uniform_sample.clamp(0.0, 1.0);
-        // The closed-form inverse divides by g: below 1e-8 its round-off
-        // (~1e-16 / g) would exceed the error of using the isotropic inverse (~g).
-        if g.abs() < 1e-8 {
-            return 2.0 * u - 1.0;
-        }
-        let ratio = (1.0 - g * g) / (1.0 - g + 2.0 * g * u);
-        ((1.0 + g * g - ratio * ratio) / (2.0 * g)).clamp(-1.0, 1.0)
+        sample_henyey_greenstein_cos_theta(self.asymmetry_parameter, uniform_sample)
     }
 }
 

@@ -166,9 +166,24 @@ impl TabulatedPhaseFunction {
     /// Phase function at `cos_theta` (sr^-1), linear in cos theta between
     /// nodes; `cos_theta` is clamped to [-1, 1].
     pub fn phase_function_per_sr(&self, cos_theta: f64) -> f64 {
+        self.phase_function_at(self.locate(cos_theta))
+    }
+
+    /// Where `cos_theta` (clamped to [-1, 1]) lies among the nodes: the
+    /// index i of the interval [mu_i, mu_{i+1}] holding it and the fraction
+    /// t = (mu - mu_i) / (mu_{i+1} - mu_i) across it. Tables on the same
+    /// nodes (one per wavelength) share it: a caller searches once and
+    /// evaluates each with [`Self::phase_function_at`].
+    pub fn locate(&self, cos_theta: f64) -> (usize, f64) {
         let mu = cos_theta.clamp(-1.0, 1.0);
         let i = self.interval_index(mu);
         let t = (mu - self.cos_theta[i]) / (self.cos_theta[i + 1] - self.cos_theta[i]);
+        (i, t)
+    }
+
+    /// Phase function (sr^-1) at a location from [`Self::locate`] on a table
+    /// with the same nodes: P_i + t (P_{i+1} - P_i).
+    pub fn phase_function_at(&self, (i, t): (usize, f64)) -> f64 {
         self.phase_per_sr[i] + t * (self.phase_per_sr[i + 1] - self.phase_per_sr[i])
     }
 

@@ -141,27 +141,21 @@ impl MieAerosol {
 /// wavelength on the same angles).
 fn phase_on_grid(per_wavelength: &[EnsembleOptics]) -> Option<PhaseFunction> {
     let mut asymmetry_g = Vec::with_capacity(per_wavelength.len());
-    let mut nodes: Option<&[f64]> = None;
-    let mut rows = Vec::with_capacity(per_wavelength.len());
+    let mut tables = Vec::with_capacity(per_wavelength.len());
     for optics in per_wavelength {
         match &optics.phase_function {
             AerosolPhaseFunction::HenyeyGreenstein(hg) => {
                 asymmetry_g.push(hg.asymmetry_parameter());
             }
-            AerosolPhaseFunction::Tabulated(table) => {
-                let table_nodes = table.cos_theta_nodes();
-                if nodes.is_some_and(|n| n != table_nodes) {
-                    return None;
-                }
-                nodes = Some(table_nodes);
-                rows.push(table.phase_per_sr_nodes().to_vec());
-            }
+            AerosolPhaseFunction::Tabulated(table) => tables.push(table.clone()),
         }
     }
-    match nodes {
-        None => Some(PhaseFunction::HenyeyGreenstein { asymmetry_g }),
-        Some(_) if !asymmetry_g.is_empty() => None,
-        Some(nodes) => TabulatedPhase::new(nodes.to_vec(), rows).map(PhaseFunction::Tabulated),
+    match (tables.is_empty(), asymmetry_g.is_empty()) {
+        (true, _) => Some(PhaseFunction::HenyeyGreenstein { asymmetry_g }),
+        (false, false) => None,
+        // The engine's tables as they are: `from_tables` checks that they
+        // share their angles.
+        (false, true) => TabulatedPhase::from_tables(tables).map(PhaseFunction::Tabulated),
     }
 }
 

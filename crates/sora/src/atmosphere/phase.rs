@@ -20,7 +20,13 @@
 //!   Its mean cosine is not g but `3 g (4 + g^2) / (5 (2 + g^2))`.
 //! - Tabulated: values at nodes mu_j, linear in mu between them (the exact
 //!   Mie phase function of a size distribution), renormalised so that the
-//!   interpolant integrates to exactly 1.
+//!   interpolant integrates to exactly 1: one `sora_mie`
+//!   [`TabulatedPhaseFunction`] per wavelength, on shared nodes.
+//!
+//! Henyey-Greenstein and the tabulated function are `sora_mie`'s (its
+//! `paper_phase` and `ensemble` modules): one implementation of their
+//! evaluation, normalisation and sampling serves the Mie engine and the
+//! renderer.
 //!
 //! A species' phase function may change with wavelength (the depolarisation
 //! of air, the Mie phase function), so [`PhaseFunction`] holds one set of
@@ -36,7 +42,13 @@
 //! Cornette-Shanks is sampled with the Henyey-Greenstein of the same g
 //! (pdf != p; the weight is p / pdf).
 
+use crate::mie::ensemble::TabulatedPhaseFunction;
+use crate::mie::paper_phase::sample_henyey_greenstein_cos_theta;
 use std::f64::consts::PI;
+
+/// Henyey-Greenstein phase function with asymmetry parameter `g`, sr^-1
+/// (the paper's eq. 3): `sora_mie`'s.
+pub use crate::mie::paper_phase::henyey_greenstein_phase_function_per_sr as henyey_greenstein_phase;
 
 /// Isotropic scattering, 1 / (4 pi) sr^-1.
 pub const ISOTROPIC_PHASE_PER_SR: f64 = 1.0 / (4.0 * PI);
@@ -46,13 +58,6 @@ pub const ISOTROPIC_PHASE_PER_SR: f64 = 1.0 / (4.0 * PI);
 pub fn rayleigh_phase(depolarization_ratio: f64, cos_theta: f64) -> f64 {
     let rho = depolarization_ratio;
     3.0 / (16.0 * PI) * 2.0 / (2.0 + rho) * ((1.0 + rho) + (1.0 - rho) * cos_theta * cos_theta)
-}
-
-/// Henyey-Greenstein phase function with asymmetry parameter `g`, sr^-1
-/// (the paper's eq. 3).
-pub fn henyey_greenstein_phase(g: f64, cos_theta: f64) -> f64 {
-    let denominator = 1.0 + g * g - 2.0 * g * cos_theta;
-    (1.0 - g * g) / (4.0 * PI * denominator * denominator.sqrt())
 }
 
 /// Cornette-Shanks phase function with parameter `g`, sr^-1.
@@ -82,124 +87,60 @@ pub struct PhaseSample {
 
 /// Phase functions at nodes mu_j (increasing, from -1 to 1), one row of
 /// values per wavelength, linear in mu between nodes; each row normalised
-/// so that its interpolant integrates to 1 over the sphere.
+/// so that its interpolant integrates to 1 over the sphere. Each row is a
+/// `sora_mie` [`TabulatedPhaseFunction`] (evaluation, exact cumulative
+/// distribution and its inversion, mean cosine); all rows share the nodes,
+/// so that evaluating every wavelength at one angle searches them once.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TabulatedPhase {
-    cos_theta_nodes: Vec<f64>,
-    /// values[wavelength][node], sr^-1.
-    values: Vec<Vec<f64>>,
-    /// cumulative[wavelength][node]: probability of mu < node (0 .. 1).
-    cumulative: Vec<Vec<f64>>,
+    /// One table per wavelength, all on the same nodes.
+    rows: Vec<TabulatedPhaseFunction>,
     /// Mean cosine per wavelength, exact for the interpolant.
     asymmetry: Vec<f64>,
 }
 
 impl TabulatedPhase {
     /// A table from nodes (strictly increasing, first -1 and last 1) and one
-    /// row of values per wavelength (finite, >= 0, not all zero); each row
-    /// is rescaled to integrate to 1. Returns `None` for an invalid table
-    /// (the callers build tables from computed values, so this is a bug
-    /// check, not a user error).
+    /// row of values per wavelength (at least one; finite, >= 0, not all
+    /// zero); each row is rescaled to integrate to 1. Returns `None` for an
+    /// invalid table (the callers build tables from computed values, so this
+    /// is a bug check, not a user error).
     pub fn new(cos_theta_nodes: Vec<f64>, values: Vec<Vec<f64>>) -> Option<TabulatedPhase> {
-        let n = cos_theta_nodes.len();
-        let nodes_ok = n >= 2
-            && cos_theta_nodes[0] == -1.0
-            && cos_theta_nodes[n - 1] == 1.0
-            && cos_theta_nodes.windows(2).all(|w| w[1] > w[0]);
-        if !nodes_ok {
+        let rows = values
+            .into_iter()
+            .map(|row| TabulatedPhaseFunction::from_nodes(cos_theta_nodes.clone(), row).ok())
+            .collect::<Option<Vec<_>>>()?;
+        Self::from_tables(rows)
+    }
+
+    /// The tables of the wavelengths as they are (no renormalisation), e.g.
+    /// the Mie engine's; `None` unless there is at least one and all share
+    /// their nodes.
+    pub fn from_tables(rows: Vec<TabulatedPhaseFunction>) -> Option<TabulatedPhase> {
+        let nodes = rows.first()?.cos_theta_nodes();
+        if rows.iter().any(|row| row.cos_theta_nodes() != nodes) {
             return None;
         }
-        let mut normalised = Vec::with_capacity(values.len());
-        let mut cumulative = Vec::with_capacity(values.len());
-        let mut asymmetry = Vec::with_capacity(values.len());
-        for row in values {
-            if row.len() != n || row.iter().any(|v| !(v.is_finite() && *v >= 0.0)) {
-                return None;
-            }
-            // Trapezoids are the exact integral of the linear interpolant.
-            let mut running = vec![0.0; n];
-            for j in 1..n {
-                let width = cos_theta_nodes[j] - cos_theta_nodes[j - 1];
-                running[j] = running[j - 1] + 0.5 * (row[j] + row[j - 1]) * width;
-            }
-            let total = 2.0 * PI * running[n - 1];
-            if !(total > 0.0 && total.is_finite()) {
-                return None;
-            }
-            let row: Vec<f64> = row.iter().map(|v| v / total).collect();
-            let mut mean_cosine = 0.0;
-            for j in 1..n {
-                // Exact integral of mu * (linear p) over the segment.
-                let (m0, m1) = (cos_theta_nodes[j - 1], cos_theta_nodes[j]);
-                let (p0, p1) = (row[j - 1], row[j]);
-                let w = m1 - m0;
-                mean_cosine += w * (p0 * (2.0 * m0 + m1) + p1 * (m0 + 2.0 * m1)) / 6.0;
-            }
-            asymmetry.push(2.0 * PI * mean_cosine);
-            cumulative.push(running.iter().map(|c| c / running[n - 1]).collect());
-            normalised.push(row);
-        }
-        Some(TabulatedPhase {
-            cos_theta_nodes,
-            values: normalised,
-            cumulative,
-            asymmetry,
-        })
-    }
-
-    /// The nodes, cos theta increasing from -1 to 1.
-    pub fn cos_theta_nodes(&self) -> &[f64] {
-        &self.cos_theta_nodes
-    }
-
-    fn segment(&self, cos_theta: f64) -> usize {
-        let upper = self.cos_theta_nodes.partition_point(|&m| m <= cos_theta);
-        upper.clamp(1, self.cos_theta_nodes.len() - 1) - 1
+        let asymmetry = rows.iter().map(|row| row.asymmetry_parameter()).collect();
+        Some(TabulatedPhase { rows, asymmetry })
     }
 
     /// p(theta) at every wavelength row into `out`, the same values as
     /// [`TabulatedPhase::eval`] row by row.
     fn eval_all(&self, cos_theta: f64, out: &mut [f64]) {
-        let cos_theta = cos_theta.clamp(-1.0, 1.0);
-        let j = self.segment(cos_theta);
-        let (m0, m1) = (self.cos_theta_nodes[j], self.cos_theta_nodes[j + 1]);
-        let t = (cos_theta - m0) / (m1 - m0);
-        for (value, row) in out.iter_mut().zip(&self.values) {
-            *value = row[j] + t * (row[j + 1] - row[j]);
+        let location = self.rows[0].locate(cos_theta);
+        for (value, row) in out.iter_mut().zip(&self.rows) {
+            *value = row.phase_function_at(location);
         }
     }
 
     fn eval(&self, wavelength_index: usize, cos_theta: f64) -> f64 {
-        let cos_theta = cos_theta.clamp(-1.0, 1.0);
-        let j = self.segment(cos_theta);
-        let (m0, m1) = (self.cos_theta_nodes[j], self.cos_theta_nodes[j + 1]);
-        let row = &self.values[wavelength_index];
-        row[j] + (cos_theta - m0) / (m1 - m0) * (row[j + 1] - row[j])
+        self.rows[wavelength_index].phase_function_per_sr(cos_theta)
     }
 
     /// Inverts the cumulative distribution of the linear interpolant.
     fn sample_cos_theta(&self, wavelength_index: usize, u: f64) -> f64 {
-        let cumulative = &self.cumulative[wavelength_index];
-        let row = &self.values[wavelength_index];
-        let upper = cumulative.partition_point(|&c| c <= u);
-        let j = upper.clamp(1, cumulative.len() - 1) - 1;
-        let (m0, m1) = (self.cos_theta_nodes[j], self.cos_theta_nodes[j + 1]);
-        let segment_probability = cumulative[j + 1] - cumulative[j];
-        if segment_probability <= 0.0 {
-            return m0;
-        }
-        // Within the segment the density is linear, a + b t for t in [0, 1];
-        // solve a t + b t^2 / 2 = s (a + b / 2) for t, stably.
-        let s = ((u - cumulative[j]) / segment_probability).clamp(0.0, 1.0);
-        let (a, b) = (row[j], row[j + 1] - row[j]);
-        let target = s * (a + 0.5 * b);
-        let t = if b.abs() < 1e-12 * a.abs().max(1e-300) {
-            s
-        } else {
-            let discriminant = (a * a + 2.0 * b * target).max(0.0);
-            2.0 * target / (a + discriminant.sqrt())
-        };
-        (m0 + t.clamp(0.0, 1.0) * (m1 - m0)).clamp(-1.0, 1.0)
+        self.rows[wavelength_index].sample_cos_theta(u)
     }
 }
 
@@ -271,10 +212,10 @@ impl PhaseFunction {
                 depolarization_ratios,
             } => sample_rayleigh_cos_theta(depolarization_ratios[wavelength_index], u[0]),
             PhaseFunction::HenyeyGreenstein { asymmetry_g } => {
-                sample_henyey_greenstein_cos_theta(asymmetry_g[wavelength_index], u[0])
+                henyey_greenstein_cos_theta(asymmetry_g[wavelength_index], u[0])
             }
             PhaseFunction::CornetteShanks { g } => {
-                sample_henyey_greenstein_cos_theta(g[wavelength_index], u[0])
+                henyey_greenstein_cos_theta(g[wavelength_index], u[0])
             }
             PhaseFunction::Tabulated(table) => table.sample_cos_theta(wavelength_index, u[0]),
         };
@@ -329,14 +270,11 @@ fn sample_rayleigh_cos_theta(depolarization_ratio: f64, u: f64) -> f64 {
     mu.clamp(-1.0, 1.0)
 }
 
-/// Henyey-Greenstein inversion (pbrt-v4 `SampleHenyeyGreenstein`, with
-/// mu measured from the incoming direction: g > 0 favours mu near 1).
-fn sample_henyey_greenstein_cos_theta(g: f64, u: f64) -> f64 {
-    if g.abs() < 1e-3 {
-        return 1.0 - 2.0 * u;
-    }
-    let s = (1.0 - g * g) / (1.0 + g - 2.0 * g * u);
-    ((1.0 + g * g - s * s) / (2.0 * g)).clamp(-1.0, 1.0)
+/// Henyey-Greenstein inversion, `sora_mie`'s, fed 1 - u so that u = 0 is
+/// the forward direction as in pbrt-v4's `SampleHenyeyGreenstein` (mu
+/// measured from the incoming direction: g > 0 favours mu near 1).
+fn henyey_greenstein_cos_theta(g: f64, u: f64) -> f64 {
+    sample_henyey_greenstein_cos_theta(g, 1.0 - u)
 }
 
 #[cfg(test)]
