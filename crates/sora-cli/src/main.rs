@@ -26,6 +26,7 @@ enum Command {
     Atmosphere(commands::atmosphere::AtmosphereArgs),
     Spectrum(commands::spectrum::SpectrumArgs),
     Render(commands::render::RenderArgs),
+    Irradiance(commands::irradiance::IrradianceArgs),
 }
 
 fn main() {
@@ -36,6 +37,7 @@ fn main() {
         Command::Atmosphere(args) => commands::atmosphere::run(args),
         Command::Spectrum(args) => commands::spectrum::run(args),
         Command::Render(args) => commands::render::run(args),
+        Command::Irradiance(args) => commands::irradiance::run(args),
     };
     if let Err(error) = result {
         if is_broken_pipe(&error) {

@@ -72,5 +72,8 @@ pub use atmosphere::Atmosphere;
 pub use camera::Camera;
 pub use error::{Error, Result};
 pub use geometry::ViewDirection;
-pub use sky::{FastTableSize, ImageSettings, Method, Scattering, Sky, SkyBuilder, SkyRadiance};
+pub use sky::{
+    FastTableSize, ImageSettings, Irradiance, Method, Plane, Scattering, Sky, SkyBuilder,
+    SkyRadiance,
+};
 pub use spectrum::WavelengthGrid;

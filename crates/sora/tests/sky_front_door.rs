@@ -181,8 +181,10 @@ fn bad_choices_are_errors_not_panics() {
         )
         .contains("all orders")
     );
-    let mut settings = sora::transport::multiple_scattering::MultipleScatteringSettings::default();
-    settings.layers = 1;
+    let settings = sora::transport::multiple_scattering::MultipleScatteringSettings {
+        layers: 1,
+        ..Default::default()
+    };
     assert!(
         error(Sky::builder(&atmosphere).scattering(Scattering::Multiple(settings)))
             .contains("multiple-scattering layers = 1")

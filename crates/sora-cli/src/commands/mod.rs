@@ -2,6 +2,7 @@
 
 pub mod atmosphere;
 pub mod colour;
+pub mod irradiance;
 pub mod mie;
 pub mod render;
 pub mod spectrum;

@@ -41,7 +41,7 @@ pub enum AerosolPhase {
 
 impl AerosolPhase {
     /// The phase function on a grid of `len` wavelengths (constant g).
-    pub fn on_grid(self, len: usize) -> PhaseFunction {
+    pub(crate) fn on_grid(self, len: usize) -> PhaseFunction {
         match self {
             AerosolPhase::HenyeyGreenstein { g } => PhaseFunction::HenyeyGreenstein {
                 asymmetry_g: vec![g; len],

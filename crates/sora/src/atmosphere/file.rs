@@ -61,7 +61,7 @@ use crate::spectrum::{SolarSpectrum, Spectrum, TabulatedSpectrum};
 pub const BUILTIN_REFRACTIVE_INDICES: [&str; 1] = ["mars-dust-wolff2009"];
 
 /// The built-in refractive index table `name`, if there is one.
-pub fn builtin_refractive_index(name: &str) -> Option<TabulatedRefractiveIndex> {
+pub(crate) fn builtin_refractive_index(name: &str) -> Option<TabulatedRefractiveIndex> {
     match name {
         "mars-dust-wolff2009" => Some(
             TabulatedRefractiveIndex::parse_csv(MARS_DUST_WOLFF2009_CSV)

@@ -16,7 +16,7 @@
 //! (0 for a pure absorber), and the asymmetry parameter g = `<cos theta>`
 //! of the phase function. Slant paths and transmittances are the
 //! renderer's business; [`AtmosphereOptics::add_extinction_at_altitude`]
-//! and [`AtmosphereOptics::add_scattering_at_altitude`] are its per-sample
+//! and `AtmosphereOptics::add_scattering_at_altitude` are its per-sample
 //! building blocks (no allocation).
 
 use super::phase::PhaseFunction;

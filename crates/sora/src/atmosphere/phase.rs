@@ -31,7 +31,7 @@
 //! A species' phase function may change with wavelength (the depolarisation
 //! of air, the Mie phase function), so [`PhaseFunction`] holds one set of
 //! parameters per sample of the atmosphere's wavelength grid and every
-//! method takes the wavelength index. [`PhaseFunction::eval_into`]
+//! method takes the wavelength index. `PhaseFunction::eval_into`
 //! evaluates all wavelengths at one angle, the renderer's hot path.
 //!
 //! Sampling (for a path tracer, as pbrt's `PhaseFunction::Sample_p`): from
@@ -55,20 +55,20 @@ pub const ISOTROPIC_PHASE_PER_SR: f64 = 1.0 / (4.0 * PI);
 
 /// Rayleigh phase function with depolarisation ratio `depolarization_ratio`
 /// (0 for the classical 3/(16 pi)(1 + mu^2)), sr^-1.
-pub fn rayleigh_phase(depolarization_ratio: f64, cos_theta: f64) -> f64 {
+pub(crate) fn rayleigh_phase(depolarization_ratio: f64, cos_theta: f64) -> f64 {
     let rho = depolarization_ratio;
     3.0 / (16.0 * PI) * 2.0 / (2.0 + rho) * ((1.0 + rho) + (1.0 - rho) * cos_theta * cos_theta)
 }
 
 /// Cornette-Shanks phase function with parameter `g`, sr^-1.
-pub fn cornette_shanks_phase(g: f64, cos_theta: f64) -> f64 {
+pub(crate) fn cornette_shanks_phase(g: f64, cos_theta: f64) -> f64 {
     let denominator = 1.0 + g * g - 2.0 * g * cos_theta;
     3.0 / (8.0 * PI) * (1.0 - g * g) * (1.0 + cos_theta * cos_theta)
         / ((2.0 + g * g) * denominator * denominator.sqrt())
 }
 
 /// Mean cosine of the Cornette-Shanks function of parameter `g`.
-pub fn cornette_shanks_asymmetry(g: f64) -> f64 {
+pub(crate) fn cornette_shanks_asymmetry(g: f64) -> f64 {
     3.0 * g * (4.0 + g * g) / (5.0 * (2.0 + g * g))
 }
 
@@ -116,7 +116,7 @@ impl TabulatedPhase {
     /// The tables of the wavelengths as they are (no renormalisation), e.g.
     /// the Mie engine's; `None` unless there is at least one and all share
     /// their nodes.
-    pub fn from_tables(rows: Vec<TabulatedPhaseFunction>) -> Option<TabulatedPhase> {
+    pub(crate) fn from_tables(rows: Vec<TabulatedPhaseFunction>) -> Option<TabulatedPhase> {
         let nodes = rows.first()?.cos_theta_nodes();
         if rows.iter().any(|row| row.cos_theta_nodes() != nodes) {
             return None;
@@ -179,7 +179,7 @@ impl PhaseFunction {
 
     /// p(theta) at every wavelength, written into `out` (one value per
     /// wavelength sample; no allocation).
-    pub fn eval_into(&self, cos_theta: f64, out: &mut [f64]) {
+    pub(crate) fn eval_into(&self, cos_theta: f64, out: &mut [f64]) {
         match self {
             // Every wavelength shares the table's cos theta nodes: find the
             // segment once (a binary search per wavelength dominated the
@@ -195,7 +195,7 @@ impl PhaseFunction {
 
     /// The probability density (sr^-1) with which [`PhaseFunction::sample`]
     /// picks a direction at angle theta.
-    pub fn pdf(&self, wavelength_index: usize, cos_theta: f64) -> f64 {
+    pub(crate) fn pdf(&self, wavelength_index: usize, cos_theta: f64) -> f64 {
         match self {
             PhaseFunction::CornetteShanks { g } => {
                 henyey_greenstein_phase(g[wavelength_index], cos_theta)

@@ -13,10 +13,10 @@
 //!
 //! where F_K = (6 + 3 rho) / (6 - 7 rho) is the King correction factor for
 //! the anisotropy of the molecules, rho their depolarisation ratio. The
-//! same rho changes the phase function (see [`super::phase::rayleigh_phase`]):
+//! same rho changes the phase function (see `super::phase::rayleigh_phase`):
 //! rho = 6 (F_K - 1) / (3 + 7 F_K).
 //!
-//! - Air ([`air_cross_section_m2`]): Bates (1984), the sum over the four
+//! - Air (`air_cross_section_m2`): Bates (1984), the sum over the four
 //!   main gases (N2 78.084 %, O2 20.946 %, Ar 0.934 %, CO2 0.036 % by
 //!   volume) of each gas's cross-section, from its refractivity at 0 C and
 //!   1013.25 hPa and its King factor, as tabulated and fitted in Bates'

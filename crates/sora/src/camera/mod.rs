@@ -122,6 +122,109 @@ impl Camera {
     }
 }
 
+impl Camera {
+    /// Where `direction` (unit, east-north-up) lands on a `width` x
+    /// `height` image: continuous pixel coordinates (x, y), pixel (column,
+    /// row) covering [column, column + 1) x [row, row + 1); None where the
+    /// camera does not see it. The inverse of [`Camera::direction_for_pixel`].
+    pub(crate) fn image_point_for_direction(
+        &self,
+        direction: Vector3,
+        width: u32,
+        height: u32,
+    ) -> Option<(f64, f64)> {
+        let (w, h) = (width as f64, height as f64);
+        let (u, v) = match self {
+            Camera::Fisheye => {
+                let zenith_angle = direction.z.clamp(-1.0, 1.0).acos();
+                let radius = zenith_angle / std::f64::consts::FRAC_PI_2;
+                if radius > 1.0 {
+                    return None;
+                }
+                let horizontal = direction.x.hypot(direction.y);
+                let (sx, sy) = if horizontal > 0.0 {
+                    (
+                        -direction.x / horizontal * radius,
+                        direction.y / horizontal * radius,
+                    )
+                } else {
+                    (0.0, 0.0)
+                };
+                let scale = w.min(h);
+                return Some((0.5 * (sx * scale + w), 0.5 * (h - sy * scale)));
+            }
+            Camera::Equirectangular => {
+                let (elevation, azimuth) =
+                    crate::geometry::elevation_azimuth_from_direction(direction);
+                (
+                    ((azimuth - 180.0).rem_euclid(360.0)) / 360.0,
+                    (90.0 - elevation) / 180.0,
+                )
+            }
+            Camera::Perspective(camera) => {
+                let depth = direction.dot(camera.forward);
+                if depth <= 0.0 {
+                    return None;
+                }
+                let aspect = h / w;
+                let sx = direction.dot(camera.right) / depth / camera.tan_half_fov;
+                let sy = direction.dot(camera.up) / depth / (camera.tan_half_fov * aspect);
+                (0.5 * (sx + 1.0), 0.5 * (1.0 - sy))
+            }
+        };
+        ((0.0..1.0).contains(&u) && (0.0..=1.0).contains(&v))
+            .then_some((u * w, (v * h).min(h - 1e-9)))
+    }
+
+    /// Solid angle of pixel (column, row), sr: exact for the panorama
+    /// (a band of azimuth times a band of elevation), and the projection's
+    /// Jacobian at the pixel's centre times its area for the fisheye
+    /// (dOmega = sin(theta) (pi/2) / r dA, r the distance from the centre
+    /// in units of the horizon's) and the pinhole (dOmega = dA / (1 + x^2 +
+    /// y^2)^(3/2) on the image plane at distance 1); zero outside the
+    /// fisheye's circle.
+    pub(crate) fn pixel_solid_angle_sr(
+        &self,
+        column: u32,
+        row: u32,
+        width: u32,
+        height: u32,
+    ) -> f64 {
+        let (w, h) = (width as f64, height as f64);
+        let (x, y) = (column as f64 + 0.5, row as f64 + 0.5);
+        match self {
+            Camera::Fisheye => {
+                let scale = w.min(h);
+                let (sx, sy) = ((2.0 * x - w) / scale, (h - 2.0 * y) / scale);
+                let radius = sx.hypot(sy);
+                if radius > 1.0 {
+                    return 0.0;
+                }
+                let theta = radius * std::f64::consts::FRAC_PI_2;
+                let sine_over_radius = if radius > 0.0 {
+                    theta.sin() / radius
+                } else {
+                    std::f64::consts::FRAC_PI_2
+                };
+                std::f64::consts::FRAC_PI_2 * sine_over_radius * (2.0 / scale).powi(2)
+            }
+            Camera::Equirectangular => {
+                let top = (90.0 - 180.0 * row as f64 / h).to_radians();
+                let bottom = (90.0 - 180.0 * (row + 1) as f64 / h).to_radians();
+                2.0 * std::f64::consts::PI / w * (top.sin() - bottom.sin())
+            }
+            Camera::Perspective(camera) => {
+                let aspect = h / w;
+                let sx = (2.0 * x / w - 1.0) * camera.tan_half_fov;
+                let sy = (1.0 - 2.0 * y / h) * camera.tan_half_fov * aspect;
+                let area =
+                    (2.0 * camera.tan_half_fov / w) * (2.0 * camera.tan_half_fov * aspect / h);
+                area / (1.0 + sx * sx + sy * sy).powf(1.5)
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -201,5 +304,66 @@ mod tests {
         assert!(up.direction_for_pixel(0, 0, 10, 10).unwrap().z > 0.8);
         assert!(PerspectiveCamera::new(0.0, 0.0, 180.0).is_err());
         assert!(PerspectiveCamera::new(95.0, 0.0, 60.0).is_err());
+    }
+
+    /// Every pixel's centre direction lands back in that pixel, and the
+    /// pixels' solid angles add up to what each camera sees: 4 pi for the
+    /// panorama, 2 pi for the fisheye's hemisphere (to its resolution), and
+    /// the pinhole's rectangle (4 asin(a b / sqrt((1 + a^2)(1 + b^2))) for
+    /// half-sides a, b on the plane at distance 1).
+    #[test]
+    fn inverse_projection_and_solid_angles() {
+        let perspective = PerspectiveCamera::new(20.0, 300.0, 70.0).unwrap();
+        for (camera, width, height) in [
+            (Camera::Fisheye, 64, 64),
+            (Camera::Fisheye, 90, 60),
+            (Camera::Equirectangular, 96, 48),
+            (Camera::Perspective(perspective), 80, 50),
+        ] {
+            let mut total = 0.0;
+            for row in 0..height {
+                for column in 0..width {
+                    total += camera.pixel_solid_angle_sr(column, row, width, height);
+                    let Some(direction) = camera.direction_for_pixel(column, row, width, height)
+                    else {
+                        continue;
+                    };
+                    let (x, y) = camera
+                        .image_point_for_direction(direction, width, height)
+                        .unwrap();
+                    assert_eq!(
+                        (x.floor() as u32, y.floor() as u32),
+                        (column, row),
+                        "{camera:?}: ({x}, {y})"
+                    );
+                }
+            }
+            let expected = match camera {
+                Camera::Equirectangular => 4.0 * std::f64::consts::PI,
+                Camera::Fisheye => 2.0 * std::f64::consts::PI,
+                Camera::Perspective(p) => {
+                    let (a, b) = (
+                        p.tan_half_fov,
+                        p.tan_half_fov * height as f64 / width as f64,
+                    );
+                    4.0 * (a * b / ((1.0 + a * a) * (1.0 + b * b)).sqrt()).asin()
+                }
+            };
+            // The fisheye's circle is resolved by its pixels: ~1 / side.
+            let bound = if camera == Camera::Fisheye {
+                0.03
+            } else {
+                1e-3
+            };
+            assert!(
+                (total / expected - 1.0).abs() < bound,
+                "{camera:?} {width}x{height}: {total} vs {expected}"
+            );
+        }
+        assert!(
+            Camera::Perspective(perspective)
+                .image_point_for_direction(-perspective.forward, 80, 50)
+                .is_none()
+        );
     }
 }

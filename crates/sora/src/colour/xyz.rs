@@ -105,7 +105,7 @@ pub struct SpectrumToXyz {
 impl SpectrumToXyz {
     /// The conversion on `grid` for `observer` (parses the observer's table;
     /// to share one parsed table between grids, use
-    /// [`SpectrumToXyz::with_colour_matching_functions`]).
+    /// `SpectrumToXyz::with_colour_matching_functions`).
     pub fn new(grid: &WavelengthGrid, observer: Observer) -> SpectrumToXyz {
         SpectrumToXyz::with_colour_matching_functions(grid, &ColourMatchingFunctions::new(observer))
     }

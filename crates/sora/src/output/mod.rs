@@ -20,7 +20,7 @@
 //!
 //! Atomicity: every file is written in full to a temporary file in the
 //! target's directory, synced, then renamed onto the target
-//! ([`write_file_atomically`]). A failed write leaves no partial file and no
+//! (`write_file_atomically`). A failed write leaves no partial file and no
 //! temporary file, and an existing file at the target is replaced only when
 //! the new one is complete. Errors are [`Error::Io`](crate::Error::Io)
 //! naming the target path (image validation errors are

@@ -93,7 +93,7 @@ impl WavelengthGrid {
     }
 
     /// Last wavelength, nm.
-    pub(crate) fn stop_nm(&self) -> f64 {
+    pub fn stop_nm(&self) -> f64 {
         self.wavelength_nm(self.len - 1)
     }
 

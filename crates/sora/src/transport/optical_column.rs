@@ -8,13 +8,13 @@
 //! integral per species serves all wavelengths. Transmittance is
 //! exp(-tau) (Beer-Lambert, the paper's A(x0, xi)).
 //!
-//! - [`compute_columns_along_ray`]: the integral by composite 4-point
+//! - `compute_columns_along_ray`: the integral by composite 4-point
 //!   Gauss-Legendre on panels that crowd toward the ray's lowest point
 //!   (where the density peaks) and its start, cut where the ray crosses a
 //!   corner of a piecewise-linear profile ([`ProfileCorners`]).
 //! - [`SunColumnTable`]: the columns from any point to the top of the
 //!   atmosphere toward the sun, tabulated over (altitude, cos of the sun's
-//!   zenith angle) and read by [`SunColumnTable::lookup_columns_to_sun`].
+//!   zenith angle) and read by `SunColumnTable::lookup_columns_to_sun`.
 //!   Both axes are Bruneton's (2017) transmittance-texture
 //!   parametrisation: altitude through rho = sqrt(r^2 - R^2) (dense near
 //!   the ground, where thin aerosol layers live), and mu through the
@@ -200,7 +200,7 @@ const TABLE_RAY_PANELS: usize = 16;
 
 /// Columns from any point in the atmosphere to its top toward the sun,
 /// tabulated (see the module docs). Points whose path to the sun hits the
-/// ground are in the planet's shadow: [`SunColumnTable::lookup_columns_to_sun`]
+/// ground are in the planet's shadow: `SunColumnTable::lookup_columns_to_sun`
 /// reports them and leaves the columns alone.
 #[derive(Debug, Clone)]
 pub struct SunColumnTable {

@@ -51,13 +51,13 @@
 //! ground):
 //! 1. **Optical depths.** The columns C_j(t) = integral_0^t rho_j ds of
 //!    every species are integrated by composite 4-point Gauss-Legendre on
-//!    [`SEGMENT_PANELS`] panels crowded toward the segment's start and its
+//!    `SEGMENT_PANELS` panels crowded toward the segment's start and its
 //!    lowest point, and cut where the segment crosses a corner of a
 //!    piecewise-linear profile (tents, layers), where the rule would
 //!    otherwise converge slowly (measured: a 2-4 km tent seen at 10 deg
 //!    elevation came out 1.4% low without the cuts), as in the
 //!    single-scattering code
-//!    ([`super::optical_column::ProfileCorners::fill_panel_ends`]).
+//!    (`super::optical_column::ProfileCorners::fill_panel_ends`).
 //!    tau_lambda(t) = sum_j beta_ext,j(lambda) C_j(t) for every wavelength
 //!    at once. Transmittances used in weights
 //!    are exp(-tau) of these integrals at the exact sampled point (the
@@ -107,14 +107,14 @@
 //!    every wavelength is weighted by
 //!    sum_j sigma_s,j(lambda) p_j,lambda(w.w') / q(w'), where q is the
 //!    mixture over wavelengths and species of the densities
-//!    ([`PhaseFunction::pdf`]) with which the direction could have been
+//!    (`PhaseFunction::pdf`) with which the direction could have been
 //!    drawn.
 //! 5. **Ground.** At a ground vertex x_g with normal n: NEE
 //!    beta a/pi E (n.s) T_sun(x_g), then a cosine-weighted direction
 //!    (pdf (n.w')/pi), so the throughput is multiplied by a.
 //! 6. **Russian roulette** after every vertex: with m the largest
 //!    throughput over the wavelengths, the path survives with probability
-//!    min(1, m / [`RUSSIAN_ROULETTE_THRESHOLD`]) and its throughputs are
+//!    min(1, m / `RUSSIAN_ROULETTE_THRESHOLD`) and its throughputs are
 //!    divided by it (unbiased; no depth limit).
 //!
 //! # What it reports
@@ -133,8 +133,8 @@
 //!
 //! # Determinism
 //! Sample i draws all its numbers from its own stream
-//! [`RandomStream::new`]`(seed, i)`. Samples are grouped in fixed chunks of
-//! [`SAMPLES_PER_CHUNK`] indices; each chunk is accumulated in index order
+//! `RandomStream::new``(seed, i)`. Samples are grouped in fixed chunks of
+//! `SAMPLES_PER_CHUNK` indices; each chunk is accumulated in index order
 //! and the chunks are combined in chunk order, so for one seed the result
 //! is bit-identical whatever the number of threads (rayon, behind the
 //! `parallel` feature).

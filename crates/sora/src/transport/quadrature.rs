@@ -6,7 +6,7 @@
 //! transmittance back to the eye). Evaluating rho a second time for the
 //! running integral would double the cost, so we integrate the cubic that
 //! interpolates rho at the four Gauss nodes: C(a -> s_k) = (b - a)/2 *
-//! sum_m W[k][m] rho(s_m), with W[k][m] = integral_{-1}^{x_k} l_m(t) dt
+//! sum_m `W[k][m]` rho(s_m), with `W[k][m]` = integral_{-1}^{x_k} l_m(t) dt
 //! (l_m the Lagrange basis on the nodes). This is exact for cubics, the
 //! same order as the Gauss rule's own error for smooth integrands
 //! (spectral integration, as in Chebyshev/Gauss collocation methods).
@@ -14,7 +14,7 @@
 /// Nodes of the 4-point Gauss-Legendre rule on [-1, 1]: the values of
 /// [`sora_mie::quadrature::gauss_legendre`](crate::mie::quadrature::gauss_legendre)`(4)`,
 /// kept as constants for the per-ray hot path (tested equal).
-pub const GAUSS_NODES: [f64; 4] = [
+pub(crate) const GAUSS_NODES: [f64; 4] = [
     -0.861_136_311_594_052_6,
     -0.339_981_043_584_856_3,
     0.339_981_043_584_856_3,
@@ -22,7 +22,7 @@ pub const GAUSS_NODES: [f64; 4] = [
 ];
 
 /// Weights of the 4-point Gauss-Legendre rule on [-1, 1] (they sum to 2).
-pub const GAUSS_WEIGHTS: [f64; 4] = [
+pub(crate) const GAUSS_WEIGHTS: [f64; 4] = [
     0.347_854_845_137_453_86,
     0.652_145_154_862_546_1,
     0.652_145_154_862_546_1,
@@ -37,9 +37,9 @@ fn lagrange_basis(m: usize, t: f64) -> f64 {
         .product()
 }
 
-/// W[k][m] = integral from -1 to x_k of l_m(t) dt (see the module docs),
+/// `W[k][m]` = integral from -1 to x_k of l_m(t) dt (see the module docs),
 /// computed by the 4-point rule on [-1, x_k], exact for the cubic l_m.
-pub fn running_integral_matrix() -> [[f64; 4]; 4] {
+pub(crate) fn running_integral_matrix() -> [[f64; 4]; 4] {
     let mut w = [[0.0; 4]; 4];
     for (k, row) in w.iter_mut().enumerate() {
         let half = 0.5 * (GAUSS_NODES[k] + 1.0);
@@ -60,7 +60,8 @@ pub fn running_integral_matrix() -> [[f64; 4]; 4] {
 /// transmittance back to the eye are largest near its start; quadratic
 /// spacing puts panels of width ~ length/n^2 there and still covers the far
 /// end, where the integrand is attenuated.
-pub fn panel_edge_crowded_at_start(length: f64, k: usize, n: usize) -> f64 {
+#[cfg(test)]
+pub(crate) fn panel_edge_crowded_at_start(length: f64, k: usize, n: usize) -> f64 {
     let u = k as f64 / n as f64;
     length * u * u
 }

@@ -33,10 +33,10 @@
 //!   depth is sum_j beta_ext,j(lambda) column_j, so the march integrates
 //!   one geometric column per species, not one per wavelength. The view ray
 //!   is cut into Gauss-Legendre panels that crowd toward its start and its
-//!   lowest point ([`super::optical_column::ray_panel`]), and at the
+//!   lowest point (`super::optical_column::ray_panel`), and at the
 //!   corners of piecewise-linear profiles ([`ProfileCorners`]); the column back to
 //!   the eye at each node comes from the same density samples
-//!   ([`super::quadrature::running_integral_matrix`]). Columns toward the
+//!   (`super::quadrature::running_integral_matrix`). Columns toward the
 //!   sun are exact integrals ([`SunColumns::Exact`]) or a table
 //!   ([`SunColumns::Table`]) for images.
 
@@ -594,11 +594,7 @@ impl SingleScatteringSky {
     /// ray that ends on the ground never sees the sun, however close to it.
     pub fn is_in_sun_disc(&self, view: Vector3) -> bool {
         self.sun_angular_radius_rad > 0.0
-            && !crate::geometry::ray_intersects_ground(
-                self.observer.z,
-                view.z,
-                self.ground_radius_m,
-            )
+            && self.sees_sky(view)
             && view
                 .cross(self.sun_direction)
                 .length()
@@ -606,35 +602,14 @@ impl SingleScatteringSky {
                 < self.sun_angular_radius_rad
     }
 
-    /// Radiance of the sun's disc seen along `view` (zero outside it),
-    /// W m^-2 sr^-1 nm^-1: E_sun / (solid angle) times the view
-    /// transmittance, with linear limb darkening I(mu)/I(1) = 1 - 0.6 (1 - mu)
-    /// normalised so that the disc's integral is E_sun T.
-    pub(crate) fn add_sun_disc(
-        &self,
-        view: Vector3,
-        view_transmittance: &[f64],
-        radiance: &mut [f64],
-    ) {
-        let radius = self.sun_angular_radius_rad;
-        if radius <= 0.0 {
-            return;
-        }
-        let angle = view
-            .cross(self.sun_direction)
-            .length()
-            .atan2(view.dot(self.sun_direction));
-        if angle >= radius {
-            return;
-        }
-        const LIMB_DARKENING: f64 = 0.6;
-        let mu = (1.0 - (angle / radius).powi(2)).max(0.0).sqrt();
-        let solid_angle_sr = 2.0 * std::f64::consts::PI * (1.0 - radius.cos());
-        let profile = (1.0 - LIMB_DARKENING * (1.0 - mu)) / (1.0 - LIMB_DARKENING / 3.0);
-        for (i, out) in radiance.iter_mut().enumerate() {
-            *out += self.optics.solar_irradiance_w_m2_nm[i] / solid_angle_sr
-                * profile
-                * view_transmittance[i];
-        }
+    /// Angular radius of the sun's disc, rad (0: a point).
+    pub(crate) fn sun_angular_radius_rad(&self) -> f64 {
+        self.sun_angular_radius_rad
+    }
+
+    /// True when the ray from the eye toward `direction` (unit) reaches
+    /// space rather than the ground.
+    pub(crate) fn sees_sky(&self, direction: Vector3) -> bool {
+        !crate::geometry::ray_intersects_ground(self.observer.z, direction.z, self.ground_radius_m)
     }
 }

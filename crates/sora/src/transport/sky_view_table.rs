@@ -9,7 +9,7 @@
 //! point sun the scattering angle is fixed along each view ray, so the
 //! phase functions, which carry all the sharp structure (the aerosol's
 //! forward peak, the Mie glory), are applied exactly per pixel by
-//! [`SingleScatteringSky::radiance_from_integrals`]. What remains varies
+//! `SingleScatteringSky::radiance_from_integrals`. What remains varies
 //! smoothly with direction, except across the horizon.
 //!
 //! Axes: the view's zenith angle and its azimuth relative to the sun's,

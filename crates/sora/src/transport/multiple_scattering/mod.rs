@@ -60,7 +60,7 @@
 //!    Mie dust's diffraction peak holds f ~ 40 % and without it the sky
 //!    away from the sun was 8-20 % too dark. Its phase functions are taken
 //!    no closer to the sun than a forward cone of 4.3 degrees (see
-//!    [`MultipleScatteringField::forward_cone_rad`]). The ground term
+//!    `MultipleScatteringField::forward_cone_rad`). The ground term
 //!    likewise carries what delta-M moved from the diffuse to the direct
 //!    beam (forward-scattered sunlight on the ground, and the sunlit
 //!    ground's light forward-scattered toward the eye).
@@ -635,7 +635,7 @@ pub struct MultipleScatteringField {
 impl MultipleScatteringField {
     /// Solves the field of `sky` for every sun zenith angle seen at a point
     /// of the atmosphere visible from its eye; an error for settings that
-    /// [`MultipleScatteringSettings::validate`] rejects.
+    /// `MultipleScatteringSettings::validate` rejects.
     pub fn compute(
         sky: &SingleScatteringSky,
         settings: MultipleScatteringSettings,

@@ -45,7 +45,7 @@ const MOMENT_PANELS: usize = 160;
 /// Gauss-Legendre nodes and weights of order `n` (>= 1) on [0, 1], nodes
 /// increasing, weights summing to 1: the [-1, 1] rule of
 /// [`sora_mie::quadrature::gauss_legendre`](crate::mie::quadrature::gauss_legendre) mapped to mu = (t + 1) / 2.
-pub fn gauss_legendre_unit_interval(n: usize) -> (Vec<f64>, Vec<f64>) {
+pub(crate) fn gauss_legendre_unit_interval(n: usize) -> (Vec<f64>, Vec<f64>) {
     assert!(n >= 1);
     let (nodes, weights) = crate::mie::quadrature::gauss_legendre(n);
     (
@@ -57,7 +57,7 @@ pub fn gauss_legendre_unit_interval(n: usize) -> (Vec<f64>, Vec<f64>) {
 /// Normalised associated Legendre functions Lambda_l^m(mu) for
 /// 0 <= m <= l < `degrees`, written to `out[m * degrees + l]` (entries with
 /// l < m are left alone). Stable upward recurrences in l for each m.
-pub fn normalized_associated_legendre(mu: f64, degrees: usize, out: &mut [f64]) {
+pub(crate) fn normalized_associated_legendre(mu: f64, degrees: usize, out: &mut [f64]) {
     debug_assert!(out.len() >= degrees * degrees);
     let sine = (1.0 - mu * mu).max(0.0).sqrt();
     let mut diagonal = 1.0;
@@ -82,7 +82,7 @@ pub fn normalized_associated_legendre(mu: f64, degrees: usize, out: &mut [f64]) 
 /// Legendre moments chi_0..=chi_`highest` of `phase` at every wavelength:
 /// `out[wavelength * (highest + 1) + l]`, normalised so that chi_0 = 1
 /// exactly (the quadrature's own normalisation error is divided out).
-pub fn compute_legendre_moments(
+pub(crate) fn compute_legendre_moments(
     phase: &PhaseFunction,
     wavelengths: usize,
     highest: usize,
@@ -143,7 +143,7 @@ pub struct TruncatedPhase {
 
 impl TruncatedPhase {
     /// From moments chi_0..=chi_streams (chi_0 = 1).
-    pub fn from_moments(moments: &[f64], streams: usize) -> TruncatedPhase {
+    pub(crate) fn from_moments(moments: &[f64], streams: usize) -> TruncatedPhase {
         debug_assert!(moments.len() > streams);
         // A negative chi_N (a backscattering function) is not a forward
         // peak: leave such functions alone.
@@ -159,13 +159,13 @@ impl TruncatedPhase {
 
     /// True when p*_m vanishes (all coefficients from l = m on are zero):
     /// Rayleigh scattering has no harmonics above m = 2.
-    pub fn harmonic_vanishes(&self, m: usize) -> bool {
+    pub(crate) fn harmonic_vanishes(&self, m: usize) -> bool {
         self.coefficients.iter().skip(m).all(|c| *c == 0.0)
     }
 
     /// p*_m(mu, mu') from the two directions' Lambda tables (each laid out
     /// as [m * degrees + l], degrees = the number of coefficients).
-    pub fn harmonic(&self, m: usize, lambda_a: &[f64], lambda_b: &[f64]) -> f64 {
+    pub(crate) fn harmonic(&self, m: usize, lambda_a: &[f64], lambda_b: &[f64]) -> f64 {
         let n = self.coefficients.len();
         let (a, b) = (&lambda_a[m * n..(m + 1) * n], &lambda_b[m * n..(m + 1) * n]);
         (m..n).map(|l| self.coefficients[l] * a[l] * b[l]).sum()
@@ -173,7 +173,7 @@ impl TruncatedPhase {
 
     /// p*(cos Theta), summed from the Legendre series (for tests).
     #[cfg(test)]
-    pub fn eval(&self, cos_theta: f64) -> f64 {
+    pub(crate) fn eval(&self, cos_theta: f64) -> f64 {
         let (mut p0, mut p1) = (1.0, cos_theta);
         let mut sum = 0.0;
         for (l, c) in self.coefficients.iter().enumerate() {

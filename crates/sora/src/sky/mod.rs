@@ -6,7 +6,10 @@
 //!   (W m^-2 sr^-1 nm^-1) of one view or of many views in one call, with
 //!   standard errors when path tracing;
 //! - [`Sky::render_xyz`] and [`Sky::render_spectral`]: an image for a
-//!   camera, as CIE XYZ or as radiance per wavelength.
+//!   camera, as CIE XYZ or as radiance per wavelength, with the sun's disc
+//!   energy-true at any resolution ([`sun_disc`]);
+//! - [`Sky::irradiance`]: direct, diffuse and global irradiance on a plane
+//!   ([`irradiance`]).
 //!
 //! This is the one place where single scattering and the multiply
 //! scattered light are added: what [`Scattering`] asks for is composed
@@ -33,12 +36,18 @@
 //!   unbiased, with standard errors; views only).
 //!
 //! The sun's disc is part of images only (`ImageSettings::draw_sun_disc`);
-//! a view's radiance is the sky's.
+//! a view's radiance is the sky's, and the direct beam is in
+//! [`Sky::irradiance`] and [`Sky::direct_normal_irradiance`].
 //!
 //! Views and pixels run in parallel with the `parallel` feature; each is
 //! computed by the same code whatever the thread count or the number of
 //! views asked for together, so `radiances(&[v])[0] == radiance(v)` to the
 //! last bit.
+
+mod irradiance;
+mod sun_disc;
+
+pub use irradiance::{Irradiance, Plane};
 
 use std::sync::OnceLock;
 
@@ -52,7 +61,6 @@ use crate::transport::multiple_scattering::{
     MultipleScatteringField, MultipleScatteringScratch, MultipleScatteringSettings,
     MultipleScatteringTable, forward_peak_cosine,
 };
-use crate::transport::optical_column::SunColumnTable;
 use crate::transport::path_tracing::worst_relative_error;
 use crate::transport::{
     Observation, PathTracer, SingleScatteringScratch, SingleScatteringSky, SkyViewTable, SunColumns,
@@ -218,7 +226,13 @@ impl SkyBuilder<'_> {
     /// expensive tables wait for their first use).
     pub fn build(self) -> Result<Sky> {
         let scene = SingleScatteringSky::new(self.atmosphere, &self.wavelengths, self.observation)?;
-        Sky::from_scene(scene, self.scattering, self.method, self.table_size)
+        let mut sky = Sky::from_scene(scene, self.scattering, self.method, self.table_size)?;
+        // The angles as given, not as recovered from the unit vector.
+        sky.sun_position_deg = (
+            self.observation.sun_elevation_deg,
+            self.observation.sun_azimuth_deg,
+        );
+        Ok(sky)
     }
 }
 
@@ -227,6 +241,8 @@ impl SkyBuilder<'_> {
 #[derive(Debug)]
 pub struct Sky {
     scene: SingleScatteringSky,
+    /// Sun elevation and azimuth, degrees.
+    sun_position_deg: (f64, f64),
     scattering: Scattering,
     method: Method,
     table_size: FastTableSize,
@@ -241,7 +257,6 @@ pub struct Sky {
 
 #[derive(Debug)]
 struct ImageTables {
-    sun_columns: SunColumnTable,
     sky_view: SkyViewTable,
 }
 
@@ -341,6 +356,9 @@ impl Sky {
             }
         }
         Ok(Sky {
+            sun_position_deg: crate::geometry::elevation_azimuth_from_direction(
+                scene.sun_direction(),
+            ),
             scene,
             scattering,
             method,
@@ -365,6 +383,41 @@ impl Sky {
     /// Unit vector toward the sun, east-north-up.
     pub fn sun_direction(&self) -> Vector3 {
         self.scene.sun_direction()
+    }
+
+    /// The transmittance of the direct beam from the top of the atmosphere
+    /// to the eye toward the sun's centre (0 where the planet is in the way).
+    pub fn direct_beam_transmittance(&self) -> SampledSpectrum {
+        let mut transmittance = SampledSpectrum::zeros(self.wavelengths().len());
+        let sun = self.sun_direction();
+        if self.scene.sees_sky(sun) {
+            let mut scratch = self.scene.scratch();
+            self.scene
+                .compute_inscattering_integrals(sun, SunColumns::Exact, &mut scratch);
+            transmittance
+                .values_mut()
+                .copy_from_slice(scratch.view_transmittance());
+        }
+        transmittance
+    }
+
+    /// The direct normal irradiance, E_sun T, W m^-2 nm^-1.
+    pub fn direct_normal_irradiance(&self) -> SampledSpectrum {
+        let mut direct = self.direct_beam_transmittance();
+        for (d, e) in direct
+            .values_mut()
+            .iter_mut()
+            .zip(self.optics().solar_irradiance_w_m2_nm.values())
+        {
+            *d *= e;
+        }
+        direct
+    }
+
+    /// The sun's elevation above the horizon and azimuth clockwise from
+    /// north, degrees (as given to the builder).
+    pub fn sun_position_deg(&self) -> (f64, f64) {
+        self.sun_position_deg
     }
 
     /// The orders of scattering and the method.
@@ -422,10 +475,7 @@ impl Sky {
                 half_zenith,
                 azimuth,
             );
-            ImageTables {
-                sun_columns,
-                sky_view,
-            }
+            ImageTables { sky_view }
         })
     }
 
@@ -524,20 +574,32 @@ impl Sky {
     /// tables, without the sun's disc): within 0.1 % of [`Sky::radiance`]
     /// with [`Method::Fast`], which is what the tests hold it to.
     pub fn radiance_from_image_tables(&self, view: ViewDirection) -> Result<SkyRadiance> {
+        let mut all = self.radiances_from_image_tables(&[view])?;
+        Ok(all.remove(0))
+    }
+
+    /// [`Sky::radiance_from_image_tables`] for every view in `views`.
+    fn radiances_from_image_tables(&self, views: &[ViewDirection]) -> Result<Vec<SkyRadiance>> {
         self.prepare_field()?;
+        let tables = self.image_tables();
         let mut work = self.view_work();
-        let mut radiance = SampledSpectrum::zeros(self.wavelengths().len());
-        self.compute_pixel_radiance(
-            view.to_vector(),
-            self.image_tables(),
-            false,
-            &mut work,
-            radiance.values_mut(),
-        );
-        Ok(SkyRadiance {
-            radiance_w_m2_sr_nm: radiance,
-            standard_error_w_m2_sr_nm: None,
-        })
+        let n = self.wavelengths().len();
+        Ok(views
+            .iter()
+            .map(|view| {
+                let mut radiance = SampledSpectrum::zeros(n);
+                self.compute_pixel_radiance(
+                    view.to_vector(),
+                    tables,
+                    &mut work,
+                    radiance.values_mut(),
+                );
+                SkyRadiance {
+                    radiance_w_m2_sr_nm: radiance,
+                    standard_error_w_m2_sr_nm: None,
+                }
+            })
+            .collect())
     }
 
     /// One view's radiance without image tables (fast or reference method),
@@ -591,12 +653,12 @@ impl Sky {
 
     /// One pixel's radiance from the image tables (fast method), into
     /// `radiance`: the sky-view table's integrals, ground and multiply
-    /// scattered light with the exact phase functions, and the sun's disc.
+    /// scattered light with the exact phase functions (the sun's disc is
+    /// added per image, see [`sun_disc`]).
     fn compute_pixel_radiance(
         &self,
         view: Vector3,
         tables: &ImageTables,
-        draw_sun_disc: bool,
         work: &mut ViewWork,
         radiance: &mut [f64],
     ) {
@@ -631,17 +693,19 @@ impl Sky {
                 *r += m + f;
             }
         }
-        if draw_sun_disc && self.scene.is_in_sun_disc(view) {
-            // A handful of pixels: trace them exactly for the
-            // transmittance toward the sun.
-            self.scene.compute_inscattering_integrals(
-                view,
-                SunColumns::Table(&tables.sun_columns),
-                &mut work.single,
-            );
-            self.scene
-                .add_sun_disc(view, work.single.view_transmittance(), radiance);
+    }
+
+    /// Builds everything images of this sky need (the multiple-scattering
+    /// field and its source table; for the fast method the sun-column and
+    /// sky-view tables), so that a progress display can show it as its
+    /// own phase; rendering does it on first use otherwise.
+    pub fn prepare_images(&self) -> Result<()> {
+        self.prepare_field()?;
+        self.source_table();
+        if self.method == Method::Fast {
+            self.image_tables();
         }
+        Ok(())
     }
 
     /// The image `image` as CIE XYZ per pixel (row-major, top row first;
@@ -710,6 +774,20 @@ impl Sky {
         let source_table = self.source_table();
         let tables = (self.method == Method::Fast).then(|| self.image_tables());
         let wavelengths = self.wavelengths().len();
+        // The sun's disc: its share of each pixel it touches, per sr.
+        let direct_normal = self.direct_normal_irradiance();
+        let disc = if image.draw_sun_disc {
+            sun_disc::compute_disc_pixels(
+                &image.camera,
+                width,
+                height,
+                self.sun_direction(),
+                self.scene.sun_angular_radius_rad(),
+                |direction| self.scene.sees_sky(direction),
+            )
+        } else {
+            Vec::new()
+        };
         let rows_done = std::sync::atomic::AtomicUsize::new(0);
         let row_length = width as usize * per_pixel;
         let mut pixels = vec![black; row_length * height as usize];
@@ -725,27 +803,18 @@ impl Sky {
                     continue;
                 };
                 match tables {
-                    Some(tables) => self.compute_pixel_radiance(
-                        view,
-                        tables,
-                        image.draw_sun_disc,
-                        &mut work,
-                        &mut radiance,
-                    ),
+                    Some(tables) => {
+                        self.compute_pixel_radiance(view, tables, &mut work, &mut radiance)
+                    }
                     None => {
-                        self.compute_view_radiance(view, source_table, &mut work, &mut radiance);
-                        if image.draw_sun_disc && self.scene.is_in_sun_disc(view) {
-                            self.scene.compute_inscattering_integrals(
-                                view,
-                                SunColumns::Exact,
-                                &mut work.single,
-                            );
-                            self.scene.add_sun_disc(
-                                view,
-                                work.single.view_transmittance(),
-                                &mut radiance,
-                            );
-                        }
+                        self.compute_view_radiance(view, source_table, &mut work, &mut radiance)
+                    }
+                }
+                let index = row * width as usize + column;
+                if let Ok(k) = disc.binary_search_by_key(&index, |(pixel, _)| *pixel) {
+                    let per_sr = disc[k].1;
+                    for (r, e) in radiance.iter_mut().zip(direct_normal.values()) {
+                        *r += e * per_sr;
                     }
                 }
                 store(&radiance, pixel);

@@ -1,0 +1,73 @@
+//! `sora irradiance` end to end.
+
+mod common;
+
+use common::{one_line_error, sora, stdout};
+
+const BASE: [&str; 5] = [
+    "irradiance",
+    "--preset",
+    "earth-clear",
+    "--sun-elevation",
+    "30",
+];
+
+#[test]
+fn csv_rows_add_up_and_json_carries_units_and_the_sun() {
+    let csv = stdout(&sora(&[&BASE[..], &["--tilt-deg", "35"]].concat()));
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(
+        header,
+        [
+            "wavelength_nm",
+            "direct_normal_irradiance_w_m2_nm",
+            "direct_beam_transmittance",
+            "direct_horizontal_irradiance_w_m2_nm",
+            "diffuse_horizontal_irradiance_w_m2_nm",
+            "global_horizontal_irradiance_w_m2_nm",
+            "direct_tilted_irradiance_w_m2_nm",
+            "diffuse_tilted_irradiance_w_m2_nm",
+            "global_tilted_irradiance_w_m2_nm",
+        ]
+    );
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 21);
+    for row in &rows {
+        // direct horizontal = direct normal x sin 30; global = direct + diffuse.
+        assert!((row[3] / (0.5 * row[1]) - 1.0).abs() < 1e-8, "{row:?}");
+        assert!((row[5] / (row[3] + row[4]) - 1.0).abs() < 1e-8, "{row:?}");
+        assert!((row[8] / (row[6] + row[7]) - 1.0).abs() < 1e-8, "{row:?}");
+        assert!(row[2] > 0.0 && row[2] < 1.0);
+        // Tilted 35 degrees toward the sun (south): more direct light.
+        assert!(row[6] > row[3]);
+    }
+    let json = stdout(&sora(&[&BASE[..], &["--format", "json"]].concat()));
+    for key in [
+        "\"sun_elevation_deg\": 30",
+        "\"sun_azimuth_deg\": 180",
+        "\"global_horizontal_irradiance_w_m2\": ",
+        "\"global_horizontal_illuminance_lx\": ",
+        "\"direct_normal_illuminance_lx\": ",
+        "\"diffuse_horizontal_irradiance_w_m2_nm\": [",
+    ] {
+        assert!(json.contains(key), "{key} not in {json}");
+    }
+}
+
+#[test]
+fn bad_irradiance_arguments_are_one_line_errors() {
+    for (extra, expected) in [
+        (&["--tilt-deg", "200"][..], "plane tilt = 200 deg"),
+        (&["--samples", "10"][..], "--samples and --seed"),
+        (
+            &["--method", "path-tracing", "--samples", "1"][..],
+            "samples = 1",
+        ),
+    ] {
+        let error = one_line_error(&sora(&[&BASE[..], extra].concat()));
+        assert!(error.contains(expected), "{extra:?}: {error}");
+    }
+}
