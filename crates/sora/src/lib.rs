@@ -65,6 +65,7 @@ pub mod output;
 mod parallel;
 pub mod sky;
 pub mod spectrum;
+pub mod sun_position;
 pub mod table;
 pub mod transport;
 
@@ -77,3 +78,4 @@ pub use sky::{
     SkyRadiance,
 };
 pub use spectrum::WavelengthGrid;
+pub use sun_position::{SunPosition, UtcTime};
