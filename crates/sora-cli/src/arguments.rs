@@ -184,21 +184,58 @@ impl Scattering {
     }
 }
 
-/// The eye and the sun: shared by `sora spectrum` and `sora render`.
+/// The eye and the sun: shared by `sora spectrum` and `sora render`. The
+/// sun is given either as angles (--sun-elevation, --sun-azimuth) or as an
+/// instant and a place (--time, --location), never both.
 #[derive(Debug, Clone, clap::Args)]
+#[command(group(
+    clap::ArgGroup::new("sun_position")
+        .args(["sun_elevation", "time"])
+        .required(true)
+        .multiple(false)
+))]
 pub struct SunAndObserver {
-    /// Sun elevation above the horizon, degrees (-90..90; negative: twilight)
+    /// Sun elevation above the horizon, degrees (-90..90; negative: twilight);
+    /// or give --time and --location
     #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
-    pub sun_elevation: f64,
+    pub sun_elevation: Option<f64>,
 
     /// Sun azimuth clockwise from north, degrees (0 N, 90 E, 180 S, 270 W)
     #[arg(
         long,
         value_name = "DEG",
         default_value_t = 180.0,
-        allow_hyphen_values = true
+        allow_hyphen_values = true,
+        conflicts_with = "time"
     )]
     pub sun_azimuth: f64,
+
+    /// The sun at this instant, instead of --sun-elevation: RFC 3339 with Z
+    /// or a zone offset, e.g. 2026-06-21T05:30:00+09:00 (needs --location)
+    #[arg(long, value_name = "TIME", requires = "location")]
+    pub time: Option<String>,
+
+    /// Where the sun is seen from at --time: LAT,LON[,ELEVATION_M] (degrees
+    /// north, degrees east, metres above sea level), e.g. 35.68,139.77,40
+    #[arg(
+        long,
+        value_name = "LAT,LON[,ELEV_M]",
+        allow_hyphen_values = true,
+        requires = "time",
+        conflicts_with = "sun_elevation"
+    )]
+    pub location: Option<String>,
+
+    /// With --time: the sun's apparent position, lifted by refraction
+    /// (1013.25 hPa, 10 C), or its geometric one [default: on]
+    #[arg(
+        long,
+        value_enum,
+        value_name = "on|off",
+        requires = "time",
+        conflicts_with = "sun_elevation"
+    )]
+    pub refraction: Option<OnOff>,
 
     /// Height of the eye above the ground, metres
     #[arg(
@@ -235,13 +272,94 @@ impl SunAndObserver {
             )
             .map_err(|e| anyhow::anyhow!("--ground-albedo: {e}"))?;
         }
+        let (sun_elevation, sun_azimuth) = self.sun_deg()?;
         Ok(sora::Sky::builder(atmosphere)
-            .sun_deg(self.sun_elevation, self.sun_azimuth)
+            .sun_deg(sun_elevation, sun_azimuth)
             .observer_altitude_m(self.observer_altitude_m)
             .wavelengths(self.wavelengths)
             .scattering(scattering)
             .method(method)
             .build()?)
+    }
+}
+
+impl SunAndObserver {
+    /// The sun's elevation and azimuth (degrees) these options give: as
+    /// written, or computed for --time at --location.
+    pub fn sun_deg(&self) -> anyhow::Result<(f64, f64)> {
+        let (Some(time), Some(location)) = (&self.time, &self.location) else {
+            let elevation = self
+                .sun_elevation
+                .expect("clap requires --sun-elevation or --time");
+            return Ok((elevation, self.sun_azimuth));
+        };
+        let time = sora::sun_position::parse_time_utc(time).map_err(|e| match e {
+            sora::Error::Parse { message, .. } => anyhow::anyhow!("--time: {message}"),
+            other => anyhow::anyhow!("--time: {other}"),
+        })?;
+        let location = parse_location(location).map_err(|e| anyhow::anyhow!("--location: {e}"))?;
+        let refraction = match self.refraction.unwrap_or(OnOff::On) {
+            OnOff::On => sora::sun_position::Refraction::default(),
+            OnOff::Off => sora::sun_position::Refraction::Off,
+        };
+        let sun = sora::SunPosition::at(time, location, refraction)?;
+        Ok((sun.elevation_deg, sun.azimuth_deg))
+    }
+}
+
+/// A yes/no option (`--refraction on|off`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum OnOff {
+    On,
+    Off,
+}
+
+/// Parses a place written `LAT,LON[,ELEVATION_M]`: latitude in degrees
+/// north (-90..=90), longitude in degrees east (-180..=180), elevation in
+/// metres above sea level (default 0), e.g. `35.68,139.77,40`.
+pub fn parse_location(text: &str) -> Result<sora::sun_position::Location, String> {
+    let values = parse_number_list(text, "location")?;
+    let (latitude, longitude, elevation) = match values[..] {
+        [latitude, longitude] => (latitude, longitude, 0.0),
+        [latitude, longitude, elevation] => (latitude, longitude, elevation),
+        _ => {
+            return Err(format!(
+                "'{text}' has {} values: write LAT,LON or LAT,LON,ELEVATION_M (degrees north, degrees east, metres), e.g. 35.68,139.77,40",
+                values.len()
+            ));
+        }
+    };
+    sora::sun_position::Location::new(latitude, longitude, elevation).map_err(|e| e.to_string())
+}
+
+#[cfg(test)]
+mod location_tests {
+    use super::*;
+
+    #[test]
+    fn locations() {
+        let tokyo = parse_location("35.68, 139.77, 40").unwrap();
+        assert_eq!(
+            (
+                tokyo.latitude_deg(),
+                tokyo.longitude_deg(),
+                tokyo.elevation_m()
+            ),
+            (35.68, 139.77, 40.0)
+        );
+        let sydney = parse_location("-33.87,151.21").unwrap();
+        assert_eq!(sydney.elevation_m(), 0.0);
+        for (text, expected) in [
+            ("91,0", "latitude = 91 deg is out of range"),
+            ("0,200", "longitude = 200 deg"),
+            ("0", "has 1 values"),
+            ("0,0,0,0", "has 4 values"),
+            ("north,0", "'north' in location"),
+            ("", "'' in location"),
+        ] {
+            let error = parse_location(text).unwrap_err();
+            assert!(error.contains(expected), "{text}: {error}");
+        }
     }
 }
 

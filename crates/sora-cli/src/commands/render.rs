@@ -34,8 +34,10 @@ use crate::arguments::{AtmosphereSource, ColourOptions, Scattering, SunAndObserv
 ///                zenith at the top row (an environment map)
 ///   perspective  a pinhole camera: --view-elevation, --view-azimuth, --fov-deg
 ///
-/// Example:
+/// Examples (the sun as angles; the sun over Tokyo at 05:30 local time):
 ///   sora render --preset earth-clear --sun-elevation 30 -o sky.png
+///   sora render --preset earth-clear --time 2026-06-21T05:30:00+09:00 \
+///       --location 35.68,139.77 -o tokyo.png
 #[derive(Debug, Args)]
 #[command(verbatim_doc_comment)]
 pub struct RenderArgs {
@@ -235,8 +237,9 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     } else {
         format!("{pixels_per_second:.0} pixel/s")
     };
+    let (sun_elevation, sun_azimuth) = args.sun.sun_deg()?;
     eprintln!(
-        "rendered {width}x{height} ({} wavelengths, {:?} method, {:?} scattering) in {render_seconds:.3} s ({rate}), wrote {} in {total_seconds:.3} s total",
+        "rendered {width}x{height} ({} wavelengths, {:?} method, {:?} scattering, sun at {sun_elevation:.4} deg elevation, {sun_azimuth:.4} deg azimuth) in {render_seconds:.3} s ({rate}), wrote {} in {total_seconds:.3} s total",
         args.sun.wavelengths.len(),
         args.method,
         args.scattering,

@@ -36,6 +36,11 @@ use crate::arguments::{AtmosphereSource, Scattering, SunAndObserver, parse_direc
 ///   sora spectrum --preset clear-sky-reference --sun-elevation 36 \
 ///       --view-elevation 17 --view-azimuth 347 --method path-tracing --samples 100000
 ///   sora spectrum --preset earth-clear --sun-elevation 30 --almucantar 5
+///
+/// The sun from a date, a time and a place instead (--refraction off for
+/// its geometric position; the JSON reports the sun used):
+///   sora spectrum --preset earth-clear --time 2026-06-21T05:30:00+09:00 \
+///       --location 35.68,139.77,40 --almucantar 10 --format json
 #[derive(Debug, Args)]
 #[command(verbatim_doc_comment)]
 #[group(id = "views", required = true, multiple = false)]
@@ -144,9 +149,11 @@ fn steps_over(option: &str, step_deg: f64, span_deg: f64) -> anyhow::Result<usiz
     Ok((span_deg / step_deg + 1e-9).floor() as usize)
 }
 
-/// The directions the options ask for.
-fn directions(args: &SpectrumArgs) -> anyhow::Result<Vec<ViewDirection>> {
-    let (sun_elevation, sun_azimuth) = (args.sun.sun_elevation, args.sun.sun_azimuth);
+/// The directions the options ask for, with the sun at these angles.
+fn directions(
+    args: &SpectrumArgs,
+    (sun_elevation, sun_azimuth): (f64, f64),
+) -> anyhow::Result<Vec<ViewDirection>> {
     if let (Some(elevation), Some(azimuth)) = (args.view_elevation, args.view_azimuth) {
         if !(-90.0..=90.0).contains(&elevation) {
             anyhow::bail!(
@@ -230,7 +237,8 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
         .sun
         .sky(&mut atmosphere, scattering.to_library(), method)?;
     let grid = *sky.wavelengths();
-    let views = directions(&args)?;
+    let (sun_elevation, sun_azimuth) = args.sun.sun_deg()?;
+    let views = directions(&args, (sun_elevation, sun_azimuth))?;
     let started = Instant::now();
     let results = if args.method == Method::PathTracing {
         let bar = progress_bar(samples * views.len() as u64);
@@ -291,6 +299,8 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
         String::new()
     };
     let wavelength_json = number_list(&wavelengths, |w| format!("{w}"));
+    let sun_json =
+        format!("\"sun_elevation_deg\": {sun_elevation}, \"sun_azimuth_deg\": {sun_azimuth}");
     if args.view_elevation.is_some() {
         // One direction: the two- or three-column spectrum.
         let (result, (xyz, rgb)) = (&results[0], &colours[0]);
@@ -318,7 +328,7 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
                 let (spectrum, colour) = json_direction(result, &colours[0]);
                 writeln!(
                     out,
-                    "{{\"wavelength_nm\": [{wavelength_json}], {spectrum}{run_json}, {colour}}}"
+                    "{{{sun_json}, \"wavelength_nm\": [{wavelength_json}], {spectrum}{run_json}, {colour}}}"
                 )?;
             }
         }
@@ -363,7 +373,7 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
                     .collect();
                 writeln!(
                     out,
-                    "{{\"wavelength_nm\": [{wavelength_json}]{run_json}, \"directions\": [{}]}}",
+                    "{{{sun_json}, \"wavelength_nm\": [{wavelength_json}]{run_json}, \"directions\": [{}]}}",
                     directions.join(", ")
                 )?;
             }

@@ -1,0 +1,249 @@
+//! The sun from a date, a time and a place: `--time T --location LAT,LON[,ELEV]`
+//! for `sora spectrum` and `sora render`, the position reported, and bad
+//! inputs as one-line errors.
+
+mod common;
+
+use common::{one_line_error, sora, stdout};
+use sora::sun_position::{Location, Refraction, parse_time_utc};
+
+/// A cheap single-scattering spectrum with `sun` options, as JSON.
+fn spectrum_json(sun: &[&str], views: &[&str]) -> std::process::Output {
+    let common = [
+        "spectrum",
+        "--preset",
+        "earth-clear",
+        "--scattering",
+        "single",
+        "--wavelengths",
+        "400:700:100",
+        "--format",
+        "json",
+    ];
+    sora(&[&common[..], sun, views].concat())
+}
+
+const ONE_VIEW: [&str; 4] = ["--view-elevation", "10", "--view-azimuth", "0"];
+
+/// The number after `"key": ` in `json` (the first one).
+fn number(json: &str, key: &str) -> f64 {
+    let pattern = format!("\"{key}\": ");
+    let start = json
+        .find(&pattern)
+        .unwrap_or_else(|| panic!("{key} in {json}"))
+        + pattern.len();
+    let end = start + json[start..].find([',', '}']).unwrap();
+    json[start..end].parse().unwrap()
+}
+
+#[test]
+fn spectrum_json_reports_the_sun_computed_for_the_time_and_place() {
+    // NREL SPA's example instant and place (its own air is 820 hPa, 11 C;
+    // here the defaults, 1013.25 hPa and 10 C, or no refraction).
+    let place = ["--location", "39.742476,-105.1786,1830.14"];
+    let time = ["--time", "2003-10-17T12:30:30-07:00"];
+    let expected = |refraction| {
+        sora::SunPosition::at(
+            parse_time_utc(time[1]).unwrap(),
+            Location::new(39.742476, -105.1786, 1830.14).unwrap(),
+            refraction,
+        )
+        .unwrap()
+    };
+    for (extra, refraction) in [
+        (&[][..], Refraction::default()),
+        (&["--refraction", "on"][..], Refraction::default()),
+        (&["--refraction", "off"][..], Refraction::Off),
+    ] {
+        let json = stdout(&spectrum_json(
+            &[&time[..], &place[..], extra].concat(),
+            &ONE_VIEW,
+        ));
+        let sun = expected(refraction);
+        assert_eq!(number(&json, "sun_elevation_deg"), sun.elevation_deg);
+        assert_eq!(number(&json, "sun_azimuth_deg"), sun.azimuth_deg);
+        // SPA's published azimuth (refraction changes only the elevation).
+        assert!((sun.azimuth_deg - 194.34024).abs() < 1e-3, "{sun:?}");
+        assert!(json.contains("\"radiance_w_m2_sr_nm\": ["), "{json}");
+    }
+    // Refraction lifts the sun (about 0.02 deg at 40 deg elevation).
+    let lift =
+        expected(Refraction::default()).elevation_deg - expected(Refraction::Off).elevation_deg;
+    assert!((0.01..0.03).contains(&lift), "{lift}");
+}
+
+#[test]
+fn spectrum_json_reports_the_sun_for_many_directions_and_for_angles() {
+    // The almucantar follows the computed sun.
+    let json = stdout(&spectrum_json(
+        &[
+            "--time",
+            "2026-06-21T05:30:00+09:00",
+            "--location",
+            "35.68,139.77,40",
+        ],
+        &["--almucantar", "90"],
+    ));
+    let elevation = number(&json, "sun_elevation_deg");
+    let azimuth = number(&json, "sun_azimuth_deg");
+    // Tokyo, 05:30 on the June solstice: low in the north-east.
+    assert!(
+        (5.0..20.0).contains(&elevation) && (55.0..80.0).contains(&azimuth),
+        "{elevation} {azimuth}"
+    );
+    assert_eq!(number(&json, "view_elevation_deg"), elevation);
+    assert_eq!(number(&json, "view_azimuth_deg"), azimuth);
+    assert_eq!(json.matches("\"view_elevation_deg\"").count(), 4, "{json}");
+    // The sun given as angles is reported as given.
+    let json = stdout(&spectrum_json(&["--sun-elevation", "30"], &ONE_VIEW));
+    assert_eq!(number(&json, "sun_elevation_deg"), 30.0);
+    assert_eq!(number(&json, "sun_azimuth_deg"), 180.0);
+    let json = stdout(&spectrum_json(
+        &["--sun-elevation", "-4.5", "--sun-azimuth", "270"],
+        &["--principal-plane", "90"],
+    ));
+    assert_eq!(number(&json, "sun_elevation_deg"), -4.5);
+    assert_eq!(number(&json, "sun_azimuth_deg"), 270.0);
+}
+
+#[test]
+fn render_summary_reports_the_sun() {
+    let dir = tempfile::tempdir().unwrap();
+    let output = dir.path().join("sky.png");
+    let out = sora(&[
+        "render",
+        "--preset",
+        "earth-clear",
+        "--time",
+        "2026-06-20T20:30:00Z",
+        "--location",
+        "35.68,139.77",
+        "--refraction",
+        "off",
+        "--scattering",
+        "single",
+        "--wavelengths",
+        "400:700:100",
+        "--width",
+        "8",
+        "-o",
+        output.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{out:?}");
+    assert!(output.is_file());
+    let sun = sora::SunPosition::at(
+        parse_time_utc("2026-06-20T20:30:00Z").unwrap(),
+        Location::new(35.68, 139.77, 0.0).unwrap(),
+        Refraction::Off,
+    )
+    .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let expected = format!(
+        "sun at {:.4} deg elevation, {:.4} deg azimuth",
+        sun.elevation_deg, sun.azimuth_deg
+    );
+    assert!(
+        stderr.contains("rendered 8x8") && stderr.contains(&expected),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn bad_times_and_places_are_one_line_errors() {
+    for (sun, expected) in [
+        (
+            ["--time", "2026-06-21T05:30:00+09:00", "--location", "91,0"],
+            "--location: latitude = 91 deg is out of range: allowed -90..=90 deg",
+        ),
+        (
+            [
+                "--time",
+                "2026-06-21T05:30:00+09:00",
+                "--location",
+                "0,-200",
+            ],
+            "longitude = -200 deg",
+        ),
+        (
+            ["--time", "2026-06-21T05:30:00+09:00", "--location", "35"],
+            "--location: '35' has 1 values",
+        ),
+        (
+            [
+                "--time",
+                "2026-06-21T05:30:00",
+                "--location",
+                "35.68,139.77",
+            ],
+            "--time: '2026-06-21T05:30:00' has no zone",
+        ),
+        (
+            ["--time", "2026-06-21", "--location", "35.68,139.77"],
+            "without a time of day",
+        ),
+        (
+            ["--time", "tomorrow at dawn", "--location", "35.68,139.77"],
+            "--time: 'tomorrow at dawn' is not a time",
+        ),
+        (
+            [
+                "--time",
+                "2026-02-30T05:30:00Z",
+                "--location",
+                "35.68,139.77",
+            ],
+            "day = 30",
+        ),
+    ] {
+        let out = spectrum_json(&sun, &ONE_VIEW);
+        let error = one_line_error(&out);
+        assert!(error.contains(expected), "{sun:?}: {error}");
+        assert!(out.stdout.is_empty(), "{sun:?}");
+    }
+}
+
+#[test]
+fn the_sun_is_given_one_way_exactly() {
+    let time = "2026-06-21T05:30:00+09:00";
+    for (sun, expected) in [
+        (
+            &[
+                "--time",
+                time,
+                "--location",
+                "35,139",
+                "--sun-elevation",
+                "30",
+            ][..],
+            "cannot be used with",
+        ),
+        (
+            &[
+                "--time",
+                time,
+                "--location",
+                "35,139",
+                "--sun-azimuth",
+                "90",
+            ][..],
+            "cannot be used with",
+        ),
+        (&["--time", time][..], "--location"),
+        (
+            &["--sun-elevation", "30", "--location", "35,139"][..],
+            "cannot be used with",
+        ),
+        (
+            &["--sun-elevation", "30", "--refraction", "off"][..],
+            "cannot be used with",
+        ),
+        (&[][..], "--sun-elevation <DEG>|--time <TIME>"),
+    ] {
+        let out = spectrum_json(sun, &ONE_VIEW);
+        // clap's own argument errors: status 2, the first line says why.
+        assert_eq!(out.status.code(), Some(2), "{sun:?}: {out:?}");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(stderr.contains(expected), "{sun:?}: {stderr}");
+        assert!(out.stdout.is_empty());
+    }
+}
