@@ -105,6 +105,17 @@ pub struct ColourOptions {
     #[arg(long, value_name = "auto|auto:KEY|FACTOR", default_value = "auto")]
     pub exposure: sora::colour::Exposure,
 
+    /// A photographic exposure instead of --exposure: the exposure value at
+    /// ISO 100 (1.2 x 2^EV100 cd/m^2 maps to white; 15 a sunny day, 0 a dim
+    /// room, -6 deep twilight), the same for every image
+    #[arg(
+        long,
+        value_name = "EV",
+        allow_hyphen_values = true,
+        conflicts_with = "exposure"
+    )]
+    pub ev100: Option<f64>,
+
     /// Out-of-gamut and over-range colours: preserve-hue (desaturate toward
     /// the same luminance, then scale down by the largest channel) or clip
     /// (clamp each channel to 0..1)
@@ -113,13 +124,19 @@ pub struct ColourOptions {
 }
 
 impl ColourOptions {
-    /// The library's display stage for these options.
-    pub fn display_mapping(&self) -> sora::colour::DisplayMapping {
-        sora::colour::DisplayMapping {
-            exposure: self.exposure,
+    /// The library's display stage for these options (an error for an
+    /// EV100 out of range).
+    pub fn display_mapping(&self) -> anyhow::Result<sora::colour::DisplayMapping> {
+        let exposure = match self.ev100 {
+            Some(ev100) => sora::colour::Exposure::from_ev100(ev100)
+                .map_err(|e| anyhow::anyhow!("--ev100: {e}"))?,
+            None => self.exposure,
+        };
+        Ok(sora::colour::DisplayMapping {
+            exposure,
             gamut_mapping: self.gamut,
             encoding: self.encoding,
-        }
+        })
     }
 }
 

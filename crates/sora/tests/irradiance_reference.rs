@@ -214,8 +214,8 @@ fn images_carry_the_sun_and_light_a_plane_as_the_irradiance_says() {
             }
         }
         let mut worst: f64 = 0.0;
-        for i in 0..n {
-            let error = global[i] / irradiance.global_w_m2_nm[i] - 1.0;
+        for (i, lit) in global.iter().enumerate() {
+            let error = lit / irradiance.global_w_m2_nm[i] - 1.0;
             worst = worst.max(error.abs());
             assert!(error.abs() < 0.01, "sun {sun}, sample {i}: {error}");
         }

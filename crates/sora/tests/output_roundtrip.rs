@@ -119,6 +119,7 @@ fn f32_exr_reads_back_bit_for_bit_for_rgb_and_xyz() {
             let options = ExrOptions {
                 sample_type: ExrSampleType::F32,
                 compression,
+                ..ExrOptions::default()
             };
             write_exr(&path, &image, options).unwrap();
 
@@ -385,4 +386,34 @@ fn invalid_images_never_reach_a_file() {
     assert!(LinearImage::new(0, 0, ChannelKind::Xyz, Vec::new()).is_err());
     assert!(DisplayImage8::new(0, 1, Vec::new()).is_err());
     assert!(DisplayImage16::new(1, 0, Vec::new()).is_err());
+}
+
+/// The unit attributes come back: `whiteLuminance` and the `sora:*` texts.
+#[test]
+fn exr_unit_attributes_round_trip() {
+    let directory = tempfile::tempdir().unwrap();
+    let path = directory.path().join("units.exr");
+    let image = LinearImage::new(1, 1, ChannelKind::Rgb, vec![[1.0, 2.0, 3.0]]).unwrap();
+    let options = ExrOptions {
+        white_luminance_cd_m2: Some(683.0),
+        text_attributes: vec![
+            ("units".into(), "radiance".into()),
+            ("sun_elevation_deg".into(), "30".into()),
+        ],
+        ..ExrOptions::default()
+    };
+    write_exr(&path, &image, options).unwrap();
+    let read = exr::prelude::read_first_flat_layer_from_file(&path).unwrap();
+    assert_eq!(read.layer_data.attributes.white_luminance, Some(683.0));
+    let text = |name: &str| match read
+        .layer_data
+        .attributes
+        .other
+        .get(&exr::meta::attribute::Text::from(name))
+    {
+        Some(exr::meta::attribute::AttributeValue::Text(text)) => text.to_string(),
+        other => panic!("{name}: {other:?}"),
+    };
+    assert_eq!(text("sora:units"), "radiance");
+    assert_eq!(text("sora:sun_elevation_deg"), "30");
 }

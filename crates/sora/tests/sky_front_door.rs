@@ -217,3 +217,23 @@ fn bad_choices_are_errors_not_panics() {
     );
     assert!(sky.render_xyz(&image, &other, &|_| {}).is_err());
 }
+
+/// A sky moved to another sun is the sky built for that sun, to the bit.
+#[test]
+fn moving_the_sun_equals_building_for_it() {
+    let atmosphere = Atmosphere::preset("earth-clear").unwrap();
+    let first = Sky::builder(&atmosphere)
+        .sun_deg(20.0, 100.0)
+        .build()
+        .unwrap();
+    let moved = first.with_sun_deg(-2.0, 250.0).unwrap();
+    let built = Sky::builder(&atmosphere)
+        .sun_deg(-2.0, 250.0)
+        .build()
+        .unwrap();
+    assert_eq!(moved.sun_position_deg(), (-2.0, 250.0));
+    for view in views() {
+        assert_eq!(moved.radiance(view).unwrap(), built.radiance(view).unwrap());
+    }
+    assert!(first.with_sun_deg(91.0, 0.0).is_err());
+}

@@ -59,7 +59,7 @@ pub fn run(args: ColourArgs) -> anyhow::Result<()> {
     let xyz = SpectrumToXyz::new(&args.wavelengths, args.colour.observer)
         .to_xyz(&sampled)
         .with_context(|| name.clone())?;
-    let mapping = args.colour.display_mapping();
+    let mapping = args.colour.display_mapping()?;
     let colour_space = mapping.encoding.colour_space();
     let linear = colour_space.linear_rgb_from_xyz(xyz);
     let [display] = mapping.to_u8(&[xyz])?[..] else {

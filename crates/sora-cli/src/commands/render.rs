@@ -23,9 +23,14 @@ use crate::arguments::{AtmosphereSource, ColourOptions, Scattering, SunAndObserv
 /// ordinate field solved once per image); single is the paper's model.
 ///
 /// The output format follows the file extension: .png (8-bit sRGB display
-/// colours, or 16-bit with --png-16-bit) or .exr (linear radiance-scaled
-/// RGB or XYZ, float or half; no exposure applied: 1.0 = the XYZ of a
-/// spectrum of 1 W m^-2 sr^-1 nm^-1 integrated without the 683 lm/W factor).
+/// colours, or 16-bit with --png-16-bit; --exposure or --ev100) or .exr
+/// (linear RGB or XYZ, float or half, no exposure applied) in --units
+/// radiance (default: 1.0 = the XYZ of a spectrum of 1 W m^-2 sr^-1 nm^-1,
+/// without the 683 lm/W factor) or luminance (Y in cd/m^2); the unit, the
+/// sun and whiteLuminance are written into the EXR header. Half floats end
+/// at 65504: the sun's core exceeds that in luminance units, so
+/// --exr-half fails then unless --half-overflow clamp is given (or
+/// --no-sun-disc, or 32-bit floats).
 ///
 /// Cameras:
 ///   fisheye      the whole sky in a disc, zenith at the centre, north up,
@@ -98,6 +103,26 @@ pub struct RenderArgs {
     #[arg(long)]
     no_sun_disc: bool,
 
+    /// A sequence: frames from --sun-elevation to this elevation, degrees,
+    /// written as OUTPUT_000.png, OUTPUT_001.png, ... at one exposure (the
+    /// first frame's auto exposure, or --exposure/--ev100)
+    #[arg(
+        long,
+        value_name = "DEG",
+        allow_hyphen_values = true,
+        requires = "sun_elevation"
+    )]
+    sun_elevation_to: Option<f64>,
+
+    /// A sequence: the step between frames, degrees
+    #[arg(
+        long,
+        value_name = "DEG",
+        default_value_t = 1.0,
+        requires = "sun_elevation_to"
+    )]
+    sun_elevation_step: f64,
+
     #[command(flatten)]
     colour: ColourOptions,
 
@@ -109,9 +134,31 @@ pub struct RenderArgs {
     #[arg(long)]
     exr_half: bool,
 
+    /// OpenEXR half floats: values beyond 65504 are an error (default) or
+    /// are clamped to 65504
+    #[arg(long, value_enum, default_value_t = HalfOverflow::Error, requires = "exr_half")]
+    half_overflow: HalfOverflow,
+
+    /// OpenEXR: radiance (XYZ of W m^-2 sr^-1 nm^-1 over nm, i.e.
+    /// W m^-2 sr^-1, y-bar weighted) or luminance (x 683 lm/W: Y in cd/m^2)
+    #[arg(long, value_enum, default_value_t = Units::Radiance)]
+    units: Units,
+
     /// OpenEXR: store CIE XYZ channels instead of linear RGB
     #[arg(long)]
     exr_xyz: bool,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum HalfOverflow {
+    Error,
+    Clamp,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum Units {
+    Radiance,
+    Luminance,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -178,29 +225,131 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         height,
         draw_sun_disc: !args.no_sun_disc,
     };
+    // The frames: one, or a sequence of sun elevations at one azimuth.
+    let elevations = frame_elevations(&args, sky.sun_position_deg().0)?;
+    let mut exposure = None;
+    for (frame, elevation) in elevations.iter().enumerate() {
+        let (output, frame_sky);
+        let sky = if elevations.len() == 1 {
+            output = args.output.clone();
+            &sky
+        } else {
+            output = frame_path(&args.output, frame);
+            frame_sky = sky.with_sun_deg(*elevation, sky.sun_position_deg().1)?;
+            &frame_sky
+        };
+        let scale = render_frame(
+            &args, sky, &image, &to_xyz, format, &output, exposure, started,
+        )?;
+        // A sequence keeps the first frame's automatic exposure (a fixed
+        // one is the same for every frame anyway).
+        let automatic = args.colour.ev100.is_none()
+            && matches!(args.colour.exposure, sora::colour::Exposure::Auto { .. });
+        if automatic && exposure.is_none() && elevations.len() > 1 {
+            exposure = scale.map(sora::colour::Exposure::Fixed);
+            if let Some(scale) = scale {
+                eprintln!("sequence exposure: {scale:.6e} (frame 0's, fixed for every frame)");
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The sun elevations of the frames: `--sun-elevation` alone, or from it
+/// to `--sun-elevation-to` every `--sun-elevation-step` degrees.
+fn frame_elevations(args: &RenderArgs, first: f64) -> anyhow::Result<Vec<f64>> {
+    let Some(last) = args.sun_elevation_to else {
+        return Ok(vec![first]);
+    };
+    let step = args.sun_elevation_step;
+    if !(step.is_finite() && step > 0.0) {
+        bail!("--sun-elevation-step = {step} deg is out of range: allowed > 0 deg");
+    }
+    if !(-90.0..=90.0).contains(&last) {
+        bail!("--sun-elevation-to = {last} deg is out of range: allowed -90..=90 deg");
+    }
+    let count = ((last - first).abs() / step + 1e-9).floor() as usize + 1;
+    if count > 10_000 {
+        bail!("{count} frames from {first} to {last} deg every {step} deg: at most 10000");
+    }
+    let direction = if last >= first { 1.0 } else { -1.0 };
+    Ok((0..count)
+        .map(|k| first + direction * step * k as f64)
+        .collect())
+}
+
+/// `sky_007.png` for frame 7 of `sky.png`.
+fn frame_path(output: &std::path::Path, frame: usize) -> PathBuf {
+    let stem = output
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let extension = output
+        .extension()
+        .map(|e| e.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    output.with_file_name(format!("{stem}_{frame:03}.{extension}"))
+}
+
+/// Renders `sky` and writes it to `output`; with `exposure` (a sequence's)
+/// in place of the options'. Returns the PNG's exposure scale.
+#[allow(clippy::too_many_arguments)]
+fn render_frame(
+    args: &RenderArgs,
+    sky: &sora::Sky,
+    image: &ImageSettings,
+    to_xyz: &SpectrumToXyz,
+    format: OutputFormat,
+    output: &std::path::Path,
+    exposure: Option<sora::colour::Exposure>,
+    started: Instant,
+) -> anyhow::Result<Option<f64>> {
+    let (width, height) = (image.width, image.height);
+    let frame_started = Instant::now();
+    // Two phases, each shown for what it is: the tables (an estimate of
+    // the time left would be a guess), then the rows.
+    let spinner = tables_spinner();
+    sky.prepare_images()?;
+    spinner.finish_and_clear();
     let bar = progress_bar(height as u64);
-    let xyz = sky.render_xyz(&image, &to_xyz, &|rows| bar.set_position(rows as u64))?;
+    let xyz = sky.render_xyz(image, to_xyz, &|rows| bar.set_position(rows as u64))?;
     bar.finish_and_clear();
-    let render_seconds = started.elapsed().as_secs_f64();
+    let render_seconds = frame_started.elapsed().as_secs_f64();
 
     let (w, h) = (width as usize, height as usize);
+    let mut png_scale = None;
     match format {
         OutputFormat::Png => {
-            let mapping = args.colour.display_mapping();
+            let mut mapping = args.colour.display_mapping()?;
+            if let Some(exposure) = exposure {
+                mapping.exposure = exposure;
+            }
+            png_scale = Some(mapping.exposure.scale_for_image(&xyz)?);
             if args.png_16_bit {
                 let data = mapping.to_u16(&xyz)?.into_iter().flatten().collect();
-                write_png(&args.output, &DisplayImage::new(w, h, data)?)?;
+                write_png(output, &DisplayImage::new(w, h, data)?)?;
             } else {
                 let data = mapping.to_u8(&xyz)?.into_iter().flatten().collect();
-                write_png(&args.output, &DisplayImage::new(w, h, data)?)?;
+                write_png(output, &DisplayImage::new(w, h, data)?)?;
             }
         }
         OutputFormat::Exr => {
+            // Luminance units: x 683 lm/W, so that Y is in cd/m^2.
+            let scale = match args.units {
+                Units::Radiance => 1.0,
+                Units::Luminance => sora::colour::MAXIMUM_LUMINOUS_EFFICACY_LM_PER_W,
+            };
             let (kind, pixels) = if args.exr_xyz {
                 (
                     ChannelKind::Xyz,
                     xyz.iter()
-                        .map(|c| [c.x as f32, c.y as f32, c.z as f32])
+                        .map(|c| {
+                            [
+                                (scale * c.x) as f32,
+                                (scale * c.y) as f32,
+                                (scale * c.z) as f32,
+                            ]
+                        })
                         .collect(),
                 )
             } else {
@@ -208,26 +357,42 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
                 let pixels = xyz
                     .iter()
                     .map(|c| {
-                        let rgb = space.linear_rgb_from_xyz(*c);
+                        let rgb = space.linear_rgb_from_xyz(c.scaled(scale));
                         [rgb.r as f32, rgb.g as f32, rgb.b as f32]
                     })
                     .collect();
                 (ChannelKind::Rgb, pixels)
             };
+            let (units, white_luminance) = match args.units {
+                Units::Radiance => (
+                    "radiance_w_m2_sr (XYZ of spectral radiance integrated over nm, no 683 lm/W)",
+                    683.0,
+                ),
+                Units::Luminance => ("luminance_cd_m2 (Y in cd/m^2)", 1.0),
+            };
+            let (sun_elevation, sun_azimuth) = sky.sun_position_deg();
             let options = ExrOptions {
-                sample_type: if args.exr_half {
-                    ExrSampleType::F16
-                } else {
-                    ExrSampleType::F32
+                sample_type: match (args.exr_half, args.half_overflow) {
+                    (false, _) => ExrSampleType::F32,
+                    (true, HalfOverflow::Error) => ExrSampleType::F16,
+                    (true, HalfOverflow::Clamp) => ExrSampleType::F16Clamped,
                 },
+                white_luminance_cd_m2: Some(white_luminance),
+                text_attributes: vec![
+                    ("units".into(), units.into()),
+                    ("sun_elevation_deg".into(), sun_elevation.to_string()),
+                    ("sun_azimuth_deg".into(), sun_azimuth.to_string()),
+                    ("sun_disc".into(), (!args.no_sun_disc).to_string()),
+                ],
                 ..ExrOptions::default()
             };
-            write_exr(
-                &args.output,
-                &LinearImage::new(w, h, kind, pixels)?,
-                options,
-            )
-            .with_context(|| format!("writing {}", args.output.display()))?;
+            let half_hint = if args.exr_half && args.half_overflow == HalfOverflow::Error {
+                " (half floats end at 65504: --half-overflow clamp clamps, --no-sun-disc leaves the sun out, and without --exr-half 32-bit floats hold everything)"
+            } else {
+                ""
+            };
+            write_exr(output, &LinearImage::new(w, h, kind, pixels)?, options)
+                .with_context(|| format!("writing {}{half_hint}", output.display()))?;
         }
     }
     let total_seconds = started.elapsed().as_secs_f64();
@@ -237,15 +402,15 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     } else {
         format!("{pixels_per_second:.0} pixel/s")
     };
-    let (sun_elevation, sun_azimuth) = args.sun.sun_deg()?;
+    let (sun_elevation, sun_azimuth) = sky.sun_position_deg();
     eprintln!(
         "rendered {width}x{height} ({} wavelengths, {:?} method, {:?} scattering, sun at {sun_elevation:.4} deg elevation, {sun_azimuth:.4} deg azimuth) in {render_seconds:.3} s ({rate}), wrote {} in {total_seconds:.3} s total",
         args.sun.wavelengths.len(),
         args.method,
         args.scattering,
-        args.output.display()
+        output.display()
     );
-    Ok(())
+    Ok(png_scale)
 }
 
 /// A progress bar on stderr when it is a terminal, hidden otherwise.
@@ -260,4 +425,17 @@ fn progress_bar(rows: u64) -> indicatif::ProgressBar {
         bar.set_style(style.progress_chars("=> "));
     }
     bar
+}
+
+/// A spinner on stderr (when it is a terminal) while the tables are built.
+fn tables_spinner() -> indicatif::ProgressBar {
+    let spinner =
+        indicatif::ProgressBar::with_draw_target(None, indicatif::ProgressDrawTarget::stderr());
+    if let Ok(style) =
+        indicatif::ProgressStyle::with_template("{spinner} building tables ({elapsed})")
+    {
+        spinner.set_style(style);
+    }
+    spinner.enable_steady_tick(std::time::Duration::from_millis(100));
+    spinner
 }

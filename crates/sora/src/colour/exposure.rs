@@ -65,6 +65,22 @@ impl Exposure {
     pub const FORMS: &'static str =
         "'auto', 'auto:<key>' (e.g. auto:0.18) or a fixed factor (e.g. 0.5)";
 
+    /// A fixed photographic exposure of `ev100` (exposure value at ISO 100):
+    /// the saturation-based rule of ISO 12232, as renderers use it (Lagarde
+    /// & de Rousiers 2014, "Moving Frostbite to PBR", §5.1): a luminance of
+    /// L_max = 1.2 x 2^EV100 cd/m^2 maps to display white, so the factor on
+    /// XYZ (in W m^-2 sr^-1, Y x 683 lm/W = cd/m^2) is 683 / L_max. EV100 15
+    /// is a sunny day (L_max = 39 000 cd/m^2), 0 a dim interior, -6 deep
+    /// twilight. Finite, within -30..=40.
+    pub fn from_ev100(ev100: f64) -> Result<Exposure> {
+        if !(ev100.is_finite() && (-30.0..=40.0).contains(&ev100)) {
+            return Err(Error::out_of_range("EV100", ev100, "1", "-30..=40"));
+        }
+        Ok(Exposure::Fixed(
+            crate::colour::MAXIMUM_LUMINOUS_EFFICACY_LM_PER_W / (1.2 * ev100.exp2()),
+        ))
+    }
+
     /// The factor to multiply `image`'s XYZ by (dimensionless display units
     /// per unit of the XYZ).
     ///
@@ -280,5 +296,22 @@ mod tests {
         assert!(message.contains("exposure key = -1"), "{message}");
         assert!("0".parse::<Exposure>().is_err());
         assert!("inf".parse::<Exposure>().is_err());
+    }
+
+    #[test]
+    fn ev100_maps_its_saturation_luminance_to_white() {
+        let Exposure::Fixed(scale) = Exposure::from_ev100(15.0).unwrap() else {
+            panic!("a fixed exposure");
+        };
+        // Y such that 683 Y = 1.2 x 2^15 cd/m^2 maps to 1.
+        let y = 1.2 * 32768.0 / 683.0;
+        assert!((scale * y - 1.0).abs() < 1e-12);
+        assert_eq!(
+            Exposure::from_ev100(14.0).unwrap(),
+            Exposure::Fixed(2.0 * scale)
+        );
+        for bad in [f64::NAN, 41.0, -31.0] {
+            assert!(Exposure::from_ev100(bad).is_err());
+        }
     }
 }

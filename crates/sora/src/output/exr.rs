@@ -8,8 +8,12 @@
 //! - Samples: 32-bit float ([`ExrSampleType::F32`], the default, exact) or
 //!   16-bit half float ([`ExrSampleType::F16`], rounded to nearest; a value
 //!   whose magnitude rounds beyond the half-float maximum 65504 is rejected
-//!   rather than written as infinity, and values below 2^-14 lose relative
-//!   precision as half-float subnormals).
+//!   rather than written as infinity, or with [`ExrSampleType::F16Clamped`]
+//!   clamped to +-65504; values below 2^-14 lose relative precision as
+//!   half-float subnormals).
+//! - Units: the `whiteLuminance` attribute (the luminance, cd/m^2, of
+//!   RGB = (1, 1, 1)) and text attributes `sora:*` (the unit, the sun) from
+//!   [`ExrOptions`], so a reader can tell what the numbers are.
 //! - Compression: lossless ZIP over blocks of 16 scan lines
 //!   ([`ExrCompression::Zip`], the default) or none. Both are built into
 //!   `exr` without optional features.
@@ -27,7 +31,7 @@
 use std::path::Path;
 
 use ::exr::math::Vec2;
-use ::exr::meta::attribute::{Chromaticities, Compression, LineOrder, Text};
+use ::exr::meta::attribute::{AttributeValue, Chromaticities, Compression, LineOrder, Text};
 use ::exr::meta::header::LayerAttributes;
 use ::exr::prelude::{AnyChannel, AnyChannels, Blocks, Encoding, FlatSamples, Image, Layer};
 use ::exr::prelude::{SmallVec, WritableImage, f16};
@@ -43,8 +47,12 @@ pub enum ExrSampleType {
     #[default]
     F32,
     /// 16-bit half float: half the size, 11 significant bits (relative
-    /// rounding error at most 2^-11 for magnitudes in 2^-14..=65504).
+    /// rounding error at most 2^-11 for magnitudes in 2^-14..=65504); a
+    /// value beyond 65504 is an error.
     F16,
+    /// As [`ExrSampleType::F16`], magnitudes beyond 65504 clamped to it
+    /// (the sun's core in luminance units, typically).
+    F16Clamped,
 }
 
 /// How the pixel data of an OpenEXR file is compressed; both are lossless.
@@ -57,13 +65,18 @@ pub enum ExrCompression {
     Uncompressed,
 }
 
-/// Options for [`write_exr`]; the default is 32-bit float, ZIP compressed.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+/// Options for [`write_exr`]; the default is 32-bit float, ZIP compressed,
+/// no unit attributes.
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct ExrOptions {
     /// Sample type of all three channels.
     pub sample_type: ExrSampleType,
     /// Compression of the pixel data.
     pub compression: ExrCompression,
+    /// The `whiteLuminance` attribute: cd/m^2 of RGB = (1, 1, 1).
+    pub white_luminance_cd_m2: Option<f32>,
+    /// Text attributes, written as `sora:<name>` (e.g. `units`).
+    pub text_attributes: Vec<(String, String)>,
 }
 
 /// The largest finite half-float value.
@@ -88,6 +101,7 @@ pub fn write_exr(path: impl AsRef<Path>, image: &LinearImage, options: ExrOption
 
     let layer_attributes = LayerAttributes {
         software_name: Some(Text::from(concat!("sora ", env!("CARGO_PKG_VERSION")))),
+        white_luminance: options.white_luminance_cd_m2,
         ..LayerAttributes::default()
     };
     let layer = Layer::new(
@@ -98,6 +112,12 @@ pub fn write_exr(path: impl AsRef<Path>, image: &LinearImage, options: ExrOption
     );
     let mut exr_image = Image::from_layer(layer);
     exr_image.attributes.chromaticities = Some(chromaticities(image.channel_kind()));
+    for (name, value) in &options.text_attributes {
+        exr_image.layer_data.attributes.other.insert(
+            Text::from(format!("sora:{name}").as_str()),
+            AttributeValue::Text(Text::from(value.as_str())),
+        );
+    }
 
     write_file_atomically(path, |file| {
         exr_image
@@ -121,6 +141,11 @@ fn channel_samples(
     let values = image.pixels().iter().map(|pixel| pixel[channel]);
     match sample_type {
         ExrSampleType::F32 => Ok(FlatSamples::F32(values.collect())),
+        ExrSampleType::F16Clamped => Ok(FlatSamples::F16(
+            values
+                .map(|value| f16::from_f32(value.clamp(-HALF_FLOAT_MAX, HALF_FLOAT_MAX)))
+                .collect(),
+        )),
         ExrSampleType::F16 => {
             let mut halves = Vec::with_capacity(image.pixels().len());
             for (index, value) in values.enumerate() {
@@ -193,6 +218,28 @@ mod tests {
         // fine as halves.
         assert!(channel_samples(&image, 2, ExrSampleType::F32).is_ok());
         assert!(channel_samples(&image, 0, ExrSampleType::F16).is_ok());
+    }
+
+    #[test]
+    fn clamped_half_floats_keep_the_maximum_and_the_sign() {
+        let image = LinearImage::new(
+            2,
+            1,
+            ChannelKind::Rgb,
+            vec![[1.0, -1e9, 3.5], [1e9, 0.0, 65504.0]],
+        )
+        .unwrap();
+        for (channel, expected) in [(0, [1.0, HALF_FLOAT_MAX]), (1, [-HALF_FLOAT_MAX, 0.0])] {
+            let Ok(FlatSamples::F16(halves)) =
+                channel_samples(&image, channel, ExrSampleType::F16Clamped)
+            else {
+                panic!("expected half-float samples");
+            };
+            assert_eq!(
+                halves.iter().map(|h| h.to_f32()).collect::<Vec<_>>(),
+                expected
+            );
+        }
     }
 
     #[test]

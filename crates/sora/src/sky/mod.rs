@@ -7,9 +7,9 @@
 //!   standard errors when path tracing;
 //! - [`Sky::render_xyz`] and [`Sky::render_spectral`]: an image for a
 //!   camera, as CIE XYZ or as radiance per wavelength, with the sun's disc
-//!   energy-true at any resolution ([`sun_disc`]);
+//!   energy-true at any resolution (`sky/sun_disc.rs`);
 //! - [`Sky::irradiance`]: direct, diffuse and global irradiance on a plane
-//!   ([`irradiance`]).
+//!   (`sky/irradiance.rs`).
 //!
 //! This is the one place where single scattering and the multiply
 //! scattered light are added: what [`Scattering`] asks for is composed
@@ -367,6 +367,16 @@ impl Sky {
             source_table: OnceLock::new(),
             image_tables: OnceLock::new(),
         })
+    }
+
+    /// This sky with the sun at `elevation_deg`, `azimuth_deg`: the optics
+    /// (Mie ensembles included) are reused, the sun-dependent tables and
+    /// field are built anew on first use (for sequences of frames).
+    pub fn with_sun_deg(&self, elevation_deg: f64, azimuth_deg: f64) -> Result<Sky> {
+        let scene = self.scene.with_sun(elevation_deg, azimuth_deg)?;
+        let mut sky = Sky::from_scene(scene, self.scattering, self.method, self.table_size)?;
+        sky.sun_position_deg = (elevation_deg, azimuth_deg);
+        Ok(sky)
     }
 
     /// The wavelengths of every spectrum the sky returns.

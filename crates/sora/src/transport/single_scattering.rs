@@ -241,6 +241,27 @@ impl SingleScatteringSky {
         })
     }
 
+    /// The same atmosphere on the same grid, seen by the same eye, with the
+    /// sun moved to `sun_elevation_deg`, `sun_azimuth_deg` (the optics are
+    /// copied, not recomputed).
+    pub(crate) fn with_sun(
+        &self,
+        sun_elevation_deg: f64,
+        sun_azimuth_deg: f64,
+    ) -> Result<SingleScatteringSky> {
+        SingleScatteringSky::from_optics(
+            self.optics.clone(),
+            self.ground_radius_m,
+            self.top_radius_m,
+            self.sun_angular_radius_rad,
+            Observation {
+                observer_altitude_m: self.observer.z - self.ground_radius_m,
+                sun_elevation_deg,
+                sun_azimuth_deg,
+            },
+        )
+    }
+
     /// The optics on the grid.
     pub fn optics(&self) -> &AtmosphereOptics {
         &self.optics
