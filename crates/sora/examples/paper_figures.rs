@@ -20,6 +20,11 @@
 //!   multiple, and `mars_sun_glow.csv`: the colour of the sky near the sun
 //!   and away from it, the numbers behind `docs/README.md`'s remarks on the
 //!   blue glow;
+//! - `day_strip.png`: a day over Tokyo (June solstice 2026) from before
+//!   sunrise to after sunset, fisheyes at one exposure;
+//! - `readme_tokyo.png`: the README's time-and-place command
+//!   (`sora render --preset earth-clear --time 2026-06-21T05:30:00+09:00
+//!   --location 35.68,139.77 -o tokyo.png`), identical to what it writes;
 //! - `readme_sky.png`: the picture of the README's example command
 //!   (`sora render --preset earth-clear --sun-elevation 30 -o sky.png`),
 //!   identical to what that command writes.
@@ -46,6 +51,7 @@ use sora::colour::{DisplayMapping, Exposure, Observer, RgbColourSpace, SpectrumT
 use sora::geometry::angle_between_deg;
 use sora::output::{DisplayImage, write_png};
 use sora::spectrum::{SampledSpectrum, SolarSpectrum, WavelengthGrid};
+use sora::sun_position::{Location, Refraction, SunPosition, parse_time_utc};
 use sora::{ImageSettings, Method, Scattering, Sky, ViewDirection};
 
 type Result<T> = std::result::Result<T, Box<dyn std::error::Error>>;
@@ -77,8 +83,74 @@ fn run(out: &Path) -> Result<()> {
         render_scene(out, &grid, &scene)?;
     }
     mars_sun_glow(out, &grid)?;
+    day_strip(out, &grid)?;
     Ok(())
 }
+
+/// Tokyo (35.68 N, 139.77 E), the README's time-and-place example.
+const TOKYO: (f64, f64) = (35.68, 139.77);
+
+/// The sun over Tokyo at `time` (RFC 3339), refraction at its default, as
+/// `sora render --time ... --location 35.68,139.77` computes it.
+fn sun_over_tokyo(time: &str) -> Result<(f64, f64)> {
+    let place = Location::new(TOKYO.0, TOKYO.1, 0.0)?;
+    let sun = SunPosition::at(parse_time_utc(time)?, place, Refraction::default())?;
+    Ok((sun.elevation_deg, sun.azimuth_deg))
+}
+
+/// `day_strip.png`: a day at one place, Tokyo on the June solstice 2026,
+/// as fisheyes (160 px, north up, east left) side by side from before
+/// sunrise to after sunset (local times in `DAY_STRIP_TIMES`), all at one
+/// exposure: the automatic exposure of the strip as a whole, so that the
+/// frames compare directly (twilight is as dark as it is).
+fn day_strip(out: &Path, grid: &WavelengthGrid) -> Result<()> {
+    let started = Instant::now();
+    const SIDE: usize = 160;
+    let atmosphere = Atmosphere::preset("earth-clear")?;
+    let to_xyz = SpectrumToXyz::new(grid, Observer::Cie1931TwoDegree);
+    let image = ImageSettings::new(Camera::Fisheye, SIDE as u32, SIDE as u32);
+    let frames = DAY_STRIP_TIMES.len();
+    let mut strip = vec![sora::colour::Xyz::BLACK; frames * SIDE * SIDE];
+    let mut first: Option<Sky> = None;
+    for (k, time) in DAY_STRIP_TIMES.iter().enumerate() {
+        let (elevation, azimuth) = sun_over_tokyo(&format!("2026-06-21T{time}:00+09:00"))?;
+        // Every frame after the first reuses its optics.
+        let sky = match &first {
+            None => sky(
+                &atmosphere,
+                grid,
+                (elevation, azimuth),
+                Scattering::multiple(),
+                Method::Fast,
+            )?,
+            Some(first) => first.with_sun_deg(elevation, azimuth)?,
+        };
+        let xyz = sky.render_xyz(&image, &to_xyz, &|_| {})?;
+        for row in 0..SIDE {
+            let at = (row * frames + k) * SIDE;
+            strip[at..at + SIDE].copy_from_slice(&xyz[row * SIDE..(row + 1) * SIDE]);
+        }
+        println!("day strip: {time} local, sun {elevation:.2} deg up at {azimuth:.2} deg");
+        first.get_or_insert(sky);
+    }
+    let mapping = DisplayMapping::default();
+    let scale = mapping.exposure.scale_for_image(&strip)?;
+    let pixels = mapping.to_u8(&strip)?.concat();
+    let path = out.join("day_strip.png");
+    write_png(&path, &DisplayImage::new(frames * SIDE, SIDE, pixels)?)?;
+    println!(
+        "wrote {} ({} frames, one exposure {scale:.4e}, {:.2} s)",
+        path.display(),
+        frames,
+        started.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+/// Local times (UTC+9) of the day strip's frames.
+const DAY_STRIP_TIMES: [&str; 10] = [
+    "04:00", "04:30", "05:30", "08:00", "11:40", "15:00", "18:00", "18:50", "19:15", "19:40",
+];
 
 /// The sky of `atmosphere` with the sun at (elevation, azimuth), seen
 /// from the ground, with `scattering` by `method`.
@@ -414,6 +486,17 @@ fn scenes() -> Result<Vec<Scene>> {
             name: "readme_sky",
             atmosphere: preset("earth-clear")?,
             sun: (30.0, 180.0),
+            sun_disc: true,
+            single_too: false,
+            views: vec![View {
+                suffix: "",
+                ..fisheye()
+            }],
+        },
+        Scene {
+            name: "readme_tokyo",
+            atmosphere: preset("earth-clear")?,
+            sun: sun_over_tokyo("2026-06-21T05:30:00+09:00")?,
             sun_disc: true,
             single_too: false,
             views: vec![View {
