@@ -201,6 +201,81 @@ impl Scattering {
     }
 }
 
+/// How the radiance is computed: shared by `sora spectrum` and `sora
+/// irradiance` (whose path tracer estimates the irradiance directly).
+#[derive(Debug, Clone, clap::Args)]
+pub struct MethodOptions {
+    /// fast (Gauss-Legendre columns, tables where they serve) or reference
+    /// (the paper's uniform double march, slow), each with the orders of
+    /// --scattering; or path-tracing (Monte Carlo, all orders of
+    /// scattering, with standard errors)
+    #[arg(long, value_enum, default_value_t = MethodKind::Fast)]
+    pub method: MethodKind,
+
+    /// fast and reference: multiple (all orders of scattering and skylight
+    /// reflected by the ground) or single (sunlight scattered once, the
+    /// paper's model) [default: multiple]
+    #[arg(long, value_enum)]
+    pub scattering: Option<Scattering>,
+
+    /// Path tracing: number of paths (the standard error falls as
+    /// 1/sqrt(N)) [default: 10000 for a radiance, 100000 for an irradiance]
+    #[arg(long, value_name = "N")]
+    pub samples: Option<u64>,
+
+    /// Path tracing: random seed (the same seed gives the same result on any
+    /// number of threads) [default: 1]
+    #[arg(long, value_name = "S")]
+    pub seed: Option<u64>,
+}
+
+/// The methods [`MethodOptions`] offers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum MethodKind {
+    Fast,
+    Reference,
+    PathTracing,
+}
+
+impl MethodOptions {
+    /// The library's scattering and method, checked: `default_samples`
+    /// paths unless --samples says otherwise, `reference` for the
+    /// reference method's step counts.
+    pub fn resolve(
+        &self,
+        default_samples: u64,
+        reference: sora::Method,
+    ) -> anyhow::Result<(sora::Scattering, sora::Method)> {
+        let tracing = self.method == MethodKind::PathTracing;
+        if !tracing && (self.samples.is_some() || self.seed.is_some()) {
+            anyhow::bail!("--samples and --seed apply to --method path-tracing only");
+        }
+        if tracing && self.scattering.is_some() {
+            anyhow::bail!(
+                "--scattering applies to --method fast and reference only (path tracing has all orders)"
+            );
+        }
+        let samples = self.samples.unwrap_or(default_samples);
+        if samples < 2 {
+            anyhow::bail!(
+                "--samples = {samples} is out of range: at least 2 (a standard error needs two paths)"
+            );
+        }
+        let scattering = self.scattering.unwrap_or(Scattering::Multiple).to_library();
+        Ok(match self.method {
+            MethodKind::Fast => (scattering, sora::Method::Fast),
+            MethodKind::Reference => (scattering, reference),
+            MethodKind::PathTracing => (
+                sora::Scattering::multiple(),
+                sora::Method::PathTracing {
+                    samples,
+                    seed: self.seed.unwrap_or(1),
+                },
+            ),
+        })
+    }
+}
+
 /// The eye and the sun: shared by `sora spectrum` and `sora render`. The
 /// sun is given either as angles (--sun-elevation, --sun-azimuth) or as an
 /// instant and a place (--time, --location), never both.

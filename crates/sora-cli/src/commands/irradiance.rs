@@ -6,7 +6,7 @@ use clap::{Args, ValueEnum};
 use sora::spectrum::SampledSpectrum;
 use sora::{Irradiance, Plane};
 
-use crate::arguments::{AtmosphereSource, Scattering, SunAndObserver};
+use crate::arguments::{AtmosphereSource, MethodOptions, SunAndObserver};
 
 /// Irradiance on a horizontal plane (and on a tilted one): direct normal,
 /// direct, diffuse and global, per wavelength and broadband.
@@ -51,35 +51,12 @@ pub struct IrradianceArgs {
     )]
     plane_azimuth_deg: f64,
 
-    /// How the sky's radiance is computed: fast (tables), reference (the
-    /// paper's march per direction, slow) or path-tracing (the diffuse
-    /// part by Monte Carlo, with standard errors)
-    #[arg(long, value_enum, default_value_t = Method::Fast)]
-    method: Method,
-
-    /// fast and reference: multiple (all orders) or single (the paper's
-    /// model) [default: multiple]
-    #[arg(long, value_enum)]
-    scattering: Option<Scattering>,
-
-    /// Path tracing: number of paths [default: 100000]
-    #[arg(long, value_name = "N")]
-    samples: Option<u64>,
-
-    /// Path tracing: random seed [default: 1]
-    #[arg(long, value_name = "S")]
-    seed: Option<u64>,
+    #[command(flatten)]
+    method: MethodOptions,
 
     /// Output format
     #[arg(long, value_enum, default_value_t = Format::Csv)]
     format: Format,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-enum Method {
-    Fast,
-    Reference,
-    PathTracing,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -99,31 +76,15 @@ struct Quantity<'a> {
 }
 
 pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
-    if args.method != Method::PathTracing && (args.samples.is_some() || args.seed.is_some()) {
-        anyhow::bail!("--samples and --seed apply to --method path-tracing only");
-    }
-    if args.method == Method::PathTracing && args.scattering.is_some() {
-        anyhow::bail!(
-            "--scattering applies to --method fast and reference only (path tracing has all orders)"
-        );
-    }
     let tilted = args
         .tilt_deg
         .map(|tilt| Plane::new(tilt, args.plane_azimuth_deg))
         .transpose()?;
-    let method = match args.method {
-        Method::Fast => sora::Method::Fast,
-        Method::Reference => sora::Method::REFERENCE_DEFAULT,
-        Method::PathTracing => sora::Method::PathTracing {
-            samples: args.samples.unwrap_or(100_000),
-            seed: args.seed.unwrap_or(1),
-        },
-    };
-    let scattering = args.scattering.unwrap_or(Scattering::Multiple);
+    let (scattering, method) = args
+        .method
+        .resolve(100_000, sora::Method::REFERENCE_DEFAULT)?;
     let mut atmosphere = args.source.load()?;
-    let sky = args
-        .sun
-        .sky(&mut atmosphere, scattering.to_library(), method)?;
+    let sky = args.sun.sky(&mut atmosphere, scattering, method)?;
     let grid = *sky.wavelengths();
     let horizontal = sky.irradiance(Plane::HORIZONTAL)?;
     let tilted = tilted.map(|plane| sky.irradiance(plane)).transpose()?;

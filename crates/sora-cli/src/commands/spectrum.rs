@@ -8,7 +8,9 @@ use clap::{Args, ValueEnum};
 use sora::colour::{RgbColourSpace, SpectrumToXyz};
 use sora::{SkyRadiance, ViewDirection};
 
-use crate::arguments::{AtmosphereSource, Scattering, SunAndObserver, parse_directions_csv};
+use crate::arguments::{
+    AtmosphereSource, MethodKind, MethodOptions, SunAndObserver, parse_directions_csv,
+};
 
 /// Spectral radiance of the sky in one direction or many.
 ///
@@ -96,39 +98,12 @@ pub struct SpectrumArgs {
     )]
     principal_plane: Option<f64>,
 
-    /// How single scattering is integrated: fast (Gauss-Legendre column
-    /// march) or reference (the paper's uniform double march, slow), each
-    /// plus the higher orders of --scattering; or path-tracing (Monte Carlo,
-    /// all orders of scattering, with standard errors)
-    #[arg(long, value_enum, default_value_t = Method::Fast)]
-    method: Method,
-
-    /// fast and reference: multiple (all orders of scattering and skylight
-    /// reflected by the ground) or single (sunlight scattered once, the
-    /// paper's model) [default: multiple]
-    #[arg(long, value_enum)]
-    scattering: Option<Scattering>,
-
-    /// Path tracing: number of paths (the standard error falls as
-    /// 1/sqrt(N)) [default: 10000]
-    #[arg(long, value_name = "N")]
-    samples: Option<u64>,
-
-    /// Path tracing: random seed (the same seed gives the same result on any
-    /// number of threads) [default: 1]
-    #[arg(long, value_name = "S")]
-    seed: Option<u64>,
+    #[command(flatten)]
+    method: MethodOptions,
 
     /// Output format
     #[arg(long, value_enum, default_value_t = Format::Csv)]
     format: Format,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-enum Method {
-    Fast,
-    Reference,
-    PathTracing,
 }
 
 /// Paths traced by default: about 1% standard error for a clear sky.
@@ -200,47 +175,25 @@ fn directions(
 }
 
 pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
-    if args.method != Method::PathTracing && (args.samples.is_some() || args.seed.is_some()) {
-        anyhow::bail!("--samples and --seed apply to --method path-tracing only");
-    }
-    if args.method == Method::PathTracing && args.scattering.is_some() {
-        anyhow::bail!(
-            "--scattering applies to --method fast and reference only (path tracing has all orders)"
-        );
-    }
-    let samples = args.samples.unwrap_or(DEFAULT_SAMPLES);
-    if samples < 2 {
-        anyhow::bail!(
-            "--samples = {samples} is out of range: at least 2 (a standard error needs two paths)"
-        );
-    }
-    let seed = args.seed.unwrap_or(1);
-    let (scattering, method) = match args.method {
-        Method::Fast => (
-            args.scattering.unwrap_or(Scattering::Multiple),
-            sora::Method::Fast,
-        ),
-        Method::Reference => (
-            args.scattering.unwrap_or(Scattering::Multiple),
-            sora::Method::Reference {
-                view_steps: 4000,
-                sun_steps: 800,
-            },
-        ),
-        Method::PathTracing => (
-            Scattering::Multiple,
-            sora::Method::PathTracing { samples, seed },
-        ),
+    let (scattering, method) = args.method.resolve(
+        DEFAULT_SAMPLES,
+        sora::Method::Reference {
+            view_steps: 4000,
+            sun_steps: 800,
+        },
+    )?;
+    let (samples, seed) = match method {
+        sora::Method::PathTracing { samples, seed } => (samples, seed),
+        _ => (0, 0),
     };
     let mut atmosphere = args.source.load()?;
-    let sky = args
-        .sun
-        .sky(&mut atmosphere, scattering.to_library(), method)?;
+    let sky = args.sun.sky(&mut atmosphere, scattering, method)?;
     let grid = *sky.wavelengths();
     let (sun_elevation, sun_azimuth) = args.sun.sun_deg()?;
     let views = directions(&args, (sun_elevation, sun_azimuth))?;
     let started = Instant::now();
-    let results = if args.method == Method::PathTracing {
+    let path_tracing = args.method.method == MethodKind::PathTracing;
+    let results = if path_tracing {
         let bar = progress_bar(samples * views.len() as u64);
         let results = sky.radiances_with_progress(&views, &|done, _| bar.set_position(done))?;
         bar.finish_and_clear();
@@ -266,7 +219,6 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
             Ok((xyz, RgbColourSpace::Srgb.linear_rgb_from_xyz(xyz)))
         })
         .collect::<sora::Result<Vec<_>>>()?;
-    let path_tracing = args.method == Method::PathTracing;
     let mut out = std::io::BufWriter::new(std::io::stdout().lock());
     let number_list = |values: &[f64], format: fn(&f64) -> String| {
         values.iter().map(format).collect::<Vec<_>>().join(", ")
