@@ -84,22 +84,7 @@ impl ViewDirection {
     /// `elevation_deg` in -90..=90 (negative: below the horizon) and a
     /// finite `azimuth_deg` (0 N, 90 E, 180 S, 270 W; any turn is accepted).
     pub fn new(elevation_deg: f64, azimuth_deg: f64) -> Result<ViewDirection> {
-        if !(-90.0..=90.0).contains(&elevation_deg) {
-            return Err(Error::out_of_range(
-                "view elevation",
-                elevation_deg,
-                "deg",
-                "-90..=90",
-            ));
-        }
-        if !azimuth_deg.is_finite() {
-            return Err(Error::out_of_range(
-                "view azimuth",
-                azimuth_deg,
-                "deg",
-                "a finite angle",
-            ));
-        }
+        check_elevation_azimuth("view", elevation_deg, azimuth_deg)?;
         Ok(ViewDirection {
             elevation_deg,
             azimuth_deg,
@@ -120,6 +105,33 @@ impl ViewDirection {
     pub(crate) fn to_vector(self) -> Vector3 {
         direction_from_elevation_azimuth(self.elevation_deg, self.azimuth_deg)
     }
+}
+
+/// Checks a direction as users give it: `elevation_deg` in -90..=90 and a
+/// finite `azimuth_deg`; errors name `what` ("view elevation", "sun
+/// azimuth").
+pub(crate) fn check_elevation_azimuth(
+    what: &str,
+    elevation_deg: f64,
+    azimuth_deg: f64,
+) -> Result<()> {
+    if !(-90.0..=90.0).contains(&elevation_deg) {
+        return Err(Error::out_of_range(
+            format!("{what} elevation"),
+            elevation_deg,
+            "deg",
+            "-90..=90",
+        ));
+    }
+    if !azimuth_deg.is_finite() {
+        return Err(Error::out_of_range(
+            format!("{what} azimuth"),
+            azimuth_deg,
+            "deg",
+            "a finite angle",
+        ));
+    }
+    Ok(())
 }
 
 /// Unit direction toward `elevation_deg` above the horizon at

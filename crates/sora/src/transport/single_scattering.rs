@@ -209,22 +209,11 @@ impl SingleScatteringSky {
                 ">= 0 (on or above the ground)",
             ));
         }
-        if !(-90.0..=90.0).contains(&sun_elevation_deg) {
-            return Err(Error::out_of_range(
-                "sun elevation",
-                sun_elevation_deg,
-                "deg",
-                "-90..=90",
-            ));
-        }
-        if !sun_azimuth_deg.is_finite() {
-            return Err(Error::out_of_range(
-                "sun azimuth",
-                sun_azimuth_deg,
-                "deg",
-                "a finite angle",
-            ));
-        }
+        crate::geometry::direction::check_elevation_azimuth(
+            "sun",
+            sun_elevation_deg,
+            sun_azimuth_deg,
+        )?;
         let profiles: Vec<DensityProfile> =
             optics.species.iter().map(|s| s.profile.clone()).collect();
         let corners = ProfileCorners::new(&profiles, ground_radius_m, top_radius_m);
