@@ -116,10 +116,12 @@ pub struct ColourOptions {
     )]
     pub ev100: Option<f64>,
 
-    /// Out-of-gamut and over-range colours: preserve-hue (desaturate toward
-    /// the same luminance, then scale down by the largest channel) or clip
-    /// (clamp each channel to 0..1)
-    #[arg(long, value_name = "NAME", default_value = "preserve-hue")]
+    /// Out-of-gamut and over-range colours: highlights-to-white
+    /// (preserve-hue, then colours brighter than white toward white, as a
+    /// camera shows them: the sun is white), preserve-hue (desaturate
+    /// toward the same luminance, then scale down by the largest channel)
+    /// or clip (clamp each channel to 0..1)
+    #[arg(long, value_name = "NAME", default_value = "highlights-to-white")]
     pub gamut: sora::colour::GamutMapping,
 }
 

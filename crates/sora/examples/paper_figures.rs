@@ -31,7 +31,9 @@
 //!
 //! Every image goes through the same stages as `sora render`:
 //! [`Sky::render_xyz`] (fast method, sun disc drawn), then the
-//! colour module's [`DisplayMapping`] (sRGB, hue-preserving gamut mapping)
+//! colour module's [`DisplayMapping`] (sRGB; the README's pictures with the
+//! default highlights-to-white gamut mapping, the compared scenes with
+//! preserve-hue, which keeps the hue of over-exposed sky)
 //! and [`write_png`]. Exposure: each scene's multiple-scattering fisheye
 //! gets the default automatic exposure (log-average luminance -> 0.18), and
 //! the same factor is used, fixed, for every other picture of the scene
@@ -47,7 +49,9 @@ use std::time::Instant;
 use sora::atmosphere::presets::find_preset;
 use sora::atmosphere::{Atmosphere, Sun};
 use sora::camera::{Camera, PerspectiveCamera};
-use sora::colour::{DisplayMapping, Exposure, Observer, RgbColourSpace, SpectrumToXyz};
+use sora::colour::{
+    DisplayMapping, Exposure, GamutMapping, Observer, RgbColourSpace, SpectrumToXyz,
+};
 use sora::geometry::angle_between_deg;
 use sora::output::{DisplayImage, write_png};
 use sora::spectrum::{SampledSpectrum, SolarSpectrum, WavelengthGrid};
@@ -101,7 +105,7 @@ fn sun_over_tokyo(time: &str) -> Result<(f64, f64)> {
 /// `day_strip.png`: a day at one place, Tokyo on the June solstice 2026,
 /// as fisheyes (160 px, north up, east left) side by side from before
 /// sunrise to after sunset (local times in `DAY_STRIP_TIMES`), all at one
-/// exposure: the automatic exposure of the strip as a whole, so that the
+/// exposure: the automatic exposure of the brightest frame, so that the
 /// frames compare directly (twilight is as dark as it is).
 fn day_strip(out: &Path, grid: &WavelengthGrid) -> Result<()> {
     let started = Instant::now();
@@ -112,6 +116,7 @@ fn day_strip(out: &Path, grid: &WavelengthGrid) -> Result<()> {
     let frames = DAY_STRIP_TIMES.len();
     let mut strip = vec![sora::colour::Xyz::BLACK; frames * SIDE * SIDE];
     let mut first: Option<Sky> = None;
+    let mut frame_scales = Vec::with_capacity(frames);
     for (k, time) in DAY_STRIP_TIMES.iter().enumerate() {
         let (elevation, azimuth) = sun_over_tokyo(&format!("2026-06-21T{time}:00+09:00"))?;
         // Every frame after the first reuses its optics.
@@ -126,6 +131,7 @@ fn day_strip(out: &Path, grid: &WavelengthGrid) -> Result<()> {
             Some(first) => first.with_sun_deg(elevation, azimuth)?,
         };
         let xyz = sky.render_xyz(&image, &to_xyz, &|_| {})?;
+        frame_scales.push(Exposure::default().scale_for_image(&xyz)?);
         for row in 0..SIDE {
             let at = (row * frames + k) * SIDE;
             strip[at..at + SIDE].copy_from_slice(&xyz[row * SIDE..(row + 1) * SIDE]);
@@ -133,8 +139,14 @@ fn day_strip(out: &Path, grid: &WavelengthGrid) -> Result<()> {
         println!("day strip: {time} local, sun {elevation:.2} deg up at {azimuth:.2} deg");
         first.get_or_insert(sky);
     }
-    let mapping = DisplayMapping::default();
-    let scale = mapping.exposure.scale_for_image(&strip)?;
+    // One exposure: the automatic exposure of the brightest frame (the
+    // smallest of the frames' own), so that midday is exposed as a camera
+    // would and twilight is as dark as it is beside it.
+    let scale = frame_scales.iter().copied().fold(f64::INFINITY, f64::min);
+    let mapping = DisplayMapping {
+        exposure: Exposure::Fixed(scale),
+        ..DisplayMapping::default()
+    };
     let pixels = mapping.to_u8(&strip)?.concat();
     let path = out.join("day_strip.png");
     write_png(&path, &DisplayImage::new(frames * SIDE, SIDE, pixels)?)?;
@@ -616,8 +628,18 @@ fn render_scene(out: &Path, grid: &WavelengthGrid, scene: &Scene) -> Result<()> 
                     1.0 / peak
                 }),
             };
+            // The README's pictures are what their commands write (the
+            // default display, highlights to white); the scenes compared in
+            // docs/README.md keep the hue of over-exposed sky (preserve-hue),
+            // so that the glow around a low sun shows its colour.
+            let gamut_mapping = if scene.name.starts_with("readme") {
+                GamutMapping::default()
+            } else {
+                GamutMapping::PreserveHue
+            };
             let mapping = DisplayMapping {
                 exposure: Exposure::Fixed(scale),
+                gamut_mapping,
                 ..DisplayMapping::default()
             };
             let data = mapping.to_u8(&xyz)?.into_iter().flatten().collect();

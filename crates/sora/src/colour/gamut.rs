@@ -10,7 +10,7 @@
 //! and sunset reds come close. And a sky exposed
 //! for its average is over range near the sun.
 //!
-//! Two rules ([`GamutMapping`]), applied after exposure, per pixel:
+//! Three rules ([`GamutMapping`]), applied after exposure, per pixel:
 //!
 //! - [`GamutMapping::Clip`]: clamp each component to [0, 1] independently.
 //!   Simple and what most renderers do, but it changes hue: an over-exposed
@@ -33,7 +33,20 @@
 //!      show. Over-exposed areas keep their colour instead of turning white
 //!      or changing hue.
 //!
-//! Neither rule divides by zero: t's denominators g - c_i are > 0 (g >= 0 >
+//! - [`GamutMapping::HighlightsToWhite`] (the default): preserve-hue, and
+//!   then what a camera does with light brighter than its white: where
+//!   step 2 scaled a colour down, it is moved on the straight line toward
+//!   white, c'' = c' + t ((1, 1, 1) - c'), until its luminance is
+//!   min(Y, Y_white) again, t = (min(Y, Y_white) - Y') / (Y_white - Y')
+//!   (Y the luminance before step 2, Y' after, Y_white that of (1, 1, 1)).
+//!   The dominant wavelength is kept and no component leaves [0, 1]; a
+//!   colour at or beyond the display's white becomes white. So the sun's
+//!   disc, thousands of times brighter than the sky, shows as the brightest
+//!   thing in the picture, its core white, instead of a dim orange dot of
+//!   luminance Y / m (preserve-hue's step 2 alone), and bright haze near the
+//!   sun fades to white as in a photograph.
+//!
+//! No rule divides by zero: t's denominators g - c_i are > 0 (g >= 0 >
 //! c_i), and the scaling only happens when m > 1. Black stays black.
 
 use std::fmt;
@@ -48,24 +61,31 @@ pub enum GamutMapping {
     /// Clamp each component to [0, 1].
     Clip,
     /// Desaturate toward the grey of equal luminance until no component is
-    /// negative, then scale down by the largest component if it exceeds 1
-    /// (the default).
-    #[default]
+    /// negative, then scale down by the largest component if it exceeds 1.
     PreserveHue,
+    /// Preserve-hue, then over-range colours toward white until their
+    /// luminance is restored up to the display's white (the default).
+    #[default]
+    HighlightsToWhite,
 }
 
 impl GamutMapping {
     /// Every mapping, in the order of [`GamutMapping::NAMES`].
-    pub const ALL: [GamutMapping; 2] = [GamutMapping::Clip, GamutMapping::PreserveHue];
+    pub const ALL: [GamutMapping; 3] = [
+        GamutMapping::Clip,
+        GamutMapping::PreserveHue,
+        GamutMapping::HighlightsToWhite,
+    ];
 
     /// The names accepted by [`FromStr`] (and written by [`fmt::Display`]).
-    pub const NAMES: [&'static str; 2] = ["clip", "preserve-hue"];
+    pub const NAMES: [&'static str; 3] = ["clip", "preserve-hue", "highlights-to-white"];
 
     /// The name as the command line spells it.
     pub fn name(self) -> &'static str {
         match self {
             GamutMapping::Clip => GamutMapping::NAMES[0],
             GamutMapping::PreserveHue => GamutMapping::NAMES[1],
+            GamutMapping::HighlightsToWhite => GamutMapping::NAMES[2],
         }
     }
 
@@ -87,6 +107,27 @@ impl GamutMapping {
                 } else {
                     in_gamut
                 }
+            }
+            GamutMapping::HighlightsToWhite => {
+                let in_gamut = desaturate_into_gamut(rgb, colour_space);
+                let largest = in_gamut.max_component();
+                if largest <= 1.0 {
+                    return in_gamut;
+                }
+                let white: f64 = colour_space.luminance_coefficients().iter().sum();
+                let target = colour_space.luminance(in_gamut).min(white);
+                let scaled = in_gamut.scaled(1.0 / largest);
+                let reduced = colour_space.luminance(scaled);
+                let t = if white > reduced {
+                    ((target - reduced) / (white - reduced)).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
+                LinearRgb::new(
+                    scaled.r + t * (1.0 - scaled.r),
+                    scaled.g + t * (1.0 - scaled.g),
+                    scaled.b + t * (1.0 - scaled.b),
+                )
             }
         }
     }
@@ -134,7 +175,8 @@ impl fmt::Display for GamutMapping {
 impl FromStr for GamutMapping {
     type Err = Error;
 
-    /// Parses `clip` or `preserve-hue`; the error lists both.
+    /// Parses `clip`, `preserve-hue` or `highlights-to-white`; the error
+    /// lists them.
     fn from_str(text: &str) -> Result<GamutMapping> {
         let text = text.trim();
         GamutMapping::ALL
@@ -227,5 +269,33 @@ mod tests {
         assert_eq!(GamutMapping::default(), GamutMapping::PreserveHue);
         let message = "soft".parse::<GamutMapping>().unwrap_err().to_string();
         assert!(message.contains("clip, preserve-hue"), "{message}");
+    }
+
+    #[test]
+    fn highlights_go_to_white_keeping_luminance_up_to_white() {
+        let white: f64 = SRGB.luminance_coefficients().iter().sum();
+        // The sun: far beyond white, orange: white.
+        let sun =
+            GamutMapping::HighlightsToWhite.apply(LinearRgb::new(4000.0, 2500.0, 1200.0), SRGB);
+        assert!((sun.min_component() - 1.0).abs() < 1e-12, "{sun:?}");
+        // Over range but darker than white: its luminance is restored, its
+        // components stay in [0, 1], and it is no less bright than
+        // preserve-hue's version.
+        let rgb = LinearRgb::new(1.6, 0.5, 0.2);
+        let y = SRGB.luminance(rgb);
+        assert!(y < white);
+        let mapped = GamutMapping::HighlightsToWhite.apply(rgb, SRGB);
+        assert!(
+            (SRGB.luminance(mapped) / y - 1.0).abs() < 1e-12,
+            "{mapped:?}"
+        );
+        assert!(mapped.max_component() <= 1.0 && mapped.min_component() >= 0.0);
+        let hue = GamutMapping::PreserveHue.apply(rgb, SRGB);
+        assert!(SRGB.luminance(mapped) > SRGB.luminance(hue));
+        // Red still dominates: toward white, not across the hue circle.
+        assert!(mapped.r >= mapped.g && mapped.g >= mapped.b, "{mapped:?}");
+        // Inside the cube nothing changes.
+        let inside = LinearRgb::new(0.3, 0.6, 0.9);
+        assert_eq!(GamutMapping::HighlightsToWhite.apply(inside, SRGB), inside);
     }
 }
