@@ -266,9 +266,14 @@ mod tests {
                 mapping
             );
         }
-        assert_eq!(GamutMapping::default(), GamutMapping::PreserveHue);
+        // The default shows light brighter than white as white (issue 12:
+        // the sun is the brightest thing in the picture).
+        assert_eq!(GamutMapping::default(), GamutMapping::HighlightsToWhite);
         let message = "soft".parse::<GamutMapping>().unwrap_err().to_string();
-        assert!(message.contains("clip, preserve-hue"), "{message}");
+        assert!(
+            message.contains("clip, preserve-hue, highlights-to-white"),
+            "{message}"
+        );
     }
 
     #[test]
