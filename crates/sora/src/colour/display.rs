@@ -173,8 +173,8 @@ impl FromStr for DisplayEncoding {
 }
 
 /// The whole display stage: exposure, gamut mapping and encoding (see the
-/// module docs). The default is automatic exposure (key 0.18),
-/// hue-preserving gamut mapping and sRGB.
+/// module docs). The default is automatic exposure (key 0.18), the
+/// highlights-to-white gamut mapping and sRGB.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct DisplayMapping {
     pub exposure: Exposure,

@@ -21,9 +21,10 @@
 //!    pixels maps to the key 0.18).
 //! 4. **Gamut and range** ([`GamutMapping`], `gamut.rs`): negative
 //!    components (out of gamut) and components above 1 (over range) are
-//!    either clipped per channel, or, by default, handled hue-preservingly
-//!    (desaturate at constant luminance until nothing is negative, then scale
-//!    down by the largest component).
+//!    either clipped per channel, or handled hue-preservingly (desaturate at
+//!    constant luminance until nothing is negative, then scale down by the
+//!    largest component), and by default then moved toward white where they
+//!    were brighter than white (the sun's core shows white).
 //! 5. **Encoding** ([`DisplayEncoding`], `display.rs`): the transfer curve
 //!    (sRGB's, or the paper's k L^(1/γ)) and rounding to 8 or 16 bits,
 //!    `round(V × 255)` / `round(V × 65535)`. [`DisplayMapping`] runs steps 2-5
@@ -33,7 +34,7 @@
 //! Wavelengths in nm; XYZ with Y the luminance-like component, in display
 //! units (white Y = 1) from step 3 on; linear RGB with the colour space's
 //! white (D65) at R = G = B = 1 when Y = 1. Every name the command line
-//! accepts (`cie1931-2deg`, `srgb`, `paper-smpte-c`, `preserve-hue`, `auto`)
+//! accepts (`cie1931-2deg`, `srgb`, `paper-smpte-c`, `highlights-to-white`, `auto`)
 //! parses with [`std::str::FromStr`], and an unknown name gets an error listing
 //! the valid ones.
 //!
