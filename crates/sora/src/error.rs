@@ -20,6 +20,10 @@ pub enum Error {
     /// A spectrum that cannot be turned into colour or light: NaN, negative,
     /// wrong length, or a table that does not cover the wavelengths asked for.
     InvalidSpectrum(String),
+    /// A combination of choices that cannot work together (path tracing
+    /// with single scattering, an image from the path tracer); the message
+    /// names both.
+    Unsupported(String),
     /// Text input (CSV table, TOML file) that does not parse.
     Parse {
         /// What was being read (`"solar spectrum CSV"`).
@@ -85,6 +89,7 @@ impl fmt::Display for Error {
                 )
             }
             Error::InvalidSpectrum(message) => write!(f, "invalid spectrum: {message}"),
+            Error::Unsupported(message) => f.write_str(message),
             Error::Parse {
                 what,
                 line,
