@@ -527,11 +527,6 @@ impl Sky {
         progress: &(dyn Fn(u64, u64) + Sync),
     ) -> Result<Vec<SkyRadiance>> {
         let wavelengths = self.wavelengths().len();
-        let spectrum = |values: &[f64]| {
-            let mut spectrum = SampledSpectrum::zeros(wavelengths);
-            spectrum.values_mut().copy_from_slice(values);
-            spectrum
-        };
         if let Method::PathTracing { samples, seed } = self.method {
             let tracer = PathTracer::new(&self.scene);
             let total = samples * views.len() as u64;
@@ -555,27 +550,25 @@ impl Sky {
         self.prepare_field()?;
         const VIEWS_PER_TASK: usize = 4;
         let mut values = vec![0.0; views.len() * wavelengths];
-        if !values.is_empty() {
-            let total = views.len() as u64;
-            let done = std::sync::atomic::AtomicU64::new(0);
-            crate::parallel::for_each_chunk_mut(
-                &mut values,
-                VIEWS_PER_TASK * wavelengths,
-                |task, chunk| {
-                    let mut work = self.view_work();
-                    for (k, radiance) in chunk.chunks_mut(wavelengths).enumerate() {
-                        let view = views[task * VIEWS_PER_TASK + k].to_vector();
-                        self.compute_view_radiance(view, None, &mut work, radiance);
-                        let finished = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-                        progress(finished, total);
-                    }
-                },
-            );
-        }
+        let total = views.len() as u64;
+        let done = std::sync::atomic::AtomicU64::new(0);
+        crate::parallel::for_each_chunk_mut(
+            &mut values,
+            VIEWS_PER_TASK * wavelengths,
+            |task, chunk| {
+                let mut work = self.view_work();
+                for (k, radiance) in chunk.chunks_mut(wavelengths).enumerate() {
+                    let view = views[task * VIEWS_PER_TASK + k].to_vector();
+                    self.compute_view_radiance(view, None, &mut work, radiance);
+                    let finished = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                    progress(finished, total);
+                }
+            },
+        );
         Ok(values
             .chunks(wavelengths)
             .map(|values| SkyRadiance {
-                radiance_w_m2_sr_nm: spectrum(values),
+                radiance_w_m2_sr_nm: SampledSpectrum::from_values(values.to_vec()),
                 standard_error_w_m2_sr_nm: None,
             })
             .collect())
