@@ -190,3 +190,74 @@ fn help_explains_the_commands() {
         assert!(text.contains(fragment), "{fragment} in {text}");
     }
 }
+
+/// Issue 17: an aerosol of index 1 + 0i does not scatter. Given by number
+/// density it is non-scattering in both phase modes (optical depths 0,
+/// albedo 0, g 0, no NaN); given by an optical depth at a wavelength where
+/// it does not extinguish, it is a one-line error naming the index.
+#[test]
+fn an_aerosol_of_index_one_is_non_scattering_or_refused() {
+    let paper = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../atmospheres/paper-earth.toml"),
+    )
+    .unwrap();
+    let index_one = paper.replace("{ n = 1.5, k = 0.01 }", "{ n = 1.0, k = 0.0 }");
+    assert_ne!(index_one, paper, "the paper's aerosol index moved");
+    let directory = tempfile::tempdir().unwrap();
+    for phase in ["paper-hg", "mie"] {
+        let with_phase = index_one.replace("phase = \"paper-hg\"", &format!("phase = \"{phase}\""));
+        let path = directory.path().join(format!("depth-{phase}.toml"));
+        std::fs::write(&path, &with_phase).unwrap();
+        let message = error(&sora(&[
+            "atmosphere",
+            "show",
+            "--atmosphere",
+            path.to_str().unwrap(),
+        ]));
+        assert!(message.contains("refractive index 1 + 0i"), "{message}");
+        assert!(message.contains("optical_depth"), "{message}");
+        let by_density: String = with_phase
+            .lines()
+            .map(|line| {
+                if line.starts_with("optical_depth = 0.15") {
+                    "number_density_m3 = 1e9"
+                } else if line.starts_with("reference_wavelength_nm = 550") {
+                    ""
+                } else {
+                    line
+                }
+            })
+            .collect::<Vec<_>>()
+            .join("\n");
+        let path = directory.path().join(format!("density-{phase}.toml"));
+        std::fs::write(&path, by_density).unwrap();
+        for format in ["table", "csv", "json"] {
+            let text = stdout(&sora(&[
+                "atmosphere",
+                "show",
+                "--atmosphere",
+                path.to_str().unwrap(),
+                "--format",
+                format,
+            ]));
+            assert!(
+                !text.to_lowercase().contains("nan"),
+                "{phase} {format}:\n{text}"
+            );
+            assert!(!text.contains("inf"), "{phase} {format}:\n{text}");
+            if format == "table" {
+                let aerosol_rows: Vec<&str> = text
+                    .lines()
+                    .filter(|l| l.split_whitespace().nth(1) == Some("aerosol"))
+                    .collect();
+                assert_eq!(aerosol_rows.len(), 21, "{text}");
+                for row in aerosol_rows {
+                    let fields: Vec<&str> = row.split_whitespace().collect();
+                    for value in &fields[2..] {
+                        assert_eq!(value.parse::<f64>().unwrap(), 0.0, "{row}");
+                    }
+                }
+            }
+        }
+    }
+}

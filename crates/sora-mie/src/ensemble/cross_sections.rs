@@ -24,8 +24,27 @@ use crate::sphere::{
 };
 use std::f64::consts::PI;
 
+/// `numerator / denominator`, or 0 where the denominator is 0 (or the
+/// quotient is not finite). A population whose mean scattering
+/// cross-section is 0 at a wavelength (e.g. m = 1, where every Mie
+/// coefficient vanishes) is non-scattering there: its single-scattering
+/// albedo is 0 and its asymmetry parameters (Mie and the paper's HG g) are
+/// reported as 0, i.e. an isotropic phase function that is never used,
+/// instead of 0/0 = NaN (issue 17). The phase table of such a population is
+/// isotropic too (`phase_table.rs`).
+pub(super) fn ratio_or_zero(numerator: f64, denominator: f64) -> f64 {
+    let ratio = numerator / denominator;
+    if denominator > 0.0 && ratio.is_finite() {
+        ratio
+    } else {
+        0.0
+    }
+}
+
 /// Per-particle mean cross-sections and related quantities of a population
-/// at one wavelength.
+/// at one wavelength. Where `scattering_cross_section_m2` is 0 the
+/// population is non-scattering: albedo and both g are 0 (see
+/// [`ratio_or_zero`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EnsembleCrossSections {
     /// Vacuum wavelength (nm).
@@ -149,9 +168,9 @@ pub(super) fn compute_shared_cross_sections(
                 extinction_cross_section_m2: sum[0] * area_per_x_squared_m2,
                 scattering_cross_section_m2: sum[1] * area_per_x_squared_m2,
                 absorption_cross_section_m2: sum[2] * area_per_x_squared_m2,
-                single_scattering_albedo: sum[1] / sum[0],
-                asymmetry_parameter: sum[3] / sum[1],
-                paper_asymmetry_parameter: sum[4] / sum[1],
+                single_scattering_albedo: ratio_or_zero(sum[1], sum[0]),
+                asymmetry_parameter: ratio_or_zero(sum[3], sum[1]),
+                paper_asymmetry_parameter: ratio_or_zero(sum[4], sum[1]),
                 number_fraction_in_window: distribution.number_fraction_in_window(),
                 radius_node_count: quadrature.len(),
             }
@@ -195,9 +214,9 @@ pub fn integrate_ensemble_cross_sections(
         extinction_cross_section_m2: extinction_m2,
         scattering_cross_section_m2: scattering_m2,
         absorption_cross_section_m2: absorption_m2,
-        single_scattering_albedo: scattering_m2 / extinction_m2,
-        asymmetry_parameter: scattering_times_g_m2 / scattering_m2,
-        paper_asymmetry_parameter: scattering_times_paper_g_m2 / scattering_m2,
+        single_scattering_albedo: ratio_or_zero(scattering_m2, extinction_m2),
+        asymmetry_parameter: ratio_or_zero(scattering_times_g_m2, scattering_m2),
+        paper_asymmetry_parameter: ratio_or_zero(scattering_times_paper_g_m2, scattering_m2),
         number_fraction_in_window: distribution.number_fraction_in_window(),
         radius_node_count: quadrature.len(),
     })

@@ -505,9 +505,11 @@ pub fn compute_ensemble_optics_spectrum(
             AerosolPhaseMode::PaperHenyeyGreenstein => cross_sections
                 .iter()
                 .map(|c| {
-                    // The paper's g lies in [0.5, 0.9], so this cannot fail.
+                    // The paper's g lies in [0.5, 0.9], or is 0 for a
+                    // non-scattering population (see `EnsembleCrossSections`),
+                    // so this cannot fail.
                     let hg = HenyeyGreensteinPhaseFunction::new(c.paper_asymmetry_parameter)
-                        .expect("the paper's g(r) lies in [0.5, 0.9]");
+                        .expect("the paper's g(r) lies in [0.5, 0.9] or is 0");
                     AerosolPhaseFunction::HenyeyGreenstein(hg)
                 })
                 .collect(),

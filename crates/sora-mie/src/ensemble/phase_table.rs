@@ -412,7 +412,15 @@ impl PhaseTableWorkspace {
                 let table_sums = &self.accumulated_s11[table_start..table_start + angle_count];
                 let scale =
                     1.0 / (PI * scattering_x_squared[index * wavelength_count + wavelength]);
-                let phase_per_sr: Vec<f64> = table_sums.iter().map(|s| s * scale).collect();
+                let phase_per_sr: Vec<f64> = if scale.is_finite() && scale > 0.0 {
+                    table_sums.iter().map(|s| s * scale).collect()
+                } else {
+                    // No scattering at this wavelength (sum w x^2 Q_sca = 0,
+                    // e.g. m = 1): the population is non-scattering (albedo
+                    // 0, see `cross_sections::ratio_or_zero`) and its phase
+                    // function, never used, is isotropic rather than 0/0.
+                    vec![1.0 / (4.0 * PI); angle_count]
+                };
                 per_wavelength.push(
                     TabulatedPhaseFunction::from_nodes(self.cos_theta.clone(), phase_per_sr)
                         .map_err(|error| {

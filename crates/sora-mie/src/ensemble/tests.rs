@@ -600,3 +600,68 @@ fn tabulated_index_is_used_per_wavelength() {
             > spectrum[0].cross_sections.single_scattering_albedo
     );
 }
+
+/// Particles of index 1 + 0i do not scatter (every Mie coefficient is 0):
+/// in both phase modes they are non-scattering, with albedo 0, g 0 and an
+/// isotropic phase function, no NaN (issue 17).
+#[test]
+fn particles_of_index_one_are_non_scattering_in_both_modes() {
+    let model = RefractiveIndexModel::constant(Complex64::new(1.0, 0.0)).unwrap();
+    let distribution = SizeDistribution::log_normal(0.1 * MICROMETRE, 2.0).unwrap();
+    for phase_mode in [
+        AerosolPhaseMode::Mie,
+        AerosolPhaseMode::PaperHenyeyGreenstein,
+    ] {
+        let settings = EnsembleSettings {
+            phase_mode,
+            ..EnsembleSettings::default()
+        };
+        let spectrum = compute_ensemble_optics_spectrum(
+            &[380.0, 550.0, 780.0],
+            &model,
+            &distribution,
+            &settings,
+        )
+        .unwrap();
+        for optics in &spectrum {
+            let c = &optics.cross_sections;
+            assert_eq!(c.scattering_cross_section_m2, 0.0, "{phase_mode:?}");
+            assert_eq!(c.single_scattering_albedo, 0.0, "{phase_mode:?}");
+            assert_eq!(c.asymmetry_parameter, 0.0, "{phase_mode:?}");
+            assert_eq!(c.paper_asymmetry_parameter, 0.0, "{phase_mode:?}");
+            let isotropic = 1.0 / (4.0 * PI);
+            match &optics.phase_function {
+                AerosolPhaseFunction::HenyeyGreenstein(hg) => {
+                    assert_eq!(phase_mode, AerosolPhaseMode::PaperHenyeyGreenstein);
+                    assert_eq!(hg.asymmetry_parameter(), 0.0);
+                    assert!((hg.phase_function_per_sr(0.3) - isotropic).abs() < 1e-12);
+                }
+                AerosolPhaseFunction::Tabulated(table) => {
+                    assert_eq!(phase_mode, AerosolPhaseMode::Mie);
+                    for &p in table.phase_per_sr_nodes() {
+                        assert!((p - isotropic).abs() < 1e-12, "{p}");
+                    }
+                    assert!(table.asymmetry_parameter().abs() < 1e-12);
+                }
+            }
+        }
+    }
+    // The one-sphere-at-a-time oracle agrees.
+    let wavenumber = 2.0 * PI / 550e-9;
+    let quadrature = RadiusQuadrature::trapezoid(&distribution, wavenumber, 201, 18.0).unwrap();
+    let c = integrate_ensemble_cross_sections(
+        550.0,
+        Complex64::new(1.0, 0.0),
+        &distribution,
+        &quadrature,
+    )
+    .unwrap();
+    assert_eq!(
+        (
+            c.single_scattering_albedo,
+            c.asymmetry_parameter,
+            c.paper_asymmetry_parameter
+        ),
+        (0.0, 0.0, 0.0)
+    );
+}

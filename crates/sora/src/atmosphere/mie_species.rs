@@ -108,6 +108,21 @@ impl MieAerosol {
                     &settings.cross_section_quadrature,
                 )
                 .map_err(|e| ensemble_error(name, e))?;
+                // Particles that do not extinguish light at the reference
+                // wavelength (e.g. m = 1 + 0i) cannot reach any optical
+                // depth there: refused, naming the index (issue 17).
+                if reference.extinction_cross_section_m2.is_nan()
+                    || reference.extinction_cross_section_m2 <= 0.0
+                {
+                    return Err(Error::parse(
+                        "atmosphere",
+                        0,
+                        format!(
+                            "{name}: optical_depth = {optical_depth} at reference_wavelength_nm = {reference_wavelength_nm} cannot be reached: particles of refractive index {} + {}i neither scatter nor absorb there (zero extinction cross-section); give a refractive index other than 1 + 0i, or give number_density_m3 for a non-scattering species",
+                            m.re, m.im
+                        ),
+                    ));
+                }
                 optical_depth / (reference.extinction_cross_section_m2 * column_m)
             }
         };
