@@ -27,6 +27,7 @@ enum Command {
     Spectrum(commands::spectrum::SpectrumArgs),
     Render(commands::render::RenderArgs),
     Irradiance(commands::irradiance::IrradianceArgs),
+    SelfTest(commands::self_test::SelfTestArgs),
 }
 
 fn main() {
@@ -38,6 +39,7 @@ fn main() {
         Command::Spectrum(args) => commands::spectrum::run(args),
         Command::Render(args) => commands::render::run(args),
         Command::Irradiance(args) => commands::irradiance::run(args),
+        Command::SelfTest(args) => commands::self_test::run(args),
     };
     if let Err(error) = result {
         if is_broken_pipe(&error) {

@@ -575,6 +575,38 @@ fn tables_that_do_not_cover_the_grid_are_named() {
     }
 }
 
+/// Values that each pass their checks but combine into an infinite
+/// coefficient (an optical depth over a column of 1e-308 m, found by
+/// `atmosphere_mutations.rs`) are refused when the optics are computed, in
+/// one line naming the species, instead of giving infinite extinction.
+#[test]
+fn coefficients_that_overflow_are_refused() {
+    let grid = WavelengthGrid::new(400.0, 700.0, 100.0).unwrap();
+    let paper_earth = sora::atmosphere::presets::find_preset("paper-earth")
+        .unwrap()
+        .toml;
+    assert_eq!(
+        paper_earth.matches("atmosphere_height_m = 100e3").count(),
+        1
+    );
+    let cases = [(
+        paper_earth.replace(
+            "atmosphere_height_m = 100e3",
+            "atmosphere_height_m = 1e-308",
+        ),
+        "species[1] (aerosol): its extinction or scattering coefficient comes out as inf m^-1",
+    )];
+    for (text, expected) in cases {
+        let atmosphere = Atmosphere::from_toml_str(&text).unwrap();
+        let message = atmosphere.compute_optics(&grid).unwrap_err().to_string();
+        assert!(
+            message.contains(expected),
+            "expected '{expected}' in: {message}"
+        );
+        assert!(!message.contains('\n'));
+    }
+}
+
 /// Files may name a solar spectrum CSV; the caller supplies its text.
 #[test]
 fn a_solar_csv_is_read_through_the_callers_closure() {

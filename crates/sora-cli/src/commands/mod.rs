@@ -5,4 +5,5 @@ pub mod colour;
 pub mod irradiance;
 pub mod mie;
 pub mod render;
+pub mod self_test;
 pub mod spectrum;

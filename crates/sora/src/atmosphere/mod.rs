@@ -159,6 +159,20 @@ impl Atmosphere {
             let column_m = species.profile.vertical_column_m(top_m);
             let (extinction_per_m, scattering_per_m, phase_function, reference_number_density_m3) =
                 species_coefficients(&species.model, grid, column_m, &path)?;
+            // Values that pass their own checks can still combine into an
+            // unusable coefficient: an optical depth spread over a column
+            // of 1e-308 m is an infinite extinction. Refuse it here, once,
+            // rather than let it become NaN radiance downstream.
+            if let Some(bad) = extinction_per_m
+                .values()
+                .iter()
+                .chain(scattering_per_m.values())
+                .find(|v| !v.is_finite() || **v < 0.0)
+            {
+                return Err(Error::InvalidSpectrum(format!(
+                    "{path}: its extinction or scattering coefficient comes out as {bad} m^-1, not a finite non-negative number (its vertical column is {column_m:e} m); check its amount, its profile and planet.atmosphere_height_m"
+                )));
+            }
             species_optics.push(SpeciesOptics {
                 name: species.name.clone(),
                 kind: species.model.kind(),
