@@ -151,3 +151,173 @@ fn distribution_form_matches_the_reference_ensemble() {
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("sigma_g = 0.5"));
 }
+
+/// Issue 17: the degenerate corners (m = 1, x down to 1e-300, k -> 0, a zero
+/// optical depth) print finite numbers or fail with a one-line error; never
+/// NaN or infinity with exit status 0.
+#[test]
+fn degenerate_corners_print_no_nan() {
+    fn check(args: &[&str]) -> Option<String> {
+        let out = sora(args);
+        let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+        if !out.status.success() {
+            assert_eq!(out.status.code(), Some(1), "{args:?}: {stderr}");
+            assert_eq!(
+                stderr.lines().count(),
+                1,
+                "{args:?}: not one line: {stderr}"
+            );
+            assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+            return None;
+        }
+        let text = String::from_utf8(out.stdout).unwrap();
+        let lower = text.to_lowercase();
+        assert!(!lower.contains("nan"), "{args:?}:\n{text}");
+        assert!(!lower.contains("inf"), "{args:?}:\n{text}");
+        Some(text)
+    }
+    let indices = [
+        "1+0i",
+        "1.33",
+        "1.33+0.01i",
+        "1.5+1e-300i",
+        "1+1e-300i",
+        "2+1i",
+    ];
+    let size_parameters = ["1e-300", "1e-100", "1e-20", "1e-8", "1e-3", "1"];
+    for m in indices {
+        for x in size_parameters {
+            let text = check(&["mie", "--m", m, "--x", x]).expect("efficiencies always print");
+            if m == "1+0i" {
+                assert!(text.contains("single_scattering_albedo = 0.0"), "{text}");
+            }
+            let phase = check(&[
+                "mie",
+                "--m",
+                m,
+                "--x",
+                x,
+                "--phase",
+                "--angle-step-deg",
+                "30",
+            ]);
+            if m == "1+0i" {
+                assert!(phase.is_none(), "m = 1 has no phase function");
+            }
+        }
+        check(&[
+            "mie",
+            "--m",
+            m,
+            "--lognormal",
+            "0.1,2.0",
+            "--wavelengths",
+            "550:550:1",
+        ])
+        .expect("the ensemble prints");
+    }
+    // x -> 0: the Rayleigh limit, 3 (1 + mu^2) / (16 pi).
+    let text = check(&[
+        "mie",
+        "--m",
+        "1.33",
+        "--x",
+        "1e-300",
+        "--phase",
+        "--angle-step-deg",
+        "90",
+    ])
+    .unwrap();
+    let rows: Vec<Vec<f64>> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    let rayleigh = |mu: f64| 3.0 * (1.0 + mu * mu) / (16.0 * std::f64::consts::PI);
+    assert_eq!(rows.len(), 3);
+    for (row, mu) in rows.iter().zip([1.0, 0.0, -1.0]) {
+        assert!((row[1] - rayleigh(mu)).abs() < 1e-12, "{row:?}");
+    }
+    assert_eq!(rows[1][2], -1.0);
+    // ... continuous with the Mie series just above the switch.
+    let series = check(&[
+        "mie",
+        "--m",
+        "1.33",
+        "--x",
+        "1e-6",
+        "--phase",
+        "--angle-step-deg",
+        "90",
+    ])
+    .unwrap();
+    for (line, mu) in series.lines().skip(1).zip([1.0, 0.0, -1.0]) {
+        let p: f64 = line.split(',').nth(1).unwrap().parse().unwrap();
+        assert!((p / rayleigh(mu) - 1.0).abs() < 1e-9, "{line}");
+    }
+    // The non-scattering ensemble: albedo and g 0, not NaN.
+    let text = check(&[
+        "mie",
+        "--m",
+        "1+0i",
+        "--lognormal",
+        "0.1,2.0",
+        "--wavelengths",
+        "550:550:1",
+    ])
+    .unwrap();
+    let values: Vec<f64> = text
+        .lines()
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    assert_eq!(&values[1..7], &[0.0; 6]);
+    // Batch rows at m = 1 and tiny x.
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("corners.csv");
+    std::fs::write(
+        &input,
+        "m_re,m_im,x\n1,0,1\n1.33,0,1e-300\n1.5,1e-300,1e-300\n",
+    )
+    .unwrap();
+    check(&["mie", "--batch", input.to_str().unwrap()]).unwrap();
+    // A zero optical depth: the aerosol is absent, the sky is finite.
+    let paper = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../atmospheres/paper-earth.toml"),
+    )
+    .unwrap();
+    let zero = paper.replace("optical_depth = 0.15", "optical_depth = 0");
+    assert_ne!(zero, paper);
+    let path = dir.path().join("zero.toml");
+    std::fs::write(&path, zero).unwrap();
+    let path = path.to_str().unwrap();
+    for format in ["table", "csv", "json"] {
+        check(&[
+            "atmosphere",
+            "show",
+            "--atmosphere",
+            path,
+            "--format",
+            format,
+        ])
+        .unwrap();
+    }
+    check(&[
+        "spectrum",
+        "--atmosphere",
+        path,
+        "--sun-elevation",
+        "30",
+        "--view-elevation",
+        "10",
+        "--view-azimuth",
+        "0",
+        "--wavelengths",
+        "400:700:100",
+        "--format",
+        "csv",
+    ])
+    .unwrap();
+}

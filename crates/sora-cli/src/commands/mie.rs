@@ -183,36 +183,73 @@ fn print_efficiencies(m: Complex64, x: f64) -> anyhow::Result<()> {
     println!("qabs  = {:.12e}", q.qabs);
     println!("qback = {:.12e}", q.qback);
     println!("g     = {:.12e}", q.g);
-    let albedo = if q.qext > 0.0 { q.qsca / q.qext } else { 1.0 };
+    // Where Q_ext is 0 (or underflows) the albedo is its limit: 0 for
+    // m = 1 + 0i (no scattering at all, as for a non-scattering species in
+    // the ensemble optics), else the Rayleigh limit x -> 0 (Q_sca ~ x^4,
+    // Q_abs ~ x): 0 if the sphere absorbs, 1 if not (issue 17).
+    let albedo = if q.qext > 0.0 && (q.qsca / q.qext).is_finite() {
+        q.qsca / q.qext
+    } else if m == Complex64::new(1.0, 0.0) || m.im > 0.0 {
+        0.0
+    } else {
+        1.0
+    };
     println!("single_scattering_albedo = {albedo:.12e}");
     Ok(())
 }
+
+/// Below this |m| x (and x), `sora mie --phase` prints the Rayleigh-limit
+/// phase function, exact there to double precision, instead of the Mie
+/// series, whose S11 ~ x^6 underflows for x below about 1e-55.
+const RAYLEIGH_LIMIT_SIZE_PARAMETER: f64 = 1e-8;
 
 fn print_phase_table(m: Complex64, x: f64, step_deg: f64) -> anyhow::Result<()> {
     if !(step_deg.is_finite() && step_deg > 0.0 && step_deg <= 180.0) {
         bail!("--angle-step-deg = {step_deg} deg is out of range: allowed 0 < step <= 180 deg");
     }
     let solution = MieSolution::compute(m, x)?;
+    if m == Complex64::new(1.0, 0.0) {
+        bail!(
+            "--m 1+0i: the sphere does not scatter (every Mie coefficient is 0, Q_sca = 0), so it has no phase function; give an index other than 1+0i"
+        );
+    }
     let count = (180.0 / step_deg).floor() as usize + 1;
     let angles_deg: Vec<f64> = (0..count)
         .map(|i| (i as f64 * step_deg).min(180.0))
         .collect();
     let cos_theta: Vec<f64> = angles_deg.iter().map(|a| a.to_radians().cos()).collect();
-    let (mut s11, mut s12) = (vec![0.0; count], vec![0.0; count]);
-    solution.s11_s12_table(&cos_theta, &mut s11, &mut s12);
-    // S11 / (pi x^2 Qsca) is the phase function normalised to 1 over 4 pi sr.
-    let normalisation = 1.0 / (std::f64::consts::PI * x * x * solution.efficiencies().qsca);
+    let (mut phase, mut ratio) = (vec![0.0; count], vec![0.0; count]);
+    if x * m.norm().max(1.0) <= RAYLEIGH_LIMIT_SIZE_PARAMETER {
+        // The Rayleigh limit x -> 0 (exact to O((|m| x)^2) <= 1e-16 relative
+        // here, where S11 underflows): P = 3 (1 + mu^2) / (16 pi),
+        // S12 / S11 = -(1 - mu^2) / (1 + mu^2).
+        for ((p, r), &mu) in phase.iter_mut().zip(&mut ratio).zip(&cos_theta) {
+            *p = 3.0 * (1.0 + mu * mu) / (16.0 * std::f64::consts::PI);
+            // + 0.0: 0, not -0, at the ends.
+            *r = -(1.0 - mu * mu) / (1.0 + mu * mu) + 0.0;
+        }
+    } else {
+        let (mut s11, mut s12) = (vec![0.0; count], vec![0.0; count]);
+        solution.s11_s12_table(&cos_theta, &mut s11, &mut s12);
+        // S11 / (pi x^2 Qsca) is the phase function normalised to 1 over 4 pi sr.
+        let qsca = solution.efficiencies().qsca;
+        let normalisation = 1.0 / (std::f64::consts::PI * x * x * qsca);
+        for i in 0..count {
+            ratio[i] = if s11[i] > 0.0 { s12[i] / s11[i] } else { 0.0 };
+            phase[i] = s11[i] * normalisation;
+        }
+        if !normalisation.is_finite() || phase.iter().chain(&ratio).any(|v| !v.is_finite()) {
+            bail!(
+                "--m {}{:+}i --x {x}: the sphere scatters too weakly for its phase function to be computed in double precision (Q_sca = {qsca:e} underflows); m closer to 1 than about 1e-150 is out of range",
+                m.re,
+                m.im
+            );
+        }
+    }
     let mut out = BufWriter::new(std::io::stdout().lock());
     writeln!(out, "angle_deg,phase_function_per_sr,s12_over_s11")?;
     for i in 0..count {
-        let ratio = if s11[i] > 0.0 { s12[i] / s11[i] } else { 0.0 };
-        writeln!(
-            out,
-            "{},{:.12e},{:.12e}",
-            angles_deg[i],
-            s11[i] * normalisation,
-            ratio
-        )?;
+        writeln!(out, "{},{:.12e},{:.12e}", angles_deg[i], phase[i], ratio[i])?;
     }
     out.flush()?;
     Ok(())
