@@ -321,3 +321,18 @@ fn degenerate_corners_print_no_nan() {
     ])
     .unwrap();
 }
+
+/// A batch CSV that starts with a UTF-8 byte-order mark (as spreadsheets
+/// write) is read as without it.
+#[test]
+fn batch_accepts_a_byte_order_mark() {
+    let dir = tempfile::tempdir().unwrap();
+    let plain = dir.path().join("plain.csv");
+    let marked = dir.path().join("marked.csv");
+    let rows = "m_re,m_im,x\n1.33,0.0,10.0\n";
+    std::fs::write(&plain, rows).unwrap();
+    std::fs::write(&marked, format!("\u{feff}{rows}")).unwrap();
+    let expected = stdout(&sora(&["mie", "--batch", plain.to_str().unwrap()]));
+    let got = stdout(&sora(&["mie", "--batch", marked.to_str().unwrap()]));
+    assert_eq!(got, expected);
+}

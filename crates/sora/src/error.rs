@@ -108,7 +108,7 @@ impl std::error::Error for Error {}
 
 /// A number as a person would write it in a message: plain when moderate
 /// (`-5`, `0.25`), scientific when very large or small (`-2.55e25`, `3e-9`).
-fn format_number(value: f64) -> String {
+pub(crate) fn format_number(value: f64) -> String {
     let magnitude = value.abs();
     if value.is_finite() && magnitude != 0.0 && !(1e-4..1e6).contains(&magnitude) {
         format!("{value:e}")

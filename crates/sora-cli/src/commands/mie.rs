@@ -271,6 +271,12 @@ fn run_batch(path: &PathBuf) -> anyhow::Result<()> {
     for (index, line) in reader.lines().enumerate() {
         let line_number = index + 1;
         let line = line.with_context(|| format!("{name}: cannot read line {line_number}"))?;
+        // A UTF-8 byte-order mark (as some spreadsheets write) before the header is skipped.
+        let line = if line_number == 1 {
+            line.trim_start_matches('\u{feff}')
+        } else {
+            &line
+        };
         let line = line.trim();
         if line.is_empty() || line.starts_with('#') {
             continue;

@@ -68,16 +68,50 @@ pub fn find_preset(name: &str) -> Option<&'static Preset> {
     PRESETS.iter().find(|preset| preset.name == name)
 }
 
+/// The Damerau (optimal string alignment) edit distance between `a` and
+/// `b`: insertions, deletions, substitutions and swaps of neighbours.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let (a, b): (Vec<char>, Vec<char>) = (a.chars().collect(), b.chars().collect());
+    let mut d = vec![vec![0usize; b.len() + 1]; a.len() + 1];
+    for (i, row) in d.iter_mut().enumerate() {
+        row[0] = i;
+    }
+    for (j, cell) in d[0].iter_mut().enumerate() {
+        *cell = j;
+    }
+    for i in 1..=a.len() {
+        for j in 1..=b.len() {
+            let cost = usize::from(a[i - 1] != b[j - 1]);
+            let mut best = (d[i - 1][j] + 1)
+                .min(d[i][j - 1] + 1)
+                .min(d[i - 1][j - 1] + cost);
+            if i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] {
+                best = best.min(d[i - 2][j - 2] + 1);
+            }
+            d[i][j] = best;
+        }
+    }
+    d[a.len()][b.len()]
+}
+
 /// Loads the preset called `name`; an unknown name is an error that lists
 /// the known ones.
 pub(crate) fn load_preset(name: &str) -> Result<Atmosphere> {
     let Some(preset) = find_preset(name) else {
         let known: Vec<&str> = PRESETS.iter().map(|p| p.name).collect();
+        // A misspelling (at most 2 edits, e.g. earth-claer) gets a suggestion.
+        let suggestion = known
+            .iter()
+            .map(|k| (edit_distance(&name.to_lowercase(), k), *k))
+            .filter(|(distance, _)| *distance <= 2)
+            .min()
+            .map(|(_, k)| format!(" (did you mean {k}?)"))
+            .unwrap_or_default();
         return Err(Error::parse(
             "atmosphere preset",
             0,
             format!(
-                "'{name}' is not a preset; known presets: {}",
+                "'{name}' is not a preset{suggestion}; known presets: {}",
                 known.join(", ")
             ),
         ));
@@ -102,6 +136,19 @@ mod tests {
             assert!(!atmosphere.species.is_empty(), "{}", preset.name);
             assert!(!preset.description.contains('\n'));
         }
+    }
+
+    #[test]
+    fn a_misspelt_preset_gets_a_suggestion() {
+        let e = load_preset("earth-claer").unwrap_err().to_string();
+        assert!(e.contains("did you mean earth-clear?"), "{e}");
+        let e = load_preset("paper-mras").unwrap_err().to_string();
+        assert!(e.contains("did you mean paper-mars?"), "{e}");
+        let e = load_preset("venus").unwrap_err().to_string();
+        assert!(!e.contains("did you mean"), "{e}");
+        assert_eq!(edit_distance("earth-claer", "earth-clear"), 1);
+        assert_eq!(edit_distance("", "abc"), 3);
+        assert_eq!(edit_distance("kitten", "sitting"), 3);
     }
 
     #[test]

@@ -28,7 +28,7 @@ use crate::colour::exposure::Exposure;
 use crate::colour::gamut::GamutMapping;
 use crate::colour::rgb::{LinearRgb, RgbColourSpace, ScaledPower, TransferCurve};
 use crate::colour::xyz::Xyz;
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, format_number};
 
 /// A display encoding: an RGB colour space and its transfer curve.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -199,8 +199,11 @@ impl DisplayMapping {
                 let rgb = colour_space.linear_rgb_from_xyz(xyz.scaled(scale));
                 if !rgb.is_finite() {
                     return Err(Error::InvalidSpectrum(format!(
-                        "pixel {index}: XYZ ({}, {}, {}) times exposure {scale} is not finite in RGB",
-                        xyz.x, xyz.y, xyz.z
+                        "pixel {index}: XYZ ({}, {}, {}) times exposure {} is not finite in RGB; give a smaller --exposure",
+                        format_number(xyz.x),
+                        format_number(xyz.y),
+                        format_number(xyz.z),
+                        format_number(scale)
                     )));
                 }
                 Ok(self.gamut_mapping.apply(rgb, colour_space))
@@ -347,5 +350,9 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(message.contains("pixel 0"), "{message}");
+        // Huge numbers in scientific notation, not 301 digits (issue 17).
+        assert!(message.contains("exposure 1e300"), "{message}");
+        assert!(message.contains("XYZ (1e10, 1e10, 1e10)"), "{message}");
+        assert!(!message.contains("0000000000"), "{message}");
     }
 }

@@ -54,11 +54,21 @@ impl WavelengthGrid {
         }
         let steps = (stop_nm - start_nm) / step_nm;
         if (steps - steps.round()).abs() > 1e-6 {
+            // The unit follows `allowed` in the message: no "nm" here.
+            let stop = |steps: f64| ((start_nm + steps * step_nm) * 1e9).round() / 1e9;
+            let (below, above) = (stop(steps.floor()), stop(steps.ceil()));
+            let suggestion = if above <= MAX_WAVELENGTH_NM {
+                format!(
+                    "(try {start_nm}:{below}:{step_nm} or {start_nm}:{above}:{step_nm}): the nearest stops are {below} and {above}"
+                )
+            } else {
+                format!("(try {start_nm}:{below}:{step_nm}): the nearest stop is {below}")
+            };
             return Err(Error::out_of_range(
                 "stop_nm",
                 stop_nm,
                 "nm",
-                format!("start_nm + a whole number of steps of {step_nm} nm"),
+                format!("start_nm + a whole number of steps of {step_nm} {suggestion}"),
             ));
         }
         Ok(WavelengthGrid {
@@ -212,5 +222,26 @@ mod tests {
             let message = text.parse::<WavelengthGrid>().unwrap_err().to_string();
             assert!(message.contains(expected), "{text}: {message}");
         }
+    }
+
+    #[test]
+    fn an_off_grid_stop_names_the_nearest_stops_once_in_nm() {
+        let message = "380:780:7"
+            .parse::<WavelengthGrid>()
+            .unwrap_err()
+            .to_string();
+        assert!(!message.contains("nm nm"), "{message}");
+        assert!(message.contains("380:779:7"), "{message}");
+        assert!(message.contains("779 and 786 nm"), "{message}");
+        // Past the end of the range only the stop below is offered.
+        let message = "380:829:7"
+            .parse::<WavelengthGrid>()
+            .unwrap_err()
+            .to_string();
+        assert!(
+            message.contains("(try 380:828:7): the nearest stop is 828 nm"),
+            "{message}"
+        );
+        assert!(!message.contains("835"), "{message}");
     }
 }
