@@ -22,6 +22,11 @@ pub const MIN_WAVELENGTH_NM: f64 = 360.0;
 /// Longest wavelength a grid may sample, nm (end of the CIE tables).
 pub const MAX_WAVELENGTH_NM: f64 = 830.0;
 
+/// The most wavelengths a grid may have (checked before anything is
+/// allocated or computed: every spectrum, image row and Mie ensemble is
+/// per wavelength). 10000 covers the whole range at 0.05 nm.
+pub const MAX_WAVELENGTH_COUNT: usize = 10_000;
+
 /// Evenly spaced wavelengths `start_nm, start_nm + step_nm, ..., stop_nm`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct WavelengthGrid {
@@ -71,10 +76,17 @@ impl WavelengthGrid {
                 format!("start_nm + a whole number of steps of {step_nm} {suggestion}"),
             ));
         }
+        let len = steps.round() as usize + 1;
+        if len > MAX_WAVELENGTH_COUNT {
+            return Err(Error::Unsupported(format!(
+                "wavelength grid {start_nm}:{stop_nm}:{step_nm} has {len} wavelengths, more than the limit of {MAX_WAVELENGTH_COUNT}; use a coarser step (at least {} nm here)",
+                ((stop_nm - start_nm) / (MAX_WAVELENGTH_COUNT - 1) as f64 * 1e6).ceil() / 1e6
+            )));
+        }
         Ok(WavelengthGrid {
             start_nm,
             step_nm,
-            len: steps.round() as usize + 1,
+            len,
         })
     }
 
@@ -243,5 +255,23 @@ mod tests {
             "{message}"
         );
         assert!(!message.contains("835"), "{message}");
+    }
+
+    #[test]
+    fn the_number_of_wavelengths_is_limited() {
+        // At the limit: 10000 wavelengths.
+        let grid: WavelengthGrid = "380:779.96:0.04".parse().unwrap();
+        assert_eq!(grid.len(), MAX_WAVELENGTH_COUNT);
+        // One past it, and far past it: errors naming the count, the limit and the fix.
+        for text in ["380:780:0.04", "360:830:0.01"] {
+            let message = text.parse::<WavelengthGrid>().unwrap_err().to_string();
+            assert!(message.contains("limit of 10000"), "{message}");
+            assert!(message.contains("coarser step"), "{message}");
+        }
+        let message = "360:830:0.01"
+            .parse::<WavelengthGrid>()
+            .unwrap_err()
+            .to_string();
+        assert!(message.contains("47001 wavelengths"), "{message}");
     }
 }
