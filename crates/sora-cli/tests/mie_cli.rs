@@ -336,3 +336,35 @@ fn batch_accepts_a_byte_order_mark() {
     let got = stdout(&sora(&["mie", "--batch", marked.to_str().unwrap()]));
     assert_eq!(got, expected);
 }
+
+/// `--phase --angle-step-deg` is bounded: at most 1800001 rows (a step of
+/// 1e-4 deg), refused before anything is computed.
+#[test]
+fn phase_table_rows_are_limited() {
+    for step in ["1e-6", "9.9e-5"] {
+        let out = sora(&[
+            "mie",
+            "--m",
+            "1.33",
+            "--x",
+            "1",
+            "--phase",
+            "--angle-step-deg",
+            step,
+        ]);
+        let message = common::one_line_error(&out);
+        assert!(message.contains("limit of 1800001"), "{message}");
+        assert!(message.contains("at least 1e-4 deg"), "{message}");
+    }
+    let text = stdout(&sora(&[
+        "mie",
+        "--m",
+        "1.33",
+        "--x",
+        "1",
+        "--phase",
+        "--angle-step-deg",
+        "0.01",
+    ]));
+    assert_eq!(text.lines().count(), 18_002);
+}

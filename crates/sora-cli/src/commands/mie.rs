@@ -203,6 +203,10 @@ fn print_efficiencies(m: Complex64, x: f64) -> anyhow::Result<()> {
 /// series, whose S11 ~ x^6 underflows for x below about 1e-55.
 const RAYLEIGH_LIMIT_SIZE_PARAMETER: f64 = 1e-8;
 
+/// The most rows `sora mie --phase` prints (checked before anything is
+/// allocated): a step of 1e-4 deg.
+const MAX_PHASE_TABLE_ROWS: usize = 1_800_001;
+
 fn print_phase_table(m: Complex64, x: f64, step_deg: f64) -> anyhow::Result<()> {
     if !(step_deg.is_finite() && step_deg > 0.0 && step_deg <= 180.0) {
         bail!("--angle-step-deg = {step_deg} deg is out of range: allowed 0 < step <= 180 deg");
@@ -214,6 +218,12 @@ fn print_phase_table(m: Complex64, x: f64, step_deg: f64) -> anyhow::Result<()> 
         );
     }
     let count = (180.0 / step_deg).floor() as usize + 1;
+    if count > MAX_PHASE_TABLE_ROWS {
+        bail!(
+            "--angle-step-deg = {step_deg:e} deg gives {count} rows, more than the limit of {MAX_PHASE_TABLE_ROWS}; give a step of at least {:e} deg",
+            180.0 / (MAX_PHASE_TABLE_ROWS - 1) as f64
+        );
+    }
     let angles_deg: Vec<f64> = (0..count)
         .map(|i| (i as f64 * step_deg).min(180.0))
         .collect();
