@@ -368,3 +368,31 @@ fn phase_table_rows_are_limited() {
     ]));
     assert_eq!(text.lines().count(), 18_002);
 }
+
+/// A distribution whose effective size parameter exceeds 1e5 is refused at
+/// once (it would compute for hours); one below it runs.
+#[test]
+fn huge_distributions_are_refused_at_once() {
+    let start = std::time::Instant::now();
+    let out = sora(&[
+        "mie",
+        "--m",
+        "2+1i",
+        "--gamma",
+        "1e6,0.3",
+        "--wavelengths",
+        "550:550:1",
+    ]);
+    let message = common::one_line_error(&out);
+    assert!(message.contains("limit of 1e5"), "{message}");
+    assert!(start.elapsed().as_secs() < 30);
+    stdout(&sora(&[
+        "mie",
+        "--m",
+        "2+1i",
+        "--gamma",
+        "10,0.3",
+        "--wavelengths",
+        "550:550:1",
+    ]));
+}

@@ -135,9 +135,31 @@ fn size_distribution(args: &MieArgs) -> anyhow::Result<SizeDistribution> {
         .context("--gamma")
 }
 
+/// The largest effective size parameter 2 pi r_eff / lambda (at the shortest
+/// wavelength) of the distribution forms, checked before computing: about
+/// half a minute of work per wavelength there.
+const MAX_EFFECTIVE_SIZE_PARAMETER: f64 = 1e5;
+
 /// The distribution forms: per-particle ensemble optics per wavelength, CSV.
 fn print_ensemble_table(m: Complex64, args: &MieArgs) -> anyhow::Result<()> {
     let distribution = size_distribution(args)?;
+    // The work grows with the size parameter (nodes and series terms both
+    // ~ x): refuse at once rather than compute for hours (issue 17).
+    let mut radius_m = distribution.shape().effective_radius_m();
+    if let Some(window) = distribution.radius_window() {
+        radius_m = radius_m.min(window.max_radius_m());
+    }
+    let shortest_nm = args
+        .wavelengths
+        .wavelengths_nm()
+        .fold(f64::INFINITY, f64::min);
+    let x_eff = 2.0 * std::f64::consts::PI * radius_m * 1e9 / shortest_nm;
+    if x_eff.is_nan() || x_eff > MAX_EFFECTIVE_SIZE_PARAMETER {
+        bail!(
+            "the distribution's effective radius {radius_m:e} m is a size parameter of {x_eff:e} at {shortest_nm} nm, more than the limit of {MAX_EFFECTIVE_SIZE_PARAMETER:e}; give an effective radius below {:e} um",
+            MAX_EFFECTIVE_SIZE_PARAMETER * shortest_nm * 1e-3 / (2.0 * std::f64::consts::PI)
+        );
+    }
     let settings = RadiusQuadratureSettings::cross_sections();
     let mut out = BufWriter::new(std::io::stdout().lock());
     writeln!(
