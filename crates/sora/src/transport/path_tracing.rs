@@ -192,6 +192,10 @@ const MODEL_DENSITY_FLOOR: f64 = 0.1;
 /// summation order.
 pub(crate) const SAMPLES_PER_CHUNK: u64 = 1024;
 
+/// The most paths one run traces (`--samples`): checked before the
+/// per-chunk statistics are allocated (about 1e6 chunks of 1024 here).
+pub const MAX_SAMPLES: u64 = 1_000_000_000;
+
 /// A path whose largest throughput falls below this value plays Russian
 /// roulette (see the module docs). Measured on the clear-sky reference
 /// (albedo 0 and 0.3), CPU time times variance at the worst wavelength,
@@ -500,6 +504,14 @@ impl<'a> PathTracer<'a> {
                 samples as f64,
                 "1",
                 ">= 2 (a standard error needs two samples)",
+            ));
+        }
+        if samples > MAX_SAMPLES {
+            return Err(Error::out_of_range(
+                "samples",
+                samples as f64,
+                "1",
+                "<= 1e9 (the statistics are kept per chunk of samples; for more, average runs with different seeds)",
             ));
         }
         let chunks = samples.div_ceil(SAMPLES_PER_CHUNK) as usize;
@@ -1180,6 +1192,23 @@ mod tests {
             observation,
         )
         .unwrap()
+    }
+
+    /// More than MAX_SAMPLES paths is an error before anything is
+    /// allocated (issue 17), naming the value and the limit.
+    #[test]
+    fn samples_are_limited() {
+        let sky = clear_sky(0.3);
+        let tracer = PathTracer::new(&sky);
+        let view = direction_from_elevation_azimuth(17.0, 347.0);
+        for samples in [MAX_SAMPLES + 1, 1_000_000_000_000, u64::MAX] {
+            let message = tracer
+                .compute_radiance(view, samples, 1)
+                .unwrap_err()
+                .to_string();
+            assert!(message.contains("samples = "), "{message}");
+            assert!(message.contains("<= 1e9"), "{message}");
+        }
     }
 
     /// The same seed gives bit-identical results on one thread and on
