@@ -44,7 +44,7 @@ pub(super) fn ratio_or_zero(numerator: f64, denominator: f64) -> f64 {
 /// Per-particle mean cross-sections and related quantities of a population
 /// at one wavelength. Where `scattering_cross_section_m2` is 0 the
 /// population is non-scattering: albedo and both g are 0 (see
-/// [`ratio_or_zero`]).
+/// `ratio_or_zero`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EnsembleCrossSections {
     /// Vacuum wavelength (nm).
