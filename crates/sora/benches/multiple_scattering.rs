@@ -1,62 +1,52 @@
-//! Multiple-scattering benchmarks (issue 6): the per-image precomputation
-//! (the discrete-ordinate field at every sun zenith angle the view rays
-//! meet, then its source table), and a whole 512 x 512 all-sky fisheye at
-//! the 21 paper wavelengths with multiple scattering, next to the same
-//! image with single scattering only. Sun at 30 degrees (the fewest sun
-//! angles) and 5 degrees (the most: the sunset steps).
+//! Multiple-scattering benchmarks (issue 6): the discrete-ordinate field at
+//! every sun zenith angle the view rays meet (timed as a new sky's first
+//! view, whose exact synthesis costs little beside the field), all the
+//! image tables (the field, its source table, the sun-column and sky-view
+//! tables), and a whole 512 x 512 all-sky fisheye at the 21 paper
+//! wavelengths with multiple scattering, next to the same image with single
+//! scattering only. Sun at 30 degrees (the fewest sun angles) and 5 degrees
+//! (the most: the sunset steps).
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use sora::atmosphere::Atmosphere;
-use sora::camera::Camera;
 use sora::colour::{Observer, SpectrumToXyz};
-use sora::spectrum::WavelengthGrid;
-use sora::transport::multiple_scattering::{
-    MultipleScatteringField, MultipleScatteringSettings, MultipleScatteringTable,
-};
-use sora::transport::{Observation, SingleScatteringSky};
-use sora::{FastTableSize, ImageSettings, Method, Scattering, Sky};
-
-fn sky(sun_elevation_deg: f64) -> SingleScatteringSky {
-    let atmosphere = Atmosphere::preset("clear-sky-reference").expect("preset");
-    let observation = Observation {
-        observer_altitude_m: 0.0,
-        sun_elevation_deg,
-        sun_azimuth_deg: 180.0,
-    };
-    SingleScatteringSky::new(&atmosphere, &WavelengthGrid::paper(), observation).expect("sky")
-}
+use sora::{Atmosphere, Camera, ImageSettings, Scattering, Sky, ViewDirection, WavelengthGrid};
 
 fn multiple_scattering_benchmarks(c: &mut Criterion) {
-    let settings = MultipleScatteringSettings::default();
+    let atmosphere = Atmosphere::preset("clear-sky-reference").expect("preset");
     let to_xyz = SpectrumToXyz::new(&WavelengthGrid::paper(), Observer::Cie1931TwoDegree);
+    let view = ViewDirection::new(45.0, 0.0).expect("view");
     for sun_elevation in [30.0, 5.0] {
-        let sky = sky(sun_elevation);
+        // A new sky per iteration: its field and tables are built once per sky.
+        let sky = |scattering: Scattering| {
+            Sky::builder(&atmosphere)
+                .sun_deg(sun_elevation, 180.0)
+                .wavelengths(WavelengthGrid::paper())
+                .scattering(scattering)
+                .build()
+                .expect("sky")
+        };
         let mut group = c.benchmark_group(format!("multiple_scattering_sun_{sun_elevation}"));
         group.sample_size(10);
-        group.bench_function("field", |b| {
-            b.iter(|| MultipleScatteringField::compute(&sky, settings).expect("field"))
+        group.bench_function("field_and_one_view", |b| {
+            b.iter(|| sky(Scattering::multiple()).radiance(view).expect("view"))
         });
-        let field = MultipleScatteringField::compute(&sky, settings).expect("field");
-        group.bench_function("source_table", |b| {
-            b.iter(|| MultipleScatteringTable::compute(field.clone()))
+        group.bench_function("image_tables", |b| {
+            b.iter(|| {
+                sky(Scattering::multiple())
+                    .prepare_images()
+                    .expect("tables")
+            })
         });
         let image = ImageSettings::new(Camera::Fisheye, 512, 512);
         for (name, scattering) in [
             ("fisheye_512_single", Scattering::Single),
-            ("fisheye_512_multiple", Scattering::Multiple(settings)),
+            ("fisheye_512_multiple", Scattering::multiple()),
         ] {
-            // Every image builds its field and tables: a new sky per iteration.
             group.bench_function(name, |b| {
                 b.iter(|| {
-                    Sky::from_scene(
-                        sky.clone(),
-                        scattering,
-                        Method::Fast,
-                        FastTableSize::default(),
-                    )
-                    .expect("sky")
-                    .render_xyz(&image, &to_xyz, &|_| {})
-                    .expect("render")
+                    sky(scattering)
+                        .render_xyz(&image, &to_xyz, &|_| {})
+                        .expect("render")
                 })
             });
         }

@@ -9,10 +9,9 @@
 //! path count found by a pilot run (printed before the measurements).
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use sora::atmosphere::{Atmosphere, Planet};
-use sora::geometry::direction_from_elevation_azimuth;
-use sora::spectrum::{Spectrum, WavelengthGrid};
-use sora::transport::{Observation, PathTracer, SingleScatteringSky};
+use sora::atmosphere::Planet;
+use sora::spectrum::Spectrum;
+use sora::{Atmosphere, Method, Sky, ViewDirection, WavelengthGrid};
 
 const BATCH: u64 = 10_000;
 
@@ -24,23 +23,21 @@ fn path_tracing_benchmarks(c: &mut Criterion) {
         Spectrum::Constant(0.3),
     )
     .expect("planet");
-    let observation = Observation {
-        observer_altitude_m: 0.0,
-        sun_elevation_deg: 36.0,
-        sun_azimuth_deg: 207.0,
+    let tracer = |samples: u64| {
+        Sky::builder(&atmosphere)
+            .sun_deg(36.0, 207.0)
+            .wavelengths(WavelengthGrid::paper())
+            .method(Method::PathTracing { samples, seed: 1 })
+            .build()
+            .expect("sky")
     };
-    let sky =
-        SingleScatteringSky::new(&atmosphere, &WavelengthGrid::paper(), observation).expect("sky");
-    let tracer = PathTracer::new(&sky);
-    let view = direction_from_elevation_azimuth(17.0, 347.0);
+    let view = ViewDirection::new(17.0, 347.0).expect("view");
 
     // Pilot: the per-path relative standard deviation at the worst
     // wavelength gives the paths needed for a 1% standard error.
     let pilot_paths = 40_000;
-    let pilot = tracer
-        .compute_radiance(view, pilot_paths, 12345)
-        .expect("pilot");
-    let per_path = pilot.total.worst_relative_standard_error() * (pilot_paths as f64).sqrt();
+    let pilot = tracer(pilot_paths).radiance(view).expect("pilot");
+    let per_path = pilot.worst_relative_standard_error() * (pilot_paths as f64).sqrt();
     let paths_to_one_percent = ((per_path / 0.01).powi(2).ceil() as u64).max(2);
     eprintln!(
         "path tracing, case (a), albedo 0.3: per-path relative standard deviation {per_path:.3} at the worst wavelength; 1% standard error needs {paths_to_one_percent} paths"
@@ -49,16 +46,14 @@ fn path_tracing_benchmarks(c: &mut Criterion) {
     let mut group = c.benchmark_group("path_tracing");
     group.sample_size(10);
     group.throughput(Throughput::Elements(BATCH));
+    let batch = tracer(BATCH);
     group.bench_function("case_a_10000_paths", |b| {
-        b.iter(|| tracer.compute_radiance(view, BATCH, 1).expect("radiance"))
+        b.iter(|| batch.radiance(view).expect("radiance"))
     });
     group.throughput(Throughput::Elements(paths_to_one_percent));
+    let to_one_percent = tracer(paths_to_one_percent);
     group.bench_function("case_a_to_one_percent", |b| {
-        b.iter(|| {
-            tracer
-                .compute_radiance(view, paths_to_one_percent, 1)
-                .expect("radiance")
-        })
+        b.iter(|| to_one_percent.radiance(view).expect("radiance"))
     });
     group.finish();
 }

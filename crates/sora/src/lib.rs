@@ -42,10 +42,10 @@
 //!    direction each pixel sees;
 //! 5. [`sky`]: the [`Sky`], where single scattering (the paper's eq. 4-5)
 //!    and multiple scattering are composed, for views and images;
-//! 6. [`transport`]: the engine underneath it, for those who test or
-//!    extend it (single scattering, its reference march and tables; the
-//!    multiple-scattering field; the Monte Carlo path tracer). Its
-//!    interfaces are not stable: use [`Sky`];
+//! 6. the engine underneath it, private to the crate (`transport/`):
+//!    single scattering, its reference march and its tables; the
+//!    multiple-scattering field; the Monte Carlo path tracer. [`Sky`] is
+//!    its interface; its reference tests live beside it;
 //! 7. [`colour`]: spectral radiance -> CIE XYZ -> RGB (paper §4, eq. 6),
 //!    exposure and gamut mapping;
 //! 8. [`output`]: images on disk (PNG, OpenEXR), written atomically; the only
@@ -66,7 +66,7 @@ mod parallel;
 pub mod sky;
 pub mod spectrum;
 pub mod sun_position;
-pub mod table;
+pub(crate) mod table;
 pub mod transport;
 
 pub use atmosphere::Atmosphere;
@@ -74,8 +74,8 @@ pub use camera::Camera;
 pub use error::{Error, Result};
 pub use geometry::ViewDirection;
 pub use sky::{
-    FastTableSize, ImageSettings, Irradiance, Method, Plane, Scattering, Sky, SkyBuilder,
-    SkyRadiance,
+    FastTableSize, ImageSettings, Irradiance, Method, MultipleScatteringSettings, Plane,
+    Scattering, Sky, SkyBuilder, SkyRadiance,
 };
 pub use spectrum::WavelengthGrid;
 pub use sun_position::{SunPosition, UtcTime};

@@ -31,13 +31,13 @@
 //!   to 0.004 deg (the hour angle moves 15 deg per hour).
 //! - **Delta T** (TT - UT1, 69 s in 2026) places the sun on its orbit, which
 //!   runs in Terrestrial Time. [`SunPosition::at`] estimates it from the
-//!   date ([`delta_t_estimate_s`]: Espenak & Meeus polynomials, refitted to
+//!   date (`delta_t_estimate_s`: Espenak & Meeus polynomials, refitted to
 //!   IERS observations through 2026 by the `solar-positioning` crate).
 //!   The sun moves only 0.04 arcsec (1.2e-5 deg) along its path per
 //!   second of TT, so a 10 s error costs about 1e-4 deg; the estimate is
 //!   within a second or two of the observed values from 1900 to today and
 //!   uncertain (minutes to hours) in the far past and future.
-//!   [`SunPosition::at_with_delta_t`] takes it from the caller: SPA's
+//!   `SunPosition::at_with_delta_t` takes it from the caller: SPA's
 //!   example uses 67 s.
 //! - **Refraction** ([`Refraction`]) lifts the sun by 0.5 deg at the
 //!   horizon, 0.017 deg at 45 deg; SPA's formula (Bennett's, scaled by
@@ -77,7 +77,7 @@ const TIME_FORM: &str =
     "write YYYY-MM-DDTHH:MM:SS with Z or a zone offset, e.g. 2026-06-21T05:30:00+09:00";
 
 /// An instant in UTC (proleptic Gregorian calendar, years -500..=3000),
-/// validated. Made by [`UtcTime::new`] or [`parse_time_utc`]; shown as
+/// validated. Made by `UtcTime::new` or [`parse_time_utc`]; shown as
 /// RFC 3339 in UTC (`2026-06-20T20:30:00Z`).
 #[derive(Debug, Clone, Copy, PartialEq, PartialOrd)]
 pub struct UtcTime {
@@ -90,7 +90,7 @@ pub struct UtcTime {
 impl UtcTime {
     /// The instant `year-month-day hour:minute:second` UTC. Errors name
     /// the field out of range (`month = 13 is out of range: allowed 1..=12`).
-    pub fn new(
+    pub(crate) fn new(
         year: i32,
         month: u32,
         day: u32,
@@ -134,18 +134,19 @@ impl UtcTime {
 
     /// The Julian day (UTC taken for UT1): days since noon UT,
     /// 1 January 4713 BC (Julian calendar).
-    pub fn julian_day(&self) -> f64 {
+    pub(crate) fn julian_day(&self) -> f64 {
         UNIX_EPOCH_JULIAN_DAY + self.day as f64 + self.second_of_day / SECONDS_PER_DAY as f64
     }
 
     /// Year, month (1-12) and day (1-31) of the UTC date.
-    pub fn date(&self) -> (i32, u32, u32) {
+    pub(crate) fn date(&self) -> (i32, u32, u32) {
         let (year, month, day) = civil_from_days(self.day);
         (year as i32, month, day)
     }
 
     /// Seconds since midnight UTC (0 <= s < 86400).
-    pub fn second_of_day(&self) -> f64 {
+    #[cfg(test)]
+    pub(crate) fn second_of_day(&self) -> f64 {
         self.second_of_day
     }
 
@@ -438,14 +439,14 @@ pub struct SunPosition {
 
 impl SunPosition {
     /// The sun at `time`, seen from `place`, with delta T estimated from
-    /// the date ([`delta_t_estimate_s`]).
+    /// the date (`delta_t_estimate_s`).
     pub fn at(time: UtcTime, place: Location, refraction: Refraction) -> Result<SunPosition> {
         SunPosition::at_with_delta_t(time, place, refraction, delta_t_estimate_s(time))
     }
 
     /// The sun at `time` with the caller's delta T (TT - UT1, seconds,
     /// finite and within +-1 day).
-    pub fn at_with_delta_t(
+    pub(crate) fn at_with_delta_t(
         time: UtcTime,
         place: Location,
         refraction: Refraction,
@@ -475,14 +476,15 @@ impl SunPosition {
     }
 
     /// The zenith angle, 90 deg - elevation.
-    pub fn zenith_deg(&self) -> f64 {
+    #[cfg(test)]
+    pub(crate) fn zenith_deg(&self) -> f64 {
         90.0 - self.elevation_deg
     }
 }
 
 /// An estimate of delta T (TT - UT1, seconds) at `time`: 64 s in 2000,
 /// 69 s in 2026 (see the module docs).
-pub fn delta_t_estimate_s(time: UtcTime) -> f64 {
+pub(crate) fn delta_t_estimate_s(time: UtcTime) -> f64 {
     // UtcTime's years are those the estimate covers.
     solar_positioning::delta_t::estimate(time.decimal_year()).unwrap_or(69.0)
 }

@@ -18,7 +18,7 @@ pub struct NumericTable {
 impl NumericTable {
     /// Parses `text`. `what` names the table in errors ("solar spectrum CSV");
     /// every error gives the 1-based line. Non-finite numbers are rejected.
-    pub fn parse(text: &str, what: &str) -> Result<NumericTable> {
+    pub(crate) fn parse(text: &str, what: &str) -> Result<NumericTable> {
         let mut lines = text
             .lines()
             .enumerate()
@@ -64,7 +64,7 @@ impl NumericTable {
     }
 
     /// Column `index` as a vector.
-    pub fn column(&self, index: usize) -> Vec<f64> {
+    pub(crate) fn column(&self, index: usize) -> Vec<f64> {
         self.rows.iter().map(|row| row[index]).collect()
     }
 }

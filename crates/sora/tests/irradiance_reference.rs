@@ -5,7 +5,7 @@
 //!
 //! No flux reference is shared in `../shared/reference/sky/`; the path
 //! tracer is the independent code here: it matches DISORT's radiances
-//! within its noise (`path_tracing_reference.rs`), and its irradiance
+//! within its noise (`src/transport/reference_tests/path_tracing_reference.rs`), and its irradiance
 //! estimator draws views cosine-weighted over the hemisphere, so it shares
 //! neither the quadrature nor the tables with the fast method.
 

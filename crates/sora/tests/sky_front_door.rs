@@ -181,7 +181,7 @@ fn bad_choices_are_errors_not_panics() {
         )
         .contains("all orders")
     );
-    let settings = sora::transport::multiple_scattering::MultipleScatteringSettings {
+    let settings = sora::MultipleScatteringSettings {
         layers: 1,
         ..Default::default()
     };

@@ -16,7 +16,7 @@
 //! - all orders of scattering for the same case, plane-parallel (a planet of
 //!   radius 6.36e9 m), against DISORT 32 streams (`L_multi_plane_parallel`;
 //!   8e-4 relative, the field's bound in
-//!   `sora/tests/multiple_scattering_reference.rs`);
+//!   `sora/src/transport/reference_tests/multiple_scattering_reference.rs`);
 //! - every preset atmosphere file parses, matches its preset, and has
 //!   finite non-negative optics.
 

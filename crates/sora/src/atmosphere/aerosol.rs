@@ -67,14 +67,14 @@ pub struct ParametricAerosol {
 impl ParametricAerosol {
     /// Extinction coefficient at the reference density, m^-1, for a profile
     /// of vertical column `column_m` (> 0).
-    pub fn extinction_per_m(&self, wavelength_nm: f64, column_m: f64) -> f64 {
+    pub(crate) fn extinction_per_m(&self, wavelength_nm: f64, column_m: f64) -> f64 {
         self.optical_depth / column_m
             * (wavelength_nm / self.reference_wavelength_nm).powf(-self.angstrom_exponent)
     }
 
     /// (extinction, scattering) coefficients at the reference density on
     /// `grid`, m^-1, and the phase function.
-    pub fn compute_optics(
+    pub(crate) fn compute_optics(
         &self,
         grid: &WavelengthGrid,
         column_m: f64,

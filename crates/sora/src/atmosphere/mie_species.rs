@@ -72,7 +72,7 @@ impl MieAerosol {
     /// the amount (the expensive step: one Mie ensemble per wavelength,
     /// with `sora-mie`'s validated quadrature settings). `name` prefixes
     /// errors (`species[1] (dust)`).
-    pub fn compute_optics(
+    pub(crate) fn compute_optics(
         &self,
         grid: &WavelengthGrid,
         column_m: f64,

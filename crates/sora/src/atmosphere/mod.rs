@@ -43,6 +43,8 @@ pub mod planet;
 pub mod presets;
 pub mod profile;
 pub mod rayleigh;
+#[cfg(test)]
+mod reference_tests;
 pub mod sun;
 
 pub use aerosol::{AerosolPhase, ParametricAerosol};
@@ -110,7 +112,7 @@ pub enum RayleighScatterer {
 
 impl SpeciesModel {
     /// The kind's name in listings.
-    pub fn kind(&self) -> &'static str {
+    pub(crate) fn kind(&self) -> &'static str {
         match self {
             SpeciesModel::Rayleigh(_) => "rayleigh",
             SpeciesModel::Mie(_) => "mie",

@@ -15,7 +15,7 @@
 //! top, vertical), the single-scattering albedo omega = beta_sca / beta_ext
 //! (0 for a pure absorber), and the asymmetry parameter g = `<cos theta>`
 //! of the phase function. Slant paths and transmittances are the
-//! renderer's business; [`AtmosphereOptics::add_extinction_at_altitude`]
+//! renderer's business; `AtmosphereOptics::add_extinction_at_altitude`
 //! and `AtmosphereOptics::add_scattering_at_altitude` are its per-sample
 //! building blocks (no allocation).
 
@@ -46,17 +46,17 @@ pub struct SpeciesOptics {
 
 impl SpeciesOptics {
     /// Vertical column extinction optical depth, ground to top.
-    pub fn optical_depth_extinction(&self) -> SampledSpectrum {
+    pub(crate) fn optical_depth_extinction(&self) -> SampledSpectrum {
         &self.extinction_per_m * self.vertical_column_m
     }
 
     /// Vertical column scattering optical depth, ground to top.
-    pub fn optical_depth_scattering(&self) -> SampledSpectrum {
+    pub(crate) fn optical_depth_scattering(&self) -> SampledSpectrum {
         &self.scattering_per_m * self.vertical_column_m
     }
 
     /// beta_sca / beta_ext per wavelength (0 where nothing is extinguished).
-    pub fn single_scattering_albedo(&self) -> SampledSpectrum {
+    pub(crate) fn single_scattering_albedo(&self) -> SampledSpectrum {
         SampledSpectrum::from_values(
             self.extinction_per_m
                 .values()
@@ -69,7 +69,7 @@ impl SpeciesOptics {
 
     /// Asymmetry parameter `<cos theta>` per wavelength (0 for species that do
     /// not scatter).
-    pub fn asymmetry_g(&self) -> SampledSpectrum {
+    pub(crate) fn asymmetry_g(&self) -> SampledSpectrum {
         SampledSpectrum::from_values(
             (0..self.extinction_per_m.len())
                 .map(|i| {
@@ -85,7 +85,8 @@ impl SpeciesOptics {
 
     /// Cross-section per particle (extinction, scattering), m^2, where the
     /// species has a number density.
-    pub fn cross_sections_m2(&self) -> Option<(SampledSpectrum, SampledSpectrum)> {
+    #[cfg(test)]
+    pub(crate) fn cross_sections_m2(&self) -> Option<(SampledSpectrum, SampledSpectrum)> {
         let n = self.reference_number_density_m3.filter(|n| *n > 0.0)?;
         Some((
             &self.extinction_per_m * (1.0 / n),
@@ -118,7 +119,7 @@ impl AtmosphereOptics {
 
     /// Adds the extinction coefficient of all species at `altitude_m` to
     /// `out`, m^-1 (a ray-march step; no allocation).
-    pub fn add_extinction_at_altitude(&self, altitude_m: f64, out: &mut SampledSpectrum) {
+    pub(crate) fn add_extinction_at_altitude(&self, altitude_m: f64, out: &mut SampledSpectrum) {
         for species in &self.species {
             let density = species.profile.relative_density(altitude_m);
             if density > 0.0 {

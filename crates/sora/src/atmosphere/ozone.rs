@@ -49,7 +49,7 @@ pub struct BinnedCrossSection {
 impl BinnedCrossSection {
     /// Parses a two-column CSV `wavelength_nm,<cross-section m^2>` whose rows
     /// are the starts of equal-width bins; `what` names it in errors.
-    pub fn parse_csv(text: &str, what: &str) -> Result<BinnedCrossSection> {
+    pub(crate) fn parse_csv(text: &str, what: &str) -> Result<BinnedCrossSection> {
         let table = NumericTable::parse(text, what)?;
         if table.column_names.len() != 2 || table.rows.len() < 2 {
             return Err(Error::parse(
@@ -96,7 +96,7 @@ impl BinnedCrossSection {
     }
 
     /// The covered range [first bin start, last bin end), nm.
-    pub fn range_nm(&self) -> (f64, f64) {
+    pub(crate) fn range_nm(&self) -> (f64, f64) {
         (
             self.bin_starts_nm[0],
             self.bin_starts_nm.last().unwrap() + self.bin_width_nm,
@@ -130,7 +130,7 @@ impl BinnedCrossSection {
     }
 
     /// Band averages on `grid` (see the module docs), m^2.
-    pub fn sample(&self, grid: &WavelengthGrid) -> Result<SampledSpectrum> {
+    pub(crate) fn sample(&self, grid: &WavelengthGrid) -> Result<SampledSpectrum> {
         let (first, end) = self.range_nm();
         let half = if grid.len() == 1 {
             0.0
@@ -162,7 +162,7 @@ pub enum AbsorptionCrossSection {
 
 impl AbsorptionCrossSection {
     /// Cross-section per molecule on `grid`, m^2.
-    pub fn sample(&self, grid: &WavelengthGrid) -> Result<SampledSpectrum> {
+    pub(crate) fn sample(&self, grid: &WavelengthGrid) -> Result<SampledSpectrum> {
         match self {
             AbsorptionCrossSection::Binned(binned) => binned.sample(grid),
             AbsorptionCrossSection::Tabulated(table) => {
@@ -191,7 +191,7 @@ pub struct AbsorbingGas {
 impl AbsorbingGas {
     /// Number density at relative density 1, m^-3, for a profile of
     /// vertical column `column_m` (> 0 when the amount is a column).
-    pub fn reference_number_density_m3(&self, column_m: f64) -> f64 {
+    pub(crate) fn reference_number_density_m3(&self, column_m: f64) -> f64 {
         match self.amount {
             GasAmount::ColumnDobsonUnits(du) => du * MOLECULES_PER_M2_PER_DOBSON_UNIT / column_m,
             GasAmount::NumberDensityM3(n) => n,
@@ -200,7 +200,7 @@ impl AbsorbingGas {
 
     /// (extinction, scattering = 0) coefficients at the reference density on
     /// `grid`, m^-1, and a placeholder phase function.
-    pub fn compute_optics(
+    pub(crate) fn compute_optics(
         &self,
         grid: &WavelengthGrid,
         column_m: f64,

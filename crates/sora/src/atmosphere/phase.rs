@@ -35,7 +35,7 @@
 //! evaluates all wavelengths at one angle, the renderer's hot path.
 //!
 //! Sampling (for a path tracer, as pbrt's `PhaseFunction::Sample_p`): from
-//! two uniform numbers u in [0, 1)^2, [`PhaseFunction::sample`] returns a
+//! two uniform numbers u in [0, 1)^2, `PhaseFunction::sample` returns a
 //! direction as (cos theta, phi) about the incoming direction, with the
 //! value p and the pdf of having chosen it (per steradian). Rayleigh,
 //! Henyey-Greenstein and tabulated functions are sampled exactly (pdf = p);
@@ -105,7 +105,8 @@ impl TabulatedPhase {
     /// zero); each row is rescaled to integrate to 1. Returns `None` for an
     /// invalid table (the callers build tables from computed values, so this
     /// is a bug check, not a user error).
-    pub fn new(cos_theta_nodes: Vec<f64>, values: Vec<Vec<f64>>) -> Option<TabulatedPhase> {
+    #[cfg(test)]
+    pub(crate) fn new(cos_theta_nodes: Vec<f64>, values: Vec<Vec<f64>>) -> Option<TabulatedPhase> {
         let rows = values
             .into_iter()
             .map(|row| TabulatedPhaseFunction::from_nodes(cos_theta_nodes.clone(), row).ok())
@@ -205,7 +206,7 @@ impl PhaseFunction {
     }
 
     /// Samples a scattering direction from two uniform numbers in [0, 1).
-    pub fn sample(&self, wavelength_index: usize, u: [f64; 2]) -> PhaseSample {
+    pub(crate) fn sample(&self, wavelength_index: usize, u: [f64; 2]) -> PhaseSample {
         let cos_theta = match self {
             PhaseFunction::Isotropic => 1.0 - 2.0 * u[0],
             PhaseFunction::Rayleigh {

@@ -98,12 +98,6 @@ impl Planet {
         })
     }
 
-    /// Altitude above the ground of a point at distance `r_m` from the
-    /// centre, m.
-    pub fn altitude_m(&self, r_m: f64) -> f64 {
-        r_m - self.radius_m
-    }
-
     /// Distance from a point at radius `r_m` (inside the atmosphere) along
     /// a direction of zenith cosine `mu` to the top of the atmosphere, m.
     #[cfg(test)]

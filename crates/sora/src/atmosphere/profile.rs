@@ -66,7 +66,7 @@ impl ProfileTable {
     /// strictly increasing, densities finite and >= 0 (> 0 when
     /// `positive_densities`, as logarithmic interpolation needs). `name`
     /// is the key in error messages (`species[0].profile.table`).
-    pub fn new(
+    pub(crate) fn new(
         altitudes_m: Vec<f64>,
         relative_densities: Vec<f64>,
         positive_densities: bool,
@@ -153,7 +153,7 @@ impl ProfileTable {
 impl DensityProfile {
     /// An exponential profile; `scale_height_m` must be finite and > 0.
     /// `name` is the key in errors.
-    pub fn exponential(scale_height_m: f64, name: &str) -> Result<DensityProfile> {
+    pub(crate) fn exponential(scale_height_m: f64, name: &str) -> Result<DensityProfile> {
         if !(scale_height_m.is_finite() && scale_height_m > 0.0 && scale_height_m <= 1e9) {
             return Err(Error::out_of_range(
                 name,
@@ -169,7 +169,11 @@ impl DensityProfile {
     /// 0 at `peak_altitude_m -/+ half_width_m`, zero beyond (the usual
     /// shape of an ozone layer, e.g. peak 25 km, half-width 15 km, as in
     /// Bruneton 2017).
-    pub fn tent(peak_altitude_m: f64, half_width_m: f64, name: &str) -> Result<DensityProfile> {
+    pub(crate) fn tent(
+        peak_altitude_m: f64,
+        half_width_m: f64,
+        name: &str,
+    ) -> Result<DensityProfile> {
         if !(peak_altitude_m.is_finite() && peak_altitude_m.abs() <= 1e9) {
             return Err(Error::out_of_range(
                 format!("{name}.peak_altitude_m"),
@@ -200,7 +204,7 @@ impl DensityProfile {
     }
 
     /// Relative density at `altitude_m` (m above the ground).
-    pub fn relative_density(&self, altitude_m: f64) -> f64 {
+    pub(crate) fn relative_density(&self, altitude_m: f64) -> f64 {
         match self {
             DensityProfile::Exponential { scale_height_m } => (-altitude_m / scale_height_m).exp(),
             DensityProfile::PiecewiseLinear(table) => {
@@ -264,7 +268,7 @@ impl DensityProfile {
 
     /// The vertical column from the ground to `top_altitude_m`, m
     /// (the equivalent thickness of the species in the atmosphere).
-    pub fn vertical_column_m(&self, top_altitude_m: f64) -> f64 {
+    pub(crate) fn vertical_column_m(&self, top_altitude_m: f64) -> f64 {
         self.column_between_m(0.0, top_altitude_m)
     }
 

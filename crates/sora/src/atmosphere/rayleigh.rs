@@ -27,10 +27,10 @@
 //!   the mixture, for the depolarisation of its phase function, is the
 //!   scattering-weighted mean. Checked against the Nicolet (1984) fit to
 //!   Bates' table (`earth_rayleigh_21wl.csv`, ±0.5 % by its author): within
-//!   1 % at the 21 paper wavelengths (see `tests/atmosphere_reference.rs`).
+//!   1 % at the 21 paper wavelengths (see `atmosphere/reference_tests.rs`).
 //!   The N2 refractivity has a 0.016 % step at 468 nm where Bates switches
 //!   formulas, kept as published.
-//! - CO2 ([`co2_cross_section_m2`]): refractivity of Bideau-Mehu et al.
+//! - CO2 (`co2_cross_section_m2`): refractivity of Bideau-Mehu et al.
 //!   (1973) in the form of Sneep & Ubachs (2005, eq. 13), at 288.15 K and
 //!   1013.25 hPa (N = 2.546899e25 m^-3), and F_K = 1.1364 + 25.3e-12 nu^2
 //!   (nu in cm^-1), as in the header of `mars_co2_rayleigh_21wl.csv`.
@@ -63,16 +63,8 @@ pub enum RayleighGas {
 }
 
 impl RayleighGas {
-    /// The gas' name in atmosphere files (`"air"`, `"co2"`).
-    pub fn name(self) -> &'static str {
-        match self {
-            RayleighGas::Air => "air",
-            RayleighGas::Co2 => "co2",
-        }
-    }
-
     /// Cross-section per molecule, m^2.
-    pub fn cross_section_m2(self, wavelength_nm: f64) -> f64 {
+    pub(crate) fn cross_section_m2(self, wavelength_nm: f64) -> f64 {
         match self {
             RayleighGas::Air => air_cross_section_m2(wavelength_nm),
             RayleighGas::Co2 => co2_cross_section_m2(wavelength_nm),
@@ -220,7 +212,7 @@ pub(crate) fn air_king_factor(wavelength_nm: f64) -> f64 {
 
 /// Refractivity n - 1 of CO2 at 288.15 K and 1013.25 hPa (Bideau-Mehu et
 /// al. 1973 in the form of Sneep & Ubachs 2005 eq. 13), nu in cm^-1.
-pub fn co2_refractivity(wavelength_nm: f64) -> f64 {
+pub(crate) fn co2_refractivity(wavelength_nm: f64) -> f64 {
     let nu = 1e7 / wavelength_nm;
     let nu2 = nu * nu;
     1.1427e3
@@ -233,13 +225,13 @@ pub fn co2_refractivity(wavelength_nm: f64) -> f64 {
 
 /// King factor of CO2, F_K = 1.1364 + 25.3e-12 nu^2 (nu in cm^-1;
 /// Sneep & Ubachs 2005).
-pub fn co2_king_factor(wavelength_nm: f64) -> f64 {
+pub(crate) fn co2_king_factor(wavelength_nm: f64) -> f64 {
     let nu = 1e7 / wavelength_nm;
     1.1364 + 25.3e-12 * nu * nu
 }
 
 /// Rayleigh cross-section of one CO2 molecule, m^2.
-pub fn co2_cross_section_m2(wavelength_nm: f64) -> f64 {
+pub(crate) fn co2_cross_section_m2(wavelength_nm: f64) -> f64 {
     lorentz_lorenz_cross_section_m2(
         wavelength_nm * 1e-9,
         co2_refractivity(wavelength_nm),

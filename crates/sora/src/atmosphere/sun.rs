@@ -8,8 +8,6 @@
 //! Mars); 0 makes a point sun, as in the reference radiative-transfer
 //! cases.
 
-use std::f64::consts::PI;
-
 use crate::error::{Error, Result};
 use crate::spectrum::{SampledSpectrum, SolarSpectrum, WavelengthGrid};
 
@@ -79,9 +77,10 @@ impl Sun {
     }
 
     /// Solid angle of the disc, sr: 2 pi (1 - cos(angular radius)).
-    pub fn solid_angle_sr(&self) -> f64 {
+    #[cfg(test)]
+    pub(crate) fn solid_angle_sr(&self) -> f64 {
         // 1 - cos x = 2 sin^2(x/2), without cancellation for tiny discs.
-        4.0 * PI * (0.5 * self.angular_radius_rad()).sin().powi(2)
+        4.0 * std::f64::consts::PI * (0.5 * self.angular_radius_rad()).sin().powi(2)
     }
 
     /// Top-of-atmosphere irradiance on a plane normal to the sun's rays at

@@ -3,7 +3,7 @@
 //! Pixels are addressed (column, row) from the top-left corner, and a pixel
 //! sees the direction through its centre, (column + 0.5, row + 0.5).
 //! Directions are unit vectors in the observer's east-north-up frame (see
-//! [`crate::geometry::direction`]).
+//! `crate::geometry::direction`).
 //!
 //! - [`Camera::Fisheye`]: the whole sky in a disc, equidistant (angular)
 //!   projection: the distance from the image centre is proportional to the

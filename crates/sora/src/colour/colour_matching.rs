@@ -25,7 +25,9 @@ use std::fmt;
 use std::str::FromStr;
 
 use crate::error::{Error, Result};
-use crate::spectrum::{MAX_WAVELENGTH_NM, MIN_WAVELENGTH_NM};
+#[cfg(test)]
+use crate::spectrum::MAX_WAVELENGTH_NM;
+use crate::spectrum::MIN_WAVELENGTH_NM;
 use crate::table::NumericTable;
 
 const CIE1931_TWO_DEGREE_CSV: &str = include_str!("../data/cie1931_2deg_cmf_1nm.csv");
@@ -52,7 +54,7 @@ impl Observer {
     pub const NAMES: [&'static str; 2] = ["cie1931-2deg", "cie1964-10deg"];
 
     /// The observer's name as the command line and atmosphere files spell it.
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             Observer::Cie1931TwoDegree => Observer::NAMES[0],
             Observer::Cie1964TenDegree => Observer::NAMES[1],
@@ -109,20 +111,21 @@ pub struct ColourMatchingFunctions {
 
 impl ColourMatchingFunctions {
     /// The functions of `observer`, parsed from the embedded table.
-    pub fn new(observer: Observer) -> ColourMatchingFunctions {
+    pub(crate) fn new(observer: Observer) -> ColourMatchingFunctions {
         let rows = parse_one_nanometre_table(observer.table_text(), observer.name())
             .expect("the embedded colour-matching tables are valid (tested below)");
         ColourMatchingFunctions { observer, rows }
     }
 
     /// The observer these functions belong to.
-    pub fn observer(&self) -> Observer {
+    pub(crate) fn observer(&self) -> Observer {
         self.observer
     }
 
     /// `[x̄, ȳ, z̄]` at `wavelength_nm` (dimensionless), interpolated linearly
     /// between the 1 nm rows. Fails outside 360-830 nm (or for NaN).
-    pub fn value_at_nm(&self, wavelength_nm: f64) -> Result<[f64; 3]> {
+    #[cfg(test)]
+    pub(crate) fn value_at_nm(&self, wavelength_nm: f64) -> Result<[f64; 3]> {
         if !(MIN_WAVELENGTH_NM..=MAX_WAVELENGTH_NM).contains(&wavelength_nm) {
             return Err(Error::out_of_range(
                 "wavelength_nm",

@@ -55,7 +55,7 @@ impl DisplayEncoding {
     }
 
     /// The encoding's name, without parameters.
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             DisplayEncoding::Srgb => DisplayEncoding::NAMES[0],
             DisplayEncoding::PaperSmpteC(_) => DisplayEncoding::NAMES[1],
@@ -86,7 +86,7 @@ impl DisplayEncoding {
 
     /// 8-bit display values of `rgb` (linear, normally already in [0, 1]^3
     /// after gamut mapping): round(255 × V) per component.
-    pub fn encode_u8(self, rgb: LinearRgb) -> [u8; 3] {
+    pub(crate) fn encode_u8(self, rgb: LinearRgb) -> [u8; 3] {
         // The clamp keeps the product in 0..=255, so the cast is exact.
         rgb.to_array()
             .map(|linear| (self.encoded_unit(linear) * 255.0).round() as u8)
@@ -189,7 +189,7 @@ impl DisplayMapping {
     ///
     /// Fails if the exposure is invalid, or if a pixel is not finite before
     /// or after exposure (the error names the pixel's index).
-    pub fn display_linear_rgb(&self, image: &[Xyz]) -> Result<Vec<LinearRgb>> {
+    pub(crate) fn display_linear_rgb(&self, image: &[Xyz]) -> Result<Vec<LinearRgb>> {
         let scale = self.exposure.scale_for_image(image)?;
         let colour_space = self.encoding.colour_space();
         image

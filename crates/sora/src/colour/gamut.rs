@@ -92,7 +92,7 @@ impl GamutMapping {
     /// `rgb` (linear, in `colour_space`, finite) brought into [0, 1]^3.
     /// The luminance of the grey that [`GamutMapping::PreserveHue`]
     /// desaturates toward is that of `colour_space`.
-    pub fn apply(self, rgb: LinearRgb, colour_space: RgbColourSpace) -> LinearRgb {
+    pub(crate) fn apply(self, rgb: LinearRgb, colour_space: RgbColourSpace) -> LinearRgb {
         match self {
             GamutMapping::Clip => LinearRgb::new(
                 rgb.r.clamp(0.0, 1.0),

@@ -38,7 +38,7 @@
 //! parses with [`std::str::FromStr`], and an unknown name gets an error listing
 //! the valid ones.
 //!
-//! # Validation against references (`tests/colour_reference.rs`)
+//! # Validation against references (`colour/reference_tests.rs`)
 //! - CIE D65 on 380-780 nm every 5 nm (CIE 015's abridged range and step)
 //!   gives the CIE white point (95.04, 100, 108.88) with the 2-degree observer
 //!   and (94.81, 100, 107.32) with the 10-degree one, and sRGB (1, 1, 1).
@@ -54,6 +54,8 @@ mod colour_matching;
 mod display;
 mod exposure;
 mod gamut;
+#[cfg(test)]
+mod reference_tests;
 mod rgb;
 mod xyz;
 

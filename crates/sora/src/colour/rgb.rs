@@ -148,22 +148,22 @@ impl LinearRgb {
     };
 
     /// The components (R, G, B).
-    pub const fn new(r: f64, g: f64, b: f64) -> LinearRgb {
+    pub(crate) const fn new(r: f64, g: f64, b: f64) -> LinearRgb {
         LinearRgb { r, g, b }
     }
 
     /// `[R, G, B]`.
-    pub const fn to_array(self) -> [f64; 3] {
+    pub(crate) const fn to_array(self) -> [f64; 3] {
         [self.r, self.g, self.b]
     }
 
     /// From `[R, G, B]`.
-    pub const fn from_array([r, g, b]: [f64; 3]) -> LinearRgb {
+    pub(crate) const fn from_array([r, g, b]: [f64; 3]) -> LinearRgb {
         LinearRgb { r, g, b }
     }
 
     /// Every component multiplied by `factor`.
-    pub fn scaled(self, factor: f64) -> LinearRgb {
+    pub(crate) fn scaled(self, factor: f64) -> LinearRgb {
         LinearRgb::new(self.r * factor, self.g * factor, self.b * factor)
     }
 
@@ -173,12 +173,12 @@ impl LinearRgb {
     }
 
     /// The smallest component.
-    pub fn min_component(self) -> f64 {
+    pub(crate) fn min_component(self) -> f64 {
         self.r.min(self.g).min(self.b)
     }
 
     /// True when R, G and B are all finite.
-    pub fn is_finite(self) -> bool {
+    pub(crate) fn is_finite(self) -> bool {
         self.r.is_finite() && self.g.is_finite() && self.b.is_finite()
     }
 }
@@ -211,16 +211,12 @@ impl RgbColourSpace {
 
     /// The CIE 1931 chromaticities (x, y) of the red, green and blue
     /// primaries (for file metadata such as OpenEXR's `chromaticities`).
-    pub fn primaries_xy(self) -> [[f64; 2]; 3] {
+    #[cfg(test)]
+    pub(crate) fn primaries_xy(self) -> [[f64; 2]; 3] {
         match self {
             RgbColourSpace::Srgb => [[0.64, 0.33], [0.30, 0.60], [0.15, 0.06]],
             RgbColourSpace::PaperSmpteC => [[0.630, 0.340], [0.310, 0.595], [0.155, 0.070]],
         }
-    }
-
-    /// The CIE 1931 chromaticity (x, y) of the white point: D65 for both.
-    pub fn white_point_xy(self) -> [f64; 2] {
-        [0.3127, 0.3290]
     }
 
     /// The XYZ -> linear RGB matrix.
@@ -246,7 +242,8 @@ impl RgbColourSpace {
     }
 
     /// XYZ of linear RGB `rgb`.
-    pub fn xyz_from_linear_rgb(self, rgb: LinearRgb) -> Xyz {
+    #[cfg(test)]
+    pub(crate) fn xyz_from_linear_rgb(self, rgb: LinearRgb) -> Xyz {
         Xyz::from_array(multiply(self.xyz_from_linear_rgb_matrix(), rgb.to_array()))
     }
 
@@ -257,7 +254,7 @@ impl RgbColourSpace {
     }
 
     /// The luminance Y of linear RGB `rgb`, in the unit of the XYZ it came from.
-    pub fn luminance(self, rgb: LinearRgb) -> f64 {
+    pub(crate) fn luminance(self, rgb: LinearRgb) -> f64 {
         let [cr, cg, cb] = self.luminance_coefficients();
         cr * rgb.r + cg * rgb.g + cb * rgb.b
     }
@@ -304,7 +301,7 @@ impl ScaledPower {
     pub const PAPER_DEFAULT: ScaledPower = ScaledPower { k: 1.0, gamma: 2.2 };
 
     /// The curve V = k L^(1/γ). Fails unless k and γ are finite and > 0.
-    pub fn new(k: f64, gamma: f64) -> Result<ScaledPower> {
+    pub(crate) fn new(k: f64, gamma: f64) -> Result<ScaledPower> {
         if !(k.is_finite() && k > 0.0) {
             return Err(Error::out_of_range("k", k, "1", "> 0 and finite"));
         }
@@ -315,12 +312,12 @@ impl ScaledPower {
     }
 
     /// The scale k (dimensionless).
-    pub fn k(self) -> f64 {
+    pub(crate) fn k(self) -> f64 {
         self.k
     }
 
     /// The exponent γ (dimensionless); the curve raises to 1/γ.
-    pub fn gamma(self) -> f64 {
+    pub(crate) fn gamma(self) -> f64 {
         self.gamma
     }
 }
@@ -339,7 +336,7 @@ impl TransferCurve {
     /// The encoded value V of linear component `linear` (both dimensionless,
     /// 1 = white); negative input gives 0. Not clamped above: values over 1
     /// encode over 1.
-    pub fn encode(self, linear: f64) -> f64 {
+    pub(crate) fn encode(self, linear: f64) -> f64 {
         let linear = linear.max(0.0);
         match self {
             TransferCurve::Srgb => {
@@ -355,7 +352,8 @@ impl TransferCurve {
 
     /// The linear component of encoded value `encoded`, the inverse of
     /// [`TransferCurve::encode`] (negative input gives 0).
-    pub fn decode(self, encoded: f64) -> f64 {
+    #[cfg(test)]
+    pub(crate) fn decode(self, encoded: f64) -> f64 {
         let encoded = encoded.max(0.0);
         match self {
             TransferCurve::Srgb => {

@@ -52,17 +52,17 @@ impl Xyz {
     };
 
     /// The tristimulus values (X, Y, Z).
-    pub const fn new(x: f64, y: f64, z: f64) -> Xyz {
+    pub(crate) const fn new(x: f64, y: f64, z: f64) -> Xyz {
         Xyz { x, y, z }
     }
 
     /// `[X, Y, Z]`.
-    pub const fn to_array(self) -> [f64; 3] {
+    pub(crate) const fn to_array(self) -> [f64; 3] {
         [self.x, self.y, self.z]
     }
 
     /// From `[X, Y, Z]`.
-    pub const fn from_array([x, y, z]: [f64; 3]) -> Xyz {
+    pub(crate) const fn from_array([x, y, z]: [f64; 3]) -> Xyz {
         Xyz { x, y, z }
     }
 
@@ -132,19 +132,8 @@ impl SpectrumToXyz {
     }
 
     /// The grid the spectra must be sampled on.
-    pub fn grid(&self) -> &WavelengthGrid {
+    pub(crate) fn grid(&self) -> &WavelengthGrid {
         &self.grid
-    }
-
-    /// The observer whose colour-matching functions are used.
-    pub fn observer(&self) -> Observer {
-        self.observer
-    }
-
-    /// The precomputed `[w_i x̄(λ_i), w_i ȳ(λ_i), w_i z̄(λ_i)]`, nm, one per
-    /// grid sample: the XYZ of a spectrum that is 1 at sample `i` and 0 elsewhere.
-    pub fn weighted_colour_matching_functions(&self) -> &[[f64; 3]] {
-        &self.weighted_cmfs
     }
 
     /// XYZ of `spectrum` (unit: the spectrum's times nm; see the module docs).

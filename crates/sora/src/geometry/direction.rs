@@ -18,7 +18,7 @@ pub struct Vector3 {
 }
 
 impl Vector3 {
-    pub const fn new(x: f64, y: f64, z: f64) -> Vector3 {
+    pub(crate) const fn new(x: f64, y: f64, z: f64) -> Vector3 {
         Vector3 { x, y, z }
     }
 
@@ -26,7 +26,7 @@ impl Vector3 {
         self.x * other.x + self.y * other.y + self.z * other.z
     }
 
-    pub fn cross(self, other: Vector3) -> Vector3 {
+    pub(crate) fn cross(self, other: Vector3) -> Vector3 {
         Vector3::new(
             self.y * other.z - self.z * other.y,
             self.z * other.x - self.x * other.z,
@@ -34,7 +34,7 @@ impl Vector3 {
         )
     }
 
-    pub fn length(self) -> f64 {
+    pub(crate) fn length(self) -> f64 {
         self.dot(self).sqrt()
     }
 
@@ -136,7 +136,7 @@ pub(crate) fn check_elevation_azimuth(
 
 /// Unit direction toward `elevation_deg` above the horizon at
 /// `azimuth_deg` clockwise from north, in the east-north-up frame.
-pub fn direction_from_elevation_azimuth(elevation_deg: f64, azimuth_deg: f64) -> Vector3 {
+pub(crate) fn direction_from_elevation_azimuth(elevation_deg: f64, azimuth_deg: f64) -> Vector3 {
     let (sin_el, cos_el) = elevation_deg.to_radians().sin_cos();
     let (sin_az, cos_az) = azimuth_deg.to_radians().sin_cos();
     Vector3::new(cos_el * sin_az, cos_el * cos_az, sin_el)
@@ -144,7 +144,7 @@ pub fn direction_from_elevation_azimuth(elevation_deg: f64, azimuth_deg: f64) ->
 
 /// Elevation above the horizon and azimuth clockwise from north (0..360),
 /// both in degrees, of a unit direction in the east-north-up frame.
-pub fn elevation_azimuth_from_direction(direction: Vector3) -> (f64, f64) {
+pub(crate) fn elevation_azimuth_from_direction(direction: Vector3) -> (f64, f64) {
     let elevation_deg = direction.z.clamp(-1.0, 1.0).asin().to_degrees();
     let azimuth_deg = direction
         .x

@@ -19,7 +19,7 @@ impl OutputFormat {
     pub const ALL: [OutputFormat; 2] = [OutputFormat::Png, OutputFormat::Exr];
 
     /// The format's file extension, lower case, without the dot.
-    pub fn extension(self) -> &'static str {
+    pub(crate) fn extension(self) -> &'static str {
         match self {
             OutputFormat::Png => "png",
             OutputFormat::Exr => "exr",

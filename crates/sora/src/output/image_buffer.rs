@@ -114,17 +114,17 @@ impl LinearImage {
     }
 
     /// Width in pixels (at least 1).
-    pub fn width(&self) -> usize {
+    pub(crate) fn width(&self) -> usize {
         self.width
     }
 
     /// Height in pixels (at least 1).
-    pub fn height(&self) -> usize {
+    pub(crate) fn height(&self) -> usize {
         self.height
     }
 
     /// What the three channels mean.
-    pub fn channel_kind(&self) -> ChannelKind {
+    pub(crate) fn channel_kind(&self) -> ChannelKind {
         self.channel_kind
     }
 
@@ -134,12 +134,14 @@ impl LinearImage {
     }
 
     /// The pixel at column `x`, row `y` (0 = top), or `None` outside the image.
-    pub fn pixel(&self, x: usize, y: usize) -> Option<[f32; 3]> {
+    #[cfg(test)]
+    pub(crate) fn pixel(&self, x: usize, y: usize) -> Option<[f32; 3]> {
         (x < self.width && y < self.height).then(|| self.pixels[y * self.width + x])
     }
 
     /// Gives the pixel buffer back (row-major, top row first).
-    pub fn into_pixels(self) -> Vec<[f32; 3]> {
+    #[cfg(test)]
+    pub(crate) fn into_pixels(self) -> Vec<[f32; 3]> {
         self.pixels
     }
 }
@@ -189,33 +191,29 @@ impl<T: Copy> DisplayImage<T> {
     }
 
     /// Width in pixels (at least 1).
-    pub fn width(&self) -> usize {
+    pub(crate) fn width(&self) -> usize {
         self.width
     }
 
     /// Height in pixels (at least 1).
-    pub fn height(&self) -> usize {
+    pub(crate) fn height(&self) -> usize {
         self.height
     }
 
     /// All samples, interleaved `R, G, B`, row-major, top row first.
-    pub fn data(&self) -> &[T] {
+    pub(crate) fn data(&self) -> &[T] {
         &self.data
     }
 
     /// The `[R, G, B]` samples at column `x`, row `y` (0 = top), or `None`
     /// outside the image.
-    pub fn pixel(&self, x: usize, y: usize) -> Option<[T; 3]> {
+    #[cfg(test)]
+    pub(crate) fn pixel(&self, x: usize, y: usize) -> Option<[T; 3]> {
         if x >= self.width || y >= self.height {
             return None;
         }
         let start = (y * self.width + x) * 3;
         Some([self.data[start], self.data[start + 1], self.data[start + 2]])
-    }
-
-    /// Gives the sample buffer back (interleaved, row-major, top row first).
-    pub fn into_data(self) -> Vec<T> {
-        self.data
     }
 }
 

@@ -20,12 +20,12 @@
 //!
 //! # Methods ([`Method`])
 //! - [`Method::Fast`]: single scattering by Gauss-Legendre columns
-//!   ([`crate::transport::single_scattering`]) with exact columns toward the
+//!   (`crate::transport::single_scattering`) with exact columns toward the
 //!   sun for views, a sun-column table and a sky-view table for images
 //!   (within 0.1 % of the exact path); the higher orders from the
 //!   discrete-ordinate field, synthesised exactly along each view, or read
 //!   from its source table for images
-//!   ([`crate::transport::multiple_scattering`]).
+//!   (`crate::transport::multiple_scattering`).
 //! - [`Method::Reference`]: the paper's uniform double march for single
 //!   scattering per view and per pixel (slow: the oracle the fast method
 //!   is tested against), plus the field's exact synthesis for views, and
@@ -48,6 +48,7 @@
 mod irradiance;
 mod sun_disc;
 
+pub use crate::transport::multiple_scattering::MultipleScatteringSettings;
 pub use irradiance::{Irradiance, Plane};
 
 use std::sync::OnceLock;
@@ -59,8 +60,8 @@ use crate::error::{Error, Result};
 use crate::geometry::{Vector3, ViewDirection};
 use crate::spectrum::{SampledSpectrum, WavelengthGrid};
 use crate::transport::multiple_scattering::{
-    MultipleScatteringField, MultipleScatteringScratch, MultipleScatteringSettings,
-    MultipleScatteringTable, forward_peak_cosine,
+    MultipleScatteringField, MultipleScatteringScratch, MultipleScatteringTable,
+    forward_peak_cosine,
 };
 use crate::transport::path_tracing::worst_relative_error;
 use crate::transport::{
@@ -162,7 +163,7 @@ pub struct SkyRadiance {
 impl SkyRadiance {
     /// The largest standard error relative to its value over the
     /// wavelengths (0 without standard errors; see
-    /// [`crate::transport::SpectralEstimate::worst_relative_standard_error`]).
+    /// `crate::transport::SpectralEstimate::worst_relative_standard_error`).
     pub fn worst_relative_standard_error(&self) -> f64 {
         self.standard_error_w_m2_sr_nm
             .as_ref()
@@ -308,7 +309,7 @@ impl Sky {
     }
 
     /// A sky from a scene already on its grid (optics, planet, eye, sun).
-    pub fn from_scene(
+    pub(crate) fn from_scene(
         scene: SingleScatteringSky,
         scattering: Scattering,
         method: Method,
@@ -392,7 +393,7 @@ impl Sky {
     }
 
     /// Unit vector toward the sun, east-north-up.
-    pub fn sun_direction(&self) -> Vector3 {
+    pub(crate) fn sun_direction(&self) -> Vector3 {
         self.scene.sun_direction()
     }
 
@@ -577,7 +578,8 @@ impl Sky {
     /// The radiance a fast-method image shows toward `view` (read from its
     /// tables, without the sun's disc): within 0.1 % of [`Sky::radiance`]
     /// with [`Method::Fast`], which is what the tests hold it to.
-    pub fn radiance_from_image_tables(&self, view: ViewDirection) -> Result<SkyRadiance> {
+    #[cfg(test)]
+    pub(crate) fn radiance_from_image_tables(&self, view: ViewDirection) -> Result<SkyRadiance> {
         let mut all = self.radiances_from_image_tables(&[view])?;
         Ok(all.remove(0))
     }

@@ -35,7 +35,7 @@ pub struct TabulatedSpectrum {
 
 impl TabulatedSpectrum {
     /// A table from its columns. `what` names it in errors.
-    pub fn new(
+    pub(crate) fn new(
         wavelengths_nm: Vec<f64>,
         values: Vec<f64>,
         what: &str,
@@ -70,7 +70,7 @@ impl TabulatedSpectrum {
     }
 
     /// Parses a two-column CSV (`wavelength_nm,<value>`, `#` comments, one
-    /// header line); see [`NumericTable`].
+    /// header line, any column names).
     pub fn parse_csv(text: &str, what: &str) -> Result<TabulatedSpectrum> {
         let table = NumericTable::parse(text, what)?;
         if table.column_names.len() != 2 {
@@ -92,12 +92,12 @@ impl TabulatedSpectrum {
     }
 
     /// The rows' wavelengths, nm.
-    pub fn wavelengths_nm(&self) -> &[f64] {
+    pub(crate) fn wavelengths_nm(&self) -> &[f64] {
         &self.wavelengths_nm
     }
 
     /// The rows' values.
-    pub fn values(&self) -> &[f64] {
+    pub(crate) fn values(&self) -> &[f64] {
         &self.values
     }
 

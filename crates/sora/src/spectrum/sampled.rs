@@ -12,6 +12,7 @@
 
 use std::ops::{Add, AddAssign, Index, IndexMut, Mul, MulAssign};
 
+#[cfg(test)]
 use crate::error::{Error, Result};
 
 /// Values at the samples of one wavelength grid (unit: that of the quantity).
@@ -22,14 +23,14 @@ pub struct SampledSpectrum {
 
 impl SampledSpectrum {
     /// `len` zeros.
-    pub fn zeros(len: usize) -> SampledSpectrum {
+    pub(crate) fn zeros(len: usize) -> SampledSpectrum {
         SampledSpectrum {
             values: vec![0.0; len],
         }
     }
 
     /// `len` copies of `value`.
-    pub fn constant(len: usize, value: f64) -> SampledSpectrum {
+    pub(crate) fn constant(len: usize, value: f64) -> SampledSpectrum {
         SampledSpectrum {
             values: vec![value; len],
         }
@@ -66,13 +67,13 @@ impl SampledSpectrum {
     }
 
     /// Sets every value to `value` (reuse a buffer without allocating).
-    pub fn fill(&mut self, value: f64) {
+    pub(crate) fn fill(&mut self, value: f64) {
         self.values.fill(value);
     }
 
     /// `self += scale * other`, element-wise: the accumulation step of a
     /// quadrature or a ray march.
-    pub fn add_scaled(&mut self, other: &SampledSpectrum, scale: f64) {
+    pub(crate) fn add_scaled(&mut self, other: &SampledSpectrum, scale: f64) {
         assert_eq!(
             self.len(),
             other.len(),
@@ -85,7 +86,8 @@ impl SampledSpectrum {
 
     /// Replaces each value v by exp(-v): optical depth -> transmittance
     /// (Beer-Lambert).
-    pub fn exp_neg_in_place(&mut self) {
+    #[cfg(test)]
+    pub(crate) fn exp_neg_in_place(&mut self) {
         for v in &mut self.values {
             *v = (-*v).exp();
         }
@@ -102,7 +104,8 @@ impl SampledSpectrum {
     /// Checks that every value is finite and >= 0, as radiance, irradiance
     /// and reflectance must be; the error names the first bad sample.
     /// `what` names the quantity in the message (`"sky radiance"`).
-    pub fn check_finite_non_negative(&self, what: &str) -> Result<()> {
+    #[cfg(test)]
+    pub(crate) fn check_finite_non_negative(&self, what: &str) -> Result<()> {
         match self
             .values
             .iter()

@@ -27,7 +27,7 @@ pub struct SolarSpectrum {
 
 impl SolarSpectrum {
     /// The paper's equal-energy sun with `irradiance_w_m2_nm` at every wavelength.
-    pub fn flat(irradiance_w_m2_nm: f64) -> Result<SolarSpectrum> {
+    pub(crate) fn flat(irradiance_w_m2_nm: f64) -> Result<SolarSpectrum> {
         if !(irradiance_w_m2_nm.is_finite() && irradiance_w_m2_nm > 0.0) {
             return Err(Error::out_of_range(
                 "solar irradiance",
@@ -51,7 +51,7 @@ impl SolarSpectrum {
     /// A user table: two columns `wavelength_nm,irradiance_w_m2_nm` (header
     /// line, `#` comments). `name` identifies it in errors. Irradiances must
     /// be finite and >= 0.
-    pub fn parse_csv(text: &str, name: &str) -> Result<SolarSpectrum> {
+    pub(crate) fn parse_csv(text: &str, name: &str) -> Result<SolarSpectrum> {
         let what = format!("solar spectrum {name}");
         let table = TabulatedSpectrum::parse_csv(text, &what)?;
         if let Some(i) = table.values().iter().position(|v| *v < 0.0) {
@@ -73,13 +73,14 @@ impl SolarSpectrum {
     }
 
     /// The irradiance as a function of wavelength, W m^-2 nm^-1.
-    pub fn irradiance_w_m2_nm(&self) -> &Spectrum {
+    #[cfg(test)]
+    pub(crate) fn irradiance_w_m2_nm(&self) -> &Spectrum {
         &self.irradiance_w_m2_nm
     }
 
     /// Band-averaged irradiance at each wavelength of `grid`, W m^-2 nm^-1.
     /// Fails, naming the table's range, when the table does not cover the grid.
-    pub fn sample(&self, grid: &WavelengthGrid) -> Result<SampledSpectrum> {
+    pub(crate) fn sample(&self, grid: &WavelengthGrid) -> Result<SampledSpectrum> {
         self.irradiance_w_m2_nm
             .sample_band_averaged(grid)
             .map_err(|e| {

@@ -140,7 +140,7 @@
 //! `parallel` feature).
 //!
 //! # Measured
-//! Against DISORT (`tests/path_tracing_reference.rs`: the clear-sky
+//! Against DISORT (`transport/reference_tests/path_tracing_reference.rs`: the clear-sky
 //! reference in the plane-parallel limit, 28 geometries x 21 wavelengths,
 //! 400 000 / 600 000 paths per direction for ground albedo 0 / 0.3): worst
 //! 2.99 / 2.64 standard errors, worst relative error 0.34% / 0.43%. The
@@ -208,14 +208,6 @@ pub(crate) const RUSSIAN_ROULETTE_THRESHOLD: f64 = 0.5;
 pub struct SpectralEstimate {
     pub mean: SampledSpectrum,
     pub standard_error: SampledSpectrum,
-}
-
-impl SpectralEstimate {
-    /// The largest standard error relative to the mean over the
-    /// wavelengths (0 where both are 0, infinite where only the mean is).
-    pub fn worst_relative_standard_error(&self) -> f64 {
-        worst_relative_error(self.mean.values(), self.standard_error.values())
-    }
 }
 
 /// The largest of |error / mean| over paired values (0 where the error is
@@ -413,7 +405,7 @@ fn cosine_weighted_direction(normal: Vector3, u: [f64; 2]) -> Vector3 {
 
 impl<'a> PathTracer<'a> {
     /// The path tracer of `sky`'s atmosphere, eye and sun.
-    pub fn new(sky: &'a SingleScatteringSky) -> PathTracer<'a> {
+    pub(crate) fn new(sky: &'a SingleScatteringSky) -> PathTracer<'a> {
         let optics = sky.optics();
         let (ground_radius_m, top_radius_m) = sky.radii_m();
         let wavelengths = optics.grid.len();
@@ -448,7 +440,8 @@ impl<'a> PathTracer<'a> {
     /// Radiance arriving at the eye from the unit direction `view`
     /// (east-north-up), W m^-2 sr^-1 nm^-1, from `samples` paths (at least
     /// 2, for the standard error) drawn with `seed`.
-    pub fn compute_radiance(
+    #[cfg(test)]
+    pub(crate) fn compute_radiance(
         &self,
         view: Vector3,
         samples: u64,
@@ -476,7 +469,7 @@ impl<'a> PathTracer<'a> {
     /// direct sun. Each sample draws its view direction cosine-weighted
     /// (pdf (w.facing)/pi), so the estimate is pi L(w). Facing down at the
     /// top of the atmosphere it is the upward flux that leaves the planet.
-    pub fn compute_irradiance(
+    pub(crate) fn compute_irradiance(
         &self,
         facing: Vector3,
         samples: u64,

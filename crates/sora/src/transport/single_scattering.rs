@@ -140,7 +140,6 @@ pub struct SingleScatteringScratch {
     sun_columns: Vec<f64>,
     panel_densities: Vec<[f64; 4]>,
     optical_depth: Vec<f64>,
-    phase: Vec<f64>,
     /// I_j(lambda), species-major: [j * wavelengths + i], m.
     inscattering_integrals: Vec<f64>,
     /// The Lambertian ground's radiance times the view transmittance.
@@ -173,7 +172,7 @@ impl SingleScatteringScratch {
 
 impl SingleScatteringSky {
     /// Puts `atmosphere` on `grid` and places the eye and the sun.
-    pub fn new(
+    pub(crate) fn new(
         atmosphere: &Atmosphere,
         grid: &WavelengthGrid,
         observation: Observation,
@@ -252,12 +251,12 @@ impl SingleScatteringSky {
     }
 
     /// The optics on the grid.
-    pub fn optics(&self) -> &AtmosphereOptics {
+    pub(crate) fn optics(&self) -> &AtmosphereOptics {
         &self.optics
     }
 
     /// Unit vector toward the sun (east-north-up).
-    pub fn sun_direction(&self) -> Vector3 {
+    pub(crate) fn sun_direction(&self) -> Vector3 {
         self.sun_direction
     }
 
@@ -272,7 +271,7 @@ impl SingleScatteringSky {
     }
 
     /// The sun-column table for images of this sky (altitude x mu nodes).
-    pub fn compute_sun_column_table(
+    pub(crate) fn compute_sun_column_table(
         &self,
         altitude_nodes: usize,
         mu_nodes: usize,
@@ -287,7 +286,7 @@ impl SingleScatteringSky {
     }
 
     /// Work space for [`SingleScatteringSky::compute_radiance`].
-    pub fn scratch(&self) -> SingleScatteringScratch {
+    pub(crate) fn scratch(&self) -> SingleScatteringScratch {
         let (species, wavelengths) = (self.optics.species.len(), self.optics.grid.len());
         SingleScatteringScratch {
             densities: vec![0.0; species],
@@ -296,7 +295,6 @@ impl SingleScatteringSky {
             sun_columns: vec![0.0; species],
             panel_densities: vec![[0.0; 4]; species],
             optical_depth: vec![0.0; wavelengths],
-            phase: vec![0.0; wavelengths],
             inscattering_integrals: vec![0.0; species * wavelengths],
             ground_radiance: vec![0.0; wavelengths],
             view_transmittance: vec![0.0; wavelengths],
@@ -481,7 +479,8 @@ impl SingleScatteringSky {
 
     /// Fast path: single-scattered sky radiance (plus the sunlit ground) in
     /// the direction `view` (unit, east-north-up), W m^-2 sr^-1 nm^-1.
-    pub fn compute_radiance(
+    #[cfg(test)]
+    pub(crate) fn compute_radiance(
         &self,
         view: Vector3,
         sun_columns: SunColumns,
@@ -490,17 +489,12 @@ impl SingleScatteringSky {
     ) {
         self.compute_inscattering_integrals(view, sun_columns, scratch);
         let cos_theta = view.dot(self.sun_direction);
-        let SingleScatteringScratch {
-            inscattering_integrals,
-            ground_radiance,
-            phase,
-            ..
-        } = scratch;
+        let mut phase = vec![0.0; radiance.len()];
         self.radiance_from_integrals(
             cos_theta,
-            inscattering_integrals,
-            ground_radiance,
-            phase,
+            &scratch.inscattering_integrals,
+            &scratch.ground_radiance,
+            &mut phase,
             radiance.values_mut(),
         );
     }
@@ -508,7 +502,7 @@ impl SingleScatteringSky {
     /// Reference path (the paper's method): uniform midpoint march of
     /// `view_steps` along the view ray and, from every sample,
     /// `sun_steps` toward the sun. W m^-2 sr^-1 nm^-1.
-    pub fn compute_radiance_reference(
+    pub(crate) fn compute_radiance_reference(
         &self,
         view: Vector3,
         view_steps: usize,
@@ -602,7 +596,8 @@ impl SingleScatteringSky {
 
     /// True when `view` points inside the sun's disc and reaches space: a
     /// ray that ends on the ground never sees the sun, however close to it.
-    pub fn is_in_sun_disc(&self, view: Vector3) -> bool {
+    #[cfg(test)]
+    pub(crate) fn is_in_sun_disc(&self, view: Vector3) -> bool {
         self.sun_angular_radius_rad > 0.0
             && self.sees_sky(view)
             && view

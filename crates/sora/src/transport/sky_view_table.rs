@@ -62,25 +62,10 @@ pub struct SkyViewTable {
 impl SkyViewTable {
     /// Fills the table with `half_zenith_nodes` nodes above and below the
     /// horizon and `azimuth_nodes` over 0..180 degrees, with sun columns
-    /// from `sun_columns`. Rows run in parallel with the `parallel` feature;
-    /// the result does not depend on the thread count.
-    pub fn compute(
-        sky: &SingleScatteringSky,
-        sun_columns: &SunColumnTable,
-        half_zenith_nodes: usize,
-        azimuth_nodes: usize,
-    ) -> SkyViewTable {
-        SkyViewTable::compute_with_multiple_scattering(
-            sky,
-            sun_columns,
-            None,
-            half_zenith_nodes,
-            azimuth_nodes,
-        )
-    }
-
-    /// As [`SkyViewTable::compute`], and with `multiple_scattering` the
-    /// multiply scattered radiance at every node too (see the module docs).
+    /// from `sun_columns`, and with `multiple_scattering` the multiply
+    /// scattered radiance at every node too (see the module docs). Rows run
+    /// in parallel with the `parallel` feature; the result does not depend
+    /// on the thread count.
     pub(crate) fn compute_with_multiple_scattering(
         sky: &SingleScatteringSky,
         sun_columns: &SunColumnTable,
@@ -249,12 +234,6 @@ impl SkyViewTable {
         let east = sx * cos_a + sy * sin_a;
         let north = sy * cos_a - sx * sin_a;
         Vector3::new(sin_z * east, sin_z * north, cos_z)
-    }
-
-    /// Interpolates the integrals and ground radiance for `view` (unit,
-    /// east-north-up) into `integrals` (species * wavelengths) and `ground`.
-    pub fn lookup(&self, view: Vector3, integrals: &mut [f64], ground: &mut [f64]) {
-        self.interpolate(view, integrals, ground, None);
     }
 
     /// As [`SkyViewTable::lookup`], and the multiply scattered radiance into

@@ -96,7 +96,7 @@
 //! discrete-ordinate field costs about as much per sun zenith angle as
 //! Hillaire's table and treats every order with the real phase functions.
 //!
-//! # Accuracy (measured, `tests/multiple_scattering_reference.rs`)
+//! # Accuracy (measured, `transport/reference_tests/multiple_scattering_reference.rs`)
 //! - Against DISORT (plane-parallel, every row of the clear-sky reference,
 //!   single + multiple scattering): worst 0.074 % (black ground) and
 //!   0.061 % (albedo 0.3) with the exact synthesis, 0.10 % and 0.14 %
@@ -636,7 +636,7 @@ impl MultipleScatteringField {
     /// Solves the field of `sky` for every sun zenith angle seen at a point
     /// of the atmosphere visible from its eye; an error for settings that
     /// `MultipleScatteringSettings::validate` rejects.
-    pub fn compute(
+    pub(crate) fn compute(
         sky: &SingleScatteringSky,
         settings: MultipleScatteringSettings,
     ) -> Result<MultipleScatteringField> {
@@ -983,20 +983,15 @@ impl MultipleScatteringField {
     }
 
     /// Work space for [`MultipleScatteringField::compute_radiance`].
-    pub fn scratch(&self) -> MultipleScatteringScratch {
+    pub(crate) fn scratch(&self) -> MultipleScatteringScratch {
         self.optics.scratch(self.streams.count())
-    }
-
-    /// The settings it was solved with.
-    pub fn settings(&self) -> MultipleScatteringSettings {
-        self.settings
     }
 
     /// Multiply scattered radiance (orders >= 2 and skylight reflected by
     /// the ground) seen along `view`, W m^-2 sr^-1 nm^-1, into `radiance`:
     /// the field's exact angular synthesis at every march node, with
     /// columns toward the sun from `sun_columns` for the forward-peak term.
-    pub fn compute_radiance(
+    pub(crate) fn compute_radiance(
         &self,
         view: Vector3,
         sun_columns: SunColumns,

@@ -42,7 +42,7 @@ pub struct MultipleScatteringTable {
 impl MultipleScatteringTable {
     /// Tabulates the source of `field` (which it keeps, for the march's
     /// optics and for exact comparisons), at the table size of its settings.
-    pub fn compute(field: MultipleScatteringField) -> MultipleScatteringTable {
+    pub(crate) fn compute(field: MultipleScatteringField) -> MultipleScatteringTable {
         let settings = field.settings;
         let (views, azimuths) = (
             settings.table_view_zenith_nodes.max(2),
@@ -167,19 +167,20 @@ impl MultipleScatteringTable {
     }
 
     /// The field the table was made from.
-    pub fn field(&self) -> &MultipleScatteringField {
+    #[cfg(test)]
+    pub(crate) fn field(&self) -> &MultipleScatteringField {
         &self.field
     }
 
     /// Work space for [`MultipleScatteringTable::compute_radiance`].
-    pub fn scratch(&self) -> MultipleScatteringScratch {
+    pub(crate) fn scratch(&self) -> MultipleScatteringScratch {
         self.field.scratch()
     }
 
     /// Multiply scattered radiance along `view` (as
     /// [`MultipleScatteringField::compute_radiance`], with the source read
     /// from the table), W m^-2 sr^-1 nm^-1.
-    pub fn compute_radiance(
+    pub(crate) fn compute_radiance(
         &self,
         view: Vector3,
         sun_columns: SunColumns,

@@ -20,18 +20,16 @@
 //!   standard errors of the path tracer (a modest-sample version here, a
 //!   heavier one with `--ignored`), and twilight reported.
 
-use sora::atmosphere::{Atmosphere, Planet};
-use sora::geometry::{Vector3, direction_from_elevation_azimuth};
-use sora::spectrum::{SampledSpectrum, Spectrum, WavelengthGrid};
-use sora::transport::multiple_scattering::{
+use crate::atmosphere::{Atmosphere, Planet};
+use crate::geometry::{Vector3, direction_from_elevation_azimuth};
+use crate::spectrum::{SampledSpectrum, Spectrum, WavelengthGrid};
+use crate::transport::multiple_scattering::{
     MultipleScatteringField, MultipleScatteringSettings, MultipleScatteringTable,
 };
-use sora::transport::{Observation, PathTracer, SingleScatteringSky, SunColumns};
-use sora::{FastTableSize, ImageSettings, Method, Scattering, Sky, ViewDirection};
+use crate::transport::{Observation, PathTracer, SingleScatteringSky, SunColumns};
+use crate::{FastTableSize, ImageSettings, Method, Scattering, Sky, ViewDirection};
 
-mod common;
-
-use common::reference_rows;
+use super::reference_data::reference_rows;
 
 fn sky(
     atmosphere: &Atmosphere,
@@ -451,8 +449,8 @@ fn spherical_sky_matches_the_path_tracer_exhaustively() {
 /// fisheye.
 #[test]
 fn fast_image_matches_the_per_pixel_march() {
-    use sora::camera::Camera;
-    use sora::colour::{Observer, SpectrumToXyz};
+    use crate::camera::Camera;
+    use crate::colour::{Observer, SpectrumToXyz};
     let atmosphere = Atmosphere::preset("clear-sky-reference").unwrap();
     let to_xyz = SpectrumToXyz::new(&WavelengthGrid::paper(), Observer::Cie1931TwoDegree);
     let scattering = Scattering::multiple();

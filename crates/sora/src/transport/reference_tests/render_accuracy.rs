@@ -1,12 +1,12 @@
 //! The fast image path (sun-column and sky-view tables) against the exact
 //! fast path and the paper's reference march, pixel by pixel.
 
-use sora::atmosphere::Atmosphere;
-use sora::camera::Camera;
-use sora::colour::{Observer, SpectrumToXyz};
-use sora::spectrum::WavelengthGrid;
-use sora::transport::{Observation, SingleScatteringSky};
-use sora::{FastTableSize, ImageSettings, Method, Scattering, Sky, ViewDirection};
+use crate::atmosphere::Atmosphere;
+use crate::camera::Camera;
+use crate::colour::{Observer, SpectrumToXyz};
+use crate::spectrum::WavelengthGrid;
+use crate::transport::{Observation, SingleScatteringSky};
+use crate::{FastTableSize, ImageSettings, Method, Scattering, Sky, ViewDirection};
 
 /// A deterministic stream of numbers in [0, 1) (64-bit LCG, Knuth's MMIX).
 struct Lcg(u64);
@@ -170,7 +170,7 @@ fn fast_image_matches_the_reference_image() {
     // exponential one: the rays and the sun-column table meet its corners.
     // Measured 8.2e-4 (2.3e-3 while the table interpolated the layer's
     // mean density in its logarithm).
-    let preset = sora::atmosphere::presets::find_preset("earth-clear").unwrap();
+    let preset = crate::atmosphere::presets::find_preset("earth-clear").unwrap();
     let exponential = "profile.exponential.scale_height_m = 1200";
     assert!(preset.toml.contains(exponential));
     let layered = Atmosphere::from_toml_str(&preset.toml.replace(

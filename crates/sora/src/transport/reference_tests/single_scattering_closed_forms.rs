@@ -1,10 +1,10 @@
 //! Single scattering against closed forms and symmetries that need no
 //! reference data.
 
-use sora::atmosphere::Atmosphere;
-use sora::geometry::direction_from_elevation_azimuth;
-use sora::spectrum::{SampledSpectrum, WavelengthGrid};
-use sora::transport::{Observation, SingleScatteringSky, SunColumns};
+use crate::atmosphere::Atmosphere;
+use crate::geometry::direction_from_elevation_azimuth;
+use crate::spectrum::{SampledSpectrum, WavelengthGrid};
+use crate::transport::{Observation, SingleScatteringSky, SunColumns};
 
 /// Pure Rayleigh air, exponential with an 8 km scale height, flat sun of
 /// 1 W m^-2 nm^-1, black ground.
@@ -77,7 +77,10 @@ fn zenith_sky_under_a_zenith_sun_is_e_p_tau_exp_minus_tau() {
 #[test]
 fn the_sky_is_symmetric_about_the_solar_meridian() {
     let sky = sky(
-        include_str!("data/atmosphere_clear-sky-reference.toml"),
+        include_str!(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/tests/data/atmosphere_clear-sky-reference.toml"
+        )),
         25.0,
         207.0,
     );
@@ -120,7 +123,10 @@ fn the_sky_is_symmetric_about_the_solar_meridian() {
 #[test]
 fn the_planets_shadow_is_dark() {
     let night = sky(
-        include_str!("data/atmosphere_clear-sky-reference.toml"),
+        include_str!(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/tests/data/atmosphere_clear-sky-reference.toml"
+        )),
         -90.0,
         0.0,
     );
@@ -142,7 +148,10 @@ fn the_planets_shadow_is_dark() {
     // sun's rays clear the ground only above R (1 / cos 10 deg - 1) = 98 km,
     // so the zenith sky is lit in the last 2 km below the top: faint, not
     // zero.
-    let clear_sky = include_str!("data/atmosphere_clear-sky-reference.toml");
+    let clear_sky = include_str!(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/atmosphere_clear-sky-reference.toml"
+    ));
     let twilight = fast(&sky(clear_sky, -10.0, 0.0), 90.0, 0.0);
     let sunset = fast(&sky(clear_sky, 0.0, 0.0), 90.0, 0.0);
     for (t, s) in twilight.values().iter().zip(sunset.values()) {

@@ -7,11 +7,11 @@
 
 use std::f64::consts::PI;
 
-use sora::atmosphere::optical_depth::AtmosphereOptics;
-use sora::atmosphere::presets::{PRESETS, find_preset};
-use sora::atmosphere::{Atmosphere, PhaseFunction, rayleigh};
-use sora::spectrum::{SampledSpectrum, WavelengthGrid};
-use sora::table::NumericTable;
+use crate::atmosphere::optical_depth::AtmosphereOptics;
+use crate::atmosphere::presets::{PRESETS, find_preset};
+use crate::atmosphere::{Atmosphere, PhaseFunction, rayleigh};
+use crate::spectrum::{SampledSpectrum, WavelengthGrid};
+use crate::table::NumericTable;
 
 fn table(text: &str) -> NumericTable {
     NumericTable::parse(text, "reference").unwrap()
@@ -39,15 +39,24 @@ fn relative_error(value: f64, reference: f64) -> f64 {
 fn shared_files_are_the_presets() {
     for (file, preset) in [
         (
-            include_str!("data/atmosphere_clear-sky-reference.toml"),
+            include_str!(concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/tests/data/atmosphere_clear-sky-reference.toml"
+            )),
             "clear-sky-reference",
         ),
         (
-            include_str!("data/atmosphere_paper-mars.toml"),
+            include_str!(concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/tests/data/atmosphere_paper-mars.toml"
+            )),
             "paper-mars",
         ),
         (
-            include_str!("data/atmosphere_us-standard-1976-rayleigh.toml"),
+            include_str!(concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/tests/data/atmosphere_us-standard-1976-rayleigh.toml"
+            )),
             "us-standard-1976-rayleigh",
         ),
     ] {
@@ -59,10 +68,15 @@ fn shared_files_are_the_presets() {
 
 #[test]
 fn clear_sky_reference_reproduces_its_optical_depths() {
-    let reference = table(include_str!("data/clear_sky_optical_depths.csv"));
-    let atmosphere =
-        Atmosphere::from_toml_str(include_str!("data/atmosphere_clear-sky-reference.toml"))
-            .unwrap();
+    let reference = table(include_str!(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/clear_sky_optical_depths.csv"
+    )));
+    let atmosphere = Atmosphere::from_toml_str(include_str!(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/atmosphere_clear-sky-reference.toml"
+    )))
+    .unwrap();
     let optics = optics(&atmosphere);
     assert_eq!(
         column(&reference, "lambda_nm"),
@@ -121,7 +135,10 @@ fn clear_sky_reference_reproduces_its_optical_depths() {
 /// Bates cross-section, continuous, lies between them.
 #[test]
 fn earth_air_matches_bates_within_one_percent() {
-    let reference = table(include_str!("data/earth_rayleigh_21wl.csv"));
+    let reference = table(include_str!(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/earth_rayleigh_21wl.csv"
+    )));
     let atmosphere = Atmosphere::from_toml_str(
         r#"
 name = "sea-level air"
@@ -178,7 +195,10 @@ scattering.rayleigh.gas = "air"
 /// (610 Pa, 210 K: 2.1039e23 m^-3, scale height 10.86 km).
 #[test]
 fn mars_co2_matches_the_reference_within_two_percent() {
-    let reference = table(include_str!("data/mars_co2_rayleigh_21wl.csv"));
+    let reference = table(include_str!(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/mars_co2_rayleigh_21wl.csv"
+    )));
     let sigma = column(&reference, "sigma_CO2_m2");
     let king = column(&reference, "King_CO2");
     let refractivity = column(&reference, "n_minus_1_CO2_288K");
@@ -219,7 +239,10 @@ fn mars_co2_matches_the_reference_within_two_percent() {
 /// one of the reference cases).
 #[test]
 fn paper_earth_aerosol_matches_the_mie_reference() {
-    let text = include_str!("data/lognormal_paper_earth_aerosol.csv");
+    let text = include_str!(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/lognormal_paper_earth_aerosol.csv"
+    ));
     // The reference rows are every 20 nm plus 550 nm: a 10 nm grid holds them.
     let grid: WavelengthGrid = "380:780:10".parse().unwrap();
     let optics = Atmosphere::preset("paper-earth")

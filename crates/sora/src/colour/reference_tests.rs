@@ -9,16 +9,25 @@
 //! Data files (copies with a `# source:` line) are embedded with
 //! `include_str!`, so the tests read no files at run time.
 
-use sora::colour::{
+use crate::colour::{
     DisplayEncoding, DisplayMapping, Exposure, GamutMapping, LinearRgb, Observer, RgbColourSpace,
     SpectrumToXyz, TransferCurve, Xyz,
 };
-use sora::spectrum::{SampledSpectrum, WavelengthGrid};
-use sora::table::NumericTable;
+use crate::spectrum::{SampledSpectrum, WavelengthGrid};
+use crate::table::NumericTable;
 
-const D65_CSV: &str = include_str!("data/cie_d65_relative_spd_5nm.csv");
-const SKY_RADIANCE_CSV: &str = include_str!("data/clear_sky_radiance.csv");
-const SKY_CASE_A_COLOUR_CSV: &str = include_str!("data/sky_case_a_xyz_srgb.csv");
+const D65_CSV: &str = include_str!(concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/tests/data/cie_d65_relative_spd_5nm.csv"
+));
+const SKY_RADIANCE_CSV: &str = include_str!(concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/tests/data/clear_sky_radiance.csv"
+));
+const SKY_CASE_A_COLOUR_CSV: &str = include_str!(concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/tests/data/sky_case_a_xyz_srgb.csv"
+));
 
 fn column_index(table: &NumericTable, name: &str) -> usize {
     table

@@ -33,17 +33,15 @@
 //! paths and other seeds, not by moving the tolerance. A bias shows as an
 //! excess that grows with the number of paths, and in the z-scores' mean.
 
-use sora::atmosphere::{Atmosphere, Planet};
-use sora::geometry::{Vector3, direction_from_elevation_azimuth};
-use sora::spectrum::{SampledSpectrum, Spectrum, WavelengthGrid};
-use sora::transport::{Observation, PathTracer, SingleScatteringSky, SunColumns};
+use crate::atmosphere::{Atmosphere, Planet};
+use crate::geometry::{Vector3, direction_from_elevation_azimuth};
+use crate::spectrum::{SampledSpectrum, Spectrum, WavelengthGrid};
+use crate::transport::{Observation, PathTracer, SingleScatteringSky, SunColumns};
 
 /// The plane-parallel limit's planet radius, m.
 const PLANE_PARALLEL_RADIUS_M: f64 = 6.36e9;
 
-mod common;
-
-use common::{reference_geometries, reference_rows};
+use super::reference_data::{reference_geometries, reference_rows};
 
 /// The clear-sky reference atmosphere on a planet of `radius_m` with a
 /// constant ground albedo, seen from `observer_altitude_m` with the sun at

@@ -5,14 +5,12 @@
 //! column `L_single_plane_parallel` (approximated by a planet of radius
 //! 6.36e9 m, as the issue asks).
 
-use sora::atmosphere::{Atmosphere, Planet};
-use sora::geometry::direction_from_elevation_azimuth;
-use sora::spectrum::{SampledSpectrum, Spectrum, WavelengthGrid};
-use sora::transport::{Observation, SingleScatteringSky, SunColumns};
+use crate::atmosphere::{Atmosphere, Planet};
+use crate::geometry::direction_from_elevation_azimuth;
+use crate::spectrum::{SampledSpectrum, Spectrum, WavelengthGrid};
+use crate::transport::{Observation, SingleScatteringSky, SunColumns};
 
-mod common;
-
-use common::{ReferenceRow as Row, reference_rows};
+use super::reference_data::{ReferenceRow as Row, reference_rows};
 
 fn sky(atmosphere: &Atmosphere, sun_elevation_deg: f64) -> SingleScatteringSky {
     let observation = Observation {

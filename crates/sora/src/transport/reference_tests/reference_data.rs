@@ -2,30 +2,29 @@
 //! `data/clear_sky_radiance.csv` (independent radiative-transfer numbers for
 //! the atmosphere `clear-sky-reference`; provenance on the file's first
 //! line). Each test file uses the columns it needs.
-#![allow(dead_code)]
 
-use sora::table::NumericTable;
+use crate::table::NumericTable;
 
 /// One row: a wavelength, a geometry, a ground albedo and three radiances
 /// per unit top-of-atmosphere solar irradiance, sr^-1 (W m^-2 sr^-1 nm^-1
 /// for a flat sun of 1 W m^-2 nm^-1).
-pub struct ReferenceRow {
-    pub wavelength_nm: f64,
-    pub sun_elevation_deg: f64,
-    pub view_elevation_deg: f64,
+pub(super) struct ReferenceRow {
+    pub(super) wavelength_nm: f64,
+    pub(super) sun_elevation_deg: f64,
+    pub(super) view_elevation_deg: f64,
     /// View azimuth minus sun azimuth, degrees.
-    pub relative_azimuth_deg: f64,
-    pub ground_albedo: f64,
+    pub(super) relative_azimuth_deg: f64,
+    pub(super) ground_albedo: f64,
     /// Single scattering, plane-parallel (quadrature).
-    pub single_plane_parallel: f64,
+    pub(super) single_plane_parallel: f64,
     /// Single scattering, spherical planet of radius 6360 km (quadrature).
-    pub single_spherical: f64,
+    pub(super) single_spherical: f64,
     /// All orders, plane-parallel (DISORT, 32 streams).
-    pub multiple_plane_parallel: f64,
+    pub(super) multiple_plane_parallel: f64,
 }
 
 /// Every row of `data/clear_sky_radiance.csv`, in the file's order.
-pub fn reference_rows() -> Vec<ReferenceRow> {
+pub(super) fn reference_rows() -> Vec<ReferenceRow> {
     let text = std::fs::read_to_string(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/tests/data/clear_sky_radiance.csv"
@@ -64,7 +63,7 @@ pub fn reference_rows() -> Vec<ReferenceRow> {
 /// The distinct geometries of `rows`, in the file's order:
 /// (ground albedo, sun elevation deg, view elevation deg, relative azimuth
 /// deg). The file lists each geometry's wavelengths together.
-pub fn reference_geometries(rows: &[ReferenceRow]) -> Vec<(f64, f64, f64, f64)> {
+pub(super) fn reference_geometries(rows: &[ReferenceRow]) -> Vec<(f64, f64, f64, f64)> {
     let mut geometries: Vec<(f64, f64, f64, f64)> = rows
         .iter()
         .map(|r| {
