@@ -11,6 +11,7 @@ pub enum Error {
     OutOfRange {
         /// The parameter, as a user would name it (`step_nm`, `species[1].scale_height_m`).
         name: String,
+        /// The value given.
         value: f64,
         /// Unit of `value` (`"nm"`, `"m"`, `"1"` for dimensionless).
         unit: &'static str,
@@ -30,13 +31,19 @@ pub enum Error {
         what: String,
         /// 1-based line number, 0 when unknown.
         line: usize,
+        /// What is wrong, in one line.
         message: String,
     },
     /// A Mie-theory input outside the solver's domain.
     Mie(sora_mie::sphere::MieError),
     /// Writing an output file failed (the output module is the only place
     /// with file I/O).
-    Io { path: String, message: String },
+    Io {
+        /// The file.
+        path: String,
+        /// The operating system's reason.
+        message: String,
+    },
 }
 
 /// The library's result type.

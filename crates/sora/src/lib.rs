@@ -54,6 +54,8 @@
 //! Units are SI unless a name says otherwise (`wavelength_nm`). The library
 //! has no global state and prints nothing.
 
+#![warn(missing_docs)]
+
 pub use sora_mie as mie;
 
 pub mod atmosphere;

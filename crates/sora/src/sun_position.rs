@@ -377,7 +377,9 @@ pub enum Refraction {
     /// The apparent position through air at this pressure (hPa, > 0 and
     /// <= 2000) and temperature (C, > -273 and <= 100) at the observer.
     On {
+        /// Air pressure at the observer, hPa.
         pressure_hpa: f64,
+        /// Air temperature at the observer, degrees Celsius.
         temperature_c: f64,
     },
 }

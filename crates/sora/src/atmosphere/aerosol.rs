@@ -34,9 +34,15 @@ use crate::spectrum::{SampledSpectrum, WavelengthGrid};
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum AerosolPhase {
     /// Henyey-Greenstein with asymmetry parameter g, |g| < 1.
-    HenyeyGreenstein { g: f64 },
+    HenyeyGreenstein {
+        /// The asymmetry parameter (mean scattering cosine).
+        g: f64,
+    },
     /// Cornette-Shanks with parameter g, |g| < 1 (its mean cosine differs).
-    CornetteShanks { g: f64 },
+    CornetteShanks {
+        /// The Cornette-Shanks parameter g.
+        g: f64,
+    },
 }
 
 impl AerosolPhase {
@@ -58,9 +64,13 @@ impl AerosolPhase {
 pub struct ParametricAerosol {
     /// Column extinction optical depth at `reference_wavelength_nm`.
     pub optical_depth: f64,
+    /// The wavelength of `optical_depth`, nm.
     pub reference_wavelength_nm: f64,
+    /// tau(lambda) = tau_ref (lambda / lambda_ref)^-angstrom_exponent.
     pub angstrom_exponent: f64,
+    /// Scattering over extinction, the same at every wavelength.
     pub single_scattering_albedo: f64,
+    /// The phase function's shape.
     pub phase: AerosolPhase,
 }
 

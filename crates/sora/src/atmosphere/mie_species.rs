@@ -44,7 +44,9 @@ pub enum ParticleAmount {
     NumberDensityM3(f64),
     /// Vertical column extinction optical depth at a reference wavelength.
     OpticalDepth {
+        /// The column extinction optical depth.
         optical_depth: f64,
+        /// The wavelength it is given at, nm.
         reference_wavelength_nm: f64,
     },
 }
@@ -52,18 +54,26 @@ pub enum ParticleAmount {
 /// A Mie aerosol, validated by the file loader.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MieAerosol {
+    /// The particles' complex refractive index against wavelength.
     pub refractive_index: RefractiveIndexModel,
+    /// Their radii (log-normal, gamma, ...), with its integration window.
     pub size_distribution: SizeDistribution,
+    /// Which phase function: full Mie, or the paper's HG of g(r).
     pub phase_mode: AerosolPhaseMode,
+    /// How many particles there are.
     pub amount: ParticleAmount,
 }
 
 /// The optics of a Mie aerosol on a grid.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MieOptics {
+    /// beta_ext at relative density 1, m^-1, per wavelength.
     pub extinction_per_m: SampledSpectrum,
+    /// beta_sca at relative density 1, m^-1, per wavelength.
     pub scattering_per_m: SampledSpectrum,
+    /// The ensemble's phase function per wavelength.
     pub phase_function: PhaseFunction,
+    /// Particles per m^3 at relative density 1.
     pub reference_number_density_m3: f64,
 }
 

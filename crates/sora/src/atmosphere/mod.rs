@@ -64,10 +64,13 @@ use crate::spectrum::{SampledSpectrum, WavelengthGrid};
 /// A planet, its sun, and what its sky is made of.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Atmosphere {
+    /// Its name (shown by `sora atmosphere list` and in outputs).
     pub name: String,
     /// A one-line description (may be empty).
     pub description: String,
+    /// The planet: radius, top of the atmosphere, ground albedo.
     pub planet: Planet,
+    /// The sun: its spectrum, scale and angular diameter.
     pub sun: Sun,
     /// In the file's order.
     pub species: Vec<Species>,
@@ -76,17 +79,25 @@ pub struct Atmosphere {
 /// One constituent of the atmosphere.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Species {
+    /// Its name in the atmosphere file.
     pub name: String,
+    /// How its density varies with altitude.
     pub profile: DensityProfile,
+    /// How it scatters and absorbs light.
     pub model: SpeciesModel,
 }
 
 /// How a species interacts with light.
 #[derive(Debug, Clone, PartialEq)]
 pub enum SpeciesModel {
+    /// Molecules much smaller than the wavelength (Rayleigh scattering).
     Rayleigh(RayleighScatterer),
+    /// Spherical particles of a size distribution (Mie theory).
     Mie(MieAerosol),
+    /// An aerosol given by optical depth, Angstrom exponent, albedo and a
+    /// parametric phase function.
     ParametricAerosol(ParametricAerosol),
+    /// A gas that only absorbs (ozone).
     AbsorbingGas(AbsorbingGas),
 }
 
@@ -95,7 +106,9 @@ pub enum SpeciesModel {
 pub enum RayleighScatterer {
     /// A physical gas at `number_density_m3` (relative density 1).
     Gas {
+        /// Which gas (its refractive index and King factor).
         gas: RayleighGas,
+        /// Molecules per m^3 at relative density 1.
         number_density_m3: f64,
         /// Use the depolarisation ratio of the gas' King factor in the
         /// phase function (else 3/(16 pi)(1 + cos^2)).
@@ -103,9 +116,14 @@ pub enum RayleighScatterer {
     },
     /// beta = coefficient_per_m (reference_wavelength_nm / lambda)^exponent.
     Parametric {
+        /// Scattering coefficient at the reference wavelength and relative
+        /// density 1, m^-1.
         coefficient_per_m: f64,
+        /// The wavelength of `coefficient_per_m`, nm.
         reference_wavelength_nm: f64,
+        /// The power of lambda (4 for ideal Rayleigh scattering).
         wavelength_exponent: f64,
+        /// Depolarisation ratio of the phase function (0 for none).
         depolarization_ratio: f64,
     },
 }

@@ -31,6 +31,7 @@ pub struct SpeciesOptics {
     /// What kind of species it is ("rayleigh", "mie", "parametric aerosol",
     /// "absorbing gas").
     pub kind: &'static str,
+    /// How its density varies with altitude.
     pub profile: DensityProfile,
     /// integral_0^top relative_density(h) dh, m.
     pub vertical_column_m: f64,
@@ -41,6 +42,7 @@ pub struct SpeciesOptics {
     pub extinction_per_m: SampledSpectrum,
     /// beta_sca at relative density 1, m^-1, per wavelength.
     pub scattering_per_m: SampledSpectrum,
+    /// Its phase function per wavelength.
     pub phase_function: PhaseFunction,
 }
 
@@ -98,6 +100,7 @@ impl SpeciesOptics {
 /// Everything on one grid: the sun, the ground and every species.
 #[derive(Debug, Clone, PartialEq)]
 pub struct AtmosphereOptics {
+    /// The wavelengths every spectrum here is sampled on.
     pub grid: WavelengthGrid,
     /// Top-of-atmosphere solar irradiance (scaled), W m^-2 nm^-1.
     pub solar_irradiance_w_m2_nm: SampledSpectrum,
@@ -192,11 +195,17 @@ impl AtmosphereOptics {
 /// Column optics of one species at one wavelength.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OpticsSummaryRow<'a> {
+    /// The wavelength, nm.
     pub wavelength_nm: f64,
+    /// The species' name.
     pub species: &'a str,
+    /// Vertical column extinction optical depth, ground to top.
     pub tau_extinction: f64,
+    /// Vertical column scattering optical depth, ground to top.
     pub tau_scattering: f64,
+    /// tau_scattering / tau_extinction (0 for a species that only absorbs).
     pub single_scattering_albedo: f64,
+    /// The phase function's mean scattering cosine.
     pub asymmetry_g: f64,
 }
 

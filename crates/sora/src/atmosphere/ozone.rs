@@ -184,7 +184,9 @@ pub enum GasAmount {
 /// A gas that absorbs and does not scatter.
 #[derive(Debug, Clone, PartialEq)]
 pub struct AbsorbingGas {
+    /// Its absorption cross-section against wavelength.
     pub cross_section: AbsorptionCrossSection,
+    /// How much of it there is.
     pub amount: GasAmount,
 }
 

@@ -151,11 +151,20 @@ pub enum PhaseFunction {
     /// 1 / (4 pi); also the placeholder of species that do not scatter.
     Isotropic,
     /// Rayleigh with a depolarisation ratio per wavelength.
-    Rayleigh { depolarization_ratios: Vec<f64> },
+    Rayleigh {
+        /// One per wavelength.
+        depolarization_ratios: Vec<f64>,
+    },
     /// Henyey-Greenstein with g per wavelength.
-    HenyeyGreenstein { asymmetry_g: Vec<f64> },
+    HenyeyGreenstein {
+        /// One per wavelength.
+        asymmetry_g: Vec<f64>,
+    },
     /// Cornette-Shanks with parameter g per wavelength.
-    CornetteShanks { g: Vec<f64> },
+    CornetteShanks {
+        /// One per wavelength.
+        g: Vec<f64>,
+    },
     /// Tabulated in cos theta, one row per wavelength.
     Tabulated(TabulatedPhase),
 }

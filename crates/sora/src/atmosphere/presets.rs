@@ -19,8 +19,11 @@ use crate::error::{Error, Result};
 /// A built-in atmosphere: its name, a one-line description, its TOML text.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Preset {
+    /// The name `--preset` takes.
     pub name: &'static str,
+    /// One line for `sora atmosphere list`.
     pub description: &'static str,
+    /// The atmosphere file's text.
     pub toml: &'static str,
 }
 

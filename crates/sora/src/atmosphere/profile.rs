@@ -46,7 +46,10 @@ use crate::error::{Error, Result};
 #[derive(Debug, Clone, PartialEq)]
 pub enum DensityProfile {
     /// exp(-altitude / scale_height_m).
-    Exponential { scale_height_m: f64 },
+    Exponential {
+        /// The altitude over which the density falls by e, m.
+        scale_height_m: f64,
+    },
     /// Linear between rows, zero outside them.
     PiecewiseLinear(ProfileTable),
     /// Linear in ln(density) between rows (exponential layers), each

@@ -28,8 +28,12 @@ use crate::geometry::{Vector3, ViewDirection, direction_from_elevation_azimuth};
 /// A projection from image pixels to sky directions.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Camera {
+    /// The whole sky in a disc: the zenith at the centre, the horizon at
+    /// the rim, north up, east to the left (as seen from below).
     Fisheye,
+    /// A 360 x 180 degree panorama (an environment map).
     Equirectangular,
+    /// A pinhole camera with a view direction and a field of view.
     Perspective(PerspectiveCamera),
 }
 

@@ -177,8 +177,11 @@ impl FromStr for DisplayEncoding {
 /// highlights-to-white gamut mapping and sRGB.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct DisplayMapping {
+    /// How bright the picture is.
     pub exposure: Exposure,
+    /// What happens to colours outside the display's gamut.
     pub gamut_mapping: GamutMapping,
+    /// The RGB space and transfer curve of the file.
     pub encoding: DisplayEncoding,
 }
 

@@ -54,7 +54,10 @@ pub enum Exposure {
     Fixed(f64),
     /// Scale so that the log-average Y of the image's non-black pixels
     /// becomes `key` (finite, > 0; dimensionless, display white = 1).
-    Auto { key: f64 },
+    Auto {
+        /// The target log-average Y (0.18 by default).
+        key: f64,
+    },
 }
 
 impl Exposure {

@@ -134,8 +134,11 @@ const fn inverse(m: &Matrix3) -> Matrix3 {
 /// value at Y = 1, components may be negative or above 1.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct LinearRgb {
+    /// Red.
     pub r: f64,
+    /// Green.
     pub g: f64,
+    /// Blue.
     pub b: f64,
 }
 

@@ -38,8 +38,11 @@ pub const MAXIMUM_LUMINOUS_EFFICACY_LM_PER_W: f64 = 683.0;
 /// (see the module docs); Y is the luminance-like component.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Xyz {
+    /// X.
     pub x: f64,
+    /// Y (luminance when the spectrum is a radiance).
     pub y: f64,
+    /// Z.
     pub z: f64,
 }
 

@@ -91,10 +91,20 @@ pub enum Method {
     Fast,
     /// The paper's uniform midpoint march with these step counts along the
     /// view ray and toward the sun.
-    Reference { view_steps: usize, sun_steps: usize },
+    Reference {
+        /// Midpoint steps along the view ray.
+        view_steps: usize,
+        /// Midpoint steps toward the sun from each view step.
+        sun_steps: usize,
+    },
     /// Monte Carlo: `samples` paths per view (at least 2), drawn with
     /// `seed` (the same seed gives the same result on any thread count).
-    PathTracing { samples: u64, seed: u64 },
+    PathTracing {
+        /// Paths per view.
+        samples: u64,
+        /// The random seed.
+        seed: u64,
+    },
 }
 
 impl Method {
@@ -133,8 +143,11 @@ pub const MAX_IMAGE_SIDE: u32 = 16384;
 /// An image to render: camera, size, and whether the sun's disc is drawn.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ImageSettings {
+    /// Which direction each pixel sees.
     pub camera: Camera,
+    /// Pixels across.
     pub width: u32,
+    /// Pixels down.
     pub height: u32,
     /// Draw the sun's disc (with limb darkening), attenuated by the air.
     pub draw_sun_disc: bool,
@@ -155,6 +168,7 @@ impl ImageSettings {
 /// The radiance of one view, W m^-2 sr^-1 nm^-1 on the sky's grid.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SkyRadiance {
+    /// The radiance, one value per wavelength.
     pub radiance_w_m2_sr_nm: SampledSpectrum,
     /// The standard error of each value (path tracing only).
     pub standard_error_w_m2_sr_nm: Option<SampledSpectrum>,
