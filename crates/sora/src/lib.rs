@@ -77,7 +77,7 @@ pub use error::{Error, Result};
 pub use geometry::ViewDirection;
 pub use sky::{
     FastTableSize, ImageSettings, Irradiance, Method, MultipleScatteringSettings, Plane,
-    Scattering, Sky, SkyBuilder, SkyRadiance,
+    Polarisation, Scattering, Sky, SkyBuilder, SkyRadiance, Stokes,
 };
 pub use spectrum::WavelengthGrid;
 pub use sun_position::{SunPosition, UtcTime};

@@ -39,6 +39,7 @@ pub mod mie_species;
 pub mod optical_depth;
 pub mod ozone;
 pub mod phase;
+pub(crate) mod phase_matrix;
 pub mod planet;
 pub mod presets;
 pub mod profile;

@@ -64,6 +64,7 @@ use crate::transport::multiple_scattering::{
     forward_peak_cosine,
 };
 use crate::transport::path_tracing::worst_relative_error;
+use crate::transport::stokes::meridian_reference;
 use crate::transport::{
     Observation, PathTracer, SingleScatteringScratch, SingleScatteringSky, SkyViewTable, SunColumns,
 };
@@ -119,6 +120,21 @@ impl Method {
     };
 }
 
+/// Whether the polarisation of the light is followed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Polarisation {
+    /// Light as a scalar intensity (what radiative-transfer codes call the
+    /// scalar approximation; up to a few per cent off in a clear sky).
+    #[default]
+    Scalar,
+    /// Stokes vectors through every scattering: the polarised intensity and
+    /// Q, U and V, referred to the meridian plane of each view (the
+    /// convention is in `transport/stokes.rs`, summarised at
+    /// [`Stokes`]). Only the path tracer follows it so far; Mie species
+    /// need their phase matrix, which is not tabulated yet.
+    Vector,
+}
+
 /// Resolution of the fast method's image tables.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FastTableSize {
@@ -172,6 +188,61 @@ pub struct SkyRadiance {
     pub radiance_w_m2_sr_nm: SampledSpectrum,
     /// The standard error of each value (path tracing only).
     pub standard_error_w_m2_sr_nm: Option<SampledSpectrum>,
+    /// Q, U and V with [`Polarisation::Vector`] (then
+    /// `radiance_w_m2_sr_nm` is the polarised intensity I).
+    pub stokes: Option<Stokes>,
+}
+
+/// The polarised part of a view's light: Stokes Q, U and V,
+/// W m^-2 sr^-1 nm^-1, one value per wavelength, with standard errors
+/// when path tracing.
+///
+/// The reference plane is the view's meridian plane (through the zenith
+/// and the view direction): Q > 0 when the electric field is mostly in it
+/// (vertical), Q < 0 when mostly horizontal; the angle of polarisation
+/// turns from "up" toward the observer's left (counter-clockwise on the sky
+/// as the observer sees it), and U > 0 at +45 degrees.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Stokes {
+    /// Q, W m^-2 sr^-1 nm^-1.
+    pub q_w_m2_sr_nm: SampledSpectrum,
+    /// U, W m^-2 sr^-1 nm^-1.
+    pub u_w_m2_sr_nm: SampledSpectrum,
+    /// V (circular polarisation), W m^-2 sr^-1 nm^-1.
+    pub v_w_m2_sr_nm: SampledSpectrum,
+    /// The standard errors of Q, U and V (path tracing).
+    pub standard_errors_w_m2_sr_nm: Option<[SampledSpectrum; 3]>,
+}
+
+impl Stokes {
+    /// The degree of linear polarisation sqrt(Q^2 + U^2) / I per
+    /// wavelength, given I (0 where I is 0).
+    pub fn degree_of_linear_polarisation(&self, intensity: &SampledSpectrum) -> Vec<f64> {
+        (0..intensity.len())
+            .map(|i| {
+                let (q, u) = (self.q_w_m2_sr_nm[i], self.u_w_m2_sr_nm[i]);
+                let total = intensity[i];
+                if total > 0.0 { q.hypot(u) / total } else { 0.0 }
+            })
+            .collect()
+    }
+
+    /// The angle of polarisation 0.5 atan2(U, Q), degrees in (-90, 90],
+    /// per wavelength: None where the light is wholly unpolarised
+    /// (Q = U = 0), whose angle does not exist.
+    pub fn angle_of_polarisation_deg(&self) -> Vec<Option<f64>> {
+        self.q_w_m2_sr_nm
+            .values()
+            .iter()
+            .zip(self.u_w_m2_sr_nm.values())
+            .map(|(q, u)| {
+                (*q != 0.0 || *u != 0.0).then(|| {
+                    let angle = 0.5 * u.atan2(*q).to_degrees();
+                    if angle <= -90.0 { angle + 180.0 } else { angle }
+                })
+            })
+            .collect()
+    }
 }
 
 impl SkyRadiance {
@@ -196,6 +267,7 @@ pub struct SkyBuilder<'a> {
     scattering: Scattering,
     method: Method,
     table_size: FastTableSize,
+    polarisation: Polarisation,
 }
 
 impl SkyBuilder<'_> {
@@ -238,6 +310,12 @@ impl SkyBuilder<'_> {
         self
     }
 
+    /// Scalar or vector (Stokes) light (default [`Polarisation::Scalar`]).
+    pub fn polarisation(mut self, polarisation: Polarisation) -> Self {
+        self.polarisation = polarisation;
+        self
+    }
+
     /// Checks every choice and puts the atmosphere on the grid (the
     /// expensive tables wait for their first use).
     pub fn build(self) -> Result<Sky> {
@@ -248,6 +326,7 @@ impl SkyBuilder<'_> {
             self.observation.sun_elevation_deg,
             self.observation.sun_azimuth_deg,
         );
+        sky.set_polarisation(self.polarisation)?;
         Ok(sky)
     }
 }
@@ -262,6 +341,7 @@ pub struct Sky {
     scattering: Scattering,
     method: Method,
     table_size: FastTableSize,
+    polarisation: Polarisation,
     /// The multiple-scattering field over every sun zenith angle the eye's
     /// rays meet (built on first use).
     field: OnceLock<MultipleScatteringField>,
@@ -319,6 +399,7 @@ impl Sky {
             scattering: Scattering::multiple(),
             method: Method::Fast,
             table_size: FastTableSize::default(),
+            polarisation: Polarisation::Scalar,
         }
     }
 
@@ -379,6 +460,7 @@ impl Sky {
             scattering,
             method,
             table_size,
+            polarisation: Polarisation::Scalar,
             field: OnceLock::new(),
             source_table: OnceLock::new(),
             image_tables: OnceLock::new(),
@@ -392,7 +474,22 @@ impl Sky {
         let scene = self.scene.with_sun(elevation_deg, azimuth_deg)?;
         let mut sky = Sky::from_scene(scene, self.scattering, self.method, self.table_size)?;
         sky.sun_position_deg = (elevation_deg, azimuth_deg);
+        sky.set_polarisation(self.polarisation)?;
         Ok(sky)
+    }
+
+    /// Checks that the method can follow `polarisation` and keeps it.
+    fn set_polarisation(&mut self, polarisation: Polarisation) -> Result<()> {
+        if polarisation == Polarisation::Vector {
+            if !matches!(self.method, Method::PathTracing { .. }) {
+                return Err(Error::Unsupported(
+                    "polarisation: only the path tracer follows Stokes vectors so far (method path-tracing); the fast and reference methods are scalar".into(),
+                ));
+            }
+            PathTracer::new_polarised(&self.scene)?;
+        }
+        self.polarisation = polarisation;
+        Ok(())
     }
 
     /// The wavelengths of every spectrum the sky returns.
@@ -454,6 +551,11 @@ impl Sky {
     /// The method.
     pub fn method(&self) -> Method {
         self.method
+    }
+
+    /// Scalar or vector light.
+    pub fn polarisation(&self) -> Polarisation {
+        self.polarisation
     }
 
     /// Solves the multiple-scattering field if the sky has one and it is
@@ -543,20 +645,41 @@ impl Sky {
     ) -> Result<Vec<SkyRadiance>> {
         let wavelengths = self.wavelengths().len();
         if let Method::PathTracing { samples, seed } = self.method {
-            let tracer = PathTracer::new(&self.scene);
+            let tracer = match self.polarisation {
+                Polarisation::Scalar => PathTracer::new(&self.scene),
+                Polarisation::Vector => PathTracer::new_polarised(&self.scene)?,
+            };
             let total = samples * views.len() as u64;
             let mut out = Vec::with_capacity(views.len());
             for (k, view) in views.iter().enumerate() {
                 let before = k as u64 * samples;
-                let traced = tracer.compute_radiance_with_progress(
+                let traced = tracer.compute_stokes_with_progress(
                     view.to_vector(),
+                    meridian_reference(view.elevation_deg(), view.azimuth_deg()),
                     samples,
                     seed,
                     &|done| progress(before + done, total),
                 )?;
-                out.push(SkyRadiance {
-                    radiance_w_m2_sr_nm: traced.total.mean,
-                    standard_error_w_m2_sr_nm: Some(traced.total.standard_error),
+                out.push(match traced.stokes {
+                    None => SkyRadiance {
+                        radiance_w_m2_sr_nm: traced.total.mean,
+                        standard_error_w_m2_sr_nm: Some(traced.total.standard_error),
+                        stokes: None,
+                    },
+                    Some([i, q, u, v]) => SkyRadiance {
+                        radiance_w_m2_sr_nm: i.mean,
+                        standard_error_w_m2_sr_nm: Some(i.standard_error),
+                        stokes: Some(Stokes {
+                            q_w_m2_sr_nm: q.mean,
+                            u_w_m2_sr_nm: u.mean,
+                            v_w_m2_sr_nm: v.mean,
+                            standard_errors_w_m2_sr_nm: Some([
+                                q.standard_error,
+                                u.standard_error,
+                                v.standard_error,
+                            ]),
+                        }),
+                    },
                 });
             }
             return Ok(out);
@@ -585,6 +708,7 @@ impl Sky {
             .map(|values| SkyRadiance {
                 radiance_w_m2_sr_nm: SampledSpectrum::from_values(values.to_vec()),
                 standard_error_w_m2_sr_nm: None,
+                stokes: None,
             })
             .collect())
     }
@@ -617,6 +741,7 @@ impl Sky {
                 SkyRadiance {
                     radiance_w_m2_sr_nm: radiance,
                     standard_error_w_m2_sr_nm: None,
+                    stokes: None,
                 }
             })
             .collect())

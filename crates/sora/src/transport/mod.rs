@@ -29,6 +29,7 @@ pub(crate) mod random;
 mod reference_tests;
 pub(crate) mod single_scattering;
 pub(crate) mod sky_view_table;
+pub(crate) mod stokes;
 
 pub use path_tracing::PathTracer;
 pub use single_scattering::{
