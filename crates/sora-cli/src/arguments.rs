@@ -357,6 +357,17 @@ impl SunAndObserver {
         scattering: sora::Scattering,
         method: sora::Method,
     ) -> anyhow::Result<sora::Sky> {
+        self.sky_with_polarisation(atmosphere, scattering, method, sora::Polarisation::Scalar)
+    }
+
+    /// [`SunAndObserver::sky`] with scalar or vector light.
+    pub fn sky_with_polarisation(
+        &self,
+        atmosphere: &mut sora::Atmosphere,
+        scattering: sora::Scattering,
+        method: sora::Method,
+        polarisation: sora::Polarisation,
+    ) -> anyhow::Result<sora::Sky> {
         if let Some(albedo) = self.ground_albedo {
             let planet = &atmosphere.planet;
             atmosphere.planet = sora::atmosphere::Planet::new(
@@ -373,6 +384,7 @@ impl SunAndObserver {
             .wavelengths(self.wavelengths)
             .scattering(scattering)
             .method(method)
+            .polarisation(polarisation)
             .build()?)
     }
 }

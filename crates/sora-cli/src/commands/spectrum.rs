@@ -39,6 +39,19 @@ use crate::arguments::{
 ///       --view-elevation 17 --view-azimuth 347 --method path-tracing --samples 100000
 ///   sora spectrum --preset earth-clear --sun-elevation 30 --almucantar 5
 ///
+/// Polarisation (--stokes): the Stokes vector of the light, from the path
+/// tracer (all orders) or from single scattering (--scattering single):
+/// adds the columns q_w_m2_sr_nm,u_w_m2_sr_nm,v_w_m2_sr_nm,
+/// degree_of_linear_polarisation,angle_of_polarisation_deg, and the
+/// radiance column becomes the polarised intensity I. Q and U are referred
+/// to the view's meridian plane (the vertical plane through the view): Q > 0
+/// for a mostly vertical electric field, Q < 0 for a horizontal one; the
+/// angle of polarisation (-90..90 degrees) turns from the vertical toward
+/// the observer's left; it is empty (JSON null) for wholly unpolarised
+/// light. Mie aerosols are not polarised yet (refused):
+///   sora spectrum --preset us-standard-1976-rayleigh --sun-elevation 30 \
+///       --principal-plane 10 --method path-tracing --samples 20000 --stokes
+///
 /// The sun from a date, a time and a place instead (--refraction off for
 /// its geometric position; the JSON reports the sun used):
 ///   sora spectrum --preset earth-clear --time 2026-06-21T05:30:00+09:00 \
@@ -100,6 +113,11 @@ pub struct SpectrumArgs {
 
     #[command(flatten)]
     method: MethodOptions,
+
+    /// Polarised light: Stokes Q, U, V, the degree and the angle of
+    /// polarisation (with --method path-tracing, or --scattering single)
+    #[arg(long)]
+    stokes: bool,
 
     /// Output format
     #[arg(long, value_enum, default_value_t = Format::Csv)]
@@ -187,7 +205,14 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
         _ => (0, 0),
     };
     let mut atmosphere = args.source.load()?;
-    let sky = args.sun.sky(&mut atmosphere, scattering, method)?;
+    let polarisation = if args.stokes {
+        sora::Polarisation::Vector
+    } else {
+        sora::Polarisation::Scalar
+    };
+    let sky = args
+        .sun
+        .sky_with_polarisation(&mut atmosphere, scattering, method, polarisation)?;
     let grid = *sky.wavelengths();
     let (sun_elevation, sun_azimuth) = args.sun.sun_deg()?;
     let views = directions(&args, (sun_elevation, sun_azimuth))?;
@@ -234,9 +259,36 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
                     number_list(errors.values(), |e| format!("{e:.3e}"))
                 ),
             };
+            let stokes = r.stokes.as_ref().map_or(String::new(), |stokes| {
+                let degree = stokes.degree_of_linear_polarisation(&r.radiance_w_m2_sr_nm);
+                let angle: Vec<String> = stokes
+                    .angle_of_polarisation_deg()
+                    .iter()
+                    .map(|a| a.map_or("null".to_string(), |a| format!("{a:.6}")))
+                    .collect();
+                let errors = stokes
+                    .standard_errors_w_m2_sr_nm
+                    .as_ref()
+                    .map_or(String::new(), |[q, u, v]| {
+                        format!(
+                            ", \"standard_error_q_w_m2_sr_nm\": [{}], \"standard_error_u_w_m2_sr_nm\": [{}], \"standard_error_v_w_m2_sr_nm\": [{}]",
+                            number_list(q.values(), |e| format!("{e:.3e}")),
+                            number_list(u.values(), |e| format!("{e:.3e}")),
+                            number_list(v.values(), |e| format!("{e:.3e}"))
+                        )
+                    });
+                format!(
+                    ", \"q_w_m2_sr_nm\": [{}], \"u_w_m2_sr_nm\": [{}], \"v_w_m2_sr_nm\": [{}]{errors}, \"degree_of_linear_polarisation\": [{}], \"angle_of_polarisation_deg\": [{}]",
+                    number_list(stokes.q_w_m2_sr_nm.values(), |v| format!("{v:.9e}")),
+                    number_list(stokes.u_w_m2_sr_nm.values(), |v| format!("{v:.9e}")),
+                    number_list(stokes.v_w_m2_sr_nm.values(), |v| format!("{v:.9e}")),
+                    number_list(&degree, |d| format!("{d:.6}")),
+                    angle.join(", ")
+                )
+            });
             (
                 format!(
-                    "\"radiance_w_m2_sr_nm\": [{}]{errors}",
+                    "\"radiance_w_m2_sr_nm\": [{}]{errors}{stokes}",
                     number_list(r.radiance_w_m2_sr_nm.values(), |v| format!("{v:.9e}"))
                 ),
                 format!(
@@ -251,6 +303,34 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
         String::new()
     };
     let wavelength_json = number_list(&wavelengths, |w| format!("{w}"));
+    // The Stokes columns of a CSV row (empty without --stokes).
+    let stokes_header = if args.stokes {
+        ",q_w_m2_sr_nm,u_w_m2_sr_nm,v_w_m2_sr_nm,degree_of_linear_polarisation,angle_of_polarisation_deg"
+    } else {
+        ""
+    };
+    let stokes_columns: Vec<Vec<String>> = results
+        .iter()
+        .map(|r| match &r.stokes {
+            None => vec![String::new(); wavelengths.len()],
+            Some(stokes) => {
+                let degree = stokes.degree_of_linear_polarisation(&r.radiance_w_m2_sr_nm);
+                let angle = stokes.angle_of_polarisation_deg();
+                (0..wavelengths.len())
+                    .map(|i| {
+                        format!(
+                            ",{:.9e},{:.9e},{:.9e},{:.6},{}",
+                            stokes.q_w_m2_sr_nm[i],
+                            stokes.u_w_m2_sr_nm[i],
+                            stokes.v_w_m2_sr_nm[i],
+                            degree[i],
+                            angle[i].map_or(String::new(), |a| format!("{a:.6}"))
+                        )
+                    })
+                    .collect()
+            }
+        })
+        .collect();
     let sun_json =
         format!("\"sun_elevation_deg\": {sun_elevation}, \"sun_azimuth_deg\": {sun_azimuth}");
     if args.view_elevation.is_some() {
@@ -263,13 +343,13 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
                 } else {
                     "wavelength_nm,radiance_w_m2_sr_nm"
                 };
-                writeln!(out, "{header}")?;
+                writeln!(out, "{header}{stokes_header}")?;
                 for (i, wavelength) in wavelengths.iter().enumerate() {
                     write!(out, "{wavelength},{:.9e}", result.radiance_w_m2_sr_nm[i])?;
                     if let Some(errors) = &result.standard_error_w_m2_sr_nm {
                         write!(out, ",{:.3e}", errors[i])?;
                     }
-                    writeln!(out)?;
+                    writeln!(out, "{}", stokes_columns[0][i])?;
                 }
                 eprintln!(
                     "XYZ {:.6e} {:.6e} {:.6e}; linear sRGB {:.6e} {:.6e} {:.6e}",
@@ -292,8 +372,8 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
                 } else {
                     "view_elevation_deg,view_azimuth_deg,wavelength_nm,radiance_w_m2_sr_nm"
                 };
-                writeln!(out, "{header}")?;
-                for (view, result) in views.iter().zip(&results) {
+                writeln!(out, "{header}{stokes_header}")?;
+                for ((view, result), stokes) in views.iter().zip(&results).zip(&stokes_columns) {
                     for (i, wavelength) in wavelengths.iter().enumerate() {
                         write!(
                             out,
@@ -305,7 +385,7 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
                         if let Some(errors) = &result.standard_error_w_m2_sr_nm {
                             write!(out, ",{:.3e}", errors[i])?;
                         }
-                        writeln!(out)?;
+                        writeln!(out, "{}", stokes[i])?;
                     }
                 }
             }

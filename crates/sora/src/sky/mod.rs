@@ -53,6 +53,7 @@ pub use irradiance::{Irradiance, Plane};
 
 use std::sync::OnceLock;
 
+use crate::atmosphere::phase_matrix::PhaseMatrix;
 use crate::atmosphere::{Atmosphere, AtmosphereOptics};
 use crate::camera::Camera;
 use crate::colour::{SpectrumToXyz, Xyz};
@@ -64,7 +65,7 @@ use crate::transport::multiple_scattering::{
     forward_peak_cosine,
 };
 use crate::transport::path_tracing::worst_relative_error;
-use crate::transport::stokes::meridian_reference;
+use crate::transport::stokes::{meridian_reference, rotation_cos_sin_2eta, scattering_plane};
 use crate::transport::{
     Observation, PathTracer, SingleScatteringScratch, SingleScatteringSky, SkyViewTable, SunColumns,
 };
@@ -130,8 +131,9 @@ pub enum Polarisation {
     /// Stokes vectors through every scattering: the polarised intensity and
     /// Q, U and V, referred to the meridian plane of each view (the
     /// convention is in `transport/stokes.rs`, summarised at
-    /// [`Stokes`]). Only the path tracer follows it so far; Mie species
-    /// need their phase matrix, which is not tabulated yet.
+    /// [`Stokes`]). So far from the path tracer (all orders) and from the
+    /// fast method with [`Scattering::Single`]; Mie species need their
+    /// phase matrix, which is not tabulated yet.
     Vector,
 }
 
@@ -370,6 +372,8 @@ struct ViewWork {
     /// The multiply scattered radiance, and the forward-peak term's.
     added: Vec<f64>,
     forward_radiance: Vec<f64>,
+    /// Phase matrices per wavelength (polarised single scattering).
+    matrices: Vec<PhaseMatrix>,
 }
 
 impl Sky {
@@ -481,10 +485,13 @@ impl Sky {
     /// Checks that the method can follow `polarisation` and keeps it.
     fn set_polarisation(&mut self, polarisation: Polarisation) -> Result<()> {
         if polarisation == Polarisation::Vector {
-            if !matches!(self.method, Method::PathTracing { .. }) {
-                return Err(Error::Unsupported(
-                    "polarisation: only the path tracer follows Stokes vectors so far (method path-tracing); the fast and reference methods are scalar".into(),
-                ));
+            match (self.method, self.scattering) {
+                (Method::PathTracing { .. }, _) | (Method::Fast, Scattering::Single) => {}
+                _ => {
+                    return Err(Error::Unsupported(
+                        "polarisation: Stokes vectors come from the path tracer (method path-tracing) or from single scattering by the fast method; the multiple-scattering field and the reference march are scalar so far".into(),
+                    ));
+                }
             }
             PathTracer::new_polarised(&self.scene)?;
         }
@@ -620,6 +627,7 @@ impl Sky {
             phase: vec![0.0; wavelengths],
             added: vec![0.0; wavelengths],
             forward_radiance: vec![0.0; wavelengths],
+            matrices: vec![PhaseMatrix::default(); wavelengths],
         }
     }
 
@@ -684,33 +692,82 @@ impl Sky {
             }
             return Ok(out);
         }
-        // Views in groups, each group with its own buffers.
+        // Views in groups, each group with its own buffers; each view's
+        // values are I, then Q and U when polarised (V is 0: see
+        // `SingleScatteringSky::polarised_radiance_from_integrals`).
         self.prepare_field()?;
         const VIEWS_PER_TASK: usize = 4;
-        let mut values = vec![0.0; views.len() * wavelengths];
+        let polarised = self.polarisation == Polarisation::Vector;
+        let per_view = wavelengths * if polarised { 3 } else { 1 };
+        let mut values = vec![0.0; views.len() * per_view];
         let total = views.len() as u64;
         let done = std::sync::atomic::AtomicU64::new(0);
         crate::parallel::for_each_chunk_mut(
             &mut values,
-            VIEWS_PER_TASK * wavelengths,
+            VIEWS_PER_TASK * per_view,
             |task, chunk| {
                 let mut work = self.view_work();
-                for (k, radiance) in chunk.chunks_mut(wavelengths).enumerate() {
-                    let view = views[task * VIEWS_PER_TASK + k].to_vector();
-                    self.compute_view_radiance(view, None, &mut work, radiance);
+                for (k, out) in chunk.chunks_mut(per_view).enumerate() {
+                    let view = views[task * VIEWS_PER_TASK + k];
+                    let (radiance, stokes) = out.split_at_mut(wavelengths);
+                    self.compute_view_radiance(view.to_vector(), None, &mut work, radiance);
+                    if polarised {
+                        self.compute_single_scattering_stokes(view, &mut work, stokes);
+                    }
                     let finished = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
                     progress(finished, total);
                 }
             },
         );
         Ok(values
-            .chunks(wavelengths)
-            .map(|values| SkyRadiance {
-                radiance_w_m2_sr_nm: SampledSpectrum::from_values(values.to_vec()),
-                standard_error_w_m2_sr_nm: None,
-                stokes: None,
+            .chunks(per_view)
+            .map(|values| {
+                let spectrum = |k: usize| {
+                    SampledSpectrum::from_values(
+                        values[k * wavelengths..(k + 1) * wavelengths].to_vec(),
+                    )
+                };
+                SkyRadiance {
+                    radiance_w_m2_sr_nm: spectrum(0),
+                    standard_error_w_m2_sr_nm: None,
+                    stokes: polarised.then(|| Stokes {
+                        q_w_m2_sr_nm: spectrum(1),
+                        u_w_m2_sr_nm: spectrum(2),
+                        v_w_m2_sr_nm: SampledSpectrum::zeros(wavelengths),
+                        standard_errors_w_m2_sr_nm: None,
+                    }),
+                }
             })
             .collect())
+    }
+
+    /// Q and U (W m^-2 sr^-1 nm^-1, referred to the view's meridian plane)
+    /// of the singly scattered light of `view`, into `stokes` (Q then U),
+    /// from the integrals [`Sky::compute_view_radiance`] left in `work`:
+    /// the scattering-plane Q of single scattering turned into the meridian
+    /// frame (`transport/stokes.rs`).
+    fn compute_single_scattering_stokes(
+        &self,
+        view: ViewDirection,
+        work: &mut ViewWork,
+        stokes: &mut [f64],
+    ) {
+        let w = view.to_vector();
+        let (k_in, k_out) = (-self.sun_direction(), -w);
+        let meridian = meridian_reference(view.elevation_deg(), view.azimuth_deg());
+        let normal = scattering_plane(k_in, k_out, meridian);
+        let (c, s) = rotation_cos_sin_2eta(k_out, normal.cross(k_out), meridian);
+        let (q, u) = stokes.split_at_mut(self.wavelengths().len());
+        self.scene.polarised_radiance_from_integrals(
+            w.dot(self.sun_direction()),
+            work.single.inscattering_integrals(),
+            &mut work.matrices,
+            q,
+        );
+        for (q, u) in q.iter_mut().zip(u) {
+            *u = -s * *q;
+            *q *= c;
+        }
     }
 
     /// The radiance a fast-method image shows toward `view` (read from its

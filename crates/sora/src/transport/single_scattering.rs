@@ -44,6 +44,7 @@ use std::borrow::Borrow;
 
 use super::optical_column::{ProfileCorners, SunColumnTable, compute_columns_along_ray};
 use super::quadrature::{GAUSS_NODES, GAUSS_WEIGHTS, running_integral_matrix};
+use crate::atmosphere::phase_matrix::PhaseMatrix;
 use crate::atmosphere::{Atmosphere, AtmosphereOptics, DensityProfile};
 use crate::error::{Error, Result};
 use crate::geometry::{Vector3, direction_from_elevation_azimuth, segment_in_atmosphere};
@@ -472,6 +473,38 @@ impl SingleScatteringSky {
                 radiance[i] += self.optics.solar_irradiance_w_m2_nm[i]
                     * s.scattering_per_m[i]
                     * phase[i]
+                    * row[i];
+            }
+        }
+    }
+
+    /// The polarised part of single scattering from the same integrals:
+    /// per wavelength sum_j E sigma_s,j b1_j(theta) I_j, W m^-2 sr^-1 nm^-1,
+    /// into `polarised`: the Q of the singly scattered light referred to the
+    /// scattering plane (its I is [`Self::radiance_from_integrals`]'s; the
+    /// sunlit ground is unpolarised, and sunlight scattered once has U = V
+    /// = 0 there). The scattering angle is the same along the whole view
+    /// ray (a parallel sun), so the phase matrix comes out of the integral
+    /// as the phase function does.
+    pub(crate) fn polarised_radiance_from_integrals(
+        &self,
+        cos_theta: f64,
+        integrals: &[f64],
+        matrices: &mut [PhaseMatrix],
+        polarised: &mut [f64],
+    ) {
+        let wavelengths = self.optics.grid.len();
+        polarised.fill(0.0);
+        for (j, s) in self.optics.species.iter().enumerate() {
+            let row = &integrals[j * wavelengths..(j + 1) * wavelengths];
+            if row.iter().all(|v| *v == 0.0) {
+                continue;
+            }
+            s.phase_function.phase_matrix_into(cos_theta, matrices);
+            for i in 0..wavelengths {
+                polarised[i] += self.optics.solar_irradiance_w_m2_nm[i]
+                    * s.scattering_per_m[i]
+                    * matrices[i].b1
                     * row[i];
             }
         }

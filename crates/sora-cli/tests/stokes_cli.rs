@@ -1,0 +1,173 @@
+//! `sora spectrum --stokes`: the columns, their meaning, and the choices
+//! that cannot give Stokes vectors.
+
+mod common;
+
+use common::{sora, stdout};
+
+/// The standard output of `sora` with `args`, which must succeed.
+fn run(args: &[&str]) -> String {
+    stdout(&sora(args))
+}
+
+const RAYLEIGH_SUN_30: [&str; 7] = [
+    "spectrum",
+    "--preset",
+    "us-standard-1976-rayleigh",
+    "--sun-elevation",
+    "30",
+    "--sun-azimuth",
+    "180",
+];
+
+#[test]
+fn single_scattering_stokes_columns_follow_the_convention() {
+    // 90 degrees from the sun in its vertical: the field is horizontal,
+    // so Q < 0, U = 0 and the angle of polarisation is 90 degrees.
+    let csv = run(&[
+        &RAYLEIGH_SUN_30[..],
+        &[
+            "--view-elevation",
+            "60",
+            "--view-azimuth",
+            "0",
+            "--scattering",
+            "single",
+            "--stokes",
+        ],
+    ]
+    .concat());
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next(),
+        Some(
+            "wavelength_nm,radiance_w_m2_sr_nm,q_w_m2_sr_nm,u_w_m2_sr_nm,v_w_m2_sr_nm,degree_of_linear_polarisation,angle_of_polarisation_deg"
+        )
+    );
+    let mut rows = 0;
+    for line in lines {
+        let v: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
+        let (i, q, u, degree, angle) = (v[1], v[2], v[3], v[5], v[6]);
+        assert!(q < 0.0 && u.abs() < 1e-12 * i, "{line}");
+        // The Rayleigh maximum with air's depolarisation (rho ~ 0.028-0.03):
+        // (1 - rho) / (1 + rho) ~ 0.94-0.95.
+        assert!(degree > 0.93 && degree < 0.96, "{line}");
+        assert!((degree - q.hypot(u) / i).abs() < 1e-6, "{line}");
+        assert!((angle - 90.0).abs() < 1e-6, "{line}");
+        rows += 1;
+    }
+    assert_eq!(rows, 21);
+}
+
+#[test]
+fn unpolarised_light_has_an_empty_angle_and_json_null() {
+    // Looking straight at the sun, single scattering is forward scattering:
+    // b1 = 0, no polarisation, and no angle.
+    let view = [
+        "--view-elevation",
+        "30",
+        "--view-azimuth",
+        "180",
+        "--scattering",
+        "single",
+        "--stokes",
+    ];
+    let csv = run(&[&RAYLEIGH_SUN_30[..], &view, &["--wavelengths", "550"]].concat());
+    let row = csv.lines().nth(1).unwrap();
+    assert!(row.ends_with(",0.000000,"), "{row}");
+    let json = run(&[
+        &RAYLEIGH_SUN_30[..],
+        &view,
+        &["--wavelengths", "550", "--format", "json"],
+    ]
+    .concat());
+    assert!(
+        json.contains("\"angle_of_polarisation_deg\": [null]"),
+        "{json}"
+    );
+}
+
+#[test]
+fn path_traced_stokes_have_standard_errors_in_json() {
+    let json = run(&[
+        &RAYLEIGH_SUN_30[..],
+        &[
+            "--almucantar",
+            "90",
+            "--method",
+            "path-tracing",
+            "--samples",
+            "500",
+        ],
+        &[
+            "--stokes",
+            "--format",
+            "json",
+            "--wavelengths",
+            "450:650:100",
+        ],
+    ]
+    .concat());
+    for key in [
+        "\"q_w_m2_sr_nm\"",
+        "\"standard_error_q_w_m2_sr_nm\"",
+        "\"standard_error_v_w_m2_sr_nm\"",
+        "\"degree_of_linear_polarisation\"",
+    ] {
+        assert_eq!(json.matches(key).count(), 4, "{key} in {json}");
+    }
+    assert!(!json.contains("NaN"));
+}
+
+#[test]
+fn choices_without_stokes_vectors_are_one_line_errors() {
+    for (extra, expected) in [
+        (
+            &["--view-elevation", "60", "--view-azimuth", "0"][..],
+            "path tracer",
+        ),
+        (
+            &[
+                "--view-elevation",
+                "60",
+                "--view-azimuth",
+                "0",
+                "--method",
+                "reference",
+                "--scattering",
+                "single",
+            ][..],
+            "reference",
+        ),
+    ] {
+        let out = sora(&[&RAYLEIGH_SUN_30[..], extra, &["--stokes"]].concat());
+        assert!(!out.status.success());
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        assert!(
+            stderr.contains("polarisation") && stderr.contains(expected),
+            "{stderr}"
+        );
+        assert!(out.stdout.is_empty());
+    }
+    let out = sora(&[
+        "spectrum",
+        "--preset",
+        "earth-clear",
+        "--sun-elevation",
+        "30",
+        "--view-elevation",
+        "60",
+        "--view-azimuth",
+        "0",
+        "--scattering",
+        "single",
+        "--stokes",
+    ]);
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("Mie") && stderr.lines().count() == 1,
+        "{stderr}"
+    );
+}

@@ -1,0 +1,218 @@
+//! Polarised skies through the front door ([`sora::Polarisation::Vector`]):
+//! single scattering by the fast method against its closed forms, the
+//! choices that cannot give Stokes vectors, and the path tracer's Stokes
+//! output (its physics is checked against the Coulson tables inside the
+//! crate, `src/transport/reference_tests/polarisation_reference.rs`).
+
+use sora::{Atmosphere, Method, Polarisation, Scattering, Sky, ViewDirection};
+
+/// Pure Rayleigh air (exponential, 8 km) with depolarisation ratio `rho`,
+/// a flat sun, a black ground.
+fn rayleigh(rho: f64) -> Atmosphere {
+    Atmosphere::from_toml_str(&format!(
+        r#"
+name = "pure Rayleigh"
+[planet]
+radius_m = 6360e3
+atmosphere_height_m = 100e3
+ground_albedo = 0.0
+[sun]
+spectrum = "flat"
+irradiance_w_m2_nm = 1.0
+angular_diameter_deg = 0.0
+[[species]]
+name = "air"
+profile.exponential.scale_height_m = 8000
+scattering.rayleigh = {{ coefficient_per_m = 1.16e-5, reference_wavelength_nm = 550, wavelength_exponent = 4.0, depolarization_ratio = {rho} }}
+"#
+    ))
+    .unwrap()
+}
+
+/// East-north-up unit vector of (elevation, azimuth clockwise from north).
+fn enu(elevation_deg: f64, azimuth_deg: f64) -> [f64; 3] {
+    let (se, ce) = elevation_deg.to_radians().sin_cos();
+    let (sa, ca) = azimuth_deg.to_radians().sin_cos();
+    [ce * sa, ce * ca, se]
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+#[test]
+fn single_scattering_has_the_rayleigh_closed_forms() {
+    let sun = (25.0, 200.0);
+    let views = [
+        (90.0, 0.0),
+        (10.0, 20.0),
+        (40.0, 110.0),
+        (65.0, 290.0),
+        (3.0, 200.0),
+    ];
+    for rho in [0.0, 0.0279, 0.1] {
+        let atmosphere = rayleigh(rho);
+        let sky = Sky::builder(&atmosphere)
+            .sun_deg(sun.0, sun.1)
+            .scattering(Scattering::Single)
+            .polarisation(Polarisation::Vector)
+            .build()
+            .unwrap();
+        let views: Vec<ViewDirection> = views
+            .iter()
+            .map(|(el, az)| ViewDirection::new(*el, *az).unwrap())
+            .collect();
+        for (view, result) in views.iter().zip(sky.radiances(&views).unwrap()) {
+            let stokes = result.stokes.as_ref().unwrap();
+            let w = enu(view.elevation_deg(), view.azimuth_deg());
+            let s = enu(sun.0, sun.1);
+            let mu = dot(w, s);
+            // -b1 / a1 of the Rayleigh phase matrix (Hansen & Travis 1974,
+            // eq. 2.15): (1 - mu^2) / (1 + mu^2) without depolarisation.
+            let d = (1.0 - rho) / (1.0 + 0.5 * rho);
+            let expected = 0.75 * d * (1.0 - mu * mu) / (0.75 * d * (1.0 + mu * mu) + 1.0 - d);
+            let degrees = stokes.degree_of_linear_polarisation(&result.radiance_w_m2_sr_nm);
+            // The field is perpendicular to the plane of sun, eye and
+            // view: along n = (-s) x (-w), read in the meridian frame
+            // (e_l toward the zenith across the sky, e_r to the observer's
+            // left: e_r = (-w) x e_l).
+            let n = cross(s, w);
+            let (el, az) = (
+                view.elevation_deg().to_radians(),
+                view.azimuth_deg().to_radians(),
+            );
+            let e_l = [-el.sin() * az.sin(), -el.sin() * az.cos(), el.cos()];
+            let e_r = cross([-w[0], -w[1], -w[2]], e_l);
+            let expected_angle = dot(n, e_r).atan2(dot(n, e_l)).to_degrees();
+            for (k, (degree, angle)) in degrees
+                .iter()
+                .zip(stokes.angle_of_polarisation_deg())
+                .enumerate()
+            {
+                assert!(
+                    (degree - expected).abs() < 1e-9,
+                    "rho {rho} view {view:?} wavelength {k}: {degree} vs {expected}"
+                );
+                let difference = (angle.unwrap() - expected_angle).rem_euclid(180.0);
+                assert!(
+                    difference.min(180.0 - difference) < 1e-6,
+                    "rho {rho} view {view:?}: angle {angle:?} vs {expected_angle}"
+                );
+                assert_eq!(stokes.v_w_m2_sr_nm[k], 0.0);
+            }
+        }
+        // 90 degrees from a sun at the horizon, at the zenith: the maximum,
+        // (1 - rho) / (1 + rho).
+        let zenith = Sky::builder(&atmosphere)
+            .sun_deg(0.0, 90.0)
+            .scattering(Scattering::Single)
+            .polarisation(Polarisation::Vector)
+            .build()
+            .unwrap()
+            .radiance(ViewDirection::new(90.0, 0.0).unwrap())
+            .unwrap();
+        let degree = zenith
+            .stokes
+            .as_ref()
+            .unwrap()
+            .degree_of_linear_polarisation(&zenith.radiance_w_m2_sr_nm);
+        for d in degree {
+            assert!(
+                (d - (1.0 - rho) / (1.0 + rho)).abs() < 1e-9,
+                "rho {rho}: {d}"
+            );
+        }
+    }
+}
+
+#[test]
+fn scalar_intensity_is_unchanged_by_single_scattering_polarisation() {
+    // For single scattering of unpolarised sunlight, I is the phase
+    // function's: the vector and scalar skies agree to the last bit.
+    let atmosphere = Atmosphere::preset("us-standard-1976-rayleigh").unwrap();
+    let view = ViewDirection::new(30.0, 45.0).unwrap();
+    let build = |polarisation| {
+        Sky::builder(&atmosphere)
+            .sun_deg(20.0, 180.0)
+            .scattering(Scattering::Single)
+            .polarisation(polarisation)
+            .build()
+            .unwrap()
+            .radiance(view)
+            .unwrap()
+    };
+    let (scalar, vector) = (build(Polarisation::Scalar), build(Polarisation::Vector));
+    assert_eq!(scalar.radiance_w_m2_sr_nm, vector.radiance_w_m2_sr_nm);
+    assert!(scalar.stokes.is_none() && vector.stokes.is_some());
+}
+
+#[test]
+fn path_traced_stokes_come_with_standard_errors() {
+    let atmosphere = Atmosphere::preset("us-standard-1976-rayleigh").unwrap();
+    let sky = Sky::builder(&atmosphere)
+        .sun_deg(30.0, 180.0)
+        .method(Method::PathTracing {
+            samples: 2_000,
+            seed: 1,
+        })
+        .polarisation(Polarisation::Vector)
+        .build()
+        .unwrap();
+    // 90 degrees from the sun in the solar meridian: strongly polarised,
+    // horizontally (the field perpendicular to the vertical scattering
+    // plane), so Q < 0 and the angle is near 90 degrees.
+    let result = sky
+        .radiance(ViewDirection::new(60.0, 0.0).unwrap())
+        .unwrap();
+    let stokes = result.stokes.as_ref().unwrap();
+    let errors = stokes.standard_errors_w_m2_sr_nm.as_ref().unwrap();
+    for (k, degree) in stokes
+        .degree_of_linear_polarisation(&result.radiance_w_m2_sr_nm)
+        .iter()
+        .enumerate()
+    {
+        assert!(*degree > 0.5 && *degree < 1.0, "{k}: {degree}");
+        assert!(stokes.q_w_m2_sr_nm[k] < -5.0 * errors[0][k]);
+        let angle = stokes.angle_of_polarisation_deg()[k].unwrap();
+        assert!(angle.abs() > 85.0, "{k}: {angle}");
+    }
+}
+
+#[test]
+fn choices_without_stokes_vectors_are_refused() {
+    let rayleigh = rayleigh(0.0);
+    let error = Sky::builder(&rayleigh)
+        .polarisation(Polarisation::Vector)
+        .build()
+        .unwrap_err()
+        .to_string();
+    assert!(
+        error.contains("polarisation") && error.contains("path-tracing"),
+        "{error}"
+    );
+    let error = Sky::builder(&rayleigh)
+        .scattering(Scattering::Single)
+        .method(Method::REFERENCE_DEFAULT)
+        .polarisation(Polarisation::Vector)
+        .build()
+        .unwrap_err()
+        .to_string();
+    assert!(error.contains("reference"), "{error}");
+    // Mie aerosols: their phase matrix is not tabulated yet.
+    let earth = Atmosphere::preset("earth-clear").unwrap();
+    let error = Sky::builder(&earth)
+        .scattering(Scattering::Single)
+        .polarisation(Polarisation::Vector)
+        .build()
+        .unwrap_err()
+        .to_string();
+    assert!(error.contains("Mie") && error.contains('"'), "{error}");
+}
