@@ -5,13 +5,14 @@
 //! reference file's two cases).
 //!
 //! Measured: a fixed batch of paths (criterion's throughput is paths/s),
+//! the same batch with polarisation (Stokes vectors),
 //! and the run that reaches a 1% standard error at every wavelength, its
 //! path count found by a pilot run (printed before the measurements).
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use sora::atmosphere::Planet;
 use sora::spectrum::Spectrum;
-use sora::{Atmosphere, Method, Sky, ViewDirection, WavelengthGrid};
+use sora::{Atmosphere, Method, Polarisation, Sky, ViewDirection, WavelengthGrid};
 
 const BATCH: u64 = 10_000;
 
@@ -23,14 +24,16 @@ fn path_tracing_benchmarks(c: &mut Criterion) {
         Spectrum::Constant(0.3),
     )
     .expect("planet");
-    let tracer = |samples: u64| {
+    let polarised_tracer = |samples: u64, polarisation: Polarisation| {
         Sky::builder(&atmosphere)
             .sun_deg(36.0, 207.0)
             .wavelengths(WavelengthGrid::paper())
             .method(Method::PathTracing { samples, seed: 1 })
+            .polarisation(polarisation)
             .build()
             .expect("sky")
     };
+    let tracer = |samples: u64| polarised_tracer(samples, Polarisation::Scalar);
     let view = ViewDirection::new(17.0, 347.0).expect("view");
 
     // Pilot: the per-path relative standard deviation at the worst
@@ -49,6 +52,13 @@ fn path_tracing_benchmarks(c: &mut Criterion) {
     let batch = tracer(BATCH);
     group.bench_function("case_a_10000_paths", |b| {
         b.iter(|| batch.radiance(view).expect("radiance"))
+    });
+    // The same paths carrying Stokes vectors (the aerosol's
+    // Henyey-Greenstein phase function is non-polarising, the air's
+    // Rayleigh matrix polarises).
+    let polarised = polarised_tracer(BATCH, Polarisation::Vector);
+    group.bench_function("case_a_10000_paths_polarised", |b| {
+        b.iter(|| polarised.radiance(view).expect("radiance"))
     });
     group.throughput(Throughput::Elements(paths_to_one_percent));
     let to_one_percent = tracer(paths_to_one_percent);

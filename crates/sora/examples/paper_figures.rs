@@ -1,5 +1,5 @@
 //! The paper's results, and skies beside them, generated from the library
-//! (deterministic; 35-40 s on two cores after the build):
+//! (deterministic; about 65 s on two cores after the build):
 //!
 //! ```sh
 //! cargo run --release -p sora --example paper_figures -- docs
@@ -20,6 +20,11 @@
 //!   multiple, and `mars_sun_glow.csv`: the colour of the sky near the sun
 //!   and away from it, the numbers behind `docs/README.md`'s remarks on the
 //!   blue glow;
+//! - `polarisation_principal_plane.png` and `.csv`: the degree of
+//!   polarisation along the sun's vertical of a Rayleigh sky
+//!   (`us-standard-1976-rayleigh`, 550 nm) at suns 30 and 5 degrees, single
+//!   scattering beside all orders (the polarised path tracer), with the
+//!   neutral points where the higher orders put them;
 //! - `day_strip.png`: a day over Tokyo (June solstice 2026) from before
 //!   sunrise to after sunset, fisheyes at one exposure;
 //! - `readme_tokyo.png`: the README's time-and-place command
@@ -56,7 +61,7 @@ use sora::geometry::angle_between_deg;
 use sora::output::{DisplayImage, write_png};
 use sora::spectrum::{SampledSpectrum, SolarSpectrum, WavelengthGrid};
 use sora::sun_position::{Location, Refraction, SunPosition, parse_time_utc};
-use sora::{ImageSettings, Method, Scattering, Sky, ViewDirection};
+use sora::{ImageSettings, Method, Polarisation, Scattering, Sky, ViewDirection};
 
 type Result<T> = std::result::Result<T, Box<dyn std::error::Error>>;
 
@@ -87,6 +92,7 @@ fn run(out: &Path) -> Result<()> {
         render_scene(out, &grid, &scene)?;
     }
     mars_sun_glow(out, &grid)?;
+    polarisation_principal_plane(out)?;
     day_strip(out, &grid)?;
     Ok(())
 }
@@ -204,6 +210,143 @@ fn wrote(path: &Path, what: &str, started: Instant) {
         path.display(),
         started.elapsed().as_secs_f64()
     );
+}
+
+// ---------------------------------------------------------------------------
+// Polarisation along the principal plane
+
+/// Paths per direction of the polarisation curves (standard error of the
+/// degree of polarisation about 0.004).
+const POLARISATION_PATHS: u64 = 10_000;
+
+/// `polarisation_principal_plane.png` and `.csv`: -Q/I along the sun's
+/// vertical (where U = 0 by symmetry, so -Q/I is the degree of
+/// polarisation with its sign: positive for a field perpendicular to the
+/// vertical, the usual skylight polarisation, negative beyond a neutral
+/// point), at 550 nm for the U.S. standard Rayleigh sky at suns 30 and 5
+/// degrees (azimuth 180): single scattering (fast method, exact) and all
+/// orders (the polarised path tracer). The x axis runs from the horizon
+/// under the sun (0) over the zenith (90) to the opposite horizon (180).
+fn polarisation_principal_plane(out: &Path) -> Result<()> {
+    let started = Instant::now();
+    let atmosphere = Atmosphere::preset("us-standard-1976-rayleigh")?;
+    let grid = WavelengthGrid::new(550.0, 550.0, 20.0)?;
+    // Elevations 1..89 toward the sun, the zenith, then 89..1 away from it.
+    let along: Vec<f64> = (1..180).map(f64::from).collect();
+    let views: Vec<ViewDirection> = along
+        .iter()
+        .map(|x| {
+            if *x <= 90.0 {
+                ViewDirection::new(*x, 180.0)
+            } else {
+                ViewDirection::new(180.0 - x, 0.0)
+            }
+        })
+        .collect::<sora::Result<_>>()?;
+    let mut csv = String::from(
+        "# -Q/I at 550 nm along the principal plane of us-standard-1976-rayleigh (sun azimuth 180); x: degrees from the horizon under the sun over the zenith\nsun_elevation_deg,x_deg,view_elevation_deg,view_azimuth_deg,scattering,minus_q_over_i,standard_error\n",
+    );
+    let mut series = Vec::new();
+    let mut notes = Vec::new();
+    for (sun_elevation, colour) in [(30.0, [200, 60, 40]), (5.0, [40, 90, 200])] {
+        for (scattering, method, dashed) in [
+            ("single", Method::Fast, true),
+            (
+                "all orders",
+                Method::PathTracing {
+                    samples: POLARISATION_PATHS,
+                    seed: 1,
+                },
+                false,
+            ),
+        ] {
+            let sky = Sky::builder(&atmosphere)
+                .wavelengths(grid)
+                .sun_deg(sun_elevation, 180.0)
+                .scattering(if dashed {
+                    Scattering::Single
+                } else {
+                    Scattering::multiple()
+                })
+                .method(method)
+                .polarisation(Polarisation::Vector)
+                .build()?;
+            let results = sky.radiances(&views)?;
+            let mut points = Vec::with_capacity(views.len());
+            for ((x, view), result) in along.iter().zip(&views).zip(&results) {
+                let stokes = result.stokes.as_ref().ok_or("no Stokes vector")?;
+                let (i, q) = (result.radiance_w_m2_sr_nm[0], stokes.q_w_m2_sr_nm[0]);
+                let error = stokes
+                    .standard_errors_w_m2_sr_nm
+                    .as_ref()
+                    .map_or(0.0, |e| e[0][0] / i);
+                writeln!(
+                    csv,
+                    "{sun_elevation},{x},{},{},{scattering},{:.6},{error:.6}",
+                    view.elevation_deg(),
+                    view.azimuth_deg(),
+                    -q / i
+                )?;
+                points.push((*x, -q / i));
+            }
+            if !dashed {
+                // Neutral points: where -Q/I changes sign (linear between
+                // the two directions around the change).
+                for pair in points.windows(2) {
+                    let ((x0, y0), (x1, y1)) = (pair[0], pair[1]);
+                    if y0.signum() != y1.signum() {
+                        let x = x0 + (x1 - x0) * y0 / (y0 - y1);
+                        let (name, from) = if x < 90.0 {
+                            (
+                                if x > sun_elevation {
+                                    "BABINET"
+                                } else {
+                                    "BREWSTER"
+                                },
+                                sun_elevation,
+                            )
+                        } else {
+                            ("ARAGO", 180.0 + sun_elevation)
+                        };
+                        let note = format!(
+                            "SUN {sun_elevation}: {name} POINT {:.1} DEG FROM THE {}",
+                            (x - from).abs(),
+                            if name == "ARAGO" { "ANTISUN" } else { "SUN" }
+                        );
+                        println!("{}", note.to_lowercase());
+                        notes.push(note);
+                    }
+                }
+            }
+            series.push(plot::Series {
+                label: format!("SUN {sun_elevation} DEG, {}", scattering.to_uppercase()),
+                colour,
+                dashed,
+                points,
+            });
+        }
+    }
+    let path = out.join("polarisation_principal_plane.csv");
+    std::fs::write(&path, csv)?;
+    wrote(&path, "polarisation along the principal plane", started);
+    notes.push("SOLID: ALL ORDERS (PATH TRACER), DASHED: SINGLE".into());
+    let figure = plot::LinePlot {
+        title: "DEGREE OF POLARISATION, SUN'S VERTICAL, RAYLEIGH SKY, 550 NM".into(),
+        x_label: "DEGREES FROM THE HORIZON UNDER THE SUN (ZENITH AT 90)".into(),
+        y_label: "-Q / I".into(),
+        x_range: (0.0, 180.0),
+        // Room above the curves for the legend.
+        y_range: (-0.2, 2.0),
+        x_ticks: ((0..7).map(|k| 30.0 * k as f64).collect(), 0),
+        y_ticks: ((0..7).map(|k| -0.2 + 0.2 * k as f64).collect(), 1),
+        series,
+        notes,
+    };
+    let (w, h, data) = figure.render(900, 640).into_rgb8();
+    let path = out.join("polarisation_principal_plane.png");
+    write_png(&path, &DisplayImage::new(w, h, data)?)?;
+    wrote(&path, "polarisation plot", started);
+    Ok(())
 }
 
 // ---------------------------------------------------------------------------
