@@ -171,3 +171,24 @@ fn choices_without_stokes_vectors_are_one_line_errors() {
         "{stderr}"
     );
 }
+
+#[test]
+fn atmosphere_show_says_what_polarises() {
+    let text = run(&["atmosphere", "show", "--preset", "clear-sky-reference"]);
+    assert!(text.contains("phase Rayleigh, polarising"), "{text}");
+    assert!(
+        text.contains("phase Henyey-Greenstein, non-polarising"),
+        "{text}"
+    );
+    let text = run(&["atmosphere", "show", "--preset", "earth-clear"]);
+    assert!(
+        text.contains("no phase matrix yet (refused by --stokes)"),
+        "{text}"
+    );
+    // Ozone does not scatter: nothing to say about its polarisation.
+    let ozone = text
+        .lines()
+        .find(|l| l.trim_start().starts_with("ozone"))
+        .unwrap();
+    assert!(ozone.ends_with("phase isotropic"), "{ozone}");
+}

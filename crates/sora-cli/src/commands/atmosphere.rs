@@ -10,7 +10,7 @@ use std::io::Write as _;
 use anyhow::Context;
 use clap::{Args, Subcommand, ValueEnum};
 use sora::atmosphere::presets::PRESETS;
-use sora::atmosphere::{Atmosphere, AtmosphereOptics};
+use sora::atmosphere::{Atmosphere, AtmosphereOptics, PhaseFunction};
 use sora::spectrum::{Spectrum, WavelengthGrid};
 
 use crate::arguments::AtmosphereSource;
@@ -198,9 +198,17 @@ fn table(atmosphere: &Atmosphere, optics: &AtmosphereOptics) -> String {
             Some(n) => format!(", {n:.4e} m^-3 at relative density 1"),
             None => String::new(),
         };
+        // What a polarised computation (--stokes) does with it.
+        let scatters = species.scattering_per_m.values().iter().any(|b| *b > 0.0);
+        let polarisation = match species.phase_function {
+            _ if !scatters => "",
+            PhaseFunction::Rayleigh { .. } => ", polarising",
+            PhaseFunction::Tabulated(_) => ", no phase matrix yet (refused by --stokes)",
+            _ => ", non-polarising",
+        };
         let _ = writeln!(
             out,
-            "  {:name_width$}  {}; {}; column {:.1} m{}; phase {}",
+            "  {:name_width$}  {}; {}; column {:.1} m{}; phase {}{polarisation}",
             species.name,
             species.kind,
             species.profile.describe(),
