@@ -443,7 +443,7 @@ fn malformed_files_get_one_line_errors_naming_the_problem() {
         (
             edit("geometric_std_dev = 1.5", "geometric_std_dev = 0.9"),
             &[
-                "species[2].scattering.mie.size_distribution.lognormal.geometric_std_dev = 0.9 is out of range: allowed > 1",
+                "species[2].scattering.mie.size_distribution.lognormal.geometric_std_dev = 0.9 is out of range: allowed >= 1.0001",
             ],
         ),
         (
@@ -504,6 +504,38 @@ fn malformed_files_get_one_line_errors_naming_the_problem() {
             ),
             &[
                 "species[2].reference_wavelength_nm = 880 nm is out of range: allowed within the refractive-index table, 321..=800 nm",
+            ],
+        ),
+        // Vanishing widths (issue 17: v_eff = 1e-30 made the radius
+        // quadrature allocate until the process aborted).
+        (
+            edit(
+                "geometric_std_dev = 1.5",
+                "geometric_std_dev = 1.00000000000001",
+            ),
+            &[
+                "species[2].scattering.mie.size_distribution.lognormal.geometric_std_dev = 1.00000000000001",
+                ">= 1.0001 (narrower populations are not resolved)",
+            ],
+        ),
+        (
+            edit(
+                "median_radius_um = 0.5, geometric_std_dev = 1.5,",
+                "effective_radius_um = 1.5, effective_variance = 1e-30,",
+            ),
+            &[
+                "species[2].scattering.mie.size_distribution.lognormal.effective_variance = 1e-30",
+                ">= 1e-8",
+            ],
+        ),
+        (
+            edit(
+                "lognormal = { median_radius_um = 0.5, geometric_std_dev = 1.5,",
+                "gamma = { effective_radius_um = 1.5, effective_variance = 5e-324,",
+            ),
+            &[
+                "species[2].scattering.mie.size_distribution.gamma.effective_variance = 5e-324",
+                ">= 1e-8",
             ],
         ),
         // Absorbing gas.
