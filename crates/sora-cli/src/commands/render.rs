@@ -15,6 +15,7 @@ use sora::output::{
 };
 
 use crate::arguments::{AtmosphereSource, ColourOptions, Scattering, SunAndObserver};
+use crate::output_path::output_target;
 
 /// Render the sky to an image.
 ///
@@ -52,7 +53,10 @@ pub struct RenderArgs {
     #[command(flatten)]
     sun: SunAndObserver,
 
-    /// Output image: .png or .exr
+    /// Output image: .png or .exr, replaced atomically. A symbolic link is
+    /// followed (the file it points to is written, the link kept); a
+    /// directory, a read-only file or a missing directory is refused before
+    /// any work
     #[arg(short, long, value_name = "FILE")]
     output: PathBuf,
 
@@ -200,15 +204,22 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         } else {
             width
         });
-    if let Some(parent) = args.output.parent().filter(|p| !p.as_os_str().is_empty())
-        && !parent.is_dir()
-    {
-        bail!(
-            "{}: the directory {} does not exist",
-            args.output.display(),
-            parent.display()
-        );
-    }
+    // Every file the run will write, checked before any work (see
+    // `output_path`): a directory, a read-only file or a missing directory
+    // is refused now, not after the render.
+    let frame_count = frame_count(&args)?;
+    let targets = if frame_count == 1 {
+        vec![output_target(&args.output, "-o")?]
+    } else {
+        (0..frame_count)
+            .map(|frame| {
+                output_target(
+                    &frame_path(&args.output, frame),
+                    "-o (a frame of the sequence)",
+                )
+            })
+            .collect::<anyhow::Result<Vec<_>>>()?
+    };
     let mut atmosphere = args.source.load()?;
     let started = Instant::now();
     let method = match args.method {
@@ -228,18 +239,17 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     // The frames: one, or a sequence of sun elevations at one azimuth.
     let elevations = frame_elevations(&args, sky.sun_position_deg().0)?;
     let mut exposure = None;
-    for (frame, elevation) in elevations.iter().enumerate() {
-        let (output, frame_sky);
+    debug_assert_eq!(elevations.len(), targets.len());
+    for (elevation, output) in elevations.iter().zip(&targets) {
+        let frame_sky;
         let sky = if elevations.len() == 1 {
-            output = args.output.clone();
             &sky
         } else {
-            output = frame_path(&args.output, frame);
             frame_sky = sky.with_sun_deg(*elevation, sky.sun_position_deg().1)?;
             &frame_sky
         };
         let scale = render_frame(
-            &args, sky, &image, &to_xyz, format, &output, exposure, started,
+            &args, sky, &image, &to_xyz, format, output, exposure, started,
         )?;
         // A sequence keeps the first frame's automatic exposure (a fixed
         // one is the same for every frame anyway).
@@ -255,12 +265,16 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The sun elevations of the frames: `--sun-elevation` alone, or from it
-/// to `--sun-elevation-to` every `--sun-elevation-step` degrees.
-fn frame_elevations(args: &RenderArgs, first: f64) -> anyhow::Result<Vec<f64>> {
+/// How many frames the run writes: 1, or a sequence's (checked: at most
+/// 10000), from the options alone (before the sun is known).
+fn frame_count(args: &RenderArgs) -> anyhow::Result<usize> {
     let Some(last) = args.sun_elevation_to else {
-        return Ok(vec![first]);
+        return Ok(1);
     };
+    let first = args
+        .sun
+        .sun_elevation
+        .expect("clap: --sun-elevation-to requires --sun-elevation");
     let step = args.sun_elevation_step;
     if !(step.is_finite() && step > 0.0) {
         bail!("--sun-elevation-step = {step} deg is out of range: allowed > 0 deg");
@@ -268,10 +282,21 @@ fn frame_elevations(args: &RenderArgs, first: f64) -> anyhow::Result<Vec<f64>> {
     if !(-90.0..=90.0).contains(&last) {
         bail!("--sun-elevation-to = {last} deg is out of range: allowed -90..=90 deg");
     }
-    let count = ((last - first).abs() / step + 1e-9).floor() as usize + 1;
-    if count > 10_000 {
+    let count = ((last - first).abs() / step + 1e-9).floor();
+    if !(count < 10_000.0) {
         bail!("{count} frames from {first} to {last} deg every {step} deg: at most 10000");
     }
+    Ok(count as usize + 1)
+}
+
+/// The sun elevations of the frames: `--sun-elevation` alone, or from it
+/// to `--sun-elevation-to` every `--sun-elevation-step` degrees.
+fn frame_elevations(args: &RenderArgs, first: f64) -> anyhow::Result<Vec<f64>> {
+    let Some(last) = args.sun_elevation_to else {
+        return Ok(vec![first]);
+    };
+    let step = args.sun_elevation_step;
+    let count = frame_count(args)?;
     let direction = if last >= first { 1.0 } else { -1.0 };
     Ok((0..count)
         .map(|k| first + direction * step * k as f64)
