@@ -159,3 +159,57 @@ fn a_read_only_file_is_refused_and_left_alone() {
     );
     assert_eq!(&std::fs::read(&writable).unwrap()[..4], b"\x89PNG");
 }
+
+/// The perspective camera's options with the whole-sky cameras are an
+/// error naming the option and the camera (issue 17: they were silently
+/// ignored), before any work; with the perspective camera they apply.
+#[test]
+fn perspective_options_with_whole_sky_cameras_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let output = dir.path().join("sky.png");
+    let output = output.to_str().unwrap();
+    for (camera, shown) in [
+        (None, "fisheye"),
+        (Some("fisheye"), "fisheye"),
+        (Some("equirect"), "equirect"),
+    ] {
+        for (option, value) in [
+            ("--fov-deg", "60"),
+            ("--view-elevation", "20"),
+            ("--view-azimuth", "-90"),
+        ] {
+            let mut extra = vec![option, value];
+            if let Some(camera) = camera {
+                extra.extend(["--camera", camera]);
+            }
+            let out = render(&["--atmosphere", "/nonexistent/air.toml"], output, &extra);
+            let stderr = one_line_error(&out);
+            assert!(
+                stderr.contains(&format!(
+                    "{option} applies to --camera perspective only; the {shown} camera"
+                )),
+                "{extra:?}: {stderr}"
+            );
+        }
+    }
+    assert!(!std::path::Path::new(output).exists());
+    let out = render(
+        &PRESET,
+        output,
+        &[
+            "--camera",
+            "perspective",
+            "--fov-deg",
+            "60",
+            "--view-elevation",
+            "20",
+            "--view-azimuth",
+            "-90",
+        ],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}

@@ -73,26 +73,19 @@ pub struct RenderArgs {
     height: Option<u32>,
 
     /// Perspective camera: elevation of the view direction, degrees
-    #[arg(
-        long,
-        value_name = "DEG",
-        default_value_t = 10.0,
-        allow_hyphen_values = true
-    )]
-    view_elevation: f64,
+    /// [default: 10] (an error with the other cameras, which show the whole
+    /// sky)
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
+    view_elevation: Option<f64>,
 
-    /// Perspective camera: azimuth of the view direction, degrees clockwise from north
-    #[arg(
-        long,
-        value_name = "DEG",
-        default_value_t = 180.0,
-        allow_hyphen_values = true
-    )]
-    view_azimuth: f64,
+    /// Perspective camera: azimuth of the view direction, degrees clockwise
+    /// from north [default: 180]
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
+    view_azimuth: Option<f64>,
 
-    /// Perspective camera: horizontal field of view, degrees
-    #[arg(long, value_name = "DEG", default_value_t = 90.0)]
-    fov_deg: f64,
+    /// Perspective camera: horizontal field of view, degrees [default: 90]
+    #[arg(long, value_name = "DEG")]
+    fov_deg: Option<f64>,
 
     /// fast (tables per image) or reference (the paper's march per pixel, slow)
     #[arg(long, value_enum, default_value_t = Method::Fast)]
@@ -181,15 +174,7 @@ enum Method {
 pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     // Check everything cheap before the expensive work.
     let format = OutputFormat::from_path(&args.output)?;
-    let camera = match args.camera {
-        CameraKind::Fisheye => Camera::Fisheye,
-        CameraKind::Equirect => Camera::Equirectangular,
-        CameraKind::Perspective => Camera::Perspective(PerspectiveCamera::new(
-            args.view_elevation,
-            args.view_azimuth,
-            args.fov_deg,
-        )?),
-    };
+    let camera = camera(&args)?;
     let width = args
         .width
         .unwrap_or(if args.camera == CameraKind::Equirect {
@@ -263,6 +248,34 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         }
     }
     Ok(())
+}
+
+/// The camera of the options. The view direction and field of view
+/// belong to the perspective camera only: given with another, they would be
+/// silently ignored, so they are an error naming the option and the camera.
+fn camera(args: &RenderArgs) -> anyhow::Result<Camera> {
+    let perspective_only = [
+        ("--view-elevation", args.view_elevation),
+        ("--view-azimuth", args.view_azimuth),
+        ("--fov-deg", args.fov_deg),
+    ];
+    let (name, whole_sky) = match args.camera {
+        CameraKind::Fisheye => ("fisheye", Camera::Fisheye),
+        CameraKind::Equirect => ("equirect", Camera::Equirectangular),
+        CameraKind::Perspective => {
+            return Ok(Camera::Perspective(PerspectiveCamera::new(
+                args.view_elevation.unwrap_or(10.0),
+                args.view_azimuth.unwrap_or(180.0),
+                args.fov_deg.unwrap_or(90.0),
+            )?));
+        }
+    };
+    if let Some((option, _)) = perspective_only.iter().find(|(_, value)| value.is_some()) {
+        bail!(
+            "{option} applies to --camera perspective only; the {name} camera shows the whole sky (add --camera perspective, or leave {option} out)"
+        );
+    }
+    Ok(whole_sky)
 }
 
 /// How many frames the run writes: 1, or a sequence's (checked: at most
