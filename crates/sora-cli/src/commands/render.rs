@@ -15,6 +15,7 @@ use sora::output::{
 };
 
 use crate::arguments::{AtmosphereSource, ColourOptions, Scattering, SunAndObserver};
+use crate::estimate;
 use crate::output_path::output_target;
 
 /// Render the sky to an image.
@@ -205,6 +206,24 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             })
             .collect::<anyhow::Result<Vec<_>>>()?
     };
+    // Image buffers bounded before any work (see `estimate`).
+    let (encoded_bytes_per_pixel, format_name) = match (format, args.png_16_bit) {
+        (OutputFormat::Png, false) => (6, "8-bit PNG"),
+        (OutputFormat::Png, true) => (12, "16-bit PNG"),
+        (OutputFormat::Exr, _) => (24, "OpenEXR"),
+    };
+    estimate::check_render_memory(width, height, encoded_bytes_per_pixel, format_name)?;
+    estimate::announce(estimate::render_estimate(
+        width,
+        height,
+        frame_count,
+        args.sun.wavelengths.len(),
+        match args.method {
+            Method::Fast => estimate::RenderSpeed::Fast,
+            Method::Reference => estimate::RenderSpeed::Reference,
+        },
+        encoded_bytes_per_pixel,
+    ));
     let mut atmosphere = args.source.load()?;
     let started = Instant::now();
     let method = match args.method {
@@ -296,7 +315,7 @@ fn frame_count(args: &RenderArgs) -> anyhow::Result<usize> {
         bail!("--sun-elevation-to = {last} deg is out of range: allowed -90..=90 deg");
     }
     let count = ((last - first).abs() / step + 1e-9).floor();
-    if !(count < 10_000.0) {
+    if !(0.0..10_000.0).contains(&count) {
         bail!("{count} frames from {first} to {last} deg every {step} deg: at most 10000");
     }
     Ok(count as usize + 1)

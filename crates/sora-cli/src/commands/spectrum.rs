@@ -193,6 +193,13 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
     let views = directions(&args, (sun_elevation, sun_azimuth))?;
     let started = Instant::now();
     let path_tracing = args.method.method == MethodKind::PathTracing;
+    if path_tracing {
+        crate::estimate::announce(crate::estimate::path_tracing_estimate(
+            samples,
+            views.len(),
+            grid.len(),
+        ));
+    }
     let results = if path_tracing {
         let bar = progress_bar(samples * views.len() as u64);
         let results = sky.radiances_with_progress(&views, &|done, _| bar.set_position(done))?;

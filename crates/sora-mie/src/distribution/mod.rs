@@ -343,10 +343,7 @@ impl ModifiedGammaDistribution {
         effective_variance: f64,
     ) -> Result<Self, SizeDistributionError> {
         validate_radius("effective radius", effective_radius_m)?;
-        if !(effective_variance.is_finite()
-            && effective_variance >= MIN_EFFECTIVE_VARIANCE
-            && effective_variance < 0.5)
-        {
+        if !(MIN_EFFECTIVE_VARIANCE..0.5).contains(&effective_variance) {
             return Err(SizeDistributionError::InvalidEffectiveVariance {
                 effective_variance,
                 upper_limit_exclusive: 0.5,
