@@ -506,6 +506,15 @@ fn malformed_files_get_one_line_errors_naming_the_problem() {
                 "species[2].reference_wavelength_nm = 880 nm is out of range: allowed within the refractive-index table, 321..=800 nm",
             ],
         ),
+        // An irradiance scale that made the solar irradiance infinite
+        // (issue 17, the 50,000-file mutation campaign).
+        (
+            edit(
+                "irradiance_w_m2_nm = 1.0",
+                "irradiance_w_m2_nm = 1.0\nirradiance_scale = 1e308",
+            ),
+            &["sun.irradiance_scale = 1e308 is out of range: allowed > 0 and <= 1e4"],
+        ),
         // Keys that need each other (issue 17, checks across keys).
         (
             edit(
