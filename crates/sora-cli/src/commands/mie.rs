@@ -241,13 +241,16 @@ fn print_phase_table(m: Complex64, x: f64, step_deg: f64) -> anyhow::Result<()> 
             "--m 1+0i: the sphere does not scatter (every Mie coefficient is 0, Q_sca = 0), so it has no phase function; give an index other than 1+0i"
         );
     }
-    let count = (180.0 / step_deg).floor() as usize + 1;
-    if count > MAX_PHASE_TABLE_ROWS {
+    // Counted in floating point: a subnormal step gives an infinite count
+    // (5e-324 overflowed the integer, found by the flag mutation tests).
+    let rows = (180.0 / step_deg).floor() + 1.0;
+    if rows > MAX_PHASE_TABLE_ROWS as f64 {
         bail!(
-            "--angle-step-deg = {step_deg:e} deg gives {count} rows, more than the limit of {MAX_PHASE_TABLE_ROWS}; give a step of at least {:e} deg",
+            "--angle-step-deg = {step_deg:e} deg gives {rows:e} rows, more than the limit of {MAX_PHASE_TABLE_ROWS}; give a step of at least {:e} deg",
             180.0 / (MAX_PHASE_TABLE_ROWS - 1) as f64
         );
     }
+    let count = rows as usize;
     let angles_deg: Vec<f64> = (0..count)
         .map(|i| (i as f64 * step_deg).min(180.0))
         .collect();
