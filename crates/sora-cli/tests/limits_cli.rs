@@ -62,3 +62,55 @@ fn render_memory_is_refused_before_any_work() {
     assert!(stderr.contains("air.toml"), "{stderr}");
     assert!(!stderr.contains("estimate"), "{stderr}");
 }
+
+/// `sora spectrum` lists at most 100,000 directions and 1e7 directions x
+/// wavelengths, refused before any radiance is computed (issue 17:
+/// `--almucantar 5e-324` overflowed the count).
+#[test]
+fn direction_counts_are_bounded() {
+    let spectrum = |extra: &[&str]| {
+        sora(
+            &[
+                &[
+                    "spectrum",
+                    "--preset",
+                    "clear-sky-reference",
+                    "--sun-elevation",
+                    "30",
+                    "--scattering",
+                    "single",
+                ][..],
+                extra,
+            ]
+            .concat(),
+        )
+    };
+    for (extra, expected) in [
+        (
+            &["--almucantar", "5e-324", "--wavelengths", "550"][..],
+            "--almucantar = 5e-324 deg gives inf directions, more than the limit of 100000",
+        ),
+        (
+            &["--almucantar", "0.0035", "--wavelengths", "550"][..],
+            "gives 1.02858e5 directions, more than the limit of 100000",
+        ),
+        (
+            &["--principal-plane", "0.002", "--wavelengths", "360:830:1"][..],
+            "90001 directions x 471 wavelengths = 4.2390471e7 values, more than the limit of 1e7",
+        ),
+    ] {
+        let stderr = one_line_error(&spectrum(extra));
+        assert!(stderr.contains(expected), "{extra:?}: {stderr}");
+    }
+    // Within both limits: 1801 directions at one wavelength.
+    let out = spectrum(&["--principal-plane", "0.1", "--wavelengths", "550"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(
+        String::from_utf8_lossy(&out.stdout).lines().count(),
+        1 + 1801
+    );
+}
