@@ -169,34 +169,41 @@ impl std::fmt::Display for SizeDistributionError {
         match self {
             SizeDistributionError::InvalidRadius { quantity, radius_m } => write!(
                 f,
-                "{quantity} = {radius_m} m is invalid: it must be finite and greater than 0"
+                "{quantity} = {} m is invalid: it must be finite and greater than 0",
+                Number(*radius_m)
             ),
             SizeDistributionError::InvalidGeometricStandardDeviation {
                 geometric_standard_deviation,
             } => write!(
                 f,
-                "geometric standard deviation sigma_g = {geometric_standard_deviation} is invalid: it must be finite and at least {MIN_GEOMETRIC_STANDARD_DEVIATION} (narrower populations are not resolved)"
+                "geometric standard deviation sigma_g = {} is invalid: it must be finite and at least {MIN_GEOMETRIC_STANDARD_DEVIATION} (narrower populations are not resolved)",
+                Number(*geometric_standard_deviation)
             ),
             SizeDistributionError::InvalidEffectiveVariance {
                 effective_variance,
                 upper_limit_exclusive,
             } => write!(
                 f,
-                "effective variance v_eff = {effective_variance} is invalid: it must be finite, at least {MIN_EFFECTIVE_VARIANCE:e} (narrower populations are not resolved) and less than {upper_limit_exclusive}"
+                "effective variance v_eff = {} is invalid: it must be finite, at least {MIN_EFFECTIVE_VARIANCE:e} (narrower populations are not resolved) and less than {upper_limit_exclusive}",
+                Number(*effective_variance)
             ),
             SizeDistributionError::InvalidRadiusWindow {
                 min_radius_m,
                 max_radius_m,
             } => write!(
                 f,
-                "radius window [{min_radius_m} m, {max_radius_m} m] is invalid: it needs 0 < min < max, both finite"
+                "radius window [{} m, {} m] is invalid: it needs 0 < min < max, both finite",
+                Number(*min_radius_m),
+                Number(*max_radius_m)
             ),
             SizeDistributionError::NoParticlesInWindow {
                 min_radius_m,
                 max_radius_m,
             } => write!(
                 f,
-                "radius window [{min_radius_m} m, {max_radius_m} m] holds no particles of the distribution (number fraction underflows to 0)"
+                "radius window [{} m, {} m] holds no particles of the distribution (number fraction underflows to 0)",
+                Number(*min_radius_m),
+                Number(*max_radius_m)
             ),
             SizeDistributionError::InvalidQuadratureSettings { message } => {
                 write!(f, "invalid radius quadrature settings: {message}")
@@ -215,6 +222,21 @@ impl std::fmt::Display for SizeDistributionError {
 }
 
 impl std::error::Error for SizeDistributionError {}
+
+/// A number in a message, in the fewest digits that read back as it: plain
+/// between 1e-4 and 1e6, in exponent form outside (`1e-30`, not 31 digits).
+struct Number(f64);
+
+impl std::fmt::Display for Number {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let magnitude = self.0.abs();
+        if self.0.is_finite() && magnitude != 0.0 && !(1e-4..1e6).contains(&magnitude) {
+            write!(f, "{:e}", self.0)
+        } else {
+            write!(f, "{}", self.0)
+        }
+    }
+}
 
 fn validate_radius(quantity: &'static str, radius_m: f64) -> Result<(), SizeDistributionError> {
     if radius_m.is_finite() && radius_m > 0.0 {
@@ -820,12 +842,13 @@ mod tests {
     /// their own effective radius and variance.
     #[test]
     fn the_narrowest_populations_are_refused_at_the_stated_limits() {
-        for v_eff in [1e-30, 5e-324, 0.99e-8] {
+        for (v_eff, shown) in [(1e-30, "1e-30"), (5e-324, "5e-324"), (0.99e-8, "9.9e-9")] {
             let message = LogNormalDistribution::from_effective_radius_and_variance(1e-6, v_eff)
                 .unwrap_err()
                 .to_string();
             assert!(
-                message.contains(&format!("{v_eff}")) && message.contains("at least 1e-8"),
+                message.contains(&format!("v_eff = {shown} is invalid"))
+                    && message.contains("at least 1e-8"),
                 "{message}"
             );
             assert!(ModifiedGammaDistribution::new(1e-6, v_eff).is_err());
