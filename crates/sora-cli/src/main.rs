@@ -7,6 +7,8 @@
 
 mod arguments;
 mod commands;
+mod estimate;
+mod output_path;
 
 use clap::{Parser, Subcommand};
 

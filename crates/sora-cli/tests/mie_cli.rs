@@ -341,7 +341,8 @@ fn batch_accepts_a_byte_order_mark() {
 /// 1e-4 deg), refused before anything is computed.
 #[test]
 fn phase_table_rows_are_limited() {
-    for step in ["1e-6", "9.9e-5"] {
+    // 5e-324: 180 / step is infinite (it overflowed the row count).
+    for step in ["1e-6", "9.9e-5", "5e-324"] {
         let out = sora(&[
             "mie",
             "--m",
@@ -395,4 +396,80 @@ fn huge_distributions_are_refused_at_once() {
         "--wavelengths",
         "550:550:1",
     ]));
+}
+
+/// `sora mie --batch` echoes its inputs in the shortest form that reads
+/// back as the same double (issue 17: 5e-324 came back as 324 digits).
+#[test]
+fn batch_echoes_inputs_in_shortest_round_trip_form() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("echo.csv");
+    let inputs = [
+        ("1.5", "5e-324", "1e-300", ["1.5", "5e-324", "1e-300"]),
+        ("1.33", "0.0", "10.0", ["1.33", "0", "10"]),
+        ("1.5", "0.001", "12345.678", ["1.5", "0.001", "12345.678"]),
+        ("1.5", "1e-5", "2.5e-8", ["1.5", "1e-5", "2.5e-8"]),
+    ];
+    let mut text = String::from("m_re,m_im,x\n");
+    for (re, im, x, _) in &inputs {
+        text += &format!("{re},{im},{x}\n");
+    }
+    std::fs::write(&input, text).unwrap();
+    let out = stdout(&sora(&["mie", "--batch", input.to_str().unwrap()]));
+    for (line, (re, im, x, expected)) in out.lines().skip(1).zip(&inputs) {
+        let fields: Vec<&str> = line.split(',').collect();
+        assert_eq!(&fields[..3], expected, "{line}");
+        // Each echo reads back as the input's double.
+        for (echo, given) in fields[..3].iter().zip([re, im, x]) {
+            assert_eq!(echo.parse::<f64>().unwrap(), given.parse::<f64>().unwrap());
+        }
+        assert!(line.len() < 150, "{line}");
+    }
+    assert_eq!(out.lines().count(), 1 + inputs.len());
+}
+
+/// Q_abs is never negative, even where k is subnormal and the absorption
+/// is far below rounding of Q_ext (issue 17: the batch campaign found
+/// Q_abs < 0 at k = 5e-324), and stays the reference value where k is
+/// normal.
+#[test]
+fn absorption_is_never_negative_at_tiny_k() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("tiny_k.csv");
+    let mut text = String::from("m_re,m_im,x\n");
+    for k in [
+        "5e-324",
+        "1e-320",
+        "1e-310",
+        "2.2250738585072014e-308",
+        "1e-300",
+        "1e-30",
+    ] {
+        for x in ["0.001", "0.5", "1", "10", "100", "1000", "5000"] {
+            for n in ["1.0001", "1.33", "1.5", "2", "5"] {
+                text += &format!("{n},{k},{x}\n");
+            }
+        }
+    }
+    std::fs::write(&input, &text).unwrap();
+    let out = stdout(&sora(&["mie", "--batch", input.to_str().unwrap()]));
+    let mut rows = 0;
+    for line in out.lines().skip(1) {
+        let values: Vec<f64> = line.split(',').map(|v| v.parse().unwrap()).collect();
+        let (qext, qsca, qabs) = (values[3], values[4], values[5]);
+        assert!(qabs >= 0.0 && qabs.is_sign_positive(), "{line}");
+        assert!(qext >= qsca && qsca >= 0.0, "{line}");
+        rows += 1;
+    }
+    assert_eq!(rows, text.lines().count() - 1);
+    // Where k is normal: the 100-digit reference
+    // (shared/reference/mie/efficiencies.csv), m = 1.5 + 0.01i, x = 1.
+    let single = stdout(&sora(&["mie", "--m", "1.5+0.01i", "--x", "1"]));
+    let qabs: f64 = single
+        .lines()
+        .find_map(|l| l.strip_prefix("qabs  = "))
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!((qabs / 0.028840763900684192 - 1.0).abs() < 1e-11, "{qabs}");
 }

@@ -443,7 +443,7 @@ fn malformed_files_get_one_line_errors_naming_the_problem() {
         (
             edit("geometric_std_dev = 1.5", "geometric_std_dev = 0.9"),
             &[
-                "species[2].scattering.mie.size_distribution.lognormal.geometric_std_dev = 0.9 is out of range: allowed > 1",
+                "species[2].scattering.mie.size_distribution.lognormal.geometric_std_dev = 0.9 is out of range: allowed >= 1.0001",
             ],
         ),
         (
@@ -506,6 +506,76 @@ fn malformed_files_get_one_line_errors_naming_the_problem() {
                 "species[2].reference_wavelength_nm = 880 nm is out of range: allowed within the refractive-index table, 321..=800 nm",
             ],
         ),
+        // An irradiance scale that made the solar irradiance infinite
+        // (issue 17, the 50,000-file mutation campaign).
+        (
+            edit(
+                "irradiance_w_m2_nm = 1.0",
+                "irradiance_w_m2_nm = 1.0\nirradiance_scale = 1e308",
+            ),
+            &["sun.irradiance_scale = 1e308 is out of range: allowed > 0 and <= 1e4"],
+        ),
+        // Keys that need each other (issue 17, checks across keys).
+        (
+            edit(
+                "phase.henyey_greenstein.g = 0.7",
+                "phase.henyey_greenstein = {}",
+            ),
+            &["line 23", "missing field `g`"],
+        ),
+        (
+            edit(
+                "optical_depth = 0.1\nreference_wavelength_nm = 550\n",
+                "optical_depth = 0.1\n",
+            ),
+            &["species[1].reference_wavelength_nm: is required with optical_depth"],
+        ),
+        (
+            edit(
+                "number_density_m3 = 2.0e6",
+                "number_density_m3 = 2.0e6\noptical_depth = 0.3",
+            ),
+            &["species[2]: a Mie aerosol needs exactly one of number_density_m3 or optical_depth"],
+        ),
+        (
+            edit(
+                "number_density_m3 = 2.5e25",
+                "number_density_m3 = 2.5e25\noptical_depth = 0.1",
+            ),
+            &["species[0].optical_depth: is not used by a Rayleigh gas"],
+        ),
+        // Vanishing widths (issue 17: v_eff = 1e-30 made the radius
+        // quadrature allocate until the process aborted).
+        (
+            edit(
+                "geometric_std_dev = 1.5",
+                "geometric_std_dev = 1.00000000000001",
+            ),
+            &[
+                "species[2].scattering.mie.size_distribution.lognormal.geometric_std_dev = 1.00000000000001",
+                ">= 1.0001 (narrower populations are not resolved)",
+            ],
+        ),
+        (
+            edit(
+                "median_radius_um = 0.5, geometric_std_dev = 1.5,",
+                "effective_radius_um = 1.5, effective_variance = 1e-30,",
+            ),
+            &[
+                "species[2].scattering.mie.size_distribution.lognormal.effective_variance = 1e-30",
+                ">= 1e-8",
+            ],
+        ),
+        (
+            edit(
+                "lognormal = { median_radius_um = 0.5, geometric_std_dev = 1.5,",
+                "gamma = { effective_radius_um = 1.5, effective_variance = 5e-324,",
+            ),
+            &[
+                "species[2].scattering.mie.size_distribution.gamma.effective_variance = 5e-324",
+                ">= 1e-8",
+            ],
+        ),
         // Absorbing gas.
         (
             edit("absorption.gas = \"ozone\"", "absorption.gas = \"methane\""),
@@ -536,8 +606,9 @@ fn malformed_files_get_one_line_errors_naming_the_problem() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
-/// Tables that must cover the wavelength grid are checked when the optics
-/// are computed, and the error names the species or key.
+/// Tables that must cover the wavelength grid are checked in one step
+/// before the optics are computed (`atmosphere/coverage.rs`), and the error
+/// names the table's key and the grid: the two that disagree.
 #[test]
 fn tables_that_do_not_cover_the_grid_are_named() {
     let grid = WavelengthGrid::paper();
@@ -547,21 +618,21 @@ fn tables_that_do_not_cover_the_grid_are_named() {
                 "ground_albedo = 0.1",
                 "ground_albedo = { wavelength_nm = [400, 700], albedo = [0.1, 0.2] }",
             ),
-            "planet.ground_albedo: the table covers 400-700 nm but 380-380 nm is needed",
+            "planet.ground_albedo covers 400-700 nm but the wavelength grid 380:780:20 spans 380-780 nm: choose a grid within 400-700 nm, or extend the table",
         ),
         (
             edit(
                 "[321, 440, 500, 600, 700, 800]",
                 "[321, 440, 500, 600, 700, 750]",
             ),
-            "species[2] (dust): scattering.mie.refractive_index: wavelength 760 nm is outside the refractive-index table",
+            "species[2] (dust): scattering.mie.refractive_index covers 321-750 nm but the wavelength grid 380:780:20 spans 380-780 nm",
         ),
         (
             edit(
                 "absorption.gas = \"ozone\"",
                 "absorption = { wavelength_nm = [400, 700], cross_section_m2 = [1e-25, 1e-25] }",
             ),
-            "species[3] (ozone): the table covers 400-700 nm",
+            "species[3] (ozone): absorption.cross_section_m2 covers 400-700 nm but the wavelength grid 380:780:20",
         ),
     ];
     for (text, expected) in cases {
@@ -573,6 +644,26 @@ fn tables_that_do_not_cover_the_grid_are_named() {
         );
         assert!(!message.contains('\n'));
     }
+    // A solar spectrum read from a CSV that stops short of the grid; and a
+    // built-in refractive-index table (Wolff's Mars dust, 263-2480 nm) is
+    // fine on any grid of sora's 360-830 nm.
+    let text = edit(
+        "spectrum = \"flat\"\nirradiance_w_m2_nm = 1.0",
+        "spectrum = \"csv\"\ncsv_file = \"short.csv\"",
+    );
+    let atmosphere = Atmosphere::from_toml_str_with_files(&text, &mut |_: &str| {
+        Ok("wavelength_nm,irradiance_w_m2_nm\n400,1.5\n900,1.5\n".to_string())
+    })
+    .unwrap();
+    let message = atmosphere.compute_optics(&grid).unwrap_err().to_string();
+    assert!(
+        message.starts_with("sun.spectrum (")
+            && message
+                .contains("covers 400-900 nm but the wavelength grid 380:780:20 spans 380-780 nm"),
+        "{message}"
+    );
+    let mars = Atmosphere::preset("mars-dust").unwrap();
+    assert!(mars.compute_optics(&"360:830:470".parse().unwrap()).is_ok());
 }
 
 /// Values that each pass their checks but combine into an infinite

@@ -18,11 +18,13 @@
 //! count; `SORA_FUZZ_TRACE=FILE` writes each file there before it runs,
 //! so that after a crash FILE is the culprit) and prints its counts.
 //!
-//! Open finding (issue 17): `SORA_FUZZ_SEED=99 SORA_FUZZ_FILES=50000`
-//! reaches `mars-dust` with `effective_variance = 1e-30` in its lognormal,
-//! for which the loader's radius quadrature (`check_radius_range` ->
-//! `RadiusQuadrature::gauss_legendre`) asks for gigabytes and the process
-//! aborts out of memory.
+//! Found and fixed (issue 17): `SORA_FUZZ_SEED=99 SORA_FUZZ_FILES=50000`
+//! reached `mars-dust` with `effective_variance = 1e-30` in its lognormal,
+//! for which the radius quadrature's panels stopped advancing and it
+//! allocated until the process aborted. Widths below sora-mie's
+//! `MIN_GEOMETRIC_STANDARD_DEVIATION` / `MIN_EFFECTIVE_VARIANCE` are refused
+//! naming the key, and the quadrature counts its nodes against a bound
+//! before it allocates (`tests/atmosphere_files.rs` keeps the cases).
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 

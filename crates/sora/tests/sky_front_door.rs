@@ -218,6 +218,63 @@ fn bad_choices_are_errors_not_panics() {
     assert!(sky.render_xyz(&image, &other, &|_| {}).is_err());
 }
 
+/// Image buffers are bounded by `MAX_IMAGE_BUFFER_BYTES` (4 GiB), checked
+/// before anything is computed (issue 17): at the edge the request passes
+/// the check (and meets the next one, that the path tracer renders no
+/// images: nothing is allocated), one row past it is refused naming the
+/// size, the limit and what to do; spectral images count every wavelength.
+#[test]
+fn image_buffers_are_bounded_before_allocating() {
+    assert_eq!(sora::sky::MAX_IMAGE_BUFFER_BYTES, 4 << 30);
+    let atmosphere = Atmosphere::preset("earth-clear").unwrap();
+    let traced = Sky::builder(&atmosphere)
+        .method(Method::PathTracing {
+            samples: 10,
+            seed: 0,
+        })
+        .build()
+        .unwrap();
+    let to_xyz = SpectrumToXyz::new(traced.wavelengths(), Observer::Cie1931TwoDegree);
+    // XYZ: 24 bytes a pixel, 16384 x 10922 = 4.2947e9 bytes fits, x 10923 does not.
+    let edge = ImageSettings::new(Camera::Fisheye, 16384, 10922);
+    let past = ImageSettings::new(Camera::Fisheye, 16384, 10923);
+    let message = traced
+        .render_xyz(&edge, &to_xyz, &|_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(message.contains("path tracing computes views"), "{message}");
+    let message = traced
+        .render_xyz(&past, &to_xyz, &|_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(
+        message.contains("image buffer (16384 x 10923 pixels x 1 values of 24 bytes) = 4.0")
+            && message.contains("GiB is out of range: allowed <= 4: render fewer pixels"),
+        "{message}"
+    );
+    // Spectral: 8 bytes a wavelength; 4 GiB / (n 8 bytes) pixels.
+    let n = traced.wavelengths().len() as u64;
+    let pixels_at_edge = (4u64 << 30) / (8 * n);
+    let width = 16384u32;
+    let height = (pixels_at_edge / u64::from(width)) as u32;
+    let fits = ImageSettings::new(Camera::Fisheye, width, height);
+    let message = traced
+        .render_spectral(&fits, &|_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(message.contains("path tracing computes views"), "{message}");
+    let over = ImageSettings::new(Camera::Fisheye, width, height + 1);
+    let message = traced
+        .render_spectral(&over, &|_| {})
+        .unwrap_err()
+        .to_string();
+    assert!(
+        message.contains(&format!("x {n} values of 8 bytes"))
+            && message.contains("fewer wavelengths"),
+        "{message}"
+    );
+}
+
 /// A sky moved to another sun is the sky built for that sun, to the bit.
 #[test]
 fn moving_the_sun_equals_building_for_it() {

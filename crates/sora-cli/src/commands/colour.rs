@@ -4,6 +4,7 @@
 
 use std::path::PathBuf;
 
+use crate::output_path::output_target;
 use anyhow::Context;
 use clap::Args;
 use sora::colour::SpectrumToXyz;
@@ -40,12 +41,21 @@ pub struct ColourArgs {
     colour: ColourOptions,
 
     /// Also write a 64 x 64 swatch of the colour: .png (display colour) or
-    /// .exr (linear RGB, unexposed)
+    /// .exr (linear RGB, unexposed); as sora render -o: a symbolic link is
+    /// followed, a directory or a read-only file is refused
     #[arg(long, value_name = "FILE")]
     swatch: Option<PathBuf>,
 }
 
 pub fn run(args: ColourArgs) -> anyhow::Result<()> {
+    // Checked before any work (see `output_path`).
+    let swatch = match &args.swatch {
+        Some(path) => Some((
+            OutputFormat::from_path(path)?,
+            output_target(path, "--swatch")?,
+        )),
+        None => None,
+    };
     let name = args.spectrum.display().to_string();
     let text = if args.spectrum.as_os_str() == "-" {
         std::io::read_to_string(std::io::stdin()).context("cannot read the spectrum from stdin")?
@@ -98,18 +108,18 @@ pub fn run(args: ColourArgs) -> anyhow::Result<()> {
         xyz.luminance_cd_m2()
     );
 
-    if let Some(path) = &args.swatch {
+    if let (Some((format, target)), Some(path)) = (&swatch, &args.swatch) {
         const SIZE: usize = 64;
-        match OutputFormat::from_path(path)? {
+        match format {
             OutputFormat::Png => {
                 let data = display.repeat(SIZE * SIZE);
-                write_png(path, &DisplayImage::new(SIZE, SIZE, data)?)?;
+                write_png(target, &DisplayImage::new(SIZE, SIZE, data)?)?;
             }
             OutputFormat::Exr => {
                 let pixel = [linear.r as f32, linear.g as f32, linear.b as f32];
                 let image =
                     LinearImage::new(SIZE, SIZE, ChannelKind::Rgb, vec![pixel; SIZE * SIZE])?;
-                write_exr(path, &image, ExrOptions::default())?;
+                write_exr(target, &image, ExrOptions::default())?;
             }
         }
         eprintln!("wrote {}", path.display());

@@ -86,6 +86,14 @@ pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
     let mut atmosphere = args.source.load()?;
     let sky = args.sun.sky(&mut atmosphere, scattering, method)?;
     let grid = *sky.wavelengths();
+    if let sora::Method::PathTracing { samples, .. } = method {
+        let planes = 1 + usize::from(tilted.is_some());
+        crate::estimate::announce(crate::estimate::path_tracing_estimate(
+            samples,
+            planes,
+            grid.len(),
+        ));
+    }
     let horizontal = sky.irradiance(Plane::HORIZONTAL)?;
     let tilted = tilted.map(|plane| sky.irradiance(plane)).transpose()?;
     let quantity = |name: &str, spectrum, irradiance| Quantity {

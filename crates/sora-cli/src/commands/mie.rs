@@ -198,8 +198,10 @@ fn size_parameter(radius_um: f64, wavelength_nm: f64) -> anyhow::Result<f64> {
 
 fn print_efficiencies(m: Complex64, x: f64) -> anyhow::Result<()> {
     let q = compute_efficiencies(m, x)?;
-    println!("m     = {}{:+}i", m.re, m.im);
-    println!("x     = {x}");
+    let imaginary = shortest_round_trip(m.im);
+    let sign = if imaginary.starts_with('-') { "" } else { "+" };
+    println!("m     = {}{sign}{imaginary}i", shortest_round_trip(m.re));
+    println!("x     = {}", shortest_round_trip(x));
     println!("qext  = {:.12e}", q.qext);
     println!("qsca  = {:.12e}", q.qsca);
     println!("qabs  = {:.12e}", q.qabs);
@@ -239,13 +241,16 @@ fn print_phase_table(m: Complex64, x: f64, step_deg: f64) -> anyhow::Result<()> 
             "--m 1+0i: the sphere does not scatter (every Mie coefficient is 0, Q_sca = 0), so it has no phase function; give an index other than 1+0i"
         );
     }
-    let count = (180.0 / step_deg).floor() as usize + 1;
-    if count > MAX_PHASE_TABLE_ROWS {
+    // Counted in floating point: a subnormal step gives an infinite count
+    // (5e-324 overflowed the integer, found by the flag mutation tests).
+    let rows = (180.0 / step_deg).floor() + 1.0;
+    if rows > MAX_PHASE_TABLE_ROWS as f64 {
         bail!(
-            "--angle-step-deg = {step_deg:e} deg gives {count} rows, more than the limit of {MAX_PHASE_TABLE_ROWS}; give a step of at least {:e} deg",
+            "--angle-step-deg = {step_deg:e} deg gives {rows:e} rows, more than the limit of {MAX_PHASE_TABLE_ROWS}; give a step of at least {:e} deg",
             180.0 / (MAX_PHASE_TABLE_ROWS - 1) as f64
         );
     }
+    let count = rows as usize;
     let angles_deg: Vec<f64> = (0..count)
         .map(|i| (i as f64 * step_deg).min(180.0))
         .collect();
@@ -342,8 +347,15 @@ fn run_batch(path: &PathBuf) -> anyhow::Result<()> {
             .with_context(|| format!("{name}, line {line_number}"))?;
         writeln!(
             out,
-            "{re},{im},{x},{:.16e},{:.16e},{:.16e},{:.16e},{:.16e}",
-            q.qext, q.qsca, q.qabs, q.qback, q.g
+            "{},{},{},{:.16e},{:.16e},{:.16e},{:.16e},{:.16e}",
+            shortest_round_trip(re),
+            shortest_round_trip(im),
+            shortest_round_trip(x),
+            q.qext,
+            q.qsca,
+            q.qabs,
+            q.qback,
+            q.g
         )?;
     }
     if !header_seen {
@@ -351,4 +363,17 @@ fn run_batch(path: &PathBuf) -> anyhow::Result<()> {
     }
     out.flush()?;
     Ok(())
+}
+
+/// `value` in the fewest digits that read back as the same double: plain
+/// (`1.33`, `0.001`) between 1e-4 and 1e6, in exponent form outside (`5e-324`,
+/// not 324 digits; `1e300`, not 301). Both of Rust's forms are the shortest
+/// round-trip representation.
+fn shortest_round_trip(value: f64) -> String {
+    let magnitude = value.abs();
+    if value.is_finite() && magnitude != 0.0 && !(1e-4..1e6).contains(&magnitude) {
+        format!("{value:e}")
+    } else {
+        format!("{value}")
+    }
 }

@@ -15,6 +15,8 @@ use sora::output::{
 };
 
 use crate::arguments::{AtmosphereSource, ColourOptions, Scattering, SunAndObserver};
+use crate::estimate;
+use crate::output_path::output_target;
 
 /// Render the sky to an image.
 ///
@@ -52,7 +54,10 @@ pub struct RenderArgs {
     #[command(flatten)]
     sun: SunAndObserver,
 
-    /// Output image: .png or .exr
+    /// Output image: .png or .exr, replaced atomically. A symbolic link is
+    /// followed (the file it points to is written, the link kept); a
+    /// directory, a read-only file or a missing directory is refused before
+    /// any work
     #[arg(short, long, value_name = "FILE")]
     output: PathBuf,
 
@@ -69,26 +74,19 @@ pub struct RenderArgs {
     height: Option<u32>,
 
     /// Perspective camera: elevation of the view direction, degrees
-    #[arg(
-        long,
-        value_name = "DEG",
-        default_value_t = 10.0,
-        allow_hyphen_values = true
-    )]
-    view_elevation: f64,
+    /// [default: 10] (an error with the other cameras, which show the whole
+    /// sky)
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
+    view_elevation: Option<f64>,
 
-    /// Perspective camera: azimuth of the view direction, degrees clockwise from north
-    #[arg(
-        long,
-        value_name = "DEG",
-        default_value_t = 180.0,
-        allow_hyphen_values = true
-    )]
-    view_azimuth: f64,
+    /// Perspective camera: azimuth of the view direction, degrees clockwise
+    /// from north [default: 180]
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
+    view_azimuth: Option<f64>,
 
-    /// Perspective camera: horizontal field of view, degrees
-    #[arg(long, value_name = "DEG", default_value_t = 90.0)]
-    fov_deg: f64,
+    /// Perspective camera: horizontal field of view, degrees [default: 90]
+    #[arg(long, value_name = "DEG")]
+    fov_deg: Option<f64>,
 
     /// fast (tables per image) or reference (the paper's march per pixel, slow)
     #[arg(long, value_enum, default_value_t = Method::Fast)]
@@ -177,15 +175,7 @@ enum Method {
 pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     // Check everything cheap before the expensive work.
     let format = OutputFormat::from_path(&args.output)?;
-    let camera = match args.camera {
-        CameraKind::Fisheye => Camera::Fisheye,
-        CameraKind::Equirect => Camera::Equirectangular,
-        CameraKind::Perspective => Camera::Perspective(PerspectiveCamera::new(
-            args.view_elevation,
-            args.view_azimuth,
-            args.fov_deg,
-        )?),
-    };
+    let camera = camera(&args)?;
     let width = args
         .width
         .unwrap_or(if args.camera == CameraKind::Equirect {
@@ -200,15 +190,40 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         } else {
             width
         });
-    if let Some(parent) = args.output.parent().filter(|p| !p.as_os_str().is_empty())
-        && !parent.is_dir()
-    {
-        bail!(
-            "{}: the directory {} does not exist",
-            args.output.display(),
-            parent.display()
-        );
-    }
+    // Every file the run will write, checked before any work (see
+    // `output_path`): a directory, a read-only file or a missing directory
+    // is refused now, not after the render.
+    let frame_count = frame_count(&args)?;
+    let targets = if frame_count == 1 {
+        vec![output_target(&args.output, "-o")?]
+    } else {
+        (0..frame_count)
+            .map(|frame| {
+                output_target(
+                    &frame_path(&args.output, frame),
+                    "-o (a frame of the sequence)",
+                )
+            })
+            .collect::<anyhow::Result<Vec<_>>>()?
+    };
+    // Image buffers bounded before any work (see `estimate`).
+    let (encoded_bytes_per_pixel, format_name) = match (format, args.png_16_bit) {
+        (OutputFormat::Png, false) => (6, "8-bit PNG"),
+        (OutputFormat::Png, true) => (12, "16-bit PNG"),
+        (OutputFormat::Exr, _) => (24, "OpenEXR"),
+    };
+    estimate::check_render_memory(width, height, encoded_bytes_per_pixel, format_name)?;
+    estimate::announce(estimate::render_estimate(
+        width,
+        height,
+        frame_count,
+        args.sun.wavelengths.len(),
+        match args.method {
+            Method::Fast => estimate::RenderSpeed::Fast,
+            Method::Reference => estimate::RenderSpeed::Reference,
+        },
+        encoded_bytes_per_pixel,
+    ));
     let mut atmosphere = args.source.load()?;
     let started = Instant::now();
     let method = match args.method {
@@ -228,18 +243,17 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     // The frames: one, or a sequence of sun elevations at one azimuth.
     let elevations = frame_elevations(&args, sky.sun_position_deg().0)?;
     let mut exposure = None;
-    for (frame, elevation) in elevations.iter().enumerate() {
-        let (output, frame_sky);
+    debug_assert_eq!(elevations.len(), targets.len());
+    for (elevation, output) in elevations.iter().zip(&targets) {
+        let frame_sky;
         let sky = if elevations.len() == 1 {
-            output = args.output.clone();
             &sky
         } else {
-            output = frame_path(&args.output, frame);
             frame_sky = sky.with_sun_deg(*elevation, sky.sun_position_deg().1)?;
             &frame_sky
         };
         let scale = render_frame(
-            &args, sky, &image, &to_xyz, format, &output, exposure, started,
+            &args, sky, &image, &to_xyz, format, output, exposure, started,
         )?;
         // A sequence keeps the first frame's automatic exposure (a fixed
         // one is the same for every frame anyway).
@@ -255,12 +269,44 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The sun elevations of the frames: `--sun-elevation` alone, or from it
-/// to `--sun-elevation-to` every `--sun-elevation-step` degrees.
-fn frame_elevations(args: &RenderArgs, first: f64) -> anyhow::Result<Vec<f64>> {
-    let Some(last) = args.sun_elevation_to else {
-        return Ok(vec![first]);
+/// The camera of the options. The view direction and field of view
+/// belong to the perspective camera only: given with another, they would be
+/// silently ignored, so they are an error naming the option and the camera.
+fn camera(args: &RenderArgs) -> anyhow::Result<Camera> {
+    let perspective_only = [
+        ("--view-elevation", args.view_elevation),
+        ("--view-azimuth", args.view_azimuth),
+        ("--fov-deg", args.fov_deg),
+    ];
+    let (name, whole_sky) = match args.camera {
+        CameraKind::Fisheye => ("fisheye", Camera::Fisheye),
+        CameraKind::Equirect => ("equirect", Camera::Equirectangular),
+        CameraKind::Perspective => {
+            return Ok(Camera::Perspective(PerspectiveCamera::new(
+                args.view_elevation.unwrap_or(10.0),
+                args.view_azimuth.unwrap_or(180.0),
+                args.fov_deg.unwrap_or(90.0),
+            )?));
+        }
     };
+    if let Some((option, _)) = perspective_only.iter().find(|(_, value)| value.is_some()) {
+        bail!(
+            "{option} applies to --camera perspective only; the {name} camera shows the whole sky (add --camera perspective, or leave {option} out)"
+        );
+    }
+    Ok(whole_sky)
+}
+
+/// How many frames the run writes: 1, or a sequence's (checked: at most
+/// 10000), from the options alone (before the sun is known).
+fn frame_count(args: &RenderArgs) -> anyhow::Result<usize> {
+    let Some(last) = args.sun_elevation_to else {
+        return Ok(1);
+    };
+    let first = args
+        .sun
+        .sun_elevation
+        .expect("clap: --sun-elevation-to requires --sun-elevation");
     let step = args.sun_elevation_step;
     if !(step.is_finite() && step > 0.0) {
         bail!("--sun-elevation-step = {step} deg is out of range: allowed > 0 deg");
@@ -268,10 +314,21 @@ fn frame_elevations(args: &RenderArgs, first: f64) -> anyhow::Result<Vec<f64>> {
     if !(-90.0..=90.0).contains(&last) {
         bail!("--sun-elevation-to = {last} deg is out of range: allowed -90..=90 deg");
     }
-    let count = ((last - first).abs() / step + 1e-9).floor() as usize + 1;
-    if count > 10_000 {
+    let count = ((last - first).abs() / step + 1e-9).floor();
+    if !(0.0..10_000.0).contains(&count) {
         bail!("{count} frames from {first} to {last} deg every {step} deg: at most 10000");
     }
+    Ok(count as usize + 1)
+}
+
+/// The sun elevations of the frames: `--sun-elevation` alone, or from it
+/// to `--sun-elevation-to` every `--sun-elevation-step` degrees.
+fn frame_elevations(args: &RenderArgs, first: f64) -> anyhow::Result<Vec<f64>> {
+    let Some(last) = args.sun_elevation_to else {
+        return Ok(vec![first]);
+    };
+    let step = args.sun_elevation_step;
+    let count = frame_count(args)?;
     let direction = if last >= first { 1.0 } else { -1.0 };
     Ok((0..count)
         .map(|k| first + direction * step * k as f64)

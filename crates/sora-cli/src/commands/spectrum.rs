@@ -133,19 +133,58 @@ enum Format {
     Json,
 }
 
+/// Most directions one run computes (an almucantar every 0.0036 deg):
+/// checked before they are listed.
+const MAX_DIRECTIONS: usize = 100_000;
+
+/// Most values (directions x wavelengths) one run computes and prints: 1e7,
+/// 160 MB of radiances and standard errors.
+const MAX_DIRECTION_VALUES: usize = 10_000_000;
+
+/// Refuses more than [`MAX_DIRECTIONS`] directions, or more than
+/// [`MAX_DIRECTION_VALUES`] directions x wavelengths, naming what asked.
+fn check_direction_count(what: &str, directions: f64, wavelengths: usize) -> anyhow::Result<()> {
+    if directions > MAX_DIRECTIONS as f64 {
+        anyhow::bail!(
+            "{what} gives {directions:e} directions, more than the limit of {MAX_DIRECTIONS}: use a coarser step or fewer directions"
+        );
+    }
+    let values = directions * wavelengths as f64;
+    if values > MAX_DIRECTION_VALUES as f64 {
+        anyhow::bail!(
+            "{what} gives {directions} directions x {wavelengths} wavelengths = {values:e} values, more than the limit of {MAX_DIRECTION_VALUES:e}: use fewer directions or a coarser --wavelengths"
+        );
+    }
+    Ok(())
+}
+
 /// Directions every `step_deg` over a turn of `span_deg`: how many, checked.
-fn steps_over(option: &str, step_deg: f64, span_deg: f64) -> anyhow::Result<usize> {
+fn steps_over(
+    option: &str,
+    step_deg: f64,
+    span_deg: f64,
+    wavelengths: usize,
+) -> anyhow::Result<usize> {
     if !(step_deg.is_finite() && step_deg > 0.0 && step_deg <= 90.0) {
         anyhow::bail!("{option} = {step_deg} deg is out of range: allowed > 0 and <= 90 deg");
     }
-    // The last step ends short of (almucantar) or at (principal plane) the span.
-    Ok((span_deg / step_deg + 1e-9).floor() as usize)
+    // The last step ends short of (almucantar) or at (principal plane) the
+    // span. Counted in floating point: a subnormal step's count is infinite
+    // (5e-324 overflowed the integer, found by the flag mutation tests).
+    let steps = (span_deg / step_deg + 1e-9).floor();
+    check_direction_count(
+        &format!("{option} = {step_deg:e} deg"),
+        steps + 1.0,
+        wavelengths,
+    )?;
+    Ok(steps as usize)
 }
 
 /// The directions the options ask for, with the sun at these angles.
 fn directions(
     args: &SpectrumArgs,
     (sun_elevation, sun_azimuth): (f64, f64),
+    wavelengths: usize,
 ) -> anyhow::Result<Vec<ViewDirection>> {
     if let (Some(elevation), Some(azimuth)) = (args.view_elevation, args.view_azimuth) {
         if !(-90.0..=90.0).contains(&elevation) {
@@ -161,10 +200,13 @@ fn directions(
     if let Some(path) = &args.directions {
         let text = std::fs::read_to_string(path)
             .with_context(|| format!("cannot read {}", path.display()))?;
-        return parse_directions_csv(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()));
+        let views =
+            parse_directions_csv(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+        check_direction_count(&path.display().to_string(), views.len() as f64, wavelengths)?;
+        return Ok(views);
     }
     let views: Result<Vec<ViewDirection>, sora::Error> = if let Some(step) = args.almucantar {
-        let count = steps_over("--almucantar", step, 360.0 - 1e-6)? + 1;
+        let count = steps_over("--almucantar", step, 360.0 - 1e-6, wavelengths)? + 1;
         (0..count)
             .map(|k| {
                 ViewDirection::new(
@@ -177,7 +219,7 @@ fn directions(
         let step = args
             .principal_plane
             .expect("clap requires one direction option");
-        let count = steps_over("--principal-plane", step, 180.0)? + 1;
+        let count = steps_over("--principal-plane", step, 180.0, wavelengths)? + 1;
         (0..count)
             .map(|k| {
                 let e = k as f64 * step;
@@ -215,9 +257,16 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
         .sky_with_polarisation(&mut atmosphere, scattering, method, polarisation)?;
     let grid = *sky.wavelengths();
     let (sun_elevation, sun_azimuth) = args.sun.sun_deg()?;
-    let views = directions(&args, (sun_elevation, sun_azimuth))?;
+    let views = directions(&args, (sun_elevation, sun_azimuth), grid.len())?;
     let started = Instant::now();
     let path_tracing = args.method.method == MethodKind::PathTracing;
+    if path_tracing {
+        crate::estimate::announce(crate::estimate::path_tracing_estimate(
+            samples,
+            views.len(),
+            grid.len(),
+        ));
+    }
     let results = if path_tracing {
         let bar = progress_bar(samples * views.len() as u64);
         let results = sky.radiances_with_progress(&views, &|done, _| bar.set_position(done))?;

@@ -51,6 +51,23 @@
 //! `r` is the regularised incomplete gamma function `P(k, r/theta)`.
 //! `b >= 1/2` has no normalisable `n(r)` and is rejected.
 //!
+//! ## The narrowest populations
+//!
+//! A population narrower than [`MIN_GEOMETRIC_STANDARD_DEVIATION`] 1.0001
+//! (log-normal; a spread of 1e-4 in `ln r`) or with an effective variance
+//! below [`MIN_EFFECTIVE_VARIANCE`] 1e-8 (both shapes; the gamma's spread
+//! `1/sqrt(k + 2)` is then 1e-4) is refused. Nothing physical is lost:
+//! aerosols are never that narrow (laboratory latex spheres have
+//! `sigma_g ~ 1.01-1.05`). Numerically the limit matters: the radius
+//! quadrature's panels are a fixed number of spreads wide, so a vanishing
+//! spread makes them narrower than the spacing of doubles in `ln r` (the
+//! rule stops advancing and allocates without end, as `v_eff = 1e-30` did),
+//! and the gamma density `k ln u - u - ln Gamma(k)` would lose
+//! `~ k ln k 1e-16` of its logarithm to cancellation unless written with
+//! Stirling's series, as it is here (below, `number_density_per_ln_radius`). At the
+//! limit a population is a single sphere to ~1e-7 in its cross-sections
+//! (second order in the spread).
+//!
 //! ## Truncation
 //!
 //! The paper keeps only radii in a window (Table 1: 0.1-2.5 um; Table 2:
@@ -78,7 +95,10 @@
 pub mod quadrature;
 mod special_functions;
 
-pub use quadrature::{RadiusQuadrature, RadiusQuadratureSettings, SharedSizeParameterQuadrature};
+pub use quadrature::{
+    MAX_RADIUS_QUADRATURE_NODES, MAX_SHARED_QUADRATURE_WEIGHTS, RadiusQuadrature,
+    RadiusQuadratureSettings, SharedSizeParameterQuadrature,
+};
 
 use special_functions::{
     ln_gamma, regularized_incomplete_gamma, standard_normal_probability_between,
@@ -92,6 +112,14 @@ use std::f64::consts::PI;
 /// (absorption's law there, the slowest of the efficiencies).
 const GEOMETRIC_REGIME_SIZE_PARAMETER: f64 = 4.0;
 
+/// Smallest geometric standard deviation of a log-normal (see the module
+/// docs, "The narrowest populations"): a spread of ln 1.0001 ~ 1e-4 in ln r.
+pub const MIN_GEOMETRIC_STANDARD_DEVIATION: f64 = 1.0001;
+
+/// Smallest effective variance of either shape (see the module docs): a
+/// spread of about 1e-4 in ln r.
+pub const MIN_EFFECTIVE_VARIANCE: f64 = 1e-8;
+
 /// Why a size distribution could not be built.
 #[derive(Debug, Clone, PartialEq)]
 pub enum SizeDistributionError {
@@ -100,10 +128,12 @@ pub enum SizeDistributionError {
         quantity: &'static str,
         radius_m: f64,
     },
-    /// The geometric standard deviation must be finite and > 1.
+    /// The geometric standard deviation must be finite and at least
+    /// [`MIN_GEOMETRIC_STANDARD_DEVIATION`].
     InvalidGeometricStandardDeviation { geometric_standard_deviation: f64 },
-    /// The effective variance must be finite, > 0 and below the distribution's
-    /// upper limit (infinite for the log-normal, 1/2 for the gamma).
+    /// The effective variance must be finite, at least
+    /// [`MIN_EFFECTIVE_VARIANCE`] and below the distribution's upper limit
+    /// (infinite for the log-normal, 1/2 for the gamma).
     InvalidEffectiveVariance {
         effective_variance: f64,
         upper_limit_exclusive: f64,
@@ -121,6 +151,17 @@ pub enum SizeDistributionError {
     },
     /// The quadrature settings are not usable.
     InvalidQuadratureSettings { message: String },
+    /// The radius quadrature would need more than
+    /// [`quadrature::MAX_RADIUS_QUADRATURE_NODES`] nodes, or more than
+    /// [`quadrature::MAX_SHARED_QUADRATURE_WEIGHTS`] weights over its
+    /// wavelengths (refused before allocating; `node_count` is where the
+    /// count stopped).
+    TooManyQuadratureNodes {
+        node_count: usize,
+        wavelength_count: usize,
+        max_nodes: usize,
+        max_weights: usize,
+    },
 }
 
 impl std::fmt::Display for SizeDistributionError {
@@ -128,43 +169,74 @@ impl std::fmt::Display for SizeDistributionError {
         match self {
             SizeDistributionError::InvalidRadius { quantity, radius_m } => write!(
                 f,
-                "{quantity} = {radius_m} m is invalid: it must be finite and greater than 0"
+                "{quantity} = {} m is invalid: it must be finite and greater than 0",
+                Number(*radius_m)
             ),
             SizeDistributionError::InvalidGeometricStandardDeviation {
                 geometric_standard_deviation,
             } => write!(
                 f,
-                "geometric standard deviation sigma_g = {geometric_standard_deviation} is invalid: it must be finite and greater than 1"
+                "geometric standard deviation sigma_g = {} is invalid: it must be finite and at least {MIN_GEOMETRIC_STANDARD_DEVIATION} (narrower populations are not resolved)",
+                Number(*geometric_standard_deviation)
             ),
             SizeDistributionError::InvalidEffectiveVariance {
                 effective_variance,
                 upper_limit_exclusive,
             } => write!(
                 f,
-                "effective variance v_eff = {effective_variance} is invalid: it must be finite, greater than 0 and less than {upper_limit_exclusive}"
+                "effective variance v_eff = {} is invalid: it must be finite, at least {MIN_EFFECTIVE_VARIANCE:e} (narrower populations are not resolved) and less than {upper_limit_exclusive}",
+                Number(*effective_variance)
             ),
             SizeDistributionError::InvalidRadiusWindow {
                 min_radius_m,
                 max_radius_m,
             } => write!(
                 f,
-                "radius window [{min_radius_m} m, {max_radius_m} m] is invalid: it needs 0 < min < max, both finite"
+                "radius window [{} m, {} m] is invalid: it needs 0 < min < max, both finite",
+                Number(*min_radius_m),
+                Number(*max_radius_m)
             ),
             SizeDistributionError::NoParticlesInWindow {
                 min_radius_m,
                 max_radius_m,
             } => write!(
                 f,
-                "radius window [{min_radius_m} m, {max_radius_m} m] holds no particles of the distribution (number fraction underflows to 0)"
+                "radius window [{} m, {} m] holds no particles of the distribution (number fraction underflows to 0)",
+                Number(*min_radius_m),
+                Number(*max_radius_m)
             ),
             SizeDistributionError::InvalidQuadratureSettings { message } => {
                 write!(f, "invalid radius quadrature settings: {message}")
             }
+            SizeDistributionError::TooManyQuadratureNodes {
+                node_count,
+                wavelength_count,
+                max_nodes,
+                max_weights,
+            } => write!(
+                f,
+                "the radius quadrature needs at least {node_count} nodes at {wavelength_count} wavelength(s), more than its limits of {max_nodes} nodes and {max_weights} nodes x wavelengths: use fewer wavelengths or a wider size distribution"
+            ),
         }
     }
 }
 
 impl std::error::Error for SizeDistributionError {}
+
+/// A number in a message, in the fewest digits that read back as it: plain
+/// between 1e-4 and 1e6, in exponent form outside (`1e-30`, not 31 digits).
+struct Number(f64);
+
+impl std::fmt::Display for Number {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let magnitude = self.0.abs();
+        if self.0.is_finite() && magnitude != 0.0 && !(1e-4..1e6).contains(&magnitude) {
+            write!(f, "{:e}", self.0)
+        } else {
+            write!(f, "{}", self.0)
+        }
+    }
+}
 
 fn validate_radius(quantity: &'static str, radius_m: f64) -> Result<(), SizeDistributionError> {
     if radius_m.is_finite() && radius_m > 0.0 {
@@ -184,13 +256,16 @@ pub struct LogNormalDistribution {
 
 impl LogNormalDistribution {
     /// From the number median radius `r_m` (m, > 0) and the geometric
-    /// standard deviation `sigma_g` (> 1, dimensionless).
+    /// standard deviation `sigma_g` (>= [`MIN_GEOMETRIC_STANDARD_DEVIATION`],
+    /// dimensionless).
     pub fn new(
         number_median_radius_m: f64,
         geometric_standard_deviation: f64,
     ) -> Result<Self, SizeDistributionError> {
         validate_radius("number median radius", number_median_radius_m)?;
-        if !(geometric_standard_deviation.is_finite() && geometric_standard_deviation > 1.0) {
+        if !(geometric_standard_deviation.is_finite()
+            && geometric_standard_deviation >= MIN_GEOMETRIC_STANDARD_DEVIATION)
+        {
             return Err(SizeDistributionError::InvalidGeometricStandardDeviation {
                 geometric_standard_deviation,
             });
@@ -202,20 +277,22 @@ impl LogNormalDistribution {
     }
 
     /// From the Hansen & Travis effective radius (m, > 0) and effective
-    /// variance (> 0, dimensionless): `s^2 = ln(1 + v_eff)`,
+    /// variance (>= [`MIN_EFFECTIVE_VARIANCE`], dimensionless): `s^2 = ln(1 + v_eff)`,
     /// `r_m = r_eff exp(-5 s^2 / 2)`.
     pub fn from_effective_radius_and_variance(
         effective_radius_m: f64,
         effective_variance: f64,
     ) -> Result<Self, SizeDistributionError> {
         validate_radius("effective radius", effective_radius_m)?;
-        if !(effective_variance.is_finite() && effective_variance > 0.0) {
+        if !(effective_variance.is_finite() && effective_variance >= MIN_EFFECTIVE_VARIANCE) {
             return Err(SizeDistributionError::InvalidEffectiveVariance {
                 effective_variance,
                 upper_limit_exclusive: f64::INFINITY,
             });
         }
         let ln_sigma_squared = effective_variance.ln_1p();
+        // v_eff = 1e-8 gives sigma_g = 1.000100005, above the log-normal's own
+        // minimum, so this cannot fail on the width.
         Self::new(
             effective_radius_m * (-2.5 * ln_sigma_squared).exp(),
             ln_sigma_squared.sqrt().exp(),
@@ -281,15 +358,14 @@ pub struct ModifiedGammaDistribution {
 
 impl ModifiedGammaDistribution {
     /// From the effective radius a (m, > 0) and effective variance b
-    /// (0 < b < 1/2, dimensionless); these are exactly the distribution's
+    /// ([`MIN_EFFECTIVE_VARIANCE`] <= b < 1/2, dimensionless); these are exactly the distribution's
     /// r_eff and v_eff.
     pub fn new(
         effective_radius_m: f64,
         effective_variance: f64,
     ) -> Result<Self, SizeDistributionError> {
         validate_radius("effective radius", effective_radius_m)?;
-        if !(effective_variance.is_finite() && effective_variance > 0.0 && effective_variance < 0.5)
-        {
+        if !(MIN_EFFECTIVE_VARIANCE..0.5).contains(&effective_variance) {
             return Err(SizeDistributionError::InvalidEffectiveVariance {
                 effective_variance,
                 upper_limit_exclusive: 0.5,
@@ -321,11 +397,27 @@ impl ModifiedGammaDistribution {
         self.effective_radius_m * self.effective_variance
     }
 
-    /// dN/d ln r = r n(r) per particle at `radius_m` (dimensionless).
+    /// dN/d ln r = r n(r) per particle at `radius_m` (dimensionless):
+    /// `exp(k ln u - u - ln Gamma(k))`, `u = r / theta`. For a narrow
+    /// distribution (large k) the three terms are ~k ln k and cancel to
+    /// O(1), losing `k ln k` ulps; there (k >= 10) Stirling's series
+    /// `ln Gamma(k) = (k - 1/2) ln k - k + ln(2 pi)/2 + R(k)` turns it into
+    /// `k (ln(1 + w) - w) + ln(k / (2 pi))/2 - R(k)`, `w = u/k - 1`, whose
+    /// terms are O(1) near the peak.
     pub fn number_density_per_ln_radius(&self, radius_m: f64) -> f64 {
         let k = self.gamma_shape();
         let u = radius_m / self.gamma_scale_m();
-        (k * u.ln() - u - ln_gamma(k)).exp()
+        if k < 10.0 {
+            return (k * u.ln() - u - ln_gamma(k)).exp();
+        }
+        let w = (u - k) / k;
+        let inverse_k_squared = 1.0 / (k * k);
+        // R(k) to 4 terms: the next, 1/(1188 k^9), is below 1e-12 of R at k = 10.
+        let stirling_remainder = (1.0 / 12.0
+            - inverse_k_squared
+                * (1.0 / 360.0 - inverse_k_squared * (1.0 / 1260.0 - inverse_k_squared / 1680.0)))
+            / k;
+        (k * (w.ln_1p() - w) + 0.5 * (k / (2.0 * PI)).ln() - stirling_remainder).exp()
     }
 
     /// Fraction of the particles with radius in [min_radius_m, max_radius_m].
@@ -742,6 +834,58 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(message.contains("sigma_g = 0.9"), "{message}");
+    }
+
+    /// Issue 17: a vanishing width (v_eff = 1e-30 made the radius quadrature
+    /// allocate without end) is refused at the stated limits, and the
+    /// narrowest accepted populations still integrate to one particle with
+    /// their own effective radius and variance.
+    #[test]
+    fn the_narrowest_populations_are_refused_at_the_stated_limits() {
+        for (v_eff, shown) in [(1e-30, "1e-30"), (5e-324, "5e-324"), (0.99e-8, "9.9e-9")] {
+            let message = LogNormalDistribution::from_effective_radius_and_variance(1e-6, v_eff)
+                .unwrap_err()
+                .to_string();
+            assert!(
+                message.contains(&format!("v_eff = {shown} is invalid"))
+                    && message.contains("at least 1e-8"),
+                "{message}"
+            );
+            assert!(ModifiedGammaDistribution::new(1e-6, v_eff).is_err());
+        }
+        for sigma_g in [1.0 + f64::EPSILON, 1.000_099] {
+            let message = LogNormalDistribution::new(1e-6, sigma_g)
+                .unwrap_err()
+                .to_string();
+            assert!(message.contains("at least 1.0001"), "{message}");
+        }
+        let narrowest = [
+            SizeDistribution::log_normal(MICROMETRE, MIN_GEOMETRIC_STANDARD_DEVIATION).unwrap(),
+            SizeDistribution::log_normal_from_effective_radius_and_variance(
+                MICROMETRE,
+                MIN_EFFECTIVE_VARIANCE,
+            )
+            .unwrap(),
+            SizeDistribution::modified_gamma(MICROMETRE, MIN_EFFECTIVE_VARIANCE).unwrap(),
+        ];
+        for distribution in narrowest {
+            let quadrature = RadiusQuadrature::gauss_legendre(
+                &distribution,
+                2.0 * PI / 360e-9,
+                &RadiusQuadratureSettings::cross_sections(),
+            )
+            .unwrap();
+            assert!(quadrature.len() < 1000, "{}", quadrature.len());
+            let total = quadrature.integrate(|_| 1.0);
+            assert!((total - 1.0).abs() < 1e-8, "{distribution:?}: {total}");
+            let (r_eff, v_eff) = distribution.effective_radius_and_variance_by_quadrature();
+            let shape = distribution.shape();
+            assert!((r_eff / shape.effective_radius_m() - 1.0).abs() < 1e-12);
+            assert!(
+                (v_eff / shape.effective_variance() - 1.0).abs() < 1e-4,
+                "{v_eff}"
+            );
+        }
     }
 
     #[test]

@@ -69,6 +69,19 @@
 //! a fraction of a typical range, so the whole spectrum costs little more than
 //! one wavelength.
 //!
+//! ## Bounded memory
+//!
+//! The panels are laid out twice: once to count them, then, with the
+//! vectors allocated at their final size, to fill them. A rule of more than
+//! [`MAX_RADIUS_QUADRATURE_NODES`] nodes (2^20; the validated settings need
+//! a few hundred to a few thousand) or a shared rule of more than
+//! [`MAX_SHARED_QUADRATURE_WEIGHTS`] weights (nodes x wavelengths, 2^26:
+//! 512 MiB) is refused before anything is allocated
+//! ([`SizeDistributionError::TooManyQuadratureNodes`]): a narrow population
+//! over thousands of wavelengths lays out separate panels for every
+//! wavelength, and a panel narrower than the spacing of doubles would never
+//! advance (the counting pass stops at the bound instead of running on).
+//!
 //! Measured errors of [`RadiusQuadratureSettings::cross_sections`] and
 //! [`RadiusQuadratureSettings::phase_function`] are in [`crate::ensemble`].
 //! [`RadiusQuadrature::trapezoid`] is the slow, obviously correct oracle:
@@ -77,6 +90,25 @@
 
 use super::{SizeDistribution, SizeDistributionError};
 use crate::quadrature::gauss_legendre;
+
+/// Most nodes of one radius quadrature (see "Bounded memory" in the module
+/// docs): 2^20, 16 MiB of radii and weights.
+pub const MAX_RADIUS_QUADRATURE_NODES: usize = 1 << 20;
+
+/// Most weights (nodes x wavelengths) of one [`SharedSizeParameterQuadrature`]:
+/// 2^26, 512 MiB.
+pub const MAX_SHARED_QUADRATURE_WEIGHTS: usize = 1 << 26;
+
+/// The error for a rule of `node_count` nodes (or more: counting stops past
+/// the bound) at `wavelength_count` wavelengths.
+fn too_many_nodes(node_count: usize, wavelength_count: usize) -> SizeDistributionError {
+    SizeDistributionError::TooManyQuadratureNodes {
+        node_count,
+        wavelength_count,
+        max_nodes: MAX_RADIUS_QUADRATURE_NODES,
+        max_weights: MAX_SHARED_QUADRATURE_WEIGHTS,
+    }
+}
 
 /// How the radius quadrature lays out its panels (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -298,33 +330,61 @@ impl SharedSizeParameterQuadrature {
             }
             limit
         };
-        let (unit_nodes, unit_weights) = gauss_legendre(settings.nodes_per_panel);
         let wavelength_count = wavenumbers_per_m.len();
-        let mut size_parameter = Vec::new();
-        let mut weight = Vec::new();
-        let mut panel_count = 0;
-        let mut panel_start = ranges.iter().map(|r| r.0).fold(f64::INFINITY, f64::min);
-        while panel_start < union_end {
-            let Some(tentative) = width_limit_at(panel_start) else {
-                // A gap that no wavelength's range covers: skip to the next range.
-                panel_start = ranges
+        let first_start = ranges.iter().map(|r| r.0).fold(f64::INFINITY, f64::min);
+        // The panels as (start, width), visited in order; stops (returning
+        // false) when `visit` does.
+        let lay_out = |visit: &mut dyn FnMut(f64, f64) -> bool| {
+            let mut panel_start = first_start;
+            while panel_start < union_end {
+                let Some(tentative) = width_limit_at(panel_start) else {
+                    // A gap that no wavelength's range covers: skip to the next range.
+                    panel_start = ranges
+                        .iter()
+                        .map(|r| r.0)
+                        .filter(|&lower| lower > panel_start)
+                        .fold(union_end, f64::min);
+                    continue;
+                };
+                let mut width =
+                    width_limit_at(panel_start + tentative).map_or(tentative, |w| w.min(tentative));
+                // Panels end at window edges, never stride them; no sliver before one.
+                let next_stop = breakpoints
                     .iter()
-                    .map(|r| r.0)
-                    .filter(|&lower| lower > panel_start)
-                    .fold(union_end, f64::min);
-                continue;
-            };
-            let mut width =
-                width_limit_at(panel_start + tentative).map_or(tentative, |w| w.min(tentative));
-            // Panels end at window edges, never stride them; no sliver before one.
-            let next_stop = breakpoints
-                .iter()
-                .copied()
-                .find(|&b| b > panel_start)
-                .unwrap_or(union_end);
-            if panel_start + 1.25 * width >= next_stop {
-                width = next_stop - panel_start;
+                    .copied()
+                    .find(|&b| b > panel_start)
+                    .unwrap_or(union_end);
+                if panel_start + 1.25 * width >= next_stop {
+                    width = next_stop - panel_start;
+                }
+                if !visit(panel_start, width) {
+                    return;
+                }
+                panel_start += width;
             }
+        };
+        // Count first (stopping past the bound), allocate once, then fill.
+        let nodes_per_panel = settings.nodes_per_panel;
+        let fits = |panels: usize| {
+            let nodes = panels.saturating_mul(nodes_per_panel);
+            nodes <= MAX_RADIUS_QUADRATURE_NODES
+                && nodes.saturating_mul(wavelength_count) <= MAX_SHARED_QUADRATURE_WEIGHTS
+        };
+        let mut panel_count = 0usize;
+        lay_out(&mut |_, _| {
+            panel_count += 1;
+            fits(panel_count)
+        });
+        if !fits(panel_count) {
+            return Err(too_many_nodes(
+                panel_count * nodes_per_panel,
+                wavelength_count,
+            ));
+        }
+        let (unit_nodes, unit_weights) = gauss_legendre(nodes_per_panel);
+        let mut size_parameter = Vec::with_capacity(panel_count * nodes_per_panel);
+        let mut weight = Vec::with_capacity(panel_count * nodes_per_panel * wavelength_count);
+        lay_out(&mut |panel_start, width| {
             let half_width = 0.5 * width;
             let middle = panel_start + half_width;
             for (&node, &unit_weight) in unit_nodes.iter().zip(&unit_weights) {
@@ -345,9 +405,9 @@ impl SharedSizeParameterQuadrature {
                     });
                 }
             }
-            panel_count += 1;
-            panel_start += width;
-        }
+            true
+        });
+        debug_assert_eq!(size_parameter.len(), panel_count * nodes_per_panel);
         debug_assert_eq!(weight.len(), size_parameter.len() * wavelength_count);
         Ok(Self {
             size_parameter,
@@ -419,19 +479,38 @@ impl RadiusQuadrature {
             distribution.ln_radius_integration_range(settings.tail_depth, wavenumber_per_m);
         let width_limit_at =
             |ln_radius: f64| panel_width_limit(distribution, settings, ln_radius, wavenumber_per_m);
-        let (unit_nodes, unit_weights) = gauss_legendre(settings.nodes_per_panel);
-        let mut radius_m = Vec::new();
-        let mut weight = Vec::new();
-        let mut panel_count = 0;
-        let mut panel_start = lower;
-        while panel_start < upper {
-            // The limit at both ends of the tentative panel: x grows across it.
-            let tentative = width_limit_at(panel_start);
-            let mut width = tentative.min(width_limit_at(panel_start + tentative));
-            // No sliver panel at the end: stretch the last one by up to a quarter.
-            if panel_start + 1.25 * width >= upper {
-                width = upper - panel_start;
+        let lay_out = |visit: &mut dyn FnMut(f64, f64) -> bool| {
+            let mut panel_start = lower;
+            while panel_start < upper {
+                // The limit at both ends of the tentative panel: x grows across it.
+                let tentative = width_limit_at(panel_start);
+                let mut width = tentative.min(width_limit_at(panel_start + tentative));
+                // No sliver panel at the end: stretch the last one by up to a quarter.
+                if panel_start + 1.25 * width >= upper {
+                    width = upper - panel_start;
+                }
+                if !visit(panel_start, width) {
+                    return;
+                }
+                panel_start += width;
             }
+        };
+        // Count first (stopping past the bound), allocate once, then fill.
+        let nodes_per_panel = settings.nodes_per_panel;
+        let fits =
+            |panels: usize| panels.saturating_mul(nodes_per_panel) <= MAX_RADIUS_QUADRATURE_NODES;
+        let mut panel_count = 0usize;
+        lay_out(&mut |_, _| {
+            panel_count += 1;
+            fits(panel_count)
+        });
+        if !fits(panel_count) {
+            return Err(too_many_nodes(panel_count * nodes_per_panel, 1));
+        }
+        let (unit_nodes, unit_weights) = gauss_legendre(nodes_per_panel);
+        let mut radius_m = Vec::with_capacity(panel_count * nodes_per_panel);
+        let mut weight = Vec::with_capacity(panel_count * nodes_per_panel);
+        lay_out(&mut |panel_start, width| {
             let half_width = 0.5 * width;
             let middle = panel_start + half_width;
             for (&node, &unit_weight) in unit_nodes.iter().zip(&unit_weights) {
@@ -443,9 +522,8 @@ impl RadiusQuadrature {
                         * distribution.number_density_per_ln_radius_inside_window(r),
                 );
             }
-            panel_count += 1;
-            panel_start += width;
-        }
+            true
+        });
         Ok(Self {
             radius_m,
             weight,
@@ -617,5 +695,50 @@ mod tests {
                 .is_err()
         );
         assert!(RadiusQuadrature::trapezoid(&d, 1e7, 1, 25.0).is_err());
+    }
+
+    /// Issue 17: the node count is bounded before anything is allocated. A
+    /// panel narrower than the spacing of doubles in ln r (which once made
+    /// the rule allocate without end) stops the counting pass at the bound;
+    /// a narrow population over 10,000 wavelengths (separate panels for
+    /// each) is refused for its weights; each error names the counts and
+    /// the limits.
+    #[test]
+    fn node_counts_are_bounded_before_allocating() {
+        let d = SizeDistribution::log_normal(0.5 * MICROMETRE, 1.5).unwrap();
+        let never_advancing = RadiusQuadratureSettings {
+            max_panel_width_ln_radius: 1e-300,
+            ..RadiusQuadratureSettings::smooth()
+        };
+        for error in [
+            RadiusQuadrature::gauss_legendre(&d, 1e7, &never_advancing).unwrap_err(),
+            SharedSizeParameterQuadrature::gauss_legendre(&d, &[1e7], &never_advancing)
+                .unwrap_err(),
+        ] {
+            assert!(
+                matches!(error, SizeDistributionError::TooManyQuadratureNodes { node_count, .. } if node_count > MAX_RADIUS_QUADRATURE_NODES),
+                "{error}"
+            );
+            let message = error.to_string();
+            assert!(message.contains("1048576 nodes"), "{message}");
+        }
+        let narrow = SizeDistribution::log_normal(0.5 * MICROMETRE, 1.0001).unwrap();
+        let wavenumbers: Vec<f64> = (0..10_000)
+            .map(|i| 2.0 * std::f64::consts::PI / ((360.0 + 0.047 * i as f64) * 1e-9))
+            .collect();
+        let settings = RadiusQuadratureSettings::cross_sections();
+        let error = SharedSizeParameterQuadrature::gauss_legendre(&narrow, &wavenumbers, &settings)
+            .unwrap_err();
+        let message = error.to_string();
+        assert!(
+            message.contains("10000 wavelength(s)") && message.contains("67108864"),
+            "{message}"
+        );
+        // The same population at 21 wavelengths is fine, and so is one wavelength.
+        let q =
+            SharedSizeParameterQuadrature::gauss_legendre(&narrow, &wavenumbers[..21], &settings)
+                .unwrap();
+        assert!(q.len() * 21 <= MAX_SHARED_QUADRATURE_WEIGHTS);
+        assert!(RadiusQuadrature::gauss_legendre(&narrow, wavenumbers[0], &settings).is_ok());
     }
 }

@@ -173,6 +173,13 @@ impl SeriesSums {
     ) -> Efficiencies {
         let qsca = 2.0 * scale_squared_over_x_squared * self.scattering;
         let qabs = 2.0 * scale_over_x_squared * self.absorption;
+        // A passive sphere (k >= 0) absorbs k times a positive integral of
+        // |E|^2, so Q_abs >= 0 and so is every term. A negative sum is the
+        // rounding of terms smaller than their own error (k subnormal: the
+        // imaginary parts of A_n, B_n are differences of numbers near the
+        // underflow threshold); 0 is nearer the truth than the sum is, so
+        // the clamp never adds error. NaN passes through (it is a bug).
+        let qabs = if qabs <= 0.0 { 0.0 } else { qabs };
         // Q_ext = (2/x^2) sum (2n+1) Re(a_n + b_n) (B&H 4.62), summed as
         // Q_sca + Q_abs: per term Re a_n = |a_n|^2 + (Re a_n - |a_n|^2), and
         // both parts are sums of non-negative, accurately computed terms.
@@ -1125,6 +1132,43 @@ mod tests {
             assert!(a.iter().chain(&b).all(|c| c.norm() == 0.0));
             assert_eq!(a.len(), 2 * series_length_converged(x));
         }
+    }
+
+    /// Issue 17: at subnormal and tiny k the absorption sum is rounding
+    /// noise that came out negative (k = 5e-324); it is never negative, in
+    /// both builds and both series (x below and above 0.01), while at normal
+    /// k it keeps the reference values (the tests against the 100-digit
+    /// table, unchanged).
+    #[test]
+    fn absorption_is_never_negative_at_tiny_k() {
+        let mut underflowed = 0;
+        for k in [
+            5e-324,
+            1e-322,
+            1e-315,
+            2.2250738585072014e-308,
+            1e-300,
+            1e-200,
+            1e-30,
+        ] {
+            for n in [1.0001, 1.33, 1.5, 2.0, 5.0] {
+                for x in [1e-4, 0.005, 0.5, 1.0, 10.0, 100.0, 1000.0, 5000.0] {
+                    let (q, _, p, _) = solve_both(Complex64::new(n, k), x);
+                    for e in [q, p] {
+                        assert!(
+                            e.qabs >= 0.0 && e.qabs.is_sign_positive(),
+                            "{n}+{k:e}i x {x}: {e:?}"
+                        );
+                        assert!(e.qext >= e.qsca, "{n}+{k:e}i x {x}: {e:?}");
+                    }
+                    underflowed += usize::from(q.qabs == 0.0);
+                }
+            }
+        }
+        assert!(
+            underflowed > 0,
+            "the sweep reaches k where Q_abs rounds to 0"
+        );
     }
 
     #[test]

@@ -49,7 +49,8 @@ use super::{Atmosphere, RayleighScatterer, Species, SpeciesModel};
 use crate::error::{Error, Result};
 use crate::mie::Complex64;
 use crate::mie::distribution::{
-    RadiusQuadrature, RadiusQuadratureSettings, RadiusWindow, SizeDistribution,
+    MIN_EFFECTIVE_VARIANCE, MIN_GEOMETRIC_STANDARD_DEVIATION, RadiusQuadrature,
+    RadiusQuadratureSettings, RadiusWindow, SizeDistribution,
 };
 use crate::mie::paper_phase::AerosolPhaseMode;
 use crate::mie::refractive_index::{
@@ -965,12 +966,12 @@ fn convert_size_distribution(file: SizeDistributionFile, here: &str) -> Result<S
             ) {
                 (Some(r_m), Some(sigma), None, None) => {
                     check_range(&format!("{key}.median_radius_um"), r_m, "um", 1e-4, 1e3)?;
-                    check(&format!("{key}.geometric_std_dev"), sigma, "1", "> 1 and <= 5", sigma > 1.0 && sigma <= 5.0)?;
+                    check(&format!("{key}.geometric_std_dev"), sigma, "1", &format!(">= {MIN_GEOMETRIC_STANDARD_DEVIATION} (narrower populations are not resolved) and <= 5"), (MIN_GEOMETRIC_STANDARD_DEVIATION..=5.0).contains(&sigma))?;
                     SizeDistribution::log_normal(r_m * 1e-6, sigma)
                 }
                 (None, None, Some(r_eff), Some(v_eff)) => {
                     check_range(&format!("{key}.effective_radius_um"), r_eff, "um", 1e-4, 1e3)?;
-                    check(&format!("{key}.effective_variance"), v_eff, "1", "> 0 and <= 10", v_eff > 0.0 && v_eff <= 10.0)?;
+                    check(&format!("{key}.effective_variance"), v_eff, "1", &format!(">= {MIN_EFFECTIVE_VARIANCE:e} (narrower populations are not resolved) and <= 10"), (MIN_EFFECTIVE_VARIANCE..=10.0).contains(&v_eff))?;
                     SizeDistribution::log_normal_from_effective_radius_and_variance(r_eff * 1e-6, v_eff)
                 }
                 _ => {
@@ -998,8 +999,10 @@ fn convert_size_distribution(file: SizeDistributionFile, here: &str) -> Result<S
                 &format!("{key}.effective_variance"),
                 v_eff,
                 "1",
-                "> 0 and < 0.5",
-                v_eff > 0.0 && v_eff < 0.5,
+                &format!(
+                    ">= {MIN_EFFECTIVE_VARIANCE:e} (narrower populations are not resolved) and < 0.5"
+                ),
+                (MIN_EFFECTIVE_VARIANCE..0.5).contains(&v_eff),
             )?;
             let distribution =
                 SizeDistribution::modified_gamma(gamma.effective_radius_um * 1e-6, v_eff)

@@ -34,6 +34,7 @@
 //! caller supplies.
 
 pub mod aerosol;
+mod coverage;
 pub mod file;
 pub mod mie_species;
 pub mod optical_depth;
@@ -173,6 +174,8 @@ impl Atmosphere {
     /// their ensembles here: the expensive step). Fails when a table does
     /// not cover the grid, naming the species.
     pub fn compute_optics(&self, grid: &WavelengthGrid) -> Result<AtmosphereOptics> {
+        // Every table covers the grid, or one line names the table and the grid.
+        coverage::check_grid_coverage(self, grid)?;
         let top_m = self.planet.atmosphere_height_m();
         let mut species_optics = Vec::with_capacity(self.species.len());
         for (index, species) in self.species.iter().enumerate() {

@@ -25,20 +25,29 @@ pub struct Sun {
     angular_diameter_deg: f64,
 }
 
+/// Largest `sun.irradiance_scale`: a sun 20 deg across (the largest disc,
+/// [`MAX_SUN_ANGULAR_DIAMETER_DEG`]) is (sin 10 deg / sin 0.2665 deg)^2 = 1400
+/// times as bright as at 1 AU; 1e4 leaves room and keeps every irradiance
+/// far from overflow (1e308 made it infinite, found by the mutation tests).
+pub const MAX_IRRADIANCE_SCALE: f64 = 1e4;
+
 impl Sun {
-    /// A sun of spectrum `spectrum` scaled by `irradiance_scale` (> 0) with
-    /// an angular diameter `angular_diameter_deg` (0..=20 deg).
+    /// A sun of spectrum `spectrum` scaled by `irradiance_scale` (> 0,
+    /// <= [`MAX_IRRADIANCE_SCALE`]) with an angular diameter
+    /// `angular_diameter_deg` (0..=20 deg).
     pub fn new(
         spectrum: SolarSpectrum,
         irradiance_scale: f64,
         angular_diameter_deg: f64,
     ) -> Result<Sun> {
-        if !(irradiance_scale.is_finite() && irradiance_scale > 0.0) {
+        if !(irradiance_scale > 0.0 && irradiance_scale <= MAX_IRRADIANCE_SCALE) {
             return Err(Error::out_of_range(
                 "sun.irradiance_scale",
                 irradiance_scale,
                 "1",
-                "> 0 and finite",
+                format!(
+                    "> 0 and <= {MAX_IRRADIANCE_SCALE:e} (a sun 20 deg across is 1400 times as bright as at 1 AU)"
+                ),
             ));
         }
         if !(0.0..=MAX_SUN_ANGULAR_DIAMETER_DEG).contains(&angular_diameter_deg) {

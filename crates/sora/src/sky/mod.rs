@@ -158,6 +158,13 @@ impl Default for FastTableSize {
 /// Largest image side, pixels.
 pub const MAX_IMAGE_SIDE: u32 = 16384;
 
+/// Largest image buffer [`Sky::render_xyz`] or [`Sky::render_spectral`]
+/// allocates, bytes (4 GiB): width x height x values per pixel (1 XYZ of 24
+/// bytes, or one 8-byte radiance per wavelength). Checked before anything
+/// is computed; a 16384 x 16384 XYZ image (6 GiB) or a 1024 x 1024 spectral
+/// image of 1000 wavelengths (8 GiB) is refused.
+pub const MAX_IMAGE_BUFFER_BYTES: u64 = 4 << 30;
+
 /// An image to render: camera, size, and whether the sun's disc is drawn.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ImageSettings {
@@ -964,6 +971,24 @@ impl Sky {
                     format!("1..={MAX_IMAGE_SIDE}"),
                 ));
             }
+        }
+        let buffer_bytes = u64::from(width)
+            * u64::from(height)
+            * per_pixel as u64
+            * std::mem::size_of::<T>() as u64;
+        if buffer_bytes > MAX_IMAGE_BUFFER_BYTES {
+            return Err(Error::out_of_range(
+                format!(
+                    "image buffer ({width} x {height} pixels x {per_pixel} values of {} bytes)",
+                    std::mem::size_of::<T>()
+                ),
+                buffer_bytes as f64 / f64::from(1u32 << 30),
+                "GiB",
+                format!(
+                    "<= {}: render fewer pixels (or fewer wavelengths for a spectral image)",
+                    MAX_IMAGE_BUFFER_BYTES >> 30
+                ),
+            ));
         }
         if let Method::PathTracing { .. } = self.method {
             return Err(Error::Unsupported(
