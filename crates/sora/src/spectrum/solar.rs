@@ -73,7 +73,6 @@ impl SolarSpectrum {
     }
 
     /// The irradiance as a function of wavelength, W m^-2 nm^-1.
-    #[cfg(test)]
     pub(crate) fn irradiance_w_m2_nm(&self) -> &Spectrum {
         &self.irradiance_w_m2_nm
     }
