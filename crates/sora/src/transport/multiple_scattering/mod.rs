@@ -144,6 +144,7 @@
 
 mod phase_fourier;
 mod source_table;
+mod spherical_first_order;
 mod spherical_paths;
 mod successive_orders;
 mod vertical_grid;
@@ -155,10 +156,11 @@ use std::f64::consts::PI;
 use self::phase_fourier::{
     TruncatedPhase, compute_legendre_moments, normalized_associated_legendre,
 };
+use self::spherical_first_order::{FirstOrderInputs, compute_spherical_first_order};
 use self::spherical_paths::StreamPaths;
 use self::successive_orders::{ColumnSystem, ScaledSpecies, Streams};
 use self::vertical_grid::VerticalGrid;
-use super::optical_column::{ProfileCorners, compute_columns_along_ray};
+use super::optical_column::{ProfileCorners, SunColumnTable, compute_columns_along_ray};
 use super::quadrature::{GAUSS_NODES, GAUSS_WEIGHTS, running_integral_matrix};
 use super::single_scattering::{SingleScatteringSky, SunColumns};
 use crate::atmosphere::{AtmosphereOptics, DensityProfile};
@@ -177,6 +179,16 @@ const FORWARD_CONE_WIDTH: f64 = 1.2;
 
 /// Panels of the exact column integrals toward the sun from each level.
 const SUN_RAY_PANELS: usize = 12;
+
+/// The sun zenith angle from which the field's first order is computed in
+/// the spherical shell (`spherical_first_order`), degrees: higher suns
+/// keep the column's own (the two agree there, and the spherical one costs
+/// 10 000 marched paths per sun node).
+const FIRST_ORDER_SUN_ZENITH_DEG: f64 = 84.0;
+
+/// Altitude and mu nodes of the sun-column table of the spherical first
+/// order (the image tables' size).
+const FIRST_ORDER_SUN_COLUMN_NODES: (usize, usize) = (128, 256);
 
 /// Resolution of the multiple-scattering method.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -667,8 +679,10 @@ impl MultipleScatteringField {
         let species = optics.species.len();
         let streams = Streams::new(settings.streams_per_hemisphere);
         let degrees = streams.count();
-        // Beyond this zenith angle the sun has set for the whole column.
-        let darkest = 0.5 * PI + (ground_radius_m / top_radius_m).acos();
+        // Beyond this zenith angle the sun has set for the whole column,
+        // and for every point a ray from its top can reach: nothing there
+        // sees light scattered once (`spherical_first_order`).
+        let darkest = 0.5 * PI + 2.0 * (ground_radius_m / top_radius_m).acos();
         let lowest = lowest_rad.clamp(0.0, darkest);
         let highest = highest_rad.clamp(lowest, darkest);
         let sun_axis = SunZenithAxis::new(
@@ -768,10 +782,42 @@ impl MultipleScatteringField {
             }
         }
         let solution_len = degrees * levels * degrees;
+        // The first order in the spherical shell, with the planet's shadow,
+        // at the sun nodes from FIRST_ORDER_SUN_ZENITH_DEG on (index
+        // s - first_spherical); the column's own first order above.
+        let first_spherical = sun_axis
+            .angles_rad
+            .partition_point(|a| *a < FIRST_ORDER_SUN_ZENITH_DEG.to_radians());
+        let table_columns = SunColumnTable::compute(
+            &profiles,
+            ground_radius_m,
+            top_radius_m,
+            FIRST_ORDER_SUN_COLUMN_NODES.0,
+            FIRST_ORDER_SUN_COLUMN_NODES.1,
+        );
+        let solar_irradiance: Vec<f64> = optics.solar_irradiance_w_m2_nm.values().to_vec();
+        let first_order = compute_spherical_first_order(&FirstOrderInputs {
+            profiles: &profiles,
+            corners: &corners,
+            sun_columns: &table_columns,
+            level_altitudes_m: grid.altitudes_m(),
+            stream_cosines: streams.cosines(),
+            sun_zenith_rad: &sun_axis.angles_rad[first_spherical..],
+            scaled_extinction: &scaled_extinction,
+            scaled_scattering: &scaled_scattering,
+            phases: &phases,
+            solar_irradiance_w_m2_nm: &solar_irradiance,
+        });
         // Per wavelength: every sun node's solution, then its two ground values.
         let chunk = count * (solution_len + 2);
         let mut solved = vec![0.0; wavelengths * chunk];
         crate::parallel::for_each_chunk_mut(&mut solved, chunk, |i, out| {
+            let first_of = |s: usize| {
+                (s >= first_spherical).then(|| {
+                    &first_order[((s - first_spherical) * wavelengths + i) * solution_len..]
+                        [..solution_len]
+                })
+            };
             let scaled: Vec<ScaledSpecies> = (0..species)
                 .map(|j| ScaledSpecies {
                     extinction_per_m: scaled_extinction[i * species + j],
@@ -805,7 +851,8 @@ impl MultipleScatteringField {
                 }
                 let block = &mut out[s * (solution_len + 2)..(s + 1) * (solution_len + 2)];
                 let (field, ground) = block.split_at_mut(solution_len);
-                let diffuse = system.solve(sun_cosine, &transmittance, field, &mut work);
+                let first = first_of(s);
+                let diffuse = system.solve(sun_cosine, &transmittance, first, field, &mut work);
                 let lit = sun_cosine.max(0.0);
                 ground[0] =
                     albedo / PI * (diffuse + solar * lit * (transmittance[0] - exact_ground));
@@ -813,11 +860,23 @@ impl MultipleScatteringField {
             }
             // The near-horizontal light comes from columns where the sun
             // stands higher or lower (see `spherical_paths`).
+            // The first order is already spherical: only the higher
+            // orders are shifted.
             let mut fields: Vec<&mut [f64]> = out
                 .chunks_exact_mut(solution_len + 2)
                 .map(|block| &mut block[..solution_len])
                 .collect();
+            for (s, field) in fields.iter_mut().enumerate() {
+                for (value, l) in field.iter_mut().zip(first_of(s).unwrap_or(&[])) {
+                    *value -= l;
+                }
+            }
             system.shift_toward_sources(&sun_axis.angles_rad, &mut fields);
+            for (s, field) in fields.iter_mut().enumerate() {
+                for (value, l) in field.iter_mut().zip(first_of(s).unwrap_or(&[])) {
+                    *value += l;
+                }
+            }
         });
         let mut radiance = vec![0.0; count * wavelengths * solution_len];
         let mut ground_diffuse = vec![0.0; count * wavelengths];
