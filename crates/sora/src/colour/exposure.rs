@@ -47,6 +47,32 @@ use std::str::FromStr;
 use crate::colour::xyz::Xyz;
 use crate::error::{Error, Result};
 
+/// The night floor, cd/m^2: the model has no airglow, zodiacal light or
+/// starlight, which give the moonless natural night sky about 2e-4 cd/m^2
+/// (22 mag/arcsec^2); a luminance 200 times below that is not a sky
+/// anyone sees, and far below it lie only numerical floors (the
+/// multiple-scattering tables floor their logarithms at 1e-30). A pixel
+/// darker than this is night: [`apply_night_floor`] makes it black.
+pub const NIGHT_FLOOR_CD_M2: f64 = 1e-6;
+
+/// Sets every pixel of `image` (XYZ of radiance, Y x 683 lm/W = cd/m^2)
+/// whose luminance is below [`NIGHT_FLOOR_CD_M2`] (or negative) to black,
+/// and returns the brightest luminance left, cd/m^2 (0 for an image that
+/// is all night: auto exposure then leaves it black, see
+/// [`Exposure::scale_for_image`]).
+pub fn apply_night_floor(image: &mut [Xyz]) -> f64 {
+    let floor = NIGHT_FLOOR_CD_M2 / crate::colour::MAXIMUM_LUMINOUS_EFFICACY_LM_PER_W;
+    let mut brightest: f64 = 0.0;
+    for xyz in image.iter_mut() {
+        if xyz.y < floor {
+            *xyz = Xyz::BLACK;
+        } else {
+            brightest = brightest.max(xyz.y);
+        }
+    }
+    brightest * crate::colour::MAXIMUM_LUMINOUS_EFFICACY_LM_PER_W
+}
+
 /// How an image's XYZ are scaled before display (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Exposure {

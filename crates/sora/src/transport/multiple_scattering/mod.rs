@@ -346,6 +346,12 @@ pub(crate) fn forward_peak_cosine(cos_theta: f64, cone_rad: f64) -> f64 {
 /// interpolations (radiances are ~1e-6..1 W m^-2 sr^-1 nm^-1).
 const LOG_FLOOR: f64 = 1e-30;
 
+/// ln R below which the march takes the source as zero: e^-46 = 1e-20
+/// W m^-2 sr^-1 nm^-1 (the logarithms' floor is ln 1e-30 = -69), far below
+/// the night floor ([`crate::colour::NIGHT_FLOOR_CD_M2`], ~1e-11 in these
+/// units).
+const DARK_LOG_SOURCE: f64 = -46.0;
+
 /// ln of a non-negative value, floored.
 fn floored_log(value: f64) -> f64 {
     value.max(LOG_FLOOR).ln()
@@ -560,7 +566,11 @@ impl ViewRayOptics {
                             tau += self.scaled_extinction[i * s + j] * scratch.node_columns[j];
                             scattering += self.scaled_scattering[i * s + j] * scratch.densities[j];
                         }
-                        if scattering > 0.0 {
+                        // A source at the logarithms' floor is no light
+                        // (the interpolation between a dark node, 1e-30,
+                        // and a lit one would otherwise leave numerical
+                        // noise in the night sky).
+                        if scattering > 0.0 && scratch.log_source[i] > DARK_LOG_SOURCE {
                             *out += weight * scattering * (scratch.log_source[i] - tau).exp();
                         }
                     }
@@ -679,10 +689,16 @@ impl MultipleScatteringField {
         let species = optics.species.len();
         let streams = Streams::new(settings.streams_per_hemisphere);
         let degrees = streams.count();
-        // Beyond this zenith angle the sun has set for the whole column,
-        // and for every point a ray from its top can reach: nothing there
-        // sees light scattered once (`spherical_first_order`).
-        let darkest = 0.5 * PI + 2.0 * (ground_radius_m / top_radius_m).acos();
+        // The sun sets for the top of a column at 90 degrees +
+        // acos(R / R_top), and a straight path from a point of the column
+        // reaches at most 2 acos(R / R_top) farther (to the top, grazing
+        // the ground): beyond 90 degrees + 3 acos(R / R_top) nothing a
+        // column's streams reach is sunlit (`spherical_first_order`), and
+        // its field is zero. The axis ends a degree past that, so that a
+        // sun angle beyond its end (read at its last node) reads darkness,
+        // not the last lit column (measured: a zenith of 1e-6 cd/m^2 with
+        // the sun 30 degrees below the horizon when it ended at 111 deg).
+        let darkest = 0.5 * PI + 3.0 * (ground_radius_m / top_radius_m).acos() + 1f64.to_radians();
         let lowest = lowest_rad.clamp(0.0, darkest);
         let highest = highest_rad.clamp(lowest, darkest);
         let sun_axis = SunZenithAxis::new(
@@ -860,23 +876,18 @@ impl MultipleScatteringField {
             }
             // The near-horizontal light comes from columns where the sun
             // stands higher or lower (see `spherical_paths`).
-            // The first order is already spherical: only the higher
-            // orders are shifted.
+            // Only the sun nodes with the column's own first order: with the
+            // spherical first order the light from lit columns is in the
+            // field already, and the shift's finite difference across the
+            // sun axis would carry light into columns that are dark
+            // (measured: a zenith of 1e-6 cd/m^2 with the sun 30 degrees
+            // below the horizon).
             let mut fields: Vec<&mut [f64]> = out
                 .chunks_exact_mut(solution_len + 2)
                 .map(|block| &mut block[..solution_len])
+                .take(first_spherical)
                 .collect();
-            for (s, field) in fields.iter_mut().enumerate() {
-                for (value, l) in field.iter_mut().zip(first_of(s).unwrap_or(&[])) {
-                    *value -= l;
-                }
-            }
-            system.shift_toward_sources(&sun_axis.angles_rad, &mut fields);
-            for (s, field) in fields.iter_mut().enumerate() {
-                for (value, l) in field.iter_mut().zip(first_of(s).unwrap_or(&[])) {
-                    *value += l;
-                }
-            }
+            system.shift_toward_sources(&sun_axis.angles_rad[..fields.len()], &mut fields);
         });
         let mut radiance = vec![0.0; count * wavelengths * solution_len];
         let mut ground_diffuse = vec![0.0; count * wavelengths];
