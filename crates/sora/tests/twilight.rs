@@ -40,7 +40,6 @@ fn image_tables_agree_with_the_per_view_path_in_twilight() {
     let mut worst = 0.0f64;
     for sun in [0.0, -4.0, -8.0, -12.0, -16.0] {
         let sky = Sky::builder(&atmosphere).sun_deg(sun, 0.0).build().unwrap();
-        let mut previous_zenith = f64::INFINITY;
         for (elevation, azimuth) in VIEWS {
             let view = ViewDirection::new(elevation, azimuth).unwrap();
             let exact = sky.radiance(view).unwrap().radiance_w_m2_sr_nm;
@@ -55,20 +54,16 @@ fn image_tables_agree_with_the_per_view_path_in_twilight() {
                 );
                 let error = (t / e - 1.0).abs();
                 worst = worst.max(error);
-                // Measured at most 5.8e-3 (780 nm, 20 degrees up across the
-                // sun's vertical, where the sky-view table's azimuth
-                // interpolation is coarsest).
+                // Measured at most 7.1e-3 (5.8e-3 down to -12 degrees, at
+                // 780 nm 20 degrees up across the sun's vertical, where the
+                // sky-view table's azimuth interpolation is coarsest).
                 assert!(
                     error < 1e-2,
                     "sun {sun}, view ({elevation}, {azimuth}), {} nm: table {t:e} vs per view {e:e}",
                     sky.wavelengths().wavelength_nm(i)
                 );
             }
-            if (elevation, azimuth) == (90.0, 0.0) {
-                previous_zenith = exact.values()[8];
-            }
         }
-        assert!(previous_zenith.is_finite());
     }
     eprintln!("worst relative difference, image tables vs per view: {worst:.3e}");
 }
@@ -118,9 +113,39 @@ fn check_smooth(suns: &[f64], radiances: &[[f64; 3]]) -> (f64, f64, usize) {
     (worst, at_sun, at_wavelength)
 }
 
+/// Every 0.25 degree over `range` (start above end), both included.
+fn suns_every_quarter_degree(start: f64, end: f64) -> Vec<f64> {
+    let steps = ((start - end) / 0.25).round() as usize;
+    (0..=steps).map(|k| start - 0.25 * k as f64).collect()
+}
+
+/// Where a kink is likeliest, every 0.25 degree: the sun crossing 6
+/// degrees, where the eye's own sun node starts taking the spherical
+/// first order (from 84 degrees zenith), and -8.5 to -10 degrees, where
+/// the full sweep (ignored test below) measured its worst second
+/// difference (0.0174 at -9.25 degrees, 650 nm).
 #[test]
+fn zenith_radiance_is_smooth_where_it_could_kink() {
+    for (start, end) in [(7.0, 4.5), (-8.5, -10.0)] {
+        let suns = suns_every_quarter_degree(start, end);
+        let radiances = zenith_radiances(&suns);
+        let (worst, sun, wavelength) = check_smooth(&suns, &radiances);
+        eprintln!("sun {start}..{end}: worst |second difference of ln L| {worst:.4} at sun {sun}");
+        assert!(
+            worst < 0.05,
+            "{worst} at sun {sun}, wavelength {wavelength}"
+        );
+    }
+}
+
+/// The whole range, +10 to -12 degrees every 0.25 degree (89
+/// skies, 4 minutes on 2 shared cores). Measured: monotone at all three
+/// wavelengths, worst |second difference of ln L| 0.0174 (at -9.25
+/// degrees, 650 nm).
+#[test]
+#[ignore]
 fn zenith_radiance_is_smooth_from_day_to_nautical_twilight() {
-    let suns: Vec<f64> = (0..=88).map(|k| 10.0 - 0.25 * k as f64).collect();
+    let suns = suns_every_quarter_degree(10.0, -12.0);
     let radiances = zenith_radiances(&suns);
     for (sun, l) in suns.iter().zip(&radiances) {
         eprintln!(
@@ -194,10 +219,13 @@ fn excess_over_path_tracer(
 
 /// Civil twilight, a representative subset: within 3 % + 3 standard
 /// errors at suns -2 and -4 degrees, 5 % + 3 standard errors at -6, in
-/// the zenith, toward the sun low and away from it (measured with 400 000
-/// paths, see the ignored test: within 1.9 % at -2, 3.0 % at -4, 7.3 % at
-/// -6 in the zenith with the path tracer at +-3.2 %). Before the field's
-/// first order was spherical: -2 degrees +16 %, -4 +20 %, -6 -39 %.
+/// the zenith, toward the sun low and away from it, every wavelength
+/// (100 000 paths: the path tracer's standard error is 1-2 % at -2
+/// degrees, 2-3 % at -4, 6-14 % at -6, at 380 nm the largest). Measured
+/// with 400 000 paths (the ignored test's grid, 460/540/620 nm): within
+/// 1.9 % at -2, 3.0 % at -4, 7.3 % at -6 (the zenith, the path tracer at
+/// +-3.2 %). Before the field's first order was spherical: -2 degrees
+/// +16 %, -4 +20 %, -6 -39 %.
 #[test]
 fn civil_twilight_matches_the_path_tracer() {
     let views = [(90.0, 0.0), (20.0, 0.0), (5.0, 180.0)];
