@@ -234,6 +234,29 @@ impl FromStr for Exposure {
 mod tests {
     use super::*;
 
+    #[test]
+    fn pixels_below_the_night_floor_turn_black() {
+        let per_cd_m2 = 1.0 / crate::colour::MAXIMUM_LUMINOUS_EFFICACY_LM_PER_W;
+        let mut image = vec![
+            Xyz::new(1.0, 2e-6 * per_cd_m2, 1.0),
+            Xyz::new(1.0, 0.5e-6 * per_cd_m2, 1.0),
+            Xyz::new(0.0, -1e-3, 0.0),
+        ];
+        let brightest = apply_night_floor(&mut image);
+        assert!((brightest - 2e-6).abs() < 1e-18, "{brightest}");
+        assert_eq!(image[1], Xyz::BLACK);
+        assert_eq!(image[2], Xyz::BLACK);
+        assert_eq!(image[0].x, 1.0);
+        let mut night = vec![Xyz::new(1e-20, 1e-20, 1e-20); 4];
+        assert_eq!(apply_night_floor(&mut night), 0.0);
+        assert!(night.iter().all(|p| *p == Xyz::BLACK));
+        // An all-black image gets scale 1 from auto exposure: it stays black.
+        let scale = Exposure::Auto { key: 0.18 }
+            .scale_for_image(&night)
+            .unwrap();
+        assert_eq!(scale, 1.0);
+    }
+
     fn grey(y: f64) -> Xyz {
         Xyz::new(0.95 * y, y, 1.09 * y)
     }
