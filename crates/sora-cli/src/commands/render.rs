@@ -34,6 +34,11 @@ use crate::output_path::output_target;
 /// --exr-half fails then unless --half-overflow clamp is given (or
 /// --no-sun-disc, or 32-bit floats).
 ///
+/// Night: pixels darker than 1e-6 cd/m^2 (the night floor, 200 times below
+/// the natural night sky's airglow and starlight, which the model lacks)
+/// are written black; when the whole sky is that dark, auto exposure says
+/// so on stderr and writes a black image.
+///
 /// Cameras:
 ///   fisheye      the whole sky in a disc, zenith at the centre, north up,
 ///                east LEFT (a sky chart seen from below); equidistant
@@ -369,8 +374,11 @@ fn render_frame(
     sky.prepare_images()?;
     spinner.finish_and_clear();
     let bar = progress_bar(height as u64);
-    let xyz = sky.render_xyz(image, to_xyz, &|rows| bar.set_position(rows as u64))?;
+    let mut xyz = sky.render_xyz(image, to_xyz, &|rows| bar.set_position(rows as u64))?;
     bar.finish_and_clear();
+    // Below the night floor the model has nothing to show (no airglow, no
+    // stars), only numerical floors: such pixels are written black.
+    let brightest_cd_m2 = sora::colour::apply_night_floor(&mut xyz);
     let render_seconds = frame_started.elapsed().as_secs_f64();
 
     let (w, h) = (width as usize, height as usize);
@@ -380,6 +388,14 @@ fn render_frame(
             let mut mapping = args.colour.display_mapping()?;
             if let Some(exposure) = exposure {
                 mapping.exposure = exposure;
+            }
+            if brightest_cd_m2 == 0.0
+                && matches!(mapping.exposure, sora::colour::Exposure::Auto { .. })
+            {
+                eprintln!(
+                    "night: the whole sky is darker than the night floor of {:e} cd/m^2 (the model has no airglow or stars), so auto exposure writes a black image; a fixed --exposure or --ev100 shows the same",
+                    sora::colour::NIGHT_FLOOR_CD_M2
+                );
             }
             png_scale = Some(mapping.exposure.scale_for_image(&xyz)?);
             if args.png_16_bit {

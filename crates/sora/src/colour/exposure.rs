@@ -47,6 +47,32 @@ use std::str::FromStr;
 use crate::colour::xyz::Xyz;
 use crate::error::{Error, Result};
 
+/// The night floor, cd/m^2: the model has no airglow, zodiacal light or
+/// starlight, which give the moonless natural night sky about 2e-4 cd/m^2
+/// (22 mag/arcsec^2); a luminance 200 times below that is not a sky
+/// anyone sees, and far below it lie only numerical floors (the
+/// multiple-scattering tables floor their logarithms at 1e-30). A pixel
+/// darker than this is night: [`apply_night_floor`] makes it black.
+pub const NIGHT_FLOOR_CD_M2: f64 = 1e-6;
+
+/// Sets every pixel of `image` (XYZ of radiance, Y x 683 lm/W = cd/m^2)
+/// whose luminance is below [`NIGHT_FLOOR_CD_M2`] (or negative) to black,
+/// and returns the brightest luminance left, cd/m^2 (0 for an image that
+/// is all night: auto exposure then leaves it black, see
+/// [`Exposure::scale_for_image`]).
+pub fn apply_night_floor(image: &mut [Xyz]) -> f64 {
+    let floor = NIGHT_FLOOR_CD_M2 / crate::colour::MAXIMUM_LUMINOUS_EFFICACY_LM_PER_W;
+    let mut brightest: f64 = 0.0;
+    for xyz in image.iter_mut() {
+        if xyz.y < floor {
+            *xyz = Xyz::BLACK;
+        } else {
+            brightest = brightest.max(xyz.y);
+        }
+    }
+    brightest * crate::colour::MAXIMUM_LUMINOUS_EFFICACY_LM_PER_W
+}
+
 /// How an image's XYZ are scaled before display (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Exposure {
@@ -210,6 +236,29 @@ impl FromStr for Exposure {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn pixels_below_the_night_floor_turn_black() {
+        let per_cd_m2 = 1.0 / crate::colour::MAXIMUM_LUMINOUS_EFFICACY_LM_PER_W;
+        let mut image = vec![
+            Xyz::new(1.0, 2e-6 * per_cd_m2, 1.0),
+            Xyz::new(1.0, 0.5e-6 * per_cd_m2, 1.0),
+            Xyz::new(0.0, -1e-3, 0.0),
+        ];
+        let brightest = apply_night_floor(&mut image);
+        assert!((brightest - 2e-6).abs() < 1e-18, "{brightest}");
+        assert_eq!(image[1], Xyz::BLACK);
+        assert_eq!(image[2], Xyz::BLACK);
+        assert_eq!(image[0].x, 1.0);
+        let mut night = vec![Xyz::new(1e-20, 1e-20, 1e-20); 4];
+        assert_eq!(apply_night_floor(&mut night), 0.0);
+        assert!(night.iter().all(|p| *p == Xyz::BLACK));
+        // An all-black image gets scale 1 from auto exposure: it stays black.
+        let scale = Exposure::Auto { key: 0.18 }
+            .scale_for_image(&night)
+            .unwrap();
+        assert_eq!(scale, 1.0);
+    }
 
     fn grey(y: f64) -> Xyz {
         Xyz::new(0.95 * y, y, 1.09 * y)

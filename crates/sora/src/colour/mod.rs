@@ -61,7 +61,7 @@ mod xyz;
 
 pub use colour_matching::{ColourMatchingFunctions, Observer};
 pub use display::{DisplayEncoding, DisplayMapping};
-pub use exposure::Exposure;
+pub use exposure::{Exposure, NIGHT_FLOOR_CD_M2, apply_night_floor};
 pub use gamut::GamutMapping;
 pub use rgb::{LinearRgb, Matrix3, RgbColourSpace, ScaledPower, TransferCurve};
 pub use xyz::{MAXIMUM_LUMINOUS_EFFICACY_LM_PER_W, SpectrumToXyz, Xyz};

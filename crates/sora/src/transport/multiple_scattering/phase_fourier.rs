@@ -171,8 +171,7 @@ impl TruncatedPhase {
         (m..n).map(|l| self.coefficients[l] * a[l] * b[l]).sum()
     }
 
-    /// p*(cos Theta), summed from the Legendre series (for tests).
-    #[cfg(test)]
+    /// p*(cos Theta), sr^-1, summed from the Legendre series.
     pub(crate) fn eval(&self, cos_theta: f64) -> f64 {
         let (mut p0, mut p1) = (1.0, cos_theta);
         let mut sum = 0.0;

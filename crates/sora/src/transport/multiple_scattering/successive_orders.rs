@@ -277,10 +277,17 @@ impl<'a> ColumnSystem<'a> {
     /// planet's shadow) into `radiance` (harmonics x levels x streams
     /// values, [(m * levels + k) * streams + b]), with `work` space.
     /// Returns the diffuse downward irradiance at the ground.
+    ///
+    /// With `first_order` (the same layout as `radiance`) the sun's light
+    /// scattered once is that field instead of the column's own (the
+    /// spherical first order, `super::spherical_first_order`): each sweep
+    /// adds it in place of the transported beam source, so every higher
+    /// order is fed by it.
     pub(crate) fn solve(
         &self,
         sun_cosine: f64,
         sun_transmittance: &[f64],
+        first_order: Option<&[f64]>,
         radiance: &mut [f64],
         work: &mut Vec<f64>,
     ) -> f64 {
@@ -288,8 +295,9 @@ impl<'a> ColumnSystem<'a> {
         let total = self.streams.count();
         let s = self.species.len();
         let size = levels * total;
-        work.resize(4 * size + total * total + s * total + 2 * levels, 0.0);
+        work.resize(5 * size + total * total + s * total + 2 * levels, 0.0);
         let (direct_source, rest) = work.split_at_mut(size);
+        let (replacement, rest) = rest.split_at_mut(size);
         let (source, rest) = rest.split_at_mut(size);
         let (previous, rest) = rest.split_at_mut(size);
         let (increment, rest) = rest.split_at_mut(size);
@@ -334,6 +342,17 @@ impl<'a> ColumnSystem<'a> {
             let field = &mut radiance[m * size..(m + 1) * size];
             let matrices =
                 &self.scattering_matrices[m * levels * total * total..][..levels * total * total];
+            // What replaces the column's first order: the given first order
+            // minus the transported beam source (the sweeps are linear).
+            if let Some(first_order) = first_order {
+                self.transport(direct_source, 0.0, replacement, columns);
+                for (r, l) in replacement
+                    .iter_mut()
+                    .zip(&first_order[m * size..(m + 1) * size])
+                {
+                    *r = l - *r;
+                }
+            }
             source.copy_from_slice(direct_source);
             let (mut last_norm, mut last_ratio) = (0.0f64, f64::NAN);
             for iteration in 0..MAX_ITERATIONS {
@@ -343,6 +362,11 @@ impl<'a> ColumnSystem<'a> {
                     _ => 0.0,
                 };
                 self.transport(source, ground_radiance, field, columns);
+                if first_order.is_some() {
+                    for (value, r) in field.iter_mut().zip(replacement.iter()) {
+                        *value += r;
+                    }
+                }
                 let (mut norm, mut size_of_field) = (0.0, 0.0);
                 for ((d, new), old) in increment.iter_mut().zip(field.iter()).zip(previous.iter()) {
                     *d = new - old;
@@ -584,7 +608,7 @@ mod tests {
         }
         let mut radiance = vec![0.0; total * levels * total];
         let mut work = Vec::new();
-        let diffuse_down = system.solve(sun_cosine, &transmittance, &mut radiance, &mut work);
+        let diffuse_down = system.solve(sun_cosine, &transmittance, None, &mut radiance, &mut work);
         let top = levels - 1;
         let n = streams.per_hemisphere();
         let up: f64 = 2.0

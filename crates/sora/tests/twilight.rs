@@ -1,0 +1,263 @@
+//! Twilight: the sun from the horizon to 16 degrees below it.
+//!
+//! - The image path (`Sky::render_xyz`: sun-column, source and sky-view
+//!   tables, read by `Sky::radiance_from_image_tables`) against the
+//!   per-view path (`Sky::radiance`, what `sora spectrum` prints) in every
+//!   kind of direction, toward, across and away from the sun, at every
+//!   wavelength. Before the field's first order was spherical the two
+//!   differed by 12 % at sun -11 degrees and every value below -10 degrees
+//!   was the same whatever the sun (the field's sun axis stopped at the
+//!   column's sunset, 100 degrees, and clamped).
+//! - The fast method against the path tracer in civil twilight (a subset
+//!   here, the whole grid down to -12 degrees with `--ignored`).
+//! - The zenith radiance against the sun's elevation, +10 to -12 degrees
+//!   every 0.25 degree, at 450, 550 and 650 nm: monotone, and with no
+//!   staircase or kink (|second difference of ln L| below 0.05 per step,
+//!   the bar).
+
+use sora::spectrum::WavelengthGrid;
+use sora::{Atmosphere, Sky, ViewDirection};
+
+/// Directions from the zenith to the ground, toward (azimuth 0), across
+/// and away from the sun (which stands at azimuth 0).
+const VIEWS: [(f64, f64); 11] = [
+    (90.0, 0.0),
+    (60.0, 135.0),
+    (45.0, 180.0),
+    (45.0, 0.0),
+    (20.0, 90.0),
+    (5.0, 0.0),
+    (5.0, 180.0),
+    (2.0, 0.0),
+    (2.0, 180.0),
+    (-10.0, 0.0),
+    (-10.0, 180.0),
+];
+
+#[test]
+fn image_tables_agree_with_the_per_view_path_in_twilight() {
+    let atmosphere = Atmosphere::preset("earth-clear").unwrap();
+    let mut worst = 0.0f64;
+    for sun in [0.0, -4.0, -8.0, -12.0, -16.0] {
+        let sky = Sky::builder(&atmosphere).sun_deg(sun, 0.0).build().unwrap();
+        for (elevation, azimuth) in VIEWS {
+            let view = ViewDirection::new(elevation, azimuth).unwrap();
+            let exact = sky.radiance(view).unwrap().radiance_w_m2_sr_nm;
+            let table = sky
+                .radiance_from_image_tables(view)
+                .unwrap()
+                .radiance_w_m2_sr_nm;
+            for (i, (e, t)) in exact.values().iter().zip(table.values()).enumerate() {
+                assert!(
+                    *e > 0.0 && e.is_finite(),
+                    "sun {sun}, view ({elevation}, {azimuth}), index {i}: {e}"
+                );
+                let error = (t / e - 1.0).abs();
+                worst = worst.max(error);
+                // Measured at most 7.1e-3 (5.8e-3 down to -12 degrees, at
+                // 780 nm 20 degrees up across the sun's vertical, where the
+                // sky-view table's azimuth interpolation is coarsest).
+                assert!(
+                    error < 1e-2,
+                    "sun {sun}, view ({elevation}, {azimuth}), {} nm: table {t:e} vs per view {e:e}",
+                    sky.wavelengths().wavelength_nm(i)
+                );
+            }
+        }
+    }
+    eprintln!("worst relative difference, image tables vs per view: {worst:.3e}");
+}
+
+/// Zenith radiances at 450, 550 and 650 nm for each sun elevation.
+fn zenith_radiances(suns: &[f64]) -> Vec<[f64; 3]> {
+    let atmosphere = Atmosphere::preset("earth-clear").unwrap();
+    let grid = WavelengthGrid::new(450.0, 650.0, 100.0).unwrap();
+    let base = Sky::builder(&atmosphere)
+        .wavelengths(grid)
+        .sun_deg(suns[0], 0.0)
+        .build()
+        .unwrap();
+    let zenith = ViewDirection::new(90.0, 0.0).unwrap();
+    suns.iter()
+        .map(|sun| {
+            let sky = base.with_sun_deg(*sun, 0.0).unwrap();
+            let values = sky.radiance(zenith).unwrap().radiance_w_m2_sr_nm;
+            [values.values()[0], values.values()[1], values.values()[2]]
+        })
+        .collect()
+}
+
+/// Monotone and smooth: returns the worst |second difference of ln L| and
+/// where, panicking on a radiance that grows as the sun sinks.
+fn check_smooth(suns: &[f64], radiances: &[[f64; 3]]) -> (f64, f64, usize) {
+    let (mut worst, mut at_sun, mut at_wavelength) = (0.0f64, 0.0, 0);
+    for c in 0..3 {
+        for k in 1..suns.len() {
+            assert!(
+                radiances[k][c] < radiances[k - 1][c],
+                "wavelength {c}: zenith radiance grows from sun {} ({:e}) to {} ({:e})",
+                suns[k - 1],
+                radiances[k - 1][c],
+                suns[k],
+                radiances[k][c]
+            );
+        }
+        for k in 1..suns.len() - 1 {
+            let second =
+                radiances[k + 1][c].ln() - 2.0 * radiances[k][c].ln() + radiances[k - 1][c].ln();
+            if second.abs() > worst {
+                (worst, at_sun, at_wavelength) = (second.abs(), suns[k], c);
+            }
+        }
+    }
+    (worst, at_sun, at_wavelength)
+}
+
+/// Every 0.25 degree over `range` (start above end), both included.
+fn suns_every_quarter_degree(start: f64, end: f64) -> Vec<f64> {
+    let steps = ((start - end) / 0.25).round() as usize;
+    (0..=steps).map(|k| start - 0.25 * k as f64).collect()
+}
+
+/// Where a kink is likeliest, every 0.25 degree: the sun crossing 6
+/// degrees, where the eye's own sun node starts taking the spherical
+/// first order (from 84 degrees zenith), and -8.5 to -10 degrees, where
+/// the full sweep (ignored test below) measured its worst second
+/// difference (0.0174 at -9.25 degrees, 650 nm).
+#[test]
+fn zenith_radiance_is_smooth_where_it_could_kink() {
+    for (start, end) in [(7.0, 4.5), (-8.5, -10.0)] {
+        let suns = suns_every_quarter_degree(start, end);
+        let radiances = zenith_radiances(&suns);
+        let (worst, sun, wavelength) = check_smooth(&suns, &radiances);
+        eprintln!("sun {start}..{end}: worst |second difference of ln L| {worst:.4} at sun {sun}");
+        assert!(
+            worst < 0.05,
+            "{worst} at sun {sun}, wavelength {wavelength}"
+        );
+    }
+}
+
+/// The whole range, +10 to -12 degrees every 0.25 degree (89
+/// skies, 4 minutes on 2 shared cores). Measured: monotone at all three
+/// wavelengths, worst |second difference of ln L| 0.0174 (at -9.25
+/// degrees, 650 nm).
+#[test]
+#[ignore]
+fn zenith_radiance_is_smooth_from_day_to_nautical_twilight() {
+    let suns = suns_every_quarter_degree(10.0, -12.0);
+    let radiances = zenith_radiances(&suns);
+    for (sun, l) in suns.iter().zip(&radiances) {
+        eprintln!(
+            "sun {sun:>6.2}: zenith {:.4e} {:.4e} {:.4e}",
+            l[0], l[1], l[2]
+        );
+    }
+    let (worst, sun, wavelength) = check_smooth(&suns, &radiances);
+    eprintln!(
+        "worst |second difference of ln L| {worst:.4} at sun {sun} ({} nm)",
+        [450, 550, 650][wavelength]
+    );
+    assert!(
+        worst < 0.05,
+        "{worst} at sun {sun}, wavelength {wavelength}"
+    );
+}
+
+/// The fast method against the path tracer (all orders, unbiased) for
+/// earth-clear with the sun at the given elevations and `views`
+/// (elevation, azimuth from the sun): the worst excess over `bound(sun)`
+/// plus three standard errors, over every wavelength; prints each view.
+fn excess_over_path_tracer(
+    suns: &[f64],
+    views: &[(f64, f64)],
+    samples: u64,
+    bound: impl Fn(f64) -> f64,
+) -> f64 {
+    use sora::Method;
+    let atmosphere = Atmosphere::preset("earth-clear").unwrap();
+    let directions: Vec<ViewDirection> = views
+        .iter()
+        .map(|(e, a)| ViewDirection::new(*e, *a).unwrap())
+        .collect();
+    let mut worst_excess = f64::NEG_INFINITY;
+    for (n, &sun) in suns.iter().enumerate() {
+        let fast = Sky::builder(&atmosphere).sun_deg(sun, 0.0).build().unwrap();
+        let traced = Sky::builder(&atmosphere)
+            .sun_deg(sun, 0.0)
+            .method(Method::PathTracing {
+                samples,
+                seed: 100 + n as u64,
+            })
+            .build()
+            .unwrap()
+            .radiances(&directions)
+            .unwrap();
+        let computed = fast.radiances(&directions).unwrap();
+        for ((view, f), t) in views.iter().zip(&computed).zip(&traced) {
+            let errors = t.standard_error_w_m2_sr_nm.as_ref().unwrap();
+            let (mut worst, mut at, mut sigma_at) = (0.0f64, 0, 0.0);
+            for i in 0..f.radiance_w_m2_sr_nm.len() {
+                let expected = t.radiance_w_m2_sr_nm.values()[i];
+                let sigma = errors.values()[i] / expected;
+                let error = f.radiance_w_m2_sr_nm.values()[i] / expected - 1.0;
+                worst_excess = worst_excess.max(error.abs() - bound(sun) - 3.0 * sigma);
+                if error.abs() > worst.abs() {
+                    (worst, at, sigma_at) = (error, i, sigma);
+                }
+            }
+            eprintln!(
+                "sun {sun:>5}, view {view:?}: worst {:+.2} % at {} nm (path tracer +-{:.2} %)",
+                100.0 * worst,
+                fast.wavelengths().wavelength_nm(at),
+                100.0 * sigma_at
+            );
+        }
+    }
+    worst_excess
+}
+
+/// Civil twilight, a representative subset: within 3 % + 3 standard
+/// errors at suns -2 and -4 degrees, 5 % + 3 standard errors at -6, in
+/// the zenith, toward the sun low and away from it, every wavelength
+/// (100 000 paths: the path tracer's standard error is 1-2 % at -2
+/// degrees, 2-3 % at -4, 6-14 % at -6, at 380 nm the largest). Measured
+/// with 400 000 paths (the ignored test's grid, 460/540/620 nm): within
+/// 1.9 % at -2, 3.0 % at -4, 7.3 % at -6 (the zenith, the path tracer at
+/// +-3.2 %). Before the field's first order was spherical: -2 degrees
+/// +16 %, -4 +20 %, -6 -39 %.
+#[test]
+fn civil_twilight_matches_the_path_tracer() {
+    let views = [(90.0, 0.0), (20.0, 0.0), (5.0, 180.0)];
+    let excess = excess_over_path_tracer(&[-2.0, -4.0, -6.0], &views, 100_000, |sun| {
+        if sun >= -4.0 { 0.03 } else { 0.05 }
+    });
+    assert!(excess <= 0.0, "beyond the bound + 3 sigma by {excess}");
+}
+
+/// The whole grid (about an hour on 2 cores): suns 0 to -12 degrees, the
+/// zenith and view elevations 5, 20, 45 degrees at 0, 90 and 180 degrees
+/// from the sun, within 3 % + 3 standard errors down to -6 degrees and 5 %
+/// + 3 standard errors at -8 to -12 (400 000 paths; 1 000 000 at -10 and
+/// -12, where the path tracer's standard error is still 10-40 %).
+#[test]
+#[ignore]
+fn twilight_matches_the_path_tracer_over_the_whole_grid() {
+    let mut views = vec![(90.0, 0.0)];
+    for elevation in [5.0, 20.0, 45.0] {
+        for azimuth in [0.0, 90.0, 180.0] {
+            views.push((elevation, azimuth));
+        }
+    }
+    let bound = |sun: f64| if sun >= -6.0 { 0.03 } else { 0.05 };
+    let civil = excess_over_path_tracer(&[0.0, -2.0, -4.0, -6.0, -8.0], &views, 400_000, bound);
+    let nautical = excess_over_path_tracer(&[-10.0, -12.0], &views, 1_000_000, bound);
+    assert!(
+        civil <= 0.0,
+        "sun 0..-8: beyond the bound + 3 sigma by {civil}"
+    );
+    assert!(
+        nautical <= 0.0,
+        "sun -10, -12: beyond the bound + 3 sigma by {nautical}"
+    );
+}
