@@ -779,9 +779,9 @@ impl Sky {
 
     /// The radiance a fast-method image shows toward `view` (read from its
     /// tables, without the sun's disc): within 0.1 % of [`Sky::radiance`]
-    /// with [`Method::Fast`], which is what the tests hold it to.
-    #[cfg(test)]
-    pub(crate) fn radiance_from_image_tables(&self, view: ViewDirection) -> Result<SkyRadiance> {
+    /// with [`Method::Fast`], which is what the tests hold it to: for
+    /// values that match a rendered image pixel for pixel.
+    pub fn radiance_from_image_tables(&self, view: ViewDirection) -> Result<SkyRadiance> {
         let mut all = self.radiances_from_image_tables(&[view])?;
         Ok(all.remove(0))
     }
