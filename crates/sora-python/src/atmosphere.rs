@@ -145,7 +145,11 @@ impl Atmosphere {
             table(&|s| s.optical_depth_scattering().into_values()),
             table(&|s| s.single_scattering_albedo().into_values()),
             table(&|s| s.asymmetry_g().into_values()),
-            optics.solar_irradiance_w_m2_nm.values().to_vec().into_pyarray(py),
+            optics
+                .solar_irradiance_w_m2_nm
+                .values()
+                .to_vec()
+                .into_pyarray(py),
         ))
     }
 
@@ -201,12 +205,15 @@ fn toml_value(value: &Bound<'_, PyAny>, path: &str) -> PyResult<toml::Value> {
         return Ok(toml::Value::Boolean(value.extract()?));
     }
     if value.is_instance_of::<PyInt>() {
-        return value.extract::<i64>().map(toml::Value::Integer).map_err(|_| {
-            value_error(format!(
-                "atmosphere dict: '{path}' = {} does not fit a 64-bit integer",
-                value.repr().map(|r| r.to_string()).unwrap_or_default()
-            ))
-        });
+        return value
+            .extract::<i64>()
+            .map(toml::Value::Integer)
+            .map_err(|_| {
+                value_error(format!(
+                    "atmosphere dict: '{path}' = {} does not fit a 64-bit integer",
+                    value.repr().map(|r| r.to_string()).unwrap_or_default()
+                ))
+            });
     }
     if value.is_instance_of::<PyFloat>() {
         return Ok(toml::Value::Float(value.extract()?));
@@ -215,7 +222,10 @@ fn toml_value(value: &Bound<'_, PyAny>, path: &str) -> PyResult<toml::Value> {
         return Ok(toml::Value::String(text.to_cow()?.into_owned()));
     }
     if let Ok(dict) = value.cast::<PyDict>() {
-        return Ok(toml::Value::Table(table_from_dict(dict, &format!("{path}."))?));
+        return Ok(toml::Value::Table(table_from_dict(
+            dict,
+            &format!("{path}."),
+        )?));
     }
     if value.is_instance_of::<PyList>() || value.is_instance_of::<PyTuple>() {
         let items: Vec<Bound<'_, PyAny>> = value.extract()?;

@@ -37,7 +37,9 @@ fn grid_from_values(values: &[f64]) -> PyResult<WavelengthGrid> {
         )));
     }
     match values {
-        [] => Err(value_error("wavelengths_nm is empty: give at least one wavelength in nm")),
+        [] => Err(value_error(
+            "wavelengths_nm is empty: give at least one wavelength in nm",
+        )),
         [single] => WavelengthGrid::new(*single, *single, 1.0).map_err(to_py_err),
         [first, second, ..] => {
             let step = second - first;

@@ -41,8 +41,13 @@ fn solve_chunk(m: &[Complex64], x: &[f64], out: &mut [Efficiencies]) -> Result<(
     let mut start = 0;
     while start < m.len() {
         let end = start + m[start..].iter().take_while(|v| **v == m[start]).count();
-        compute_efficiencies_many_with(&mut workspace, m[start], &x[start..end], &mut out[start..end])
-            .map_err(|_| ())?;
+        compute_efficiencies_many_with(
+            &mut workspace,
+            m[start],
+            &x[start..end],
+            &mut out[start..end],
+        )
+        .map_err(|_| ())?;
         start = end;
     }
     Ok(())
@@ -86,7 +91,9 @@ pub fn mie_efficiencies<'py>(
             .map(|(task, chunk)| {
                 let start = task * SPHERES_PER_TASK;
                 let end = start + chunk.len();
-                solve_chunk(&m[start..end], &x[start..end], chunk).err().map(|_| task)
+                solve_chunk(&m[start..end], &x[start..end], chunk)
+                    .err()
+                    .map(|_| task)
             })
             .filter_map(|failed| failed)
             .min()
@@ -106,7 +113,8 @@ pub fn mie_efficiencies<'py>(
         }
         unreachable!("a chunk that failed has a sphere that fails");
     }
-    let column = |f: fn(&Efficiencies) -> f64| out.iter().map(f).collect::<Vec<_>>().into_pyarray(py);
+    let column =
+        |f: fn(&Efficiencies) -> f64| out.iter().map(f).collect::<Vec<_>>().into_pyarray(py);
     Ok((
         column(|q| q.qext),
         column(|q| q.qsca),

@@ -18,10 +18,20 @@ use sora::{Atmosphere, Method, Scattering, Sky, ViewDirection, WavelengthGrid};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let arguments: Vec<String> = std::env::args().skip(1).collect();
-    let [preset, sun_elevation, sun_azimuth, scattering, method, grid, views @ ..] =
-        arguments.as_slice()
+    let [
+        preset,
+        sun_elevation,
+        sun_azimuth,
+        scattering,
+        method,
+        grid,
+        views @ ..,
+    ] = arguments.as_slice()
     else {
-        return Err("usage: radiance_values PRESET SUN_EL SUN_AZ single|multiple METHOD GRID EL,AZ...".into());
+        return Err(
+            "usage: radiance_values PRESET SUN_EL SUN_AZ single|multiple METHOD GRID EL,AZ..."
+                .into(),
+        );
     };
     let scattering = match scattering.as_str() {
         "single" => Scattering::Single,
