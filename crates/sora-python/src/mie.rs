@@ -124,6 +124,8 @@ pub fn mie_efficiencies<'py>(
     ))
 }
 
+type TwoArrays<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>);
+
 /// The phase function (sr^-1, normalised to 1 over 4 pi sr) and S12/S11 of
 /// one sphere at each scattering angle cosine.
 #[pyfunction]
@@ -133,7 +135,7 @@ pub fn mie_phase_function<'py>(
     m_im: f64,
     x: f64,
     cos_theta: PyReadonlyArray1<'py, f64>,
-) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>)> {
+) -> PyResult<TwoArrays<'py>> {
     let m = Complex64::new(m_re, m_im);
     let cos_theta: Vec<f64> = cos_theta.as_array().iter().copied().collect();
     if let Some(bad) = cos_theta.iter().find(|c| !(-1.0..=1.0).contains(*c)) {
