@@ -38,6 +38,7 @@ __all__ = [
     "Atmosphere",
     "Sky",
     "mie",
+    "sweep",
     "set_num_threads",
     "get_num_threads",
     "__version__",
@@ -407,4 +408,4 @@ def _sky_from_arguments(atmosphere: Atmosphere, arguments: Dict[str, Any]) -> Sk
     return Sky(atmosphere, **arguments)
 
 
-from . import mie  # noqa: E402  (after the classes: mie uses nothing of them)
+from . import mie, sweep  # noqa: E402  (after the classes, which sweep uses)
