@@ -1,0 +1,411 @@
+"""sora: physically based spectral atmospheric scattering, from Python.
+
+A thin layer over the Rust library's front door (``sora::Sky``): the same
+code computes every number as the ``sora`` command-line tool, here from
+numpy arrays and into xarray objects with units in their ``attrs``.
+
+>>> import sora
+>>> sky = sora.Sky(sora.Atmosphere.preset("earth-clear"), sun_elevation_deg=30)
+>>> zenith = sky.radiance(90, 0)          # DataArray (direction, wavelength)
+>>> image = sky.render(camera="fisheye", width=256)   # (256, 256, 3) XYZ
+
+Conventions: angles in degrees (elevation above the horizon, azimuth
+clockwise from north: 0 N, 90 E, 180 S, 270 W), altitudes in m, wavelengths
+in nm, spectral radiance in W m^-2 sr^-1 nm^-1. Bad values raise
+``ValueError`` with the library's one-line message; unreadable files raise
+``OSError``. Computations release the GIL and run on
+``sora.set_num_threads(n)`` threads (default: one per core); results do not
+depend on the thread count.
+
+Modules: :mod:`sora.mie` (Mie theory over numpy arrays), :mod:`sora.sweep`
+(many skies, serially or on Dask).
+"""
+
+from __future__ import annotations
+
+import datetime as _datetime
+import os as _os
+from typing import Any, Dict, Optional, Sequence, Tuple, Union
+
+import numpy as np
+import xarray as xr
+
+from . import _sora
+from ._arrays import broadcast_flat as _broadcast_flat
+from ._sora import __version__, get_num_threads, set_num_threads
+
+__all__ = [
+    "Atmosphere",
+    "Sky",
+    "mie",
+    "sweep",
+    "set_num_threads",
+    "get_num_threads",
+    "__version__",
+    "RADIANCE_UNITS",
+]
+
+#: Units of spectral radiance, as written in ``attrs["units"]``.
+RADIANCE_UNITS = "W m-2 sr-1 nm-1"
+
+WavelengthsLike = Union[str, Sequence[float], np.ndarray, None]
+
+
+def _wavelength_coordinate(wavelengths_nm: np.ndarray) -> xr.DataArray:
+    return xr.DataArray(
+        np.asarray(wavelengths_nm, dtype=float),
+        dims="wavelength",
+        attrs={"units": "nm", "long_name": "vacuum wavelength"},
+    )
+
+
+def _native_wavelengths(wavelengths_nm: WavelengthsLike):
+    """A grid argument for the native module: None, a 'start:stop:step'
+    string, or a 1-D float array."""
+    if wavelengths_nm is None or isinstance(wavelengths_nm, str):
+        return wavelengths_nm
+    values = np.asarray(wavelengths_nm, dtype=float)
+    if values.ndim > 1:
+        raise ValueError(
+            f"wavelengths_nm must be 1-D (nm), not an array of shape {values.shape}"
+        )
+    return values.reshape(-1).tolist()
+
+
+class Atmosphere:
+    """An atmosphere: the planet, the sun's spectrum and the species (air,
+    ozone, aerosols), with the schema of sora's atmosphere files.
+
+    Build one with :meth:`preset`, :meth:`from_toml`, :meth:`from_toml_str`
+    or :meth:`from_dict`. Atmospheres pickle (by their recipe), so they can
+    be sent to Dask workers.
+    """
+
+    __slots__ = ("_native", "_recipe")
+
+    def __init__(self, native: _sora.Atmosphere, recipe: Tuple[Any, ...]):
+        self._native = native
+        self._recipe = recipe
+
+    @staticmethod
+    def presets() -> list:
+        """The names of the built-in atmospheres."""
+        return list(_sora.preset_names())
+
+    @classmethod
+    def preset(cls, name: str) -> "Atmosphere":
+        """A built-in atmosphere, e.g. ``"earth-clear"``, ``"paper-earth"``,
+        ``"mars-dusty"`` (see :meth:`presets`). An unknown name raises
+        ``ValueError``."""
+        return cls(_sora.Atmosphere.preset(name), ("preset", name))
+
+    @classmethod
+    def from_toml(cls, path: Union[str, "_os.PathLike[str]"]) -> "Atmosphere":
+        """An atmosphere file (TOML). Files it names (a solar spectrum CSV)
+        are read relative to its directory. ``OSError`` if a file cannot be
+        read, ``ValueError`` if it is invalid."""
+        path = _os.fspath(path)
+        return cls(_sora.Atmosphere.from_toml(path), ("toml", path))
+
+    @classmethod
+    def from_toml_str(
+        cls, text: str, base_dir: Optional[Union[str, "_os.PathLike[str]"]] = None
+    ) -> "Atmosphere":
+        """An atmosphere from TOML text; files it names are read relative to
+        ``base_dir`` (default: the working directory)."""
+        base = None if base_dir is None else _os.fspath(base_dir)
+        return cls(_sora.Atmosphere.from_toml_str(text, base), ("toml_str", text, base))
+
+    @classmethod
+    def from_dict(
+        cls,
+        table: Dict[str, Any],
+        base_dir: Optional[Union[str, "_os.PathLike[str]"]] = None,
+    ) -> "Atmosphere":
+        """An atmosphere from a dict with the atmosphere files' schema:
+        TOML tables are dicts, arrays are lists, e.g. the result of
+        ``tomllib.load`` on a file. The same checks and messages as the
+        files (``ValueError`` naming the bad key and value)."""
+        base = None if base_dir is None else _os.fspath(base_dir)
+        return cls(_sora.Atmosphere.from_dict(table, base), ("dict", table, base))
+
+    @property
+    def species_names(self) -> list:
+        """The species' names, in the file's order."""
+        return list(self._native.species_names)
+
+    def optical_depths(self, wavelengths_nm: WavelengthsLike = None) -> xr.Dataset:
+        """Vertical optical depths, ground to top of the atmosphere, per
+        species and wavelength (``"380:780:20"``, an evenly spaced array in
+        nm, or None for the paper's 380-780 nm every 20 nm).
+
+        Variables (dims ``species, wavelength``): ``optical_depth_extinction``
+        and ``optical_depth_scattering`` (dimensionless),
+        ``single_scattering_albedo``, ``asymmetry_parameter``; and
+        ``optical_depth_total`` (dims ``wavelength``) and
+        ``solar_irradiance`` (W m^-2 nm^-1, top of the atmosphere).
+        """
+        (names, kinds, wavelengths, tau_ext, tau_sca, albedo, g, solar) = (
+            self._native.optical_depth_arrays(_native_wavelengths(wavelengths_nm))
+        )
+        dims = ("species", "wavelength")
+        dataset = xr.Dataset(
+            {
+                "optical_depth_extinction": (dims, tau_ext, {"units": "1", "long_name": "vertical extinction optical depth"}),
+                "optical_depth_scattering": (dims, tau_sca, {"units": "1", "long_name": "vertical scattering optical depth"}),
+                "single_scattering_albedo": (dims, albedo, {"units": "1"}),
+                "asymmetry_parameter": (dims, g, {"units": "1", "long_name": "asymmetry parameter <cos theta>"}),
+                "optical_depth_total": (("wavelength",), tau_ext.sum(axis=0), {"units": "1", "long_name": "total vertical extinction optical depth"}),
+                "solar_irradiance": (("wavelength",), solar, {"units": "W m-2 nm-1", "long_name": "top-of-atmosphere solar spectral irradiance"}),
+            },
+            coords={
+                "species": ("species", list(names)),
+                "kind": ("species", list(kinds)),
+                "wavelength": _wavelength_coordinate(wavelengths),
+            },
+        )
+        return dataset
+
+    def __reduce__(self):
+        return (_atmosphere_from_recipe, (self._recipe,))
+
+    def __repr__(self) -> str:
+        return repr(self._native)
+
+
+def _atmosphere_from_recipe(recipe: Tuple[Any, ...]) -> Atmosphere:
+    kind, *arguments = recipe
+    build = {
+        "preset": Atmosphere.preset,
+        "toml": Atmosphere.from_toml,
+        "toml_str": Atmosphere.from_toml_str,
+        "dict": Atmosphere.from_dict,
+    }[kind]
+    return build(*arguments)
+
+
+class Sky:
+    """A sky: an atmosphere, the sun, the eye, the wavelengths and the
+    choice of physics and method; built once, asked for radiance and
+    images many times (its tables are built on first use and kept).
+
+    Parameters (keywords):
+
+    - ``sun_elevation_deg``: the sun's elevation above the horizon, deg
+      (-90..90; negative: twilight); ``sun_azimuth_deg`` clockwise from
+      north, deg (default 180, south);
+    - or ``time`` (RFC 3339 text such as ``"2026-06-21T05:30:00+09:00"``,
+      or a timezone-aware ``datetime``) and ``location``
+      ``(latitude_deg, longitude_deg[, elevation_m])``, with
+      ``refraction`` (default True: the sun's apparent position);
+    - ``observer_altitude_m``: the eye's height above the ground, m;
+    - ``wavelengths_nm``: ``"start:stop:step"`` or an evenly spaced array,
+      nm (default: the paper's 380-780 nm every 20 nm);
+    - ``scattering``: ``"multiple"`` (all orders and skylight reflected by
+      the ground; default) or ``"single"`` (the paper's model);
+    - ``method``: ``"fast"`` (default), ``"reference"`` (the paper's
+      uniform march; ``reference_steps=(view_steps, sun_steps)``) or
+      ``"path-tracing"`` (Monte Carlo, all orders: ``samples`` paths per
+      view, default 10000, and ``seed``, default 1; the same seed gives the
+      same result on any thread count).
+
+    Skies pickle (by their arguments), so Dask can ship them.
+    """
+
+    __slots__ = ("_native", "_arguments")
+
+    def __init__(
+        self,
+        atmosphere: Atmosphere,
+        *,
+        sun_elevation_deg: Optional[float] = None,
+        sun_azimuth_deg: Optional[float] = None,
+        time: Union[str, _datetime.datetime, None] = None,
+        location: Optional[Sequence[float]] = None,
+        refraction: bool = True,
+        observer_altitude_m: float = 0.0,
+        wavelengths_nm: WavelengthsLike = None,
+        scattering: str = "multiple",
+        method: str = "fast",
+        samples: Optional[int] = None,
+        seed: Optional[int] = None,
+        reference_steps: Optional[Tuple[int, int]] = None,
+    ):
+        if not isinstance(atmosphere, Atmosphere):
+            raise ValueError(
+                f"atmosphere must be a sora.Atmosphere, not {type(atmosphere).__name__}"
+            )
+        if isinstance(time, _datetime.datetime):
+            if time.tzinfo is None:
+                raise ValueError(
+                    "time is a naive datetime: give its time zone (e.g. tzinfo=datetime.timezone.utc)"
+                )
+            time = time.isoformat()
+        arguments = dict(
+            sun_elevation_deg=None if sun_elevation_deg is None else float(sun_elevation_deg),
+            sun_azimuth_deg=None if sun_azimuth_deg is None else float(sun_azimuth_deg),
+            time=time,
+            location=None if location is None else [float(v) for v in location],
+            refraction=bool(refraction),
+            observer_altitude_m=float(observer_altitude_m),
+            wavelengths_nm=_native_wavelengths(wavelengths_nm),
+            scattering=scattering,
+            method=method,
+            samples=samples,
+            seed=seed,
+            reference_steps=reference_steps,
+        )
+        self._native = _sora.Sky(atmosphere._native, **arguments)
+        self._arguments = (atmosphere, arguments)
+
+    @property
+    def wavelengths_nm(self) -> np.ndarray:
+        """The wavelengths of every spectrum, nm."""
+        return self._native.wavelengths_nm
+
+    @property
+    def sun_position_deg(self) -> Tuple[float, float]:
+        """The sun's (elevation, azimuth), degrees."""
+        return self._native.sun_position_deg
+
+    @property
+    def method(self) -> str:
+        return self._native.method
+
+    @property
+    def scattering(self) -> str:
+        return self._native.scattering
+
+    def almucantar(self, step_deg: float = 5.0) -> Tuple[np.ndarray, np.ndarray]:
+        """Directions of the almucantar (the sun's elevation) every
+        ``step_deg`` of azimuth from the sun's, as ``sora spectrum
+        --almucantar``: (view_elevation_deg, view_azimuth_deg) arrays."""
+        step = float(step_deg)
+        if not (np.isfinite(step) and 0.0 < step <= 90.0):
+            raise ValueError(
+                f"step_deg = {step} deg is out of range: allowed > 0 and <= 90 deg"
+            )
+        count = int(np.floor((360.0 - 1e-6) / step + 1e-9)) + 1
+        elevation, azimuth = self.sun_position_deg
+        azimuths = np.array([(azimuth + k * step) % 360.0 for k in range(count)])
+        return np.full(count, elevation), azimuths
+
+    def _radiance_arrays(self, view_elevation_deg, view_azimuth_deg):
+        (elevation, azimuth), _ = _broadcast_flat(
+            ("view_elevation_deg", "view_azimuth_deg"), view_elevation_deg, view_azimuth_deg
+        )
+        values, errors = self._native.radiances(elevation, azimuth)
+        return elevation, azimuth, values, errors
+
+    def _coords(self, elevation, azimuth):
+        return {
+            "view_elevation_deg": ("direction", elevation, {"units": "deg", "long_name": "view elevation above the horizon"}),
+            "view_azimuth_deg": ("direction", azimuth, {"units": "deg", "long_name": "view azimuth clockwise from north"}),
+            "wavelength": _wavelength_coordinate(self.wavelengths_nm),
+        }
+
+    def _attrs(self) -> Dict[str, Any]:
+        elevation, azimuth = self.sun_position_deg
+        return {
+            "sun_elevation_deg": elevation,
+            "sun_azimuth_deg": azimuth,
+            "scattering": self.scattering,
+            "method": self.method,
+        }
+
+    def radiance(self, view_elevation_deg, view_azimuth_deg) -> xr.DataArray:
+        """The spectral radiance arriving at the eye from each direction
+        (numbers or arrays that broadcast together, deg; an almucantar is
+        one call), as a DataArray with dims ``(direction, wavelength)``,
+        W m^-2 sr^-1 nm^-1. Directions are flattened in C order; their
+        angles are the coordinates ``view_elevation_deg`` and
+        ``view_azimuth_deg``. With path tracing, :meth:`radiance_with_error`
+        also gives the standard errors."""
+        elevation, azimuth, values, _ = self._radiance_arrays(view_elevation_deg, view_azimuth_deg)
+        attrs = {"units": RADIANCE_UNITS, "long_name": "spectral radiance"}
+        attrs.update(self._attrs())
+        return xr.DataArray(
+            values,
+            dims=("direction", "wavelength"),
+            coords=self._coords(elevation, azimuth),
+            name="radiance",
+            attrs=attrs,
+        )
+
+    def radiance_with_error(self, view_elevation_deg, view_azimuth_deg) -> xr.Dataset:
+        """As :meth:`radiance`, as a Dataset with ``radiance`` and, for
+        ``method="path-tracing"``, ``standard_error`` (the Monte Carlo
+        standard error of each value, same units; it shrinks as
+        1/sqrt(samples)). Other methods are deterministic: ``ValueError``."""
+        if self.method != "path-tracing":
+            raise ValueError(
+                f"method = '{self.method}' is deterministic and has no standard errors: use method='path-tracing'"
+            )
+        elevation, azimuth, values, errors = self._radiance_arrays(view_elevation_deg, view_azimuth_deg)
+        dims = ("direction", "wavelength")
+        attrs = self._attrs()
+        arguments = self._arguments[1]
+        attrs.update(samples=int(arguments["samples"] or 10000), seed=int(arguments["seed"] or 1))
+        return xr.Dataset(
+            {
+                "radiance": (dims, values, {"units": RADIANCE_UNITS, "long_name": "spectral radiance (Monte Carlo mean)"}),
+                "standard_error": (dims, errors, {"units": RADIANCE_UNITS, "long_name": "standard error of the radiance"}),
+            },
+            coords=self._coords(elevation, azimuth),
+            attrs=attrs,
+        )
+
+    def direct_normal_irradiance(self) -> xr.DataArray:
+        """The sun's direct beam at the eye on a plane facing it,
+        W m^-2 nm^-1 (0 where the planet hides the sun)."""
+        return xr.DataArray(
+            self._native.direct_normal_irradiance(),
+            dims="wavelength",
+            coords={"wavelength": _wavelength_coordinate(self.wavelengths_nm)},
+            name="direct_normal_irradiance",
+            attrs={"units": "W m-2 nm-1"},
+        )
+
+    def render(
+        self,
+        camera: str = "fisheye",
+        width: int = 512,
+        height: Optional[int] = None,
+        output: str = "xyz",
+        draw_sun_disc: bool = True,
+        look_elevation_deg: float = 0.0,
+        look_azimuth_deg: float = 180.0,
+        fov_deg: float = 60.0,
+    ) -> np.ndarray:
+        """An image as a numpy array (rows top first), handed over without a
+        copy from the library's buffer:
+
+        - ``output="xyz"``: (height, width, 3), CIE 1931 XYZ (Y in cd m^-2);
+        - ``"linear-srgb"``: (height, width, 3), linear sRGB of the same XYZ
+          (no exposure, no clipping);
+        - ``"spectral"``: (height, width, wavelengths), W m^-2 sr^-1 nm^-1.
+
+        ``camera``: ``"fisheye"`` (the whole sky, zenith at the centre, north
+        up, east left; black outside the circle), ``"equirectangular"`` or
+        ``"perspective"`` (``look_elevation_deg``, ``look_azimuth_deg``,
+        ``fov_deg`` across the width). ``height`` defaults to ``width``
+        (half of it for equirectangular). Path tracing renders no images.
+        """
+        return self._native.render(
+            camera, width, height, output, draw_sun_disc,
+            float(look_elevation_deg), float(look_azimuth_deg), float(fov_deg),
+        )
+
+    def __reduce__(self):
+        atmosphere, arguments = self._arguments
+        return (_sky_from_arguments, (atmosphere, arguments))
+
+    def __repr__(self) -> str:
+        return repr(self._native)
+
+
+def _sky_from_arguments(atmosphere: Atmosphere, arguments: Dict[str, Any]) -> Sky:
+    return Sky(atmosphere, **arguments)
+
+
+from . import mie, sweep  # noqa: E402  (after the classes, which sweep uses)

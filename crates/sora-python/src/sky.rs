@@ -1,0 +1,369 @@
+//! `sora.Sky` (native part): the library's [`sora::Sky`] built from
+//! keyword arguments, with the radiance of arrays of views and images as
+//! numpy arrays.
+//!
+//! Units: angles in degrees (elevation above the horizon, azimuth clockwise
+//! from north), altitude in m, wavelengths in nm, radiance in
+//! W m^-2 sr^-1 nm^-1, XYZ in the library's photometric scale (Y in
+//! cd m^-2).
+
+use numpy::ndarray::{Array2, Array3};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray1};
+use pyo3::prelude::*;
+use sora::colour::{Observer, RgbColourSpace, SpectrumToXyz};
+use sora::{Camera, ImageSettings, Method, Scattering, ViewDirection};
+
+use crate::atmosphere::Atmosphere;
+use crate::errors::{to_py_err, value_error};
+use crate::grid::grid_from_python;
+use crate::threads::run_detached;
+
+/// A sky: atmosphere, sun, eye, wavelengths, physics and method.
+#[pyclass(frozen, module = "sora._sora")]
+pub struct Sky {
+    inner: sora::Sky,
+}
+
+/// The library's scattering and method for the keyword arguments.
+fn scattering_and_method(
+    scattering: &str,
+    method: &str,
+    samples: Option<u64>,
+    seed: Option<u64>,
+    reference_steps: Option<(usize, usize)>,
+) -> PyResult<(Scattering, Method)> {
+    let scattering = match scattering {
+        "single" => Scattering::Single,
+        "multiple" => Scattering::multiple(),
+        other => {
+            return Err(value_error(format!(
+                "scattering = '{other}' is unknown: use 'single' or 'multiple'"
+            )));
+        }
+    };
+    if method != "path-tracing" && (samples.is_some() || seed.is_some()) {
+        return Err(value_error(format!(
+            "samples and seed apply to method='path-tracing' only, not method='{method}'"
+        )));
+    }
+    if method != "reference" && reference_steps.is_some() {
+        return Err(value_error(
+            "reference_steps applies to method='reference' only",
+        ));
+    }
+    let method = match method {
+        "fast" => Method::Fast,
+        "reference" => match reference_steps {
+            Some((view_steps, sun_steps)) => Method::Reference {
+                view_steps,
+                sun_steps,
+            },
+            None => Method::REFERENCE_DEFAULT,
+        },
+        "path-tracing" => Method::PathTracing {
+            samples: samples.unwrap_or(10_000),
+            seed: seed.unwrap_or(1),
+        },
+        other => {
+            return Err(value_error(format!(
+                "method = '{other}' is unknown: use 'fast', 'reference' or 'path-tracing'"
+            )));
+        }
+    };
+    Ok((scattering, method))
+}
+
+/// The sun at `time` (RFC 3339, e.g. 2026-06-21T05:30:00+09:00) from
+/// `location` (latitude deg N, longitude deg E, elevation m): elevation and
+/// azimuth, degrees.
+fn sun_from_time(time: &str, location: &[f64], refraction: bool) -> PyResult<(f64, f64)> {
+    let time =
+        sora::sun_position::parse_time_utc(time).map_err(|e| value_error(format!("time: {e}")))?;
+    let (latitude, longitude, elevation) = match location {
+        [latitude, longitude] => (*latitude, *longitude, 0.0),
+        [latitude, longitude, elevation] => (*latitude, *longitude, *elevation),
+        _ => {
+            return Err(value_error(format!(
+                "location has {} values: give (latitude_deg, longitude_deg) or (latitude_deg, longitude_deg, elevation_m)",
+                location.len()
+            )));
+        }
+    };
+    let place = sora::sun_position::Location::new(latitude, longitude, elevation)
+        .map_err(|e| value_error(format!("location: {e}")))?;
+    let refraction = if refraction {
+        sora::sun_position::Refraction::default()
+    } else {
+        sora::sun_position::Refraction::Off
+    };
+    let sun = sora::SunPosition::at(time, place, refraction).map_err(to_py_err)?;
+    Ok((sun.elevation_deg, sun.azimuth_deg))
+}
+
+/// Checks a number given for an angle or a length before the library sees
+/// it, so that the message names the keyword.
+fn finite(name: &str, value: f64, unit: &str) -> PyResult<f64> {
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(value_error(format!(
+            "{name} = {value} {unit} is not a finite number"
+        )))
+    }
+}
+
+/// The camera named `camera` (perspective: looking at `look_deg` with
+/// `fov_deg` across the width).
+fn camera_from_name(camera: &str, look_deg: (f64, f64), fov_deg: f64) -> PyResult<Camera> {
+    Ok(match camera {
+        "fisheye" => Camera::Fisheye,
+        "equirectangular" | "equirect" => Camera::Equirectangular,
+        "perspective" => Camera::Perspective(
+            sora::camera::PerspectiveCamera::new(look_deg.0, look_deg.1, fov_deg)
+                .map_err(to_py_err)?,
+        ),
+        other => {
+            return Err(value_error(format!(
+                "camera = '{other}' is unknown: use 'fisheye', 'equirectangular' or 'perspective'"
+            )));
+        }
+    })
+}
+
+#[pymethods]
+impl Sky {
+    /// See `sora.Sky` (the Python class documents every keyword).
+    #[new]
+    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (
+        atmosphere, *, sun_elevation_deg=None, sun_azimuth_deg=None, time=None, location=None,
+        refraction=true, observer_altitude_m=0.0, wavelengths_nm=None, scattering="multiple",
+        method="fast", samples=None, seed=None, reference_steps=None
+    ))]
+    fn new(
+        py: Python<'_>,
+        atmosphere: &Atmosphere,
+        sun_elevation_deg: Option<f64>,
+        sun_azimuth_deg: Option<f64>,
+        time: Option<&str>,
+        location: Option<Vec<f64>>,
+        refraction: bool,
+        observer_altitude_m: f64,
+        wavelengths_nm: Option<&Bound<'_, PyAny>>,
+        scattering: &str,
+        method: &str,
+        samples: Option<u64>,
+        seed: Option<u64>,
+        reference_steps: Option<(usize, usize)>,
+    ) -> PyResult<Sky> {
+        let (elevation_deg, azimuth_deg) = match (sun_elevation_deg, time) {
+            (Some(elevation), None) => (
+                finite("sun_elevation_deg", elevation, "deg")?,
+                finite("sun_azimuth_deg", sun_azimuth_deg.unwrap_or(180.0), "deg")?,
+            ),
+            (None, Some(time)) => {
+                if sun_azimuth_deg.is_some() {
+                    return Err(value_error(
+                        "sun_azimuth_deg and time exclude each other: the time and location give the sun's azimuth",
+                    ));
+                }
+                let location = location.as_deref().ok_or_else(|| {
+                    value_error("time needs location=(latitude_deg, longitude_deg[, elevation_m])")
+                })?;
+                sun_from_time(time, location, refraction)?
+            }
+            (Some(_), Some(_)) => {
+                return Err(value_error(
+                    "give the sun either as sun_elevation_deg (and sun_azimuth_deg) or as time and location, not both",
+                ));
+            }
+            (None, None) => {
+                return Err(value_error(
+                    "give the sun: sun_elevation_deg=... (degrees above the horizon), or time=... and location=...",
+                ));
+            }
+        };
+        if time.is_none() && location.is_some() {
+            return Err(value_error("location applies with time only"));
+        }
+        finite("observer_altitude_m", observer_altitude_m, "m")?;
+        let grid = grid_from_python(wavelengths_nm)?;
+        let (scattering, method) =
+            scattering_and_method(scattering, method, samples, seed, reference_steps)?;
+        let atmosphere = &atmosphere.inner;
+        let inner = run_detached(py, || {
+            sora::Sky::builder(atmosphere)
+                .sun_deg(elevation_deg, azimuth_deg)
+                .observer_altitude_m(observer_altitude_m)
+                .wavelengths(grid)
+                .scattering(scattering)
+                .method(method)
+                .build()
+        })
+        .map_err(to_py_err)?;
+        Ok(Sky { inner })
+    }
+
+    /// The wavelengths of every spectrum, nm.
+    #[getter]
+    fn wavelengths_nm<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.inner
+            .wavelengths()
+            .wavelengths_nm()
+            .collect::<Vec<_>>()
+            .into_pyarray(py)
+    }
+
+    /// The sun's elevation and azimuth, degrees.
+    #[getter]
+    fn sun_position_deg(&self) -> (f64, f64) {
+        self.inner.sun_position_deg()
+    }
+
+    /// The method's name ('fast', 'reference' or 'path-tracing').
+    #[getter]
+    fn method(&self) -> &'static str {
+        match self.inner.method() {
+            Method::Fast => "fast",
+            Method::Reference { .. } => "reference",
+            Method::PathTracing { .. } => "path-tracing",
+        }
+    }
+
+    /// 'single' or 'multiple'.
+    #[getter]
+    fn scattering(&self) -> &'static str {
+        match self.inner.scattering() {
+            Scattering::Single => "single",
+            Scattering::Multiple(_) => "multiple",
+        }
+    }
+
+    /// The direct normal irradiance at the eye, W m^-2 nm^-1.
+    fn direct_normal_irradiance<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        let values = run_detached(py, || self.inner.direct_normal_irradiance().into_values());
+        values.into_pyarray(py)
+    }
+
+    /// The radiance of views (1-D arrays of equal length, degrees):
+    /// (radiance [view, wavelength], standard error or None),
+    /// W m^-2 sr^-1 nm^-1.
+    #[allow(clippy::type_complexity)]
+    fn radiances<'py>(
+        &self,
+        py: Python<'py>,
+        elevation_deg: PyReadonlyArray1<'py, f64>,
+        azimuth_deg: PyReadonlyArray1<'py, f64>,
+    ) -> PyResult<(Bound<'py, PyArray2<f64>>, Option<Bound<'py, PyArray2<f64>>>)> {
+        let (elevations, azimuths) = (elevation_deg.as_array(), azimuth_deg.as_array());
+        if elevations.len() != azimuths.len() {
+            return Err(value_error(format!(
+                "view_elevation_deg has {} values and view_azimuth_deg {}: they must broadcast to one list of directions",
+                elevations.len(),
+                azimuths.len()
+            )));
+        }
+        let views = elevations
+            .iter()
+            .zip(azimuths.iter())
+            .enumerate()
+            .map(|(k, (e, a))| {
+                ViewDirection::new(*e, *a)
+                    .map_err(|error| value_error(format!("direction {k}: {error}")))
+            })
+            .collect::<PyResult<Vec<_>>>()?;
+        let results = run_detached(py, || self.inner.radiances(&views)).map_err(to_py_err)?;
+        let wavelengths = self.inner.wavelengths().len();
+        let mut values = Vec::with_capacity(views.len() * wavelengths);
+        let mut errors = Vec::new();
+        for result in &results {
+            values.extend_from_slice(result.radiance_w_m2_sr_nm.values());
+            if let Some(e) = &result.standard_error_w_m2_sr_nm {
+                errors.extend_from_slice(e.values());
+            }
+        }
+        let shape = (views.len(), wavelengths);
+        let values = Array2::from_shape_vec(shape, values).expect("one row per view");
+        let errors = (matches!(self.inner.method(), Method::PathTracing { .. }))
+            .then(|| Array2::from_shape_vec(shape, errors).expect("one row per view"));
+        Ok((values.into_pyarray(py), errors.map(|e| e.into_pyarray(py))))
+    }
+
+    /// An image: `output` 'xyz' (height, width, 3; CIE 1931 XYZ),
+    /// 'linear-srgb' (height, width, 3) or 'spectral' (height, width,
+    /// wavelengths; W m^-2 sr^-1 nm^-1); black outside a fisheye's circle.
+    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (
+        camera="fisheye", width=512, height=None, output="xyz", draw_sun_disc=true,
+        look_elevation_deg=0.0, look_azimuth_deg=180.0, fov_deg=60.0
+    ))]
+    fn render<'py>(
+        &self,
+        py: Python<'py>,
+        camera: &str,
+        width: u32,
+        height: Option<u32>,
+        output: &str,
+        draw_sun_disc: bool,
+        look_elevation_deg: f64,
+        look_azimuth_deg: f64,
+        fov_deg: f64,
+    ) -> PyResult<Bound<'py, PyArray3<f64>>> {
+        let camera = camera_from_name(camera, (look_elevation_deg, look_azimuth_deg), fov_deg)?;
+        let height = height.unwrap_or(match camera {
+            Camera::Equirectangular => width.div_ceil(2),
+            _ => width,
+        });
+        let mut image = ImageSettings::new(camera, width, height);
+        image.draw_sun_disc = draw_sun_disc;
+        let shape = |per_pixel| (height as usize, width as usize, per_pixel);
+        match output {
+            "spectral" => {
+                let values = run_detached(py, || self.inner.render_spectral(&image, &|_| {}))
+                    .map_err(to_py_err)?;
+                let wavelengths = self.inner.wavelengths().len();
+                // Zero-copy: the library's buffer becomes the array's.
+                Ok(Array3::from_shape_vec(shape(wavelengths), values)
+                    .expect("one spectrum per pixel")
+                    .into_pyarray(py))
+            }
+            "xyz" | "linear-srgb" => {
+                let linear_srgb = output == "linear-srgb";
+                let values = run_detached(py, || {
+                    let to_xyz =
+                        SpectrumToXyz::new(self.inner.wavelengths(), Observer::Cie1931TwoDegree);
+                    let xyz = self.inner.render_xyz(&image, &to_xyz, &|_| {})?;
+                    Ok::<_, sora::Error>(
+                        xyz.iter()
+                            .flat_map(|c| {
+                                if linear_srgb {
+                                    let rgb = RgbColourSpace::Srgb.linear_rgb_from_xyz(*c);
+                                    [rgb.r, rgb.g, rgb.b]
+                                } else {
+                                    [c.x, c.y, c.z]
+                                }
+                            })
+                            .collect::<Vec<f64>>(),
+                    )
+                })
+                .map_err(to_py_err)?;
+                Ok(Array3::from_shape_vec(shape(3), values)
+                    .expect("three values per pixel")
+                    .into_pyarray(py))
+            }
+            other => Err(value_error(format!(
+                "output = '{other}' is unknown: use 'xyz', 'linear-srgb' or 'spectral'"
+            ))),
+        }
+    }
+
+    fn __repr__(&self) -> String {
+        let (elevation, azimuth) = self.inner.sun_position_deg();
+        format!(
+            "Sky(sun_elevation_deg={elevation}, sun_azimuth_deg={azimuth}, wavelengths_nm='{}', scattering='{}', method='{}')",
+            self.inner.wavelengths(),
+            self.scattering(),
+            self.method()
+        )
+    }
+}
