@@ -48,17 +48,17 @@ pub struct SpeciesOptics {
 
 impl SpeciesOptics {
     /// Vertical column extinction optical depth, ground to top.
-    pub(crate) fn optical_depth_extinction(&self) -> SampledSpectrum {
+    pub fn optical_depth_extinction(&self) -> SampledSpectrum {
         &self.extinction_per_m * self.vertical_column_m
     }
 
     /// Vertical column scattering optical depth, ground to top.
-    pub(crate) fn optical_depth_scattering(&self) -> SampledSpectrum {
+    pub fn optical_depth_scattering(&self) -> SampledSpectrum {
         &self.scattering_per_m * self.vertical_column_m
     }
 
     /// beta_sca / beta_ext per wavelength (0 where nothing is extinguished).
-    pub(crate) fn single_scattering_albedo(&self) -> SampledSpectrum {
+    pub fn single_scattering_albedo(&self) -> SampledSpectrum {
         SampledSpectrum::from_values(
             self.extinction_per_m
                 .values()
@@ -71,7 +71,7 @@ impl SpeciesOptics {
 
     /// Asymmetry parameter `<cos theta>` per wavelength (0 for species that do
     /// not scatter).
-    pub(crate) fn asymmetry_g(&self) -> SampledSpectrum {
+    pub fn asymmetry_g(&self) -> SampledSpectrum {
         SampledSpectrum::from_values(
             (0..self.extinction_per_m.len())
                 .map(|i| {
