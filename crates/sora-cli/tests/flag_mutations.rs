@@ -30,7 +30,8 @@
 //! debug builds). Counts after the fixes: seed 2026, 1,000 cases: 127 ok,
 //! 235 one-line errors, 638 usage errors, 0 slow, 0 problems; seed 7, 5,000
 //! cases: 646 ok, 1194 one-line errors, 3160 usage errors, 0 slow, 0
-//! problems.
+//! problems; seed 11, 8,000 cases: 1073 ok, 1858 one-line errors, 5069
+//! usage errors, 0 slow, 0 problems.
 
 use std::path::Path;
 use std::process::{Command, Stdio};
