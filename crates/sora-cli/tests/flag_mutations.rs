@@ -24,6 +24,14 @@
 //! --test flag_mutations -- --ignored --nocapture` runs a long one (1,000
 //! flag sets; `SORA_FUZZ_SEED`, `SORA_FUZZ_CASES` change them) and prints
 //! its counts.
+//!
+//! Found and fixed: `sora mie --phase --angle-step-deg 5e-324` and
+//! `sora spectrum --almucantar 5e-324` overflowed their counts (panics in
+//! debug builds). Counts after the fixes: seed 2026, 1,000 cases: 127 ok,
+//! 235 one-line errors, 638 usage errors, 0 slow, 0 problems; seed 7, 5,000
+//! cases: 646 ok, 1194 one-line errors, 3160 usage errors, 0 slow, 0
+//! problems; seed 11, 8,000 cases: 1073 ok, 1858 one-line errors, 5069
+//! usage errors, 0 slow, 0 problems.
 
 use std::path::Path;
 use std::process::{Command, Stdio};

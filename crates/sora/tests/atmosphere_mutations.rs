@@ -25,6 +25,10 @@
 //! `MIN_GEOMETRIC_STANDARD_DEVIATION` / `MIN_EFFECTIVE_VARIANCE` are refused
 //! naming the key, and the quadrature counts its nodes against a bound
 //! before it allocates (`tests/atmosphere_files.rs` keeps the cases).
+//! The same campaign also found `sun.irradiance_scale = 1e308` (an
+//! infinite solar irradiance; now at most 1e4). After both fixes it gives
+//! files 50000, parse errors 42989, optics errors 65, ok 6946, panics 0,
+//! multi-line errors 0, NaN/negative optics 0 (665 s, release build).
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
