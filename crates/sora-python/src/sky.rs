@@ -11,7 +11,7 @@ use numpy::ndarray::{Array2, Array3};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray1};
 use pyo3::prelude::*;
 use sora::colour::{Observer, RgbColourSpace, SpectrumToXyz};
-use sora::{Camera, ImageSettings, Method, Scattering, ViewDirection};
+use sora::{Camera, ImageSettings, Method, Polarisation, Scattering, ViewDirection};
 
 use crate::atmosphere::Atmosphere;
 use crate::errors::{to_py_err, value_error};
@@ -138,7 +138,7 @@ impl Sky {
     #[pyo3(signature = (
         atmosphere, *, sun_elevation_deg=None, sun_azimuth_deg=None, time=None, location=None,
         refraction=true, observer_altitude_m=0.0, wavelengths_nm=None, scattering="multiple",
-        method="fast", samples=None, seed=None, reference_steps=None
+        method="fast", samples=None, seed=None, reference_steps=None, polarisation="scalar"
     ))]
     fn new(
         py: Python<'_>,
@@ -155,7 +155,17 @@ impl Sky {
         samples: Option<u64>,
         seed: Option<u64>,
         reference_steps: Option<(usize, usize)>,
+        polarisation: &str,
     ) -> PyResult<Sky> {
+        let polarisation = match polarisation {
+            "scalar" => Polarisation::Scalar,
+            "vector" => Polarisation::Vector,
+            other => {
+                return Err(value_error(format!(
+                    "polarisation = '{other}': expected 'scalar' or 'vector'"
+                )));
+            }
+        };
         let (elevation_deg, azimuth_deg) = match (sun_elevation_deg, time) {
             (Some(elevation), None) => (
                 finite("sun_elevation_deg", elevation, "deg")?,
@@ -198,6 +208,7 @@ impl Sky {
                 .wavelengths(grid)
                 .scattering(scattering)
                 .method(method)
+                .polarisation(polarisation)
                 .build()
         })
         .map_err(to_py_err)?;
@@ -255,23 +266,7 @@ impl Sky {
         elevation_deg: PyReadonlyArray1<'py, f64>,
         azimuth_deg: PyReadonlyArray1<'py, f64>,
     ) -> PyResult<(Bound<'py, PyArray2<f64>>, Option<Bound<'py, PyArray2<f64>>>)> {
-        let (elevations, azimuths) = (elevation_deg.as_array(), azimuth_deg.as_array());
-        if elevations.len() != azimuths.len() {
-            return Err(value_error(format!(
-                "view_elevation_deg has {} values and view_azimuth_deg {}: they must broadcast to one list of directions",
-                elevations.len(),
-                azimuths.len()
-            )));
-        }
-        let views = elevations
-            .iter()
-            .zip(azimuths.iter())
-            .enumerate()
-            .map(|(k, (e, a))| {
-                ViewDirection::new(*e, *a)
-                    .map_err(|error| value_error(format!("direction {k}: {error}")))
-            })
-            .collect::<PyResult<Vec<_>>>()?;
+        let views = views_from_arrays(&elevation_deg, &azimuth_deg)?;
         let results = run_detached(py, || self.inner.radiances(&views)).map_err(to_py_err)?;
         let wavelengths = self.inner.wavelengths().len();
         let mut values = Vec::with_capacity(views.len() * wavelengths);
@@ -287,6 +282,72 @@ impl Sky {
         let errors = (matches!(self.inner.method(), Method::PathTracing { .. }))
             .then(|| Array2::from_shape_vec(shape, errors).expect("one row per view"));
         Ok((values.into_pyarray(py), errors.map(|e| e.into_pyarray(py))))
+    }
+
+    /// 'scalar' or 'vector'.
+    #[getter]
+    fn polarisation(&self) -> &'static str {
+        match self.inner.polarisation() {
+            Polarisation::Scalar => "scalar",
+            Polarisation::Vector => "vector",
+        }
+    }
+
+    /// The Stokes vectors of views (1-D arrays of equal length, degrees),
+    /// referred to each view's meridian plane: an array [4, view,
+    /// wavelength] of I, Q, U, V, and their standard errors (path tracing)
+    /// or None, W m^-2 sr^-1 nm^-1. Needs polarisation='vector'.
+    #[allow(clippy::type_complexity)]
+    fn stokes<'py>(
+        &self,
+        py: Python<'py>,
+        elevation_deg: PyReadonlyArray1<'py, f64>,
+        azimuth_deg: PyReadonlyArray1<'py, f64>,
+    ) -> PyResult<(Bound<'py, PyArray3<f64>>, Option<Bound<'py, PyArray3<f64>>>)> {
+        if self.inner.polarisation() != Polarisation::Vector {
+            return Err(value_error(
+                "stokes needs a sky built with polarisation='vector'",
+            ));
+        }
+        let views = views_from_arrays(&elevation_deg, &azimuth_deg)?;
+        let results = run_detached(py, || self.inner.radiances(&views)).map_err(to_py_err)?;
+        let wavelengths = self.inner.wavelengths().len();
+        let shape = (4, views.len(), wavelengths);
+        let mut values = Array3::<f64>::zeros(shape);
+        let mut errors = Array3::<f64>::zeros(shape);
+        let mut has_errors = false;
+        for (k, result) in results.iter().enumerate() {
+            let stokes = result
+                .stokes
+                .as_ref()
+                .expect("a vector sky gives Stokes vectors");
+            let parts = [
+                &result.radiance_w_m2_sr_nm,
+                &stokes.q_w_m2_sr_nm,
+                &stokes.u_w_m2_sr_nm,
+                &stokes.v_w_m2_sr_nm,
+            ];
+            for (c, part) in parts.iter().enumerate() {
+                for (i, v) in part.values().iter().enumerate() {
+                    values[[c, k, i]] = *v;
+                }
+            }
+            if let (Some(i_error), Some([q, u, v])) = (
+                &result.standard_error_w_m2_sr_nm,
+                &stokes.standard_errors_w_m2_sr_nm,
+            ) {
+                has_errors = true;
+                for (c, part) in [i_error, q, u, v].iter().enumerate() {
+                    for (i, e) in part.values().iter().enumerate() {
+                        errors[[c, k, i]] = *e;
+                    }
+                }
+            }
+        }
+        Ok((
+            values.into_pyarray(py),
+            has_errors.then(|| errors.into_pyarray(py)),
+        ))
     }
 
     /// An image: `output` 'xyz' (height, width, 3; CIE 1931 XYZ),
@@ -366,4 +427,29 @@ impl Sky {
             self.method()
         )
     }
+}
+
+/// The views of two 1-D arrays of equal length (elevation, azimuth; deg),
+/// each checked, the bad one named by its index.
+fn views_from_arrays(
+    elevation_deg: &PyReadonlyArray1<'_, f64>,
+    azimuth_deg: &PyReadonlyArray1<'_, f64>,
+) -> PyResult<Vec<ViewDirection>> {
+    let (elevations, azimuths) = (elevation_deg.as_array(), azimuth_deg.as_array());
+    if elevations.len() != azimuths.len() {
+        return Err(value_error(format!(
+            "view_elevation_deg has {} values and view_azimuth_deg {}: they must broadcast to one list of directions",
+            elevations.len(),
+            azimuths.len()
+        )));
+    }
+    elevations
+        .iter()
+        .zip(azimuths.iter())
+        .enumerate()
+        .map(|(k, (e, a))| {
+            ViewDirection::new(*e, *a)
+                .map_err(|error| value_error(format!("direction {k}: {error}")))
+        })
+        .collect()
 }

@@ -207,7 +207,12 @@ class Sky:
       uniform march; ``reference_steps=(view_steps, sun_steps)``) or
       ``"path-tracing"`` (Monte Carlo, all orders: ``samples`` paths per
       view, default 10000, and ``seed``, default 1; the same seed gives the
-      same result on any thread count).
+      same result on any thread count);
+    - ``polarisation``: ``"scalar"`` (default) or ``"vector"`` (Stokes
+      vectors, :meth:`stokes`; with ``method="path-tracing"``, or
+      ``scattering="single"`` with the fast method; Mie aerosols are not
+      polarised yet and raise ``ValueError``). With ``"vector"`` the
+      radiance is the polarised intensity I.
 
     Skies pickle (by their arguments), so Dask can ship them.
     """
@@ -230,6 +235,7 @@ class Sky:
         samples: Optional[int] = None,
         seed: Optional[int] = None,
         reference_steps: Optional[Tuple[int, int]] = None,
+        polarisation: str = "scalar",
     ):
         if not isinstance(atmosphere, Atmosphere):
             raise ValueError(
@@ -254,6 +260,7 @@ class Sky:
             samples=samples,
             seed=seed,
             reference_steps=reference_steps,
+            polarisation=polarisation,
         )
         self._native = _sora.Sky(atmosphere._native, **arguments)
         self._arguments = (atmosphere, arguments)
@@ -275,6 +282,11 @@ class Sky:
     @property
     def scattering(self) -> str:
         return self._native.scattering
+
+    @property
+    def polarisation(self) -> str:
+        """'scalar' or 'vector' (Stokes vectors: :meth:`stokes`)."""
+        return self._native.polarisation
 
     def almucantar(self, step_deg: float = 5.0) -> Tuple[np.ndarray, np.ndarray]:
         """Directions of the almucantar (the sun's elevation) every
@@ -354,6 +366,51 @@ class Sky:
             coords=self._coords(elevation, azimuth),
             attrs=attrs,
         )
+
+    def stokes(self, view_elevation_deg, view_azimuth_deg) -> xr.Dataset:
+        """The Stokes vector of the light from each direction (as
+        :meth:`radiance`), for a sky with ``polarisation="vector"``: a
+        Dataset with ``I``, ``Q``, ``U``, ``V`` (W m^-2 sr^-1 nm^-1), the
+        ``degree_of_linear_polarisation`` sqrt(Q^2 + U^2) / I, and with path
+        tracing ``standard_error_I`` ... ``standard_error_V``.
+
+        Q and U are referred to the meridian plane of each view (the
+        vertical plane through it): Q > 0 for a mostly vertical electric
+        field, Q < 0 for a horizontal one; the angle of polarisation,
+        0.5 * arctan2(U, Q), turns from the vertical toward the observer's
+        left (docs/polarisation.md)."""
+        (elevation, azimuth), _ = _broadcast_flat(
+            ("view_elevation_deg", "view_azimuth_deg"), view_elevation_deg, view_azimuth_deg
+        )
+        values, errors = self._native.stokes(elevation, azimuth)
+        dims = ("direction", "wavelength")
+        names = ("I", "Q", "U", "V")
+        variables = {
+            name: (dims, values[k], {"units": RADIANCE_UNITS, "long_name": f"Stokes {name}"})
+            for k, name in enumerate(names)
+        }
+        intensity = values[0]
+        degree = np.divide(
+            np.hypot(values[1], values[2]),
+            intensity,
+            out=np.zeros_like(intensity),
+            where=intensity > 0,
+        )
+        variables["degree_of_linear_polarisation"] = (
+            dims,
+            degree,
+            {"units": "1", "long_name": "degree of linear polarisation"},
+        )
+        if errors is not None:
+            for k, name in enumerate(names):
+                variables[f"standard_error_{name}"] = (
+                    dims,
+                    errors[k],
+                    {"units": RADIANCE_UNITS, "long_name": f"standard error of Stokes {name}"},
+                )
+        attrs = self._attrs()
+        attrs["reference_plane"] = "meridian plane of each view"
+        return xr.Dataset(variables, coords=self._coords(elevation, azimuth), attrs=attrs)
 
     def direct_normal_irradiance(self) -> xr.DataArray:
         """The sun's direct beam at the eye on a plane facing it,

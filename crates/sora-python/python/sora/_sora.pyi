@@ -55,6 +55,7 @@ class Sky:
         samples: Optional[int] = None,
         seed: Optional[int] = None,
         reference_steps: Optional[Tuple[int, int]] = None,
+        polarisation: str = "scalar",
     ) -> None: ...
     @property
     def wavelengths_nm(self) -> _F64: ...
@@ -67,6 +68,10 @@ class Sky:
     def direct_normal_irradiance(self) -> _F64: ...
     def radiances(self, elevation_deg: _F64, azimuth_deg: _F64) -> Tuple[_F64, Optional[_F64]]:
         """(radiance [view, wavelength], standard error or None), W m^-2 sr^-1 nm^-1."""
+    @property
+    def polarisation(self) -> str: ...
+    def stokes(self, elevation_deg: _F64, azimuth_deg: _F64) -> Tuple[_F64, Optional[_F64]]:
+        """(I, Q, U, V [4, view, wavelength], standard errors or None), W m^-2 sr^-1 nm^-1."""
     def render(
         self,
         camera: str = "fisheye",

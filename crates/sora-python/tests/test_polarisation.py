@@ -1,0 +1,73 @@
+"""Polarised skies from Python (polarisation="vector"): the Stokes Dataset,
+the closed form of single Rayleigh scattering, path-traced standard errors,
+and the choices that cannot give Stokes vectors."""
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import sora
+
+
+@pytest.fixture(scope="module")
+def rayleigh():
+    return sora.Atmosphere.preset("us-standard-1976-rayleigh")
+
+
+def test_single_scattering_stokes_have_the_rayleigh_degree(rayleigh):
+    sky = sora.Sky(
+        rayleigh,
+        sun_elevation_deg=0,
+        sun_azimuth_deg=90,
+        scattering="single",
+        polarisation="vector",
+    )
+    assert sky.polarisation == "vector"
+    stokes = sky.stokes([90, 30], [0, 270])
+    assert isinstance(stokes, xr.Dataset)
+    assert stokes["Q"].dims == ("direction", "wavelength")
+    assert stokes["I"].attrs["units"] == "W m-2 sr-1 nm-1"
+    # 90 degrees from a sun on the horizon, at the zenith: the Rayleigh
+    # maximum (1 - rho) / (1 + rho), rho of air about 0.028-0.03.
+    zenith = stokes["degree_of_linear_polarisation"].isel(direction=0).values
+    assert np.all((zenith > 0.93) & (zenith < 0.96))
+    # The intensity is the scalar single-scattering radiance.
+    scalar = sora.Sky(rayleigh, sun_elevation_deg=0, sun_azimuth_deg=90, scattering="single")
+    np.testing.assert_array_equal(stokes["I"].values, scalar.radiance([90, 30], [0, 270]).values)
+    assert np.all(stokes["V"].values == 0.0)
+    assert "standard_error_Q" not in stokes
+
+
+def test_path_traced_stokes_have_standard_errors(rayleigh):
+    sky = sora.Sky(
+        rayleigh,
+        sun_elevation_deg=30,
+        method="path-tracing",
+        samples=500,
+        seed=3,
+        polarisation="vector",
+        wavelengths_nm="450:650:100",
+    )
+    stokes = sky.stokes(60, 0)
+    for name in ("I", "Q", "U", "V"):
+        assert f"standard_error_{name}" in stokes
+    # 90 degrees from the sun in its vertical: horizontally polarised, Q < 0.
+    assert np.all(stokes["Q"].values < -5 * stokes["standard_error_Q"].values)
+    degree = stokes["degree_of_linear_polarisation"].values
+    assert np.all((degree > 0.5) & (degree < 1.0))
+
+
+def test_choices_without_stokes_vectors_raise(rayleigh):
+    with pytest.raises(ValueError, match="polarisation"):
+        sora.Sky(rayleigh, sun_elevation_deg=30, polarisation="vector")
+    with pytest.raises(ValueError, match="Mie"):
+        sora.Sky(
+            sora.Atmosphere.preset("earth-clear"),
+            sun_elevation_deg=30,
+            scattering="single",
+            polarisation="vector",
+        )
+    with pytest.raises(ValueError, match="'scalar' or 'vector'"):
+        sora.Sky(rayleigh, sun_elevation_deg=30, polarisation="circular")
+    with pytest.raises(ValueError, match="polarisation='vector'"):
+        sora.Sky(rayleigh, sun_elevation_deg=30).stokes(90, 0)
