@@ -41,7 +41,8 @@
 //!    give them (elevation, azimuth clockwise from north), and which
 //!    direction each pixel sees;
 //! 5. [`sky`]: the [`Sky`], where single scattering (the paper's eq. 4-5)
-//!    and multiple scattering are composed, for views and images;
+//!    and multiple scattering are composed, for views and images, as
+//!    scalar light or as Stokes vectors ([`Polarisation`]);
 //! 6. the engine underneath it, private to the crate (`transport/`):
 //!    single scattering, its reference march and its tables; the
 //!    multiple-scattering field; the Monte Carlo path tracer. [`Sky`] is

@@ -9,7 +9,10 @@
 //!   camera, as CIE XYZ or as radiance per wavelength, with the sun's disc
 //!   energy-true at any resolution (`sky/sun_disc.rs`);
 //! - [`Sky::irradiance`]: direct, diffuse and global irradiance on a plane
-//!   (`sky/irradiance.rs`).
+//!   (`sky/irradiance.rs`);
+//! - with [`Polarisation::Vector`], the Stokes vector of each view
+//!   ([`SkyRadiance::stokes`]; `docs/polarisation.md` says which methods
+//!   follow it so far).
 //!
 //! This is the one place where single scattering and the multiply
 //! scattered light are added: what [`Scattering`] asks for is composed
