@@ -137,13 +137,14 @@
 //! the source table 0.08 s for a sun 30 degrees high (9 sun zenith angles),
 //! 0.22 s and 0.16 s for 5 degrees (18 angles); a 512 x 512 fisheye with
 //! multiple scattering 0.51 s and 0.75 s, against 0.23 s and 0.21 s with
-//! single scattering only. The spherical first order adds about 65 ms per
-//! sun node from 84 degrees on (10 000 marched paths; earth-clear, 21
-//! wavelengths, the machine shared by other work): 0.7 s for a sun 5
-//! degrees high (11 of 18 nodes) or 6 degrees below the horizon (19), and
-//! nothing for a sun higher than about 16 degrees. Measured with `sora`
-//! (one view, field included): sun 30 degrees 0.3 s before and after; sun
-//! 5 and -6 degrees 0.4-0.5 s before, about 1.2 s after.
+//! single scattering only. The spherical first order adds 20-30 ms per
+//! sun node from 84 degrees on (10 000 marched paths each; earth-clear, 21
+//! wavelengths), nothing for a sun higher than about 16 degrees. Measured
+//! with the `sora` binary on the quiet 2-core machine, before and after
+//! it: sun 30 degrees, one view 0.11 s and a 512 x 512 fisheye 0.30 s,
+//! unchanged; sun 5 degrees (11 of 18 nodes) 0.16 s and 0.39 s before,
+//! 0.51 s and 0.76 s after; sun -6 degrees (19 nodes) 0.15 s and 0.32 s
+//! before, 0.52 s and 0.69 s after.
 //!
 //! # What it approximates
 //! - Diffuse light between nearby points travels as in a column of uniform
