@@ -195,3 +195,61 @@ fn a_sequence_shares_one_exposure() {
     ]));
     assert!(error.contains("EV100 = 99"), "{error}");
 }
+
+/// Night (the sun 30 degrees down): darker than the night floor
+/// (1e-6 cd/m^2) everywhere, so every pixel is written black, not an
+/// amplified numerical floor; auto exposure says so on stderr; a fixed
+/// exposure still works. At -12 degrees the sky is above the floor and
+/// nothing is said.
+#[test]
+fn a_night_sky_is_black_and_auto_exposure_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let (png, exr) = (dir.path().join("night.png"), dir.path().join("night.exr"));
+    let night = ["--sun-elevation", "-30"];
+    let out = render(&[&night[..], &["-o", png.to_str().unwrap()]].concat());
+    assert!(out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("night floor of 1e-6 cd/m^2") && stderr.contains("black image"),
+        "{stderr}"
+    );
+    let out = render(
+        &[
+            &night[..],
+            &[
+                "--units",
+                "luminance",
+                "--exr-xyz",
+                "-o",
+                exr.to_str().unwrap(),
+            ],
+        ]
+        .concat(),
+    );
+    assert!(out.status.success());
+    for channel in ["X", "Y", "Z"] {
+        assert!(exr_channel(&exr, channel).iter().all(|v| *v == 0.0));
+    }
+    let fixed = render(&[&night[..], &["--ev100", "-20", "-o", png.to_str().unwrap()]].concat());
+    assert!(fixed.status.success(), "{}", one_line_error(&fixed));
+    assert!(!String::from_utf8_lossy(&fixed.stderr).contains("night floor"));
+    // Nautical twilight is darker than a day but not night.
+    let twilight = dir.path().join("twilight.exr");
+    let out = render(&[
+        "--sun-elevation",
+        "-12",
+        "--units",
+        "luminance",
+        "--exr-xyz",
+        "-o",
+        twilight.to_str().unwrap(),
+    ]);
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("night floor"));
+    let y = exr_channel(&twilight, "Y");
+    let brightest = y.iter().copied().fold(0.0f32, f32::max);
+    assert!(brightest > 1e-4, "{brightest}");
+    assert!(
+        y.iter().all(|v| *v == 0.0 || *v >= 1e-6),
+        "a pixel below the floor"
+    );
+}
