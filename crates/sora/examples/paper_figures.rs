@@ -1,5 +1,5 @@
 //! The paper's results, and skies beside them, generated from the library
-//! (deterministic; about 65 s on two cores after the build):
+//! (deterministic; 60-120 s on two cores after the build):
 //!
 //! ```sh
 //! cargo run --release -p sora --example paper_figures -- docs
@@ -25,6 +25,12 @@
 //!   (`us-standard-1976-rayleigh`, 550 nm) at suns 30 and 5 degrees, single
 //!   scattering beside all orders (the polarised path tracer), with the
 //!   neutral points where the higher orders put them;
+//! - `twilight_sequence.png`: earth-clear panoramas with the sun at 0, -2,
+//!   -4, -6, -9 and -12 degrees in the west, each row at its own automatic
+//!   exposure (printed), showing the Earth's shadow and the Belt of Venus;
+//! - `twilight_brightness.png` and `.csv`: zenith luminance and horizontal
+//!   illuminance of earth-clear against sun elevation, +10 to -18 degrees,
+//!   with the classic clear-sky illuminances beside them;
 //! - `day_strip.png`: a day over Tokyo (June solstice 2026) from before
 //!   sunrise to after sunset, fisheyes at one exposure;
 //! - `readme_tokyo.png`: the README's time-and-place command
@@ -61,7 +67,9 @@ use sora::geometry::angle_between_deg;
 use sora::output::{DisplayImage, write_png};
 use sora::spectrum::{SampledSpectrum, SolarSpectrum, WavelengthGrid};
 use sora::sun_position::{Location, Refraction, SunPosition, parse_time_utc};
-use sora::{ImageSettings, Method, Polarisation, Scattering, Sky, ViewDirection};
+use sora::{
+    ImageSettings, Irradiance, Method, Plane, Polarisation, Scattering, Sky, ViewDirection,
+};
 
 type Result<T> = std::result::Result<T, Box<dyn std::error::Error>>;
 
@@ -93,6 +101,8 @@ fn run(out: &Path) -> Result<()> {
     }
     mars_sun_glow(out, &grid)?;
     polarisation_principal_plane(out)?;
+    twilight_sequence(out, &grid)?;
+    twilight_brightness(out, &grid)?;
     day_strip(out, &grid)?;
     Ok(())
 }
@@ -210,6 +220,145 @@ fn wrote(path: &Path, what: &str, started: Instant) {
         path.display(),
         started.elapsed().as_secs_f64()
     );
+}
+
+// ---------------------------------------------------------------------------
+// Twilight
+
+/// Sun elevations of the twilight sequence, degrees (the sun in the west).
+const TWILIGHT_SUNS: [f64; 6] = [0.0, -2.0, -4.0, -6.0, -9.0, -12.0];
+
+/// `twilight_sequence.png`: earth-clear, all orders, the upper halves (down
+/// to 6 degrees below the horizon) of 512 x 256 panoramas (north at the
+/// centre, west at a quarter of the width) stacked from sun 0 (top) to -12
+/// degrees (bottom); each row at its own automatic exposure of that part,
+/// since the sky dims fifty-thousandfold over the sequence.
+fn twilight_sequence(out: &Path, grid: &WavelengthGrid) -> Result<()> {
+    let started = Instant::now();
+    let (width, height) = (512usize, 256usize);
+    let atmosphere = Atmosphere::preset("earth-clear")?;
+    let to_xyz = SpectrumToXyz::new(grid, Observer::Cie1931TwoDegree);
+    let image = ImageSettings::new(Camera::Equirectangular, width as u32, height as u32);
+    let first = sky(
+        &atmosphere,
+        grid,
+        (TWILIGHT_SUNS[0], SUNSET_AZIMUTH),
+        Scattering::multiple(),
+        Method::Fast,
+    )?;
+    let mut rows = Vec::with_capacity(TWILIGHT_SUNS.len() * width * height);
+    // The sky and 6 degrees below the horizon of each panorama (the
+    // ground below is lit only by the sky and shows nothing of twilight).
+    let kept = height / 2 + height / 30;
+    for elevation in TWILIGHT_SUNS {
+        let sky = first.with_sun_deg(elevation, SUNSET_AZIMUTH)?;
+        let xyz = sky.render_xyz(&image, &to_xyz, &|_| {})?;
+        let sky_rows = &xyz[..kept * width];
+        let scale = Exposure::default().scale_for_image(sky_rows)?;
+        println!("twilight sequence: sun {elevation} deg, automatic exposure {scale:.4e}");
+        rows.extend(sky_rows.iter().map(|c| c.scaled(scale)));
+    }
+    let mapping = DisplayMapping {
+        exposure: Exposure::Fixed(1.0),
+        gamut_mapping: GamutMapping::PreserveHue,
+        ..DisplayMapping::default()
+    };
+    let pixels = mapping.to_u8(&rows)?.concat();
+    let path = out.join("twilight_sequence.png");
+    write_png(
+        &path,
+        &DisplayImage::new(width, kept * TWILIGHT_SUNS.len(), pixels)?,
+    )?;
+    wrote(&path, "twilight sequence", started);
+    Ok(())
+}
+
+/// `twilight_brightness.png` and `.csv`: the zenith luminance (cd/m^2) and
+/// the global horizontal illuminance (lux) of earth-clear, fast method with
+/// all orders, for the sun every degree from +10 to -18 (azimuth 270), as
+/// log10 against the sun's elevation, with the classic clear-sky
+/// illuminances quoted by issue 11 (400-700 lx at 0, 2-4 lx at -6, about
+/// 0.01 lx at -12) as markers.
+fn twilight_brightness(out: &Path, grid: &WavelengthGrid) -> Result<()> {
+    let started = Instant::now();
+    let atmosphere = Atmosphere::preset("earth-clear")?;
+    let to_xyz = SpectrumToXyz::new(grid, Observer::Cie1931TwoDegree);
+    let first = sky(
+        &atmosphere,
+        grid,
+        (10.0, SUNSET_AZIMUTH),
+        Scattering::multiple(),
+        Method::Fast,
+    )?;
+    let horizontal = Plane::new(0.0, 0.0)?;
+    let zenith = ViewDirection::new(90.0, 0.0)?;
+    let mut csv = String::from(
+        "# earth-clear, fast method, all orders, sun azimuth 270: zenith luminance and global horizontal illuminance\nsun_elevation_deg,zenith_luminance_cd_m2,horizontal_illuminance_lx\n",
+    );
+    let (mut luminance, mut illuminance) = (Vec::new(), Vec::new());
+    for k in 0..=28 {
+        let elevation = 10.0 - k as f64;
+        let sky = first.with_sun_deg(elevation, SUNSET_AZIMUTH)?;
+        let l = to_xyz
+            .to_xyz(&sky.radiance(zenith)?.radiance_w_m2_sr_nm)?
+            .luminance_cd_m2();
+        let e = Irradiance::illuminance_lx(&sky.irradiance(horizontal)?.global_w_m2_nm, grid)?;
+        writeln!(csv, "{elevation},{l:.6e},{e:.6e}")?;
+        for (series, value) in [(&mut luminance, l), (&mut illuminance, e)] {
+            if value > 0.0 {
+                series.push((elevation, value.log10()));
+            }
+        }
+    }
+    let path = out.join("twilight_brightness.csv");
+    std::fs::write(&path, csv)?;
+    wrote(&path, "twilight brightness", started);
+    let classic = |elevation: f64, low: f64, high: f64| {
+        vec![(elevation, low.log10()), (elevation, high.log10())]
+    };
+    let mut series = vec![
+        plot::Series {
+            label: "HORIZONTAL ILLUMINANCE (LX)".into(),
+            colour: [200, 60, 40],
+            dashed: false,
+            points: illuminance,
+        },
+        plot::Series {
+            label: "ZENITH LUMINANCE (CD/M2)".into(),
+            colour: [40, 90, 200],
+            dashed: false,
+            points: luminance,
+        },
+    ];
+    for (label, elevation, low, high) in [
+        ("CLASSIC: 400-700 LX AT 0", 0.0, 400.0, 700.0),
+        ("CLASSIC: 2-4 LX AT -6", -6.0, 2.0, 4.0),
+        ("CLASSIC: ABOUT 0.01 LX AT -12", -12.0, 0.007, 0.013),
+    ] {
+        series.push(plot::Series {
+            label: label.into(),
+            colour: [0, 0, 0],
+            dashed: false,
+            points: classic(elevation, low, high),
+        });
+    }
+    let figure = plot::LinePlot {
+        title: "TWILIGHT, EARTH-CLEAR, FAST METHOD, ALL ORDERS".into(),
+        x_label: "SUN ELEVATION (DEG)".into(),
+        y_label: "LOG10 OF THE VALUE".into(),
+        x_range: (-18.5, 10.5),
+        // Room above the curves for the legend.
+        y_range: (-6.0, 9.0),
+        x_ticks: ((0..7).map(|k| -18.0 + 4.0 * k as f64).collect(), 0),
+        y_ticks: ((0..7).map(|k| -6.0 + 2.0 * k as f64).collect(), 0),
+        series,
+        notes: vec!["BELOW -12 DEG THE METHOD IS NOT VALIDATED".into()],
+    };
+    let (w, h, data) = figure.render(900, 640).into_rgb8();
+    let path = out.join("twilight_brightness.png");
+    write_png(&path, &DisplayImage::new(w, h, data)?)?;
+    wrote(&path, "twilight plot", started);
+    Ok(())
 }
 
 // ---------------------------------------------------------------------------
