@@ -211,8 +211,15 @@ const MODEL_DENSITY_FLOOR: f64 = 0.1;
 /// summation order.
 pub(crate) const SAMPLES_PER_CHUNK: u64 = 1024;
 
-/// The most paths one run traces (`--samples`): checked before the
-/// per-chunk statistics are allocated (about 1e6 chunks of 1024 here).
+/// Chunks whose statistics are kept at once (see `PathTracer::run`): the
+/// memory of a run is this many times 2 x 8 bytes per value of a sample
+/// ((4 + 4 Stokes) parts x wavelengths), at most 330 MB at 10 000
+/// wavelengths, whatever the number of samples.
+const CHUNKS_PER_BATCH: usize = 256;
+
+/// The most paths one run traces (`--samples`): a bound on time (the
+/// statistics are kept for one batch of chunks at a time, so memory does
+/// not grow with the number of paths).
 pub const MAX_SAMPLES: u64 = 1_000_000_000;
 
 /// A path whose largest throughput falls below this value plays Russian
@@ -381,6 +388,13 @@ struct ChunkStatistics {
 }
 
 impl ChunkStatistics {
+    /// Empties the statistics, keeping their buffers.
+    fn clear(&mut self) {
+        self.count = 0;
+        self.mean.fill(0.0);
+        self.squared_deviations.fill(0.0);
+    }
+
     fn add(&mut self, values: &[f64]) {
         if self.mean.is_empty() {
             self.mean = vec![0.0; values.len()];
@@ -581,28 +595,36 @@ impl<'a> PathTracer<'a> {
                 "samples",
                 samples as f64,
                 "1",
-                "<= 1e9 (the statistics are kept per chunk of samples; for more, average runs with different seeds)",
+                "<= 1e9 (hours of computing at 30 000-70 000 paths/s; for more, average runs with different seeds)",
             ));
         }
+        // Chunks run in batches of CHUNKS_PER_BATCH, each batch's
+        // statistics merged in chunk order before the next starts: the same
+        // sums in the same order as merging all chunks at the end, with
+        // memory for one batch only.
         let chunks = samples.div_ceil(SAMPLES_PER_CHUNK) as usize;
-        let mut statistics = vec![ChunkStatistics::default(); chunks];
+        let mut batch = vec![ChunkStatistics::default(); chunks.min(CHUNKS_PER_BATCH)];
         let samples_done = AtomicU64::new(0);
-        crate::parallel::for_each_chunk_mut(&mut statistics, 1, |chunk, slot| {
-            let first = chunk as u64 * SAMPLES_PER_CHUNK;
-            let last = (first + SAMPLES_PER_CHUNK).min(samples);
-            let mut scratch = self.scratch();
-            let statistics = &mut slot[0];
-            for sample in first..last {
-                let mut random = RandomStream::new(seed, sample);
-                let (view, reference, weight) = choose_view(&mut random);
-                self.trace_path(view, reference, weight, &mut random, &mut scratch);
-                statistics.add(&scratch.contributions);
-            }
-            progress(samples_done.fetch_add(last - first, Ordering::Relaxed) + (last - first));
-        });
         let mut combined = ChunkStatistics::default();
-        for chunk in &statistics {
-            combined.merge(chunk);
+        for batch_start in (0..chunks).step_by(CHUNKS_PER_BATCH) {
+            let statistics = &mut batch[..(chunks - batch_start).min(CHUNKS_PER_BATCH)];
+            statistics.iter_mut().for_each(ChunkStatistics::clear);
+            crate::parallel::for_each_chunk_mut(statistics, 1, |k, slot| {
+                let first = (batch_start + k) as u64 * SAMPLES_PER_CHUNK;
+                let last = (first + SAMPLES_PER_CHUNK).min(samples);
+                let mut scratch = self.scratch();
+                let statistics = &mut slot[0];
+                for sample in first..last {
+                    let mut random = RandomStream::new(seed, sample);
+                    let (view, reference, weight) = choose_view(&mut random);
+                    self.trace_path(view, reference, weight, &mut random, &mut scratch);
+                    statistics.add(&scratch.contributions);
+                }
+                progress(samples_done.fetch_add(last - first, Ordering::Relaxed) + (last - first));
+            });
+            for chunk in statistics.iter() {
+                combined.merge(chunk);
+            }
         }
         let n = self.wavelengths;
         let count = combined.count as f64;
