@@ -206,11 +206,14 @@
 //!   accumulation into the tables (the hot loops);
 //! - `index_interpolation.rs`: the tables of a tabulated m(lambda) from five
 //!   reference indices ([`index_interpolation_applies`]);
+//! - `phase_matrix.rs`: F12, F33 and F34 relative to F11, for polarised
+//!   computations ([`compute_ensemble_phase_matrix_ratios`]);
 //! - `tests.rs`: the tests of all of them.
 
 mod angular_sums;
 mod cross_sections;
 mod index_interpolation;
+mod phase_matrix;
 mod phase_table;
 #[cfg(test)]
 mod tests;
@@ -222,6 +225,7 @@ pub use index_interpolation::{
     MAX_INTERPOLATED_ABSORPTION_RATIO, MAX_INTERPOLATED_REAL_INDEX_SPREAD,
     index_interpolation_applies,
 };
+pub use phase_matrix::{PhaseMatrixRatios, compute_ensemble_phase_matrix_ratios};
 pub use phase_table::{
     InvalidPhaseTable, TabulatedPhaseFunction, compute_ensemble_phase_function,
     ensemble_phase_table_angles_deg,

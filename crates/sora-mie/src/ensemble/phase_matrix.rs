@@ -1,0 +1,202 @@
+//! # The ensemble's phase matrix relative to its phase function
+//!
+//! Spheres (and randomly oriented particles with a plane of symmetry) turn
+//! the Stokes vector of light with a matrix of four independent elements
+//! per angle, in the scattering plane's frame (Bohren & Huffman 1983,
+//! eq. 4.77):
+//!
+//! ```text
+//! S11 = (|S2|^2 + |S1|^2) / 2,   S12 = (|S2|^2 - |S1|^2) / 2,
+//! S33 = Re(S2 S1*),              S34 = Im(S2 S1*),
+//! ```
+//!
+//! with S22 = S11 and S44 = S33. For an ensemble at one wavelength each
+//! element is the number-weighted radius integral of the particles' (the
+//! per-particle factor 1/k^2 is the same for all), so the ratios
+//! F12/F11, F33/F11 and F34/F11 need no normalisation: they multiply the
+//! tabulated phase function (F11) to give the rest of the matrix. For small
+//! spheres they tend to Rayleigh's, -(1 - mu^2)/(1 + mu^2), 2 mu/(1 + mu^2)
+//! and 0; for one sphere F12^2 + F33^2 + F34^2 = F11^2 exactly, and an
+//! ensemble, a mixture, depolarises: the sum is at most F11^2.
+//!
+//! This is the straightforward path (the amplitudes of every node at every
+//! angle, no vector kernels), for polarised computations only: the scalar
+//! phase tables keep their fast angular sums (`angular_sums.rs`).
+
+use super::{EnsembleError, validate_wavelength};
+use crate::Complex64;
+use crate::distribution::{RadiusQuadrature, RadiusQuadratureSettings, SizeDistribution};
+use crate::sphere::MieSolution;
+
+/// F12/F11, F33/F11 and F34/F11 of an ensemble at the scattering-angle
+/// cosines it was computed at (dimensionless; 0 where F11 is 0).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PhaseMatrixRatios {
+    /// The cosines of the scattering angles, as given.
+    pub cos_theta: Vec<f64>,
+    /// F12 / F11 (minus the degree of linear polarisation of scattered
+    /// unpolarised light).
+    pub f12_over_f11: Vec<f64>,
+    /// F33 / F11.
+    pub f33_over_f11: Vec<f64>,
+    /// F34 / F11.
+    pub f34_over_f11: Vec<f64>,
+}
+
+/// The phase-matrix ratios of `distribution` at `wavelength_nm` (nm) for
+/// particles of index `refractive_index`, at each of `cos_theta`, the
+/// radius integral by the Gauss-Legendre rule of `settings`
+/// ([`RadiusQuadratureSettings::phase_function`] is the validated choice
+/// for phase functions).
+pub fn compute_ensemble_phase_matrix_ratios(
+    wavelength_nm: f64,
+    refractive_index: Complex64,
+    distribution: &SizeDistribution,
+    settings: &RadiusQuadratureSettings,
+    cos_theta: &[f64],
+) -> Result<PhaseMatrixRatios, EnsembleError> {
+    let wavenumber_per_m = validate_wavelength(wavelength_nm)?;
+    let quadrature = RadiusQuadrature::gauss_legendre(distribution, wavenumber_per_m, settings)?;
+    // [S11, S12, S33, S34] summed over the nodes, per angle.
+    let mut sums = vec![[0.0f64; 4]; cos_theta.len()];
+    for (&radius_m, &weight) in quadrature.radii_m().iter().zip(quadrature.weights()) {
+        let solution = MieSolution::compute(refractive_index, wavenumber_per_m * radius_m)
+            .map_err(|error| EnsembleError::Mie {
+                wavelength_nm,
+                radius_m,
+                error,
+            })?;
+        for (sum, &mu) in sums.iter_mut().zip(cos_theta) {
+            let (s1, s2) = solution.amplitudes(mu);
+            let (n1, n2) = (s1.norm_sqr(), s2.norm_sqr());
+            let product = s2 * s1.conj();
+            sum[0] += weight * 0.5 * (n2 + n1);
+            sum[1] += weight * 0.5 * (n2 - n1);
+            sum[2] += weight * product.re;
+            sum[3] += weight * product.im;
+        }
+    }
+    let ratio = |k: usize| -> Vec<f64> {
+        sums.iter()
+            .map(|s| if s[0] > 0.0 { s[k] / s[0] } else { 0.0 })
+            .collect()
+    };
+    Ok(PhaseMatrixRatios {
+        cos_theta: cos_theta.to_vec(),
+        f12_over_f11: ratio(1),
+        f33_over_f11: ratio(2),
+        f34_over_f11: ratio(3),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn lognormal(median_m: f64, sigma_g: f64) -> SizeDistribution {
+        SizeDistribution::log_normal(median_m, sigma_g).unwrap()
+    }
+
+    fn cosines() -> Vec<f64> {
+        (0..=36)
+            .map(|k| (5.0 * k as f64).to_radians().cos())
+            .collect()
+    }
+
+    #[test]
+    fn small_spheres_have_the_rayleigh_matrix() {
+        // 2 nm spheres at 550 nm (x ~ 0.02): Rayleigh to O(x^2).
+        let ratios = compute_ensemble_phase_matrix_ratios(
+            550.0,
+            Complex64::new(1.5, 0.01),
+            &lognormal(2e-9, 1.2),
+            &RadiusQuadratureSettings::phase_function(),
+            &cosines(),
+        )
+        .unwrap();
+        for (k, &mu) in ratios.cos_theta.iter().enumerate() {
+            let f12 = -(1.0 - mu * mu) / (1.0 + mu * mu);
+            let f33 = 2.0 * mu / (1.0 + mu * mu);
+            assert!((ratios.f12_over_f11[k] - f12).abs() < 1e-3, "mu {mu}");
+            assert!((ratios.f33_over_f11[k] - f33).abs() < 1e-3, "mu {mu}");
+            assert!(ratios.f34_over_f11[k].abs() < 1e-3, "mu {mu}");
+        }
+    }
+
+    #[test]
+    fn one_sphere_keeps_light_polarised_and_an_ensemble_depolarises() {
+        let m = Complex64::new(1.33, 0.0);
+        let settings = RadiusQuadratureSettings::phase_function();
+        // sigma_g = 1.0001: the optics of one sphere to ~1e-7 (x = 10).
+        let narrow = lognormal(10.0 * 550e-9 / (2.0 * std::f64::consts::PI), 1.0001);
+        let broad = lognormal(10.0 * 550e-9 / (2.0 * std::f64::consts::PI), 1.6);
+        let norm = |r: &PhaseMatrixRatios, k: usize| {
+            (r.f12_over_f11[k].powi(2) + r.f33_over_f11[k].powi(2) + r.f34_over_f11[k].powi(2))
+                .sqrt()
+        };
+        let one =
+            compute_ensemble_phase_matrix_ratios(550.0, m, &narrow, &settings, &cosines()).unwrap();
+        let many =
+            compute_ensemble_phase_matrix_ratios(550.0, m, &broad, &settings, &cosines()).unwrap();
+        let mut depolarised = 0.0f64;
+        for k in 0..one.cos_theta.len() {
+            assert!(
+                (norm(&one, k) - 1.0).abs() < 1e-4,
+                "angle {k}: {}",
+                norm(&one, k)
+            );
+            assert!(
+                norm(&many, k) <= 1.0 + 1e-12,
+                "angle {k}: {}",
+                norm(&many, k)
+            );
+            depolarised = depolarised.max(1.0 - norm(&many, k));
+        }
+        // The broad ensemble depolarises noticeably somewhere.
+        assert!(depolarised > 0.05, "{depolarised}");
+        // Forward and backward scattering keep unpolarised light
+        // unpolarised (S1 = S2 there for a sphere).
+        for k in [0, one.cos_theta.len() - 1] {
+            assert!(one.f12_over_f11[k].abs() < 1e-9 && many.f12_over_f11[k].abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn it_matches_the_single_sphere_reference() {
+        // ../shared/reference/mie/phase.csv, case 0 (m = 1.33, x = 10):
+        // the degree of linear polarisation -S12/S11 at 30, 90 and 150
+        // degrees, against the narrowest ensemble (one sphere to ~1e-7 in
+        // x, so to ~1e-5 in a ratio that varies on the scale of a degree).
+        let text = include_str!("../../tests/data/phase.csv");
+        let mut lines = text.lines().filter(|l| !l.starts_with('#'));
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let column = |name: &str| header.iter().position(|h| *h == name).unwrap();
+        let (case, theta, dolp) = (column("case_id"), column("theta_deg"), column("dolp"));
+        let narrow = lognormal(10.0 * 550e-9 / (2.0 * std::f64::consts::PI), 1.0001);
+        let mut checked = 0;
+        for line in lines {
+            let v: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
+            if v[case] != 0.0 || ![30.0, 90.0, 150.0].contains(&v[theta]) {
+                continue;
+            }
+            let mu = v[theta].to_radians().cos();
+            let ratios = compute_ensemble_phase_matrix_ratios(
+                550.0,
+                Complex64::new(1.33, 0.0),
+                &narrow,
+                &RadiusQuadratureSettings::phase_function(),
+                &[mu],
+            )
+            .unwrap();
+            assert!(
+                (-ratios.f12_over_f11[0] - v[dolp]).abs() < 1e-4,
+                "theta {}: {} vs {}",
+                v[theta],
+                -ratios.f12_over_f11[0],
+                v[dolp]
+            );
+            checked += 1;
+        }
+        assert_eq!(checked, 3);
+    }
+}
