@@ -57,16 +57,20 @@ def test_path_traced_stokes_have_standard_errors(rayleigh):
     assert np.all((degree > 0.5) & (degree < 1.0))
 
 
+def test_mie_aerosols_polarise():
+    sky = sora.Sky(
+        sora.Atmosphere.preset("earth-clear"),
+        sun_elevation_deg=30,
+        scattering="single",
+        polarisation="vector",
+    )
+    degree = sky.stokes(60, 0)["degree_of_linear_polarisation"].values
+    assert np.all((degree > 0.3) & (degree < 0.95))
+
+
 def test_choices_without_stokes_vectors_raise(rayleigh):
     with pytest.raises(ValueError, match="polarisation"):
         sora.Sky(rayleigh, sun_elevation_deg=30, polarisation="vector")
-    with pytest.raises(ValueError, match="Mie"):
-        sora.Sky(
-            sora.Atmosphere.preset("earth-clear"),
-            sun_elevation_deg=30,
-            scattering="single",
-            polarisation="vector",
-        )
     with pytest.raises(ValueError, match="'scalar' or 'vector'"):
         sora.Sky(rayleigh, sun_elevation_deg=30, polarisation="circular")
     with pytest.raises(ValueError, match="polarisation='vector'"):

@@ -206,13 +206,34 @@ fn choices_without_stokes_vectors_are_refused() {
         .unwrap_err()
         .to_string();
     assert!(error.contains("reference"), "{error}");
-    // Mie aerosols: their phase matrix is not tabulated yet.
-    let earth = Atmosphere::preset("earth-clear").unwrap();
-    let error = Sky::builder(&earth)
-        .scattering(Scattering::Single)
-        .polarisation(Polarisation::Vector)
-        .build()
-        .unwrap_err()
-        .to_string();
-    assert!(error.contains("Mie") && error.contains('"'), "{error}");
+}
+
+#[test]
+fn mie_aerosols_polarise_with_their_phase_matrix() {
+    // earth-clear's continental aerosol (Mie) 90 degrees from the sun:
+    // the aerosol's own polarisation is weaker than air's, so the sky's
+    // degree falls below the air-only sky's, and stays positive
+    // (perpendicular to the scattering plane, as air dominates there).
+    let view = ViewDirection::new(60.0, 0.0).unwrap();
+    let degree = |atmosphere: &Atmosphere| {
+        let result = Sky::builder(atmosphere)
+            .sun_deg(30.0, 180.0)
+            .scattering(Scattering::Single)
+            .polarisation(Polarisation::Vector)
+            .build()
+            .unwrap()
+            .radiance(view)
+            .unwrap();
+        let stokes = result.stokes.unwrap();
+        assert!(stokes.q_w_m2_sr_nm.values().iter().all(|q| *q < 0.0));
+        stokes.degree_of_linear_polarisation(&result.radiance_w_m2_sr_nm)
+    };
+    let with_aerosol = degree(&Atmosphere::preset("earth-clear").unwrap());
+    let air_only = degree(&Atmosphere::preset("us-standard-1976-rayleigh").unwrap());
+    for (k, (a, b)) in with_aerosol.iter().zip(&air_only).enumerate() {
+        assert!(
+            *a > 0.3 && a < b,
+            "wavelength {k}: {a} with aerosol, {b} air only"
+        );
+    }
 }

@@ -203,7 +203,9 @@ fn table(atmosphere: &Atmosphere, optics: &AtmosphereOptics) -> String {
         let polarisation = match species.phase_function {
             _ if !scatters => "",
             PhaseFunction::Rayleigh { .. } => ", polarising",
-            PhaseFunction::Tabulated(_) => ", no phase matrix yet (refused by --stokes)",
+            PhaseFunction::Tabulated(_) => {
+                ", polarising (its phase matrix is computed for --stokes)"
+            }
             _ => ", non-polarising",
         };
         let _ = writeln!(

@@ -48,7 +48,7 @@ use crate::arguments::{
 /// for a mostly vertical electric field, Q < 0 for a horizontal one; the
 /// angle of polarisation (-90..90 degrees) turns from the vertical toward
 /// the observer's left; it is empty (JSON null) for wholly unpolarised
-/// light. Mie aerosols are not polarised yet (refused):
+/// light. Mie aerosols polarise by their phase matrix, computed for the run:
 ///   sora spectrum --preset us-standard-1976-rayleigh --sun-elevation 30 \
 ///       --principal-plane 10 --method path-tracing --samples 20000 --stokes
 ///

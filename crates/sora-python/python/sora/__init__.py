@@ -210,8 +210,8 @@ class Sky:
       same result on any thread count);
     - ``polarisation``: ``"scalar"`` (default) or ``"vector"`` (Stokes
       vectors, :meth:`stokes`; with ``method="path-tracing"``, or
-      ``scattering="single"`` with the fast method; Mie aerosols are not
-      polarised yet and raise ``ValueError``). With ``"vector"`` the
+      ``scattering="single"`` with the fast method; Mie aerosols get
+      their phase matrix computed). With ``"vector"`` the
       radiance is the polarised intensity I.
 
     Skies pickle (by their arguments), so Dask can ship them.

@@ -32,6 +32,7 @@ use crate::mie::distribution::SizeDistribution;
 use crate::mie::ensemble::{
     AerosolPhaseFunction, EnsembleError, EnsembleOptics, EnsembleSettings,
     compute_ensemble_cross_sections, compute_ensemble_optics_spectrum,
+    compute_ensemble_phase_matrix_ratios,
 };
 use crate::mie::paper_phase::AerosolPhaseMode;
 use crate::mie::refractive_index::{RefractiveIndexError, RefractiveIndexModel};
@@ -157,6 +158,45 @@ impl MieAerosol {
             phase_function,
             reference_number_density_m3,
         })
+    }
+}
+
+impl MieAerosol {
+    /// The phase-matrix ratios of the ensemble at every wavelength of
+    /// `grid`, on the nodes of its phase table `table`, kept in the table
+    /// (`phase_matrix.rs`; the radius rule of the phase tables). `name`
+    /// prefixes errors.
+    pub(crate) fn compute_phase_matrix(
+        &self,
+        grid: &WavelengthGrid,
+        table: &mut TabulatedPhase,
+        name: &str,
+    ) -> Result<()> {
+        let settings = EnsembleSettings::default().phase_function_quadrature;
+        let nodes = table.cos_theta_nodes().to_vec();
+        let ratios = grid
+            .wavelengths_nm()
+            .map(|wavelength_nm| {
+                let m = self
+                    .refractive_index
+                    .refractive_index_at(wavelength_nm)
+                    .map_err(|e| ensemble_error(name, e.into()))?;
+                compute_ensemble_phase_matrix_ratios(
+                    wavelength_nm,
+                    m,
+                    &self.size_distribution,
+                    &settings,
+                    &nodes,
+                )
+                .map_err(|e| ensemble_error(name, e))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        if !table.set_matrix_ratios(ratios) {
+            return Err(Error::InvalidSpectrum(format!(
+                "{name}: the phase matrix does not match the phase table's nodes"
+            )));
+        }
+        Ok(())
     }
 }
 

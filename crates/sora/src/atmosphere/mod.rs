@@ -169,6 +169,24 @@ impl Atmosphere {
         presets::load_preset(name)
     }
 
+    /// Adds to `optics` (this atmosphere's, on its grid) the phase matrix
+    /// of every Mie species with a tabulated phase function, for polarised
+    /// skies (`phase_matrix.rs`): one Mie solution per radius node and
+    /// wavelength, the cost of the phase tables again or more.
+    pub(crate) fn add_phase_matrices(&self, optics: &mut AtmosphereOptics) -> Result<()> {
+        for (index, (species, species_optics)) in
+            self.species.iter().zip(&mut optics.species).enumerate()
+        {
+            if let (SpeciesModel::Mie(mie), PhaseFunction::Tabulated(table)) =
+                (&species.model, &mut species_optics.phase_function)
+            {
+                let path = format!("species[{index}] ({})", species.name);
+                mie.compute_phase_matrix(&optics.grid, table, &path)?;
+            }
+        }
+        Ok(())
+    }
+
     /// Puts the atmosphere on `grid`: per-wavelength coefficients, phase
     /// functions, solar irradiance and ground albedo (Mie species compute
     /// their ensembles here: the expensive step). Fails when a table does

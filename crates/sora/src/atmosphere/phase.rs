@@ -42,7 +42,8 @@
 //! Cornette-Shanks is sampled with the Henyey-Greenstein of the same g
 //! (pdf != p; the weight is p / pdf).
 
-use crate::mie::ensemble::TabulatedPhaseFunction;
+use super::phase_matrix::PhaseMatrix;
+use crate::mie::ensemble::{PhaseMatrixRatios, TabulatedPhaseFunction};
 use crate::mie::paper_phase::sample_henyey_greenstein_cos_theta;
 use std::f64::consts::PI;
 
@@ -97,6 +98,9 @@ pub struct TabulatedPhase {
     rows: Vec<TabulatedPhaseFunction>,
     /// Mean cosine per wavelength, exact for the interpolant.
     asymmetry: Vec<f64>,
+    /// F12/F11, F33/F11 and F34/F11 per wavelength on the same nodes, for
+    /// polarised computations (`phase_matrix.rs`); None until computed.
+    matrix_ratios: Option<Vec<PhaseMatrixRatios>>,
 }
 
 impl TabulatedPhase {
@@ -123,7 +127,61 @@ impl TabulatedPhase {
             return None;
         }
         let asymmetry = rows.iter().map(|row| row.asymmetry_parameter()).collect();
-        Some(TabulatedPhase { rows, asymmetry })
+        Some(TabulatedPhase {
+            rows,
+            asymmetry,
+            matrix_ratios: None,
+        })
+    }
+
+    /// The cosines of the table's nodes (every wavelength's).
+    pub(crate) fn cos_theta_nodes(&self) -> &[f64] {
+        self.rows[0].cos_theta_nodes()
+    }
+
+    /// Keeps the phase-matrix ratios of each wavelength (computed on
+    /// [`Self::cos_theta_nodes`]); false, keeping none, unless there is one
+    /// per wavelength on those nodes.
+    pub(crate) fn set_matrix_ratios(&mut self, ratios: Vec<PhaseMatrixRatios>) -> bool {
+        let nodes = self.cos_theta_nodes();
+        if ratios.len() != self.rows.len() || ratios.iter().any(|r| r.cos_theta != nodes) {
+            return false;
+        }
+        self.matrix_ratios = Some(ratios);
+        true
+    }
+
+    /// Whether the table carries its phase matrix.
+    pub(crate) fn has_matrix_ratios(&self) -> bool {
+        self.matrix_ratios.is_some()
+    }
+
+    /// The phase matrix of every wavelength at `cos_theta` into `out`: a1
+    /// the tabulated phase function, the rest a1 times the ratios, all
+    /// linear in cos theta between the nodes (a2 = a1 and a4 = a3 for
+    /// spheres). Non-polarising without ratios.
+    pub(crate) fn phase_matrix_into(&self, cos_theta: f64, out: &mut [PhaseMatrix]) {
+        let location = self.rows[0].locate(cos_theta);
+        let (i, t) = location;
+        let at = |v: &[f64]| v[i] + t * (v[i + 1] - v[i]);
+        for (k, (m, row)) in out.iter_mut().zip(&self.rows).enumerate() {
+            let a1 = row.phase_function_at(location);
+            *m = match &self.matrix_ratios {
+                None => PhaseMatrix::non_polarising(a1),
+                Some(ratios) => {
+                    let r = &ratios[k];
+                    let a3 = a1 * at(&r.f33_over_f11);
+                    PhaseMatrix {
+                        a1,
+                        a2: a1,
+                        a3,
+                        a4: a3,
+                        b1: a1 * at(&r.f12_over_f11),
+                        b2: a1 * at(&r.f34_over_f11),
+                    }
+                }
+            };
+        }
     }
 
     /// p(theta) at every wavelength row into `out`, the same values as

@@ -31,9 +31,13 @@
 //!   Cornette-Shanks, the paper's HG of g(r)) carry no polarisation: they
 //!   are treated as non-polarising, `a1 = a2 = a3 = a4 = p`, `b1 = b2 = 0`
 //!   (the light keeps its state of polarisation).
-//! - **Tabulated (Mie)** phase functions would need the ensemble's F12,
-//!   F33 and F34 from S1 and S2; they are not tabulated yet, so a
-//!   polarised computation refuses them ([`PhaseFunction::phase_matrix_into`]).
+//! - **Tabulated (Mie)** phase functions: the ensemble's F12, F33 and F34
+//!   relative to F11, from S1 and S2 over the size distribution
+//!   (`sora_mie::ensemble::compute_ensemble_phase_matrix_ratios`, B&H
+//!   eq. 4.77), on the table's nodes, with F22 = F11 and F44 = F33 for
+//!   spheres. They are computed only for a polarised sky
+//!   (`Atmosphere::add_phase_matrices`: a Mie solution per radius node,
+//!   angle and wavelength, seconds for large particles).
 
 use std::f64::consts::PI;
 
@@ -111,18 +115,22 @@ pub(crate) fn rayleigh_phase_matrix(rho: f64, mu: f64) -> PhaseMatrix {
 
 impl PhaseFunction {
     /// Whether a polarised computation can use this phase function: every
-    /// kind but the tabulated (Mie) one, whose F12, F33 and F34 are not
-    /// tabulated yet.
+    /// kind but a tabulated (Mie) one without its matrix ratios (which
+    /// `Atmosphere::add_phase_matrices` computes).
     pub(crate) fn has_phase_matrix(&self) -> bool {
-        !matches!(self, PhaseFunction::Tabulated(_))
+        match self {
+            PhaseFunction::Tabulated(table) => table.has_matrix_ratios(),
+            _ => true,
+        }
     }
 
     /// The phase matrix at every wavelength at scattering-angle cosine
     /// `cos_theta`, into `out` (one per wavelength sample; no allocation).
-    /// A tabulated function gets its non-polarising matrix: callers check
-    /// [`PhaseFunction::has_phase_matrix`] first.
+    /// A tabulated function without its ratios gets its non-polarising
+    /// matrix: callers check [`PhaseFunction::has_phase_matrix`] first.
     pub(crate) fn phase_matrix_into(&self, cos_theta: f64, out: &mut [PhaseMatrix]) {
         match self {
+            PhaseFunction::Tabulated(table) => table.phase_matrix_into(cos_theta, out),
             PhaseFunction::Rayleigh {
                 depolarization_ratios,
             } => {
@@ -202,6 +210,42 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn tabulated_functions_carry_their_ratios() {
+        use super::super::phase::TabulatedPhase;
+        use crate::mie::ensemble::PhaseMatrixRatios;
+        let nodes = vec![-1.0, 0.0, 1.0];
+        let mut table = TabulatedPhase::new(nodes.clone(), vec![vec![1.0, 0.5, 2.0]]).unwrap();
+        assert!(!PhaseFunction::Tabulated(table.clone()).has_phase_matrix());
+        let ratios = PhaseMatrixRatios {
+            cos_theta: nodes.clone(),
+            f12_over_f11: vec![0.0, -0.8, 0.0],
+            f33_over_f11: vec![-1.0, 0.1, 1.0],
+            f34_over_f11: vec![0.0, 0.2, 0.0],
+        };
+        // Ratios on other nodes, or for another number of wavelengths, are refused.
+        let shifted = PhaseMatrixRatios {
+            cos_theta: vec![-1.0, 0.1, 1.0],
+            ..ratios.clone()
+        };
+        assert!(!table.set_matrix_ratios(vec![shifted]));
+        assert!(!table.set_matrix_ratios(vec![ratios.clone(), ratios.clone()]));
+        assert!(table.set_matrix_ratios(vec![ratios]));
+        let phase = PhaseFunction::Tabulated(table);
+        assert!(phase.has_phase_matrix());
+        // At a node: a1 the table's value, the rest a1 times the ratios;
+        // halfway between nodes, linear in cos theta.
+        let mut out = [PhaseMatrix::default()];
+        phase.phase_matrix_into(0.0, &mut out);
+        let a1 = phase.eval(0, 0.0);
+        assert!((out[0].a1 - a1).abs() < 1e-15 && (out[0].b1 + 0.8 * a1).abs() < 1e-15);
+        assert!((out[0].a3 - 0.1 * a1).abs() < 1e-15 && (out[0].b2 - 0.2 * a1).abs() < 1e-15);
+        assert_eq!((out[0].a2, out[0].a4), (out[0].a1, out[0].a3));
+        phase.phase_matrix_into(0.5, &mut out);
+        let a1 = phase.eval(0, 0.5);
+        assert!((out[0].b1 + 0.4 * a1).abs() < 1e-12, "{:?}", out[0]);
     }
 
     #[test]

@@ -135,8 +135,8 @@ pub enum Polarisation {
     /// Q, U and V, referred to the meridian plane of each view (the
     /// convention is in `transport/stokes.rs`, summarised at
     /// [`Stokes`]). So far from the path tracer (all orders) and from the
-    /// fast method with [`Scattering::Single`]; Mie species need their
-    /// phase matrix, which is not tabulated yet.
+    /// fast method with [`Scattering::Single`]; Mie species get their
+    /// phase matrix computed when the sky is built.
     Vector,
 }
 
@@ -331,7 +331,12 @@ impl SkyBuilder<'_> {
     /// Checks every choice and puts the atmosphere on the grid (the
     /// expensive tables wait for their first use).
     pub fn build(self) -> Result<Sky> {
-        let scene = SingleScatteringSky::new(self.atmosphere, &self.wavelengths, self.observation)?;
+        let scene = SingleScatteringSky::new_with_phase_matrices(
+            self.atmosphere,
+            &self.wavelengths,
+            self.observation,
+            self.polarisation == Polarisation::Vector,
+        )?;
         let mut sky = Sky::from_scene(scene, self.scattering, self.method, self.table_size)?;
         // The angles as given, not as recovered from the unit vector.
         sky.sun_position_deg = (

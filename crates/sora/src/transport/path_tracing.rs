@@ -171,7 +171,7 @@
 //!
 //! # Assumptions and limits
 //! A point sun (parallel rays; the disc is not sampled), unpolarised
-//! light unless polarised (Mie species have no phase matrix yet),
+//! light unless polarised,
 //! no refraction, a smooth spherical Lambertian ground. Profiles must be
 //! resolved by the Gauss panels between corners: exponentials and
 //! log-linear tables (US Standard Atmosphere) are smooth enough, corners of
@@ -510,7 +510,7 @@ impl<'a> PathTracer<'a> {
             .find(|(s, scatters)| **scatters && !s.phase_function.has_phase_matrix())
         {
             return Err(Error::Unsupported(format!(
-                "polarisation: species \"{}\" has a Mie phase function, whose phase matrix (F12, F33, F34) sora does not tabulate yet; use a scalar computation for it",
+                "polarisation: species \"{}\" has a Mie phase table without its phase matrix (F12, F33, F34): build the sky with polarisation, which computes it",
                 species.0.name
             )));
         }

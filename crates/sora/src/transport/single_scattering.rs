@@ -173,12 +173,27 @@ impl SingleScatteringScratch {
 
 impl SingleScatteringSky {
     /// Puts `atmosphere` on `grid` and places the eye and the sun.
+    #[cfg(test)]
     pub(crate) fn new(
         atmosphere: &Atmosphere,
         grid: &WavelengthGrid,
         observation: Observation,
     ) -> Result<SingleScatteringSky> {
-        let optics = atmosphere.compute_optics(grid)?;
+        SingleScatteringSky::new_with_phase_matrices(atmosphere, grid, observation, false)
+    }
+
+    /// [`SingleScatteringSky::new`], with the Mie species' phase matrices
+    /// when `phase_matrices` (for polarised skies).
+    pub(crate) fn new_with_phase_matrices(
+        atmosphere: &Atmosphere,
+        grid: &WavelengthGrid,
+        observation: Observation,
+        phase_matrices: bool,
+    ) -> Result<SingleScatteringSky> {
+        let mut optics = atmosphere.compute_optics(grid)?;
+        if phase_matrices {
+            atmosphere.add_phase_matrices(&mut optics)?;
+        }
         SingleScatteringSky::from_optics(
             optics,
             atmosphere.planet.radius_m(),
