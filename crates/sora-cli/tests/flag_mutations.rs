@@ -33,6 +33,8 @@
 //! problems; seed 11, 8,000 cases: 1073 ok, 1858 one-line errors, 5069
 //! usage errors, 0 slow, 0 problems.
 
+mod common;
+
 use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -598,18 +600,7 @@ fn report(counts: &Counts) -> String {
 }
 
 fn assert_clean(counts: &Counts) {
-    assert!(
-        counts.problems.is_empty(),
-        "{}\nfirst problems:\n{}",
-        report(counts),
-        counts
-            .problems
-            .iter()
-            .take(5)
-            .cloned()
-            .collect::<Vec<_>>()
-            .join("\n----\n")
-    );
+    common::assert_no_problems(&report(counts), &counts.problems);
 }
 
 #[test]

@@ -12,6 +12,8 @@
 //! `-- --ignored --nocapture` runs a long one (5,000 files) and prints its
 //! counts.
 
+mod common;
+
 use std::io::Write;
 use std::process::{Command, Stdio};
 
@@ -206,18 +208,7 @@ fn report(counts: &Counts) -> String {
 }
 
 fn assert_clean(counts: &Counts) {
-    assert!(
-        counts.problems.is_empty(),
-        "{}\nfirst problems:\n{}",
-        report(counts),
-        counts
-            .problems
-            .iter()
-            .take(5)
-            .cloned()
-            .collect::<Vec<_>>()
-            .join("\n----\n")
-    );
+    common::assert_no_problems(&report(counts), &counts.problems);
 }
 
 #[test]

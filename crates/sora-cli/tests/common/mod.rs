@@ -39,3 +39,18 @@ pub fn data(name: &str) -> String {
         .display()
         .to_string()
 }
+
+/// Fails with a mutation campaign's `report` and its first five problems
+/// unless there are none.
+pub fn assert_no_problems(report: &str, problems: &[String]) {
+    assert!(
+        problems.is_empty(),
+        "{report}\nfirst problems:\n{}",
+        problems
+            .iter()
+            .take(5)
+            .cloned()
+            .collect::<Vec<_>>()
+            .join("\n----\n")
+    );
+}
