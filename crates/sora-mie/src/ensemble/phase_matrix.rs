@@ -59,13 +59,22 @@ pub fn compute_ensemble_phase_matrix_ratios(
     let quadrature = RadiusQuadrature::gauss_legendre(distribution, wavenumber_per_m, settings)?;
     // [S11, S12, S33, S34] summed over the nodes, per angle.
     let mut sums = vec![[0.0f64; 4]; cos_theta.len()];
+    // One solution's buffers serve every node (recomputed in place).
+    let mut solution: Option<MieSolution> = None;
     for (&radius_m, &weight) in quadrature.radii_m().iter().zip(quadrature.weights()) {
-        let solution = MieSolution::compute(refractive_index, wavenumber_per_m * radius_m)
-            .map_err(|error| EnsembleError::Mie {
-                wavelength_nm,
-                radius_m,
-                error,
-            })?;
+        let x = wavenumber_per_m * radius_m;
+        let mie_error = |error| EnsembleError::Mie {
+            wavelength_nm,
+            radius_m,
+            error,
+        };
+        let solution = match &mut solution {
+            Some(solution) => {
+                solution.recompute(refractive_index, x).map_err(mie_error)?;
+                solution
+            }
+            None => solution.insert(MieSolution::compute(refractive_index, x).map_err(mie_error)?),
+        };
         for (sum, &mu) in sums.iter_mut().zip(cos_theta) {
             let (s1, s2) = solution.amplitudes(mu);
             let (n1, n2) = (s1.norm_sqr(), s2.norm_sqr());

@@ -12,7 +12,8 @@
 //!
 //! the paper's eq. 1 (beta = rho(h) sigma(lambda)) split into a profile
 //! ([`profile`]) and the coefficients at relative density 1, and scatters
-//! with its phase function ([`phase`]). Optical models:
+//! with its phase function ([`phase`]; for polarised skies its phase
+//! matrix, `phase_matrix.rs`). Optical models:
 //! - [`rayleigh`]: molecules; physical (number density and a gas, `air`
 //!   or `co2`, cross-section from refractive index and King factor) or
 //!   parametric (coefficient at a reference wavelength, lambda^-n);
@@ -26,7 +27,9 @@
 //! become validated model types; [`Atmosphere::from_toml_str`]) or taken
 //! from the built-in [`presets`]. [`Atmosphere::compute_optics`] puts all of
 //! it on a wavelength grid once ([`optical_depth::AtmosphereOptics`]): the
-//! per-wavelength arrays the renderer reads, and the column optical depths.
+//! per-wavelength arrays the renderer reads, and the column optical depths;
+//! every wavelength table is checked against the grid first
+//! (`coverage.rs`).
 //!
 //! Units: SI (m, m^-1, m^-3, m^2) unless a name says otherwise
 //! (`wavelength_nm`, `radius_um`, `angular_diameter_deg`). No I/O: files

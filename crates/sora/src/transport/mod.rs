@@ -18,6 +18,8 @@
 //!   to single scattering;
 //! - `sky_view_table`: the fast path tabulated over view directions, for
 //!   images;
+//! - `stokes`: Stokes vectors along a path (the meridian-plane convention,
+//!   rotations, the Mueller matrix a polarised path carries);
 //! - `quadrature`: the Gauss-Legendre rules they share.
 
 pub(crate) mod multiple_scattering;
