@@ -663,10 +663,10 @@ impl SizeDistribution {
     /// dN/d ln r per particle of this population at `radius_m`: the shape's
     /// density divided by the number fraction in the window, 0 outside it.
     pub fn number_density_per_ln_radius(&self, radius_m: f64) -> f64 {
-        if let Some(window) = self.radius_window
-            && !(window.min_radius_m..=window.max_radius_m).contains(&radius_m)
-        {
-            return 0.0;
+        if let Some(window) = self.radius_window {
+            if !(window.min_radius_m..=window.max_radius_m).contains(&radius_m) {
+                return 0.0;
+            }
         }
         self.number_density_per_ln_radius_inside_window(radius_m)
     }

@@ -620,7 +620,7 @@ impl LargeSphere {
         previous_b_im[1..].copy_from_slice(&b_im[..B - 1]);
         inverse_n[1..].copy_from_slice(&inverse_n_plus_1[..B - 1]);
         // (-1)^n, alternating from the first term's parity.
-        let first_sign = if first.is_multiple_of(2) { 1.0 } else { -1.0 };
+        let first_sign = if first % 2 == 0 { 1.0 } else { -1.0 };
         for k in 0..B {
             let sign = if k % 2 == 0 { first_sign } else { -first_sign };
             let term = Term {

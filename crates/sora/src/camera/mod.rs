@@ -83,6 +83,23 @@ impl PerspectiveCamera {
 }
 
 impl Camera {
+    /// The sky direction seen through the centre of pixel (`column`, `row`)
+    /// of a `width` x `height` image (row 0 at the top), or None where the
+    /// camera sees nothing (outside the fisheye's circle): which direction
+    /// a click on a rendered image means.
+    pub fn view_at_pixel(
+        &self,
+        column: u32,
+        row: u32,
+        width: u32,
+        height: u32,
+    ) -> Option<ViewDirection> {
+        let direction = self.direction_for_pixel(column, row, width, height)?;
+        let (elevation_deg, azimuth_deg) =
+            crate::geometry::elevation_azimuth_from_direction(direction);
+        ViewDirection::new(elevation_deg, azimuth_deg).ok()
+    }
+
     /// The unit direction seen through the centre of pixel (column, row) of a
     /// `width` x `height` image, or None where the camera sees nothing
     /// (outside the fisheye's circle).

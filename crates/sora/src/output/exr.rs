@@ -28,6 +28,7 @@
 //!
 //! The file is written atomically, as [`write_file_atomically`] describes.
 
+use std::io::Write;
 use std::path::Path;
 
 use ::exr::math::Vec2;
@@ -92,6 +93,29 @@ const HALF_FLOAT_MAX: f32 = 65504.0;
 /// and encoder errors name `path`.
 pub fn write_exr(path: impl AsRef<Path>, image: &LinearImage, options: ExrOptions) -> Result<()> {
     let path = path.as_ref();
+    // Encoded in memory first: a half-float overflow or an encoder error
+    // leaves no file behind, and the file is written in one piece.
+    let bytes = encode_exr(image, options).map_err(|error| match error {
+        Error::Io { message, .. } => Error::Io {
+            path: path.display().to_string(),
+            message,
+        },
+        other => other,
+    })?;
+    write_file_atomically(path, |file| {
+        file.write_all(&bytes).map_err(|error| Error::Io {
+            path: path.display().to_string(),
+            message: format!("cannot write OpenEXR: {error}"),
+        })
+    })
+}
+
+/// The OpenEXR file [`write_exr`] writes, as bytes in memory (for a
+/// browser download or a network reply, where there is no file system).
+///
+/// Fails as [`write_exr`] does before it creates a file; an encoder error
+/// is an [`Error::Io`] with the path `"(memory)"`.
+pub fn encode_exr(image: &LinearImage, options: ExrOptions) -> Result<Vec<u8>> {
     let names = image.channel_kind().channel_names();
     let mut channels: SmallVec<[AnyChannel<FlatSamples>; 4]> = SmallVec::new();
     for (channel, name) in names.into_iter().enumerate() {
@@ -119,16 +143,16 @@ pub fn write_exr(path: impl AsRef<Path>, image: &LinearImage, options: ExrOption
         );
     }
 
-    write_file_atomically(path, |file| {
-        exr_image
-            .write()
-            .non_parallel()
-            .to_unbuffered(file)
-            .map_err(|error| Error::Io {
-                path: path.display().to_string(),
-                message: format!("cannot write OpenEXR: {error}"),
-            })
-    })
+    let mut bytes = Vec::new();
+    exr_image
+        .write()
+        .non_parallel()
+        .to_buffered(std::io::Cursor::new(&mut bytes))
+        .map_err(|error| Error::Io {
+            path: "(memory)".to_string(),
+            message: format!("cannot encode OpenEXR: {error}"),
+        })?;
+    Ok(bytes)
 }
 
 /// One channel of `image` as a flat, row-major sample vector of

@@ -33,7 +33,7 @@ mod format;
 mod image_buffer;
 mod png;
 
-pub use exr::{ExrCompression, ExrOptions, ExrSampleType, write_exr};
+pub use exr::{ExrCompression, ExrOptions, ExrSampleType, encode_exr, write_exr};
 pub use format::OutputFormat;
 pub use image_buffer::{
     ChannelKind, DisplayImage, DisplayImage8, DisplayImage16, LinearImage, MAX_IMAGE_DIMENSION,

@@ -585,12 +585,12 @@ impl Sky {
     /// a worker that stole work inside the (parallel) solve must not find
     /// the field half-made, and the loops read it with [`Sky::field`].
     fn prepare_field(&self) -> Result<()> {
-        if let Scattering::Multiple(settings) = self.scattering
-            && self.field.get().is_none()
-        {
-            let field = MultipleScatteringField::compute(&self.scene, settings)?;
-            // Another thread may have been first: either field is the same.
-            let _ = self.field.set(field);
+        if let Scattering::Multiple(settings) = self.scattering {
+            if self.field.get().is_none() {
+                let field = MultipleScatteringField::compute(&self.scene, settings)?;
+                // Another thread may have been first: either field is the same.
+                let _ = self.field.set(field);
+            }
         }
         Ok(())
     }
@@ -614,9 +614,7 @@ impl Sky {
     fn image_tables(&self) -> &ImageTables {
         self.image_tables.get_or_init(|| {
             let (altitude_nodes, mu_nodes) = self.table_size.sun_column_nodes;
-            let sun_columns = self
-                .scene
-                .compute_sun_column_table(altitude_nodes, mu_nodes);
+            let sun_columns = self.scene.sun_column_table(altitude_nodes, mu_nodes);
             let (half_zenith, azimuth) = self.table_size.sky_view_nodes;
             let sky_view = SkyViewTable::compute_with_multiple_scattering(
                 &self.scene,

@@ -294,6 +294,11 @@ impl SunColumnTable {
         }
     }
 
+    /// The table's (altitude, mu) node counts.
+    pub(crate) fn node_counts(&self) -> (usize, usize) {
+        (self.altitude_nodes, self.mu_nodes)
+    }
+
     /// Bruneton's altitude coordinate: rho / H in [0, 1], rho = sqrt(r^2 - R^2),
     /// H = sqrt(R_top^2 - R^2).
     fn unit_from_radius(&self, r: f64) -> f64 {

@@ -41,6 +41,7 @@
 //!   ([`SunColumns::Table`]) for images.
 
 use std::borrow::Borrow;
+use std::sync::{Arc, Mutex};
 
 use super::optical_column::{ProfileCorners, SunColumnTable, compute_columns_along_ray};
 use super::quadrature::{GAUSS_NODES, GAUSS_WEIGHTS, running_integral_matrix};
@@ -128,6 +129,10 @@ pub struct SingleScatteringSky {
     profiles: Vec<DensityProfile>,
     /// Where the profiles have corners: rays are cut there.
     corners: ProfileCorners,
+    /// The sun-column tables built so far, by size: they depend on the
+    /// profiles and radii only, so every sky moved to another sun
+    /// ([`SingleScatteringSky::with_sun`]) shares them.
+    sun_column_tables: Arc<Mutex<Vec<Arc<SunColumnTable>>>>,
 }
 
 /// Per-thread work space of the fast path (no allocation per ray).
@@ -242,6 +247,7 @@ impl SingleScatteringSky {
             sun_direction: direction_from_elevation_azimuth(sun_elevation_deg, sun_azimuth_deg),
             sun_angular_radius_rad,
             running_integral: running_integral_matrix(),
+            sun_column_tables: Arc::default(),
         })
     }
 
@@ -253,7 +259,7 @@ impl SingleScatteringSky {
         sun_elevation_deg: f64,
         sun_azimuth_deg: f64,
     ) -> Result<SingleScatteringSky> {
-        SingleScatteringSky::from_optics(
+        let moved = SingleScatteringSky::from_optics(
             self.optics.clone(),
             self.ground_radius_m,
             self.top_radius_m,
@@ -263,7 +269,11 @@ impl SingleScatteringSky {
                 sun_elevation_deg,
                 sun_azimuth_deg,
             },
-        )
+        )?;
+        Ok(SingleScatteringSky {
+            sun_column_tables: Arc::clone(&self.sun_column_tables),
+            ..moved
+        })
     }
 
     /// The optics on the grid.
@@ -286,19 +296,47 @@ impl SingleScatteringSky {
         (self.ground_radius_m, self.top_radius_m)
     }
 
-    /// The sun-column table for images of this sky (altitude x mu nodes).
-    pub(crate) fn compute_sun_column_table(
+    /// The sun-column table of this sky's atmosphere (altitude x mu nodes):
+    /// built on first use, then shared by every sky of this atmosphere and
+    /// eye, whatever its sun (the table does not depend on it), so that a
+    /// sequence of frames or a moving slider builds it once.
+    pub(crate) fn sun_column_table(
         &self,
         altitude_nodes: usize,
         mu_nodes: usize,
-    ) -> SunColumnTable {
-        SunColumnTable::compute(
+    ) -> Arc<SunColumnTable> {
+        let find = |tables: &[Arc<SunColumnTable>]| {
+            tables
+                .iter()
+                .find(|t| t.node_counts() == (altitude_nodes, mu_nodes))
+                .cloned()
+        };
+        // A poisoned lock only means that another thread panicked: the
+        // tables in it are whole (each is pushed when complete).
+        let lock = || {
+            self.sun_column_tables
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner)
+        };
+        if let Some(table) = find(&lock()) {
+            return table;
+        }
+        // Computed without the lock (the computation runs on the thread
+        // pool, whose workers may ask for a table too); two threads that
+        // race compute the same table, and the first one is kept.
+        let table = Arc::new(SunColumnTable::compute(
             &self.profiles,
             self.ground_radius_m,
             self.top_radius_m,
             altitude_nodes,
             mu_nodes,
-        )
+        ));
+        let mut tables = lock();
+        if let Some(first) = find(&tables) {
+            return first;
+        }
+        tables.push(Arc::clone(&table));
+        table
     }
 
     /// Work space for [`SingleScatteringSky::compute_radiance`].

@@ -134,10 +134,10 @@ impl SkyViewTable {
                 for (o, v) in ground.iter_mut().zip(scratch.ground_radiance()) {
                     *o = *v as f32;
                 }
-                if let (Some(ms), Some((ms_scratch, radiance))) =
-                    (multiple_scattering, ms_work.as_mut())
-                    && marched(index_in_half, half_zenith_nodes)
-                    && marched(k, azimuth_nodes)
+                let marched_here =
+                    marched(index_in_half, half_zenith_nodes) && marched(k, azimuth_nodes);
+                if let (Some(ms), Some((ms_scratch, radiance)), true) =
+                    (multiple_scattering, ms_work.as_mut(), marched_here)
                 {
                     ms.compute_radiance_parts(
                         view,
@@ -321,7 +321,7 @@ impl SkyViewTable {
 /// scattered radiance marched (the others are interpolated): every other
 /// node and the last.
 fn marched(index: usize, count: usize) -> bool {
-    index.is_multiple_of(2) || index + 1 == count
+    index % 2 == 0 || index + 1 == count
 }
 
 /// Along one axis of `count` nodes, `step` values apart in `values`: fills

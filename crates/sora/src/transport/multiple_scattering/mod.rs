@@ -186,7 +186,7 @@ use self::spherical_first_order::{FirstOrderInputs, compute_spherical_first_orde
 use self::spherical_paths::StreamPaths;
 use self::successive_orders::{ColumnSystem, ScaledSpecies, Streams};
 use self::vertical_grid::VerticalGrid;
-use super::optical_column::{ProfileCorners, SunColumnTable, compute_columns_along_ray};
+use super::optical_column::{ProfileCorners, compute_columns_along_ray};
 use super::quadrature::{GAUSS_NODES, GAUSS_WEIGHTS, running_integral_matrix};
 use super::single_scattering::{SingleScatteringSky, SunColumns};
 use crate::atmosphere::{AtmosphereOptics, DensityProfile};
@@ -830,26 +830,27 @@ impl MultipleScatteringField {
         let first_spherical = sun_axis
             .angles_rad
             .partition_point(|a| *a < FIRST_ORDER_SUN_ZENITH_DEG.to_radians());
-        let table_columns = SunColumnTable::compute(
-            &profiles,
-            ground_radius_m,
-            top_radius_m,
-            FIRST_ORDER_SUN_COLUMN_NODES.0,
-            FIRST_ORDER_SUN_COLUMN_NODES.1,
-        );
         let solar_irradiance: Vec<f64> = optics.solar_irradiance_w_m2_nm.values().to_vec();
-        let first_order = compute_spherical_first_order(&FirstOrderInputs {
-            profiles: &profiles,
-            corners: &corners,
-            sun_columns: &table_columns,
-            level_altitudes_m: grid.altitudes_m(),
-            stream_cosines: streams.cosines(),
-            sun_zenith_rad: &sun_axis.angles_rad[first_spherical..],
-            scaled_extinction: &scaled_extinction,
-            scaled_scattering: &scaled_scattering,
-            phases: &phases,
-            solar_irradiance_w_m2_nm: &solar_irradiance,
-        });
+        // The table only where some sun node needs the spherical first order
+        // (a high sun's nodes all stop short of it).
+        let first_order = if first_spherical < sun_axis.angles_rad.len() {
+            let (altitude_nodes, mu_nodes) = FIRST_ORDER_SUN_COLUMN_NODES;
+            let table_columns = sky.sun_column_table(altitude_nodes, mu_nodes);
+            compute_spherical_first_order(&FirstOrderInputs {
+                profiles: &profiles,
+                corners: &corners,
+                sun_columns: &table_columns,
+                level_altitudes_m: grid.altitudes_m(),
+                stream_cosines: streams.cosines(),
+                sun_zenith_rad: &sun_axis.angles_rad[first_spherical..],
+                scaled_extinction: &scaled_extinction,
+                scaled_scattering: &scaled_scattering,
+                phases: &phases,
+                solar_irradiance_w_m2_nm: &solar_irradiance,
+            })
+        } else {
+            Vec::new()
+        };
         // Per wavelength: every sun node's solution, then its two ground values.
         let chunk = count * (solution_len + 2);
         let mut solved = vec![0.0; wavelengths * chunk];
