@@ -1,0 +1,419 @@
+//! Runs the page's requests on the library and keeps what the screen shows.
+//!
+//! Caches: the last atmosphere (Mie ensembles are its cost), and one sky
+//! per image quality, moved to a new sun with [`Sky::with_sun_deg`] (the
+//! optics are reused) and kept with its tables built, so a click on the
+//! image or a download reuses them. Nothing here prints or touches files.
+
+use serde::Serialize;
+use serde_json::{Value, json};
+
+use sora::camera::Camera;
+use sora::colour::{DisplayMapping, Exposure, RgbColourSpace, SpectrumToXyz, Xyz};
+use sora::output::{ChannelKind, ExrOptions, LinearImage, encode_exr};
+use sora::spectrum::Spectrum;
+use sora::{
+    Atmosphere, FastTableSize, ImageSettings, MultipleScatteringSettings, Scattering, Sky,
+    ViewDirection, WavelengthGrid,
+};
+
+use crate::atmosphere_controls::{apply_controls, read_controls, set_ground_albedo};
+use crate::request::{
+    AtmosphereSpec, CameraChoice, ImageSpec, Quality, Request, ScatteringChoice, SkySpec,
+};
+
+/// One reply: JSON text, bytes, and whether it is an error.
+#[derive(Debug, Default, Clone)]
+pub struct Reply {
+    /// `{"error": "..."}` when `is_error`.
+    pub json: String,
+    /// Pixels or a file; empty for most requests.
+    pub bytes: Vec<u8>,
+    /// The request failed.
+    pub is_error: bool,
+}
+
+/// The engine: the caches between requests.
+#[derive(Debug, Default)]
+pub struct Engine {
+    atmosphere: Option<(AtmosphereSpec, Atmosphere)>,
+    /// (spec, quality, sky) of the skies last used, one per quality.
+    skies: Vec<(SkySpec, Quality, Sky)>,
+}
+
+type Outcome = Result<(Value, Vec<u8>), String>;
+
+impl Engine {
+    /// Runs a JSON request given as bytes.
+    pub fn call_bytes(&mut self, request: &[u8]) -> Reply {
+        let outcome = serde_json::from_slice::<Request>(request)
+            .map_err(|e| format!("request: {e}"))
+            .and_then(|request| self.call(&request));
+        match outcome {
+            Ok((json, bytes)) => Reply {
+                json: json.to_string(),
+                bytes,
+                is_error: false,
+            },
+            Err(message) => Reply {
+                json: json!({ "error": message }).to_string(),
+                bytes: Vec::new(),
+                is_error: true,
+            },
+        }
+    }
+
+    /// Runs one request.
+    pub fn call(&mut self, request: &Request) -> Outcome {
+        match request {
+            Request::Presets => {
+                let presets: Vec<Value> = sora::atmosphere::PRESETS
+                    .iter()
+                    .map(|p| json!({"name": p.name, "description": p.description, "toml": p.toml}))
+                    .collect();
+                Ok((json!({ "presets": presets }), Vec::new()))
+            }
+            Request::Controls { atmosphere } => {
+                let controls = read_controls(&atmosphere_text(atmosphere)?)?;
+                Ok((to_value(&controls), Vec::new()))
+            }
+            Request::Render { sky, image } => self.render(sky, image),
+            Request::Exr { sky, image } => self.exr(sky, image),
+            Request::ViewAtPixel { image, column, row } => {
+                let view = camera(image).view_at_pixel(*column, *row, image.width, image.height);
+                Ok((
+                    json!({
+                        "elevation_deg": view.map(|v| v.elevation_deg()),
+                        "azimuth_deg": view.map(|v| v.azimuth_deg()),
+                    }),
+                    Vec::new(),
+                ))
+            }
+            Request::Spectrum {
+                sky,
+                view_elevation_deg,
+                view_azimuth_deg,
+            } => self.spectrum(sky, *view_elevation_deg, *view_azimuth_deg),
+            Request::Optics { atmosphere } => self.optics(atmosphere),
+            Request::AtmosphereToml { atmosphere } => {
+                let mut text = apply_controls(&atmosphere_text(atmosphere)?, atmosphere)?;
+                if let Some(albedo) = atmosphere.ground_albedo {
+                    text = set_ground_albedo(&text, albedo)?;
+                }
+                // The library checks it as it would the file.
+                Atmosphere::from_toml_str(&text).map_err(|e| e.to_string())?;
+                Ok((json!({ "toml": text }), Vec::new()))
+            }
+        }
+    }
+
+    /// The atmosphere of `spec`, from the cache when it is the last one.
+    fn atmosphere(&mut self, spec: &AtmosphereSpec) -> Result<&Atmosphere, String> {
+        if self.atmosphere.as_ref().map(|(s, _)| s) != Some(spec) {
+            let text = apply_controls(&atmosphere_text(spec)?, spec)?;
+            let mut atmosphere = Atmosphere::from_toml_str(&text).map_err(|e| e.to_string())?;
+            if let Some(albedo) = spec.ground_albedo {
+                let planet = &atmosphere.planet;
+                atmosphere.planet = sora::atmosphere::Planet::new(
+                    planet.radius_m(),
+                    planet.atmosphere_height_m(),
+                    Spectrum::Constant(albedo),
+                )
+                .map_err(|e| format!("ground albedo: {e}"))?;
+            }
+            self.atmosphere = Some((spec.clone(), atmosphere));
+        }
+        Ok(&self.atmosphere.as_ref().expect("just set").1)
+    }
+
+    /// The sky of `spec` at `quality`: the cached one, the cached one moved
+    /// to a new sun, or a new one.
+    fn sky(&mut self, spec: &SkySpec, quality: Quality) -> Result<&Sky, String> {
+        let slot = self.skies.iter().position(|(_, q, _)| *q == quality);
+        let reusable = slot.and_then(|i| {
+            let (cached, _, _) = &self.skies[i];
+            let same_but_sun = SkySpec {
+                sun_elevation_deg: spec.sun_elevation_deg,
+                sun_azimuth_deg: spec.sun_azimuth_deg,
+                ..cached.clone()
+            } == *spec;
+            same_but_sun.then_some(i)
+        });
+        let sky = match reusable {
+            Some(i) if self.skies[i].0 == *spec => None,
+            Some(i) => Some(
+                self.skies[i]
+                    .2
+                    .with_sun_deg(spec.sun_elevation_deg, spec.sun_azimuth_deg)
+                    .map_err(|e| e.to_string())?,
+            ),
+            None => Some(build_sky(
+                self.atmosphere(&spec.atmosphere)?,
+                spec,
+                quality,
+            )?),
+        };
+        if let Some(sky) = sky {
+            if let Some(i) = slot {
+                self.skies.remove(i);
+            }
+            self.skies.push((spec.clone(), quality, sky));
+        }
+        let (_, _, sky) = self
+            .skies
+            .iter()
+            .find(|(_, q, _)| *q == quality)
+            .expect("just cached");
+        Ok(sky)
+    }
+
+    /// The image's XYZ per pixel, night-floored, and the brightest
+    /// luminance left, cd/m^2.
+    fn render_xyz(&mut self, spec: &SkySpec, image: &ImageSpec) -> Result<(Vec<Xyz>, f64), String> {
+        let sky = self.sky(spec, image.quality)?;
+        let settings = ImageSettings {
+            draw_sun_disc: image.sun_disc,
+            ..ImageSettings::new(camera(image), image.width, image.height)
+        };
+        let to_xyz = SpectrumToXyz::new(sky.wavelengths(), Default::default());
+        let mut xyz = sky
+            .render_xyz(&settings, &to_xyz, &|_| {})
+            .map_err(|e| e.to_string())?;
+        let brightest_cd_m2 = sora::colour::apply_night_floor(&mut xyz);
+        Ok((xyz, brightest_cd_m2))
+    }
+
+    fn render(&mut self, spec: &SkySpec, image: &ImageSpec) -> Outcome {
+        let (xyz, brightest_cd_m2) = self.render_xyz(spec, image)?;
+        let exposure = match image.ev100 {
+            Some(ev100) => Exposure::from_ev100(ev100).map_err(|e| format!("EV100: {e}"))?,
+            None => Exposure::Auto {
+                key: Exposure::DEFAULT_KEY,
+            },
+        };
+        let mapping = DisplayMapping {
+            exposure,
+            gamut_mapping: Default::default(),
+            encoding: Default::default(),
+        };
+        let scale = exposure.scale_for_image(&xyz).map_err(|e| e.to_string())?;
+        let rgb = mapping.to_u8(&xyz).map_err(|e| e.to_string())?;
+        let mut rgba = Vec::with_capacity(rgb.len() * 4);
+        for [r, g, b] in rgb {
+            rgba.extend_from_slice(&[r, g, b, 255]);
+        }
+        let wavelengths = self.sky(spec, image.quality)?.wavelengths().len();
+        Ok((
+            json!({
+                "width": image.width,
+                "height": image.height,
+                "wavelengths": wavelengths,
+                "brightest_cd_m2": brightest_cd_m2,
+                "night": brightest_cd_m2 == 0.0,
+                "night_floor_cd_m2": sora::colour::NIGHT_FLOOR_CD_M2,
+                "exposure_scale": scale,
+            }),
+            rgba,
+        ))
+    }
+
+    /// The image as `sora render -o sky.exr` writes it: linear sRGB in
+    /// radiance units (whiteLuminance 683), the sun in the header.
+    fn exr(&mut self, spec: &SkySpec, image: &ImageSpec) -> Outcome {
+        let (xyz, _) = self.render_xyz(spec, image)?;
+        let space = RgbColourSpace::Srgb;
+        let pixels = xyz
+            .iter()
+            .map(|c| {
+                let rgb = space.linear_rgb_from_xyz(*c);
+                [rgb.r as f32, rgb.g as f32, rgb.b as f32]
+            })
+            .collect();
+        let linear = LinearImage::new(
+            image.width as usize,
+            image.height as usize,
+            ChannelKind::Rgb,
+            pixels,
+        )
+        .map_err(|e| e.to_string())?;
+        let options =
+            ExrOptions {
+                white_luminance_cd_m2: Some(683.0),
+                text_attributes: vec![
+                (
+                    "units".into(),
+                    "radiance_w_m2_sr (XYZ of spectral radiance integrated over nm, no 683 lm/W)"
+                        .into(),
+                ),
+                ("sun_elevation_deg".into(), spec.sun_elevation_deg.to_string()),
+                ("sun_azimuth_deg".into(), spec.sun_azimuth_deg.to_string()),
+                ("sun_disc".into(), image.sun_disc.to_string()),
+            ],
+                ..ExrOptions::default()
+            };
+        let bytes = encode_exr(&linear, options).map_err(|e| e.to_string())?;
+        Ok((json!({ "bytes": bytes.len() }), bytes))
+    }
+
+    /// One direction's spectrum, as `sora spectrum` computes it (the
+    /// library's default resolution), and its single-scattering part. The
+    /// refined sky serves: a view's radiance does not use the image tables,
+    /// the only difference from the default, and its field is already
+    /// solved when the page has refined its image.
+    fn spectrum(&mut self, spec: &SkySpec, elevation_deg: f64, azimuth_deg: f64) -> Outcome {
+        let view = ViewDirection::new(elevation_deg, azimuth_deg).map_err(|e| e.to_string())?;
+        let radiance = self
+            .sky(spec, Quality::Refined)?
+            .radiance(view)
+            .map_err(|e| e.to_string())?
+            .radiance_w_m2_sr_nm;
+        let single = match spec.scattering {
+            ScatteringChoice::Single => radiance.clone(),
+            ScatteringChoice::Multiple => {
+                let single_spec = SkySpec {
+                    scattering: ScatteringChoice::Single,
+                    ..spec.clone()
+                };
+                let atmosphere = self.atmosphere(&spec.atmosphere)?;
+                build_sky(atmosphere, &single_spec, Quality::Refined)?
+                    .radiance(view)
+                    .map_err(|e| e.to_string())?
+                    .radiance_w_m2_sr_nm
+            }
+        };
+        let sky = self.sky(spec, Quality::Refined)?;
+        let to_xyz = SpectrumToXyz::new(sky.wavelengths(), Default::default());
+        let xyz = to_xyz.to_xyz(&radiance).map_err(|e| e.to_string())?;
+        let rgb = RgbColourSpace::Srgb.linear_rgb_from_xyz(xyz);
+        Ok((
+            json!({
+                "view_elevation_deg": view.elevation_deg(),
+                "view_azimuth_deg": view.azimuth_deg(),
+                "wavelength_nm": sky.wavelengths().wavelengths_nm().collect::<Vec<_>>(),
+                "radiance_w_m2_sr_nm": radiance.values(),
+                "single_scattering_w_m2_sr_nm": single.values(),
+                "xyz": [xyz.x, xyz.y, xyz.z],
+                "luminance_cd_m2": xyz.luminance_cd_m2(),
+                "chromaticity_xy": xyz.chromaticity_xy(),
+                "linear_srgb": [rgb.r, rgb.g, rgb.b],
+            }),
+            Vec::new(),
+        ))
+    }
+
+    /// The optical depths per species on the paper's wavelengths.
+    fn optics(&mut self, spec: &AtmosphereSpec) -> Outcome {
+        let grid = WavelengthGrid::paper();
+        let optics = self
+            .atmosphere(spec)?
+            .compute_optics(&grid)
+            .map_err(|e| e.to_string())?;
+        let species: Vec<Value> = optics
+            .species
+            .iter()
+            .map(|s| {
+                json!({
+                    "name": s.name,
+                    "kind": s.kind,
+                    "optical_depth": s.optical_depth_extinction().values(),
+                    "scattering_optical_depth": s.optical_depth_scattering().values(),
+                    "single_scattering_albedo": s.single_scattering_albedo().values(),
+                    "asymmetry_g": s.asymmetry_g().values(),
+                })
+            })
+            .collect();
+        Ok((
+            json!({
+                "wavelength_nm": grid.wavelengths_nm().collect::<Vec<_>>(),
+                "species": species,
+                "total_optical_depth": optics.total_optical_depth_extinction().values(),
+            }),
+            Vec::new(),
+        ))
+    }
+}
+
+/// The atmosphere file's text of `spec` (a preset's or the given one).
+fn atmosphere_text(spec: &AtmosphereSpec) -> Result<String, String> {
+    match (&spec.preset, &spec.toml) {
+        (Some(name), None) => sora::atmosphere::presets::find_preset(name)
+            .map(|p| p.toml.to_string())
+            .ok_or_else(|| {
+                let names: Vec<&str> = sora::atmosphere::PRESETS.iter().map(|p| p.name).collect();
+                format!("unknown preset '{name}' (known: {})", names.join(", "))
+            }),
+        (None, Some(text)) => Ok(text.clone()),
+        _ => Err("atmosphere: give exactly one of preset and toml".into()),
+    }
+}
+
+fn camera(image: &ImageSpec) -> Camera {
+    match image.camera {
+        CameraChoice::Fisheye => Camera::Fisheye,
+        CameraChoice::Equirect => Camera::Equirectangular,
+    }
+}
+
+/// A new sky of `spec` on `atmosphere` at `quality` (see [`Quality`]).
+pub fn build_sky(atmosphere: &Atmosphere, spec: &SkySpec, quality: Quality) -> Result<Sky, String> {
+    let (grid, settings, tables) = quality_settings(quality);
+    let scattering = match spec.scattering {
+        ScatteringChoice::Single => Scattering::Single,
+        ScatteringChoice::Multiple => Scattering::Multiple(settings),
+    };
+    Sky::builder(atmosphere)
+        .sun_deg(spec.sun_elevation_deg, spec.sun_azimuth_deg)
+        .observer_altitude_m(spec.observer_altitude_m)
+        .wavelengths(grid)
+        .scattering(scattering)
+        .table_size(tables)
+        .build()
+        .map_err(|e| e.to_string())
+}
+
+/// The wavelengths, multiple-scattering resolution and image tables of a
+/// quality. Full is the library's (and `sora render`'s) default. Preview
+/// is what a slider drag can afford in a browser: every 40 nm (11
+/// wavelengths, enough for the colour, not for the spectrum), 4 streams
+/// per hemisphere on 20 layers, sun-zenith steps twice as wide, and image
+/// tables a quarter as fine on each axis. Refined is Full with a sky-view
+/// table of 64 x 24 nodes instead of 128 x 48.
+pub fn quality_settings(
+    quality: Quality,
+) -> (WavelengthGrid, MultipleScatteringSettings, FastTableSize) {
+    match quality {
+        Quality::Full => (
+            WavelengthGrid::paper(),
+            MultipleScatteringSettings::default(),
+            FastTableSize::default(),
+        ),
+        Quality::Refined => (
+            WavelengthGrid::paper(),
+            MultipleScatteringSettings::default(),
+            FastTableSize {
+                sky_view_nodes: (64, 24),
+                ..FastTableSize::default()
+            },
+        ),
+        Quality::Preview => (
+            WavelengthGrid::new(380.0, 780.0, 40.0).expect("a valid grid"),
+            MultipleScatteringSettings {
+                streams_per_hemisphere: 4,
+                layers: 20,
+                sun_zenith_step_deg: 6.0,
+                sunset_sun_zenith_step_deg: 1.5,
+                view_ray_panels: 8,
+                table_view_zenith_nodes: 19,
+                table_azimuth_nodes: 10,
+            },
+            FastTableSize {
+                sun_column_nodes: (32, 64),
+                sky_view_nodes: (32, 16),
+            },
+        ),
+    }
+}
+
+fn to_value(value: &impl Serialize) -> Value {
+    serde_json::to_value(value).expect("plain data serialises")
+}

@@ -1,0 +1,191 @@
+//! The requests the page sends, as JSON (`"op"` names the request), and
+//! the shapes of their replies. Units are in the key names, as in the
+//! library and the CLI's JSON output; unknown keys are errors, so a typo in
+//! the page fails loudly instead of being ignored.
+
+use serde::Deserialize;
+
+/// One request (`{"op": "render", ...}`).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(tag = "op", rename_all = "snake_case")]
+pub enum Request {
+    /// The built-in atmospheres: `{"presets": [{"name", "description",
+    /// "toml"}]}`.
+    Presets,
+    /// The controls an atmosphere offers and their values in it (see
+    /// [`crate::atmosphere_controls::Controls`]), `null` where a control
+    /// does not apply (no ozone on Mars, a tabulated refractive index).
+    Controls {
+        /// The atmosphere.
+        atmosphere: AtmosphereSpec,
+    },
+    /// A sky image: JSON `{"width", "height", "wavelengths",
+    /// "brightest_cd_m2", "night", "exposure_scale"}`, bytes RGBA8
+    /// (sRGB display values, row-major, top row first).
+    Render {
+        /// The sky.
+        sky: SkySpec,
+        /// The image.
+        image: ImageSpec,
+    },
+    /// The same image as an OpenEXR file (linear sRGB primaries, radiance
+    /// units: 1.0 = the XYZ of 1 W m^-2 sr^-1 nm^-1, as `sora render`).
+    Exr {
+        /// The sky.
+        sky: SkySpec,
+        /// The image.
+        image: ImageSpec,
+    },
+    /// Which direction a pixel of an image sees: `{"elevation_deg",
+    /// "azimuth_deg"}`, or `null` values outside the fisheye's circle.
+    ViewAtPixel {
+        /// The image's camera and size.
+        image: ImageSpec,
+        /// Column, 0 at the left.
+        column: u32,
+        /// Row, 0 at the top.
+        row: u32,
+    },
+    /// One direction's spectrum at the library's default resolution (what
+    /// `sora spectrum` computes): the radiance of the sky's scattering and
+    /// of single scattering alone, its XYZ, luminance, chromaticity and
+    /// display colour.
+    Spectrum {
+        /// The sky.
+        sky: SkySpec,
+        /// Degrees above the horizon.
+        view_elevation_deg: f64,
+        /// Degrees clockwise from north.
+        view_azimuth_deg: f64,
+    },
+    /// The atmosphere file with the controls written in: `{"toml"}` (what
+    /// `sora --atmosphere` needs to reproduce the page's sky).
+    AtmosphereToml {
+        /// The atmosphere.
+        atmosphere: AtmosphereSpec,
+    },
+    /// The optical depths per species and wavelength (`sora atmosphere
+    /// show`'s numbers).
+    Optics {
+        /// The atmosphere.
+        atmosphere: AtmosphereSpec,
+    },
+}
+
+/// An atmosphere: a preset or a file's text, with the page's controls
+/// applied on top (each `None` keeps the atmosphere's own value).
+#[derive(Debug, Clone, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct AtmosphereSpec {
+    /// A built-in atmosphere's name.
+    #[serde(default)]
+    pub preset: Option<String>,
+    /// An atmosphere file's text (TOML), instead of a preset.
+    #[serde(default)]
+    pub toml: Option<String>,
+    /// The first aerosol's column optical depth at its reference wavelength.
+    #[serde(default)]
+    pub aerosol_optical_depth: Option<f64>,
+    /// Its log-normal number median radius, micrometres.
+    #[serde(default)]
+    pub aerosol_median_radius_um: Option<f64>,
+    /// Its log-normal geometric standard deviation (> 1).
+    #[serde(default)]
+    pub aerosol_geometric_std_dev: Option<f64>,
+    /// Its refractive index's imaginary part (absorption).
+    #[serde(default)]
+    pub aerosol_imaginary_index: Option<f64>,
+    /// The ozone column, Dobson units.
+    #[serde(default)]
+    pub ozone_column_du: Option<f64>,
+    /// A constant Lambertian ground albedo (0..1), as `--ground-albedo`.
+    #[serde(default)]
+    pub ground_albedo: Option<f64>,
+}
+
+/// Which orders of scattering.
+#[derive(Debug, Clone, Copy, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum ScatteringChoice {
+    /// The sun's light scattered once (the paper's model).
+    Single,
+    /// All orders (the default, as in the CLI).
+    #[default]
+    Multiple,
+}
+
+/// A sky: atmosphere, sun, eye and physics.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SkySpec {
+    /// The atmosphere.
+    pub atmosphere: AtmosphereSpec,
+    /// Sun elevation, degrees (-90..90).
+    pub sun_elevation_deg: f64,
+    /// Sun azimuth clockwise from north, degrees.
+    #[serde(default = "default_sun_azimuth_deg")]
+    pub sun_azimuth_deg: f64,
+    /// Height of the eye above the ground, metres.
+    #[serde(default)]
+    pub observer_altitude_m: f64,
+    /// Single or multiple scattering.
+    #[serde(default)]
+    pub scattering: ScatteringChoice,
+}
+
+fn default_sun_azimuth_deg() -> f64 {
+    180.0
+}
+
+/// A camera projection.
+#[derive(Debug, Clone, Copy, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum CameraChoice {
+    /// The whole sky in a disc, zenith at the centre, north up, east left.
+    #[default]
+    Fisheye,
+    /// A 360 x 180 degree panorama, north at the centre.
+    Equirect,
+}
+
+/// How finely an image is computed.
+#[derive(Debug, Clone, Copy, Default, Deserialize, PartialEq, Eq, Hash)]
+#[serde(rename_all = "snake_case")]
+pub enum Quality {
+    /// What a slider drag shows at once: every 40 nm, a coarse
+    /// multiple-scattering field and small image tables.
+    Preview,
+    /// What the page refines to: the library's defaults but a sky-view
+    /// table half as fine on each axis (enough for images up to 512 pixels
+    /// across).
+    Refined,
+    /// The library's defaults, as `sora render`.
+    #[default]
+    Full,
+}
+
+/// An image: camera, size, quality, exposure.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ImageSpec {
+    /// The projection.
+    #[serde(default)]
+    pub camera: CameraChoice,
+    /// Pixels across.
+    pub width: u32,
+    /// Pixels down.
+    pub height: u32,
+    /// Preview or full.
+    #[serde(default)]
+    pub quality: Quality,
+    /// A fixed exposure value at ISO 100 (`--ev100`); `None`: auto exposure.
+    #[serde(default)]
+    pub ev100: Option<f64>,
+    /// Draw the sun's disc.
+    #[serde(default = "default_true")]
+    pub sun_disc: bool,
+}
+
+fn default_true() -> bool {
+    true
+}

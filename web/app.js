@@ -1,0 +1,407 @@
+// The sora sky explorer: controls, the sky image, a direction's spectrum
+// and the optical depths, all computed by the sora library in a Web Worker
+// (worker.js, sora_web.wasm). Plain ES module, no dependencies.
+//
+// Progressive rendering: every change asks for a 128-pixel preview (coarse
+// tables, every 40 nm), then, if nothing changed meanwhile, a 256-pixel
+// refinement at the library's resolution. Changes that arrive while the
+// engine is busy are coalesced: only the latest state is computed.
+//
+// window.soraExplorer exposes the state the browser test reads (timings,
+// the last spectrum, counts); it is not an API.
+
+const $ = (id) => document.getElementById(id);
+
+// ---- the engine -----------------------------------------------------------
+const worker = new Worker(new URL('./worker.js', import.meta.url), { type: 'module' });
+let nextId = 1;
+const pending = new Map();
+let resolveReady;
+const ready = new Promise((resolve) => { resolveReady = resolve; });
+
+worker.onmessage = (event) => {
+  const message = event.data;
+  if (message.id === 0) {
+    if (message.ready) resolveReady();
+    else showError(message.json.error);
+    return;
+  }
+  pending.get(message.id)(message);
+  pending.delete(message.id);
+};
+
+function engine(request) {
+  return new Promise((resolve) => {
+    const id = nextId++;
+    pending.set(id, resolve);
+    worker.postMessage({ id, request });
+  });
+}
+
+// ---- state ----------------------------------------------------------------
+// Each atmosphere control: element id, key of the engine's AtmosphereSpec
+// (and of its Controls reply).
+const ATMOSPHERE_CONTROLS = [
+  ['aerosol-optical-depth', 'aerosol_optical_depth'],
+  ['aerosol-median-radius', 'aerosol_median_radius_um'],
+  ['aerosol-width', 'aerosol_geometric_std_dev'],
+  ['aerosol-k', 'aerosol_imaginary_index'],
+  ['ozone', 'ozone_column_du'],
+  ['ground-albedo', 'ground_albedo'],
+];
+const SKY_CONTROLS = ['sun-elevation', 'sun-azimuth', 'observer-altitude', 'ev100'];
+
+const explorer = {
+  atmosphere: { preset: 'earth-clear' }, // preset or {toml}, without the controls
+  atmosphereLabel: 'earth-clear',
+  defaults: {}, // the atmosphere's own control values
+  overrides: {}, // controls the user changed
+  view: null, // {elevation_deg, azimuth_deg} of the last click
+  lastSpectrum: null,
+  stats: { renders: 0, previews: 0, refinements: 0, lastPreview: null, lastRefinement: null, errors: 0 },
+  lastError: null,
+  busy: false,
+};
+window.soraExplorer = explorer;
+
+function atmosphereSpec() {
+  return { ...explorer.atmosphere, ...explorer.overrides };
+}
+
+function number(id) {
+  return Number.parseFloat($(`${id}-value`).value);
+}
+
+function skySpec() {
+  return {
+    atmosphere: atmosphereSpec(),
+    sun_elevation_deg: number('sun-elevation'),
+    sun_azimuth_deg: number('sun-azimuth'),
+    observer_altitude_m: number('observer-altitude'),
+    scattering: $('scattering').value,
+  };
+}
+
+function imageSpec(quality) {
+  const side = quality === 'preview' ? 128 : 256;
+  const panorama = $('camera').value === 'equirect';
+  const spec = {
+    camera: $('camera').value,
+    width: panorama ? 2 * side : side,
+    height: side,
+    quality,
+  };
+  if (!$('auto-exposure').checked) spec.ev100 = number('ev100');
+  return spec;
+}
+
+// ---- messages -------------------------------------------------------------
+function showError(text) {
+  explorer.lastError = text;
+  explorer.stats.errors += 1;
+  $('message').textContent = text;
+  $('message').hidden = false;
+}
+
+function clearError() {
+  $('message').hidden = true;
+  $('message').textContent = '';
+}
+
+function status(text) {
+  $('status').textContent = text;
+}
+
+// ---- rendering ------------------------------------------------------------
+let dirty = false;
+let changedAt = 0;
+
+function changed() {
+  dirty = true;
+  changedAt = performance.now();
+  pump();
+}
+
+async function pump() {
+  if (explorer.busy || !dirty) return;
+  explorer.busy = true;
+  dirty = false;
+  const started = changedAt;
+  const sky = skySpec();
+  try {
+    const preview = await engine({ op: 'render', sky, image: imageSpec('preview') });
+    if (!preview.ok) {
+      showError(preview.json.error);
+      return;
+    }
+    clearError();
+    draw(preview);
+    explorer.stats.previews += 1;
+    explorer.stats.lastPreview = { ms: performance.now() - started, engineMs: preview.ms, sky, width: preview.json.width };
+    status(describe('preview', preview));
+    if (dirty) return; // a newer state waits: preview it first
+    const refined = await engine({ op: 'render', sky, image: imageSpec('refined') });
+    if (!refined.ok) {
+      showError(refined.json.error);
+      return;
+    }
+    if (dirty) return; // stale: the preview of the newer state comes next
+    draw(refined);
+    explorer.stats.refinements += 1;
+    explorer.stats.lastRefinement = { ms: performance.now() - started, engineMs: refined.ms, sky, width: refined.json.width };
+    status(describe('refined', refined));
+    explorer.shownSky = sky;
+    if (explorer.view) await showSpectrum(explorer.view);
+  } finally {
+    explorer.busy = false;
+    explorer.stats.renders += 1;
+    if (dirty) pump();
+  }
+}
+
+function describe(stage, reply) {
+  const { width, height, wavelengths, night, night_floor_cd_m2: floor } = reply.json;
+  const night_note = night ? ` — night: the whole sky is darker than ${floor} cd/m² (no airglow or stars in the model), shown black` : '';
+  return `${stage} ${width}×${height}, ${wavelengths} wavelengths: ${reply.ms.toFixed(0)} ms${night_note}`;
+}
+
+function draw(reply) {
+  const { width, height } = reply.json;
+  const canvas = $('sky');
+  canvas.width = width;
+  canvas.height = height;
+  canvas.style.height = `${(512 * height) / width}px`;
+  const pixels = new ImageData(new Uint8ClampedArray(reply.bytes), width, height);
+  canvas.getContext('2d').putImageData(pixels, 0, 0);
+  explorer.imageSpec = { ...imageSpec('refined'), width, height };
+}
+
+// ---- spectrum -------------------------------------------------------------
+async function showSpectrum(view) {
+  const reply = await engine({
+    op: 'spectrum',
+    sky: skySpec(),
+    view_elevation_deg: view.elevation_deg,
+    view_azimuth_deg: view.azimuth_deg,
+  });
+  if (!reply.ok) {
+    showError(reply.json.error);
+    return;
+  }
+  explorer.lastSpectrum = { ...reply.json, sky: skySpec() };
+  $('download-csv').disabled = false;
+  $('direction').textContent = `elevation ${view.elevation_deg.toFixed(1)}°, azimuth ${view.azimuth_deg.toFixed(1)}°`;
+  plotSpectrum(reply.json);
+  const [r, g, b] = reply.json.linear_srgb;
+  const peak = Math.max(r, g, b, 1e-300);
+  const encode = (c) => {
+    const v = Math.min(Math.max(c / peak, 0), 1);
+    return Math.round(255 * (v <= 0.0031308 ? 12.92 * v : 1.055 * v ** (1 / 2.4) - 0.055));
+  };
+  $('swatch').style.background = `rgb(${encode(r)}, ${encode(g)}, ${encode(b)})`;
+  const xy = reply.json.chromaticity_xy;
+  $('colour-text').textContent = `${reply.json.luminance_cd_m2.toPrecision(4)} cd/m²` +
+    (xy ? `, chromaticity x ${xy[0].toFixed(4)}, y ${xy[1].toFixed(4)}` : '');
+}
+
+function plotSpectrum(spectrum) {
+  const canvas = $('plot');
+  const context = canvas.getContext('2d');
+  const { width, height } = canvas;
+  const margin = { left: 62, right: 10, top: 10, bottom: 34 };
+  context.clearRect(0, 0, width, height);
+  const wavelengths = spectrum.wavelength_nm;
+  const series = [
+    { values: spectrum.radiance_w_m2_sr_nm, colour: '#7cf', label: spectrum.single_scattering_w_m2_sr_nm === spectrum.radiance_w_m2_sr_nm ? 'radiance' : 'all orders' },
+    { values: spectrum.single_scattering_w_m2_sr_nm, colour: '#fa6', label: 'single scattering' },
+  ];
+  const top = Math.max(...series.flatMap((s) => s.values), 1e-300) * 1.05;
+  const x = (nm) => margin.left + ((nm - wavelengths[0]) / (wavelengths.at(-1) - wavelengths[0])) * (width - margin.left - margin.right);
+  const y = (v) => height - margin.bottom - (v / top) * (height - margin.top - margin.bottom);
+  context.strokeStyle = '#666';
+  context.fillStyle = '#bbb';
+  context.font = '11px system-ui';
+  context.beginPath();
+  context.moveTo(margin.left, margin.top);
+  context.lineTo(margin.left, height - margin.bottom);
+  context.lineTo(width - margin.right, height - margin.bottom);
+  context.stroke();
+  for (let nm = 400; nm <= 780; nm += 100) {
+    context.fillText(String(nm), x(nm) - 10, height - margin.bottom + 14);
+  }
+  context.fillText('wavelength, nm', width / 2 - 30, height - 4);
+  for (let k = 0; k <= 4; k += 1) {
+    const v = (top * k) / 4;
+    context.fillText(v.toExponential(1), 4, y(v) + 4);
+  }
+  context.save();
+  context.translate(10, height / 2 + 40);
+  context.restore();
+  context.fillText('W m⁻² sr⁻¹ nm⁻¹', margin.left + 6, margin.top + 10);
+  series.forEach((s, k) => {
+    context.strokeStyle = s.colour;
+    context.lineWidth = 2;
+    context.beginPath();
+    s.values.forEach((v, i) => (i ? context.lineTo(x(wavelengths[i]), y(v)) : context.moveTo(x(wavelengths[i]), y(v))));
+    context.stroke();
+    context.fillStyle = s.colour;
+    context.fillText(s.label, width - 120, margin.top + 14 + 14 * k);
+  });
+}
+
+// ---- atmosphere -----------------------------------------------------------
+async function setAtmosphere(atmosphere, label) {
+  const reply = await engine({ op: 'controls', atmosphere });
+  if (!reply.ok) {
+    showError(reply.json.error);
+    return false;
+  }
+  const optics = await engine({ op: 'optics', atmosphere });
+  if (!optics.ok) {
+    showError(optics.json.error);
+    return false;
+  }
+  explorer.atmosphere = atmosphere;
+  explorer.atmosphereLabel = label;
+  explorer.defaults = reply.json;
+  explorer.overrides = {};
+  $('atmosphere-name').textContent = label;
+  for (const [id, key] of ATMOSPHERE_CONTROLS) {
+    const value = reply.json[key];
+    const usable = value !== null && value !== undefined;
+    $(id).disabled = !usable;
+    $(`${id}-value`).disabled = !usable;
+    $(id).value = usable ? value : $(id).min;
+    $(`${id}-value`).value = usable ? value : '';
+  }
+  const reference = reply.json.aerosol_reference_wavelength_nm;
+  $('aerosol-reference').textContent = reference ? `at ${reference} nm` : '';
+  showOptics(optics.json);
+  clearError();
+  changed();
+  return true;
+}
+
+function showOptics(optics) {
+  const columns = [400, 500, 600, 700].map((nm) => optics.wavelength_nm.indexOf(nm));
+  const at500 = optics.wavelength_nm.indexOf(500);
+  const rows = optics.species.map((s) => `<tr><td>${escape(s.name)} <span class="note">${s.kind}</span></td>${columns.map((i) => `<td>${s.optical_depth[i].toPrecision(3)}</td>`).join('')}<td>${s.single_scattering_albedo[at500].toFixed(3)}</td><td>${s.asymmetry_g[at500].toFixed(3)}</td></tr>`);
+  const total = `<tr><th>total</th>${columns.map((i) => `<th>${optics.total_optical_depth[i].toPrecision(3)}</th>`).join('')}<th></th><th></th></tr>`;
+  $('optics').innerHTML = `<tr><th>species</th><th>τ 400 nm</th><th>500</th><th>600</th><th>700</th><th>ω 500</th><th>g 500</th></tr>${rows.join('')}${total}`;
+}
+
+function escape(text) {
+  return text.replace(/[&<>"]/g, (c) => ({ '&': '&amp;', '<': '&lt;', '>': '&gt;', '"': '&quot;' })[c]);
+}
+
+async function loadAtmosphereFile(file) {
+  const text = await file.text();
+  await setAtmosphere({ toml: text }, file.name);
+}
+
+// ---- downloads ------------------------------------------------------------
+function download(blob, name) {
+  const link = document.createElement('a');
+  link.href = URL.createObjectURL(blob);
+  link.download = name;
+  link.click();
+  setTimeout(() => URL.revokeObjectURL(link.href), 10000);
+}
+
+function spectrumCsv(spectrum) {
+  const lines = ['wavelength_nm,radiance_w_m2_sr_nm,single_scattering_w_m2_sr_nm'];
+  spectrum.wavelength_nm.forEach((nm, i) => {
+    lines.push(`${nm},${spectrum.radiance_w_m2_sr_nm[i]},${spectrum.single_scattering_w_m2_sr_nm[i]}`);
+  });
+  return `${lines.join('\n')}\n`;
+}
+explorer.spectrumCsv = () => (explorer.lastSpectrum ? spectrumCsv(explorer.lastSpectrum) : null);
+
+// ---- wiring ---------------------------------------------------------------
+function linkSlider(id, onChange) {
+  const slider = $(id);
+  const field = $(`${id}-value`);
+  slider.addEventListener('input', () => {
+    field.value = slider.value;
+    onChange();
+  });
+  field.addEventListener('change', () => {
+    if (field.value !== '') slider.value = field.value;
+    onChange();
+  });
+}
+
+function atmosphereControlChanged() {
+  explorer.overrides = {};
+  for (const [id, key] of ATMOSPHERE_CONTROLS) {
+    const field = $(`${id}-value`);
+    if (field.disabled || field.value === '') continue;
+    const value = Number.parseFloat(field.value);
+    if (value !== explorer.defaults[key]) explorer.overrides[key] = Number.isNaN(value) ? field.value : value;
+  }
+  engine({ op: 'optics', atmosphere: atmosphereSpec() }).then((reply) => reply.ok && showOptics(reply.json));
+  changed();
+}
+
+async function start() {
+  for (const id of SKY_CONTROLS) linkSlider(id, changed);
+  for (const [id] of ATMOSPHERE_CONTROLS) linkSlider(id, atmosphereControlChanged);
+  for (const id of ['scattering', 'camera']) $(id).addEventListener('change', changed);
+  $('auto-exposure').addEventListener('change', () => {
+    $('ev100').disabled = $('auto-exposure').checked;
+    $('ev100-value').disabled = $('auto-exposure').checked;
+    changed();
+  });
+  $('preset').addEventListener('change', () => setAtmosphere({ preset: $('preset').value }, $('preset').value));
+  $('atmosphere-file').addEventListener('change', () => {
+    const [file] = $('atmosphere-file').files;
+    if (file) loadAtmosphereFile(file);
+  });
+  document.body.addEventListener('dragover', (event) => {
+    event.preventDefault();
+    document.body.classList.add('dragging');
+  });
+  document.body.addEventListener('dragleave', () => document.body.classList.remove('dragging'));
+  document.body.addEventListener('drop', (event) => {
+    event.preventDefault();
+    document.body.classList.remove('dragging');
+    const [file] = event.dataTransfer.files;
+    if (file) loadAtmosphereFile(file);
+  });
+  $('sky').addEventListener('click', async (event) => {
+    const canvas = $('sky');
+    const bounds = canvas.getBoundingClientRect();
+    const column = Math.floor(((event.clientX - bounds.left) / bounds.width) * canvas.width);
+    const row = Math.floor(((event.clientY - bounds.top) / bounds.height) * canvas.height);
+    const reply = await engine({ op: 'view_at_pixel', image: explorer.imageSpec, column, row });
+    if (!reply.ok) return showError(reply.json.error);
+    if (reply.json.elevation_deg === null) return status('outside the sky: click inside the circle');
+    explorer.view = reply.json;
+    await showSpectrum(explorer.view);
+  });
+  $('download-png').addEventListener('click', () => $('sky').toBlob((blob) => download(blob, 'sky.png'), 'image/png'));
+  $('download-exr').addEventListener('click', async () => {
+    const reply = await engine({ op: 'exr', sky: skySpec(), image: imageSpec('refined') });
+    if (!reply.ok) return showError(reply.json.error);
+    download(new Blob([reply.bytes], { type: 'image/x-exr' }), 'sky.exr');
+  });
+  $('download-csv').addEventListener('click', () => {
+    download(new Blob([spectrumCsv(explorer.lastSpectrum)], { type: 'text/csv' }), 'spectrum.csv');
+  });
+  $('download-toml').addEventListener('click', async () => {
+    const reply = await engine({ op: 'atmosphere_toml', atmosphere: atmosphereSpec() });
+    if (!reply.ok) return showError(reply.json.error);
+    download(new Blob([reply.json.toml], { type: 'text/plain' }), 'atmosphere.toml');
+  });
+
+  await ready;
+  const presets = await engine({ op: 'presets' });
+  for (const preset of presets.json.presets) {
+    const option = new Option(`${preset.name}: ${preset.description}`, preset.name);
+    $('preset').add(option);
+  }
+  $('preset').value = 'earth-clear';
+  await setAtmosphere({ preset: 'earth-clear' }, 'earth-clear');
+}
+
+start().catch((error) => showError(String(error.message || error)));

@@ -1,0 +1,179 @@
+// Browser test of the sky explorer: serves web/ on localhost, drives
+// Debian's headless Chromium with playwright-core, and checks that
+// - the page loads and draws a sky, and moving the sun slider changes it;
+// - a clicked direction's spectrum equals the native library's for the same
+//   inputs to 1e-9 relative: the same engine compiled natively (full
+//   precision) and `sora spectrum` (the CLI, 10 significant digits);
+// - bad input (an out-of-range value typed into a field, an atmosphere file
+//   that does not parse) shows the library's one-line error and keeps the
+//   previous sky;
+// - the console has no errors;
+// and reports the preview and refinement times after slider moves.
+//
+// Environment: SORA_CLI (default target/debug/sora), SORA_WEB_REQUEST
+// (default target/sora-web/debug/examples/request), CHROMIUM (default
+// /usr/bin/chromium), SORA_WEB_OUT (default target/web-test: screenshot and
+// report). Run: cd web/tests && npm ci && npm test
+
+import { createServer } from 'node:http';
+import { readFile, mkdir, writeFile } from 'node:fs/promises';
+import { execFileSync } from 'node:child_process';
+import { extname, join, resolve, dirname } from 'node:path';
+import { fileURLToPath } from 'node:url';
+import assert from 'node:assert/strict';
+import { chromium } from 'playwright-core';
+
+const here = dirname(fileURLToPath(import.meta.url));
+const root = resolve(here, '../..');
+const webRoot = resolve(here, '..');
+const cli = process.env.SORA_CLI || join(root, 'target/debug/sora');
+const nativeEngine = process.env.SORA_WEB_REQUEST || join(root, 'target/sora-web/debug/examples/request');
+const out = resolve(process.env.SORA_WEB_OUT || join(root, 'target/web-test'));
+const TOLERANCE = 1e-9;
+
+const TYPES = { '.html': 'text/html', '.js': 'text/javascript', '.css': 'text/css', '.wasm': 'application/wasm' };
+
+function serve() {
+  const server = createServer(async (request, response) => {
+    const path = new URL(request.url, 'http://localhost').pathname;
+    const file = resolve(webRoot, `.${path === '/' ? '/index.html' : path}`);
+    if (!file.startsWith(webRoot) || file.includes('/tests/')) {
+      response.writeHead(404).end();
+      return;
+    }
+    try {
+      const body = await readFile(file);
+      response.writeHead(200, { 'content-type': TYPES[extname(file)] || 'application/octet-stream' }).end(body);
+    } catch {
+      response.writeHead(404).end();
+    }
+  });
+  return new Promise((ok) => server.listen(0, '127.0.0.1', () => ok(server)));
+}
+
+function relativeDifference(a, b) {
+  return Math.abs(a - b) / Math.max(Math.abs(b), 1e-300);
+}
+
+function assertClose(actual, expected, what) {
+  assert.equal(actual.length, expected.length, `${what}: lengths`);
+  let worst = 0;
+  actual.forEach((value, i) => {
+    worst = Math.max(worst, relativeDifference(value, expected[i]));
+  });
+  assert.ok(worst <= TOLERANCE, `${what}: worst relative difference ${worst} > ${TOLERANCE}`);
+  return worst;
+}
+
+const server = await serve();
+const url = `http://127.0.0.1:${server.address().port}/`;
+const browser = await chromium.launch({
+  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
+  args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
+    '--disable-background-networking', '--disable-component-update', '--disable-sync'],
+});
+const report = { url, timings: [], checks: [] };
+const consoleErrors = [];
+try {
+  const page = await browser.newPage({ viewport: { width: 1320, height: 900 } });
+  page.on('console', (message) => {
+    if (message.type() === 'error') consoleErrors.push(message.text());
+  });
+  page.on('pageerror', (error) => consoleErrors.push(String(error)));
+  await page.goto(url);
+  await page.waitForFunction(() => window.soraExplorer?.stats.refinements >= 1, null, { timeout: 120000 });
+  const pixels = () => page.evaluate(() => document.getElementById('sky').toDataURL());
+  const before = await pixels();
+
+  // Move the sun slider (as a drag does: input events on the range), wait
+  // for the preview and the refinement of each position.
+  async function moveSun(elevation) {
+    const counts = await page.evaluate(() => ({ ...window.soraExplorer.stats }));
+    await page.evaluate((value) => {
+      const slider = document.getElementById('sun-elevation');
+      slider.value = String(value);
+      slider.dispatchEvent(new Event('input', { bubbles: true }));
+    }, elevation);
+    await page.waitForFunction((n) => window.soraExplorer.stats.refinements > n, counts.refinements, { timeout: 120000 });
+    const stats = await page.evaluate(() => window.soraExplorer.stats);
+    const timing = {
+      sun_elevation_deg: elevation,
+      preview_ms: stats.lastPreview.ms,
+      preview_engine_ms: stats.lastPreview.engineMs,
+      preview_width: stats.lastPreview.width,
+      refinement_ms: stats.lastRefinement.ms,
+      refinement_engine_ms: stats.lastRefinement.engineMs,
+      refinement_width: stats.lastRefinement.width,
+    };
+    report.timings.push(timing);
+    console.log(`sun ${elevation} deg: preview ${timing.preview_width} px in ${timing.preview_ms.toFixed(0)} ms, refinement ${timing.refinement_width} px in ${timing.refinement_ms.toFixed(0)} ms (from the slider's input event to the image drawn)`);
+  }
+  for (const elevation of [45, 20, 10, 5, 2]) await moveSun(elevation);
+  const after = await pixels();
+  assert.notEqual(after, before, 'the image changed after the sun moved');
+  report.checks.push('the image changes when the sun slider moves');
+
+  // Click a direction: its spectrum against the native engine and the CLI.
+  const box = await page.locator('#sky').boundingBox();
+  await page.mouse.click(box.x + box.width * 0.7, box.y + box.height * 0.35);
+  await page.waitForFunction(() => window.soraExplorer.lastSpectrum, null, { timeout: 60000 });
+  const spectrum = await page.evaluate(() => window.soraExplorer.lastSpectrum);
+  const native = JSON.parse(execFileSync(nativeEngine, {
+    input: JSON.stringify({
+      op: 'spectrum',
+      sky: spectrum.sky,
+      view_elevation_deg: spectrum.view_elevation_deg,
+      view_azimuth_deg: spectrum.view_azimuth_deg,
+    }),
+  }).toString());
+  const worstNative = assertClose(spectrum.radiance_w_m2_sr_nm, native.radiance_w_m2_sr_nm, 'radiance against the native engine');
+  assertClose(spectrum.single_scattering_w_m2_sr_nm, native.single_scattering_w_m2_sr_nm, 'single scattering against the native engine');
+  const sky = spectrum.sky;
+  assert.deepEqual(Object.keys(sky.atmosphere), ['preset'], 'the CLI comparison needs the preset unchanged');
+  const fromCli = JSON.parse(execFileSync(cli, ['spectrum', '--preset', sky.atmosphere.preset,
+    '--sun-elevation', String(sky.sun_elevation_deg), '--sun-azimuth', String(sky.sun_azimuth_deg),
+    '--observer-altitude-m', String(sky.observer_altitude_m),
+    '--view-elevation', String(spectrum.view_elevation_deg), '--view-azimuth', String(spectrum.view_azimuth_deg),
+    '--format', 'json']).toString());
+  const worstCli = assertClose(spectrum.radiance_w_m2_sr_nm, fromCli.radiance_w_m2_sr_nm, 'radiance against sora spectrum');
+  report.checks.push(`spectrum at elevation ${spectrum.view_elevation_deg.toFixed(3)}, azimuth ${spectrum.view_azimuth_deg.toFixed(3)} deg: worst relative difference ${worstNative.toExponential(2)} against the native engine, ${worstCli.toExponential(2)} against sora spectrum (10 digits)`);
+  console.log(report.checks.at(-1));
+  const csv = await page.evaluate(() => window.soraExplorer.spectrumCsv());
+  assert.match(csv, /^wavelength_nm,radiance_w_m2_sr_nm,single_scattering_w_m2_sr_nm\n380,/);
+
+  await mkdir(out, { recursive: true });
+  const screenshot = join(out, 'explorer.png');
+  await page.screenshot({ path: screenshot });
+
+  // Bad input: an out-of-range optical depth typed into its field.
+  const shown = await pixels();
+  const errorsBefore = await page.evaluate(() => window.soraExplorer.stats.errors);
+  await page.fill('#aerosol-optical-depth-value', '-1');
+  await page.dispatchEvent('#aerosol-optical-depth-value', 'change');
+  await page.waitForFunction((n) => window.soraExplorer.stats.errors > n, errorsBefore, { timeout: 60000 });
+  const typedError = await page.textContent('#message');
+  assert.match(typedError, /optical_depth.*-1.*out of range/, `typed error: ${typedError}`);
+  assert.equal(typedError.split('\n').length, 1, 'one line');
+  assert.equal(await pixels(), shown, 'the previous sky stays after a bad value');
+  report.checks.push(`a typed optical depth of -1 shows: ${typedError}`);
+  await page.fill('#aerosol-optical-depth-value', '0.1');
+  await page.dispatchEvent('#aerosol-optical-depth-value', 'change');
+
+  // Bad input: an atmosphere file that does not parse.
+  const errorsBeforeFile = await page.evaluate(() => window.soraExplorer.stats.errors);
+  await page.setInputFiles('#atmosphere-file', { name: 'broken.toml', mimeType: 'text/plain', buffer: Buffer.from('name = 3\n[planet\n') });
+  await page.waitForFunction((n) => window.soraExplorer.stats.errors > n, errorsBeforeFile, { timeout: 60000 });
+  const fileError = await page.textContent('#message');
+  assert.match(fileError, /atmosphere file/, `file error: ${fileError}`);
+  assert.equal(await page.evaluate(() => window.soraExplorer.atmosphereLabel), 'earth-clear', 'the previous atmosphere stays');
+  report.checks.push(`a broken atmosphere file shows: ${fileError}`);
+
+  assert.deepEqual(consoleErrors, [], 'no errors in the console');
+  report.checks.push('no errors in the console');
+  report.screenshot = screenshot;
+  await writeFile(join(out, 'report.json'), `${JSON.stringify(report, null, 2)}\n`);
+  console.log(`explorer test passed (${report.checks.length} checks); screenshot: ${screenshot}; report: ${join(out, 'report.json')}`);
+} finally {
+  await browser.close();
+  server.close();
+}
