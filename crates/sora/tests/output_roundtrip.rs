@@ -45,7 +45,7 @@ fn extreme_value_image(channel_kind: ChannelKind) -> LinearImage {
         [0, 1, 2].map(|channel| {
             let i = index + channel;
             specials[i % specials.len()]
-                * if (i / specials.len()).is_multiple_of(2) {
+                * if (i / specials.len()) % 2 == 0 {
                     1.0
                 } else {
                     0.5
@@ -63,7 +63,7 @@ fn half_range_image(channel_kind: ChannelKind) -> LinearImage {
             let i = (y * 6 + x) * 3 + channel;
             let exponent = (i % 31) as i32 - 14; // -14 ..= 16 but capped below
             let mantissa = 1.0 + (i as f32 * 0.618_034).fract() * 0.999;
-            let sign = if i.is_multiple_of(5) { -1.0 } else { 1.0 };
+            let sign = if i % 5 == 0 { -1.0 } else { 1.0 };
             (sign * mantissa * 2.0_f32.powi(exponent)).clamp(-65504.0, 65504.0)
         })
     })
