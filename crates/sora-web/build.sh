@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Builds the browser explorer's engine, web/sora_web.wasm, with Debian's
-# Rust 1.85 toolchain (packages rustc-web, cargo-web, rust-web-src, lld-19):
+# rustc-web toolchain (packages rustc-web, cargo-web, rust-web-src, lld-19;
+# Debian 12 has shipped 1.85 and, in its updates, 1.96; both work):
 # rustup's wasm32 standard library comes from the Rust project's servers,
 # which CI cannot reach, so the standard library is built from Debian's
 # rust-web-src (-Zbuild-std; RUSTC_BOOTSTRAP allows that flag on a stable
@@ -26,7 +27,7 @@ RUSTC=/usr/bin/rustc RUSTC_BOOTSTRAP=1 RUSTFLAGS="" \
 CARGO_TARGET_WASM32_UNKNOWN_UNKNOWN_LINKER=wasm-ld-19 \
 CARGO_TARGET_DIR="$root/target/sora-web-wasm" \
     /usr/bin/cargo build --release --locked --lib --target wasm32-unknown-unknown \
-    -Zbuild-std=std,panic_abort -Zbuild-std-features=panic_immediate_abort
+    -Zbuild-std=std,panic_abort
 wasm="$root/target/sora-web-wasm/wasm32-unknown-unknown/release/sora_web.wasm"
 install -m 644 "$wasm" "$root/web/sora_web.wasm.tmp"
 mv "$root/web/sora_web.wasm.tmp" "$root/web/sora_web.wasm"
