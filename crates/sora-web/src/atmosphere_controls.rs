@@ -45,7 +45,9 @@ const DEFAULT_REFERENCE_WAVELENGTH_NM: f64 = 550.0;
 
 /// The controls of the atmosphere file `text`.
 pub fn read_controls(text: &str) -> Result<Controls, String> {
-    let table: Table = text.parse().map_err(|e| format!("atmosphere file: {e}"))?;
+    let table: Table = text
+        .parse()
+        .map_err(|e: toml::de::Error| format!("atmosphere file: {}", e.message()))?;
     let mut controls = Controls {
         ground_albedo: table
             .get("planet")
@@ -104,7 +106,9 @@ pub fn apply_controls(text: &str, spec: &AtmosphereSpec) -> Result<String, Strin
     if !wants_aerosol && spec.ozone_column_du.is_none() {
         return Ok(text.to_string());
     }
-    let mut table: Table = text.parse().map_err(|e| format!("atmosphere file: {e}"))?;
+    let mut table: Table = text
+        .parse()
+        .map_err(|e: toml::de::Error| format!("atmosphere file: {}", e.message()))?;
     let species = table
         .get_mut("species")
         .and_then(Value::as_array_mut)
@@ -162,7 +166,9 @@ pub fn apply_controls(text: &str, spec: &AtmosphereSpec) -> Result<String, Strin
 /// `text` with the planet's ground albedo set to the constant `albedo`
 /// (for a downloaded file that reproduces what the page shows).
 pub fn set_ground_albedo(text: &str, albedo: f64) -> Result<String, String> {
-    let mut table: Table = text.parse().map_err(|e| format!("atmosphere file: {e}"))?;
+    let mut table: Table = text
+        .parse()
+        .map_err(|e: toml::de::Error| format!("atmosphere file: {}", e.message()))?;
     let planet = table
         .get_mut("planet")
         .and_then(Value::as_table_mut)
