@@ -55,6 +55,7 @@ const explorer = {
   atmosphere: { preset: 'earth-clear' }, // preset or {toml}, without the controls
   atmosphereLabel: 'earth-clear',
   defaults: {}, // the atmosphere's own control values
+  shown: {}, // those values as their fields show them (4 significant digits)
   overrides: {}, // controls the user changed
   view: null, // {elevation_deg, azimuth_deg} of the last click
   lastSpectrum: null,
@@ -161,7 +162,7 @@ async function pump() {
 
 function describe(stage, reply) {
   const { width, height, wavelengths, night, night_floor_cd_m2: floor } = reply.json;
-  const night_note = night ? ` — night: the whole sky is darker than ${floor} cd/m² (no airglow or stars in the model), shown black` : '';
+  const night_note = night ? ` — night: the whole sky is darker than ${floor.toExponential(0)} cd/m² (no airglow or stars in the model), shown black` : '';
   return `${stage} ${width}×${height}, ${wavelengths} wavelengths: ${reply.ms.toFixed(0)} ms${night_note}`;
 }
 
@@ -271,8 +272,10 @@ async function setAtmosphere(atmosphere, label) {
     const usable = value !== null && value !== undefined;
     $(id).disabled = !usable;
     $(`${id}-value`).disabled = !usable;
+    const text = usable ? String(Number(value.toPrecision(4))) : '';
+    explorer.shown[key] = text;
     $(id).value = usable ? value : $(id).min;
-    $(`${id}-value`).value = usable ? value : '';
+    $(`${id}-value`).value = text;
   }
   const reference = reply.json.aerosol_reference_wavelength_nm;
   $('aerosol-reference').textContent = reference ? `at ${reference} nm` : '';
@@ -335,9 +338,11 @@ function atmosphereControlChanged() {
   explorer.overrides = {};
   for (const [id, key] of ATMOSPHERE_CONTROLS) {
     const field = $(`${id}-value`);
-    if (field.disabled || field.value === '') continue;
+    // A field still showing the atmosphere's (rounded) value keeps the
+    // atmosphere's exact one.
+    if (field.disabled || field.value === '' || field.value === explorer.shown[key]) continue;
     const value = Number.parseFloat(field.value);
-    if (value !== explorer.defaults[key]) explorer.overrides[key] = Number.isNaN(value) ? field.value : value;
+    explorer.overrides[key] = Number.isNaN(value) ? field.value : value;
   }
   engine({ op: 'optics', atmosphere: atmosphereSpec() }).then((reply) => reply.ok && showOptics(reply.json));
   changed();

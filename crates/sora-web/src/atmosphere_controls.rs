@@ -21,7 +21,9 @@ use crate::request::AtmosphereSpec;
 pub struct Controls {
     /// The aerosol species' name.
     pub aerosol_name: Option<String>,
-    /// Its column optical depth at `aerosol_reference_wavelength_nm`.
+    /// Its column optical depth at `aerosol_reference_wavelength_nm` (from
+    /// the file; the engine computes it where the file gives a number
+    /// density).
     pub aerosol_optical_depth: Option<f64>,
     /// The wavelength of that optical depth, nm (550 when the file gives
     /// the aerosol as a number density).
@@ -41,7 +43,7 @@ pub struct Controls {
 
 /// The reference wavelength an optical-depth control uses for an aerosol
 /// that the file gives as a number density, nm.
-const DEFAULT_REFERENCE_WAVELENGTH_NM: f64 = 550.0;
+pub const DEFAULT_REFERENCE_WAVELENGTH_NM: f64 = 550.0;
 
 /// The controls of the atmosphere file `text`.
 pub fn read_controls(text: &str) -> Result<Controls, String> {

@@ -17,7 +17,9 @@ use sora::{
     ViewDirection, WavelengthGrid,
 };
 
-use crate::atmosphere_controls::{apply_controls, read_controls, set_ground_albedo};
+use crate::atmosphere_controls::{
+    DEFAULT_REFERENCE_WAVELENGTH_NM, apply_controls, read_controls, set_ground_albedo,
+};
 use crate::request::{
     AtmosphereSpec, CameraChoice, ImageSpec, Quality, Request, ScatteringChoice, SkySpec,
 };
@@ -74,7 +76,18 @@ impl Engine {
                 Ok((json!({ "presets": presets }), Vec::new()))
             }
             Request::Controls { atmosphere } => {
-                let controls = read_controls(&atmosphere_text(atmosphere)?)?;
+                let text = atmosphere_text(atmosphere)?;
+                let mut controls = read_controls(&text)?;
+                if controls.aerosol_optical_depth.is_none() {
+                    controls.aerosol_optical_depth = aerosol_optical_depth_at_reference(
+                        &Atmosphere::from_toml_str(&text).map_err(|e| e.to_string())?,
+                        controls.aerosol_name.as_deref(),
+                    )?;
+                    if controls.aerosol_optical_depth.is_some() {
+                        controls.aerosol_reference_wavelength_nm =
+                            Some(DEFAULT_REFERENCE_WAVELENGTH_NM);
+                    }
+                }
                 Ok((to_value(&controls), Vec::new()))
             }
             Request::Render { sky, image } => self.render(sky, image),
@@ -339,6 +352,32 @@ impl Engine {
     }
 }
 
+/// The extinction optical depth at the reference wavelength of the species
+/// named `aerosol` (first of that name), for an aerosol the file gives as a
+/// number density: what its optical-depth control starts from.
+fn aerosol_optical_depth_at_reference(
+    atmosphere: &Atmosphere,
+    aerosol: Option<&str>,
+) -> Result<Option<f64>, String> {
+    let Some(name) = aerosol else {
+        return Ok(None);
+    };
+    let grid = WavelengthGrid::new(
+        DEFAULT_REFERENCE_WAVELENGTH_NM,
+        DEFAULT_REFERENCE_WAVELENGTH_NM,
+        1.0,
+    )
+    .map_err(|e| e.to_string())?;
+    let optics = atmosphere
+        .compute_optics(&grid)
+        .map_err(|e| e.to_string())?;
+    Ok(optics
+        .species
+        .iter()
+        .find(|s| s.name == name)
+        .map(|s| s.optical_depth_extinction().values()[0]))
+}
+
 /// The atmosphere file's text of `spec` (a preset's or the given one),
 /// checked by the library first, so that a broken file gets the library's
 /// one-line error (with its line number) before the controls read it.
@@ -513,6 +552,38 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn an_aerosol_given_as_a_number_density_gets_its_optical_depth_control() {
+        let mut engine = Engine::default();
+        let (controls, _) = request(
+            &mut engine,
+            r#"{"op": "controls", "atmosphere": {"preset": "paper-mars"}}"#,
+        );
+        let tau = controls["aerosol_optical_depth"].as_f64().unwrap();
+        assert_eq!(controls["aerosol_reference_wavelength_nm"], 550.0);
+        // Setting the control to that value gives the same optics at 550 nm.
+        let (optics, _) = request(
+            &mut engine,
+            &format!(
+                r#"{{"op": "optics", "atmosphere": {{"preset": "paper-mars", "aerosol_optical_depth": {tau}}}}}"#
+            ),
+        );
+        let (original, _) = request(
+            &mut engine,
+            r#"{"op": "optics", "atmosphere": {"preset": "paper-mars"}}"#,
+        );
+        let at_550 = |o: &Value| {
+            let i = o["wavelength_nm"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .position(|w| w == 540.0)
+                .unwrap();
+            o["species"][1]["optical_depth"][i].as_f64().unwrap()
+        };
+        assert!((at_550(&optics) / at_550(&original) - 1.0).abs() < 1e-12);
     }
 
     #[test]
