@@ -94,6 +94,24 @@
 //!    The collision is a scattering event; absorption is in the weight:
 //!    beta_lambda *= T_lambda(t) / pdf(t), and sigma_s (not sigma_t) enters
 //!    below.
+//!    **Sunlit parts** (twilight): where the planet's shadow cuts the
+//!    segment (`sunlit_parts`, the half-cylinder behind the planet, in
+//!    closed form), a share `SUNLIT_SHARE` of the free paths is drawn from
+//!    the same model density restricted to the sunlit parts and
+//!    renormalised there (per wavelength k its mass M_k, the mixture over
+//!    the wavelengths with M_k > 0), and every weight uses the two-part
+//!    mixture (1 - share) p(t) + share p_lit(t). After sunset most of the
+//!    model's collisions fall in the shadow near the ground, where the sun
+//!    is not seen and the path must find the sunlit layer by chance; the
+//!    second part puts half of them where next-event estimation scores.
+//!    Unbiased as any mixture is (test: against share 0 at sun -6 and -9
+//!    degrees); measured at 40 000 paths, earth-clear, the worst relative
+//!    standard error at the zenith 0.147 -> 0.075 (sun -6) and 0.91 ->
+//!    0.36 (sun -9), 10 degrees above the sunward horizon 0.082 -> 0.044
+//!    and 0.39 -> 0.10. Segments wholly lit or wholly in shadow are
+//!    sampled as before, with the same random numbers: a daylight path
+//!    comes out bit for bit as before unless it wanders into the night
+//!    side.
 //! 3. **NEE toward the sun** at every scattering vertex:
 //!    beta_lambda sum_j sigma_s,j p_j(w.s) E T_sun, with T_sun from the
 //!    exact column toward the sun (the same Gauss-Legendre integral as the
@@ -228,6 +246,12 @@ pub const MAX_SAMPLES: u64 = 1_000_000_000;
 /// relative to 0.5: 1.0 -> 1.1-1.25, 0.5 -> 1, 0.3 -> 1.1, 0.1 -> 1.3.
 pub(crate) const RUSSIAN_ROULETTE_THRESHOLD: f64 = 0.5;
 
+/// The share of free paths drawn from the sunlit part of a segment that
+/// the planet's shadow cuts (module docs, step 2): half, so that neither
+/// the lit nor the shadowed part is ever sampled at less than half its
+/// model density.
+const SUNLIT_SHARE: f64 = 0.5;
+
 /// A spectrum estimated by Monte Carlo: the sample mean and its standard
 /// error per wavelength (same unit as the mean).
 #[derive(Debug, Clone, PartialEq)]
@@ -323,6 +347,10 @@ pub struct PathTracer<'a> {
     /// Whether each path carries the Mueller matrix of its scatterings
     /// (the Stokes vector of the light, `stokes.rs`).
     polarised: bool,
+    /// The share of free paths drawn from a segment's sunlit part where
+    /// the planet's shadow cuts it ([`SUNLIT_SHARE`]; 0 turns it off, for
+    /// the tests that compare the two samplers).
+    sunlit_share: f64,
 }
 
 /// Per-chunk work space (no allocation per path).
@@ -352,6 +380,9 @@ struct PathScratch {
     densities: Vec<f64>,
     /// tau_lambda of the whole current segment.
     segment_optical_depth: Vec<f64>,
+    /// Per wavelength: the model's probability of a collision in the
+    /// segment's sunlit parts.
+    sunlit_mass: Vec<f64>,
     /// sigma_s(lambda) at the current vertex, m^-1.
     scattering_coefficient: Vec<f64>,
     /// sum_j sigma_s,j p_j at one angle, m^-1 sr^-1.
@@ -492,6 +523,7 @@ impl<'a> PathTracer<'a> {
             black_ground: optics.ground_albedo.values().iter().all(|a| *a <= 0.0),
             running_integral: running_integral_matrix(),
             polarised: false,
+            sunlit_share: SUNLIT_SHARE,
         }
     }
 
@@ -668,6 +700,7 @@ impl<'a> PathTracer<'a> {
             sun_columns_m: vec![0.0; species],
             densities: vec![0.0; species],
             segment_optical_depth: vec![0.0; n],
+            sunlit_mass: vec![0.0; n],
             scattering_coefficient: vec![0.0; n],
             phase_term: vec![0.0; n],
             phase_values: vec![0.0; n],
@@ -945,45 +978,112 @@ impl<'a> PathTracer<'a> {
         if members == 0 {
             return passes;
         }
-        let pick = random.next_index(members);
-        let hero = if forced {
-            scratch
-                .segment_optical_depth
-                .iter()
-                .enumerate()
-                .filter(|(_, tau)| **tau > 0.0)
-                .nth(pick)
-                .map_or(0, |(i, _)| i)
+        // Where the planet's shadow cuts the segment, a share of the free
+        // paths comes from the model density restricted to the sunlit part.
+        let lit = sunlit_parts(
+            start,
+            direction,
+            length,
+            self.sun_direction,
+            self.ground_radius_m,
+        );
+        let lit_members = if self.sunlit_share > 0.0 && lit.is_partial(length) {
+            self.set_sunlit_masses(&lit, sampling_points, scratch)
         } else {
-            pick
+            0
         };
-        let u = random.next_f64();
-        let hero_total = scratch.segment_optical_depth[hero];
-        let target = if forced {
-            -(-u * -(-hero_total).exp_m1()).ln_1p()
+        // No wavelength sees any medium in the lit part: no component.
+        let share = if lit_members > 0 {
+            self.sunlit_share
         } else {
-            let target = -(-u).ln_1p();
-            if target >= hero_total {
-                // The ground: the mixture's probability of getting there
-                // under the model, and the exact transmittance.
-                let probability = scratch
+            0.0
+        };
+        let from_lit = share > 0.0 && random.next_f64() < share;
+        let (interval, fraction, distance_m) = if from_lit {
+            self.sample_sunlit_distance(&lit, lit_members, sampling_points, random, scratch)
+        } else {
+            let pick = random.next_index(members);
+            let hero = if forced {
+                scratch
                     .segment_optical_depth
                     .iter()
-                    .map(|tau| (-tau).exp())
-                    .sum::<f64>()
-                    / n as f64;
-                let whole = panels * species;
-                for i in 0..n {
-                    let tau =
-                        self.optical_depth(i, &scratch.panel_columns_m[whole..whole + species]);
-                    scratch.throughput[i] *= (-tau).exp() / probability;
+                    .enumerate()
+                    .filter(|(_, tau)| **tau > 0.0)
+                    .nth(pick)
+                    .map_or(0, |(i, _)| i)
+            } else {
+                pick
+            };
+            let u = random.next_f64();
+            let hero_total = scratch.segment_optical_depth[hero];
+            let target = if forced {
+                -(-u * -(-hero_total).exp_m1()).ln_1p()
+            } else {
+                let target = -(-u).ln_1p();
+                if target >= hero_total {
+                    // The ground: the mixture's probability of getting there
+                    // under the model, and the exact transmittance.
+                    let probability = (1.0 - share)
+                        * scratch
+                            .segment_optical_depth
+                            .iter()
+                            .map(|tau| (-tau).exp())
+                            .sum::<f64>()
+                        / n as f64;
+                    let whole = panels * species;
+                    for i in 0..n {
+                        let tau =
+                            self.optical_depth(i, &scratch.panel_columns_m[whole..whole + species]);
+                        scratch.throughput[i] *= (-tau).exp() / probability;
+                    }
+                    return FreePath::ReachesGround;
                 }
-                return FreePath::ReachesGround;
-            }
-            target
+                target
+            };
+            self.model_distance(hero, target, sampling_points, scratch)
         };
-        // The interval of the model where the hero's optical depth reaches
-        // the target (intervals where it does not grow are never chosen).
+        let mut density =
+            (1.0 - share) * self.model_density(interval, fraction, forced, members, scratch);
+        if share > 0.0 && lit.contains(distance_m) {
+            density += share * self.sunlit_density(interval, fraction, lit_members, scratch);
+        }
+        // Exact columns to the point: the panels before it plus a 4-point
+        // rule from the start of its panel.
+        let panel = interval / 5;
+        let panel_start = scratch.sampling_distances_m[5 * panel];
+        scratch
+            .point_columns_m
+            .copy_from_slice(&scratch.panel_columns_m[panel * species..(panel + 1) * species]);
+        let (centre, half) = (
+            0.5 * (panel_start + distance_m),
+            0.5 * (distance_m - panel_start),
+        );
+        for (x, w) in GAUSS_NODES.iter().zip(GAUSS_WEIGHTS) {
+            let altitude_m =
+                (start + direction * (centre + half * x)).length() - self.ground_radius_m;
+            for (column, profile) in scratch.point_columns_m.iter_mut().zip(&self.profiles) {
+                *column += half * w * profile.relative_density(altitude_m);
+            }
+        }
+        for i in 0..n {
+            let tau = self.optical_depth(i, &scratch.point_columns_m);
+            scratch.throughput[i] *= (-tau).exp() / density;
+        }
+        FreePath::Scatters { distance_m }
+    }
+
+    /// Where the hero's model optical depth reaches `target` along the
+    /// segment: the model's interval, the fraction across it, and the
+    /// distance, m (intervals where it does not grow are never chosen).
+    fn model_distance(
+        &self,
+        hero: usize,
+        target: f64,
+        sampling_points: usize,
+        scratch: &PathScratch,
+    ) -> (usize, f64, f64) {
+        let species = self.profiles.len();
+        let hero_total = scratch.segment_optical_depth[hero];
         let mut interval = sampling_points - 2;
         let (mut lower, mut upper) = (0.0, hero_total);
         let mut previous = 0.0;
@@ -1008,49 +1108,164 @@ impl<'a> PathTracer<'a> {
             scratch.sampling_distances_m[interval],
             scratch.sampling_distances_m[interval + 1],
         );
-        let distance_m = a + fraction * (b - a);
-        // The mixture density of the sampled distance, 1/m.
+        (interval, fraction, a + fraction * (b - a))
+    }
+
+    /// The model's interval and the fraction across it at `distance_m`.
+    fn locate_on_model(
+        &self,
+        distance_m: f64,
+        sampling_points: usize,
+        scratch: &PathScratch,
+    ) -> (usize, f64) {
+        let distances = &scratch.sampling_distances_m[..sampling_points];
+        let upper = distances.partition_point(|d| *d <= distance_m);
+        let interval = upper.clamp(1, sampling_points - 1) - 1;
+        let (a, b) = (distances[interval], distances[interval + 1]);
+        let fraction = if b > a {
+            ((distance_m - a) / (b - a)).clamp(0.0, 1.0)
+        } else {
+            0.5
+        };
+        (interval, fraction)
+    }
+
+    /// Wavelength `i`'s model optical depth and its slope (1/m) at
+    /// `fraction` across the model's `interval`.
+    fn model_optical_depth(
+        &self,
+        i: usize,
+        interval: usize,
+        fraction: f64,
+        scratch: &PathScratch,
+    ) -> (f64, f64) {
+        let species = self.profiles.len();
         let columns_a = &scratch.sampling_columns_m[interval * species..(interval + 1) * species];
         let columns_b =
             &scratch.sampling_columns_m[(interval + 1) * species..(interval + 2) * species];
+        let (tau_a, tau_b) = (
+            self.optical_depth(i, columns_a),
+            self.optical_depth(i, columns_b),
+        );
+        let width =
+            scratch.sampling_distances_m[interval + 1] - scratch.sampling_distances_m[interval];
+        (tau_a + fraction * (tau_b - tau_a), (tau_b - tau_a) / width)
+    }
+
+    /// The model's free-path density at `fraction` across `interval`, 1/m:
+    /// the mixture over the `members` wavelengths (those with some optical
+    /// depth when the collision is `forced`, and then normalised inside the
+    /// segment).
+    fn model_density(
+        &self,
+        interval: usize,
+        fraction: f64,
+        forced: bool,
+        members: usize,
+        scratch: &PathScratch,
+    ) -> f64 {
         let mut density_sum = 0.0;
-        for i in 0..n {
+        for i in 0..self.wavelengths {
             let total = scratch.segment_optical_depth[i];
             if forced && total <= 0.0 {
                 continue;
             }
-            let (tau_a, tau_b) = (
-                self.optical_depth(i, columns_a),
-                self.optical_depth(i, columns_b),
-            );
-            let slope = (tau_b - tau_a) / (b - a);
+            let (tau, slope) = self.model_optical_depth(i, interval, fraction, scratch);
             let normalisation = if forced { -(-total).exp_m1() } else { 1.0 };
-            density_sum += slope * (-(tau_a + fraction * (tau_b - tau_a))).exp() / normalisation;
+            density_sum += slope * (-tau).exp() / normalisation;
         }
-        let density = density_sum / members as f64;
-        // Exact columns to the point: the panels before it plus a 4-point
-        // rule from the start of its panel.
-        let panel = interval / 5;
-        let panel_start = scratch.sampling_distances_m[5 * panel];
-        scratch
-            .point_columns_m
-            .copy_from_slice(&scratch.panel_columns_m[panel * species..(panel + 1) * species]);
-        let (centre, half) = (
-            0.5 * (panel_start + distance_m),
-            0.5 * (distance_m - panel_start),
-        );
-        for (x, w) in GAUSS_NODES.iter().zip(GAUSS_WEIGHTS) {
-            let altitude_m =
-                (start + direction * (centre + half * x)).length() - self.ground_radius_m;
-            for (column, profile) in scratch.point_columns_m.iter_mut().zip(&self.profiles) {
-                *column += half * w * profile.relative_density(altitude_m);
+        density_sum / members as f64
+    }
+
+    /// Each wavelength's model probability of a collision in the sunlit
+    /// parts `lit` (the sum over them of exp(-tau(from)) - exp(-tau(to))),
+    /// into `scratch.sunlit_mass`; returns how many are positive.
+    fn set_sunlit_masses(
+        &self,
+        lit: &SunlitParts,
+        sampling_points: usize,
+        scratch: &mut PathScratch,
+    ) -> usize {
+        let mut members = 0;
+        for i in 0..self.wavelengths {
+            let mut mass = 0.0;
+            for &(from, to) in lit.parts() {
+                let (ia, fa) = self.locate_on_model(from, sampling_points, scratch);
+                let (ib, fb) = self.locate_on_model(to, sampling_points, scratch);
+                let (tau_a, _) = self.model_optical_depth(i, ia, fa, scratch);
+                let (tau_b, _) = self.model_optical_depth(i, ib, fb, scratch);
+                mass += (-tau_a).exp() - (-tau_b).exp();
+            }
+            scratch.sunlit_mass[i] = mass.max(0.0);
+            if scratch.sunlit_mass[i] > 0.0 {
+                members += 1;
             }
         }
-        for i in 0..n {
-            let tau = self.optical_depth(i, &scratch.point_columns_m);
-            scratch.throughput[i] *= (-tau).exp() / density;
+        members
+    }
+
+    /// Draws a distance from the model density restricted to the sunlit
+    /// parts: a wavelength with sunlit mass uniformly, then its model
+    /// density there, inverted in closed form as in step 2.
+    fn sample_sunlit_distance(
+        &self,
+        lit: &SunlitParts,
+        lit_members: usize,
+        sampling_points: usize,
+        random: &mut RandomStream,
+        scratch: &PathScratch,
+    ) -> (usize, f64, f64) {
+        let pick = random.next_index(lit_members);
+        let hero = scratch
+            .sunlit_mass
+            .iter()
+            .enumerate()
+            .filter(|(_, m)| **m > 0.0)
+            .nth(pick)
+            .map_or(0, |(i, _)| i);
+        let mut u = random.next_f64() * scratch.sunlit_mass[hero];
+        let parts = lit.parts();
+        for (k, &(from, to)) in parts.iter().enumerate() {
+            let (ia, fa) = self.locate_on_model(from, sampling_points, scratch);
+            let (ib, fb) = self.locate_on_model(to, sampling_points, scratch);
+            let (tau_a, _) = self.model_optical_depth(hero, ia, fa, scratch);
+            let (tau_b, _) = self.model_optical_depth(hero, ib, fb, scratch);
+            let mass = (-tau_a).exp() - (-tau_b).exp();
+            if u < mass || k + 1 == parts.len() {
+                // exp(-target) = exp(-tau_a) - u: target in [tau_a, tau_b].
+                let target = (tau_a - (-u * tau_a.exp()).ln_1p()).clamp(tau_a, tau_b);
+                let (_, _, distance) = self.model_distance(hero, target, sampling_points, scratch);
+                // Flat stretches of the model have no mass: a distance just
+                // outside the part is rounding, put back inside it.
+                let distance = distance.clamp(from, to);
+                let (interval, fraction) = self.locate_on_model(distance, sampling_points, scratch);
+                return (interval, fraction, distance);
+            }
+            u -= mass;
         }
-        FreePath::Scatters { distance_m }
+        unreachable!("sunlit parts are drawn only when there is one")
+    }
+
+    /// The model density restricted to the sunlit parts at `fraction`
+    /// across `interval` (a point inside them), 1/m: the mixture over the
+    /// `lit_members` wavelengths with sunlit mass.
+    fn sunlit_density(
+        &self,
+        interval: usize,
+        fraction: f64,
+        lit_members: usize,
+        scratch: &PathScratch,
+    ) -> f64 {
+        let mut density_sum = 0.0;
+        for i in 0..self.wavelengths {
+            let mass = scratch.sunlit_mass[i];
+            if mass <= 0.0 {
+                continue;
+            }
+            let (tau, slope) = self.model_optical_depth(i, interval, fraction, scratch);
+            density_sum += slope * (-tau).exp() / mass;
+        }
+        density_sum / lit_members as f64
     }
 
     /// Relative densities of every species at `position`, and the
@@ -1345,6 +1560,90 @@ impl<'a> PathTracer<'a> {
 /// ground reflects unpolarised light whatever reaches it, so only T's first
 /// column (the response to unpolarised light) remains, and any frame
 /// perpendicular to the new direction will do.
+/// The parts of a segment in sunlight: at most two intervals of distance
+/// (m) along it, outside the planet's shadow (the half-cylinder of the
+/// planet's radius behind it, for parallel rays: a point is in shadow when
+/// its path toward the sun meets the ground, as `ray_intersects_ground`
+/// tests).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct SunlitParts {
+    parts: [(f64, f64); 2],
+    count: usize,
+}
+
+impl SunlitParts {
+    fn parts(&self) -> &[(f64, f64)] {
+        &self.parts[..self.count]
+    }
+
+    /// Some of a segment of this `length` is lit and some is not.
+    fn is_partial(&self, length: f64) -> bool {
+        let lit: f64 = self.parts().iter().map(|(a, b)| b - a).sum();
+        lit > 0.0 && lit < length
+    }
+
+    fn contains(&self, distance_m: f64) -> bool {
+        self.parts()
+            .iter()
+            .any(|(a, b)| (*a..=*b).contains(&distance_m))
+    }
+}
+
+/// The sunlit parts of the segment `start + t direction`, t in 0..length,
+/// for the unit vector `sun`: with a = direction.s and b = start.s, a point
+/// is behind the planet where b + a t < 0, and within its radius R of the
+/// sun's axis where |p|^2 - (p.s)^2 = (1 - a^2) t^2 + 2 (start.direction -
+/// a b) t + |start|^2 - b^2 < R^2; in shadow where both hold.
+fn sunlit_parts(
+    start: Vector3,
+    direction: Vector3,
+    length: f64,
+    sun: Vector3,
+    ground_radius_m: f64,
+) -> SunlitParts {
+    let whole = SunlitParts {
+        parts: [(0.0, length), (0.0, 0.0)],
+        count: 1,
+    };
+    let (a, b) = (direction.dot(sun), start.dot(sun));
+    let qa = 1.0 - a * a;
+    let qb = start.dot(direction) - a * b;
+    let qc = start.dot(start) - b * b - ground_radius_m * ground_radius_m;
+    let discriminant = qb * qb - qa * qc;
+    if qa <= 0.0 || discriminant <= 0.0 {
+        return whole;
+    }
+    // The roots of qa t^2 + 2 qb t + qc, without cancellation.
+    let q = -(qb + qb.signum() * discriminant.sqrt());
+    let (x, y) = (q / qa, if q != 0.0 { qc / q } else { 0.0 });
+    let (t1, t2) = (x.min(y), x.max(y));
+    let (behind_from, behind_to) = if a > 0.0 {
+        (f64::NEG_INFINITY, -b / a)
+    } else if a < 0.0 {
+        (-b / a, f64::INFINITY)
+    } else if b < 0.0 {
+        (f64::NEG_INFINITY, f64::INFINITY)
+    } else {
+        return whole;
+    };
+    let shadow_from = t1.max(behind_from).max(0.0);
+    let shadow_to = t2.min(behind_to).min(length);
+    if shadow_from >= shadow_to {
+        return whole;
+    }
+    let mut parts = [(0.0, 0.0); 2];
+    let mut count = 0;
+    if shadow_from > 0.0 {
+        parts[count] = (0.0, shadow_from);
+        count += 1;
+    }
+    if shadow_to < length {
+        parts[count] = (shadow_to, length);
+        count += 1;
+    }
+    SunlitParts { parts, count }
+}
+
 fn reflect_depolarised(direction: Vector3, scratch: &mut PathScratch) {
     for t in &mut scratch.transfer {
         for row in t.iter_mut() {
@@ -1411,6 +1710,108 @@ mod tests {
             observation,
         )
         .unwrap()
+    }
+
+    /// The sunlit parts of random segments against the shadow test of the
+    /// sun columns (`ray_intersects_ground` at each point), at 2001 points
+    /// along each: every point agrees except within a step of a boundary.
+    #[test]
+    fn sunlit_parts_match_the_pointwise_shadow_test() {
+        let ground = 6_360e3;
+        let mut random = RandomStream::new(7, 0);
+        let mut partial = 0;
+        for _ in 0..2000 {
+            let unit = |random: &mut RandomStream| {
+                let z = 2.0 * random.next_f64() - 1.0;
+                let phi = 2.0 * PI * random.next_f64();
+                let r = (1.0 - z * z).sqrt();
+                Vector3::new(r * phi.cos(), r * phi.sin(), z)
+            };
+            let sun = unit(&mut random);
+            let start = unit(&mut random) * (ground + 100e3 * random.next_f64());
+            let direction = unit(&mut random);
+            let length = 2_000e3 * random.next_f64();
+            let lit = sunlit_parts(start, direction, length, sun, ground);
+            if lit.is_partial(length) {
+                partial += 1;
+            }
+            let step = length / 2000.0;
+            for k in 0..=2000 {
+                let t = k as f64 * step;
+                let p = start + direction * t;
+                let r = p.length();
+                let in_shadow = crate::geometry::ray_intersects_ground(r, p.dot(sun) / r, ground);
+                let near_boundary = lit
+                    .parts()
+                    .iter()
+                    .any(|(a, b)| (t - a).abs() <= step || (t - b).abs() <= step);
+                if !near_boundary {
+                    assert_eq!(
+                        lit.contains(t),
+                        !in_shadow,
+                        "t {t} of {length}, sun {sun:?}"
+                    );
+                }
+            }
+        }
+        assert!(partial > 100, "only {partial} segments cut by the shadow");
+    }
+
+    /// Drawing a share of the free paths from the sunlit parts changes the
+    /// noise, not the expectation: at sun -6 and -9 degrees (earth-clear,
+    /// zenith and 10 degrees above the sunward horizon), 40 000 paths each
+    /// way agree within 4 combined standard errors at every wavelength,
+    /// and the sunlit sampling is the less noisy at the zenith.
+    #[test]
+    fn sunlit_sampling_is_unbiased_at_twilight() {
+        let atmosphere = Atmosphere::preset("earth-clear").unwrap();
+        for sun in [-6.0, -9.0] {
+            let observation = Observation {
+                observer_altitude_m: 0.0,
+                sun_elevation_deg: sun,
+                sun_azimuth_deg: 270.0,
+            };
+            let sky = SingleScatteringSky::new(&atmosphere, &WavelengthGrid::paper(), observation)
+                .unwrap();
+            let with = PathTracer::new(&sky);
+            let without = PathTracer {
+                sunlit_share: 0.0,
+                ..PathTracer::new(&sky)
+            };
+            for (name, view) in [
+                ("zenith", Vector3::new(0.0, 0.0, 1.0)),
+                (
+                    "sunward 10 deg",
+                    crate::geometry::direction_from_elevation_azimuth(10.0, 270.0),
+                ),
+            ] {
+                let a = with.compute_radiance(view, 40_000, 11).unwrap().total;
+                let b = without.compute_radiance(view, 40_000, 12).unwrap().total;
+                let mut worst: f64 = 0.0;
+                for i in 0..a.mean.len() {
+                    let sigma = a.standard_error.values()[i].hypot(b.standard_error.values()[i]);
+                    let z = (a.mean.values()[i] - b.mean.values()[i]) / sigma;
+                    worst = worst.max(z.abs());
+                }
+                let noise = |e: &SpectralEstimate| {
+                    worst_relative_error(e.mean.values(), e.standard_error.values())
+                };
+                eprintln!(
+                    "sun {sun}, {name}: worst |difference| {worst:.2} sigma; relative standard error {:.3} with sunlit sampling, {:.3} without",
+                    noise(&a),
+                    noise(&b)
+                );
+                assert!(worst < 4.0, "sun {sun}, {name}: {worst:.2} sigma apart");
+                if name == "zenith" {
+                    assert!(
+                        noise(&a) < noise(&b),
+                        "sun {sun}: {} >= {}",
+                        noise(&a),
+                        noise(&b)
+                    );
+                }
+            }
+        }
     }
 
     /// More than MAX_SAMPLES paths is an error before anything is
