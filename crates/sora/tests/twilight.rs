@@ -221,9 +221,9 @@ fn excess_over_path_tracer(
 /// Civil twilight, a representative subset: within 3 % + 3 standard
 /// errors at suns -2 and -4 degrees, 5 % + 3 standard errors at -6, in
 /// the zenith, toward the sun low and away from it, every wavelength
-/// (100 000 paths: the path tracer's standard error is 1-2.5 % at -2
-/// degrees, 2-3.4 % at -4, 3.6-5.8 % at -6, at 380 nm the largest; 6-14 %
-/// at -6 before it drew free paths from the sunlit parts). Measured
+/// (100 000 paths: the path tracer's standard error is 1-2 % at -2
+/// degrees, 1-3 % at -4, 2-8 % at -6, at 380 nm the largest; 6-14 % at -6
+/// before it drew free paths from the sunlit parts). Measured
 /// with 400 000 paths (the ignored test's grid, 460/540/620 nm): within
 /// 1.9 % at -2, 3.0 % at -4, 7.3 % at -6 (the zenith, the path tracer at
 /// +-3.2 %). Before the field's first order was spherical: -2 degrees
