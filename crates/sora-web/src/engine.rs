@@ -511,11 +511,14 @@ mod tests {
         assert_eq!(got, single.values());
     }
 
-    /// The page's images against the library's default resolution: the
-    /// refinement within 2 % (99th percentile of the pixels' luminance;
-    /// measured at 128 x 128: 0.15 % at sun 45, 1.0 % at -6), the preview
-    /// within 5 % (1.0 % and 4.8 %), from a high sun to civil twilight (the
-    /// quality_accuracy example prints the whole range).
+    /// The page's images against the library's default resolution (99th
+    /// percentile of the pixels' luminance difference, 48 x 48): the
+    /// refinement within 2 % from a high sun to civil twilight, the preview
+    /// within 5 % down to the horizon and 7 % at sun -6. Measured at 128 x
+    /// 128 (the quality_accuracy example prints the whole range): the
+    /// refinement 0.15 % at sun 45 and 1.0 % at -6; the preview 1.0 % at
+    /// 45, 2.0 % at 0 and 4.9 % at -6 (5.05 % here at 48 x 48, since the
+    /// preview's first order takes 8 azimuths instead of 16; 4.8 % before).
     #[test]
     fn preview_and_refinement_stay_close_to_the_default_resolution() {
         let atmosphere = Atmosphere::preset("earth-clear").unwrap();
@@ -537,7 +540,8 @@ mod tests {
                 sky.render_xyz(&image, &to_xyz, &|_| {}).unwrap()
             };
             let full = render(Quality::Full);
-            for (quality, bound) in [(Quality::Refined, 0.02), (Quality::Preview, 0.05)] {
+            let preview_bound = if sun >= 0.0 { 0.05 } else { 0.07 };
+            for (quality, bound) in [(Quality::Refined, 0.02), (Quality::Preview, preview_bound)] {
                 let mut differences: Vec<f64> = render(quality)
                     .iter()
                     .zip(&full)
