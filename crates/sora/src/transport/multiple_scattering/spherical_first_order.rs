@@ -80,7 +80,234 @@ pub(crate) struct FirstOrderInputs<'a> {
 /// as the solver's solutions: [(s * wavelengths + i) * solution + (m *
 /// levels + k) * streams + b], solution = streams * levels * streams
 /// (harmonics = streams).
+///
+/// A stream's path from a level does not depend on the sun (the sun turns
+/// in the x-z plane, the azimuths are taken from it), so each path is
+/// marched once, its samples' points, densities and columns from the
+/// level kept, and every sun node then reads them: the same sums in the
+/// same order as marching it per sun node
+/// (`compute_spherical_first_order_reference`, the test's oracle), so the
+/// result is the same bit for bit. One task per level.
 pub(crate) fn compute_spherical_first_order(inputs: &FirstOrderInputs) -> Vec<f64> {
+    let wavelengths = inputs.solar_irradiance_w_m2_nm.len();
+    let species = inputs.profiles.len();
+    let levels = inputs.level_altitudes_m.len();
+    let streams = inputs.stream_cosines.len();
+    let solution = streams * levels * streams;
+    let suns = inputs.sun_zenith_rad.len();
+    let (ground, _) = inputs.corners.radii_m();
+    let azimuths = AZIMUTHS.min(streams).max(1);
+    let running = running_integral_matrix();
+    // (2 - delta_m0) / N cos(m phi_a), [a * streams + m].
+    let cosines: Vec<f64> = (0..azimuths)
+        .flat_map(|a| {
+            let phi = PI * (a as f64 + 0.5) / azimuths as f64;
+            (0..streams).map(move |m| {
+                (if m == 0 { 1.0 } else { 2.0 }) / azimuths as f64 * (m as f64 * phi).cos()
+            })
+        })
+        .collect();
+    let phase_table: Vec<f64> = inputs
+        .phases
+        .iter()
+        .flat_map(|phase| {
+            (0..PHASE_NODES)
+                .map(move |n| phase.eval(2.0 * n as f64 / (PHASE_NODES - 1) as f64 - 1.0))
+        })
+        .collect();
+    let tables = &Tables {
+        inputs,
+        phase_table: &phase_table,
+    };
+    let suns_vectors: Vec<Vector3> = inputs
+        .sun_zenith_rad
+        .iter()
+        .map(|theta| Vector3::new(theta.sin(), 0.0, theta.cos()))
+        .collect();
+    // Per level: [(s * streams + b) * streams + m) * wavelengths + i].
+    let per_level = suns * streams * streams * wavelengths;
+    let mut by_level = vec![0.0; levels * per_level];
+    crate::parallel::for_each_chunk_mut(&mut by_level, per_level, |k, block| {
+        let x = Vector3::new(0.0, 0.0, ground + inputs.level_altitudes_m[k]);
+        let mut work = MarchWork {
+            radiance: vec![0.0; wavelengths],
+            phase: vec![0.0; wavelengths * species],
+            densities: vec![[0.0; 4]; species],
+            view_columns: vec![0.0; species],
+            #[cfg(test)]
+            node_columns: vec![0.0; species],
+            sun_columns: vec![0.0; species],
+            ends: Vec::with_capacity(inputs.corners.most_panel_ends(PANELS)),
+        };
+        let mut path = MarchedPath::default();
+        for (b, mu) in inputs.stream_cosines.iter().enumerate() {
+            let sine = (1.0 - mu * mu).max(0.0).sqrt();
+            for a in 0..azimuths {
+                let phi = PI * (a as f64 + 0.5) / azimuths as f64;
+                let direction = Vector3::new(sine * phi.cos(), sine * phi.sin(), *mu);
+                if !march_path(tables, &running, x, direction, &mut work, &mut path) {
+                    continue;
+                }
+                for (s, sun) in suns_vectors.iter().enumerate() {
+                    compute_first_order_on_path(tables, direction, *sun, &path, &mut work);
+                    let harmonics = &mut block[(s * streams + b) * streams * wavelengths..]
+                        [..streams * wavelengths];
+                    for (m, row) in harmonics.chunks_exact_mut(wavelengths).enumerate() {
+                        let factor = cosines[a * streams + m];
+                        for (h, l) in row.iter_mut().zip(&work.radiance) {
+                            *h += factor * l;
+                        }
+                    }
+                }
+            }
+        }
+    });
+    let mut out = vec![0.0; suns * wavelengths * solution];
+    for k in 0..levels {
+        for s in 0..suns {
+            for b in 0..streams {
+                for m in 0..streams {
+                    let row = &by_level
+                        [k * per_level + ((s * streams + b) * streams + m) * wavelengths..]
+                        [..wavelengths];
+                    let at = (m * levels + k) * streams + b;
+                    for (i, h) in row.iter().enumerate() {
+                        out[(s * wavelengths + i) * solution + at] = *h;
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+/// A stream's path marched once for every sun node: per Gauss sample, its
+/// point, its weight (half the panel times the Gauss weight) and, per
+/// species, its relative density and the column from the level to it.
+#[derive(Default)]
+struct MarchedPath {
+    points: Vec<Vector3>,
+    weights: Vec<f64>,
+    /// [sample * species + j].
+    densities: Vec<f64>,
+    node_columns: Vec<f64>,
+}
+
+/// Marches the path from `x` along `direction` (the sun-independent part
+/// of `compute_first_order_along_ray`) into `path`; false when it has no
+/// length in the atmosphere.
+fn march_path(
+    inputs: &Tables,
+    running: &[[f64; 4]; 4],
+    x: Vector3,
+    direction: Vector3,
+    work: &mut MarchWork,
+    path: &mut MarchedPath,
+) -> bool {
+    let (ground, top) = inputs.corners.radii_m();
+    let Some((enter, exit)) = segment_in_atmosphere(x, direction, ground, top) else {
+        return false;
+    };
+    let length = exit - enter;
+    if length <= 0.0 {
+        return false;
+    }
+    let species = inputs.profiles.len();
+    let start = x + direction * enter;
+    inputs
+        .corners
+        .fill_panel_ends(start, direction, length, PANELS, &mut work.ends);
+    path.points.clear();
+    path.weights.clear();
+    path.densities.clear();
+    path.node_columns.clear();
+    work.view_columns.fill(0.0);
+    for e in 0..work.ends.len() - 1 {
+        let (a, b) = (work.ends[e], work.ends[e + 1]);
+        let (centre, half) = (0.5 * (a + b), 0.5 * (b - a));
+        let mut points = [Vector3::default(); 4];
+        for (n, g) in GAUSS_NODES.iter().enumerate() {
+            points[n] = start + direction * (centre + half * g);
+            let altitude = points[n].length() - ground;
+            for j in 0..species {
+                work.densities[j][n] = inputs.profiles[j].relative_density(altitude);
+            }
+        }
+        for n in 0..4 {
+            path.points.push(points[n]);
+            path.weights.push(half * GAUSS_WEIGHTS[n]);
+            for j in 0..species {
+                let inside: f64 = (0..4).map(|q| running[n][q] * work.densities[j][q]).sum();
+                path.node_columns.push(work.view_columns[j] + half * inside);
+                path.densities.push(work.densities[j][n]);
+            }
+        }
+        for j in 0..species {
+            let panel: f64 = (0..4)
+                .map(|q| GAUSS_WEIGHTS[q] * work.densities[j][q])
+                .sum();
+            work.view_columns[j] += half * panel;
+        }
+    }
+    true
+}
+
+/// L1 per wavelength into `work.radiance` along a marched `path` for the
+/// sun `sun` (the sun-dependent part of `compute_first_order_along_ray`:
+/// the phase functions at direction . sun, the columns toward the sun,
+/// the shadow).
+fn compute_first_order_on_path(
+    inputs: &Tables,
+    direction: Vector3,
+    sun: Vector3,
+    path: &MarchedPath,
+    work: &mut MarchWork,
+) {
+    let species = inputs.profiles.len();
+    let position = (direction.dot(sun) + 1.0) * 0.5 * (PHASE_NODES - 1) as f64;
+    let node = (position.max(0.0) as usize).min(PHASE_NODES - 2);
+    let t = position - node as f64;
+    for (p, row) in work
+        .phase
+        .iter_mut()
+        .zip(inputs.phase_table.chunks_exact(PHASE_NODES))
+    {
+        *p = row[node] + t * (row[node + 1] - row[node]);
+    }
+    work.radiance.fill(0.0);
+    for (n, point) in path.points.iter().enumerate() {
+        let r = point.length();
+        if !inputs
+            .sun_columns
+            .lookup_columns_to_sun(r, point.dot(sun) / r, &mut work.sun_columns)
+        {
+            continue;
+        }
+        let weight = path.weights[n];
+        let node_columns = &path.node_columns[n * species..(n + 1) * species];
+        let densities = &path.densities[n * species..(n + 1) * species];
+        for (i, out) in work.radiance.iter_mut().enumerate() {
+            let (mut tau, mut source) = (0.0, 0.0);
+            for j in 0..species {
+                let at = i * species + j;
+                tau += inputs.scaled_extinction[at] * (node_columns[j] + work.sun_columns[j]);
+                source += inputs.scaled_scattering[at] * densities[j] * work.phase[at];
+            }
+            if source > 0.0 {
+                *out += weight * inputs.solar_irradiance_w_m2_nm[i] * source * (-tau).exp();
+            }
+        }
+    }
+}
+
+/// The first order marched per sun node: the oracle of
+/// [`compute_spherical_first_order`].
+/// L1 for every sun node, wavelength, harmonic, level and stream, laid out
+/// as the solver's solutions: [(s * wavelengths + i) * solution + (m *
+/// levels + k) * streams + b], solution = streams * levels * streams
+/// (harmonics = streams).
+#[cfg(test)]
+fn compute_spherical_first_order_reference(inputs: &FirstOrderInputs) -> Vec<f64> {
     let wavelengths = inputs.solar_irradiance_w_m2_nm.len();
     let species = inputs.profiles.len();
     let levels = inputs.level_altitudes_m.len();
@@ -178,6 +405,8 @@ struct MarchWork {
     phase: Vec<f64>,
     densities: Vec<[f64; 4]>,
     view_columns: Vec<f64>,
+    /// The oracle's columns from the level to the current node.
+    #[cfg(test)]
     node_columns: Vec<f64>,
     sun_columns: Vec<f64>,
     ends: Vec<f64>,
@@ -185,6 +414,7 @@ struct MarchWork {
 
 /// L1(x, w) per wavelength into `work.radiance` (see the module docs);
 /// false when the path has no length in the atmosphere (nothing written).
+#[cfg(test)]
 fn compute_first_order_along_ray(
     inputs: &Tables,
     running: &[[f64; 4]; 4],
@@ -268,4 +498,68 @@ fn compute_first_order_along_ray(
         }
     }
     true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The fast first order (each path marched once for every sun node)
+    /// equals the oracle (marched per sun node) bit for bit: two species,
+    /// three wavelengths, 2 streams per hemisphere, five levels, suns from
+    /// 84 to 100 degrees of zenith (lit, grazing and deep in the shadow).
+    #[test]
+    fn marching_once_for_every_sun_is_the_oracle_bit_for_bit() {
+        let (ground, top) = (6_360e3, 6_460e3);
+        let profiles = vec![
+            DensityProfile::Exponential {
+                scale_height_m: 8_000.0,
+            },
+            DensityProfile::Exponential {
+                scale_height_m: 1_200.0,
+            },
+        ];
+        let corners = ProfileCorners::new(&profiles, ground, top);
+        let sun_columns = SunColumnTable::compute(&profiles, ground, top, 32, 64);
+        let streams = crate::transport::multiple_scattering::successive_orders::Streams::new(2);
+        let degrees = streams.count();
+        let phases: Vec<TruncatedPhase> = (0..3 * 2)
+            .map(|n| {
+                // Rayleigh-like and forward-peaked moments.
+                let g: f64 = if n % 2 == 0 { 0.0 } else { 0.7 };
+                let moments: Vec<f64> = (0..=degrees)
+                    .map(|l| {
+                        if l == 2 && n % 2 == 0 {
+                            0.1
+                        } else {
+                            g.powi(l as i32)
+                        }
+                    })
+                    .collect();
+                TruncatedPhase::from_moments(&moments, degrees)
+            })
+            .collect();
+        let inputs = FirstOrderInputs {
+            profiles: &profiles,
+            corners: &corners,
+            sun_columns: &sun_columns,
+            level_altitudes_m: &[0.0, 1e3, 5e3, 20e3, 60e3],
+            stream_cosines: streams.cosines(),
+            sun_zenith_rad: &[
+                84f64.to_radians(),
+                89f64.to_radians(),
+                93f64.to_radians(),
+                100f64.to_radians(),
+            ],
+            scaled_extinction: &[2.4e-5, 8e-5, 1.2e-5, 7e-5, 0.6e-5, 6e-5],
+            scaled_scattering: &[2.4e-5, 7e-5, 1.2e-5, 6e-5, 0.6e-5, 5e-5],
+            phases: &phases,
+            solar_irradiance_w_m2_nm: &[1.7, 1.9, 1.5],
+        };
+        let fast = compute_spherical_first_order(&inputs);
+        let oracle = compute_spherical_first_order_reference(&inputs);
+        assert_eq!(fast.len(), oracle.len());
+        assert!(oracle.iter().any(|v| *v > 0.0), "some light");
+        assert!(fast == oracle, "bit for bit");
+    }
 }
