@@ -23,7 +23,11 @@ done
 }
 cd "$root/crates/sora-web"
 # Debian's cargo and rustc, not rustup's (whose rustc has no wasm32 std).
-RUSTC=/usr/bin/rustc RUSTC_BOOTSTRAP=1 RUSTFLAGS="" \
+# simd128: WebAssembly's 128-bit SIMD (Chrome 91, Firefox 89, Safari 16.4
+# and later), for the loops over wavelengths: measured in headless
+# Chromium, a 256-pixel refinement 0.44-0.48 -> 0.36-0.37 s with a high
+# sun, 8 % faster with a low one; the numbers are the same (no fast-math).
+RUSTC=/usr/bin/rustc RUSTC_BOOTSTRAP=1 RUSTFLAGS="-C target-feature=+simd128" \
 CARGO_TARGET_WASM32_UNKNOWN_UNKNOWN_LINKER=wasm-ld-19 \
 CARGO_TARGET_DIR="$root/target/sora-web-wasm" \
     /usr/bin/cargo build --release --locked --lib --target wasm32-unknown-unknown \
