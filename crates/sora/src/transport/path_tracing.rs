@@ -1157,6 +1157,23 @@ impl<'a> PathTracer<'a> {
         (tau_a + fraction * (tau_b - tau_a), (tau_b - tau_a) / width)
     }
 
+    /// Wavelength `i`'s model optical depths at the distances `from_m` and
+    /// `to_m` along the segment (the ends of a sunlit part).
+    fn model_optical_depths_at_ends(
+        &self,
+        i: usize,
+        from_m: f64,
+        to_m: f64,
+        sampling_points: usize,
+        scratch: &PathScratch,
+    ) -> (f64, f64) {
+        let at = |distance_m| {
+            let (interval, fraction) = self.locate_on_model(distance_m, sampling_points, scratch);
+            self.model_optical_depth(i, interval, fraction, scratch).0
+        };
+        (at(from_m), at(to_m))
+    }
+
     /// The model's free-path density at `fraction` across `interval`, 1/m:
     /// the mixture over the `members` wavelengths (those with some optical
     /// depth when the collision is `forced`, and then normalised inside the
@@ -1195,10 +1212,8 @@ impl<'a> PathTracer<'a> {
         for i in 0..self.wavelengths {
             let mut mass = 0.0;
             for &(from, to) in lit.parts() {
-                let (ia, fa) = self.locate_on_model(from, sampling_points, scratch);
-                let (ib, fb) = self.locate_on_model(to, sampling_points, scratch);
-                let (tau_a, _) = self.model_optical_depth(i, ia, fa, scratch);
-                let (tau_b, _) = self.model_optical_depth(i, ib, fb, scratch);
+                let (tau_a, tau_b) =
+                    self.model_optical_depths_at_ends(i, from, to, sampling_points, scratch);
                 mass += (-tau_a).exp() - (-tau_b).exp();
             }
             scratch.sunlit_mass[i] = mass.max(0.0);
@@ -1231,10 +1246,8 @@ impl<'a> PathTracer<'a> {
         let mut u = random.next_f64() * scratch.sunlit_mass[hero];
         let parts = lit.parts();
         for (k, &(from, to)) in parts.iter().enumerate() {
-            let (ia, fa) = self.locate_on_model(from, sampling_points, scratch);
-            let (ib, fb) = self.locate_on_model(to, sampling_points, scratch);
-            let (tau_a, _) = self.model_optical_depth(hero, ia, fa, scratch);
-            let (tau_b, _) = self.model_optical_depth(hero, ib, fb, scratch);
+            let (tau_a, tau_b) =
+                self.model_optical_depths_at_ends(hero, from, to, sampling_points, scratch);
             let mass = (-tau_a).exp() - (-tau_b).exp();
             if u < mass || k + 1 == parts.len() {
                 // exp(-target) = exp(-tau_a) - u: target in [tau_a, tau_b].

@@ -96,25 +96,10 @@ pub(crate) fn compute_spherical_first_order(inputs: &FirstOrderInputs) -> Vec<f6
     let solution = streams * levels * streams;
     let suns = inputs.sun_zenith_rad.len();
     let (ground, _) = inputs.corners.radii_m();
-    let azimuths = AZIMUTHS.min(streams).max(1);
+    let azimuths = azimuth_count(streams);
     let running = running_integral_matrix();
-    // (2 - delta_m0) / N cos(m phi_a), [a * streams + m].
-    let cosines: Vec<f64> = (0..azimuths)
-        .flat_map(|a| {
-            let phi = PI * (a as f64 + 0.5) / azimuths as f64;
-            (0..streams).map(move |m| {
-                (if m == 0 { 1.0 } else { 2.0 }) / azimuths as f64 * (m as f64 * phi).cos()
-            })
-        })
-        .collect();
-    let phase_table: Vec<f64> = inputs
-        .phases
-        .iter()
-        .flat_map(|phase| {
-            (0..PHASE_NODES)
-                .map(move |n| phase.eval(2.0 * n as f64 / (PHASE_NODES - 1) as f64 - 1.0))
-        })
-        .collect();
+    let cosines = harmonic_cosines(azimuths, streams);
+    let phase_table = tabulate_phases(inputs.phases);
     let tables = &Tables {
         inputs,
         phase_table: &phase_table,
@@ -181,9 +166,55 @@ pub(crate) fn compute_spherical_first_order(inputs: &FirstOrderInputs) -> Vec<f6
     out
 }
 
+/// Azimuths of the cosine transform for `streams` harmonics (see
+/// [`AZIMUTHS`]).
+fn azimuth_count(streams: usize) -> usize {
+    AZIMUTHS.min(streams).max(1)
+}
+
+/// (2 - delta_m0) / N cos(m phi_a) of the cosine transform over N =
+/// `azimuths` midpoint azimuths, [a * streams + m].
+fn harmonic_cosines(azimuths: usize, streams: usize) -> Vec<f64> {
+    (0..azimuths)
+        .flat_map(|a| {
+            let phi = PI * (a as f64 + 0.5) / azimuths as f64;
+            (0..streams).map(move |m| {
+                (if m == 0 { 1.0 } else { 2.0 }) / azimuths as f64 * (m as f64 * phi).cos()
+            })
+        })
+        .collect()
+}
+
+/// p*_ij tabulated over cos theta on `PHASE_NODES` nodes in [-1, 1],
+/// [(i * species + j) * PHASE_NODES + n], sr^-1.
+fn tabulate_phases(phases: &[TruncatedPhase]) -> Vec<f64> {
+    phases
+        .iter()
+        .flat_map(|phase| {
+            (0..PHASE_NODES)
+                .map(move |n| phase.eval(2.0 * n as f64 / (PHASE_NODES - 1) as f64 - 1.0))
+        })
+        .collect()
+}
+
+/// Every p*_ij at `cos_theta` into `phase`, linear between the table's
+/// nodes (p* is a 16-term Legendre series: its second derivative is at
+/// most ~ l^4 / 4 p* ~ 1.6e4 p*, so the error is below
+/// 1.6e4 (2 / 2048)^2 / 8 = 2e-3 of the largest p*, and far less where it
+/// is flat).
+fn interpolate_phases(phase_table: &[f64], cos_theta: f64, phase: &mut [f64]) {
+    let position = (cos_theta + 1.0) * 0.5 * (PHASE_NODES - 1) as f64;
+    let node = (position.max(0.0) as usize).min(PHASE_NODES - 2);
+    let t = position - node as f64;
+    for (p, row) in phase.iter_mut().zip(phase_table.chunks_exact(PHASE_NODES)) {
+        *p = row[node] + t * (row[node + 1] - row[node]);
+    }
+}
+
 /// A stream's path marched once for every sun node: per Gauss sample, its
-/// point, its weight (half the panel times the Gauss weight) and, per
-/// species, its relative density and the column from the level to it.
+/// point (planet-centred, m), its quadrature weight (half the panel times
+/// the Gauss weight, m) and, per species, its relative density and the
+/// column from the level to it (relative density times length, m).
 #[derive(Default)]
 struct MarchedPath {
     points: Vec<Vector3>,
@@ -264,16 +295,7 @@ fn compute_first_order_on_path(
     work: &mut MarchWork,
 ) {
     let species = inputs.profiles.len();
-    let position = (direction.dot(sun) + 1.0) * 0.5 * (PHASE_NODES - 1) as f64;
-    let node = (position.max(0.0) as usize).min(PHASE_NODES - 2);
-    let t = position - node as f64;
-    for (p, row) in work
-        .phase
-        .iter_mut()
-        .zip(inputs.phase_table.chunks_exact(PHASE_NODES))
-    {
-        *p = row[node] + t * (row[node + 1] - row[node]);
-    }
+    interpolate_phases(inputs.phase_table, direction.dot(sun), &mut work.phase);
     work.radiance.fill(0.0);
     for (n, point) in path.points.iter().enumerate() {
         let r = point.length();
@@ -317,25 +339,9 @@ fn compute_spherical_first_order_reference(inputs: &FirstOrderInputs) -> Vec<f64
     let (ground, _) = inputs.corners.radii_m();
     let mut out = vec![0.0; suns * wavelengths * solution];
     let running = running_integral_matrix();
-    // (2 - delta_m0) / N cos(m phi_a), [a * streams + m].
-    let azimuths = AZIMUTHS.min(streams).max(1);
-    let cosines: Vec<f64> = (0..azimuths)
-        .flat_map(|a| {
-            let phi = PI * (a as f64 + 0.5) / azimuths as f64;
-            (0..streams).map(move |m| {
-                (if m == 0 { 1.0 } else { 2.0 }) / azimuths as f64 * (m as f64 * phi).cos()
-            })
-        })
-        .collect();
-    // p*_ij tabulated over cos theta, [(i * species + j) * PHASE_NODES + n].
-    let phase_table: Vec<f64> = inputs
-        .phases
-        .iter()
-        .flat_map(|phase| {
-            (0..PHASE_NODES)
-                .map(move |n| phase.eval(2.0 * n as f64 / (PHASE_NODES - 1) as f64 - 1.0))
-        })
-        .collect();
+    let azimuths = azimuth_count(streams);
+    let cosines = harmonic_cosines(azimuths, streams);
+    let phase_table = tabulate_phases(inputs.phases);
     let inputs = &Tables {
         inputs,
         phase_table: &phase_table,
@@ -432,20 +438,7 @@ fn compute_first_order_along_ray(
         return false;
     }
     let species = inputs.profiles.len();
-    // p*(cos theta) from its table, linear between nodes (p* is a
-    // 16-term Legendre series: its second derivative is at most ~ l^4 / 4
-    // p* ~ 1.6e4 p*, so the error is below 1.6e4 (2 / 2048)^2 / 8 = 2e-3
-    // of the largest p*, and far less where it is flat).
-    let position = (direction.dot(sun) + 1.0) * 0.5 * (PHASE_NODES - 1) as f64;
-    let node = (position.max(0.0) as usize).min(PHASE_NODES - 2);
-    let t = position - node as f64;
-    for (p, row) in work
-        .phase
-        .iter_mut()
-        .zip(inputs.phase_table.chunks_exact(PHASE_NODES))
-    {
-        *p = row[node] + t * (row[node + 1] - row[node]);
-    }
+    interpolate_phases(inputs.phase_table, direction.dot(sun), &mut work.phase);
     let start = x + direction * enter;
     inputs
         .corners
