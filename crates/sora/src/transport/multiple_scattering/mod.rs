@@ -169,10 +169,12 @@
 //! altitudes m, angles rad inside (degrees in settings).
 
 mod phase_fourier;
+mod phase_matrix_fourier;
 mod source_table;
 mod spherical_first_order;
 mod spherical_paths;
 mod successive_orders;
+mod vector_successive_orders;
 mod vertical_grid;
 
 pub use source_table::MultipleScatteringTable;

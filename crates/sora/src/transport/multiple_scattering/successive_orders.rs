@@ -48,7 +48,61 @@ use super::vertical_grid::VerticalGrid;
 const CONVERGENCE_TOLERANCE: f64 = 1e-4;
 /// A safety net (an optically thick conservative atmosphere converges
 /// slowly, but the extrapolation still ends it long before this).
-const MAX_ITERATIONS: usize = 200;
+pub(super) const MAX_ITERATIONS: usize = 200;
+
+/// What the successive orders do after a sweep (see [`StoppingRule`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) enum Sweep {
+    Continue,
+    /// The last increment is negligible.
+    Converged,
+    /// The remaining orders sum to this multiple of the last increment:
+    /// add it and stop.
+    Extrapolate(f64),
+}
+
+/// The stopping rule of the successive orders (see the module docs): the
+/// increments of successive sweeps, once their ratio r is steady, sum to
+/// r / (1 - r) times the last one.
+#[derive(Debug, Clone)]
+pub(super) struct StoppingRule {
+    sweeps: usize,
+    last_norm: f64,
+    last_ratio: f64,
+}
+
+impl StoppingRule {
+    pub(super) fn new() -> StoppingRule {
+        StoppingRule {
+            sweeps: 0,
+            last_norm: 0.0,
+            last_ratio: f64::NAN,
+        }
+    }
+
+    /// After a sweep whose increment has L1 norm `norm`, the new field
+    /// having L1 norm `size_of_field`.
+    pub(super) fn after_sweep(&mut self, norm: f64, size_of_field: f64) -> Sweep {
+        let first = self.sweeps == 0;
+        self.sweeps += 1;
+        if size_of_field == 0.0 || norm <= 1e-3 * CONVERGENCE_TOLERANCE * size_of_field {
+            return Sweep::Converged;
+        }
+        if !first {
+            let ratio = norm / self.last_norm;
+            let steady = (ratio - self.last_ratio).abs() < 0.05 * ratio;
+            if ratio < 1.0 && steady {
+                let remaining = ratio / (1.0 - ratio);
+                if norm * remaining <= CONVERGENCE_TOLERANCE * size_of_field {
+                    return Sweep::Extrapolate(remaining);
+                }
+            }
+            self.last_ratio = ratio;
+        }
+        self.last_norm = norm;
+        Sweep::Continue
+    }
+}
 
 /// The discrete ordinates: Gauss-Legendre cosines on each hemisphere
 /// ("double Gauss", Sykes 1951), exact for the polynomial fields of each
@@ -124,15 +178,15 @@ pub struct ScaledSpecies<'a> {
 /// Everything about one wavelength that does not depend on the sun.
 #[derive(Debug, Clone)]
 pub struct ColumnSystem<'a> {
-    streams: &'a Streams,
-    grid: &'a VerticalGrid,
+    pub(super) streams: &'a Streams,
+    pub(super) grid: &'a VerticalGrid,
     species: Vec<ScaledSpecies<'a>>,
-    solar_irradiance: f64,
-    ground_albedo: f64,
+    pub(super) solar_irradiance: f64,
+    pub(super) ground_albedo: f64,
     /// Harmonics with any scattering.
     active_harmonics: Vec<bool>,
     /// omega_j at each level, [k * species + j].
-    level_albedo: Vec<f64>,
+    pub(super) level_albedo: Vec<f64>,
     /// Per layer and stream magnitude, [k * n + a]: e^{-x}, the near
     /// level's weight and the far level's weight.
     transmission: Vec<f64>,
@@ -354,8 +408,8 @@ impl<'a> ColumnSystem<'a> {
                 }
             }
             source.copy_from_slice(direct_source);
-            let (mut last_norm, mut last_ratio) = (0.0f64, f64::NAN);
-            for iteration in 0..MAX_ITERATIONS {
+            let mut stopping = StoppingRule::new();
+            for _ in 0..MAX_ITERATIONS {
                 previous.copy_from_slice(field);
                 let ground_radiance = match m {
                     0 => self.ground_albedo / PI * self.downward_flux(previous) + ground_direct,
@@ -373,24 +427,16 @@ impl<'a> ColumnSystem<'a> {
                     norm += d.abs();
                     size_of_field += new.abs();
                 }
-                if size_of_field == 0.0 || norm <= 1e-3 * CONVERGENCE_TOLERANCE * size_of_field {
-                    break;
-                }
-                if iteration >= 1 {
-                    let ratio = norm / last_norm;
-                    let steady = (ratio - last_ratio).abs() < 0.05 * ratio;
-                    if ratio < 1.0 && steady {
-                        let remaining = ratio / (1.0 - ratio);
-                        if norm * remaining <= CONVERGENCE_TOLERANCE * size_of_field {
-                            for (value, d) in field.iter_mut().zip(increment.iter()) {
-                                *value += remaining * d;
-                            }
-                            break;
+                match stopping.after_sweep(norm, size_of_field) {
+                    Sweep::Continue => {}
+                    Sweep::Converged => break,
+                    Sweep::Extrapolate(remaining) => {
+                        for (value, d) in field.iter_mut().zip(increment.iter()) {
+                            *value += remaining * d;
                         }
+                        break;
                     }
-                    last_ratio = ratio;
                 }
-                last_norm = norm;
                 // Scattering of the new field: the next order's source,
                 // column by column.
                 source.copy_from_slice(direct_source);
@@ -468,7 +514,7 @@ impl<'a> ColumnSystem<'a> {
     }
 
     /// 2 pi sum_{mu_b > 0} w_b mu_b L_0(ground, mu_b).
-    fn downward_flux(&self, field: &[f64]) -> f64 {
+    pub(super) fn downward_flux(&self, field: &[f64]) -> f64 {
         let n = self.streams.per_hemisphere();
         2.0 * PI
             * (0..n)
@@ -481,7 +527,7 @@ impl<'a> ColumnSystem<'a> {
     /// streams from the ground (radiance `ground_radiance`) up; the
     /// spherical streams along their paths (`columns`: work space of 2
     /// levels).
-    fn transport(
+    pub(super) fn transport(
         &self,
         source: &[f64],
         ground_radiance: f64,
