@@ -328,7 +328,7 @@ mod tests {
                     LookDirection::new(m_a, phi),
                     LookDirection::new(sun_cosine, 0.0),
                 );
-                for i in 0..COMPONENTS {
+                for (i, row) in z.iter().enumerate() {
                     let synthesised: f64 = (0..6)
                         .map(|m| {
                             let g = if is_even_component(i) {
@@ -340,9 +340,9 @@ mod tests {
                         })
                         .sum();
                     assert!(
-                        (synthesised - z[i][0]).abs() < 1e-14,
+                        (synthesised - row[0]).abs() < 1e-14,
                         "mu {m_a} phi {phi} i {i}: {synthesised} vs {}",
-                        z[i][0]
+                        row[0]
                     );
                 }
             }
