@@ -389,6 +389,8 @@ struct ViewWork {
     forward_radiance: Vec<f64>,
     /// Phase matrices per wavelength (polarised single scattering).
     matrices: Vec<PhaseMatrix>,
+    /// The multiply scattered light's I, Q, U, V (polarised skies).
+    multiple_stokes: Vec<f64>,
 }
 
 impl Sky {
@@ -501,10 +503,10 @@ impl Sky {
     fn set_polarisation(&mut self, polarisation: Polarisation) -> Result<()> {
         if polarisation == Polarisation::Vector {
             match (self.method, self.scattering) {
-                (Method::PathTracing { .. }, _) | (Method::Fast, Scattering::Single) => {}
-                _ => {
+                (Method::PathTracing { .. }, _) | (Method::Fast, _) => {}
+                (Method::Reference { .. }, _) => {
                     return Err(Error::Unsupported(
-                        "polarisation: Stokes vectors come from the path tracer (method path-tracing) or from single scattering by the fast method; the multiple-scattering field and the reference march are scalar so far".into(),
+                        "polarisation: Stokes vectors come from the path tracer (method path-tracing) or the fast method; the reference march is scalar".into(),
                     ));
                 }
             }
@@ -587,7 +589,8 @@ impl Sky {
     fn prepare_field(&self) -> Result<()> {
         if let Scattering::Multiple(settings) = self.scattering {
             if self.field.get().is_none() {
-                let field = MultipleScatteringField::compute(&self.scene, settings)?;
+                let polarised = self.polarisation == Polarisation::Vector;
+                let field = MultipleScatteringField::compute(&self.scene, settings, polarised)?;
                 // Another thread may have been first: either field is the same.
                 let _ = self.field.set(field);
             }
@@ -641,6 +644,7 @@ impl Sky {
             added: vec![0.0; wavelengths],
             forward_radiance: vec![0.0; wavelengths],
             matrices: vec![PhaseMatrix::default(); wavelengths],
+            multiple_stokes: vec![0.0; 4 * wavelengths],
         }
     }
 
@@ -706,12 +710,13 @@ impl Sky {
             return Ok(out);
         }
         // Views in groups, each group with its own buffers; each view's
-        // values are I, then Q and U when polarised (V is 0: see
+        // values are I, then Q, U and V when polarised (single scattering
+        // of unpolarised sunlight has no V: see
         // `SingleScatteringSky::polarised_radiance_from_integrals`).
         self.prepare_field()?;
         const VIEWS_PER_TASK: usize = 4;
         let polarised = self.polarisation == Polarisation::Vector;
-        let per_view = wavelengths * if polarised { 3 } else { 1 };
+        let per_view = wavelengths * if polarised { 4 } else { 1 };
         let mut values = vec![0.0; views.len() * per_view];
         let total = views.len() as u64;
         let done = std::sync::atomic::AtomicU64::new(0);
@@ -725,7 +730,9 @@ impl Sky {
                     let (radiance, stokes) = out.split_at_mut(wavelengths);
                     self.compute_view_radiance(view.to_vector(), None, &mut work, radiance);
                     if polarised {
+                        stokes.fill(0.0);
                         self.compute_single_scattering_stokes(view, &mut work, stokes);
+                        self.add_multiple_scattering_stokes(view, &mut work, radiance, stokes);
                     }
                     let finished = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
                     progress(finished, total);
@@ -746,7 +753,7 @@ impl Sky {
                     stokes: polarised.then(|| Stokes {
                         q_w_m2_sr_nm: spectrum(1),
                         u_w_m2_sr_nm: spectrum(2),
-                        v_w_m2_sr_nm: SampledSpectrum::zeros(wavelengths),
+                        v_w_m2_sr_nm: spectrum(3),
                         standard_errors_w_m2_sr_nm: None,
                     }),
                 }
@@ -780,6 +787,43 @@ impl Sky {
         for (q, u) in q.iter_mut().zip(u) {
             *u = -s * *q;
             *q *= c;
+        }
+    }
+
+    /// Turns the multiply scattered radiance [`Sky::compute_view_radiance`]
+    /// left in `work` into its Stokes vector (the field's polarisation
+    /// correction): `radiance` gets the polarised intensity in place of the
+    /// scalar one, `stokes` (Q, U, V) the multiply scattered Q, U and V
+    /// added.
+    fn add_multiple_scattering_stokes(
+        &self,
+        view: ViewDirection,
+        work: &mut ViewWork,
+        radiance: &mut [f64],
+        stokes: &mut [f64],
+    ) {
+        let Some(field) = self.field() else {
+            return;
+        };
+        let view_cosine = view.elevation_deg().to_radians().sin();
+        let azimuth_rad = (view.azimuth_deg() - self.sun_position_deg.1).to_radians();
+        let w = radiance.len();
+        if field
+            .compute_polarised_radiance(
+                (view_cosine, azimuth_rad),
+                &work.added,
+                &mut work.multiple_stokes,
+            )
+            .is_none()
+        {
+            return;
+        }
+        let (intensity, rest) = work.multiple_stokes.split_at(w);
+        for ((r, i), scalar) in radiance.iter_mut().zip(intensity).zip(&work.added) {
+            *r += i - scalar;
+        }
+        for (s, m) in stokes.iter_mut().zip(rest) {
+            *s += m;
         }
     }
 
@@ -968,6 +1012,11 @@ impl Sky {
         progress: &(dyn Fn(usize) + Sync),
         store: impl Fn(&[f64], &mut [T]) + Sync,
     ) -> Result<Vec<T>> {
+        if self.polarisation == Polarisation::Vector && self.scattering != Scattering::Single {
+            return Err(Error::Unsupported(
+                "polarisation: images of a polarised sky with multiple scattering are not made yet (Stokes vectors come per view, Sky::radiances); render the scalar sky".into(),
+            ));
+        }
         let (width, height) = (image.width, image.height);
         for (name, side) in [("image width", width), ("image height", height)] {
             if !(1..=MAX_IMAGE_SIDE).contains(&side) {

@@ -169,16 +169,12 @@
 //! altitudes m, angles rad inside (degrees in settings).
 
 mod phase_fourier;
-// The polarised column solver (issue 13), tested against the Coulson
-// tables; only its tests use it until the sky's field carries Stokes
-// vectors.
-#[cfg_attr(not(test), allow(dead_code))]
 mod phase_matrix_fourier;
+mod polarisation_correction;
 mod source_table;
 mod spherical_first_order;
 mod spherical_paths;
 mod successive_orders;
-#[cfg_attr(not(test), allow(dead_code))]
 mod vector_successive_orders;
 mod vertical_grid;
 
@@ -189,6 +185,7 @@ use std::f64::consts::PI;
 use self::phase_fourier::{
     TruncatedPhase, compute_legendre_moments, normalized_associated_legendre,
 };
+use self::polarisation_correction::{CorrectionInputs, PolarisationCorrection};
 use self::spherical_first_order::{FirstOrderInputs, compute_spherical_first_order};
 use self::spherical_paths::StreamPaths;
 use self::successive_orders::{ColumnSystem, ScaledSpecies, Streams};
@@ -685,6 +682,8 @@ pub struct MultipleScatteringField {
     /// The source's Legendre moments for the exact synthesis, made on
     /// first use ([`MultipleScatteringField::source_moments`]).
     moments: std::sync::OnceLock<Vec<f64>>,
+    /// With Stokes vectors, the columns of the polarisation correction.
+    polarisation: Option<PolarisationCorrection>,
 }
 
 impl MultipleScatteringField {
@@ -694,6 +693,7 @@ impl MultipleScatteringField {
     pub(crate) fn compute(
         sky: &SingleScatteringSky,
         settings: MultipleScatteringSettings,
+        polarised: bool,
     ) -> Result<MultipleScatteringField> {
         let (ground, top) = sky.radii_m();
         let r = sky.observer_radius_m();
@@ -706,6 +706,7 @@ impl MultipleScatteringField {
             settings,
             (sun_zenith - reach).max(0.0),
             sun_zenith + reach,
+            polarised,
         )
     }
 
@@ -714,6 +715,7 @@ impl MultipleScatteringField {
         settings: MultipleScatteringSettings,
         lowest_rad: f64,
         highest_rad: f64,
+        polarised: bool,
     ) -> Result<MultipleScatteringField> {
         settings.validate()?;
         let optics = sky.optics();
@@ -805,8 +807,7 @@ impl MultipleScatteringField {
         let corners = ProfileCorners::new(&profiles, ground_radius_m, top_radius_m);
         let mut ends = Vec::with_capacity(corners.most_panel_ends(SUN_RAY_PANELS));
         let mut sun_columns: Vec<Option<Vec<f64>>> = Vec::with_capacity(count * levels);
-        for s in 0..count {
-            let theta = sun_axis.angle(s);
+        let mut add_columns_toward_sun = |theta: f64, sun_columns: &mut Vec<Option<Vec<f64>>>| {
             let direction = Vector3::new(theta.sin(), 0.0, theta.cos());
             for &z in grid.altitudes_m() {
                 let r = ground_radius_m + z;
@@ -829,7 +830,43 @@ impl MultipleScatteringField {
                 );
                 sun_columns.push(Some(columns));
             }
+        };
+        for s in 0..count {
+            add_columns_toward_sun(sun_axis.angle(s), &mut sun_columns);
         }
+        // The polarisation correction's column has the eye's own sun.
+        let eye_sun_zenith = sky.sun_direction().z.clamp(-1.0, 1.0).acos();
+        let polarisation = polarised.then(|| {
+            let mut eye_columns = Vec::with_capacity(levels);
+            add_columns_toward_sun(eye_sun_zenith, &mut eye_columns);
+            let sun_optical_depths: Vec<Option<(f64, f64)>> = (0..wavelengths)
+                .flat_map(|i| {
+                    let (scaled_extinction, extinction) = (&scaled_extinction, &extinction);
+                    eye_columns.iter().map(move |columns| {
+                        columns.as_ref().map(|columns| {
+                            (0..species).fold((0.0, 0.0), |(scaled, exact), j| {
+                                (
+                                    scaled + scaled_extinction[i * species + j] * columns[j],
+                                    exact + extinction[i * species + j] * columns[j],
+                                )
+                            })
+                        })
+                    })
+                })
+                .collect();
+            PolarisationCorrection::compute(&CorrectionInputs {
+                optics,
+                streams: &streams,
+                grid: &grid,
+                paths: &paths,
+                phases: &phases,
+                scaled_extinction: &scaled_extinction,
+                scaled_scattering: &scaled_scattering,
+                sun_cosine: eye_sun_zenith.cos(),
+                sun_optical_depths: &sun_optical_depths,
+                eye_altitude_m: sky.observer_radius_m() - ground_radius_m,
+            })
+        });
         let solution_len = degrees * levels * degrees;
         // The first order in the spherical shell, with the planet's shadow,
         // at the sun nodes from FIRST_ORDER_SUN_ZENITH_DEG on (index
@@ -973,6 +1010,7 @@ impl MultipleScatteringField {
             radiance,
             solution_len,
             moments: std::sync::OnceLock::new(),
+            polarisation,
         })
     }
 
@@ -1084,6 +1122,34 @@ impl MultipleScatteringField {
     /// degrees from a sun 5 degrees high is 85 % too bright.
     pub(crate) fn forward_cone_rad(&self) -> f64 {
         self.optics.forward_cone_rad
+    }
+
+    /// The Stokes vector of the multiply scattered light whose radiance
+    /// (scalar field) is `radiance`, toward the view of zenith cosine
+    /// `view_cosine` at azimuth `view_azimuth_rad` from the sun's
+    /// (clockwise) at the eye, into `stokes` ([component * wavelengths + i],
+    /// I, Q, U, V): the polarisation correction's ratios times `radiance`
+    /// (see `polarisation_correction.rs`). None for a scalar field.
+    pub(crate) fn compute_polarised_radiance(
+        &self,
+        (view_cosine, view_azimuth_rad): (f64, f64),
+        radiance: &[f64],
+        stokes: &mut [f64],
+    ) -> Option<()> {
+        let correction = self.polarisation.as_ref()?;
+        correction.compute_ratios(
+            &self.atmosphere,
+            &self.phases,
+            (view_cosine, view_azimuth_rad),
+            stokes,
+        );
+        let w = radiance.len();
+        for component in stokes.chunks_exact_mut(w) {
+            for (s, r) in component.iter_mut().zip(radiance) {
+                *s *= r;
+            }
+        }
+        Some(())
     }
 
     /// Work space for [`MultipleScatteringField::compute_radiance`].

@@ -67,7 +67,8 @@ use std::f64::consts::PI;
 use crate::atmosphere::phase_matrix::PhaseMatrix;
 use crate::geometry::{Vector3, direction_from_elevation_azimuth};
 use crate::transport::stokes::{
-    Mueller, meridian_reference, multiply_rotated, rotation_cos_sin_2eta, scattering_plane,
+    IDENTITY, Mueller, meridian_reference, multiply_rotated, rotation_cos_sin_2eta,
+    scattering_plane,
 };
 
 /// Stokes components carried: I, Q, U, V.
@@ -97,19 +98,22 @@ pub struct PhaseMatrixHarmonics {
 }
 
 impl PhaseMatrixHarmonics {
-    /// Harmonics 0..`harmonics` of `phase` (the phase matrix in the
-    /// scattering plane at a scattering-angle cosine, sr^-1) from the
-    /// look directions of zenith cosines `input_cosines` (weights
-    /// `input_weights`, each hemisphere's summing to 1) and from the sun at
-    /// zenith cosine `sun_cosine` into those of `output_cosines`.
+    /// Harmonics 0..`harmonics` at each of `wavelengths` wavelengths of
+    /// `phase` (which writes the phase matrix in the scattering plane at a
+    /// scattering-angle cosine for every wavelength, sr^-1) from the look
+    /// directions of zenith cosines `input_cosines` (weights
+    /// `input_weights`, each hemisphere's summing to 1), and from the sun
+    /// at zenith cosine `sun_cosine` if given (zeros if not), into those of
+    /// `output_cosines`. The rotations are computed once for all
+    /// wavelengths.
     pub(crate) fn compute(
-        phase: &dyn Fn(f64) -> PhaseMatrix,
+        phase: &dyn Fn(f64, &mut [PhaseMatrix]),
+        wavelengths: usize,
         output_cosines: &[f64],
-        input_cosines: &[f64],
-        input_weights: &[f64],
-        sun_cosine: f64,
+        (input_cosines, input_weights): (&[f64], &[f64]),
+        sun_cosine: Option<f64>,
         harmonics: usize,
-    ) -> PhaseMatrixHarmonics {
+    ) -> Vec<PhaseMatrixHarmonics> {
         let (outputs, inputs) = (output_cosines.len(), input_cosines.len());
         let nodes = 4 * harmonics.max(1) + 1;
         let step = 2.0 * PI / nodes as f64;
@@ -119,52 +123,66 @@ impl PhaseMatrixHarmonics {
             .map(|(s, c)| (c, s))
             .collect();
         let block = COMPONENTS * outputs;
-        let mut scattering = vec![0.0; harmonics * COMPONENTS * inputs * block];
-        let mut sun = vec![0.0; harmonics * block];
-        let mut accumulate = |z: &Mueller, a: usize, k: usize, column: Option<(usize, f64)>| {
-            for m in 0..harmonics {
-                let (cos_m, sin_m) = trig[k * harmonics + m];
-                for (i, row) in z.iter().enumerate() {
-                    match column {
-                        Some((b, weight)) => {
-                            for (c, value) in row.iter().enumerate() {
-                                let g = match (is_even_component(i), is_even_component(c)) {
-                                    (true, true) | (false, false) => cos_m,
-                                    (true, false) => -sin_m,
-                                    (false, true) => sin_m,
-                                };
-                                scattering[((m * COMPONENTS + c) * inputs + b) * block
-                                    + i * outputs
-                                    + a] += weight * step * value * g;
+        let mut all: Vec<PhaseMatrixHarmonics> = (0..wavelengths)
+            .map(|_| PhaseMatrixHarmonics {
+                harmonics,
+                outputs,
+                inputs,
+                scattering: vec![0.0; harmonics * COMPONENTS * inputs * block],
+                sun: vec![0.0; harmonics * block],
+            })
+            .collect();
+        let mut matrices = vec![PhaseMatrix::default(); wavelengths];
+        let inputs_and_sun = input_cosines
+            .iter()
+            .zip(input_weights)
+            .map(|(mu, w)| (*mu, Some(*w)))
+            .chain(sun_cosine.map(|mu| (mu, None)));
+        let inputs_and_sun: Vec<(f64, Option<f64>)> = inputs_and_sun.collect();
+        for (a, &mu_out) in output_cosines.iter().enumerate() {
+            for k in 0..nodes {
+                let out = LookDirection::new(mu_out, k as f64 * step);
+                for (b, &(mu_in, weight)) in inputs_and_sun.iter().enumerate() {
+                    let geometry = ScatteringGeometry::new(out, LookDirection::new(mu_in, 0.0));
+                    phase(geometry.cos_theta, &mut matrices);
+                    for (h, f) in all.iter_mut().zip(&matrices) {
+                        let z = geometry.rotate(f);
+                        for m in 0..harmonics {
+                            let (cos_m, sin_m) = trig[k * harmonics + m];
+                            for (i, row) in z.iter().enumerate() {
+                                match weight {
+                                    Some(weight) => {
+                                        let column = |c: usize| {
+                                            ((m * COMPONENTS + c) * inputs + b) * block
+                                                + i * outputs
+                                                + a
+                                        };
+                                        for (c, value) in row.iter().enumerate() {
+                                            let g = match (
+                                                is_even_component(i),
+                                                is_even_component(c),
+                                            ) {
+                                                (true, true) | (false, false) => cos_m,
+                                                (true, false) => -sin_m,
+                                                (false, true) => sin_m,
+                                            };
+                                            h.scattering[column(c)] += weight * step * value * g;
+                                        }
+                                    }
+                                    None => {
+                                        let g = if is_even_component(i) { cos_m } else { sin_m };
+                                        let norm = if m == 0 { 2.0 * PI } else { PI };
+                                        h.sun[(m * COMPONENTS + i) * outputs + a] +=
+                                            step / norm * row[0] * g;
+                                    }
+                                }
                             }
-                        }
-                        None => {
-                            let g = if is_even_component(i) { cos_m } else { sin_m };
-                            let norm = if m == 0 { 2.0 * PI } else { PI };
-                            sun[(m * COMPONENTS + i) * outputs + a] += step / norm * row[0] * g;
                         }
                     }
                 }
             }
-        };
-        for (a, &mu_out) in output_cosines.iter().enumerate() {
-            for k in 0..nodes {
-                let out = LookDirection::new(mu_out, k as f64 * step);
-                for (b, (&mu_in, &weight)) in input_cosines.iter().zip(input_weights).enumerate() {
-                    let z = rotated_phase_matrix(phase, out, LookDirection::new(mu_in, 0.0));
-                    accumulate(&z, a, k, Some((b, weight)));
-                }
-                let z = rotated_phase_matrix(phase, out, LookDirection::new(sun_cosine, 0.0));
-                accumulate(&z, a, k, None);
-            }
         }
-        PhaseMatrixHarmonics {
-            harmonics,
-            outputs,
-            inputs,
-            scattering,
-            sun,
-        }
+        all
     }
 
     pub(crate) fn harmonics(&self) -> usize {
@@ -204,7 +222,10 @@ struct LookDirection {
 
 impl LookDirection {
     fn new(mu: f64, phi_rad: f64) -> LookDirection {
-        let (elevation_deg, azimuth_deg) = (mu.clamp(-1.0, 1.0).asin().to_degrees(), phi_rad.to_degrees());
+        let (elevation_deg, azimuth_deg) = (
+            mu.clamp(-1.0, 1.0).asin().to_degrees(),
+            phi_rad.to_degrees(),
+        );
         LookDirection {
             w: direction_from_elevation_azimuth(elevation_deg, azimuth_deg),
             e_l: meridian_reference(elevation_deg, azimuth_deg),
@@ -212,42 +233,46 @@ impl LookDirection {
     }
 }
 
+/// The geometry of one scattering from the look direction `incoming`
+/// into `out`: the scattering angle and the two rotations of
 /// Z(out <- in) = L(eta_out) F(Theta) L(eta_in) (see the module docs).
-fn rotated_phase_matrix(
-    phase: &dyn Fn(f64) -> PhaseMatrix,
-    out: LookDirection,
-    incoming: LookDirection,
-) -> Mueller {
-    let (k_in, k_out) = (-incoming.w, -out.w);
-    let f = phase(k_in.dot(k_out).clamp(-1.0, 1.0));
-    let normal = scattering_plane(k_in, k_out, incoming.e_l);
-    let f_matrix: Mueller = [
-        [f.a1, f.b1, 0.0, 0.0],
-        [f.b1, f.a2, 0.0, 0.0],
-        [0.0, 0.0, f.a3, f.b2],
-        [0.0, 0.0, -f.b2, f.a4],
-    ];
-    // F L(eta_in): L(eta_in) re-refers the incoming light from its
-    // meridian frame to the scattering plane's (e_l = n x k_in).
-    let mut rotate_in = crate::transport::stokes::IDENTITY;
-    multiply_rotated(
-        &mut rotate_in,
-        rotation_cos_sin_2eta(k_in, incoming.e_l, normal.cross(k_in)),
-        &crate::transport::stokes::IDENTITY,
-    );
-    let mut z = crate::transport::stokes::IDENTITY;
-    multiply_rotated(
-        &mut z,
-        rotation_cos_sin_2eta(k_out, normal.cross(k_out), out.e_l),
-        &f_matrix,
-    );
-    let left = z;
-    for (row, out_row) in z.iter_mut().enumerate() {
-        for (col, value) in out_row.iter_mut().enumerate() {
-            *value = (0..4).map(|k| left[row][k] * rotate_in[k][col]).sum();
+#[derive(Debug, Clone, Copy)]
+struct ScatteringGeometry {
+    cos_theta: f64,
+    /// (cos 2 eta, sin 2 eta) re-referring the incoming light from its
+    /// meridian frame to the scattering plane's (e_l = n x k_in).
+    rotation_in: (f64, f64),
+    /// The scattering plane's frame (e_l = n x k_out) to the outgoing
+    /// meridian frame.
+    rotation_out: (f64, f64),
+}
+
+impl ScatteringGeometry {
+    fn new(out: LookDirection, incoming: LookDirection) -> ScatteringGeometry {
+        let (k_in, k_out) = (-incoming.w, -out.w);
+        let normal = scattering_plane(k_in, k_out, incoming.e_l);
+        ScatteringGeometry {
+            cos_theta: k_in.dot(k_out).clamp(-1.0, 1.0),
+            rotation_in: rotation_cos_sin_2eta(k_in, incoming.e_l, normal.cross(k_in)),
+            rotation_out: rotation_cos_sin_2eta(k_out, normal.cross(k_out), out.e_l),
         }
     }
-    z
+
+    /// L(eta_out) F L(eta_in) for the phase matrix `f` at this angle.
+    fn rotate(&self, f: &PhaseMatrix) -> Mueller {
+        let (c1, s1) = self.rotation_in;
+        // F L(eta_in), column by column (L's columns 1 and 2 are
+        // (0, c, -s, 0) and (0, s, c, 0)).
+        let f_l: Mueller = [
+            [f.a1, c1 * f.b1, s1 * f.b1, 0.0],
+            [f.b1, c1 * f.a2, s1 * f.a2, 0.0],
+            [0.0, -s1 * f.a3, c1 * f.a3, f.b2],
+            [0.0, s1 * f.b2, -c1 * f.b2, f.a4],
+        ];
+        let mut z = IDENTITY;
+        multiply_rotated(&mut z, self.rotation_out, &f_l);
+        z
+    }
 }
 
 #[cfg(test)]
@@ -283,13 +308,14 @@ mod tests {
         let scalar = TruncatedPhase::from_moments(&moments, total);
         let sun_cosine = 0.37;
         let harmonics = PhaseMatrixHarmonics::compute(
-            &|c| rayleigh_phase_matrix(rho, c),
+            &|c, out| out[0] = rayleigh_phase_matrix(rho, c),
+            1,
             &mu,
-            &mu,
-            &w,
-            sun_cosine,
+            (&mu, &w),
+            Some(sun_cosine),
             total,
-        );
+        )
+        .remove(0);
         let mut lambda = vec![vec![0.0; total * total]; total];
         for (a, m) in mu.iter().enumerate() {
             normalized_associated_legendre(*m, total, &mut lambda[a]);
@@ -302,12 +328,18 @@ mod tests {
                 for b in 0..total {
                     let expected = 2.0 * PI * w[b] * scalar.harmonic(m, &lambda[a], &lambda[b]);
                     let got = matrix[b * COMPONENTS * total + a];
-                    assert!((got - expected).abs() < 1e-14, "m {m} a {a} b {b}: {got} vs {expected}");
+                    assert!(
+                        (got - expected).abs() < 1e-14,
+                        "m {m} a {a} b {b}: {got} vs {expected}"
+                    );
                 }
                 let factor = if m == 0 { 1.0 } else { 2.0 };
                 let expected = factor * scalar.harmonic(m, &lambda[a], &sun_lambda);
                 let got = harmonics.sun(m)[a];
-                assert!((got - expected).abs() < 1e-14, "sun m {m} a {a}: {got} vs {expected}");
+                assert!(
+                    (got - expected).abs() < 1e-14,
+                    "sun m {m} a {a}: {got} vs {expected}"
+                );
             }
             assert_eq!(harmonics.harmonic_vanishes(m), m > 2, "m {m}");
         }
@@ -320,14 +352,22 @@ mod tests {
         let phase = |c: f64| rayleigh_phase_matrix(rho, c);
         let (mu, w) = double_gauss(3);
         let sun_cosine = 0.5;
-        let harmonics = PhaseMatrixHarmonics::compute(&phase, &mu, &mu, &w, sun_cosine, 6);
+        let harmonics = PhaseMatrixHarmonics::compute(
+            &|c, out| out[0] = phase(c),
+            1,
+            &mu,
+            (&mu, &w),
+            Some(sun_cosine),
+            6,
+        )
+        .remove(0);
         for (a, &m_a) in mu.iter().enumerate() {
             for phi in [0.3f64, 1.2, 2.9, 4.4] {
-                let z = rotated_phase_matrix(
-                    &phase,
+                let geometry = ScatteringGeometry::new(
                     LookDirection::new(m_a, phi),
                     LookDirection::new(sun_cosine, 0.0),
                 );
+                let z = geometry.rotate(&phase(geometry.cos_theta));
                 for (i, row) in z.iter().enumerate() {
                     let synthesised: f64 = (0..6)
                         .map(|m| {
@@ -344,6 +384,44 @@ mod tests {
                         "mu {m_a} phi {phi} i {i}: {synthesised} vs {}",
                         row[0]
                     );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_rotated_matrix_is_the_product_of_the_three_matrices() {
+        // ScatteringGeometry::rotate's expanded F L(eta_in) against the
+        // plain product L(eta_out) F L(eta_in), with a Mie-like matrix
+        // (every element non-zero).
+        let f = PhaseMatrix {
+            a1: 0.9,
+            a2: 0.7,
+            a3: 0.5,
+            a4: 0.4,
+            b1: -0.3,
+            b2: 0.2,
+        };
+        let f_matrix: Mueller = [
+            [f.a1, f.b1, 0.0, 0.0],
+            [f.b1, f.a2, 0.0, 0.0],
+            [0.0, 0.0, f.a3, f.b2],
+            [0.0, 0.0, -f.b2, f.a4],
+        ];
+        for (mu_out, phi, mu_in) in [(0.3, 1.0, 0.8), (-0.6, 2.5, 0.2), (0.9, 4.0, -0.4)] {
+            let geometry = ScatteringGeometry::new(
+                LookDirection::new(mu_out, phi),
+                LookDirection::new(mu_in, 0.0),
+            );
+            let mut rotate_in = IDENTITY;
+            multiply_rotated(&mut rotate_in, geometry.rotation_in, &IDENTITY);
+            let mut left = IDENTITY;
+            multiply_rotated(&mut left, geometry.rotation_out, &f_matrix);
+            let z = geometry.rotate(&f);
+            for r in 0..4 {
+                for c in 0..4 {
+                    let expected: f64 = (0..4).map(|k| left[r][k] * rotate_in[k][c]).sum();
+                    assert!((z[r][c] - expected).abs() < 1e-15, "{r} {c}");
                 }
             }
         }

@@ -36,7 +36,6 @@ use super::successive_orders::{ColumnSystem, MAX_ITERATIONS, StoppingRule, Sweep
 #[derive(Debug, Clone)]
 pub struct VectorColumnSystem<'a> {
     scalar: ColumnSystem<'a>,
-    harmonics: usize,
     active_harmonics: Vec<bool>,
     /// Per harmonic and level the (4 streams) x (4 streams) matrix
     /// sum_j omega_j w_b Z^m_j(mu_a, mu_b), by columns (c, b):
@@ -86,7 +85,6 @@ impl<'a> VectorColumnSystem<'a> {
         }
         VectorColumnSystem {
             scalar,
-            harmonics: total,
             active_harmonics,
             scattering_matrices,
             sun_sources,
@@ -96,7 +94,8 @@ impl<'a> VectorColumnSystem<'a> {
     /// The values of a field: harmonics x components x levels x streams,
     /// [((m * 4 + i) * levels + k) * streams + a].
     pub(crate) fn field_len(&self) -> usize {
-        self.harmonics * COMPONENTS * self.scalar.grid.levels() * self.scalar.streams.count()
+        let total = self.scalar.streams.count();
+        total * COMPONENTS * self.scalar.grid.levels() * total
     }
 
     /// Solves for the sun at zenith cosine `sun_cosine` (the one the
@@ -145,7 +144,8 @@ impl<'a> VectorColumnSystem<'a> {
                 }
             }
             let field = &mut radiance[m * field_size..(m + 1) * field_size];
-            let matrices = &self.scattering_matrices[m * levels * size * size..][..levels * size * size];
+            let matrices =
+                &self.scattering_matrices[m * levels * size * size..][..levels * size * size];
             source.copy_from_slice(direct_source);
             let mut stopping = StoppingRule::new();
             for _ in 0..MAX_ITERATIONS {
@@ -304,13 +304,14 @@ mod tests {
             .iter()
             .map(|p| {
                 PhaseMatrixHarmonics::compute(
-                    &|c| PhaseMatrix::non_polarising(p.eval(c)),
+                    &|c, out| out[0] = PhaseMatrix::non_polarising(p.eval(c)),
+                    1,
                     slab.streams.cosines(),
-                    slab.streams.cosines(),
-                    slab.streams.weights(),
-                    sun_cosine,
+                    (slab.streams.cosines(), slab.streams.weights()),
+                    Some(sun_cosine),
                     total,
                 )
+                .remove(0)
             })
             .collect();
         let vector = VectorColumnSystem::new(scalar.clone(), &harmonics.iter().collect::<Vec<_>>());
@@ -319,7 +320,13 @@ mod tests {
         let mut scalar_field = vec![0.0; total * levels * total];
         let mut vector_field = vec![0.0; vector.field_len()];
         let mut work = Vec::new();
-        let scalar_down = scalar.solve(sun_cosine, &transmittance, None, &mut scalar_field, &mut work);
+        let scalar_down = scalar.solve(
+            sun_cosine,
+            &transmittance,
+            None,
+            &mut scalar_field,
+            &mut work,
+        );
         let vector_down = vector.solve(sun_cosine, &transmittance, &mut vector_field, &mut work);
         assert!((vector_down - scalar_down).abs() < 1e-12 * scalar_down);
         let block = levels * total;
@@ -378,9 +385,17 @@ mod tests {
         }];
         let solar = PI;
         let scalar = ColumnSystem::new(&slab.streams, &slab.grid, None, species, solar, albedo);
-        let phase = |c: f64| rayleigh_phase_matrix(0.0, c);
+        let phase = |c: f64, out: &mut [PhaseMatrix]| out[0] = rayleigh_phase_matrix(0.0, c);
         let (cosines, weights) = (slab.streams.cosines(), slab.streams.weights());
-        let harmonics = PhaseMatrixHarmonics::compute(&phase, cosines, cosines, weights, sun_cosine, total);
+        let harmonics = PhaseMatrixHarmonics::compute(
+            &phase,
+            1,
+            cosines,
+            (cosines, weights),
+            Some(sun_cosine),
+            total,
+        )
+        .remove(0);
         let vector = VectorColumnSystem::new(scalar, &[&harmonics]);
         let transmittance = slab.sun_transmittance(&betas, sun_cosine);
         let mut field = vec![0.0; vector.field_len()];
@@ -392,7 +407,15 @@ mod tests {
         views
             .iter()
             .map(|&(mu, phi_deg)| {
-                let rows = PhaseMatrixHarmonics::compute(&phase, &[-mu], cosines, weights, sun_cosine, total);
+                let rows = PhaseMatrixHarmonics::compute(
+                    &phase,
+                    1,
+                    &[-mu],
+                    (cosines, weights),
+                    Some(sun_cosine),
+                    total,
+                )
+                .remove(0);
                 let mut stokes = [0.0; 3];
                 for m in 0..total {
                     let matrix = rows.scattering(m);
@@ -415,8 +438,8 @@ mod tests {
                         .collect();
                     let mut radiance = [0.0; COMPONENTS];
                     if m == 0 {
-                        radiance[0] = albedo / PI
-                            * (diffuse_down + solar * sun_cosine * transmittance[0]);
+                        radiance[0] =
+                            albedo / PI * (diffuse_down + solar * sun_cosine * transmittance[0]);
                     }
                     for k in 0..levels - 1 {
                         let (one_minus_e, c) = linear_source_weights(dtau[k] / mu);

@@ -56,7 +56,8 @@ fn worst_errors_against_disort(ground_albedo: f64) -> [f64; 3] {
     for sun_elevation in [36.0, 60.0] {
         let sky = sky(&atmosphere, sun_elevation, 0.0);
         let field =
-            MultipleScatteringField::compute(&sky, MultipleScatteringSettings::default()).unwrap();
+            MultipleScatteringField::compute(&sky, MultipleScatteringSettings::default(), false)
+                .unwrap();
         let table = MultipleScatteringTable::compute(field.clone());
         let image_sky = Sky::from_scene(
             sky.clone(),
@@ -170,7 +171,8 @@ fn multiple_scattering_adds_light_relatively_more_in_the_blue() {
     for sun_elevation in [60.0, 20.0] {
         let sky = sky(&atmosphere, sun_elevation, 0.0);
         let field =
-            MultipleScatteringField::compute(&sky, MultipleScatteringSettings::default()).unwrap();
+            MultipleScatteringField::compute(&sky, MultipleScatteringSettings::default(), false)
+                .unwrap();
         for view in directions(60).into_iter().filter(|v| v.z > 0.0) {
             let (single, multiple) = both(&sky, &field, view);
             assert!(multiple.iter().all(|m| *m > 0.0), "{view:?}: {multiple:?}");
@@ -196,7 +198,7 @@ fn multiple_scattering_is_finite_and_non_negative_everywhere() {
         ] {
             let sky = sky(&atmosphere, sun_elevation, altitude);
             let table = MultipleScatteringTable::compute(
-                MultipleScatteringField::compute(&sky, settings).unwrap(),
+                MultipleScatteringField::compute(&sky, settings, false).unwrap(),
             );
             let mut scratch = table.scratch();
             let mut radiance = vec![0.0; sky.optics().grid.len()];
@@ -228,7 +230,8 @@ fn twilight_zenith_is_brighter_than_single_scattering() {
     for sun_elevation in [-2.0, -4.0, -6.0] {
         let sky = sky(&atmosphere, sun_elevation, 0.0);
         let field =
-            MultipleScatteringField::compute(&sky, MultipleScatteringSettings::default()).unwrap();
+            MultipleScatteringField::compute(&sky, MultipleScatteringSettings::default(), false)
+                .unwrap();
         let (single, multiple) = both(&sky, &field, zenith);
         eprintln!(
             "sun {sun_elevation}: zenith multiple / single {:.3} at 380 nm, {:.3} at 780 nm",
@@ -263,9 +266,10 @@ fn default_resolution_is_converged_on_the_spherical_sky() {
     };
     for sun_elevation in [90.0, 30.0, 5.0] {
         let sky = sky(&atmosphere, sun_elevation, 0.0);
-        let reference = MultipleScatteringField::compute(&sky, fine).unwrap();
+        let reference = MultipleScatteringField::compute(&sky, fine, false).unwrap();
         let table = MultipleScatteringTable::compute(
-            MultipleScatteringField::compute(&sky, MultipleScatteringSettings::default()).unwrap(),
+            MultipleScatteringField::compute(&sky, MultipleScatteringSettings::default(), false)
+                .unwrap(),
         );
         let (mut worst_field, mut worst_table) = (0.0f64, 0.0f64);
         let mut radiance = vec![0.0; sky.optics().grid.len()];
@@ -314,7 +318,8 @@ fn compare_with_path_tracer(
     for (n, &sun_elevation) in suns.iter().enumerate() {
         let sky = sky(&atmosphere, sun_elevation, 0.0);
         let table = MultipleScatteringTable::compute(
-            MultipleScatteringField::compute(&sky, MultipleScatteringSettings::default()).unwrap(),
+            MultipleScatteringField::compute(&sky, MultipleScatteringSettings::default(), false)
+                .unwrap(),
         );
         let tracer = PathTracer::new(&sky);
         let mut scratch = table.scratch();
