@@ -1,5 +1,6 @@
-//! `sora spectrum --stokes`: the columns, their meaning, and the choices
-//! that cannot give Stokes vectors.
+//! `sora spectrum --stokes`: the columns, their meaning, the polarised
+//! intensity of the default method, and the choices that cannot give
+//! Stokes vectors.
 
 mod common;
 
@@ -120,32 +121,53 @@ fn path_traced_stokes_have_standard_errors_in_json() {
 }
 
 #[test]
+fn the_default_method_gives_the_polarised_intensity_of_all_orders() {
+    // Sun 30, view 30 degrees up at 90 degrees from it: the polarised
+    // intensity is below the scalar one (the scalar field overestimates the
+    // light there, most in the blue), and the light is strongly polarised.
+    let view = ["--view-elevation", "30", "--view-azimuth", "90"];
+    let scalar = run(&[&RAYLEIGH_SUN_30[..], &view[..]].concat());
+    let vector = run(&[&RAYLEIGH_SUN_30[..], &view[..], &["--stokes"]].concat());
+    let header = vector.lines().next().unwrap();
+    let column = |name: &str| header.split(',').position(|c| c == name).unwrap();
+    let (radiance, degree) = (
+        column("radiance_w_m2_sr_nm"),
+        column("degree_of_linear_polarisation"),
+    );
+    for (s, v) in scalar.lines().skip(1).zip(vector.lines().skip(1)) {
+        let (s, v): (Vec<&str>, Vec<&str>) = (s.split(',').collect(), v.split(',').collect());
+        let ratio = v[radiance].parse::<f64>().unwrap() / s[radiance].parse::<f64>().unwrap();
+        assert!(
+            (0.97..0.999).contains(&ratio),
+            "{} nm: vector / scalar {ratio}",
+            v[0]
+        );
+        let d: f64 = v[degree].parse().unwrap();
+        assert!((0.6..0.9).contains(&d), "{} nm: degree {d}", v[0]);
+    }
+}
+
+#[test]
 fn choices_without_stokes_vectors_are_one_line_errors() {
-    for (extra, expected) in [
-        (
-            &["--view-elevation", "60", "--view-azimuth", "0"][..],
-            "path tracer",
-        ),
-        (
-            &[
-                "--view-elevation",
-                "60",
-                "--view-azimuth",
-                "0",
-                "--method",
-                "reference",
-                "--scattering",
-                "single",
-            ][..],
+    // The reference march is scalar, single or multiple scattering.
+    for scattering in ["single", "multiple"] {
+        let extra = [
+            "--view-elevation",
+            "60",
+            "--view-azimuth",
+            "0",
+            "--method",
             "reference",
-        ),
-    ] {
-        let out = sora(&[&RAYLEIGH_SUN_30[..], extra, &["--stokes"]].concat());
+            "--scattering",
+            scattering,
+            "--stokes",
+        ];
+        let out = sora(&[&RAYLEIGH_SUN_30[..], &extra[..]].concat());
         assert!(!out.status.success());
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert_eq!(stderr.lines().count(), 1, "{stderr}");
         assert!(
-            stderr.contains("polarisation") && stderr.contains(expected),
+            stderr.contains("polarisation") && stderr.contains("reference"),
             "{stderr}"
         );
         assert!(out.stdout.is_empty());

@@ -68,9 +68,20 @@ def test_mie_aerosols_polarise():
     assert np.all((degree > 0.3) & (degree < 0.95))
 
 
+def test_the_fast_method_polarises_all_orders(rayleigh):
+    vector = sora.Sky(rayleigh, sun_elevation_deg=30, polarisation="vector")
+    scalar = sora.Sky(rayleigh, sun_elevation_deg=30)
+    stokes = vector.stokes(30, 90)
+    intensity = stokes["I"].values
+    ratio = intensity / scalar.radiance(30, 90).values
+    assert np.all((ratio > 0.97) & (ratio < 0.999))
+    with pytest.raises(ValueError, match="polarisation"):
+        vector.render(width=8, height=8)
+
+
 def test_choices_without_stokes_vectors_raise(rayleigh):
     with pytest.raises(ValueError, match="polarisation"):
-        sora.Sky(rayleigh, sun_elevation_deg=30, polarisation="vector")
+        sora.Sky(rayleigh, sun_elevation_deg=30, method="reference", polarisation="vector")
     with pytest.raises(ValueError, match="'scalar' or 'vector'"):
         sora.Sky(rayleigh, sun_elevation_deg=30, polarisation="circular")
     with pytest.raises(ValueError, match="polarisation='vector'"):

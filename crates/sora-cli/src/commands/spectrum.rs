@@ -39,9 +39,10 @@ use crate::arguments::{
 ///       --view-elevation 17 --view-azimuth 347 --method path-tracing --samples 100000
 ///   sora spectrum --preset earth-clear --sun-elevation 30 --almucantar 5
 ///
-/// Polarisation (--stokes): the Stokes vector of the light, from the path
-/// tracer (all orders) or from single scattering (--scattering single):
-/// adds the columns q_w_m2_sr_nm,u_w_m2_sr_nm,v_w_m2_sr_nm,
+/// Polarisation (--stokes): the Stokes vector of the light, all orders, by
+/// the fast method (its multiple scattering polarised by a column solved
+/// with Stokes vectors at the eye's sun; docs/polarisation.md) or the path
+/// tracer; adds the columns q_w_m2_sr_nm,u_w_m2_sr_nm,v_w_m2_sr_nm,
 /// degree_of_linear_polarisation,angle_of_polarisation_deg, and the
 /// radiance column becomes the polarised intensity I. Q and U are referred
 /// to the view's meridian plane (the vertical plane through the view): Q > 0
@@ -115,7 +116,7 @@ pub struct SpectrumArgs {
     method: MethodOptions,
 
     /// Polarised light: Stokes Q, U, V, the degree and the angle of
-    /// polarisation (with --method path-tracing, or --scattering single)
+    /// polarisation (the fast method or path tracing; not the reference)
     #[arg(long)]
     stokes: bool,
 

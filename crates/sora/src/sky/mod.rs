@@ -134,9 +134,11 @@ pub enum Polarisation {
     /// Stokes vectors through every scattering: the polarised intensity and
     /// Q, U and V, referred to the meridian plane of each view (the
     /// convention is in `transport/stokes.rs`, summarised at
-    /// [`Stokes`]). So far from the path tracer (all orders) and from the
-    /// fast method with [`Scattering::Single`]; Mie species get their
-    /// phase matrix computed when the sky is built.
+    /// [`Stokes`]). From the path tracer and from the fast method (all
+    /// orders; its multiple scattering polarised by a column solved with
+    /// Stokes vectors, `docs/polarisation.md`), per view: images of a
+    /// polarised sky with multiple scattering are not made yet. Mie species
+    /// get their phase matrix computed when the sky is built.
     Vector,
 }
 

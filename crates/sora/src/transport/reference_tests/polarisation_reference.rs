@@ -383,7 +383,11 @@ fn the_fast_method_matches_the_coulson_tables() {
             for (c, name) in ["I", "Q", "U"].iter().enumerate() {
                 let error = (mapped[c] - row[3 + c]).abs();
                 let place = format!("{name} at albedo {albedo} mu {} phi {}", row[1], row[2]);
-                println!("{place}: {:.8} vs table {:.8} ({error:.1e})", mapped[c], row[3 + c]);
+                println!(
+                    "{place}: {:.8} vs table {:.8} ({error:.1e})",
+                    mapped[c],
+                    row[3 + c]
+                );
                 if error > worst.0 {
                     worst = (error, place);
                 }
@@ -436,7 +440,10 @@ fn the_fast_method_matches_the_vector_path_tracer() {
         let q_u_errors = ts.standard_errors_w_m2_sr_nm.unwrap();
         for i in 0..grid.len() {
             let (fi, ti) = (fast.radiance_w_m2_sr_nm[i], traced.radiance_w_m2_sr_nm[i]);
-            let place = format!("{preset} sun {sun:?} view {view:?} {} nm", grid.wavelength_nm(i));
+            let place = format!(
+                "{preset} sun {sun:?} view {view:?} {} nm",
+                grid.wavelength_nm(i)
+            );
             let allowed = 0.01 * ti + 3.0 * errors[i];
             println!(
                 "{place}: I fast / traced {:.4} (+- {:.4}), scalar / traced {:.4}",
@@ -450,15 +457,24 @@ fn the_fast_method_matches_the_vector_path_tracer() {
             let td = degree(ts.q_w_m2_sr_nm[i], ts.u_w_m2_sr_nm[i], ti);
             let degree_error = q_u_errors[0][i].hypot(q_u_errors[1][i]) / ti;
             println!("  degree {fd:.4} vs {td:.4} (+- {degree_error:.4})");
-            assert!((fd - td).abs() <= 0.01 + 3.0 * degree_error, "{place}: degree {fd} vs {td}");
+            assert!(
+                (fd - td).abs() <= 0.01 + 3.0 * degree_error,
+                "{place}: degree {fd} vs {td}"
+            );
             if td > 0.05 {
                 let fa = angle_deg(fs.q_w_m2_sr_nm[i], fs.u_w_m2_sr_nm[i]);
                 let ta = angle_deg(ts.q_w_m2_sr_nm[i], ts.u_w_m2_sr_nm[i]);
-                assert!(angle_difference_deg(fa, ta) <= 1.0, "{place}: angle {fa} vs {ta}");
+                assert!(
+                    angle_difference_deg(fa, ta) <= 1.0,
+                    "{place}: angle {fa} vs {ta}"
+                );
             }
             if k == 0 && i == 0 {
                 let si = scalar.radiance_w_m2_sr_nm[i];
-                assert!((si - ti).abs() > 0.03 * ti + 3.0 * errors[i], "{place}: scalar {si}");
+                assert!(
+                    (si - ti).abs() > 0.03 * ti + 3.0 * errors[i],
+                    "{place}: scalar {si}"
+                );
             }
         }
     }
