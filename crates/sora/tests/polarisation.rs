@@ -189,13 +189,26 @@ fn path_traced_stokes_come_with_standard_errors() {
 #[test]
 fn choices_without_stokes_vectors_are_refused() {
     let rayleigh = rayleigh(0.0);
-    let error = Sky::builder(&rayleigh)
+    // The fast method polarises every order per view, not yet in images.
+    let sky = Sky::builder(&rayleigh)
         .polarisation(Polarisation::Vector)
         .build()
+        .unwrap();
+    assert!(
+        sky.radiance(ViewDirection::new(30.0, 90.0).unwrap())
+            .unwrap()
+            .stokes
+            .is_some()
+    );
+    let error = sky
+        .render_spectral(
+            &sora::ImageSettings::new(sora::Camera::Fisheye, 8, 8),
+            &|_| {},
+        )
         .unwrap_err()
         .to_string();
     assert!(
-        error.contains("polarisation") && error.contains("path-tracing"),
+        error.contains("polarisation") && error.contains("images"),
         "{error}"
     );
     let error = Sky::builder(&rayleigh)
