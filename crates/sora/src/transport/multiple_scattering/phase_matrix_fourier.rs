@@ -337,7 +337,10 @@ impl PhaseMatrixHarmonics {
     pub(crate) fn harmonic_vanishes(&self, m: usize) -> bool {
         // Harmonic 0's I <- I block holds the largest values (w_b times the
         // phase function's mean over azimuth, 2 pi p_0 > 0).
-        let largest = self.scattering(0).iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let largest = self
+            .scattering(0)
+            .iter()
+            .fold(0.0f64, |a, v| a.max(v.abs()));
         self.scattering(m)
             .iter()
             .chain(self.sun(m))
