@@ -36,14 +36,8 @@ use super::successive_orders::{ColumnSystem, MAX_ITERATIONS, StoppingRule, Sweep
 #[derive(Debug, Clone)]
 pub struct VectorColumnSystem<'a> {
     scalar: ColumnSystem<'a>,
+    harmonics: Vec<&'a PhaseMatrixHarmonics>,
     active_harmonics: Vec<bool>,
-    /// Per harmonic and level the (4 streams) x (4 streams) matrix
-    /// sum_j omega_j w_b Z^m_j(mu_a, mu_b), by columns (c, b):
-    /// [(m * levels + k) * size^2 + (c * streams + b) * size + i * streams + a],
-    /// size = 4 streams.
-    scattering_matrices: Vec<f64>,
-    /// Per harmonic and level E sum_j omega_j B^m_j: [(m * levels + k) * size + i * streams + a].
-    sun_sources: Vec<f64>,
 }
 
 impl<'a> VectorColumnSystem<'a> {
@@ -52,42 +46,50 @@ impl<'a> VectorColumnSystem<'a> {
     /// streams).
     pub(crate) fn new(
         scalar: ColumnSystem<'a>,
-        harmonics: &[&PhaseMatrixHarmonics],
+        harmonics: &[&'a PhaseMatrixHarmonics],
     ) -> VectorColumnSystem<'a> {
-        let levels = scalar.grid.levels();
         let total = scalar.streams.count();
-        let size = COMPONENTS * total;
-        let species = harmonics.len();
         debug_assert!(harmonics.iter().all(|h| h.harmonics() == total));
         let active_harmonics: Vec<bool> = (0..total)
             .map(|m| harmonics.iter().any(|h| !h.harmonic_vanishes(m)))
             .collect();
-        let mut scattering_matrices = vec![0.0; total * levels * size * size];
-        let mut sun_sources = vec![0.0; total * levels * size];
-        for m in (0..total).filter(|m| active_harmonics[*m]) {
-            for k in 0..levels {
-                let at = (m * levels + k) * size;
-                let matrix = &mut scattering_matrices[at * size..(at + size) * size];
-                let sun = &mut sun_sources[at..at + size];
-                for (j, h) in harmonics.iter().enumerate() {
-                    let omega = scalar.level_albedo[k * species + j];
-                    if omega == 0.0 {
-                        continue;
-                    }
-                    for (out, value) in matrix.iter_mut().zip(h.scattering(m)) {
-                        *out += omega * value;
-                    }
-                    for (out, value) in sun.iter_mut().zip(h.sun(m)) {
-                        *out += scalar.solar_irradiance * omega * value;
-                    }
-                }
-            }
-        }
         VectorColumnSystem {
             scalar,
+            harmonics: harmonics.to_vec(),
             active_harmonics,
-            scattering_matrices,
-            sun_sources,
+        }
+    }
+
+    /// Harmonic m's matrix at every level,
+    /// sum_j omega_j w_b Z^m_j(mu_a, mu_b) by columns (c, b),
+    /// [k * size^2 + (c * streams + b) * size + i * streams + a] (size = 4
+    /// streams), and its sun source E sum_j omega_j B^m_j,
+    /// [k * size + i * streams + a]; made per harmonic, in the solve's
+    /// work space, rather than for all harmonics at once (16 MB at 8
+    /// streams per hemisphere and 40 layers).
+    fn mix_harmonic(&self, m: usize, matrices: &mut [f64], sun_sources: &mut [f64]) {
+        let scalar = &self.scalar;
+        let species = self.harmonics.len();
+        let size = COMPONENTS * scalar.streams.count();
+        matrices.fill(0.0);
+        sun_sources.fill(0.0);
+        for ((k, matrix), sun) in matrices
+            .chunks_exact_mut(size * size)
+            .enumerate()
+            .zip(sun_sources.chunks_exact_mut(size))
+        {
+            for (j, h) in self.harmonics.iter().enumerate() {
+                let omega = scalar.level_albedo[k * species + j];
+                if omega == 0.0 {
+                    continue;
+                }
+                for (out, value) in matrix.iter_mut().zip(h.scattering(m)) {
+                    *out += omega * value;
+                }
+                for (out, value) in sun.iter_mut().zip(h.sun(m)) {
+                    *out += scalar.solar_irradiance * omega * value;
+                }
+            }
         }
     }
 
@@ -117,8 +119,13 @@ impl<'a> VectorColumnSystem<'a> {
         let size = COMPONENTS * total;
         let block = levels * total;
         let field_size = COMPONENTS * block;
-        work.resize(4 * field_size + 2 * size + 2 * levels, 0.0);
-        let (direct_source, rest) = work.split_at_mut(field_size);
+        work.resize(
+            4 * field_size + levels * size * (size + 1) + 2 * size + 2 * levels,
+            0.0,
+        );
+        let (matrices, rest) = work.split_at_mut(levels * size * size);
+        let (sun_sources, rest) = rest.split_at_mut(levels * size);
+        let (direct_source, rest) = rest.split_at_mut(field_size);
         let (source, rest) = rest.split_at_mut(field_size);
         let (previous, rest) = rest.split_at_mut(field_size);
         let (increment, rest) = rest.split_at_mut(field_size);
@@ -132,10 +139,11 @@ impl<'a> VectorColumnSystem<'a> {
         };
         let mut ground_diffuse_irradiance = 0.0;
         for m in (0..total).filter(|m| self.active_harmonics[*m]) {
+            self.mix_harmonic(m, matrices, sun_sources);
             // Single scattering of the sun's beam into every stream and
             // component.
             for k in 0..levels {
-                let sun = &self.sun_sources[(m * levels + k) * size..][..size];
+                let sun = &sun_sources[k * size..][..size];
                 for i in 0..COMPONENTS {
                     for a in 0..total {
                         direct_source[i * block + k * total + a] =
@@ -144,8 +152,6 @@ impl<'a> VectorColumnSystem<'a> {
                 }
             }
             let field = &mut radiance[m * field_size..(m + 1) * field_size];
-            let matrices =
-                &self.scattering_matrices[m * levels * size * size..][..levels * size * size];
             source.copy_from_slice(direct_source);
             let mut stopping = StoppingRule::new();
             for _ in 0..MAX_ITERATIONS {

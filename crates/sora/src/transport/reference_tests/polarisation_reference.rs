@@ -479,3 +479,102 @@ fn the_fast_method_matches_the_vector_path_tracer() {
         }
     }
 }
+
+/// The whole grid, fast against the vector path tracer (the README
+/// names it): us-standard-1976-rayleigh, earth-clear and mars-dust; suns
+/// 60, 30, 10 and 5 degrees; the zenith and views 10, 30 and 60 degrees up
+/// at 0, 90 and 180 degrees from the sun; 440, 560 and 680 nm; 100 000
+/// paths a view. Prints every comparison and the worst of each quantity,
+/// and holds I to 1 % + 3 standard errors, the degree to 0.01 + 3 standard
+/// errors, the angle to 1 degree where the degree is above 0.05.
+/// `cargo test --release -p sora --lib -- --ignored fast_polarisation_over_the_whole_grid --nocapture`
+#[test]
+#[ignore = "minutes: 120 path-traced views"]
+fn fast_polarisation_over_the_whole_grid() {
+    let grid = WavelengthGrid::new(440.0, 680.0, 120.0).unwrap();
+    let mut views = vec![(90.0, 0.0)];
+    for elevation in [10.0, 30.0, 60.0] {
+        for azimuth in [0.0, 90.0, 180.0] {
+            views.push((elevation, azimuth));
+        }
+    }
+    let mut failures = Vec::new();
+    let mut worst = [
+        (0.0f64, String::new()),
+        (0.0, String::new()),
+        (0.0, String::new()),
+    ];
+    for preset in ["us-standard-1976-rayleigh", "earth-clear", "mars-dust"] {
+        let atmosphere = Atmosphere::preset(preset).unwrap();
+        for sun in [60.0, 30.0, 10.0, 5.0] {
+            let sky = |method| {
+                crate::Sky::builder(&atmosphere)
+                    .sun_deg(sun, 0.0)
+                    .wavelengths(grid)
+                    .method(method)
+                    .polarisation(crate::Polarisation::Vector)
+                    .build()
+                    .unwrap()
+            };
+            let directions: Vec<crate::ViewDirection> = views
+                .iter()
+                .map(|v| crate::ViewDirection::new(v.0, v.1).unwrap())
+                .collect();
+            let fast = sky(crate::Method::Fast).radiances(&directions).unwrap();
+            let traced = sky(crate::Method::PathTracing {
+                samples: 100_000,
+                seed: 7,
+            })
+            .radiances(&directions)
+            .unwrap();
+            for ((view, f), t) in views.iter().zip(&fast).zip(&traced) {
+                let (fs, ts) = (f.stokes.as_ref().unwrap(), t.stokes.as_ref().unwrap());
+                let errors = t.standard_error_w_m2_sr_nm.as_ref().unwrap();
+                let qu = ts.standard_errors_w_m2_sr_nm.as_ref().unwrap();
+                for i in 0..grid.len() {
+                    let place = format!(
+                        "{preset} sun {sun} view {view:?} {} nm",
+                        grid.wavelength_nm(i)
+                    );
+                    let (fi, ti) = (f.radiance_w_m2_sr_nm[i], t.radiance_w_m2_sr_nm[i]);
+                    let fd = fs.q_w_m2_sr_nm[i].hypot(fs.u_w_m2_sr_nm[i]) / fi;
+                    let td = ts.q_w_m2_sr_nm[i].hypot(ts.u_w_m2_sr_nm[i]) / ti;
+                    let degree_error = qu[0][i].hypot(qu[1][i]) / ti;
+                    let angle = if td > 0.05 {
+                        angle_difference_deg(
+                            angle_deg(fs.q_w_m2_sr_nm[i], fs.u_w_m2_sr_nm[i]),
+                            angle_deg(ts.q_w_m2_sr_nm[i], ts.u_w_m2_sr_nm[i]),
+                        )
+                    } else {
+                        0.0
+                    };
+                    println!(
+                        "{place}: I {:+.2} % (se {:.2} %), degree {fd:.4} vs {td:.4} (se {degree_error:.4}), angle {angle:.2}",
+                        100.0 * (fi / ti - 1.0),
+                        100.0 * errors[i] / ti
+                    );
+                    let measures = [(fi / ti - 1.0).abs(), (fd - td).abs(), angle];
+                    for (w, m) in worst.iter_mut().zip(measures) {
+                        if m > w.0 {
+                            *w = (m, place.clone());
+                        }
+                    }
+                    if (fi - ti).abs() > 0.01 * ti + 3.0 * errors[i]
+                        || (fd - td).abs() > 0.01 + 3.0 * degree_error
+                        || angle > 1.0
+                    {
+                        failures.push(place);
+                    }
+                }
+            }
+        }
+    }
+    println!("worst I {:.2} % at {}", 100.0 * worst[0].0, worst[0].1);
+    println!("worst degree {:.4} at {}", worst[1].0, worst[1].1);
+    println!("worst angle {:.2} deg at {}", worst[2].0, worst[2].1);
+    assert!(
+        failures.is_empty(),
+        "{} outside: {failures:#?}",
+        failures.len()
+    );
+}
