@@ -110,6 +110,36 @@ fn truncated_phase_matrix_into(
     }
 }
 
+/// Each species' harmonics of its truncated phase matrix from the streams
+/// (and the sun, if given) into the look directions of zenith cosines
+/// `outputs`, at every wavelength: [j][i].
+fn compute_species_harmonics(
+    optics: &AtmosphereOptics,
+    phases: &[TruncatedPhase],
+    streams: &Streams,
+    outputs: &[f64],
+    sun_cosine: Option<f64>,
+) -> Vec<Vec<PhaseMatrixHarmonics>> {
+    let species = optics.species.len();
+    optics
+        .species
+        .iter()
+        .enumerate()
+        .map(|(j, s)| {
+            PhaseMatrixHarmonics::compute(
+                &|c, out| {
+                    truncated_phase_matrix_into(&s.phase_function, phases, (j, species), c, out)
+                },
+                optics.grid.len(),
+                outputs,
+                (streams.cosines(), streams.weights()),
+                sun_cosine,
+                streams.count(),
+            )
+        })
+        .collect()
+}
+
 impl PolarisationCorrection {
     /// Solves both columns at every wavelength.
     pub(crate) fn compute(inputs: &CorrectionInputs) -> PolarisationCorrection {
@@ -120,32 +150,16 @@ impl PolarisationCorrection {
         let total = streams.count();
         let grid = inputs.grid;
         let levels = grid.levels();
-        let (cosines, weights) = (streams.cosines(), streams.weights());
+        let cosines = streams.cosines();
         // Each species' harmonics between the streams and from the sun, at
         // every wavelength: [j][i].
-        let harmonics: Vec<Vec<PhaseMatrixHarmonics>> = optics
-            .species
-            .iter()
-            .enumerate()
-            .map(|(j, s)| {
-                PhaseMatrixHarmonics::compute(
-                    &|c, out| {
-                        truncated_phase_matrix_into(
-                            &s.phase_function,
-                            inputs.phases,
-                            (j, species),
-                            c,
-                            out,
-                        )
-                    },
-                    wavelengths,
-                    cosines,
-                    (cosines, weights),
-                    Some(inputs.sun_cosine),
-                    total,
-                )
-            })
-            .collect();
+        let harmonics = compute_species_harmonics(
+            optics,
+            inputs.phases,
+            streams,
+            cosines,
+            Some(inputs.sun_cosine),
+        );
         let vector_len = total * COMPONENTS * levels * total;
         let scalar_len = total * levels * total;
         let solution_len = vector_len + scalar_len + 2;
@@ -244,23 +258,7 @@ impl PolarisationCorrection {
         } else {
             view_cosine
         };
-        let rows: Vec<Vec<PhaseMatrixHarmonics>> = optics
-            .species
-            .iter()
-            .enumerate()
-            .map(|(j, s)| {
-                PhaseMatrixHarmonics::compute(
-                    &|c, out| {
-                        truncated_phase_matrix_into(&s.phase_function, phases, (j, species), c, out)
-                    },
-                    w,
-                    &[mu],
-                    (self.streams.cosines(), self.streams.weights()),
-                    None,
-                    total,
-                )
-            })
-            .collect();
+        let rows = compute_species_harmonics(optics, phases, &self.streams, &[mu], None);
         let mut sources = vec![[0.0; COMPONENTS + 1]; levels];
         for i in 0..w {
             let solution = &self.solutions[i * self.solution_len..][..self.solution_len];

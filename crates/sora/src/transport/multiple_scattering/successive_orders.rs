@@ -52,7 +52,7 @@ pub(super) const MAX_ITERATIONS: usize = 200;
 
 /// What the successive orders do after a sweep (see [`StoppingRule`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(super) enum Sweep {
+enum Sweep {
     Continue,
     /// The last increment is negligible.
     Converged,
@@ -80,9 +80,36 @@ impl StoppingRule {
         }
     }
 
+    /// After a sweep from `previous` to `field`: the increment into
+    /// `increment` and the rule's decision, the extrapolated orders added
+    /// to `field` if it extrapolates. True when the iteration stops.
+    pub(super) fn finish_sweep(
+        &mut self,
+        field: &mut [f64],
+        previous: &[f64],
+        increment: &mut [f64],
+    ) -> bool {
+        let (mut norm, mut size_of_field) = (0.0, 0.0);
+        for ((d, new), old) in increment.iter_mut().zip(field.iter()).zip(previous) {
+            *d = new - old;
+            norm += d.abs();
+            size_of_field += new.abs();
+        }
+        match self.after_sweep(norm, size_of_field) {
+            Sweep::Continue => false,
+            Sweep::Converged => true,
+            Sweep::Extrapolate(remaining) => {
+                for (value, d) in field.iter_mut().zip(increment.iter()) {
+                    *value += remaining * d;
+                }
+                true
+            }
+        }
+    }
+
     /// After a sweep whose increment has L1 norm `norm`, the new field
     /// having L1 norm `size_of_field`.
-    pub(super) fn after_sweep(&mut self, norm: f64, size_of_field: f64) -> Sweep {
+    fn after_sweep(&mut self, norm: f64, size_of_field: f64) -> Sweep {
         let first = self.sweeps == 0;
         self.sweeps += 1;
         if size_of_field == 0.0 || norm <= 1e-3 * CONVERGENCE_TOLERANCE * size_of_field {
@@ -421,21 +448,8 @@ impl<'a> ColumnSystem<'a> {
                         *value += r;
                     }
                 }
-                let (mut norm, mut size_of_field) = (0.0, 0.0);
-                for ((d, new), old) in increment.iter_mut().zip(field.iter()).zip(previous.iter()) {
-                    *d = new - old;
-                    norm += d.abs();
-                    size_of_field += new.abs();
-                }
-                match stopping.after_sweep(norm, size_of_field) {
-                    Sweep::Continue => {}
-                    Sweep::Converged => break,
-                    Sweep::Extrapolate(remaining) => {
-                        for (value, d) in field.iter_mut().zip(increment.iter()) {
-                            *value += remaining * d;
-                        }
-                        break;
-                    }
+                if stopping.finish_sweep(field, previous, increment) {
+                    break;
                 }
                 // Scattering of the new field: the next order's source,
                 // column by column.

@@ -29,7 +29,7 @@
 use std::f64::consts::PI;
 
 use super::phase_matrix_fourier::{COMPONENTS, PhaseMatrixHarmonics};
-use super::successive_orders::{ColumnSystem, MAX_ITERATIONS, StoppingRule, Sweep};
+use super::successive_orders::{ColumnSystem, MAX_ITERATIONS, StoppingRule};
 
 /// A column system (`scalar`: the streams, layers, transport and level
 /// albedos) with the species' phase-matrix harmonics between its streams.
@@ -165,21 +165,8 @@ impl<'a> VectorColumnSystem<'a> {
                     let range = i * block..(i + 1) * block;
                     scalar.transport(&source[range.clone()], ground, &mut field[range], columns);
                 }
-                let (mut norm, mut size_of_field) = (0.0, 0.0);
-                for ((d, new), old) in increment.iter_mut().zip(field.iter()).zip(previous.iter()) {
-                    *d = new - old;
-                    norm += d.abs();
-                    size_of_field += new.abs();
-                }
-                match stopping.after_sweep(norm, size_of_field) {
-                    Sweep::Continue => {}
-                    Sweep::Converged => break,
-                    Sweep::Extrapolate(remaining) => {
-                        for (value, d) in field.iter_mut().zip(increment.iter()) {
-                            *value += remaining * d;
-                        }
-                        break;
-                    }
+                if stopping.finish_sweep(field, previous, increment) {
+                    break;
                 }
                 // Scattering of the new field: the next order's source,
                 // level by level (gathered into one Stokes-and-streams
