@@ -587,7 +587,12 @@ impl Sky {
     fn prepare_field(&self) -> Result<()> {
         if let Scattering::Multiple(settings) = self.scattering {
             if self.field.get().is_none() {
-                let field = MultipleScatteringField::compute(&self.scene, settings)?;
+                // The first order shares the image tables' sun-column table.
+                let field = MultipleScatteringField::compute_with_sun_column_nodes(
+                    &self.scene,
+                    settings,
+                    self.table_size.sun_column_nodes,
+                )?;
                 // Another thread may have been first: either field is the same.
                 let _ = self.field.set(field);
             }
