@@ -3,40 +3,50 @@
 // (worker.js, sora_web.wasm). Plain ES module, no dependencies.
 //
 // Progressive rendering: every change asks for a 128-pixel preview (coarse
-// tables, every 40 nm), then, if nothing changed meanwhile, a 256-pixel
-// refinement at the library's resolution. Changes that arrive while the
-// engine is busy are coalesced: only the latest state is computed.
+// tables, every 40 nm) and a 256-pixel refinement (the library's resolution
+// but for its image tables and sunset steps, see crates/sora-web), at once,
+// from two engines in two workers (two cores: the refinement does not wait
+// for the preview, and a slider drag's previews do not wait for a
+// refinement or a spectrum). Changes that arrive while an engine is busy
+// are coalesced: it computes only the latest state, and a result older
+// than the image shown is not drawn.
 //
 // window.soraExplorer exposes the state the browser test reads (timings,
 // the last spectrum, counts); it is not an API.
 
 const $ = (id) => document.getElementById(id);
 
-// ---- the engine -----------------------------------------------------------
-const worker = new Worker(new URL('./worker.js', import.meta.url), { type: 'module' });
-let nextId = 1;
-const pending = new Map();
-let resolveReady;
-const ready = new Promise((resolve) => { resolveReady = resolve; });
-
-worker.onmessage = (event) => {
-  const message = event.data;
-  if (message.id === 0) {
-    if (message.ready) resolveReady();
-    else showError(message.json.error);
-    return;
-  }
-  pending.get(message.id)(message);
-  pending.delete(message.id);
-};
-
-function engine(request) {
-  return new Promise((resolve) => {
+// ---- the engines ----------------------------------------------------------
+// One worker (its own sora_web.wasm instance and caches) for the previews,
+// one for everything else: refinements, spectra, files, controls.
+function startEngine() {
+  const worker = new Worker(new URL('./worker.js', import.meta.url), { type: 'module' });
+  let nextId = 1;
+  const pending = new Map();
+  let resolveReady;
+  const ready = new Promise((resolve) => { resolveReady = resolve; });
+  worker.onmessage = (event) => {
+    const message = event.data;
+    if (message.id === 0) {
+      if (message.ready) resolveReady();
+      else showError(message.json.error);
+      return;
+    }
+    pending.get(message.id)(message);
+    pending.delete(message.id);
+  };
+  const call = (request) => new Promise((resolve) => {
     const id = nextId++;
     pending.set(id, resolve);
     worker.postMessage({ id, request });
   });
+  return { call, ready };
 }
+
+const mainEngine = startEngine();
+const previewEngine = startEngine();
+const ready = Promise.all([mainEngine.ready, previewEngine.ready]);
+const engine = mainEngine.call;
 
 // ---- state ----------------------------------------------------------------
 // Each atmosphere control: element id, key of the engine's AtmosphereSpec
@@ -61,7 +71,6 @@ const explorer = {
   lastSpectrum: null,
   stats: { renders: 0, previews: 0, refinements: 0, lastPreview: null, lastRefinement: null, errors: 0 },
   lastError: null,
-  busy: false,
 };
 window.soraExplorer = explorer;
 
@@ -114,49 +123,69 @@ function status(text) {
 }
 
 // ---- rendering ------------------------------------------------------------
-let dirty = false;
+// Each change is a new generation; each engine computes the latest one when
+// it is free. The image shown is that of `shown` (generation, refined).
+let generation = 0;
 let changedAt = 0;
+const shown = { generation: 0, refined: false };
+const previews = { busy: false, done: 0 };
+const refinements = { busy: false, done: 0 };
 
 function changed() {
-  dirty = true;
+  generation += 1;
   changedAt = performance.now();
-  pump();
+  pumpPreview();
+  pumpRefinement();
 }
 
-async function pump() {
-  if (explorer.busy || !dirty) return;
-  explorer.busy = true;
-  dirty = false;
-  const started = changedAt;
-  const sky = skySpec();
+async function pumpPreview() {
+  if (previews.busy || previews.done === generation) return;
+  previews.busy = true;
+  const [mine, started, sky] = [generation, changedAt, skySpec()];
+  previews.done = mine;
   try {
-    const preview = await engine({ op: 'render', sky, image: imageSpec('preview') });
+    const preview = await previewEngine.call({ op: 'render', sky, image: imageSpec('preview') });
+    if (mine < shown.generation || (mine === shown.generation && shown.refined)) return;
     if (!preview.ok) {
       showError(preview.json.error);
       return;
     }
     clearError();
     draw(preview);
+    Object.assign(shown, { generation: mine, refined: false });
     explorer.stats.previews += 1;
     explorer.stats.lastPreview = { ms: performance.now() - started, engineMs: preview.ms, sky, width: preview.json.width };
     status(describe('preview', preview));
-    if (dirty) return; // a newer state waits: preview it first
+  } finally {
+    previews.busy = false;
+    pumpPreview();
+  }
+}
+
+async function pumpRefinement() {
+  if (refinements.busy || refinements.done === generation) return;
+  refinements.busy = true;
+  const [mine, started, sky] = [generation, changedAt, skySpec()];
+  refinements.done = mine;
+  try {
     const refined = await engine({ op: 'render', sky, image: imageSpec('refined') });
+    if (mine !== generation) return; // stale: the newer state's come next
     if (!refined.ok) {
       showError(refined.json.error);
       return;
     }
-    if (dirty) return; // stale: the preview of the newer state comes next
+    clearError();
     draw(refined);
+    Object.assign(shown, { generation: mine, refined: true });
     explorer.stats.refinements += 1;
     explorer.stats.lastRefinement = { ms: performance.now() - started, engineMs: refined.ms, sky, width: refined.json.width };
     status(describe('refined', refined));
     explorer.shownSky = sky;
     if (explorer.view) await showSpectrum(explorer.view);
   } finally {
-    explorer.busy = false;
+    refinements.busy = false;
     explorer.stats.renders += 1;
-    if (dirty) pump();
+    pumpRefinement();
   }
 }
 

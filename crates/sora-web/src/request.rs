@@ -157,7 +157,8 @@ pub enum Quality {
     Preview,
     /// What the page refines to: the library's defaults but a sky-view
     /// table half as fine on each axis (enough for images up to 512 pixels
-    /// across).
+    /// across) and wider sun-zenith steps near sunset (see
+    /// [`crate::engine::quality_settings`]).
     Refined,
     /// The library's defaults, as `sora render`.
     #[default]

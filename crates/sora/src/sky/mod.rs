@@ -591,8 +591,13 @@ impl Sky {
     fn prepare_field(&self) -> Result<()> {
         if let Scattering::Multiple(settings) = self.scattering {
             if self.field.get().is_none() {
-                let polarised = self.polarisation == Polarisation::Vector;
-                let field = MultipleScatteringField::compute(&self.scene, settings, polarised)?;
+                // The first order shares the image tables' sun-column table.
+                let field = MultipleScatteringField::compute_with_sun_column_nodes(
+                    &self.scene,
+                    settings,
+                    self.table_size.sun_column_nodes,
+                    self.polarisation == Polarisation::Vector,
+                )?;
                 // Another thread may have been first: either field is the same.
                 let _ = self.field.set(field);
             }

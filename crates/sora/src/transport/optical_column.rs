@@ -313,22 +313,8 @@ impl SunColumnTable {
         (rho * rho + ground * ground).sqrt().min(top)
     }
 
-    /// Bruneton's horizon-adapted coordinate: for a point at radius r, the
-    /// distance d to the top along mu, mapped to [0, 1] between its
-    /// smallest (straight up) and largest (the ground's horizon) values.
-    fn unit_from_mu(&self, r: f64, mu: f64) -> f64 {
-        let (ground, top) = (self.ground_radius_m, self.top_radius_m);
-        let h = ((top - ground) * (top + ground)).sqrt();
-        let rho = ((r - ground) * (r + ground)).max(0.0).sqrt();
-        let d = crate::geometry::distance_to_top_boundary(r, mu, top);
-        let (d_min, d_max) = (top - r, rho + h);
-        if d_max > d_min {
-            ((d - d_min) / (d_max - d_min)).clamp(0.0, 1.0)
-        } else {
-            0.0
-        }
-    }
-
+    /// The zenith cosine at radius r of the mu coordinate `unit` (see
+    /// [`SunColumnTable::lookup_columns_at_radius`]).
     fn mu_from_unit(&self, r: f64, unit: f64) -> f64 {
         let (ground, top) = (self.ground_radius_m, self.top_radius_m);
         let h = ((top - ground) * (top + ground)).sqrt();
@@ -346,17 +332,17 @@ impl SunColumnTable {
     /// Returns false, and leaves `columns_m` alone, when that path hits the
     /// ground (the point is in the planet's shadow).
     pub(crate) fn lookup_columns_to_sun(&self, r_m: f64, mu: f64, columns_m: &mut [f64]) -> bool {
+        self.lookup_columns_at_radius(&self.locate_radius(r_m), mu, columns_m)
+    }
+
+    /// The part of a lookup that depends on the radius alone: a point
+    /// that is looked up toward many suns (the spherical first order's
+    /// samples) locates its radius once.
+    pub(crate) fn locate_radius(&self, r_m: f64) -> SunColumnRadius {
         let ground = self.ground_radius_m;
         let r = r_m.clamp(ground, self.top_radius_m);
-        if crate::geometry::ray_intersects_ground(r, mu, ground) {
-            return false;
-        }
         let x = self.unit_from_radius(r) * (self.altitude_nodes - 1) as f64;
-        let y = self.unit_from_mu(r, mu) * (self.mu_nodes - 1) as f64;
-        let (i, j) = (
-            (x as usize).min(self.altitude_nodes - 2),
-            (y as usize).min(self.mu_nodes - 2),
-        );
+        let i = (x as usize).min(self.altitude_nodes - 2);
         // Nodes are spaced in rho, but the weight between two altitude nodes
         // is linear in altitude: ln(mean density) of an exponential profile
         // is linear in altitude, and quadratic in rho.
@@ -365,13 +351,50 @@ impl SunColumnTable {
             self.radius_from_unit(i as f64 / denominator),
             self.radius_from_unit((i + 1) as f64 / denominator),
         );
-        let fx = ((r - r0) / (r1 - r0)).clamp(0.0, 1.0);
+        let (top, h) = (self.top_radius_m, self.horizon_distance_m());
+        let rho = ((r - ground) * (r + ground)).max(0.0).sqrt();
+        SunColumnRadius {
+            r,
+            r_squared: r * r,
+            altitude_node: i,
+            altitude_weight: ((r - r0) / (r1 - r0)).clamp(0.0, 1.0),
+            d_min: top - r,
+            d_max: rho + h,
+        }
+    }
+
+    /// [`SunColumnTable::lookup_columns_to_sun`] at a located radius: the
+    /// same operations in the same order, so the same columns bit for bit.
+    pub(crate) fn lookup_columns_at_radius(
+        &self,
+        at_radius: &SunColumnRadius,
+        mu: f64,
+        columns_m: &mut [f64],
+    ) -> bool {
+        let ground = self.ground_radius_m;
+        let r = at_radius.r;
+        // `ray_intersects_ground`, with r^2 from the located radius.
+        if mu < 0.0 && at_radius.r_squared * (1.0 - mu * mu) <= ground * ground {
+            return false;
+        }
+        // Bruneton's horizon-adapted coordinate: the distance d to the top
+        // along mu (the path's length), mapped to [0, 1] between its
+        // smallest (straight up) and largest (the ground's horizon) values.
+        let length = crate::geometry::distance_to_top_boundary(r, mu, self.top_radius_m);
+        let (d_min, d_max) = (at_radius.d_min, at_radius.d_max);
+        let unit = if d_max > d_min {
+            ((length - d_min) / (d_max - d_min)).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let y = unit * (self.mu_nodes - 1) as f64;
+        let (i, j) = (at_radius.altitude_node, (y as usize).min(self.mu_nodes - 2));
+        let fx = at_radius.altitude_weight;
         let fy = y - j as f64;
         let s = self.species;
         let at =
             |ii: usize, jj: usize| &self.log_mean_densities[(ii * self.mu_nodes + jj) * s..][..s];
         let (c00, c01, c10, c11) = (at(i, j), at(i, j + 1), at(i + 1, j), at(i + 1, j + 1));
-        let length = crate::geometry::distance_to_top_boundary(r, mu, self.top_radius_m);
         let weights = [
             (1.0 - fx) * (1.0 - fy),
             (1.0 - fx) * fy,
@@ -399,6 +422,28 @@ impl SunColumnTable {
         }
         true
     }
+
+    /// H = sqrt(R_top^2 - R^2), the distance from the ground's horizon to
+    /// the top of the atmosphere, m.
+    fn horizon_distance_m(&self) -> f64 {
+        let (ground, top) = (self.ground_radius_m, self.top_radius_m);
+        ((top - ground) * (top + ground)).sqrt()
+    }
+}
+
+/// A radius located in a [`SunColumnTable`]
+/// ([`SunColumnTable::locate_radius`]): the radius clamped to the
+/// atmosphere and its square, the lower altitude node and the weight
+/// toward the next, and the shortest (straight up) and longest (the
+/// ground's horizon) distances to the top from it, m.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct SunColumnRadius {
+    r: f64,
+    r_squared: f64,
+    altitude_node: usize,
+    altitude_weight: f64,
+    d_min: f64,
+    d_max: f64,
 }
 
 #[cfg(test)]

@@ -217,7 +217,10 @@ const SUN_RAY_PANELS: usize = 12;
 const FIRST_ORDER_SUN_ZENITH_DEG: f64 = 84.0;
 
 /// Altitude and mu nodes of the sun-column table of the spherical first
-/// order (the image tables' size).
+/// order in the tests' fields: the default image tables' size
+/// ([`crate::FastTableSize`]; a sky's field takes its own image tables'
+/// size, see [`MultipleScatteringField::compute_with_sun_column_nodes`]).
+#[cfg(test)]
 const FIRST_ORDER_SUN_COLUMN_NODES: (usize, usize) = (128, 256);
 
 /// Resolution of the multiple-scattering method.
@@ -687,12 +690,40 @@ pub struct MultipleScatteringField {
 }
 
 impl MultipleScatteringField {
-    /// Solves the field of `sky` for every sun zenith angle seen at a point
-    /// of the atmosphere visible from its eye; an error for settings that
-    /// `MultipleScatteringSettings::validate` rejects.
+    /// [`MultipleScatteringField::compute_with_sun_column_nodes`] with the
+    /// default image tables' sun-column table.
+    #[cfg(test)]
     pub(crate) fn compute(
         sky: &SingleScatteringSky,
         settings: MultipleScatteringSettings,
+        polarised: bool,
+    ) -> Result<MultipleScatteringField> {
+        MultipleScatteringField::compute_with_sun_column_nodes(
+            sky,
+            settings,
+            FIRST_ORDER_SUN_COLUMN_NODES,
+            polarised,
+        )
+    }
+
+    /// Solves the field of `sky` for every sun zenith angle seen at a point
+    /// of the atmosphere visible from its eye; an error for settings that
+    /// `MultipleScatteringSettings::validate` rejects. The spherical first
+    /// order reads the columns toward the sun from a table of
+    /// `sun_column_nodes` (altitude, mu) nodes: a sky passes its image
+    /// tables' size ([`crate::FastTableSize`], 128 x 256 by default), so
+    /// that the two share one table. The explorer's preview (32 x 64) then
+    /// builds no second table of 128 x 256 nodes for its first low sun
+    /// (measured on one thread: its 128-pixel frame at sun 10 0.10 ->
+    /// 0.075 s), and its first order on the coarse table moves its images
+    /// by at most 0.1 % of their 99th-percentile error against the default
+    /// resolution at suns 10 to -12 degrees (the `quality_accuracy`
+    /// example of `crates/sora-web`). With `polarised`, the field also
+    /// solves the columns of its polarisation correction.
+    pub(crate) fn compute_with_sun_column_nodes(
+        sky: &SingleScatteringSky,
+        settings: MultipleScatteringSettings,
+        sun_column_nodes: (usize, usize),
         polarised: bool,
     ) -> Result<MultipleScatteringField> {
         let (ground, top) = sky.radii_m();
@@ -704,6 +735,7 @@ impl MultipleScatteringField {
         MultipleScatteringField::compute_for_sun_zenith_range(
             sky,
             settings,
+            sun_column_nodes,
             (sun_zenith - reach).max(0.0),
             sun_zenith + reach,
             polarised,
@@ -713,6 +745,7 @@ impl MultipleScatteringField {
     fn compute_for_sun_zenith_range(
         sky: &SingleScatteringSky,
         settings: MultipleScatteringSettings,
+        sun_column_nodes: (usize, usize),
         lowest_rad: f64,
         highest_rad: f64,
         polarised: bool,
@@ -878,7 +911,7 @@ impl MultipleScatteringField {
         // The table only where some sun node needs the spherical first order
         // (a high sun's nodes all stop short of it).
         let first_order = if first_spherical < sun_axis.angles_rad.len() {
-            let (altitude_nodes, mu_nodes) = FIRST_ORDER_SUN_COLUMN_NODES;
+            let (altitude_nodes, mu_nodes) = sun_column_nodes;
             let table_columns = sky.sun_column_table(altitude_nodes, mu_nodes);
             compute_spherical_first_order(&FirstOrderInputs {
                 profiles: &profiles,

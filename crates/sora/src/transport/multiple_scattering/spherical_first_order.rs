@@ -43,7 +43,7 @@ use std::f64::consts::PI;
 use super::phase_fourier::TruncatedPhase;
 use crate::atmosphere::DensityProfile;
 use crate::geometry::{Vector3, segment_in_atmosphere};
-use crate::transport::optical_column::{ProfileCorners, SunColumnTable};
+use crate::transport::optical_column::{ProfileCorners, SunColumnRadius, SunColumnTable};
 use crate::transport::quadrature::{GAUSS_NODES, GAUSS_WEIGHTS, running_integral_matrix};
 
 /// Most azimuths of the cosine transform: the solver has 2n = 16
@@ -104,6 +104,7 @@ pub(crate) fn compute_spherical_first_order(inputs: &FirstOrderInputs) -> Vec<f6
         inputs,
         phase_table: &phase_table,
     };
+    let by_species = &BySpecies::new(inputs);
     let suns_vectors: Vec<Vector3> = inputs
         .sun_zenith_rad
         .iter()
@@ -121,8 +122,15 @@ pub(crate) fn compute_spherical_first_order(inputs: &FirstOrderInputs) -> Vec<f6
             view_columns: vec![0.0; species],
             #[cfg(test)]
             node_columns: vec![0.0; species],
+            #[cfg(test)]
             sun_columns: vec![0.0; species],
             ends: Vec::with_capacity(inputs.corners.most_panel_ends(PANELS)),
+        };
+        let mut sun_work = SunWork {
+            phase: vec![0.0; species * wavelengths],
+            columns: vec![0.0; species],
+            optical_depths: vec![0.0; wavelengths],
+            sources: vec![0.0; wavelengths],
         };
         let mut path = MarchedPath::default();
         for (b, mu) in inputs.stream_cosines.iter().enumerate() {
@@ -134,7 +142,15 @@ pub(crate) fn compute_spherical_first_order(inputs: &FirstOrderInputs) -> Vec<f6
                     continue;
                 }
                 for (s, sun) in suns_vectors.iter().enumerate() {
-                    compute_first_order_on_path(tables, direction, *sun, &path, &mut work);
+                    compute_first_order_on_path(
+                        tables,
+                        by_species,
+                        direction,
+                        *sun,
+                        &path,
+                        &mut work,
+                        &mut sun_work,
+                    );
                     let harmonics = &mut block[(s * streams + b) * streams * wavelengths..]
                         [..streams * wavelengths];
                     for (m, row) in harmonics.chunks_exact_mut(wavelengths).enumerate() {
@@ -212,12 +228,16 @@ fn interpolate_phases(phase_table: &[f64], cos_theta: f64, phase: &mut [f64]) {
 }
 
 /// A stream's path marched once for every sun node: per Gauss sample, its
-/// point (planet-centred, m), its quadrature weight (half the panel times
-/// the Gauss weight, m) and, per species, its relative density and the
-/// column from the level to it (relative density times length, m).
+/// point (planet-centred, m), its distance from the planet's centre (m)
+/// and that radius located in the sun-column table, its quadrature weight
+/// (half the panel times the Gauss weight, m) and, per species, its
+/// relative density and the column from the level to it (relative density
+/// times length, m).
 #[derive(Default)]
 struct MarchedPath {
     points: Vec<Vector3>,
+    radii: Vec<f64>,
+    located: Vec<SunColumnRadius>,
     weights: Vec<f64>,
     /// [sample * species + j].
     densities: Vec<f64>,
@@ -249,6 +269,8 @@ fn march_path(
         .corners
         .fill_panel_ends(start, direction, length, PANELS, &mut work.ends);
     path.points.clear();
+    path.radii.clear();
+    path.located.clear();
     path.weights.clear();
     path.densities.clear();
     path.node_columns.clear();
@@ -265,7 +287,10 @@ fn march_path(
             }
         }
         for n in 0..4 {
+            let r = points[n].length();
             path.points.push(points[n]);
+            path.radii.push(r);
+            path.located.push(inputs.sun_columns.locate_radius(r));
             path.weights.push(half * GAUSS_WEIGHTS[n]);
             for j in 0..species {
                 let inside: f64 = (0..4).map(|q| running[n][q] * work.densities[j][q]).sum();
@@ -287,39 +312,111 @@ fn march_path(
 /// sun `sun` (the sun-dependent part of `compute_first_order_along_ray`:
 /// the phase functions at direction . sun, the columns toward the sun,
 /// the shadow).
+///
+/// The oracle's sums per wavelength, tau = sum_j beta*_ext,ij (C_j + C_sun,j)
+/// and source = sum_j beta*_sca,ij rho_j p*_ij, are taken here species by
+/// species over all wavelengths at once (`by_species`, contiguous rows that
+/// the compiler vectorises), each wavelength's sum still starting from zero
+/// and adding the species in the same order: the same numbers bit for bit.
+/// The radius of each sample was located in the sun-column table by the
+/// march, once for every sun.
 fn compute_first_order_on_path(
     inputs: &Tables,
+    by_species: &BySpecies,
     direction: Vector3,
     sun: Vector3,
     path: &MarchedPath,
     work: &mut MarchWork,
+    sun_work: &mut SunWork,
 ) {
     let species = inputs.profiles.len();
+    let wavelengths = work.radiance.len();
     interpolate_phases(inputs.phase_table, direction.dot(sun), &mut work.phase);
+    for (i, row) in work.phase.chunks_exact(species).enumerate() {
+        for (j, p) in row.iter().enumerate() {
+            sun_work.phase[j * wavelengths + i] = *p;
+        }
+    }
     work.radiance.fill(0.0);
     for (n, point) in path.points.iter().enumerate() {
-        let r = point.length();
-        if !inputs
-            .sun_columns
-            .lookup_columns_to_sun(r, point.dot(sun) / r, &mut work.sun_columns)
-        {
+        let r = path.radii[n];
+        if !inputs.sun_columns.lookup_columns_at_radius(
+            &path.located[n],
+            point.dot(sun) / r,
+            &mut sun_work.columns,
+        ) {
             continue;
         }
         let weight = path.weights[n];
         let node_columns = &path.node_columns[n * species..(n + 1) * species];
         let densities = &path.densities[n * species..(n + 1) * species];
-        for (i, out) in work.radiance.iter_mut().enumerate() {
-            let (mut tau, mut source) = (0.0, 0.0);
-            for j in 0..species {
-                let at = i * species + j;
-                tau += inputs.scaled_extinction[at] * (node_columns[j] + work.sun_columns[j]);
-                source += inputs.scaled_scattering[at] * densities[j] * work.phase[at];
+        sun_work.optical_depths.fill(0.0);
+        sun_work.sources.fill(0.0);
+        for j in 0..species {
+            let column = node_columns[j] + sun_work.columns[j];
+            let density = densities[j];
+            let rows = (j * wavelengths)..((j + 1) * wavelengths);
+            for (((tau, source), (extinction, scattering)), phase) in sun_work
+                .optical_depths
+                .iter_mut()
+                .zip(sun_work.sources.iter_mut())
+                .zip(
+                    by_species.scaled_extinction[rows.clone()]
+                        .iter()
+                        .zip(&by_species.scaled_scattering[rows.clone()]),
+                )
+                .zip(&sun_work.phase[rows])
+            {
+                *tau += extinction * column;
+                *source += scattering * density * phase;
             }
-            if source > 0.0 {
-                *out += weight * inputs.solar_irradiance_w_m2_nm[i] * source * (-tau).exp();
+        }
+        for (((out, tau), source), solar) in work
+            .radiance
+            .iter_mut()
+            .zip(&sun_work.optical_depths)
+            .zip(&sun_work.sources)
+            .zip(inputs.solar_irradiance_w_m2_nm)
+        {
+            if *source > 0.0 {
+                *out += weight * solar * source * (-tau).exp();
             }
         }
     }
+}
+
+/// The scaled coefficients species-major, [j * wavelengths + i] (the
+/// inputs have them [i * species + j]).
+struct BySpecies {
+    scaled_extinction: Vec<f64>,
+    scaled_scattering: Vec<f64>,
+}
+
+impl BySpecies {
+    fn new(inputs: &FirstOrderInputs) -> BySpecies {
+        let wavelengths = inputs.solar_irradiance_w_m2_nm.len();
+        let species = inputs.profiles.len();
+        let transpose = |by_wavelength: &[f64]| -> Vec<f64> {
+            (0..species * wavelengths)
+                .map(|at| by_wavelength[(at % wavelengths) * species + at / wavelengths])
+                .collect()
+        };
+        BySpecies {
+            scaled_extinction: transpose(inputs.scaled_extinction),
+            scaled_scattering: transpose(inputs.scaled_scattering),
+        }
+    }
+}
+
+/// Work space of [`compute_first_order_on_path`], species-major: the
+/// phase functions [j * wavelengths + i], the columns toward the sun per
+/// species, and per wavelength the optical depth and the source of a
+/// sample.
+struct SunWork {
+    phase: Vec<f64>,
+    columns: Vec<f64>,
+    optical_depths: Vec<f64>,
+    sources: Vec<f64>,
 }
 
 /// The first order marched per sun node: the oracle of
@@ -414,6 +511,8 @@ struct MarchWork {
     /// The oracle's columns from the level to the current node.
     #[cfg(test)]
     node_columns: Vec<f64>,
+    /// The oracle's columns toward the sun.
+    #[cfg(test)]
     sun_columns: Vec<f64>,
     ends: Vec<f64>,
 }
