@@ -209,10 +209,11 @@ class Sky:
       view, default 10000, and ``seed``, default 1; the same seed gives the
       same result on any thread count);
     - ``polarisation``: ``"scalar"`` (default) or ``"vector"`` (Stokes
-      vectors, :meth:`stokes`; with ``method="path-tracing"``, or
-      ``scattering="single"`` with the fast method; Mie aerosols get
-      their phase matrix computed). With ``"vector"`` the
-      radiance is the polarised intensity I.
+      vectors, :meth:`stokes`, all orders, by the fast method or path
+      tracing, not ``method="reference"``; Mie aerosols get their phase
+      matrix computed; :meth:`render` of a vector sky with multiple
+      scattering raises, images are scalar so far). With ``"vector"``
+      the radiance is the polarised intensity I.
 
     Skies pickle (by their arguments), so Dask can ship them.
     """
