@@ -59,7 +59,9 @@
 //! is never a node). That needs nothing but F(Theta) and the exact
 //! rotations: no generalised spherical functions to derive and test, and
 //! the same rotation code as the path tracer the solver is tested
-//! against. The cost, streams^2 (4N + 1) rotations per species and
+//! against. The mirror symmetry about the sun's vertical halves the
+//! nodes (2N + 1 of them are computed); the cost, streams^2 (2N + 1)
+//! rotations per species for all wavelengths and the transforms per
 //! wavelength, is small beside a solve.
 
 use std::f64::consts::PI;
