@@ -84,6 +84,13 @@
 //!    out, so a view costs degrees^2 / 2 products per node and wavelength
 //!    (an almucantar of 72 views about as much as the field itself).
 //!
+//! 7. **Polarisation** (a sky with Stokes vectors, views only): the column
+//!    at the eye's sun is solved again with Stokes vectors
+//!    (`vector_successive_orders.rs`, `phase_matrix_fourier.rs`), and the
+//!    ratio of its multiply scattered (I, Q, U, V) to its scalar intensity
+//!    turns each view's L_ms into a Stokes vector
+//!    (`polarisation_correction.rs`; accuracy in `docs/polarisation.md`).
+//!
 //! Interpolations between sun zenith angles and altitudes are linear in
 //! the logarithm of the (positive) source: across sunset the field falls
 //! off exponentially, and a linear blend of two nodes overestimates it.

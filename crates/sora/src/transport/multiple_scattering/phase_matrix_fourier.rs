@@ -118,30 +118,11 @@ impl PhaseMatrixHarmonics {
     ) -> Vec<PhaseMatrixHarmonics> {
         const ELEMENTS: usize = COMPONENTS * COMPONENTS;
         let (outputs, inputs) = (output_cosines.len(), input_cosines.len());
-        let nodes = 4 * harmonics.max(1) + 1;
-        let step = 2.0 * PI / nodes as f64;
-        // cos(m Delta_k), sin(m Delta_k) at every node.
-        let trig: Vec<(f64, f64)> = (0..nodes)
-            .flat_map(|k| (0..harmonics).map(move |m| (m as f64 * k as f64 * step).sin_cos()))
-            .map(|(s, c)| (c, s))
-            .collect();
+        let AzimuthRule { nodes, step, trig } = AzimuthRule::new(harmonics);
         let block = COMPONENTS * outputs;
-        let mut all: Vec<PhaseMatrixHarmonics> = (0..wavelengths)
-            .map(|_| PhaseMatrixHarmonics {
-                harmonics,
-                outputs,
-                inputs,
-                scattering: vec![0.0; harmonics * COMPONENTS * inputs * block],
-                sun: vec![0.0; harmonics * block],
-            })
-            .collect();
+        let mut all = PhaseMatrixHarmonics::zeros(wavelengths, harmonics, outputs, inputs);
         let mut matrices = vec![PhaseMatrix::default(); wavelengths];
-        let inputs_and_sun: Vec<(f64, Option<f64>)> = input_cosines
-            .iter()
-            .zip(input_weights)
-            .map(|(mu, w)| (*mu, Some(*w)))
-            .chain(sun_cosine.map(|mu| (mu, None)))
-            .collect();
+        let inputs_and_sun = inputs_and_sun((input_cosines, input_weights), sun_cosine);
         // The mirror symmetry about the sun's vertical, Z(-Delta) =
         // D Z(Delta) D with D = diag(1, 1, -1, -1): the even elements are
         // even in Delta and the odd ones odd, so the nodes k and nodes - k
@@ -249,30 +230,11 @@ impl PhaseMatrixHarmonics {
         harmonics: usize,
     ) -> Vec<PhaseMatrixHarmonics> {
         let (outputs, inputs) = (output_cosines.len(), input_cosines.len());
-        let nodes = 4 * harmonics.max(1) + 1;
-        let step = 2.0 * PI / nodes as f64;
-        // cos(m Delta_k), sin(m Delta_k) at every node.
-        let trig: Vec<(f64, f64)> = (0..nodes)
-            .flat_map(|k| (0..harmonics).map(move |m| (m as f64 * k as f64 * step).sin_cos()))
-            .map(|(s, c)| (c, s))
-            .collect();
+        let AzimuthRule { nodes, step, trig } = AzimuthRule::new(harmonics);
         let block = COMPONENTS * outputs;
-        let mut all: Vec<PhaseMatrixHarmonics> = (0..wavelengths)
-            .map(|_| PhaseMatrixHarmonics {
-                harmonics,
-                outputs,
-                inputs,
-                scattering: vec![0.0; harmonics * COMPONENTS * inputs * block],
-                sun: vec![0.0; harmonics * block],
-            })
-            .collect();
+        let mut all = PhaseMatrixHarmonics::zeros(wavelengths, harmonics, outputs, inputs);
         let mut matrices = vec![PhaseMatrix::default(); wavelengths];
-        let inputs_and_sun = input_cosines
-            .iter()
-            .zip(input_weights)
-            .map(|(mu, w)| (*mu, Some(*w)))
-            .chain(sun_cosine.map(|mu| (mu, None)));
-        let inputs_and_sun: Vec<(f64, Option<f64>)> = inputs_and_sun.collect();
+        let inputs_and_sun = inputs_and_sun((input_cosines, input_weights), sun_cosine);
         for (a, &mu_out) in output_cosines.iter().enumerate() {
             for k in 0..nodes {
                 let out = LookDirection::new(mu_out, k as f64 * step);
@@ -319,6 +281,25 @@ impl PhaseMatrixHarmonics {
         all
     }
 
+    /// Zero harmonics at each of `wavelengths` wavelengths.
+    fn zeros(
+        wavelengths: usize,
+        harmonics: usize,
+        outputs: usize,
+        inputs: usize,
+    ) -> Vec<PhaseMatrixHarmonics> {
+        let block = COMPONENTS * outputs;
+        (0..wavelengths)
+            .map(|_| PhaseMatrixHarmonics {
+                harmonics,
+                outputs,
+                inputs,
+                scattering: vec![0.0; harmonics * COMPONENTS * inputs * block],
+                sun: vec![0.0; harmonics * block],
+            })
+            .collect()
+    }
+
     pub(crate) fn harmonics(&self) -> usize {
         self.harmonics
     }
@@ -348,6 +329,41 @@ impl PhaseMatrixHarmonics {
             .chain(self.sun(m))
             .all(|v| v.abs() <= 1e-14 * largest)
     }
+}
+
+/// The azimuth rule of the transforms: `nodes` = 4 harmonics + 1 points
+/// `step` apart on [0, 2 pi), and cos(m Delta_k), sin(m Delta_k) at each,
+/// [k * harmonics + m].
+struct AzimuthRule {
+    nodes: usize,
+    step: f64,
+    trig: Vec<(f64, f64)>,
+}
+
+impl AzimuthRule {
+    fn new(harmonics: usize) -> AzimuthRule {
+        let nodes = 4 * harmonics.max(1) + 1;
+        let step = 2.0 * PI / nodes as f64;
+        let trig = (0..nodes)
+            .flat_map(|k| (0..harmonics).map(move |m| (m as f64 * k as f64 * step).sin_cos()))
+            .map(|(s, c)| (c, s))
+            .collect();
+        AzimuthRule { nodes, step, trig }
+    }
+}
+
+/// The input directions' cosines with their weights, then the sun's
+/// cosine (weight None) if given.
+fn inputs_and_sun(
+    (cosines, weights): (&[f64], &[f64]),
+    sun_cosine: Option<f64>,
+) -> Vec<(f64, Option<f64>)> {
+    cosines
+        .iter()
+        .zip(weights)
+        .map(|(mu, w)| (*mu, Some(*w)))
+        .chain(sun_cosine.map(|mu| (mu, None)))
+        .collect()
 }
 
 /// A look direction of zenith cosine mu at azimuth phi (radians) from the

@@ -208,11 +208,11 @@ mod tests {
     use super::*;
     use crate::atmosphere::DensityProfile;
     use crate::atmosphere::phase_matrix::{PhaseMatrix, rayleigh_phase_matrix};
-    use crate::table::NumericTable;
     use crate::transport::multiple_scattering::phase_fourier::TruncatedPhase;
     use crate::transport::multiple_scattering::spherical_paths::linear_source_weights;
     use crate::transport::multiple_scattering::successive_orders::{ScaledSpecies, Streams};
     use crate::transport::multiple_scattering::vertical_grid::VerticalGrid;
+    use crate::transport::reference_tests::reference_data::coulson_table;
 
     /// A slab of `species` (profile, scattering = extinction at density 1
     /// per m, scalar phase, phase matrix) on `layers` layers up to 100 km.
@@ -356,12 +356,12 @@ mod tests {
         let air = DensityProfile::Exponential {
             scale_height_m: 8000.0,
         };
-        let unit = Slab::new(&[&air], &[1.0], layers, streams);
-        let column: f64 = (0..unit.grid.levels() - 1)
-            .map(|k| unit.grid.layer_columns_m(k)[0])
+        let slab = Slab::new(&[&air], &[1.0], layers, streams);
+        // The scattering coefficient (m^-1) that gives the slab optical depth tau.
+        let column_m: f64 = (0..slab.grid.levels() - 1)
+            .map(|k| slab.grid.layer_columns_m(k)[0])
             .sum();
-        let betas = [tau / column];
-        let slab = unit;
+        let betas = [tau / column_m];
         let total = slab.streams.count();
         let moments: Vec<f64> = (0..=total)
             .map(|l| match l {
@@ -460,12 +460,7 @@ mod tests {
         // `reference_tests/polarisation_reference.rs`: they refer Stokes
         // vectors to the plane perpendicular to the meridian plane); phi is
         // the view's azimuth from the sun's, as in sora.
-        let text = std::fs::read_to_string(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/tests/data/coulson_rayleigh_toa.csv"
-        ))
-        .unwrap();
-        let table = NumericTable::parse(&text, "coulson_rayleigh_toa.csv").unwrap();
+        let table = coulson_table();
         let mut worst = 0.0f64;
         for albedo in [0.0, 0.8] {
             let rows: Vec<&Vec<f64>> = table.rows.iter().filter(|r| r[0] == albedo).collect();

@@ -8,7 +8,7 @@
 mod multiple_scattering_reference;
 mod path_tracing_reference;
 mod polarisation_reference;
-mod reference_data;
+pub(crate) mod reference_data;
 mod render_accuracy;
 mod single_scattering_closed_forms;
 mod single_scattering_reference;

@@ -13,10 +13,10 @@
 //!   Natraj, Li & Yung (2009), `tests/data/coulson_rayleigh_toa.csv`.
 //! - Non-polarising species leave the scalar result unchanged.
 
+use super::reference_data::coulson_table;
 use crate::atmosphere::{Atmosphere, Planet};
 use crate::geometry::direction_from_elevation_azimuth;
 use crate::spectrum::{Spectrum, WavelengthGrid};
-use crate::table::NumericTable;
 use crate::transport::stokes::meridian_reference;
 use crate::transport::{Observation, PathTracer, SingleScatteringSky};
 
@@ -268,17 +268,7 @@ fn stokes_vectors_match_the_coulson_tables() {
     // perpendicular to the scattering plane, which for the nadir view at
     // phi = 0 is the meridian plane, and the tables give Q > 0 there
     // (0.0376), sora Q < 0 (its Q > 0 means a field in the meridian plane).
-    let text = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/tests/data/coulson_rayleigh_toa.csv"
-    ))
-    .unwrap();
-    let table = NumericTable::parse(&text, "coulson_rayleigh_toa.csv").unwrap();
-    assert_eq!(
-        table.column_names,
-        ["albedo", "mu", "phi_deg", "I", "Q", "U"]
-    );
-    assert_eq!(table.rows.len(), 14);
+    let table = coulson_table();
     let sun = (0.2f64.asin().to_degrees(), 180.0);
     let mut worst = (0.0f64, String::new());
     for (k, row) in table.rows.iter().enumerate() {
@@ -357,12 +347,7 @@ fn the_fast_method_matches_the_coulson_tables() {
     // polarisation correction) on the plane-parallel layer of
     // `stokes_vectors_match_the_coulson_tables`, with the tables' signs of
     // Q and U mapped as there.
-    let text = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/tests/data/coulson_rayleigh_toa.csv"
-    ))
-    .unwrap();
-    let table = NumericTable::parse(&text, "coulson_rayleigh_toa.csv").unwrap();
+    let table = coulson_table();
     let sun = (0.2f64.asin().to_degrees(), 180.0);
     let settings = crate::MultipleScatteringSettings {
         streams_per_hemisphere: 12,

@@ -78,3 +78,20 @@ pub(super) fn reference_geometries(rows: &[ReferenceRow]) -> Vec<(f64, f64, f64,
     geometries.dedup();
     geometries
 }
+
+/// The corrected Coulson tables (`tests/data/coulson_rayleigh_toa.csv`):
+/// columns albedo, mu, phi_deg, I, Q, U, 14 rows (checked here).
+pub(crate) fn coulson_table() -> crate::table::NumericTable {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/coulson_rayleigh_toa.csv"
+    ))
+    .unwrap();
+    let table = crate::table::NumericTable::parse(&text, "coulson_rayleigh_toa.csv").unwrap();
+    assert_eq!(
+        table.column_names,
+        ["albedo", "mu", "phi_deg", "I", "Q", "U"]
+    );
+    assert_eq!(table.rows.len(), 14);
+    table
+}
