@@ -146,14 +146,7 @@ impl SpectrumToXyz {
     /// negative (radiance cannot be, and such a value must not reach a pixel).
     pub fn to_xyz(&self, spectrum: &SampledSpectrum) -> Result<Xyz> {
         let values = spectrum.values();
-        if values.len() != self.weighted_cmfs.len() {
-            return Err(Error::InvalidSpectrum(format!(
-                "spectrum to XYZ: {} samples, but the grid {} has {}",
-                values.len(),
-                self.grid,
-                self.weighted_cmfs.len()
-            )));
-        }
+        self.check_length(values)?;
         if let Some(i) = values.iter().position(|v| !(v.is_finite() && *v >= 0.0)) {
             return Err(Error::InvalidSpectrum(format!(
                 "spectrum to XYZ: sample {i} ({} nm) is {}; values must be finite and >= 0",
@@ -162,6 +155,36 @@ impl SpectrumToXyz {
             )));
         }
         Ok(self.to_xyz_unchecked(values))
+    }
+
+    /// XYZ of a signed spectrum: a Stokes Q, U or V, which may be negative
+    /// (XYZ is linear in the spectrum, so a Stokes vector's four spectra map
+    /// component by component). Fails as [`SpectrumToXyz::to_xyz`] does,
+    /// but for negative values.
+    pub fn to_xyz_signed(&self, spectrum: &SampledSpectrum) -> Result<Xyz> {
+        let values = spectrum.values();
+        self.check_length(values)?;
+        if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+            return Err(Error::InvalidSpectrum(format!(
+                "spectrum to XYZ: sample {i} ({} nm) is {}; values must be finite",
+                self.grid.wavelength_nm(i),
+                values[i]
+            )));
+        }
+        Ok(self.weighted_sum(values))
+    }
+
+    /// An error unless `values` has one value per grid wavelength.
+    fn check_length(&self, values: &[f64]) -> Result<()> {
+        if values.len() != self.weighted_cmfs.len() {
+            return Err(Error::InvalidSpectrum(format!(
+                "spectrum to XYZ: {} samples, but the grid {} has {}",
+                values.len(),
+                self.grid,
+                self.weighted_cmfs.len()
+            )));
+        }
+        Ok(())
     }
 
     /// XYZ of `values` without validation, for the renderer's inner loop,
@@ -174,6 +197,14 @@ impl SpectrumToXyz {
             values.iter().all(|v| v.is_finite() && *v >= 0.0),
             "spectrum with a NaN, infinite or negative sample"
         );
+        self.weighted_sum(values)
+    }
+
+    /// The colour-matching integral of a signed spectrum on the grid,
+    /// without the checks: a Stokes Q, U or V, whose XYZ is the same linear
+    /// map of it as of a radiance (and may be negative).
+    pub(crate) fn weighted_sum(&self, values: &[f64]) -> Xyz {
+        debug_assert_eq!(values.len(), self.weighted_cmfs.len(), "wrong grid");
         let mut sum = [0.0; 3];
         for (value, weights) in values.iter().zip(&self.weighted_cmfs) {
             sum[0] += value * weights[0];

@@ -192,6 +192,7 @@ use std::f64::consts::PI;
 use self::phase_fourier::{
     TruncatedPhase, compute_legendre_moments, normalized_associated_legendre,
 };
+pub(crate) use self::polarisation_correction::PolarisationTable;
 use self::polarisation_correction::{CorrectionInputs, PolarisationCorrection};
 use self::spherical_first_order::{FirstOrderInputs, compute_spherical_first_order};
 use self::spherical_paths::StreamPaths;
@@ -1190,6 +1191,17 @@ impl MultipleScatteringField {
             }
         }
         Some(())
+    }
+
+    /// The polarisation correction's ratios tabulated over view directions
+    /// on `nodes` (per half of the zenith-cosine axis, azimuths), for
+    /// images (see `polarisation_correction.rs`). None for a scalar field.
+    pub(crate) fn compute_polarisation_table(
+        &self,
+        nodes: (usize, usize),
+    ) -> Option<PolarisationTable> {
+        let correction = self.polarisation.as_ref()?;
+        Some(correction.tabulate(&self.atmosphere, &self.phases, nodes))
     }
 
     /// Work space for [`MultipleScatteringField::compute_radiance`].

@@ -173,22 +173,49 @@ impl TruncatedPhase {
 
     /// p*(cos Theta), sr^-1, summed from the Legendre series.
     pub(crate) fn eval(&self, cos_theta: f64) -> f64 {
-        let (mut p0, mut p1) = (1.0, cos_theta);
+        let mut legendre = [0.0; MAX_LEGENDRE_TERMS];
+        let legendre = &mut legendre[..self.coefficients.len()];
+        legendre_polynomials(cos_theta, legendre);
+        self.eval_with_legendre(legendre)
+    }
+
+    /// p*(cos Theta), sr^-1, from the Legendre polynomials P_l(cos Theta)
+    /// of [`legendre_polynomials`] (at least as many as the series has
+    /// terms): for several wavelengths at one angle, the polynomials made
+    /// once.
+    pub(crate) fn eval_with_legendre(&self, legendre: &[f64]) -> f64 {
         let mut sum = 0.0;
-        for (l, c) in self.coefficients.iter().enumerate() {
-            let p = match l {
-                0 => 1.0,
-                1 => cos_theta,
-                _ => {
-                    let p2 = ((2 * l - 1) as f64 * cos_theta * p1 - (l - 1) as f64 * p0) / l as f64;
-                    p0 = p1;
-                    p1 = p2;
-                    p2
-                }
-            };
+        for (c, p) in self.coefficients.iter().zip(legendre) {
             sum += c * p;
         }
         sum
+    }
+
+    /// The number of terms of the series.
+    pub(crate) fn terms(&self) -> usize {
+        self.coefficients.len()
+    }
+}
+
+/// The most terms a truncated phase function's series has (two per
+/// stream, 32 streams per hemisphere at most).
+pub(crate) const MAX_LEGENDRE_TERMS: usize = 64;
+
+/// P_l(x) for l = 0..out.len() into `out`, by Bonnet's recurrence
+/// l P_l = (2l - 1) x P_(l-1) - (l - 1) P_(l-2).
+pub(crate) fn legendre_polynomials(x: f64, out: &mut [f64]) {
+    let (mut p0, mut p1) = (1.0, x);
+    for (l, value) in out.iter_mut().enumerate() {
+        *value = match l {
+            0 => 1.0,
+            1 => x,
+            _ => {
+                let p2 = ((2 * l - 1) as f64 * x * p1 - (l - 1) as f64 * p0) / l as f64;
+                p0 = p1;
+                p1 = p2;
+                p2
+            }
+        };
     }
 }
 

@@ -282,7 +282,7 @@ impl PhaseMatrixHarmonics {
     }
 
     /// Zero harmonics at each of `wavelengths` wavelengths.
-    fn zeros(
+    pub(crate) fn zeros(
         wavelengths: usize,
         harmonics: usize,
         outputs: usize,
