@@ -347,27 +347,57 @@ pub struct SunAndObserver {
     /// Wavelengths, start:stop:step in nm (within 360-830)
     #[arg(long, value_name = "START:STOP:STEP", default_value = "380:780:20")]
     pub wavelengths: sora::spectrum::WavelengthGrid,
+
+    /// vector: Stokes vectors through every scattering, so that radiances
+    /// are the intensity of polarised light (up to 5 % from the scalar
+    /// one, docs/polarisation.md); off: scalar light (faster; what scalar
+    /// radiative-transfer codes compute) [default: vector; off with
+    /// --method reference, whose march is scalar]
+    #[arg(long, value_enum, value_name = "vector|off")]
+    pub polarisation: Option<PolarisationChoice>,
+}
+
+/// A sky's polarisation as `--polarisation` names it (for summaries and
+/// JSON).
+pub fn polarisation_name(polarisation: sora::Polarisation) -> &'static str {
+    match polarisation {
+        sora::Polarisation::Vector => "vector",
+        sora::Polarisation::Scalar => "off",
+    }
+}
+
+/// `--polarisation`: vector or off.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum PolarisationChoice {
+    /// Stokes vectors
+    Vector,
+    /// Scalar light
+    Off,
 }
 
 impl SunAndObserver {
-    /// The sky these options describe, with `scattering` by `method`.
+    /// The light's polarisation for `method`: as --polarisation says, or
+    /// by default vector (scalar for the reference march, which has no
+    /// Stokes vectors; an explicit `--polarisation vector` with it is the
+    /// library's one-line error).
+    pub fn polarisation(&self, method: sora::Method) -> sora::Polarisation {
+        match (self.polarisation, method) {
+            (Some(PolarisationChoice::Off), _) | (None, sora::Method::Reference { .. }) => {
+                sora::Polarisation::Scalar
+            }
+            (Some(PolarisationChoice::Vector), _) | (None, _) => sora::Polarisation::Vector,
+        }
+    }
+
+    /// The sky these options describe, with `scattering` by `method`, its
+    /// light polarised as [`SunAndObserver::polarisation`] says.
     pub fn sky(
         &self,
         atmosphere: &mut sora::Atmosphere,
         scattering: sora::Scattering,
         method: sora::Method,
     ) -> anyhow::Result<sora::Sky> {
-        self.sky_with_polarisation(atmosphere, scattering, method, sora::Polarisation::Scalar)
-    }
-
-    /// [`SunAndObserver::sky`] with scalar or vector light.
-    pub fn sky_with_polarisation(
-        &self,
-        atmosphere: &mut sora::Atmosphere,
-        scattering: sora::Scattering,
-        method: sora::Method,
-        polarisation: sora::Polarisation,
-    ) -> anyhow::Result<sora::Sky> {
+        let polarisation = self.polarisation(method);
         if let Some(albedo) = self.ground_albedo {
             let planet = &atmosphere.planet;
             atmosphere.planet = sora::atmosphere::Planet::new(

@@ -9,6 +9,7 @@ mod arguments;
 mod commands;
 mod estimate;
 mod output_path;
+mod polarisation_maps;
 
 use clap::{Parser, Subcommand};
 

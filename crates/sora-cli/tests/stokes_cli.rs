@@ -125,9 +125,16 @@ fn the_default_method_gives_the_polarised_intensity_of_all_orders() {
     // Sun 30, view 30 degrees up at 90 degrees from it: the polarised
     // intensity is below the scalar one (the scalar field overestimates the
     // light there, most in the blue), and the light is strongly polarised.
+    // Polarised light is the default (--stokes adds columns, not physics);
+    // --polarisation off is the scalar light.
     let view = ["--view-elevation", "30", "--view-azimuth", "90"];
-    let scalar = run(&[&RAYLEIGH_SUN_30[..], &view[..]].concat());
+    let scalar = run(&[&RAYLEIGH_SUN_30[..], &view[..], &["--polarisation", "off"]].concat());
     let vector = run(&[&RAYLEIGH_SUN_30[..], &view[..], &["--stokes"]].concat());
+    let default = run(&[&RAYLEIGH_SUN_30[..], &view[..]].concat());
+    for (d, v) in default.lines().skip(1).zip(vector.lines().skip(1)) {
+        let d: Vec<&str> = d.split(',').collect();
+        assert_eq!(d[..], v.split(',').collect::<Vec<_>>()[..2]);
+    }
     let header = vector.lines().next().unwrap();
     let column = |name: &str| header.split(',').position(|c| c == name).unwrap();
     let (radiance, degree) = (

@@ -7,7 +7,7 @@
 //! W m^-2 sr^-1 nm^-1, XYZ in the library's photometric scale (Y in
 //! cd m^-2).
 
-use numpy::ndarray::{Array2, Array3};
+use numpy::ndarray::{Array2, Array3, Array4};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray1};
 use pyo3::prelude::*;
 use sora::colour::{Observer, RgbColourSpace, SpectrumToXyz};
@@ -351,8 +351,10 @@ impl Sky {
     }
 
     /// An image: `output` 'xyz' (height, width, 3; CIE 1931 XYZ),
-    /// 'linear-srgb' (height, width, 3) or 'spectral' (height, width,
-    /// wavelengths; W m^-2 sr^-1 nm^-1); black outside a fisheye's circle.
+    /// 'linear-srgb' (height, width, 3), 'spectral' (height, width,
+    /// wavelengths; W m^-2 sr^-1 nm^-1) or, for a vector sky, 'stokes-xyz'
+    /// (height, width, 4, 3: the XYZ of I, Q, U, V); black outside a
+    /// fisheye's circle.
     #[allow(clippy::too_many_arguments)]
     #[pyo3(signature = (
         camera="fisheye", width=512, height=None, output="xyz", draw_sun_disc=true,
@@ -369,7 +371,7 @@ impl Sky {
         look_elevation_deg: f64,
         look_azimuth_deg: f64,
         fov_deg: f64,
-    ) -> PyResult<Bound<'py, PyArray3<f64>>> {
+    ) -> PyResult<Bound<'py, PyAny>> {
         let camera = camera_from_name(camera, (look_elevation_deg, look_azimuth_deg), fov_deg)?;
         let height = height.unwrap_or(match camera {
             Camera::Equirectangular => width.div_ceil(2),
@@ -386,7 +388,29 @@ impl Sky {
                 // Zero-copy: the library's buffer becomes the array's.
                 Ok(Array3::from_shape_vec(shape(wavelengths), values)
                     .expect("one spectrum per pixel")
-                    .into_pyarray(py))
+                    .into_pyarray(py)
+                    .into_any())
+            }
+            "stokes-xyz" => {
+                let values = run_detached(py, || {
+                    let to_xyz =
+                        SpectrumToXyz::new(self.inner.wavelengths(), Observer::Cie1931TwoDegree);
+                    let stokes = self.inner.render_stokes_xyz(&image, &to_xyz, &|_| {})?;
+                    Ok::<_, sora::Error>(
+                        stokes
+                            .iter()
+                            .flatten()
+                            .flat_map(|c| [c.x, c.y, c.z])
+                            .collect::<Vec<f64>>(),
+                    )
+                })
+                .map_err(to_py_err)?;
+                Ok(
+                    Array4::from_shape_vec((height as usize, width as usize, 4, 3), values)
+                        .expect("four XYZ per pixel")
+                        .into_pyarray(py)
+                        .into_any(),
+                )
             }
             "xyz" | "linear-srgb" => {
                 let linear_srgb = output == "linear-srgb";
@@ -410,10 +434,11 @@ impl Sky {
                 .map_err(to_py_err)?;
                 Ok(Array3::from_shape_vec(shape(3), values)
                     .expect("three values per pixel")
-                    .into_pyarray(py))
+                    .into_pyarray(py)
+                    .into_any())
             }
             other => Err(value_error(format!(
-                "output = '{other}' is unknown: use 'xyz', 'linear-srgb' or 'spectral'"
+                "output = '{other}' is unknown: use 'xyz', 'linear-srgb', 'spectral' or 'stokes-xyz'"
             ))),
         }
     }

@@ -75,8 +75,21 @@ def test_the_fast_method_polarises_all_orders(rayleigh):
     intensity = stokes["I"].values
     ratio = intensity / scalar.radiance(30, 90).values
     assert np.all((ratio > 0.97) & (ratio < 0.999))
-    with pytest.raises(ValueError, match="polarisation"):
-        vector.render(width=8, height=8)
+    # Images of a vector sky: the polarised intensity, and the Stokes XYZ
+    # whose I is that image.
+    image = vector.render(width=16, draw_sun_disc=False)
+    scalar_image = scalar.render(width=16, draw_sun_disc=False)
+    seen = scalar_image[..., 1] > 0
+    change = image[..., 1][seen] / scalar_image[..., 1][seen]
+    assert np.all((change > 0.93) & (change < 1.04))
+    assert np.any(np.abs(change - 1) > 0.005)
+    stokes = vector.render(width=16, draw_sun_disc=False, output="stokes-xyz")
+    assert stokes.shape == (16, 16, 4, 3)
+    np.testing.assert_array_equal(stokes[:, :, 0, :], image)
+    degree = np.hypot(stokes[..., 1, 1], stokes[..., 2, 1])[seen] / image[..., 1][seen]
+    assert 0.6 < degree.max() < 0.95
+    with pytest.raises(ValueError, match="Polarisation::Vector"):
+        scalar.render(width=8, output="stokes-xyz")
 
 
 def test_choices_without_stokes_vectors_raise(rayleigh):

@@ -10,13 +10,16 @@ use sora::ImageSettings;
 use sora::camera::{Camera, PerspectiveCamera};
 use sora::colour::{RgbColourSpace, SpectrumToXyz};
 use sora::output::{
-    ChannelKind, DisplayImage, ExrOptions, ExrSampleType, LinearImage, OutputFormat, write_exr,
-    write_png,
+    ChannelKind, DisplayImage, ExrOptions, ExrSampleType, LinearImage, OutputFormat,
+    write_exr_with_layers, write_png,
 };
 
-use crate::arguments::{AtmosphereSource, ColourOptions, Scattering, SunAndObserver};
+use crate::arguments::{
+    AtmosphereSource, ColourOptions, Scattering, SunAndObserver, polarisation_name,
+};
 use crate::estimate;
 use crate::output_path::output_target;
+use crate::polarisation_maps;
 
 /// Render the sky to an image.
 ///
@@ -34,6 +37,16 @@ use crate::output_path::output_target;
 /// --exr-half fails then unless --half-overflow clamp is given (or
 /// --no-sun-disc, or 32-bit floats).
 ///
+/// Polarisation: by default the light is followed as Stokes vectors, so
+/// the image is the intensity of polarised light (--polarisation off for
+/// scalar light). --stokes adds the Stokes images S0..S3 (I, Q, U, V) to
+/// an OpenEXR file as layers S0.R, S0.G, ... S3.B (or .X, .Y, .Z with
+/// --exr-xyz; Q, U, V may be negative), Q and U referred to each pixel's
+/// meridian plane (Q > 0: vertical); --dolp and --aop write the degree
+/// and the angle of linear polarisation (luminance-weighted, the angle
+/// from the vertical toward the observer's left) as PNG maps with a
+/// legend (docs/polarisation.md).
+///
 /// Night: pixels darker than 1e-6 cd/m^2 (the night floor, 200 times below
 /// the natural night sky's airglow and starlight, which the model lacks)
 /// are written black; when the whole sky is that dark, auto exposure says
@@ -50,6 +63,8 @@ use crate::output_path::output_target;
 ///   sora render --preset earth-clear --sun-elevation 30 -o sky.png
 ///   sora render --preset earth-clear --time 2026-06-21T05:30:00+09:00 \
 ///       --location 35.68,139.77 -o tokyo.png
+///   sora render --preset earth-clear --sun-elevation 30 -o sky.exr \
+///       --stokes --dolp degree.png --aop angle.png
 #[derive(Debug, Args)]
 #[command(verbatim_doc_comment)]
 pub struct RenderArgs {
@@ -150,6 +165,21 @@ pub struct RenderArgs {
     /// OpenEXR: store CIE XYZ channels instead of linear RGB
     #[arg(long)]
     exr_xyz: bool,
+
+    /// OpenEXR: add the Stokes images S0..S3 as layers (needs polarised
+    /// light, the default)
+    #[arg(long)]
+    stokes: bool,
+
+    /// Also write the degree of linear polarisation as a PNG map with a
+    /// legend (viridis, 0..1)
+    #[arg(long, value_name = "FILE.png")]
+    dolp: Option<PathBuf>,
+
+    /// Also write the angle of polarisation as a PNG map with a legend (a
+    /// cyclic perceptual colour map, -90..90 degrees from the vertical)
+    #[arg(long, value_name = "FILE.png")]
+    aop: Option<PathBuf>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -211,12 +241,52 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             })
             .collect::<anyhow::Result<Vec<_>>>()?
     };
+    // The polarisation outputs: polarised light, one frame, the right
+    // formats, writable paths.
+    let polarisation_outputs = args.stokes || args.dolp.is_some() || args.aop.is_some();
+    let method = match args.method {
+        Method::Fast => sora::Method::Fast,
+        Method::Reference => sora::Method::REFERENCE_DEFAULT,
+    };
+    if polarisation_outputs {
+        if args.sun.polarisation(method) == sora::Polarisation::Scalar {
+            bail!(
+                "--stokes, --dolp and --aop need polarised light: the fast method (the default) without --polarisation off"
+            );
+        }
+        if frame_count > 1 {
+            bail!(
+                "--stokes, --dolp and --aop make one image, not a sequence (leave out --sun-elevation-to)"
+            );
+        }
+        if args.stokes && format != OutputFormat::Exr {
+            bail!(
+                "--stokes writes the Stokes images as OpenEXR layers: give -o FILE.exr (PNG maps of the polarisation: --dolp FILE.png, --aop FILE.png)"
+            );
+        }
+    }
+    let mut map_targets = Vec::new();
+    for (option, path) in [("--dolp", &args.dolp), ("--aop", &args.aop)] {
+        if let Some(path) = path {
+            if OutputFormat::from_path(path)? != OutputFormat::Png {
+                bail!(
+                    "{option} {}: the map is a PNG (give FILE.png)",
+                    path.display()
+                );
+            }
+            map_targets.push(output_target(path, option)?);
+        }
+    }
     // Image buffers bounded before any work (see `estimate`).
     let (encoded_bytes_per_pixel, format_name) = match (format, args.png_16_bit) {
         (OutputFormat::Png, false) => (6, "8-bit PNG"),
         (OutputFormat::Png, true) => (12, "16-bit PNG"),
         (OutputFormat::Exr, _) => (24, "OpenEXR"),
     };
+    // The polarisation outputs' buffers beside the image's: the Stokes XYZ
+    // (4 x 24 bytes), the EXR's four layers (4 x 12) and two maps (2 x 3).
+    let encoded_bytes_per_pixel =
+        encoded_bytes_per_pixel + if polarisation_outputs { 96 + 48 + 6 } else { 0 };
     estimate::check_render_memory(width, height, encoded_bytes_per_pixel, format_name)?;
     estimate::announce(estimate::render_estimate(
         width,
@@ -231,10 +301,6 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     ));
     let mut atmosphere = args.source.load()?;
     let started = Instant::now();
-    let method = match args.method {
-        Method::Fast => sora::Method::Fast,
-        Method::Reference => sora::Method::REFERENCE_DEFAULT,
-    };
     let sky = args
         .sun
         .sky(&mut atmosphere, args.scattering.to_library(), method)?;
@@ -258,7 +324,13 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             &frame_sky
         };
         let scale = render_frame(
-            &args, sky, &image, &to_xyz, format, output, exposure, started,
+            &args,
+            sky,
+            &image,
+            &to_xyz,
+            (format, output, &map_targets),
+            exposure,
+            started,
         )?;
         // A sequence keeps the first frame's automatic exposure (a fixed
         // one is the same for every frame anyway).
@@ -353,16 +425,16 @@ fn frame_path(output: &std::path::Path, frame: usize) -> PathBuf {
     output.with_file_name(format!("{stem}_{frame:03}.{extension}"))
 }
 
-/// Renders `sky` and writes it to `output`; with `exposure` (a sequence's)
-/// in place of the options'. Returns the PNG's exposure scale.
-#[allow(clippy::too_many_arguments)]
+/// Renders `sky` and writes it to `output` (and the polarisation maps to
+/// `maps`, the targets of --dolp and --aop in that order); with
+/// `exposure` (a sequence's) in place of the options'. Returns the PNG's
+/// exposure scale.
 fn render_frame(
     args: &RenderArgs,
     sky: &sora::Sky,
     image: &ImageSettings,
     to_xyz: &SpectrumToXyz,
-    format: OutputFormat,
-    output: &std::path::Path,
+    (format, output, maps): (OutputFormat, &std::path::Path, &[PathBuf]),
     exposure: Option<sora::colour::Exposure>,
     started: Instant,
 ) -> anyhow::Result<Option<f64>> {
@@ -374,14 +446,35 @@ fn render_frame(
     sky.prepare_images()?;
     spinner.finish_and_clear();
     let bar = progress_bar(height as u64);
-    let mut xyz = sky.render_xyz(image, to_xyz, &|rows| bar.set_position(rows as u64))?;
+    let progress = |rows: usize| bar.set_position(rows as u64);
+    // The Stokes images when asked for (S0 is the image), else the image.
+    let (mut xyz, mut stokes) = if args.stokes || !maps.is_empty() {
+        let stokes = sky.render_stokes_xyz(image, to_xyz, &progress)?;
+        (stokes.iter().map(|s| s[0]).collect(), stokes)
+    } else {
+        (sky.render_xyz(image, to_xyz, &progress)?, Vec::new())
+    };
     bar.finish_and_clear();
     // Below the night floor the model has nothing to show (no airglow, no
-    // stars), only numerical floors: such pixels are written black.
+    // stars), only numerical floors: such pixels are written black, and
+    // their polarisation with them.
     let brightest_cd_m2 = sora::colour::apply_night_floor(&mut xyz);
+    for (s, i) in stokes.iter_mut().zip(&xyz) {
+        if i.y == 0.0 {
+            *s = [sora::colour::Xyz::BLACK; 4];
+        }
+    }
+    let (w, h) = (width as usize, height as usize);
+    for (path, is_degree) in maps.iter().zip([args.dolp.is_some(), false]) {
+        let map = if is_degree {
+            polarisation_maps::degree_map(&polarisation_maps::degrees(&stokes), w, h)?
+        } else {
+            polarisation_maps::angle_map(&polarisation_maps::angles_deg(&stokes), w, h)?
+        };
+        write_png(path, &map)?;
+    }
     let render_seconds = frame_started.elapsed().as_secs_f64();
 
-    let (w, h) = (width as usize, height as usize);
     let mut png_scale = None;
     match format {
         OutputFormat::Png => {
@@ -412,10 +505,10 @@ fn render_frame(
                 Units::Radiance => 1.0,
                 Units::Luminance => sora::colour::MAXIMUM_LUMINOUS_EFFICACY_LM_PER_W,
             };
-            let (kind, pixels) = if args.exr_xyz {
-                (
-                    ChannelKind::Xyz,
-                    xyz.iter()
+            // One image of linear values (RGB or XYZ) from XYZ per pixel.
+            let linear_image = |xyz: &mut dyn Iterator<Item = sora::colour::Xyz>| {
+                let (kind, pixels) = if args.exr_xyz {
+                    let pixels = xyz
                         .map(|c| {
                             [
                                 (scale * c.x) as f32,
@@ -423,19 +516,31 @@ fn render_frame(
                                 (scale * c.z) as f32,
                             ]
                         })
-                        .collect(),
-                )
-            } else {
-                let space = RgbColourSpace::Srgb;
-                let pixels = xyz
-                    .iter()
-                    .map(|c| {
-                        let rgb = space.linear_rgb_from_xyz(c.scaled(scale));
-                        [rgb.r as f32, rgb.g as f32, rgb.b as f32]
-                    })
-                    .collect();
-                (ChannelKind::Rgb, pixels)
+                        .collect();
+                    (ChannelKind::Xyz, pixels)
+                } else {
+                    let space = RgbColourSpace::Srgb;
+                    let pixels = xyz
+                        .map(|c| {
+                            let rgb = space.linear_rgb_from_xyz(c.scaled(scale));
+                            [rgb.r as f32, rgb.g as f32, rgb.b as f32]
+                        })
+                        .collect();
+                    (ChannelKind::Rgb, pixels)
+                };
+                LinearImage::new(w, h, kind, pixels)
             };
+            let main = linear_image(&mut xyz.iter().copied())?;
+            // --stokes: S0..S3 as layers (S0 the same as the main image).
+            let layers = if args.stokes {
+                (0..4)
+                    .map(|c| linear_image(&mut stokes.iter().map(|s| s[c])))
+                    .collect::<sora::Result<Vec<_>>>()?
+            } else {
+                Vec::new()
+            };
+            let names = ["S0", "S1", "S2", "S3"];
+            let layers: Vec<(&str, &LinearImage)> = names.into_iter().zip(&layers).collect();
             let (units, white_luminance) = match args.units {
                 Units::Radiance => (
                     "radiance_w_m2_sr (XYZ of spectral radiance integrated over nm, no 683 lm/W)",
@@ -456,7 +561,16 @@ fn render_frame(
                     ("sun_elevation_deg".into(), sun_elevation.to_string()),
                     ("sun_azimuth_deg".into(), sun_azimuth.to_string()),
                     ("sun_disc".into(), (!args.no_sun_disc).to_string()),
-                ],
+                    ("polarisation".into(), polarisation_name(sky.polarisation()).into()),
+                ]
+                .into_iter()
+                .chain(args.stokes.then(|| {
+                    (
+                        "stokes".into(),
+                        "layers S0..S3 are Stokes I, Q, U, V in the units above; Q and U referred to each pixel's meridian plane (Q > 0: vertical), the angle of polarisation 0.5 atan2(U, Q) from the vertical toward the observer's left (sora docs/polarisation.md)".into(),
+                    )
+                }))
+                .collect(),
                 ..ExrOptions::default()
             };
             let half_hint = if args.exr_half && args.half_overflow == HalfOverflow::Error {
@@ -464,7 +578,7 @@ fn render_frame(
             } else {
                 ""
             };
-            write_exr(output, &LinearImage::new(w, h, kind, pixels)?, options)
+            write_exr_with_layers(output, &main, &layers, options)
                 .with_context(|| format!("writing {}{half_hint}", output.display()))?;
         }
     }
@@ -477,10 +591,11 @@ fn render_frame(
     };
     let (sun_elevation, sun_azimuth) = sky.sun_position_deg();
     eprintln!(
-        "rendered {width}x{height} ({} wavelengths, {:?} method, {:?} scattering, sun at {sun_elevation:.4} deg elevation, {sun_azimuth:.4} deg azimuth) in {render_seconds:.3} s ({rate}), wrote {} in {total_seconds:.3} s total",
+        "rendered {width}x{height} ({} wavelengths, {:?} method, {:?} scattering, polarisation {}, sun at {sun_elevation:.4} deg elevation, {sun_azimuth:.4} deg azimuth) in {render_seconds:.3} s ({rate}), wrote {} in {total_seconds:.3} s total",
         args.sun.wavelengths.len(),
         args.method,
         args.scattering,
+        polarisation_name(sky.polarisation()),
         output.display()
     );
     Ok(png_scale)

@@ -248,14 +248,15 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
         _ => (0, 0),
     };
     let mut atmosphere = args.source.load()?;
-    let polarisation = if args.stokes {
-        sora::Polarisation::Vector
-    } else {
-        sora::Polarisation::Scalar
-    };
-    let sky = args
-        .sun
-        .sky_with_polarisation(&mut atmosphere, scattering, method, polarisation)?;
+    if args.stokes && args.sun.polarisation(method) == sora::Polarisation::Scalar {
+        match method {
+            sora::Method::Reference { .. } => anyhow::bail!(
+                "--stokes: the reference method's march is scalar (no polarisation); Stokes vectors come from --method fast (the default) or path-tracing"
+            ),
+            _ => anyhow::bail!("--stokes needs --polarisation vector (the default), not off"),
+        }
+    }
+    let sky = args.sun.sky(&mut atmosphere, scattering, method)?;
     let grid = *sky.wavelengths();
     let (sun_elevation, sun_azimuth) = args.sun.sun_deg()?;
     let views = directions(&args, (sun_elevation, sun_azimuth), grid.len())?;
@@ -309,7 +310,8 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
                     number_list(errors.values(), |e| format!("{e:.3e}"))
                 ),
             };
-            let stokes = r.stokes.as_ref().map_or(String::new(), |stokes| {
+            let stokes = r.stokes.as_ref().filter(|_| args.stokes);
+            let stokes = stokes.map_or(String::new(), |stokes| {
                 let degree = stokes.degree_of_linear_polarisation(&r.radiance_w_m2_sr_nm);
                 let angle: Vec<String> = stokes
                     .angle_of_polarisation_deg()
@@ -361,7 +363,7 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
     };
     let stokes_columns: Vec<Vec<String>> = results
         .iter()
-        .map(|r| match &r.stokes {
+        .map(|r| match r.stokes.as_ref().filter(|_| args.stokes) {
             None => vec![String::new(); wavelengths.len()],
             Some(stokes) => {
                 let degree = stokes.degree_of_linear_polarisation(&r.radiance_w_m2_sr_nm);
@@ -381,8 +383,10 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
             }
         })
         .collect();
-    let sun_json =
-        format!("\"sun_elevation_deg\": {sun_elevation}, \"sun_azimuth_deg\": {sun_azimuth}");
+    let polarisation = crate::arguments::polarisation_name(sky.polarisation());
+    let sun_json = format!(
+        "\"sun_elevation_deg\": {sun_elevation}, \"sun_azimuth_deg\": {sun_azimuth}, \"polarisation\": \"{polarisation}\""
+    );
     if args.view_elevation.is_some() {
         // One direction: the two- or three-column spectrum.
         let (result, (xyz, rgb)) = (&results[0], &colours[0]);

@@ -211,9 +211,9 @@ class Sky:
     - ``polarisation``: ``"scalar"`` (default) or ``"vector"`` (Stokes
       vectors, :meth:`stokes`, all orders, by the fast method or path
       tracing, not ``method="reference"``; Mie aerosols get their phase
-      matrix computed; :meth:`render` of a vector sky with multiple
-      scattering raises, images are scalar so far). With ``"vector"``
-      the radiance is the polarised intensity I.
+      matrix computed; :meth:`render` gives the polarised intensity, and
+      with ``output="stokes-xyz"`` the XYZ of I, Q, U and V). With
+      ``"vector"`` the radiance is the polarised intensity I.
 
     Skies pickle (by their arguments), so Dask can ship them.
     """
@@ -441,7 +441,11 @@ class Sky:
         - ``output="xyz"``: (height, width, 3), CIE 1931 XYZ (Y in cd m^-2);
         - ``"linear-srgb"``: (height, width, 3), linear sRGB of the same XYZ
           (no exposure, no clipping);
-        - ``"spectral"``: (height, width, wavelengths), W m^-2 sr^-1 nm^-1.
+        - ``"spectral"``: (height, width, wavelengths), W m^-2 sr^-1 nm^-1;
+        - ``"stokes-xyz"`` (a ``polarisation="vector"`` sky): (height, width,
+          4, 3), the XYZ of the Stokes I, Q, U and V (Q and U referred to
+          each pixel's meridian plane, Q > 0 vertical; they may be
+          negative), the sun's disc in I only.
 
         ``camera``: ``"fisheye"`` (the whole sky, zenith at the centre, north
         up, east left; black outside the circle), ``"equirectangular"`` or

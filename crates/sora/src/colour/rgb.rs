@@ -339,7 +339,7 @@ impl TransferCurve {
     /// The encoded value V of linear component `linear` (both dimensionless,
     /// 1 = white); negative input gives 0. Not clamped above: values over 1
     /// encode over 1.
-    pub(crate) fn encode(self, linear: f64) -> f64 {
+    pub fn encode(self, linear: f64) -> f64 {
         let linear = linear.max(0.0);
         match self {
             TransferCurve::Srgb => {

@@ -4,7 +4,11 @@
 //!
 //! - Channels: `R, G, B` for [`ChannelKind::Rgb`], `X, Y, Z` for
 //!   [`ChannelKind::Xyz`] (OpenEXR stores channels sorted by name, so an RGB
-//!   file lists them as `B, G, R`; readers look them up by name).
+//!   file lists them as `B, G, R`; readers look them up by name). More
+//!   images of the same size can go into the same file as layers
+//!   ([`write_exr_with_layers`]): channels named `<layer>.R` and so on, the
+//!   OpenEXR convention for layers of one part (a polarised sky's Stokes
+//!   images S0..S3, say).
 //! - Samples: 32-bit float ([`ExrSampleType::F32`], the default, exact) or
 //!   16-bit half float ([`ExrSampleType::F16`], rounded to nearest; a value
 //!   whose magnitude rounds beyond the half-float maximum 65504 is rejected
@@ -92,10 +96,23 @@ const HALF_FLOAT_MAX: f32 = 65504.0;
 /// value would overflow them; the error names the pixel and channel. I/O
 /// and encoder errors name `path`.
 pub fn write_exr(path: impl AsRef<Path>, image: &LinearImage, options: ExrOptions) -> Result<()> {
+    write_exr_with_layers(path, image, &[], options)
+}
+
+/// [`write_exr`] with `layers` beside the image, each as channels
+/// `<name>.R, <name>.G, <name>.B` (or `.X, .Y, .Z`) of the same part; an
+/// error, before any file is made, if a layer's size or channel kind is
+/// not the image's.
+pub fn write_exr_with_layers(
+    path: impl AsRef<Path>,
+    image: &LinearImage,
+    layers: &[(&str, &LinearImage)],
+    options: ExrOptions,
+) -> Result<()> {
     let path = path.as_ref();
     // Encoded in memory first: a half-float overflow or an encoder error
     // leaves no file behind, and the file is written in one piece.
-    let bytes = encode_exr(image, options).map_err(|error| match error {
+    let bytes = encode_exr_with_layers(image, layers, options).map_err(|error| match error {
         Error::Io { message, .. } => Error::Io {
             path: path.display().to_string(),
             message,
@@ -116,11 +133,39 @@ pub fn write_exr(path: impl AsRef<Path>, image: &LinearImage, options: ExrOption
 /// Fails as [`write_exr`] does before it creates a file; an encoder error
 /// is an [`Error::Io`] with the path `"(memory)"`.
 pub fn encode_exr(image: &LinearImage, options: ExrOptions) -> Result<Vec<u8>> {
-    let names = image.channel_kind().channel_names();
+    encode_exr_with_layers(image, &[], options)
+}
+
+/// The bytes of [`write_exr_with_layers`]'s file (see [`encode_exr`]).
+pub fn encode_exr_with_layers(
+    image: &LinearImage,
+    layers: &[(&str, &LinearImage)],
+    options: ExrOptions,
+) -> Result<Vec<u8>> {
     let mut channels: SmallVec<[AnyChannel<FlatSamples>; 4]> = SmallVec::new();
-    for (channel, name) in names.into_iter().enumerate() {
-        let samples = channel_samples(image, channel, options.sample_type)?;
-        channels.push(AnyChannel::new(name, samples));
+    for (prefix, layer) in std::iter::once(("", image)).chain(layers.iter().copied()) {
+        if (layer.width(), layer.height(), layer.channel_kind())
+            != (image.width(), image.height(), image.channel_kind())
+        {
+            return Err(Error::Unsupported(format!(
+                "OpenEXR layer {prefix}: {} x {} {:?} pixels, but the image is {} x {} {:?}",
+                layer.width(),
+                layer.height(),
+                layer.channel_kind(),
+                image.width(),
+                image.height(),
+                image.channel_kind()
+            )));
+        }
+        for (channel, name) in layer.channel_kind().channel_names().into_iter().enumerate() {
+            let name = if prefix.is_empty() {
+                name.to_string()
+            } else {
+                format!("{prefix}.{name}")
+            };
+            let samples = channel_samples(layer, channel, &name, options.sample_type)?;
+            channels.push(AnyChannel::new(name.as_str(), samples));
+        }
     }
 
     let layer_attributes = LayerAttributes {
@@ -155,11 +200,13 @@ pub fn encode_exr(image: &LinearImage, options: ExrOptions) -> Result<Vec<u8>> {
     Ok(bytes)
 }
 
-/// One channel of `image` as a flat, row-major sample vector of
-/// `sample_type`, rejecting values that half floats cannot hold.
+/// One channel of `image` (named `name` in the file) as a flat, row-major
+/// sample vector of `sample_type`, rejecting values that half floats
+/// cannot hold.
 fn channel_samples(
     image: &LinearImage,
     channel: usize,
+    name: &str,
     sample_type: ExrSampleType,
 ) -> Result<FlatSamples> {
     let values = image.pixels().iter().map(|pixel| pixel[channel]);
@@ -178,7 +225,6 @@ fn channel_samples(
                 // that round to infinity are lost.
                 if half.is_infinite() {
                     let (x, y) = (index % image.width(), index / image.width());
-                    let name = image.channel_kind().channel_names()[channel];
                     return Err(Error::out_of_range(
                         format!("half-float OpenEXR pixel ({x}, {y}) channel {name}"),
                         f64::from(value),
@@ -234,14 +280,14 @@ mod tests {
     fn half_float_overflow_is_rejected_naming_pixel_and_channel() {
         let image =
             LinearImage::new(2, 1, ChannelKind::Rgb, vec![[1.0; 3], [1.0, 1.0, 70000.0]]).unwrap();
-        let error = channel_samples(&image, 2, ExrSampleType::F16).unwrap_err();
+        let error = channel_samples(&image, 2, "B", ExrSampleType::F16).unwrap_err();
         let message = error.to_string();
         assert!(message.contains("pixel (1, 0) channel B"), "{message}");
         assert!(message.contains("70000"), "{message}");
         // The same value is fine as a 32-bit float and other channels are
         // fine as halves.
-        assert!(channel_samples(&image, 2, ExrSampleType::F32).is_ok());
-        assert!(channel_samples(&image, 0, ExrSampleType::F16).is_ok());
+        assert!(channel_samples(&image, 2, "B", ExrSampleType::F32).is_ok());
+        assert!(channel_samples(&image, 0, "R", ExrSampleType::F16).is_ok());
     }
 
     #[test]
@@ -255,7 +301,7 @@ mod tests {
         .unwrap();
         for (channel, expected) in [(0, [1.0, HALF_FLOAT_MAX]), (1, [-HALF_FLOAT_MAX, 0.0])] {
             let Ok(FlatSamples::F16(halves)) =
-                channel_samples(&image, channel, ExrSampleType::F16Clamped)
+                channel_samples(&image, channel, "R", ExrSampleType::F16Clamped)
             else {
                 panic!("expected half-float samples");
             };
@@ -275,7 +321,8 @@ mod tests {
             vec![[HALF_FLOAT_MAX; 3], [65519.0; 3], [-65519.0; 3]],
         )
         .unwrap();
-        let Ok(FlatSamples::F16(halves)) = channel_samples(&image, 1, ExrSampleType::F16) else {
+        let Ok(FlatSamples::F16(halves)) = channel_samples(&image, 1, "Y", ExrSampleType::F16)
+        else {
             panic!("expected half-float samples");
         };
         assert_eq!(

@@ -33,7 +33,10 @@ mod format;
 mod image_buffer;
 mod png;
 
-pub use exr::{ExrCompression, ExrOptions, ExrSampleType, encode_exr, write_exr};
+pub use exr::{
+    ExrCompression, ExrOptions, ExrSampleType, encode_exr, encode_exr_with_layers, write_exr,
+    write_exr_with_layers,
+};
 pub use format::OutputFormat;
 pub use image_buffer::{
     ChannelKind, DisplayImage, DisplayImage8, DisplayImage16, LinearImage, MAX_IMAGE_DIMENSION,
