@@ -119,7 +119,6 @@ impl PhaseMatrixHarmonics {
         const ELEMENTS: usize = COMPONENTS * COMPONENTS;
         let (outputs, inputs) = (output_cosines.len(), input_cosines.len());
         let AzimuthRule { nodes, step, trig } = AzimuthRule::new(harmonics);
-        let block = COMPONENTS * outputs;
         let mut all = PhaseMatrixHarmonics::zeros(wavelengths, harmonics, outputs, inputs);
         let mut matrices = vec![PhaseMatrix::default(); wavelengths];
         let inputs_and_sun = inputs_and_sun((input_cosines, input_weights), sun_cosine);
@@ -174,48 +173,61 @@ impl PhaseMatrixHarmonics {
                             }
                         }
                     }
-                    for m in 0..harmonics {
-                        let (cosine, sine) = (
-                            &cosine_part[m * ELEMENTS..(m + 1) * ELEMENTS],
-                            &sine_part[m * ELEMENTS..(m + 1) * ELEMENTS],
-                        );
-                        for row in 0..COMPONENTS {
-                            match weight {
-                                Some(weight) => {
-                                    for column in 0..COMPONENTS {
-                                        let e = row * COMPONENTS + column;
-                                        let projected = match (
-                                            is_even_component(row),
-                                            is_even_component(column),
-                                        ) {
-                                            (true, true) | (false, false) => cosine[e],
-                                            (true, false) => -sine[e],
-                                            (false, true) => sine[e],
-                                        };
-                                        h.scattering[((m * COMPONENTS + column) * inputs + b)
-                                            * block
-                                            + row * outputs
-                                            + a] = weight * step * projected;
-                                    }
-                                }
-                                None => {
-                                    let e = row * COMPONENTS;
-                                    let projected = if is_even_component(row) {
-                                        cosine[e]
-                                    } else {
-                                        sine[e]
-                                    };
-                                    let norm = if m == 0 { 2.0 * PI } else { PI };
-                                    h.sun[(m * COMPONENTS + row) * outputs + a] =
-                                        step / norm * projected;
-                                }
-                            }
-                        }
-                    }
+                    h.store_transforms((&cosine_part, &sine_part), (a, b), weight, step);
                 }
             }
         }
         all
+    }
+
+    /// Stores the cosine and sine transforms over the azimuth nodes of the
+    /// rotated matrix from input (or sun) `b` into output `a`, [m * 16 +
+    /// e], as this wavelength's harmonics: the scattering blocks with the
+    /// input's quadrature weight `weight`, or (None) the sun's.
+    fn store_transforms(
+        &mut self,
+        (cosine_part, sine_part): (&[f64], &[f64]),
+        (a, b): (usize, usize),
+        weight: Option<f64>,
+        step: f64,
+    ) {
+        const ELEMENTS: usize = COMPONENTS * COMPONENTS;
+        let (harmonics, inputs, outputs) = (self.harmonics, self.inputs, self.outputs);
+        let block = COMPONENTS * outputs;
+        for m in 0..harmonics {
+            let (cosine, sine) = (
+                &cosine_part[m * ELEMENTS..(m + 1) * ELEMENTS],
+                &sine_part[m * ELEMENTS..(m + 1) * ELEMENTS],
+            );
+            for row in 0..COMPONENTS {
+                match weight {
+                    Some(weight) => {
+                        for column in 0..COMPONENTS {
+                            let e = row * COMPONENTS + column;
+                            let projected =
+                                match (is_even_component(row), is_even_component(column)) {
+                                    (true, true) | (false, false) => cosine[e],
+                                    (true, false) => -sine[e],
+                                    (false, true) => sine[e],
+                                };
+                            self.scattering[((m * COMPONENTS + column) * inputs + b) * block
+                                + row * outputs
+                                + a] = weight * step * projected;
+                        }
+                    }
+                    None => {
+                        let e = row * COMPONENTS;
+                        let projected = if is_even_component(row) {
+                            cosine[e]
+                        } else {
+                            sine[e]
+                        };
+                        let norm = if m == 0 { 2.0 * PI } else { PI };
+                        self.sun[(m * COMPONENTS + row) * outputs + a] = step / norm * projected;
+                    }
+                }
+            }
+        }
     }
 
     /// [`PhaseMatrixHarmonics::compute`] element by element, node by node:
