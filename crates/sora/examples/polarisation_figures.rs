@@ -17,9 +17,9 @@
 //! Q changes sign along the sun's vertical: Babinet's above the sun,
 //! Brewster's below it, Arago's above the antisolar point), marks them with
 //! white rings on the map (the sun with a black one), and writes
-//! `polarisation_intensity_change_<preset>_sun<elevation>.png`: (I_vector
-//! - I_scalar) / I_scalar of the luminance, blue -5 % through white to red
-//! +5 %, a colour bar below, and prints its range.
+//! `polarisation_intensity_change_<preset>_sun<elevation>.png`: the
+//! luminance's I_vector / I_scalar - 1, blue at -5 % through white to red
+//! at 5 %, a colour bar below, and prints its range.
 
 use sora::colour::{Observer, SpectrumToXyz};
 use sora::output::{DisplayImage, write_png};
