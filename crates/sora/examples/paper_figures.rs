@@ -744,6 +744,9 @@ struct Scene {
     /// Render single scattering beside multiple scattering (`*_single.png`
     /// and `*_multiple.png`); otherwise multiple only.
     single_too: bool,
+    /// Polarised light, as `sora render` by default (the README's
+    /// pictures); the other figures are the scalar sky's.
+    polarised: bool,
     views: Vec<View>,
 }
 
@@ -792,6 +795,7 @@ fn scenes() -> Result<Vec<Scene>> {
             sun: (30.0, 180.0),
             sun_disc: true,
             single_too: false,
+            polarised: true,
             views: vec![View {
                 suffix: "",
                 ..fisheye()
@@ -803,6 +807,7 @@ fn scenes() -> Result<Vec<Scene>> {
             sun: sun_over_tokyo("2026-06-21T05:30:00+09:00")?,
             sun_disc: true,
             single_too: false,
+            polarised: true,
             views: vec![View {
                 suffix: "",
                 ..fisheye()
@@ -814,6 +819,7 @@ fn scenes() -> Result<Vec<Scene>> {
             sun: (60.0, 180.0),
             sun_disc: true,
             single_too: true,
+            polarised: false,
             views: vec![fisheye(), panorama()],
         },
         Scene {
@@ -822,6 +828,7 @@ fn scenes() -> Result<Vec<Scene>> {
             sun: sunset,
             sun_disc: true,
             single_too: true,
+            polarised: false,
             views: vec![fisheye(), panorama()],
         },
         Scene {
@@ -830,6 +837,7 @@ fn scenes() -> Result<Vec<Scene>> {
             sun: (-2.0, SUNSET_AZIMUTH),
             sun_disc: true,
             single_too: true,
+            polarised: false,
             views: vec![fisheye(), panorama()],
         },
         Scene {
@@ -838,6 +846,7 @@ fn scenes() -> Result<Vec<Scene>> {
             sun: (60.0, 180.0),
             sun_disc: true,
             single_too: true,
+            polarised: false,
             views: vec![fisheye(), panorama()],
         },
         Scene {
@@ -846,6 +855,7 @@ fn scenes() -> Result<Vec<Scene>> {
             sun: sunset,
             sun_disc: true,
             single_too: true,
+            polarised: false,
             views: vec![
                 fisheye(),
                 toward_sunset(ViewExposure::Scene)?,
@@ -858,6 +868,7 @@ fn scenes() -> Result<Vec<Scene>> {
             sun: sunset,
             sun_disc: true,
             single_too: true,
+            polarised: false,
             views: vec![
                 fisheye(),
                 toward_sunset(ViewExposure::Scene)?,
@@ -871,13 +882,15 @@ fn render_scene(out: &Path, grid: &WavelengthGrid, scene: &Scene) -> Result<()> 
     let started = Instant::now();
     // One sky per order of scattering, each building its tables once for
     // all the scene's views.
-    let multiple_sky = sky(
-        &scene.atmosphere,
-        grid,
-        scene.sun,
-        Scattering::multiple(),
-        Method::Fast,
-    )?;
+    let multiple_sky = Sky::builder(&scene.atmosphere)
+        .wavelengths(*grid)
+        .sun_deg(scene.sun.0, scene.sun.1)
+        .polarisation(if scene.polarised {
+            Polarisation::Vector
+        } else {
+            Polarisation::Scalar
+        })
+        .build()?;
     let single_sky = sky(
         &scene.atmosphere,
         grid,
