@@ -3,20 +3,7 @@
 
 mod common;
 
-use common::{one_line_error, sora};
-
-/// Every sample of channel `name` of an OpenEXR file, as f32.
-fn exr_channel(path: &std::path::Path, name: &str) -> Vec<f32> {
-    let image = exr::prelude::read_first_flat_layer_from_file(path).unwrap();
-    let channel = image
-        .layer_data
-        .channel_data
-        .list
-        .iter()
-        .find(|c| c.name.to_string() == name)
-        .unwrap_or_else(|| panic!("no channel {name}"));
-    channel.sample_data.values_as_f32().collect()
-}
+use common::{exr_channel, one_line_error, sora};
 
 fn render(args: &[&str]) -> std::process::Output {
     let base = ["render", "--preset", "earth-clear", "--width", "48"];

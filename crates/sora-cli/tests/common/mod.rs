@@ -31,6 +31,19 @@ pub fn one_line_error(out: &Output) -> String {
     stderr
 }
 
+/// Every sample of channel `name` of an OpenEXR file, as f32.
+pub fn exr_channel(path: &Path, name: &str) -> Vec<f32> {
+    let image = exr::prelude::read_first_flat_layer_from_file(path).unwrap();
+    let channel = image
+        .layer_data
+        .channel_data
+        .list
+        .iter()
+        .find(|c| c.name.to_string() == name)
+        .unwrap_or_else(|| panic!("no channel {name}"));
+    channel.sample_data.values_as_f32().collect()
+}
+
 /// Path of a file in `tests/data/`.
 pub fn data(name: &str) -> String {
     Path::new(env!("CARGO_MANIFEST_DIR"))

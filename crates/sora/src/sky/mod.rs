@@ -409,6 +409,24 @@ struct ViewWork {
     multiple_stokes: Vec<f64>,
 }
 
+/// A view's [`SkyRadiance`] from its values: the radiance (the polarised
+/// intensity I of a polarised sky) at `wavelengths` wavelengths, then, if
+/// there are four times as many values, its Q, U and V.
+fn sky_radiance_from_values(values: &[f64], wavelengths: usize) -> SkyRadiance {
+    let spectrum =
+        |k: usize| SampledSpectrum::from_values(values[k * wavelengths..][..wavelengths].to_vec());
+    SkyRadiance {
+        radiance_w_m2_sr_nm: spectrum(0),
+        standard_error_w_m2_sr_nm: None,
+        stokes: (values.len() == 4 * wavelengths).then(|| Stokes {
+            q_w_m2_sr_nm: spectrum(1),
+            u_w_m2_sr_nm: spectrum(2),
+            v_w_m2_sr_nm: spectrum(3),
+            standard_errors_w_m2_sr_nm: None,
+        }),
+    }
+}
+
 impl Sky {
     /// Starts a sky of `atmosphere`: the sun at the zenith, the eye on the
     /// ground, the paper's wavelengths, all orders of scattering, the fast
@@ -776,23 +794,7 @@ impl Sky {
         );
         Ok(values
             .chunks(per_view)
-            .map(|values| {
-                let spectrum = |k: usize| {
-                    SampledSpectrum::from_values(
-                        values[k * wavelengths..(k + 1) * wavelengths].to_vec(),
-                    )
-                };
-                SkyRadiance {
-                    radiance_w_m2_sr_nm: spectrum(0),
-                    standard_error_w_m2_sr_nm: None,
-                    stokes: polarised.then(|| Stokes {
-                        q_w_m2_sr_nm: spectrum(1),
-                        u_w_m2_sr_nm: spectrum(2),
-                        v_w_m2_sr_nm: spectrum(3),
-                        standard_errors_w_m2_sr_nm: None,
-                    }),
-                }
-            })
+            .map(|values| sky_radiance_from_values(values, wavelengths))
             .collect())
     }
 
@@ -878,34 +880,17 @@ impl Sky {
         let mut work = self.view_work();
         let n = self.wavelengths().len();
         let polarised = self.polarisation == Polarisation::Vector;
-        let mut stokes = vec![0.0; 3 * n];
+        let mut values = vec![0.0; if polarised { 4 * n } else { n }];
         Ok(views
             .iter()
             .map(|view| {
-                let mut radiance = SampledSpectrum::zeros(n);
                 let view = view.to_vector();
-                self.compute_pixel_radiance(view, tables, &mut work, radiance.values_mut());
+                let (radiance, stokes) = values.split_at_mut(n);
+                self.compute_pixel_radiance(view, tables, &mut work, radiance);
                 if polarised {
-                    self.add_pixel_stokes(
-                        view,
-                        tables,
-                        &mut work,
-                        radiance.values_mut(),
-                        &mut stokes,
-                    );
+                    self.add_pixel_stokes(view, tables, &mut work, radiance, stokes);
                 }
-                let spectrum =
-                    |c: usize| SampledSpectrum::from_values(stokes[c * n..][..n].to_vec());
-                SkyRadiance {
-                    radiance_w_m2_sr_nm: radiance,
-                    standard_error_w_m2_sr_nm: None,
-                    stokes: polarised.then(|| Stokes {
-                        q_w_m2_sr_nm: spectrum(0),
-                        u_w_m2_sr_nm: spectrum(1),
-                        v_w_m2_sr_nm: spectrum(2),
-                        standard_errors_w_m2_sr_nm: None,
-                    }),
-                }
+                sky_radiance_from_values(&values, n)
             })
             .collect())
     }
