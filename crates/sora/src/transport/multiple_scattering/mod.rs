@@ -746,6 +746,35 @@ impl MultipleScatteringField {
             (sun_zenith - reach).max(0.0),
             sun_zenith + reach,
             polarised,
+            successive_orders::MAX_ITERATIONS,
+        )
+    }
+
+    /// As [`MultipleScatteringField::compute_with_sun_column_nodes`] (not
+    /// polarised) with the solver stopped
+    /// after `sweeps` orders of the field (the field's own first order, or
+    /// the spherical one, is order 1): with one, the field is the first
+    /// order and a view's multiply scattered radiance is the second order
+    /// alone (the twilight survey compares it with the path tracer's).
+    #[cfg(test)]
+    pub(crate) fn compute_with_sweeps(
+        sky: &SingleScatteringSky,
+        settings: MultipleScatteringSettings,
+        sun_column_nodes: (usize, usize),
+        sweeps: usize,
+    ) -> Result<MultipleScatteringField> {
+        let (ground, top) = sky.radii_m();
+        let r = sky.observer_radius_m();
+        let reach = (ground / r.max(ground)).min(1.0).acos() + (ground / top).acos();
+        let sun_zenith = sky.sun_direction().z.clamp(-1.0, 1.0).acos();
+        MultipleScatteringField::compute_for_sun_zenith_range(
+            sky,
+            settings,
+            sun_column_nodes,
+            (sun_zenith - reach).max(0.0),
+            sun_zenith + reach,
+            false,
+            sweeps,
         )
     }
 
@@ -756,6 +785,7 @@ impl MultipleScatteringField {
         lowest_rad: f64,
         highest_rad: f64,
         polarised: bool,
+        sweeps: usize,
     ) -> Result<MultipleScatteringField> {
         settings.validate()?;
         let optics = sky.optics();
@@ -954,7 +984,8 @@ impl MultipleScatteringField {
                 .collect();
             let solar = optics.solar_irradiance_w_m2_nm[i];
             let albedo = optics.ground_albedo[i];
-            let system = ColumnSystem::new(&streams, &grid, Some(&paths), scaled, solar, albedo);
+            let system = ColumnSystem::new(&streams, &grid, Some(&paths), scaled, solar, albedo)
+                .with_sweeps(sweeps);
             let mut work = Vec::new();
             let mut transmittance = vec![0.0; levels];
             for s in 0..count {
