@@ -1030,6 +1030,23 @@ impl MultipleScatteringField {
                 .take(first_spherical)
                 .collect();
             system.shift_toward_sources(&sun_axis.angles_rad[..fields.len()], &mut fields);
+            // From 84 degrees on, the orders >= 2 of the spherical streams
+            // (the first order is spherical already), in the logarithm.
+            if first_spherical < count {
+                let first_orders: Vec<&[f64]> = (first_spherical..count)
+                    .map(|s| first_of(s).unwrap())
+                    .collect();
+                let mut fields: Vec<&mut [f64]> = out
+                    .chunks_exact_mut(solution_len + 2)
+                    .map(|block| &mut block[..solution_len])
+                    .skip(first_spherical)
+                    .collect();
+                system.shift_higher_orders_toward_sources(
+                    &sun_axis.angles_rad[first_spherical..],
+                    &first_orders,
+                    &mut fields,
+                );
+            }
         });
         let mut radiance = vec![0.0; count * wavelengths * solution_len];
         let mut ground_diffuse = vec![0.0; count * wavelengths];

@@ -225,7 +225,10 @@ pub struct ColumnSystem<'a> {
     paths: Option<&'a StreamPaths>,
     spherical_transport: Vec<f64>,
     spherical_rows: Vec<(usize, usize)>,
-    spherical_mean_angles: Vec<f64>,
+    /// Per spherical stream and level, the mean angle at the planet's
+    /// centre to where its light is gathered and that angle's spread, rad
+    /// (`StreamPaths::compute_transport_matrices`).
+    spherical_mean_angles: Vec<(f64, f64)>,
     /// Per harmonic and level the matrix 2 pi w_b sum_j omega_j p*_jm(mu_a, mu_b),
     /// stored by columns, [((m * levels + k) * streams + b) * streams + a],
     /// so that scattering is a sum of whole columns (vectorisable) rather
@@ -297,7 +300,7 @@ impl<'a> ColumnSystem<'a> {
                 let count = paths.spherical_streams().len();
                 let mut matrices = vec![0.0; count * levels * (levels + 1)];
                 let mut rows = vec![(0, 0); count * levels];
-                let mut angles = vec![0.0; count * levels];
+                let mut angles = vec![(0.0, 0.0); count * levels];
                 paths.compute_transport_matrices(
                     &layer_optical_depth,
                     &mut matrices,
@@ -503,7 +506,7 @@ impl<'a> ColumnSystem<'a> {
         let mut shifted = vec![0.0; nodes * total];
         for (s, &a) in paths.spherical_streams().iter().enumerate() {
             for k in 0..levels {
-                let angle = self.spherical_mean_angles[s * levels + k];
+                let angle = self.spherical_mean_angles[s * levels + k].0;
                 if angle == 0.0 {
                     continue;
                 }
@@ -532,6 +535,116 @@ impl<'a> ColumnSystem<'a> {
                 for node in 0..nodes {
                     for m in 0..total {
                         fields[node][m * size + k * total + a] = shifted[node * total + m];
+                    }
+                }
+            }
+        }
+    }
+
+    /// After sunset: shifts the orders >= 2 of each spherical stream (the
+    /// field minus its spherical first order `first_orders`, one per sun
+    /// node of `sun_zenith_rad`) to the sun zenith angle where their light
+    /// is gathered, in each direction separately, by interpolation across
+    /// the sun nodes linear in the logarithm:
+    ///
+    /// ```text
+    /// H'(theta_s, phi) = H(theta_s - gamma cos phi, phi),  H = L - L1,
+    /// ```
+    ///
+    /// averaged over two angles gamma = gamma_mean +- gamma_spread, the
+    /// mean and spread at the planet's centre of where the path gathers
+    /// its light (as [`ColumnSystem::shift_toward_sources`], which takes
+    /// the first order of the Taylor series at the mean: in twilight H
+    /// changes by orders of magnitude over a few degrees, a linear shift
+    /// runs negative, and the mean of an exponential is brighter than its
+    /// value at the mean angle).
+    /// H is synthesised at `2 * streams` midpoint azimuths on 0..180
+    /// degrees from its harmonics and transformed back (exact for an
+    /// unshifted field). The first order is exact already (marched through
+    /// the spherical shell, `super::spherical_first_order`) and is kept.
+    /// An angle beyond the axis reads its end node's segment, extrapolated
+    /// by at most half a segment; where H is not positive at both nodes,
+    /// H is kept.
+    pub(crate) fn shift_higher_orders_toward_sources(
+        &self,
+        sun_zenith_rad: &[f64],
+        first_orders: &[&[f64]],
+        fields: &mut [&mut [f64]],
+    ) {
+        let Some(paths) = self.paths else {
+            return;
+        };
+        let nodes = sun_zenith_rad.len();
+        if nodes < 2 {
+            return;
+        }
+        let levels = self.grid.levels();
+        let total = self.streams.count();
+        let size = levels * total;
+        let azimuths = 2 * total;
+        // cos(m phi_q), [q * total + m].
+        let cosines: Vec<f64> = (0..azimuths)
+            .flat_map(|q| {
+                let phi = PI * (q as f64 + 0.5) / azimuths as f64;
+                (0..total).map(move |m| (m as f64 * phi).cos())
+            })
+            .collect();
+        let mut higher = vec![0.0; nodes * azimuths];
+        let mut logs = vec![0.0; nodes * azimuths];
+        let mut shifted = vec![0.0; azimuths];
+        for (s, &a) in paths.spherical_streams().iter().enumerate() {
+            for k in 0..levels {
+                let (mean, spread) = self.spherical_mean_angles[s * levels + k];
+                if mean == 0.0 {
+                    continue;
+                }
+                // Two angles with the mean and spread of the path's: the
+                // source changes exponentially along the path, and its
+                // mean is brighter than its value at the mean angle.
+                let angles = [mean + spread, (mean - spread).max(0.0)];
+                for node in 0..nodes {
+                    for q in 0..azimuths {
+                        higher[node * azimuths + q] = (0..total)
+                            .filter(|m| self.active_harmonics[*m])
+                            .map(|m| {
+                                let at = m * size + k * total + a;
+                                (fields[node][at] - first_orders[node][at]) * cosines[q * total + m]
+                            })
+                            .sum();
+                    }
+                }
+                for (l, h) in logs.iter_mut().zip(&higher) {
+                    *l = if *h > 0.0 { h.ln() } else { f64::NEG_INFINITY };
+                }
+                for node in 0..nodes {
+                    for (q, out) in shifted.iter_mut().enumerate() {
+                        let phi_cosine = cosines[q * total + 1.min(total - 1)];
+                        *out = 0.0;
+                        for angle in angles {
+                            let theta = sun_zenith_rad[node] - angle * phi_cosine;
+                            let upper = sun_zenith_rad.partition_point(|t| *t <= theta);
+                            let lo = upper.clamp(1, nodes - 1) - 1;
+                            let t = ((theta - sun_zenith_rad[lo])
+                                / (sun_zenith_rad[lo + 1] - sun_zenith_rad[lo]))
+                                .clamp(-0.5, 1.5);
+                            let (h0, h1) = (logs[lo * azimuths + q], logs[(lo + 1) * azimuths + q]);
+                            *out += 0.5
+                                * if h0.is_finite() && h1.is_finite() {
+                                    ((1.0 - t) * h0 + t * h1).exp()
+                                } else {
+                                    higher[node * azimuths + q]
+                                };
+                        }
+                    }
+                    for m in (0..total).filter(|m| self.active_harmonics[*m]) {
+                        let factor = if m == 0 { 1.0 } else { 2.0 } / azimuths as f64;
+                        let harmonic: f64 = shifted
+                            .iter()
+                            .enumerate()
+                            .map(|(q, h)| h * cosines[q * total + m])
+                            .sum();
+                        let at = m * size + k * total + a;
+                        fields[node][at] = first_orders[node][at] + factor * harmonic;
                     }
                 }
             }
