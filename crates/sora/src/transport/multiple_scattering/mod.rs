@@ -24,7 +24,14 @@
 //!    carried along their real straight paths through the spherical shells
 //!    (which climb out to space instead of running on forever, as a slab's
 //!    would), and their light is shifted, to first order, toward the sun
-//!    angle of the columns where it was gathered.
+//!    angle of the columns where it was gathered. From a sun zenith angle
+//!    of 84 degrees on (where the first order is spherical, item 3) only
+//!    their orders >= 2 are shifted, and exactly rather than to first
+//!    order: read at the shifted sun angle, per azimuth, by interpolation
+//!    across the sun nodes linear in the logarithm, averaged over the mean
+//!    angle +- its spread (in twilight that light changes by orders of
+//!    magnitude over a few degrees; without it the orders >= 3 toward a
+//!    sun at -6 degrees were about a quarter too dark).
 //! 3. **The first order in the sphere** (`spherical_first_order.rs`): for
 //!    sun zenith angles from 84 degrees on, the light scattered once that
 //!    reaches each level in each stream is marched along the stream's
@@ -164,7 +171,9 @@
 //!   near-horizontal streams' paths and their first-order shift, and for
 //!   the first order from 84 degrees on (spherical): exact in the
 //!   plane-parallel limit, good for a sun above 5 degrees, within a few
-//!   per cent in civil twilight.
+//!   per cent in civil twilight. The steeper streams' orders >= 2 still
+//!   take their sources from their own column's sun angle: after sunset
+//!   they are the rest of the darkness measured at 440 nm.
 //! - Delta-M: orders >= 2 within the phase functions' forward peak of the
 //!   sun are smoothed (the aureole itself is single scattering, exact).
 //! - 2n streams and harmonics, 40 layers, the source linear in optical

@@ -39,8 +39,10 @@
 //! sun nodes; cos(phi) couples each azimuthal harmonic to its neighbours.
 //! Measured against the path tracer for a sun 5 degrees high, it halves the
 //! error of the sunward horizon (-2.3 % to -1.3 % of the total at 380 nm).
-//! In twilight the first order is not enough (see the module docs of
-//! [`super`]).
+//! In twilight the first order is not enough: from a sun zenith angle of
+//! 84 degrees on, the orders >= 2 are shifted exactly, per azimuth, with
+//! the mean angle and its spread
+//! (`ColumnSystem::shift_higher_orders_toward_sources`).
 
 /// Streams with |mu| below this (within 17 degrees of the horizon) take
 /// the spherical paths; steeper ones keep the slab's recursion: at 24
