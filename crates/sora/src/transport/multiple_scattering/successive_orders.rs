@@ -558,7 +558,7 @@ impl<'a> ColumnSystem<'a> {
     /// changes by orders of magnitude over a few degrees, a linear shift
     /// runs negative, and the mean of an exponential is brighter than its
     /// value at the mean angle).
-    /// H is synthesised at `2 * streams` midpoint azimuths on 0..180
+    /// H is synthesised at `streams` midpoint azimuths on 0..180
     /// degrees from its harmonics and transformed back (exact for an
     /// unshifted field). The first order is exact already (marched through
     /// the spherical shell, `super::spherical_first_order`) and is kept.
@@ -581,7 +581,7 @@ impl<'a> ColumnSystem<'a> {
         let levels = self.grid.levels();
         let total = self.streams.count();
         let size = levels * total;
-        let azimuths = 2 * total;
+        let azimuths = total;
         // cos(m phi_q), [q * total + m].
         let cosines: Vec<f64> = (0..azimuths)
             .flat_map(|q| {
