@@ -356,6 +356,12 @@ pub struct PathTracer<'a> {
     /// the planet's shadow cuts it ([`SUNLIT_SHARE`]; 0 turns it off, for
     /// the tests that compare the two samplers).
     sunlit_share: f64,
+    /// Paths end after this many interactions (scatterings and ground
+    /// reflections), so that `multiple_scattering` holds the orders from
+    /// 2 to it: for the tests that compare one order (unlimited
+    /// otherwise).
+    #[cfg(test)]
+    max_interactions: u32,
 }
 
 /// Per-chunk work space (no allocation per path).
@@ -529,7 +535,18 @@ impl<'a> PathTracer<'a> {
             running_integral: running_integral_matrix(),
             polarised: false,
             sunlit_share: SUNLIT_SHARE,
+            #[cfg(test)]
+            max_interactions: u32::MAX,
         }
+    }
+
+    /// This tracer ending every path after `interactions` scatterings and
+    /// ground reflections (2: its `multiple_scattering` is the second
+    /// order alone).
+    #[cfg(test)]
+    pub(crate) fn with_max_interactions(mut self, interactions: u32) -> PathTracer<'a> {
+        self.max_interactions = interactions;
+        self
     }
 
     /// The path tracer of `sky` carrying the polarisation of the light
@@ -829,6 +846,10 @@ impl<'a> PathTracer<'a> {
                     }
                 }
                 interactions += 1;
+                #[cfg(test)]
+                if interactions >= self.max_interactions {
+                    break;
+                }
                 // Russian roulette (unbiased: survivors are reweighted).
                 let largest = scratch.throughput.iter().copied().fold(0.0, f64::max);
                 if largest <= 0.0 {

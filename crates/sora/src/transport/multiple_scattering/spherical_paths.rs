@@ -39,8 +39,10 @@
 //! sun nodes; cos(phi) couples each azimuthal harmonic to its neighbours.
 //! Measured against the path tracer for a sun 5 degrees high, it halves the
 //! error of the sunward horizon (-2.3 % to -1.3 % of the total at 380 nm).
-//! In twilight the first order is not enough (see the module docs of
-//! [`super`]).
+//! In twilight the first order is not enough: from a sun zenith angle of
+//! 84 degrees on, the orders >= 2 are shifted exactly, per azimuth, with
+//! the mean angle and its spread
+//! (`ColumnSystem::shift_higher_orders_toward_sources`).
 
 /// Streams with |mu| below this (within 17 degrees of the horizon) take
 /// the spherical paths; steeper ones keep the slab's recursion: at 24
@@ -116,13 +118,15 @@ impl StreamPaths {
     /// ([s * levels + j], half-open; paths that only climb make M
     /// triangular), and the mean angle at the planet's centre between each
     /// level and the light its path gathers (weighted by what a uniform
-    /// source would contribute) into `mean_angles` ([s * levels + k], rad).
+    /// source would contribute) and the spread of that angle (its standard
+    /// deviation with the same weights) into `mean_angles` ([s * levels +
+    /// k], rad).
     pub(crate) fn compute_transport_matrices(
         &self,
         layer_optical_depth: &[f64],
         out: &mut [f64],
         rows: &mut [(usize, usize)],
-        mean_angles: &mut [f64],
+        mean_angles: &mut [(f64, f64)],
     ) {
         let levels = self.levels;
         let block = levels * (levels + 1);
@@ -132,11 +136,12 @@ impl StreamPaths {
             for k in 0..levels {
                 let (first, last, ends_on_ground) = self.paths[s * levels + k];
                 let mut transmittance = 1.0;
-                let (mut angle_sum, mut weight_sum) = (0.0, 0.0);
+                let (mut angle_sum, mut square_sum, mut weight_sum) = (0.0, 0.0, 0.0);
                 for step in &self.steps[first..last] {
                     let x = layer_optical_depth[step.layer] * step.stretch;
                     let (one_minus_e, c) = linear_source_weights(x);
                     angle_sum += transmittance * one_minus_e * step.centre_angle;
+                    square_sum += transmittance * one_minus_e * step.centre_angle.powi(2);
                     weight_sum += transmittance * one_minus_e;
                     let near = transmittance * (one_minus_e - c);
                     let far = transmittance * c;
@@ -152,9 +157,13 @@ impl StreamPaths {
                     ground[k] = transmittance;
                 }
                 mean_angles[s * levels + k] = if weight_sum > 0.0 {
-                    angle_sum / weight_sum
+                    let mean = angle_sum / weight_sum;
+                    (
+                        mean,
+                        (square_sum / weight_sum - mean * mean).max(0.0).sqrt(),
+                    )
                 } else {
-                    0.0
+                    (0.0, 0.0)
                 };
             }
             for (j, column) in matrix.chunks_exact(levels).enumerate() {
@@ -303,7 +312,7 @@ mod tests {
         let levels = r.len();
         let mut out = vec![0.0; paths.spherical_streams().len() * levels * (levels + 1)];
         let mut rows = vec![(0, 0); paths.spherical_streams().len() * levels];
-        let mut angles = vec![0.0; paths.spherical_streams().len() * levels];
+        let mut angles = vec![(0.0, 0.0); paths.spherical_streams().len() * levels];
         paths.compute_transport_matrices(&depths, &mut out, &mut rows, &mut angles);
         for (s, &a) in paths.spherical_streams().iter().enumerate() {
             let block = &out[s * levels * (levels + 1)..];

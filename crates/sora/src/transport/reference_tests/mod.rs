@@ -12,3 +12,4 @@ pub(crate) mod reference_data;
 mod render_accuracy;
 mod single_scattering_closed_forms;
 mod single_scattering_reference;
+mod twilight_survey;
