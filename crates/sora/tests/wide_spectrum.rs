@@ -92,7 +92,8 @@ fn fast_method_matches_the_path_tracer_at_870_and_1020_nm() {
 }
 
 /// 340 nm, the photometer's shortest channel: Rayleigh optical depth 0.7
-/// and ozone 0.004 (the Huggins band), the most scattering of any channel.
+/// and ozone 0.004 (the Huggins band's 340 nm bin, which a one-wavelength
+/// grid samples), the most scattering of any channel.
 #[test]
 fn fast_method_matches_the_path_tracer_at_340_nm() {
     let excess = worst_excess("earth-clear", "340", &[(45.0, 90.0)], 20_000, 13);
