@@ -19,7 +19,7 @@
 //! - 360-840 nm (`data/ozone_cross_section_233K_10nm.csv`): Serdyuchenko,
 //!   Gorshelev et al. 2014 (AMT 7, 625), as averaged and used by Bruneton
 //!   2017. These are the only bins that touch colour, and they are unchanged.
-//! - 290-360 nm (the Huggins band) and 840-1060 nm (the Wulf band)
+//! - 290-360 nm (the Huggins band) and 840-1066 nm (the Wulf band)
 //!   (`data/ozone_cross_section_233K_10nm_bogumil2003.csv`): Bogumil et al.
 //!   2003 (J. Photochem. Photobiol. A 157, 167), SCIAMACHY pre-flight
 //!   cross-sections, at 233 K from their quadratic temperature fit as
