@@ -96,10 +96,10 @@ fn bad_spectra_are_one_line_errors() {
         "colour",
         &data("case_a_multi_albedo0.csv"),
         "--wavelengths",
-        "300:780:20",
+        "290:780:20",
     ]);
     assert_eq!(out.status.code(), Some(2), "clap rejects a bad grid");
-    assert!(String::from_utf8_lossy(&out.stderr).contains("start_nm = 300 nm"));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("start_nm = 290 nm"));
 }
 
 #[test]

@@ -287,7 +287,26 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
     } else {
         sky.radiances(&views)?
     };
+    // Colour comes from the grid's wavelengths in 360-830 nm (all of them
+    // for a grid inside that range); a grid with none there has no colour.
     let to_xyz = SpectrumToXyz::new(&grid, sora::colour::Observer::Cie1931TwoDegree);
+    let colour_sample_count = to_xyz.colour_sample_count();
+    let colour_note = if colour_sample_count == 0 {
+        format!(
+            "no colour: no wavelength of {grid} lies in {}-{} nm, the range of the colour-matching functions",
+            sora::colour::CIE_MIN_WAVELENGTH_NM,
+            sora::colour::CIE_MAX_WAVELENGTH_NM
+        )
+    } else if colour_sample_count < grid.len() {
+        format!(
+            " (colour from the {colour_sample_count} of {} wavelengths in {}-{} nm)",
+            grid.len(),
+            sora::colour::CIE_MIN_WAVELENGTH_NM,
+            sora::colour::CIE_MAX_WAVELENGTH_NM
+        )
+    } else {
+        String::new()
+    };
     let colours = results
         .iter()
         .map(|r| {
@@ -343,10 +362,14 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
                     "\"radiance_w_m2_sr_nm\": [{}]{errors}{stokes}",
                     number_list(r.radiance_w_m2_sr_nm.values(), |v| format!("{v:.9e}"))
                 ),
-                format!(
-                    "\"xyz\": [{:.9e}, {:.9e}, {:.9e}], \"linear_srgb\": [{:.9e}, {:.9e}, {:.9e}]",
-                    xyz.x, xyz.y, xyz.z, rgb.r, rgb.g, rgb.b
-                ),
+                if colour_sample_count == 0 {
+                    "\"xyz\": null, \"linear_srgb\": null".to_string()
+                } else {
+                    format!(
+                        "\"xyz\": [{:.9e}, {:.9e}, {:.9e}], \"linear_srgb\": [{:.9e}, {:.9e}, {:.9e}]",
+                        xyz.x, xyz.y, xyz.z, rgb.r, rgb.g, rgb.b
+                    )
+                },
             )
         };
     let run_json = if path_tracing {
@@ -405,10 +428,14 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
                     }
                     writeln!(out, "{}", stokes_columns[0][i])?;
                 }
-                eprintln!(
-                    "XYZ {:.6e} {:.6e} {:.6e}; linear sRGB {:.6e} {:.6e} {:.6e}",
-                    xyz.x, xyz.y, xyz.z, rgb.r, rgb.g, rgb.b
-                );
+                if colour_sample_count == 0 {
+                    eprintln!("{colour_note}");
+                } else {
+                    eprintln!(
+                        "XYZ {:.6e} {:.6e} {:.6e}; linear sRGB {:.6e} {:.6e} {:.6e}{colour_note}",
+                        xyz.x, xyz.y, xyz.z, rgb.r, rgb.g, rgb.b
+                    );
+                }
             }
             Format::Json => {
                 let (spectrum, colour) = json_direction(result, &colours[0]);

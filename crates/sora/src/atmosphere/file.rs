@@ -56,7 +56,7 @@ use crate::mie::paper_phase::AerosolPhaseMode;
 use crate::mie::refractive_index::{
     MARS_DUST_WOLFF2009_CSV, RefractiveIndexModel, TabulatedRefractiveIndex,
 };
-use crate::spectrum::{SolarSpectrum, Spectrum, TabulatedSpectrum};
+use crate::spectrum::{MIN_WAVELENGTH_NM, SolarSpectrum, Spectrum, TabulatedSpectrum};
 
 /// Names of the built-in refractive-index tables (`refractive_index.builtin`).
 pub const BUILTIN_REFRACTIVE_INDICES: [&str; 1] = ["mars-dust-wolff2009"];
@@ -1024,19 +1024,21 @@ fn convert_size_distribution(file: SizeDistributionFile, here: &str) -> Result<S
     Ok(distribution)
 }
 
-/// Largest particle radius sora integrates over, m: size parameter ~1750
-/// at 360 nm. Larger particles are not aerosol (they fall out within
-/// minutes), and their Mie series grow long enough to make a preset slow.
+/// Largest particle radius sora integrates over, m: size parameter ~2100
+/// at 300 nm, the shortest wavelength of any grid. Larger particles are not
+/// aerosol (they fall out within minutes), and their Mie series grow long
+/// enough to make a preset slow.
 const MAX_INTEGRATED_RADIUS_M: f64 = 100e-6;
 
-/// Smallest: size parameter 1e-6 at 830 nm, the Mie solver's domain.
-const MIN_INTEGRATED_RADIUS_M: f64 = 1.4e-13;
+/// Smallest: size parameter 1e-6 (the Mie solver's tested domain) at 1100
+/// nm, the longest wavelength of any grid (1.75e-13 m, rounded up).
+const MIN_INTEGRATED_RADIUS_M: f64 = 1.8e-13;
 
 /// The radii that matter in `distribution` (the nodes of the engine's own
-/// cross-section quadrature at 360 nm, the shortest wavelength of any
+/// cross-section quadrature at 300 nm, the shortest wavelength of any
 /// grid) must lie in the range the Mie engine handles quickly.
 fn check_radius_range(distribution: &SizeDistribution, key: &str) -> Result<()> {
-    let wavenumber_per_m = 2.0 * std::f64::consts::PI / 360e-9;
+    let wavenumber_per_m = 2.0 * std::f64::consts::PI / (MIN_WAVELENGTH_NM * 1e-9);
     let quadrature = RadiusQuadrature::gauss_legendre(
         distribution,
         wavenumber_per_m,

@@ -11,18 +11,80 @@
 //!
 //! Ozone is what keeps the zenith sky blue at sunset: its Chappuis band
 //! (broad, peaking near 600 nm) absorbs orange light along the long slant
-//! path. The embedded cross-section (`data/ozone_cross_section_233K_10nm.csv`,
-//! Serdyuchenko/Gorshelev et al. 2014 at 233 K, as used by Bruneton 2017)
-//! holds bin averages over [lambda, lambda + 10) nm, 360-840 nm. sora
-//! treats it as the piecewise-constant function it describes and puts it
-//! on a wavelength grid by the band average over each sample's band
-//! [lambda - step/2, lambda + step/2] (clipped to the table, the sample's
-//! own wavelength inside it), which keeps the absorbed energy of each band
-//! whatever the grid; on a 10 nm grid aligned with the bins a sample at
-//! 600 nm averages the 590 and 600 nm bins half and half. User tables
-//! (`absorption.wavelength_nm` / `cross_section_m2`) are point values,
-//! linearly interpolated and sampled at each wavelength.
+//! path. The embedded cross-section is at 233 K (a typical temperature of
+//! the stratospheric ozone layer), bin averages over [lambda, lambda + 10)
+//! nm (vacuum) from 290 to 1110 nm, put together from two published data
+//! sets of IUP Bremen:
 //!
+//! - 360-840 nm (`data/ozone_cross_section_233K_10nm.csv`): Serdyuchenko,
+//!   Gorshelev et al. 2014 (AMT 7, 625), as averaged and used by Bruneton
+//!   2017. These are the only bins that touch colour, and they are unchanged.
+//! - 290-360 nm (the Huggins band) and 840-1066 nm (the Wulf band)
+//!   (`data/ozone_cross_section_233K_10nm_bogumil2003.csv`): Bogumil et al.
+//!   2003 (J. Photochem. Photobiol. A 157, 167), SCIAMACHY pre-flight
+//!   cross-sections, at 233 K from their quadratic temperature fit as
+//!   libRadtran distributes it, converted from air to vacuum wavelengths and
+//!   averaged over the same bins (the CSV header gives the details and the
+//!   file copied). Serdyuchenko's own data reach 1100 nm, but no copy of
+//!   them could be obtained; where the two sets overlap Bogumil's bins are
+//!   2-7.5 % above Serdyuchenko's (440-810 nm), so the seams at 360 and 840
+//!   nm are steps of a few per cent in cross-sections whose 300 DU optical
+//!   depth is below 1e-3 there.
+//! - 1070-1110 nm: 0. The Bogumil data end at 1066.5 nm; between 1000 and
+//!   1066 nm they average 1.8e-28 m^2, a 300 DU optical depth of 1.5e-5,
+//!   at the level of their noise. The zeros err by about that much.
+//!
+//! | 300 DU, vertical | 300 | 310 | 320 | 340 | 380 | 440 | 500 | 600 | 675 | 870 | 1020 nm |
+//! |---|---|---|---|---|---|---|---|---|---|---|---|
+//! | ozone optical depth | 3.9 | 1.0 | 0.24 | 0.012 | 2.0e-5 | 9.8e-4 | 0.0096 | 0.039 | 0.012 | 4.7e-4 | 6.6e-6 |
+//!
+//! (the mean over the 10 nm band centred on each wavelength, what a sample
+//! of a 10 nm grid gets; at 675 nm that is the 670 nm bin.) In the Huggins
+//! band (300-350 nm) the cross-section falls by a factor of 4 across one
+//! 10 nm bin and depends on temperature
+//! (Bogumil's fit: 243 K is 3, 7, 13 and 20 % above 223 K in the 300, 320,
+//! 340 and 350 nm bins), so the one temperature is a model error of a few
+//! per cent of the ozone optical depth there; Beer's law with a bin's
+//! mean cross-section overestimates the absorption of a long path there
+//! (the transmittance of the mean is below the mean transmittance), so
+//! below 320 nm sora's radiances are a band model's, not a line-by-line
+//! code's.
+//!
+//! sora treats the table as the piecewise-constant function it describes
+//! and puts it on a wavelength grid by the band average over each sample's
+//! band [lambda - step/2, lambda + step/2] (clipped to the table, the
+//! sample's own wavelength inside it), which keeps the absorbed energy of
+//! each band whatever the grid; on a 10 nm grid aligned with the bins a
+//! sample at 600 nm averages the 590 and 600 nm bins half and half. The
+//! band is also clipped at the seams (360 and 840 nm) to the data set that
+//! holds the sample: a sample at 360 nm averages Serdyuchenko's 360 nm bin
+//! only, not Bogumil's 350 nm bin, so no sample mixes two measurements and
+//! every grid inside 360-840 nm (every grid before the range widened) gets
+//! exactly the cross-sections it got then. User
+//! tables (`absorption.wavelength_nm` / `cross_section_m2`) are point
+//! values, linearly interpolated and sampled at each wavelength.
+//!
+//! Gases sora leaves out (no cross-section is embedded for them; a user
+//! may give any as an absorption table): water vapour (bands at 720, 820,
+//! 940 and 1130 nm and weak lines near 870 and 1020 nm), the O2 A (760 nm)
+//! and B (687 nm) bands and the O2-O2 collision bands (477, 577, 630, 1060
+//! nm), and NO2 (a structured continuum over 300-600 nm). Sun photometers
+//! put their channels in windows between these bands (AERONET: 340, 380,
+//! 440, 500, 675, 870, 1020 nm; 940 nm is its water vapour channel) and
+//! still correct what absorption remains: AERONET's version 3 (Giles et al.
+//! 2019, AMT 12, 169; Sinyuk et al. 2020, AMT 13, 3375) removes ozone, NO2
+//! and water vapour optical depths. What leaving them out costs sora is
+//! that absorption. NO2, from the Bogumil et al. (2003) NO2 cross-sections
+//! (libRadtran's `crs_NO2_UBremen_cf.dat`, 10 nm means read off the table):
+//! about 4e-19 cm^2 at 340 nm and 5e-19 cm^2 at 440 nm, so a column of
+//! 1e16 molecules cm^-2 (0.37 DU; clean air has a few 1e15, a polluted
+//! city a few 1e16) has an optical depth of 0.004 at 340 nm and 0.005 at
+//! 440 nm, against a Rayleigh optical depth of 0.7 and 0.24 and an aerosol
+//! optical depth of typically 0.1. Water vapour at 870 and 1020 nm and the
+//! O2 bands lie outside the photometer windows and are not quantified here;
+//! a 10 nm sora sample at 760 nm (or 940 nm) has no O2 (or water) band at
+//! all, so its radiance is that of the window either side.
+
 //! Amount: a column in Dobson units (1 DU = 2.6867e20 molecules m^-2, a
 //! 10 um layer of pure gas at 0 C and 1 atm; Earth ~300 DU), spread over
 //! the species' profile: the number density at relative density 1 is
@@ -37,6 +99,8 @@ use crate::table::NumericTable;
 pub const MOLECULES_PER_M2_PER_DOBSON_UNIT: f64 = 2.6867e20;
 
 const OZONE_233K_CSV: &str = include_str!("../data/ozone_cross_section_233K_10nm.csv");
+const OZONE_233K_BOGUMIL_CSV: &str =
+    include_str!("../data/ozone_cross_section_233K_10nm_bogumil2003.csv");
 
 /// Cross-sections averaged over bins [start, start + width) of equal width.
 #[derive(Debug, Clone, PartialEq)]
@@ -44,22 +108,25 @@ pub struct BinnedCrossSection {
     bin_starts_nm: Vec<f64>,
     bin_width_nm: f64,
     cross_sections_m2: Vec<f64>,
+    /// Where the data sets the table joins meet, nm: a sample's band is
+    /// clipped to the data set holding the sample (see `sample`). Empty
+    /// for a table from one data set.
+    seams_nm: Vec<f64>,
 }
 
 impl BinnedCrossSection {
     /// Parses a two-column CSV `wavelength_nm,<cross-section m^2>` whose rows
     /// are the starts of equal-width bins; `what` names it in errors.
     pub(crate) fn parse_csv(text: &str, what: &str) -> Result<BinnedCrossSection> {
-        let table = NumericTable::parse(text, what)?;
-        if table.column_names.len() != 2 || table.rows.len() < 2 {
-            return Err(Error::parse(
-                what,
-                0,
-                "expected 2 columns (bin start wavelength_nm, cross-section m^2) and at least 2 rows",
-            ));
+        let (starts, values) = parse_two_columns(text, what)?;
+        BinnedCrossSection::from_columns(starts, values, what)
+    }
+
+    /// Bins with these starts and values (see `parse_csv`).
+    fn from_columns(starts: Vec<f64>, values: Vec<f64>, what: &str) -> Result<BinnedCrossSection> {
+        if starts.len() < 2 {
+            return Err(Error::parse(what, 0, "expected at least 2 bins"));
         }
-        let starts = table.column(0);
-        let values = table.column(1);
         let width = starts[1] - starts[0];
         let uniform = width > 0.0
             && starts
@@ -86,13 +153,47 @@ impl BinnedCrossSection {
             bin_starts_nm: starts,
             bin_width_nm: width,
             cross_sections_m2: values,
+            seams_nm: Vec::new(),
         })
     }
 
-    /// Ozone at 233 K, 10 nm bins from 360 to 840 nm (embedded).
+    /// Ozone at 233 K, 10 nm bins from 290 to 1110 nm (embedded): the
+    /// Serdyuchenko bins (360-840 nm) and the Bogumil bins on either side
+    /// (see the module docs).
     pub(crate) fn ozone_233k() -> BinnedCrossSection {
-        BinnedCrossSection::parse_csv(OZONE_233K_CSV, "embedded ozone cross-section")
-            .expect("the embedded ozone table is valid")
+        let what = "embedded ozone cross-section";
+        let serdyuchenko = BinnedCrossSection::parse_csv(OZONE_233K_CSV, what)
+            .expect("the embedded ozone table is valid");
+        let (serdyuchenko_first, serdyuchenko_end) = serdyuchenko.range_nm();
+        let (bogumil_starts, bogumil_values) = parse_two_columns(OZONE_233K_BOGUMIL_CSV, what)
+            .expect("the embedded ozone extension is valid");
+        // Bogumil's bins below, then Serdyuchenko's, then Bogumil's above:
+        // the Serdyuchenko bins as they are.
+        let mut rows: Vec<(f64, f64)> = bogumil_starts
+            .iter()
+            .zip(&bogumil_values)
+            .filter(|(start, _)| **start < serdyuchenko_first)
+            .map(|(s, v)| (*s, *v))
+            .collect();
+        rows.extend(
+            serdyuchenko
+                .bin_starts_nm
+                .iter()
+                .zip(&serdyuchenko.cross_sections_m2)
+                .map(|(s, v)| (*s, *v)),
+        );
+        rows.extend(
+            bogumil_starts
+                .iter()
+                .zip(&bogumil_values)
+                .filter(|(start, _)| **start >= serdyuchenko_end)
+                .map(|(s, v)| (*s, *v)),
+        );
+        let (starts, values) = rows.into_iter().unzip();
+        let mut joined = BinnedCrossSection::from_columns(starts, values, what)
+            .expect("the embedded ozone tables join into equal bins");
+        joined.seams_nm = vec![serdyuchenko_first, serdyuchenko_end];
+        joined
     }
 
     /// The covered range [first bin start, last bin end), nm.
@@ -129,7 +230,12 @@ impl BinnedCrossSection {
         Ok(total / (hi_nm - lo_nm))
     }
 
-    /// Band averages on `grid` (see the module docs), m^2.
+    /// Band averages on `grid` (see the module docs), m^2. Each sample's
+    /// band is clipped to the table and to the data set that holds the
+    /// sample's wavelength, between the seams: a sample never averages two
+    /// measurements (they differ by a few per cent where they meet), and a
+    /// grid inside 360-840 nm samples Serdyuchenko's bins exactly as it did
+    /// when they were the whole table.
     pub(crate) fn sample(&self, grid: &WavelengthGrid) -> Result<SampledSpectrum> {
         let (first, end) = self.range_nm();
         let half = if grid.len() == 1 {
@@ -144,11 +250,36 @@ impl BinnedCrossSection {
                         "the cross-section table covers {first}-{end} nm but {w} nm is needed"
                     )));
                 }
-                self.band_average_m2((w - half).max(first), (w + half).min(end))
+                let lo = self
+                    .seams_nm
+                    .iter()
+                    .copied()
+                    .filter(|seam| *seam <= w)
+                    .fold(first, f64::max);
+                let hi = self
+                    .seams_nm
+                    .iter()
+                    .copied()
+                    .filter(|seam| *seam > w)
+                    .fold(end, f64::min);
+                self.band_average_m2((w - half).max(lo), (w + half).min(hi))
             })
             .collect::<Result<Vec<f64>>>()
             .map(SampledSpectrum::from_values)
     }
+}
+
+/// The two columns (bin start nm, cross-section m^2) of a CSV.
+fn parse_two_columns(text: &str, what: &str) -> Result<(Vec<f64>, Vec<f64>)> {
+    let table = NumericTable::parse(text, what)?;
+    if table.column_names.len() != 2 {
+        return Err(Error::parse(
+            what,
+            0,
+            "expected 2 columns (bin start wavelength_nm, cross-section m^2)",
+        ));
+    }
+    Ok((table.column(0), table.column(1)))
 }
 
 /// An absorption cross-section per molecule as a function of wavelength.
@@ -224,13 +355,86 @@ mod tests {
     #[test]
     fn embedded_table_is_the_reference_with_ten_nm_bins() {
         let ozone = BinnedCrossSection::ozone_233k();
-        assert_eq!(ozone.range_nm(), (360.0, 840.0));
+        assert_eq!(ozone.range_nm(), (290.0, 1110.0));
         // A band inside one bin is that bin's value.
         assert_eq!(ozone.band_average_m2(600.0, 609.0).unwrap(), 5.019e-25);
         // Straddling two bins: the mean, weighted by overlap.
         let mixed = ozone.band_average_m2(595.0, 605.0).unwrap();
         assert!((mixed - 0.5 * (4.701e-25 + 5.019e-25)).abs() < 1e-35);
-        assert!(ozone.band_average_m2(350.0, 370.0).is_err());
+        // Across the seam at 360 nm: Bogumil's 350 nm bin and Serdyuchenko's
+        // 360 nm bin.
+        let seam = ozone.band_average_m2(350.0, 370.0).unwrap();
+        assert!(
+            (seam - 0.5 * (7.828e-27 + 1.18e-27)).abs() < 1e-39,
+            "{seam}"
+        );
+        // Outside 290-1110 nm: an error naming the range.
+        for (lo, hi) in [(280.0, 300.0), (1100.0, 1120.0)] {
+            let message = ozone.band_average_m2(lo, hi).unwrap_err().to_string();
+            assert!(message.contains("290-1110 nm"), "{message}");
+        }
+    }
+
+    /// The bins of one embedded CSV, (start nm, m^2).
+    fn csv_bins(text: &str) -> Vec<(f64, f64)> {
+        let (starts, values) = parse_two_columns(text, "test").unwrap();
+        starts.into_iter().zip(values).collect()
+    }
+
+    #[test]
+    fn the_joined_table_keeps_every_published_bin_unchanged() {
+        let ozone = BinnedCrossSection::ozone_233k();
+        let joined: Vec<(f64, f64)> = ozone
+            .bin_starts_nm
+            .iter()
+            .copied()
+            .zip(ozone.cross_sections_m2.iter().copied())
+            .collect();
+        assert_eq!(joined.len(), 82); // 290, 300, ..., 1100
+        // Serdyuchenko's 48 bins (360-830 nm, today's numbers) are the
+        // joined table's, bit for bit, and so are Bogumil's 34 outside them.
+        let serdyuchenko = csv_bins(OZONE_233K_CSV);
+        assert_eq!(serdyuchenko.len(), 48);
+        let bogumil = csv_bins(OZONE_233K_BOGUMIL_CSV);
+        assert_eq!(bogumil.len(), 34);
+        for bin in serdyuchenko.iter().chain(&bogumil) {
+            assert!(joined.contains(bin), "{bin:?}");
+        }
+        assert_eq!(&joined[7..55], &serdyuchenko[..]);
+        // The Huggins band: the cross-section rises monotonically towards
+        // the ultraviolet, by 3.5 to 6 times per 10 nm, across the seam too.
+        for pair in joined[..9].windows(2) {
+            let ratio = pair[0].1 / pair[1].1;
+            assert!((3.5..7.0).contains(&ratio), "{pair:?}: {ratio}");
+        }
+        // Past the end of the data (1066.5 nm) the bins are 0.
+        assert!(joined[78..].iter().all(|(_, sigma)| *sigma == 0.0));
+        assert!(joined[..78].iter().all(|(_, sigma)| *sigma > 0.0));
+    }
+
+    #[test]
+    fn ozone_optical_depths_at_the_photometer_channels() {
+        // 300 DU, vertical, over the 10 nm band centred on each wavelength:
+        // the table of the module docs.
+        let ozone = BinnedCrossSection::ozone_233k();
+        let column_m2 = 300.0 * MOLECULES_PER_M2_PER_DOBSON_UNIT;
+        let expected = [
+            (300.0, 3.9),
+            (310.0, 1.0),
+            (320.0, 0.24),
+            (340.0, 0.012),
+            (380.0, 2.0e-5),
+            (440.0, 9.8e-4),
+            (500.0, 0.0096),
+            (600.0, 0.039),
+            (675.0, 0.012),
+            (870.0, 4.7e-4),
+            (1020.0, 6.6e-6),
+        ];
+        for (nm, want) in expected {
+            let got = column_m2 * ozone.band_average_m2(nm - 5.0, nm + 5.0).unwrap();
+            assert!((got / want - 1.0).abs() < 0.03, "{nm} nm: {got} vs {want}");
+        }
     }
 
     #[test]
@@ -245,6 +449,47 @@ mod tests {
         assert!((sampled[0] - 0.5 * (2.182e-28 + 2.818e-28)).abs() < 1e-40);
         // The 1 nm grid covers the whole CIE range 360-830.
         assert!(ozone.sample(&"360:830:1".parse().unwrap()).is_ok());
+        // Every grid sora accepts is covered: 300-1100 nm at 10 and 1 nm.
+        for text in ["300:1100:10", "300:1100:1", "300", "1100"] {
+            let grid: WavelengthGrid = text.parse().unwrap();
+            assert_eq!(ozone.sample(&grid).unwrap().len(), grid.len(), "{text}");
+        }
+        // 300 nm on a 10 nm grid: half of the 290 nm bin, half of the 300 nm.
+        let sampled = ozone.sample(&"300:1100:10".parse().unwrap()).unwrap();
+        assert!((sampled[0] - 0.5 * (7.751e-23 + 1.978e-23)).abs() < 1e-35);
+        assert_eq!(sampled[80], 0.0); // 1100 nm
+        // At the seams each sample keeps to its own data set.
+        assert_eq!(sampled[6], 1.18e-27); // 360 nm: Serdyuchenko's bin only
+        assert_eq!(sampled[54], 8.857e-27); // 840 nm: Bogumil's bin only
+        assert!((sampled[5] - 0.5 * (4.59e-26 + 7.828e-27)).abs() < 1e-38); // 350 nm
+        assert!((sampled[53] - 0.5 * (1.383e-26 + 7.105e-27)).abs() < 1e-38); // 830 nm
+    }
+
+    #[test]
+    fn grids_inside_360_to_840_nm_sample_exactly_what_they_did() {
+        // Today's grids against the Serdyuchenko table alone (the whole
+        // table before the range widened): bit for bit.
+        let joined = BinnedCrossSection::ozone_233k();
+        let serdyuchenko = BinnedCrossSection::parse_csv(OZONE_233K_CSV, "test").unwrap();
+        for text in [
+            "360:830:1",
+            "360:830:10",
+            "360:830:5",
+            "380:780:20",
+            "365:825:10",
+            "360:830:470",
+            "829:830:1",
+            "360",
+            "550",
+            "830",
+        ] {
+            let grid: WavelengthGrid = text.parse().unwrap();
+            assert_eq!(
+                joined.sample(&grid).unwrap(),
+                serdyuchenko.sample(&grid).unwrap(),
+                "{text}"
+            );
+        }
     }
 
     #[test]

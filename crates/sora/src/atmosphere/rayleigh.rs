@@ -29,7 +29,9 @@
 //!   Bates' table (`earth_rayleigh_21wl.csv`, ±0.5 % by its author): within
 //!   1 % at the 21 paper wavelengths (see `atmosphere/reference_tests.rs`).
 //!   The N2 refractivity has a 0.016 % step at 468 nm where Bates switches
-//!   formulas, kept as published.
+//!   formulas, kept as published. Over the whole grid range, 300-1100 nm,
+//!   within 0.25 % of Bodhaine et al.'s (1999, eq. 29) fit from Peck &
+//!   Reeder's (1972) refractivity of air.
 //! - CO2 (`co2_cross_section_m2`): refractivity of Bideau-Mehu et al.
 //!   (1973) in the form of Sneep & Ubachs (2005, eq. 13), at 288.15 K and
 //!   1013.25 hPa (N = 2.546899e25 m^-3), and F_K = 1.1364 + 25.3e-12 nu^2
@@ -288,6 +290,23 @@ mod tests {
         assert!((co2_refractivity(380.0) / 4.34970e-4 - 1.0).abs() < 1e-5);
         assert!((co2_king_factor(380.0) - 1.1539).abs() < 1e-4);
         assert!((co2_cross_section_m2(380.0) / 5.3377e-30 - 1.0).abs() < 1e-4);
+    }
+
+    #[test]
+    fn air_matches_bodhaine_over_the_photometer_range() {
+        // Bodhaine et al. (1999) eq. 29, their fit to the cross-section of
+        // air with 360 ppm CO2, 1e-28 cm^2 (lambda in um), from an
+        // independent set of refractive indices (Peck & Reeder 1972): within
+        // 0.25 % from 300 to 1100 nm, the grid's whole range.
+        let bodhaine_m2 = |wavelength_um: f64| {
+            let l2 = wavelength_um * wavelength_um;
+            1e-32 * (1.045_599_6 - 341.290_61 / l2 - 0.902_308_50 * l2)
+                / (1.0 + 0.002_705_988_9 / l2 - 85.968_563 * l2)
+        };
+        for nm in [300.0, 340.0, 440.0, 500.0, 675.0, 870.0, 1020.0, 1100.0] {
+            let ratio = air_cross_section_m2(nm) / bodhaine_m2(nm * 1e-3);
+            assert!((ratio - 1.0).abs() < 2.5e-3, "{nm} nm: {ratio}");
+        }
     }
 
     #[test]

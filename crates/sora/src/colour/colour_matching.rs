@@ -19,16 +19,25 @@
 //! 9e-4 from the smooth curve through the rows, estimated from their second
 //! differences; grids on whole nanometres, such as the paper's, hit the rows
 //! exactly). Outside 360-830 nm they are not defined; asking there is an
-//! error, not a zero.
+//! error, not a zero. A wavelength grid may reach beyond them (sora's grids
+//! span 300-1100 nm): colour is then integrated over the part of the grid
+//! inside 360-830 nm, the range over which the CIE defines colorimetric
+//! integrals (see `xyz.rs`).
 
 use std::fmt;
 use std::str::FromStr;
 
 use crate::error::{Error, Result};
-#[cfg(test)]
-use crate::spectrum::MAX_WAVELENGTH_NM;
-use crate::spectrum::MIN_WAVELENGTH_NM;
 use crate::table::NumericTable;
+
+/// Shortest wavelength of the colour-matching tables, nm.
+pub const CIE_MIN_WAVELENGTH_NM: f64 = 360.0;
+/// Longest wavelength of the colour-matching tables, nm.
+pub const CIE_MAX_WAVELENGTH_NM: f64 = 830.0;
+
+/// How far outside 360-830 nm a wavelength may be and still count as inside
+/// (a grid's wavelengths are `start + i * step`, with rounding errors), nm.
+const RANGE_TOLERANCE_NM: f64 = 1e-9;
 
 const CIE1931_TWO_DEGREE_CSV: &str = include_str!("../data/cie1931_2deg_cmf_1nm.csv");
 const CIE1964_TEN_DEGREE_CSV: &str = include_str!("../data/cie1964_10deg_cmf_1nm.csv");
@@ -105,7 +114,7 @@ impl FromStr for Observer {
 #[derive(Debug, Clone, PartialEq)]
 pub struct ColourMatchingFunctions {
     observer: Observer,
-    /// Row `i` is the value at `MIN_WAVELENGTH_NM + i` nm.
+    /// Row `i` is the value at `CIE_MIN_WAVELENGTH_NM + i` nm.
     rows: Vec<[f64; 3]>,
 }
 
@@ -126,22 +135,28 @@ impl ColourMatchingFunctions {
     /// between the 1 nm rows. Fails outside 360-830 nm (or for NaN).
     #[cfg(test)]
     pub(crate) fn value_at_nm(&self, wavelength_nm: f64) -> Result<[f64; 3]> {
-        if !(MIN_WAVELENGTH_NM..=MAX_WAVELENGTH_NM).contains(&wavelength_nm) {
+        if !(CIE_MIN_WAVELENGTH_NM..=CIE_MAX_WAVELENGTH_NM).contains(&wavelength_nm) {
             return Err(Error::out_of_range(
                 "wavelength_nm",
                 wavelength_nm,
                 "nm",
-                format!("{MIN_WAVELENGTH_NM}..={MAX_WAVELENGTH_NM}"),
+                format!("{CIE_MIN_WAVELENGTH_NM}..={CIE_MAX_WAVELENGTH_NM}"),
             ));
         }
         Ok(self.value_at_nm_clamped(wavelength_nm))
     }
 
+    /// Whether `wavelength_nm` lies in 360-830 nm, to a rounding error.
+    pub(crate) fn covers_nm(wavelength_nm: f64) -> bool {
+        (CIE_MIN_WAVELENGTH_NM - RANGE_TOLERANCE_NM..=CIE_MAX_WAVELENGTH_NM + RANGE_TOLERANCE_NM)
+            .contains(&wavelength_nm)
+    }
+
     /// Like [`ColourMatchingFunctions::value_at_nm`], for wavelengths already
-    /// known to be in range (a [`crate::spectrum::WavelengthGrid`]'s): a
+    /// known to be in range ([`ColourMatchingFunctions::covers_nm`]): a
     /// wavelength a rounding error outside 360-830 nm gets the end row.
     pub(crate) fn value_at_nm_clamped(&self, wavelength_nm: f64) -> [f64; 3] {
-        let offset_nm = (wavelength_nm - MIN_WAVELENGTH_NM).clamp(0.0, (ROW_COUNT - 1) as f64);
+        let offset_nm = (wavelength_nm - CIE_MIN_WAVELENGTH_NM).clamp(0.0, (ROW_COUNT - 1) as f64);
         // The row at or below the wavelength, kept one short of the last row
         // so that 830 nm interpolates inside the last interval (t = 1).
         let lower = (offset_nm.floor() as usize).min(ROW_COUNT - 2);
@@ -176,7 +191,7 @@ fn parse_one_nanometre_table(text: &str, what: &str) -> Result<Vec<[f64; 3]>> {
         .iter()
         .enumerate()
         .map(|(i, row)| {
-            let expected_nm = MIN_WAVELENGTH_NM + i as f64;
+            let expected_nm = CIE_MIN_WAVELENGTH_NM + i as f64;
             if row[0] != expected_nm {
                 return Err(Error::parse(
                     &what,

@@ -59,7 +59,9 @@ mod reference_tests;
 mod rgb;
 mod xyz;
 
-pub use colour_matching::{ColourMatchingFunctions, Observer};
+pub use colour_matching::{
+    CIE_MAX_WAVELENGTH_NM, CIE_MIN_WAVELENGTH_NM, ColourMatchingFunctions, Observer,
+};
 pub use display::{DisplayEncoding, DisplayMapping};
 pub use exposure::{Exposure, NIGHT_FLOOR_CD_M2, apply_night_floor};
 pub use gamut::GamutMapping;

@@ -9,7 +9,16 @@
 //! ```
 //!
 //! with x̄, ȳ, z̄ the observer's colour-matching functions at the sample
-//! wavelengths (interpolated linearly between their 1 nm rows). There is no
+//! wavelengths (interpolated linearly between their 1 nm rows), the sum
+//! running over the samples inside 360-830 nm, the range of the tables. A
+//! grid that reaches beyond it (sora's span 300-1100 nm, for the
+//! sun-photometer channels) gives its ultraviolet and infrared samples
+//! weight 0: the CIE defines colorimetric integrals over 360-830 nm, and the
+//! functions there fall to 1e-4 (x̄ at 360 nm) and 1e-6 (at 830 nm) of their
+//! peaks, so no colour is lost. A grid inside 360-830 nm, as every grid
+//! was before the range widened, converts exactly as before. A grid with no
+//! sample in 360-830 nm has no colour ([`SpectrumToXyz::colour_sample_count`]
+//! is 0, and every XYZ is black): callers that show colour refuse it. There is no
 //! normalising constant and no 683 lm/W: X, Y, Z are in the spectrum's unit
 //! times nm. For a spectral radiance L in W m^-2 sr^-1 nm^-1, XYZ are in
 //! W m^-2 sr^-1 (ȳ-weighted), and the luminance is
@@ -118,12 +127,17 @@ impl SpectrumToXyz {
         grid: &WavelengthGrid,
         cmfs: &ColourMatchingFunctions,
     ) -> SpectrumToXyz {
-        // A grid only holds wavelengths in 360-830 nm (checked when it was
-        // built), so the clamped look-up changes nothing but rounding.
+        // Samples inside 360-830 nm (to a rounding error, which the clamped
+        // look-up absorbs) get the functions times their weight; the others,
+        // none (see the module docs).
         let weighted_cmfs = (0..grid.len())
             .map(|i| {
+                let wavelength_nm = grid.wavelength_nm(i);
+                if !ColourMatchingFunctions::covers_nm(wavelength_nm) {
+                    return [0.0; 3];
+                }
                 let weight_nm = grid.quadrature_weight_nm(i);
-                cmfs.value_at_nm_clamped(grid.wavelength_nm(i))
+                cmfs.value_at_nm_clamped(wavelength_nm)
                     .map(|value| value * weight_nm)
             })
             .collect();
@@ -137,6 +151,16 @@ impl SpectrumToXyz {
     /// The grid the spectra must be sampled on.
     pub(crate) fn grid(&self) -> &WavelengthGrid {
         &self.grid
+    }
+
+    /// How many of the grid's samples lie in 360-830 nm and so count
+    /// towards colour: the grid's length for a grid inside that range, 0
+    /// for one with no colour (e.g. 900-1100 nm).
+    pub fn colour_sample_count(&self) -> usize {
+        self.grid
+            .wavelengths_nm()
+            .filter(|w| ColourMatchingFunctions::covers_nm(*w))
+            .count()
     }
 
     /// XYZ of `spectrum` (unit: the spectrum's times nm; see the module docs).
@@ -231,6 +255,59 @@ mod tests {
         for (got, want) in xyz.to_array().iter().zip(expected) {
             assert!((got - want).abs() < 1e-12, "{xyz:?}");
         }
+    }
+
+    #[test]
+    fn a_wide_grid_has_the_colour_of_its_part_in_360_to_830_nm() {
+        // The same smooth spectrum on 300-1100 nm and on 360-830 nm, both
+        // every 10 nm: the samples in 360-830 nm are the same wavelengths,
+        // and the others add nothing, so the colours are identical.
+        let spectrum_on = |grid: &WavelengthGrid| {
+            SampledSpectrum::from_values(
+                grid.wavelengths_nm()
+                    .map(|w| (550.0 / w).powi(4) + 0.001 * w)
+                    .collect(),
+            )
+        };
+        let wide: WavelengthGrid = "300:1100:10".parse().unwrap();
+        let visible: WavelengthGrid = "360:830:10".parse().unwrap();
+        for observer in Observer::ALL {
+            let (wide_to_xyz, visible_to_xyz) = (
+                SpectrumToXyz::new(&wide, observer),
+                SpectrumToXyz::new(&visible, observer),
+            );
+            assert_eq!(wide_to_xyz.colour_sample_count(), 48);
+            assert_eq!(visible_to_xyz.colour_sample_count(), visible.len());
+            let wide_xyz = wide_to_xyz.to_xyz(&spectrum_on(&wide)).unwrap();
+            let visible_xyz = visible_to_xyz.to_xyz(&spectrum_on(&visible)).unwrap();
+            assert_eq!(wide_xyz, visible_xyz, "{observer}");
+            assert!(wide_xyz.y > 0.0);
+        }
+        // Light only outside 360-830 nm has no colour.
+        let mut ultraviolet_and_infrared = SampledSpectrum::zeros(wide.len());
+        for i in (0..6).chain(54..81) {
+            ultraviolet_and_infrared[i] = 1.0;
+        }
+        let to_xyz = SpectrumToXyz::new(&wide, Observer::Cie1931TwoDegree);
+        assert_eq!(
+            to_xyz.to_xyz(&ultraviolet_and_infrared).unwrap(),
+            Xyz::BLACK
+        );
+        // A grid wholly outside has none at all.
+        let infrared: WavelengthGrid = "900:1100:10".parse().unwrap();
+        let to_xyz = SpectrumToXyz::new(&infrared, Observer::Cie1931TwoDegree);
+        assert_eq!(to_xyz.colour_sample_count(), 0);
+        assert_eq!(
+            to_xyz
+                .to_xyz(&SampledSpectrum::constant(infrared.len(), 1.0))
+                .unwrap(),
+            Xyz::BLACK
+        );
+        // Rounding: 300:1100:0.1 reaches 360 and 830 nm only to a rounding
+        // error, and still counts both ends.
+        let fine: WavelengthGrid = "300:1100:0.1".parse().unwrap();
+        let to_xyz = SpectrumToXyz::new(&fine, Observer::Cie1931TwoDegree);
+        assert_eq!(to_xyz.colour_sample_count(), 4701);
     }
 
     #[test]

@@ -1041,21 +1041,38 @@ impl Sky {
         Ok(())
     }
 
+    /// `to_xyz` must be on the sky's grid, and the grid must have a
+    /// wavelength in 360-830 nm (colour comes from those; see
+    /// [`SpectrumToXyz`]).
+    fn check_colour_conversion(&self, to_xyz: &SpectrumToXyz) -> Result<()> {
+        if to_xyz.grid() != self.wavelengths() {
+            return Err(Error::InvalidSpectrum(
+                "the colour conversion and the sky use different wavelength grids".into(),
+            ));
+        }
+        if to_xyz.colour_sample_count() == 0 {
+            return Err(Error::Unsupported(format!(
+                "no wavelength of the grid {} lies in {}-{} nm, the range of the colour-matching functions, so it gives no colour: use a grid that overlaps that range (a spectral image takes any grid)",
+                self.wavelengths(),
+                crate::colour::CIE_MIN_WAVELENGTH_NM,
+                crate::colour::CIE_MAX_WAVELENGTH_NM
+            )));
+        }
+        Ok(())
+    }
+
     /// The image `image` as CIE XYZ per pixel (row-major, top row first;
     /// black where the camera sees nothing), converted by `to_xyz` (which
-    /// must be on the sky's grid); `progress(rows)` is called as rows
-    /// complete (from worker threads).
+    /// must be on the sky's grid; colour comes from the grid's wavelengths
+    /// in 360-830 nm, and a grid with none there is an error);
+    /// `progress(rows)` is called as rows complete (from worker threads).
     pub fn render_xyz(
         &self,
         image: &ImageSettings,
         to_xyz: &SpectrumToXyz,
         progress: &(dyn Fn(usize) + Sync),
     ) -> Result<Vec<Xyz>> {
-        if to_xyz.grid() != self.wavelengths() {
-            return Err(Error::InvalidSpectrum(
-                "the colour conversion and the sky use different wavelength grids".into(),
-            ));
-        }
+        self.check_colour_conversion(to_xyz)?;
         let n = self.wavelengths().len();
         self.render_pixels(image, 1, Xyz::BLACK, progress, |radiance, pixel| {
             pixel[0] = to_xyz.to_xyz_unchecked(&radiance[..n])
@@ -1080,11 +1097,7 @@ impl Sky {
                 "Stokes images: the sky is scalar; build it with Polarisation::Vector".into(),
             ));
         }
-        if to_xyz.grid() != self.wavelengths() {
-            return Err(Error::InvalidSpectrum(
-                "the colour conversion and the sky use different wavelength grids".into(),
-            ));
-        }
+        self.check_colour_conversion(to_xyz)?;
         let n = self.wavelengths().len();
         self.render_pixels(image, 1, [Xyz::BLACK; 4], progress, |stokes, pixel| {
             pixel[0] = [

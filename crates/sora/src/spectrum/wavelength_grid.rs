@@ -1,8 +1,17 @@
 //! The wavelengths a computation samples, and the quadrature that turns
 //! samples into integrals over wavelength.
 //!
-//! A grid is `start:stop:step` in nanometres (vacuum wavelength), inside the
-//! range of the CIE colour-matching functions, 360-830 nm. The default is the
+//! A grid is `start:stop:step` in nanometres (vacuum wavelength), inside
+//! 300-1100 nm: the near ultraviolet to the near infrared, wide enough for
+//! the sun-photometer channels from 340 to 1020 nm. Every built-in optical
+//! property covers it: the solar spectrum (ASTM E490, 119.5 nm to 1 mm),
+//! the Rayleigh cross-sections (refractive-index formulas of Bates 1984 and
+//! Bideau-Mehu et al. 1973, both fitted over wider ranges), the ozone
+//! cross-section (`atmosphere::ozone`, 290-1110 nm) and the Mie solver; a
+//! user table (refractive index, albedo, spectrum) that does not cover a
+//! grid is an error naming the wavelength and the table's range. Colour
+//! uses only the part of a grid inside the range of the CIE colour-matching
+//! functions, 360-830 nm (`colour::SpectrumToXyz`). The default is the
 //! paper's grid (§4): 380 to 780 nm every 20 nm, 21 samples.
 //!
 //! Quadrature rule: the paper's, a Riemann sum with the same weight `step_nm`
@@ -17,14 +26,18 @@ use std::str::FromStr;
 
 use crate::error::{Error, Result};
 
-/// Shortest wavelength a grid may sample, nm (start of the CIE tables).
-pub const MIN_WAVELENGTH_NM: f64 = 360.0;
-/// Longest wavelength a grid may sample, nm (end of the CIE tables).
-pub const MAX_WAVELENGTH_NM: f64 = 830.0;
+/// Shortest wavelength a grid may sample, nm (the near ultraviolet; below
+/// it the ozone Hartley band makes the ground sky dark and the embedded
+/// ozone table ends at 290 nm).
+pub const MIN_WAVELENGTH_NM: f64 = 300.0;
+/// Longest wavelength a grid may sample, nm (the near infrared, past the
+/// 1020 nm sun-photometer channel; the embedded ozone table ends at 1110 nm).
+pub const MAX_WAVELENGTH_NM: f64 = 1100.0;
 
 /// The most wavelengths a grid may have (checked before anything is
 /// allocated or computed: every spectrum, image row and Mie ensemble is
-/// per wavelength). 10000 covers the whole range at 0.05 nm.
+/// per wavelength). 10000 covers 360-830 nm at 0.05 nm, the whole range at
+/// 0.09 nm.
 pub const MAX_WAVELENGTH_COUNT: usize = 10_000;
 
 /// Evenly spaced wavelengths `start_nm, start_nm + step_nm, ..., stop_nm`.
@@ -211,6 +224,33 @@ mod tests {
     }
 
     #[test]
+    fn the_range_is_300_to_1100_nm() {
+        // The sun-photometer grid of issue 16: 81 samples, 300 to 1100 nm.
+        let grid: WavelengthGrid = "300:1100:10".parse().unwrap();
+        assert_eq!(grid.len(), 81);
+        assert_eq!(grid.start_nm(), MIN_WAVELENGTH_NM);
+        assert_eq!(grid.stop_nm(), MAX_WAVELENGTH_NM);
+        assert_eq!(grid.to_string(), "300:1100:10");
+        // Each end alone, and a photometer channel alone.
+        for text in ["300", "1100", "1020"] {
+            assert_eq!(text.parse::<WavelengthGrid>().unwrap().len(), 1);
+        }
+        // Just outside either end: one line naming the value, its unit and
+        // the range.
+        for (text, expected) in [
+            ("299.9:1100:0.1", "start_nm = 299.9 nm"),
+            ("300:1100.5:0.5", "stop_nm = 1100.5 nm"),
+            ("1101", "start_nm = 1101 nm"),
+            ("250", "start_nm = 250 nm"),
+        ] {
+            let message = text.parse::<WavelengthGrid>().unwrap_err().to_string();
+            assert!(message.contains(expected), "{text}: {message}");
+            assert!(message.contains("300..=1100"), "{text}: {message}");
+            assert!(!message.contains('\n'), "{text}: {message}");
+        }
+    }
+
+    #[test]
     fn single_wavelength_grid() {
         let grid: WavelengthGrid = "550".parse().unwrap();
         assert_eq!(grid.len(), 1);
@@ -220,8 +260,8 @@ mod tests {
     #[test]
     fn bad_grids_are_rejected_with_the_offending_value() {
         let cases = [
-            ("300:780:20", "start_nm = 300 nm"),
-            ("380:900:20", "stop_nm = 900 nm"),
+            ("290:780:20", "start_nm = 290 nm"),
+            ("380:1110:20", "stop_nm = 1110 nm"),
             ("780:380:20", "stop_nm = 380 nm"),
             ("380:780:0", "step_nm = 0 nm"),
             ("380:780:-20", "step_nm = -20 nm"),
@@ -246,15 +286,15 @@ mod tests {
         assert!(message.contains("380:779:7"), "{message}");
         assert!(message.contains("779 and 786 nm"), "{message}");
         // Past the end of the range only the stop below is offered.
-        let message = "380:829:7"
+        let message = "380:1099:7"
             .parse::<WavelengthGrid>()
             .unwrap_err()
             .to_string();
         assert!(
-            message.contains("(try 380:828:7): the nearest stop is 828 nm"),
+            message.contains("(try 380:1094:7): the nearest stop is 1094 nm"),
             "{message}"
         );
-        assert!(!message.contains("835"), "{message}");
+        assert!(!message.contains("1101"), "{message}");
     }
 
     #[test]

@@ -1,0 +1,158 @@
+//! `sora spectrum` and `sora render` on grids beyond the visible (300-1100
+//! nm, issue 16): the sun-photometer grid runs, colour comes from its part
+//! in 360-830 nm, a grid with no part there has no colour, and grids past
+//! the range are refused with the value and its unit.
+
+mod common;
+
+use common::{one_line_error, sora, stdout};
+
+const VIEW: [&str; 10] = [
+    "--preset",
+    "earth-clear",
+    "--sun-elevation",
+    "30",
+    "--sun-azimuth",
+    "180",
+    "--view-elevation",
+    "45",
+    "--view-azimuth",
+    "90",
+];
+
+/// The rows `wavelength_nm,radiance` of a one-direction CSV.
+fn rows(csv: &str) -> Vec<(f64, f64)> {
+    let mut lines = csv.lines();
+    assert_eq!(lines.next(), Some("wavelength_nm,radiance_w_m2_sr_nm"));
+    lines
+        .map(|line| {
+            let (w, l) = line.split_once(',').unwrap();
+            (w.parse().unwrap(), l.parse().unwrap())
+        })
+        .collect()
+}
+
+#[test]
+fn the_photometer_grid_gives_81_rows_and_the_colour_of_its_visible_part() {
+    let out = sora(&[&["spectrum"][..], &VIEW, &["--wavelengths", "300:1100:10"]].concat());
+    let rows = rows(&stdout(&out));
+    assert_eq!(rows.len(), 81);
+    for (i, (wavelength, radiance)) in rows.iter().enumerate() {
+        assert_eq!(*wavelength, 300.0 + 10.0 * i as f64);
+        assert!(
+            radiance.is_finite() && *radiance > 0.0,
+            "{wavelength}: {radiance}"
+        );
+    }
+    let at = |nm: f64| rows.iter().find(|(w, _)| *w == nm).unwrap().1;
+    // Ozone's Hartley-Huggins edge darkens the ultraviolet sky by orders of
+    // magnitude between 340 and 300 nm; in the infrared the sky fades as
+    // Rayleigh scattering does (lambda^-4) with aerosol light added.
+    assert!(at(300.0) < 1e-2 * at(340.0), "{} {}", at(300.0), at(340.0));
+    assert!(at(1020.0) < at(870.0) && at(870.0) < at(670.0));
+    // Colour: on stderr, from the 48 wavelengths in 360-830 nm.
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        stderr.starts_with("XYZ ")
+            && stderr.contains("(colour from the 48 of 81 wavelengths in 360-830 nm)"),
+        "{stderr}"
+    );
+    // A grid inside 360-830 nm prints its colour as it always did: no note.
+    let out = sora(&[&["spectrum"][..], &VIEW, &["--wavelengths", "360:830:10"]].concat());
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        stderr.starts_with("XYZ ") && !stderr.contains("colour from"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn an_infrared_grid_has_no_colour() {
+    let out = sora(&[&["spectrum"][..], &VIEW, &["--wavelengths", "870:1020:150"]].concat());
+    assert_eq!(rows(&stdout(&out)).len(), 2);
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        stderr.contains("no colour: no wavelength of 870:1020:150 lies in 360-830 nm"),
+        "{stderr}"
+    );
+    let out = sora(
+        &[
+            &["spectrum"][..],
+            &VIEW,
+            &["--wavelengths", "870:1020:150", "--format", "json"],
+        ]
+        .concat(),
+    );
+    let json = stdout(&out);
+    assert!(
+        json.contains("\"xyz\": null, \"linear_srgb\": null"),
+        "{json}"
+    );
+    // An image needs colour: a one-line error, and no file.
+    let dir = std::env::temp_dir().join(format!("sora-wide-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let png = dir.join("infrared.png");
+    let out = sora(&[
+        "render",
+        "--preset",
+        "earth-clear",
+        "--sun-elevation",
+        "30",
+        "--wavelengths",
+        "870:1020:150",
+        "--width",
+        "16",
+        "--height",
+        "8",
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    let message = one_line_error(&out);
+    assert!(message.contains("360-830 nm"), "{message}");
+    assert!(!png.exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn grids_past_300_to_1100_nm_are_refused_with_value_and_unit() {
+    for (grid, expected) in [
+        (
+            "290:1100:10",
+            "start_nm = 290 nm is out of range: allowed 300..=1100 nm",
+        ),
+        (
+            "300:1110:10",
+            "stop_nm = 1110 nm is out of range: allowed 300..=1100 nm",
+        ),
+    ] {
+        let out = sora(&[&["spectrum"][..], &VIEW, &["--wavelengths", grid]].concat());
+        // clap's own argument errors: status 2, the first line says why.
+        assert_eq!(out.status.code(), Some(2), "{grid}: {out:?}");
+        let stderr = String::from_utf8(out.stderr).unwrap();
+        assert!(
+            stderr.lines().next().unwrap().contains(expected),
+            "{grid}: {stderr}"
+        );
+        assert!(out.stdout.is_empty());
+    }
+    // A table that stops short of a grid: a one-line error naming both
+    // ranges (the paper's Mars dust indices cover 321-800 nm).
+    let out = sora(&[
+        "spectrum",
+        "--preset",
+        "paper-mars",
+        "--sun-elevation",
+        "30",
+        "--view-elevation",
+        "45",
+        "--view-azimuth",
+        "90",
+        "--wavelengths",
+        "300:1100:10",
+    ]);
+    let message = one_line_error(&out);
+    assert!(
+        message.contains("321-800 nm") && message.contains("300-1100 nm"),
+        "{message}"
+    );
+}
