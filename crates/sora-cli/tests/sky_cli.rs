@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{sora, stdout};
+use common::{sora, spectrum_rows, stdout};
 
 /// Case (a) of ../shared/reference/sky/clear_sky_radiance.csv (sun 36 deg
 /// at azimuth 207, view 17 deg at 347): L_single_spherical at 380, 400, 780 nm.
@@ -26,18 +26,6 @@ const CASE_A_SPECTRUM: [&str; 11] = [
     "--view-azimuth",
     "347",
 ];
-
-/// The (wavelength, radiance) rows of `sora spectrum`'s CSV.
-fn spectrum_rows(csv: &str) -> Vec<(f64, f64)> {
-    let mut lines = csv.lines();
-    assert_eq!(lines.next(), Some("wavelength_nm,radiance_w_m2_sr_nm"));
-    lines
-        .map(|l| {
-            let (w, v) = l.split_once(',').unwrap();
-            (w.parse().unwrap(), v.parse().unwrap())
-        })
-        .collect()
-}
 
 #[test]
 fn spectrum_csv_is_the_reference_single_scattering() {

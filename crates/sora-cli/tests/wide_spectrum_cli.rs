@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{one_line_error, sora, stdout};
+use common::{one_line_error, sora, spectrum_rows, stdout};
 
 const VIEW: [&str; 10] = [
     "--preset",
@@ -20,22 +20,10 @@ const VIEW: [&str; 10] = [
     "90",
 ];
 
-/// The rows `wavelength_nm,radiance` of a one-direction CSV.
-fn rows(csv: &str) -> Vec<(f64, f64)> {
-    let mut lines = csv.lines();
-    assert_eq!(lines.next(), Some("wavelength_nm,radiance_w_m2_sr_nm"));
-    lines
-        .map(|line| {
-            let (w, l) = line.split_once(',').unwrap();
-            (w.parse().unwrap(), l.parse().unwrap())
-        })
-        .collect()
-}
-
 #[test]
 fn the_photometer_grid_gives_81_rows_and_the_colour_of_its_visible_part() {
     let out = sora(&[&["spectrum"][..], &VIEW, &["--wavelengths", "300:1100:10"]].concat());
-    let rows = rows(&stdout(&out));
+    let rows = spectrum_rows(&stdout(&out));
     assert_eq!(rows.len(), 81);
     for (i, (wavelength, radiance)) in rows.iter().enumerate() {
         assert_eq!(*wavelength, 300.0 + 10.0 * i as f64);
@@ -69,7 +57,7 @@ fn the_photometer_grid_gives_81_rows_and_the_colour_of_its_visible_part() {
 #[test]
 fn an_infrared_grid_has_no_colour() {
     let out = sora(&[&["spectrum"][..], &VIEW, &["--wavelengths", "870:1020:150"]].concat());
-    assert_eq!(rows(&stdout(&out)).len(), 2);
+    assert_eq!(spectrum_rows(&stdout(&out)).len(), 2);
     let stderr = String::from_utf8(out.stderr).unwrap();
     assert!(
         stderr.contains("no colour: no wavelength of 870:1020:150 lies in 360-830 nm"),

@@ -44,6 +44,18 @@ pub fn exr_channel(path: &Path, name: &str) -> Vec<f32> {
     channel.sample_data.values_as_f32().collect()
 }
 
+/// The (wavelength, radiance) rows of a one-direction `sora spectrum` CSV.
+pub fn spectrum_rows(csv: &str) -> Vec<(f64, f64)> {
+    let mut lines = csv.lines();
+    assert_eq!(lines.next(), Some("wavelength_nm,radiance_w_m2_sr_nm"));
+    lines
+        .map(|line| {
+            let (w, l) = line.split_once(',').unwrap();
+            (w.parse().unwrap(), l.parse().unwrap())
+        })
+        .collect()
+}
+
 /// Path of a file in `tests/data/`.
 pub fn data(name: &str) -> String {
     Path::new(env!("CARGO_MANIFEST_DIR"))

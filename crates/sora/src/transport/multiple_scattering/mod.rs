@@ -772,6 +772,24 @@ impl MultipleScatteringField {
         sun_column_nodes: (usize, usize),
         polarised: bool,
     ) -> Result<MultipleScatteringField> {
+        MultipleScatteringField::compute_for_visible_suns(
+            sky,
+            settings,
+            sun_column_nodes,
+            polarised,
+            successive_orders::MAX_ITERATIONS,
+        )
+    }
+
+    /// The field for every sun zenith angle at a point of the atmosphere
+    /// the eye sees, the solver stopped after `sweeps` orders.
+    fn compute_for_visible_suns(
+        sky: &SingleScatteringSky,
+        settings: MultipleScatteringSettings,
+        sun_column_nodes: (usize, usize),
+        polarised: bool,
+        sweeps: usize,
+    ) -> Result<MultipleScatteringField> {
         let (ground, top) = sky.radii_m();
         let r = sky.observer_radius_m();
         // A point of the atmosphere that the eye sees is at most this far
@@ -785,7 +803,7 @@ impl MultipleScatteringField {
             (sun_zenith - reach).max(0.0),
             sun_zenith + reach,
             polarised,
-            successive_orders::MAX_ITERATIONS,
+            sweeps,
         )
     }
 
@@ -802,16 +820,10 @@ impl MultipleScatteringField {
         sun_column_nodes: (usize, usize),
         sweeps: usize,
     ) -> Result<MultipleScatteringField> {
-        let (ground, top) = sky.radii_m();
-        let r = sky.observer_radius_m();
-        let reach = (ground / r.max(ground)).min(1.0).acos() + (ground / top).acos();
-        let sun_zenith = sky.sun_direction().z.clamp(-1.0, 1.0).acos();
-        MultipleScatteringField::compute_for_sun_zenith_range(
+        MultipleScatteringField::compute_for_visible_suns(
             sky,
             settings,
             sun_column_nodes,
-            (sun_zenith - reach).max(0.0),
-            sun_zenith + reach,
             false,
             sweeps,
         )
