@@ -265,18 +265,23 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             );
         }
     }
-    let mut map_targets = Vec::new();
-    for (option, path) in [("--dolp", &args.dolp), ("--aop", &args.aop)] {
-        if let Some(path) = path {
-            if OutputFormat::from_path(path)? != OutputFormat::Png {
-                bail!(
-                    "{option} {}: the map is a PNG (give FILE.png)",
-                    path.display()
-                );
-            }
-            map_targets.push(output_target(path, option)?);
+    // The maps' targets: (--dolp, --aop).
+    let map_target = |option: &str, path: &Option<PathBuf>| -> anyhow::Result<Option<PathBuf>> {
+        let Some(path) = path else {
+            return Ok(None);
+        };
+        if OutputFormat::from_path(path)? != OutputFormat::Png {
+            bail!(
+                "{option} {}: the map is a PNG (give FILE.png)",
+                path.display()
+            );
         }
-    }
+        Ok(Some(output_target(path, option)?))
+    };
+    let map_targets = (
+        map_target("--dolp", &args.dolp)?,
+        map_target("--aop", &args.aop)?,
+    );
     // Image buffers bounded before any work (see `estimate`).
     let (encoded_bytes_per_pixel, format_name) = match (format, args.png_16_bit) {
         (OutputFormat::Png, false) => (6, "8-bit PNG"),
@@ -328,7 +333,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             sky,
             &image,
             &to_xyz,
-            (format, output, &map_targets),
+            (format, output, (&map_targets.0, &map_targets.1)),
             exposure,
             started,
         )?;
@@ -426,7 +431,7 @@ fn frame_path(output: &std::path::Path, frame: usize) -> PathBuf {
 }
 
 /// Renders `sky` and writes it to `output` (and the polarisation maps to
-/// `maps`, the targets of --dolp and --aop in that order); with
+/// `maps`, the targets of --dolp and --aop); with
 /// `exposure` (a sequence's) in place of the options'. Returns the PNG's
 /// exposure scale.
 fn render_frame(
@@ -434,7 +439,11 @@ fn render_frame(
     sky: &sora::Sky,
     image: &ImageSettings,
     to_xyz: &SpectrumToXyz,
-    (format, output, maps): (OutputFormat, &std::path::Path, &[PathBuf]),
+    (format, output, (dolp, aop)): (
+        OutputFormat,
+        &std::path::Path,
+        (&Option<PathBuf>, &Option<PathBuf>),
+    ),
     exposure: Option<sora::colour::Exposure>,
     started: Instant,
 ) -> anyhow::Result<Option<f64>> {
@@ -448,7 +457,7 @@ fn render_frame(
     let bar = progress_bar(height as u64);
     let progress = |rows: usize| bar.set_position(rows as u64);
     // The Stokes images when asked for (S0 is the image), else the image.
-    let (mut xyz, mut stokes) = if args.stokes || !maps.is_empty() {
+    let (mut xyz, mut stokes) = if args.stokes || dolp.is_some() || aop.is_some() {
         let stokes = sky.render_stokes_xyz(image, to_xyz, &progress)?;
         (stokes.iter().map(|s| s[0]).collect(), stokes)
     } else {
@@ -465,13 +474,13 @@ fn render_frame(
         }
     }
     let (w, h) = (width as usize, height as usize);
-    for (path, is_degree) in maps.iter().zip([args.dolp.is_some(), false]) {
-        let map = if is_degree {
-            polarisation_maps::degree_map(&polarisation_maps::degrees(&stokes), w, h)?
-        } else {
-            polarisation_maps::angle_map(&polarisation_maps::angles_deg(&stokes), w, h)?
-        };
-        write_png(path, &map)?;
+    if let Some(path) = dolp {
+        let degrees = polarisation_maps::degrees(&stokes);
+        write_png(path, &polarisation_maps::degree_map(&degrees, w, h)?)?;
+    }
+    if let Some(path) = aop {
+        let angles = polarisation_maps::angles_deg(&stokes);
+        write_png(path, &polarisation_maps::angle_map(&angles, w, h)?)?;
     }
     let render_seconds = frame_started.elapsed().as_secs_f64();
 
