@@ -64,6 +64,7 @@ pub mod camera;
 pub mod colour;
 pub mod error;
 pub mod geometry;
+pub mod inversion;
 pub mod output;
 mod parallel;
 pub mod sky;
