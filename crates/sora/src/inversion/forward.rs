@@ -1,0 +1,263 @@
+//! The forward model of a retrieval: the sky radiances and optical depths
+//! an aerosol state gives at the measured wavelengths and directions.
+//!
+//! The atmosphere is the user's (air, gases, planet, ground, sun) with its
+//! aerosol species removed and the state's aerosol added as one species:
+//! the Mie kernels' ensemble (`kernels.rs`) scaled to the state's optical
+//! depth at the reference wavelength, spread over an exponential profile
+//! of scale height `aerosol_scale_height_m`. Radiances come from the
+//! library's own fast method ([`crate::Sky`], all orders of scattering,
+//! scalar light, the default tables): one sky per wavelength and sun
+//! position, each on a one-wavelength grid, since a photometer's channels
+//! (440, 675, 870, 1020 nm) are not a regular grid. The optics of air and
+//! gases are computed once; only the aerosol species changes between
+//! evaluations.
+
+use std::sync::{Arc, Mutex};
+
+use super::kernels::{MieKernels, radius_nodes_um};
+use super::measurements::Measurements;
+use super::state::AerosolState;
+use crate::ViewDirection;
+use crate::atmosphere::{
+    Atmosphere, AtmosphereOptics, DensityProfile, PhaseFunction, SpeciesModel, SpeciesOptics,
+    TabulatedPhase,
+};
+use crate::error::{Error, Result};
+use crate::mie::Complex64;
+use crate::mie::ensemble::TabulatedPhaseFunction;
+use crate::sky::{FastTableSize, Method, Scattering, Sky};
+use crate::spectrum::{SampledSpectrum, WavelengthGrid};
+use crate::transport::{Observation, SingleScatteringSky};
+
+/// Mie kernels kept per refractive index (the fit's current point, its two
+/// index columns of the Jacobian and a trial step fit with room to spare).
+const KERNEL_CACHE_SIZE: usize = 8;
+
+/// The measured directions of one wavelength and one sun position.
+#[derive(Debug, Clone)]
+struct SkyGroup {
+    wavelength: usize,
+    sun_elevation_deg: f64,
+    sun_azimuth_deg: f64,
+    views: Vec<ViewDirection>,
+    /// Indices into the measurements' sky list, in `views`' order.
+    measurements: Vec<usize>,
+}
+
+/// The aerosol's optics at one wavelength.
+#[derive(Debug, Clone)]
+pub(crate) struct AerosolOptics {
+    /// Extinction optical depth.
+    pub optical_depth: f64,
+    /// Single-scattering albedo.
+    pub single_scattering_albedo: f64,
+    /// The phase function (sr^-1).
+    pub phase_function: TabulatedPhaseFunction,
+}
+
+/// What stays fixed while the aerosol changes.
+#[derive(Debug)]
+pub(crate) struct ForwardModel {
+    /// The measured wavelengths, nm, increasing.
+    pub wavelengths_nm: Vec<f64>,
+    /// Index of the reference wavelength (the state's optical depth).
+    pub reference: usize,
+    /// Air and gases on each wavelength's one-point grid.
+    base_optics: Vec<AtmosphereOptics>,
+    ground_radius_m: f64,
+    top_radius_m: f64,
+    sun_angular_radius_rad: f64,
+    profile: DensityProfile,
+    column_m: f64,
+    groups: Vec<SkyGroup>,
+    sky_measurements: usize,
+    kernels: Mutex<Vec<Arc<MieKernels>>>,
+}
+
+impl ForwardModel {
+    /// The model of `measurements` in `atmosphere` (whose aerosol species
+    /// are set aside), with the aerosol in an exponential profile of
+    /// `aerosol_scale_height_m`, and the state's optical depth given at
+    /// `reference_wavelength_nm` (one of the measured wavelengths).
+    pub(crate) fn new(
+        atmosphere: &Atmosphere,
+        measurements: &Measurements,
+        aerosol_scale_height_m: f64,
+        reference_wavelength_nm: f64,
+    ) -> Result<ForwardModel> {
+        let mut wavelengths_nm: Vec<f64> =
+            measurements.sky.iter().map(|m| m.wavelength_nm).collect();
+        wavelengths_nm.sort_by(f64::total_cmp);
+        wavelengths_nm.dedup();
+        let reference = wavelengths_nm
+            .iter()
+            .position(|w| *w == reference_wavelength_nm)
+            .ok_or_else(|| {
+                Error::Unsupported(format!(
+                    "the reference wavelength {reference_wavelength_nm} nm is not one of the measured wavelengths ({wavelengths_nm:?} nm)"
+                ))
+            })?;
+        let mut base = atmosphere.clone();
+        base.species.retain(|s| {
+            !matches!(
+                s.model,
+                SpeciesModel::Mie(_) | SpeciesModel::ParametricAerosol(_)
+            )
+        });
+        let base_optics = wavelengths_nm
+            .iter()
+            .map(|&w| base.compute_optics(&WavelengthGrid::new(w, w, 1.0)?))
+            .collect::<Result<Vec<_>>>()?;
+        let profile = DensityProfile::exponential(aerosol_scale_height_m, "aerosol scale height")?;
+        let column_m = profile.vertical_column_m(base.planet.atmosphere_height_m());
+
+        let mut groups: Vec<SkyGroup> = Vec::new();
+        for (index, m) in measurements.sky.iter().enumerate() {
+            let wavelength = wavelengths_nm
+                .iter()
+                .position(|w| *w == m.wavelength_nm)
+                .expect("every sky wavelength is in the list");
+            let view = ViewDirection::new(m.view_elevation_deg, m.view_azimuth_deg)?;
+            match groups.iter_mut().find(|g| {
+                g.wavelength == wavelength
+                    && g.sun_elevation_deg == m.sun_elevation_deg
+                    && g.sun_azimuth_deg == m.sun_azimuth_deg
+            }) {
+                Some(group) => {
+                    group.views.push(view);
+                    group.measurements.push(index);
+                }
+                None => groups.push(SkyGroup {
+                    wavelength,
+                    sun_elevation_deg: m.sun_elevation_deg,
+                    sun_azimuth_deg: m.sun_azimuth_deg,
+                    views: vec![view],
+                    measurements: vec![index],
+                }),
+            }
+        }
+        Ok(ForwardModel {
+            wavelengths_nm,
+            reference,
+            base_optics,
+            ground_radius_m: base.planet.radius_m(),
+            top_radius_m: base.planet.top_radius_m(),
+            sun_angular_radius_rad: base.sun.angular_radius_rad(),
+            profile,
+            column_m,
+            groups,
+            sky_measurements: measurements.sky.len(),
+            kernels: Mutex::new(Vec::new()),
+        })
+    }
+
+    /// The Mie kernels of `m`, from the cache or computed (and cached).
+    fn kernels(&self, m: Complex64) -> Result<Arc<MieKernels>> {
+        if let Some(k) = self
+            .kernels
+            .lock()
+            .expect("kernel cache")
+            .iter()
+            .find(|k| k.refractive_index == m)
+        {
+            return Ok(Arc::clone(k));
+        }
+        let computed = Arc::new(MieKernels::compute(&self.wavelengths_nm, m)?);
+        let mut cache = self.kernels.lock().expect("kernel cache");
+        if cache.len() == KERNEL_CACHE_SIZE {
+            cache.remove(0);
+        }
+        cache.push(Arc::clone(&computed));
+        Ok(computed)
+    }
+
+    /// The aerosol's optical depth, albedo and phase function at every
+    /// measured wavelength.
+    pub(crate) fn aerosol_optics(&self, state: &AerosolState) -> Result<Vec<AerosolOptics>> {
+        let kernels = self.kernels(Complex64::new(
+            state.refractive_index_real,
+            state.refractive_index_imaginary,
+        ))?;
+        let (radii_um, _) = radius_nodes_um();
+        let volume: Vec<f64> = radii_um
+            .iter()
+            .map(|r| state.volume_per_ln_radius(*r))
+            .collect();
+        let mut phase = Vec::new();
+        let per_wavelength: Vec<(f64, f64, Vec<f64>)> = (0..self.wavelengths_nm.len())
+            .map(|i| {
+                let (e, s) = kernels.ensemble(i, &volume, &mut phase);
+                (e, s, phase.clone())
+            })
+            .collect();
+        let reference_extinction = per_wavelength[self.reference].0;
+        per_wavelength
+            .into_iter()
+            .map(|(e, s, phase)| {
+                let phase_function =
+                    TabulatedPhaseFunction::from_nodes(kernels.cos_theta.clone(), phase).map_err(
+                        |error| Error::Unsupported(format!("aerosol phase table: {error}")),
+                    )?;
+                Ok(AerosolOptics {
+                    optical_depth: state.optical_depth * e / reference_extinction,
+                    single_scattering_albedo: s / e,
+                    phase_function,
+                })
+            })
+            .collect()
+    }
+
+    /// The sky radiance of every measurement (W m^-2 sr^-1 nm^-1), in the
+    /// measurements' order.
+    pub(crate) fn radiances(&self, state: &AerosolState) -> Result<Vec<f64>> {
+        let aerosol = self.aerosol_optics(state)?;
+        let mut radiances = vec![0.0; self.sky_measurements];
+        for group in &self.groups {
+            let optics = self.optics_at(group.wavelength, &aerosol[group.wavelength]);
+            let scene = SingleScatteringSky::from_optics(
+                optics,
+                self.ground_radius_m,
+                self.top_radius_m,
+                self.sun_angular_radius_rad,
+                Observation {
+                    observer_altitude_m: 0.0,
+                    sun_elevation_deg: group.sun_elevation_deg,
+                    sun_azimuth_deg: group.sun_azimuth_deg,
+                },
+            )?;
+            let sky = Sky::from_scene(
+                scene,
+                Scattering::multiple(),
+                Method::Fast,
+                FastTableSize::default(),
+            )?;
+            for (radiance, &index) in sky.radiances(&group.views)?.iter().zip(&group.measurements) {
+                radiances[index] = radiance.radiance_w_m2_sr_nm[0];
+            }
+        }
+        Ok(radiances)
+    }
+
+    /// Air, gases and the aerosol at wavelength index `wavelength`.
+    fn optics_at(&self, wavelength: usize, aerosol: &AerosolOptics) -> AtmosphereOptics {
+        let mut optics = self.base_optics[wavelength].clone();
+        let extinction_per_m = aerosol.optical_depth / self.column_m;
+        optics.species.push(SpeciesOptics {
+            name: "retrieved aerosol".into(),
+            kind: "mie",
+            profile: self.profile.clone(),
+            vertical_column_m: self.column_m,
+            reference_number_density_m3: None,
+            extinction_per_m: SampledSpectrum::from_values(vec![extinction_per_m]),
+            scattering_per_m: SampledSpectrum::from_values(vec![
+                extinction_per_m * aerosol.single_scattering_albedo,
+            ]),
+            phase_function: PhaseFunction::Tabulated(
+                TabulatedPhase::from_tables(vec![aerosol.phase_function.clone()])
+                    .expect("one table"),
+            ),
+        });
+        optics
+    }
+}
