@@ -209,8 +209,8 @@ impl ForwardModel {
     }
 
     /// The sky radiance of every measurement (W m^-2 sr^-1 nm^-1), in the
-    /// measurements' order.
-    pub(crate) fn radiances(&self, state: &AerosolState) -> Result<Vec<f64>> {
+    /// measurements' order, and the aerosol's optics per wavelength.
+    pub(crate) fn radiances(&self, state: &AerosolState) -> Result<(Vec<f64>, Vec<AerosolOptics>)> {
         let aerosol = self.aerosol_optics(state)?;
         let mut radiances = vec![0.0; self.sky_measurements];
         for group in &self.groups {
@@ -236,7 +236,7 @@ impl ForwardModel {
                 radiances[index] = radiance.radiance_w_m2_sr_nm[0];
             }
         }
-        Ok(radiances)
+        Ok((radiances, aerosol))
     }
 
     /// Air, gases and the aerosol at wavelength index `wavelength`.

@@ -1,7 +1,49 @@
 //! # Inversion: from measured sky radiances back to the aerosol
 //!
-//! (Work in progress.)
+//! The paper's future work, as sun-sky photometer networks do it (AERONET,
+//! Dubovik & King 2000): from sky radiances in known directions at a few
+//! wavelengths (an almucantar or a principal plane, 440/675/870/1020 nm),
+//! with the aerosol optical depths measured from the direct sun if there
+//! are any, estimate the aerosol: its optical depth, its size
+//! distribution and its complex refractive index, and from them its
+//! single-scattering albedo, asymmetry parameter, Angstrom exponent and
+//! effective radii, each with an uncertainty.
+//!
+//! - `measurements.rs`: what is measured ([`Measurements`]);
+//! - `state.rs`: what is fitted ([`AerosolState`]: the optical depth at a
+//!   reference wavelength, two log-normal volume modes, one refractive
+//!   index), its bounds and its a priori;
+//! - `kernels.rs`: Mie kernels per radius node, so that a new size
+//!   distribution costs no Mie solution;
+//! - `forward.rs`: the forward model, the library's fast multiple-
+//!   scattering method on the user's atmosphere with the state's aerosol;
+//! - `fit.rs`: Levenberg-Marquardt with the a priori, and the posterior
+//!   covariance.
+//!
+//! Measurements enter the fit as ln L (sky radiances, sigma = the relative
+//! uncertainty) and as tau (optical depths, sigma = their uncertainty), so
+//! the fit is in log space for radiances, which span decades along an
+//! almucantar, and linear for optical depths, which may be near 0.
+//!
+//! Assumptions, stated: spheres (Mie theory; AERONET adds spheroids for
+//! dust); one refractive index for both modes and every wavelength; the
+//! aerosol in one exponential layer (scale height
+//! [`RetrievalSettings::aerosol_scale_height_m`]; an almucantar depends on
+//! it very little, since every view sees the same air mass); scalar light
+//! (the polarised intensity differs by up to a few per cent,
+//! `docs/polarisation.md`); the ground albedo of the atmosphere given.
+//! What a single normalised spectrum in one direction (the paper's Fig. 2,
+//! [`RadianceScale::Relative`]) can tell: with one free scale factor only
+//! the spectral shape of one radiance is left, which the optical depth,
+//! the fine fraction and the fine radius all change alike, so the
+//! retrieval returns the a priori for most of the state with wide
+//! uncertainties, and says so in its warnings; an almucantar's angular
+//! shape is what carries the size distribution.
+//!
+//! No I/O: text formats are read in `input.rs` from strings; the CLI
+//! (`sora retrieve`) reads the files and writes the outputs.
 
+mod fit;
 mod forward;
 mod kernels;
 pub mod measurements;
@@ -12,3 +54,586 @@ pub use measurements::{
     Measurements, OpticalDepthMeasurement, RadianceScale, SkyRadianceMeasurement,
 };
 pub use state::{AerosolState, BOUNDS, Bounds, LogNormalMode, PARAMETER_NAMES, PARAMETERS};
+
+use crate::atmosphere::Atmosphere;
+use crate::error::{Error, Result};
+use fit::Problem;
+use forward::{AerosolOptics, ForwardModel};
+
+/// How a retrieval runs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RetrievalSettings {
+    /// The wavelength of the state's optical depth, nm; one of the measured
+    /// wavelengths. None: 440 nm if it was measured, else the shortest.
+    pub reference_wavelength_nm: Option<f64>,
+    /// Scale height of the aerosol's exponential profile, m.
+    pub aerosol_scale_height_m: f64,
+    /// The most Levenberg-Marquardt iterations per starting point.
+    pub max_iterations: usize,
+    /// Starting points, each fitted to its own minimum; the lowest chi^2
+    /// wins (see [`RetrievalSettings::starting_states`]).
+    pub starting_points: usize,
+}
+
+impl Default for RetrievalSettings {
+    fn default() -> Self {
+        RetrievalSettings {
+            reference_wavelength_nm: None,
+            aerosol_scale_height_m: 1200.0,
+            max_iterations: 20,
+            starting_points: 2,
+        }
+    }
+}
+
+impl RetrievalSettings {
+    /// The starting states, in order (the first `starting_points` are
+    /// used): a fine-dominated aerosol (urban, smoke), a coarse-dominated
+    /// one (dust), and the a priori; each with the measured optical depth
+    /// at the reference wavelength where there is one.
+    pub fn starting_states(optical_depth: f64) -> Vec<AerosolState> {
+        let mode = |r, s| LogNormalMode {
+            volume_median_radius_um: r,
+            width: s,
+        };
+        vec![
+            AerosolState {
+                optical_depth,
+                fine: mode(0.15, 0.45),
+                coarse: mode(2.5, 0.65),
+                fine_volume_fraction: 0.6,
+                refractive_index_real: 1.45,
+                refractive_index_imaginary: 0.008,
+            },
+            AerosolState {
+                optical_depth,
+                fine: mode(0.12, 0.45),
+                coarse: mode(2.0, 0.6),
+                fine_volume_fraction: 0.1,
+                refractive_index_real: 1.52,
+                refractive_index_imaginary: 0.003,
+            },
+            AerosolState {
+                optical_depth,
+                ..AerosolState::a_priori()
+            },
+        ]
+    }
+}
+
+/// A retrieved number and its 1-sigma uncertainty.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Estimate {
+    /// The value.
+    pub value: f64,
+    /// Its 1-sigma uncertainty (from the linearised posterior covariance).
+    pub sigma: f64,
+}
+
+/// The aerosol's optics at one measured wavelength.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SpectralOptics {
+    /// Wavelength, nm.
+    pub wavelength_nm: f64,
+    /// Aerosol extinction optical depth.
+    pub optical_depth: Estimate,
+    /// Single-scattering albedo.
+    pub single_scattering_albedo: Estimate,
+    /// Asymmetry parameter.
+    pub asymmetry: Estimate,
+}
+
+/// One measured sky radiance and its fit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FittedRadiance {
+    /// The measurement.
+    pub measured: SkyRadianceMeasurement,
+    /// The forward model at the retrieved state, W m^-2 sr^-1 nm^-1 (in the
+    /// measurement's units when the scale is relative).
+    pub fitted_w_m2_sr_nm: f64,
+    /// (measured - fitted) / uncertainty.
+    pub normalised_residual: f64,
+}
+
+/// One measured optical depth and its fit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FittedOpticalDepth {
+    /// The measurement.
+    pub measured: OpticalDepthMeasurement,
+    /// The retrieved aerosol's optical depth there.
+    pub fitted: f64,
+    /// (measured - fitted) / uncertainty.
+    pub normalised_residual: f64,
+}
+
+/// What a retrieval found.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Retrieval {
+    /// The measurements' label.
+    pub label: String,
+    /// The reference wavelength of the optical depth, nm.
+    pub reference_wavelength_nm: f64,
+    /// The retrieved state.
+    pub state: AerosolState,
+    /// Each parameter with its 1-sigma uncertainty, in
+    /// [`PARAMETER_NAMES`]' order.
+    pub parameters: Vec<Estimate>,
+    /// Correlations between the parameters (row-major, PARAMETERS^2).
+    pub correlations: Vec<f64>,
+    /// Optical depth, albedo and asymmetry per measured wavelength.
+    pub spectral: Vec<SpectralOptics>,
+    /// Angstrom exponent: minus the slope of ln tau against ln lambda,
+    /// least squares over the measured wavelengths.
+    pub angstrom_exponent: Estimate,
+    /// Effective radius of the fine and the coarse mode, um.
+    pub fine_effective_radius_um: Estimate,
+    /// See above.
+    pub coarse_effective_radius_um: Estimate,
+    /// The fitted radiance scale factor (relative radiances only).
+    pub radiance_scale: Option<Estimate>,
+    /// Every sky radiance and its fit.
+    pub radiances: Vec<FittedRadiance>,
+    /// Every optical depth and its fit.
+    pub optical_depths: Vec<FittedOpticalDepth>,
+    /// chi^2 of the measurements at the retrieved state.
+    pub chi_square: f64,
+    /// How many measurements (radiances and optical depths).
+    pub measurement_count: usize,
+    /// Levenberg-Marquardt iterations of the winning start.
+    pub iterations: usize,
+    /// Whether the fit met its convergence criterion.
+    pub converged: bool,
+    /// What the user should know about this result (no convergence, a poor
+    /// fit, parameters the measurements did not constrain), one line each.
+    pub warnings: Vec<String>,
+}
+
+/// A posterior uncertainty above this fraction of its a priori one means
+/// the measurements did not constrain the parameter (warned about).
+const UNCONSTRAINED_FRACTION: f64 = 0.7;
+
+/// Forward difference step of the Jacobian, in the fit's coordinates
+/// (logit units: a relative change of about 1 % of a log-bounded
+/// parameter); small enough for the model's curvature, large enough
+/// against its interpolation noise.
+const JACOBIAN_STEP: f64 = 0.02;
+
+/// Retrieves the aerosol from `measurements` in `atmosphere` (its air,
+/// gases, ground and sun; its own aerosol species are set aside).
+pub fn retrieve(
+    atmosphere: &Atmosphere,
+    measurements: &Measurements,
+    settings: &RetrievalSettings,
+) -> Result<Retrieval> {
+    if measurements.sky.is_empty() {
+        return Err(Error::Unsupported(format!(
+            "{}: no sky radiances to retrieve from",
+            measurements.label
+        )));
+    }
+    if !(1..=3).contains(&settings.starting_points) {
+        return Err(Error::out_of_range(
+            "starting points",
+            settings.starting_points as f64,
+            "1",
+            "1..=3",
+        ));
+    }
+    if settings.max_iterations == 0 {
+        return Err(Error::out_of_range("max iterations", 0.0, "1", ">= 1"));
+    }
+    let mut wavelengths: Vec<f64> = measurements.sky.iter().map(|m| m.wavelength_nm).collect();
+    wavelengths.sort_by(f64::total_cmp);
+    wavelengths.dedup();
+    let reference_wavelength_nm =
+        settings
+            .reference_wavelength_nm
+            .unwrap_or(if wavelengths.contains(&440.0) {
+                440.0
+            } else {
+                wavelengths[0]
+            });
+    let forward = ForwardModel::new(
+        atmosphere,
+        measurements,
+        settings.aerosol_scale_height_m,
+        reference_wavelength_nm,
+    )?;
+    let relative = measurements.scale == RadianceScale::Relative;
+    let parameters = PARAMETERS + usize::from(relative);
+
+    // y: ln L for radiances, tau for optical depths.
+    let mut measured: Vec<f64> = measurements
+        .sky
+        .iter()
+        .map(|m| m.radiance_w_m2_sr_nm.ln())
+        .collect();
+    let mut sigma: Vec<f64> = measurements
+        .sky
+        .iter()
+        .map(|m| m.uncertainty_w_m2_sr_nm / m.radiance_w_m2_sr_nm)
+        .collect();
+    measured.extend(
+        measurements
+            .optical_depths
+            .iter()
+            .map(|d| d.aerosol_optical_depth),
+    );
+    sigma.extend(measurements.optical_depths.iter().map(|d| d.uncertainty));
+    let depth_wavelengths: Vec<usize> = measurements
+        .optical_depths
+        .iter()
+        .map(|d| {
+            forward
+                .wavelengths_nm
+                .iter()
+                .position(|w| *w == d.wavelength_nm)
+                .ok_or_else(|| {
+                    Error::Unsupported(format!(
+                        "{}: an optical depth at {} nm, where no sky radiance was measured",
+                        measurements.label, d.wavelength_nm
+                    ))
+                })
+        })
+        .collect::<Result<_>>()?;
+
+    let model = |t: &[f64]| -> Option<Vec<f64>> {
+        let state = AerosolState::from_fit(&t[..PARAMETERS]);
+        let (radiances, optics) = forward.radiances(&state).ok()?;
+        let shift = if relative { t[PARAMETERS] } else { 0.0 };
+        let mut values: Vec<f64> = radiances.iter().map(|l| l.ln() + shift).collect();
+        values.extend(depth_wavelengths.iter().map(|&w| optics[w].optical_depth));
+        values.iter().all(|v| v.is_finite()).then_some(values)
+    };
+    let evaluate_many = |points: &[Vec<f64>]| -> Vec<Option<Vec<f64>>> {
+        let mut results: Vec<Option<Vec<f64>>> = vec![None; points.len()];
+        crate::parallel::for_each_chunk_mut(&mut results, 1, |i, chunk| {
+            chunk[0] = model(&points[i]);
+        });
+        results
+    };
+
+    let measured_depth = measurements
+        .optical_depths
+        .iter()
+        .find(|d| d.wavelength_nm == reference_wavelength_nm)
+        .map(|d| d.aerosol_optical_depth.clamp(0.01, 3.0));
+    let mut prior_mean = vec![0.0; parameters];
+    let mut prior_sigma = vec![state::PRIOR_SIGMA; parameters];
+    if relative {
+        // The scale factor: free (a flat a priori).
+        prior_sigma[PARAMETERS] = 1e3;
+    }
+    let problem = Problem {
+        measured: &measured,
+        sigma: &sigma,
+        prior_mean: &prior_mean,
+        prior_sigma: &prior_sigma,
+        step: JACOBIAN_STEP,
+        max_iterations: settings.max_iterations,
+    };
+    let mut best: Option<fit::Solution> = None;
+    for start in RetrievalSettings::starting_states(measured_depth.unwrap_or(0.2))
+        .into_iter()
+        .take(settings.starting_points)
+    {
+        let mut t = start.to_fit().to_vec();
+        if relative {
+            // Start the scale at the mean ratio of measured to modelled.
+            let modelled = model(&[t.clone(), vec![0.0]].concat());
+            let shift = modelled.map_or(0.0, |f| {
+                measured[..measurements.sky.len()]
+                    .iter()
+                    .zip(&f)
+                    .map(|(y, f)| y - f)
+                    .sum::<f64>()
+                    / measurements.sky.len() as f64
+            });
+            t.push(shift);
+        }
+        if let Some(solution) = problem.solve(&t, &evaluate_many) {
+            let total = |s: &fit::Solution| s.chi_square_measurements + s.chi_square_prior;
+            if best.as_ref().is_none_or(|b| total(&solution) < total(b)) {
+                best = Some(solution);
+            }
+        }
+    }
+    prior_mean.truncate(parameters);
+    let Some(solution) = best else {
+        return Err(Error::Unsupported(format!(
+            "{}: the fit failed: the forward model could not be evaluated at any starting point",
+            measurements.label
+        )));
+    };
+    summarise(
+        &forward,
+        measurements,
+        &solution,
+        &prior_sigma,
+        relative,
+        reference_wavelength_nm,
+    )
+}
+
+/// The retrieval's report from the fit's solution.
+fn summarise(
+    forward: &ForwardModel,
+    measurements: &Measurements,
+    solution: &fit::Solution,
+    prior_sigma: &[f64],
+    relative: bool,
+    reference_wavelength_nm: f64,
+) -> Result<Retrieval> {
+    let n = solution.t.len();
+    let t = &solution.t;
+    let state = AerosolState::from_fit(&t[..PARAMETERS]);
+    let covariance = &solution.covariance;
+    let sigma_t: Vec<f64> = (0..n).map(|k| covariance[k * n + k].sqrt()).collect();
+    let parameters: Vec<Estimate> = (0..PARAMETERS)
+        .map(|k| Estimate {
+            value: state.to_array()[k],
+            sigma: BOUNDS[k].derivative(t[k]).abs() * sigma_t[k],
+        })
+        .collect();
+    let correlations: Vec<f64> = (0..PARAMETERS * PARAMETERS)
+        .map(|ij| {
+            let (i, j) = (ij / PARAMETERS, ij % PARAMETERS);
+            covariance[i * n + j] / (sigma_t[i] * sigma_t[j])
+        })
+        .collect();
+
+    // Derived quantities and their gradients in t (forward differences,
+    // the Jacobian's step: its index columns' kernels are cached).
+    let derived = |t: &[f64]| -> Result<Vec<f64>> {
+        let state = AerosolState::from_fit(&t[..PARAMETERS]);
+        let optics = forward.aerosol_optics(&state)?;
+        Ok(derived_quantities(&forward.wavelengths_nm, &optics, &state))
+    };
+    let centre = derived(t)?;
+    let mut gradients = vec![vec![0.0; n]; centre.len()];
+    for k in 0..PARAMETERS {
+        let mut moved = t.clone();
+        moved[k] += JACOBIAN_STEP;
+        for (q, value) in derived(&moved)?.iter().enumerate() {
+            gradients[q][k] = (value - centre[q]) / JACOBIAN_STEP;
+        }
+    }
+    let estimate = |q: usize| {
+        let g = &gradients[q];
+        let variance: f64 = (0..n)
+            .flat_map(|i| (0..n).map(move |j| (i, j)))
+            .map(|(i, j)| g[i] * covariance[i * n + j] * g[j])
+            .sum();
+        Estimate {
+            value: centre[q],
+            sigma: variance.max(0.0).sqrt(),
+        }
+    };
+    let w = forward.wavelengths_nm.len();
+    let spectral = (0..w)
+        .map(|i| SpectralOptics {
+            wavelength_nm: forward.wavelengths_nm[i],
+            optical_depth: estimate(i),
+            single_scattering_albedo: estimate(w + i),
+            asymmetry: estimate(2 * w + i),
+        })
+        .collect();
+
+    let sky = measurements.sky.len();
+    let radiances = measurements
+        .sky
+        .iter()
+        .zip(&solution.modelled)
+        .map(|(m, f)| {
+            let fitted = f.exp();
+            FittedRadiance {
+                measured: *m,
+                fitted_w_m2_sr_nm: fitted,
+                normalised_residual: (m.radiance_w_m2_sr_nm - fitted) / m.uncertainty_w_m2_sr_nm,
+            }
+        })
+        .collect();
+    let optical_depths = measurements
+        .optical_depths
+        .iter()
+        .zip(&solution.modelled[sky..])
+        .map(|(m, f)| FittedOpticalDepth {
+            measured: *m,
+            fitted: *f,
+            normalised_residual: (m.aerosol_optical_depth - f) / m.uncertainty,
+        })
+        .collect();
+
+    let measurement_count = solution.modelled.len();
+    let mut warnings = Vec::new();
+    if !solution.converged {
+        warnings.push(format!(
+            "the fit did not converge in {} iterations: the result is the best point reached, not a minimum",
+            solution.iterations
+        ));
+    }
+    let reduced = solution.chi_square_measurements / measurement_count as f64;
+    if reduced > 4.0 {
+        warnings.push(format!(
+            "poor fit: chi^2 per measurement is {reduced:.2} (about 1 expected): the measurements' uncertainties are too small, or the model (spheres, one index, two modes) does not describe this aerosol"
+        ));
+    }
+    for k in 0..PARAMETERS {
+        if sigma_t[k] > UNCONSTRAINED_FRACTION * prior_sigma[k] {
+            warnings.push(format!(
+                "{} is barely constrained by these measurements (posterior uncertainty {:.0} % of the a priori's): its value mostly reflects the a priori",
+                PARAMETER_NAMES[k],
+                100.0 * sigma_t[k] / prior_sigma[k]
+            ));
+        }
+    }
+    Ok(Retrieval {
+        label: measurements.label.clone(),
+        reference_wavelength_nm,
+        state,
+        parameters,
+        correlations,
+        spectral,
+        angstrom_exponent: estimate(3 * w),
+        fine_effective_radius_um: estimate(3 * w + 1),
+        coarse_effective_radius_um: estimate(3 * w + 2),
+        radiance_scale: relative.then(|| Estimate {
+            value: t[PARAMETERS].exp(),
+            sigma: t[PARAMETERS].exp() * sigma_t[PARAMETERS],
+        }),
+        radiances,
+        optical_depths,
+        chi_square: solution.chi_square_measurements,
+        measurement_count,
+        iterations: solution.iterations,
+        converged: solution.converged,
+        warnings,
+    })
+}
+
+/// tau, omega and g per wavelength, then the Angstrom exponent and the
+/// two modes' effective radii.
+fn derived_quantities(
+    wavelengths_nm: &[f64],
+    optics: &[AerosolOptics],
+    state: &AerosolState,
+) -> Vec<f64> {
+    let mut values: Vec<f64> = optics.iter().map(|o| o.optical_depth).collect();
+    values.extend(optics.iter().map(|o| o.single_scattering_albedo));
+    values.extend(
+        optics
+            .iter()
+            .map(|o| o.phase_function.asymmetry_parameter()),
+    );
+    values.push(angstrom_exponent(wavelengths_nm, optics));
+    values.push(state.fine.effective_radius_um());
+    values.push(state.coarse.effective_radius_um());
+    values
+}
+
+/// Minus the least-squares slope of ln tau against ln lambda (0 for one
+/// wavelength).
+fn angstrom_exponent(wavelengths_nm: &[f64], optics: &[AerosolOptics]) -> f64 {
+    let n = wavelengths_nm.len() as f64;
+    if wavelengths_nm.len() < 2 {
+        return 0.0;
+    }
+    let x: Vec<f64> = wavelengths_nm.iter().map(|w| w.ln()).collect();
+    let y: Vec<f64> = optics.iter().map(|o| o.optical_depth.ln()).collect();
+    let (mx, my) = (x.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
+    let sxy: f64 = x.iter().zip(&y).map(|(x, y)| (x - mx) * (y - my)).sum();
+    let sxx: f64 = x.iter().map(|x| (x - mx) * (x - mx)).sum();
+    -sxy / sxx
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// AERONET's almucantar azimuths from the sun, degrees (one side).
+    pub(crate) const ALMUCANTAR_AZIMUTHS_DEG: [f64; 26] = [
+        3.5, 4.0, 5.0, 6.0, 7.0, 8.0, 10.0, 12.0, 14.0, 16.0, 18.0, 20.0, 25.0, 30.0, 35.0, 40.0,
+        45.0, 50.0, 60.0, 70.0, 80.0, 90.0, 100.0, 120.0, 140.0, 160.0,
+    ];
+
+    /// Without noise, the fit returns the state that made its own
+    /// measurements (the forward model is the same: this checks the fit,
+    /// not the physics; `tests/retrieval.rs` checks against the path
+    /// tracer).
+    #[test]
+    fn retrieval_recovers_the_state_of_its_own_forward_model() {
+        let atmosphere = Atmosphere::preset("earth-clear").unwrap();
+        let truth = AerosolState {
+            optical_depth: 0.45,
+            fine: LogNormalMode {
+                volume_median_radius_um: 0.17,
+                width: 0.45,
+            },
+            coarse: LogNormalMode {
+                volume_median_radius_um: 2.8,
+                width: 0.62,
+            },
+            fine_volume_fraction: 0.45,
+            refractive_index_real: 1.47,
+            refractive_index_imaginary: 0.012,
+        };
+        let (sun_elevation_deg, sun_azimuth_deg) = (30.0, 180.0);
+        let mut measurements = Measurements {
+            label: "self".into(),
+            ..Measurements::default()
+        };
+        for wavelength_nm in [440.0, 675.0, 870.0, 1020.0] {
+            for a in ALMUCANTAR_AZIMUTHS_DEG {
+                measurements.sky.push(SkyRadianceMeasurement {
+                    wavelength_nm,
+                    sun_elevation_deg,
+                    sun_azimuth_deg,
+                    view_elevation_deg: sun_elevation_deg,
+                    view_azimuth_deg: sun_azimuth_deg + a,
+                    radiance_w_m2_sr_nm: 1.0,
+                    uncertainty_w_m2_sr_nm: 0.03,
+                });
+            }
+        }
+        let forward = ForwardModel::new(&atmosphere, &measurements, 1200.0, 440.0).unwrap();
+        let (radiances, optics) = forward.radiances(&truth).unwrap();
+        for (m, l) in measurements.sky.iter_mut().zip(&radiances) {
+            m.radiance_w_m2_sr_nm = *l;
+            m.uncertainty_w_m2_sr_nm = 0.03 * l;
+        }
+        for (w, o) in forward.wavelengths_nm.iter().zip(&optics) {
+            measurements.optical_depths.push(OpticalDepthMeasurement {
+                wavelength_nm: *w,
+                aerosol_optical_depth: o.optical_depth,
+                uncertainty: 0.01,
+            });
+        }
+        let started = std::time::Instant::now();
+        let retrieval =
+            retrieve(&atmosphere, &measurements, &RetrievalSettings::default()).unwrap();
+        println!(
+            "retrieval in {:?}, {} iterations, chi2 {:.3e}",
+            started.elapsed(),
+            retrieval.iterations,
+            retrieval.chi_square
+        );
+        for (k, e) in retrieval.parameters.iter().enumerate() {
+            println!(
+                "{}: {:.4} +- {:.4} (truth {:.4})",
+                PARAMETER_NAMES[k],
+                e.value,
+                e.sigma,
+                truth.to_array()[k]
+            );
+        }
+        println!("warnings {:?}", retrieval.warnings);
+        assert!(retrieval.converged);
+        for (k, e) in retrieval.parameters.iter().enumerate() {
+            assert!(
+                (e.value - truth.to_array()[k]).abs() < 0.3 * e.sigma,
+                "{}",
+                PARAMETER_NAMES[k]
+            );
+        }
+    }
+}

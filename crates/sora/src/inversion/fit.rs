@@ -1,0 +1,336 @@
+//! Regularised non-linear least squares: Levenberg-Marquardt with an a
+//! priori (Rodgers 2000, eq. 5.36, with Marquardt's diagonal damping), and
+//! the small dense linear algebra it needs.
+//!
+//! The fit minimises
+//!
+//! ```text
+//!     chi^2(t) = sum_i ((y_i - F_i(t)) / sigma_i)^2 + sum_k ((t_k - t_a,k) / sigma_a,k)^2
+//! ```
+//!
+//! over the fit coordinates t (`state.rs`), with y the measurements (ln of
+//! sky radiances, optical depths), F the forward model and a diagonal a
+//! priori. Each iteration solves
+//!
+//! ```text
+//!     (A + lambda diag(A)) dt = J^T W (y - F) - S_a^-1 (t - t_a),   A = J^T W J + S_a^-1
+//! ```
+//!
+//! with the Jacobian J by forward differences, W = diag(1 / sigma_i^2);
+//! lambda shrinks after a step that lowers chi^2 and grows until one does.
+//! At the minimum, A^-1 is the posterior covariance of t (Rodgers eq.
+//! 5.38), linearised.
+//!
+//! Why by hand: the systems are at most 10 x 10 and symmetric positive
+//! definite (a Cholesky factorisation, 30 lines); a linear-algebra crate
+//! would be the largest dependency of the library for it.
+
+/// The Cholesky factor L (lower, row-major n x n) of the symmetric positive
+/// definite `a`, or None if it is not positive definite.
+pub(crate) fn cholesky(a: &[f64], n: usize) -> Option<Vec<f64>> {
+    let mut l = vec![0.0; n * n];
+    for i in 0..n {
+        for j in 0..=i {
+            let mut sum = a[i * n + j];
+            for k in 0..j {
+                sum -= l[i * n + k] * l[j * n + k];
+            }
+            if i == j {
+                if !(sum > 0.0 && sum.is_finite()) {
+                    return None;
+                }
+                l[i * n + i] = sum.sqrt();
+            } else {
+                l[i * n + j] = sum / l[j * n + j];
+            }
+        }
+    }
+    Some(l)
+}
+
+/// Solves L L^T x = b for the Cholesky factor `l`.
+pub(crate) fn cholesky_solve(l: &[f64], n: usize, b: &[f64]) -> Vec<f64> {
+    let mut y = b.to_vec();
+    for i in 0..n {
+        for k in 0..i {
+            y[i] -= l[i * n + k] * y[k];
+        }
+        y[i] /= l[i * n + i];
+    }
+    for i in (0..n).rev() {
+        for k in i + 1..n {
+            y[i] -= l[k * n + i] * y[k];
+        }
+        y[i] /= l[i * n + i];
+    }
+    y
+}
+
+/// The inverse of the symmetric positive definite `a` (n x n), or None.
+pub(crate) fn inverse(a: &[f64], n: usize) -> Option<Vec<f64>> {
+    let l = cholesky(a, n)?;
+    let mut inverse = vec![0.0; n * n];
+    for j in 0..n {
+        let mut e = vec![0.0; n];
+        e[j] = 1.0;
+        for (i, v) in cholesky_solve(&l, n, &e).into_iter().enumerate() {
+            inverse[i * n + j] = v;
+        }
+    }
+    Some(inverse)
+}
+
+/// What a fit problem provides: measurements with their uncertainties,
+/// the a priori, and the model.
+pub(crate) struct Problem<'a> {
+    /// Measured values y.
+    pub measured: &'a [f64],
+    /// Their 1-sigma uncertainties.
+    pub sigma: &'a [f64],
+    /// A priori mean of t.
+    pub prior_mean: &'a [f64],
+    /// A priori standard deviation of t.
+    pub prior_sigma: &'a [f64],
+    /// Forward difference step in t.
+    pub step: f64,
+    /// The most iterations.
+    pub max_iterations: usize,
+}
+
+/// A fit's end point.
+#[derive(Debug, Clone)]
+pub(crate) struct Solution {
+    /// The fit coordinates at the minimum.
+    pub t: Vec<f64>,
+    /// The model there.
+    pub modelled: Vec<f64>,
+    /// chi^2 of the measurements alone, and of the a priori term.
+    pub chi_square_measurements: f64,
+    pub chi_square_prior: f64,
+    /// Posterior covariance of t (row-major).
+    pub covariance: Vec<f64>,
+    /// Iterations taken, and whether the step size criterion was met.
+    pub iterations: usize,
+    pub converged: bool,
+}
+
+impl Problem<'_> {
+    fn chi_square(&self, modelled: &[f64], t: &[f64]) -> (f64, f64) {
+        let data = self
+            .measured
+            .iter()
+            .zip(modelled)
+            .zip(self.sigma)
+            .map(|((y, f), s)| ((y - f) / s).powi(2))
+            .sum();
+        let prior = t
+            .iter()
+            .zip(self.prior_mean)
+            .zip(self.prior_sigma)
+            .map(|((t, a), s)| ((t - a) / s).powi(2))
+            .sum();
+        (data, prior)
+    }
+
+    /// The Jacobian at `t` (where the model is `modelled`) by forward
+    /// differences, its columns evaluated by `evaluate_many` (in parallel).
+    fn jacobian<E>(&self, t: &[f64], modelled: &[f64], evaluate_many: &E) -> Option<Vec<f64>>
+    where
+        E: Fn(&[Vec<f64>]) -> Vec<Option<Vec<f64>>>,
+    {
+        let n = t.len();
+        let m = modelled.len();
+        let points: Vec<Vec<f64>> = (0..n)
+            .map(|k| {
+                let mut p = t.to_vec();
+                p[k] += self.step;
+                p
+            })
+            .collect();
+        let columns = evaluate_many(&points);
+        let mut jacobian = vec![0.0; m * n];
+        for (k, column) in columns.into_iter().enumerate() {
+            let column = column?;
+            for i in 0..m {
+                jacobian[i * n + k] = (column[i] - modelled[i]) / self.step;
+            }
+        }
+        Some(jacobian)
+    }
+
+    /// A = J^T W J + S_a^-1 and g = J^T W (y - F) - S_a^-1 (t - t_a).
+    fn normal_equations(
+        &self,
+        jacobian: &[f64],
+        modelled: &[f64],
+        t: &[f64],
+    ) -> (Vec<f64>, Vec<f64>) {
+        let n = t.len();
+        let mut a = vec![0.0; n * n];
+        let mut g = vec![0.0; n];
+        for (i, ((y, f), s)) in self
+            .measured
+            .iter()
+            .zip(modelled)
+            .zip(self.sigma)
+            .enumerate()
+        {
+            let w = 1.0 / (s * s);
+            let row = &jacobian[i * n..][..n];
+            for j in 0..n {
+                g[j] += row[j] * w * (y - f);
+                for k in 0..n {
+                    a[j * n + k] += row[j] * w * row[k];
+                }
+            }
+        }
+        for k in 0..n {
+            let w = 1.0 / (self.prior_sigma[k] * self.prior_sigma[k]);
+            a[k * n + k] += w;
+            g[k] -= w * (t[k] - self.prior_mean[k]);
+        }
+        (a, g)
+    }
+
+    /// Levenberg-Marquardt from `start`. `evaluate_many` computes the model
+    /// at several points (None where the model fails there: treated as
+    /// an infinitely bad point).
+    pub(crate) fn solve<E>(&self, start: &[f64], evaluate_many: &E) -> Option<Solution>
+    where
+        E: Fn(&[Vec<f64>]) -> Vec<Option<Vec<f64>>>,
+    {
+        let n = start.len();
+        let mut t = start.to_vec();
+        let mut modelled = evaluate_many(std::slice::from_ref(&t)).pop()??;
+        let (mut data, mut prior) = self.chi_square(&modelled, &t);
+        let mut lambda = 1e-2;
+        let mut converged = false;
+        let mut iterations = 0;
+        let mut jacobian = self.jacobian(&t, &modelled, evaluate_many)?;
+        while iterations < self.max_iterations {
+            iterations += 1;
+            let (a, g) = self.normal_equations(&jacobian, &modelled, &t);
+            let mut accepted = None;
+            for _ in 0..12 {
+                let mut damped = a.clone();
+                for k in 0..n {
+                    damped[k * n + k] *= 1.0 + lambda;
+                }
+                let Some(l) = cholesky(&damped, n) else {
+                    lambda *= 10.0;
+                    continue;
+                };
+                let step = cholesky_solve(&l, n, &g);
+                // No step longer than 3 units of t at once: the logit
+                // coordinates saturate beyond, and the model is far from
+                // linear over such a step anyway.
+                let longest = step.iter().fold(0.0f64, |m, s| m.max(s.abs()));
+                let scale = if longest > 3.0 { 3.0 / longest } else { 1.0 };
+                let trial: Vec<f64> = t.iter().zip(&step).map(|(t, s)| t + scale * s).collect();
+                if let Some(trial_model) =
+                    evaluate_many(std::slice::from_ref(&trial)).pop().flatten()
+                {
+                    let (d, p) = self.chi_square(&trial_model, &trial);
+                    if d + p < data + prior {
+                        accepted = Some((trial, trial_model, d, p, longest * scale));
+                        lambda = (lambda / 5.0).max(1e-7);
+                        break;
+                    }
+                }
+                lambda *= 5.0;
+            }
+            let Some((trial, trial_model, d, p, longest)) = accepted else {
+                // No step lowers chi^2 however short: a minimum, to the
+                // model's precision.
+                converged = true;
+                break;
+            };
+            let decrease = (data + prior) - (d + p);
+            t = trial;
+            modelled = trial_model;
+            data = d;
+            prior = p;
+            jacobian = self.jacobian(&t, &modelled, evaluate_many)?;
+            if longest < 1e-3 || decrease < 1e-3 * (data + prior).max(1.0) {
+                converged = true;
+                break;
+            }
+        }
+        let (a, _) = self.normal_equations(&jacobian, &modelled, &t);
+        let covariance = inverse(&a, n)?;
+        Some(Solution {
+            t,
+            modelled,
+            chi_square_measurements: data,
+            chi_square_prior: prior,
+            covariance,
+            iterations,
+            converged,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cholesky_inverts_a_symmetric_positive_definite_matrix() {
+        let a = [4.0, 2.0, 0.6, 2.0, 5.0, 1.0, 0.6, 1.0, 3.0];
+        let inv = inverse(&a, 3).unwrap();
+        for i in 0..3 {
+            for j in 0..3 {
+                let product: f64 = (0..3).map(|k| a[i * 3 + k] * inv[k * 3 + j]).sum();
+                assert!((product - if i == j { 1.0 } else { 0.0 }).abs() < 1e-14);
+            }
+        }
+        assert!(cholesky(&[1.0, 2.0, 2.0, 1.0], 2).is_none());
+    }
+
+    /// A non-linear model with a known answer: y = a exp(-b x) sampled
+    /// without noise is recovered, and the covariance equals the inverse
+    /// of J^T W J + S_a^-1 of the exact Jacobian.
+    #[test]
+    fn levenberg_marquardt_recovers_an_exponential() {
+        let x: Vec<f64> = (0..20).map(|i| i as f64 * 0.25).collect();
+        let truth = [1.3f64, 0.7];
+        let y: Vec<f64> = x.iter().map(|x| truth[0] * (-truth[1] * x).exp()).collect();
+        let sigma = vec![0.01; x.len()];
+        let problem = Problem {
+            measured: &y,
+            sigma: &sigma,
+            prior_mean: &[0.0, 0.0],
+            prior_sigma: &[1e3, 1e3],
+            step: 1e-7,
+            max_iterations: 50,
+        };
+        let model = |points: &[Vec<f64>]| -> Vec<Option<Vec<f64>>> {
+            points
+                .iter()
+                .map(|p| Some(x.iter().map(|x| p[0] * (-p[1] * x).exp()).collect()))
+                .collect()
+        };
+        let solution = problem.solve(&[0.2, 2.0], &model).unwrap();
+        assert!(solution.converged);
+        assert!(
+            (solution.t[0] - truth[0]).abs() < 1e-6 && (solution.t[1] - truth[1]).abs() < 1e-6,
+            "{:?}",
+            solution.t
+        );
+        assert!(solution.chi_square_measurements < 1e-6);
+        // Exact J^T W J at the truth.
+        let mut a = [1e-6, 0.0, 0.0, 1e-6];
+        for x in &x {
+            let j = [(-truth[1] * x).exp(), -truth[0] * x * (-truth[1] * x).exp()];
+            for r in 0..2 {
+                for c in 0..2 {
+                    a[r * 2 + c] += j[r] * j[c] / 1e-4;
+                }
+            }
+        }
+        let exact = inverse(&a, 2).unwrap();
+        for (c, e) in solution.covariance.iter().zip(exact) {
+            assert!((c - e).abs() < 1e-4 * e.abs().max(1e-9), "{c} {e}");
+        }
+    }
+}
