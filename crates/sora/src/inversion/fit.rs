@@ -82,6 +82,7 @@ pub(crate) fn inverse(a: &[f64], n: usize) -> Option<Vec<f64>> {
 
 /// What a fit problem provides: measurements with their uncertainties,
 /// the a priori, and the model.
+#[derive(Clone, Copy)]
 pub(crate) struct Problem<'a> {
     /// Measured values y.
     pub measured: &'a [f64],

@@ -212,6 +212,9 @@ pub struct Retrieval {
 /// the measurements did not constrain the parameter (warned about).
 const UNCONSTRAINED_FRACTION: f64 = 0.7;
 
+/// Iterations each starting point gets before the best is continued.
+const SCOUT_ITERATIONS: usize = 3;
+
 /// Forward difference step of the Jacobian, in the fit's coordinates
 /// (logit units: a relative change of about 1 % of a log-bounded
 /// parameter); small enough for the model's curvature, large enough
@@ -332,7 +335,10 @@ pub fn retrieve(
         step: JACOBIAN_STEP,
         max_iterations: settings.max_iterations,
     };
-    let mut best: Option<fit::Solution> = None;
+    // Several starts against local minima, each scouted for a few
+    // iterations; the best goes on to convergence.
+    let mut scouted: Option<fit::Solution> = None;
+    let total = |s: &fit::Solution| s.chi_square_measurements + s.chi_square_prior;
     for start in RetrievalSettings::starting_states(measured_depth.unwrap_or(0.2))
         .into_iter()
         .take(settings.starting_points)
@@ -351,13 +357,24 @@ pub fn retrieve(
             });
             t.push(shift);
         }
-        if let Some(solution) = problem.solve(&t, &evaluate_many) {
-            let total = |s: &fit::Solution| s.chi_square_measurements + s.chi_square_prior;
-            if best.as_ref().is_none_or(|b| total(&solution) < total(b)) {
-                best = Some(solution);
+        let scout = Problem {
+            max_iterations: SCOUT_ITERATIONS.min(settings.max_iterations),
+            ..problem
+        };
+        if let Some(solution) = scout.solve(&t, &evaluate_many) {
+            if scouted.as_ref().is_none_or(|b| total(&solution) < total(b)) {
+                scouted = Some(solution);
             }
         }
     }
+    let best = match scouted {
+        Some(s) if s.converged || settings.max_iterations <= SCOUT_ITERATIONS => Some(s),
+        Some(s) => problem.solve(&s.t, &evaluate_many).map(|mut rest| {
+            rest.iterations += s.iterations;
+            rest
+        }),
+        None => None,
+    };
     prior_mean.truncate(parameters);
     let Some(solution) = best else {
         return Err(Error::Unsupported(format!(
@@ -635,5 +652,76 @@ mod tests {
                 PARAMETER_NAMES[k]
             );
         }
+    }
+}
+#[cfg(test)]
+mod timing {
+    use super::*;
+    #[test]
+    fn tmp_timing() {
+        let atmosphere = Atmosphere::preset("earth-clear").unwrap();
+        let truth = AerosolState::a_priori();
+        let mut measurements = Measurements::default();
+        for wavelength_nm in [440.0, 675.0, 870.0, 1020.0] {
+            for a in tests::ALMUCANTAR_AZIMUTHS_DEG {
+                measurements.sky.push(SkyRadianceMeasurement {
+                    wavelength_nm,
+                    sun_elevation_deg: 30.0,
+                    sun_azimuth_deg: 180.0,
+                    view_elevation_deg: 30.0,
+                    view_azimuth_deg: 180.0 + a,
+                    radiance_w_m2_sr_nm: 1.0,
+                    uncertainty_w_m2_sr_nm: 0.03,
+                });
+            }
+        }
+        let mut forward = ForwardModel::new(&atmosphere, &measurements, 1200.0, 440.0).unwrap();
+        let (reference, _) = forward.radiances(&truth).unwrap();
+        for (streams, layers, step, panels) in [
+            (8, 40, 3.0, 16),
+            (8, 20, 3.0, 8),
+            (6, 20, 3.0, 8),
+            (8, 16, 3.0, 8),
+            (6, 16, 4.0, 8),
+            (8, 40, 3.0, 16),
+        ] {
+            forward.scattering = crate::Scattering::Multiple(crate::MultipleScatteringSettings {
+                streams_per_hemisphere: streams,
+                layers,
+                sun_zenith_step_deg: step,
+                view_ray_panels: panels,
+                ..Default::default()
+            });
+            let t = std::time::Instant::now();
+            let (l, _) = forward.radiances(&truth).unwrap();
+            let e = l
+                .iter()
+                .zip(&reference)
+                .map(|(a, b)| (a / b - 1.0).abs())
+                .fold(0.0f64, f64::max);
+            println!(
+                "{streams} {layers} {step} {panels}: {:?} worst {e:.2e}",
+                t.elapsed()
+            );
+        }
+        let t = std::time::Instant::now();
+        let k = kernels::MieKernels::compute(
+            &[440.0, 675.0, 870.0, 1020.0],
+            crate::mie::Complex64::new(1.5, 0.01),
+        )
+        .unwrap();
+        println!("kernels {:?}", t.elapsed());
+        let _ = k;
+        forward.aerosol_optics(&truth).unwrap();
+        let t = std::time::Instant::now();
+        for _ in 0..10 {
+            forward.aerosol_optics(&truth).unwrap();
+        }
+        println!("aerosol optics (cached kernels) {:?}", t.elapsed() / 10);
+        let t = std::time::Instant::now();
+        for _ in 0..5 {
+            forward.radiances(&truth).unwrap();
+        }
+        println!("radiances {:?}", t.elapsed() / 5);
     }
 }

@@ -184,7 +184,7 @@ impl Bounds {
 
 impl AerosolState {
     /// The parameters in [`PARAMETER_NAMES`]' order.
-    pub fn to_array(&self) -> [f64; PARAMETERS] {
+    pub fn to_array(self) -> [f64; PARAMETERS] {
         [
             self.optical_depth,
             self.fine.volume_median_radius_um,
@@ -231,7 +231,7 @@ impl AerosolState {
     }
 
     /// The fit's coordinates of this state.
-    pub(crate) fn to_fit(&self) -> [f64; PARAMETERS] {
+    pub(crate) fn to_fit(self) -> [f64; PARAMETERS] {
         let p = self.to_array();
         std::array::from_fn(|i| BOUNDS[i].to_fit(p[i]))
     }
