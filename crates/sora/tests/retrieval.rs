@@ -13,7 +13,7 @@
 
 use sora::Atmosphere;
 use sora::inversion::{
-    Measurements, OpticalDepthMeasurement, RetrievalSettings, Retrieval, SkyRadianceMeasurement,
+    Measurements, OpticalDepthMeasurement, Retrieval, RetrievalSettings, SkyRadianceMeasurement,
     retrieve,
 };
 
@@ -107,7 +107,8 @@ fn misses(retrieval: &Retrieval, truth: &Truth) -> Vec<String> {
         if n.abs() > 0.04 {
             misses.push(format!("n {n:+.4}"));
         }
-        let radius = retrieval.fine_effective_radius_um.value / truth.fine_effective_radius_um - 1.0;
+        let radius =
+            retrieval.fine_effective_radius_um.value / truth.fine_effective_radius_um - 1.0;
         if radius.abs() > 0.15 {
             misses.push(format!("fine r_eff {:+.1} %", 100.0 * radius));
         }
@@ -125,7 +126,10 @@ fn inside_one_sigma(retrieval: &Retrieval, truth: &Truth) -> (usize, usize) {
     }
     pairs.push((retrieval.parameters[6], truth.n));
     pairs.push((retrieval.parameters[7], truth.k));
-    pairs.push((retrieval.fine_effective_radius_um, truth.fine_effective_radius_um));
+    pairs.push((
+        retrieval.fine_effective_radius_um,
+        truth.fine_effective_radius_um,
+    ));
     let inside = pairs
         .iter()
         .filter(|(e, truth)| (e.value - truth).abs() <= e.sigma)
@@ -135,14 +139,19 @@ fn inside_one_sigma(retrieval: &Retrieval, truth: &Truth) -> (usize, usize) {
 
 fn run(selected: &[usize]) -> (usize, usize, usize) {
     let mut atmosphere = Atmosphere::preset("earth-clear").unwrap();
-    atmosphere.species.retain(|s| s.name != "continental aerosol");
+    atmosphere
+        .species
+        .retain(|s| s.name != "continental aerosol");
     let settings = RetrievalSettings::default();
     let (mut failed, mut inside, mut total) = (0, 0, 0);
     println!(
         "| case | tau(440) truth | retrieved | omega(440) truth | retrieved | n truth | retrieved | k truth | retrieved | fine r_eff truth (um) | retrieved | chi^2/N | time (s) | bars |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
-    for (measurements, truth) in cases().into_iter().filter(|(_, t)| selected.contains(&t.case)) {
+    for (measurements, truth) in cases()
+        .into_iter()
+        .filter(|(_, t)| selected.contains(&t.case))
+    {
         let started = std::time::Instant::now();
         let retrieval = retrieve(&atmosphere, &measurements, &settings).unwrap();
         let seconds = started.elapsed().as_secs_f64();
@@ -171,7 +180,11 @@ fn run(selected: &[usize]) -> (usize, usize, usize) {
             retrieval.fine_effective_radius_um.value,
             retrieval.fine_effective_radius_um.sigma,
             retrieval.chi_square / retrieval.measurement_count as f64,
-            if missed.is_empty() { "met".to_string() } else { missed.join("; ") },
+            if missed.is_empty() {
+                "met".to_string()
+            } else {
+                missed.join("; ")
+            },
         );
         let _ = truth.fine_fraction;
     }
