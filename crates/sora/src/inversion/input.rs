@@ -68,8 +68,9 @@
 //!   [`AERONET_SCAN_WINDOW_S`] of its first row, each wavelength once.
 //! * Points closer to the sun than [`MIN_SCATTERING_ANGLE_DEG`] (AERONET
 //!   measures from 2 deg) and principal-plane points below the horizon are
-//!   left out, and counted in the notes; an angle measured twice in one
-//!   scan (AERONET repeats the near-sun angles) is averaged.
+//!   left out, and counted in the notes; a direction measured twice in one
+//!   scan (AERONET repeats the near-sun angles; 180 and -180 deg are one
+//!   direction) is averaged.
 //! * Each radiance's 1-sigma uncertainty is `relative_uncertainty` times
 //!   the radiance (AERONET quotes about 5 % for its sky calibration).
 //! * A scan left with no usable radiance is dropped and named in
@@ -496,6 +497,9 @@ pub struct AeronetSky {
 pub struct AeronetOpticalDepths {
     /// When.
     pub time: AeronetTime,
+    /// The site (`AERONET_Site` or `AERONET_Site_Name`), empty when the
+    /// file has neither column.
+    pub site: String,
     /// `(nominal wavelength nm, aerosol optical depth)`, the channels
     /// measured (`-999` left out), in the file's column order.
     pub optical_depths: Vec<(f64, f64)>,
@@ -862,18 +866,10 @@ fn scan_measurements(
     for row in group {
         let sun_elevation_deg = 90.0 - row.solar_zenith_deg;
         let sun_azimuth_deg = AERONET_SUN_AZIMUTH_DEG;
-        // Average an angle measured twice (sum, count).
-        let mut by_angle: Vec<(f64, f64, u32)> = Vec::new();
+        // Directions, each once: an angle measured twice (AERONET repeats
+        // the near-sun ones), or 180 and -180, is averaged (sum, count).
+        let mut by_direction: Vec<(f64, f64, f64, u32)> = Vec::new();
         for &(angle, radiance) in &row.radiances {
-            match by_angle.iter_mut().find(|(a, _, _)| *a == angle) {
-                Some(entry) => {
-                    entry.1 += radiance;
-                    entry.2 += 1;
-                }
-                None => by_angle.push((angle, radiance, 1)),
-            }
-        }
-        for (angle, sum, count) in by_angle {
             let (view_elevation_deg, view_azimuth_deg) = match kind {
                 AeronetScan::Almucantar => (sun_elevation_deg, sun_azimuth_deg + angle),
                 AeronetScan::PrincipalPlane => {
@@ -900,6 +896,18 @@ fn scan_measurements(
                 near_sun += 1;
                 continue;
             }
+            let same = |e: f64, a: f64| {
+                (e - view_elevation_deg).abs() < 1e-9 && (a - view_azimuth_deg).abs() < 1e-9
+            };
+            match by_direction.iter_mut().find(|(e, a, _, _)| same(*e, *a)) {
+                Some(entry) => {
+                    entry.2 += radiance;
+                    entry.3 += 1;
+                }
+                None => by_direction.push((view_elevation_deg, view_azimuth_deg, radiance, 1)),
+            }
+        }
+        for (view_elevation_deg, view_azimuth_deg, sum, count) in by_direction {
             let radiance = sum / f64::from(count) * AERONET_RADIANCE_TO_W_M2_SR_NM;
             sky.push(SkyRadianceMeasurement {
                 wavelength_nm: row.wavelength_nm,
@@ -922,6 +930,10 @@ pub fn parse_aeronet_aod(text: &str, what: &str) -> Result<Vec<AeronetOpticalDep
     let file = AeronetText::new(text, what, "optical depth")?;
     let date = file.column(what, "Date(")?;
     let time = file.column(what, "Time(")?;
+    let site = file
+        .header_cells()
+        .iter()
+        .position(|c| *c == "AERONET_Site" || *c == "AERONET_Site_Name");
     let channels: Vec<(usize, f64)> = file
         .header_cells()
         .iter()
@@ -950,6 +962,7 @@ pub fn parse_aeronet_aod(text: &str, what: &str) -> Result<Vec<AeronetOpticalDep
         if !optical_depths.is_empty() {
             entries.push(AeronetOpticalDepths {
                 time,
+                site: site.map_or(String::new(), |i| cell(cells, i).to_string()),
                 optical_depths,
             });
         }
@@ -993,8 +1006,9 @@ fn optical_depth_at(entry: &AeronetOpticalDepths, wavelength_nm: f64) -> Option<
     Some((below.1.ln() + t * (above.1 / below.1).ln()).exp())
 }
 
-/// Gives each scan the optical depths of the AERONET entry nearest to it in
-/// time, if within [`AOD_MATCH_WINDOW_S`], at each of the scan's
+/// Gives each scan the optical depths of the AERONET entry of its site
+/// (when both name one) nearest to it in time, if within
+/// [`AOD_MATCH_WINDOW_S`], at each of the scan's
 /// wavelengths that it has or brackets (uncertainty
 /// [`AERONET_AOD_UNCERTAINTY`]); replaces the scan's optical depths. Returns
 /// one note per scan left without (or with only some) optical depths.
@@ -1006,14 +1020,18 @@ pub fn attach_nearest_optical_depths(
     for scan in scans.iter_mut() {
         let label = &scan.measurements.label;
         let t = scan.time.unix_seconds();
+        let same_site = |entry: &&AeronetOpticalDepths| {
+            entry.site.is_empty() || scan.site.is_empty() || entry.site == scan.site
+        };
         let nearest = optical_depths
             .iter()
+            .filter(same_site)
             .min_by_key(|entry| (entry.time.unix_seconds() - t).abs());
         let Some(entry) =
             nearest.filter(|e| (e.time.unix_seconds() - t).abs() <= AOD_MATCH_WINDOW_S)
         else {
             notes.push(format!(
-                "{label}: no optical depth within {} min; fitted from the sky radiances alone",
+                "{label}: no optical depth of this site within {} min; fitted from the sky radiances alone",
                 AOD_MATCH_WINDOW_S / 60
             ));
             scan.measurements.optical_depths.clear();
@@ -1446,7 +1464,7 @@ Site_A,10:06:2020,12:00:00,162,-999.,-999.,-999.,-999.,-999.,1.5,0.4402
         let notes = attach_nearest_optical_depths(&mut sky.scans, &late);
         assert!(sky.scans[0].measurements.optical_depths.is_empty());
         assert!(
-            notes[0].contains("no optical depth within 30 min"),
+            notes[0].contains("no optical depth of this site within 30 min"),
             "{notes:?}"
         );
     }
