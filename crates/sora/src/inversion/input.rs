@@ -40,8 +40,9 @@
 //! * Units: microwatts per square centimetre, per steradian, per nanometre;
 //!   1 uW cm^-2 = 1e-6 W / 1e-4 m^2, so a radiance is multiplied by
 //!   [`AERONET_RADIANCE_TO_W_M2_SR_NM`] = 0.01.
-//! * `-999` (any spelling: `-999`, `-999.`, `-999.000000`) is a missing
-//!   value and is skipped.
+//! * `-999` (any spelling: `-999`, `-999.`, `-999.000000`), `N/A` and an
+//!   empty cell are missing values and are skipped; the `<br>` and
+//!   `<html>` wrapping of the web service's output is ignored.
 //! * Almucantar: the angles are azimuths relative to the sun's, at the
 //!   sun's elevation (`90 - Solar_Zenith_Angle`); the positive (`pos`) and
 //!   negative (`neg`) columns are the scan's two branches, to either side
@@ -52,8 +53,9 @@
 //! * Principal plane: the angles are offsets from the sun along its
 //!   vertical circle, negative below the sun (towards the horizon on the
 //!   sun's side), positive above it, through the zenith and down the other
-//!   side (the files' radiances fix the sign: a scan at solar zenith angle
-//!   73 deg goes to +150 deg, which is only above the horizon this way).
+//!   side (no document found says so; a real file fixes the sign: its scan
+//!   at solar zenith angle 73 deg goes to +150 deg, which is above the
+//!   horizon only this way, and is brighter at -6 than at +6 deg).
 //!   View zenith angle = solar zenith angle - offset; a negative one is on
 //!   the side opposite the sun.
 //! * The files give the solar zenith angle (per row: each wavelength is
@@ -97,9 +99,10 @@
 //! (through its Angstrom exponent) and its phase function at that angle
 //! trade off against each other: at most one aerosol parameter (an optical
 //! depth with the size fixed, or an Angstrom exponent with the amount
-//! fixed) can be fitted, and its uncertainty must come out large. It
-//! cannot give a size distribution, an absorption, or the amount and size
-//! together.
+//! fixed) can be fitted, and its uncertainty must come out large (ozone,
+//! the ground's albedo and multiple scattering colour the same spectrum).
+//! It cannot give a size distribution, an absorption, or the amount and
+//! size together.
 
 use crate::error::{Error, Result};
 use crate::inversion::measurements::{
@@ -517,7 +520,7 @@ impl<'a> AeronetText<'a> {
         let lines: Vec<(usize, Vec<&str>)> = text
             .lines()
             .enumerate()
-            .map(|(i, line)| (i + 1, line.trim().split(',').map(str::trim).collect()))
+            .map(|(i, line)| (i + 1, split_aeronet_line(line)))
             .collect();
         let header = lines
             .iter()
@@ -571,11 +574,28 @@ impl<'a> AeronetText<'a> {
     }
 }
 
+/// A line's cells, without the `<br>` line breaks and the `<html><body>`
+/// wrapping that the web service's output has unless asked not to.
+fn split_aeronet_line(line: &str) -> Vec<&str> {
+    let mut line = line.trim();
+    while let Some(rest) = line.strip_suffix("<br>") {
+        line = rest.trim_end();
+    }
+    for wrapper in ["</body></html>", "</div>"] {
+        line = line.strip_suffix(wrapper).unwrap_or(line).trim_end();
+    }
+    for wrapper in ["<html><body><div>", "<html><body>"] {
+        line = line.strip_prefix(wrapper).unwrap_or(line).trim_start();
+    }
+    line.split(',').map(str::trim).collect()
+}
+
 fn cell<'a>(cells: &[&'a str], index: usize) -> &'a str {
     cells.get(index).copied().unwrap_or("")
 }
 
-/// A number cell: `Ok(None)` for AERONET's `-999` (or an empty cell).
+/// A number cell: `Ok(None)` for AERONET's `-999` (or an empty or `N/A`
+/// cell).
 fn aeronet_number(
     cells: &[&str],
     index: usize,
@@ -584,7 +604,7 @@ fn aeronet_number(
     line: usize,
 ) -> Result<Option<f64>> {
     let text = cell(cells, index);
-    if text.is_empty() {
+    if text.is_empty() || text == "N/A" {
         return Ok(None);
     }
     match text.parse::<f64>() {
@@ -1382,6 +1402,18 @@ Site_B,03:01:2019,11:11:49,620,870,0.8700,72.000000,Principal Plane,22.0,-999.00
             0.05,
         ));
         assert!(e.contains("line 2") && e.contains("not dd:mm:yyyy"), "{e}");
+    }
+
+    #[test]
+    fn web_service_markup_and_n_a_are_ignored() {
+        let alm = "<html><body><div>AERONET Version 3;<br>\n\
+Date(dd:mm:yyyy),Time(hh:mm:ss),Nominal_Wavelength(nm),Solar_Zenith_Angle(Degrees),10.0,-10.0,20.0<br>\n\
+10:06:2020,09:00:00,440,60,5.0,N/A,4.0<br>\n\
+</div></body></html>\n";
+        let sky = parse_aeronet_sky(alm, AeronetScan::Almucantar, "w.alm", 0.05).unwrap();
+        let m = &sky.scans[0].measurements;
+        assert_eq!(m.sky.len(), 2);
+        assert!((m.sky[1].radiance_w_m2_sr_nm - 0.04).abs() < 1e-12);
     }
 
     #[test]
