@@ -13,6 +13,8 @@ use crate::error::{Error, Result};
 pub struct NumericTable {
     pub column_names: Vec<String>,
     pub rows: Vec<Vec<f64>>,
+    /// The 1-based line of each row in the text, for errors found later.
+    pub line_numbers: Vec<usize>,
 }
 
 impl NumericTable {
@@ -29,6 +31,7 @@ impl NumericTable {
         };
         let column_names: Vec<String> = header.split(',').map(|s| s.trim().to_string()).collect();
         let mut rows = Vec::new();
+        let mut line_numbers = Vec::new();
         for (line_number, line) in lines {
             let fields: Vec<&str> = line.split(',').map(str::trim).collect();
             if fields.len() != column_names.len() {
@@ -56,11 +59,16 @@ impl NumericTable {
                 })
                 .collect::<Result<Vec<f64>>>()?;
             rows.push(row);
+            line_numbers.push(line_number);
         }
         if rows.is_empty() {
             return Err(Error::parse(what, 0, "the table has a header but no rows"));
         }
-        Ok(NumericTable { column_names, rows })
+        Ok(NumericTable {
+            column_names,
+            rows,
+            line_numbers,
+        })
     }
 
     /// Column `index` as a vector.
@@ -83,6 +91,7 @@ mod tests {
         assert_eq!(table.column_names, ["lambda_nm", "value"]);
         assert_eq!(table.rows, vec![vec![380.0, 1.5], vec![400.0, 2e-3]]);
         assert_eq!(table.column(1), vec![1.5, 2e-3]);
+        assert_eq!(table.line_numbers, [3, 5]);
     }
 
     #[test]

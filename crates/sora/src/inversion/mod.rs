@@ -9,7 +9,10 @@
 //! single-scattering albedo, asymmetry parameter, Angstrom exponent and
 //! effective radii, each with an uncertainty.
 //!
-//! - `measurements.rs`: what is measured ([`Measurements`]);
+//! - `measurements.rs`: what is measured ([`Measurements`]), and its
+//!   checks ([`Measurements::validate`]); `input.rs`: its readers from
+//!   text (sora's CSV, AERONET version 3 almucantar, principal-plane and
+//!   optical-depth files, a normalised spectrum in one direction);
 //! - `state.rs`: what is fitted ([`AerosolState`]: the optical depth at a
 //!   reference wavelength, two log-normal volume modes, one refractive
 //!   index), its bounds and its a priori;
@@ -46,12 +49,19 @@
 mod fit;
 mod forward;
 mod kernels;
+pub mod input;
 pub mod measurements;
 pub mod state;
 
 pub use kernels::{MAX_RADIUS_UM, MIN_RADIUS_UM, RADIUS_NODES};
+pub use input::{
+    AeronetOpticalDepths, AeronetScan, AeronetSky, AeronetSkyScan, AeronetTime, SkyGeometry,
+    attach_nearest_optical_depths, parse_aeronet_aod, parse_aeronet_sky,
+    parse_normalised_spectrum_csv, parse_optical_depth_csv, parse_sky_radiance_csv,
+};
 pub use measurements::{
-    Measurements, OpticalDepthMeasurement, RadianceScale, SkyRadianceMeasurement,
+    MIN_SCATTERING_ANGLE_DEG, Measurements, OpticalDepthMeasurement, RadianceScale,
+    SkyRadianceMeasurement,
 };
 pub use state::{AerosolState, BOUNDS, Bounds, LogNormalMode, PARAMETER_NAMES, PARAMETERS};
 
@@ -228,12 +238,7 @@ pub fn retrieve(
     measurements: &Measurements,
     settings: &RetrievalSettings,
 ) -> Result<Retrieval> {
-    if measurements.sky.is_empty() {
-        return Err(Error::Unsupported(format!(
-            "{}: no sky radiances to retrieve from",
-            measurements.label
-        )));
-    }
+    measurements.validate()?;
     if !(1..=3).contains(&settings.starting_points) {
         return Err(Error::out_of_range(
             "starting points",
