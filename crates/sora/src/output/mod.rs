@@ -1,4 +1,5 @@
-//! Images on disk: the only module of the library that touches files.
+//! Images (and text: [`write_text`]) on disk: the only module of the
+//! library that touches files.
 //!
 //! Two in-memory image types, independent of colour science (the colour
 //! module fills them), both row-major with the top row first and three
@@ -32,6 +33,7 @@ mod exr;
 mod format;
 mod image_buffer;
 mod png;
+mod text;
 
 pub use exr::{
     ExrCompression, ExrOptions, ExrSampleType, encode_exr, encode_exr_with_layers, write_exr,
@@ -42,3 +44,4 @@ pub use image_buffer::{
     ChannelKind, DisplayImage, DisplayImage8, DisplayImage16, LinearImage, MAX_IMAGE_DIMENSION,
 };
 pub use png::{PngSample, write_png};
+pub use text::write_text;
