@@ -60,8 +60,10 @@
 //!   the side opposite the sun.
 //! * The files give the solar zenith angle (per row: each wavelength is
 //!   scanned at its own moment) but not the solar azimuth; the sun is put
-//!   at azimuth [`AERONET_SUN_AZIMUTH_DEG`] = 180 deg. Only the views'
-//!   azimuths relative to the sun's matter to sora's forward model.
+//!   at azimuth [`AERONET_SUN_AZIMUTH_DEG`] = 180 deg (or at a
+//!   `Solar_Azimuth_Angle...` column's value, should a file have one).
+//!   Only the views' azimuths relative to the sun's matter to sora's
+//!   forward model.
 //! * Wavelengths are the nominal ones (`Nominal_Wavelength(nm)`: 440, 675,
 //!   870, 1020, in newer instruments also 380, 500, 1640); the exact ones
 //!   differ by a few nanometres at most. Channels outside the model's
@@ -134,8 +136,9 @@ pub const NORMALISED_SPECTRUM_COLUMNS: [&str; 2] = ["wavelength_nm", "relative_r
 /// 1e-6 W per 1e-4 m^2.
 pub const AERONET_RADIANCE_TO_W_M2_SR_NM: f64 = 1e-2;
 
-/// The sun's azimuth given to AERONET scans, whose files do not have it,
-/// degrees clockwise from north.
+/// The sun's azimuth given to AERONET scans, whose files do not have it
+/// (no `Solar_Azimuth_Angle` column in any file seen), degrees clockwise
+/// from north.
 pub const AERONET_SUN_AZIMUTH_DEG: f64 = 180.0;
 
 /// Rows of one date and scan type within this time of a scan's first row
@@ -699,6 +702,8 @@ struct SkyRow {
     scan_type: String,
     wavelength_nm: f64,
     solar_zenith_deg: f64,
+    /// The file's solar azimuth if it has one, else [`AERONET_SUN_AZIMUTH_DEG`].
+    sun_azimuth_deg: f64,
     /// `(angle deg, radiance uW cm^-2 sr^-1 nm^-1)`, -999 left out.
     radiances: Vec<(f64, f64)>,
 }
@@ -723,6 +728,7 @@ pub fn parse_aeronet_sky(
     let time = file.column(what, "Time(")?;
     let wavelength = file.column(what, "Nominal_Wavelength")?;
     let zenith = file.column(what, "Solar_Zenith_Angle")?;
+    let azimuth = file.optional_column("Solar_Azimuth_Angle");
     let scan_type = file.optional_column("Sky_Scan_Type");
     let site = file.optional_column("AERONET_Site");
     let (angles, skip) = radiance_columns(&file, what)?;
@@ -754,6 +760,11 @@ pub fn parse_aeronet_sky(
             ));
             continue;
         };
+        let sun_azimuth_deg = match azimuth {
+            Some(i) => aeronet_number(cells, i, "Solar_Azimuth_Angle", what, line)?,
+            None => None,
+        }
+        .unwrap_or(AERONET_SUN_AZIMUTH_DEG);
         let mut radiances = Vec::new();
         for &(column, angle) in &angles {
             if let Some(radiance) = aeronet_number(
@@ -773,6 +784,7 @@ pub fn parse_aeronet_sky(
             scan_type,
             wavelength_nm,
             solar_zenith_deg,
+            sun_azimuth_deg,
             radiances,
         });
     }
@@ -885,7 +897,7 @@ fn scan_measurements(
     let mut sky = Vec::new();
     for row in group {
         let sun_elevation_deg = 90.0 - row.solar_zenith_deg;
-        let sun_azimuth_deg = AERONET_SUN_AZIMUTH_DEG;
+        let sun_azimuth_deg = row.sun_azimuth_deg;
         // Directions, each once: an angle measured twice (AERONET repeats
         // the near-sun ones), or 180 and -180, is averaged (sum, count).
         let mut by_direction: Vec<(f64, f64, f64, u32)> = Vec::new();
@@ -1402,6 +1414,17 @@ Site_B,03:01:2019,11:11:49,620,870,0.8700,72.000000,Principal Plane,22.0,-999.00
             0.05,
         ));
         assert!(e.contains("line 2") && e.contains("not dd:mm:yyyy"), "{e}");
+    }
+
+    #[test]
+    fn a_solar_azimuth_column_is_used_when_there_is_one() {
+        let alm = "Date(dd:mm:yyyy),Time(hh:mm:ss),Nominal_Wavelength(nm),Solar_Zenith_Angle(Degrees),Solar_Azimuth_Angle(Degrees),10.0,-10.0\n\
+                   10:06:2020,09:00:00,440,60,100,5.0,4.0\n";
+        let sky = parse_aeronet_sky(alm, AeronetScan::Almucantar, "a.alm", 0.05).unwrap();
+        let m = &sky.scans[0].measurements;
+        assert_eq!(m.sky[0].sun_azimuth_deg, 100.0);
+        assert_eq!(m.sky[0].view_azimuth_deg, 110.0);
+        assert_eq!(m.sky[1].view_azimuth_deg, 90.0);
     }
 
     #[test]
