@@ -13,8 +13,8 @@
 
 use sora::Atmosphere;
 use sora::inversion::{
-    Measurements, OpticalDepthMeasurement, Retrieval, RetrievalSettings, SkyRadianceMeasurement,
-    retrieve,
+    MIN_SCATTERING_ANGLE_DEG, Measurements, OpticalDepthMeasurement, Retrieval, RetrievalSettings,
+    SkyRadianceMeasurement, retrieve,
 };
 
 struct Truth {
@@ -57,7 +57,7 @@ fn cases() -> Vec<(Measurements, Truth)> {
                 ..Measurements::default()
             };
             for r in radiances.iter().filter(|r| r[0] as usize == case) {
-                measurements.sky.push(SkyRadianceMeasurement {
+                let measurement = SkyRadianceMeasurement {
                     wavelength_nm: r[1],
                     sun_elevation_deg: r[2],
                     sun_azimuth_deg: r[3],
@@ -65,7 +65,13 @@ fn cases() -> Vec<(Measurements, Truth)> {
                     view_azimuth_deg: r[5],
                     radiance_w_m2_sr_nm: r[6],
                     uncertainty_w_m2_sr_nm: r[7],
-                });
+                };
+                // As AERONET's inversion does, and as the readers of its
+                // files do: no point closer to the sun than 3 degrees (the
+                // first azimuths of a high sun's almucantar).
+                if measurement.scattering_angle_deg() >= MIN_SCATTERING_ANGLE_DEG {
+                    measurements.sky.push(measurement);
+                }
             }
             for (w, wavelength_nm) in [440.0, 675.0, 870.0, 1020.0].into_iter().enumerate() {
                 measurements.optical_depths.push(OpticalDepthMeasurement {
@@ -155,6 +161,13 @@ fn run(selected: &[usize]) -> (usize, usize, usize) {
         let started = std::time::Instant::now();
         let retrieval = retrieve(&atmosphere, &measurements, &settings).unwrap();
         let seconds = started.elapsed().as_secs_f64();
+        eprintln!(
+            "case {}: {} iterations, {} forward evaluations, {} kernel sets, {seconds:.1} s",
+            truth.case,
+            retrieval.iterations,
+            retrieval.forward_evaluations,
+            retrieval.kernel_computations
+        );
         let missed = misses(&retrieval, &truth);
         let (i, t) = inside_one_sigma(&retrieval, &truth);
         inside += i;

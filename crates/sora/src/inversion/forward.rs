@@ -13,6 +13,7 @@
 //! gases are computed once; only the aerosol species changes between
 //! evaluations.
 
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
 use super::kernels::{MieKernels, radius_nodes_um};
@@ -91,6 +92,9 @@ pub(crate) struct ForwardModel {
     /// The multiple-scattering solver's settings.
     pub(crate) scattering: Scattering,
     kernels: Mutex<Vec<Arc<MieKernels>>>,
+    /// How many times the radiances and the kernels were computed.
+    pub(crate) evaluations: AtomicUsize,
+    pub(crate) kernel_computations: AtomicUsize,
 }
 
 impl ForwardModel {
@@ -168,6 +172,8 @@ impl ForwardModel {
             sky_measurements: measurements.sky.len(),
             scattering: Scattering::Multiple(RETRIEVAL_SOLVER),
             kernels: Mutex::new(Vec::new()),
+            evaluations: AtomicUsize::new(0),
+            kernel_computations: AtomicUsize::new(0),
         })
     }
 
@@ -183,6 +189,7 @@ impl ForwardModel {
             return Ok(Arc::clone(k));
         }
         let computed = Arc::new(MieKernels::compute(&self.wavelengths_nm, m)?);
+        self.kernel_computations.fetch_add(1, Ordering::Relaxed);
         let mut cache = self.kernels.lock().expect("kernel cache");
         if cache.len() == KERNEL_CACHE_SIZE {
             cache.remove(0);
@@ -230,6 +237,7 @@ impl ForwardModel {
     /// The sky radiance of every measurement (W m^-2 sr^-1 nm^-1), in the
     /// measurements' order, and the aerosol's optics per wavelength.
     pub(crate) fn radiances(&self, state: &AerosolState) -> Result<(Vec<f64>, Vec<AerosolOptics>)> {
+        self.evaluations.fetch_add(1, Ordering::Relaxed);
         let aerosol = self.aerosol_optics(state)?;
         let mut radiances = vec![0.0; self.sky_measurements];
         for group in &self.groups {

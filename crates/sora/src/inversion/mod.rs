@@ -48,17 +48,17 @@
 
 mod fit;
 mod forward;
-mod kernels;
 pub mod input;
+mod kernels;
 pub mod measurements;
 pub mod state;
 
-pub use kernels::{MAX_RADIUS_UM, MIN_RADIUS_UM, RADIUS_NODES};
 pub use input::{
     AeronetOpticalDepths, AeronetScan, AeronetSky, AeronetSkyScan, AeronetTime, SkyGeometry,
     attach_nearest_optical_depths, parse_aeronet_aod, parse_aeronet_sky,
     parse_normalised_spectrum_csv, parse_optical_depth_csv, parse_sky_radiance_csv,
 };
+pub use kernels::{MAX_RADIUS_UM, MIN_RADIUS_UM, RADIUS_NODES};
 pub use measurements::{
     MIN_SCATTERING_ANGLE_DEG, Measurements, OpticalDepthMeasurement, RadianceScale,
     SkyRadianceMeasurement,
@@ -67,8 +67,9 @@ pub use state::{AerosolState, BOUNDS, Bounds, LogNormalMode, PARAMETER_NAMES, PA
 
 use crate::atmosphere::Atmosphere;
 use crate::error::{Error, Result};
-use fit::Problem;
+use fit::{Problem, Start};
 use forward::{AerosolOptics, ForwardModel};
+use std::sync::atomic::Ordering;
 
 /// How a retrieval runs.
 #[derive(Debug, Clone, PartialEq)]
@@ -213,6 +214,11 @@ pub struct Retrieval {
     pub iterations: usize,
     /// Whether the fit met its convergence criterion.
     pub converged: bool,
+    /// Forward-model evaluations (radiances at every measurement) and
+    /// Mie kernel computations (one per refractive index met) it took.
+    pub forward_evaluations: usize,
+    /// See above.
+    pub kernel_computations: usize,
     /// What the user should know about this result (no convergence, a poor
     /// fit, parameters the measurements did not constrain), one line each.
     pub warnings: Vec<String>,
@@ -339,6 +345,7 @@ pub fn retrieve(
         prior_sigma: &prior_sigma,
         step: JACOBIAN_STEP,
         max_iterations: settings.max_iterations,
+        finish: true,
     };
     // Several starts against local minima, each scouted for a few
     // iterations; the best goes on to convergence.
@@ -364,20 +371,25 @@ pub fn retrieve(
         }
         let scout = Problem {
             max_iterations: SCOUT_ITERATIONS.min(settings.max_iterations),
+            finish: false,
             ..problem
         };
-        if let Some(solution) = scout.solve(&t, &evaluate_many) {
+        if let Some(solution) = scout.solve(Start::At(t), &evaluate_many) {
             if scouted.as_ref().is_none_or(|b| total(&solution) < total(b)) {
                 scouted = Some(solution);
             }
         }
     }
     let best = match scouted {
-        Some(s) if s.converged || settings.max_iterations <= SCOUT_ITERATIONS => Some(s),
-        Some(s) => problem.solve(&s.t, &evaluate_many).map(|mut rest| {
-            rest.iterations += s.iterations;
-            rest
-        }),
+        Some(s) => {
+            let scouting = s.iterations;
+            problem
+                .solve(Start::From(s), &evaluate_many)
+                .map(|mut rest| {
+                    rest.iterations += scouting;
+                    rest
+                })
+        }
         None => None,
     };
     prior_mean.truncate(parameters);
@@ -529,6 +541,8 @@ fn summarise(
         measurement_count,
         iterations: solution.iterations,
         converged: solution.converged,
+        forward_evaluations: forward.evaluations.load(Ordering::Relaxed),
+        kernel_computations: forward.kernel_computations.load(Ordering::Relaxed),
         warnings,
     })
 }
