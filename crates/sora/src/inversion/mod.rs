@@ -673,3 +673,61 @@ mod tests {
         }
     }
 }
+
+#[cfg(test)]
+mod normalised_spectrum_tests {
+    use super::*;
+
+    /// The paper's Fig. 2 case: one direction, a spectrum known only up to
+    /// a factor. The fit finds a state that reproduces the shape, and says
+    /// which parameters the shape does not constrain (the size
+    /// distribution's widths and the coarse mode, the refractive index).
+    #[test]
+    fn a_normalised_spectrum_constrains_little_and_says_so() {
+        let atmosphere = Atmosphere::preset("earth-clear").unwrap();
+        let truth = AerosolState {
+            optical_depth: 0.3,
+            ..AerosolState::a_priori()
+        };
+        let mut measurements = Measurements {
+            label: "one direction".into(),
+            scale: RadianceScale::Relative,
+            ..Measurements::default()
+        };
+        for wavelength_nm in [400.0, 440.0, 500.0, 560.0, 620.0, 675.0, 740.0, 870.0] {
+            measurements.sky.push(SkyRadianceMeasurement {
+                wavelength_nm,
+                sun_elevation_deg: 36.0,
+                sun_azimuth_deg: 207.0,
+                view_elevation_deg: 17.0,
+                view_azimuth_deg: 347.0,
+                radiance_w_m2_sr_nm: 1.0,
+                uncertainty_w_m2_sr_nm: 0.02,
+            });
+        }
+        let forward = ForwardModel::new(&atmosphere, &measurements, 1200.0, 440.0).unwrap();
+        let (radiances, _) = forward.radiances(&truth).unwrap();
+        // Normalised to 1 at 560 nm, as the paper's figure is.
+        for (m, l) in measurements.sky.iter_mut().zip(&radiances) {
+            m.radiance_w_m2_sr_nm = l / radiances[3];
+            m.uncertainty_w_m2_sr_nm = 0.02 * m.radiance_w_m2_sr_nm;
+        }
+        let settings = RetrievalSettings {
+            starting_points: 1,
+            ..RetrievalSettings::default()
+        };
+        let retrieval = retrieve(&atmosphere, &measurements, &settings).unwrap();
+        // The shape is reproduced (noise-free data: far below 1 per point).
+        assert!(retrieval.chi_square / (retrieval.measurement_count as f64) < 0.1);
+        let scale = retrieval.radiance_scale.unwrap();
+        assert!((scale.value * radiances[3] - 1.0).abs() < 3.0 * scale.sigma * radiances[3] + 0.02);
+        // And most of the state is reported as the a priori's.
+        let unconstrained = retrieval
+            .warnings
+            .iter()
+            .filter(|w| w.contains("barely constrained"))
+            .count();
+        println!("{:#?}", retrieval.warnings);
+        assert!(unconstrained >= 4, "{:?}", retrieval.warnings);
+    }
+}
