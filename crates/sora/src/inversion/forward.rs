@@ -239,31 +239,45 @@ impl ForwardModel {
     pub(crate) fn radiances(&self, state: &AerosolState) -> Result<(Vec<f64>, Vec<AerosolOptics>)> {
         self.evaluations.fetch_add(1, Ordering::Relaxed);
         let aerosol = self.aerosol_optics(state)?;
+        // One sky per group, the groups in parallel (a trial step is one
+        // evaluation: this is what keeps both cores busy for it).
+        let mut per_group: Vec<Result<Vec<f64>>> = vec![Ok(Vec::new()); self.groups.len()];
+        crate::parallel::for_each_chunk_mut(&mut per_group, 1, |g, out| {
+            out[0] = self.group_radiances(&self.groups[g], &aerosol[self.groups[g].wavelength]);
+        });
         let mut radiances = vec![0.0; self.sky_measurements];
-        for group in &self.groups {
-            let optics = self.optics_at(group.wavelength, &aerosol[group.wavelength]);
-            let scene = SingleScatteringSky::from_optics(
-                optics,
-                self.ground_radius_m,
-                self.top_radius_m,
-                self.sun_angular_radius_rad,
-                Observation {
-                    observer_altitude_m: 0.0,
-                    sun_elevation_deg: group.sun_elevation_deg,
-                    sun_azimuth_deg: group.sun_azimuth_deg,
-                },
-            )?;
-            let sky = Sky::from_scene(
-                scene,
-                self.scattering,
-                Method::Fast,
-                FastTableSize::default(),
-            )?;
-            for (radiance, &index) in sky.radiances(&group.views)?.iter().zip(&group.measurements) {
-                radiances[index] = radiance.radiance_w_m2_sr_nm[0];
+        for (group, values) in self.groups.iter().zip(per_group) {
+            for (value, &index) in values?.iter().zip(&group.measurements) {
+                radiances[index] = *value;
             }
         }
         Ok((radiances, aerosol))
+    }
+
+    /// The radiances of one group's views.
+    fn group_radiances(&self, group: &SkyGroup, aerosol: &AerosolOptics) -> Result<Vec<f64>> {
+        let scene = SingleScatteringSky::from_optics(
+            self.optics_at(group.wavelength, aerosol),
+            self.ground_radius_m,
+            self.top_radius_m,
+            self.sun_angular_radius_rad,
+            Observation {
+                observer_altitude_m: 0.0,
+                sun_elevation_deg: group.sun_elevation_deg,
+                sun_azimuth_deg: group.sun_azimuth_deg,
+            },
+        )?;
+        let sky = Sky::from_scene(
+            scene,
+            self.scattering,
+            Method::Fast,
+            FastTableSize::default(),
+        )?;
+        Ok(sky
+            .radiances(&group.views)?
+            .iter()
+            .map(|radiance| radiance.radiance_w_m2_sr_nm[0])
+            .collect())
     }
 
     /// Air, gases and the aerosol at wavelength index `wavelength`.
