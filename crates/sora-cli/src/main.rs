@@ -6,6 +6,7 @@
 //! stderr and exit status 1; argument errors exit with status 2 (clap).
 
 mod arguments;
+mod bitmap_text;
 mod commands;
 mod estimate;
 mod output_path;
