@@ -283,11 +283,7 @@ pub fn fit_plot(retrieval: &Retrieval) -> anyhow::Result<DisplayImage<u8>> {
     canvas.line((x0, y0), (x1, y0), 1, INK);
     canvas.line((x1, y0), (x1, y1), 1, INK);
     // Titles: the scan above, the y axis's unit under it, the x axis below.
-    let mut title = format!(
-        "{}: chi^2/N {:.2}",
-        retrieval.label,
-        retrieval.chi_square / retrieval.measurement_count.max(1) as f64
-    );
+    let mut title = retrieval.label.clone();
     let room = (WIDTH - 16) / glyph;
     if title.chars().count() > room {
         title = title
@@ -297,12 +293,16 @@ pub fn fit_plot(retrieval: &Retrieval) -> anyhow::Result<DisplayImage<u8>> {
             + "...";
     }
     canvas.text((8, 8), &title, INK);
-    let unit = if retrieval.radiance_scale.is_some() {
-        "relative radiance (log scale)"
-    } else {
-        "radiance, W m^-2 sr^-1 nm^-1 (log scale)"
-    };
-    canvas.text((8, 8 + glyph + 12), unit, INK);
+    let unit = format!(
+        "{} (log scale); chi^2/N {:.2}",
+        if retrieval.radiance_scale.is_some() {
+            "relative radiance"
+        } else {
+            "radiance, W m^-2 sr^-1 nm^-1"
+        },
+        retrieval.chi_square / retrieval.measurement_count.max(1) as f64
+    );
+    canvas.text((8, 8 + glyph + 12), &unit, INK);
     let x_label = "scattering angle, deg";
     canvas.text(
         (
