@@ -214,7 +214,7 @@ pub struct RetrieveArgs {
     /// Also write every sky radiance and its fit as CSV (scan,
     /// wavelength_nm, the geometry in degrees, measured, uncertainty and
     /// fitted in W m^-2 sr^-1 nm^-1, normalised_residual), replaced
-    /// atomically
+    /// atomically (the optical depths' residuals are in --format json)
     #[arg(long, value_name = "FILE.csv")]
     residuals: Option<PathBuf>,
 
@@ -516,8 +516,8 @@ fn table(retrievals: &[(usize, Retrieval)]) -> String {
         }
         let _ = writeln!(
             out,
-            "  {:>13}  {:<22}{:<26}{}",
-            "wavelength nm", "optical depth", "single-scat. albedo", "asymmetry parameter"
+            "  {:>13}  {:<22}{:<26}asymmetry parameter",
+            "wavelength nm", "optical depth", "single-scat. albedo"
         );
         for s in &r.spectral {
             let _ = writeln!(
