@@ -201,15 +201,29 @@ fn aeronet_almucantar_with_optical_depths_as_a_table() {
 }
 
 #[test]
-fn a_fit_that_does_not_converge_is_a_warning_not_an_error() {
-    // The real principal-plane row (1020 nm), one iteration: exit 0, the
-    // warning on stderr and in the CSV.
+fn every_scan_of_a_file_one_row_each_and_a_fit_that_does_not_converge_is_a_warning() {
+    // The real principal-plane row (1020 nm), and the same row half an
+    // hour later (a second scan); one iteration each: exit 0, the warning
+    // on stderr and in the CSV, one CSV row and one residual block per scan.
+    let directory = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(aeronet(PRINCIPAL_PLANE)).unwrap();
+    let row = text.lines().nth(1).unwrap();
+    assert!(row.contains(",11:11:49,"), "{row}");
+    let two_scans = directory.path().join("two.ppl");
+    std::fs::write(
+        &two_scans,
+        format!("{text}\n{}\n", row.replace(",11:11:49,", ",11:41:49,")).replace("\n\n", "\n"),
+    )
+    .unwrap();
+    let residuals = directory.path().join("residuals.csv");
     let out = sora(&[
         "retrieve",
         "--aeronet-principal-plane",
-        &aeronet(PRINCIPAL_PLANE),
+        two_scans.to_str().unwrap(),
         "--format",
         "csv",
+        "--residuals",
+        residuals.to_str().unwrap(),
         "--starting-points",
         "1",
         "--max-iterations",
@@ -236,9 +250,15 @@ fn a_fit_that_does_not_converge_is_a_warning_not_an_error() {
         assert!(header.contains(&column), "{column} not in {header:?}");
     }
     let rows: Vec<&str> = lines.collect();
-    assert_eq!(rows.len(), 1, "{csv}");
-    assert!(rows[0].contains(",false,\""), "{}", rows[0]);
-    assert!(rows[0].contains("did not converge"), "{}", rows[0]);
+    assert_eq!(rows.len(), 2, "{csv}");
+    for (k, row) in rows.iter().enumerate() {
+        assert!(
+            row.starts_with(&format!("{},ARM_Graciosa ", k + 1)),
+            "{row}"
+        );
+        assert!(row.contains(",false,\""), "{row}");
+        assert!(row.contains("did not converge"), "{row}");
+    }
     let stderr = String::from_utf8(out.stderr).unwrap();
     assert!(
         stderr
@@ -246,6 +266,17 @@ fn a_fit_that_does_not_converge_is_a_warning_not_an_error() {
             .any(|l| l.starts_with("warning: ") && l.contains("did not converge")),
         "{stderr}"
     );
+    let residual_text = std::fs::read_to_string(&residuals).unwrap();
+    let scans: Vec<&str> = residual_text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').next().unwrap())
+        .collect();
+    assert!(
+        scans.contains(&"1") && scans.contains(&"2"),
+        "{residual_text}"
+    );
+    assert_eq!(scans.iter().filter(|s| **s == "1").count(), scans.len() / 2);
 }
 
 #[test]
