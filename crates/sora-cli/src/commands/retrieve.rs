@@ -469,10 +469,16 @@ fn parameter_label(name: &str, reference_nm: f64) -> (String, &'static str) {
     }
 }
 
-/// `value ± sigma`, to the sigma's second significant digit (4 to 8
-/// decimals where the sigma is 0 or not finite).
+/// `value ± sigma`, to the sigma's second significant digit (4 decimals
+/// where the sigma is 0 or not finite; `n/a` for a value that is not).
 fn plus_minus(e: Estimate) -> String {
-    let decimals = if e.sigma.is_finite() && e.sigma > 0.0 {
+    if !e.value.is_finite() {
+        return "n/a".to_string();
+    }
+    if !e.sigma.is_finite() {
+        return format!("{:.4} ± n/a", e.value);
+    }
+    let decimals = if e.sigma > 0.0 {
         (1.0 - e.sigma.log10().floor()).clamp(0.0, 8.0) as usize
     } else {
         4
@@ -844,6 +850,8 @@ mod tests {
         assert_eq!(plus_minus(e(1.4567, 0.0346)), "1.457 ± 0.035");
         assert_eq!(plus_minus(e(12.0, 3.0)), "12.0 ± 3.0");
         assert_eq!(plus_minus(e(0.5, 0.0)), "0.5000 ± 0.0000");
+        assert_eq!(plus_minus(e(0.5, f64::NAN)), "0.5000 ± n/a");
+        assert_eq!(plus_minus(e(f64::NAN, 0.1)), "n/a");
     }
 
     #[test]
