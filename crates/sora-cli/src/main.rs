@@ -6,8 +6,10 @@
 //! stderr and exit status 1; argument errors exit with status 2 (clap).
 
 mod arguments;
+mod bitmap_text;
 mod commands;
 mod estimate;
+mod fit_plot;
 mod output_path;
 mod polarisation_maps;
 
@@ -30,6 +32,7 @@ enum Command {
     Spectrum(commands::spectrum::SpectrumArgs),
     Render(commands::render::RenderArgs),
     Irradiance(commands::irradiance::IrradianceArgs),
+    Retrieve(commands::retrieve::RetrieveArgs),
     SelfTest(commands::self_test::SelfTestArgs),
 }
 
@@ -42,6 +45,7 @@ fn main() {
         Command::Spectrum(args) => commands::spectrum::run(args),
         Command::Render(args) => commands::render::run(args),
         Command::Irradiance(args) => commands::irradiance::run(args),
+        Command::Retrieve(args) => commands::retrieve::run(args),
         Command::SelfTest(args) => commands::self_test::run(args),
     };
     if let Err(error) = result {

@@ -20,10 +20,16 @@
 //!
 //! Pixels the camera does not see, and wholly unpolarised ones for the
 //! angle, are black. The legend's text is an 8 x 8 bitmap font
-//! (`font8x8`), drawn at twice its size when the image is wide enough.
+//! (`font8x8`, drawn by `bitmap_text`), at twice its size when the image
+//! is wide enough.
 
 use sora::colour::{TransferCurve, Xyz};
 use sora::output::DisplayImage;
+
+use crate::bitmap_text::draw_text;
+
+/// The legend's text colour.
+const WHITE: [u8; 3] = [255, 255, 255];
 
 /// Height of the legend strip below the image, pixels (at text scale 2).
 const LEGEND_ROWS: usize = 64;
@@ -148,7 +154,14 @@ fn compose(
         let centre = margin + k * (bar_width - 1) / (labels.len() - 1).max(1);
         let text_width = label.len() * 8 * scale;
         let left = centre.saturating_sub(text_width / 2);
-        draw_text(&mut data, (width, rows), (left, label_top), scale, label);
+        draw_text(
+            &mut data,
+            (width, rows),
+            (left, label_top),
+            scale,
+            label,
+            WHITE,
+        );
     }
     // The title at the labels' size if it fits, else at the font's own.
     let title_top = label_top + 10 * scale;
@@ -164,40 +177,9 @@ fn compose(
         (left, title_top),
         title_scale,
         title,
+        WHITE,
     );
     (rows, data)
-}
-
-/// Draws `text` (ASCII) in white with its top-left corner at `(left,
-/// top)`, each font pixel `scale` x `scale` image pixels; clipped to the
-/// image.
-fn draw_text(
-    data: &mut [u8],
-    (width, rows): (usize, usize),
-    (left, top): (usize, usize),
-    scale: usize,
-    text: &str,
-) {
-    for (n, character) in text.chars().enumerate() {
-        let glyph = font8x8::legacy::BASIC_LEGACY
-            .get(character as usize)
-            .copied()
-            .unwrap_or(font8x8::legacy::NOTHING_TO_DISPLAY);
-        for (y, bits) in glyph.iter().enumerate() {
-            for x in 0..8 {
-                if bits & (1 << x) == 0 {
-                    continue;
-                }
-                for (dy, dx) in (0..scale).flat_map(|dy| (0..scale).map(move |dx| (dy, dx))) {
-                    let (column, row) = (left + (n * 8 + x) * scale + dx, top + y * scale + dy);
-                    if column < width && row < rows {
-                        let start = (row * width + column) * 3;
-                        data[start..start + 3].copy_from_slice(&[255, 255, 255]);
-                    }
-                }
-            }
-        }
-    }
 }
 
 #[cfg(test)]

@@ -255,8 +255,8 @@ fn table(atmosphere: &Atmosphere, optics: &AtmosphereOptics) -> String {
     out
 }
 
-/// A JSON string literal.
-fn json_string(text: &str) -> String {
+/// A JSON string literal (also `sora retrieve`'s).
+pub(crate) fn json_string(text: &str) -> String {
     let mut out = String::with_capacity(text.len() + 2);
     out.push('"');
     for c in text.chars() {

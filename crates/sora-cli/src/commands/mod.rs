@@ -5,5 +5,6 @@ pub mod colour;
 pub mod irradiance;
 pub mod mie;
 pub mod render;
+pub mod retrieve;
 pub mod self_test;
 pub mod spectrum;

@@ -1,0 +1,863 @@
+//! `sora retrieve`: the aerosol from measured sky radiances (issue 16).
+
+use std::fmt::Write as _;
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, bail};
+use clap::{Args, ValueEnum};
+use sora::inversion::{
+    AeronetScan, Estimate, Measurements, PARAMETER_NAMES, Retrieval, RetrievalSettings,
+    SkyGeometry, attach_nearest_optical_depths, parse_aeronet_aod, parse_aeronet_sky,
+    parse_normalised_spectrum_csv, parse_optical_depth_csv, parse_sky_radiance_csv, retrieve,
+};
+
+use crate::arguments::AtmosphereSource;
+use crate::commands::atmosphere::json_string;
+use crate::output_path::output_target;
+
+/// Retrieve the aerosol from measured sky radiances: its optical depth,
+/// size distribution and refractive index, and from them its single-
+/// scattering albedo, asymmetry parameter, Angstrom exponent and effective
+/// radii, each with a 1-sigma uncertainty.
+///
+/// The fit (Levenberg-Marquardt with a weak a priori, as sun-sky
+/// photometer networks do it) compares ln radiance and the direct-sun
+/// optical depths, where given, with sora's fast multiple-scattering model
+/// of the measured directions, and reports chi^2, whether it converged,
+/// and warnings: a fit that did not converge, a poor fit, parameters the
+/// measurements did not constrain. A fit that did not converge is a
+/// warning, not an error (exit status 0).
+///
+/// The model's assumptions: the particles are spheres (Mie theory; dust's
+/// spheroids are not), with one complex refractive index for both modes
+/// and every wavelength; the size distribution is two log-normal volume
+/// modes (fine and coarse); the aerosol lies in one exponential layer
+/// (--aerosol-scale-height-m); light is scalar (polarisation changes
+/// radiances by up to a few per cent); the air, ozone and ground are the
+/// atmosphere's (--preset, default earth-clear, or --atmosphere), whose
+/// own aerosol species are set aside and replaced by the fitted one.
+///
+/// Inputs, exactly one of:
+///   --radiances FILE.csv     sora's CSV: wavelength_nm, sun_elevation_deg,
+///                            sun_azimuth_deg, view_elevation_deg,
+///                            view_azimuth_deg, radiance_w_m2_sr_nm,
+///                            uncertainty_w_m2_sr_nm (any order); with
+///                            --optical-depths FILE.csv (wavelength_nm,
+///                            aerosol_optical_depth, uncertainty)
+///   --aeronet-almucantar FILE, --aeronet-principal-plane FILE
+///                            AERONET version 3 raw sky scans (.alm, .ppl),
+///                            with --aeronet-aod FILE (.lev15, .lev20) for
+///                            the optical depths nearest in time; every
+///                            usable scan of the file is retrieved, one
+///                            after another, or the one --scan N names
+///   --normalised-spectrum FILE.csv
+///                            wavelength_nm, relative_radiance in one
+///                            direction (--sun-elevation, --sun-azimuth,
+///                            --view-elevation, --view-azimuth): a spectrum
+///                            known up to a factor tells little (the result
+///                            is mostly the a priori, and says so)
+///
+/// Output: --format table (default), csv (one row per scan, units in the
+/// column names) or json (one object per scan: the state, its sigmas and
+/// correlations, the spectral optics, every measurement's residual) on
+/// stdout; warnings also on stderr. --residuals FILE.csv writes every sky
+/// radiance with its fit; --plot FILE.png the measured against the fitted
+/// radiances of the (first) scan. Both are checked before any work and
+/// written atomically; on any error nothing is written.
+///
+/// Examples (the repository's sample files):
+///   sora retrieve \
+///       --aeronet-almucantar crates/sora/tests/data/aeronet/alm_synthetic_karlsruhe_20050321.alm \
+///       --aeronet-aod crates/sora/tests/data/aeronet/aod_karlsruhe_20050321.lev15 \
+///       --plot fit.png
+///   sora retrieve \
+///       --aeronet-principal-plane crates/sora/tests/data/aeronet/ppl_arm_graciosa_20190103.ppl \
+///       --format json --residuals residuals.csv
+#[derive(Debug, Args)]
+#[command(verbatim_doc_comment)]
+#[group(skip)]
+#[command(group(clap::ArgGroup::new("input").required(true).multiple(false)))]
+pub struct RetrieveArgs {
+    /// Sky radiances in sora's CSV (W m^-2 sr^-1 nm^-1, degrees)
+    #[arg(long, value_name = "FILE.csv", group = "input")]
+    radiances: Option<PathBuf>,
+
+    /// With --radiances: direct-sun aerosol optical depths (wavelength_nm,
+    /// aerosol_optical_depth, uncertainty), at wavelengths of the radiances
+    #[arg(long, value_name = "FILE.csv", requires = "radiances")]
+    optical_depths: Option<PathBuf>,
+
+    /// An AERONET version 3 almucantar file (.alm)
+    #[arg(long, value_name = "FILE", group = "input")]
+    aeronet_almucantar: Option<PathBuf>,
+
+    /// An AERONET version 3 principal-plane file (.ppl)
+    #[arg(long, value_name = "FILE", group = "input")]
+    aeronet_principal_plane: Option<PathBuf>,
+
+    /// With an AERONET sky file: its site's direct-sun optical depths
+    /// (.lev15, .lev20); each scan gets those measured nearest in time
+    /// (within 30 minutes)
+    #[arg(
+        long,
+        value_name = "FILE",
+        conflicts_with_all = ["radiances", "normalised_spectrum"]
+    )]
+    aeronet_aod: Option<PathBuf>,
+
+    /// With an AERONET sky file: retrieve only its N-th usable scan
+    /// (1-based, in the file's order) [default: every scan]
+    #[arg(
+        long,
+        value_name = "N",
+        value_parser = clap::value_parser!(u64).range(1..),
+        conflicts_with_all = ["radiances", "normalised_spectrum"]
+    )]
+    scan: Option<u64>,
+
+    /// A spectrum in one direction, known up to a factor (wavelength_nm,
+    /// relative_radiance)
+    #[arg(
+        long,
+        value_name = "FILE.csv",
+        group = "input",
+        requires_all = ["sun_elevation", "sun_azimuth", "view_elevation", "view_azimuth"]
+    )]
+    normalised_spectrum: Option<PathBuf>,
+
+    /// With --normalised-spectrum: the sun's elevation, degrees
+    #[arg(
+        long,
+        value_name = "DEG",
+        allow_hyphen_values = true,
+        requires = "normalised_spectrum"
+    )]
+    sun_elevation: Option<f64>,
+
+    /// With --normalised-spectrum: the sun's azimuth clockwise from north,
+    /// degrees
+    #[arg(
+        long,
+        value_name = "DEG",
+        allow_hyphen_values = true,
+        requires = "normalised_spectrum"
+    )]
+    sun_azimuth: Option<f64>,
+
+    /// With --normalised-spectrum: the view's elevation, degrees
+    #[arg(
+        long,
+        value_name = "DEG",
+        allow_hyphen_values = true,
+        requires = "normalised_spectrum"
+    )]
+    view_elevation: Option<f64>,
+
+    /// With --normalised-spectrum: the view's azimuth clockwise from north,
+    /// degrees
+    #[arg(
+        long,
+        value_name = "DEG",
+        allow_hyphen_values = true,
+        requires = "normalised_spectrum"
+    )]
+    view_azimuth: Option<f64>,
+
+    /// The 1-sigma uncertainty of each AERONET or normalised radiance, as
+    /// a fraction of it (AERONET quotes about 5 % for its sky calibration)
+    #[arg(long, value_name = "FRACTION", default_value_t = 0.05)]
+    relative_uncertainty: f64,
+
+    /// A built-in atmosphere for the air, gases and ground (its aerosol
+    /// species are set aside) [default: earth-clear]
+    #[arg(long, value_name = "NAME", conflicts_with = "atmosphere")]
+    preset: Option<String>,
+
+    /// An atmosphere file (TOML) instead of --preset
+    #[arg(long, value_name = "FILE.toml")]
+    atmosphere: Option<PathBuf>,
+
+    /// The wavelength of the fitted optical depth, nm: one of the measured
+    /// [default: 440 if measured, else the shortest]
+    #[arg(long, value_name = "NM")]
+    reference_wavelength: Option<f64>,
+
+    /// Scale height of the aerosol's exponential profile, m
+    #[arg(long, value_name = "M", default_value_t = 1200.0)]
+    aerosol_scale_height_m: f64,
+
+    /// Starting points of the fit (fine-dominated, coarse-dominated, the a
+    /// priori); the lowest chi^2 wins
+    #[arg(
+        long,
+        value_name = "N",
+        default_value_t = 2,
+        value_parser = clap::value_parser!(u64).range(1..=3)
+    )]
+    starting_points: u64,
+
+    /// The most Levenberg-Marquardt iterations
+    #[arg(
+        long,
+        value_name = "N",
+        default_value_t = 20,
+        value_parser = clap::value_parser!(u64).range(1..)
+    )]
+    max_iterations: u64,
+
+    /// Output format on stdout
+    #[arg(long, value_enum, default_value_t = Format::Table)]
+    format: Format,
+
+    /// Also write every sky radiance and its fit as CSV (scan,
+    /// wavelength_nm, the geometry in degrees, measured, uncertainty and
+    /// fitted in W m^-2 sr^-1 nm^-1, normalised_residual), replaced
+    /// atomically (the optical depths' residuals are in --format json)
+    #[arg(long, value_name = "FILE.csv")]
+    residuals: Option<PathBuf>,
+
+    /// Also write a plot of the (first) scan's measured and fitted
+    /// radiances against scattering angle (PNG), replaced atomically
+    #[arg(long, value_name = "FILE.png")]
+    plot: Option<PathBuf>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum Format {
+    Table,
+    Csv,
+    Json,
+}
+
+/// One scan to retrieve: its number (1-based, as --scan counts) and its
+/// measurements.
+struct Scan {
+    number: usize,
+    measurements: Measurements,
+}
+
+pub fn run(args: RetrieveArgs) -> anyhow::Result<()> {
+    // Outputs first: a bad path is refused before any work.
+    if let Some(plot) = &args.plot
+        && !plot
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("png"))
+    {
+        bail!(
+            "--plot {}: the plot is a PNG image: give a name ending in .png",
+            plot.display()
+        );
+    }
+    let residuals_target = args
+        .residuals
+        .as_deref()
+        .map(|path| output_target(path, "--residuals"))
+        .transpose()?;
+    let plot_target = args
+        .plot
+        .as_deref()
+        .map(|path| output_target(path, "--plot"))
+        .transpose()?;
+
+    let atmosphere = AtmosphereSource {
+        preset: match (&args.preset, &args.atmosphere) {
+            (_, Some(_)) => None,
+            (Some(name), None) => Some(name.clone()),
+            (None, None) => Some("earth-clear".to_string()),
+        },
+        atmosphere: args.atmosphere.clone(),
+    }
+    .load()?;
+    let settings = RetrievalSettings {
+        reference_wavelength_nm: args.reference_wavelength,
+        aerosol_scale_height_m: args.aerosol_scale_height_m,
+        max_iterations: args.max_iterations as usize,
+        starting_points: args.starting_points as usize,
+    };
+    if !(settings.aerosol_scale_height_m.is_finite() && settings.aerosol_scale_height_m > 0.0) {
+        bail!(
+            "--aerosol-scale-height-m {}: must be a length > 0",
+            settings.aerosol_scale_height_m
+        );
+    }
+    let scans = read_scans(&args)?;
+    if let Some(reference) = args.reference_wavelength {
+        for scan in &scans {
+            let wavelengths = scan.measurements.wavelengths_nm();
+            if !wavelengths.contains(&reference) {
+                bail!(
+                    "--reference-wavelength {reference}: {} has no radiance at {reference} nm (it has {})",
+                    scan.measurements.label,
+                    list(&wavelengths)
+                );
+            }
+        }
+    }
+
+    // The retrievals, one after another (each uses every core).
+    let bar = progress_bar(scans.len() as u64);
+    let started = Instant::now();
+    let mut retrievals: Vec<(usize, Retrieval)> = Vec::with_capacity(scans.len());
+    for (done, scan) in scans.iter().enumerate() {
+        let retrieval = retrieve(&atmosphere, &scan.measurements, &settings)
+            .with_context(|| scan.measurements.label.clone())?;
+        bar.suspend(|| {
+            for warning in &retrieval.warnings {
+                eprintln!("warning: {}: {warning}", retrieval.label);
+            }
+        });
+        retrievals.push((scan.number, retrieval));
+        bar.inc(1);
+        let done = done + 1;
+        let per_scan = started.elapsed().as_secs_f64() / done as f64;
+        bar.set_message(format!(
+            "about {:.0} s left",
+            per_scan * (scans.len() - done) as f64
+        ));
+    }
+    bar.finish_and_clear();
+
+    // Everything in memory first, then the files, then stdout.
+    let plot = retrievals
+        .first()
+        .filter(|_| plot_target.is_some())
+        .map(|(_, r)| crate::fit_plot::fit_plot(r))
+        .transpose()?;
+    let text = match args.format {
+        Format::Table => table(&retrievals),
+        Format::Csv => csv(&retrievals),
+        Format::Json => json(&retrievals),
+    };
+    if let Some(target) = &residuals_target {
+        sora::output::write_text(target, &residuals_csv(&retrievals))?;
+    }
+    if let (Some(target), Some(image)) = (&plot_target, &plot) {
+        sora::output::write_png(target, image)?;
+    }
+    let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+    out.write_all(text.as_bytes())?;
+    out.flush()?;
+    eprintln!(
+        "{} scan(s) retrieved in {:.1} s",
+        retrievals.len(),
+        started.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+/// The text of `path`, or a one-line error naming it.
+fn read(path: &Path) -> anyhow::Result<String> {
+    std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))
+}
+
+/// The scans the arguments name, read and checked; AERONET's notes on
+/// stderr.
+fn read_scans(args: &RetrieveArgs) -> anyhow::Result<Vec<Scan>> {
+    if let Some(path) = &args.radiances {
+        let what = path.display().to_string();
+        let mut measurements = parse_sky_radiance_csv(&read(path)?, &what)?;
+        if let Some(depths) = &args.optical_depths {
+            measurements.optical_depths =
+                parse_optical_depth_csv(&read(depths)?, &depths.display().to_string())?;
+            measurements.validate()?;
+        }
+        return Ok(vec![Scan {
+            number: 1,
+            measurements,
+        }]);
+    }
+    if let Some(path) = &args.normalised_spectrum {
+        let geometry = SkyGeometry {
+            sun_elevation_deg: args.sun_elevation.expect("clap requires it"),
+            sun_azimuth_deg: args.sun_azimuth.expect("clap requires it"),
+            view_elevation_deg: args.view_elevation.expect("clap requires it"),
+            view_azimuth_deg: args.view_azimuth.expect("clap requires it"),
+        };
+        let measurements = parse_normalised_spectrum_csv(
+            &read(path)?,
+            &path.display().to_string(),
+            geometry,
+            args.relative_uncertainty,
+        )?;
+        return Ok(vec![Scan {
+            number: 1,
+            measurements,
+        }]);
+    }
+    let (path, kind) = match (&args.aeronet_almucantar, &args.aeronet_principal_plane) {
+        (Some(path), _) => (path, AeronetScan::Almucantar),
+        (None, Some(path)) => (path, AeronetScan::PrincipalPlane),
+        (None, None) => unreachable!("clap requires one input"),
+    };
+    let mut sky = parse_aeronet_sky(
+        &read(path)?,
+        kind,
+        &path.display().to_string(),
+        args.relative_uncertainty,
+    )?;
+    let mut notes = std::mem::take(&mut sky.notes);
+    if let Some(aod) = &args.aeronet_aod {
+        let entries = parse_aeronet_aod(&read(aod)?, &aod.display().to_string())?;
+        notes.extend(attach_nearest_optical_depths(&mut sky.scans, &entries));
+    }
+    let count = sky.scans.len();
+    let scans: Vec<Scan> = sky
+        .scans
+        .into_iter()
+        .enumerate()
+        .map(|(i, scan)| Scan {
+            number: i + 1,
+            measurements: scan.measurements,
+        })
+        .filter(|scan| args.scan.is_none_or(|n| n as usize == scan.number))
+        .collect();
+    if let Some(n) = args.scan
+        && scans.is_empty()
+    {
+        bail!(
+            "--scan {n}: {} has {count} usable scan(s): give 1..={count}",
+            path.display()
+        );
+    }
+    for note in notes {
+        eprintln!("note: {note}");
+    }
+    for scan in &scans {
+        scan.measurements.validate()?;
+    }
+    Ok(scans)
+}
+
+/// A progress bar on stderr when it is a terminal, hidden otherwise: scans
+/// done of all, and the time left from the mean time per scan so far
+/// (nothing claimed before the first is done).
+fn progress_bar(scans: u64) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::with_draw_target(
+        Some(scans),
+        indicatif::ProgressDrawTarget::stderr(),
+    );
+    if let Ok(style) = indicatif::ProgressStyle::with_template(
+        "{spinner} retrieving [{bar:30}] {pos}/{len} scans, {elapsed} elapsed, {msg}",
+    ) {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    bar.set_message("time left known after the first scan");
+    bar.enable_steady_tick(std::time::Duration::from_millis(200));
+    bar
+}
+
+/// `440, 675 nm`.
+fn list(wavelengths: &[f64]) -> String {
+    let names: Vec<String> = wavelengths.iter().map(|w| w.to_string()).collect();
+    format!("{} nm", names.join(", "))
+}
+
+/// How a parameter is shown to people: its name and its unit.
+fn parameter_label(name: &str, reference_nm: f64) -> (String, &'static str) {
+    match name {
+        "aerosol_optical_depth" => (format!("aerosol optical depth at {reference_nm} nm"), ""),
+        "fine_volume_median_radius_um" => ("fine mode volume median radius".into(), "um"),
+        "fine_width" => ("fine mode width (std. dev. of ln r)".into(), ""),
+        "coarse_volume_median_radius_um" => ("coarse mode volume median radius".into(), "um"),
+        "coarse_width" => ("coarse mode width (std. dev. of ln r)".into(), ""),
+        "fine_volume_fraction" => ("fine mode volume fraction".into(), ""),
+        "refractive_index_real" => ("refractive index, real part".into(), ""),
+        "refractive_index_imaginary" => ("refractive index, imaginary part".into(), ""),
+        other => (other.replace('_', " "), ""),
+    }
+}
+
+/// `value ± sigma`, to the sigma's second significant digit (4 decimals
+/// where the sigma is 0 or not finite; `n/a` for a value that is not).
+fn plus_minus(e: Estimate) -> String {
+    if !e.value.is_finite() {
+        return "n/a".to_string();
+    }
+    if !e.sigma.is_finite() {
+        return format!("{:.4} ± n/a", e.value);
+    }
+    let decimals = if e.sigma > 0.0 {
+        (1.0 - e.sigma.log10().floor()).clamp(0.0, 8.0) as usize
+    } else {
+        4
+    };
+    format!("{:.decimals$} ± {:.decimals$}", e.value, e.sigma)
+}
+
+/// chi^2 per measurement.
+fn reduced(r: &Retrieval) -> f64 {
+    r.chi_square / r.measurement_count.max(1) as f64
+}
+
+fn table(retrievals: &[(usize, Retrieval)]) -> String {
+    let mut out = String::new();
+    for (k, (number, r)) in retrievals.iter().enumerate() {
+        if k > 0 {
+            out.push('\n');
+        }
+        let wavelengths: Vec<f64> = r.spectral.iter().map(|s| s.wavelength_nm).collect();
+        let _ = writeln!(out, "scan {number}: {}", r.label);
+        let _ = writeln!(
+            out,
+            "  {} sky radiances at {}, {} optical depth(s)",
+            r.radiances.len(),
+            list(&wavelengths),
+            r.optical_depths.len()
+        );
+        let _ = writeln!(out, "  state (± 1 sigma):");
+        for (name, e) in PARAMETER_NAMES.iter().zip(&r.parameters) {
+            let (label, unit) = parameter_label(name, r.reference_wavelength_nm);
+            let line = format!("    {label:<40} {} {unit}", plus_minus(*e));
+            let _ = writeln!(out, "{}", line.trim_end());
+        }
+        if let Some(scale) = r.radiance_scale {
+            let _ = writeln!(
+                out,
+                "    {:<40} {}",
+                "radiance scale factor",
+                plus_minus(scale)
+            );
+        }
+        let _ = writeln!(
+            out,
+            "  {:>13}  {:<22}{:<26}asymmetry parameter",
+            "wavelength nm", "optical depth", "single-scat. albedo"
+        );
+        for s in &r.spectral {
+            let _ = writeln!(
+                out,
+                "  {:>13}  {:<22}{:<26}{}",
+                s.wavelength_nm,
+                plus_minus(s.optical_depth),
+                plus_minus(s.single_scattering_albedo),
+                plus_minus(s.asymmetry)
+            );
+        }
+        let _ = writeln!(
+            out,
+            "  {:<40}   {}",
+            "Angstrom exponent",
+            plus_minus(r.angstrom_exponent)
+        );
+        let _ = writeln!(
+            out,
+            "  {:<40}   {} um",
+            "fine mode effective radius",
+            plus_minus(r.fine_effective_radius_um)
+        );
+        let _ = writeln!(
+            out,
+            "  {:<40}   {} um",
+            "coarse mode effective radius",
+            plus_minus(r.coarse_effective_radius_um)
+        );
+        let _ = writeln!(
+            out,
+            "  chi^2 {:.3} over {} measurements ({:.3} per measurement), {} iterations, converged: {}",
+            r.chi_square,
+            r.measurement_count,
+            reduced(r),
+            r.iterations,
+            if r.converged { "yes" } else { "no" }
+        );
+        if r.warnings.is_empty() {
+            let _ = writeln!(out, "  warnings: none");
+        } else {
+            let _ = writeln!(out, "  warnings:");
+            for warning in &r.warnings {
+                let _ = writeln!(out, "    - {warning}");
+            }
+        }
+    }
+    out
+}
+
+/// A CSV cell: quoted when it holds a comma, a quote or a line break.
+fn csv_cell(text: &str) -> String {
+    if text.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", text.replace('"', "\"\""))
+    } else {
+        text.to_string()
+    }
+}
+
+/// A number for CSV and JSON: `{:.9e}`-free, shortest exact form; JSON
+/// null / CSV empty when not finite.
+fn number(value: f64, missing: &str) -> String {
+    if value.is_finite() {
+        value.to_string()
+    } else {
+        missing.to_string()
+    }
+}
+
+fn csv(retrievals: &[(usize, Retrieval)]) -> String {
+    // The union of the scans' wavelengths: a scan without one leaves its
+    // cells empty.
+    let mut wavelengths: Vec<f64> = retrievals
+        .iter()
+        .flat_map(|(_, r)| r.spectral.iter().map(|s| s.wavelength_nm))
+        .collect();
+    wavelengths.sort_by(f64::total_cmp);
+    wavelengths.dedup();
+    let mut header: Vec<String> = vec![
+        "scan".into(),
+        "label".into(),
+        "reference_wavelength_nm".into(),
+    ];
+    let pair = |header: &mut Vec<String>, name: String| {
+        header.push(format!("{name}_sigma"));
+        let sigma = header.len() - 1;
+        header.insert(sigma, name);
+    };
+    for w in &wavelengths {
+        pair(&mut header, format!("aerosol_optical_depth_{w}nm"));
+    }
+    for name in &PARAMETER_NAMES[1..] {
+        pair(&mut header, name.to_string());
+    }
+    for w in &wavelengths {
+        pair(&mut header, format!("single_scattering_albedo_{w}nm"));
+    }
+    for w in &wavelengths {
+        pair(&mut header, format!("asymmetry_parameter_{w}nm"));
+    }
+    for name in [
+        "angstrom_exponent",
+        "fine_effective_radius_um",
+        "coarse_effective_radius_um",
+        "radiance_scale",
+    ] {
+        pair(&mut header, name.to_string());
+    }
+    header.extend(
+        [
+            "chi_square",
+            "measurement_count",
+            "chi_square_per_measurement",
+            "iterations",
+            "converged",
+            "warnings",
+        ]
+        .map(String::from),
+    );
+    let mut out = header.join(",");
+    out.push('\n');
+    for (number_of_scan, r) in retrievals {
+        let mut row: Vec<String> = vec![
+            number_of_scan.to_string(),
+            csv_cell(&r.label),
+            number(r.reference_wavelength_nm, ""),
+        ];
+        let estimate = |row: &mut Vec<String>, e: Option<Estimate>| match e {
+            Some(e) => {
+                row.push(number(e.value, ""));
+                row.push(number(e.sigma, ""));
+            }
+            None => row.extend([String::new(), String::new()]),
+        };
+        let at = |w: f64| r.spectral.iter().find(|s| s.wavelength_nm == w);
+        for w in &wavelengths {
+            estimate(&mut row, at(*w).map(|s| s.optical_depth));
+        }
+        for e in &r.parameters[1..] {
+            estimate(&mut row, Some(*e));
+        }
+        for w in &wavelengths {
+            estimate(&mut row, at(*w).map(|s| s.single_scattering_albedo));
+        }
+        for w in &wavelengths {
+            estimate(&mut row, at(*w).map(|s| s.asymmetry));
+        }
+        estimate(&mut row, Some(r.angstrom_exponent));
+        estimate(&mut row, Some(r.fine_effective_radius_um));
+        estimate(&mut row, Some(r.coarse_effective_radius_um));
+        estimate(&mut row, r.radiance_scale);
+        row.push(number(r.chi_square, ""));
+        row.push(r.measurement_count.to_string());
+        row.push(number(reduced(r), ""));
+        row.push(r.iterations.to_string());
+        row.push(r.converged.to_string());
+        // Always quoted, so that a reader sees one cell even when empty.
+        row.push(format!(
+            "\"{}\"",
+            r.warnings.join("; ").replace('"', "\"\"")
+        ));
+        out.push_str(&row.join(","));
+        out.push('\n');
+    }
+    out
+}
+
+fn json_estimate(e: Estimate) -> String {
+    format!(
+        "{{\"value\": {}, \"sigma\": {}}}",
+        number(e.value, "null"),
+        number(e.sigma, "null")
+    )
+}
+
+fn json(retrievals: &[(usize, Retrieval)]) -> String {
+    let objects: Vec<String> = retrievals
+        .iter()
+        .map(|(scan, r)| {
+            let parameters: Vec<String> = PARAMETER_NAMES
+                .iter()
+                .zip(&r.parameters)
+                .map(|(name, e)| format!("\"{name}\": {}", json_estimate(*e)))
+                .collect();
+            let n = r.parameters.len();
+            let rows: Vec<String> = r
+                .correlations
+                .chunks(n.max(1))
+                .map(|row| {
+                    let values: Vec<String> = row.iter().map(|v| number(*v, "null")).collect();
+                    format!("[{}]", values.join(", "))
+                })
+                .collect();
+            let names: Vec<String> = PARAMETER_NAMES.iter().map(|n| json_string(n)).collect();
+            let spectral: Vec<String> = r
+                .spectral
+                .iter()
+                .map(|s| {
+                    format!(
+                        "{{\"wavelength_nm\": {}, \"aerosol_optical_depth\": {}, \"single_scattering_albedo\": {}, \"asymmetry_parameter\": {}}}",
+                        s.wavelength_nm,
+                        json_estimate(s.optical_depth),
+                        json_estimate(s.single_scattering_albedo),
+                        json_estimate(s.asymmetry)
+                    )
+                })
+                .collect();
+            let radiances: Vec<String> = r
+                .radiances
+                .iter()
+                .map(|f| {
+                    let m = &f.measured;
+                    format!(
+                        "{{\"wavelength_nm\": {}, \"sun_elevation_deg\": {}, \"sun_azimuth_deg\": {}, \"view_elevation_deg\": {}, \"view_azimuth_deg\": {}, \"scattering_angle_deg\": {}, \"measured_w_m2_sr_nm\": {}, \"uncertainty_w_m2_sr_nm\": {}, \"fitted_w_m2_sr_nm\": {}, \"normalised_residual\": {}}}",
+                        m.wavelength_nm,
+                        m.sun_elevation_deg,
+                        m.sun_azimuth_deg,
+                        m.view_elevation_deg,
+                        m.view_azimuth_deg,
+                        number(m.scattering_angle_deg(), "null"),
+                        number(m.radiance_w_m2_sr_nm, "null"),
+                        number(m.uncertainty_w_m2_sr_nm, "null"),
+                        number(f.fitted_w_m2_sr_nm, "null"),
+                        number(f.normalised_residual, "null")
+                    )
+                })
+                .collect();
+            let depths: Vec<String> = r
+                .optical_depths
+                .iter()
+                .map(|f| {
+                    format!(
+                        "{{\"wavelength_nm\": {}, \"measured\": {}, \"uncertainty\": {}, \"fitted\": {}, \"normalised_residual\": {}}}",
+                        f.measured.wavelength_nm,
+                        number(f.measured.aerosol_optical_depth, "null"),
+                        number(f.measured.uncertainty, "null"),
+                        number(f.fitted, "null"),
+                        number(f.normalised_residual, "null")
+                    )
+                })
+                .collect();
+            let warnings: Vec<String> = r.warnings.iter().map(|w| json_string(w)).collect();
+            let members = [
+                format!("\"scan\": {scan}"),
+                format!("\"label\": {}", json_string(&r.label)),
+                format!("\"reference_wavelength_nm\": {}", r.reference_wavelength_nm),
+                format!("\"parameters\": {{{}}}", parameters.join(", ")),
+                format!(
+                    "\"correlations\": {{\"parameters\": [{}], \"matrix\": [{}]}}",
+                    names.join(", "),
+                    rows.join(", ")
+                ),
+                format!("\"spectral\": [{}]", spectral.join(", ")),
+                format!("\"angstrom_exponent\": {}", json_estimate(r.angstrom_exponent)),
+                format!(
+                    "\"fine_effective_radius_um\": {}",
+                    json_estimate(r.fine_effective_radius_um)
+                ),
+                format!(
+                    "\"coarse_effective_radius_um\": {}",
+                    json_estimate(r.coarse_effective_radius_um)
+                ),
+                format!(
+                    "\"radiance_scale\": {}",
+                    r.radiance_scale.map_or("null".into(), json_estimate)
+                ),
+                format!("\"chi_square\": {}", number(r.chi_square, "null")),
+                format!("\"measurement_count\": {}", r.measurement_count),
+                format!(
+                    "\"chi_square_per_measurement\": {}",
+                    number(reduced(r), "null")
+                ),
+                format!("\"iterations\": {}", r.iterations),
+                format!("\"converged\": {}", r.converged),
+                format!("\"warnings\": [{}]", warnings.join(", ")),
+                format!(
+                    "\"residuals\": {{\"radiances\": [{}], \"optical_depths\": [{}]}}",
+                    radiances.join(", "),
+                    depths.join(", ")
+                ),
+            ];
+            format!("{{{}}}", members.join(", "))
+        })
+        .collect();
+    format!("[{}]\n", objects.join(",\n "))
+}
+
+/// Columns of `--residuals`.
+const RESIDUAL_COLUMNS: &str = "scan,wavelength_nm,sun_elevation_deg,sun_azimuth_deg,view_elevation_deg,view_azimuth_deg,scattering_angle_deg,measured_w_m2_sr_nm,uncertainty_w_m2_sr_nm,fitted_w_m2_sr_nm,normalised_residual";
+
+fn residuals_csv(retrievals: &[(usize, Retrieval)]) -> String {
+    let mut out = String::from(RESIDUAL_COLUMNS);
+    out.push('\n');
+    for (scan, r) in retrievals {
+        for f in &r.radiances {
+            let m = &f.measured;
+            let _ = writeln!(
+                out,
+                "{scan},{},{},{},{},{},{},{},{},{},{}",
+                m.wavelength_nm,
+                m.sun_elevation_deg,
+                m.sun_azimuth_deg,
+                m.view_elevation_deg,
+                m.view_azimuth_deg,
+                number(m.scattering_angle_deg(), ""),
+                number(m.radiance_w_m2_sr_nm, ""),
+                number(m.uncertainty_w_m2_sr_nm, ""),
+                number(f.fitted_w_m2_sr_nm, ""),
+                number(f.normalised_residual, "")
+            );
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn plus_minus_rounds_to_the_sigma() {
+        let e = |value, sigma| Estimate { value, sigma };
+        assert_eq!(plus_minus(e(0.23456, 0.0123)), "0.235 ± 0.012");
+        assert_eq!(plus_minus(e(1.4567, 0.0346)), "1.457 ± 0.035");
+        assert_eq!(plus_minus(e(12.0, 3.0)), "12.0 ± 3.0");
+        assert_eq!(plus_minus(e(0.5, 0.0)), "0.5000 ± 0.0000");
+        assert_eq!(plus_minus(e(0.5, f64::NAN)), "0.5000 ± n/a");
+        assert_eq!(plus_minus(e(f64::NAN, 0.1)), "n/a");
+    }
+
+    #[test]
+    fn csv_cells_are_quoted_when_needed() {
+        assert_eq!(csv_cell("a b"), "a b");
+        assert_eq!(csv_cell("a,b"), "\"a,b\"");
+        assert_eq!(csv_cell("say \"x\""), "\"say \"\"x\"\"\"");
+    }
+}

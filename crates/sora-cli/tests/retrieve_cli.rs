@@ -1,0 +1,352 @@
+//! `sora retrieve` end to end: sora's CSV (radiances made by `sora
+//! spectrum` itself), the AERONET sample files, and bad inputs. Each
+//! retrieval here is short (--starting-points 1, few iterations): these
+//! tests check the command, not the fit (`crates/sora/tests/retrieval.rs`
+//! does that).
+
+mod common;
+
+use std::path::Path;
+
+use common::{one_line_error, sora, stdout};
+
+/// A sample file of the library's tests.
+fn aeronet(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../sora/tests/data/aeronet")
+        .join(name)
+        .display()
+        .to_string()
+}
+
+const ALMUCANTAR: &str = "alm_synthetic_karlsruhe_20050321.alm";
+const AOD: &str = "aod_karlsruhe_20050321.lev15";
+const PRINCIPAL_PLANE: &str = "ppl_arm_graciosa_20190103.ppl";
+
+/// Short fits: the command is tested, not the fit.
+const QUICK: [&str; 4] = ["--starting-points", "1", "--max-iterations", "8"];
+
+/// 2 wavelengths x 8 almucantar azimuths of `sora spectrum` at the
+/// earth-clear preset (sun at 30 deg elevation, azimuth 180), scalar
+/// light, as sora's radiance CSV with 5 % uncertainties.
+fn synthetic_radiances_csv() -> String {
+    let out = sora(&[
+        "spectrum",
+        "--preset",
+        "earth-clear",
+        "--sun-elevation",
+        "30",
+        "--sun-azimuth",
+        "180",
+        "--wavelengths",
+        "440:680:240",
+        "--almucantar",
+        "20",
+        "--polarisation",
+        "off",
+    ]);
+    let text = stdout(&out);
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next(),
+        Some("view_elevation_deg,view_azimuth_deg,wavelength_nm,radiance_w_m2_sr_nm")
+    );
+    let mut csv = String::from(
+        "wavelength_nm,sun_elevation_deg,sun_azimuth_deg,view_elevation_deg,view_azimuth_deg,radiance_w_m2_sr_nm,uncertainty_w_m2_sr_nm\n",
+    );
+    let mut rows = 0;
+    for line in lines {
+        let v: Vec<f64> = line.split(',').map(|c| c.parse().unwrap()).collect();
+        let relative = v[1] - 180.0;
+        if (20.0..=160.0).contains(&relative) {
+            csv.push_str(&format!(
+                "{},30,180,{},{},{},{}\n",
+                v[2],
+                v[0],
+                v[1],
+                v[3],
+                0.05 * v[3]
+            ));
+            rows += 1;
+        }
+    }
+    assert_eq!(rows, 16, "{text}");
+    csv
+}
+
+#[test]
+fn csv_radiances_give_json_residuals_and_a_plot() {
+    let directory = tempfile::tempdir().unwrap();
+    let input = directory.path().join("sky.csv");
+    std::fs::write(&input, synthetic_radiances_csv()).unwrap();
+    let residuals = directory.path().join("residuals.csv");
+    let plot = directory.path().join("fit.png");
+    let out = sora(
+        &[
+            &[
+                "retrieve",
+                "--radiances",
+                input.to_str().unwrap(),
+                "--format",
+                "json",
+                "--residuals",
+                residuals.to_str().unwrap(),
+                "--plot",
+                plot.to_str().unwrap(),
+            ][..],
+            &QUICK,
+        ]
+        .concat(),
+    );
+    let json = stdout(&out);
+    let json = json.trim();
+    assert!(json.starts_with("[{") && json.ends_with("}]"), "{json}");
+    for key in [
+        "\"scan\": 1",
+        "\"label\": ",
+        "\"reference_wavelength_nm\": 440",
+        "\"parameters\": {\"aerosol_optical_depth\": {\"value\": ",
+        "\"refractive_index_imaginary\": {\"value\": ",
+        "\"correlations\": {\"parameters\": [",
+        "\"matrix\": [[",
+        "\"spectral\": [{\"wavelength_nm\": 440, \"aerosol_optical_depth\": {\"value\": ",
+        "\"single_scattering_albedo\": {\"value\": ",
+        "\"asymmetry_parameter\": {\"value\": ",
+        "\"angstrom_exponent\": {\"value\": ",
+        "\"fine_effective_radius_um\": ",
+        "\"radiance_scale\": null",
+        "\"chi_square\": ",
+        "\"converged\": ",
+        "\"warnings\": [",
+        "\"residuals\": {\"radiances\": [{\"wavelength_nm\": ",
+        "\"normalised_residual\": ",
+    ] {
+        assert!(json.contains(key), "{key} not in {json}");
+    }
+    // Brackets and braces balance (no string here holds one).
+    for (open, close) in [('{', '}'), ('[', ']')] {
+        assert_eq!(json.matches(open).count(), json.matches(close).count());
+    }
+    let residual_text = std::fs::read_to_string(&residuals).unwrap();
+    let mut lines = residual_text.lines();
+    assert_eq!(
+        lines.next(),
+        Some(
+            "scan,wavelength_nm,sun_elevation_deg,sun_azimuth_deg,view_elevation_deg,view_azimuth_deg,scattering_angle_deg,measured_w_m2_sr_nm,uncertainty_w_m2_sr_nm,fitted_w_m2_sr_nm,normalised_residual"
+        )
+    );
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|c| c.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 16);
+    for row in &rows {
+        assert_eq!(row.len(), 11);
+        assert!(row[9] > 0.0, "{row:?}");
+        assert!(
+            ((row[7] - row[9]) / row[8] - row[10]).abs() < 1e-6,
+            "{row:?}"
+        );
+    }
+    let png = std::fs::read(&plot).unwrap();
+    assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+}
+
+#[test]
+fn aeronet_almucantar_with_optical_depths_as_a_table() {
+    // 115 radiances at 4 wavelengths: one iteration (the slowest test).
+    let out = sora(&[
+        "retrieve",
+        "--aeronet-almucantar",
+        &aeronet(ALMUCANTAR),
+        "--aeronet-aod",
+        &aeronet(AOD),
+        "--scan",
+        "1",
+        "--starting-points",
+        "1",
+        "--max-iterations",
+        "1",
+    ]);
+    let table = stdout(&out);
+    for text in [
+        "scan 1: Karlsruhe",
+        "4 optical depth(s)",
+        "aerosol optical depth at 440 nm",
+        "fine mode volume median radius",
+        " um\n",
+        "refractive index, imaginary part",
+        "wavelength nm",
+        "Angstrom exponent",
+        "fine mode effective radius",
+        "chi^2 ",
+        "per measurement",
+        "1 iterations, converged: no",
+        "warnings:\n    - the fit did not converge",
+    ] {
+        assert!(table.contains(text), "{text} not in {table}");
+    }
+    assert_eq!(table.matches("scan ").count(), 1, "{table}");
+    for wavelength in ["440", "675", "870", "1020"] {
+        assert!(
+            table
+                .lines()
+                .any(|l| l.trim_start().starts_with(wavelength)),
+            "{table}"
+        );
+    }
+    // The reader's notes (a 1640 nm row left out, ...) go to stderr.
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(stderr.contains("note: "), "{stderr}");
+    assert!(stderr.contains("1640"), "{stderr}");
+}
+
+#[test]
+fn every_scan_of_a_file_one_row_each_and_a_fit_that_does_not_converge_is_a_warning() {
+    // The real principal-plane row (1020 nm), and the same row half an
+    // hour later (a second scan); one iteration each: exit 0, the warning
+    // on stderr and in the CSV, one CSV row and one residual block per scan.
+    let directory = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(aeronet(PRINCIPAL_PLANE)).unwrap();
+    let row = text.lines().nth(1).unwrap();
+    assert!(row.contains(",11:11:49,"), "{row}");
+    let two_scans = directory.path().join("two.ppl");
+    std::fs::write(
+        &two_scans,
+        format!("{text}\n{}\n", row.replace(",11:11:49,", ",11:41:49,")).replace("\n\n", "\n"),
+    )
+    .unwrap();
+    let residuals = directory.path().join("residuals.csv");
+    let out = sora(&[
+        "retrieve",
+        "--aeronet-principal-plane",
+        two_scans.to_str().unwrap(),
+        "--format",
+        "csv",
+        "--residuals",
+        residuals.to_str().unwrap(),
+        "--starting-points",
+        "1",
+        "--max-iterations",
+        "1",
+    ]);
+    let csv = stdout(&out);
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    for column in [
+        "scan",
+        "label",
+        "aerosol_optical_depth_1020nm",
+        "aerosol_optical_depth_1020nm_sigma",
+        "fine_volume_median_radius_um",
+        "fine_volume_median_radius_um_sigma",
+        "single_scattering_albedo_1020nm",
+        "asymmetry_parameter_1020nm",
+        "angstrom_exponent",
+        "fine_effective_radius_um",
+        "chi_square",
+        "converged",
+        "warnings",
+    ] {
+        assert!(header.contains(&column), "{column} not in {header:?}");
+    }
+    let rows: Vec<&str> = lines.collect();
+    assert_eq!(rows.len(), 2, "{csv}");
+    for (k, row) in rows.iter().enumerate() {
+        assert!(
+            row.starts_with(&format!("{},ARM_Graciosa ", k + 1)),
+            "{row}"
+        );
+        assert!(row.contains(",false,\""), "{row}");
+        assert!(row.contains("did not converge"), "{row}");
+    }
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        stderr
+            .lines()
+            .any(|l| l.starts_with("warning: ") && l.contains("did not converge")),
+        "{stderr}"
+    );
+    let residual_text = std::fs::read_to_string(&residuals).unwrap();
+    let scans: Vec<&str> = residual_text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').next().unwrap())
+        .collect();
+    assert!(
+        scans.contains(&"1") && scans.contains(&"2"),
+        "{residual_text}"
+    );
+    assert_eq!(scans.iter().filter(|s| **s == "1").count(), scans.len() / 2);
+}
+
+#[test]
+fn bad_inputs_give_one_line_errors_and_write_nothing() {
+    let directory = tempfile::tempdir().unwrap();
+    let path = |name: &str| directory.path().join(name).display().to_string();
+    let outputs = |extra: &[&str]| -> Vec<String> {
+        let mut args = vec![
+            "--residuals".to_string(),
+            path("residuals.csv"),
+            "--plot".to_string(),
+            path("fit.png"),
+        ];
+        args.extend(extra.iter().map(|s| s.to_string()));
+        args
+    };
+    let run = |args: &[String]| {
+        let mut all = vec!["retrieve"];
+        all.extend(args.iter().map(String::as_str));
+        one_line_error(&sora(&all))
+    };
+
+    let missing = run(&[&["--radiances".into(), path("none.csv")][..], &outputs(&[])].concat());
+    assert!(
+        missing.contains("cannot read") && missing.contains("none.csv"),
+        "{missing}"
+    );
+
+    let negative = path("negative.csv");
+    std::fs::write(
+        &negative,
+        "wavelength_nm,sun_elevation_deg,sun_azimuth_deg,view_elevation_deg,view_azimuth_deg,radiance_w_m2_sr_nm,uncertainty_w_m2_sr_nm\n\
+         440,30,180,30,240,0.05,0.0025\n\
+         440,30,180,30,300,-0.01,0.0025\n",
+    )
+    .unwrap();
+    let error = run(&[&["--radiances".into(), negative.clone()][..], &outputs(&[])].concat());
+    assert!(error.contains("negative.csv, line 3"), "{error}");
+
+    let scan = run(&[
+        &["--aeronet-almucantar".into(), aeronet(ALMUCANTAR)][..],
+        &outputs(&["--scan", "99"]),
+    ]
+    .concat());
+    assert!(
+        scan.contains("--scan 99") && scan.contains("1..=1"),
+        "{scan}"
+    );
+
+    let jpeg = run(&[
+        "--radiances".into(),
+        negative.clone(),
+        "--plot".into(),
+        path("fit.jpg"),
+    ]);
+    assert!(jpeg.contains("--plot") && jpeg.contains(".png"), "{jpeg}");
+
+    let no_directory = run(&[
+        "--radiances".into(),
+        negative.clone(),
+        "--residuals".into(),
+        path("missing/residuals.csv"),
+    ]);
+    assert!(no_directory.contains("--residuals"), "{no_directory}");
+
+    // Nothing but the input was written.
+    let mut names: Vec<String> = std::fs::read_dir(directory.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["negative.csv"]);
+}
