@@ -370,6 +370,10 @@ pub struct Sky {
     source_table: OnceLock<MultipleScatteringTable>,
     /// The fast method's image tables (built on first use).
     image_tables: OnceLock<ImageTables>,
+    /// Views no lower than this (rad) only: the field is solved for the
+    /// sun angles their rays meet (`Sky::for_views_above`), and other
+    /// views and images are refused.
+    lowest_view_elevation_rad: Option<f64>,
 }
 
 #[derive(Debug)]
@@ -519,6 +523,7 @@ impl Sky {
             field: OnceLock::new(),
             source_table: OnceLock::new(),
             image_tables: OnceLock::new(),
+            lowest_view_elevation_rad: None,
         })
     }
 
@@ -531,6 +536,35 @@ impl Sky {
         sky.sun_position_deg = (elevation_deg, azimuth_deg);
         sky.set_polarisation(self.polarisation)?;
         Ok(sky)
+    }
+
+    /// This sky for views of `views`' elevations and higher only (all at
+    /// or above the horizon): the field is solved for the sun angles their
+    /// rays meet, not for every point the eye sees, which at a low sun
+    /// is many times cheaper (`MultipleScatteringField::compute_for_views_above`).
+    /// Lower views and images are then an error. For a retrieval's forward
+    /// model, which asks one sky for one set of views.
+    pub(crate) fn for_views_above(mut self, views: &[ViewDirection]) -> Sky {
+        let lowest = views
+            .iter()
+            .map(|v| v.elevation_deg())
+            .fold(90.0f64, f64::min)
+            .max(0.0);
+        self.lowest_view_elevation_rad = Some(lowest.to_radians());
+        self
+    }
+
+    /// An error if the field was restricted to views above some elevation
+    /// and `elevation_deg` (a view's; None for an image) is not one of them.
+    fn check_within_restricted_field(&self, elevation_deg: Option<f64>) -> Result<()> {
+        match (self.lowest_view_elevation_rad, elevation_deg) {
+            (None, _) => Ok(()),
+            (Some(lowest), Some(e)) if e.to_radians() >= lowest - 1e-12 => Ok(()),
+            (Some(lowest), _) => Err(Error::Unsupported(format!(
+                "this sky's multiple-scattering field was solved for views {:.4} degrees or more above the horizon only",
+                lowest.to_degrees()
+            ))),
+        }
     }
 
     /// Checks that the method can follow `polarisation` and keeps it.
@@ -624,12 +658,25 @@ impl Sky {
         if let Scattering::Multiple(settings) = self.scattering {
             if self.field.get().is_none() {
                 // The first order shares the image tables' sun-column table.
-                let field = MultipleScatteringField::compute_with_sun_column_nodes(
-                    &self.scene,
-                    settings,
+                let (nodes, polarised) = (
                     self.table_size.sun_column_nodes,
                     self.polarisation == Polarisation::Vector,
-                )?;
+                );
+                let field = match self.lowest_view_elevation_rad {
+                    None => MultipleScatteringField::compute_with_sun_column_nodes(
+                        &self.scene,
+                        settings,
+                        nodes,
+                        polarised,
+                    )?,
+                    Some(lowest) => MultipleScatteringField::compute_for_views_above(
+                        &self.scene,
+                        settings,
+                        nodes,
+                        polarised,
+                        lowest,
+                    )?,
+                };
                 // Another thread may have been first: either field is the same.
                 let _ = self.field.set(field);
             }
@@ -758,6 +805,9 @@ impl Sky {
         // values are I, then Q, U and V when polarised (single scattering
         // of unpolarised sunlight has no V: see
         // `SingleScatteringSky::polarised_radiance_from_integrals`).
+        for view in views {
+            self.check_within_restricted_field(Some(view.elevation_deg()))?;
+        }
         self.prepare_field()?;
         const VIEWS_PER_TASK: usize = 4;
         let polarised = self.polarisation == Polarisation::Vector;
@@ -875,6 +925,7 @@ impl Sky {
 
     /// [`Sky::radiance_from_image_tables`] for every view in `views`.
     fn radiances_from_image_tables(&self, views: &[ViewDirection]) -> Result<Vec<SkyRadiance>> {
+        self.check_within_restricted_field(None)?;
         self.prepare_field()?;
         let tables = self.image_tables();
         let mut work = self.view_work();
@@ -1033,6 +1084,7 @@ impl Sky {
     /// sky-view tables), so that a progress display can show it as its
     /// own phase; rendering does it on first use otherwise.
     pub fn prepare_images(&self) -> Result<()> {
+        self.check_within_restricted_field(None)?;
         self.prepare_field()?;
         self.source_table();
         if self.method == Method::Fast {
@@ -1171,6 +1223,7 @@ impl Sky {
             ));
         }
         // Tables first, outside the parallel loop (see `prepare_field`).
+        self.check_within_restricted_field(None)?;
         self.prepare_field()?;
         let source_table = self.source_table();
         let tables = (self.method == Method::Fast).then(|| self.image_tables());
@@ -1229,5 +1282,51 @@ impl Sky {
             progress(rows_done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
         });
         Ok(pixels)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A field solved only for the sun angles an almucantar's rays meet
+    /// gives the almucantar of the field solved for everything the eye
+    /// sees (its sun nodes are the same near the eye's sun), and refuses
+    /// lower views and images.
+    #[test]
+    fn a_field_for_some_views_gives_their_radiances_and_refuses_others() {
+        let atmosphere = Atmosphere::preset("earth-clear").unwrap();
+        for sun_elevation_deg in [30.0, 15.0] {
+            let views: Vec<ViewDirection> = [4.0, 10.0, 30.0, 90.0, 150.0, 180.0]
+                .iter()
+                .map(|a| ViewDirection::new(sun_elevation_deg, 180.0 + a).unwrap())
+                .collect();
+            let sky = || {
+                Sky::builder(&atmosphere)
+                    .sun_deg(sun_elevation_deg, 180.0)
+                    .wavelengths(WavelengthGrid::new(440.0, 870.0, 430.0).unwrap())
+                    .build()
+                    .unwrap()
+            };
+            let full = sky().radiances(&views).unwrap();
+            let restricted_sky = sky().for_views_above(&views);
+            let restricted = restricted_sky.radiances(&views).unwrap();
+            for (f, r) in full.iter().zip(&restricted) {
+                for (a, b) in f
+                    .radiance_w_m2_sr_nm
+                    .values()
+                    .iter()
+                    .zip(r.radiance_w_m2_sr_nm.values())
+                {
+                    assert!(
+                        (a / b - 1.0).abs() < 1e-6,
+                        "sun {sun_elevation_deg}: {a} {b}"
+                    );
+                }
+            }
+            let lower = ViewDirection::new(sun_elevation_deg - 1.0, 0.0).unwrap();
+            assert!(restricted_sky.radiance(lower).is_err());
+            assert!(restricted_sky.prepare_images().is_err());
+        }
     }
 }
