@@ -213,6 +213,7 @@
 //! m^-1 at relative density 1 (as [`crate::atmosphere::AtmosphereOptics`]),
 //! altitudes m, angles rad inside (degrees in settings).
 
+mod forward_peak;
 mod phase_fourier;
 mod phase_matrix_fourier;
 mod polarisation_correction;
@@ -227,6 +228,7 @@ pub use source_table::MultipleScatteringTable;
 
 use std::f64::consts::PI;
 
+use self::forward_peak::ForwardPeak;
 use self::phase_fourier::{
     TruncatedPhase, compute_legendre_moments, normalized_associated_legendre,
 };
@@ -242,16 +244,6 @@ use super::single_scattering::{SingleScatteringSky, SunColumns};
 use crate::atmosphere::{AtmosphereOptics, DensityProfile};
 use crate::error::{Error, Result};
 use crate::geometry::{Vector3, segment_in_atmosphere};
-
-/// The forward cone of the forward-peak term is this many radians over the
-/// number of Legendre terms (4.3 degrees at 16 terms), about half the
-/// finest angle the truncated phase functions resolve (the first zero of
-/// P_N(cos theta) ~ J_0((N + 1/2) theta) is at 2.4 / N). Measured against
-/// the path tracer for a sun 5 degrees high, 2 and 5 degrees from it: Mars
-/// dust +9 % and +12 %, hazy Earth -6 % and +0.6 % with this cone; with
-/// twice the cone -32 % and -30 %, -12 % and -8 %; with half of it +78 %
-/// and +12 %, +14 % and +0.6 %.
-const FORWARD_CONE_WIDTH: f64 = 1.2;
 
 /// Panels of the exact column integrals toward the sun from each level.
 const SUN_RAY_PANELS: usize = 12;
@@ -413,14 +405,6 @@ impl SunZenithAxis {
     }
 }
 
-/// The cosine of the scattering angle at which the forward-peak term
-/// takes the phase functions for a view at cos(theta) = `cos_theta` from
-/// the sun: theta, or the forward cone's edge within it (see
-/// [`MultipleScatteringField::forward_cone_rad`]).
-pub(crate) fn forward_peak_cosine(cos_theta: f64, cone_rad: f64) -> f64 {
-    cos_theta.min(cone_rad.cos())
-}
-
 /// Values below this are treated as zero by the logarithmic
 /// interpolations (radiances are ~1e-6..1 W m^-2 sr^-1 nm^-1).
 const LOG_FLOOR: f64 = 1e-30;
@@ -467,8 +451,8 @@ struct ViewRayOptics {
     sun_axis: SunZenithAxis,
     /// Whether any phase function lost a forward peak to delta-M.
     has_forward_peaks: bool,
-    /// Angular radius of the forward cone of the forward-peak term, rad.
-    forward_cone_rad: f64,
+    /// The forward-peak term's tables (`forward_peak.rs`).
+    forward_peak: ForwardPeak,
     /// [s * wavelengths + i]: (A / pi)(F*_diffuse + E mu_s (T*_sun - T_sun))
     /// at the ground, W m^-2 sr^-1 nm^-1.
     ground_diffuse: Vec<f64>,
@@ -497,16 +481,19 @@ pub struct MultipleScatteringScratch {
     view_panel_ends: Vec<f64>,
     sun_panel_ends: Vec<f64>,
     /// The forward-peak integrals of the last ray, species-major
-    /// [j * wavelengths + i], m (see [`MultipleScatteringTable::compute_radiance_parts`]).
+    /// [j * wavelengths + i], m, then the peak-only rows Q and Q X-bar
+    /// (`forward_peak.rs`; see [`MultipleScatteringTable::compute_radiance_parts`]).
     forward_integrals: Vec<f64>,
     phase: Vec<f64>,
+    forward_radiance: Vec<f64>,
 }
 
 impl MultipleScatteringScratch {
     /// The forward-peak integrals of the last ray: integral rho_j
     /// (T* T*_sun - T T_sun) ds, species-major [j * wavelengths + i], m,
-    /// to be weighted like single scattering's integrals,
-    /// E beta_sca,j p_j(theta).
+    /// then the peak-only rows Q = integral (sum_j f_j beta_sca,j rho_j)
+    /// T T_sun ds and Q X-bar (dimensionless), as
+    /// [`MultipleScatteringField::compute_forward_peak_radiance`] takes them.
     pub(crate) fn forward_integrals(&self) -> &[f64] {
         &self.forward_integrals
     }
@@ -534,15 +521,14 @@ impl ViewRayOptics {
             sun_columns: vec![0.0; s],
             view_panel_ends: Vec::with_capacity(self.corners.most_panel_ends(self.panels)),
             sun_panel_ends: Vec::with_capacity(self.corners.most_panel_ends(SUN_RAY_PANELS)),
-            forward_integrals: vec![0.0; s * w],
+            forward_integrals: vec![0.0; (s + forward_peak::EXTRA_ROWS) * w],
             phase: vec![0.0; w],
+            forward_radiance: vec![0.0; w],
         }
     }
 
-    /// Adds E sum_j beta_sca,j p_j(theta') times the scratch's forward-peak
-    /// integrals to `radiance`, with the exact phase functions at
-    /// theta' = max(theta, the forward cone) (see
-    /// [`MultipleScatteringField::forward_cone_rad`]).
+    /// Adds the forward-peak term of the scratch's integrals along `view`
+    /// to `radiance` (`forward_peak.rs`).
     fn add_forward_peak(
         &self,
         optics: &AtmosphereOptics,
@@ -550,22 +536,18 @@ impl ViewRayOptics {
         scratch: &mut MultipleScatteringScratch,
         radiance: &mut [f64],
     ) {
-        let w = self.wavelengths;
-        let cos_theta = forward_peak_cosine(view.dot(self.sun), self.forward_cone_rad);
-        for (j, species) in optics.species.iter().enumerate() {
-            let row = &scratch.forward_integrals[j * w..(j + 1) * w];
-            if row.iter().all(|v| *v == 0.0) {
-                continue;
-            }
-            species
-                .phase_function
-                .eval_into(cos_theta, &mut scratch.phase);
-            for i in 0..w {
-                radiance[i] += optics.solar_irradiance_w_m2_nm[i]
-                    * species.scattering_per_m[i]
-                    * scratch.phase[i]
-                    * row[i];
-            }
+        if !self.has_forward_peaks {
+            return;
+        }
+        self.forward_peak.radiance(
+            optics,
+            view.dot(self.sun),
+            &scratch.forward_integrals,
+            &mut scratch.phase,
+            &mut scratch.forward_radiance,
+        );
+        for (r, f) in radiance.iter_mut().zip(&scratch.forward_radiance) {
+            *r += f;
         }
     }
 
@@ -667,17 +649,27 @@ impl ViewRayOptics {
                         )
                     {
                         for i in 0..w {
-                            let (mut scaled, mut exact) = (0.0, 0.0);
+                            let (mut scaled, mut exact, mut peak) = (0.0, 0.0, 0.0);
                             for j in 0..s {
                                 let column = scratch.node_columns[j] + scratch.sun_columns[j];
                                 scaled += self.scaled_extinction[i * s + j] * column;
                                 exact += self.extinction[i * s + j] * column;
+                                // f_j beta_sca,j rho_j: what the peaks scatter here.
+                                peak += (self.extinction[i * s + j]
+                                    - self.scaled_extinction[i * s + j])
+                                    * scratch.densities[j];
                             }
-                            let excess = weight * ((-scaled).exp() - (-exact).exp());
+                            let direct = (-exact).exp();
+                            let excess = weight * ((-scaled).exp() - direct);
                             for j in 0..s {
                                 scratch.forward_integrals[j * w + i] +=
                                     excess * scratch.densities[j];
                             }
+                            // The peak-only light: its weight and the
+                            // peak optical depth X of its two legs.
+                            let only = weight * direct * peak;
+                            scratch.forward_integrals[s * w + i] += only;
+                            scratch.forward_integrals[(s + 1) * w + i] += only * (exact - scaled);
                         }
                     }
                 }
@@ -1111,6 +1103,13 @@ impl MultipleScatteringField {
                 ground_direct[s * wavelengths + i] = block[solution_len + 1];
             }
         }
+        let forward_peak = ForwardPeak::new(
+            optics,
+            &phases,
+            degrees,
+            &profiles,
+            top_radius_m - ground_radius_m,
+        );
         let harmonics = (0..degrees)
             .map(|m| {
                 phases
@@ -1136,8 +1135,8 @@ impl MultipleScatteringField {
                 corners,
                 extinction,
                 scaled_extinction,
-                has_forward_peaks: phases.iter().any(|p| p.forward_fraction > 0.0),
-                forward_cone_rad: FORWARD_CONE_WIDTH / degrees as f64,
+                has_forward_peaks: forward_peak.any(),
+                forward_peak,
                 scaled_scattering,
                 sun_axis,
                 ground_diffuse,
@@ -1250,17 +1249,30 @@ impl MultipleScatteringField {
             .collect()
     }
 
-    /// Angular radius of the forward cone of the forward-peak term, rad:
-    /// the term is light that delta-M moved into the sun's beam (scattered
-    /// within the phase functions' forward peaks) and that then scatters
-    /// toward the eye. Its first scattering spread it over the peak's
-    /// width, so near the sun it must not take the peak a second time at
-    /// full sharpness: within the cone the phase functions are taken at its
-    /// edge ([`forward_peak_cosine`]; the cone is 1.2 rad over the number
-    /// of Legendre terms). Without it a Mars dust aureole 2
-    /// degrees from a sun 5 degrees high is 85 % too bright.
-    pub(crate) fn forward_cone_rad(&self) -> f64 {
-        self.optics.forward_cone_rad
+    /// The forward-peak term toward a view at cos(theta) = `cos_theta` from
+    /// the sun, into `out`, from its integrals along the view ray
+    /// ([`MultipleScatteringScratch::forward_integrals`], or the sky-view
+    /// table's interpolation of them); `phase` is work space, one value per
+    /// wavelength.
+    pub(crate) fn compute_forward_peak_radiance(
+        &self,
+        cos_theta: f64,
+        integrals: &[f64],
+        phase: &mut [f64],
+        out: &mut [f64],
+    ) {
+        if !self.optics.has_forward_peaks {
+            out.fill(0.0);
+            return;
+        }
+        self.optics
+            .forward_peak
+            .radiance(&self.atmosphere, cos_theta, integrals, phase, out);
+    }
+
+    /// Rows of the forward-peak integrals per wavelength.
+    pub(crate) fn forward_integral_rows(&self) -> usize {
+        self.optics.species + forward_peak::EXTRA_ROWS
     }
 
     /// The Stokes vector of the multiply scattered light whose radiance
