@@ -35,6 +35,14 @@
 //! homogeneous path the two lines with the scaled field give every
 //! Legendre moment of the exact solution, e^(-tau) (e^(tau omega chi_l) - 1).
 //!
+//! Far from the sun the peak-only light is the peak's wide tail (what p
+//! has there beyond p*: r's moments sum to f (p - (1 - f) p*) / f there),
+//! and the two lines together are E sum_j beta_sca,j p_j(theta) integral
+//! rho_j (T* T*_sun - T T_sun) ds: one scattering by the whole p after or
+//! before the peak scatterings. That form is used from 30 degrees from
+//! the sun on (passing to it linearly from 20 degrees), where the peaks'
+//! k-fold spread has no light left; the tables of G stop there.
+//!
 //! The earlier term, E sum_j beta_sca,j p_j(theta) integral rho_j
 //! (T* T*_sun - T T_sun) ds with theta kept out of a 4.3 degree cone
 //! around the sun, counted a path with k peak scatterings k times and
@@ -44,15 +52,15 @@
 //!
 //! # Numerics
 //! - rhat_l for l > N from the phase functions' moments integrated over
-//!   0..40 degrees (4-point Gauss panels crowded toward the sun, at most
-//!   pi / L wide), the integrand tapered by cos^2 over 20..40 degrees: the
+//!   0..60 degrees (4-point Gauss panels crowded toward the sun, at most
+//!   pi / L wide), the integrand tapered by cos^2 over 30..60 degrees: the
 //!   high moments are the peak's; the smooth rest contributes little there.
 //!   The series stops where |rhat_l| < 1e-3 for every wavelength (at most
 //!   L = [`MAX_DEGREE`]).
 //! - G is tabulated per wavelength over theta in 0..30 degrees (nodes
 //!   crowded toward the sun, theta = 30 (t / 95)^2) and over X (25 nodes,
-//!   0..64) as e^(-X) G, read bilinearly; beyond 30 degrees it is taken as
-//!   zero. Along a view ray X(s) is replaced by its mean weighted by the
+//!   0..64) as e^(-X) G, read bilinearly (beyond 30 degrees the wide-angle
+//!   form above). Along a view ray X(s) is replaced by its mean weighted by the
 //!   integrand (near the sun, where G matters, both legs together are
 //!   about the sun's slant path, so X hardly changes along the ray).
 //! - (1 - f) p* is tabulated over theta (721 nodes, 0.25 degrees apart) for
@@ -74,10 +82,15 @@ const MAX_DEGREE: usize = 768;
 
 /// The peak's moments are integrated up to this angle, rad (tapered
 /// from half of it).
-const MOMENT_WINDOW_RAD: f64 = 40.0 * PI / 180.0;
+const MOMENT_WINDOW_RAD: f64 = 60.0 * PI / 180.0;
 
 /// G is tabulated up to this angle from the sun, rad, and zero beyond.
 const KERNEL_RADIUS_RAD: f64 = 30.0 * PI / 180.0;
+
+/// From this angle from the sun, rad, to [`KERNEL_RADIUS_RAD`] the term
+/// passes linearly to the wide-angle form E sum_j beta_sca,j p_j(theta)
+/// integral rho_j (T* T*_sun - T T_sun) ds (see the module docs).
+const BLEND_START_RAD: f64 = 20.0 * PI / 180.0;
 
 /// Nodes of G's angle axis.
 const KERNEL_ANGLES: usize = 96;
@@ -241,6 +254,8 @@ impl ForwardPeak {
         let (w, s) = (self.wavelengths, self.species);
         out.fill(0.0);
         let theta = cos_theta.clamp(-1.0, 1.0).acos();
+        // 0: the near-sun form; 1: the wide-angle one.
+        let wide = ((theta - BLEND_START_RAD) / (KERNEL_RADIUS_RAD - BLEND_START_RAD)).clamp(0.0, 1.0);
         let position = theta / PI * (TRUNCATED_ANGLES - 1) as f64;
         let t = (position as usize).min(TRUNCATED_ANGLES - 2);
         let ft = position - t as f64;
@@ -251,11 +266,12 @@ impl ForwardPeak {
             }
             // p itself where the species has no peak at a wavelength.
             species.phase_function.eval_into(cos_theta, phase);
-            if self.peaked[j] {
+            if self.peaked[j] && wide < 1.0 {
                 let low = &self.truncated[(j * TRUNCATED_ANGLES + t) * w..][..w];
                 let high = &self.truncated[(j * TRUNCATED_ANGLES + t + 1) * w..][..w];
                 for i in (0..w).filter(|i| self.fractions[i * s + j] > 0.0) {
-                    phase[i] = (1.0 - ft) * low[i] + ft * high[i];
+                    let truncated = (1.0 - ft) * low[i] + ft * high[i];
+                    phase[i] = (1.0 - wide) * truncated + wide * phase[i];
                 }
             }
             for i in 0..w {
@@ -284,7 +300,7 @@ impl ForwardPeak {
             let at = |x: usize, t: usize| self.kernel[(x * KERNEL_ANGLES + t) * w + i];
             let scaled = (1.0 - fx) * ((1.0 - ft) * at(upper - 1, t) + ft * at(upper - 1, t + 1))
                 + fx * ((1.0 - ft) * at(upper, t) + ft * at(upper, t + 1));
-            out[i] += optics.solar_irradiance_w_m2_nm[i] * q[i] * scaled * x_mean.exp();
+            out[i] += (1.0 - wide) * optics.solar_irradiance_w_m2_nm[i] * q[i] * scaled * x_mean.exp();
         }
     }
 }

@@ -69,13 +69,21 @@
 //!    real phase functions. TMS's single scattering uses the scaled
 //!    transmittances T* and T*_sun (light scattered into a forward peak
 //!    travels on with the beam); [`super::single_scattering`] uses the real
-//!    ones, so the difference is added here as the **forward-peak term**,
-//!    E sum_j beta_sca,j p_j(theta) integral rho_j (T* T*_sun - T T_sun) ds:
+//!    ones, so the difference is added here as the **forward-peak term**
+//!    (`forward_peak.rs`): light scattered k >= 1 times in the truncated
+//!    peaks r = p - (1 - f) p* and once by the smooth part,
+//!    E sum_j beta_sca,j (1 - f_j) p*_j(theta) integral rho_j (T* T*_sun - T T_sun) ds,
+//!    and light scattered only in the peaks, k >= 2 times, spread by the
+//!    k-fold convolution of the peak (Legendre moments (r_l / f)^k):
 //!    negligible for the reference aerosol (HG g = 0.7, f = 0.3 %), but a
 //!    Mie dust's diffraction peak holds f ~ 40 % and without it the sky
-//!    away from the sun was 8-20 % too dark. Its phase functions are taken
-//!    no closer to the sun than a forward cone of 4.3 degrees (see
-//!    `MultipleScatteringField::forward_cone_rad`). The ground term
+//!    away from the sun was 8-20 % too dark. Until the peak-only light had
+//!    its own term, the first line was taken with p_j(theta) (out of a
+//!    4.3 degree cone around the sun), which counts a path with k peak
+//!    scatterings k times with the peak at full sharpness: near a low sun
+//!    (peak optical depths of 1 to 5 along the sun's path) `mars-dust` was
+//!    3-17 % too bright within 5 degrees of it and `earth-hazy` 5-7 % too
+//!    dark within 2 degrees (accuracy below). The ground term
 //!    likewise carries what delta-M moved from the diffuse to the direct
 //!    beam (forward-scattered sunlight on the ground, and the sunlit
 //!    ground's light forward-scattered toward the eye).
@@ -131,17 +139,16 @@
 //!   0.3: within 1.1 % (100 000 paths).
 //! - Exact Mie phase functions (`earth-hazy`, suns 30 and 5 degrees, views
 //!   away from the sun, 400 000 paths): within 1.7 %. `mars-dust` (100 000
-//!   paths): within 2 % for a sun 30 degrees high. Within 5 degrees of a
-//!   low sun the forward cone leaves the weakest place measured (the
-//!   twilight survey below, 800 000 paths, standard errors 0.1-0.5 %,
-//!   sun 5 degrees high): `earth-hazy` -5 to -6 % 2 degrees from the sun
-//!   (its orders >= 2 there 8-25 % too dark) and 2 degrees up from it
-//!   (-4 to -5 %), within 1 % 5 degrees away; `mars-dust` 3 to 17 % too
-//!   bright within 5 degrees of it (its orders >= 2 9-29 %). With the sun
-//!   2 degrees high, `earth-hazy` 2 degrees up from it -6.5 % and -6.9 %
-//!   at 560 and 680 nm. The twilight shift of item 2 moves these by less
-//!   than 0.4 %: the forward cone's error is the orders >= 2 of the
-//!   aerosol's forward peak, not the twilight geometry.
+//!   paths): within 2 % for a sun 30 degrees high. Near a low sun
+//!   (`docs/twilight_survey.md`, 400 000 and 800 000 paths, standard
+//!   errors 0.1-0.5 % there): `mars-dust` within 0.8 % of the path tracer
+//!   2 to 10 degrees from a sun 10 and 5 degrees high (its orders >= 2
+//!   within 1.6 %), `earth-hazy` within 0.7 % 2 to 5 degrees from a sun 5
+//!   degrees high; before the forward-peak term counted each path once
+//!   (item 5), `mars-dust` was 3 to 17 % too bright there (its orders >= 2
+//!   9-29 %) and `earth-hazy` -5 to -6 % 2 degrees from the sun (orders
+//!   >= 2 8-25 % too dark), -6.5 and -6.9 % at 560 and 680 nm 2 degrees
+//!   above a sun 2 degrees high.
 //! - Twilight (`reference_tests/twilight_survey.rs`, `tests/twilight.rs`):
 //!   the zenith and elevations 5 and 20 degrees at 0, 90 and 180 degrees
 //!   from the sun, 440/560/680 nm, 800 000 paths (standard errors 0.1-2.6
@@ -204,7 +211,11 @@
 //!   take their sources from their own column's sun angle: after sunset
 //!   they are the rest of the darkness measured at 440 nm.
 //! - Delta-M: orders >= 2 within the phase functions' forward peak of the
-//!   sun are smoothed (the aureole itself is single scattering, exact).
+//!   sun are smoothed (the aureole itself is single scattering, exact);
+//!   the peak-only light of the forward-peak term takes its k-fold
+//!   convolution of the peak in the small-angle sense (its paths' legs
+//!   all near the sun's line, their mean peak optical depth along the
+//!   view ray).
 //! - 2n streams and harmonics, 40 layers, the source linear in optical
 //!   depth across a layer, and the tables' interpolations.
 //!
