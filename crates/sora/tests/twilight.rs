@@ -96,9 +96,10 @@ fn views_near_the_sun(sun: f64) -> Vec<(f64, f64)> {
 /// earth-hazy within 0.7 %, mars-dust within 2.4 % (2 degrees along the
 /// horizon from the sun 2 degrees high, 5 degrees from it: the tables a
 /// little darker; 1.2 % at 5 degrees from a sun 5 degrees high), the same
-/// with three times the sky-view table's azimuth nodes, so it is the
-/// multiply scattered source's table (`MultipleScatteringTable`), not the
-/// sky-view table's interpolation.
+/// with three times the sky-view table's azimuth nodes (so not its
+/// azimuth interpolation; the source table's reading of mars-dust's
+/// still peaked p* near the sun, or the sky-view table's zenith axis, not
+/// separated yet).
 #[test]
 fn image_tables_agree_with_the_per_view_path_near_a_low_sun_with_aerosols() {
     let mut worst = 0.0f64;
@@ -396,7 +397,10 @@ fn sun_six_below_matches_the_path_tracer_at_three_wavelengths() {
 fn near_a_low_sun_with_aerosols_matches_the_path_tracer() {
     use sora::Method;
     let grid = WavelengthGrid::new(440.0, 680.0, 120.0).unwrap();
-    for (preset, view, seed) in [("mars-dust", (5.0, 5.0), 51), ("earth-hazy", (5.0, 2.0), 52)] {
+    for (preset, view, seed) in [
+        ("mars-dust", (5.0, 5.0), 51),
+        ("earth-hazy", (5.0, 2.0), 52),
+    ] {
         let atmosphere = Atmosphere::preset(preset).unwrap();
         let views = [ViewDirection::new(view.0, view.1).unwrap()];
         let sky = |method| {

@@ -68,8 +68,8 @@
 
 use std::f64::consts::PI;
 
-use super::phase_fourier::TruncatedPhase;
 use super::super::quadrature::{GAUSS_NODES, GAUSS_WEIGHTS};
+use super::phase_fourier::TruncatedPhase;
 use crate::atmosphere::{AtmosphereOptics, DensityProfile};
 
 /// The forward-peak integrals hold, after the species' rows, this many
@@ -255,7 +255,8 @@ impl ForwardPeak {
         out.fill(0.0);
         let theta = cos_theta.clamp(-1.0, 1.0).acos();
         // 0: the near-sun form; 1: the wide-angle one.
-        let wide = ((theta - BLEND_START_RAD) / (KERNEL_RADIUS_RAD - BLEND_START_RAD)).clamp(0.0, 1.0);
+        let wide =
+            ((theta - BLEND_START_RAD) / (KERNEL_RADIUS_RAD - BLEND_START_RAD)).clamp(0.0, 1.0);
         let position = theta / PI * (TRUNCATED_ANGLES - 1) as f64;
         let t = (position as usize).min(TRUNCATED_ANGLES - 2);
         let ft = position - t as f64;
@@ -287,7 +288,10 @@ impl ForwardPeak {
         let position = (theta / KERNEL_RADIUS_RAD).sqrt() * (KERNEL_ANGLES - 1) as f64;
         let t = (position as usize).min(KERNEL_ANGLES - 2);
         let ft = position - t as f64;
-        let (q, qx) = (&integrals[s * w..(s + 1) * w], &integrals[(s + 1) * w..(s + 2) * w]);
+        let (q, qx) = (
+            &integrals[s * w..(s + 1) * w],
+            &integrals[(s + 1) * w..(s + 2) * w],
+        );
         for i in 0..w {
             if q[i] <= 0.0 {
                 continue;
@@ -300,7 +304,8 @@ impl ForwardPeak {
             let at = |x: usize, t: usize| self.kernel[(x * KERNEL_ANGLES + t) * w + i];
             let scaled = (1.0 - fx) * ((1.0 - ft) * at(upper - 1, t) + ft * at(upper - 1, t + 1))
                 + fx * ((1.0 - ft) * at(upper, t) + ft * at(upper, t + 1));
-            out[i] += (1.0 - wide) * optics.solar_irradiance_w_m2_nm[i] * q[i] * scaled * x_mean.exp();
+            out[i] +=
+                (1.0 - wide) * optics.solar_irradiance_w_m2_nm[i] * q[i] * scaled * x_mean.exp();
         }
     }
 }
