@@ -146,8 +146,8 @@
 //!   within 1.6 %), `earth-hazy` within 0.7 % 2 to 5 degrees from a sun 5
 //!   degrees high; before the forward-peak term counted each path once
 //!   (item 5), `mars-dust` was 3 to 17 % too bright there (its orders >= 2
-//!   9-29 %) and `earth-hazy` -5 to -6 % 2 degrees from the sun (orders
-//!   >= 2 8-25 % too dark), -6.5 and -6.9 % at 560 and 680 nm 2 degrees
+//!   9-29 %) and `earth-hazy` -5 to -6 % 2 degrees from the sun (its
+//!   orders >= 2 8-25 % too dark), -6.5 and -6.9 % at 560 and 680 nm 2 degrees
 //!   above a sun 2 degrees high (now -1.1 and -0.9 %). Toward a sun 2
 //!   degrees high `mars-dust` is within 2.3 %, `earth-hazy` 2 degrees
 //!   along the horizon from it -3.3 and -4.3 % at 560 and 680 nm (+-0.4,
