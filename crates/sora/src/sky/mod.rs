@@ -66,7 +66,6 @@ use crate::geometry::{Vector3, ViewDirection};
 use crate::spectrum::{SampledSpectrum, WavelengthGrid};
 use crate::transport::multiple_scattering::{
     MultipleScatteringField, MultipleScatteringScratch, MultipleScatteringTable, PolarisationTable,
-    forward_peak_cosine,
 };
 use crate::transport::path_tracing::worst_relative_error;
 use crate::transport::stokes::{meridian_reference, rotation_cos_sin_2eta, scattering_plane};
@@ -402,7 +401,6 @@ struct ViewWork {
     integrals: Vec<f64>,
     forward: Vec<f64>,
     ground: Vec<f64>,
-    zeros: Vec<f64>,
     phase: Vec<f64>,
     /// The multiply scattered radiance, and the forward-peak term's.
     added: Vec<f64>,
@@ -729,9 +727,13 @@ impl Sky {
             single: self.scene.scratch(),
             multiple: self.field().map(MultipleScatteringField::scratch),
             integrals: vec![0.0; species * wavelengths],
-            forward: vec![0.0; species * wavelengths],
+            forward: vec![
+                0.0;
+                self.field()
+                    .map_or(species, MultipleScatteringField::forward_integral_rows)
+                    * wavelengths
+            ],
             ground: vec![0.0; wavelengths],
-            zeros: vec![0.0; wavelengths],
             phase: vec![0.0; wavelengths],
             added: vec![0.0; wavelengths],
             forward_radiance: vec![0.0; wavelengths],
@@ -1022,10 +1024,9 @@ impl Sky {
             radiance,
         );
         if let Some(field) = self.field() {
-            self.scene.radiance_from_integrals(
-                forward_peak_cosine(cos_theta, field.forward_cone_rad()),
+            field.compute_forward_peak_radiance(
+                cos_theta,
                 &work.forward,
-                &work.zeros,
                 &mut work.phase,
                 &mut work.forward_radiance,
             );

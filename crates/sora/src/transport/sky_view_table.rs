@@ -30,8 +30,8 @@
 //! integrals of delta-M (light that the multiple-scattering solver counts
 //! as unscattered and that single scattering with the real transmittances
 //! misses), a fourth block: like single scattering's integrals they take
-//! the phase functions per pixel (at the edge of the forward cone near
-//! the sun, see `MultipleScatteringField::forward_cone_rad`).
+//! the phase functions per pixel (`MultipleScatteringField::compute_forward_peak_radiance`,
+//! with the peak-only rows of `forward_peak.rs`).
 
 use super::multiple_scattering::MultipleScatteringTable;
 use super::optical_column::SunColumnTable;
@@ -49,7 +49,8 @@ pub struct SkyViewTable {
     /// Values per node: species * wavelengths integrals (m), then
     /// wavelengths ground radiances, then (with multiple scattering)
     /// wavelengths multiply scattered radiances (W m^-2 sr^-1 nm^-1) and
-    /// species * wavelengths forward-peak integrals (m).
+    /// the forward-peak integrals ((species + 2) * wavelengths, see
+    /// `MultipleScatteringScratch::forward_integrals`).
     values_per_node: usize,
     wavelengths: usize,
     has_multiple_scattering: bool,
@@ -80,8 +81,9 @@ impl SkyViewTable {
         let species = optics.species.len();
         // Integrals, ground; with multiple scattering its radiance and its
         // forward-peak integrals.
+        let forward_rows = multiple_scattering.map_or(0, |ms| ms.field().forward_integral_rows());
         let blocks = if has_multiple_scattering {
-            2 * species + 2
+            species + 2 + forward_rows
         } else {
             species + 1
         };
@@ -107,7 +109,7 @@ impl SkyViewTable {
         // Marched at every other node: multiple scattering's radiance and
         // forward-peak integrals, the last blocks of each node.
         let marched_values = if has_multiple_scattering {
-            (species + 1) * wavelengths
+            (forward_rows + 1) * wavelengths
         } else {
             0
         };
@@ -237,7 +239,7 @@ impl SkyViewTable {
     }
 
     /// As [`SkyViewTable::lookup`], and the multiply scattered radiance into
-    /// `multiple` and its forward-peak integrals (species * wavelengths,
+    /// `multiple` and its forward-peak integrals ((species + 2) * wavelengths,
     /// see [`crate::transport::multiple_scattering::MultipleScatteringScratch::forward_integrals`])
     /// into `forward` (zeros when the table has none).
     pub(crate) fn lookup_with_multiple_scattering(

@@ -69,13 +69,21 @@
 //!    real phase functions. TMS's single scattering uses the scaled
 //!    transmittances T* and T*_sun (light scattered into a forward peak
 //!    travels on with the beam); [`super::single_scattering`] uses the real
-//!    ones, so the difference is added here as the **forward-peak term**,
-//!    E sum_j beta_sca,j p_j(theta) integral rho_j (T* T*_sun - T T_sun) ds:
+//!    ones, so the difference is added here as the **forward-peak term**
+//!    (`forward_peak.rs`): light scattered k >= 1 times in the truncated
+//!    peaks r = p - (1 - f) p* and once by the smooth part,
+//!    E sum_j beta_sca,j (1 - f_j) p*_j(theta) integral rho_j (T* T*_sun - T T_sun) ds,
+//!    and light scattered only in the peaks, k >= 2 times, spread by the
+//!    k-fold convolution of the peak (Legendre moments (r_l / f)^k):
 //!    negligible for the reference aerosol (HG g = 0.7, f = 0.3 %), but a
 //!    Mie dust's diffraction peak holds f ~ 40 % and without it the sky
-//!    away from the sun was 8-20 % too dark. Its phase functions are taken
-//!    no closer to the sun than a forward cone of 4.3 degrees (see
-//!    `MultipleScatteringField::forward_cone_rad`). The ground term
+//!    away from the sun was 8-20 % too dark. Until the peak-only light had
+//!    its own term, the first line was taken with p_j(theta) (out of a
+//!    4.3 degree cone around the sun), which counts a path with k peak
+//!    scatterings k times with the peak at full sharpness: near a low sun
+//!    (peak optical depths of 1 to 5 along the sun's path) `mars-dust` was
+//!    3-17 % too bright within 5 degrees of it and `earth-hazy` 5-7 % too
+//!    dark within 2 degrees (accuracy below). The ground term
 //!    likewise carries what delta-M moved from the diffuse to the direct
 //!    beam (forward-scattered sunlight on the ground, and the sunlit
 //!    ground's light forward-scattered toward the eye).
@@ -131,17 +139,22 @@
 //!   0.3: within 1.1 % (100 000 paths).
 //! - Exact Mie phase functions (`earth-hazy`, suns 30 and 5 degrees, views
 //!   away from the sun, 400 000 paths): within 1.7 %. `mars-dust` (100 000
-//!   paths): within 2 % for a sun 30 degrees high. Within 5 degrees of a
-//!   low sun the forward cone leaves the weakest place measured (the
-//!   twilight survey below, 800 000 paths, standard errors 0.1-0.5 %,
-//!   sun 5 degrees high): `earth-hazy` -5 to -6 % 2 degrees from the sun
-//!   (its orders >= 2 there 8-25 % too dark) and 2 degrees up from it
-//!   (-4 to -5 %), within 1 % 5 degrees away; `mars-dust` 3 to 17 % too
-//!   bright within 5 degrees of it (its orders >= 2 9-29 %). With the sun
-//!   2 degrees high, `earth-hazy` 2 degrees up from it -6.5 % and -6.9 %
-//!   at 560 and 680 nm. The twilight shift of item 2 moves these by less
-//!   than 0.4 %: the forward cone's error is the orders >= 2 of the
-//!   aerosol's forward peak, not the twilight geometry.
+//!   paths): within 2 % for a sun 30 degrees high. Near a low sun
+//!   (`docs/twilight_survey.md`, 400 000 and 800 000 paths, standard
+//!   errors 0.1-0.5 % there): `mars-dust` within 0.8 % of the path tracer
+//!   2 to 10 degrees from a sun 10 and 5 degrees high (its orders >= 2
+//!   within 1.6 %), `earth-hazy` within 0.7 % 2 to 5 degrees from a sun 5
+//!   degrees high; before the forward-peak term counted each path once
+//!   (item 5), `mars-dust` was 3 to 17 % too bright there (its orders >= 2
+//!   9-29 %) and `earth-hazy` -5 to -6 % 2 degrees from the sun (its
+//!   orders >= 2 8-25 % too dark), -6.5 and -6.9 % at 560 and 680 nm 2 degrees
+//!   above a sun 2 degrees high (now -1.1 and -0.9 %). Toward a sun 2
+//!   degrees high `mars-dust` is within 2.3 %, `earth-hazy` 2 degrees
+//!   along the horizon from it -3.3 and -4.3 % at 560 and 680 nm (+-0.4,
+//!   0.9 %). The weakest place left: `mars-dust` with the sun on the
+//!   horizon, 1 degree up and 2-5 degrees along the horizon from it, -9 %
+//!   (+-0.7 to 1.1 %; its orders >= 2 10-11 % too dark, where the eye sees
+//!   almost only multiply scattered light).
 //! - Twilight (`reference_tests/twilight_survey.rs`, `tests/twilight.rs`):
 //!   the zenith and elevations 5 and 20 degrees at 0, 90 and 180 degrees
 //!   from the sun, 440/560/680 nm, 800 000 paths (standard errors 0.1-2.6
@@ -204,7 +217,11 @@
 //!   take their sources from their own column's sun angle: after sunset
 //!   they are the rest of the darkness measured at 440 nm.
 //! - Delta-M: orders >= 2 within the phase functions' forward peak of the
-//!   sun are smoothed (the aureole itself is single scattering, exact).
+//!   sun are smoothed (the aureole itself is single scattering, exact);
+//!   the peak-only light of the forward-peak term takes its k-fold
+//!   convolution of the peak in the small-angle sense (its paths' legs
+//!   all near the sun's line, their mean peak optical depth along the
+//!   view ray).
 //! - 2n streams and harmonics, 40 layers, the source linear in optical
 //!   depth across a layer, and the tables' interpolations.
 //!
@@ -213,6 +230,7 @@
 //! m^-1 at relative density 1 (as [`crate::atmosphere::AtmosphereOptics`]),
 //! altitudes m, angles rad inside (degrees in settings).
 
+mod forward_peak;
 mod phase_fourier;
 mod phase_matrix_fourier;
 mod polarisation_correction;
@@ -227,6 +245,7 @@ pub use source_table::MultipleScatteringTable;
 
 use std::f64::consts::PI;
 
+use self::forward_peak::ForwardPeak;
 use self::phase_fourier::{
     TruncatedPhase, compute_legendre_moments, normalized_associated_legendre,
 };
@@ -242,16 +261,6 @@ use super::single_scattering::{SingleScatteringSky, SunColumns};
 use crate::atmosphere::{AtmosphereOptics, DensityProfile};
 use crate::error::{Error, Result};
 use crate::geometry::{Vector3, segment_in_atmosphere};
-
-/// The forward cone of the forward-peak term is this many radians over the
-/// number of Legendre terms (4.3 degrees at 16 terms), about half the
-/// finest angle the truncated phase functions resolve (the first zero of
-/// P_N(cos theta) ~ J_0((N + 1/2) theta) is at 2.4 / N). Measured against
-/// the path tracer for a sun 5 degrees high, 2 and 5 degrees from it: Mars
-/// dust +9 % and +12 %, hazy Earth -6 % and +0.6 % with this cone; with
-/// twice the cone -32 % and -30 %, -12 % and -8 %; with half of it +78 %
-/// and +12 %, +14 % and +0.6 %.
-const FORWARD_CONE_WIDTH: f64 = 1.2;
 
 /// Panels of the exact column integrals toward the sun from each level.
 const SUN_RAY_PANELS: usize = 12;
@@ -413,14 +422,6 @@ impl SunZenithAxis {
     }
 }
 
-/// The cosine of the scattering angle at which the forward-peak term
-/// takes the phase functions for a view at cos(theta) = `cos_theta` from
-/// the sun: theta, or the forward cone's edge within it (see
-/// [`MultipleScatteringField::forward_cone_rad`]).
-pub(crate) fn forward_peak_cosine(cos_theta: f64, cone_rad: f64) -> f64 {
-    cos_theta.min(cone_rad.cos())
-}
-
 /// Values below this are treated as zero by the logarithmic
 /// interpolations (radiances are ~1e-6..1 W m^-2 sr^-1 nm^-1).
 const LOG_FLOOR: f64 = 1e-30;
@@ -467,8 +468,8 @@ struct ViewRayOptics {
     sun_axis: SunZenithAxis,
     /// Whether any phase function lost a forward peak to delta-M.
     has_forward_peaks: bool,
-    /// Angular radius of the forward cone of the forward-peak term, rad.
-    forward_cone_rad: f64,
+    /// The forward-peak term's tables (`forward_peak.rs`).
+    forward_peak: ForwardPeak,
     /// [s * wavelengths + i]: (A / pi)(F*_diffuse + E mu_s (T*_sun - T_sun))
     /// at the ground, W m^-2 sr^-1 nm^-1.
     ground_diffuse: Vec<f64>,
@@ -497,16 +498,19 @@ pub struct MultipleScatteringScratch {
     view_panel_ends: Vec<f64>,
     sun_panel_ends: Vec<f64>,
     /// The forward-peak integrals of the last ray, species-major
-    /// [j * wavelengths + i], m (see [`MultipleScatteringTable::compute_radiance_parts`]).
+    /// [j * wavelengths + i], m, then the peak-only rows Q and Q X-bar
+    /// (`forward_peak.rs`; see [`MultipleScatteringTable::compute_radiance_parts`]).
     forward_integrals: Vec<f64>,
     phase: Vec<f64>,
+    forward_radiance: Vec<f64>,
 }
 
 impl MultipleScatteringScratch {
     /// The forward-peak integrals of the last ray: integral rho_j
     /// (T* T*_sun - T T_sun) ds, species-major [j * wavelengths + i], m,
-    /// to be weighted like single scattering's integrals,
-    /// E beta_sca,j p_j(theta).
+    /// then the peak-only rows Q = integral (sum_j f_j beta_sca,j rho_j)
+    /// T T_sun ds and Q X-bar (dimensionless), as
+    /// [`MultipleScatteringField::compute_forward_peak_radiance`] takes them.
     pub(crate) fn forward_integrals(&self) -> &[f64] {
         &self.forward_integrals
     }
@@ -534,15 +538,14 @@ impl ViewRayOptics {
             sun_columns: vec![0.0; s],
             view_panel_ends: Vec::with_capacity(self.corners.most_panel_ends(self.panels)),
             sun_panel_ends: Vec::with_capacity(self.corners.most_panel_ends(SUN_RAY_PANELS)),
-            forward_integrals: vec![0.0; s * w],
+            forward_integrals: vec![0.0; (s + forward_peak::EXTRA_ROWS) * w],
             phase: vec![0.0; w],
+            forward_radiance: vec![0.0; w],
         }
     }
 
-    /// Adds E sum_j beta_sca,j p_j(theta') times the scratch's forward-peak
-    /// integrals to `radiance`, with the exact phase functions at
-    /// theta' = max(theta, the forward cone) (see
-    /// [`MultipleScatteringField::forward_cone_rad`]).
+    /// Adds the forward-peak term of the scratch's integrals along `view`
+    /// to `radiance` (`forward_peak.rs`).
     fn add_forward_peak(
         &self,
         optics: &AtmosphereOptics,
@@ -550,22 +553,18 @@ impl ViewRayOptics {
         scratch: &mut MultipleScatteringScratch,
         radiance: &mut [f64],
     ) {
-        let w = self.wavelengths;
-        let cos_theta = forward_peak_cosine(view.dot(self.sun), self.forward_cone_rad);
-        for (j, species) in optics.species.iter().enumerate() {
-            let row = &scratch.forward_integrals[j * w..(j + 1) * w];
-            if row.iter().all(|v| *v == 0.0) {
-                continue;
-            }
-            species
-                .phase_function
-                .eval_into(cos_theta, &mut scratch.phase);
-            for i in 0..w {
-                radiance[i] += optics.solar_irradiance_w_m2_nm[i]
-                    * species.scattering_per_m[i]
-                    * scratch.phase[i]
-                    * row[i];
-            }
+        if !self.has_forward_peaks {
+            return;
+        }
+        self.forward_peak.radiance(
+            optics,
+            view.dot(self.sun),
+            &scratch.forward_integrals,
+            &mut scratch.phase,
+            &mut scratch.forward_radiance,
+        );
+        for (r, f) in radiance.iter_mut().zip(&scratch.forward_radiance) {
+            *r += f;
         }
     }
 
@@ -667,17 +666,27 @@ impl ViewRayOptics {
                         )
                     {
                         for i in 0..w {
-                            let (mut scaled, mut exact) = (0.0, 0.0);
+                            let (mut scaled, mut exact, mut peak) = (0.0, 0.0, 0.0);
                             for j in 0..s {
                                 let column = scratch.node_columns[j] + scratch.sun_columns[j];
                                 scaled += self.scaled_extinction[i * s + j] * column;
                                 exact += self.extinction[i * s + j] * column;
+                                // f_j beta_sca,j rho_j: what the peaks scatter here.
+                                peak += (self.extinction[i * s + j]
+                                    - self.scaled_extinction[i * s + j])
+                                    * scratch.densities[j];
                             }
-                            let excess = weight * ((-scaled).exp() - (-exact).exp());
+                            let direct = (-exact).exp();
+                            let excess = weight * ((-scaled).exp() - direct);
                             for j in 0..s {
                                 scratch.forward_integrals[j * w + i] +=
                                     excess * scratch.densities[j];
                             }
+                            // The peak-only light: its weight and the
+                            // peak optical depth X of its two legs.
+                            let only = weight * direct * peak;
+                            scratch.forward_integrals[s * w + i] += only;
+                            scratch.forward_integrals[(s + 1) * w + i] += only * (exact - scaled);
                         }
                     }
                 }
@@ -1149,6 +1158,13 @@ impl MultipleScatteringField {
                 ground_direct[s * wavelengths + i] = block[solution_len + 1];
             }
         }
+        let forward_peak = ForwardPeak::new(
+            optics,
+            &phases,
+            degrees,
+            &profiles,
+            top_radius_m - ground_radius_m,
+        );
         let harmonics = (0..degrees)
             .map(|m| {
                 phases
@@ -1174,8 +1190,8 @@ impl MultipleScatteringField {
                 corners,
                 extinction,
                 scaled_extinction,
-                has_forward_peaks: phases.iter().any(|p| p.forward_fraction > 0.0),
-                forward_cone_rad: FORWARD_CONE_WIDTH / degrees as f64,
+                has_forward_peaks: forward_peak.any(),
+                forward_peak,
                 scaled_scattering,
                 sun_axis,
                 ground_diffuse,
@@ -1288,17 +1304,30 @@ impl MultipleScatteringField {
             .collect()
     }
 
-    /// Angular radius of the forward cone of the forward-peak term, rad:
-    /// the term is light that delta-M moved into the sun's beam (scattered
-    /// within the phase functions' forward peaks) and that then scatters
-    /// toward the eye. Its first scattering spread it over the peak's
-    /// width, so near the sun it must not take the peak a second time at
-    /// full sharpness: within the cone the phase functions are taken at its
-    /// edge ([`forward_peak_cosine`]; the cone is 1.2 rad over the number
-    /// of Legendre terms). Without it a Mars dust aureole 2
-    /// degrees from a sun 5 degrees high is 85 % too bright.
-    pub(crate) fn forward_cone_rad(&self) -> f64 {
-        self.optics.forward_cone_rad
+    /// The forward-peak term toward a view at cos(theta) = `cos_theta` from
+    /// the sun, into `out`, from its integrals along the view ray
+    /// ([`MultipleScatteringScratch::forward_integrals`], or the sky-view
+    /// table's interpolation of them); `phase` is work space, one value per
+    /// wavelength.
+    pub(crate) fn compute_forward_peak_radiance(
+        &self,
+        cos_theta: f64,
+        integrals: &[f64],
+        phase: &mut [f64],
+        out: &mut [f64],
+    ) {
+        if !self.optics.has_forward_peaks {
+            out.fill(0.0);
+            return;
+        }
+        self.optics
+            .forward_peak
+            .radiance(&self.atmosphere, cos_theta, integrals, phase, out);
+    }
+
+    /// Rows of the forward-peak integrals per wavelength.
+    pub(crate) fn forward_integral_rows(&self) -> usize {
+        self.optics.species + forward_peak::EXTRA_ROWS
     }
 
     /// The Stokes vector of the multiply scattered light whose radiance

@@ -167,7 +167,6 @@ impl MultipleScatteringTable {
     }
 
     /// The field the table was made from.
-    #[cfg(test)]
     pub(crate) fn field(&self) -> &MultipleScatteringField {
         &self.field
     }
