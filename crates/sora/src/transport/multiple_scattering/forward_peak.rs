@@ -226,7 +226,7 @@ impl ForwardPeak {
                 }
                 for t in 0..KERNEL_ANGLES {
                     let p = &polynomials[t * count..(t + 1) * count];
-                    let value: f64 = series.iter().zip(p).map(|(a, b)| a * b).sum();
+                    let value = dot(&series, p);
                     table.kernel[(x * KERNEL_ANGLES + t) * w + i] = value;
                 }
             }
@@ -327,17 +327,44 @@ fn scaled_series_term(r: f64, x: f64) -> f64 {
     (-x).exp() * bracket / x
 }
 
+/// sum_l a_l b_l, in four partial sums (one chain of additions over
+/// hundreds of terms waited on each addition's latency).
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let (a4, a_rest) = a.as_chunks::<4>();
+    let (b4, b_rest) = b[..a.len()].as_chunks::<4>();
+    let mut sums = [0.0; 4];
+    for (x, y) in a4.iter().zip(b4) {
+        for k in 0..4 {
+            sums[k] += x[k] * y[k];
+        }
+    }
+    let rest: f64 = a_rest.iter().zip(b_rest).map(|(x, y)| x * y).sum();
+    (sums[0] + sums[1]) + (sums[2] + sums[3]) + rest
+}
+
 /// P_0..P_{len-1}(mu) into `out`.
 fn legendre_into(mu: f64, out: &mut [f64]) {
+    let (many, _) = out.as_chunks_mut::<1>();
+    legendre_into_many([mu], many);
+}
+
+/// P_0..P_{len-1} at each of the `K` cosines `mu` into `out[l][k]`, by
+/// Bonnet's recurrence P_l = ((2l - 1) mu P_{l-1} - (l - 1) P_{l-2}) / l
+/// with its two ratios taken out of the dependency chain (a chain of
+/// divisions was a third of a retrieval's time) and `K` chains run side
+/// by side.
+fn legendre_into_many<const K: usize>(mu: [f64; K], out: &mut [[f64; K]]) {
     if out.is_empty() {
         return;
     }
-    out[0] = 1.0;
+    out[0] = [1.0; K];
     if out.len() > 1 {
         out[1] = mu;
     }
     for l in 2..out.len() {
-        out[l] = ((2 * l - 1) as f64 * mu * out[l - 1] - (l - 1) as f64 * out[l - 2]) / l as f64;
+        let (a, b) = ((2 * l - 1) as f64 / l as f64, (l - 1) as f64 / l as f64);
+        let (previous, before) = (out[l - 1], out[l - 2]);
+        out[l] = std::array::from_fn(|k| a * mu[k] * previous[k] - b * before[k]);
     }
 }
 
@@ -371,28 +398,28 @@ fn compute_windowed_moments(
     // is pi / highest or less (half a period of P_highest per 4-point panel).
     let panels = ((2.0 * MOMENT_WINDOW_RAD * highest as f64 / PI).ceil() as usize).max(64);
     let mut values = vec![0.0; wavelengths];
-    let mut legendre = vec![0.0; count];
+    let mut legendre = vec![[0.0; GAUSS_NODES.len()]; count];
     for panel in 0..panels {
         let edge = |k: usize| MOMENT_WINDOW_RAD * (k as f64 / panels as f64).powi(2);
         let (a, b) = (edge(panel), edge(panel + 1));
         let (centre, half) = (0.5 * (a + b), 0.5 * (b - a));
-        for (x, gauss) in GAUSS_NODES.iter().zip(GAUSS_WEIGHTS) {
-            let theta = centre + half * x;
+        let theta: [f64; GAUSS_NODES.len()] =
+            std::array::from_fn(|k| centre + half * GAUSS_NODES[k]);
+        legendre_into_many(theta.map(f64::cos), &mut legendre);
+        for (k, theta) in theta.into_iter().enumerate() {
             let taper = if theta <= 0.5 * MOMENT_WINDOW_RAD {
                 1.0
             } else {
                 let u = (theta - 0.5 * MOMENT_WINDOW_RAD) / (0.5 * MOMENT_WINDOW_RAD);
                 (0.5 * PI * u).cos().powi(2)
             };
-            let mu = theta.cos();
-            let weight = 2.0 * PI * half * gauss * theta.sin() * taper;
-            phase.eval_into(mu, &mut values);
-            legendre_into(mu, &mut legendre);
+            let weight = 2.0 * PI * half * GAUSS_WEIGHTS[k] * theta.sin() * taper;
+            phase.eval_into(theta.cos(), &mut values);
             for (i, value) in values.iter().enumerate() {
                 let row = &mut out[i * count..(i + 1) * count];
                 let scale = weight * value;
                 for (moment, p_l) in row.iter_mut().zip(&legendre) {
-                    *moment += scale * p_l;
+                    *moment += scale * p_l[k];
                 }
             }
         }
