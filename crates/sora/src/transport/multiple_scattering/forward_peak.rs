@@ -330,22 +330,35 @@ fn scaled_series_term(r: f64, x: f64) -> f64 {
 /// sum_l a_l b_l, in four partial sums (one chain of additions over
 /// hundreds of terms waited on each addition's latency).
 fn dot(a: &[f64], b: &[f64]) -> f64 {
-    let (a4, a_rest) = a.as_chunks::<4>();
-    let (b4, b_rest) = b[..a.len()].as_chunks::<4>();
+    let (a4, b4) = (a.chunks_exact(4), b[..a.len()].chunks_exact(4));
+    let rest: f64 = a4
+        .remainder()
+        .iter()
+        .zip(b4.remainder())
+        .map(|(x, y)| x * y)
+        .sum();
     let mut sums = [0.0; 4];
-    for (x, y) in a4.iter().zip(b4) {
+    for (x, y) in a4.zip(b4) {
         for k in 0..4 {
             sums[k] += x[k] * y[k];
         }
     }
-    let rest: f64 = a_rest.iter().zip(b_rest).map(|(x, y)| x * y).sum();
     (sums[0] + sums[1]) + (sums[2] + sums[3]) + rest
 }
 
 /// P_0..P_{len-1}(mu) into `out`.
 fn legendre_into(mu: f64, out: &mut [f64]) {
-    let (many, _) = out.as_chunks_mut::<1>();
-    legendre_into_many([mu], many);
+    if out.is_empty() {
+        return;
+    }
+    out[0] = 1.0;
+    if out.len() > 1 {
+        out[1] = mu;
+    }
+    for l in 2..out.len() {
+        let (a, b) = ((2 * l - 1) as f64 / l as f64, (l - 1) as f64 / l as f64);
+        out[l] = a * mu * out[l - 1] - b * out[l - 2];
+    }
 }
 
 /// P_0..P_{len-1} at each of the `K` cosines `mu` into `out[l][k]`, by
