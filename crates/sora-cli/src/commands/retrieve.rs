@@ -198,11 +198,12 @@ pub struct RetrieveArgs {
     )]
     starting_points: u64,
 
-    /// The most Levenberg-Marquardt iterations
+    /// The most Levenberg-Marquardt iterations in all, the starting points'
+    /// scouting (3 each) included
     #[arg(
         long,
         value_name = "N",
-        default_value_t = 20,
+        default_value_t = 30,
         value_parser = clap::value_parser!(u64).range(1..)
     )]
     max_iterations: u64,

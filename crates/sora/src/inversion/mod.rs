@@ -79,7 +79,8 @@ pub struct RetrievalSettings {
     pub reference_wavelength_nm: Option<f64>,
     /// Scale height of the aerosol's exponential profile, m.
     pub aerosol_scale_height_m: f64,
-    /// The most Levenberg-Marquardt iterations per starting point.
+    /// The most Levenberg-Marquardt iterations in all: the starting
+    /// points' scouting (three iterations each), then the best one's.
     pub max_iterations: usize,
     /// Starting points, each fitted to its own minimum; the lowest chi^2
     /// wins (see [`RetrievalSettings::starting_states`]).
@@ -91,7 +92,7 @@ impl Default for RetrievalSettings {
         RetrievalSettings {
             reference_wavelength_nm: None,
             aerosol_scale_height_m: 1200.0,
-            max_iterations: 20,
+            max_iterations: 30,
             starting_points: 2,
         }
     }
@@ -382,13 +383,20 @@ pub fn retrieve(
     }
     let best = match scouted {
         Some(s) => {
-            let scouting = s.iterations;
-            problem
-                .solve(Start::From(s), &evaluate_many)
-                .map(|mut rest| {
-                    rest.iterations += scouting;
-                    rest
-                })
+            // The scouting counts against the iterations allowed; with
+            // none left, the continuation only finishes (the Jacobian and
+            // the covariance at the scout's end point).
+            let (scouting, scout_converged) = (s.iterations, s.converged);
+            let remaining = settings.max_iterations.saturating_sub(scouting);
+            let rest = Problem {
+                max_iterations: remaining,
+                ..problem
+            };
+            rest.solve(Start::From(s), &evaluate_many).map(|mut rest| {
+                rest.iterations += scouting;
+                rest.converged |= remaining == 0 && scout_converged;
+                rest
+            })
         }
         None => None,
     };
