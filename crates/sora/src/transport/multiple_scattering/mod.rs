@@ -816,15 +816,13 @@ impl MultipleScatteringField {
         } else {
             (ground / r).min(1.0).acos() + (ground / top).acos()
         };
-        let sun_zenith = sky.sun_direction().z.clamp(-1.0, 1.0).acos();
-        MultipleScatteringField::compute_for_sun_zenith_range(
+        MultipleScatteringField::compute_within_reach(
             sky,
             settings,
             sun_column_nodes,
-            (sun_zenith - reach).max(0.0),
-            sun_zenith + reach,
             polarised,
             successive_orders::MAX_ITERATIONS,
+            reach,
         )
     }
 
@@ -842,6 +840,26 @@ impl MultipleScatteringField {
         // A point of the atmosphere that the eye sees is at most this far
         // (as an angle at the planet's centre) from the eye's zenith.
         let reach = (ground / r.max(ground)).min(1.0).acos() + (ground / top).acos();
+        MultipleScatteringField::compute_within_reach(
+            sky,
+            settings,
+            sun_column_nodes,
+            polarised,
+            sweeps,
+            reach,
+        )
+    }
+
+    /// The field for the sun zenith angles within `reach` (rad) of the
+    /// eye's, the solver stopped after `sweeps` orders.
+    fn compute_within_reach(
+        sky: &SingleScatteringSky,
+        settings: MultipleScatteringSettings,
+        sun_column_nodes: (usize, usize),
+        polarised: bool,
+        sweeps: usize,
+        reach: f64,
+    ) -> Result<MultipleScatteringField> {
         let sun_zenith = sky.sun_direction().z.clamp(-1.0, 1.0).acos();
         MultipleScatteringField::compute_for_sun_zenith_range(
             sky,
