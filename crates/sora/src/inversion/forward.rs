@@ -16,8 +16,8 @@
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
-use super::kernels::{MieKernels, radius_nodes_um};
-use super::measurements::Measurements;
+use super::kernels::MieKernels;
+use super::measurements::{Measurements, SAME_WAVELENGTH_NM};
 use super::state::AerosolState;
 use crate::ViewDirection;
 use crate::atmosphere::{
@@ -50,6 +50,15 @@ const RETRIEVAL_SOLVER: MultipleScatteringSettings = MultipleScatteringSettings 
 /// Mie kernels kept per refractive index (the fit's current point, its two
 /// index columns of the Jacobian and a trial step fit with room to spare).
 const KERNEL_CACHE_SIZE: usize = 8;
+
+/// Where `wavelength_nm` is in `wavelengths_nm` (the measurements'
+/// wavelengths, equal to within `SAME_WAVELENGTH_NM` as
+/// [`Measurements::wavelengths_nm`] merges them).
+pub(crate) fn wavelength_index(wavelengths_nm: &[f64], wavelength_nm: f64) -> Option<usize> {
+    wavelengths_nm
+        .iter()
+        .position(|w| (w - wavelength_nm).abs() < SAME_WAVELENGTH_NM)
+}
 
 /// The measured directions of one wavelength and one sun position.
 #[derive(Debug, Clone)]
@@ -108,13 +117,8 @@ impl ForwardModel {
         aerosol_scale_height_m: f64,
         reference_wavelength_nm: f64,
     ) -> Result<ForwardModel> {
-        let mut wavelengths_nm: Vec<f64> =
-            measurements.sky.iter().map(|m| m.wavelength_nm).collect();
-        wavelengths_nm.sort_by(f64::total_cmp);
-        wavelengths_nm.dedup();
-        let reference = wavelengths_nm
-            .iter()
-            .position(|w| *w == reference_wavelength_nm)
+        let wavelengths_nm = measurements.wavelengths_nm();
+        let reference = wavelength_index(&wavelengths_nm, reference_wavelength_nm)
             .ok_or_else(|| {
                 Error::Unsupported(format!(
                     "the reference wavelength {reference_wavelength_nm} nm is not one of the measured wavelengths ({wavelengths_nm:?} nm)"
@@ -136,9 +140,7 @@ impl ForwardModel {
 
         let mut groups: Vec<SkyGroup> = Vec::new();
         for (index, m) in measurements.sky.iter().enumerate() {
-            let wavelength = wavelengths_nm
-                .iter()
-                .position(|w| *w == m.wavelength_nm)
+            let wavelength = wavelength_index(&wavelengths_nm, m.wavelength_nm)
                 .expect("every sky wavelength is in the list");
             let view = ViewDirection::new(m.view_elevation_deg, m.view_azimuth_deg)?;
             match groups.iter_mut().find(|g| {
@@ -205,8 +207,8 @@ impl ForwardModel {
             state.refractive_index_real,
             state.refractive_index_imaginary,
         ))?;
-        let (radii_um, _) = radius_nodes_um();
-        let volume: Vec<f64> = radii_um
+        let volume: Vec<f64> = kernels
+            .radii_um
             .iter()
             .map(|r| state.volume_per_ln_radius(*r))
             .collect();

@@ -64,7 +64,8 @@ pub(crate) struct MieKernels {
     pub refractive_index: Complex64,
     /// cos(theta) of the phase-table nodes, increasing from -1 to 1.
     pub cos_theta: Vec<f64>,
-    /// The trapezoid weights of the radius nodes in ln r.
+    /// The radius nodes, um, and their trapezoid weights in ln r.
+    pub radii_um: Vec<f64>,
     weights: Vec<f64>,
     /// Per wavelength, per radius node: e_j and s_j (m^-1 per unit volume
     /// fraction, i.e. m^2 per m^3 of particle).
@@ -115,6 +116,7 @@ impl MieKernels {
         let (radii_um, weights) = radius_nodes_um();
         let mut kernels = MieKernels {
             refractive_index,
+            radii_um,
             weights,
             extinction: Vec::with_capacity(wavelengths_nm.len()),
             scattering: Vec::with_capacity(wavelengths_nm.len()),
@@ -130,7 +132,7 @@ impl MieKernels {
             let mut extinction = Vec::with_capacity(RADIUS_NODES);
             let mut scattering = Vec::with_capacity(RADIUS_NODES);
             let mut differential = Vec::with_capacity(RADIUS_NODES * angles);
-            for &radius_um in &radii_um {
+            for &radius_um in &kernels.radii_um {
                 let radius_m = radius_um * 1e-6;
                 let x = wavenumber_per_m * radius_m;
                 let solved = match solution.as_mut() {

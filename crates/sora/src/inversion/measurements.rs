@@ -78,7 +78,7 @@ pub struct Measurements {
 pub const MIN_SCATTERING_ANGLE_DEG: f64 = 3.0;
 
 /// Two wavelengths closer than this are the same channel, nm.
-const SAME_WAVELENGTH_NM: f64 = 1e-6;
+pub(crate) const SAME_WAVELENGTH_NM: f64 = 1e-6;
 
 impl SkyRadianceMeasurement {
     /// Scattering angle between the sun and the view direction, degrees.

@@ -257,17 +257,14 @@ pub fn retrieve(
     if settings.max_iterations == 0 {
         return Err(Error::out_of_range("max iterations", 0.0, "1", ">= 1"));
     }
-    let mut wavelengths: Vec<f64> = measurements.sky.iter().map(|m| m.wavelength_nm).collect();
-    wavelengths.sort_by(f64::total_cmp);
-    wavelengths.dedup();
-    let reference_wavelength_nm =
-        settings
-            .reference_wavelength_nm
-            .unwrap_or(if wavelengths.contains(&440.0) {
-                440.0
-            } else {
-                wavelengths[0]
-            });
+    let wavelengths = measurements.wavelengths_nm();
+    let reference_wavelength_nm = settings.reference_wavelength_nm.unwrap_or(
+        if forward::wavelength_index(&wavelengths, 440.0).is_some() {
+            440.0
+        } else {
+            wavelengths[0]
+        },
+    );
     let forward = ForwardModel::new(
         atmosphere,
         measurements,
@@ -299,16 +296,12 @@ pub fn retrieve(
         .optical_depths
         .iter()
         .map(|d| {
-            forward
-                .wavelengths_nm
-                .iter()
-                .position(|w| *w == d.wavelength_nm)
-                .ok_or_else(|| {
-                    Error::Unsupported(format!(
-                        "{}: an optical depth at {} nm, where no sky radiance was measured",
-                        measurements.label, d.wavelength_nm
-                    ))
-                })
+            forward::wavelength_index(&forward.wavelengths_nm, d.wavelength_nm).ok_or_else(|| {
+                Error::Unsupported(format!(
+                    "{}: an optical depth at {} nm, where no sky radiance was measured",
+                    measurements.label, d.wavelength_nm
+                ))
+            })
         })
         .collect::<Result<_>>()?;
 
@@ -331,9 +324,11 @@ pub fn retrieve(
     let measured_depth = measurements
         .optical_depths
         .iter()
-        .find(|d| d.wavelength_nm == reference_wavelength_nm)
+        .find(|d| {
+            (d.wavelength_nm - reference_wavelength_nm).abs() < measurements::SAME_WAVELENGTH_NM
+        })
         .map(|d| d.aerosol_optical_depth.clamp(0.01, 3.0));
-    let mut prior_mean = vec![0.0; parameters];
+    let prior_mean = vec![0.0; parameters];
     let mut prior_sigma = vec![state::PRIOR_SIGMA; parameters];
     if relative {
         // The scale factor: free (a flat a priori).
@@ -400,7 +395,6 @@ pub fn retrieve(
         }
         None => None,
     };
-    prior_mean.truncate(parameters);
     let Some(solution) = best else {
         return Err(Error::Unsupported(format!(
             "{}: the fit failed: the forward model could not be evaluated at any starting point",
