@@ -32,6 +32,7 @@ mod reference_tests;
 pub(crate) mod single_scattering;
 pub(crate) mod sky_view_table;
 pub(crate) mod stokes;
+pub(crate) mod sunlit_directions;
 
 pub use path_tracing::PathTracer;
 pub use single_scattering::{

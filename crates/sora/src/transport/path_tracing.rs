@@ -128,14 +128,35 @@
 //!    sum_j sigma_s,j(lambda) p_j,lambda(w.w') / q(w'), where q is the
 //!    mixture over wavelengths and species of the densities
 //!    (`PhaseFunction::pdf`) with which the direction could have been
-//!    drawn.
+//!    drawn. **Toward the sunlit air** (deep twilight): at a vertex in the
+//!    planet's shadow, where NEE scores nothing, a share
+//!    `SUNLIT_DIRECTION_SHARE` of the directions is drawn instead from a
+//!    density q_lit concentrated a few degrees above the horizon toward
+//!    the sun's azimuth, where the rays reach the sunlit air lowest
+//!    ([`SunlitDirections`]), and q above becomes the two-part mixture
+//!    (1 - share) q + share q_lit. Measured at sun -10 degrees (earth-clear,
+//!    the zenith, 560 nm, 200 000 paths, with step 6's exception): the
+//!    relative standard deviation of one path 126 without, 17.7 with (50
+//!    times fewer paths for the same error); the 10 heaviest paths carried
+//!    57 % of the estimate without, 8 % with.
 //! 5. **Ground.** At a ground vertex x_g with normal n: NEE
 //!    beta a/pi E (n.s) T_sun(x_g), then a cosine-weighted direction
 //!    (pdf (n.w')/pi), so the throughput is multiplied by a.
-//! 6. **Russian roulette** after every vertex: with m the largest
+//! 6. **Russian roulette** after every vertex (except the first
+//!    `SHADOW_INTERACTIONS_WITHOUT_ROULETTE` when they are in the planet's
+//!    shadow): with m the largest
 //!    throughput over the wavelengths, the path survives with probability
 //!    min(1, m / `RUSSIAN_ROULETTE_THRESHOLD`) and its throughputs are
-//!    divided by it (unbiased; no depth limit).
+//!    divided by it (unbiased; no depth limit). The throughput is in
+//!    absolute terms, and after sunset every path's is small (the light
+//!    that reaches the eye is a small part of what a path could carry in
+//!    daylight): without the exception a path that had just turned toward
+//!    the sunlit air survived its first vertex with a probability of about
+//!    0.4 % and came back 250 times heavier, and those few paths were
+//!    most of the estimate. A path in shadow still meets the roulette from
+//!    its fourth interaction on, so a night sky's paths stay short; a
+//!    daylight path whose vertices all see the sun meets neither this
+//!    exception nor step 4's and is traced bit for bit as before.
 //!
 //! # What it reports
 //! Per wavelength, the mean over samples and its standard error
@@ -208,6 +229,7 @@ use super::quadrature::{GAUSS_NODES, GAUSS_WEIGHTS, running_integral_matrix};
 use super::random::RandomStream;
 use super::single_scattering::{SUN_RAY_PANELS, SingleScatteringSky};
 use super::stokes::{self, IDENTITY, Mueller};
+use super::sunlit_directions::SunlitDirections;
 use crate::atmosphere::phase::henyey_greenstein_phase;
 use crate::atmosphere::phase_matrix::PhaseMatrix;
 use crate::atmosphere::{AtmosphereOptics, DensityProfile, PhaseFunction};
@@ -256,6 +278,15 @@ pub(crate) const RUSSIAN_ROULETTE_THRESHOLD: f64 = 0.5;
 /// spread of the zenith at 380 nm: 32 % without, 16.5 % with a quarter,
 /// 34 % with a half; at 540 and 780 nm a quarter and a half do alike).
 const SUNLIT_SHARE: f64 = 0.25;
+
+/// The share of the scattered directions drawn toward the sunlit air at a
+/// vertex in the planet's shadow (module docs, step 4;
+/// [`SunlitDirections`]).
+const SUNLIT_DIRECTION_SHARE: f64 = 0.5;
+
+/// Russian roulette spares a path at its first this many interactions
+/// when they are in the planet's shadow (module docs, step 6).
+const SHADOW_INTERACTIONS_WITHOUT_ROULETTE: u32 = 3;
 
 /// A spectrum estimated by Monte Carlo: the sample mean and its standard
 /// error per wavelength (same unit as the mean).
@@ -356,6 +387,10 @@ pub struct PathTracer<'a> {
     /// the planet's shadow cuts it ([`SUNLIT_SHARE`]; 0 turns it off, for
     /// the tests that compare the two samplers).
     sunlit_share: f64,
+    /// The share of the directions drawn toward the sunlit air at a vertex
+    /// in the planet's shadow ([`SUNLIT_DIRECTION_SHARE`]; 0 turns it off,
+    /// for the tests that compare the two samplers).
+    sunlit_direction_share: f64,
     /// Paths end after this many interactions (scatterings and ground
     /// reflections), so that `multiple_scattering` holds the orders from
     /// 2 to it: for the tests that compare one order (unlimited
@@ -478,7 +513,7 @@ impl ChunkStatistics {
 
 /// An orthonormal basis (t1, t2) perpendicular to the unit vector `n`
 /// (Duff et al. 2017, "Building an orthonormal basis, revisited").
-fn perpendicular_basis(n: Vector3) -> (Vector3, Vector3) {
+pub(crate) fn perpendicular_basis(n: Vector3) -> (Vector3, Vector3) {
     let sign = 1f64.copysign(n.z);
     let a = -1.0 / (sign + n.z);
     let b = n.x * n.y * a;
@@ -535,6 +570,7 @@ impl<'a> PathTracer<'a> {
             running_integral: running_integral_matrix(),
             polarised: false,
             sunlit_share: SUNLIT_SHARE,
+            sunlit_direction_share: SUNLIT_DIRECTION_SHARE,
             #[cfg(test)]
             max_interactions: u32::MAX,
         }
@@ -793,6 +829,7 @@ impl<'a> PathTracer<'a> {
             let mut direction = view;
             let mut interactions = 0u32;
             loop {
+                let mut in_shadow = false;
                 let (length, ends_on_ground) = self.segment_length(position, direction);
                 match self.sample_free_path(
                     position,
@@ -811,8 +848,22 @@ impl<'a> PathTracer<'a> {
                             Part::MultipleScattering
                         };
                         self.set_densities(position, scratch);
-                        self.add_scattered_sunlight(position, direction, part, scratch);
-                        match self.sample_scattering(direction, random, scratch) {
+                        let lit = self.add_scattered_sunlight(position, direction, part, scratch);
+                        in_shadow = !lit;
+                        let toward_sunlit_air =
+                            (!lit && self.sunlit_direction_share > 0.0).then(|| {
+                                SunlitDirections::new(
+                                    position,
+                                    self.sun_direction,
+                                    self.ground_radius_m,
+                                )
+                            });
+                        match self.sample_scattering(
+                            direction,
+                            toward_sunlit_air.as_ref(),
+                            random,
+                            scratch,
+                        ) {
                             Some(next) => direction = next,
                             None => break,
                         }
@@ -850,13 +901,17 @@ impl<'a> PathTracer<'a> {
                 if interactions >= self.max_interactions {
                     break;
                 }
-                // Russian roulette (unbiased: survivors are reweighted).
+                // Russian roulette (unbiased: survivors are reweighted), but
+                // not at the first interactions in the planet's shadow.
                 let largest = scratch.throughput.iter().copied().fold(0.0, f64::max);
                 if largest <= 0.0 {
                     break;
                 }
                 debug_assert!(largest.is_finite(), "throughput {largest}");
-                if largest < RUSSIAN_ROULETTE_THRESHOLD {
+                let spared = in_shadow
+                    && self.sunlit_direction_share > 0.0
+                    && interactions < SHADOW_INTERACTIONS_WITHOUT_ROULETTE;
+                if largest < RUSSIAN_ROULETTE_THRESHOLD && !spared {
                     let survival = largest / RUSSIAN_ROULETTE_THRESHOLD;
                     if random.next_f64() >= survival {
                         break;
@@ -1389,16 +1444,17 @@ impl<'a> PathTracer<'a> {
         true
     }
 
-    /// NEE at a scattering vertex: beta sum_j sigma_s,j p_j(w.s) E T_sun.
+    /// NEE at a scattering vertex: beta sum_j sigma_s,j p_j(w.s) E T_sun;
+    /// false (and nothing added) in the planet's shadow.
     fn add_scattered_sunlight(
         &self,
         position: Vector3,
         direction: Vector3,
         part: Part,
         scratch: &mut PathScratch,
-    ) {
+    ) -> bool {
         if !self.set_sun_columns(position, scratch) {
-            return;
+            return false;
         }
         let cos_theta = direction.dot(self.sun_direction);
         self.set_phase_term(cos_theta, scratch);
@@ -1415,6 +1471,7 @@ impl<'a> PathTracer<'a> {
         if self.polarised {
             self.add_stokes_of_sunlight(direction, cos_theta, scratch);
         }
+        true
     }
 
     /// The Stokes vector of a sky next-event (its scalar estimate in
@@ -1520,6 +1577,7 @@ impl<'a> PathTracer<'a> {
     fn sample_scattering(
         &self,
         direction: Vector3,
+        toward_sunlit_air: Option<&SunlitDirections>,
         random: &mut RandomStream,
         scratch: &mut PathScratch,
     ) -> Option<Vector3> {
@@ -1554,10 +1612,22 @@ impl<'a> PathTracer<'a> {
                 }
             }
         }
-        let sample = self.optics.species[chosen?]
-            .phase_function
-            .sample(hero, [random.next_f64(), random.next_f64()]);
-        let next = direction_about(direction, sample.cos_theta, sample.phi);
+        let chosen = chosen?;
+        // In the planet's shadow a share of the directions is drawn toward
+        // the sunlit air instead (step 4); the choice uses one more random
+        // number only there, so lit paths keep their random numbers.
+        let share = toward_sunlit_air.map_or(0.0, |_| self.sunlit_direction_share);
+        let next = match toward_sunlit_air {
+            Some(q) if random.next_f64() < share => {
+                q.sample([random.next_f64(), random.next_f64()])
+            }
+            _ => {
+                let sample = self.optics.species[chosen]
+                    .phase_function
+                    .sample(hero, [random.next_f64(), random.next_f64()]);
+                direction_about(direction, sample.cos_theta, sample.phi)
+            }
+        };
         let cos_theta = direction.dot(next).clamp(-1.0, 1.0);
         // The mixture density of `next` over wavelengths and species, and
         // the phase term of every wavelength there.
@@ -1581,7 +1651,10 @@ impl<'a> PathTracer<'a> {
                 }
             }
         }
-        let density = density_sum / members as f64;
+        let mut density = density_sum / members as f64;
+        if let Some(q) = toward_sunlit_air {
+            density = (1.0 - share) * density + share * q.pdf(next);
+        }
         if density.is_nan() || density <= 0.0 {
             return None;
         }
@@ -1796,15 +1869,21 @@ mod tests {
         assert!(partial > 100, "only {partial} segments cut by the shadow");
     }
 
-    /// Drawing a share of the free paths from the sunlit parts changes the
-    /// noise, not the expectation: at sun -6 and -9 degrees (earth-clear,
-    /// zenith and 10 degrees above the sunward horizon), 40 000 paths each
-    /// way agree within 4 combined standard errors at every wavelength,
-    /// and the sunlit sampling is the less noisy at the zenith.
+    /// Drawing a share of the free paths from the sunlit parts and of the
+    /// directions toward the sunlit air (with the roulette's exception in
+    /// shadow) changes the noise, not the expectation: at sun -3, -6 and
+    /// -9 degrees (earth-clear, zenith and 10 degrees above the sunward
+    /// horizon), the two ways agree within 4 combined standard errors at
+    /// every wavelength, and the sunlit sampling is the less noisy at the
+    /// zenith. At -3 degrees the air below 9 km over the eye is in shadow,
+    /// so every sampler is at work, and both ways are precise (200 000
+    /// paths: 1-2 % without): there the test sees a bias of a few per cent;
+    /// at -6 and -9 degrees (40 000 paths) the way without is too noisy to
+    /// see less than 30-100 %.
     #[test]
     fn sunlit_sampling_is_unbiased_at_twilight() {
         let atmosphere = Atmosphere::preset("earth-clear").unwrap();
-        for sun in [-6.0, -9.0] {
+        for (sun, samples) in [(-3.0, 200_000), (-6.0, 40_000), (-9.0, 40_000)] {
             let observation = Observation {
                 observer_altitude_m: 0.0,
                 sun_elevation_deg: sun,
@@ -1815,6 +1894,7 @@ mod tests {
             let with = PathTracer::new(&sky);
             let without = PathTracer {
                 sunlit_share: 0.0,
+                sunlit_direction_share: 0.0,
                 ..PathTracer::new(&sky)
             };
             for (name, view) in [
@@ -1824,8 +1904,8 @@ mod tests {
                     crate::geometry::direction_from_elevation_azimuth(10.0, 270.0),
                 ),
             ] {
-                let a = with.compute_radiance(view, 40_000, 11).unwrap().total;
-                let b = without.compute_radiance(view, 40_000, 12).unwrap().total;
+                let a = with.compute_radiance(view, samples, 11).unwrap().total;
+                let b = without.compute_radiance(view, samples, 12).unwrap().total;
                 let mut worst: f64 = 0.0;
                 for i in 0..a.mean.len() {
                     let sigma = a.standard_error.values()[i].hypot(b.standard_error.values()[i]);

@@ -473,9 +473,25 @@ fn the_fast_method_matches_the_vector_path_tracer() {
 /// and holds I to 1 % + 3 standard errors, the degree to 0.01 + 3 standard
 /// errors, the angle to 1 degree where the degree is above 0.05.
 /// `cargo test --release -p sora --lib -- --ignored fast_polarisation_over_the_whole_grid --nocapture`
+///
+/// Settings by environment (all optional, for re-measuring part of the
+/// grid with more paths): `SORA_GRID_PRESETS` and `SORA_GRID_SUNS`
+/// (comma-separated), `SORA_GRID_SAMPLES` (paths a view, default
+/// 100 000), `SORA_GRID_SEED` (default 7).
 #[test]
 #[ignore = "minutes: 120 path-traced views"]
 fn fast_polarisation_over_the_whole_grid() {
+    let setting = |name: &str, default: &str| std::env::var(name).unwrap_or(default.to_string());
+    let presets = setting(
+        "SORA_GRID_PRESETS",
+        "us-standard-1976-rayleigh,earth-clear,mars-dust",
+    );
+    let suns: Vec<f64> = setting("SORA_GRID_SUNS", "60,30,10,5")
+        .split(',')
+        .map(|s| s.trim().parse().unwrap())
+        .collect();
+    let samples: u64 = setting("SORA_GRID_SAMPLES", "100000").parse().unwrap();
+    let seed: u64 = setting("SORA_GRID_SEED", "7").parse().unwrap();
     let grid = WavelengthGrid::new(440.0, 680.0, 120.0).unwrap();
     let mut views = vec![(90.0, 0.0)];
     for elevation in [10.0, 30.0, 60.0] {
@@ -489,9 +505,9 @@ fn fast_polarisation_over_the_whole_grid() {
         (0.0, String::new()),
         (0.0, String::new()),
     ];
-    for preset in ["us-standard-1976-rayleigh", "earth-clear", "mars-dust"] {
+    for preset in presets.split(',').map(str::trim) {
         let atmosphere = Atmosphere::preset(preset).unwrap();
-        for sun in [60.0, 30.0, 10.0, 5.0] {
+        for &sun in &suns {
             let sky = |method| {
                 crate::Sky::builder(&atmosphere)
                     .sun_deg(sun, 0.0)
@@ -506,12 +522,9 @@ fn fast_polarisation_over_the_whole_grid() {
                 .map(|v| crate::ViewDirection::new(v.0, v.1).unwrap())
                 .collect();
             let fast = sky(crate::Method::Fast).radiances(&directions).unwrap();
-            let traced = sky(crate::Method::PathTracing {
-                samples: 100_000,
-                seed: 7,
-            })
-            .radiances(&directions)
-            .unwrap();
+            let traced = sky(crate::Method::PathTracing { samples, seed })
+                .radiances(&directions)
+                .unwrap();
             for ((view, f), t) in views.iter().zip(&fast).zip(&traced) {
                 let (fs, ts) = (f.stokes.as_ref().unwrap(), t.stokes.as_ref().unwrap());
                 let errors = t.standard_error_w_m2_sr_nm.as_ref().unwrap();
