@@ -14,11 +14,17 @@
 //! and at 5 degrees elevation away from the sun with the sun at -4, path
 //! counts from pilot runs of 200 000 paths (twilight errors are heavy-
 //! tailed: a pilot's estimate is good to some 10-20 %). Measured on this
-//! 2-core machine: 553 000 paths in 2.45 s at the zenith (sun -6), 462 000
-//! in 2.64 s at 5 degrees away from the sun (sun -4); from the spread of
-//! 100 runs (the ignored `error_bars_are_calibrated_at_twilight`), the
-//! zenith needs about 830 000 paths, 3.7 s, and needed 4 800 000 without
-//! the sunlit-part sampling.
+//! 2-core machine, with the directions drawn toward the sunlit air from
+//! shadowed vertices (`transport/sunlit_directions.rs`): 216 000 paths in
+//! 2.85 s at the zenith (sun -6), 310 000 in 4.77 s at 5 degrees away from
+//! the sun (sun -4); before them 553 000 in 2.45 s and 462 000 in 2.64 s
+//! (fewer paths now, each about three times as long: the roulette spares
+//! the first three interactions in shadow). From the spread of 100 runs
+//! (the ignored `error_bars_are_calibrated_at_twilight`) the zenith needs
+//! about 270 000 paths, 3.5 s (830 000 and 3.7 s before; 4 800 000
+//! without the sunlit-part sampling). At sun -10 the gain is what the
+//! sampler is for: 50 times fewer paths for the same error at the zenith
+//! (`docs/twilight_survey.md`).
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use sora::atmosphere::Planet;
