@@ -30,8 +30,8 @@
 //! delta-M scaled (beta*, p*, T*) as the solver's problem is, T*_sun zero
 //! where the path from y toward the sun hits the ground, no ground
 //! reflection (the solver adds that). Its harmonics are the cosine
-//! transform over N = `AZIMUTHS` midpoint azimuths (as many as the solver has
-//! harmonics when it has fewer) on 0..180 degrees (the
+//! transform over N midpoint azimuths (as many as the solver has
+//! harmonics, [`azimuth_count`]) on 0..180 degrees (the
 //! field is symmetric about the solar meridian):
 //! L1_m = (2 - delta_m0) / N sum_a L1(phi_a) cos(m phi_a), exact for a
 //! field of harmonics below N. Along each path: `PANELS` Gauss panels
@@ -46,14 +46,6 @@ use crate::geometry::{Vector3, segment_in_atmosphere};
 use crate::transport::optical_column::{ProfileCorners, SunColumnRadius, SunColumnTable};
 use crate::transport::quadrature::{GAUSS_NODES, GAUSS_WEIGHTS, running_integral_matrix};
 
-/// Most azimuths of the cosine transform: the solver has 2n = 16
-/// harmonics at the default 8 streams per hemisphere. Fewer streams take
-/// as many azimuths as harmonics (the delta-M phase functions have no
-/// more terms than that): at 4 streams per hemisphere 8 azimuths change
-/// the explorer's preview by 0.1 % of its 99th-percentile error at suns 5
-/// to -6 degrees (the `quality_accuracy` example of `crates/sora-web`)
-/// and halve its cost.
-const AZIMUTHS: usize = 16;
 /// Gauss panels along each stream's path (measured: 8 panels change the
 /// zenith at sun -6 degrees by 4e-5 and at sun 5 by 2.5e-4, at 1.6 times
 /// the cost).
@@ -182,10 +174,19 @@ pub(crate) fn compute_spherical_first_order(inputs: &FirstOrderInputs) -> Vec<f6
     out
 }
 
-/// Azimuths of the cosine transform for `streams` harmonics (see
-/// [`AZIMUTHS`]).
+/// Azimuths of the cosine transform for `streams` harmonics: as many as
+/// harmonics (the delta-M phase functions have no more terms than that),
+/// which the transform needs to be exact. Fewer alias: harmonic m >= N
+/// of N midpoint azimuths reads as -(harmonic 2N - m). (Until the sky
+/// had more than 8 streams per hemisphere, 16 azimuths were the most;
+/// at 16 streams the first order's harmonics 17-31 were minus copies of
+/// 15-1, which cost mars-dust 13-30 % of its multiply scattered light
+/// 5 degrees above the horizon with the sun below it. At 4 streams per
+/// hemisphere 8 azimuths change the explorer's preview by 0.1 % of its
+/// 99th-percentile error at suns 5 to -6 degrees, the `quality_accuracy`
+/// example of `crates/sora-web`, and halve its cost.)
 fn azimuth_count(streams: usize) -> usize {
-    AZIMUTHS.min(streams).max(1)
+    streams.max(1)
 }
 
 /// (2 - delta_m0) / N cos(m phi_a) of the cosine transform over N =
@@ -653,5 +654,39 @@ mod tests {
         assert_eq!(fast.len(), oracle.len());
         assert!(oracle.iter().any(|v| *v > 0.0), "some light");
         assert!(fast == oracle, "bit for bit");
+    }
+
+    /// The cosine transform gives back every harmonic of a field that has
+    /// as many as the solver (2n for n streams per hemisphere), for the
+    /// explorer's 4, the default 8 and more: with at most 16 azimuths, as
+    /// before, 16 streams per hemisphere read harmonic 17 as minus
+    /// harmonic 15.
+    #[test]
+    fn the_azimuth_transform_is_exact_for_every_harmonic() {
+        for harmonics in [8, 16, 24, 32] {
+            let azimuths = azimuth_count(harmonics);
+            let cosines = harmonic_cosines(azimuths, harmonics);
+            let truth: Vec<f64> = (0..harmonics)
+                .map(|m| 1.0 / (1.0 + m as f64) * if m % 3 == 1 { -1.0 } else { 1.0 })
+                .collect();
+            let mut recovered = vec![0.0; harmonics];
+            for a in 0..azimuths {
+                let phi = PI * (a as f64 + 0.5) / azimuths as f64;
+                let field: f64 = truth
+                    .iter()
+                    .enumerate()
+                    .map(|(m, c)| c * (m as f64 * phi).cos())
+                    .sum();
+                for (m, r) in recovered.iter_mut().enumerate() {
+                    *r += field * cosines[a * harmonics + m];
+                }
+            }
+            for (m, (r, t)) in recovered.iter().zip(&truth).enumerate() {
+                assert!(
+                    (r - t).abs() < 1e-12,
+                    "{harmonics} harmonics: harmonic {m} {r} against {t}"
+                );
+            }
+        }
     }
 }
