@@ -19,7 +19,7 @@
 //! 2.85 s at the zenith (sun -6), 310 000 in 4.77 s at 5 degrees away from
 //! the sun (sun -4); before them 553 000 in 2.45 s and 462 000 in 2.64 s
 //! (fewer paths now, each about three times as long: the roulette spares
-//! the first three interactions in shadow). From the spread of 100 runs
+//! the first two interactions in shadow). From the spread of 100 runs
 //! (the ignored `error_bars_are_calibrated_at_twilight`) the zenith needs
 //! about 270 000 paths, 3.5 s (830 000 and 3.7 s before; 4 800 000
 //! without the sunlit-part sampling). At sun -10 the gain is what the

@@ -185,6 +185,21 @@
 //!   first order 0 to -8 degrees were +5.5 %, +16 %, +20 %, -39 % and
 //!   -93 %, and below -10 degrees the field collapsed (the zenith 3e5
 //!   times too dark at -10).
+//! - **Deep twilight, the method's weakest place** (`docs/twilight_survey.md`,
+//!   against the path tracer with its directions toward the sunlit air,
+//!   1 000 000 paths a view):
+//!   - -8 degrees is within 5 % (earth-clear median -2.5 %, earth-hazy
+//!     -1.2 %);
+//!   - earth-clear is 8-13 % too dark at -10 and 10-17 % at -12 where all
+//!     the light is multiply scattered;
+//!   - us-standard-1976-rayleigh is -4 to +32 % off at -10 and -29 to -48 %
+//!     at -12.
+//!
+//!   The cause is the 8 streams' quadrature of the first-order light,
+//!   which comes from the sunlit layer a few degrees above the sunward
+//!   horizon. earth-clear converges with 16 streams (+4 to +12 % at -12,
+//!   24 adding at most 0.6 %); us-standard does not (12, 16 and 24
+//!   streams differ by 15-25 %).
 //!
 //! # Cost (measured, `benches/multiple_scattering.rs`, 2 shared cores)
 //! Per image, 21 wavelengths, `clear-sky-reference`: the field 0.12 s and
