@@ -20,6 +20,9 @@
 //!   images;
 //! - `stokes`: Stokes vectors along a path (the meridian-plane convention,
 //!   rotations, the Mueller matrix a polarised path carries);
+//! - `path_tracing`: the Monte Carlo reference for all orders, and
+//!   `sunlit_directions`, its directions from the planet's shadow toward
+//!   the sunlit air in twilight;
 //! - `quadrature`: the Gauss-Legendre rules they share.
 
 pub(crate) mod multiple_scattering;
