@@ -648,6 +648,14 @@ impl Sky {
         self.polarisation
     }
 
+    /// [`Sky::prepare_field`] for images and the image tables, which need
+    /// the field of every direction (an error for a field restricted to
+    /// views above some elevation).
+    fn prepare_field_for_images(&self) -> Result<()> {
+        self.check_within_restricted_field(None)?;
+        self.prepare_field()
+    }
+
     /// Solves the multiple-scattering field if the sky has one and it is
     /// not solved yet. Every entry point calls it before its parallel loop:
     /// a worker that stole work inside the (parallel) solve must not find
@@ -927,8 +935,7 @@ impl Sky {
 
     /// [`Sky::radiance_from_image_tables`] for every view in `views`.
     fn radiances_from_image_tables(&self, views: &[ViewDirection]) -> Result<Vec<SkyRadiance>> {
-        self.check_within_restricted_field(None)?;
-        self.prepare_field()?;
+        self.prepare_field_for_images()?;
         let tables = self.image_tables();
         let mut work = self.view_work();
         let n = self.wavelengths().len();
@@ -1085,8 +1092,7 @@ impl Sky {
     /// sky-view tables), so that a progress display can show it as its
     /// own phase; rendering does it on first use otherwise.
     pub fn prepare_images(&self) -> Result<()> {
-        self.check_within_restricted_field(None)?;
-        self.prepare_field()?;
+        self.prepare_field_for_images()?;
         self.source_table();
         if self.method == Method::Fast {
             self.image_tables();
@@ -1224,8 +1230,7 @@ impl Sky {
             ));
         }
         // Tables first, outside the parallel loop (see `prepare_field`).
-        self.check_within_restricted_field(None)?;
-        self.prepare_field()?;
+        self.prepare_field_for_images()?;
         let source_table = self.source_table();
         let tables = (self.method == Method::Fast).then(|| self.image_tables());
         let wavelengths = self.wavelengths().len();
