@@ -341,6 +341,53 @@ fn twilight_matches_the_path_tracer_over_the_whole_grid() {
     );
 }
 
+/// The fast method against the path tracer (`samples` paths, `seed`) at
+/// the sun `sun_deg` high (azimuth 0), every view and wavelength of
+/// `grid`, within the 3 % plus 3 standard errors (`place` names
+/// the sky in the messages).
+fn assert_fast_matches_the_path_tracer(
+    place: &str,
+    atmosphere: &Atmosphere,
+    grid: WavelengthGrid,
+    sun_deg: f64,
+    views: &[ViewDirection],
+    (samples, seed): (u64, u64),
+) {
+    use sora::Method;
+    let sky = |method| {
+        Sky::builder(atmosphere)
+            .wavelengths(grid)
+            .sun_deg(sun_deg, 0.0)
+            .method(method)
+            .build()
+            .unwrap()
+            .radiances(views)
+            .unwrap()
+    };
+    let fast = sky(Method::Fast);
+    let traced = sky(Method::PathTracing { samples, seed });
+    for ((view, f), t) in views.iter().zip(&fast).zip(&traced) {
+        let view = (view.elevation_deg(), view.azimuth_deg());
+        let errors = t.standard_error_w_m2_sr_nm.as_ref().unwrap();
+        for i in 0..grid.len() {
+            let expected = t.radiance_w_m2_sr_nm.values()[i];
+            let sigma = errors.values()[i] / expected;
+            let error = f.radiance_w_m2_sr_nm.values()[i] / expected - 1.0;
+            eprintln!(
+                "{place}, view {view:?}, {} nm: {:+.2} % (path tracer +-{:.2} %)",
+                grid.wavelength_nm(i),
+                100.0 * error,
+                100.0 * sigma
+            );
+            assert!(
+                error.abs() <= 0.03 + 3.0 * sigma,
+                "{place}, view {view:?}, {} nm: {error:+.4} against +-{sigma:.4}",
+                grid.wavelength_nm(i)
+            );
+        }
+    }
+}
+
 /// The fast method against the path tracer where civil twilight is
 /// hardest for it (earth-clear, sun -6 degrees, 440, 560 and 680 nm):
 /// toward the sun 5 degrees up and the zenith, within the 3 %
@@ -354,47 +401,20 @@ fn twilight_matches_the_path_tracer_over_the_whole_grid() {
 /// and -0.9 % toward the sun, -3.9, -2.2 and -1.3 % at the zenith.
 #[test]
 fn sun_six_below_matches_the_path_tracer_at_three_wavelengths() {
-    use sora::Method;
     let atmosphere = Atmosphere::preset("earth-clear").unwrap();
     let grid = WavelengthGrid::new(440.0, 680.0, 120.0).unwrap();
     let views: Vec<ViewDirection> = [(5.0, 0.0), (90.0, 0.0)]
         .iter()
         .map(|(e, a)| ViewDirection::new(*e, *a).unwrap())
         .collect();
-    let sky = |method| {
-        Sky::builder(&atmosphere)
-            .wavelengths(grid)
-            .sun_deg(-6.0, 0.0)
-            .method(method)
-            .build()
-            .unwrap()
-            .radiances(&views)
-            .unwrap()
-    };
-    let fast = sky(Method::Fast);
-    let traced = sky(Method::PathTracing {
-        samples: 200_000,
-        seed: 6,
-    });
-    for ((view, f), t) in views.iter().zip(&fast).zip(&traced) {
-        let errors = t.standard_error_w_m2_sr_nm.as_ref().unwrap();
-        for i in 0..grid.len() {
-            let expected = t.radiance_w_m2_sr_nm.values()[i];
-            let sigma = errors.values()[i] / expected;
-            let error = f.radiance_w_m2_sr_nm.values()[i] / expected - 1.0;
-            eprintln!(
-                "view {view:?}, {} nm: {:+.2} % (path tracer +-{:.2} %)",
-                grid.wavelength_nm(i),
-                100.0 * error,
-                100.0 * sigma
-            );
-            assert!(
-                error.abs() <= 0.03 + 3.0 * sigma,
-                "view {view:?}, {} nm: {error:+.4} against +-{sigma:.4}",
-                grid.wavelength_nm(i)
-            );
-        }
-    }
+    assert_fast_matches_the_path_tracer(
+        "earth-clear, sun -6",
+        &atmosphere,
+        grid,
+        -6.0,
+        &views,
+        (200_000, 6),
+    );
 }
 
 /// Near a low sun with Mie aerosols, where delta-M's forward-peak term
@@ -409,45 +429,19 @@ fn sun_six_below_matches_the_path_tracer_at_three_wavelengths() {
 /// (before) mars-dust was +10 to +17 % here and earth-hazy -5 to -6 %.
 #[test]
 fn near_a_low_sun_with_aerosols_matches_the_path_tracer() {
-    use sora::Method;
     let grid = WavelengthGrid::new(440.0, 680.0, 120.0).unwrap();
     for (preset, view, seed) in [
         ("mars-dust", (5.0, 5.0), 51),
         ("earth-hazy", (5.0, 2.0), 52),
     ] {
         let atmosphere = Atmosphere::preset(preset).unwrap();
-        let views = [ViewDirection::new(view.0, view.1).unwrap()];
-        let sky = |method| {
-            Sky::builder(&atmosphere)
-                .wavelengths(grid)
-                .sun_deg(5.0, 0.0)
-                .method(method)
-                .build()
-                .unwrap()
-                .radiances(&views)
-                .unwrap()
-        };
-        let fast = sky(Method::Fast);
-        let traced = sky(Method::PathTracing {
-            samples: 50_000,
-            seed,
-        });
-        let errors = traced[0].standard_error_w_m2_sr_nm.as_ref().unwrap();
-        for i in 0..grid.len() {
-            let expected = traced[0].radiance_w_m2_sr_nm.values()[i];
-            let sigma = errors.values()[i] / expected;
-            let error = fast[0].radiance_w_m2_sr_nm.values()[i] / expected - 1.0;
-            eprintln!(
-                "{preset}, view {view:?}, {} nm: {:+.2} % (path tracer +-{:.2} %)",
-                grid.wavelength_nm(i),
-                100.0 * error,
-                100.0 * sigma
-            );
-            assert!(
-                error.abs() <= 0.03 + 3.0 * sigma,
-                "{preset}, view {view:?}, {} nm: {error:+.4} against +-{sigma:.4}",
-                grid.wavelength_nm(i)
-            );
-        }
+        assert_fast_matches_the_path_tracer(
+            preset,
+            &atmosphere,
+            grid,
+            5.0,
+            &[ViewDirection::new(view.0, view.1).unwrap()],
+            (50_000, seed),
+        );
     }
 }
