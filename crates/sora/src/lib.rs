@@ -65,6 +65,7 @@ pub mod colour;
 pub mod error;
 pub mod geometry;
 pub mod inversion;
+mod linear_algebra;
 pub mod output;
 mod parallel;
 pub mod sky;
