@@ -269,7 +269,9 @@ use self::phase_fourier::{
 };
 pub(crate) use self::polarisation_correction::PolarisationTable;
 use self::polarisation_correction::{CorrectionInputs, PolarisationCorrection};
-use self::spherical_first_order::{FirstOrderInputs, compute_spherical_first_order};
+use self::spherical_first_order::{
+    FirstOrderInputs, MomentQuadrature, compute_spherical_first_order,
+};
 use self::spherical_paths::StreamPaths;
 use self::successive_orders::{ColumnSystem, ScaledSpecies, Streams};
 use self::vertical_grid::VerticalGrid;
@@ -1090,6 +1092,8 @@ impl MultipleScatteringField {
                 sun_columns: &table_columns,
                 level_altitudes_m: grid.altitudes_m(),
                 stream_cosines: streams.cosines(),
+                stream_weights: streams.weights(),
+                moments: MomentQuadrature::Fine,
                 sun_zenith_rad: &sun_axis.angles_rad[first_spherical..],
                 scaled_extinction: &scaled_extinction,
                 scaled_scattering: &scaled_scattering,

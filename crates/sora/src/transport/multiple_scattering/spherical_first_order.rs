@@ -40,9 +40,12 @@
 
 use std::f64::consts::PI;
 
-use super::phase_fourier::TruncatedPhase;
+use super::phase_fourier::{
+    TruncatedPhase, gauss_legendre_unit_interval, normalized_associated_legendre,
+};
 use crate::atmosphere::DensityProfile;
 use crate::geometry::{Vector3, segment_in_atmosphere};
+use crate::linear_algebra::inverse;
 use crate::transport::optical_column::{ProfileCorners, SunColumnRadius, SunColumnTable};
 use crate::transport::quadrature::{GAUSS_NODES, GAUSS_WEIGHTS, running_integral_matrix};
 
@@ -61,6 +64,10 @@ pub(crate) struct FirstOrderInputs<'a> {
     pub sun_columns: &'a SunColumnTable,
     pub level_altitudes_m: &'a [f64],
     pub stream_cosines: &'a [f64],
+    /// The streams' quadrature weights (each hemisphere sums to 1).
+    pub stream_weights: &'a [f64],
+    /// How the first order's Legendre moments are integrated.
+    pub moments: MomentQuadrature,
     pub sun_zenith_rad: &'a [f64],
     pub scaled_extinction: &'a [f64],
     pub scaled_scattering: &'a [f64],
@@ -68,10 +75,25 @@ pub(crate) struct FirstOrderInputs<'a> {
     pub solar_irradiance_w_m2_nm: &'a [f64],
 }
 
+/// How the first order's Legendre moments (what the solver and the views
+/// take from it, see [`StreamFit`]) are integrated over the zenith cosine.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum MomentQuadrature {
+    /// By the streams' own quadrature: L1 at the streams as marched (the
+    /// tests' comparison, and the oracle's).
+    #[cfg(test)]
+    Streams,
+    /// On a finer grid graded toward the horizon ([`fine_cosines`]), the
+    /// streams' values then corrected so that their quadrature gives those
+    /// moments ([`StreamFit`]).
+    Fine,
+}
+
 /// L1 for every sun node, wavelength, harmonic, level and stream, laid out
 /// as the solver's solutions: [(s * wavelengths + i) * solution + (m *
 /// levels + k) * streams + b], solution = streams * levels * streams
-/// (harmonics = streams).
+/// (harmonics = streams). With [`MomentQuadrature::Fine`] the values are
+/// the streams' radiances fitted to the fine moments, not L1 itself.
 ///
 /// A stream's path from a level does not depend on the sun (the sun turns
 /// in the x-z plane, the azimuths are taken from it), so each path is
@@ -97,6 +119,15 @@ pub(crate) fn compute_spherical_first_order(inputs: &FirstOrderInputs) -> Vec<f6
         phase_table: &phase_table,
     };
     let by_species = &BySpecies::new(inputs);
+    let fit = match inputs.moments {
+        #[cfg(test)]
+        MomentQuadrature::Streams => None,
+        MomentQuadrature::Fine => Some(StreamFit::new(
+            inputs.stream_cosines,
+            inputs.stream_weights,
+            wavelengths,
+        )),
+    };
     let suns_vectors: Vec<Vector3> = inputs
         .sun_zenith_rad
         .iter()
@@ -125,6 +156,25 @@ pub(crate) fn compute_spherical_first_order(inputs: &FirstOrderInputs) -> Vec<f6
             sources: vec![0.0; wavelengths],
         };
         let mut path = MarchedPath::default();
+        let fine = fit.is_some();
+        let mut moments = vec![
+            0.0;
+            if fine {
+                suns * streams * streams * wavelengths
+            } else {
+                0
+            }
+        ];
+        let mut fine_harmonics = vec![
+            0.0;
+            if fine {
+                suns * streams * wavelengths
+            } else {
+                0
+            }
+        ];
+        let mut legendre = vec![0.0; streams * streams];
+        let mut residual = vec![0.0; if fine { streams * wavelengths } else { 0 }];
         for (b, mu) in inputs.stream_cosines.iter().enumerate() {
             let sine = (1.0 - mu * mu).max(0.0).sqrt();
             for a in 0..azimuths {
@@ -145,14 +195,72 @@ pub(crate) fn compute_spherical_first_order(inputs: &FirstOrderInputs) -> Vec<f6
                     );
                     let harmonics = &mut block[(s * streams + b) * streams * wavelengths..]
                         [..streams * wavelengths];
-                    for (m, row) in harmonics.chunks_exact_mut(wavelengths).enumerate() {
-                        let factor = cosines[a * streams + m];
-                        for (h, l) in row.iter_mut().zip(&work.radiance) {
-                            *h += factor * l;
+                    add_harmonics(
+                        &cosines[a * streams..][..streams],
+                        &work.radiance,
+                        harmonics,
+                    );
+                }
+            }
+        }
+        let Some(fit) = &fit else {
+            return;
+        };
+        // The moments on the fine grid, [((s * streams + m) * streams + l) *
+        // wavelengths + i], from the harmonics of each fine cosine,
+        // [(s * streams + m) * wavelengths + i].
+        moments.fill(0.0);
+        for (mu, weight) in fine_cosines(ground, ground + inputs.level_altitudes_m[k]) {
+            normalized_associated_legendre(mu, streams, &mut legendre);
+            fine_harmonics.fill(0.0);
+            let sine = (1.0 - mu * mu).max(0.0).sqrt();
+            for a in 0..azimuths {
+                let phi = PI * (a as f64 + 0.5) / azimuths as f64;
+                let direction = Vector3::new(sine * phi.cos(), sine * phi.sin(), mu);
+                if !march_path(tables, &running, x, direction, &mut work, &mut path) {
+                    continue;
+                }
+                for (s, sun) in suns_vectors.iter().enumerate() {
+                    compute_first_order_on_path(
+                        tables,
+                        by_species,
+                        direction,
+                        *sun,
+                        &path,
+                        &mut work,
+                        &mut sun_work,
+                    );
+                    let harmonics =
+                        &mut fine_harmonics[s * streams * wavelengths..][..streams * wavelengths];
+                    add_harmonics(
+                        &cosines[a * streams..][..streams],
+                        &work.radiance,
+                        harmonics,
+                    );
+                }
+            }
+            for s in 0..suns {
+                for m in 0..streams {
+                    let harmonic =
+                        &fine_harmonics[(s * streams + m) * wavelengths..][..wavelengths];
+                    for l in m..streams {
+                        let factor = weight * legendre[m * streams + l];
+                        let out = &mut moments[((s * streams + m) * streams + l) * wavelengths..]
+                            [..wavelengths];
+                        for (o, h) in out.iter_mut().zip(harmonic) {
+                            *o += factor * h;
                         }
                     }
                 }
             }
+        }
+        for s in 0..suns {
+            fit.correct(
+                &moments[s * streams * streams * wavelengths..][..streams * streams * wavelengths],
+                &mut block[s * streams * streams * wavelengths..]
+                    [..streams * streams * wavelengths],
+                &mut residual,
+            );
         }
     });
     let mut out = vec![0.0; suns * wavelengths * solution];
@@ -200,6 +308,213 @@ fn harmonic_cosines(azimuths: usize, streams: usize) -> Vec<f64> {
             })
         })
         .collect()
+}
+
+/// Adds one azimuth's radiance per wavelength `radiance`, times that
+/// azimuth's transform factors `cosines` (one per harmonic), to
+/// `harmonics` ([m * wavelengths + i]).
+fn add_harmonics(cosines: &[f64], radiance: &[f64], harmonics: &mut [f64]) {
+    for (factor, row) in cosines
+        .iter()
+        .zip(harmonics.chunks_exact_mut(radiance.len()))
+    {
+        for (h, l) in row.iter_mut().zip(radiance) {
+            *h += factor * l;
+        }
+    }
+}
+
+/// Zenith cosines and weights (summing to 2) of the fine quadrature of the
+/// first order's moments at a level of radius `radius_m` above a ground
+/// of radius `ground_m`: Gauss-Legendre panels on [-1, 1], narrowest
+/// around the cosine mu_h = -sqrt(1 - (R / r)^2) of the level's horizon.
+///
+/// Why: after sunset the first order at a shadowed point comes from the
+/// sunlit air seen a few degrees above the horizon toward the sun, and
+/// from a high level from the sunlit air seen just above and below its
+/// horizon: a peak a few hundredths wide in mu, with a kink at mu_h where
+/// the path begins to end on the ground. The 8 Gauss streams of a
+/// hemisphere put 2 nodes within 6 degrees of the horizon (mu 0.020 and
+/// 0.10), and their quadrature of that peak into the next order left
+/// earth-clear's deep twilight 8-17 % too dark (`docs/twilight_survey.md`).
+/// Here `FINE_PANEL_NODES` Gauss nodes on each of the panels between
+/// the breakpoints mu_h +- (0, 0.015, 0.04, 0.1, 0.25), -1, -0.5 and 0.6.
+fn fine_cosines(ground_m: f64, radius_m: f64) -> Vec<(f64, f64)> {
+    let ratio = (ground_m / radius_m).min(1.0);
+    let horizon = -(1.0 - ratio * ratio).max(0.0).sqrt();
+    let mut breaks: Vec<f64> = [-1.0, -0.5, 0.6, 1.0]
+        .into_iter()
+        .chain(
+            FINE_PANEL_OFFSETS
+                .iter()
+                .flat_map(|d| [horizon - d, horizon + d]),
+        )
+        .map(|b: f64| b.clamp(-1.0, 1.0))
+        .collect();
+    breaks.sort_by(f64::total_cmp);
+    breaks.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+    let (nodes, weights) = gauss_legendre_unit_interval(FINE_PANEL_NODES);
+    breaks
+        .windows(2)
+        .flat_map(|edge| {
+            let width = edge[1] - edge[0];
+            nodes
+                .iter()
+                .zip(&weights)
+                .map(move |(t, w)| (edge[0] + width * t, width * w))
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+/// Offsets of the fine quadrature's breakpoints from the level's horizon
+/// cosine ([`fine_cosines`]).
+const FINE_PANEL_OFFSETS: [f64; 5] = [0.0, 0.015, 0.04, 0.1, 0.25];
+/// Gauss nodes per panel of the fine quadrature.
+const FINE_PANEL_NODES: usize = 4;
+
+/// The streams' radiances fitted to given Legendre moments: everything the
+/// solver and the views take from the field at the streams is its
+/// moments by the streams' quadrature,
+///
+/// ```text
+/// Lambda_m,l = sum_b w_b Lambda_l^m(mu_b) L_m(mu_b),   l = m .. 2n - 1
+/// ```
+///
+/// (the scattering matrices' p*_m(mu_a, mu_b) = sum_l c_l Lambda_l^m(mu_a)
+/// Lambda_l^m(mu_b), the views' source moments, the image table's
+/// kernels; the delta-M phase functions have no terms beyond 2n - 1). So
+/// the first order enters them exactly when its stream values are
+/// replaced by values whose quadrature gives the finely integrated
+/// moments. Per harmonic m, with A = B W the (2n - m) x 2n matrix of w_b
+/// Lambda_l^m(mu_b) (B of Lambda_l^m(mu_b), W the weights), that is the
+/// correction dL with A (L + dL) = Lambda_fine that is smallest in the
+/// quadrature's norm sum_b w_b dL_b^2,
+///
+/// ```text
+/// dL = B^T (B W B^T)^-1 (Lambda_fine - A L)
+/// ```
+///
+/// (B has full row rank: polynomials of degrees below 2n - m at 2n
+/// distinct nodes). For m = 0 it is the one solution. The corrected
+/// values are not radiances in their own directions (they may be
+/// negative); the diffuse flux onto the ground is a half-range moment,
+/// not one of these, and is taken from them by the streams' quadrature
+/// as before.
+struct StreamFit {
+    streams: usize,
+    wavelengths: usize,
+    /// Per harmonic m, A ([l * streams + b], rows l < m zero).
+    moments_of_streams: Vec<Vec<f64>>,
+    /// Per harmonic m, B^T (B W B^T)^-1 ([b * streams + l], columns l < m
+    /// zero).
+    correction: Vec<Vec<f64>>,
+}
+
+impl StreamFit {
+    fn new(cosines: &[f64], weights: &[f64], wavelengths: usize) -> StreamFit {
+        let streams = cosines.len();
+        let mut legendre = vec![0.0; streams * streams * streams];
+        for (b, mu) in cosines.iter().enumerate() {
+            normalized_associated_legendre(
+                *mu,
+                streams,
+                &mut legendre[b * streams * streams..(b + 1) * streams * streams],
+            );
+        }
+        let mut moments_of_streams = Vec::with_capacity(streams);
+        let mut correction = Vec::with_capacity(streams);
+        for m in 0..streams {
+            let mut a = vec![0.0; streams * streams];
+            for l in m..streams {
+                for b in 0..streams {
+                    a[l * streams + b] = weights[b] * legendre[(b * streams + m) * streams + l];
+                }
+            }
+            // The correction in the span of Lambda_l^m at the streams, dL_b =
+            // sum_l Lambda_l^m(mu_b) y_l: the one that least changes sum_b w_b
+            // dL_b^2. Its Gram matrix sum_b w_b Lambda_l^m Lambda_q^m is the
+            // streams' discrete orthogonality, near the identity (A A^T
+            // itself is too ill-conditioned to factor at 16 streams).
+            let rows = streams - m;
+            let lambda = |l: usize, b: usize| legendre[(b * streams + m) * streams + l];
+            let mut gram = vec![0.0; rows * rows];
+            for p in 0..rows {
+                for q in 0..rows {
+                    gram[p * rows + q] = (0..streams)
+                        .map(|b| weights[b] * lambda(m + p, b) * lambda(m + q, b))
+                        .sum();
+                }
+            }
+            let mut p = vec![0.0; streams * streams];
+            if let Some(inverse) = inverse(&gram, rows) {
+                for b in 0..streams {
+                    for q in 0..rows {
+                        p[b * streams + m + q] = (0..rows)
+                            .map(|r| lambda(m + r, b) * inverse[r * rows + q])
+                            .sum();
+                    }
+                }
+            }
+            // Independent in exact arithmetic (distinct cosines), but the
+            // full-range Lambda_l^m at the double-Gauss cosines grow
+            // ill-conditioned with the streams: where A P is not the identity
+            // to 1e-6 the harmonic keeps the streams' own quadrature (none
+            // at 4 and 8 streams per hemisphere; harmonic 0 at 12, 0-1 at
+            // 16, 0-3 at 24, where the streams themselves resolve the first
+            // order's peak better).
+            let exact = (m..streams).all(|l| {
+                (m..streams).all(|q| {
+                    let product: f64 = (0..streams)
+                        .map(|b| a[l * streams + b] * p[b * streams + q])
+                        .sum();
+                    (product - if l == q { 1.0 } else { 0.0 }).abs() < 1e-6
+                })
+            });
+            if !exact {
+                p.fill(0.0);
+            }
+            moments_of_streams.push(a);
+            correction.push(p);
+        }
+        StreamFit {
+            streams,
+            wavelengths,
+            moments_of_streams,
+            correction,
+        }
+    }
+
+    /// Corrects one sun node's stream harmonics `values` ([(b * streams +
+    /// m) * wavelengths + i]) so that their quadrature gives `moments`
+    /// ([(m * streams + l) * wavelengths + i]); `residual` is work space of
+    /// streams x wavelengths.
+    fn correct(&self, moments: &[f64], values: &mut [f64], residual: &mut [f64]) {
+        let (n, w) = (self.streams, self.wavelengths);
+        for m in 0..n {
+            let a = &self.moments_of_streams[m];
+            for l in m..n {
+                let row = &mut residual[l * w..(l + 1) * w];
+                row.copy_from_slice(&moments[(m * n + l) * w..][..w]);
+                for b in 0..n {
+                    let factor = a[l * n + b];
+                    for (r, v) in row.iter_mut().zip(&values[(b * n + m) * w..][..w]) {
+                        *r -= factor * v;
+                    }
+                }
+            }
+            let p = &self.correction[m];
+            for b in 0..n {
+                let out = &mut values[(b * n + m) * w..][..w];
+                for l in m..n {
+                    let factor = p[b * n + l];
+                    for (o, r) in out.iter_mut().zip(&residual[l * w..(l + 1) * w]) {
+                        *o += factor * r;
+                    }
+                }
+            }
+        }
+    }
 }
 
 /// p*_ij tabulated over cos theta on `PHASE_NODES` nodes in [-1, 1],
@@ -638,6 +953,8 @@ mod tests {
             sun_columns: &sun_columns,
             level_altitudes_m: &[0.0, 1e3, 5e3, 20e3, 60e3],
             stream_cosines: streams.cosines(),
+            stream_weights: streams.weights(),
+            moments: MomentQuadrature::Streams,
             sun_zenith_rad: &[
                 84f64.to_radians(),
                 89f64.to_radians(),
@@ -687,6 +1004,233 @@ mod tests {
                     "{harmonics} harmonics: harmonic {m} {r} against {t}"
                 );
             }
+        }
+    }
+
+    /// The fit gives the streams' radiances the asked moments, to 1e-10 at
+    /// the explorer's 4 streams per hemisphere and the default 8 (every
+    /// harmonic fitted), to 1e-6 in the harmonics it fits at 12 and 16
+    /// (harmonic 0 at 12 and 0-1 at 16 are left to the streams), and
+    /// leaves values that already have them unchanged.
+    #[test]
+    fn the_stream_fit_gives_the_asked_moments() {
+        for n in [4, 8, 12, 16] {
+            let tolerance = if n <= 8 { 1e-10 } else { 1e-6 };
+            let streams = crate::transport::multiple_scattering::successive_orders::Streams::new(n);
+            let d = streams.count();
+            let w = 2;
+            let fit = StreamFit::new(streams.cosines(), streams.weights(), w);
+            let quadrature = |values: &[f64], m: usize, l: usize, i: usize| -> f64 {
+                (0..d)
+                    .map(|b| {
+                        streams.weights()[b]
+                            * streams.legendre(b)[m * d + l]
+                            * values[(b * d + m) * w + i]
+                    })
+                    .sum()
+            };
+            // Made-up stream values, and targets 0-40 % away from their
+            // moments.
+            let mut values: Vec<f64> = (0..d * d * w)
+                .map(|at| 1.0 + 0.5 * ((at * 7919) % 13) as f64 / 13.0)
+                .collect();
+            let target: Vec<f64> = (0..d * d * w)
+                .map(|at| {
+                    let (m, l, i) = (at / w / d, at / w % d, at % w);
+                    if l < m {
+                        0.0
+                    } else {
+                        quadrature(&values, m, l, i) * (1.0 + 0.4 * ((at * 31) % 7) as f64 / 7.0)
+                    }
+                })
+                .collect();
+            let mut residual = vec![0.0; d * w];
+            fit.correct(&target, &mut values, &mut residual);
+            let scale = target.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            let fitted: Vec<usize> = (0..d)
+                .filter(|m| fit.correction[*m].iter().any(|p| *p != 0.0))
+                .collect();
+            let left = d - fitted.len();
+            assert!(
+                left <= [0, 0, 1, 2][n / 4 - 1],
+                "{n} streams: {left} harmonics left"
+            );
+            for &m in &fitted {
+                for l in m..d {
+                    for i in 0..w {
+                        let got = quadrature(&values, m, l, i);
+                        let want = target[(m * d + l) * w + i];
+                        assert!(
+                            (got - want).abs() < tolerance * scale,
+                            "{n} streams: moment ({m}, {l}) {got} against {want}"
+                        );
+                    }
+                }
+            }
+            let before = values.clone();
+            let largest = before.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            fit.correct(&target, &mut values, &mut residual);
+            for (a, b) in values.iter().zip(&before) {
+                assert!(
+                    (a - b).abs() < 100.0 * tolerance * largest,
+                    "{n} streams: a second fit moves {b} to {a}"
+                );
+            }
+        }
+    }
+
+    /// After sunset (sun 12 degrees below the horizon, an Earth-like shell
+    /// of air and aerosol) the first order's moments that the solver takes
+    /// (harmonics 0-2, degrees up to 4) are integrated by the fine
+    /// quadrature (with the streams' 16 azimuths) to within 0.3 % of the
+    /// largest, against a brute-force oracle: 1 340 midpoint cosines
+    /// (0.0005 apart within 0.3 of the level's horizon cosine) times 48
+    /// azimuths, marched one by one. Measured: 0.04 % on the ground and
+    /// 0.15 % at 30 km; the default 8 streams' own quadrature is off by 17
+    /// and 88 % (asserted above 5 %), which is what the fine quadrature is
+    /// for. With 4 streams per hemisphere and so 8 azimuths the fine
+    /// quadrature is within 0.7 %.
+    #[test]
+    fn fine_moments_match_a_brute_force_integral_after_sunset() {
+        let (ground, top) = (6_360e3, 6_460e3);
+        let profiles = vec![
+            DensityProfile::Exponential {
+                scale_height_m: 8_000.0,
+            },
+            DensityProfile::Exponential {
+                scale_height_m: 1_200.0,
+            },
+        ];
+        let corners = ProfileCorners::new(&profiles, ground, top);
+        let sun_columns = SunColumnTable::compute(&profiles, ground, top, 128, 256);
+        let streams = crate::transport::multiple_scattering::successive_orders::Streams::new(8);
+        let d = streams.count();
+        let phases: Vec<TruncatedPhase> = (0..2)
+            .map(|n| {
+                let g: f64 = if n == 0 { 0.0 } else { 0.7 };
+                let moments: Vec<f64> = (0..=d)
+                    .map(|l| {
+                        if l == 2 && n == 0 {
+                            0.1
+                        } else {
+                            g.powi(l as i32)
+                        }
+                    })
+                    .collect();
+                TruncatedPhase::from_moments(&moments, d)
+            })
+            .collect();
+        let levels_m = [0.0, 30e3];
+        let sun_zenith = 102f64.to_radians();
+        let mut inputs = FirstOrderInputs {
+            profiles: &profiles,
+            corners: &corners,
+            sun_columns: &sun_columns,
+            level_altitudes_m: &levels_m,
+            stream_cosines: streams.cosines(),
+            stream_weights: streams.weights(),
+            moments: MomentQuadrature::Fine,
+            sun_zenith_rad: &[sun_zenith],
+            scaled_extinction: &[1.2e-5, 5e-5],
+            scaled_scattering: &[1.2e-5, 4.5e-5],
+            phases: &phases,
+            solar_irradiance_w_m2_nm: &[1.8],
+        };
+        let fine = compute_spherical_first_order(&inputs);
+        inputs.moments = MomentQuadrature::Streams;
+        let by_streams = compute_spherical_first_order(&inputs);
+        let levels = levels_m.len();
+        let moment_of = |field: &[f64], k: usize, m: usize, l: usize| -> f64 {
+            (0..d)
+                .map(|b| {
+                    streams.weights()[b]
+                        * streams.legendre(b)[m * d + l]
+                        * field[(m * levels + k) * d + b]
+                })
+                .sum()
+        };
+        // The oracle.
+        let phase_table = tabulate_phases(&phases);
+        let tables = Tables {
+            inputs: &inputs,
+            phase_table: &phase_table,
+        };
+        let running = running_integral_matrix();
+        let mut work = MarchWork {
+            radiance: vec![0.0; 1],
+            phase: vec![0.0; 2],
+            densities: vec![[0.0; 4]; 2],
+            view_columns: vec![0.0; 2],
+            node_columns: vec![0.0; 2],
+            sun_columns: vec![0.0; 2],
+            ends: Vec::new(),
+        };
+        let sun = Vector3::new(sun_zenith.sin(), 0.0, sun_zenith.cos());
+        let azimuths = 48;
+        let mut legendre = vec![0.0; d * d];
+        for (k, z) in levels_m.iter().enumerate() {
+            let x = Vector3::new(0.0, 0.0, ground + z);
+            let ratio = ground / (ground + z);
+            let horizon = -(1.0f64 - ratio * ratio).sqrt();
+            let (low, high) = (horizon - 0.3, horizon + 0.3);
+            let mut cosines = Vec::new();
+            let mut push_midpoints = |from: f64, to: f64, step: f64| {
+                let count = ((to - from) / step).round() as usize;
+                let width = (to - from) / count as f64;
+                for c in 0..count {
+                    cosines.push((from + (c as f64 + 0.5) * width, width));
+                }
+            };
+            push_midpoints(-1.0, low, 0.01);
+            push_midpoints(low, high, 0.0005);
+            push_midpoints(high, 1.0, 0.01);
+            let mut oracle = [0.0; 3 * 5];
+            for (mu, weight) in cosines {
+                let sine = (1.0 - mu * mu).sqrt();
+                let mut harmonics = [0.0; 3];
+                for a in 0..azimuths {
+                    let phi = PI * (a as f64 + 0.5) / azimuths as f64;
+                    let direction = Vector3::new(sine * phi.cos(), sine * phi.sin(), mu);
+                    if compute_first_order_along_ray(
+                        &tables, &running, x, direction, sun, &mut work,
+                    ) {
+                        for (m, h) in harmonics.iter_mut().enumerate() {
+                            let factor = if m == 0 { 1.0 } else { 2.0 };
+                            *h += factor / azimuths as f64
+                                * (m as f64 * phi).cos()
+                                * work.radiance[0];
+                        }
+                    }
+                }
+                normalized_associated_legendre(mu, d, &mut legendre);
+                for m in 0..3 {
+                    for l in m..5 {
+                        oracle[m * 5 + l] += weight * legendre[m * d + l] * harmonics[m];
+                    }
+                }
+            }
+            let largest = oracle.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            assert!(largest > 0.0, "level {k}: some light");
+            let mut worst_streams = 0.0f64;
+            let mut worst_fine = 0.0f64;
+            for m in 0..3 {
+                for l in m..5 {
+                    let want = oracle[m * 5 + l];
+                    let got = moment_of(&fine, k, m, l);
+                    assert!(
+                        (got - want).abs() < 3e-3 * largest,
+                        "level {k}: moment ({m}, {l}) {got:.5e} against the oracle's {want:.5e}"
+                    );
+                    worst_streams =
+                        worst_streams.max((moment_of(&by_streams, k, m, l) - want).abs());
+                    worst_fine = worst_fine.max((got - want).abs());
+                }
+            }
+            assert!(
+                worst_streams > 0.05 * largest,
+                "level {k}: the streams' own quadrature is off by only {:.2} %",
+                100.0 * worst_streams / largest
+            );
         }
     }
 }
