@@ -36,6 +36,7 @@ pub(crate) mod single_scattering;
 pub(crate) mod sky_view_table;
 pub(crate) mod stokes;
 pub(crate) mod sunlit_directions;
+pub(crate) mod vector_exp;
 
 pub use path_tracing::PathTracer;
 pub use single_scattering::{

@@ -121,6 +121,24 @@ impl ProfileCorners {
         }
     }
 
+    /// These corners and `extra_m` (altitudes, m) as well.
+    pub(crate) fn with_altitudes(&self, extra_m: &[f64]) -> ProfileCorners {
+        let height = self.top_radius_m - self.ground_radius_m;
+        let mut altitudes_m: Vec<f64> = self
+            .altitudes_m
+            .iter()
+            .chain(extra_m)
+            .copied()
+            .filter(|h| *h > 0.0 && *h < height)
+            .collect();
+        altitudes_m.sort_by(f64::total_cmp);
+        altitudes_m.dedup();
+        ProfileCorners {
+            altitudes_m,
+            ..*self
+        }
+    }
+
     /// The radii of the ground and of the top of the atmosphere, m.
     pub(crate) fn radii_m(&self) -> (f64, f64) {
         (self.ground_radius_m, self.top_radius_m)

@@ -1,0 +1,103 @@
+//! exp(-x) for the hot loops' Beer-Lambert transmittances, written so
+//! that the compiler vectorises a loop of them (the spherical first
+//! order's, `multiple_scattering/spherical_first_order.rs`: one per
+//! wavelength, sample, path and sun node, half of its time with the
+//! standard library's scalar `exp`).
+//!
+//! Method (Cody & Waite range reduction, as libm's): with n the integer
+//! nearest -x / ln 2 (by the 1.5 2^52 shift, no rounding call),
+//! r = -x - n ln 2 in [-ln 2 / 2, ln 2 / 2] with ln 2 split in a high part
+//! exact in 32 bits and a low part, e^r by its Taylor series to degree 9
+//! (truncation below 7e-12 relative: the transmittances' other errors,
+//! of the quadratures, are 1e-3), and 2^n built from its exponent
+//! bits. Branch-free: x is clamped to [0, 708] first, so every step is a
+//! plain arithmetic or bit operation on f64 and u64 lanes (SSE2 has them
+//! all). Relative error below 1e-11 over 0 <= x <= 700 (tested against
+//! `f64::exp`); exp(-x) for x beyond 708 is returned as exp(-708) ~ 3e-308,
+//! indistinguishable from zero in every sum it enters. Negative x (not
+//! an optical depth) is clamped to 0.
+//!
+//! Why by hand: no crate offers a vectorisable f64 exp without pulling a
+//! SIMD framework; the function is 20 lines.
+
+/// exp(-x) (see the module docs).
+#[inline(always)]
+pub(crate) fn exp_neg(x: f64) -> f64 {
+    const LOG2_E: f64 = std::f64::consts::LOG2_E;
+    // ln 2 = LN2_HI + LN2_LO, LN2_HI with its low 32 mantissa bits zero
+    // (so n * LN2_HI is exact for |n| < 2^20).
+    const LN2_HI: f64 = 6.931_471_803_691_238e-1;
+    const LN2_LO: f64 = 1.908_214_929_270_587_7e-10;
+    // 1.5 * 2^52: adding it rounds to an integer held in the low bits.
+    const SHIFT: f64 = 6_755_399_441_055_744.0;
+    let x = x.clamp(0.0, 708.0);
+    let shifted = -x * LOG2_E + SHIFT;
+    let n = shifted - SHIFT;
+    let r = (-x - n * LN2_HI) - n * LN2_LO;
+    // e^r, Horner on 1/k!.
+    let mut p = INVERSE_FACTORIALS[DEGREE];
+    for k in (1..DEGREE).rev() {
+        p = p * r + INVERSE_FACTORIALS[k];
+    }
+    let p = p * r + 1.0;
+    let exponent = shifted.to_bits().wrapping_sub(SHIFT.to_bits());
+    let scale = f64::from_bits(exponent.wrapping_add(1023) << 52);
+    p * scale
+}
+
+/// Degree of the Taylor polynomial of e^r: its truncation error at |r| =
+/// ln 2 / 2 is 0.347^10 / 10! = 7e-12 relative.
+const DEGREE: usize = 9;
+
+/// 1/k! for k = 0..=10.
+const INVERSE_FACTORIALS: [f64; 11] = [
+    1.0,
+    1.0,
+    1.0 / 2.0,
+    1.0 / 6.0,
+    1.0 / 24.0,
+    1.0 / 120.0,
+    1.0 / 720.0,
+    1.0 / 5_040.0,
+    1.0 / 40_320.0,
+    1.0 / 362_880.0,
+    1.0 / 3_628_800.0,
+];
+
+/// Replaces each optical depth by its transmittance exp(-x), in place.
+pub(crate) fn exp_neg_in_place(values: &mut [f64]) {
+    for v in values {
+        *v = exp_neg(*v);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Within 1e-11 of the standard library's exp over optical depths 0
+    /// to 700 (dense near 0, where transmittances matter, and across the
+    /// range reduction's half-integer boundaries), exactly 1 at 0, and
+    /// the slice form equals the scalar one bit for bit.
+    #[test]
+    fn exp_neg_matches_the_standard_library() {
+        let mut worst = 0.0f64;
+        let mut depths: Vec<f64> = (0..200_000).map(|i| i as f64 * 3.5e-3).collect();
+        depths.extend((1..2000).map(|i| i as f64 * 0.5 * std::f64::consts::LN_2));
+        depths.extend([1e-300, 1e-17, 1e-9, 0.1, 1.0, 699.9]);
+        for x in &depths {
+            let want = (-x).exp();
+            let got = exp_neg(*x);
+            worst = worst.max(((got - want) / want).abs());
+        }
+        assert!(worst < 1e-11, "worst relative error {worst:e}");
+        assert_eq!(exp_neg(0.0), 1.0);
+        assert!(exp_neg(1e4) < 1e-307 && exp_neg(1e4) >= 0.0);
+        assert_eq!(exp_neg(-3.0), 1.0);
+        let mut slice = depths.clone();
+        exp_neg_in_place(&mut slice);
+        for (x, v) in depths.iter().zip(&slice) {
+            assert_eq!(v.to_bits(), exp_neg(*x).to_bits());
+        }
+    }
+}
