@@ -343,8 +343,8 @@ fn twilight_matches_the_path_tracer_over_the_whole_grid() {
 
 /// The fast method against the path tracer (`samples` paths, `seed`) at
 /// the sun `sun_deg` high (azimuth 0), every view and wavelength of
-/// `grid`, within the 3 % plus 3 standard errors (`place` names
-/// the sky in the messages).
+/// `grid`, within `bound` (the 3 % down to -6 degrees, 5 % below)
+/// plus 3 standard errors (`place` names the sky in the messages).
 fn assert_fast_matches_the_path_tracer(
     place: &str,
     atmosphere: &Atmosphere,
@@ -352,6 +352,7 @@ fn assert_fast_matches_the_path_tracer(
     sun_deg: f64,
     views: &[ViewDirection],
     (samples, seed): (u64, u64),
+    bound: f64,
 ) {
     use sora::Method;
     let sky = |method| {
@@ -380,7 +381,7 @@ fn assert_fast_matches_the_path_tracer(
                 100.0 * sigma
             );
             assert!(
-                error.abs() <= 0.03 + 3.0 * sigma,
+                error.abs() <= bound + 3.0 * sigma,
                 "{place}, view {view:?}, {} nm: {error:+.4} against +-{sigma:.4}",
                 grid.wavelength_nm(i)
             );
@@ -414,6 +415,7 @@ fn sun_six_below_matches_the_path_tracer_at_three_wavelengths() {
         -6.0,
         &views,
         (200_000, 6),
+        0.03,
     );
 }
 
@@ -442,6 +444,60 @@ fn near_a_low_sun_with_aerosols_matches_the_path_tracer() {
             5.0,
             &[ViewDirection::new(view.0, view.1).unwrap()],
             (50_000, seed),
+            0.03,
         );
+    }
+}
+
+/// The streams converge in nautical twilight: with the sun 12 degrees
+/// below the horizon (earth-clear; the zenith, 45 degrees up toward and
+/// away from the sun; 440, 560 and 680 nm) the default 8 streams per
+/// hemisphere are within 2 % of 16 (measured +0.2 to +1.1 %). Before the
+/// first order's moments were integrated on a fine grid near the horizon,
+/// 16 streams were 4-12 %
+/// brighter (docs/twilight_survey.md): the 8 streams' quadrature of the
+/// first order's narrow peak above the sunward horizon.
+#[test]
+fn nautical_twilight_is_converged_in_the_streams() {
+    use sora::{MultipleScatteringSettings, Scattering};
+    let atmosphere = Atmosphere::preset("earth-clear").unwrap();
+    let grid = WavelengthGrid::new(440.0, 680.0, 120.0).unwrap();
+    let views: Vec<ViewDirection> = [(90.0, 0.0), (45.0, 0.0), (45.0, 180.0)]
+        .iter()
+        .map(|(e, a)| ViewDirection::new(*e, *a).unwrap())
+        .collect();
+    let radiances = |streams_per_hemisphere: usize| {
+        let settings = MultipleScatteringSettings {
+            streams_per_hemisphere,
+            ..MultipleScatteringSettings::default()
+        };
+        Sky::builder(&atmosphere)
+            .wavelengths(grid)
+            .sun_deg(-12.0, 0.0)
+            .scattering(Scattering::Multiple(settings))
+            .build()
+            .unwrap()
+            .radiances(&views)
+            .unwrap()
+    };
+    let (default, more) = (radiances(8), radiances(16));
+    for ((view, d), m) in views.iter().zip(&default).zip(&more) {
+        for i in 0..grid.len() {
+            let ratio = d.radiance_w_m2_sr_nm.values()[i] / m.radiance_w_m2_sr_nm.values()[i];
+            eprintln!(
+                "view ({}, {}), {} nm: 8 / 16 streams - 1 = {:+.2} %",
+                view.elevation_deg(),
+                view.azimuth_deg(),
+                grid.wavelength_nm(i),
+                100.0 * (ratio - 1.0)
+            );
+            assert!(
+                (ratio - 1.0).abs() < 0.02,
+                "view ({}, {}), {} nm: 8 streams / 16 = {ratio}",
+                view.elevation_deg(),
+                view.azimuth_deg(),
+                grid.wavelength_nm(i)
+            );
+        }
     }
 }
