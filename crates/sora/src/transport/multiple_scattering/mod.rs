@@ -39,7 +39,13 @@
 //!    tested at every sample, and the solver's sweeps take it in place of
 //!    their own first order (so every higher order is fed by it). After
 //!    sunset this is what lights the shadowed air: light scattered in the
-//!    sunlit layer toward the sun, far from the point's own column.
+//!    sunlit layer toward the sun, far from the point's own column. That
+//!    light is a peak a few hundredths wide in the zenith cosine, just
+//!    above the sunward horizon; from a sun zenith angle of 90 degrees on
+//!    its Legendre moments (all the solver, the views and the tables take
+//!    from it) are integrated on a grid graded toward each level's horizon
+//!    and the streams' values fitted to them, instead of the 8 streams'
+//!    own quadrature, which left nautical twilight 8-17 % too dark.
 //! 4. **The sphere as local columns**: the diffuse field at a point x of
 //!    the spherical atmosphere is taken to be that of the column at x's
 //!    altitude with x's own sun zenith angle, as Bruneton & Neyret (2008)
@@ -185,24 +191,24 @@
 //!   first order 0 to -8 degrees were +5.5 %, +16 %, +20 %, -39 % and
 //!   -93 %, and below -10 degrees the field collapsed (the zenith 3e5
 //!   times too dark at -10).
-//! - **Deep twilight, the method's weakest place** (`docs/twilight_survey.md`,
-//!   against the path tracer with its directions toward the sunlit air,
-//!   1 000 000 paths a view):
-//!   - -8 degrees is within 5 % (earth-clear median -2.5 %, earth-hazy
-//!     -1.2 %);
-//!   - earth-clear is 8-13 % too dark at -10 and 10-17 % at -12 where all
-//!     the light is multiply scattered;
-//!   - earth-hazy is within 5 % + 3 standard errors at -10 and -12 in 59
-//!     of 60 values (medians -0.7 % and -3.3 %; at -12, 680 nm, 20
-//!     degrees up toward the sun, -14 % against +-2.1 %);
-//!   - us-standard-1976-rayleigh is -4 to +32 % off at -10 and -29 to -48 %
-//!     at -12.
-//!
-//!   The cause is the 8 streams' quadrature of the first-order light,
-//!   which comes from the sunlit layer a few degrees above the sunward
-//!   horizon. earth-clear converges with 16 streams (+4 to +12 % at -12,
-//!   24 adding at most 0.6 %); us-standard does not (12, 16 and 24
-//!   streams differ by 15-25 %).
+//! - **Deep twilight** (`docs/twilight_survey.md`, against the path
+//!   tracer with its directions toward the sunlit air, 1 000 000 paths a
+//!   view; the zenith and 5, 20, 45 degrees up at 0, 90, 180 degrees from
+//!   the sun, 440/560/680 nm): earth-clear and earth-hazy at -8, -10 and
+//!   -12 degrees are all within the 5 % + 3 standard errors (180
+//!   of 180; earth-clear's medians -0.9, -5.1 and -5.0 %, earth-hazy's
+//!   -0.4, 0.0 and -0.2 %). Before the first order's moments were
+//!   integrated finely (item 3) earth-clear was 8-13 % too dark at -10
+//!   and 10-17 % at -12 (7 of 30 values at -12 outside the bar), the 8
+//!   streams' quadrature of the near-horizon first order (16 streams
+//!   converged to within 0.6 % of 24). earth-clear still leans dark at
+//!   -10 and -12 at 440 and 560 nm (-5 to -10 %, the path tracer at +-3
+//!   to 6 %).
+//! - `us-standard-1976-rayleigh` in deep twilight was -29 to +32 % off
+//!   until the first order's paths were cut at shells every 20 km
+//!   (`spherical_first_order.rs`: its atmosphere reaches 120 km and 4
+//!   Gauss panels per path left its sunlit layer under-resolved); its
+//!   remaining errors are in `docs/twilight_survey.md`.
 //!
 //! # Cost (measured, `benches/multiple_scattering.rs`, 2 shared cores)
 //! Per image, 21 wavelengths, `clear-sky-reference`: the field 0.12 s and
@@ -224,6 +230,12 @@
 //! field and one view each, on the loaded 2-core machine) 2.56-2.63 s
 //! before and 2.72-2.80 s after, about 30 ms of CPU per sky at 3
 //! wavelengths, so about 0.2 s of CPU (0.1 s on 2 cores) at 21.
+//! The first order's fine moments and shells (item 3), measured with the
+//! `sora` binary (earth-clear, 512 x 512 fisheye, `--polarisation off`,
+//! medians of 5 runs, old and new in turn): sun 5 degrees 1.70 s against
+//! 1.72 s before, sun -6 degrees 1.87 s against 1.41 s; its transmittances
+//! are a vectorisable exp ([`crate::transport::vector_exp`]), which took
+//! half of its time as the standard library's.
 //!
 //! # What it approximates
 //! - Diffuse light between nearby points travels as in a column of uniform
