@@ -33,8 +33,9 @@
 //!   depth is sum_j beta_ext,j(lambda) column_j, so the march integrates
 //!   one geometric column per species, not one per wavelength. The view ray
 //!   is cut into Gauss-Legendre panels that crowd toward its start and its
-//!   lowest point (`super::optical_column::ray_panel`), and at the
-//!   corners of piecewise-linear profiles ([`ProfileCorners`]); the column back to
+//!   lowest point (`super::optical_column::ray_panel`), at the
+//!   corners of piecewise-linear profiles ([`ProfileCorners`]) and where it
+//!   enters or leaves the planet's shadow (`add_shadow_crossings`); the column back to
 //!   the eye at each node comes from the same density samples
 //!   (`super::quadrature::running_integral_matrix`). Columns toward the
 //!   sun are exact integrals ([`SunColumns::Exact`]) or a table
@@ -55,6 +56,46 @@ use crate::spectrum::{SampledSpectrum, WavelengthGrid};
 pub(crate) const VIEW_RAY_PANELS: usize = 16;
 /// Gauss panels along each exact path toward the sun.
 pub(crate) const SUN_RAY_PANELS: usize = 12;
+
+/// Adds to the panel ends `ends` (increasing, over [0, `length_m`]) of the
+/// ray from `origin` along the unit `direction` the distances where it
+/// enters or leaves the planet's shadow for the sun in the unit direction
+/// `sun`: the cylinder of radius `ground_radius_m` behind the planet,
+/// |x|^2 - (x.s)^2 = R^2 with x.s < 0 (a quadratic in the distance). Why:
+/// the in-scattered light jumps there (from the sunlight grazing the
+/// ground to none), and a Gauss panel across a jump converges slowly.
+/// Measured in deep twilight (us-standard-1976-rayleigh, sun -10, 680 nm,
+/// against the path tracer's single scattering, 1 000 000 paths): the
+/// zenith -1.6 % (+-0.2) and 20 degrees up toward the sun +2.1 % (+-0.2)
+/// without the cuts.
+fn add_shadow_crossings(
+    origin: Vector3,
+    direction: Vector3,
+    length_m: f64,
+    sun: Vector3,
+    ground_radius_m: f64,
+    ends: &mut Vec<f64>,
+) {
+    let (vs, os) = (direction.dot(sun), origin.dot(sun));
+    let a = 1.0 - vs * vs;
+    let b = 2.0 * (origin.dot(direction) - os * vs);
+    let c = origin.dot(origin) - os * os - ground_radius_m * ground_radius_m;
+    let discriminant = b * b - 4.0 * a * c;
+    if a <= 1e-12 || discriminant <= 0.0 {
+        return;
+    }
+    let root = discriminant.sqrt();
+    let before = ends.len();
+    for t in [(-b - root) / (2.0 * a), (-b + root) / (2.0 * a)] {
+        if t > 0.0 && t < length_m && (origin + direction * t).dot(sun) < 0.0 {
+            ends.push(t);
+        }
+    }
+    if ends.len() > before {
+        ends.sort_unstable_by(f64::total_cmp);
+        ends.dedup();
+    }
+}
 
 /// Where the eye is and where the sun is.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -352,7 +393,7 @@ impl SingleScatteringSky {
             inscattering_integrals: vec![0.0; species * wavelengths],
             ground_radiance: vec![0.0; wavelengths],
             view_transmittance: vec![0.0; wavelengths],
-            view_panel_ends: Vec::with_capacity(self.corners.most_panel_ends(VIEW_RAY_PANELS)),
+            view_panel_ends: Vec::with_capacity(self.corners.most_panel_ends(VIEW_RAY_PANELS) + 2),
             sun_panel_ends: Vec::with_capacity(self.corners.most_panel_ends(SUN_RAY_PANELS)),
         }
     }
@@ -385,6 +426,14 @@ impl SingleScatteringSky {
         let mut view_ends = std::mem::take(&mut scratch.view_panel_ends);
         self.corners
             .fill_panel_ends(start, view, length, VIEW_RAY_PANELS, &mut view_ends);
+        add_shadow_crossings(
+            start,
+            view,
+            length,
+            self.sun_direction,
+            self.ground_radius_m,
+            &mut view_ends,
+        );
         for ends in view_ends.windows(2) {
             let (centre, half) = (0.5 * (ends[0] + ends[1]), 0.5 * (ends[1] - ends[0]));
             let mut points = [Vector3::default(); 4];

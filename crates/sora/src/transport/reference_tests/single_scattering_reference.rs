@@ -85,3 +85,45 @@ fn plane_parallel_single_scattering_matches_within_half_a_percent() {
     assert!(fast < 5e-3, "fast path {fast}");
     assert!(reference < 5e-3, "reference path {reference}");
 }
+
+/// After sunset the fast path against the paper's double march, where the
+/// view ray crosses the edge of the planet's shadow: us-standard-1976
+/// air (its top at 120 km), sun 10 degrees below the horizon, 680 nm (the
+/// sunlight grazing the ground there is still 20 % of the sun's, so the
+/// in-scattered light jumps at the shadow's edge), the zenith, 20 degrees
+/// up toward and across the sun and 45 degrees up toward it (20 degrees
+/// up away from it is all in the shadow); within 0.3 % (measured -0.18,
+/// -0.04, -0.28 and -0.03 %; the march with 4 000 or 8 000 steps toward
+/// the sun gives the same to 4 digits). Before the view ray's Gauss
+/// panels were cut at the shadow's edge (`add_shadow_crossings`) the
+/// zenith was -1.41 %; against the path tracer's single scattering
+/// (1 000 000 paths, +-0.25 %) the zenith and 20 degrees up toward the
+/// sun were -1.6 and +2.1 % before, -0.3 and -0.2 % after.
+#[test]
+fn single_scattering_is_exact_across_the_shadow_edge() {
+    let atmosphere = Atmosphere::preset("us-standard-1976-rayleigh").unwrap();
+    let grid = WavelengthGrid::new(680.0, 680.0, 10.0).unwrap();
+    let observation = Observation {
+        observer_altitude_m: 0.0,
+        sun_elevation_deg: -10.0,
+        sun_azimuth_deg: 0.0,
+    };
+    let sky = SingleScatteringSky::new(&atmosphere, &grid, observation).unwrap();
+    let mut scratch = sky.scratch();
+    let mut fast = SampledSpectrum::zeros(grid.len());
+    for (elevation, azimuth) in [(90.0, 0.0), (20.0, 0.0), (20.0, 90.0), (45.0, 0.0)] {
+        let view = direction_from_elevation_azimuth(elevation, azimuth);
+        sky.compute_radiance(view, SunColumns::Exact, &mut scratch, &mut fast);
+        let reference = sky.compute_radiance_reference(view, 40_000, 4_000);
+        let (f, r) = (fast.values()[0], reference.values()[0]);
+        eprintln!(
+            "({elevation}, {azimuth}): fast / march - 1 = {:+.4} %",
+            100.0 * (f / r - 1.0)
+        );
+        assert!(r > 0.0, "({elevation}, {azimuth}): no light");
+        assert!(
+            (f / r - 1.0).abs() < 3e-3,
+            "({elevation}, {azimuth}): fast {f:.5e} against the march's {r:.5e}"
+        );
+    }
+}
