@@ -101,41 +101,38 @@ impl ProfileCorners {
         ground_radius_m: f64,
         top_radius_m: f64,
     ) -> ProfileCorners {
-        let height = top_radius_m - ground_radius_m;
-        let mut altitudes_m: Vec<f64> = profiles
+        let altitudes_m = profiles
             .iter()
             .filter_map(|profile| match profile.borrow() {
                 DensityProfile::PiecewiseLinear(table) => Some(table.altitudes_m()),
                 _ => None,
             })
             .flatten()
-            .copied()
-            .filter(|h| *h > 0.0 && *h < height)
-            .collect();
+            .copied();
+        ProfileCorners::from_altitudes(ground_radius_m, top_radius_m, altitudes_m)
+    }
+
+    /// These corners and `extra_m` (altitudes, m) as well.
+    pub(crate) fn with_altitudes(&self, extra_m: &[f64]) -> ProfileCorners {
+        let altitudes_m = self.altitudes_m.iter().chain(extra_m).copied();
+        ProfileCorners::from_altitudes(self.ground_radius_m, self.top_radius_m, altitudes_m)
+    }
+
+    /// Corners at `altitudes_m` (m, in any order, repeats allowed): those
+    /// strictly inside the atmosphere, increasing.
+    fn from_altitudes(
+        ground_radius_m: f64,
+        top_radius_m: f64,
+        altitudes_m: impl Iterator<Item = f64>,
+    ) -> ProfileCorners {
+        let height = top_radius_m - ground_radius_m;
+        let mut altitudes_m: Vec<f64> = altitudes_m.filter(|h| *h > 0.0 && *h < height).collect();
         altitudes_m.sort_by(f64::total_cmp);
         altitudes_m.dedup();
         ProfileCorners {
             ground_radius_m,
             top_radius_m,
             altitudes_m,
-        }
-    }
-
-    /// These corners and `extra_m` (altitudes, m) as well.
-    pub(crate) fn with_altitudes(&self, extra_m: &[f64]) -> ProfileCorners {
-        let height = self.top_radius_m - self.ground_radius_m;
-        let mut altitudes_m: Vec<f64> = self
-            .altitudes_m
-            .iter()
-            .chain(extra_m)
-            .copied()
-            .filter(|h| *h > 0.0 && *h < height)
-            .collect();
-        altitudes_m.sort_by(f64::total_cmp);
-        altitudes_m.dedup();
-        ProfileCorners {
-            altitudes_m,
-            ..*self
         }
     }
 

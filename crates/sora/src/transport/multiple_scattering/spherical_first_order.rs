@@ -960,12 +960,13 @@ fn compute_first_order_along_ray(
 mod tests {
     use super::*;
 
-    /// The fast first order (each path marched once for every sun node)
-    /// equals the oracle (marched per sun node) bit for bit: two species,
-    /// three wavelengths, 2 streams per hemisphere, five levels, suns from
-    /// 84 to 100 degrees of zenith (lit, grazing and deep in the shadow).
-    #[test]
-    fn marching_once_for_every_sun_is_the_oracle_bit_for_bit() {
+    /// Air (scale height 8 km) and aerosol (1.2 km) in a 100 km shell over
+    /// a ground of radius 6 360 km, with a sun-column table of `nodes`
+    /// (altitude, mu) nodes: the ground radius, the profiles, their corners
+    /// and the table.
+    fn earth_like_shell(
+        nodes: (usize, usize),
+    ) -> (f64, Vec<DensityProfile>, ProfileCorners, SunColumnTable) {
         let (ground, top) = (6_360e3, 6_460e3);
         let profiles = vec![
             DensityProfile::Exponential {
@@ -976,12 +977,16 @@ mod tests {
             },
         ];
         let corners = ProfileCorners::new(&profiles, ground, top);
-        let sun_columns = SunColumnTable::compute(&profiles, ground, top, 32, 64);
-        let streams = crate::transport::multiple_scattering::successive_orders::Streams::new(2);
-        let degrees = streams.count();
-        let phases: Vec<TruncatedPhase> = (0..3 * 2)
+        let sun_columns = SunColumnTable::compute(&profiles, ground, top, nodes.0, nodes.1);
+        (ground, profiles, corners, sun_columns)
+    }
+
+    /// `count` truncated phase functions of `degrees` terms, alternately
+    /// Rayleigh-like (chi_2 = 0.1, the rest 0) and forward-peaked (HG moments,
+    /// g = 0.7): [i * 2 + j] for wavelength i and the two species j.
+    fn test_phases(count: usize, degrees: usize) -> Vec<TruncatedPhase> {
+        (0..count)
             .map(|n| {
-                // Rayleigh-like and forward-peaked moments.
                 let g: f64 = if n % 2 == 0 { 0.0 } else { 0.7 };
                 let moments: Vec<f64> = (0..=degrees)
                     .map(|l| {
@@ -994,7 +999,19 @@ mod tests {
                     .collect();
                 TruncatedPhase::from_moments(&moments, degrees)
             })
-            .collect();
+            .collect()
+    }
+
+    /// The fast first order (each path marched once for every sun node)
+    /// equals the oracle (marched per sun node) bit for bit: two species,
+    /// three wavelengths, 2 streams per hemisphere, five levels, suns from
+    /// 84 to 100 degrees of zenith (lit, grazing and deep in the shadow).
+    #[test]
+    fn marching_once_for_every_sun_is_the_oracle_bit_for_bit() {
+        let (ground, profiles, corners, sun_columns) = earth_like_shell((32, 64));
+        let streams = crate::transport::multiple_scattering::successive_orders::Streams::new(2);
+        let degrees = streams.count();
+        let phases = test_phases(3 * 2, degrees);
         let inputs = FirstOrderInputs {
             profiles: &profiles,
             corners: &corners,
@@ -1136,34 +1153,10 @@ mod tests {
     /// quadrature was within 0.7 % (48 cosines then, 40 now).
     #[test]
     fn fine_moments_match_a_brute_force_integral_after_sunset() {
-        let (ground, top) = (6_360e3, 6_460e3);
-        let profiles = vec![
-            DensityProfile::Exponential {
-                scale_height_m: 8_000.0,
-            },
-            DensityProfile::Exponential {
-                scale_height_m: 1_200.0,
-            },
-        ];
-        let corners = ProfileCorners::new(&profiles, ground, top);
-        let sun_columns = SunColumnTable::compute(&profiles, ground, top, 128, 256);
+        let (ground, profiles, corners, sun_columns) = earth_like_shell((128, 256));
         let streams = crate::transport::multiple_scattering::successive_orders::Streams::new(8);
         let d = streams.count();
-        let phases: Vec<TruncatedPhase> = (0..2)
-            .map(|n| {
-                let g: f64 = if n == 0 { 0.0 } else { 0.7 };
-                let moments: Vec<f64> = (0..=d)
-                    .map(|l| {
-                        if l == 2 && n == 0 {
-                            0.1
-                        } else {
-                            g.powi(l as i32)
-                        }
-                    })
-                    .collect();
-                TruncatedPhase::from_moments(&moments, d)
-            })
-            .collect();
+        let phases = test_phases(2, d);
         let levels_m = [0.0, 30e3];
         let sun_zenith = 102f64.to_radians();
         let mut inputs = FirstOrderInputs {
