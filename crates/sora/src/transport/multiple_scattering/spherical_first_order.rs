@@ -185,33 +185,23 @@ pub(crate) fn compute_spherical_first_order(inputs: &FirstOrderInputs) -> Vec<f6
         // themselves; the others' stream values the fit makes from the
         // moments alone.
         let marched_streams = if first_fine > 0 { streams } else { 0 };
+        let level = LevelPaths {
+            tables,
+            by_species,
+            running: &running,
+            cosines: &cosines,
+            azimuths,
+            x,
+        };
+        let per_stream = streams * wavelengths;
         for (b, mu) in inputs.stream_cosines[..marched_streams].iter().enumerate() {
-            let sine = (1.0 - mu * mu).max(0.0).sqrt();
-            for a in 0..azimuths {
-                let phi = PI * (a as f64 + 0.5) / azimuths as f64;
-                let direction = Vector3::new(sine * phi.cos(), sine * phi.sin(), *mu);
-                if !march_path(tables, &running, x, direction, &mut work, &mut path) {
-                    continue;
-                }
-                for (s, sun) in suns_vectors[..first_fine].iter().enumerate() {
-                    compute_first_order_on_path(
-                        tables,
-                        by_species,
-                        direction,
-                        *sun,
-                        &path,
-                        &mut work,
-                        &mut sun_work,
-                    );
-                    let harmonics = &mut block[(s * streams + b) * streams * wavelengths..]
-                        [..streams * wavelengths];
-                    add_harmonics(
-                        &cosines[a * streams..][..streams],
-                        &work.radiance,
-                        harmonics,
-                    );
-                }
-            }
+            level.add_harmonics(
+                *mu,
+                &suns_vectors[..first_fine],
+                (&mut work, &mut sun_work, &mut path),
+                &mut block[b * per_stream..],
+                streams * per_stream,
+            );
         }
         let Some(fit) = &fit else {
             return;
@@ -226,32 +216,13 @@ pub(crate) fn compute_spherical_first_order(inputs: &FirstOrderInputs) -> Vec<f6
         for (mu, weight) in fine_cosines(ground, ground + inputs.level_altitudes_m[k]) {
             normalized_associated_legendre(mu, streams, &mut legendre);
             fine_harmonics.fill(0.0);
-            let sine = (1.0 - mu * mu).max(0.0).sqrt();
-            for a in 0..azimuths {
-                let phi = PI * (a as f64 + 0.5) / azimuths as f64;
-                let direction = Vector3::new(sine * phi.cos(), sine * phi.sin(), mu);
-                if !march_path(tables, &running, x, direction, &mut work, &mut path) {
-                    continue;
-                }
-                for (s, sun) in suns_vectors[first_fine..].iter().enumerate() {
-                    compute_first_order_on_path(
-                        tables,
-                        by_species,
-                        direction,
-                        *sun,
-                        &path,
-                        &mut work,
-                        &mut sun_work,
-                    );
-                    let harmonics =
-                        &mut fine_harmonics[s * streams * wavelengths..][..streams * wavelengths];
-                    add_harmonics(
-                        &cosines[a * streams..][..streams],
-                        &work.radiance,
-                        harmonics,
-                    );
-                }
-            }
+            level.add_harmonics(
+                mu,
+                &suns_vectors[first_fine..],
+                (&mut work, &mut sun_work, &mut path),
+                &mut fine_harmonics,
+                per_stream,
+            );
             for s in 0..fine_suns {
                 for m in 0..streams {
                     let harmonic =
@@ -293,6 +264,59 @@ pub(crate) fn compute_spherical_first_order(inputs: &FirstOrderInputs) -> Vec<f6
         }
     }
     out
+}
+
+/// What the paths from one level share: the inputs' tables, the march's
+/// running-integral matrix, the azimuths' transform factors
+/// ([`harmonic_cosines`]) and the level's point `x`.
+struct LevelPaths<'a> {
+    tables: &'a Tables<'a>,
+    by_species: &'a BySpecies,
+    running: &'a [[f64; 4]; 4],
+    cosines: &'a [f64],
+    azimuths: usize,
+    x: Vector3,
+}
+
+impl LevelPaths<'_> {
+    /// Marches the paths at zenith cosine `mu` and every azimuth once, and
+    /// adds for each sun of `suns` the harmonics of L1 ([m * wavelengths +
+    /// i]) into `harmonics` from `s * stride` on.
+    fn add_harmonics(
+        &self,
+        mu: f64,
+        suns: &[Vector3],
+        (work, sun_work, path): (&mut MarchWork, &mut SunWork, &mut MarchedPath),
+        harmonics: &mut [f64],
+        stride: usize,
+    ) {
+        let harmonic_count = self.cosines.len() / self.azimuths;
+        let size = harmonic_count * work.radiance.len();
+        let sine = (1.0 - mu * mu).max(0.0).sqrt();
+        for a in 0..self.azimuths {
+            let phi = PI * (a as f64 + 0.5) / self.azimuths as f64;
+            let direction = Vector3::new(sine * phi.cos(), sine * phi.sin(), mu);
+            if !march_path(self.tables, self.running, self.x, direction, work, path) {
+                continue;
+            }
+            for (s, sun) in suns.iter().enumerate() {
+                compute_first_order_on_path(
+                    self.tables,
+                    self.by_species,
+                    direction,
+                    *sun,
+                    path,
+                    work,
+                    sun_work,
+                );
+                add_harmonics(
+                    &self.cosines[a * harmonic_count..][..harmonic_count],
+                    &work.radiance,
+                    &mut harmonics[s * stride..][..size],
+                );
+            }
+        }
+    }
 }
 
 /// Azimuths of the cosine transform for `streams` harmonics: as many as
@@ -1008,7 +1032,7 @@ mod tests {
     /// 84 to 100 degrees of zenith (lit, grazing and deep in the shadow).
     #[test]
     fn marching_once_for_every_sun_is_the_oracle_bit_for_bit() {
-        let (ground, profiles, corners, sun_columns) = earth_like_shell((32, 64));
+        let (_, profiles, corners, sun_columns) = earth_like_shell((32, 64));
         let streams = crate::transport::multiple_scattering::successive_orders::Streams::new(2);
         let degrees = streams.count();
         let phases = test_phases(3 * 2, degrees);
