@@ -175,8 +175,9 @@
 //!   | `us-standard-1976-rayleigh` | -0.8 % (0.4) | -2.4 % (1.0) | -4.7 % (1.9, 5 degrees up away from the sun) |
 //!
 //!   (with the fine first-order moments, the shells and the single
-//!   scattering's cut at the shadow's edge; before them +-0.4 % different
-//!   but us-standard, +1.2, +2.8 and -6.2 %; `docs/twilight_survey.md`)
+//!   scattering's cut at the shadow's edge, `docs/twilight_survey.md`;
+//!   before them earth-clear -1.2, -1.9, -4.7 %, earth-hazy -1.9, -4.0,
+//!   -4.9 %, us-standard +1.2, +2.8, -6.2 %)
 //!   All 189 values are within the 3 % + 3 standard errors
 //!   (before the orders >= 2 of the near-horizontal streams were shifted,
 //!   item 2: -2.5, -3.5, -5.8; -2.9, -5.5, -6.7; -1.6, -3.9, -7.6 %, and
