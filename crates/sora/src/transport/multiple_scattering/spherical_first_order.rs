@@ -98,10 +98,13 @@ pub(crate) enum MomentQuadrature {
     /// tests' comparison, and the oracle's).
     #[cfg(test)]
     Streams,
-    /// On a finer grid graded toward the horizon ([`fine_cosines`]); the
-    /// streams are not marched, their values are the ones whose quadrature
-    /// gives those moments ([`StreamFit`], from zero).
-    Fine,
+    /// For the sun nodes from a zenith angle of 90 degrees on
+    /// (`FINE_MOMENTS_SUN_ZENITH_RAD`), on a finer grid graded toward the
+    /// horizon ([`fine_cosines`]): the streams are not marched for those,
+    /// their values are the ones whose quadrature gives those moments
+    /// ([`StreamFit`], from zero). The streams' own quadrature for the
+    /// others, and for all where the fit cannot be made (12 streams per
+    /// hemisphere and more).
 }
 
 /// L1 for every sun node, wavelength, harmonic, level and stream, laid out
