@@ -105,6 +105,7 @@ pub(crate) enum MomentQuadrature {
     /// ([`StreamFit`], from zero). The streams' own quadrature for the
     /// others, and for all where the fit cannot be made (12 streams per
     /// hemisphere and more).
+    Fine,
 }
 
 /// L1 for every sun node, wavelength, harmonic, level and stream, laid out
