@@ -5,7 +5,7 @@
 //! first order's finely integrated moments
 //! (`transport::multiple_scattering::spherical_first_order`).
 //!
-//! Why by hand: the systems are at most 32 x 32; a linear-algebra crate
+//! Why by hand: the systems are at most 20 x 20; a linear-algebra crate
 //! would be the largest dependency of the library for 60 lines.
 
 /// The Cholesky factor L (lower, row-major n x n) of the symmetric positive

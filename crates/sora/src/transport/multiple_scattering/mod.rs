@@ -200,19 +200,20 @@
 //!   view; the zenith and 5, 20, 45 degrees up at 0, 90, 180 degrees from
 //!   the sun, 440/560/680 nm): earth-clear and earth-hazy at -8, -10 and
 //!   -12 degrees are all within the 5 % + 3 standard errors (180
-//!   of 180; earth-clear's medians -0.9, -5.1 and -5.0 %, earth-hazy's
-//!   -0.4, 0.0 and -0.2 %). Before the first order's moments were
+//!   of 180; earth-clear's medians -1.0, -5.8 and -4.6 %, earth-hazy's
+//!   -0.3, -0.2 and +0.5 %). Before the first order's moments were
 //!   integrated finely (item 3) earth-clear was 8-13 % too dark at -10
 //!   and 10-17 % at -12 (7 of 30 values at -12 outside the bar), the 8
 //!   streams' quadrature of the near-horizon first order (16 streams
-//!   converged to within 0.6 % of 24). earth-clear still leans dark at
-//!   -10 and -12 at 440 and 560 nm (-5 to -10 %, the path tracer at +-3
-//!   to 6 %).
-//! - `us-standard-1976-rayleigh` in deep twilight was -29 to +32 % off
-//!   until the first order's paths were cut at shells every 20 km
+//!   converged to within 0.6 % of 24). earth-clear still leans dark in
+//!   the blue: at 440 nm -1 to -10 % at -10 and -6 to -31 % at -12 (the
+//!   path tracer at +-1.4 to 18 %).
+//! - `us-standard-1976-rayleigh` at -10 and -12 (5 views): 30 of 30
+//!   within the bar, -15 to -1 %; it was -29 to +32 % off until the
+//!   first order's paths were cut at shells every 20 km
 //!   (`spherical_first_order.rs`: its atmosphere reaches 120 km and 4
-//!   Gauss panels per path left its sunlit layer under-resolved); its
-//!   remaining errors are in `docs/twilight_survey.md`.
+//!   Gauss panels per path left its sunlit layer under-resolved) and the
+//!   single scattering's view ray at the shadow's edge.
 //!
 //! # Cost (measured, `benches/multiple_scattering.rs`, 2 shared cores)
 //! Per image, 21 wavelengths, `clear-sky-reference`: the field 0.12 s and
@@ -1107,8 +1108,7 @@ impl MultipleScatteringField {
                 corners: &corners,
                 sun_columns: &table_columns,
                 level_altitudes_m: grid.altitudes_m(),
-                stream_cosines: streams.cosines(),
-                stream_weights: streams.weights(),
+                streams: &streams,
                 moments: MomentQuadrature::Fine,
                 sun_zenith_rad: &sun_axis.angles_rad[first_spherical..],
                 scaled_extinction: &scaled_extinction,

@@ -55,6 +55,7 @@ use std::f64::consts::PI;
 use super::phase_fourier::{
     TruncatedPhase, gauss_legendre_unit_interval, normalized_associated_legendre,
 };
+use super::successive_orders::Streams;
 use crate::atmosphere::DensityProfile;
 use crate::geometry::{Vector3, segment_in_atmosphere};
 use crate::linear_algebra::inverse;
@@ -78,9 +79,9 @@ pub(crate) struct FirstOrderInputs<'a> {
     pub corners: &'a ProfileCorners,
     pub sun_columns: &'a SunColumnTable,
     pub level_altitudes_m: &'a [f64],
-    pub stream_cosines: &'a [f64],
-    /// The streams' quadrature weights (each hemisphere sums to 1).
-    pub stream_weights: &'a [f64],
+    /// The field's streams: their zenith cosines, quadrature weights and
+    /// Legendre functions.
+    pub streams: &'a Streams,
     /// How the first order's Legendre moments are integrated.
     pub moments: MomentQuadrature,
     pub sun_zenith_rad: &'a [f64],
@@ -127,7 +128,7 @@ pub(crate) fn compute_spherical_first_order(inputs: &FirstOrderInputs) -> Vec<f6
     let wavelengths = inputs.solar_irradiance_w_m2_nm.len();
     let species = inputs.profiles.len();
     let levels = inputs.level_altitudes_m.len();
-    let streams = inputs.stream_cosines.len();
+    let streams = inputs.streams.count();
     let solution = streams * levels * streams;
     let suns = inputs.sun_zenith_rad.len();
     let (ground, _) = inputs.corners.radii_m();
@@ -140,9 +141,7 @@ pub(crate) fn compute_spherical_first_order(inputs: &FirstOrderInputs) -> Vec<f6
     let fit = match inputs.moments {
         #[cfg(test)]
         MomentQuadrature::Streams => None,
-        MomentQuadrature::Fine => {
-            StreamFit::new(inputs.stream_cosines, inputs.stream_weights, wavelengths)
-        }
+        MomentQuadrature::Fine => StreamFit::new(inputs.streams, wavelengths),
     };
     // The sun nodes from a zenith angle of 90 degrees on (after sunset on
     // the ground) take the fine moments (with `MomentQuadrature::Fine`).
@@ -198,7 +197,10 @@ pub(crate) fn compute_spherical_first_order(inputs: &FirstOrderInputs) -> Vec<f6
             x,
         };
         let per_stream = streams * wavelengths;
-        for (b, mu) in inputs.stream_cosines[..marched_streams].iter().enumerate() {
+        for (b, mu) in inputs.streams.cosines()[..marched_streams]
+            .iter()
+            .enumerate()
+        {
             level.add_harmonics(
                 *mu,
                 &suns_vectors[..first_fine],
@@ -313,7 +315,7 @@ impl LevelPaths<'_> {
                     work,
                     sun_work,
                 );
-                add_harmonics(
+                add_azimuth_to_harmonics(
                     &self.cosines[a * harmonic_count..][..harmonic_count],
                     &work.radiance,
                     &mut harmonics[s * stride..][..size],
@@ -354,7 +356,7 @@ fn harmonic_cosines(azimuths: usize, streams: usize) -> Vec<f64> {
 /// Adds one azimuth's radiance per wavelength `radiance`, times that
 /// azimuth's transform factors `cosines` (one per harmonic), to
 /// `harmonics` ([m * wavelengths + i]).
-fn add_harmonics(cosines: &[f64], radiance: &[f64], harmonics: &mut [f64]) {
+fn add_azimuth_to_harmonics(cosines: &[f64], radiance: &[f64], harmonics: &mut [f64]) {
     for (factor, row) in cosines
         .iter()
         .zip(harmonics.chunks_exact_mut(radiance.len()))
@@ -378,8 +380,9 @@ fn add_harmonics(cosines: &[f64], radiance: &[f64], harmonics: &mut [f64]) {
 /// hemisphere put 2 nodes within 6 degrees of the horizon (mu 0.020 and
 /// 0.10), and their quadrature of that peak into the next order left
 /// earth-clear's deep twilight 8-17 % too dark (`docs/twilight_survey.md`).
-/// Here `FINE_PANEL_NODES` Gauss nodes on each of the panels between
-/// the breakpoints mu_h +- (0, 0.015, 0.04, 0.1, 0.25), -1, -0.5 and 0.6.
+/// Here `FINE_PANEL_NODES` (4) Gauss nodes on each of the panels between
+/// the breakpoints -1, mu_h +- `FINE_PANEL_OFFSETS` (0, 0.01, 0.03, 0.08,
+/// 0.25) and 1: 40 cosines.
 fn fine_cosines(ground_m: f64, radius_m: f64) -> Vec<(f64, f64)> {
     let ratio = (ground_m / radius_m).min(1.0);
     let horizon = -(1.0 - ratio * ratio).max(0.0).sqrt();
@@ -465,45 +468,38 @@ impl StreamFit {
     /// functions are too ill-conditioned to fit every harmonic (from 12
     /// streams per hemisphere on; those streams' own quadrature then
     /// serves, and resolves the first order's peak better anyway).
-    fn new(cosines: &[f64], weights: &[f64], wavelengths: usize) -> Option<StreamFit> {
-        let streams = cosines.len();
-        let mut legendre = vec![0.0; streams * streams * streams];
-        for (b, mu) in cosines.iter().enumerate() {
-            normalized_associated_legendre(
-                *mu,
-                streams,
-                &mut legendre[b * streams * streams..(b + 1) * streams * streams],
-            );
-        }
-        let mut moments_of_streams = Vec::with_capacity(streams);
-        let mut correction = Vec::with_capacity(streams);
-        for m in 0..streams {
-            let mut a = vec![0.0; streams * streams];
-            for l in m..streams {
-                for b in 0..streams {
-                    a[l * streams + b] = weights[b] * legendre[(b * streams + m) * streams + l];
+    fn new(streams: &Streams, wavelengths: usize) -> Option<StreamFit> {
+        let weights = streams.weights();
+        let n = streams.count();
+        let mut moments_of_streams = Vec::with_capacity(n);
+        let mut correction = Vec::with_capacity(n);
+        for m in 0..n {
+            let mut a = vec![0.0; n * n];
+            for l in m..n {
+                for b in 0..n {
+                    a[l * n + b] = weights[b] * streams.legendre(b)[m * n + l];
                 }
             }
             // The correction in the span of Lambda_l^m at the streams, dL_b =
             // sum_l Lambda_l^m(mu_b) y_l: the one that least changes sum_b w_b
             // dL_b^2. Its Gram matrix sum_b w_b Lambda_l^m Lambda_q^m is the
-            // streams' discrete orthogonality, near the identity (A A^T
-            // itself is too ill-conditioned to factor at 16 streams).
-            let rows = streams - m;
-            let lambda = |l: usize, b: usize| legendre[(b * streams + m) * streams + l];
+            // streams' discrete orthogonality, near the identity (better
+            // conditioned than A A^T).
+            let rows = n - m;
+            let lambda = |l: usize, b: usize| streams.legendre(b)[m * n + l];
             let mut gram = vec![0.0; rows * rows];
             for p in 0..rows {
                 for q in 0..rows {
-                    gram[p * rows + q] = (0..streams)
+                    gram[p * rows + q] = (0..n)
                         .map(|b| weights[b] * lambda(m + p, b) * lambda(m + q, b))
                         .sum();
                 }
             }
-            let mut p = vec![0.0; streams * streams];
+            let mut p = vec![0.0; n * n];
             if let Some(inverse) = inverse(&gram, rows) {
-                for b in 0..streams {
+                for b in 0..n {
                     for q in 0..rows {
-                        p[b * streams + m + q] = (0..rows)
+                        p[b * n + m + q] = (0..rows)
                             .map(|r| lambda(m + r, b) * inverse[r * rows + q])
                             .sum();
                     }
@@ -511,15 +507,12 @@ impl StreamFit {
             }
             // Independent in exact arithmetic (distinct cosines), but the
             // full-range Lambda_l^m at the double-Gauss cosines grow
-            // ill-conditioned with the streams: where A P is not the identity
-            // to 1e-6 (none at 4 and 8 streams per hemisphere; harmonic 0 at
-            // 12, 0-1 at 16, 0-3 at 24) the fit is not made
-            // ([`StreamFit::new`]).
-            let exact = (m..streams).all(|l| {
-                (m..streams).all(|q| {
-                    let product: f64 = (0..streams)
-                        .map(|b| a[l * streams + b] * p[b * streams + q])
-                        .sum();
+            // ill-conditioned with the streams: where A P is not the
+            // identity to 1e-6 (none at 4 and 8 streams per hemisphere;
+            // harmonic 0 at 12, 0-1 at 16, 0-3 at 24) there is no fit.
+            let exact = (m..n).all(|l| {
+                (m..n).all(|q| {
+                    let product: f64 = (0..n).map(|b| a[l * n + b] * p[b * n + q]).sum();
                     (product - if l == q { 1.0 } else { 0.0 }).abs() < 1e-6
                 })
             });
@@ -530,7 +523,7 @@ impl StreamFit {
             correction.push(p);
         }
         Some(StreamFit {
-            streams,
+            streams: n,
             wavelengths,
             moments_of_streams,
             correction,
@@ -798,7 +791,7 @@ fn compute_spherical_first_order_reference(inputs: &FirstOrderInputs) -> Vec<f64
     let wavelengths = inputs.solar_irradiance_w_m2_nm.len();
     let species = inputs.profiles.len();
     let levels = inputs.level_altitudes_m.len();
-    let streams = inputs.stream_cosines.len();
+    let streams = inputs.streams.count();
     let solution = streams * levels * streams;
     let suns = inputs.sun_zenith_rad.len();
     let (ground, _) = inputs.corners.radii_m();
@@ -825,7 +818,7 @@ fn compute_spherical_first_order_reference(inputs: &FirstOrderInputs) -> Vec<f64
         let mut harmonics = vec![0.0; streams * wavelengths];
         for (k, z) in inputs.level_altitudes_m.iter().enumerate() {
             let x = Vector3::new(0.0, 0.0, ground + z);
-            for (b, mu) in inputs.stream_cosines.iter().enumerate() {
+            for (b, mu) in inputs.streams.cosines().iter().enumerate() {
                 let sine = (1.0 - mu * mu).max(0.0).sqrt();
                 harmonics.fill(0.0);
                 for a in 0..azimuths {
@@ -1045,8 +1038,7 @@ mod tests {
             corners: &corners,
             sun_columns: &sun_columns,
             level_altitudes_m: &[0.0, 1e3, 5e3, 20e3, 60e3],
-            stream_cosines: streams.cosines(),
-            stream_weights: streams.weights(),
+            streams: &streams,
             moments: MomentQuadrature::Streams,
             sun_zenith_rad: &[
                 84f64.to_radians(),
@@ -1108,15 +1100,14 @@ mod tests {
     fn the_stream_fit_gives_the_asked_moments() {
         for n in [12, 16, 24] {
             let streams = crate::transport::multiple_scattering::successive_orders::Streams::new(n);
-            assert!(StreamFit::new(streams.cosines(), streams.weights(), 1).is_none());
+            assert!(StreamFit::new(&streams, 1).is_none());
         }
         for n in [4, 8] {
             let tolerance = 1e-10;
             let streams = crate::transport::multiple_scattering::successive_orders::Streams::new(n);
             let d = streams.count();
             let w = 2;
-            let fit = StreamFit::new(streams.cosines(), streams.weights(), w)
-                .expect("every harmonic fits");
+            let fit = StreamFit::new(&streams, w).expect("every harmonic fits");
             let quadrature = |values: &[f64], m: usize, l: usize, i: usize| -> f64 {
                 (0..d)
                     .map(|b| {
@@ -1192,8 +1183,7 @@ mod tests {
             corners: &corners,
             sun_columns: &sun_columns,
             level_altitudes_m: &levels_m,
-            stream_cosines: streams.cosines(),
-            stream_weights: streams.weights(),
+            streams: &streams,
             moments: MomentQuadrature::Fine,
             sun_zenith_rad: &[sun_zenith],
             scaled_extinction: &[1.2e-5, 5e-5],
