@@ -583,6 +583,13 @@ impl<'a> PathTracer<'a> {
     /// ground reflections (2: its `multiple_scattering` is the second
     /// order alone).
     #[cfg(test)]
+    pub(crate) fn without_twilight_sampling(mut self) -> PathTracer<'a> {
+        self.sunlit_share = 0.0;
+        self.sunlit_direction_share = 0.0;
+        self
+    }
+
+    #[cfg(test)]
     pub(crate) fn with_max_interactions(mut self, interactions: u32) -> PathTracer<'a> {
         self.max_interactions = interactions;
         self

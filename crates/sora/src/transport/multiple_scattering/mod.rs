@@ -1142,6 +1142,7 @@ impl MultipleScatteringField {
                 .with_sweeps(sweeps);
             let mut work = Vec::new();
             let mut transmittance = vec![0.0; levels];
+            let mut ground_direct = vec![0.0; count - first_spherical.min(count)];
             for s in 0..count {
                 let sun_cosine = sun_axis.angle(s).cos();
                 let mut exact_ground = 0.0;
@@ -1163,12 +1164,21 @@ impl MultipleScatteringField {
                 }
                 let block = &mut out[s * (solution_len + 2)..(s + 1) * (solution_len + 2)];
                 let (field, ground) = block.split_at_mut(solution_len);
-                let first = first_of(s);
-                let diffuse = system.solve(sun_cosine, &transmittance, first, field, &mut work);
                 let lit = sun_cosine.max(0.0);
-                ground[0] =
-                    albedo / PI * (diffuse + solar * lit * (transmittance[0] - exact_ground));
+                // The ground's sunlight that delta-M moved into the beam
+                // (reflected as if diffuse), and the exact direct beam.
+                let moved = solar * lit * (transmittance[0] - exact_ground);
                 ground[1] = albedo / PI * solar * lit * exact_ground;
+                if s >= first_spherical {
+                    // Solved below with the other spherical nodes; the
+                    // moved sunlight waits in ground[0] for the diffuse.
+                    ground[0] = moved;
+                    ground_direct[s - first_spherical] =
+                        albedo / PI * solar * lit * transmittance[0];
+                    continue;
+                }
+                let diffuse = system.solve(sun_cosine, &transmittance, None, field, &mut work);
+                ground[0] = albedo / PI * (diffuse + moved);
             }
             // The near-horizontal light comes from columns where the sun
             // stands higher or lower (see `spherical_paths`).
@@ -1184,22 +1194,27 @@ impl MultipleScatteringField {
                 .take(first_spherical)
                 .collect();
             system.shift_toward_sources(&sun_axis.angles_rad[..fields.len()], &mut fields);
-            // From 84 degrees on, the orders >= 2 of the spherical streams
-            // (the first order is spherical already), in the logarithm.
+            // From 84 degrees on, the nodes with the spherical first order,
+            // all together: each order of the spherical streams shifted in
+            // the logarithm before it is scattered again.
             if first_spherical < count {
                 let first_orders: Vec<&[f64]> = (first_spherical..count)
                     .map(|s| first_of(s).unwrap())
                     .collect();
-                let mut fields: Vec<&mut [f64]> = out
+                let (mut fields, mut grounds): (Vec<&mut [f64]>, Vec<&mut [f64]>) = out
                     .chunks_exact_mut(solution_len + 2)
-                    .map(|block| &mut block[..solution_len])
                     .skip(first_spherical)
-                    .collect();
-                system.shift_higher_orders_toward_sources(
+                    .map(|block| block.split_at_mut(solution_len))
+                    .unzip();
+                let diffuse = system.solve_shifted_orders(
                     &sun_axis.angles_rad[first_spherical..],
+                    &ground_direct,
                     &first_orders,
                     &mut fields,
                 );
+                for (ground, diffuse) in grounds.iter_mut().zip(diffuse) {
+                    ground[0] = albedo / PI * (diffuse + ground[0]);
+                }
             }
         });
         let mut radiance = vec![0.0; count * wavelengths * solution_len];

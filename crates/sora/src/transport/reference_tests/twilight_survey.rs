@@ -8,8 +8,9 @@
 //! error.
 //!
 //! Settings by environment (all optional): `SORA_SURVEY_PRESETS`
-//! (comma-separated, default earth-clear,earth-hazy,
-//! us-standard-1976-rayleigh), `SORA_SURVEY_SUNS` (degrees, default
+//! (comma-separated preset names or paths of atmosphere files ending in
+//! `.toml`, default earth-clear,earth-hazy, us-standard-1976-rayleigh),
+//! `SORA_SURVEY_SUNS` (degrees, default
 //! -2,-4,-6), `SORA_SURVEY_SAMPLES` (paths per view, default 800 000),
 //! `SORA_SURVEY_VIEWS` (`elevation:azimuth` pairs, azimuth from the sun;
 //! default the zenith and elevations 5 and 20 at 0, 90 and 180 degrees).
@@ -18,9 +19,9 @@
 //! hemisphere, `lN` layers, `zX` the sunset sun-zenith step in degrees,
 //! `pN` view-ray panels, `tN` a sun-column table of N altitude and 2N mu
 //! nodes (e.g. `s16+z0.25`).
-//! `SORA_SURVEY_ORDER2=1`: the second order alone (the fast field stopped
-//! after its first order, the path tracer's paths after two interactions),
-//! in the `multiple` columns.
+//! `SORA_SURVEY_ORDERS=N` (N >= 2): the orders up to N alone (the fast
+//! field stopped after N - 1 sweeps, the path tracer's paths after N
+//! interactions); `multiple` is then the orders 2 to N.
 //! Wavelengths 440, 560 and 680 nm.
 //!
 //! ```text
@@ -90,13 +91,21 @@ fn twilight_survey() {
         })
         .collect();
     let variants = list("SORA_SURVEY_VARIANTS", "default");
-    let order2 = std::env::var("SORA_SURVEY_ORDER2").is_ok_and(|v| v == "1");
+    let orders: Option<usize> = std::env::var("SORA_SURVEY_ORDERS")
+        .ok()
+        .map(|v| v.parse().unwrap())
+        .filter(|n| *n >= 2);
     let grid = WavelengthGrid::new(440.0, 680.0, 120.0).unwrap();
     println!(
         "preset,sun,elevation,azimuth,nm,variant,total,total_se,single,single_se,multiple,multiple_se,ms_share"
     );
     for preset in &presets {
-        let atmosphere = Atmosphere::preset(preset).unwrap();
+        // A preset's name, or the path of an atmosphere file (`.toml`).
+        let atmosphere = if preset.ends_with(".toml") {
+            Atmosphere::from_toml_str(&std::fs::read_to_string(preset).unwrap()).unwrap()
+        } else {
+            Atmosphere::preset(preset).unwrap()
+        };
         for (n, &sun) in suns.iter().enumerate() {
             let observation = Observation {
                 observer_altitude_m: 0.0,
@@ -118,16 +127,16 @@ fn twilight_survey() {
                 .iter()
                 .map(|v| {
                     let (settings, table) = settings(v);
-                    if !order2 {
+                    let Some(orders) = orders else {
                         return sky(Scattering::Multiple(settings), table)
                             .radiances(&directions)
                             .unwrap();
-                    }
+                    };
                     let field = MultipleScatteringField::compute_with_sweeps(
                         &scene,
                         settings,
                         table.sun_column_nodes,
-                        1,
+                        orders - 1,
                     )
                     .unwrap();
                     let mut scratch = field.scratch();
@@ -156,10 +165,14 @@ fn twilight_survey() {
                         .collect()
                 })
                 .collect();
-            let tracer = if order2 {
-                PathTracer::new(&scene).with_max_interactions(2)
+            let tracer = match orders {
+                Some(n) => PathTracer::new(&scene).with_max_interactions(n as u32),
+                None => PathTracer::new(&scene),
+            };
+            let tracer = if std::env::var("SORA_SURVEY_PLAIN").is_ok_and(|v| v == "1") {
+                tracer.without_twilight_sampling()
             } else {
-                PathTracer::new(&scene)
+                tracer
             };
             for (v, view) in directions.iter().enumerate() {
                 let traced = tracer
