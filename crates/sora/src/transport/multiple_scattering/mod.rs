@@ -1123,11 +1123,10 @@ impl MultipleScatteringField {
         let chunk = count * (solution_len + 2);
         let mut solved = vec![0.0; wavelengths * chunk];
         crate::parallel::for_each_chunk_mut(&mut solved, chunk, |i, out| {
+            // The spherical first order of node s >= first_spherical.
             let first_of = |s: usize| {
-                (s >= first_spherical).then(|| {
-                    &first_order[((s - first_spherical) * wavelengths + i) * solution_len..]
-                        [..solution_len]
-                })
+                &first_order[((s - first_spherical) * wavelengths + i) * solution_len..]
+                    [..solution_len]
             };
             let scaled: Vec<ScaledSpecies> = (0..species)
                 .map(|j| ScaledSpecies {
@@ -1177,7 +1176,7 @@ impl MultipleScatteringField {
                         albedo / PI * solar * lit * transmittance[0];
                     continue;
                 }
-                let diffuse = system.solve(sun_cosine, &transmittance, None, field, &mut work);
+                let diffuse = system.solve(sun_cosine, &transmittance, field, &mut work);
                 ground[0] = albedo / PI * (diffuse + moved);
             }
             // The near-horizontal light comes from columns where the sun
@@ -1198,9 +1197,7 @@ impl MultipleScatteringField {
             // all together: each order of the spherical streams shifted in
             // the logarithm before it is scattered again.
             if first_spherical < count {
-                let first_orders: Vec<&[f64]> = (first_spherical..count)
-                    .map(|s| first_of(s).unwrap())
-                    .collect();
+                let first_orders: Vec<&[f64]> = (first_spherical..count).map(first_of).collect();
                 let (mut fields, mut grounds): (Vec<&mut [f64]>, Vec<&mut [f64]>) = out
                     .chunks_exact_mut(solution_len + 2)
                     .skip(first_spherical)

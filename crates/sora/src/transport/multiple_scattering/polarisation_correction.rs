@@ -216,8 +216,7 @@ impl PolarisationCorrection {
             let mut work = Vec::new();
             let sun_cosine = inputs.sun_cosine;
             let down_vector = vector.solve(sun_cosine, &transmittance, vector_field, &mut work);
-            let down_scalar =
-                scalar.solve(sun_cosine, &transmittance, None, scalar_field, &mut work);
+            let down_scalar = scalar.solve(sun_cosine, &transmittance, scalar_field, &mut work);
             // The ground's diffuse light as the scalar field's ground
             // term takes it (the sunlit ground's single reflection is
             // exact elsewhere; delta-M's share of the beam stays here).

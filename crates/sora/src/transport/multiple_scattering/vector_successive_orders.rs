@@ -313,13 +313,7 @@ mod tests {
         let mut scalar_field = vec![0.0; total * levels * total];
         let mut vector_field = vec![0.0; vector.field_len()];
         let mut work = Vec::new();
-        let scalar_down = scalar.solve(
-            sun_cosine,
-            &transmittance,
-            None,
-            &mut scalar_field,
-            &mut work,
-        );
+        let scalar_down = scalar.solve(sun_cosine, &transmittance, &mut scalar_field, &mut work);
         let vector_down = vector.solve(sun_cosine, &transmittance, &mut vector_field, &mut work);
         assert!((vector_down - scalar_down).abs() < 1e-12 * scalar_down);
         let block = levels * total;
