@@ -25,13 +25,22 @@
 //!    (which climb out to space instead of running on forever, as a slab's
 //!    would), and their light is shifted, to first order, toward the sun
 //!    angle of the columns where it was gathered. From a sun zenith angle
-//!    of 84 degrees on (where the first order is spherical, item 3) only
-//!    their orders >= 2 are shifted, and exactly rather than to first
-//!    order: read at the shifted sun angle, per azimuth, by interpolation
-//!    across the sun nodes linear in the logarithm, averaged over the mean
-//!    angle +- its spread (in twilight that light changes by orders of
-//!    magnitude over a few degrees; without it the orders >= 3 toward a
-//!    sun at -6 degrees were about a quarter too dark).
+//!    of 84 degrees on (where the first order is spherical, item 3) the
+//!    columns of all those sun nodes are solved together, order by order,
+//!    and each order >= 2 of these streams is shifted exactly rather than
+//!    to first order before it is scattered into the next: read at the
+//!    shifted sun angle, per azimuth, by interpolation across the sun
+//!    nodes linear in the logarithm, averaged over the mean angle +- its
+//!    spread (in twilight that light changes by orders of magnitude over a
+//!    few degrees; without it the orders >= 3 toward a sun at -6 degrees
+//!    were about a quarter too dark). Shifting only the finished field
+//!    corrected the last leg of each path and left every earlier leg in its
+//!    own column, so the n-th order missed the shift n - 2 times: where the
+//!    diffuse light is carried by many orders through air that is
+//!    optically thick at the shadow's height (mars-dust, whose dust is
+//!    mixed up to 100 km), the twilight sky away from the sun was 11-20 %
+//!    too dark at -4 and -6 degrees (`docs/twilight_survey.md`, mars-dust
+//!    in twilight, fixed).
 //! 3. **The first order in the sphere** (`spherical_first_order.rs`): for
 //!    sun zenith angles from 84 degrees on, the light scattered once that
 //!    reaches each level in each stream is marched along the stream's

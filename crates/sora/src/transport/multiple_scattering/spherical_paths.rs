@@ -40,9 +40,9 @@
 //! Measured against the path tracer for a sun 5 degrees high, it halves the
 //! error of the sunward horizon (-2.3 % to -1.3 % of the total at 380 nm).
 //! In twilight the first order is not enough: from a sun zenith angle of
-//! 84 degrees on, the orders >= 2 are shifted exactly, per azimuth, with
-//! the mean angle and its spread
-//! (`ColumnSystem::shift_higher_orders_toward_sources`).
+//! 84 degrees on, every order >= 2 is shifted exactly, per azimuth, with
+//! the mean angle and its spread, before it is scattered into the next
+//! (`ColumnSystem::solve_shifted_orders`).
 
 /// Streams with |mu| below this (within 17 degrees of the horizon) take
 /// the spherical paths; steeper ones keep the slab's recursion: at 24
