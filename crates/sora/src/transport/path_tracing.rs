@@ -579,9 +579,8 @@ impl<'a> PathTracer<'a> {
         }
     }
 
-    /// This tracer ending every path after `interactions` scatterings and
-    /// ground reflections (2: its `multiple_scattering` is the second
-    /// order alone).
+    /// This tracer without its draws toward the sunlit air (free paths and
+    /// directions as in daylight): the same expectation, for checking them.
     #[cfg(test)]
     pub(crate) fn without_twilight_sampling(mut self) -> PathTracer<'a> {
         self.sunlit_share = 0.0;
@@ -589,6 +588,9 @@ impl<'a> PathTracer<'a> {
         self
     }
 
+    /// This tracer ending every path after `interactions` scatterings and
+    /// ground reflections (2: its `multiple_scattering` is the second
+    /// order alone).
     #[cfg(test)]
     pub(crate) fn with_max_interactions(mut self, interactions: u32) -> PathTracer<'a> {
         self.max_interactions = interactions;

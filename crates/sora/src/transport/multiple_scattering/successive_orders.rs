@@ -703,7 +703,7 @@ impl<'a> ColumnSystem<'a> {
     /// n-th order misses the shift n - 2 times: measured on mars-dust with
     /// Henyey-Greenstein dust, sun -6 degrees, 5 degrees up 90 degrees
     /// from the sun, the orders up to 2, 3 and 4 and all of them were
-    /// -1.0, -3.7, -7.3 and -13.5 % from the path tracer (+-1.5 %) when
+    /// -1.0, -3.7, -7.3 and -13.5 % from the path tracer (+-1.6-1.8 %) when
     /// only the field was shifted, -4.7 % in all with every order shifted
     /// (`docs/twilight_survey.md`).
     pub(crate) fn solve_shifted_orders(

@@ -22,6 +22,8 @@
 //! `SORA_SURVEY_ORDERS=N` (N >= 2): the orders up to N alone (the fast
 //! field stopped after N - 1 sweeps, the path tracer's paths after N
 //! interactions); `multiple` is then the orders 2 to N.
+//! `SORA_SURVEY_PLAIN=1`: the path tracer without its draws toward the
+//! sunlit air (`PathTracer::without_twilight_sampling`), to check them.
 //! Wavelengths 440, 560 and 680 nm.
 //!
 //! ```text
