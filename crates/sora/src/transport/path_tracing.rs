@@ -1904,11 +1904,7 @@ mod tests {
             let sky = SingleScatteringSky::new(&atmosphere, &WavelengthGrid::paper(), observation)
                 .unwrap();
             let with = PathTracer::new(&sky);
-            let without = PathTracer {
-                sunlit_share: 0.0,
-                sunlit_direction_share: 0.0,
-                ..PathTracer::new(&sky)
-            };
+            let without = PathTracer::new(&sky).without_twilight_sampling();
             for (name, view) in [
                 ("zenith", Vector3::new(0.0, 0.0, 1.0)),
                 (

@@ -1169,7 +1169,12 @@ impl MultipleScatteringField {
                 .with_sweeps(sweeps);
             let mut work = Vec::new();
             let mut transmittance = vec![0.0; levels];
-            let mut ground_direct = vec![0.0; count - first_spherical.min(count)];
+            // Per spherical node: the sunlit ground's radiance under the
+            // scaled beam, and the sunlight delta-M moved into that beam
+            // (W m^-2 nm^-1), for the ground values after the joint solve.
+            let spherical_nodes = count - first_spherical.min(count);
+            let mut ground_direct = vec![0.0; spherical_nodes];
+            let mut moved_sunlight = vec![0.0; spherical_nodes];
             for s in 0..count {
                 let sun_cosine = sun_axis.angle(s).cos();
                 let mut exact_ground = 0.0;
@@ -1197,9 +1202,8 @@ impl MultipleScatteringField {
                 let moved = solar * lit * (transmittance[0] - exact_ground);
                 ground[1] = albedo / PI * solar * lit * exact_ground;
                 if s >= first_spherical {
-                    // Solved below with the other spherical nodes; the
-                    // moved sunlight waits in ground[0] for the diffuse.
-                    ground[0] = moved;
+                    // Solved below with the other spherical nodes.
+                    moved_sunlight[s - first_spherical] = moved;
                     ground_direct[s - first_spherical] =
                         albedo / PI * solar * lit * transmittance[0];
                     continue;
@@ -1237,8 +1241,10 @@ impl MultipleScatteringField {
                     &first_orders,
                     &mut fields,
                 );
-                for (ground, diffuse) in grounds.iter_mut().zip(diffuse) {
-                    ground[0] = albedo / PI * (diffuse + ground[0]);
+                for ((ground, diffuse), moved) in
+                    grounds.iter_mut().zip(diffuse).zip(&moved_sunlight)
+                {
+                    ground[0] = albedo / PI * (diffuse + moved);
                 }
             }
         });

@@ -138,6 +138,12 @@ pub(crate) struct ShiftPlan {
     /// [(((s * levels + k) * nodes + node) * streams + q) * 2 + i]: the
     /// node below and the fraction of its segment.
     brackets: Vec<(u32, f64)>,
+    /// The harmonics that are not zero.
+    active: Vec<usize>,
+    /// cos(m phi_q) of the active harmonics at the midpoint azimuths,
+    /// [q * active + i], and the same by harmonics, [i * streams + q].
+    cosines: Vec<f64>,
+    synthesis: Vec<f64>,
 }
 
 /// The discrete ordinates: Gauss-Legendre cosines on each hemisphere
@@ -549,7 +555,27 @@ impl<'a> ColumnSystem<'a> {
                 }
             }
         }
-        ShiftPlan { nodes, brackets }
+        let active: Vec<usize> = (0..azimuths)
+            .filter(|m| self.active_harmonics[*m])
+            .collect();
+        let h = active.len();
+        let cosines: Vec<f64> = (0..azimuths)
+            .flat_map(|q| {
+                let phi = PI * (q as f64 + 0.5) / azimuths as f64;
+                active.iter().map(move |&m| (m as f64 * phi).cos())
+            })
+            .collect();
+        let synthesis: Vec<f64> = (0..h)
+            .flat_map(|i| (0..azimuths).map(move |q| (i, q)))
+            .map(|(i, q)| cosines[q * h + i])
+            .collect();
+        ShiftPlan {
+            nodes,
+            brackets,
+            active,
+            cosines,
+            synthesis,
+        }
     }
 
     /// After sunset: shifts one order of scattering of each spherical
@@ -586,20 +612,8 @@ impl<'a> ColumnSystem<'a> {
         let total = self.streams.count();
         let size = levels * total;
         let azimuths = total;
-        let active: Vec<usize> = (0..total).filter(|m| self.active_harmonics[*m]).collect();
+        let (active, cosines, synthesis) = (&plan.active, &plan.cosines, &plan.synthesis);
         let h = active.len();
-        // cos(m phi_q) of the active harmonics, [q * h + i].
-        let cosines: Vec<f64> = (0..azimuths)
-            .flat_map(|q| {
-                let phi = PI * (q as f64 + 0.5) / azimuths as f64;
-                active.iter().map(move |&m| (m as f64 * phi).cos())
-            })
-            .collect();
-        // The same by harmonics, [i * azimuths + q].
-        let synthesis: Vec<f64> = (0..h)
-            .flat_map(|i| (0..azimuths).map(move |q| (i, q)))
-            .map(|(i, q)| cosines[q * h + i])
-            .collect();
         let mut harmonics = vec![0.0; nodes * h];
         let mut higher = vec![0.0; nodes * azimuths];
         let mut logs = vec![0.0; nodes * azimuths];
