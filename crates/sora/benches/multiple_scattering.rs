@@ -5,7 +5,11 @@
 //! tables), and a whole 512 x 512 all-sky fisheye at the 21 paper
 //! wavelengths with multiple scattering, next to the same image with single
 //! scattering only. Sun at 30 degrees (the fewest sun angles) and 5 degrees
-//! (the most: the sunset steps).
+//! (the most: the sunset steps). And issue 11's twilight image: earth-clear,
+//! sun 6 degrees below the horizon, a 512 x 512 fisheye with every order
+//! (scalar light, as the issue's bar of 2 s was set before polarisation;
+//! the polarised image is `--bench polarisation`'s business), every table
+//! built in each iteration as a `sora render` run does.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use sora::colour::{Observer, SpectrumToXyz};
@@ -54,5 +58,25 @@ fn multiple_scattering_benchmarks(c: &mut Criterion) {
     }
 }
 
-criterion_group!(benches, multiple_scattering_benchmarks);
+fn twilight_benchmarks(c: &mut Criterion) {
+    let atmosphere = Atmosphere::preset("earth-clear").expect("preset");
+    let to_xyz = SpectrumToXyz::new(&WavelengthGrid::paper(), Observer::Cie1931TwoDegree);
+    let image = ImageSettings::new(Camera::Fisheye, 512, 512);
+    let mut group = c.benchmark_group("twilight_sun_-6");
+    group.sample_size(10);
+    group.bench_function("fisheye_512_multiple", |b| {
+        b.iter(|| {
+            Sky::builder(&atmosphere)
+                .sun_deg(-6.0, 270.0)
+                .scattering(Scattering::multiple())
+                .build()
+                .expect("sky")
+                .render_xyz(&image, &to_xyz, &|_| {})
+                .expect("render")
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, multiple_scattering_benchmarks, twilight_benchmarks);
 criterion_main!(benches);

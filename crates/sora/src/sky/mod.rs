@@ -55,7 +55,7 @@ mod sun_disc;
 pub use crate::transport::multiple_scattering::MultipleScatteringSettings;
 pub use irradiance::{Irradiance, Plane};
 
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
 
 use crate::atmosphere::phase_matrix::PhaseMatrix;
 use crate::atmosphere::{Atmosphere, AtmosphereOptics};
@@ -364,7 +364,7 @@ pub struct Sky {
     polarisation: Polarisation,
     /// The multiple-scattering field over every sun zenith angle the eye's
     /// rays meet (built on first use).
-    field: OnceLock<MultipleScatteringField>,
+    field: OnceLock<Arc<MultipleScatteringField>>,
     /// The field's source table, for images (built on first use).
     source_table: OnceLock<MultipleScatteringTable>,
     /// The fast method's image tables (built on first use).
@@ -684,7 +684,7 @@ impl Sky {
                     )?,
                 };
                 // Another thread may have been first: either field is the same.
-                let _ = self.field.set(field);
+                let _ = self.field.set(Arc::new(field));
             }
         }
         Ok(())
@@ -693,15 +693,15 @@ impl Sky {
     /// The multiple-scattering field ([`Sky::prepare_field`] has run).
     fn field(&self) -> Option<&MultipleScatteringField> {
         debug_assert!(self.scattering == Scattering::Single || self.field.get().is_some());
-        self.field.get()
+        self.field.get().map(|field| &**field)
     }
 
     /// The field's source table, built on first use.
     fn source_table(&self) -> Option<&MultipleScatteringTable> {
-        let field = self.field()?;
+        let field = self.field.get()?;
         Some(
             self.source_table
-                .get_or_init(|| MultipleScatteringTable::compute(field.clone())),
+                .get_or_init(|| MultipleScatteringTable::compute(Arc::clone(field))),
         )
     }
 

@@ -799,8 +799,12 @@ pub struct MultipleScatteringField {
     /// [i * species + j].
     phases: Vec<TruncatedPhase>,
     harmonics: Vec<bool>,
-    /// L_m(z_k, mu_b), [((s * wavelengths + i) * solution) ...].
-    radiance: Vec<f64>,
+    /// The solver's output as it wrote it: per wavelength i and sun node s
+    /// a block of `solution_len + 2` values, L_m(z_k, mu_b) at [(m *
+    /// levels + k) * streams + b] and then the ground's two values, blocks
+    /// [i * sun nodes + s] (read with [`MultipleScatteringField::solution`];
+    /// kept as solved, not transposed: tens of megabytes at twilight).
+    solutions: Vec<f64>,
     solution_len: usize,
     /// The source's Legendre moments for the exact synthesis, made on
     /// first use ([`MultipleScatteringField::source_moments`]).
@@ -1248,14 +1252,11 @@ impl MultipleScatteringField {
                 }
             }
         });
-        let mut radiance = vec![0.0; count * wavelengths * solution_len];
         let mut ground_diffuse = vec![0.0; count * wavelengths];
         let mut ground_direct = vec![0.0; count * wavelengths];
         for i in 0..wavelengths {
             for s in 0..count {
                 let block = &solved[i * chunk + s * (solution_len + 2)..][..solution_len + 2];
-                radiance[(s * wavelengths + i) * solution_len..][..solution_len]
-                    .copy_from_slice(&block[..solution_len]);
                 ground_diffuse[s * wavelengths + i] = block[solution_len];
                 ground_direct[s * wavelengths + i] = block[solution_len + 1];
             }
@@ -1302,11 +1303,19 @@ impl MultipleScatteringField {
             },
             phases,
             harmonics,
-            radiance,
+            solutions: solved,
             solution_len,
             moments: std::sync::OnceLock::new(),
             polarisation,
         })
+    }
+
+    /// The field L_m(z_k, mu_b) of sun node `s` at wavelength `i`, W m^-2
+    /// sr^-1 nm^-1, [(m * levels + k) * streams + b].
+    fn solution(&self, s: usize, i: usize) -> &[f64] {
+        let block = self.solution_len + 2;
+        let at = (i * self.optics.sun_axis.count() + s) * block;
+        &self.solutions[at..at + self.solution_len]
     }
 
     /// The scattering source's moments per sun node s, wavelength i, level
@@ -1337,7 +1346,7 @@ impl MultipleScatteringField {
             let mut mixed = vec![0.0; degrees];
             for s in 0..suns {
                 for i in 0..w {
-                    let solution = &self.radiance[(s * w + i) * self.solution_len..];
+                    let solution = self.solution(s, i);
                     for k in 0..levels {
                         let densities = self.grid.densities_at_level(k);
                         let scattering = |j: usize| {

@@ -20,6 +20,7 @@
 //! back by the scaled scattering coefficient at each node.
 
 use std::f64::consts::PI;
+use std::sync::Arc;
 
 use super::phase_fourier::normalized_associated_legendre;
 use super::{
@@ -31,7 +32,9 @@ use crate::transport::SunColumns;
 /// The per-image source table (see the module docs).
 #[derive(Debug, Clone)]
 pub struct MultipleScatteringTable {
-    field: MultipleScatteringField,
+    /// Shared with the sky that made it (the field's solution is tens of
+    /// megabytes: a copy cost a 512^2 twilight image 0.1 s).
+    field: Arc<MultipleScatteringField>,
     view_zenith_nodes: usize,
     azimuth_nodes: usize,
     /// ln R (R in W m^-2 sr^-1 nm^-1), [(((k * suns + s) * azimuth_nodes + f)
@@ -42,7 +45,7 @@ pub struct MultipleScatteringTable {
 impl MultipleScatteringTable {
     /// Tabulates the source of `field` (which it keeps, for the march's
     /// optics and for exact comparisons), at the table size of its settings.
-    pub(crate) fn compute(field: MultipleScatteringField) -> MultipleScatteringTable {
+    pub(crate) fn compute(field: Arc<MultipleScatteringField>) -> MultipleScatteringTable {
         let settings = field.settings;
         let (views, azimuths) = (
             settings.table_view_zenith_nodes.max(2),
@@ -123,8 +126,7 @@ impl MultipleScatteringTable {
                     }
                 }
                 for s in first_sun..=last_sun {
-                    let solution =
-                        &field.radiance[(s * w + i) * field.solution_len..][..field.solution_len];
+                    let solution = field.solution(s, i);
                     for &m in &active {
                         let row = &mut harmonics[m * views..(m + 1) * views];
                         row.fill(0.0);

@@ -20,6 +20,8 @@
 //!   standard errors of the path tracer (a modest-sample version here, a
 //!   heavier one with `--ignored`), and twilight reported.
 
+use std::sync::Arc;
+
 use crate::atmosphere::{Atmosphere, Planet};
 use crate::geometry::{Vector3, direction_from_elevation_azimuth};
 use crate::spectrum::{SampledSpectrum, Spectrum, WavelengthGrid};
@@ -58,7 +60,7 @@ fn worst_errors_against_disort(ground_albedo: f64) -> [f64; 3] {
         let field =
             MultipleScatteringField::compute(&sky, MultipleScatteringSettings::default(), false)
                 .unwrap();
-        let table = MultipleScatteringTable::compute(field.clone());
+        let table = MultipleScatteringTable::compute(Arc::new(field.clone()));
         let image_sky = Sky::from_scene(
             sky.clone(),
             Scattering::multiple(),
@@ -197,9 +199,9 @@ fn multiple_scattering_is_finite_and_non_negative_everywhere() {
             (40.0, 400e3),
         ] {
             let sky = sky(&atmosphere, sun_elevation, altitude);
-            let table = MultipleScatteringTable::compute(
+            let table = MultipleScatteringTable::compute(Arc::new(
                 MultipleScatteringField::compute(&sky, settings, false).unwrap(),
-            );
+            ));
             let mut scratch = table.scratch();
             let mut radiance = vec![0.0; sky.optics().grid.len()];
             for view in directions(40) {
@@ -267,10 +269,10 @@ fn default_resolution_is_converged_on_the_spherical_sky() {
     for sun_elevation in [90.0, 30.0, 5.0] {
         let sky = sky(&atmosphere, sun_elevation, 0.0);
         let reference = MultipleScatteringField::compute(&sky, fine, false).unwrap();
-        let table = MultipleScatteringTable::compute(
+        let table = MultipleScatteringTable::compute(Arc::new(
             MultipleScatteringField::compute(&sky, MultipleScatteringSettings::default(), false)
                 .unwrap(),
-        );
+        ));
         let (mut worst_field, mut worst_table) = (0.0f64, 0.0f64);
         let mut radiance = vec![0.0; sky.optics().grid.len()];
         let mut scratch = table.scratch();
@@ -317,10 +319,10 @@ fn compare_with_path_tracer(
     let (mut worst, mut worst_excess) = (0.0f64, f64::NEG_INFINITY);
     for (n, &sun_elevation) in suns.iter().enumerate() {
         let sky = sky(&atmosphere, sun_elevation, 0.0);
-        let table = MultipleScatteringTable::compute(
+        let table = MultipleScatteringTable::compute(Arc::new(
             MultipleScatteringField::compute(&sky, MultipleScatteringSettings::default(), false)
                 .unwrap(),
-        );
+        ));
         let tracer = PathTracer::new(&sky);
         let mut scratch = table.scratch();
         let mut tabulated = vec![0.0; sky.optics().grid.len()];
