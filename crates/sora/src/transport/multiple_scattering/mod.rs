@@ -268,7 +268,13 @@
 //! half of its time as the standard library's. Shifting every order
 //! rather than the finished field (item 2; medians of 7 runs on the busy
 //! machine): sun -6 2.24 s against 2.01 s, sun 5 1.71 s against 1.60 s,
-//! so the -6 image is now about 2.1 s on the quiet machine.
+//! so the -6 image was about 2.1 s on the quiet machine. The field is
+//! now kept in the solver's own layout (read through
+//! [`MultipleScatteringField::solution`]) and shared with its source
+//! table, not copied (it is 20-70 MB at twilight): the same pixels, the
+//! -6 image 4-10 % faster (paired runs) and its peak memory 156 -> 123
+//! MiB; `cargo bench --bench multiple_scattering -- twilight` gives 1.91 s
+//! (1.86-1.97).
 //!
 //! # What it approximates
 //! - Diffuse light between nearby points travels as in a column of uniform
@@ -284,7 +290,11 @@
 //!   the peak-only light of the forward-peak term takes its k-fold
 //!   convolution of the peak in the small-angle sense (its paths' legs
 //!   all near the sun's line, their mean peak optical depth along the
-//!   view ray).
+//!   view ray). It takes the peak's light as going on along the sun's
+//!   line with that line's transmittance, which fails for a sun on the
+//!   horizon, whose grazing line is far darker than lines a few degrees
+//!   above it: mars-dust 1 degree up within 5 degrees of such a sun is
+//!   5-9 % too dark (`docs/twilight_survey.md`, its last section).
 //! - 2n streams and harmonics, 40 layers, the source linear in optical
 //!   depth across a layer, and the tables' interpolations.
 //!
