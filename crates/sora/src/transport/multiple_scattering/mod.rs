@@ -290,11 +290,10 @@
 //!   the peak-only light of the forward-peak term takes its k-fold
 //!   convolution of the peak in the small-angle sense (its paths' legs
 //!   all near the sun's line, their mean peak optical depth along the
-//!   view ray). It takes the peak's light as going on along the sun's
-//!   line with that line's transmittance, which fails for a sun on the
-//!   horizon, whose grazing line is far darker than lines a few degrees
-//!   above it: mars-dust 1 degree up within 5 degrees of such a sun is
-//!   5-9 % too dark (`docs/twilight_survey.md`, its last section).
+//!   view ray). With the sun on the horizon, mars-dust 1 degree up
+//!   within 5 degrees of it is 5-9 % too dark; 16 streams a hemisphere
+//!   put it right, the geometry of the peak's single scattering does
+//!   not (`docs/twilight_survey.md`, its last section).
 //! - 2n streams and harmonics, 40 layers, the source linear in optical
 //!   depth across a layer, and the tables' interpolations.
 //!
