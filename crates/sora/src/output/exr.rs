@@ -29,6 +29,8 @@
 //!   viewers map `R, G, B` channels to the screen; `X, Y, Z` channels are
 //!   for tools that read them by name (many show `Y` as luminance).
 //! - The `software` attribute is `sora <version>`.
+//! - The header's attributes are sorted by name (as the OpenEXR library
+//!   writes them), so the same image makes the same file byte for byte.
 //!
 //! The file is written atomically, as [`write_file_atomically`] describes.
 
@@ -197,7 +199,64 @@ pub fn encode_exr_with_layers(
             path: "(memory)".to_string(),
             message: format!("cannot encode OpenEXR: {error}"),
         })?;
+    sort_header_attributes(&mut bytes);
     Ok(bytes)
+}
+
+/// Puts the attributes of a single-part file's header in the order of
+/// their names, in place. The `exr` crate keeps the other attributes
+/// (ours, `sora:*`) in a hash map with a random order per run, so the same
+/// image made two files that differed in their headers; the OpenEXR
+/// library itself writes attributes sorted by name. The header's length
+/// does not change, so the offset table after it stays right. A header
+/// that does not parse as expected is left alone.
+///
+/// The layout (OpenEXR file layout, "Header"): after the magic number and
+/// the version field (4 bytes each), attributes of name (NUL-terminated),
+/// type name (NUL-terminated), value size (i32, little-endian) and value,
+/// ended by an empty name (one NUL byte).
+fn sort_header_attributes(bytes: &mut [u8]) {
+    const MULTIPART: u32 = 0x1000;
+    let Some(version) = bytes.get(4..8) else {
+        return;
+    };
+    if u32::from_le_bytes([version[0], version[1], version[2], version[3]]) & MULTIPART != 0 {
+        return;
+    }
+    let nul = |from: usize| bytes[from..].iter().position(|b| *b == 0).map(|p| from + p);
+    // (start, end of the name, end) of each attribute.
+    let mut records: Vec<(usize, usize, usize)> = Vec::new();
+    let mut at = 8;
+    loop {
+        let Some(name_end) = nul(at) else {
+            return;
+        };
+        if name_end == at {
+            break;
+        }
+        let Some(type_end) = nul(name_end + 1) else {
+            return;
+        };
+        let Some(size) = bytes.get(type_end + 1..type_end + 5) else {
+            return;
+        };
+        let size = i32::from_le_bytes([size[0], size[1], size[2], size[3]]);
+        let Ok(size) = usize::try_from(size) else {
+            return;
+        };
+        let end = type_end + 5 + size;
+        if end > bytes.len() {
+            return;
+        }
+        records.push((at, name_end, end));
+        at = end;
+    }
+    records.sort_by(|a, b| bytes[a.0..a.1].cmp(&bytes[b.0..b.1]));
+    let reordered: Vec<u8> = records
+        .iter()
+        .flat_map(|(start, _, end)| bytes[*start..*end].iter().copied())
+        .collect();
+    bytes[8..at].copy_from_slice(&reordered);
 }
 
 /// One channel of `image` (named `name` in the file) as a flat, row-major
@@ -275,6 +334,58 @@ fn chromaticities(channel_kind: ChannelKind) -> Chromaticities {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The same image and attributes make the same bytes every time (the
+    /// `exr` crate's attribute map has a random order per instance), and
+    /// the file still reads back with every attribute and pixel.
+    #[test]
+    fn the_same_image_encodes_to_the_same_bytes() {
+        let image = LinearImage::new(
+            2,
+            2,
+            ChannelKind::Rgb,
+            vec![[0.25, 0.5, 1.0], [2.0, 4.0, 8.0], [0.0; 3], [1e-3; 3]],
+        )
+        .unwrap();
+        let options = || ExrOptions {
+            white_luminance_cd_m2: Some(683.0),
+            text_attributes: (0..8)
+                .map(|n| (format!("name_{n}"), format!("value {n}")))
+                .collect(),
+            ..ExrOptions::default()
+        };
+        let first = encode_exr(&image, options()).unwrap();
+        for _ in 0..8 {
+            assert_eq!(encode_exr(&image, options()).unwrap(), first);
+        }
+        use ::exr::prelude::{ReadChannels, ReadLayers};
+        let decoded = ::exr::prelude::read()
+            .no_deep_data()
+            .largest_resolution_level()
+            .all_channels()
+            .first_valid_layer()
+            .all_attributes()
+            .from_buffered(std::io::Cursor::new(&first))
+            .unwrap();
+        let attributes = &decoded.layer_data.attributes.other;
+        for n in 0..8 {
+            assert_eq!(
+                attributes.get(&Text::from(format!("sora:name_{n}").as_str())),
+                Some(&AttributeValue::Text(Text::from(
+                    format!("value {n}").as_str()
+                )))
+            );
+        }
+        let red = decoded
+            .layer_data
+            .channel_data
+            .list
+            .iter()
+            .find(|c| c.name == *"R")
+            .unwrap();
+        let values: Vec<f32> = red.sample_data.values_as_f32().collect();
+        assert_eq!(values, [0.25, 2.0, 0.0, 1e-3]);
+    }
 
     #[test]
     fn half_float_overflow_is_rejected_naming_pixel_and_channel() {
