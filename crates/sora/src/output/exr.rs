@@ -340,6 +340,7 @@ mod tests {
     /// the file still reads back with every attribute and pixel.
     #[test]
     fn the_same_image_encodes_to_the_same_bytes() {
+        use ::exr::prelude::{ReadChannels, ReadLayers};
         let image = LinearImage::new(
             2,
             2,
@@ -358,7 +359,6 @@ mod tests {
         for _ in 0..8 {
             assert_eq!(encode_exr(&image, options()).unwrap(), first);
         }
-        use ::exr::prelude::{ReadChannels, ReadLayers};
         let decoded = ::exr::prelude::read()
             .no_deep_data()
             .largest_resolution_level()

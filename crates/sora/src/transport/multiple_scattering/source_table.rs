@@ -32,8 +32,8 @@ use crate::transport::SunColumns;
 /// The per-image source table (see the module docs).
 #[derive(Debug, Clone)]
 pub struct MultipleScatteringTable {
-    /// Shared with the sky that made it (the field's solution is tens of
-    /// megabytes: a copy cost a 512^2 twilight image 0.1 s).
+    /// Shared with the sky that made it, not copied (the field's solution
+    /// is tens of megabytes at twilight).
     field: Arc<MultipleScatteringField>,
     view_zenith_nodes: usize,
     azimuth_nodes: usize,
