@@ -693,7 +693,7 @@ impl Sky {
     /// The multiple-scattering field ([`Sky::prepare_field`] has run).
     fn field(&self) -> Option<&MultipleScatteringField> {
         debug_assert!(self.scattering == Scattering::Single || self.field.get().is_some());
-        self.field.get().map(|field| &**field)
+        self.field.get().map(Arc::as_ref)
     }
 
     /// The field's source table, built on first use.
