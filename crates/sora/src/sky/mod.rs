@@ -411,6 +411,38 @@ struct ViewWork {
     multiple_stokes: Vec<f64>,
 }
 
+/// Where a view's single-scattering integrals are: in
+/// [`ViewWork::single`] (a view, [`Sky::compute_view_radiance`]) or in
+/// [`ViewWork::integrals`] (a pixel, from the sky-view table).
+#[derive(Debug, Clone, Copy)]
+enum SingleIntegrals {
+    View,
+    Pixel,
+}
+
+/// Adds the Stokes vector of the light the scaled field scatters two or
+/// more times, `scaled` (its scalar radiance, W m^-2 sr^-1 nm^-1), from
+/// the polarisation correction's `ratios` ((I, Q, U, V) / I_scalar,
+/// [component * wavelengths + i]): `radiance` gets the polarised
+/// intensity in place of the scalar one, `stokes` ([(component - 1) *
+/// wavelengths + i]) its Q, U and V. The forward-peak term is not the
+/// scaled field's and keeps its intensity (its Q and U are single
+/// scattering's, [`Sky::compute_single_scattering_stokes`]).
+fn add_corrected_multiple_stokes(
+    ratios: &[f64],
+    scaled: &[f64],
+    radiance: &mut [f64],
+    stokes: &mut [f64],
+) {
+    let w = radiance.len();
+    for (i, multiple) in scaled.iter().enumerate() {
+        radiance[i] += (ratios[i] - 1.0) * multiple;
+        for c in 1..4 {
+            stokes[(c - 1) * w + i] += ratios[c * w + i] * multiple;
+        }
+    }
+}
+
 /// A view's [`SkyRadiance`] from its values: the radiance (the polarised
 /// intensity I of a polarised sky) at `wavelengths` wavelengths, then, if
 /// there are four times as many values, its Q, U and V.
@@ -841,8 +873,8 @@ impl Sky {
                                 view.to_vector(),
                                 meridian_reference(view.elevation_deg(), view.azimuth_deg()),
                             ),
-                            work.single.inscattering_integrals(),
-                            &mut work.matrices,
+                            SingleIntegrals::View,
+                            &mut work,
                             stokes,
                         );
                         self.add_multiple_scattering_stokes(view, &mut work, radiance, stokes);
@@ -859,27 +891,46 @@ impl Sky {
     }
 
     /// Q and U (W m^-2 sr^-1 nm^-1, referred to the view's meridian plane)
-    /// of the singly scattered light of `view`, into `stokes` (Q then U),
-    /// from the integrals [`Sky::compute_view_radiance`] left in `work`:
-    /// the scattering-plane Q of single scattering turned into the meridian
-    /// frame (`transport/stokes.rs`).
+    /// of the light scattered once through the view's scattering angle,
+    /// into `stokes` (Q then U), from the integrals `work` holds (`single`:
+    /// single scattering's, [`Sky::compute_view_radiance`]'s or the
+    /// sky-view table's; `work.forward`: the forward-peak term's): the
+    /// scattering-plane Q turned into the meridian frame
+    /// (`transport/stokes.rs`). The forward-peak term's first line is
+    /// light scattered once through that angle by a smooth phase function
+    /// and otherwise only near-forward, so it is polarised as single
+    /// scattering is (`forward_peak.rs`), not as the scaled field's
+    /// multiply scattered light.
     fn compute_single_scattering_stokes(
         &self,
         (w, meridian): (Vector3, Vector3),
-        integrals: &[f64],
-        matrices: &mut [PhaseMatrix],
+        single: SingleIntegrals,
+        work: &mut ViewWork,
         stokes: &mut [f64],
     ) {
         let (k_in, k_out) = (-self.sun_direction(), -w);
         let normal = scattering_plane(k_in, k_out, meridian);
         let (c, s) = rotation_cos_sin_2eta(k_out, normal.cross(k_out), meridian);
+        let cos_theta = w.dot(self.sun_direction());
         let (q, u) = stokes.split_at_mut(self.wavelengths().len());
-        self.scene.polarised_radiance_from_integrals(
-            w.dot(self.sun_direction()),
-            integrals,
-            matrices,
-            q,
-        );
+        let integrals = match single {
+            SingleIntegrals::View => work.single.inscattering_integrals(),
+            SingleIntegrals::Pixel => &work.integrals,
+        };
+        self.scene
+            .polarised_radiance_from_integrals(cos_theta, integrals, &mut work.matrices, q);
+        if let Some(field) = self.field() {
+            // The forward-peak term's Q into u (work space until the end).
+            field.compute_forward_peak_polarised_radiance(
+                cos_theta,
+                &work.forward,
+                (&mut work.phase, &mut work.matrices),
+                u,
+            );
+            for (q, f) in q.iter_mut().zip(u.iter()) {
+                *q += f;
+            }
+        }
         for (q, u) in q.iter_mut().zip(u) {
             *u = -s * *q;
             *q *= c;
@@ -887,10 +938,10 @@ impl Sky {
     }
 
     /// Turns the multiply scattered radiance [`Sky::compute_view_radiance`]
-    /// left in `work` into its Stokes vector (the field's polarisation
-    /// correction): `radiance` gets the polarised intensity in place of the
-    /// scalar one, `stokes` (Q, U, V) the multiply scattered Q, U and V
-    /// added.
+    /// left in `work` into its Stokes vector: `radiance` gets the polarised
+    /// intensity in place of the scalar one, `stokes` (Q, U, V) the
+    /// multiply scattered Q, U and V added (see
+    /// [`add_corrected_multiple_stokes`]).
     fn add_multiple_scattering_stokes(
         &self,
         view: ViewDirection,
@@ -903,24 +954,17 @@ impl Sky {
         };
         let view_cosine = view.elevation_deg().to_radians().sin();
         let azimuth_rad = (view.azimuth_deg() - self.sun_position_deg.1).to_radians();
-        let w = radiance.len();
         if field
-            .compute_polarised_radiance(
-                (view_cosine, azimuth_rad),
-                &work.added,
-                &mut work.multiple_stokes,
-            )
+            .compute_polarisation_ratios((view_cosine, azimuth_rad), &mut work.multiple_stokes)
             .is_none()
         {
             return;
         }
-        let (intensity, rest) = work.multiple_stokes.split_at(w);
-        for ((r, i), scalar) in radiance.iter_mut().zip(intensity).zip(&work.added) {
-            *r += i - scalar;
+        // The view's field radiance holds the forward-peak term: take it out.
+        for (a, f) in work.added.iter_mut().zip(&work.forward_radiance) {
+            *a -= f;
         }
-        for (s, m) in stokes.iter_mut().zip(rest) {
-            *s += m;
-        }
+        add_corrected_multiple_stokes(&work.multiple_stokes, &work.added, radiance, stokes);
     }
 
     /// The radiance a fast-method image shows toward `view` (read from its
@@ -998,6 +1042,10 @@ impl Sky {
                 }
                 None => field.compute_radiance(view, SunColumns::Exact, scratch, &mut work.added),
             }
+            // The forward-peak term's part, for the Stokes vector.
+            work.forward.copy_from_slice(scratch.forward_integrals());
+            work.forward_radiance
+                .copy_from_slice(scratch.forward_radiance());
             for (r, m) in radiance.iter_mut().zip(&work.added) {
                 *r += m;
             }
@@ -1067,24 +1115,17 @@ impl Sky {
         stokes.fill(0.0);
         self.compute_single_scattering_stokes(
             (view, meridian_reference(elevation_deg, azimuth_deg)),
-            &work.integrals,
-            &mut work.matrices,
+            SingleIntegrals::Pixel,
+            work,
             stokes,
         );
         let Some(table) = &tables.polarisation else {
             return;
         };
-        let w = radiance.len();
         let azimuth_rad = (azimuth_deg - self.sun_position_deg.1).to_radians();
         let ratios = &mut work.multiple_stokes;
         table.lookup_ratios((view.z, azimuth_rad), ratios);
-        for i in 0..w {
-            let multiple = work.added[i] + work.forward_radiance[i];
-            radiance[i] += (ratios[i] - 1.0) * multiple;
-            for c in 1..4 {
-                stokes[(c - 1) * w + i] += ratios[c * w + i] * multiple;
-            }
-        }
+        add_corrected_multiple_stokes(ratios, &work.added, radiance, stokes);
     }
 
     /// Builds everything images of this sky need (the multiple-scattering

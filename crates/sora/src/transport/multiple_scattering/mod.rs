@@ -118,8 +118,10 @@
 //!    at the eye's sun is solved again with Stokes vectors
 //!    (`vector_successive_orders.rs`, `phase_matrix_fourier.rs`), and the
 //!    ratio of its multiply scattered (I, Q, U, V) to its scalar intensity
-//!    turns each view's L_ms into a Stokes vector
-//!    (`polarisation_correction.rs`; accuracy in `docs/polarisation.md`).
+//!    turns the scaled field's part of each view's L_ms into a Stokes
+//!    vector (`polarisation_correction.rs`; accuracy in
+//!    `docs/polarisation.md`); the forward-peak term is polarised as
+//!    single scattering through the view's angle (`forward_peak.rs`).
 //!
 //! Interpolations between sun zenith angles and altitudes are linear in
 //! the logarithm of the (positive) source: across sunset the field falls
@@ -340,6 +342,7 @@ use self::vertical_grid::VerticalGrid;
 use super::optical_column::{ProfileCorners, compute_columns_along_ray};
 use super::quadrature::{GAUSS_NODES, GAUSS_WEIGHTS, running_integral_matrix};
 use super::single_scattering::{SingleScatteringSky, SunColumns};
+use crate::atmosphere::phase_matrix::PhaseMatrix;
 use crate::atmosphere::{AtmosphereOptics, DensityProfile};
 use crate::error::{Error, Result};
 use crate::geometry::{Vector3, segment_in_atmosphere};
@@ -595,6 +598,14 @@ impl MultipleScatteringScratch {
     /// [`MultipleScatteringField::compute_forward_peak_radiance`] takes them.
     pub(crate) fn forward_integrals(&self) -> &[f64] {
         &self.forward_integrals
+    }
+
+    /// The forward-peak term of the last ray (zero for a sky without
+    /// peaks), W m^-2 sr^-1 nm^-1: the part of the radiance
+    /// [`MultipleScatteringField::compute_radiance`] gave that is not the
+    /// scaled field's.
+    pub(crate) fn forward_radiance(&self) -> &[f64] {
+        &self.forward_radiance
     }
 }
 
@@ -1458,31 +1469,49 @@ impl MultipleScatteringField {
         self.optics.species + forward_peak::EXTRA_ROWS
     }
 
-    /// The Stokes vector of the multiply scattered light whose radiance
-    /// (scalar field) is `radiance`, toward the view of zenith cosine
-    /// `view_cosine` at azimuth `view_azimuth_rad` from the sun's
-    /// (clockwise) at the eye, into `stokes` ([component * wavelengths + i],
-    /// I, Q, U, V): the polarisation correction's ratios times `radiance`
-    /// (see `polarisation_correction.rs`). None for a scalar field.
-    pub(crate) fn compute_polarised_radiance(
+    /// The scattering-plane Q of the forward-peak term toward a view at
+    /// cos(theta) = `cos_theta` from the sun, into `out` (see
+    /// `ForwardPeak::polarised_radiance`), from the same integrals as
+    /// [`MultipleScatteringField::compute_forward_peak_radiance`];
+    /// `work` is work space of one value per wavelength.
+    pub(crate) fn compute_forward_peak_polarised_radiance(
+        &self,
+        cos_theta: f64,
+        integrals: &[f64],
+        work: (&mut [f64], &mut [PhaseMatrix]),
+        out: &mut [f64],
+    ) {
+        if !self.optics.has_forward_peaks {
+            out.fill(0.0);
+            return;
+        }
+        self.optics.forward_peak.polarised_radiance(
+            &self.atmosphere,
+            cos_theta,
+            integrals,
+            work,
+            out,
+        );
+    }
+
+    /// The polarisation correction's ratios (I, Q, U, V) / I_scalar of the
+    /// light the scaled field scatters two or more times, toward the view
+    /// of zenith cosine `view_cosine` at azimuth `view_azimuth_rad` from
+    /// the sun's (clockwise) at the eye, into `ratios` ([component *
+    /// wavelengths + i]; see `polarisation_correction.rs`). None for a
+    /// scalar field.
+    pub(crate) fn compute_polarisation_ratios(
         &self,
         (view_cosine, view_azimuth_rad): (f64, f64),
-        radiance: &[f64],
-        stokes: &mut [f64],
+        ratios: &mut [f64],
     ) -> Option<()> {
         let correction = self.polarisation.as_ref()?;
         correction.compute_ratios(
             &self.atmosphere,
             &self.phases,
             (view_cosine, view_azimuth_rad),
-            stokes,
+            ratios,
         );
-        let w = radiance.len();
-        for component in stokes.chunks_exact_mut(w) {
-            for (s, r) in component.iter_mut().zip(radiance) {
-                *s *= r;
-            }
-        }
         Some(())
     }
 

@@ -391,14 +391,30 @@ fn the_fast_method_matches_the_vector_path_tracer() {
     // 3 standard errors and its angle within 1 degree. The first case is
     // where the scalar intensity is furthest off (sun 60, view 10 degrees
     // up at 90 degrees from it: 5 % too bright at 440 nm), so a scalar
-    // field fails the test (checked at the end).
+    // field fails the test (checked at the end). The last is mars-dust
+    // away from a low sun, where much of the multiply scattered light is
+    // the forward-peak term: with the polarisation correction's column
+    // ratios applied to that term (which single scattering's polarisation
+    // suits), the degree at 440 nm was 0.049 against 0.073 (+- 0.0016 with
+    // 400 000 paths, outside the bar of 0.015); now 0.076.
     let grid = WavelengthGrid::new(440.0, 680.0, 120.0).unwrap();
     let cases = [
-        ("us-standard-1976-rayleigh", (60.0, 0.0), (10.0, 90.0)),
-        ("us-standard-1976-rayleigh", (30.0, 0.0), (10.0, 180.0)),
-        ("earth-clear", (30.0, 0.0), (30.0, 90.0)),
+        (
+            "us-standard-1976-rayleigh",
+            (60.0, 0.0),
+            (10.0, 90.0),
+            100_000,
+        ),
+        (
+            "us-standard-1976-rayleigh",
+            (30.0, 0.0),
+            (10.0, 180.0),
+            100_000,
+        ),
+        ("earth-clear", (30.0, 0.0), (30.0, 90.0), 100_000),
+        ("mars-dust", (5.0, 0.0), (10.0, 180.0), 400_000),
     ];
-    for (k, (preset, sun, view)) in cases.into_iter().enumerate() {
+    for (k, (preset, sun, view, samples)) in cases.into_iter().enumerate() {
         let atmosphere = Atmosphere::preset(preset).unwrap();
         let sky = |method, polarisation| {
             crate::Sky::builder(&atmosphere)
@@ -415,7 +431,7 @@ fn the_fast_method_matches_the_vector_path_tracer() {
         let scalar = sky(crate::Method::Fast, crate::Polarisation::Scalar);
         let traced = sky(
             crate::Method::PathTracing {
-                samples: 100_000,
+                samples,
                 seed: 40 + k as u64,
             },
             crate::Polarisation::Vector,
