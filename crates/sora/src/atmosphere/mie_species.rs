@@ -30,7 +30,7 @@ use super::phase::{PhaseFunction, TabulatedPhase};
 use crate::error::{Error, Result};
 use crate::mie::distribution::SizeDistribution;
 use crate::mie::ensemble::{
-    AerosolPhaseFunction, EnsembleError, EnsembleOptics, EnsembleSettings,
+    AerosolPhaseFunction, EnsembleError, EnsembleOptics, EnsembleSettings, PhaseMatrixRatios,
     compute_ensemble_cross_sections, compute_ensemble_optics_spectrum,
     compute_ensemble_phase_matrix_ratios,
 };
@@ -174,22 +174,33 @@ impl MieAerosol {
     ) -> Result<()> {
         let settings = EnsembleSettings::default().phase_function_quadrature;
         let nodes = table.cos_theta_nodes().to_vec();
-        let ratios = grid
-            .wavelengths_nm()
-            .map(|wavelength_nm| {
-                let m = self
-                    .refractive_index
+        let wavelengths_nm: Vec<f64> = grid.wavelengths_nm().collect();
+        // One wavelength a task: each is a Mie solution per radius node and
+        // angle, the whole cost (a polarised sky's build waited on it).
+        let mut per_wavelength: Vec<Option<Result<PhaseMatrixRatios>>> =
+            wavelengths_nm.iter().map(|_| None).collect();
+        crate::parallel::for_each_chunk_mut(&mut per_wavelength, 1, |i, slot| {
+            let wavelength_nm = wavelengths_nm[i];
+            slot[0] = Some(
+                self.refractive_index
                     .refractive_index_at(wavelength_nm)
-                    .map_err(|e| ensemble_error(name, e.into()))?;
-                compute_ensemble_phase_matrix_ratios(
-                    wavelength_nm,
-                    m,
-                    &self.size_distribution,
-                    &settings,
-                    &nodes,
-                )
-                .map_err(|e| ensemble_error(name, e))
-            })
+                    .map_err(|e| ensemble_error(name, e.into()))
+                    .and_then(|m| {
+                        compute_ensemble_phase_matrix_ratios(
+                            wavelength_nm,
+                            m,
+                            &self.size_distribution,
+                            &settings,
+                            &nodes,
+                        )
+                        .map_err(|e| ensemble_error(name, e))
+                    }),
+            );
+        });
+        // The first error in wavelength order, whatever the threads did.
+        let ratios = per_wavelength
+            .into_iter()
+            .flatten()
             .collect::<Result<Vec<_>>>()?;
         if !table.set_matrix_ratios(ratios) {
             return Err(Error::InvalidSpectrum(format!(
