@@ -419,6 +419,19 @@ impl SunAndObserver {
     }
 }
 
+/// Prints on stderr, for polarised output (Stokes vectors, degree and
+/// angle maps) of `sky`, one warning line per species that scatters light
+/// with a parametric phase function ([`sora::Sky::non_polarising_species`]:
+/// taken as non-polarising; docs/polarisation.md, and `sora atmosphere
+/// show` lists it so). The output is still written.
+pub fn warn_non_polarising_species(sky: &sora::Sky) {
+    for (name, kind) in sky.non_polarising_species() {
+        eprintln!(
+            "warning: species {name} has a {kind} phase function, which carries no polarisation: the Stokes vectors treat it as non-polarising (F12 = F34 = 0, F33 = F44 = F11; docs/polarisation.md)"
+        );
+    }
+}
+
 impl SunAndObserver {
     /// The sun's elevation and azimuth (degrees) these options give: as
     /// written, or computed for --time at --location.

@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{sora, stdout};
+use common::{one_line_error, sora, stdout};
 
 /// The standard output of `sora` with `args`, which must succeed.
 fn run(args: &[&str]) -> String {
@@ -222,4 +222,101 @@ fn atmosphere_show_says_what_polarises() {
         .find(|l| l.trim_start().starts_with("ozone"))
         .unwrap();
     assert!(ozone.ends_with("phase isotropic"), "{ozone}");
+}
+
+#[test]
+fn a_non_polarising_species_is_a_printed_warning() {
+    // clear-sky-reference's aerosol is Henyey-Greenstein: Stokes vectors
+    // treat it as non-polarising, and say so once per species on stderr.
+    let args = [
+        "spectrum",
+        "--preset",
+        "clear-sky-reference",
+        "--sun-elevation",
+        "30",
+        "--view-elevation",
+        "30",
+        "--view-azimuth",
+        "0",
+        "--scattering",
+        "single",
+        "--wavelengths",
+        "550",
+    ];
+    let out = sora(&[&args[..], &["--stokes"]].concat());
+    assert!(out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let warnings: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.starts_with("warning:"))
+        .collect();
+    assert_eq!(warnings.len(), 1, "{stderr}");
+    assert!(
+        warnings[0].contains("aerosol")
+            && warnings[0].contains("Henyey-Greenstein")
+            && warnings[0].contains("non-polarising"),
+        "{stderr}"
+    );
+    // Without polarised output nothing to warn about; nor for a sky
+    // whose species all polarise.
+    let out = sora(&args);
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("warning"));
+    let out = sora(
+        &[
+            &RAYLEIGH_SUN_30[..],
+            &[
+                "--view-elevation",
+                "30",
+                "--view-azimuth",
+                "0",
+                "--scattering",
+                "single",
+                "--wavelengths",
+                "550",
+                "--stokes",
+            ],
+        ]
+        .concat(),
+    );
+    assert!(out.status.success(), "{out:?}");
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("warning"));
+}
+
+#[test]
+fn a_depolarisation_ratio_above_one_half_cannot_be_polarised() {
+    // A parametric Rayleigh species with rho = 0.7: scalar light takes it,
+    // polarised light (Hansen & Travis's matrix needs rho <= 0.5) is a
+    // one-line error naming the species, the value and the range.
+    let text = include_str!("../../../atmospheres/clear-sky-reference.toml").replace(
+        "wavelength_exponent = 4.0 }",
+        "wavelength_exponent = 4.0, depolarization_ratio = 0.7 }",
+    );
+    assert!(text.contains("depolarization_ratio = 0.7"));
+    let path = std::env::temp_dir().join(format!("sora-depolarised-{}.toml", std::process::id()));
+    std::fs::write(&path, text).unwrap();
+    let file = path.to_str().unwrap();
+    let args = [
+        "spectrum",
+        "--atmosphere",
+        file,
+        "--sun-elevation",
+        "30",
+        "--view-elevation",
+        "30",
+        "--view-azimuth",
+        "0",
+        "--scattering",
+        "single",
+        "--wavelengths",
+        "550",
+    ];
+    let scalar = sora(&[&args[..], &["--polarisation", "off"]].concat());
+    let vector = sora(&args);
+    std::fs::remove_file(&path).unwrap();
+    assert!(scalar.status.success());
+    let error = one_line_error(&vector);
+    assert!(
+        error.contains("\"air\"") && error.contains("0.7") && error.contains("0..=0.5"),
+        "{error}"
+    );
 }

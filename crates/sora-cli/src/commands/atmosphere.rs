@@ -202,10 +202,10 @@ fn table(atmosphere: &Atmosphere, optics: &AtmosphereOptics) -> String {
         let scatters = species.scattering_per_m.values().iter().any(|b| *b > 0.0);
         let polarisation = match species.phase_function {
             _ if !scatters => "",
-            PhaseFunction::Rayleigh { .. } => ", polarising",
             PhaseFunction::Tabulated(_) => {
                 ", polarising (its phase matrix is computed for --stokes)"
             }
+            ref function if function.is_polarising() => ", polarising",
             _ => ", non-polarising",
         };
         let _ = writeln!(

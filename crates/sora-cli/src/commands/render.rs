@@ -309,6 +309,9 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     let sky = args
         .sun
         .sky(&mut atmosphere, args.scattering.to_library(), method)?;
+    if polarisation_outputs {
+        crate::arguments::warn_non_polarising_species(&sky);
+    }
     let to_xyz = SpectrumToXyz::new(sky.wavelengths(), args.colour.observer);
     let image = ImageSettings {
         camera,

@@ -257,6 +257,9 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
         }
     }
     let sky = args.sun.sky(&mut atmosphere, scattering, method)?;
+    if args.stokes {
+        crate::arguments::warn_non_polarising_species(&sky);
+    }
     let grid = *sky.wavelengths();
     let (sun_elevation, sun_azimuth) = args.sun.sun_deg()?;
     let views = directions(&args, (sun_elevation, sun_azimuth), grid.len())?;

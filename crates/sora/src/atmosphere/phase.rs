@@ -308,6 +308,19 @@ impl PhaseFunction {
         }
     }
 
+    /// Whether this phase function has a phase matrix that polarises
+    /// (Rayleigh, and tabulated Mie functions, whose matrix a polarised
+    /// sky computes from S1 and S2). The parametric ones (isotropic,
+    /// Henyey-Greenstein, Cornette-Shanks) carry no polarisation: a
+    /// polarised computation treats them as non-polarising, F12 = F34 = 0,
+    /// F33 = F44 = F11 (`phase_matrix.rs`).
+    pub fn is_polarising(&self) -> bool {
+        matches!(
+            self,
+            PhaseFunction::Rayleigh { .. } | PhaseFunction::Tabulated(_)
+        )
+    }
+
     /// A short name for listings.
     pub fn kind(&self) -> &'static str {
         match self {

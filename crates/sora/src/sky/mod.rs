@@ -680,6 +680,27 @@ impl Sky {
         self.polarisation
     }
 
+    /// For a polarised sky, the species that scatter light with a
+    /// parametric phase function (isotropic, Henyey-Greenstein,
+    /// Cornette-Shanks) as (name, phase function kind): they have no phase
+    /// matrix, so the Stokes vectors treat them as non-polarising
+    /// (F12 = F34 = 0, F33 = F44 = F11), what front ends warn about.
+    /// Empty for a scalar sky.
+    pub fn non_polarising_species(&self) -> Vec<(&str, &'static str)> {
+        if self.polarisation != Polarisation::Vector {
+            return Vec::new();
+        }
+        self.optics()
+            .species
+            .iter()
+            .filter(|s| {
+                s.scattering_per_m.values().iter().any(|b| *b > 0.0)
+                    && !s.phase_function.is_polarising()
+            })
+            .map(|s| (s.name.as_str(), s.phase_function.kind()))
+            .collect()
+    }
+
     /// [`Sky::prepare_field`] for images and the image tables, which need
     /// the field of every direction (an error for a field restricted to
     /// views above some elevation).

@@ -616,6 +616,25 @@ impl<'a> PathTracer<'a> {
                 species.0.name
             )));
         }
+        // Hansen & Travis's Rayleigh matrix (`phase_matrix.rs`) has
+        // D' = (1 - 2 rho) / (1 - rho): above 0.5 its a4 changes sign.
+        for species in &tracer.optics.species {
+            if let PhaseFunction::Rayleigh {
+                depolarization_ratios,
+            } = &species.phase_function
+                && let Some(rho) = depolarization_ratios.iter().find(|rho| **rho > 0.5)
+            {
+                return Err(Error::out_of_range(
+                    format!(
+                        "polarisation: species \"{}\" depolarization_ratio",
+                        species.name
+                    ),
+                    *rho,
+                    "1",
+                    "0..=0.5 for polarised light (Hansen & Travis 1974, eq. 2.15; scalar light takes up to 1)",
+                ));
+            }
+        }
         tracer.polarised = true;
         Ok(tracer)
     }
