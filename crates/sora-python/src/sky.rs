@@ -212,6 +212,21 @@ impl Sky {
                 .build()
         })
         .map_err(to_py_err)?;
+        // Parametric phase functions carry no polarisation: say so, once per
+        // species, as `sora spectrum --stokes` does on stderr.
+        for (name, kind) in inner.non_polarising_species() {
+            let message = format!(
+                "species {name} has a {kind} phase function, which carries no polarisation: the Stokes vectors treat it as non-polarising (F12 = F34 = 0, F33 = F44 = F11)"
+            );
+            let message = std::ffi::CString::new(message)
+                .map_err(|_| value_error("a species name holds a NUL character"))?;
+            PyErr::warn(
+                py,
+                &py.get_type::<pyo3::exceptions::PyUserWarning>(),
+                &message,
+                1,
+            )?;
+        }
         Ok(Sky { inner })
     }
 

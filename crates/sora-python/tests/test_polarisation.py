@@ -2,6 +2,8 @@
 the closed form of single Rayleigh scattering, path-traced standard errors,
 and the choices that cannot give Stokes vectors."""
 
+import warnings
+
 import numpy as np
 import pytest
 import xarray as xr
@@ -99,3 +101,33 @@ def test_choices_without_stokes_vectors_raise(rayleigh):
         sora.Sky(rayleigh, sun_elevation_deg=30, polarisation="circular")
     with pytest.raises(ValueError, match="polarisation='vector'"):
         sora.Sky(rayleigh, sun_elevation_deg=30).stokes(90, 0)
+
+
+def test_a_non_polarising_species_is_a_warning(atmospheres_dir, tmp_path):
+    # clear-sky-reference's aerosol is Henyey-Greenstein: a polarised sky
+    # treats it as non-polarising and says so; a scalar sky has nothing to say.
+    reference = sora.Atmosphere.preset("clear-sky-reference")
+    with pytest.warns(UserWarning, match="aerosol has a Henyey-Greenstein .* non-polarising"):
+        sora.Sky(reference, sun_elevation_deg=30, scattering="single", polarisation="vector")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sora.Sky(reference, sun_elevation_deg=30, scattering="single")
+        sora.Sky(
+            sora.Atmosphere.preset("us-standard-1976-rayleigh"),
+            sun_elevation_deg=30,
+            scattering="single",
+            polarisation="vector",
+        )
+    # A depolarisation ratio above 0.5 has no polarised Rayleigh matrix:
+    # a ValueError naming the species and the range; scalar light takes it.
+    text = (atmospheres_dir / "clear-sky-reference.toml").read_text()
+    depolarised = text.replace(
+        "wavelength_exponent = 4.0 }", "wavelength_exponent = 4.0, depolarization_ratio = 0.7 }"
+    )
+    assert depolarised != text
+    path = tmp_path / "depolarised.toml"
+    path.write_text(depolarised)
+    atmosphere = sora.Atmosphere.from_toml(path)
+    sora.Sky(atmosphere, sun_elevation_deg=30, scattering="single")
+    with pytest.raises(ValueError, match=r'"air" depolarization_ratio = 0.7 .*0\.\.=0\.5'):
+        sora.Sky(atmosphere, sun_elevation_deg=30, scattering="single", polarisation="vector")
