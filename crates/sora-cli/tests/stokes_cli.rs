@@ -224,25 +224,33 @@ fn atmosphere_show_says_what_polarises() {
     assert!(ozone.ends_with("phase isotropic"), "{ozone}");
 }
 
+/// One view 30 degrees up toward azimuth 0, single scattering, 550 nm.
+const ONE_VIEW: [&str; 8] = [
+    "--view-elevation",
+    "30",
+    "--view-azimuth",
+    "0",
+    "--scattering",
+    "single",
+    "--wavelengths",
+    "550",
+];
+
 #[test]
 fn a_non_polarising_species_is_a_printed_warning() {
     // clear-sky-reference's aerosol is Henyey-Greenstein: Stokes vectors
     // treat it as non-polarising, and say so once per species on stderr.
     let args = [
-        "spectrum",
-        "--preset",
-        "clear-sky-reference",
-        "--sun-elevation",
-        "30",
-        "--view-elevation",
-        "30",
-        "--view-azimuth",
-        "0",
-        "--scattering",
-        "single",
-        "--wavelengths",
-        "550",
-    ];
+        &[
+            "spectrum",
+            "--preset",
+            "clear-sky-reference",
+            "--sun-elevation",
+            "30",
+        ][..],
+        &ONE_VIEW[..],
+    ]
+    .concat();
     let out = sora(&[&args[..], &["--stokes"]].concat());
     assert!(out.status.success());
     let stderr = String::from_utf8_lossy(&out.stderr);
@@ -261,23 +269,7 @@ fn a_non_polarising_species_is_a_printed_warning() {
     // whose species all polarise.
     let out = sora(&args);
     assert!(!String::from_utf8_lossy(&out.stderr).contains("warning"));
-    let out = sora(
-        &[
-            &RAYLEIGH_SUN_30[..],
-            &[
-                "--view-elevation",
-                "30",
-                "--view-azimuth",
-                "0",
-                "--scattering",
-                "single",
-                "--wavelengths",
-                "550",
-                "--stokes",
-            ],
-        ]
-        .concat(),
-    );
+    let out = sora(&[&RAYLEIGH_SUN_30[..], &ONE_VIEW[..], &["--stokes"]].concat());
     assert!(out.status.success(), "{out:?}");
     assert!(!String::from_utf8_lossy(&out.stderr).contains("warning"));
 }
@@ -296,20 +288,10 @@ fn a_depolarisation_ratio_above_one_half_cannot_be_polarised() {
     std::fs::write(&path, text).unwrap();
     let file = path.to_str().unwrap();
     let args = [
-        "spectrum",
-        "--atmosphere",
-        file,
-        "--sun-elevation",
-        "30",
-        "--view-elevation",
-        "30",
-        "--view-azimuth",
-        "0",
-        "--scattering",
-        "single",
-        "--wavelengths",
-        "550",
-    ];
+        &["spectrum", "--atmosphere", file, "--sun-elevation", "30"][..],
+        &ONE_VIEW[..],
+    ]
+    .concat();
     let scalar = sora(&[&args[..], &["--polarisation", "off"]].concat());
     let vector = sora(&args);
     std::fs::remove_file(&path).unwrap();
