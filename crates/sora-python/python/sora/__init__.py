@@ -213,7 +213,11 @@ class Sky:
       tracing, not ``method="reference"``; Mie aerosols get their phase
       matrix computed; :meth:`render` gives the polarised intensity, and
       with ``output="stokes-xyz"`` the XYZ of I, Q, U and V). With
-      ``"vector"`` the radiance is the polarised intensity I.
+      ``"vector"`` the radiance is the polarised intensity I. A species
+      with a parametric phase function (Henyey-Greenstein, Cornette-Shanks,
+      isotropic) has no phase matrix: it is treated as non-polarising, with
+      a ``UserWarning`` naming it; a Rayleigh depolarisation ratio above
+      0.5 is a ``ValueError`` (polarised light only).
 
     Skies pickle (by their arguments), so Dask can ship them.
     """
