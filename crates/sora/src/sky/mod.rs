@@ -1064,9 +1064,11 @@ impl Sky {
                 None => field.compute_radiance(view, SunColumns::Exact, scratch, &mut work.added),
             }
             // The forward-peak term's part, for the Stokes vector.
-            work.forward.copy_from_slice(scratch.forward_integrals());
-            work.forward_radiance
-                .copy_from_slice(scratch.forward_radiance());
+            if self.polarisation == Polarisation::Vector {
+                work.forward.copy_from_slice(scratch.forward_integrals());
+                work.forward_radiance
+                    .copy_from_slice(scratch.forward_radiance());
+            }
             for (r, m) in radiance.iter_mut().zip(&work.added) {
                 *r += m;
             }

@@ -50,6 +50,11 @@
 //! dust was 9-29 % too bright 2-5 degrees from it in its orders >= 2 and
 //! hazy Earth 8-25 % too dark 2 degrees from it (inside the cone).
 //!
+//! With Stokes vectors the first line is polarised as single scattering
+//! through theta ([`ForwardPeak::polarised_radiance`]: the peaks'
+//! near-forward scatterings keep the state of polarisation) and the
+//! peak-only light is taken as unpolarised.
+//!
 //! # Numerics
 //! - rhat_l for l > N from the phase functions' moments integrated over
 //!   0..60 degrees (4-point Gauss panels crowded toward the sun, at most

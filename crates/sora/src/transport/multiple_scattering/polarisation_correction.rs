@@ -128,9 +128,8 @@ fn truncated_phase_matrix_into(
 
 /// Each species' harmonics of its truncated phase matrix from the streams
 /// (and the sun, if given) into the look directions of zenith cosines
-/// `outputs`, at every wavelength: [j][i]. The species in parallel (each
-/// is a few tenths of a second for the column's 16 x 17 directions, which
-/// a polarised image waited on).
+/// `outputs`, at every wavelength: [j][i]. The species are independent
+/// and computed in parallel.
 fn compute_species_harmonics(
     optics: &AtmosphereOptics,
     phases: &[TruncatedPhase],
