@@ -423,7 +423,7 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 }
 
 /// P_0..P_{len-1}(mu) into `out`.
-fn legendre_into(mu: f64, out: &mut [f64]) {
+pub(super) fn legendre_into(mu: f64, out: &mut [f64]) {
     if out.is_empty() {
         return;
     }
@@ -459,7 +459,7 @@ fn legendre_into_many<const K: usize>(mu: [f64; K], out: &mut [[f64; K]]) {
 
 /// The relative density integrated from the ground to the top, m
 /// (midpoint rule, 10 m steps in the lowest 2 km, 100 m above).
-fn vertical_column_m(profile: &DensityProfile, height_m: f64) -> f64 {
+pub(super) fn vertical_column_m(profile: &DensityProfile, height_m: f64) -> f64 {
     let mut column = 0.0;
     let mut z = 0.0;
     while z < height_m {

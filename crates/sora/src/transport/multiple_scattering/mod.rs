@@ -318,6 +318,7 @@
 //! altitudes m, angles rad inside (degrees in settings).
 
 mod forward_peak;
+mod peak_beam;
 mod phase_fourier;
 mod phase_matrix_fourier;
 mod polarisation_correction;
@@ -330,9 +331,10 @@ mod vertical_grid;
 
 pub use source_table::MultipleScatteringTable;
 
-use std::f64::consts::PI;
+use std::f64::consts::{FRAC_PI_2, PI};
 
 use self::forward_peak::ForwardPeak;
+use self::peak_beam::{PeakBeam, PeakBeamInputs};
 use self::phase_fourier::{
     TruncatedPhase, compute_legendre_moments, normalized_associated_legendre,
 };
@@ -347,6 +349,7 @@ use self::vertical_grid::VerticalGrid;
 use super::optical_column::{ProfileCorners, compute_columns_along_ray};
 use super::quadrature::{GAUSS_NODES, GAUSS_WEIGHTS, running_integral_matrix};
 use super::single_scattering::{SingleScatteringSky, SunColumns};
+use super::vector_exp::exp_neg_in_place;
 use crate::atmosphere::phase_matrix::PhaseMatrix;
 use crate::atmosphere::{AtmosphereOptics, DensityProfile};
 use crate::error::{Error, Result};
@@ -560,6 +563,9 @@ struct ViewRayOptics {
     has_forward_peaks: bool,
     /// The forward-peak term's tables (`forward_peak.rs`).
     forward_peak: ForwardPeak,
+    /// Near a low sun, the beam of the peaks' light with the last
+    /// scattering at its angle (`peak_beam.rs`), for that term.
+    peak_beam: Option<PeakBeam>,
     /// [s * wavelengths + i]: (A / pi)(F*_diffuse + E mu_s (T*_sun - T_sun))
     /// at the ground, W m^-2 sr^-1 nm^-1.
     ground_diffuse: Vec<f64>,
@@ -593,6 +599,12 @@ pub struct MultipleScatteringScratch {
     forward_integrals: Vec<f64>,
     phase: Vec<f64>,
     forward_radiance: Vec<f64>,
+    /// The tilted peak beam B at the current node (`peak_beam.rs`), and
+    /// the node's optical depths / transmittances and peak scattering
+    /// coefficients and X there ([`ViewRayOptics::add_tilted_forward_peak`]).
+    beam: Vec<f64>,
+    tilted_depths: Vec<f64>,
+    tilted_peak: Vec<f64>,
 }
 
 impl MultipleScatteringScratch {
@@ -639,6 +651,9 @@ impl ViewRayOptics {
             forward_integrals: vec![0.0; (s + forward_peak::EXTRA_ROWS) * w],
             phase: vec![0.0; w],
             forward_radiance: vec![0.0; w],
+            beam: vec![0.0; w],
+            tilted_depths: vec![0.0; 4 * w],
+            tilted_peak: vec![0.0; 2 * w],
         }
     }
 
@@ -753,7 +768,7 @@ impl ViewRayOptics {
                     // What delta-M moved from single scattering into the
                     // sun's beam and the view's transmittance (see the
                     // module docs, TMS).
-                    if self.has_forward_peaks
+                    let lit = self.has_forward_peaks
                         && sun_columns.compute_columns_to_sun(
                             &self.profiles,
                             &self.corners,
@@ -761,8 +776,16 @@ impl ViewRayOptics {
                             self.sun,
                             &mut scratch.sun_panel_ends,
                             &mut scratch.sun_columns,
-                        )
-                    {
+                        );
+                    let share = match &self.peak_beam {
+                        Some(beam) if self.has_forward_peaks => {
+                            beam.lookup_beam(r, sun_cosine, &mut scratch.beam)
+                        }
+                        _ => 0.0,
+                    };
+                    if share > 0.0 {
+                        self.add_tilted_forward_peak(weight, lit, share, scratch);
+                    } else if lit {
                         for i in 0..w {
                             let (mut scaled, mut exact, mut peak) = (0.0, 0.0, 0.0);
                             for j in 0..s {
@@ -814,6 +837,77 @@ impl ViewRayOptics {
                 let (scaled, exact) = ((-tau_scaled).exp(), (-tau).exp());
                 radiance[i] += scaled * lerp(&self.ground_diffuse)
                     + (scaled - exact) * lerp(&self.ground_direct);
+            }
+        }
+    }
+}
+
+impl ViewRayOptics {
+    /// The forward-peak integrals of one view node (the march's weight
+    /// `weight`, m; its columns, densities and, where `lit`, its columns
+    /// toward the sun in `scratch`) with the peaks' light reaching the
+    /// node S = T*_sun - T_sun moved toward the tilted beam B of
+    /// `scratch.beam` by `share` (`peak_beam.rs`): the first line's
+    /// T* T*_sun - T T_sun becomes T* S~ + T_sun (T* - T), the peak-only
+    /// light's weight T T_sun is scaled by (T_sun + S~) / T*_sun.
+    fn add_tilted_forward_peak(
+        &self,
+        weight: f64,
+        lit: bool,
+        share: f64,
+        scratch: &mut MultipleScatteringScratch,
+    ) {
+        let (w, s) = (self.wavelengths, self.species);
+        // Optical depths, then (in place) transmittances: T* and T from the
+        // eye, T*_sun and T_sun, per wavelength.
+        let (view, sun) = scratch.tilted_depths.split_at_mut(2 * w);
+        let (view_beam, view_direct) = view.split_at_mut(w);
+        let (sun_beam, sun_direct) = sun.split_at_mut(w);
+        for i in 0..w {
+            let (mut depths, mut peak) = ([0.0; 4], 0.0);
+            for j in 0..s {
+                let (scaled, exact) = (
+                    self.scaled_extinction[i * s + j],
+                    self.extinction[i * s + j],
+                );
+                depths[0] += scaled * scratch.node_columns[j];
+                depths[1] += exact * scratch.node_columns[j];
+                depths[2] += scaled * scratch.sun_columns[j];
+                depths[3] += exact * scratch.sun_columns[j];
+                // f_j beta_sca,j rho_j: what the peaks scatter here.
+                peak += (exact - scaled) * scratch.densities[j];
+            }
+            [view_beam[i], view_direct[i], sun_beam[i], sun_direct[i]] = depths;
+            scratch.tilted_peak[i] = peak;
+            // X, the peaks' optical depth of both legs.
+            scratch.tilted_peak[w + i] = (depths[1] + depths[3]) - (depths[0] + depths[2]);
+        }
+        exp_neg_in_place(&mut scratch.tilted_depths);
+        let (view, sun) = scratch.tilted_depths.split_at(2 * w);
+        let (view_beam, view_direct) = view.split_at(w);
+        let (sun_beam, sun_direct) = sun.split_at(w);
+        for i in 0..w {
+            let (sun_beam, sun_direct) = if lit {
+                (sun_beam[i], sun_direct[i])
+            } else {
+                (0.0, 0.0)
+            };
+            let forward = sun_beam - sun_direct;
+            let scattered = forward + share * (scratch.beam[i] - forward);
+            let excess =
+                weight * (view_beam[i] * scattered + sun_direct * (view_beam[i] - view_direct[i]));
+            for j in 0..s {
+                scratch.forward_integrals[j * w + i] += excess * scratch.densities[j];
+            }
+            if lit && sun_beam > 0.0 {
+                let only = weight
+                    * view_direct[i]
+                    * sun_direct
+                    * scratch.tilted_peak[i]
+                    * ((sun_direct + scattered) / sun_beam);
+                let x = scratch.tilted_peak[w + i];
+                scratch.forward_integrals[s * w + i] += only;
+                scratch.forward_integrals[(s + 1) * w + i] += only * x;
             }
         }
     }
@@ -1301,6 +1395,30 @@ impl MultipleScatteringField {
             &profiles,
             top_radius_m - ground_radius_m,
         );
+        let needed = PeakBeam::needed_elevations_deg(
+            FRAC_PI_2 - eye_sun_zenith,
+            (ground_radius_m, top_radius_m),
+            sky.observer_radius_m(),
+        );
+        let peak_beam = match needed {
+            Some(elevations_deg) if forward_peak.any() => {
+                let (altitude_nodes, mu_nodes) = sun_column_nodes;
+                PeakBeam::compute(
+                    &PeakBeamInputs {
+                        optics,
+                        phases: &phases,
+                        profiles: &profiles,
+                        corners: &corners,
+                        sun_columns: &sky.sun_column_table(altitude_nodes, mu_nodes),
+                        altitudes_m: grid.altitudes_m(),
+                        extinction: &extinction,
+                        scaled_extinction: &scaled_extinction,
+                    },
+                    elevations_deg,
+                )
+            }
+            _ => None,
+        };
         let harmonics = (0..degrees)
             .map(|m| {
                 phases
@@ -1328,6 +1446,7 @@ impl MultipleScatteringField {
                 scaled_extinction,
                 has_forward_peaks: forward_peak.any(),
                 forward_peak,
+                peak_beam,
                 scaled_scattering,
                 sun_axis,
                 ground_diffuse,

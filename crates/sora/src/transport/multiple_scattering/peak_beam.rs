@@ -1,0 +1,790 @@
+//! The sun's light that reaches a point after scatterings in the phase
+//! functions' forward peaks, with the last of them at its real angle in
+//! the spherical shell: what the forward-peak term (`forward_peak.rs`)
+//! takes as delta-M's T*_sun - T_sun. A fraction of the sun's irradiance
+//! (1).
+//!
+//! # Why
+//! Delta-M takes each peak as exactly forward: the light scattered k >= 1
+//! times in the peaks reaches a point x along the sun's line through x,
+//!
+//! ```text
+//! S(x) = T*_sun(x) - T_sun(x) = T_sun(x) (e^(X_sun(x)) - 1),
+//! ```
+//!
+//! X_sun the peaks' optical depth of that line. Near and below the
+//! horizon that line is the worst of all a point has: it grazes the
+//! ground, while light scattered a few degrees (the width of an aerosol's
+//! diffraction peak) comes down to x from higher, far less attenuated air.
+//! With the sun on the horizon at the ground, `mars-dust` at 440 nm:
+//! B / S = 2.5 (the table below); 5 degrees up, 1.0; 12 degrees up, 0.99
+//! (the lines tilted down then pass through denser air). The forward-peak
+//! term near a sun on the horizon was 5-9 % too dark against the path
+//! tracer 1 degree above the horizon within 5 degrees of the sun
+//! (docs/twilight_survey.md).
+//!
+//! # The model
+//! The last peak scattering before x is taken at its angle, the earlier
+//! ones exactly forward (the scaled beam T*_sun of the point where the
+//! last one happens):
+//!
+//! ```text
+//! B(x) = integral P(delta) M(x, delta) d delta,
+//! M(x, delta) = integral_0^S [sum_j f_j beta_sca,j rho_j](y) T*_sun(y) T(x, y) dt,
+//! y = x + t d(delta),
+//! ```
+//!
+//! d(delta) the sun's direction turned by delta in the vertical plane
+//! through the sun (up for delta > 0), T(x, y) the exact transmittance
+//! (no further peak scattering after the last), T*_sun(y) zero in the
+//! planet's shadow, P the peaks' mixture r / f = (p - (1 - f) p*) / f
+//! (`forward_peak.rs`), weighted by f_j beta_sca,j times each species'
+//! vertical column, projected on that plane (a turn by a small angle
+//! alpha about any axis moves the elevation by the axis' share of it:
+//! P(delta) = integral r(sqrt(delta^2 + eta^2)) d eta, the peak's
+//! negative residues clipped, over +-[`TILT_RANGE_DEG`]). The azimuthal
+//! part of the turn changes the point's altitude only at second order
+//! and is left out. With P a delta function B = S exactly (tested): the
+//! exactly forward beam is this model's limit.
+//!
+//! The forward-peak term then takes T_sun + B for the scaled beam
+//! T*_sun: its first line ([`crate::transport::multiple_scattering`], the
+//! view march) becomes T*(eye, x) B(x) + T_sun(x) (T*(eye, x) - T(eye, x))
+//! (which is T* T*_sun - T T_sun when B = S), also where x itself is in
+//! the shadow and B is not zero; its peak-only light (k >= 2, G) is
+//! scaled by (T_sun + B) / T*_sun where x is lit. The field's own first
+//! order (`spherical_first_order.rs`) keeps T*_sun: with B there it
+//! moved `mars-dust`'s views near a sun on the horizon by less than
+//! 0.1 % (measured, not kept).
+//!
+//! Left out, measured: the peak scatterings on the view's side at their
+//! angles (light scattered once by p* off the view ray, then into it by
+//! a peak): per view node a fan of tilted lines with the sun's columns at
+//! each sample, far too costly per pixel. For `mars-dust` 1 degree up
+//! 2 degrees from a sun at 0 and -2 degrees it adds another +1.7 to
+//! +3.2 % (toward the path tracer); elsewhere near a low sun less than
+//! 1.2 % (`earth-hazy` at 680 nm up to 2 %).
+//!
+//! # Numerics
+//! Tabulated per wavelength over the altitude ([`ALTITUDES`] nodes,
+//! quadratic in altitude: dense near the ground, where aerosols are) and
+//! the sun's elevation at the point (-20 to +12 degrees every
+//! [`ELEVATION_STEP_DEG`]), ln B read bilinearly. Each tilted line is
+//! marched on Gauss panels cut at the profiles' corners, the sun's columns
+//! read from a [`SunColumnTable`]. Toward a higher sun the beam passes
+//! linearly back to delta-M's between [`BLEND_START_DEG`] and the table's
+//! top, 12 degrees (where B / S is 0.99 and the correction is small); below
+//! -20 degrees a point's tilted lines no longer reach lit air of any
+//! density (the top's horizon dip is 10-14 degrees) and delta-M's beam,
+//! zero there, is kept.
+
+use super::phase_fourier::TruncatedPhase;
+use crate::atmosphere::{AtmosphereOptics, DensityProfile};
+use crate::geometry::{Vector3, segment_in_atmosphere};
+use crate::transport::optical_column::{ProfileCorners, SunColumnRadius, SunColumnTable};
+use crate::transport::quadrature::{GAUSS_NODES, GAUSS_WEIGHTS, running_integral_matrix};
+use crate::transport::vector_exp::exp_neg_in_place;
+
+/// The table's lowest node is this high, m: a horizontal line from it
+/// clears the ground (from the ground itself it would graze it).
+const LOWEST_NODE_M: f64 = 0.1;
+/// The table's sun elevations at the point, degrees.
+const LOWEST_ELEVATION_DEG: f64 = -20.0;
+const HIGHEST_ELEVATION_DEG: f64 = 12.0;
+const ELEVATION_STEP_DEG: f64 = 1.0;
+/// From this sun elevation, degrees, to [`HIGHEST_ELEVATION_DEG`] the beam
+/// passes linearly back to delta-M's.
+const BLEND_START_DEG: f64 = 8.0;
+/// The tilts' bins: -TILT_RANGE_DEG..=TILT_RANGE_DEG every TILT_STEP_DEG.
+const TILT_RANGE_DEG: f64 = 9.0;
+const TILT_STEP_DEG: f64 = 1.0;
+/// Bins lighter than this for every wavelength are skipped (what they
+/// hold together is below 1e-3 of the peak).
+const LIGHTEST_TILT: f64 = 2e-5;
+/// Gauss panels along each tilted line (cut at the profiles' corners too).
+const PANELS: usize = 4;
+/// The transmittance from a node along a line below which, at every
+/// wavelength, the line's march stops (what it would add is below this
+/// times the peaks' optical depth ahead, against beams of 1e-3 or more
+/// wherever the forward-peak term carries light).
+const OPAQUE: f64 = 1e-10;
+/// Step of the peak's projection onto the vertical plane, degrees.
+const PROJECTION_STEP_DEG: f64 = 0.1;
+
+/// What [`PeakBeam::compute`] needs; per wavelength i and species j at
+/// [i * species + j].
+pub(crate) struct PeakBeamInputs<'a> {
+    pub optics: &'a AtmosphereOptics,
+    pub phases: &'a [TruncatedPhase],
+    pub profiles: &'a [DensityProfile],
+    pub corners: &'a ProfileCorners,
+    pub sun_columns: &'a SunColumnTable,
+    /// The table's altitudes, m, increasing from 0 (the field's levels:
+    /// dense where the extinction is).
+    pub altitudes_m: &'a [f64],
+    /// m^-1 at relative density 1.
+    pub extinction: &'a [f64],
+    pub scaled_extinction: &'a [f64],
+}
+
+/// A line from a table node marched once: per sample its radius located
+/// in the sun-column table, its central angle from the node, rad, and per
+/// wavelength its quadrature weight times f beta_sca rho T(x, y),
+/// [sample * wavelengths + i].
+#[derive(Default)]
+struct MarchedLine {
+    located: Vec<SunColumnRadius>,
+    central_rad: Vec<f64>,
+    sources: Vec<f64>,
+}
+
+/// B tabulated (see the module docs).
+#[derive(Debug, Clone)]
+pub(crate) struct PeakBeam {
+    wavelengths: usize,
+    ground_m: f64,
+    altitudes_m: Vec<f64>,
+    /// The sun elevation nodes computed: first..first + elevations (of
+    /// the table's grid, [`elevation_rad`]).
+    first: usize,
+    elevations: usize,
+    /// ln B, [(a * elevations + e) * wavelengths + i].
+    ln_beam: Vec<f64>,
+}
+
+impl PeakBeam {
+    /// The table for a sky whose species have forward peaks (None when
+    /// none has), at the table's sun elevations within `elevations_deg`
+    /// (those its view rays meet, [`PeakBeam::needed_elevations_deg`]).
+    pub(crate) fn compute(inputs: &PeakBeamInputs, elevations_deg: (f64, f64)) -> Option<PeakBeam> {
+        let (ground, top) = inputs.corners.radii_m();
+        let weights =
+            compute_tilt_weights(inputs.optics, inputs.phases, inputs.profiles, top - ground)?;
+        Some(PeakBeam::compute_with_tilts(
+            inputs,
+            &weights,
+            elevations_deg,
+        ))
+    }
+
+    /// The table with the tilts' weights given, [i * tilts + k] (bin k
+    /// centred on -TILT_RANGE_DEG + k TILT_STEP_DEG).
+    ///
+    /// A line from a node depends on its own elevation only, not on the
+    /// sun's: the lines are on one grid of elevations, the tilts being a
+    /// whole number of the sun's elevation steps, so each is marched once
+    /// per altitude (its samples' radii, central angles from x and
+    /// f beta_sca rho T(x, y) kept) and read by every sun elevation and tilt
+    /// that meet on it.
+    fn compute_with_tilts(
+        inputs: &PeakBeamInputs,
+        weights: &[f64],
+        (lowest_deg, highest_deg): (f64, f64),
+    ) -> PeakBeam {
+        let (ground, top) = inputs.corners.radii_m();
+        let w = inputs.optics.grid.len();
+        let s = inputs.profiles.len();
+        let tilts = tilt_count();
+        let used: Vec<usize> = (0..tilts)
+            .filter(|k| (0..w).any(|i| weights[i * tilts + k] > LIGHTEST_TILT))
+            .collect();
+        // f_j beta_sca,j, [j * w + i]; the coefficients species-major too.
+        let by_species = |values: &dyn Fn(usize, usize) -> f64| -> Vec<f64> {
+            (0..s * w).map(|at| values(at % w, at / w)).collect()
+        };
+        let peak = by_species(&|i, j| {
+            inputs.phases[i * s + j].forward_fraction * inputs.optics.species[j].scattering_per_m[i]
+        });
+        let extinction = by_species(&|i, j| inputs.extinction[i * s + j]);
+        let scaled_extinction = by_species(&|i, j| inputs.scaled_extinction[i * s + j]);
+        let running = running_integral_matrix();
+        let node = |deg: f64| (deg - LOWEST_ELEVATION_DEG) / ELEVATION_STEP_DEG;
+        let last_node = elevation_count() - 1;
+        let first = (node(lowest_deg).floor().max(0.0) as usize).min(last_node - 1);
+        let last = (node(highest_deg).ceil().max(0.0) as usize).clamp(first + 1, last_node);
+        let elevations = last - first + 1;
+        let per_altitude = elevations * w;
+        let steps_per_tilt = (TILT_STEP_DEG / ELEVATION_STEP_DEG).round() as usize;
+        let half_tilts = (tilts / 2) * steps_per_tilt;
+        // Line n has the elevation of node first + n less TILT_RANGE.
+        let lines = elevations + 2 * half_tilts;
+        let line_rad = |n: usize| elevation_rad(first + n) - TILT_RANGE_DEG.to_radians();
+        let altitudes = inputs.altitudes_m.len();
+        let mut ln_beam = vec![0.0; altitudes * per_altitude];
+        crate::parallel::for_each_chunk_mut(&mut ln_beam, per_altitude, |a, block| {
+            let x = Vector3::new(0.0, 0.0, ground + inputs.altitudes_m[a].max(LOWEST_NODE_M));
+            let mut ends = Vec::with_capacity(inputs.corners.most_panel_ends(PANELS));
+            let mut densities = vec![[0.0; 4]; s];
+            let mut line_columns = vec![0.0; s];
+            let mut sun = vec![0.0; s];
+            let mut depth = vec![0.0; w];
+            let mut source = vec![0.0; w];
+            let mut marched: Vec<MarchedLine> = Vec::with_capacity(lines);
+            for n in 0..lines {
+                let mut line = MarchedLine::default();
+                let d = Vector3::new(line_rad(n).cos(), 0.0, line_rad(n).sin());
+                if let Some((enter, exit)) = segment_in_atmosphere(x, d, ground, top)
+                    && exit > enter
+                {
+                    let start = x + d * enter;
+                    inputs
+                        .corners
+                        .fill_panel_ends(start, d, exit - enter, PANELS, &mut ends);
+                    line_columns.fill(0.0);
+                    'panels: for panel in ends.windows(2) {
+                        let (centre, half) =
+                            (0.5 * (panel[0] + panel[1]), 0.5 * (panel[1] - panel[0]));
+                        let points: [Vector3; 4] =
+                            std::array::from_fn(|q| start + d * (centre + half * GAUSS_NODES[q]));
+                        for (q, point) in points.iter().enumerate() {
+                            let altitude = point.length() - ground;
+                            for (j, profile) in inputs.profiles.iter().enumerate() {
+                                densities[j][q] = profile.relative_density(altitude);
+                            }
+                        }
+                        for (q, point) in points.iter().enumerate() {
+                            let r = point.length();
+                            // f beta_sca rho T(x, y) times the weight.
+                            depth.fill(0.0);
+                            source.fill(0.0);
+                            for j in 0..s {
+                                let inside: f64 =
+                                    (0..4).map(|m| running[q][m] * densities[j][m]).sum();
+                                let column = line_columns[j] + half * inside;
+                                let rows = j * w..(j + 1) * w;
+                                for (((tau, src), ext), f_sca) in depth
+                                    .iter_mut()
+                                    .zip(source.iter_mut())
+                                    .zip(&extinction[rows.clone()])
+                                    .zip(&peak[rows])
+                                {
+                                    *tau += ext * column;
+                                    *src += f_sca * densities[j][q];
+                                }
+                            }
+                            exp_neg_in_place(&mut depth);
+                            // Beyond where x sees no wavelength through the
+                            // line the samples add nothing: T(x, y) only falls.
+                            if depth.iter().all(|t| *t < OPAQUE) {
+                                break 'panels;
+                            }
+                            let weight = half * GAUSS_WEIGHTS[q];
+                            for (src, t) in source.iter_mut().zip(&depth) {
+                                *src *= weight * t;
+                            }
+                            line.located.push(inputs.sun_columns.locate_radius(r));
+                            // The sun's elevation at y is the node's plus the
+                            // central angle between them (the line lies in
+                            // the sun's vertical plane, toward it).
+                            line.central_rad.push((point.z / r).clamp(-1.0, 1.0).acos());
+                            line.sources.extend_from_slice(&source);
+                        }
+                        for j in 0..s {
+                            let panel: f64 =
+                                (0..4).map(|m| GAUSS_WEIGHTS[m] * densities[j][m]).sum();
+                            line_columns[j] += half * panel;
+                        }
+                    }
+                }
+                marched.push(line);
+            }
+            let mut line_sum = vec![0.0; w];
+            for e in 0..elevations {
+                let elevation = elevation_rad(first + e);
+                let beam = &mut block[e * w..(e + 1) * w];
+                beam.fill(0.0);
+                for &k in &used {
+                    let line = &marched[e + k * steps_per_tilt];
+                    line_sum.fill(0.0);
+                    for (y, located) in line.located.iter().enumerate() {
+                        let mu_sun = (elevation + line.central_rad[y]).sin();
+                        if !inputs
+                            .sun_columns
+                            .lookup_columns_at_radius(located, mu_sun, &mut sun)
+                        {
+                            continue;
+                        }
+                        depth.fill(0.0);
+                        for j in 0..s {
+                            for (tau, scaled) in
+                                depth.iter_mut().zip(&scaled_extinction[j * w..(j + 1) * w])
+                            {
+                                *tau += scaled * sun[j];
+                            }
+                        }
+                        exp_neg_in_place(&mut depth);
+                        for ((out, t), src) in line_sum
+                            .iter_mut()
+                            .zip(&depth)
+                            .zip(&line.sources[y * w..(y + 1) * w])
+                        {
+                            *out += src * t;
+                        }
+                    }
+                    for (i, (b, m)) in beam.iter_mut().zip(&line_sum).enumerate() {
+                        *b += weights[i * tilts + k] * m;
+                    }
+                }
+                for b in beam.iter_mut() {
+                    *b = b.max(f64::MIN_POSITIVE).ln();
+                }
+            }
+        });
+        PeakBeam {
+            wavelengths: w,
+            ground_m: ground,
+            altitudes_m: inputs.altitudes_m.to_vec(),
+            first,
+            elevations,
+            ln_beam,
+        }
+    }
+
+    /// The sun elevations, degrees, that the view rays of a sky whose eye
+    /// at radius `observer_m` sees the sun at `eye_sun_elevation_rad` meet
+    /// within the table's (None: none): the sun's elevation at a point
+    /// differs from the eye's by at most the central angle between them,
+    /// which the atmosphere bounds (to the ground's horizon from the eye,
+    /// then to the top's).
+    pub(crate) fn needed_elevations_deg(
+        eye_sun_elevation_rad: f64,
+        (ground_m, top_m): (f64, f64),
+        observer_m: f64,
+    ) -> Option<(f64, f64)> {
+        let farthest = (ground_m / observer_m.max(ground_m)).acos() + (ground_m / top_m).acos();
+        let lowest = (eye_sun_elevation_rad - farthest)
+            .to_degrees()
+            .max(LOWEST_ELEVATION_DEG);
+        let highest = (eye_sun_elevation_rad + farthest)
+            .to_degrees()
+            .min(HIGHEST_ELEVATION_DEG);
+        (lowest < highest).then_some((lowest, highest))
+    }
+
+    /// B per wavelength into `out` at radius `r_m` with the sun's zenith
+    /// cosine `mu_sun` there, and the share of it the scaled beam takes:
+    /// 1 up to [`BLEND_START_DEG`], falling to 0 at the table's top, 0
+    /// (and `out` untouched) beyond the table's elevations.
+    pub(crate) fn lookup_beam(&self, r_m: f64, mu_sun: f64, out: &mut [f64]) -> f64 {
+        let elevation = mu_sun.clamp(-1.0, 1.0).asin().to_degrees();
+        if !(LOWEST_ELEVATION_DEG..HIGHEST_ELEVATION_DEG).contains(&elevation) {
+            return 0.0;
+        }
+        let share = ((HIGHEST_ELEVATION_DEG - elevation)
+            / (HIGHEST_ELEVATION_DEG - BLEND_START_DEG))
+            .min(1.0);
+        let altitudes = &self.altitudes_m;
+        let z = (r_m - self.ground_m).clamp(0.0, altitudes[altitudes.len() - 1]);
+        let a = altitudes
+            .partition_point(|node| *node <= z)
+            .clamp(1, altitudes.len() - 1)
+            - 1;
+        let ta = ((z - altitudes[a]) / (altitudes[a + 1] - altitudes[a])).clamp(0.0, 1.0);
+        // Within the nodes computed (a view ray's points cannot leave them).
+        let elevations = self.elevations;
+        let xe = ((elevation - LOWEST_ELEVATION_DEG) / ELEVATION_STEP_DEG - self.first as f64)
+            .clamp(0.0, (elevations - 1) as f64);
+        let e = (xe as usize).min(elevations - 2);
+        let te = xe - e as f64;
+        let w = self.wavelengths;
+        let at = |a: usize, e: usize| &self.ln_beam[(a * elevations + e) * w..][..w];
+        let (c00, c01, c10, c11) = (at(a, e), at(a, e + 1), at(a + 1, e), at(a + 1, e + 1));
+        let out = &mut out[..w];
+        for (i, out) in out.iter_mut().enumerate() {
+            *out = -((1.0 - ta) * ((1.0 - te) * c00[i] + te * c01[i])
+                + ta * ((1.0 - te) * c10[i] + te * c11[i]));
+        }
+        exp_neg_in_place(out);
+        share
+    }
+}
+
+/// The peaks' mixture projected on the vertical plane (see the module
+/// docs), per wavelength and tilt bin, [i * tilts + k], each wavelength's
+/// row summing to 1 (zero where no species has a peak); None when no
+/// species has one.
+fn compute_tilt_weights(
+    optics: &AtmosphereOptics,
+    phases: &[TruncatedPhase],
+    profiles: &[DensityProfile],
+    atmosphere_height_m: f64,
+) -> Option<Vec<f64>> {
+    let w = optics.grid.len();
+    let s = optics.species.len();
+    let peaked: Vec<usize> = (0..s)
+        .filter(|j| (0..w).any(|i| phases[i * s + j].forward_fraction > 0.0))
+        .collect();
+    if peaked.is_empty() {
+        return None;
+    }
+    // r(alpha) of the mixture, unnormalised, on nodes PROJECTION_STEP_DEG
+    // apart out to the corner of the projection's square.
+    let step = PROJECTION_STEP_DEG.to_radians();
+    let half = TILT_RANGE_DEG.to_radians();
+    let nodes = (half * 2f64.sqrt() / step).ceil() as usize + 2;
+    let mut mixture = vec![0.0; nodes * w];
+    let mut norm = vec![0.0; w];
+    let mut exact = vec![0.0; w];
+    for &j in &peaked {
+        let species = &optics.species[j];
+        let column = super::forward_peak::vertical_column_m(&profiles[j], atmosphere_height_m);
+        let mut legendre = vec![0.0; phases[j].terms()];
+        for i in 0..w {
+            norm[i] += species.scattering_per_m[i] * column * phases[i * s + j].forward_fraction;
+        }
+        for a in 0..nodes {
+            let cos_alpha = (a as f64 * step).cos();
+            species.phase_function.eval_into(cos_alpha, &mut exact);
+            super::forward_peak::legendre_into(cos_alpha, &mut legendre);
+            for i in 0..w {
+                let phase = &phases[i * s + j];
+                let smooth = (1.0 - phase.forward_fraction) * phase.eval_with_legendre(&legendre);
+                mixture[a * w + i] += species.scattering_per_m[i] * column * (exact[i] - smooth);
+            }
+        }
+    }
+    let tilts = tilt_count();
+    let cells = (2.0 * half / step).round() as usize;
+    let mut weights = vec![0.0; w * tilts];
+    for i in (0..w).filter(|i| norm[*i] > 0.0) {
+        let peak = |alpha: f64| {
+            let x = alpha / step;
+            let a = (x as usize).min(nodes - 2);
+            let t = x - a as f64;
+            ((1.0 - t) * mixture[a * w + i] + t * mixture[(a + 1) * w + i]).max(0.0)
+        };
+        // The marginal is even in delta and its integrand even in eta:
+        // the cells of the positive quadrant, counted for all four.
+        let row = &mut weights[i * tilts..(i + 1) * tilts];
+        for u in cells / 2..cells {
+            let delta = -half + (u as f64 + 0.5) * step;
+            let marginal: f64 = (cells / 2..cells)
+                .map(|v| {
+                    let eta = -half + (v as f64 + 0.5) * step;
+                    peak((delta * delta + eta * eta).sqrt())
+                })
+                .sum();
+            let k = (((delta + half) / TILT_STEP_DEG.to_radians()).round() as usize).min(tilts - 1);
+            row[k] += 2.0 * marginal;
+            row[tilts - 1 - k] += 2.0 * marginal;
+        }
+        let total: f64 = row.iter().sum();
+        if total > 0.0 {
+            row.iter_mut().for_each(|v| *v /= total);
+        }
+    }
+    Some(weights)
+}
+
+fn tilt_count() -> usize {
+    (2.0 * TILT_RANGE_DEG / TILT_STEP_DEG).round() as usize + 1
+}
+
+fn elevation_count() -> usize {
+    ((HIGHEST_ELEVATION_DEG - LOWEST_ELEVATION_DEG) / ELEVATION_STEP_DEG).round() as usize + 1
+}
+
+/// The sun's elevation at node e, rad.
+fn elevation_rad(e: usize) -> f64 {
+    (LOWEST_ELEVATION_DEG + e as f64 * ELEVATION_STEP_DEG).to_radians()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::phase_fourier::compute_legendre_moments;
+    use super::super::vertical_grid::VerticalGrid;
+    use super::*;
+    use crate::atmosphere::Atmosphere;
+    use crate::spectrum::WavelengthGrid;
+    use crate::transport::optical_column::compute_columns_along_ray;
+
+    /// What the table needs, for `preset` at 440, 560 and 680 nm with 8
+    /// streams a hemisphere's delta-M (the sky's default).
+    struct Inputs {
+        optics: AtmosphereOptics,
+        phases: Vec<TruncatedPhase>,
+        profiles: Vec<DensityProfile>,
+        corners: ProfileCorners,
+        sun_columns: SunColumnTable,
+        altitudes_m: Vec<f64>,
+        extinction: Vec<f64>,
+        scaled_extinction: Vec<f64>,
+    }
+
+    impl Inputs {
+        fn new(preset: &str) -> Inputs {
+            let atmosphere = Atmosphere::preset(preset).unwrap();
+            let grid = WavelengthGrid::new(440.0, 680.0, 120.0).unwrap();
+            let optics = atmosphere.compute_optics(&grid).unwrap();
+            let (w, s, degrees) = (grid.len(), optics.species.len(), 16);
+            let ground = atmosphere.planet.radius_m();
+            let top = ground + atmosphere.planet.atmosphere_height_m();
+            let mut by_species = Vec::new();
+            let mut moments = vec![0.0; w * (degrees + 1)];
+            for species in &optics.species {
+                compute_legendre_moments(&species.phase_function, w, degrees, &mut moments);
+                by_species.push(
+                    (0..w)
+                        .map(|i| {
+                            TruncatedPhase::from_moments(
+                                &moments[i * (degrees + 1)..(i + 1) * (degrees + 1)],
+                                degrees,
+                            )
+                        })
+                        .collect::<Vec<_>>(),
+                );
+            }
+            // [i * species + j] as the solver lays them out.
+            let phases: Vec<TruncatedPhase> = (0..w)
+                .flat_map(|i| by_species.iter().map(move |row| row[i].clone()))
+                .collect();
+            let extinction: Vec<f64> = (0..w)
+                .flat_map(|i| optics.species.iter().map(move |sp| sp.extinction_per_m[i]))
+                .collect();
+            let scaled_extinction: Vec<f64> = (0..w * s)
+                .map(|at| {
+                    let species = &optics.species[at % s];
+                    extinction[at] - phases[at].forward_fraction * species.scattering_per_m[at / s]
+                })
+                .collect();
+            let profiles: Vec<DensityProfile> =
+                optics.species.iter().map(|s| s.profile.clone()).collect();
+            let corners = ProfileCorners::new(&profiles, ground, top);
+            let sun_columns = SunColumnTable::compute(&profiles, ground, top, 128, 256);
+            // The field's levels, as the sky's default makes them.
+            let weights: Vec<f64> = optics
+                .species
+                .iter()
+                .map(|s| {
+                    s.extinction_per_m
+                        .values()
+                        .iter()
+                        .copied()
+                        .fold(0.0, f64::max)
+                })
+                .collect();
+            let references: Vec<&DensityProfile> = profiles.iter().collect();
+            let altitudes_m = VerticalGrid::compute(&references, &weights, top - ground, 40)
+                .altitudes_m()
+                .to_vec();
+            assert_eq!(phases.len(), w * s);
+            Inputs {
+                optics,
+                phases,
+                profiles,
+                corners,
+                sun_columns,
+                altitudes_m,
+                extinction,
+                scaled_extinction,
+            }
+        }
+
+        fn beam_inputs(&self) -> PeakBeamInputs<'_> {
+            PeakBeamInputs {
+                optics: &self.optics,
+                phases: &self.phases,
+                profiles: &self.profiles,
+                corners: &self.corners,
+                sun_columns: &self.sun_columns,
+                altitudes_m: &self.altitudes_m,
+                extinction: &self.extinction,
+                scaled_extinction: &self.scaled_extinction,
+            }
+        }
+
+        /// f_j beta_sca,j at [i * species + j], m^-1.
+        fn peak_scattering(&self) -> Vec<f64> {
+            self.extinction
+                .iter()
+                .zip(&self.scaled_extinction)
+                .map(|(e, s)| e - s)
+                .collect()
+        }
+
+        /// Columns of every species from `point` to the top along
+        /// `direction` (None through the ground), on 64 panels.
+        fn columns(&self, point: Vector3, direction: Vector3) -> Option<Vec<f64>> {
+            let (ground, top) = self.corners.radii_m();
+            let r = point.length();
+            if crate::geometry::ray_intersects_ground(r, point.dot(direction) / r, ground) {
+                return None;
+            }
+            let length = crate::geometry::distance_to_top_of_atmosphere(point, direction, top);
+            let mut ends = Vec::new();
+            self.corners
+                .fill_panel_ends(point, direction, length, 64, &mut ends);
+            let mut columns = vec![0.0; self.profiles.len()];
+            compute_columns_along_ray(
+                &self.profiles,
+                ground,
+                point,
+                direction,
+                &ends,
+                &mut columns,
+            );
+            Some(columns)
+        }
+
+        /// The oracle of B at altitude `altitude_m` with the sun
+        /// `elevation_deg` high there: each tilt's line marched on 400
+        /// midpoint steps of at most 2 km (growing from 20 m), the columns
+        /// toward the sun integrated exactly at every step.
+        fn reference_beam(&self, weights: &[f64], altitude_m: f64, elevation_deg: f64) -> Vec<f64> {
+            let (ground, top) = self.corners.radii_m();
+            let (w, s) = (self.optics.grid.len(), self.profiles.len());
+            let tilts = tilt_count();
+            // From the ground a horizontal line would graze it (the table's
+            // lowest node is LOWEST_NODE_M up for that reason).
+            let x = Vector3::new(0.0, 0.0, ground + altitude_m.max(LOWEST_NODE_M));
+            let elevation = elevation_deg.to_radians();
+            let sun = Vector3::new(elevation.cos(), 0.0, elevation.sin());
+            let mut beam = vec![0.0; w];
+            for k in 0..tilts {
+                let turned = elevation + (-TILT_RANGE_DEG + k as f64 * TILT_STEP_DEG).to_radians();
+                let d = Vector3::new(turned.cos(), 0.0, turned.sin());
+                let Some((_, exit)) = segment_in_atmosphere(x, d, ground, top) else {
+                    continue;
+                };
+                let mut view = vec![0.0; s];
+                let mut line = vec![0.0; w];
+                let mut t: f64 = 0.0;
+                let mut step: f64 = 20.0;
+                while t < exit {
+                    let h = step.min(exit - t);
+                    let y = x + d * (t + 0.5 * h);
+                    let altitude = y.length() - ground;
+                    let densities: Vec<f64> = self
+                        .profiles
+                        .iter()
+                        .map(|p| p.relative_density(altitude))
+                        .collect();
+                    if let Some(sun_columns) = self.columns(y, sun) {
+                        let columns: Vec<f64> = view
+                            .iter()
+                            .zip(&densities)
+                            .map(|(v, d)| v + 0.5 * h * d)
+                            .collect();
+                        let exact = depths(&self.extinction, &columns);
+                        let scaled = depths(&self.scaled_extinction, &sun_columns);
+                        let peak = depths(&self.peak_scattering(), &densities);
+                        for (((out, e), t), p) in line.iter_mut().zip(exact).zip(scaled).zip(peak) {
+                            *out += h * p * (-(e + t)).exp();
+                        }
+                    }
+                    for j in 0..s {
+                        view[j] += h * densities[j];
+                    }
+                    t += h;
+                    step = (step * 1.03).min(2000.0);
+                }
+                for i in 0..w {
+                    beam[i] += weights[i * tilts + k] * line[i];
+                }
+            }
+            beam
+        }
+    }
+
+    /// Per wavelength, sum_j coefficients[i * species + j] values[j].
+    fn depths(coefficients: &[f64], values: &[f64]) -> Vec<f64> {
+        coefficients
+            .chunks_exact(values.len())
+            .map(|row| row.iter().zip(values).map(|(c, v)| c * v).sum())
+            .collect()
+    }
+
+    /// With every weight but the untilted bin's zero, the last peak scattering is
+    /// exactly forward and B is delta-M's T*_sun - T_sun = T_sun (e^X - 1)
+    /// (the model's limit, a closed form of the line's integral): the
+    /// table at its nodes against the exact columns' value, lit points at
+    /// five of the field's levels from the ground up with the sun from
+    /// -2 to 10 degrees there. Measured within 0.46 % (the ground with the
+    /// sun on its horizon, where the sun-column table's interpolation is
+    /// least exact); mars-dust.
+    #[test]
+    fn an_untilted_peak_gives_delta_ms_beam() {
+        let inputs = Inputs::new("mars-dust");
+        let w = inputs.optics.grid.len();
+        let tilts = tilt_count();
+        let mut weights = vec![0.0; w * tilts];
+        for i in 0..w {
+            weights[i * tilts + tilts / 2] = 1.0;
+        }
+        let table = PeakBeam::compute_with_tilts(&inputs.beam_inputs(), &weights, (-20.0, 12.0));
+        let (ground, _) = inputs.corners.radii_m();
+        let mut worst = 0.0f64;
+        let mut looked_up = vec![0.0; w];
+        for a in [0, 3, 6, 10, 15] {
+            let z = inputs.altitudes_m[a];
+            for e in (18..=30).step_by(2) {
+                let elevation = elevation_rad(e);
+                let x = Vector3::new(0.0, 0.0, ground + z);
+                let sun = Vector3::new(elevation.cos(), 0.0, elevation.sin());
+                let Some(columns) = inputs.columns(x, sun) else {
+                    continue;
+                };
+                table.lookup_beam(x.length(), elevation.sin(), &mut looked_up);
+                let exact = depths(&inputs.extinction, &columns);
+                let scaled = depths(&inputs.scaled_extinction, &columns);
+                for (i, ((b, tau), scaled)) in looked_up.iter().zip(exact).zip(scaled).enumerate() {
+                    let expected = (-scaled).exp() - (-tau).exp();
+                    let error = b / expected - 1.0;
+                    worst = worst.max(error.abs());
+                    assert!(
+                        error.abs() < 1e-2,
+                        "altitude {z} m, sun {} deg, index {i}: {b} against {expected}",
+                        elevation.to_degrees()
+                    );
+                }
+            }
+        }
+        eprintln!("worst relative error: {worst:.2e}");
+    }
+
+    /// The table at the field's levels and between them against the oracle
+    /// with the same tilts (its Gauss panels, line sharing, sun-column
+    /// table and interpolation in altitude; the sun at the table's
+    /// elevations), for mars-dust (its dust well mixed) and earth-hazy
+    /// (its haze 1.2 km high), from the ground to 6 km, with the sun from
+    /// 3 degrees below to 6 above. Measured: mars-dust within 0.1 %;
+    /// earth-hazy within 2 % where the beam is 1e-3 of the sun or more
+    /// (where the forward-peak term carries light), and up to 13 % where
+    /// it is 1e-4 to 1e-8 (6 km, the sun below the horizon: lines tilted
+    /// down through the haze's top, between levels 1.5 km apart).
+    #[test]
+    fn the_table_matches_a_direct_integral() {
+        for (preset, bright, dark) in [("mars-dust", 0.005, 0.005), ("earth-hazy", 0.03, 0.2)] {
+            let inputs = Inputs::new(preset);
+            let (ground, top) = inputs.corners.radii_m();
+            let weights = compute_tilt_weights(
+                &inputs.optics,
+                &inputs.phases,
+                &inputs.profiles,
+                top - ground,
+            )
+            .unwrap();
+            let table =
+                PeakBeam::compute_with_tilts(&inputs.beam_inputs(), &weights, (-20.0, 12.0));
+            let mut looked_up = vec![0.0; inputs.optics.grid.len()];
+            for altitude in [0.0, 150.0, 1_300.0, 6_000.0] {
+                for elevation in [-3.0, -1.0, 0.0, 3.0, 6.0] {
+                    let expected = inputs.reference_beam(&weights, altitude, elevation);
+                    table.lookup_beam(
+                        ground + altitude,
+                        f64::to_radians(elevation).sin(),
+                        &mut looked_up,
+                    );
+                    for (i, (b, e)) in looked_up.iter().zip(&expected).enumerate() {
+                        let error = b / e - 1.0;
+                        let bound = if *e >= 1e-3 { bright } else { dark };
+                        assert!(
+                            error.abs() < bound,
+                            "{preset}, {altitude} m, sun {elevation} deg, index {i}: {b:e} against {e:e}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
