@@ -50,6 +50,14 @@
 //! dust was 9-29 % too bright 2-5 degrees from it in its orders >= 2 and
 //! hazy Earth 8-25 % too dark 2 degrees from it (inside the cone).
 //!
+//! Near a low sun (the sun within 12 degrees of a view node's horizon)
+//! both lines take the peaks' light arriving at x, T*_sun - T_sun, from
+//! [`super::peak_beam`] instead: the last peak scattering before x at its
+//! real angle in the spherical shell, so that light scattered a few
+//! degrees down from higher, less attenuated air counts. The first line's
+//! integrand becomes T* B + T_sun (T* - T), the peak-only light's is
+//! scaled by (T_sun + B) / T*_sun (see there).
+//!
 //! With Stokes vectors the first line is polarised as single scattering
 //! through theta ([`ForwardPeak::polarised_radiance`]: the peaks'
 //! near-forward scatterings keep the state of polarisation) and the

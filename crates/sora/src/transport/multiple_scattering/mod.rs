@@ -98,7 +98,11 @@
 //!    scatterings k times with the peak at full sharpness: near a low sun
 //!    (peak optical depths of 1 to 5 along the sun's path) `mars-dust` was
 //!    3-17 % too bright within 5 degrees of it and `earth-hazy` 5-7 % too
-//!    dark within 2 degrees (accuracy below). The ground term
+//!    dark within 2 degrees (accuracy below). Near a low sun the peaks'
+//!    light reaching x is not taken along the sun's line through x but
+//!    with the last peak scattering at its angle (`peak_beam.rs`): near
+//!    the horizon that line is the most attenuated a point has, and light
+//!    scattered a few degrees down comes from higher air. The ground term
 //!    likewise carries what delta-M moved from the diffuse to the direct
 //!    beam (forward-scattered sunlight on the ground, and the sunlit
 //!    ground's light forward-scattered toward the eye).
@@ -168,16 +172,16 @@
 //!   above a sun 2 degrees high (now -1.1 and -0.9 %). Toward a sun 2
 //!   degrees high `mars-dust` is within 2.3 %, `earth-hazy` 2 degrees
 //!   along the horizon from it -3.3 and -4.3 % at 560 and 680 nm (+-0.4,
-//!   0.9 %). The weakest place left: `mars-dust` with the sun on the
-//!   horizon, 1 degree up and 2-5 degrees along the horizon from it, -5.4
-//!   to -8.7 % (+-0.7 to 1.1 %; -9 % before every order of the spherical
-//!   streams was shifted, item 2), where the eye sees almost only
-//!   multiply scattered light. It is delta-M's truncation degree, not the
-//!   streams: 16 streams a hemisphere truncated at 16 terms give the
-//!   default's values within 0.3 %, truncated at their own 32 they meet the
-//!   path tracer; the forward-peak term counts the light of the Legendre
-//!   band 16-32 about 8 % of the total short there
-//!   (`docs/twilight_survey.md`).
+//!   0.9 %). With the sun on the horizon `mars-dust` 1 degree up and 0-5
+//!   degrees along the horizon from it was -5.3 to -7.5 % (+-0.7 to
+//!   1.1 %), where the eye sees almost only multiply scattered light,
+//!   most of it in the dust's peak: the forward-peak term took that light
+//!   along the sun's grazing line. With the peak's last scattering at its
+//!   angle (`peak_beam.rs`) it is SEE_DOCS (`docs/twilight_survey.md`, its
+//!   last section). The weakest place left is the same family: what is
+//!   still missing there is the peak scatterings on the view's side at
+//!   their angles (another +1.7 to +3.2 % there, measured, left out for
+//!   its cost per pixel).
 //! - Twilight (`reference_tests/twilight_survey.rs`, `tests/twilight.rs`):
 //!   the zenith and elevations 5 and 20 degrees at 0, 90 and 180 degrees
 //!   from the sun, 440/560/680 nm, 800 000 paths (standard errors 0.1-2.6
@@ -305,10 +309,12 @@
 //!   the peak-only light of the forward-peak term takes its k-fold
 //!   convolution of the peak in the small-angle sense (its paths' legs
 //!   all near the sun's line, their mean peak optical depth along the
-//!   view ray). With the sun on the horizon, mars-dust 1 degree up
-//!   within 5 degrees of it is 5-9 % too dark; 16 streams a hemisphere
-//!   put it right, the geometry of the peak's single scattering does
-//!   not (`docs/twilight_survey.md`, its last section).
+//!   view ray). The peaks' light reaching a point near a low sun takes
+//!   its last scattering at its angle, the earlier ones exactly forward,
+//!   and the peak scatterings on the view's side stay exactly forward
+//!   (`peak_beam.rs`): with the sun on the horizon, mars-dust 1 degree up
+//!   within 5 degrees of it is SEE_DOCS too dark (`docs/twilight_survey.md`,
+//!   its last section).
 //! - 2n streams and harmonics, 40 layers, the source linear in optical
 //!   depth across a layer, and the tables' interpolations.
 //!
@@ -336,7 +342,7 @@ use std::f64::consts::{FRAC_PI_2, PI};
 use self::forward_peak::ForwardPeak;
 use self::peak_beam::{PeakBeam, PeakBeamInputs};
 use self::phase_fourier::{
-    TruncatedPhase, compute_legendre_moments, normalized_associated_legendre,
+    TruncatedPhase, compute_truncated_phases, normalized_associated_legendre,
 };
 pub(crate) use self::polarisation_correction::PolarisationTable;
 use self::polarisation_correction::{CorrectionInputs, PolarisationCorrection};
@@ -1127,56 +1133,23 @@ impl MultipleScatteringField {
         );
         let count = sun_axis.count();
         // Delta-M truncated phase functions and scaled coefficients.
-        let mut phases = Vec::with_capacity(wavelengths * species);
-        let mut moments = vec![0.0; wavelengths * (degrees + 1)];
-        let mut per_species = Vec::with_capacity(species);
-        for s in &optics.species {
-            compute_legendre_moments(&s.phase_function, wavelengths, degrees, &mut moments);
-            per_species.push(
-                (0..wavelengths)
-                    .map(|i| {
-                        TruncatedPhase::from_moments(
-                            &moments[i * (degrees + 1)..(i + 1) * (degrees + 1)],
-                            degrees,
-                        )
-                    })
-                    .collect::<Vec<_>>(),
-            );
-        }
+        let phases = compute_truncated_phases(optics, degrees);
         let mut extinction = vec![0.0; wavelengths * species];
         let mut scaled_extinction = vec![0.0; wavelengths * species];
         let mut scaled_scattering = vec![0.0; wavelengths * species];
         for i in 0..wavelengths {
             for (j, s) in optics.species.iter().enumerate() {
-                let phase = per_species[j][i].clone();
-                let f = phase.forward_fraction;
+                let f = phases[i * species + j].forward_fraction;
                 let (ext, sca) = (s.extinction_per_m[i], s.scattering_per_m[i]);
                 extinction[i * species + j] = ext;
                 scaled_extinction[i * species + j] = ext - f * sca;
                 scaled_scattering[i * species + j] = (1.0 - f) * sca;
-                phases.push(phase);
             }
         }
         let profiles: Vec<DensityProfile> =
             optics.species.iter().map(|s| s.profile.clone()).collect();
-        let profile_refs: Vec<&DensityProfile> = profiles.iter().collect();
-        let weights: Vec<f64> = optics
-            .species
-            .iter()
-            .map(|s| {
-                s.extinction_per_m
-                    .values()
-                    .iter()
-                    .copied()
-                    .fold(0.0, f64::max)
-            })
-            .collect();
-        let grid = VerticalGrid::compute(
-            &profile_refs,
-            &weights,
-            top_radius_m - ground_radius_m,
-            settings.layers,
-        );
+        let grid =
+            VerticalGrid::for_optics(optics, top_radius_m - ground_radius_m, settings.layers);
         let levels = grid.levels();
         let radii: Vec<f64> = grid
             .altitudes_m()

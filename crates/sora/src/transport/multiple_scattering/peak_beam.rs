@@ -491,7 +491,7 @@ fn elevation_rad(e: usize) -> f64 {
 
 #[cfg(test)]
 mod tests {
-    use super::super::phase_fourier::compute_legendre_moments;
+    use super::super::phase_fourier::compute_truncated_phases;
     use super::super::vertical_grid::VerticalGrid;
     use super::*;
     use crate::atmosphere::Atmosphere;
@@ -516,28 +516,10 @@ mod tests {
             let atmosphere = Atmosphere::preset(preset).unwrap();
             let grid = WavelengthGrid::new(440.0, 680.0, 120.0).unwrap();
             let optics = atmosphere.compute_optics(&grid).unwrap();
-            let (w, s, degrees) = (grid.len(), optics.species.len(), 16);
+            let (w, s) = (grid.len(), optics.species.len());
             let ground = atmosphere.planet.radius_m();
             let top = ground + atmosphere.planet.atmosphere_height_m();
-            let mut by_species = Vec::new();
-            let mut moments = vec![0.0; w * (degrees + 1)];
-            for species in &optics.species {
-                compute_legendre_moments(&species.phase_function, w, degrees, &mut moments);
-                by_species.push(
-                    (0..w)
-                        .map(|i| {
-                            TruncatedPhase::from_moments(
-                                &moments[i * (degrees + 1)..(i + 1) * (degrees + 1)],
-                                degrees,
-                            )
-                        })
-                        .collect::<Vec<_>>(),
-                );
-            }
-            // [i * species + j] as the solver lays them out.
-            let phases: Vec<TruncatedPhase> = (0..w)
-                .flat_map(|i| by_species.iter().map(move |row| row[i].clone()))
-                .collect();
+            let phases = compute_truncated_phases(&optics, 16);
             let extinction: Vec<f64> = (0..w)
                 .flat_map(|i| optics.species.iter().map(move |sp| sp.extinction_per_m[i]))
                 .collect();
@@ -552,19 +534,7 @@ mod tests {
             let corners = ProfileCorners::new(&profiles, ground, top);
             let sun_columns = SunColumnTable::compute(&profiles, ground, top, 128, 256);
             // The field's levels, as the sky's default makes them.
-            let weights: Vec<f64> = optics
-                .species
-                .iter()
-                .map(|s| {
-                    s.extinction_per_m
-                        .values()
-                        .iter()
-                        .copied()
-                        .fold(0.0, f64::max)
-                })
-                .collect();
-            let references: Vec<&DensityProfile> = profiles.iter().collect();
-            let altitudes_m = VerticalGrid::compute(&references, &weights, top - ground, 40)
+            let altitudes_m = VerticalGrid::for_optics(&optics, top - ground, 40)
                 .altitudes_m()
                 .to_vec();
             assert_eq!(phases.len(), w * s);

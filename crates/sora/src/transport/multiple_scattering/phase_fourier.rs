@@ -79,6 +79,30 @@ pub(crate) fn normalized_associated_legendre(mu: f64, degrees: usize, out: &mut 
     }
 }
 
+/// Every species' phase function at every wavelength delta-M truncated
+/// to `degrees` terms, [i * species + j] (wavelength i, species j).
+pub(crate) fn compute_truncated_phases(
+    optics: &crate::atmosphere::AtmosphereOptics,
+    degrees: usize,
+) -> Vec<TruncatedPhase> {
+    let wavelengths = optics.grid.len();
+    let mut moments = vec![0.0; wavelengths * (degrees + 1)];
+    let per_species: Vec<Vec<TruncatedPhase>> = optics
+        .species
+        .iter()
+        .map(|species| {
+            compute_legendre_moments(&species.phase_function, wavelengths, degrees, &mut moments);
+            moments
+                .chunks_exact(degrees + 1)
+                .map(|row| TruncatedPhase::from_moments(row, degrees))
+                .collect()
+        })
+        .collect();
+    (0..wavelengths)
+        .flat_map(|i| per_species.iter().map(move |row| row[i].clone()))
+        .collect()
+}
+
 /// Legendre moments chi_0..=chi_`highest` of `phase` at every wavelength:
 /// `out[wavelength * (highest + 1) + l]`, normalised so that chi_0 = 1
 /// exactly (the quadrature's own normalisation error is divided out).

@@ -33,6 +33,29 @@ pub struct VerticalGrid {
 }
 
 impl VerticalGrid {
+    /// `layers` layers from the ground to `top_altitude_m` for the species
+    /// of `optics`, each weighted by its largest extinction coefficient on
+    /// the grid.
+    pub(crate) fn for_optics(
+        optics: &crate::atmosphere::AtmosphereOptics,
+        top_altitude_m: f64,
+        layers: usize,
+    ) -> VerticalGrid {
+        let profiles: Vec<&DensityProfile> = optics.species.iter().map(|s| &s.profile).collect();
+        let weights: Vec<f64> = optics
+            .species
+            .iter()
+            .map(|s| {
+                s.extinction_per_m
+                    .values()
+                    .iter()
+                    .copied()
+                    .fold(0.0, f64::max)
+            })
+            .collect();
+        VerticalGrid::compute(&profiles, &weights, top_altitude_m, layers)
+    }
+
     /// `layers` layers from the ground to `top_altitude_m` for these
     /// profiles; `extinction_weights[j]` is species j's largest extinction
     /// coefficient at relative density 1 (m^-1), its weight in the
