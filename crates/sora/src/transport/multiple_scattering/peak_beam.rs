@@ -45,7 +45,7 @@
 //! vertical column, projected on that plane (a turn by a small angle
 //! alpha about any axis moves the elevation by the axis' share of it:
 //! P(delta) = integral r(sqrt(delta^2 + eta^2)) d eta, the peak's
-//! negative residues clipped, over +-[`TILT_RANGE_DEG`]). The azimuthal
+//! negative residues clipped, over +-144 / N degrees for N terms). The azimuthal
 //! part of the turn changes the point's altitude only at second order
 //! and is left out. With P a delta function B = S exactly (tested): the
 //! exactly forward beam is this model's limit.
@@ -76,8 +76,8 @@
 //! the point, every [`ELEVATION_STEP_DEG`] from -20 to +12 degrees but
 //! only where the sky's view rays can go
 //! ([`PeakBeam::needed_elevations_deg`]); ln B read bilinearly. The
-//! tilts are bins of [`TILT_STEP_DEG`] over +-[`TILT_RANGE_DEG`] (the
-//! projected peak of 16 terms' truncation has nothing beyond 9 degrees),
+//! tilts are bins of [`TILT_STEP_DEG`] over +-[`TILT_REACH_DEG`] / N
+//! degrees (9 for the default N = 16; see there),
 //! each tilted line marched on [`PANELS`] Gauss panels cut at the
 //! profiles' corners until x sees through it no more, the sun's columns
 //! read from a [`SunColumnTable`]. Against an oracle of the same tilts
@@ -108,9 +108,12 @@ const ELEVATION_STEP_DEG: f64 = 1.0;
 /// From this sun elevation, degrees, to [`HIGHEST_ELEVATION_DEG`] the beam
 /// passes linearly back to delta-M's.
 const BLEND_START_DEG: f64 = 8.0;
-/// The tilts' bins: -TILT_RANGE_DEG..=TILT_RANGE_DEG every TILT_STEP_DEG.
-const TILT_RANGE_DEG: f64 = 9.0;
+/// The tilts' bins are TILT_STEP_DEG wide, out to +-TILT_REACH_DEG / N
+/// degrees for phases truncated to N terms: the projected peak of N = 16
+/// terms' truncation has nothing beyond 8.6 degrees (measured, mars-dust
+/// and earth-hazy, 440-680 nm), and it is as much narrower as N is larger.
 const TILT_STEP_DEG: f64 = 1.0;
+const TILT_REACH_DEG: f64 = 144.0;
 /// Bins lighter than this for every wavelength are skipped (what they
 /// hold together is below 1e-3 of the peak).
 const LIGHTEST_TILT: f64 = 2e-5;
@@ -181,7 +184,7 @@ impl PeakBeam {
     }
 
     /// The table with the tilts' weights given, [i * tilts + k] (bin k
-    /// centred on -TILT_RANGE_DEG + k TILT_STEP_DEG).
+    /// centred on [`tilt_deg`]).
     ///
     /// A line from a node depends on its own elevation only, not on the
     /// sun's: the lines are on one grid of elevations, the tilts being a
@@ -197,7 +200,7 @@ impl PeakBeam {
         let (ground, top) = inputs.corners.radii_m();
         let w = inputs.optics.grid.len();
         let s = inputs.profiles.len();
-        let tilts = tilt_count();
+        let tilts = weights.len() / w;
         let used: Vec<usize> = (0..tilts)
             .filter(|k| (0..w).any(|i| weights[i * tilts + k] > LIGHTEST_TILT))
             .collect();
@@ -219,9 +222,9 @@ impl PeakBeam {
         let per_altitude = elevations * w;
         let steps_per_tilt = (TILT_STEP_DEG / ELEVATION_STEP_DEG).round() as usize;
         let half_tilts = (tilts / 2) * steps_per_tilt;
-        // Line n has the elevation of node first + n less TILT_RANGE.
+        // Line n has the elevation of node first + n plus the lowest tilt.
         let lines = elevations + 2 * half_tilts;
-        let line_rad = |n: usize| elevation_rad(first + n) - TILT_RANGE_DEG.to_radians();
+        let line_rad = |n: usize| elevation_rad(first + n) + tilt_deg(0, tilts).to_radians();
         let altitudes = inputs.altitudes_m.len();
         let mut ln_beam = vec![0.0; altitudes * per_altitude];
         crate::parallel::for_each_chunk_mut(&mut ln_beam, per_altitude, |a, block| {
@@ -433,7 +436,8 @@ fn compute_tilt_weights(
     // r(alpha) of the mixture, unnormalised, on nodes PROJECTION_STEP_DEG
     // apart out to the corner of the projection's square.
     let step = PROJECTION_STEP_DEG.to_radians();
-    let half = TILT_RANGE_DEG.to_radians();
+    let tilts = tilt_count(phases[0].terms());
+    let half = tilt_deg(tilts - 1, tilts).to_radians();
     let nodes = (half * 2f64.sqrt() / step).ceil() as usize + 2;
     let mut mixture = vec![0.0; nodes * w];
     let mut norm = vec![0.0; w];
@@ -456,7 +460,6 @@ fn compute_tilt_weights(
             }
         }
     }
-    let tilts = tilt_count();
     let cells = (2.0 * half / step).round() as usize;
     let mut weights = vec![0.0; w * tilts];
     for i in (0..w).filter(|i| norm[*i] > 0.0) {
@@ -489,8 +492,14 @@ fn compute_tilt_weights(
     Some(weights)
 }
 
-fn tilt_count() -> usize {
-    (2.0 * TILT_RANGE_DEG / TILT_STEP_DEG).round() as usize + 1
+/// Tilt bins for phases truncated to `terms` terms.
+fn tilt_count(terms: usize) -> usize {
+    2 * (TILT_REACH_DEG / (terms.max(1) as f64 * TILT_STEP_DEG)).ceil() as usize + 1
+}
+
+/// The tilt of bin k of `tilts`, degrees.
+fn tilt_deg(k: usize, tilts: usize) -> f64 {
+    (k as f64 - (tilts / 2) as f64) * TILT_STEP_DEG
 }
 
 fn elevation_count() -> usize {
@@ -610,13 +619,14 @@ mod tests {
         }
 
         /// The oracle of B at altitude `altitude_m` with the sun
-        /// `elevation_deg` high there: each tilt's line marched on 400
-        /// midpoint steps of at most 2 km (growing from 20 m), the columns
-        /// toward the sun integrated exactly at every step.
+        /// `elevation_deg` high there: each tilt's line marched on midpoint
+        /// steps growing from 20 m by 3 % a step to at most 2 km, the
+        /// columns toward the sun integrated exactly (64 panels) at every
+        /// step.
         fn reference_beam(&self, weights: &[f64], altitude_m: f64, elevation_deg: f64) -> Vec<f64> {
             let (ground, top) = self.corners.radii_m();
             let (w, s) = (self.optics.grid.len(), self.profiles.len());
-            let tilts = tilt_count();
+            let tilts = weights.len() / w;
             // From the ground a horizontal line would graze it (the table's
             // lowest node is LOWEST_NODE_M up for that reason).
             let x = Vector3::new(0.0, 0.0, ground + altitude_m.max(LOWEST_NODE_M));
@@ -624,7 +634,7 @@ mod tests {
             let sun = Vector3::new(elevation.cos(), 0.0, elevation.sin());
             let mut beam = vec![0.0; w];
             for k in 0..tilts {
-                let turned = elevation + (-TILT_RANGE_DEG + k as f64 * TILT_STEP_DEG).to_radians();
+                let turned = elevation + tilt_deg(k, tilts).to_radians();
                 let d = Vector3::new(turned.cos(), 0.0, turned.sin());
                 let Some((_, exit)) = segment_in_atmosphere(x, d, ground, top) else {
                     continue;
@@ -689,7 +699,7 @@ mod tests {
     fn an_untilted_peak_gives_delta_ms_beam() {
         let inputs = Inputs::new("mars-dust");
         let w = inputs.optics.grid.len();
-        let tilts = tilt_count();
+        let tilts = tilt_count(inputs.phases[0].terms());
         let mut weights = vec![0.0; w * tilts];
         for i in 0..w {
             weights[i * tilts + tilts / 2] = 1.0;
