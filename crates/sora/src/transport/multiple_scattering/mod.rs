@@ -849,9 +849,7 @@ impl ViewRayOptics {
             }
         }
     }
-}
 
-impl ViewRayOptics {
     /// The forward-peak integrals of one view node (the march's weight
     /// `weight`, m; its columns, densities and, where `lit`, its columns
     /// toward the sun in `scratch`) with the peaks' light reaching the

@@ -110,12 +110,13 @@ const ELEVATION_STEP_DEG: f64 = 1.0;
 const BLEND_START_DEG: f64 = 8.0;
 /// The tilts' bins are TILT_STEP_DEG wide, out to +-TILT_REACH_DEG / N
 /// degrees for phases truncated to N terms: the projected peak of N = 16
-/// terms' truncation has nothing beyond 8.6 degrees (measured, mars-dust
-/// and earth-hazy, 440-680 nm), and it is as much narrower as N is larger.
+/// terms' truncation has nothing beyond 9 degrees (measured, mars-dust
+/// and earth-hazy, 440-680 nm, in half-degree bins), and it is as much
+/// narrower as N is larger.
 const TILT_STEP_DEG: f64 = 1.0;
 const TILT_REACH_DEG: f64 = 144.0;
-/// Bins lighter than this for every wavelength are skipped (what they
-/// hold together is below 1e-3 of the peak).
+/// Bins lighter than this for every wavelength are skipped (under 1e-3
+/// of the peak together for up to 50 bins).
 const LIGHTEST_TILT: f64 = 2e-5;
 /// Gauss panels along each tilted line (cut at the profiles' corners too).
 const PANELS: usize = 4;
