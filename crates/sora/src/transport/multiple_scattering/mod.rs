@@ -181,10 +181,12 @@
 //!   `docs/twilight_survey.md`, its last section), and every one of the 120
 //!   values 1 and 2 degrees up within 5 degrees of a sun at 5 to -2
 //!   degrees (mars-dust, earth-hazy) is within the bar (12 were not). The
-//!   weakest place left is the same family with the sun 2 degrees down:
-//!   -2.6 to -6.2 % (+-1.0 to 1.6 %). What is still missing there is the
-//!   peak scatterings on the view's side at their angles (another +1.7 to
-//!   +3.2 % there, measured, left out for its cost per pixel).
+//!   weakest place left is the same family, 1 degree up with the sun
+//!   on the horizon or 2 degrees down: with 1 600 000 paths (standard
+//!   errors 0.35-0.8 %) -0.6 to -3.6 %, the worst at 440 nm. What is
+//!   still missing there is the peak scatterings on the view's side at
+//!   their angles (another +1.7 to +3.2 % there, measured, left out for
+//!   its cost per pixel).
 //! - Twilight (`reference_tests/twilight_survey.rs`, `tests/twilight.rs`):
 //!   the zenith and elevations 5 and 20 degrees at 0, 90 and 180 degrees
 //!   from the sun, 440/560/680 nm, 800 000 paths (standard errors 0.1-2.6
@@ -316,8 +318,8 @@
 //!   its last scattering at its angle, the earlier ones exactly forward,
 //!   and the peak scatterings on the view's side stay exactly forward
 //!   (`peak_beam.rs`): with the sun on the horizon, mars-dust 1 degree up
-//!   within 5 degrees of it is 1-3.4 % too dark, with the sun 2 degrees
-//!   down 2.6-6.2 % (`docs/twilight_survey.md`, its last section).
+//!   within 5 degrees of it, or 2 degrees below it, is 0.6-3.6 % too
+//!   dark (`docs/twilight_survey.md`, its last section).
 //! - 2n streams and harmonics, 40 layers, the source linear in optical
 //!   depth across a layer, and the tables' interpolations.
 //!

@@ -23,8 +23,8 @@
 //! sun on the horizon and within 5 degrees of it was -4.3 to -7.5 % (7
 //! of 9 values outside the 3 % + 3 standard errors), with this
 //! -1.0 to -3.4 %; 2 degrees below the horizon -4.5 to -9.0 %, now -2.6
-//! to -6.2 % (+-1.0 to 1.6 %; docs/twilight_survey.md, its last
-//! section).
+//! to -6.2 % (+-1.0 to 1.6 %; with 1 600 000 paths -0.6 to -3.6 %,
+//! +-0.35 to 0.8 %; docs/twilight_survey.md, its last section).
 //!
 //! # The model
 //! The last peak scattering before x is taken at its angle, the earlier
