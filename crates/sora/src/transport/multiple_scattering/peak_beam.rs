@@ -45,9 +45,9 @@
 //! vertical column, projected on that plane (a turn by a small angle
 //! alpha about any axis moves the elevation by the axis' share of it:
 //! P(delta) = integral r(sqrt(delta^2 + eta^2)) d eta, the peak's
-//! negative residues clipped, over +-144 / N degrees for N terms). The azimuthal
-//! part of the turn changes the point's altitude only at second order
-//! and is left out. With P a delta function B = S exactly (tested): the
+//! negative residues clipped, over +-144 / N degrees for N terms). The
+//! azimuthal part of the turn changes the point's altitude only at
+//! second order and is left out. With P a delta function B = S exactly (tested): the
 //! exactly forward beam is this model's limit.
 //!
 //! The forward-peak term then takes T_sun + B for the scaled beam
@@ -441,14 +441,16 @@ fn compute_tilt_weights(
     let half = tilt_deg(tilts - 1, tilts).to_radians();
     let nodes = (half * 2f64.sqrt() / step).ceil() as usize + 2;
     let mut mixture = vec![0.0; nodes * w];
-    let mut norm = vec![0.0; w];
+    // Whether any species has a peak at the wavelength (where none has,
+    // the mixture is only p's truncation residue, not a peak).
+    let mut has_peak = vec![false; w];
     let mut exact = vec![0.0; w];
     for &j in &peaked {
         let species = &optics.species[j];
         let column = super::forward_peak::vertical_column_m(&profiles[j], atmosphere_height_m);
         let mut legendre = vec![0.0; phases[j].terms()];
-        for i in 0..w {
-            norm[i] += species.scattering_per_m[i] * column * phases[i * s + j].forward_fraction;
+        for (i, peaked) in has_peak.iter_mut().enumerate() {
+            *peaked |= phases[i * s + j].forward_fraction > 0.0;
         }
         for a in 0..nodes {
             let cos_alpha = (a as f64 * step).cos();
@@ -463,7 +465,7 @@ fn compute_tilt_weights(
     }
     let cells = (2.0 * half / step).round() as usize;
     let mut weights = vec![0.0; w * tilts];
-    for i in (0..w).filter(|i| norm[*i] > 0.0) {
+    for i in (0..w).filter(|i| has_peak[*i]) {
         let peak = |alpha: f64| {
             let x = alpha / step;
             let a = (x as usize).min(nodes - 2);
