@@ -46,9 +46,17 @@
 //!   horizon's refraction), and real refraction near the horizon varies
 //!   with the weather by tenths of a degree.
 //!
-//! The place's elevation only changes the parallax (at most 8.8 arcsec);
-//! the height of the eye above the ground in a [`crate::Sky`] is set
-//! separately ([`crate::SkyBuilder::observer_altitude_m`]).
+//! The place's elevation changes the parallax (at most 8.8 arcsec) and,
+//! through [`Refraction::standard_at_elevation_m`], the air the sun's
+//! light is refracted by; the height of the eye above the ground in a
+//! [`crate::Sky`] is set separately ([`crate::SkyBuilder::observer_altitude_m`]).
+//!
+//! # The Earth-Sun distance
+//! [`SunPosition::earth_sun_distance_au`] is SPA's radius vector R
+//! (VSOP87; SPA's example: 0.9965422974 AU, matched to 1e-8), within
+//! 5e-5 AU of published perihelion and aphelion distances (tests); the
+//! sunlight at the top of the atmosphere scales as 1 / R^2, 6.9 % more in
+//! early January than in early July ([`crate::atmosphere::Sun::at_distance_au`]).
 //!
 //! # Times
 //! [`parse_time_utc`] (also `str::parse::<UtcTime>()`) reads RFC 3339 /
@@ -388,8 +396,8 @@ impl Refraction {
     /// 1013.25 hPa and 10 C (SPA's usual annual-mean assumption): the
     /// default.
     pub const STANDARD: Refraction = Refraction::On {
-        pressure_hpa: 1013.25,
-        temperature_c: 10.0,
+        pressure_hpa: SEA_LEVEL_PRESSURE_HPA,
+        temperature_c: SEA_LEVEL_TEMPERATURE_C,
     };
 
     fn to_spa(self) -> Result<Option<RefractionCorrection>> {
@@ -422,6 +430,48 @@ impl Refraction {
     }
 }
 
+/// Sea-level pressure of the standard atmosphere, hPa.
+const SEA_LEVEL_PRESSURE_HPA: f64 = 1013.25;
+/// Sea-level temperature of [`Refraction::STANDARD`] (SPA's annual mean), C.
+const SEA_LEVEL_TEMPERATURE_C: f64 = 10.0;
+/// The standard atmosphere's lapse rate below the tropopause, K m^-1.
+const LAPSE_RATE_K_M: f64 = 0.0065;
+/// Height of the standard atmosphere's tropopause, m.
+const TROPOPAUSE_M: f64 = 11_000.0;
+/// The barometric exponent g M / (R L) of the standard atmosphere.
+const BAROMETRIC_EXPONENT: f64 = 5.255_877;
+/// Sea-level temperature of the standard atmosphere, K (the barometric
+/// formula's; the refraction's temperature is [`SEA_LEVEL_TEMPERATURE_C`]).
+const STANDARD_SEA_LEVEL_K: f64 = 288.15;
+/// Scale height of the isothermal layer above the tropopause (R T / (g M)
+/// at 216.65 K), m.
+const STRATOSPHERE_SCALE_HEIGHT_M: f64 = 6_341.6;
+
+impl Refraction {
+    /// Refraction through the standard atmosphere at a site `elevation_m`
+    /// above sea level: the pressure of the US Standard Atmosphere 1976
+    /// (1013.25 hPa at sea level, 1013.25 (1 - 0.0065 h / 288.15)^5.2559
+    /// to the tropopause at 11 km, falling with a 6.34 km scale height
+    /// above), and SPA's annual-mean 10 C at sea level cooling by 6.5 K per
+    /// km to the tropopause. At sea level this is [`Refraction::STANDARD`].
+    /// At NREL SPA's example site (1830.14 m) it gives 811.9 hPa and -1.9 C
+    /// where the example measured 820 hPa and 11 C: the sun, 40 degrees up,
+    /// comes out 6.1e-4 deg above the example's elevation (sea level's
+    /// 1013.25 hPa: 0.004 deg above).
+    pub fn standard_at_elevation_m(elevation_m: f64) -> Refraction {
+        let below = elevation_m.min(TROPOPAUSE_M);
+        let mut pressure_hpa = SEA_LEVEL_PRESSURE_HPA
+            * (1.0 - LAPSE_RATE_K_M * below / STANDARD_SEA_LEVEL_K).powf(BAROMETRIC_EXPONENT);
+        if elevation_m > TROPOPAUSE_M {
+            pressure_hpa *= (-(elevation_m - TROPOPAUSE_M) / STRATOSPHERE_SCALE_HEIGHT_M).exp();
+        }
+        Refraction::On {
+            pressure_hpa,
+            temperature_c: SEA_LEVEL_TEMPERATURE_C - LAPSE_RATE_K_M * below,
+        }
+    }
+}
+
 impl Default for Refraction {
     /// [`Refraction::STANDARD`].
     fn default() -> Refraction {
@@ -437,6 +487,11 @@ pub struct SunPosition {
     pub elevation_deg: f64,
     /// Azimuth clockwise from north (0 N, 90 E, 180 S, 270 W), 0..360 deg.
     pub azimuth_deg: f64,
+    /// The Earth-Sun distance at the instant, astronomical units: SPA's
+    /// radius vector R (VSOP87, 0.9833 in early January, 1.0167 in early
+    /// July). Sunlight at the top of the atmosphere is the 1-AU spectrum
+    /// divided by its square ([`crate::atmosphere::Sun::at_distance_au`]).
+    pub earth_sun_distance_au: f64,
 }
 
 impl SunPosition {
@@ -468,12 +523,17 @@ impl SunPosition {
             latitude: place.latitude_deg,
             longitude: place.longitude_deg,
         };
-        let position = SolarPositions::new()
-            .at_from_julian(julian, location, place.elevation_m, refraction)
+        let prepared = SolarPositions::new()
+            .for_time_from_julian(julian)
+            .map_err(from_spa)?;
+        let position = prepared
+            .at(location, place.elevation_m, refraction)
             .map_err(from_spa)?;
         Ok(SunPosition {
             elevation_deg: position.elevation_angle(),
             azimuth_deg: position.azimuth(),
+            // SPA always computes R (only Grena3 does not).
+            earth_sun_distance_au: prepared.earth_radius_vector().unwrap_or(1.0),
         })
     }
 
@@ -626,6 +686,72 @@ mod tests {
             dz.abs() < 1e-4 && da.abs() < 1e-4,
             "{sun:?}: {dz:e}, {da:e}"
         );
+    }
+
+    #[test]
+    fn earth_sun_distance_matches_spa_and_the_apsides() {
+        // SPA's example, table A5.1: R = 0.9965422974 AU.
+        let (time, place, refraction) = spa_example();
+        let sun = SunPosition::at_with_delta_t(time, place, refraction, 67.0).unwrap();
+        assert!(
+            (sun.earth_sun_distance_au - 0.996_542_297_4).abs() < 1e-8,
+            "{}",
+            sun.earth_sun_distance_au
+        );
+        // Perihelion 2006-01-04 15h UTC: 0.983326979 AU (IMCCE's
+        // announcement); aphelion 2019-07-04 22:15 UTC: 152 104 285 km =
+        // 1.0167545 AU (as published for that day). The issue asks 1e-4 AU.
+        let distance = |time: &str| {
+            let time = parse_time_utc(time).unwrap();
+            let greenwich = Location::new(51.48, 0.0, 0.0).unwrap();
+            SunPosition::at(time, greenwich, Refraction::Off)
+                .unwrap()
+                .earth_sun_distance_au
+        };
+        let (near, far) = (
+            distance("2006-01-04T15:00:00Z"),
+            distance("2019-07-04T22:15:00Z"),
+        );
+        assert!((near - 0.983_326_979).abs() < 5e-5, "{near}");
+        assert!((far - 1.016_754_5).abs() < 5e-5, "{far}");
+    }
+
+    #[test]
+    fn standard_refraction_at_a_site_follows_its_altitude() {
+        assert_eq!(
+            Refraction::standard_at_elevation_m(0.0),
+            Refraction::STANDARD
+        );
+        // SPA's example from its site's altitude alone (no measured
+        // pressure or temperature): its elevation 39.88838 deg.
+        let (time, place, _) = spa_example();
+        let refraction = Refraction::standard_at_elevation_m(place.elevation_m());
+        let Refraction::On {
+            pressure_hpa,
+            temperature_c,
+        } = refraction
+        else {
+            panic!("{refraction:?}")
+        };
+        assert!((pressure_hpa - 811.8).abs() < 0.1, "{pressure_hpa}");
+        assert!((temperature_c + 1.896).abs() < 1e-3, "{temperature_c}");
+        let sun = SunPosition::at(time, place, refraction).unwrap();
+        let error = sun.elevation_deg - (90.0 - SPA_ZENITH_DEG);
+        assert!(error.abs() < 1e-3, "{sun:?}: {error:e}");
+        // Sea level's pressure would put it 0.004 deg high.
+        let sea_level = SunPosition::at(time, place, Refraction::STANDARD).unwrap();
+        assert!(sea_level.elevation_deg - (90.0 - SPA_ZENITH_DEG) > 3e-3);
+        // Above the tropopause the pressure keeps falling, and stays > 0.
+        let mut last = f64::INFINITY;
+        for elevation_m in [5e3, 11e3, 11.001e3, 20e3, 1e5] {
+            let Refraction::On { pressure_hpa, .. } =
+                Refraction::standard_at_elevation_m(elevation_m)
+            else {
+                unreachable!()
+            };
+            assert!(pressure_hpa > 0.0 && pressure_hpa < last, "{elevation_m}");
+            last = pressure_hpa;
+        }
     }
 
     #[test]

@@ -80,6 +80,30 @@ impl Sun {
         self.angular_diameter_deg
     }
 
+    /// This sun seen from `distance_au` astronomical units (0.1..=100)
+    /// instead of the distance its scale implies (1 / sqrt(scale): 1 AU for
+    /// every Earth preset, 1.524 AU for Mars'): the irradiance scale
+    /// becomes 1 / distance^2 and the disc's angular diameter shrinks in
+    /// proportion to the distance, so the disc's radiance is unchanged.
+    /// With [`crate::SunPosition::earth_sun_distance_au`] this is the
+    /// date's sun (3 January: 1/0.98329^2 = 1.0343 of the 1-AU spectrum).
+    pub fn at_distance_au(&self, distance_au: f64) -> Result<Sun> {
+        if !(0.1..=100.0).contains(&distance_au) {
+            return Err(Error::out_of_range(
+                "sun distance",
+                distance_au,
+                "AU",
+                "0.1..=100",
+            ));
+        }
+        let implied_au = self.irradiance_scale.sqrt().recip();
+        Sun::new(
+            self.spectrum.clone(),
+            distance_au.powi(-2),
+            self.angular_diameter_deg * implied_au / distance_au,
+        )
+    }
+
     /// Apparent angular radius, radians.
     pub(crate) fn angular_radius_rad(&self) -> f64 {
         0.5 * self.angular_diameter_deg.to_radians()
@@ -128,6 +152,26 @@ mod tests {
             .sample_irradiance_w_m2_nm(&WavelengthGrid::paper())
             .unwrap();
         assert_eq!(e.values(), &[0.5; 21]);
+    }
+
+    #[test]
+    fn a_sun_moved_keeps_its_disc_radiance() {
+        // Mars' preset sun: scale 1/1.524^2 (its implied distance), disc
+        // 0.35 deg; moved to 1.381 AU (perihelion).
+        let mars = Sun::new(SolarSpectrum::flat(1.0).unwrap(), 1.524f64.powi(-2), 0.35).unwrap();
+        let perihelion = mars.at_distance_au(1.381).unwrap();
+        assert!((perihelion.irradiance_scale() - 1.381f64.powi(-2)).abs() < 1e-15);
+        assert!((perihelion.angular_diameter_deg() - 0.35 * 1.524 / 1.381).abs() < 1e-12);
+        // Irradiance / solid angle is the disc's radiance: the same.
+        let radiance = |sun: &Sun| sun.irradiance_scale() / sun.solid_angle_sr();
+        let ratio = radiance(&perihelion) / radiance(&mars);
+        assert!((ratio - 1.0).abs() < 1e-5, "{ratio}");
+        // At 1 AU an Earth sun is itself.
+        let earth = Sun::new(SolarSpectrum::flat(1.0).unwrap(), 1.0, 0.53).unwrap();
+        assert_eq!(earth.at_distance_au(1.0).unwrap(), earth);
+        let e = earth.at_distance_au(0.0).unwrap_err().to_string();
+        assert!(e.contains("sun distance = 0 AU"), "{e}");
+        assert!(earth.at_distance_au(f64::NAN).is_err());
     }
 
     #[test]
