@@ -321,7 +321,9 @@ pub struct SunAndObserver {
     pub location: Option<String>,
 
     /// With --time: the sun's apparent position, lifted by refraction
-    /// (1013.25 hPa, 10 C), or its geometric one [default: on]
+    /// through the air at --location's elevation (standard atmosphere:
+    /// 1013.25 hPa and 10 C at sea level, 812 hPa and -1.9 C at 1830 m),
+    /// or its geometric one [default: on]
     #[arg(
         long,
         value_enum,
@@ -330,6 +332,36 @@ pub struct SunAndObserver {
         conflicts_with = "sun_elevation"
     )]
     pub refraction: Option<OnOff>,
+
+    /// With --time: the air pressure at the site for refraction, hPa
+    /// (measured; default: the standard atmosphere's at --location's
+    /// elevation)
+    #[arg(
+        long,
+        value_name = "HPA",
+        allow_hyphen_values = true,
+        requires = "time",
+        conflicts_with = "sun_elevation"
+    )]
+    pub pressure_hpa: Option<f64>,
+
+    /// With --time: the air temperature at the site for refraction, C
+    /// (measured; default: 10 C at sea level, 6.5 C cooler per km up)
+    #[arg(
+        long,
+        value_name = "C",
+        allow_hyphen_values = true,
+        requires = "time",
+        conflicts_with = "sun_elevation"
+    )]
+    pub temperature_c: Option<f64>,
+
+    /// The sun's distance, astronomical units (0.1..=100): its spectrum at
+    /// 1 AU divided by the distance squared [default: with --time, the
+    /// date's Earth-Sun distance for a sun at 1 AU (every Earth preset);
+    /// otherwise the atmosphere file's sun.irradiance_scale]
+    #[arg(long, value_name = "AU", allow_hyphen_values = true)]
+    pub sun_distance_au: Option<f64>,
 
     /// Height of the eye above the ground, metres
     #[arg(
@@ -390,13 +422,15 @@ impl SunAndObserver {
     }
 
     /// The sky these options describe, with `scattering` by `method`, its
-    /// light polarised as [`SunAndObserver::polarisation`] says.
+    /// light polarised as [`SunAndObserver::polarisation`] says, and the
+    /// sun it has ([`SunAndObserver::sun_used`]; `atmosphere`'s sun is
+    /// moved to its distance).
     pub fn sky(
         &self,
         atmosphere: &mut sora::Atmosphere,
         scattering: sora::Scattering,
         method: sora::Method,
-    ) -> anyhow::Result<sora::Sky> {
+    ) -> anyhow::Result<(sora::Sky, SunUsed)> {
         let polarisation = self.polarisation(method);
         if let Some(albedo) = self.ground_albedo {
             let planet = &atmosphere.planet;
@@ -407,15 +441,64 @@ impl SunAndObserver {
             )
             .map_err(|e| anyhow::anyhow!("--ground-albedo: {e}"))?;
         }
-        let (sun_elevation, sun_azimuth) = self.sun_deg()?;
-        Ok(sora::Sky::builder(atmosphere)
-            .sun_deg(sun_elevation, sun_azimuth)
+        let sun = self.sun_used(&atmosphere.sun)?;
+        if let Some(distance_au) = sun.distance_au {
+            atmosphere.sun = atmosphere.sun.at_distance_au(distance_au).map_err(|e| {
+                anyhow::anyhow!(
+                    "{}{e}",
+                    if self.sun_distance_au.is_some() {
+                        "--sun-distance-au: "
+                    } else {
+                        ""
+                    }
+                )
+            })?;
+        }
+        let sky = sora::Sky::builder(atmosphere)
+            .sun_deg(sun.elevation_deg, sun.azimuth_deg)
             .observer_altitude_m(self.observer_altitude_m)
             .wavelengths(self.wavelengths)
             .scattering(scattering)
             .method(method)
             .polarisation(polarisation)
-            .build()?)
+            .build()?;
+        Ok((sky, sun))
+    }
+}
+
+/// The sun these options give: where it is and, when it was moved from
+/// the atmosphere file's distance, how far it is.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SunUsed {
+    /// Elevation above the horizon, degrees.
+    pub elevation_deg: f64,
+    /// Azimuth clockwise from north, degrees.
+    pub azimuth_deg: f64,
+    /// The sun's distance, AU, when --sun-distance-au or --time set it
+    /// (the file's sun otherwise).
+    pub distance_au: Option<f64>,
+    /// The Earth-Sun distance at --time, AU (whether or not it was used).
+    pub earth_sun_distance_au: Option<f64>,
+}
+
+impl SunUsed {
+    /// `"sun_distance_au": d, "earth_sun_distance_au": R` for JSON
+    /// (members present only when known), each with a leading ", ".
+    pub fn json_members(&self) -> String {
+        let mut members = String::new();
+        if let Some(d) = self.distance_au {
+            members += &format!(", \"sun_distance_au\": {d}");
+        }
+        if let Some(r) = self.earth_sun_distance_au {
+            members += &format!(", \"earth_sun_distance_au\": {r}");
+        }
+        members
+    }
+
+    /// `; the sun at d AU` for summaries, or nothing.
+    pub fn summary(&self) -> String {
+        self.distance_au
+            .map_or(String::new(), |d| format!("; the sun at {d:.6} AU"))
     }
 }
 
@@ -433,14 +516,21 @@ pub fn warn_non_polarising_species(sky: &sora::Sky) {
 }
 
 impl SunAndObserver {
-    /// The sun's elevation and azimuth (degrees) these options give: as
-    /// written, or computed for --time at --location.
-    pub fn sun_deg(&self) -> anyhow::Result<(f64, f64)> {
+    /// The sun these options give for an atmosphere whose sun is
+    /// `file_sun`: its position as written, or computed for --time at
+    /// --location; its distance from --sun-distance-au, or with --time the
+    /// date's Earth-Sun distance when `file_sun` is at 1 AU (scale 1).
+    pub fn sun_used(&self, file_sun: &sora::atmosphere::Sun) -> anyhow::Result<SunUsed> {
         let (Some(time), Some(location)) = (&self.time, &self.location) else {
             let elevation = self
                 .sun_elevation
                 .expect("clap requires --sun-elevation or --time");
-            return Ok((elevation, self.sun_azimuth));
+            return Ok(SunUsed {
+                elevation_deg: elevation,
+                azimuth_deg: self.sun_azimuth,
+                distance_au: self.sun_distance_au,
+                earth_sun_distance_au: None,
+            });
         };
         let time = sora::sun_position::parse_time_utc(time).map_err(|e| match e {
             sora::Error::Parse { message, .. } => anyhow::anyhow!("--time: {message}"),
@@ -448,11 +538,20 @@ impl SunAndObserver {
         })?;
         let location = parse_location(location).map_err(|e| anyhow::anyhow!("--location: {e}"))?;
         let refraction = match self.refraction.unwrap_or(OnOff::On) {
-            OnOff::On => sora::sun_position::Refraction::default(),
+            OnOff::On => sora::sun_position::Refraction::at_site(
+                location.elevation_m(),
+                self.pressure_hpa,
+                self.temperature_c,
+            ),
             OnOff::Off => sora::sun_position::Refraction::Off,
         };
         let sun = sora::SunPosition::at(time, location, refraction)?;
-        Ok((sun.elevation_deg, sun.azimuth_deg))
+        Ok(SunUsed {
+            elevation_deg: sun.elevation_deg,
+            azimuth_deg: sun.azimuth_deg,
+            distance_au: self.sun_distance_au.or(file_sun.date_distance_au(&sun)),
+            earth_sun_distance_au: Some(sun.earth_sun_distance_au),
+        })
     }
 }
 

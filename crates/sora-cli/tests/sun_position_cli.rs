@@ -39,7 +39,8 @@ fn number(json: &str, key: &str) -> f64 {
 #[test]
 fn spectrum_json_reports_the_sun_computed_for_the_time_and_place() {
     // NREL SPA's example instant and place (its own air is 820 hPa, 11 C;
-    // here the defaults, 1013.25 hPa and 10 C, or no refraction).
+    // here the defaults, the standard atmosphere's at the site's 1830 m,
+    // or no refraction).
     let place = ["--location", "39.742476,-105.1786,1830.14"];
     let time = ["--time", "2003-10-17T12:30:30-07:00"];
     let expected = |refraction| {
@@ -50,9 +51,10 @@ fn spectrum_json_reports_the_sun_computed_for_the_time_and_place() {
         )
         .unwrap()
     };
+    let site_air = Refraction::standard_at_elevation_m(1830.14);
     for (extra, refraction) in [
-        (&[][..], Refraction::default()),
-        (&["--refraction", "on"][..], Refraction::default()),
+        (&[][..], site_air),
+        (&["--refraction", "on"][..], site_air),
         (&["--refraction", "off"][..], Refraction::Off),
     ] {
         let json = stdout(&spectrum_json(
@@ -67,9 +69,132 @@ fn spectrum_json_reports_the_sun_computed_for_the_time_and_place() {
         assert!(json.contains("\"radiance_w_m2_sr_nm\": ["), "{json}");
     }
     // Refraction lifts the sun (about 0.02 deg at 40 deg elevation).
-    let lift =
-        expected(Refraction::default()).elevation_deg - expected(Refraction::Off).elevation_deg;
+    let lift = expected(site_air).elevation_deg - expected(Refraction::Off).elevation_deg;
     assert!((0.01..0.03).contains(&lift), "{lift}");
+    // SPA's published topocentric elevation, 39.88838 deg (zenith
+    // 50.11162), within 0.001 deg: from the site's altitude alone, and
+    // with the example's measured air.
+    for extra in [&[][..], &["--pressure-hpa", "820", "--temperature-c", "11"]] {
+        let json = stdout(&spectrum_json(
+            &[&time[..], &place[..], extra].concat(),
+            &ONE_VIEW,
+        ));
+        let elevation = number(&json, "sun_elevation_deg");
+        let azimuth = number(&json, "sun_azimuth_deg");
+        assert!(
+            (elevation - 39.88838).abs() < 1e-3,
+            "{extra:?}: {elevation}"
+        );
+        assert!((azimuth - 194.34024).abs() < 1e-3, "{extra:?}: {azimuth}");
+        // SPA's radius vector for the instant, 0.9965422974 AU.
+        assert!((number(&json, "earth_sun_distance_au") - 0.9965423).abs() < 1e-6);
+    }
+    // Bad air is the library's one-line error, naming the unit.
+    let out = spectrum_json(
+        &[&time[..], &place[..], &["--pressure-hpa", "-5"]].concat(),
+        &ONE_VIEW,
+    );
+    assert!(
+        one_line_error(&out).contains("pressure = -5 hPa"),
+        "{out:?}"
+    );
+}
+
+#[test]
+fn the_dates_sun_is_brighter_at_perihelion() {
+    // Noon on the equator on 3 January and 4 July: the sun's light at the
+    // top of the atmosphere scales as 1 / R^2, (1.01663 / 0.98330)^2 =
+    // 1.069 (the suns stand 67.19 and 67.13 deg up: the air's
+    // transmittances differ by 3e-4).
+    let irradiance = |time: &str, extra: &[&str]| {
+        let out = sora(
+            &[
+                &[
+                    "irradiance",
+                    "--preset",
+                    "earth-clear",
+                    "--location",
+                    "0,0",
+                    "--time",
+                    time,
+                    "--format",
+                    "json",
+                ][..],
+                extra,
+            ]
+            .concat(),
+        );
+        stdout(&out)
+    };
+    let january = irradiance("2026-01-03T12:00:00Z", &[]);
+    let july = irradiance("2026-07-04T12:00:00Z", &[]);
+    let ratio = number(&january, "direct_normal_irradiance_w_m2")
+        / number(&july, "direct_normal_irradiance_w_m2");
+    assert!((ratio - 1.069).abs() < 1e-3, "{ratio}");
+    let (near, far) = (
+        number(&january, "sun_distance_au"),
+        number(&july, "sun_distance_au"),
+    );
+    assert!((near - 0.98330).abs() < 1e-4 && (far - 1.01663).abs() < 1e-4);
+    // Divided by the beam's transmittance, it is exactly the distance's
+    // square (the first wavelength; printed to 10 digits).
+    let first = |json: &str, key: &str| -> f64 {
+        let pattern = format!("\"{key}\": [");
+        let start = json.find(&pattern).unwrap() + pattern.len();
+        let end = start + json[start..].find([',', ']']).unwrap();
+        json[start..end].trim().parse().unwrap()
+    };
+    let top = |json: &str| {
+        first(json, "direct_normal_irradiance_w_m2_nm") / first(json, "direct_beam_transmittance")
+    };
+    let exact = (far / near).powi(2);
+    assert!((top(&january) / top(&july) / exact - 1.0).abs() < 1e-8);
+    // --sun-distance-au sets it by hand: 1 AU is the file's own sun.
+    let at_one_au = irradiance("2026-01-03T12:00:00Z", &["--sun-distance-au", "1"]);
+    assert_eq!(number(&at_one_au, "sun_distance_au"), 1.0);
+    let undated = stdout(&sora(&[
+        "irradiance",
+        "--preset",
+        "earth-clear",
+        "--sun-elevation",
+        &number(&january, "sun_elevation_deg").to_string(),
+        "--sun-azimuth",
+        &number(&january, "sun_azimuth_deg").to_string(),
+        "--format",
+        "json",
+    ]));
+    assert!(!undated.contains("sun_distance_au"), "{undated}");
+    assert_eq!(
+        number(&at_one_au, "direct_normal_irradiance_w_m2"),
+        number(&undated, "direct_normal_irradiance_w_m2")
+    );
+    // Mars' preset sun is not at 1 AU: a date leaves it where its file
+    // puts it, and a distance out of range is a one-line error.
+    let mars = stdout(&sora(&[
+        "irradiance",
+        "--preset",
+        "mars-dust",
+        "--location",
+        "0,0",
+        "--time",
+        "2026-01-03T12:00:00Z",
+        "--format",
+        "json",
+    ]));
+    assert!(!mars.contains("\"sun_distance_au\""), "{mars}");
+    let out = sora(&[
+        "irradiance",
+        "--preset",
+        "earth-clear",
+        "--sun-elevation",
+        "30",
+        "--sun-distance-au",
+        "0",
+    ]);
+    assert!(
+        one_line_error(&out).contains("--sun-distance-au: sun distance = 0 AU"),
+        "{out:?}"
+    );
 }
 
 #[test]

@@ -459,15 +459,30 @@ impl Refraction {
     /// comes out 6.1e-4 deg above the example's elevation (sea level's
     /// 1013.25 hPa: 0.004 deg above).
     pub fn standard_at_elevation_m(elevation_m: f64) -> Refraction {
+        Refraction::at_site(elevation_m, None, None)
+    }
+
+    /// Refraction at a site `elevation_m` above sea level through the air
+    /// measured there, where it was: `pressure_hpa` and `temperature_c`
+    /// each replace [`Refraction::standard_at_elevation_m`]'s value.
+    pub fn at_site(
+        elevation_m: f64,
+        pressure_hpa: Option<f64>,
+        temperature_c: Option<f64>,
+    ) -> Refraction {
         let below = elevation_m.min(TROPOPAUSE_M);
-        let mut pressure_hpa = SEA_LEVEL_PRESSURE_HPA
-            * (1.0 - LAPSE_RATE_K_M * below / STANDARD_SEA_LEVEL_K).powf(BAROMETRIC_EXPONENT);
-        if elevation_m > TROPOPAUSE_M {
-            pressure_hpa *= (-(elevation_m - TROPOPAUSE_M) / STRATOSPHERE_SCALE_HEIGHT_M).exp();
-        }
+        let standard_pressure_hpa = || {
+            let mut pressure_hpa = SEA_LEVEL_PRESSURE_HPA
+                * (1.0 - LAPSE_RATE_K_M * below / STANDARD_SEA_LEVEL_K).powf(BAROMETRIC_EXPONENT);
+            if elevation_m > TROPOPAUSE_M {
+                pressure_hpa *= (-(elevation_m - TROPOPAUSE_M) / STRATOSPHERE_SCALE_HEIGHT_M).exp();
+            }
+            pressure_hpa
+        };
         Refraction::On {
-            pressure_hpa,
-            temperature_c: SEA_LEVEL_TEMPERATURE_C - LAPSE_RATE_K_M * below,
+            pressure_hpa: pressure_hpa.unwrap_or_else(standard_pressure_hpa),
+            temperature_c: temperature_c
+                .unwrap_or(SEA_LEVEL_TEMPERATURE_C - LAPSE_RATE_K_M * below),
         }
     }
 }

@@ -84,7 +84,7 @@ pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
         .method
         .resolve(100_000, sora::Method::REFERENCE_DEFAULT)?;
     let mut atmosphere = args.source.load()?;
-    let sky = args.sun.sky(&mut atmosphere, scattering, method)?;
+    let (sky, sun) = args.sun.sky(&mut atmosphere, scattering, method)?;
     let grid = *sky.wavelengths();
     if let sora::Method::PathTracing { samples, .. } = method {
         let planes = 1 + usize::from(tilted.is_some());
@@ -187,7 +187,8 @@ pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
         Format::Table => {
             writeln!(
                 out,
-                "sun at {sun_elevation_deg:.4} deg elevation, {sun_azimuth_deg:.4} deg azimuth; {} to {} nm",
+                "sun at {sun_elevation_deg:.4} deg elevation, {sun_azimuth_deg:.4} deg azimuth{}; {} to {} nm",
+                sun.summary(),
                 grid.start_nm(),
                 grid.stop_nm()
             )?;
@@ -209,7 +210,10 @@ pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
             };
             let mut members = vec![
                 format!("\"sun_elevation_deg\": {sun_elevation_deg}"),
-                format!("\"sun_azimuth_deg\": {sun_azimuth_deg}"),
+                format!(
+                    "\"sun_azimuth_deg\": {sun_azimuth_deg}{}",
+                    sun.json_members()
+                ),
                 format!(
                     "\"wavelength_nm\": [{}]",
                     grid.wavelengths_nm()

@@ -306,7 +306,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     ));
     let mut atmosphere = args.source.load()?;
     let started = Instant::now();
-    let sky = args
+    let (sky, sun) = args
         .sun
         .sky(&mut atmosphere, args.scattering.to_library(), method)?;
     if polarisation_outputs {
@@ -333,7 +333,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         };
         let scale = render_frame(
             &args,
-            sky,
+            (sky, &sun),
             &image,
             &to_xyz,
             (format, output, (&map_targets.0, &map_targets.1)),
@@ -439,7 +439,7 @@ fn frame_path(output: &std::path::Path, frame: usize) -> PathBuf {
 /// exposure scale.
 fn render_frame(
     args: &RenderArgs,
-    sky: &sora::Sky,
+    (sky, sun): (&sora::Sky, &crate::arguments::SunUsed),
     image: &ImageSettings,
     to_xyz: &SpectrumToXyz,
     (format, output, (dolp, aop)): (
@@ -572,10 +572,16 @@ fn render_frame(
                     ("units".into(), units.into()),
                     ("sun_elevation_deg".into(), sun_elevation.to_string()),
                     ("sun_azimuth_deg".into(), sun_azimuth.to_string()),
-                    ("sun_disc".into(), (!args.no_sun_disc).to_string()),
-                    ("polarisation".into(), polarisation_name(sky.polarisation()).into()),
                 ]
                 .into_iter()
+                .chain(
+                    sun.distance_au
+                        .map(|d| ("sun_distance_au".into(), d.to_string())),
+                )
+                .chain([
+                    ("sun_disc".into(), (!args.no_sun_disc).to_string()),
+                    ("polarisation".into(), polarisation_name(sky.polarisation()).into()),
+                ])
                 .chain(args.stokes.then(|| {
                     (
                         "stokes".into(),
@@ -603,11 +609,12 @@ fn render_frame(
     };
     let (sun_elevation, sun_azimuth) = sky.sun_position_deg();
     eprintln!(
-        "rendered {width}x{height} ({} wavelengths, {:?} method, {:?} scattering, polarisation {}, sun at {sun_elevation:.4} deg elevation, {sun_azimuth:.4} deg azimuth) in {render_seconds:.3} s ({rate}), wrote {} in {total_seconds:.3} s total",
+        "rendered {width}x{height} ({} wavelengths, {:?} method, {:?} scattering, polarisation {}, sun at {sun_elevation:.4} deg elevation, {sun_azimuth:.4} deg azimuth{}) in {render_seconds:.3} s ({rate}), wrote {} in {total_seconds:.3} s total",
         args.sun.wavelengths.len(),
         args.method,
         args.scattering,
         polarisation_name(sky.polarisation()),
+        sun.summary(),
         output.display()
     );
     Ok(png_scale)

@@ -256,12 +256,12 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
             _ => anyhow::bail!("--stokes needs --polarisation vector (the default), not off"),
         }
     }
-    let sky = args.sun.sky(&mut atmosphere, scattering, method)?;
+    let (sky, sun) = args.sun.sky(&mut atmosphere, scattering, method)?;
     if args.stokes {
         crate::arguments::warn_non_polarising_species(&sky);
     }
     let grid = *sky.wavelengths();
-    let (sun_elevation, sun_azimuth) = args.sun.sun_deg()?;
+    let (sun_elevation, sun_azimuth) = (sun.elevation_deg, sun.azimuth_deg);
     let views = directions(&args, (sun_elevation, sun_azimuth), grid.len())?;
     let started = Instant::now();
     let path_tracing = args.method.method == MethodKind::PathTracing;
@@ -411,7 +411,8 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
         .collect();
     let polarisation = crate::arguments::polarisation_name(sky.polarisation());
     let sun_json = format!(
-        "\"sun_elevation_deg\": {sun_elevation}, \"sun_azimuth_deg\": {sun_azimuth}, \"polarisation\": \"{polarisation}\""
+        "\"sun_elevation_deg\": {sun_elevation}, \"sun_azimuth_deg\": {sun_azimuth}{}, \"polarisation\": \"{polarisation}\"",
+        sun.json_members()
     );
     if args.view_elevation.is_some() {
         // One direction: the two- or three-column spectrum.

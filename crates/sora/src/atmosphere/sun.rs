@@ -80,6 +80,14 @@ impl Sun {
         self.angular_diameter_deg
     }
 
+    /// The distance this sun has on the date of `position`: the date's
+    /// Earth-Sun distance for a sun at 1 AU (irradiance scale 1: every
+    /// Earth preset), none for other suns (Mars' presets keep the distance
+    /// their file gives: the date is the Earth's).
+    pub fn date_distance_au(&self, position: &crate::SunPosition) -> Option<f64> {
+        (self.irradiance_scale == 1.0).then_some(position.earth_sun_distance_au)
+    }
+
     /// This sun seen from `distance_au` astronomical units (0.1..=100)
     /// instead of the distance its scale implies (1 / sqrt(scale): 1 AU for
     /// every Earth preset, 1.524 AU for Mars'): the irradiance scale
