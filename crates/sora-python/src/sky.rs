@@ -22,6 +22,8 @@ use crate::threads::run_detached;
 #[pyclass(frozen, module = "sora._sora")]
 pub struct Sky {
     inner: sora::Sky,
+    /// The sun's distance, AU, when `sun_distance_au` or a time set it.
+    sun_distance_au: Option<f64>,
 }
 
 /// The library's scattering and method for the keyword arguments.
@@ -74,9 +76,16 @@ fn scattering_and_method(
 }
 
 /// The sun at `time` (RFC 3339, e.g. 2026-06-21T05:30:00+09:00) from
-/// `location` (latitude deg N, longitude deg E, elevation m): elevation and
-/// azimuth, degrees.
-fn sun_from_time(time: &str, location: &[f64], refraction: bool) -> PyResult<(f64, f64)> {
+/// `location` (latitude deg N, longitude deg E, elevation m), refracted
+/// (when `refraction`) through the site's air: the standard atmosphere's
+/// at its elevation, or the measured `air` (pressure hPa, temperature C)
+/// where given.
+fn sun_from_time(
+    time: &str,
+    location: &[f64],
+    refraction: bool,
+    air: (Option<f64>, Option<f64>),
+) -> PyResult<sora::SunPosition> {
     let time =
         sora::sun_position::parse_time_utc(time).map_err(|e| value_error(format!("time: {e}")))?;
     let (latitude, longitude, elevation) = match location {
@@ -92,12 +101,11 @@ fn sun_from_time(time: &str, location: &[f64], refraction: bool) -> PyResult<(f6
     let place = sora::sun_position::Location::new(latitude, longitude, elevation)
         .map_err(|e| value_error(format!("location: {e}")))?;
     let refraction = if refraction {
-        sora::sun_position::Refraction::default()
+        sora::sun_position::Refraction::at_site(elevation, air.0, air.1)
     } else {
         sora::sun_position::Refraction::Off
     };
-    let sun = sora::SunPosition::at(time, place, refraction).map_err(to_py_err)?;
-    Ok((sun.elevation_deg, sun.azimuth_deg))
+    sora::SunPosition::at(time, place, refraction).map_err(to_py_err)
 }
 
 /// Checks a number given for an angle or a length before the library sees
@@ -137,7 +145,8 @@ impl Sky {
     #[allow(clippy::too_many_arguments)]
     #[pyo3(signature = (
         atmosphere, *, sun_elevation_deg=None, sun_azimuth_deg=None, time=None, location=None,
-        refraction=true, observer_altitude_m=0.0, wavelengths_nm=None, scattering="multiple",
+        refraction=true, pressure_hpa=None, temperature_c=None, sun_distance_au=None,
+        observer_altitude_m=0.0, wavelengths_nm=None, scattering="multiple",
         method="fast", samples=None, seed=None, reference_steps=None, polarisation="scalar"
     ))]
     fn new(
@@ -148,6 +157,9 @@ impl Sky {
         time: Option<&str>,
         location: Option<Vec<f64>>,
         refraction: bool,
+        pressure_hpa: Option<f64>,
+        temperature_c: Option<f64>,
+        sun_distance_au: Option<f64>,
         observer_altitude_m: f64,
         wavelengths_nm: Option<&Bound<'_, PyAny>>,
         scattering: &str,
@@ -166,6 +178,12 @@ impl Sky {
                 )));
             }
         };
+        if time.is_none() && (pressure_hpa.is_some() || temperature_c.is_some()) {
+            return Err(value_error(
+                "pressure_hpa and temperature_c apply with time only (the air that refracts the sun's light)",
+            ));
+        }
+        let mut date_sun = None;
         let (elevation_deg, azimuth_deg) = match (sun_elevation_deg, time) {
             (Some(elevation), None) => (
                 finite("sun_elevation_deg", elevation, "deg")?,
@@ -180,7 +198,10 @@ impl Sky {
                 let location = location.as_deref().ok_or_else(|| {
                     value_error("time needs location=(latitude_deg, longitude_deg[, elevation_m])")
                 })?;
-                sun_from_time(time, location, refraction)?
+                let sun =
+                    sun_from_time(time, location, refraction, (pressure_hpa, temperature_c))?;
+                date_sun = Some(sun);
+                (sun.elevation_deg, sun.azimuth_deg)
             }
             (Some(_), Some(_)) => {
                 return Err(value_error(
@@ -200,7 +221,19 @@ impl Sky {
         let grid = grid_from_python(wavelengths_nm)?;
         let (scattering, method) =
             scattering_and_method(scattering, method, samples, seed, reference_steps)?;
-        let atmosphere = &atmosphere.inner;
+        // The sun's distance as `sora spectrum` takes it: given, or the
+        // date's for a sun at 1 AU (sora::atmosphere::Sun::date_distance_au).
+        let mut atmosphere = atmosphere.inner.clone();
+        let sun_distance_au = sun_distance_au.or_else(|| {
+            date_sun.and_then(|sun| atmosphere.sun.date_distance_au(&sun))
+        });
+        if let Some(distance_au) = sun_distance_au {
+            atmosphere.sun = atmosphere
+                .sun
+                .at_distance_au(distance_au)
+                .map_err(|e| value_error(format!("sun_distance_au: {e}")))?;
+        }
+        let atmosphere = &atmosphere;
         let inner = run_detached(py, || {
             sora::Sky::builder(atmosphere)
                 .sun_deg(elevation_deg, azimuth_deg)
@@ -227,7 +260,17 @@ impl Sky {
                 1,
             )?;
         }
-        Ok(Sky { inner })
+        Ok(Sky {
+            inner,
+            sun_distance_au,
+        })
+    }
+
+    /// The sun's distance, AU, when `sun_distance_au` or a time set it
+    /// (None: the atmosphere file's sun).
+    #[getter]
+    fn sun_distance_au(&self) -> Option<f64> {
+        self.sun_distance_au
     }
 
     /// The wavelengths of every spectrum, nm.

@@ -170,6 +170,30 @@ def test_sun_from_time_and_location(atmosphere):
     assert same.sun_position_deg == sky.sun_position_deg
 
 
+def test_the_dates_sun_and_the_sites_air(atmosphere):
+    # NREL SPA's example: topocentric elevation 39.88838 deg, measured air
+    # 820 hPa and 11 C at 1830 m; the radius vector 0.9965422974 AU.
+    spa = dict(time="2003-10-17T12:30:30-07:00", location=(39.742476, -105.1786, 1830.14),
+               wavelengths_nm="500:600:100", scattering="single")
+    sky = sora.Sky(atmosphere, **spa)
+    assert abs(sky.sun_position_deg[0] - 39.88838) < 1e-3
+    measured = sora.Sky(atmosphere, pressure_hpa=820, temperature_c=11, **spa)
+    assert abs(measured.sun_position_deg[0] - 39.88838) < 1e-4
+    assert abs(sky.sun_distance_au - 0.9965423) < 1e-6
+    # The date's sunlight against the same sun at 1 AU: 1 / R^2.
+    one_au = sora.Sky(atmosphere, sun_distance_au=1.0, **spa)
+    assert one_au.sun_distance_au == 1.0
+    ratio = sky.direct_normal_irradiance().values / one_au.direct_normal_irradiance().values
+    np.testing.assert_allclose(ratio, sky.sun_distance_au ** -2, rtol=1e-12)
+    assert sora.Sky(atmosphere, sun_elevation_deg=30).sun_distance_au is None
+    with pytest.raises(ValueError, match="sun_distance_au: sun distance = 0 AU"):
+        sora.Sky(atmosphere, sun_elevation_deg=30, sun_distance_au=0)
+    with pytest.raises(ValueError, match="apply with time only"):
+        sora.Sky(atmosphere, sun_elevation_deg=30, pressure_hpa=900)
+    with pytest.raises(ValueError, match="pressure = -5 hPa"):
+        sora.Sky(atmosphere, pressure_hpa=-5, **spa)
+
+
 def test_skies_and_atmospheres_pickle(sky):
     copy = pickle.loads(pickle.dumps(sky))
     np.testing.assert_array_equal(copy.radiance(45, 10).values, sky.radiance(45, 10).values)

@@ -197,7 +197,14 @@ class Sky:
     - or ``time`` (RFC 3339 text such as ``"2026-06-21T05:30:00+09:00"``,
       or a timezone-aware ``datetime``) and ``location``
       ``(latitude_deg, longitude_deg[, elevation_m])``, with
-      ``refraction`` (default True: the sun's apparent position);
+      ``refraction`` (default True: the sun's apparent position, through
+      the standard atmosphere's air at the site's elevation, or the
+      measured ``pressure_hpa`` and ``temperature_c``); an Earth sun (an
+      atmosphere whose sun is at 1 AU) is then at the date's Earth-Sun
+      distance (its light 1/R^2, 6.9 % more on 3 January than on 4 July);
+    - ``sun_distance_au``: the sun's distance, AU (0.1..100), instead of
+      the date's or the atmosphere file's (:attr:`sun_distance_au` says
+      which was used);
     - ``observer_altitude_m``: the eye's height above the ground, m;
     - ``wavelengths_nm``: ``"start:stop:step"`` or an evenly spaced array,
       nm (default: the paper's 380-780 nm every 20 nm);
@@ -233,6 +240,9 @@ class Sky:
         time: Union[str, _datetime.datetime, None] = None,
         location: Optional[Sequence[float]] = None,
         refraction: bool = True,
+        pressure_hpa: Optional[float] = None,
+        temperature_c: Optional[float] = None,
+        sun_distance_au: Optional[float] = None,
         observer_altitude_m: float = 0.0,
         wavelengths_nm: WavelengthsLike = None,
         scattering: str = "multiple",
@@ -258,6 +268,9 @@ class Sky:
             time=time,
             location=None if location is None else [float(v) for v in location],
             refraction=bool(refraction),
+            pressure_hpa=None if pressure_hpa is None else float(pressure_hpa),
+            temperature_c=None if temperature_c is None else float(temperature_c),
+            sun_distance_au=None if sun_distance_au is None else float(sun_distance_au),
             observer_altitude_m=float(observer_altitude_m),
             wavelengths_nm=_native_wavelengths(wavelengths_nm),
             scattering=scattering,
@@ -279,6 +292,13 @@ class Sky:
     def sun_position_deg(self) -> Tuple[float, float]:
         """The sun's (elevation, azimuth), degrees."""
         return self._native.sun_position_deg
+
+    @property
+    def sun_distance_au(self) -> Optional[float]:
+        """The sun's distance, AU, when ``sun_distance_au`` or a time set
+        it (the date's Earth-Sun distance); None: the atmosphere file's
+        sun."""
+        return self._native.sun_distance_au
 
     @property
     def method(self) -> str:

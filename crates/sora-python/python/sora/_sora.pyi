@@ -48,6 +48,9 @@ class Sky:
         time: Optional[str] = None,
         location: Optional[Sequence[float]] = None,
         refraction: bool = True,
+        pressure_hpa: Optional[float] = None,
+        temperature_c: Optional[float] = None,
+        sun_distance_au: Optional[float] = None,
         observer_altitude_m: float = 0.0,
         wavelengths_nm: _Grid = None,
         scattering: str = "multiple",
@@ -61,6 +64,8 @@ class Sky:
     def wavelengths_nm(self) -> _F64: ...
     @property
     def sun_position_deg(self) -> Tuple[float, float]: ...
+    @property
+    def sun_distance_au(self) -> Optional[float]: ...
     @property
     def method(self) -> str: ...
     @property
