@@ -1,0 +1,263 @@
+"""Cycles, headless on the CPU, lit by the add-on's world, against
+``sora irradiance``.
+
+A Lambertian plane of albedo a seen from above has the radiance a E / pi,
+E the global horizontal irradiance; the map's pixels and the lamp are
+defined so that the luminance-weighted sum of Cycles' RGB is the broadband
+value (blender/sora_sky/core.py), so the plane's weighted mean must be
+a E_ghi / pi of ``sora irradiance`` on the same wavelength grid. A grey
+sphere's point facing the sun has a (E_dni + E_dif(s)) / pi, the point
+facing away a E_dif(-s) / pi, with E_dif the tilted planes' diffuse
+irradiance of ``sora irradiance --tilt-deg`` (sky and ground).
+
+Noise: each check states the Monte Carlo standard error of the mean as the
+pixels' spread / sqrt(pixels) (Cycles' samples in different pixels are
+independent or, with its blue-noise pattern, anti-correlated: the spread
+over-states the error of the mean), and requires it below 1 %, so the 3 %
+tolerance is at least three standard errors plus the map's quadrature.
+"""
+
+import math
+import os
+import tempfile
+
+import numpy as np
+import pytest
+
+import bpy
+from mathutils import Vector
+
+from sora_sky import core
+
+#: Samples per pixel and image size: the plane's 64 x 64 pixels at 16
+#: samples give a standard error of the mean below 0.2 % (lamp) and 0.7 %
+#: (disc; measured: test_the_default_sun_converges_faster).
+SAMPLES = 16
+SIZE = 64
+ALBEDO_PLANE = 0.8
+ALBEDO_SPHERE = 0.5
+TOLERANCE = 0.03
+MAX_STANDARD_ERROR = 0.01
+
+SUNS = (30.0, -3.0)
+
+
+def _reset(scene, samples=SAMPLES, size=SIZE):
+    # Everything but the add-on's Sun lamp (the startup file's lamp too).
+    for obj in list(bpy.data.objects):
+        if obj.name != "sora sun":
+            bpy.data.objects.remove(obj)
+    scene.render.engine = "CYCLES"
+    cycles = scene.cycles
+    cycles.device = "CPU"
+    cycles.samples = samples
+    cycles.use_denoising = False
+    cycles.use_adaptive_sampling = False
+    cycles.sample_clamp_direct = 0.0
+    cycles.sample_clamp_indirect = 0.0
+    cycles.max_bounces = 4
+    cycles.seed = 0
+    scene.render.resolution_x = scene.render.resolution_y = size
+    scene.render.resolution_percentage = 100
+    scene.view_settings.view_transform = "Standard"
+    scene.view_settings.look = "None"
+    scene.view_settings.exposure = 0.0
+    scene.view_settings.gamma = 1.0
+    settings = scene.render.image_settings
+    settings.file_format = "OPEN_EXR"
+    settings.color_depth = "32"
+    settings.exr_codec = "NONE"
+    scene.unit_settings.scale_length = 1.0
+
+
+def _material(name, albedo):
+    material = bpy.data.materials.get(name) or bpy.data.materials.new(name)
+    material.use_nodes = True
+    tree = material.node_tree
+    tree.nodes.clear()
+    diffuse = tree.nodes.new("ShaderNodeBsdfDiffuse")
+    diffuse.inputs["Color"].default_value = (albedo, albedo, albedo, 1.0)
+    output = tree.nodes.new("ShaderNodeOutputMaterial")
+    tree.links.new(diffuse.outputs[0], output.inputs["Surface"])
+    return material
+
+
+def _camera(scene, position, ortho_scale):
+    camera = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
+    scene.collection.objects.link(camera)
+    camera.data.type = "ORTHO"
+    camera.data.ortho_scale = ortho_scale
+    camera.location = position
+    # Cameras look along their -Z: +Z toward the camera's position.
+    camera.rotation_mode = "QUATERNION"
+    camera.rotation_quaternion = Vector(position).normalized().to_track_quat("Z", "Y")
+    scene.camera = camera
+    return camera
+
+
+def _render(scene):
+    """The rendered image, (height, width, 3) scene-linear RGB."""
+    path = os.path.join(tempfile.mkdtemp(prefix="sora-cycles-"), "render.exr")
+    scene.render.filepath = path
+    bpy.ops.render.render(write_still=True)
+    image = bpy.data.images.load(path, check_existing=False)
+    pixels = np.empty(image.size[0] * image.size[1] * 4, dtype=np.float32)
+    image.pixels.foreach_get(pixels)
+    height, width = image.size[1], image.size[0]
+    bpy.data.images.remove(image)
+    return pixels.reshape(height, width, 4)[..., :3].astype(float)
+
+
+def _make_world(sun_elevation_deg, sun_as="lamp", map_width=1024):
+    properties = bpy.context.scene.sora_sky
+    properties.preset = "earth-clear"
+    properties.atmosphere_path = ""
+    properties.sun_from = "angles"
+    properties.sun_elevation_deg = sun_elevation_deg
+    properties.sun_azimuth_deg = 180.0
+    properties.sun_as = sun_as
+    properties.map_width = map_width
+    properties.polarisation = "scalar"
+    properties.use_haze = False
+    assert bpy.ops.sora.update_world() == {"FINISHED"}
+
+
+def _plane_radiance(samples=SAMPLES, size=SIZE):
+    """The plane's luminance-weighted radiance: per-pixel values."""
+    scene = bpy.context.scene
+    _reset(scene, samples, size)
+    bpy.ops.mesh.primitive_plane_add(size=40.0)
+    bpy.context.object.data.materials.append(_material("white", ALBEDO_PLANE))
+    _camera(scene, (0.0, 0.0, 10.0), 10.0)
+    return _render(scene) @ core.LUMINANCE_WEIGHTS
+
+
+def _mean_and_error(values):
+    values = np.asarray(values).ravel()
+    return values.mean(), values.std(ddof=1) / math.sqrt(values.size)
+
+
+def _cli_sun(elevation):
+    return ("--preset", "earth-clear", "--sun-elevation", f"{elevation:g}", "--sun-azimuth", "180",
+            "--polarisation", "off")
+
+
+@pytest.mark.parametrize("sun_elevation_deg", SUNS)
+def test_a_white_plane_receives_soras_global_irradiance(addon, irradiance, sun_elevation_deg):
+    _make_world(sun_elevation_deg)
+    values = _plane_radiance()
+    mean, error = _mean_and_error(values)
+    global_w_m2 = irradiance(*_cli_sun(sun_elevation_deg))["global_horizontal_irradiance_w_m2"]
+    expected = ALBEDO_PLANE * global_w_m2 / math.pi
+    ratio = mean / expected
+    print(
+        f"\nsun {sun_elevation_deg:+g} deg: plane {mean:.5g} W m-2 sr-1, expected a E_ghi / pi = "
+        f"{expected:.5g} (E_ghi {global_w_m2:.5g} W m-2): ratio {ratio:.4f} +- {error / expected:.4f} "
+        f"({SIZE}x{SIZE} px, {SAMPLES} samples)"
+    )
+    assert error / expected < MAX_STANDARD_ERROR
+    assert abs(ratio - 1.0) < TOLERANCE
+
+
+@pytest.mark.parametrize("sun_elevation_deg", SUNS)
+def test_a_grey_sphere_is_lit_by_the_direct_and_diffuse_parts(addon, irradiance, sun_elevation_deg):
+    _make_world(sun_elevation_deg)
+    scene = bpy.context.scene
+    sun = core.sun_direction(sun_elevation_deg, 180.0)
+    tilt_lit, tilt_shadow = 90.0 - sun_elevation_deg, 90.0 + sun_elevation_deg
+    lit = irradiance(*_cli_sun(sun_elevation_deg), "--tilt-deg", f"{tilt_lit:g}", "--plane-azimuth-deg", "180")
+    shadow = irradiance(*_cli_sun(sun_elevation_deg), "--tilt-deg", f"{tilt_shadow:g}", "--plane-azimuth-deg", "0")
+    direct_normal = lit["direct_normal_irradiance_w_m2"]
+
+    measured = {}
+    size, samples, scale, radius = 96, 32, 2.4, 0.25
+    centres = (np.arange(size) + 0.5) / size * scale - scale / 2
+    rho = np.hypot(*np.meshgrid(centres, centres))
+    central = rho < radius
+    for side, direction in (("lit", sun), ("shadow", -sun)):
+        _reset(scene, samples, size)
+        bpy.ops.mesh.primitive_uv_sphere_add(radius=1.0, segments=128, ring_count=64)
+        bpy.ops.object.shade_smooth()
+        bpy.context.object.data.materials.append(_material("grey", ALBEDO_SPHERE))
+        _camera(scene, tuple(10.0 * direction), scale)
+        measured[side] = (_render(scene) @ core.LUMINANCE_WEIGHTS)[central]
+    # The lit pixels' normals n lean up to 14.5 deg from the sun: their
+    # direct part is E_dni n.s, n.s = sqrt(1 - rho^2) on the unit sphere.
+    cosine = np.sqrt(1.0 - rho[central] ** 2).mean()
+    expected = {
+        "lit": ALBEDO_SPHERE * (direct_normal * cosine + lit["diffuse_tilted_irradiance_w_m2"]) / math.pi,
+        "shadow": ALBEDO_SPHERE * shadow["diffuse_tilted_irradiance_w_m2"] / math.pi,
+    }
+    print()
+    for side in ("lit", "shadow"):
+        mean, error = _mean_and_error(measured[side])
+        print(
+            f"sun {sun_elevation_deg:+g} deg, sphere's {side} side: {mean:.5g} W m-2 sr-1, "
+            f"expected {expected[side]:.5g}: ratio {mean / expected[side]:.4f} +- {error / expected[side]:.4f}"
+        )
+        assert error / expected[side] < MAX_STANDARD_ERROR
+        assert abs(mean / expected[side] - 1.0) < TOLERANCE
+    ratio = measured["lit"].mean() / measured["shadow"].mean()
+    print(f"lit / shadow {ratio:.4f}, expected {expected['lit'] / expected['shadow']:.4f}")
+    assert abs(ratio / (expected["lit"] / expected["shadow"]) - 1.0) < 2 * TOLERANCE
+
+
+def test_the_default_sun_converges_faster(addon):
+    """The Sun lamp (default) against the disc in the map, at equal
+    samples: the plane's per-pixel relative spread (a pixel's noise) at
+    sun 30 degrees."""
+    spreads = {}
+    for sun_as in ("lamp", "disc"):
+        _make_world(30.0, sun_as=sun_as)
+        values = _plane_radiance(samples=4, size=32)
+        spreads[sun_as] = values.std(ddof=1) / values.mean()
+        print(f"\nsun as {sun_as}: per-pixel relative spread at 4 samples {spreads[sun_as]:.4f}")
+    assert spreads["lamp"] < spreads["disc"]
+    assert bpy.types.Scene.sora_sky.keywords["type"].bl_rna.properties["sun_as"].default == "lamp"
+
+
+def test_bad_input_reports_the_librarys_error_and_keeps_the_world(addon, tmp_path):
+    _make_world(30.0)
+    scene = bpy.context.scene
+    world, image = scene.world, bpy.data.images["sora sky map"]
+    before = np.empty(image.size[0] * image.size[1] * 4, dtype=np.float32)
+    image.pixels.foreach_get(before)
+    energy = bpy.data.objects["sora sun"].data.energy
+    properties = scene.sora_sky
+
+    broken = tmp_path / "broken.toml"
+    broken.write_text("[planet\nradius_m = 6360e3\n")
+    properties.atmosphere_path = str(broken)
+    properties.sun_elevation_deg = 10.0
+    with pytest.raises(RuntimeError, match=r"atmosphere file, line 1: .*\n?$") as parse_error:
+        bpy.ops.sora.update_world()
+    properties.atmosphere_path = ""
+    properties.sun_from = "time"
+    properties.time = "2026-06-21T19:00:00"
+    with pytest.raises(RuntimeError, match="has no zone") as zone_error:
+        bpy.ops.sora.update_world()
+    for error in (parse_error, zone_error):
+        # The operator's report: one line, the library's message.
+        message = str(error.value).strip()
+        print(f"\n{message}")
+        assert "\n" not in message
+    after = np.empty_like(before)
+    image.pixels.foreach_get(after)
+    assert scene.world == world
+    np.testing.assert_array_equal(after, before)
+    assert bpy.data.objects["sora sun"].data.energy == energy
+    # The time with its zone works, and the lamp follows the sun.
+    properties.time = "2026-06-21T19:00:00+09:00"
+    properties.latitude_deg, properties.longitude_deg = 35.68, 139.77
+    assert bpy.ops.sora.update_world() == {"FINISHED"}
+    sun = bpy.data.objects["sora sun"]
+    toward = sun.matrix_world.to_quaternion() @ Vector((0.0, 0.0, 1.0))
+    elevation = math.degrees(math.asin(toward.z))
+    azimuth = math.degrees(math.atan2(toward.x, toward.y)) % 360.0
+    import sora
+
+    expected = sora.Sky(
+        sora.Atmosphere.preset("earth-clear"), time=properties.time, location=(35.68, 139.77, 0.0)
+    ).sun_position_deg
+    assert abs(elevation - expected[0]) < 1e-4 and abs(azimuth - expected[1]) < 1e-4
+    properties.sun_from = "angles"
