@@ -78,8 +78,7 @@ fn scattering_and_method(
 /// `location` (latitude deg N, longitude deg E, elevation m): elevation and
 /// azimuth, degrees.
 fn sun_from_time(time: &str, location: &[f64], refraction: bool) -> PyResult<(f64, f64)> {
-    let time =
-        sora::sun_position::parse_time_utc(time).map_err(|e| value_error(format!("time: {e}")))?;
+    let time = sora::sun_position::parse_time_utc(time).map_err(to_py_err)?;
     let (latitude, longitude, elevation) = match location {
         [latitude, longitude] => (*latitude, *longitude, 0.0),
         [latitude, longitude, elevation] => (*latitude, *longitude, *elevation),
