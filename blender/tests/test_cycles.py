@@ -261,3 +261,60 @@ def test_bad_input_reports_the_librarys_error_and_keeps_the_world(addon, tmp_pat
     ).sun_position_deg
     assert abs(elevation - expected[0]) < 1e-4 and abs(azimuth - expected[1]) < 1e-4
     properties.sun_from = "angles"
+
+
+def test_the_haze_cube_transmits_as_its_coefficients_say(addon):
+    """The haze in Cycles: an emitter (radiance 1) seen through d of haze
+    in the dark (no sky, no lamp) is exp(-beta_ext d) per channel, beta_ext
+    the library's local extinction at the eye's altitude. Then, with the
+    sky and the lamp, the haze's in-scattered light in front of a black
+    wall at d, against sora's horizon radiance in that direction (what the
+    whole real path scatters in; printed, not asserted: the library has no
+    aerial perspective to compare with)."""
+    scene = bpy.context.scene
+    _make_world(10.0)
+    properties = scene.sora_sky
+    properties.use_haze, properties.haze_size_m = True, 120e3
+    assert bpy.ops.sora.update_world() == {"FINISHED"}
+    properties.use_haze = False
+    haze = core.haze_coefficients(core.make_atmosphere(properties.settings())[0], 0.0)
+    sky_world, lamp_energy = scene.world, bpy.data.objects["sora sun"].data.energy
+    dark = bpy.data.worlds.get("dark") or bpy.data.worlds.new("dark")
+    dark.use_nodes = True
+    dark.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
+
+    def view_through(distance, emission, lit):
+        _reset(scene, samples=16, size=8)
+        scene.cycles.volume_bounces = 1
+        scene.world = sky_world if lit else dark
+        bpy.data.objects["sora sun"].data.energy = lamp_energy if lit else 0.0
+        bpy.ops.mesh.primitive_plane_add(size=4.0, location=(0.0, distance, 1.0), rotation=(math.pi / 2, 0.0, 0.0))
+        material = bpy.data.materials.new("wall")
+        material.use_nodes = True
+        material.node_tree.nodes.clear()
+        emitter = material.node_tree.nodes.new("ShaderNodeEmission")
+        emitter.inputs["Strength"].default_value = emission
+        output = material.node_tree.nodes.new("ShaderNodeOutputMaterial")
+        material.node_tree.links.new(emitter.outputs[0], output.inputs["Surface"])
+        bpy.context.object.data.materials.append(material)
+        camera = _camera(scene, (0.0, -1.0, 1.0), 1.0)
+        camera.location = (0.0, 0.0, 1.0)
+        camera.rotation_quaternion = Vector((0.0, -1.0, 0.0)).to_track_quat("Z", "Y")
+        return _render(scene).reshape(-1, 3).mean(axis=0)
+
+    import sora
+
+    sky, _ = core.make_sky(properties.settings())
+    horizon = core.broadband_rgb(sky, sky.radiance(0.0, 0.0).values)[0] @ core.LUMINANCE_WEIGHTS
+    for distance in (1e3, 10e3, 50e3):
+        transmitted = view_through(distance, 1.0, lit=False)
+        expected = np.exp(-haze.extinction * distance)
+        print(f"\nhaze, {distance / 1e3:g} km: Cycles transmits {np.round(transmitted, 5)}, exp(-beta d) = {np.round(expected, 5)}")
+        np.testing.assert_allclose(transmitted, expected, rtol=0.01, atol=1e-4)
+        in_scattered = view_through(distance, 0.0, lit=True) @ core.LUMINANCE_WEIGHTS
+        print(f"haze, {distance / 1e3:g} km: in-scattered {in_scattered:.4g} W m-2 sr-1 toward north; "
+              f"sora's horizon there {horizon:.4g} (ratio {in_scattered / horizon:.3f})")
+    del sora
+    scene.world = sky_world
+    bpy.data.objects["sora sun"].data.energy = lamp_energy
+    bpy.data.objects.remove(bpy.data.objects[core.__name__ and "sora haze"])
