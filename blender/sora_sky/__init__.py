@@ -62,7 +62,8 @@ class SoraSkyProperties(bpy.types.PropertyGroup):
     sun_as: bpy.props.EnumProperty(name="Sun as", items=_SUN_AS, default="lamp")
     map_width: bpy.props.IntProperty(name="Map width (px)", default=1024, min=64, max=8192, step=4)
     use_haze: bpy.props.BoolProperty(name="Haze", default=False)
-    haze_size_m: bpy.props.FloatProperty(name="Haze cube (m)", default=2000.0, min=1.0)
+    haze_size_m: bpy.props.FloatProperty(name="Haze across (m)", default=2000.0, min=1.0)
+    haze_height_m: bpy.props.FloatProperty(name="Haze height (m)", default=100.0, min=0.1)
 
     def settings(self) -> core.SkySettings:
         """The panel as :class:`core.SkySettings`."""
@@ -102,6 +103,7 @@ class SORA_OT_update_world(bpy.types.Operator):
                 context.scene,
                 properties.settings(),
                 properties.haze_size_m if properties.use_haze else None,
+                properties.haze_height_m,
             )
         except (ValueError, OSError) as error:
             # The library's one line; the previous world stays.
@@ -155,6 +157,7 @@ class SORA_PT_world(bpy.types.Panel):
         sub = row.row()
         sub.active = properties.use_haze
         sub.prop(properties, "haze_size_m", text="")
+        sub.prop(properties, "haze_height_m", text="")
         layout.operator(SORA_OT_update_world.bl_idname)
 
 

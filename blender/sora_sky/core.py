@@ -29,7 +29,7 @@ Units and conventions (README "Blender"):
   facing it) with the same RGB rule for its colour, the disc left out of
   the map; the angular diameter is the atmosphere file's.
 - **Haze.** The local coefficients at the eye's altitude, held constant
-  (see :func:`haze_coefficients`).
+  in a low slab (see :func:`haze_coefficients`).
 """
 
 from __future__ import annotations

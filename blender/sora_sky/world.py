@@ -104,10 +104,15 @@ def _sun_object(scene: bpy.types.Scene, lamp: core.SunLamp) -> bpy.types.Object:
     return sun
 
 
-def _haze_object(scene: bpy.types.Scene, haze: core.HazeCoefficients, size_m: float) -> bpy.types.Object:
-    """A cube of ``size_m`` (centred on the scene's origin) filled with the
-    haze: a Rayleigh volume (air), a Henyey-Greenstein volume (the
-    aerosols' g) and an absorbing volume, densities in Blender units."""
+def _haze_object(
+    scene: bpy.types.Scene, haze: core.HazeCoefficients, size_m: float, height_m: float
+) -> bpy.types.Object:
+    """A slab ``size_m`` across and ``height_m`` high, on the ground
+    (z = 0) and centred on the scene's origin, filled with the haze: a
+    Rayleigh volume (air), a Henyey-Greenstein volume (the aerosols' g) and
+    an absorbing volume, densities in Blender units. Low, so that the sun
+    and the sky (already attenuated by the whole atmosphere in sora's map
+    and lamp) cross little of it again."""
     per_unit = scene.unit_settings.scale_length  # m per Blender unit
     obj = bpy.data.objects.get(HAZE_NAME)
     if obj is None:
@@ -118,7 +123,8 @@ def _haze_object(scene: bpy.types.Scene, haze: core.HazeCoefficients, size_m: fl
         mesh.from_pydata(corners, [], faces)
         obj = bpy.data.objects.new(HAZE_NAME, mesh)
         scene.collection.objects.link(obj)
-    obj.scale = (size_m / per_unit,) * 3
+    obj.scale = (size_m / per_unit, size_m / per_unit, height_m / per_unit)
+    obj.location = (0.0, 0.0, 0.5 * height_m / per_unit)
     material = bpy.data.materials.get(HAZE_NAME) or bpy.data.materials.new(HAZE_NAME)
     material.use_nodes = True
     tree = material.node_tree
@@ -126,15 +132,17 @@ def _haze_object(scene: bpy.types.Scene, haze: core.HazeCoefficients, size_m: fl
     output = tree.nodes.new("ShaderNodeOutputMaterial")
 
     def volume(kind: str, rgb, **settings):
+        # Cycles: a Volume Scatter's coefficient is Density x Color; a
+        # Volume Absorption's is Density x (1 - Color).
         node = tree.nodes.new(kind)
         strongest = max(max(rgb), 1e-30)
-        node.inputs["Color"].default_value = (*[c / strongest for c in rgb], 1.0)
+        relative = [c / strongest for c in rgb]
+        if kind == "ShaderNodeVolumeAbsorption":
+            relative = [1.0 - c for c in relative]
+        node.inputs["Color"].default_value = (*relative, 1.0)
         node.inputs["Density"].default_value = strongest * per_unit
         for key, value in settings.items():
-            if key == "phase":
-                node.phase = value
-            else:
-                node.inputs[key].default_value = value
+            node.inputs[key].default_value = value
         return node
 
     air = volume("ShaderNodeVolumeScatter", haze.rayleigh_scattering)
@@ -161,9 +169,11 @@ def update_world(
     scene: bpy.types.Scene,
     settings: core.SkySettings,
     haze_size_m: Optional[float] = None,
+    haze_height_m: float = 100.0,
 ) -> dict:
     """Makes ``scene``'s world from ``settings``: the map (and the Sun lamp
-    with ``sun_as="lamp"``), and a haze cube of ``haze_size_m`` when given.
+    with ``sun_as="lamp"``), and a haze slab ``haze_size_m`` across and
+    ``haze_height_m`` high when a size is given.
     Everything is computed before the scene is touched: an error (the
     library's ``ValueError``/``OSError``) leaves the previous world.
     Returns a summary (the sun, the lamp's W m^-2, the map's path)."""
@@ -190,7 +200,7 @@ def update_world(
         bpy.data.objects.remove(sun)
     existing_haze = bpy.data.objects.get(HAZE_NAME)
     if haze is not None:
-        _haze_object(scene, haze, haze_size_m)
+        _haze_object(scene, haze, haze_size_m, haze_height_m)
     elif existing_haze is not None:
         bpy.data.objects.remove(existing_haze)
     return {
