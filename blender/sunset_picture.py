@@ -14,7 +14,6 @@ Sky Texture's median differs).
 import math
 import os
 import sys
-import tempfile
 
 import bpy
 import numpy as np
@@ -75,17 +74,6 @@ def aim_camera(scene, azimuth_deg, pitch_deg):
     scene.camera = camera
 
 
-def render(scene):
-    path = os.path.join(tempfile.mkdtemp(prefix="sora-sunset-"), "render.exr")
-    scene.render.filepath = path
-    bpy.ops.render.render(write_still=True)
-    image = bpy.data.images.load(path, check_existing=False)
-    pixels = np.empty(image.size[0] * image.size[1] * 4, dtype=np.float32)
-    image.pixels.foreach_get(pixels)
-    bpy.data.images.remove(image)
-    return pixels.reshape(HEIGHT, WIDTH, 4)[..., :3].astype(float)
-
-
 def tone_map(linear):
     luminance = linear @ core.LUMINANCE_WEIGHTS
     exposed = linear * (0.18 / max(np.median(luminance), 1e-30))
@@ -105,7 +93,7 @@ def main(output):
     world.update_world(scene, settings)
     print(f"sun {elevation:.2f} deg at azimuth {azimuth:.2f} deg ({TIME}, {PLACE})")
     aim_camera(scene, azimuth - 20.0, 4.0)
-    sora_image = render(scene)
+    sora_image = world.render_linear(scene)
 
     # Blender's Sky Texture, the same sun (its rotation: azimuth from +Y,
     # clockwise, as the add-on's), its own disc; no lamp.
@@ -120,7 +108,7 @@ def main(output):
     texture.altitude = PLACE[2]
     tree.links.new(texture.outputs["Color"], tree.nodes["Background"].inputs["Color"])
     scene.world = sky_world
-    blender_image = render(scene)
+    blender_image = world.render_linear(scene)
     ratio = np.median(blender_image @ core.LUMINANCE_WEIGHTS) / np.median(sora_image @ core.LUMINANCE_WEIGHTS)
     print(f"median luminance, Sky Texture / sora: {ratio:.3g}")
 

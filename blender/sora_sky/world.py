@@ -209,3 +209,27 @@ def update_world(
         "direct_normal_w_m2": lamp.strength_w_m2,
         "map": path,
     }
+
+
+def render_linear(scene: bpy.types.Scene) -> np.ndarray:
+    """Renders ``scene`` (as its settings say) into a 32-bit float OpenEXR
+    in a temporary directory and returns its pixels, (height, width, 3)
+    scene-linear RGB, rows bottom first: what the tests and the docs'
+    picture measure (the view transform does not touch an EXR written with
+    the "Standard" view)."""
+    settings = scene.render.image_settings
+    settings.file_format, settings.color_depth = "OPEN_EXR", "32"
+    directory = tempfile.mkdtemp(prefix="sora-render-")
+    path = os.path.join(directory, "render.exr")
+    scene.render.filepath = path
+    bpy.ops.render.render(write_still=True)
+    image = bpy.data.images.load(path, check_existing=False)
+    try:
+        pixels = np.empty(image.size[0] * image.size[1] * 4, dtype=np.float32)
+        image.pixels.foreach_get(pixels)
+        width, height = image.size[0], image.size[1]
+    finally:
+        bpy.data.images.remove(image)
+        os.remove(path)
+        os.rmdir(directory)
+    return pixels.reshape(height, width, 4)[..., :3].astype(float)

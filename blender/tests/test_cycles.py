@@ -18,16 +18,15 @@ tolerance is at least three standard errors plus the map's quadrature.
 """
 
 import math
-import os
-import tempfile
 
 import numpy as np
 import pytest
 
 import bpy
+import sora
 from mathutils import Vector
 
-from sora_sky import core
+from sora_sky import core, world
 
 #: Samples per pixel and image size: the plane's 64 x 64 pixels at 16
 #: samples give a standard error of the mean below 0.2 % (lamp) and 0.7 %
@@ -96,19 +95,6 @@ def _camera(scene, position, ortho_scale):
     return camera
 
 
-def _render(scene):
-    """The rendered image, (height, width, 3) scene-linear RGB."""
-    path = os.path.join(tempfile.mkdtemp(prefix="sora-cycles-"), "render.exr")
-    scene.render.filepath = path
-    bpy.ops.render.render(write_still=True)
-    image = bpy.data.images.load(path, check_existing=False)
-    pixels = np.empty(image.size[0] * image.size[1] * 4, dtype=np.float32)
-    image.pixels.foreach_get(pixels)
-    height, width = image.size[1], image.size[0]
-    bpy.data.images.remove(image)
-    return pixels.reshape(height, width, 4)[..., :3].astype(float)
-
-
 def _make_world(sun_elevation_deg, sun_as="lamp", map_width=1024):
     properties = bpy.context.scene.sora_sky
     properties.preset = "earth-clear"
@@ -130,7 +116,7 @@ def _plane_radiance(samples=SAMPLES, size=SIZE):
     bpy.ops.mesh.primitive_plane_add(size=40.0)
     bpy.context.object.data.materials.append(_material("white", ALBEDO_PLANE))
     _camera(scene, (0.0, 0.0, 10.0), 10.0)
-    return _render(scene) @ core.LUMINANCE_WEIGHTS
+    return world.render_linear(scene) @ core.LUMINANCE_WEIGHTS
 
 
 def _mean_and_error(values):
@@ -181,7 +167,7 @@ def test_a_grey_sphere_is_lit_by_the_direct_and_diffuse_parts(addon, irradiance,
         bpy.ops.object.shade_smooth()
         bpy.context.object.data.materials.append(_material("grey", ALBEDO_SPHERE))
         _camera(scene, tuple(10.0 * direction), scale)
-        measured[side] = (_render(scene) @ core.LUMINANCE_WEIGHTS)[central]
+        measured[side] = (world.render_linear(scene) @ core.LUMINANCE_WEIGHTS)[central]
     # The lit pixels' normals n lean up to 14.5 deg from the sun: their
     # direct part is E_dni n.s, n.s = sqrt(1 - rho^2) on the unit sphere.
     cosine = np.sqrt(1.0 - rho[central] ** 2).mean()
@@ -220,7 +206,7 @@ def test_the_default_sun_converges_faster(addon):
 def test_bad_input_reports_the_librarys_error_and_keeps_the_world(addon, tmp_path):
     _make_world(30.0)
     scene = bpy.context.scene
-    world, image = scene.world, bpy.data.images["sora sky map"]
+    previous_world, image = scene.world, bpy.data.images["sora sky map"]
     before = np.empty(image.size[0] * image.size[1] * 4, dtype=np.float32)
     image.pixels.foreach_get(before)
     energy = bpy.data.objects["sora sun"].data.energy
@@ -244,7 +230,7 @@ def test_bad_input_reports_the_librarys_error_and_keeps_the_world(addon, tmp_pat
         assert "\n" not in message
     after = np.empty_like(before)
     image.pixels.foreach_get(after)
-    assert scene.world == world
+    assert scene.world == previous_world
     np.testing.assert_array_equal(after, before)
     assert bpy.data.objects["sora sun"].data.energy == energy
     # The time with its zone works, and the lamp follows the sun.
@@ -255,8 +241,6 @@ def test_bad_input_reports_the_librarys_error_and_keeps_the_world(addon, tmp_pat
     toward = sun.matrix_world.to_quaternion() @ Vector((0.0, 0.0, 1.0))
     elevation = math.degrees(math.asin(toward.z))
     azimuth = math.degrees(math.atan2(toward.x, toward.y)) % 360.0
-    import sora
-
     expected = sora.Sky(
         sora.Atmosphere.preset("earth-clear"), time=properties.time, location=(35.68, 139.77, 0.0)
     ).sun_position_deg
@@ -302,10 +286,8 @@ def test_the_haze_transmits_as_its_coefficients_say(addon):
         camera.location = (0.0, 0.0, 2.0)
         camera.data.clip_end = 1e6
         camera.rotation_quaternion = Vector((0.0, -1.0, 0.0)).to_track_quat("Z", "Y")
-        values = _render(scene).reshape(-1, 3)
+        values = world.render_linear(scene).reshape(-1, 3)
         return values.mean(axis=0), values.std(axis=0, ddof=1) / math.sqrt(len(values))
-
-    import sora
 
     sky, _ = core.make_sky(properties.settings())
     # Just above the horizon (at 0 degrees the library sees the ground).
@@ -320,7 +302,6 @@ def test_the_haze_transmits_as_its_coefficients_say(addon):
         in_scattered = view_through(distance, 0.0, lit=True)[0] @ core.LUMINANCE_WEIGHTS
         print(f"haze, {distance / 1e3:g} km: in-scattered {in_scattered:.4g} W m-2 sr-1 toward north; "
               f"sora's sky 0.5 deg above the horizon there {horizon:.4g} (ratio {in_scattered / horizon:.3f})")
-    del sora
     scene.world = sky_world
     bpy.data.objects["sora sun"].data.energy = lamp_energy
     bpy.data.objects.remove(bpy.data.objects["sora haze"])
