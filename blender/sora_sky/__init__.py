@@ -24,14 +24,12 @@ _POLARISATION = [
 ]
 
 
-def _presets(self, context):
-    import sora
-
-    return [(name, name, "") for name in sora.Atmosphere.presets()]
+# The library's presets (static items, so that the default can be named).
+_PRESETS = [(name, name, "A built-in atmosphere of sora") for name in core.sora.Atmosphere.presets()]
 
 
 class SoraSkyProperties(bpy.types.PropertyGroup):
-    preset: bpy.props.EnumProperty(name="Preset", items=_presets)
+    preset: bpy.props.EnumProperty(name="Preset", items=_PRESETS, default="earth-clear")
     atmosphere_path: bpy.props.StringProperty(
         name="Atmosphere file", subtype="FILE_PATH",
         description="An atmosphere file (TOML); empty: the preset",

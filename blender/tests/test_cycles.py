@@ -305,3 +305,10 @@ def test_the_haze_transmits_as_its_coefficients_say(addon):
     scene.world = sky_world
     bpy.data.objects["sora sun"].data.energy = lamp_energy
     bpy.data.objects.remove(bpy.data.objects["sora haze"])
+
+
+def test_the_panels_defaults_are_the_documented_ones(addon):
+    defaults = core.SkySettings()
+    rna = bpy.types.Scene.sora_sky.keywords["type"].bl_rna.properties
+    for name in ("preset", "sun_from", "sun_as", "polarisation", "map_width", "sun_elevation_deg"):
+        assert rna[name].default == getattr(defaults, name), name
