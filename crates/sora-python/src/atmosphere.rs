@@ -6,8 +6,8 @@
 use std::cell::RefCell;
 use std::path::{Path, PathBuf};
 
-use numpy::ndarray::Array2;
-use numpy::{IntoPyArray, PyArray1, PyArray2};
+use numpy::ndarray::{Array2, Array3};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray1};
 use pyo3::exceptions::PyOSError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
@@ -28,6 +28,15 @@ pub struct Atmosphere {
 #[pyfunction]
 pub fn preset_names() -> Vec<&'static str> {
     sora::atmosphere::PRESETS.iter().map(|p| p.name).collect()
+}
+
+/// The atmosphere file of the built-in atmosphere `name`, verbatim (the
+/// same text the library loads); an unknown name is the library's error.
+#[pyfunction]
+pub fn preset_toml(name: &str) -> PyResult<&'static str> {
+    // An unknown name: the library's message, with its suggestion.
+    sora::Atmosphere::preset(name).map_err(to_py_err)?;
+    Ok(sora::atmosphere::presets::find_preset(name).map_or("", |preset| preset.toml))
 }
 
 /// Parses `text` with the files it names read from `directory`; a file
@@ -149,6 +158,67 @@ impl Atmosphere {
                 .solar_irradiance_w_m2_nm
                 .values()
                 .to_vec()
+                .into_pyarray(py),
+        ))
+    }
+
+    /// The coefficients at altitudes above the ground (1-D array, m, each
+    /// within 0..=the top of the atmosphere) on `wavelengths_nm`:
+    /// (extinction and scattering coefficients [species, altitude,
+    /// wavelength] in m^-1, the library's relative density of each species
+    /// there times its coefficients at relative density 1; the asymmetry
+    /// parameter [species, wavelength]).
+    #[allow(clippy::type_complexity)]
+    #[pyo3(signature = (altitudes_m, wavelengths_nm=None))]
+    fn coefficient_arrays<'py>(
+        &self,
+        py: Python<'py>,
+        altitudes_m: PyReadonlyArray1<'py, f64>,
+        wavelengths_nm: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<(
+        Bound<'py, PyArray3<f64>>,
+        Bound<'py, PyArray3<f64>>,
+        Bound<'py, PyArray2<f64>>,
+    )> {
+        let altitudes = altitudes_m.as_slice()?.to_vec();
+        let top_m = self.inner.planet.atmosphere_height_m();
+        if let Some(bad) = altitudes
+            .iter()
+            .find(|h| !(h.is_finite() && (0.0..=top_m).contains(*h)))
+        {
+            return Err(value_error(format!(
+                "altitude_m = {bad} m is out of range: allowed 0..={top_m} m (the ground to the top of the atmosphere)"
+            )));
+        }
+        let grid = grid_from_python(wavelengths_nm)?;
+        let optics = run_detached(py, || self.inner.compute_optics(&grid)).map_err(to_py_err)?;
+        let shape = (optics.species.len(), altitudes.len(), grid.len());
+        let per_altitude = |coefficients: &dyn Fn(&sora::atmosphere::SpeciesOptics) -> &[f64]| {
+            let values: Vec<f64> = optics
+                .species
+                .iter()
+                .flat_map(|species| {
+                    let at_one = coefficients(species);
+                    altitudes.iter().flat_map(move |h| {
+                        let density = species.profile.relative_density(*h);
+                        at_one.iter().map(move |beta| beta * density)
+                    })
+                })
+                .collect();
+            Array3::from_shape_vec(shape, values)
+                .expect("one value per species, altitude and wavelength")
+                .into_pyarray(py)
+        };
+        let asymmetry: Vec<f64> = optics
+            .species
+            .iter()
+            .flat_map(|s| s.asymmetry_g().into_values())
+            .collect();
+        Ok((
+            per_altitude(&|s| s.extinction_per_m.values()),
+            per_altitude(&|s| s.scattering_per_m.values()),
+            Array2::from_shape_vec((shape.0, shape.2), asymmetry)
+                .expect("one value per species and wavelength")
                 .into_pyarray(py),
         ))
     }

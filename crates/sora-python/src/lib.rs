@@ -37,6 +37,7 @@ fn _sora(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_function(wrap_pyfunction!(mie::mie_phase_function, module)?)?;
     module.add_function(wrap_pyfunction!(mie::mie_ensemble, module)?)?;
     module.add_function(wrap_pyfunction!(atmosphere::preset_names, module)?)?;
+    module.add_function(wrap_pyfunction!(atmosphere::preset_toml, module)?)?;
     module.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

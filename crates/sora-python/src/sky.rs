@@ -8,9 +8,10 @@
 //! cd m^-2).
 
 use numpy::ndarray::{Array2, Array3, Array4};
-use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray1};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use sora::colour::{Observer, RgbColourSpace, SpectrumToXyz};
+use sora::spectrum::SampledSpectrum;
 use sora::{Camera, ImageSettings, Method, Polarisation, Scattering, ViewDirection};
 
 use crate::atmosphere::Atmosphere;
@@ -86,8 +87,7 @@ fn sun_from_time(
     refraction: bool,
     air: (Option<f64>, Option<f64>),
 ) -> PyResult<sora::SunPosition> {
-    let time =
-        sora::sun_position::parse_time_utc(time).map_err(|e| value_error(format!("time: {e}")))?;
+    let time = sora::sun_position::parse_time_utc(time).map_err(to_py_err)?;
     let (latitude, longitude, elevation) = match location {
         [latitude, longitude] => (*latitude, *longitude, 0.0),
         [latitude, longitude, elevation] => (*latitude, *longitude, *elevation),
@@ -312,6 +312,47 @@ impl Sky {
     fn direct_normal_irradiance<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
         let values = run_detached(py, || self.inner.direct_normal_irradiance().into_values());
         values.into_pyarray(py)
+    }
+
+    /// The colour of spectra on this sky's grid (2-D array [spectrum,
+    /// wavelength], W m^-2 sr^-1 nm^-1 or W m^-2 nm^-1): CIE 1931 XYZ
+    /// (Y in cd m^-2, or lux for irradiance) or, with `linear_srgb`, the
+    /// linear sRGB of that XYZ, as images' pixels are made.
+    fn colours<'py>(
+        &self,
+        py: Python<'py>,
+        spectra: PyReadonlyArray2<'py, f64>,
+        linear_srgb: bool,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let grid = self.inner.wavelengths();
+        let spectra = spectra.as_array();
+        if spectra.ncols() != grid.len() {
+            return Err(value_error(format!(
+                "spectra have {} values each, but the sky's grid {grid} has {} wavelengths",
+                spectra.ncols(),
+                grid.len()
+            )));
+        }
+        let rows: Vec<Vec<f64>> = spectra.rows().into_iter().map(|r| r.to_vec()).collect();
+        let values = run_detached(py, || {
+            let to_xyz = SpectrumToXyz::new(grid, Observer::Cie1931TwoDegree);
+            let mut values = Vec::with_capacity(rows.len() * 3);
+            for row in rows {
+                let xyz = to_xyz.to_xyz(&SampledSpectrum::from_values(row))?;
+                if linear_srgb {
+                    let rgb = RgbColourSpace::Srgb.linear_rgb_from_xyz(xyz);
+                    values.extend([rgb.r, rgb.g, rgb.b]);
+                } else {
+                    values.extend([xyz.x, xyz.y, xyz.z]);
+                }
+            }
+            Ok::<_, sora::Error>(values)
+        })
+        .map_err(to_py_err)?;
+        let count = values.len() / 3;
+        Ok(Array2::from_shape_vec((count, 3), values)
+            .expect("three values per spectrum")
+            .into_pyarray(py))
     }
 
     /// The radiance of views (1-D arrays of equal length, degrees):

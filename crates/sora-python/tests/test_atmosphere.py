@@ -52,3 +52,45 @@ def test_a_dict_change_changes_the_sky(atmospheres_dir):
     base = sora.Atmosphere.preset("earth-clear")
     up = dict(sun_elevation_deg=40, wavelengths_nm="500:600:100")
     assert np.all(sora.Sky(bright, **up).radiance(10, 0).values > sora.Sky(base, **up).radiance(10, 0).values)
+
+
+def test_preset_toml_is_the_presets_text():
+    text = sora.Atmosphere.preset_toml("earth-clear")
+    from_text = sora.Atmosphere.from_toml_str(text).optical_depths()
+    preset = sora.Atmosphere.preset("earth-clear").optical_depths()
+    np.testing.assert_array_equal(from_text.optical_depth_extinction, preset.optical_depth_extinction)
+    with pytest.raises(ValueError, match="'earth-claer' is not a preset.*did you mean earth-clear"):
+        sora.Atmosphere.preset_toml("earth-claer")
+
+
+def test_coefficients_integrate_to_the_vertical_optical_depths():
+    # The local coefficients, integrated from the ground to the top, are
+    # the column optical depths (exponential air and aerosol, ozone's tent).
+    atmosphere = sora.Atmosphere.preset("earth-clear")
+    altitudes = np.linspace(0.0, 100e3, 20001)
+    local = atmosphere.coefficients(altitudes, "400:700:100")
+    assert local.extinction_coefficient.dims == ("species", "altitude", "wavelength")
+    assert local.extinction_coefficient.attrs["units"] == "m-1"
+    columns = atmosphere.optical_depths("400:700:100")
+    for name, column in (
+        ("extinction_coefficient", columns.optical_depth_extinction),
+        ("scattering_coefficient", columns.optical_depth_scattering),
+    ):
+        values = local[name].values
+        step = altitudes[1] - altitudes[0]
+        integral = step * (values.sum(axis=1) - 0.5 * (values[:, 0] + values[:, -1]))
+        np.testing.assert_allclose(integral, column.values, rtol=2e-5)
+    np.testing.assert_array_equal(local.asymmetry_parameter, columns.asymmetry_parameter)
+    # Air at the ground: the Rayleigh optical depth over the column of an
+    # exponential of scale height 8435 m cut at 100 km.
+    ground = atmosphere.coefficients(0.0, "400:700:100").extinction_coefficient.sel(species="air")
+    column_m = 8435.0 * (1.0 - np.exp(-100e3 / 8435.0))
+    np.testing.assert_allclose(
+        ground.values[0], columns.optical_depth_extinction.sel(species="air").values / column_m, rtol=1e-12
+    )
+
+
+@pytest.mark.parametrize("altitude", [-1.0, 100e3 + 1.0, float("nan")])
+def test_coefficients_refuse_altitudes_outside_the_atmosphere(altitude):
+    with pytest.raises(ValueError, match=r"altitude_m = .* m is out of range"):
+        sora.Atmosphere.preset("earth-clear").coefficients([0.0, altitude])

@@ -206,3 +206,16 @@ def test_direct_normal_irradiance(atmosphere):
     # A longer path through the air: less light, and redder.
     assert np.all(low < high)
     assert (low[0] / high[0]) < (low[-1] / high[-1])
+
+
+def test_colour_of_spectra_is_the_images_colour(sky):
+    spectral = sky.render(camera="equirectangular", width=32, output="spectral", draw_sun_disc=False)
+    for output in ("xyz", "linear-srgb"):
+        image = sky.render(camera="equirectangular", width=32, output=output, draw_sun_disc=False)
+        np.testing.assert_allclose(sky.colour(spectral, output), image, rtol=1e-12, atol=0)
+    direct = sky.direct_normal_irradiance()
+    assert sky.colour(direct.values).shape == (3,)
+    with pytest.raises(ValueError, match="spectra have 3 values each"):
+        sky.colour(np.ones((2, 3)))
+    with pytest.raises(ValueError, match="output = 'rgb' is unknown"):
+        sky.colour(direct.values, "rgb")

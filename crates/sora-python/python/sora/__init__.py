@@ -129,6 +129,13 @@ class Atmosphere:
         base = None if base_dir is None else _os.fspath(base_dir)
         return cls(_sora.Atmosphere.from_dict(table, base), ("dict", table, base))
 
+    @staticmethod
+    def preset_toml(name: str) -> str:
+        """The atmosphere file of the preset ``name``, verbatim: the text
+        :meth:`preset` loads, to read or edit (``tomllib.loads``, then
+        :meth:`from_dict`). An unknown name raises ``ValueError``."""
+        return _sora.preset_toml(name)
+
     @property
     def species_names(self) -> list:
         """The species' names, in the file's order."""
@@ -165,6 +172,45 @@ class Atmosphere:
             },
         )
         return dataset
+
+    def coefficients(
+        self, altitude_m, wavelengths_nm: WavelengthsLike = None
+    ) -> xr.Dataset:
+        """The local optics at altitudes above the ground (a number or a
+        1-D array, m, within the ground and the top of the atmosphere): the
+        library's relative density of each species there times its
+        coefficients at relative density 1 (the paper's eq. 1).
+
+        Variables: ``extinction_coefficient`` and
+        ``scattering_coefficient`` (dims ``species, altitude, wavelength``,
+        m^-1) and ``asymmetry_parameter`` (dims ``species, wavelength``).
+        A straight path's optical depth is the integral of the extinction
+        along it; a horizontal path at altitude h of length d sees
+        ``extinction_coefficient * d`` only where the atmosphere is uniform
+        over it.
+        """
+        altitudes = np.atleast_1d(np.asarray(altitude_m, dtype=float))
+        if altitudes.ndim != 1:
+            raise ValueError(
+                f"altitude_m must be a number or 1-D (m), not an array of shape {altitudes.shape}"
+            )
+        extinction, scattering, g = self._native.coefficient_arrays(
+            np.ascontiguousarray(altitudes), _native_wavelengths(wavelengths_nm)
+        )
+        wavelengths = self._native.optical_depth_arrays(_native_wavelengths(wavelengths_nm))[2]
+        dims = ("species", "altitude", "wavelength")
+        return xr.Dataset(
+            {
+                "extinction_coefficient": (dims, extinction, {"units": "m-1", "long_name": "extinction coefficient"}),
+                "scattering_coefficient": (dims, scattering, {"units": "m-1", "long_name": "scattering coefficient"}),
+                "asymmetry_parameter": (("species", "wavelength"), g, {"units": "1", "long_name": "asymmetry parameter <cos theta>"}),
+            },
+            coords={
+                "species": ("species", self.species_names),
+                "altitude": ("altitude", altitudes, {"units": "m", "long_name": "altitude above the ground"}),
+                "wavelength": _wavelength_coordinate(wavelengths),
+            },
+        )
 
     def __reduce__(self):
         return (_atmosphere_from_recipe, (self._recipe,))
@@ -447,6 +493,21 @@ class Sky:
             name="direct_normal_irradiance",
             attrs={"units": "W m-2 nm-1"},
         )
+
+    def colour(self, spectra, output: str = "xyz") -> np.ndarray:
+        """The colour of spectra on this sky's wavelengths (an array whose
+        last axis is :attr:`wavelengths_nm`: radiance or irradiance), as
+        images' pixels are made: ``output="xyz"`` CIE 1931 XYZ (Y in
+        cd m^-2 for radiance, lux for irradiance in W m^-2 nm^-1) or
+        ``"linear-srgb"``; shape ``spectra.shape[:-1] + (3,)``."""
+        if output not in ("xyz", "linear-srgb"):
+            raise ValueError(f"output = '{output}' is unknown: use 'xyz' or 'linear-srgb'")
+        values = np.asarray(spectra, dtype=float)
+        if values.ndim == 0:
+            raise ValueError("spectra must have a wavelength axis (the last), not be a number")
+        flat = np.ascontiguousarray(values.reshape(-1, values.shape[-1]))
+        colours = self._native.colours(flat, output == "linear-srgb")
+        return colours.reshape(values.shape[:-1] + (3,))
 
     def render(
         self,

@@ -18,6 +18,7 @@ def set_num_threads(threads: int) -> None:
 
 def get_num_threads() -> int: ...
 def preset_names() -> List[str]: ...
+def preset_toml(name: str) -> str: ...
 
 class Atmosphere:
     @staticmethod
@@ -33,6 +34,11 @@ class Atmosphere:
     ) -> Tuple[List[str], List[str], _F64, _F64, _F64, _F64, _F64, _F64]:
         """(names, kinds, wavelengths nm, tau_ext, tau_sca, albedo, g
         [species, wavelength], solar irradiance W m^-2 nm^-1)."""
+    def coefficient_arrays(
+        self, altitudes_m: _F64, wavelengths_nm: _Grid = None
+    ) -> Tuple[_F64, _F64, _F64]:
+        """(extinction, scattering [species, altitude, wavelength] m^-1,
+        g [species, wavelength])."""
     @property
     def source(self) -> str: ...
     @property
@@ -71,6 +77,8 @@ class Sky:
     @property
     def scattering(self) -> str: ...
     def direct_normal_irradiance(self) -> _F64: ...
+    def colours(self, spectra: _F64, linear_srgb: bool) -> _F64:
+        """[spectrum, 3]: CIE 1931 XYZ or linear sRGB of each spectrum."""
     def radiances(self, elevation_deg: _F64, azimuth_deg: _F64) -> Tuple[_F64, Optional[_F64]]:
         """(radiance [view, wavelength], standard error or None), W m^-2 sr^-1 nm^-1."""
     @property

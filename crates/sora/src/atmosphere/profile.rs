@@ -206,8 +206,10 @@ impl DensityProfile {
         Ok(DensityProfile::PiecewiseLinear(table))
     }
 
-    /// Relative density at `altitude_m` (m above the ground).
-    pub(crate) fn relative_density(&self, altitude_m: f64) -> f64 {
+    /// Relative density at `altitude_m` (m above the ground): the factor
+    /// that multiplies a species' coefficients at relative density 1
+    /// ([`super::SpeciesOptics`]).
+    pub fn relative_density(&self, altitude_m: f64) -> f64 {
         match self {
             DensityProfile::Exponential { scale_height_m } => (-altitude_m / scale_height_m).exp(),
             DensityProfile::PiecewiseLinear(table) => {
