@@ -37,7 +37,6 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
-import struct
 import tomllib
 from typing import Optional, Tuple
 
@@ -326,42 +325,11 @@ def horizontal_optical_depth(
 
 
 def write_exr(path: str, rgb: np.ndarray) -> None:
-    """Writes ``rgb`` (height, width, 3; rows top first) as an uncompressed
-    32-bit float OpenEXR, scene-linear values as they are (Blender's own
-    ``Image.save`` applies its display transform to float images), to a
-    temporary file renamed into place."""
-    rgb = np.asarray(rgb, dtype="<f4")
-    height, width, channels = rgb.shape
-    if channels != 3:
-        raise ValueError(f"an EXR map needs 3 channels, not {channels}")
-
-    def attribute(name: str, kind: str, value: bytes) -> bytes:
-        return name.encode() + b"\0" + kind.encode() + b"\0" + struct.pack("<i", len(value)) + value
-
-    channel_list = b"".join(
-        name.encode() + b"\0" + struct.pack("<iB3xii", 2, 0, 1, 1) for name in "BGR"
-    ) + b"\0"
-    window = struct.pack("<iiii", 0, 0, width - 1, height - 1)
-    header = (
-        struct.pack("<ii", 20000630, 2)
-        + attribute("channels", "chlist", channel_list)
-        + attribute("compression", "compression", b"\0")
-        + attribute("dataWindow", "box2i", window)
-        + attribute("displayWindow", "box2i", window)
-        + attribute("lineOrder", "lineOrder", b"\0")
-        + attribute("pixelAspectRatio", "float", struct.pack("<f", 1.0))
-        + attribute("screenWindowCenter", "v2f", struct.pack("<ff", 0.0, 0.0))
-        + attribute("screenWindowWidth", "float", struct.pack("<f", 1.0))
-        + b"\0"
-    )
-    row_bytes = width * 3 * 4
-    first = len(header) + 8 * height
-    offsets = struct.pack(f"<{height}Q", *(first + y * (8 + row_bytes) for y in range(height)))
-    partial = path + ".partial"
-    with open(partial, "wb") as file:
-        file.write(header + offsets)
-        for y in range(height):
-            # One scan line: its y, its size, then the B, G and R planes.
-            planes = np.ascontiguousarray(rgb[y, :, ::-1].T)
-            file.write(struct.pack("<ii", y, row_bytes) + planes.tobytes())
-    os.replace(partial, path)
+    """Writes ``rgb`` (height, width, 3; rows top first) as a 32-bit float
+    OpenEXR, scene-linear values as they are (Blender's own ``Image.save``
+    applies its display transform to float images), by sora's writer
+    (:func:`sora.write_exr`: atomic, the bytes ``sora render`` writes)."""
+    rgb = np.asarray(rgb)
+    if rgb.ndim != 3 or rgb.shape[2] != 3:
+        raise ValueError(f"an EXR map needs (height, width, 3), not {rgb.shape}")
+    sora.write_exr(path, rgb)

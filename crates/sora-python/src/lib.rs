@@ -12,6 +12,7 @@
 //! - [`sky`]: `Sky` (radiance of many views, images, path tracing);
 //! - [`mie`]: efficiencies of numpy arrays of spheres, phase functions,
 //!   log-normal and modified-gamma ensembles per wavelength;
+//! - [`output`]: OpenEXR files through the library's writer;
 //! - [`errors`]: library errors -> `ValueError`, files -> `OSError`.
 //!
 //! Nothing here computes physics: every number comes from `sora` or
@@ -23,6 +24,7 @@ mod atmosphere;
 mod errors;
 mod grid;
 mod mie;
+mod output;
 mod sky;
 mod threads;
 
@@ -38,6 +40,7 @@ fn _sora(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_function(wrap_pyfunction!(mie::mie_ensemble, module)?)?;
     module.add_function(wrap_pyfunction!(atmosphere::preset_names, module)?)?;
     module.add_function(wrap_pyfunction!(atmosphere::preset_toml, module)?)?;
+    module.add_function(wrap_pyfunction!(output::write_exr, module)?)?;
     module.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

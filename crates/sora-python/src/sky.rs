@@ -198,8 +198,7 @@ impl Sky {
                 let location = location.as_deref().ok_or_else(|| {
                     value_error("time needs location=(latitude_deg, longitude_deg[, elevation_m])")
                 })?;
-                let sun =
-                    sun_from_time(time, location, refraction, (pressure_hpa, temperature_c))?;
+                let sun = sun_from_time(time, location, refraction, (pressure_hpa, temperature_c))?;
                 date_sun = Some(sun);
                 (sun.elevation_deg, sun.azimuth_deg)
             }
@@ -224,9 +223,8 @@ impl Sky {
         // The sun's distance as `sora spectrum` takes it: given, or the
         // date's for a sun at 1 AU (sora::atmosphere::Sun::date_distance_au).
         let mut atmosphere = atmosphere.inner.clone();
-        let sun_distance_au = sun_distance_au.or_else(|| {
-            date_sun.and_then(|sun| atmosphere.sun.date_distance_au(&sun))
-        });
+        let sun_distance_au = sun_distance_au
+            .or_else(|| date_sun.and_then(|sun| atmosphere.sun.date_distance_au(&sun)));
         if let Some(distance_au) = sun_distance_au {
             atmosphere.sun = atmosphere
                 .sun

@@ -219,3 +219,23 @@ def test_colour_of_spectra_is_the_images_colour(sky):
         sky.colour(np.ones((2, 3)))
     with pytest.raises(ValueError, match="output = 'rgb' is unknown"):
         sky.colour(direct.values, "rgb")
+
+
+def test_write_exr_writes_through_the_librarys_writer(tmp_path):
+    rgb = np.arange(2 * 3 * 3, dtype=float).reshape(2, 3, 3) / 7.0
+    path = tmp_path / "map.exr"
+    sora.write_exr(path, rgb)
+    data = path.read_bytes()
+    # OpenEXR's magic number, and the three channels named in its header.
+    assert data[:4] == bytes([0x76, 0x2F, 0x31, 0x01])
+    assert b"channels" in data and b"R\x00" in data
+    assert [p.name for p in tmp_path.iterdir()] == ["map.exr"]
+    bad = rgb.copy()
+    bad[1, 2, 0] = np.nan
+    with pytest.raises(ValueError, match=r"pixel \(2, 1\) channel R"):
+        sora.write_exr(tmp_path / "nan.exr", bad)
+    with pytest.raises(ValueError, match="needs \\(height, width, 3\\)"):
+        sora.write_exr(tmp_path / "flat.exr", rgb[0])
+    with pytest.raises(OSError):
+        sora.write_exr(tmp_path / "no-such-folder" / "map.exr", rgb)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["map.exr"]

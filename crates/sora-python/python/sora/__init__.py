@@ -43,12 +43,26 @@ __all__ = [
     "get_num_threads",
     "__version__",
     "RADIANCE_UNITS",
+    "write_exr",
 ]
 
 #: Units of spectral radiance, as written in ``attrs["units"]``.
 RADIANCE_UNITS = "W m-2 sr-1 nm-1"
 
 WavelengthsLike = Union[str, Sequence[float], np.ndarray, None]
+
+
+def write_exr(path: Union[str, "_os.PathLike[str]"], rgb: Any) -> None:
+    """Writes ``rgb`` (an array of shape (height, width, 3): linear RGB,
+    rows top first, finite values) as a 32-bit float OpenEXR at ``path``
+    by sora's own writer (the bytes ``sora render -o FILE.exr`` writes),
+    atomically: a failure leaves no file, and an existing file unchanged."""
+    array = np.ascontiguousarray(rgb, dtype=np.float64)
+    if array.ndim != 3:
+        raise ValueError(
+            f"rgb has shape {array.shape}: an EXR image needs (height, width, 3)"
+        )
+    _sora.write_exr(_os.fspath(path), array)
 
 
 def _wavelength_coordinate(wavelengths_nm: np.ndarray) -> xr.DataArray:
