@@ -310,7 +310,9 @@ pub struct SunAndObserver {
     pub time: Option<String>,
 
     /// Where the sun is seen from at --time: LAT,LON[,ELEVATION_M] (degrees
-    /// north, degrees east, metres above sea level), e.g. 35.68,139.77,40
+    /// north, degrees east, metres above sea level), e.g. 35.68,139.77,40;
+    /// the elevation is also the ground's (the atmosphere's air, gases and
+    /// aerosols above it; planet.ground_altitude_m)
     #[arg(
         long,
         value_name = "LAT,LON[,ELEV_M]",
@@ -433,15 +435,19 @@ impl SunAndObserver {
     ) -> anyhow::Result<(sora::Sky, SunUsed)> {
         let polarisation = self.polarisation(method);
         if let Some(albedo) = self.ground_albedo {
-            let planet = &atmosphere.planet;
-            atmosphere.planet = sora::atmosphere::Planet::new(
-                planet.radius_m(),
-                planet.atmosphere_height_m(),
-                sora::spectrum::Spectrum::Constant(albedo),
-            )
-            .map_err(|e| anyhow::anyhow!("--ground-albedo: {e}"))?;
+            atmosphere.planet = atmosphere
+                .planet
+                .with_ground_albedo(sora::spectrum::Spectrum::Constant(albedo))
+                .map_err(|e| anyhow::anyhow!("--ground-albedo: {e}"))?;
         }
         let sun = self.sun_used(&atmosphere.sun)?;
+        if let Some(elevation_m) = sun.site_elevation_m {
+            atmosphere.planet = atmosphere
+                .planet
+                .clone()
+                .with_ground_altitude_m(elevation_m)
+                .map_err(|e| anyhow::anyhow!("--location's elevation: {e}"))?;
+        }
         if let Some(distance_au) = sun.distance_au {
             atmosphere.sun = atmosphere.sun.at_distance_au(distance_au).map_err(|e| {
                 anyhow::anyhow!(
@@ -479,6 +485,8 @@ pub struct SunUsed {
     pub distance_au: Option<f64>,
     /// The Earth-Sun distance at --time, AU (whether or not it was used).
     pub earth_sun_distance_au: Option<f64>,
+    /// --location's elevation above sea level, m: the ground's altitude.
+    pub site_elevation_m: Option<f64>,
 }
 
 impl SunUsed {
@@ -530,6 +538,7 @@ impl SunAndObserver {
                 azimuth_deg: self.sun_azimuth,
                 distance_au: self.sun_distance_au,
                 earth_sun_distance_au: None,
+                site_elevation_m: None,
             });
         };
         let time = sora::sun_position::parse_time_utc(time).map_err(|e| match e {
@@ -551,6 +560,7 @@ impl SunAndObserver {
             azimuth_deg: sun.azimuth_deg,
             distance_au: self.sun_distance_au.or(file_sun.date_distance_au(&sun)),
             earth_sun_distance_au: Some(sun.earth_sun_distance_au),
+            site_elevation_m: Some(location.elevation_m()),
         })
     }
 }

@@ -372,3 +372,65 @@ fn the_sun_is_given_one_way_exactly() {
         assert!(out.stdout.is_empty());
     }
 }
+
+#[test]
+fn the_locations_elevation_raises_the_ground() {
+    // At 1 449 m by --location, and by the atmosphere file's key with the
+    // same sun given as angles: the same sky.
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("site.toml");
+    let preset = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../atmospheres/earth-clear.toml"
+    ))
+    .unwrap();
+    std::fs::write(
+        &file,
+        preset.replace(
+            "atmosphere_height_m = 100e3",
+            "atmosphere_height_m = 100e3\nground_altitude_m = 1449",
+        ),
+    )
+    .unwrap();
+    let site = stdout(&spectrum_json(
+        &["--time", "2026-03-20T12:00:00Z", "--location", "45,0,1449"],
+        &ONE_VIEW,
+    ));
+    let (elevation, azimuth, distance) = (
+        number(&site, "sun_elevation_deg").to_string(),
+        number(&site, "sun_azimuth_deg").to_string(),
+        number(&site, "sun_distance_au").to_string(),
+    );
+    let by_file = stdout(&sora(&[
+        "spectrum",
+        "--atmosphere",
+        file.to_str().unwrap(),
+        "--scattering",
+        "single",
+        "--wavelengths",
+        "400:700:100",
+        "--format",
+        "json",
+        "--sun-elevation",
+        &elevation,
+        "--sun-azimuth",
+        &azimuth,
+        "--sun-distance-au",
+        &distance,
+        "--view-elevation",
+        "10",
+        "--view-azimuth",
+        "0",
+    ]));
+    let radiances = |json: &str| {
+        let start = json.find("\"radiance_w_m2_sr_nm\": [").unwrap();
+        json[start..json[start..].find(']').unwrap() + start].to_string()
+    };
+    assert_eq!(radiances(&site), radiances(&by_file));
+    // And not the sea level's sky.
+    let sea = stdout(&spectrum_json(
+        &["--time", "2026-03-20T12:00:00Z", "--location", "45,0"],
+        &ONE_VIEW,
+    ));
+    assert_ne!(radiances(&site), radiances(&sea));
+}

@@ -223,6 +223,16 @@ impl Sky {
         // The sun's distance as `sora spectrum` takes it: given, or the
         // date's for a sun at 1 AU (sora::atmosphere::Sun::date_distance_au).
         let mut atmosphere = atmosphere.inner.clone();
+        // The location's elevation is the ground's, as for `sora --location`.
+        if let (Some(_), Some(&elevation_m)) =
+            (date_sun, location.as_deref().and_then(|l| l.get(2)))
+        {
+            atmosphere.planet = atmosphere
+                .planet
+                .clone()
+                .with_ground_altitude_m(elevation_m)
+                .map_err(|e| value_error(format!("location's elevation: {e}")))?;
+        }
         let sun_distance_au = sun_distance_au
             .or_else(|| date_sun.and_then(|sun| atmosphere.sun.date_distance_au(&sun)));
         if let Some(distance_au) = sun_distance_au {

@@ -192,6 +192,20 @@ def test_the_dates_sun_and_the_sites_air(atmosphere):
         sora.Sky(atmosphere, sun_elevation_deg=30, pressure_hpa=900)
     with pytest.raises(ValueError, match="pressure = -5 hPa"):
         sora.Sky(atmosphere, pressure_hpa=-5, **spa)
+    # The location's elevation is the ground's: the same sky as the
+    # atmosphere file's planet.ground_altitude_m with the same sun.
+    text = sora.Atmosphere.preset_toml("earth-clear").replace(
+        "atmosphere_height_m = 100e3", "atmosphere_height_m = 100e3\nground_altitude_m = 1830.14")
+    raised = sora.Atmosphere.from_toml_str(text)
+    elevation, azimuth = sky.sun_position_deg
+    same = sora.Sky(raised, sun_elevation_deg=elevation, sun_azimuth_deg=azimuth,
+                    sun_distance_au=sky.sun_distance_au, wavelengths_nm="500:600:100",
+                    scattering="single")
+    np.testing.assert_array_equal(sky.radiance(30, 90).values, same.radiance(30, 90).values)
+    sea = sora.Sky(atmosphere, sun_elevation_deg=elevation, sun_azimuth_deg=azimuth,
+                   sun_distance_au=sky.sun_distance_au, wavelengths_nm="500:600:100",
+                   scattering="single")
+    assert np.all(sea.radiance(30, 90).values > sky.radiance(30, 90).values)
 
 
 def test_skies_and_atmospheres_pickle(sky):

@@ -126,13 +126,10 @@ impl Engine {
             let text = apply_controls(&atmosphere_text(spec)?, spec)?;
             let mut atmosphere = Atmosphere::from_toml_str(&text).map_err(|e| e.to_string())?;
             if let Some(albedo) = spec.ground_albedo {
-                let planet = &atmosphere.planet;
-                atmosphere.planet = sora::atmosphere::Planet::new(
-                    planet.radius_m(),
-                    planet.atmosphere_height_m(),
-                    Spectrum::Constant(albedo),
-                )
-                .map_err(|e| format!("ground albedo: {e}"))?;
+                atmosphere.planet = atmosphere
+                    .planet
+                    .with_ground_albedo(Spectrum::Constant(albedo))
+                    .map_err(|e| format!("ground albedo: {e}"))?;
             }
             self.atmosphere = Some((spec.clone(), atmosphere));
         }

@@ -256,7 +256,8 @@ class Sky:
       north, deg (default 180, south);
     - or ``time`` (RFC 3339 text such as ``"2026-06-21T05:30:00+09:00"``,
       or a timezone-aware ``datetime``) and ``location``
-      ``(latitude_deg, longitude_deg[, elevation_m])``, with
+      ``(latitude_deg, longitude_deg[, elevation_m])`` (the elevation is
+      also the ground's: the atmosphere above it, as ``sora --location``), with
       ``refraction`` (default True: the sun's apparent position, through
       the standard atmosphere's air at the site's elevation, or the
       measured ``pressure_hpa`` and ``temperature_c``); an Earth sun (an

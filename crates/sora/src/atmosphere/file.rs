@@ -92,6 +92,7 @@ struct AtmosphereFile {
 struct PlanetFile {
     radius_m: f64,
     atmosphere_height_m: f64,
+    ground_altitude_m: Option<f64>,
     ground_albedo: Option<NumberOr<AlbedoTableFile>>,
 }
 
@@ -393,7 +394,8 @@ fn convert_planet(file: PlanetFile) -> Result<Planet> {
                 .map_err(|e| table_error(&e))?,
         ),
     };
-    Planet::new(file.radius_m, file.atmosphere_height_m, albedo)
+    Planet::new(file.radius_m, file.atmosphere_height_m, albedo)?
+        .with_ground_altitude_m(file.ground_altitude_m.unwrap_or(0.0))
 }
 
 fn convert_sun(
@@ -490,7 +492,7 @@ fn convert_profile(file: ProfileFile, path: &str, planet: &Planet) -> Result<Den
             "give exactly one of exponential, tent, layers, table",
         ));
     }
-    let top_m = planet.atmosphere_height_m();
+    let top_m = planet.top_above_sea_level_m();
     let profile = if let Some(exponential) = file.exponential {
         DensityProfile::exponential(
             exponential.scale_height_m,

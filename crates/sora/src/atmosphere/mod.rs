@@ -197,13 +197,31 @@ impl Atmosphere {
     pub fn compute_optics(&self, grid: &WavelengthGrid) -> Result<AtmosphereOptics> {
         // Every table covers the grid, or one line names the table and the grid.
         coverage::check_grid_coverage(self, grid)?;
-        let top_m = self.planet.atmosphere_height_m();
+        // Amounts given as columns (optical depths, Dobson units) are
+        // columns above sea level; a raised ground (`Planet::
+        // with_ground_altitude_m`) then takes away what lies below it.
+        let top_m = self.planet.top_above_sea_level_m();
+        let ground_m = self.planet.ground_altitude_m();
         let mut species_optics = Vec::with_capacity(self.species.len());
         for (index, species) in self.species.iter().enumerate() {
             let path = format!("species[{index}] ({})", species.name);
-            let column_m = species.profile.vertical_column_m(top_m);
-            let (extinction_per_m, scattering_per_m, phase_function, reference_number_density_m3) =
-                species_coefficients(&species.model, grid, column_m, &path)?;
+            let sea_level_column_m = species.profile.vertical_column_m(top_m);
+            let (
+                mut extinction_per_m,
+                mut scattering_per_m,
+                phase_function,
+                mut reference_number_density_m3,
+            ) = species_coefficients(&species.model, grid, sea_level_column_m, &path)?;
+            let (profile, column_m) = if ground_m == 0.0 {
+                (species.profile.clone(), sea_level_column_m)
+            } else {
+                let (profile, factor) = species.profile.above_ground(ground_m);
+                extinction_per_m *= factor;
+                scattering_per_m *= factor;
+                reference_number_density_m3 = reference_number_density_m3.map(|n| n * factor);
+                let column_m = profile.vertical_column_m(top_m - ground_m);
+                (profile, column_m)
+            };
             // Values that pass their own checks can still combine into an
             // unusable coefficient: an optical depth spread over a column
             // of 1e-308 m is an infinite extinction. Refuse it here, once,
@@ -221,7 +239,7 @@ impl Atmosphere {
             species_optics.push(SpeciesOptics {
                 name: species.name.clone(),
                 kind: species.model.kind(),
-                profile: species.profile.clone(),
+                profile,
                 vertical_column_m: column_m,
                 reference_number_density_m3,
                 extinction_per_m,

@@ -15,6 +15,14 @@
 //! The ground reflects as a Lambertian surface of albedo a(lambda) (a
 //! constant or a table over wavelength): reflected radiance = a E / pi for
 //! an irradiance E.
+//!
+//! The ground may stand above the sea ([`Planet::with_ground_altitude_m`]:
+//! a site at 1 449 m). The file's radius and atmosphere height are then
+//! the sea level's and the top's above it, every species' profile keeps
+//! its altitudes above sea level, and the sky is the sea-level one with
+//! everything below the ground taken away
+//! ([`crate::Atmosphere::compute_optics`]): R_ground = R_sea + g, the
+//! atmosphere g thinner.
 
 use crate::error::{Error, Result};
 use crate::spectrum::{SampledSpectrum, Spectrum, WavelengthGrid};
@@ -26,11 +34,21 @@ pub const MAX_PLANET_RADIUS_M: f64 = 1e10;
 /// Largest supported atmosphere height, m.
 pub const MAX_ATMOSPHERE_HEIGHT_M: f64 = 1e8;
 
+/// The least air a raised ground leaves below the top of the atmosphere, m.
+pub const MIN_AIR_ABOVE_GROUND_M: f64 = 1e3;
+
+/// The lowest ground altitude, m (the Dead Sea's shore is at -430 m).
+pub const MIN_GROUND_ALTITUDE_M: f64 = -1e3;
+
 /// A validated planet.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Planet {
+    /// Radius of the sea level (the profiles' zero), m.
     radius_m: f64,
+    /// Height of the top of the atmosphere above sea level, m.
     atmosphere_height_m: f64,
+    /// Height of the ground above sea level, m.
+    ground_altitude_m: f64,
     ground_albedo: Spectrum,
 }
 
@@ -67,17 +85,66 @@ impl Planet {
         Ok(Planet {
             radius_m,
             atmosphere_height_m,
+            ground_altitude_m: 0.0,
             ground_albedo,
         })
     }
 
-    /// Radius of the ground, m.
+    /// This planet with its ground `ground_altitude_m` above sea level
+    /// (0, or -1000 m up to 1 km below the top of the atmosphere): the sky of a
+    /// site on a plateau or a mountain. The radius and the atmosphere
+    /// height it was made with stay the sea level's.
+    pub fn with_ground_altitude_m(mut self, ground_altitude_m: f64) -> Result<Planet> {
+        if ground_altitude_m == 0.0 {
+            // Sea level: the planet as made, however thin its air.
+            self.ground_altitude_m = 0.0;
+            return Ok(self);
+        }
+        let highest = self.atmosphere_height_m - MIN_AIR_ABOVE_GROUND_M;
+        if !(MIN_GROUND_ALTITUDE_M..=highest).contains(&ground_altitude_m) {
+            return Err(Error::out_of_range(
+                "planet.ground_altitude_m",
+                ground_altitude_m,
+                "m",
+                format!(
+                    "{MIN_GROUND_ALTITUDE_M}..={highest} (at least {MIN_AIR_ABOVE_GROUND_M} m below the top of the atmosphere, planet.atmosphere_height_m above sea level)"
+                ),
+            ));
+        }
+        self.ground_altitude_m = ground_altitude_m;
+        Ok(self)
+    }
+
+    /// This planet with another ground albedo (its geometry unchanged).
+    pub fn with_ground_albedo(&self, ground_albedo: Spectrum) -> Result<Planet> {
+        Planet::new(self.radius_m, self.atmosphere_height_m, ground_albedo)?
+            .with_ground_altitude_m(self.ground_altitude_m)
+    }
+
+    /// Radius of the ground, m: the sea level's plus the ground altitude.
     pub fn radius_m(&self) -> f64 {
-        self.radius_m
+        self.radius_m + self.ground_altitude_m
     }
 
     /// Height of the top of the atmosphere above the ground, m.
     pub fn atmosphere_height_m(&self) -> f64 {
+        self.atmosphere_height_m - self.ground_altitude_m
+    }
+
+    /// Height of the ground above sea level, m (0 unless
+    /// [`Planet::with_ground_altitude_m`] raised it).
+    pub fn ground_altitude_m(&self) -> f64 {
+        self.ground_altitude_m
+    }
+
+    /// Radius of the sea level, m (the file's `planet.radius_m`).
+    pub fn sea_level_radius_m(&self) -> f64 {
+        self.radius_m
+    }
+
+    /// Height of the top of the atmosphere above sea level, m (the file's
+    /// `planet.atmosphere_height_m`).
+    pub fn top_above_sea_level_m(&self) -> f64 {
         self.atmosphere_height_m
     }
 
@@ -109,14 +176,14 @@ impl Planet {
     /// ground.
     #[cfg(test)]
     pub(crate) fn ray_intersects_ground(&self, r_m: f64, mu: f64) -> bool {
-        crate::geometry::ray_intersects_ground(r_m, mu, self.radius_m)
+        crate::geometry::ray_intersects_ground(r_m, mu, self.radius_m())
     }
 
     /// Distance to the ground along (r, mu), m, or `None` when the ray
     /// misses it.
     #[cfg(test)]
     pub(crate) fn distance_to_ground(&self, r_m: f64, mu: f64) -> Option<f64> {
-        crate::geometry::distance_to_ground_boundary(r_m, mu, self.radius_m)
+        crate::geometry::distance_to_ground_boundary(r_m, mu, self.radius_m())
     }
 }
 

@@ -154,6 +154,32 @@ impl ProfileTable {
 }
 
 impl DensityProfile {
+    /// This profile (altitudes above sea level) seen from a ground
+    /// `ground_altitude_m` above sea level: the same densities as a profile
+    /// of heights above that ground, and the factor its relative density
+    /// carries there. An exponential keeps its shape and carries
+    /// exp(-g / H); a table's rows move down by g (rows below the ground
+    /// stay, at negative heights, so interpolation is unchanged).
+    pub(crate) fn above_ground(&self, ground_altitude_m: f64) -> (DensityProfile, f64) {
+        let shifted = |table: &ProfileTable| ProfileTable {
+            altitudes_m: table
+                .altitudes_m
+                .iter()
+                .map(|h| h - ground_altitude_m)
+                .collect(),
+            relative_densities: table.relative_densities.clone(),
+        };
+        match self {
+            DensityProfile::Exponential { scale_height_m } => {
+                (self.clone(), (-ground_altitude_m / scale_height_m).exp())
+            }
+            DensityProfile::PiecewiseLinear(table) => {
+                (DensityProfile::PiecewiseLinear(shifted(table)), 1.0)
+            }
+            DensityProfile::LogLinear(table) => (DensityProfile::LogLinear(shifted(table)), 1.0),
+        }
+    }
+
     /// An exponential profile; `scale_height_m` must be finite and > 0.
     /// `name` is the key in errors.
     pub(crate) fn exponential(scale_height_m: f64, name: &str) -> Result<DensityProfile> {
