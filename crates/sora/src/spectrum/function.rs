@@ -180,15 +180,13 @@ impl Spectrum {
     /// Band averages over [lambda - step/2, lambda + step/2] of each sample,
     /// the band clipped to the table where the grid's end bands stick out of
     /// it (the sample's own wavelength must still be inside). A single-sample
-    /// grid gets the point value.
+    /// grid is one band too (`438.7:438.7:10`: an instrument's 10-nm
+    /// channel; `550` alone: 1 nm).
     pub(crate) fn sample_band_averaged(&self, grid: &WavelengthGrid) -> Result<SampledSpectrum> {
         let table = match self {
             Spectrum::Constant(v) => return Ok(SampledSpectrum::constant(grid.len(), *v)),
             Spectrum::Tabulated(table) => table,
         };
-        if grid.len() == 1 {
-            return self.sample_at_wavelengths(grid);
-        }
         let (first, last) = table.range_nm();
         let half = 0.5 * grid.step_nm();
         grid.wavelengths_nm()
