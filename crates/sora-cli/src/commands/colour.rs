@@ -4,10 +4,10 @@
 
 use std::path::PathBuf;
 
-use crate::output_path::output_target;
 use anyhow::Context;
 use clap::Args;
 use sora::colour::SpectrumToXyz;
+use sora::output::output_target;
 use sora::output::{
     ChannelKind, DisplayImage, ExrOptions, LinearImage, OutputFormat, write_exr, write_png,
 };
@@ -48,7 +48,7 @@ pub struct ColourArgs {
 }
 
 pub fn run(args: ColourArgs) -> anyhow::Result<()> {
-    // Checked before any work (see `output_path`).
+    // Checked before any work (`sora::output::output_target`).
     let swatch = match &args.swatch {
         Some(path) => Some((
             OutputFormat::from_path(path)?,

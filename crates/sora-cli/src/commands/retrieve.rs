@@ -15,7 +15,6 @@ use sora::inversion::{
 
 use crate::arguments::AtmosphereSource;
 use crate::commands::atmosphere::json_string;
-use crate::output_path::output_target;
 
 /// Retrieve the aerosol from measured sky radiances: its optical depth,
 /// size distribution and refractive index, and from them its single-
@@ -251,16 +250,17 @@ pub fn run(args: RetrieveArgs) -> anyhow::Result<()> {
             plot.display()
         );
     }
-    let residuals_target = args
-        .residuals
-        .as_deref()
-        .map(|path| output_target(path, "--residuals"))
-        .transpose()?;
-    let plot_target = args
-        .plot
-        .as_deref()
-        .map(|path| output_target(path, "--plot"))
-        .transpose()?;
+    // Both checked together: writable, and not one file for both.
+    let outputs: Vec<(&Path, &str)> = [
+        (args.residuals.as_deref(), "--residuals"),
+        (args.plot.as_deref(), "--plot"),
+    ]
+    .into_iter()
+    .filter_map(|(path, option)| path.map(|path| (path, option)))
+    .collect();
+    let mut targets = sora::output::output_targets(&outputs)?.into_iter();
+    let residuals_target = args.residuals.as_ref().and_then(|_| targets.next());
+    let plot_target = args.plot.as_ref().and_then(|_| targets.next());
 
     let atmosphere = AtmosphereSource {
         preset: match (&args.preset, &args.atmosphere) {
@@ -331,12 +331,15 @@ pub fn run(args: RetrieveArgs) -> anyhow::Result<()> {
         Format::Csv => csv(&retrievals),
         Format::Json => json(&retrievals),
     };
+    // Both files or neither.
+    let mut files = sora::output::OutputFiles::new();
     if let Some(target) = &residuals_target {
-        sora::output::write_text(target, &residuals_csv(&retrievals))?;
+        files.text(target, &residuals_csv(&retrievals))?;
     }
     if let (Some(target), Some(image)) = (&plot_target, &plot) {
-        sora::output::write_png(target, image)?;
+        files.png(target, image)?;
     }
+    files.commit()?;
     let mut out = std::io::BufWriter::new(std::io::stdout().lock());
     out.write_all(text.as_bytes())?;
     out.flush()?;
