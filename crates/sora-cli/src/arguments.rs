@@ -167,16 +167,14 @@ impl AtmosphereSource {
             .atmosphere
             .as_ref()
             .expect("clap requires --preset or --atmosphere");
-        let text = std::fs::read_to_string(path)
-            .with_context(|| format!("cannot read {}", path.display()))?;
+        let text = sora::input::read_text(path)?;
         let directory = path
             .parent()
             .map(std::path::Path::to_path_buf)
             .unwrap_or_default();
         let mut read_file = |name: &str| {
             let named = directory.join(name);
-            std::fs::read_to_string(&named)
-                .map_err(|e| format!("cannot read {}: {e}", named.display()))
+            sora::input::read_text(&named).map_err(|e| e.to_string())
         };
         sora::atmosphere::Atmosphere::from_toml_str_with_files(&text, &mut read_file)
             .with_context(|| path.display().to_string())

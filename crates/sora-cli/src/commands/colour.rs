@@ -58,9 +58,9 @@ pub fn run(args: ColourArgs) -> anyhow::Result<()> {
     };
     let name = args.spectrum.display().to_string();
     let text = if args.spectrum.as_os_str() == "-" {
-        std::io::read_to_string(std::io::stdin()).context("cannot read the spectrum from stdin")?
+        sora::input::read_text_from(std::io::stdin(), "stdin")?
     } else {
-        std::fs::read_to_string(&args.spectrum).with_context(|| format!("cannot read {name}"))?
+        sora::input::read_text(&args.spectrum)?
     };
     let table = TabulatedSpectrum::parse_csv(&text, &name)?;
     let sampled = Spectrum::Tabulated(table)

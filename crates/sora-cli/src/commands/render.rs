@@ -225,6 +225,10 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         } else {
             width
         });
+    // The limits of docs/limits.md, before any work: the image's sides,
+    // the exposure (--ev100), the number of frames.
+    sora::sky::check_image_size(width, height)?;
+    args.colour.display_mapping()?;
     let frame_count = frame_count(&args)?;
     // The polarisation outputs: polarised light, one frame, the right
     // formats, writable paths.

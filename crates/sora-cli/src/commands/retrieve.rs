@@ -116,6 +116,18 @@ pub struct RetrieveArgs {
     )]
     scan: Option<u64>,
 
+    /// With an AERONET sky file: the most scans one run retrieves (each
+    /// takes tens of seconds); a file with more is refused before any work
+    /// (retrieve them in parts with --scan, or raise this)
+    #[arg(
+        long,
+        value_name = "N",
+        default_value_t = 100,
+        value_parser = clap::value_parser!(u64).range(1..),
+        conflicts_with_all = ["radiances", "normalised_spectrum"]
+    )]
+    max_scans: u64,
+
     /// A spectrum in one direction, known up to a factor (wavelength_nm,
     /// relative_radiance)
     #[arg(
@@ -353,7 +365,7 @@ pub fn run(args: RetrieveArgs) -> anyhow::Result<()> {
 
 /// The text of `path`, or a one-line error naming it.
 fn read(path: &Path) -> anyhow::Result<String> {
-    std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))
+    Ok(sora::input::read_text(path)?)
 }
 
 /// The scans the arguments name, read and checked; AERONET's notes on
@@ -423,6 +435,14 @@ fn read_scans(args: &RetrieveArgs) -> anyhow::Result<Vec<Scan>> {
         bail!(
             "--scan {n}: {} has {count} usable scan(s): give 1..={count}",
             path.display()
+        );
+    }
+    if scans.len() as u64 > args.max_scans {
+        bail!(
+            "{} has {} usable scans, more than --max-scans {}: retrieve one with --scan N, or raise --max-scans (each scan takes tens of seconds)",
+            path.display(),
+            scans.len(),
+            args.max_scans
         );
     }
     for note in notes {
