@@ -71,27 +71,31 @@ fn no_species_under_a_low_sun_is_a_black_sky_in_every_command() {
 fn a_sequence_from_a_time_starts_at_that_suns_elevation() {
     let dir = tempfile::tempdir().unwrap();
     let output = dir.path().join("s.png");
-    let out = sora(&[
-        "render",
-        "--preset",
-        "clear-sky-reference",
-        "--scattering",
-        "single",
-        "--wavelengths",
-        "400:700:100",
-        "--width",
-        "8",
-        "--time",
-        "2026-06-21T05:30:00+09:00",
-        "--location",
-        "35.68,139.77",
-        "--sun-elevation-to",
-        "20",
-        "--sun-elevation-step",
-        "2",
-        "-o",
-        output.to_str().unwrap(),
-    ]);
+    // The sun at --time; with --sun-elevation-to a sequence from there.
+    let render = |extra: &[&str], output: &std::path::Path| {
+        let base = [
+            "render",
+            "--preset",
+            "clear-sky-reference",
+            "--scattering",
+            "single",
+            "--wavelengths",
+            "400:700:100",
+            "--width",
+            "8",
+            "--time",
+            "2026-06-21T05:30:00+09:00",
+            "--location",
+            "35.68,139.77",
+            "-o",
+            output.to_str().unwrap(),
+        ];
+        sora(&[&base[..], extra].concat())
+    };
+    let out = render(
+        &["--sun-elevation-to", "20", "--sun-elevation-step", "2"],
+        &output,
+    );
     assert!(
         out.status.success(),
         "{}",
@@ -101,23 +105,7 @@ fn a_sequence_from_a_time_starts_at_that_suns_elevation() {
     // The sun at 05:30 in Tokyo on the solstice is at about 11.1 degrees
     // (the same run without a sequence says where); frames every 2 degrees
     // up to 20 degrees: 5 of them, each at the time's azimuth.
-    let single = sora(&[
-        "render",
-        "--preset",
-        "clear-sky-reference",
-        "--scattering",
-        "single",
-        "--wavelengths",
-        "400:700:100",
-        "--width",
-        "8",
-        "--time",
-        "2026-06-21T05:30:00+09:00",
-        "--location",
-        "35.68,139.77",
-        "-o",
-        dir.path().join("one.png").to_str().unwrap(),
-    ]);
+    let single = render(&[], &dir.path().join("one.png"));
     let single = String::from_utf8(single.stderr).unwrap();
     let sun = |line: &str| -> (f64, f64) {
         let after = line.split("sun at ").nth(1).unwrap();

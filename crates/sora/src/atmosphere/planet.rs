@@ -189,6 +189,13 @@ mod tests {
     }
 
     #[test]
+    fn the_atmosphere_height_bounds_are_inclusive() {
+        for height in [MIN_ATMOSPHERE_HEIGHT_M, MAX_ATMOSPHERE_HEIGHT_M] {
+            assert!(Planet::new(6e6, height, Spectrum::Constant(0.0)).is_ok());
+        }
+    }
+
+    #[test]
     fn small_planet_works() {
         let planet = Planet::new(1e5, 1e4, Spectrum::Constant(0.1)).unwrap();
         assert!((planet.distance_to_top_of_atmosphere(1e5, 1.0) - 1e4).abs() < 1e-9);
