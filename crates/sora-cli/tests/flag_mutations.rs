@@ -569,9 +569,9 @@ fn complete_image(name: &str, bytes: &[u8]) -> bool {
             && &bytes[bytes.len() - 8..bytes.len() - 4] == b"IEND"
     } else if name.ends_with(".exr") {
         bytes.starts_with(&[0x76, 0x2f, 0x31, 0x01])
-    } else if name.ends_with(".csv") {
-        // A complete CSV (retrieve --residuals): a header, whole lines.
-        bytes.starts_with(b"scan,") && bytes.ends_with(b"\n")
+    } else if bytes.starts_with(b"scan,") {
+        // retrieve --residuals, by whatever name: a header, whole lines.
+        bytes.ends_with(b"\n")
     } else {
         false
     }

@@ -421,7 +421,7 @@ fn frame_count(args: &RenderArgs) -> anyhow::Result<usize> {
         bail!("--sun-elevation-to = {last} deg is out of range: allowed -90..=90 deg");
     }
     let frames = ((last - first).abs() / step + 1e-9).floor() + 1.0;
-    if !(frames <= MAX_FRAMES as f64) {
+    if frames.is_nan() || frames > MAX_FRAMES as f64 {
         bail!(
             "{frames} frames from {first} to {last} deg every {step} deg: at most {MAX_FRAMES} (a larger --sun-elevation-step)"
         );

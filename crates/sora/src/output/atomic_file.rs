@@ -349,10 +349,16 @@ mod tests {
         let second = directory.path().join("fit.png");
         let mut files = OutputFiles::new();
         files
-            .stage(&first, |file| Ok(file.write_all(b"a").unwrap()))
+            .stage(&first, |file| {
+                file.write_all(b"a").unwrap();
+                Ok(())
+            })
             .unwrap();
         files
-            .stage(&second, |file| Ok(file.write_all(b"b").unwrap()))
+            .stage(&second, |file| {
+                file.write_all(b"b").unwrap();
+                Ok(())
+            })
             .unwrap();
         // A FIFO takes the second target's place after staging: the commit
         // refuses it, and the first file, which it had created, goes too.

@@ -200,7 +200,7 @@ pub const MAX_VIEW_VALUES: usize = 10_000_000;
 /// views x wavelengths, naming `what` asked for them (a count as f64, so
 /// that a step's count past any integer is refused too).
 pub fn check_view_count(what: &str, views: f64, wavelengths: usize) -> Result<()> {
-    if !(views <= MAX_VIEWS as f64) {
+    if views.is_nan() || views > MAX_VIEWS as f64 {
         return Err(Error::Unsupported(format!(
             "{what} gives {views:e} directions, more than the limit of {MAX_VIEWS}: use a coarser step or fewer directions"
         )));
