@@ -563,15 +563,16 @@ fn stand_ins_changed(directory: &Path) -> Option<String> {
 /// Whether `bytes` is a complete output file of its kind (an image, or
 /// retrieve's residuals).
 fn complete_image(name: &str, bytes: &[u8]) -> bool {
-    if name.ends_with(".png") {
+    if bytes.starts_with(b"scan,") {
+        // retrieve --residuals, by whatever name (through a link named
+        // .png too): a header, whole lines.
+        bytes.ends_with(b"\n")
+    } else if name.ends_with(".png") {
         bytes.starts_with(b"\x89PNG\r\n\x1a\n")
             && bytes.len() > 20
             && &bytes[bytes.len() - 8..bytes.len() - 4] == b"IEND"
     } else if name.ends_with(".exr") {
         bytes.starts_with(&[0x76, 0x2f, 0x31, 0x01])
-    } else if bytes.starts_with(b"scan,") {
-        // retrieve --residuals, by whatever name: a header, whole lines.
-        bytes.ends_with(b"\n")
     } else {
         false
     }
