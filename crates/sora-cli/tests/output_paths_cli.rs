@@ -216,6 +216,15 @@ fn perspective_options_with_whole_sky_cameras_are_refused() {
     );
 }
 
+/// The repository's sample radiances for `sora retrieve` (it never gets to
+/// read them here: the outputs are refused first).
+fn radiances_csv() -> String {
+    format!(
+        "{}/../../docs/retrieval_case4_radiances.csv",
+        env!("CARGO_MANIFEST_DIR")
+    )
+}
+
 /// Stand-ins for devices in a temporary directory (the real /dev is never
 /// touched): a FIFO, a link to /dev/null and a link to the FIFO.
 #[cfg(unix)]
@@ -242,10 +251,7 @@ fn devices_and_fifos_are_refused_by_every_output() {
     let csv = device_stand_ins(&dir.path().join("."), "csv");
     let spectrum = dir.path().join("flat.csv");
     std::fs::write(&spectrum, "wavelength_nm,value\n360,1\n830,1\n").unwrap();
-    let radiances = format!(
-        "{}/../../docs/retrieval_case4_radiances.csv",
-        env!("CARGO_MANIFEST_DIR")
-    );
+    let radiances = radiances_csv();
     let fine = dir.path().join("fine.png");
     let fine = fine.to_str().unwrap();
     for (device, csv_device) in png.iter().zip(&csv) {
@@ -335,10 +341,7 @@ fn two_outputs_on_one_file_are_refused() {
     let link = dir.path().join("link.csv");
     std::os::unix::fs::symlink("fit.png", &link).unwrap();
     let plot = dir.path().join("fit.png");
-    let radiances = format!(
-        "{}/../../docs/retrieval_case4_radiances.csv",
-        env!("CARGO_MANIFEST_DIR")
-    );
+    let radiances = radiances_csv();
     let stderr = one_line_error(&sora(&[
         "retrieve",
         "--radiances",

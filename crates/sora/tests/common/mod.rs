@@ -1,4 +1,6 @@
-//! What the library's mutation campaigns share: a seeded generator.
+//! The mutation campaigns' seeded generator, shared by the library's
+//! tests and the command line's (`crates/sora-cli/tests/common` includes
+//! this file).
 #![allow(dead_code)]
 
 /// splitmix64: a small, seeded, portable generator (the same files on
@@ -17,5 +19,10 @@ impl Rng {
     /// Uniform in 0..n (n > 0).
     pub fn below(&mut self, n: usize) -> usize {
         (self.next_u64() % n as u64) as usize
+    }
+
+    /// One of `items`.
+    pub fn pick<'a>(&mut self, items: &[&'a str]) -> &'a str {
+        items[self.below(items.len())]
     }
 }
