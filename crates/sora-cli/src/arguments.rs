@@ -167,16 +167,14 @@ impl AtmosphereSource {
             .atmosphere
             .as_ref()
             .expect("clap requires --preset or --atmosphere");
-        let text = std::fs::read_to_string(path)
-            .with_context(|| format!("cannot read {}", path.display()))?;
+        let text = sora::input::read_text(path)?;
         let directory = path
             .parent()
             .map(std::path::Path::to_path_buf)
             .unwrap_or_default();
         let mut read_file = |name: &str| {
             let named = directory.join(name);
-            std::fs::read_to_string(&named)
-                .map_err(|e| format!("cannot read {}: {e}", named.display()))
+            sora::input::read_text(&named).map_err(|e| e.to_string())
         };
         sora::atmosphere::Atmosphere::from_toml_str_with_files(&text, &mut read_file)
             .with_context(|| path.display().to_string())
@@ -440,7 +438,7 @@ impl SunAndObserver {
                 .with_ground_albedo(sora::spectrum::Spectrum::Constant(albedo))
                 .map_err(|e| anyhow::anyhow!("--ground-albedo: {e}"))?;
         }
-        let sun = self.sun_used(&atmosphere.sun)?;
+        let sun = self.sun_used(Some(&atmosphere.sun))?;
         if let Some(elevation_m) = sun.site_elevation_m {
             atmosphere.planet = atmosphere
                 .planet
@@ -524,11 +522,19 @@ pub fn warn_non_polarising_species(sky: &sora::Sky) {
 }
 
 impl SunAndObserver {
+    /// The sun's elevation and azimuth (degrees) these options give: as
+    /// written, or computed for --time at --location.
+    pub fn sun_deg(&self) -> anyhow::Result<(f64, f64)> {
+        let sun = self.sun_used(None)?;
+        Ok((sun.elevation_deg, sun.azimuth_deg))
+    }
+
     /// The sun these options give for an atmosphere whose sun is
     /// `file_sun`: its position as written, or computed for --time at
     /// --location; its distance from --sun-distance-au, or with --time the
-    /// date's Earth-Sun distance when `file_sun` is at 1 AU (scale 1).
-    pub fn sun_used(&self, file_sun: &sora::atmosphere::Sun) -> anyhow::Result<SunUsed> {
+    /// date's Earth-Sun distance when `file_sun` is at 1 AU (scale 1;
+    /// without a `file_sun`, only --sun-distance-au).
+    pub fn sun_used(&self, file_sun: Option<&sora::atmosphere::Sun>) -> anyhow::Result<SunUsed> {
         let (Some(time), Some(location)) = (&self.time, &self.location) else {
             let elevation = self
                 .sun_elevation
@@ -558,7 +564,9 @@ impl SunAndObserver {
         Ok(SunUsed {
             elevation_deg: sun.elevation_deg,
             azimuth_deg: sun.azimuth_deg,
-            distance_au: self.sun_distance_au.or(file_sun.date_distance_au(&sun)),
+            distance_au: self
+                .sun_distance_au
+                .or(file_sun.and_then(|file_sun| file_sun.date_distance_au(&sun))),
             earth_sun_distance_au: Some(sun.earth_sun_distance_au),
             site_elevation_m: Some(location.elevation_m()),
         })

@@ -10,7 +10,6 @@ mod bitmap_text;
 mod commands;
 mod estimate;
 mod fit_plot;
-mod output_path;
 mod polarisation_maps;
 
 use clap::{Parser, Subcommand};

@@ -1,12 +1,16 @@
 //! Mutation fuzzing of the command-line flags (issue 17: never abort,
 //! never print NaN, never leave a partial file), through the binary.
 //!
-//! Tiny valid invocations of every command (`mie`, `spectrum`, `render`,
-//! `irradiance`, `atmosphere show`, `colour`: a few pixels, two
-//! wavelengths) are mutated by a seeded generator (one or two edits:
+//! Tiny valid invocations of every command (`mie`, `spectrum`, `render`
+//! with sequences from `--time` and polarisation maps, `irradiance` with
+//! `--time`, `atmosphere show`, `colour`, `retrieve` of ten radiances with
+//! `--residuals` and `--plot`: a few pixels, two wavelengths) are mutated
+//! by a seeded generator (one or two edits:
 //! replace a value by 0, -1, 1e308, NaN, inf, 5e-324, a word, an empty
 //! string, a value past a limit; drop, duplicate or misspell a flag; add a
-//! flag of another command with an awkward value; swap the command), and
+//! flag of another command with an awkward value; point an output at a
+//! device stand-in (a FIFO, a link to /dev/null or to the FIFO), a
+//! directory, a link or another output's file; swap the command), and
 //! each is run in a fresh directory. Every run must:
 //!
 //! - exit with status 0, 1 (sora's own error) or 2 (clap's usage error),
@@ -16,7 +20,8 @@
 //! - print no NaN or infinity on stdout;
 //! - leave no partial file: no temporary file ever, nothing new after a
 //!   failure, and only complete images (PNG or OpenEXR magic and, for PNG,
-//!   the IEND chunk at the end) after a success.
+//!   the IEND chunk at the end) and CSV after a success;
+//! - leave the device stand-ins, the directory and the links as they were.
 //!
 //! A run still going after [`TIMEOUT`] (a legal but long job the mutation
 //! made, e.g. many frames) is killed and counted as slow, not judged. A
@@ -135,6 +140,45 @@ fn templates() -> Vec<Vec<(&'static str, Option<&'static str>)>> {
             ("--wavelengths", Some("400:700:100")),
             ("--swatch", Some("swatch.png")),
         ],
+        // A sequence whose first sun comes from --time (about 11 degrees at
+        // 05:30 in Tokyo on the solstice: two frames).
+        vec![
+            ("render", None),
+            ("--preset", Some("clear-sky-reference")),
+            ("--time", Some("2026-06-21T05:30:00+09:00")),
+            ("--location", Some("35.68,139.77")),
+            ("--sun-elevation-to", Some("12")),
+            ("--wavelengths", Some("500:600:100")),
+            ("--scattering", Some("single")),
+            ("--width", Some("2")),
+            ("-o", Some("seq.png")),
+        ],
+        with_scene(
+            &[("render", None)],
+            &[
+                ("--width", Some("2")),
+                ("--dolp", Some("dolp.png")),
+                ("--aop", Some("aop.png")),
+                ("-o", Some("out.exr")),
+            ],
+        ),
+        vec![
+            ("irradiance", None),
+            ("--preset", Some("clear-sky-reference")),
+            ("--time", Some("2026-06-21T12:00:00Z")),
+            ("--location", Some("0,0")),
+            ("--wavelengths", Some("500:600:100")),
+            ("--scattering", Some("single")),
+        ],
+        vec![
+            ("retrieve", None),
+            ("--radiances", Some("radiances.csv")),
+            ("--preset", Some("clear-sky-reference")),
+            ("--max-iterations", Some("1")),
+            ("--starting-points", Some("1")),
+            ("--residuals", Some("res.csv")),
+            ("--plot", Some("fit.png")),
+        ],
     ]
 }
 
@@ -170,7 +214,58 @@ const VALUES: [&str; 26] = [
 
 /// Flags that a mutation may add: the commands that take them, and values
 /// chosen to stay cheap when they are legal.
-const EXTRA_FLAGS: [(&str, &str, &[&str]); 33] = [
+const EXTRA_FLAGS: [(&str, &str, &[&str]); 41] = [
+    // Output paths: device stand-ins (a FIFO, links to /dev/null and to
+    // the FIFO), a directory, a link to a file, and the other outputs'
+    // names (two outputs on one file).
+    (
+        "-o",
+        "render",
+        &[
+            "out.png",
+            "fifo.png",
+            "null.png",
+            "sub",
+            "link.png",
+            "dolp.png",
+            "to-fifo.png",
+        ],
+    ),
+    (
+        "--dolp",
+        "render",
+        &[
+            "dolp.png", "fifo.png", "null.png", "out.png", "link.png", "sub",
+        ],
+    ),
+    (
+        "--aop",
+        "render",
+        &["aop.png", "null.png", "dolp.png", "to-fifo.png"],
+    ),
+    (
+        "--swatch",
+        "colour",
+        &["swatch.png", "fifo.png", "null.png", "sub", "link.png"],
+    ),
+    (
+        "--residuals",
+        "retrieve",
+        &[
+            "res.csv", "fifo.csv", "null.csv", "fit.png", "sub", "link.png",
+        ],
+    ),
+    (
+        "--plot",
+        "retrieve",
+        &["fit.png", "fifo.png", "null.png", "res.csv", "link.png"],
+    ),
+    ("--max-scans", "retrieve", &["0", "1", "-1"]),
+    (
+        "--radiances",
+        "retrieve",
+        &["flat.csv", "fifo.csv", "missing.csv", "radiances.csv"],
+    ),
     ("--width", "render", &["0", "1", "3", "16385", "nan"]),
     ("--height", "render", &["0", "1", "2", "99999999"]),
     (
@@ -274,12 +369,13 @@ const EXTRA_FLAGS: [(&str, &str, &[&str]); 33] = [
     ("--gamma", "mie", &["0.1,1e-30", "0.5,0.49", "0.5,0.5"]),
 ];
 
-const COMMANDS: [&str; 6] = [
+const COMMANDS: [&str; 7] = [
     "mie",
     "spectrum",
     "render",
     "irradiance",
     "colour",
+    "retrieve",
     "self-test",
 ];
 
@@ -391,13 +487,87 @@ fn write_inputs(directory: &Path) {
         "elevation_deg,azimuth_deg\n10,0\n45,90\n",
     )
     .unwrap();
+    std::fs::write(directory.join("radiances.csv"), RADIANCES).unwrap();
+    // Stand-ins for devices, never the real /dev files: FIFOs and links
+    // to /dev/null and to a FIFO; a directory; a link to a file.
+    for fifo in ["fifo.png", "fifo.csv"] {
+        let status = Command::new("mkfifo")
+            .arg(directory.join(fifo))
+            .status()
+            .unwrap();
+        assert!(status.success());
+    }
+    for null in ["null.png", "null.csv"] {
+        std::os::unix::fs::symlink("/dev/null", directory.join(null)).unwrap();
+    }
+    std::os::unix::fs::symlink("fifo.png", directory.join("to-fifo.png")).unwrap();
+    std::os::unix::fs::symlink("linked.png", directory.join("link.png")).unwrap();
+    std::fs::create_dir(directory.join("sub")).unwrap();
 }
 
-const INPUTS: [&str; 2] = ["directions.csv", "flat.csv"];
+/// A small set of sky radiances for `sora retrieve` (10 of the case-4
+/// almucantar's, at 440 and 870 nm: docs/retrieval_case4_radiances.csv).
+const RADIANCES: &str = "wavelength_nm,sun_elevation_deg,sun_azimuth_deg,view_elevation_deg,view_azimuth_deg,radiance_w_m2_sr_nm,uncertainty_w_m2_sr_nm
+440,19.1476,180,19.1476,184.0000,3.783041e-1,1.1572e-2
+440,19.1476,180,19.1476,190.0000,2.960933e-1,9.0731e-3
+440,19.1476,180,19.1476,200.0000,2.417940e-1,7.4358e-3
+440,19.1476,180,19.1476,225.0000,1.319842e-1,4.1333e-3
+440,19.1476,180,19.1476,270.0000,5.586914e-2,1.8195e-3
+870,19.1476,180,19.1476,184.0000,3.917878e-1,1.1788e-2
+870,19.1476,180,19.1476,190.0000,1.976243e-1,5.9532e-3
+870,19.1476,180,19.1476,200.0000,1.229544e-1,3.7119e-3
+870,19.1476,180,19.1476,225.0000,6.268490e-2,1.9038e-3
+870,19.1476,180,19.1476,270.0000,1.967825e-2,6.2201e-4
+";
 
-/// Whether `bytes` is a complete image file of its kind.
+/// The inputs (and the stand-ins, checked untouched after every run).
+const INPUTS: [&str; 10] = [
+    "directions.csv",
+    "flat.csv",
+    "radiances.csv",
+    "fifo.png",
+    "fifo.csv",
+    "null.png",
+    "null.csv",
+    "to-fifo.png",
+    "link.png",
+    "sub",
+];
+
+/// A problem if a stand-in for a device (or the directory, or the link)
+/// is not what it was: every output must have refused it.
+fn stand_ins_changed(directory: &Path) -> Option<String> {
+    use std::os::unix::fs::FileTypeExt;
+    let kind = |name: &str| std::fs::symlink_metadata(directory.join(name)).map(|m| m.file_type());
+    for fifo in ["fifo.png", "fifo.csv"] {
+        if !kind(fifo).is_ok_and(|t| t.is_fifo()) {
+            return Some(format!("the FIFO {fifo} was replaced"));
+        }
+    }
+    for (link, target) in [
+        ("null.png", "/dev/null"),
+        ("null.csv", "/dev/null"),
+        ("to-fifo.png", "fifo.png"),
+        ("link.png", "linked.png"),
+    ] {
+        if std::fs::read_link(directory.join(link)).ok().as_deref() != Some(Path::new(target)) {
+            return Some(format!("the link {link} was replaced"));
+        }
+    }
+    if !kind("sub").is_ok_and(|t| t.is_dir()) {
+        return Some("the directory sub was replaced".to_string());
+    }
+    None
+}
+
+/// Whether `bytes` is a complete output file of its kind (an image, or
+/// retrieve's residuals).
 fn complete_image(name: &str, bytes: &[u8]) -> bool {
-    if name.ends_with(".png") {
+    if bytes.starts_with(b"scan,") {
+        // retrieve --residuals, by whatever name (through a link named
+        // .png too): a header, whole lines.
+        bytes.ends_with(b"\n")
+    } else if name.ends_with(".png") {
         bytes.starts_with(b"\x89PNG\r\n\x1a\n")
             && bytes.len() > 20
             && &bytes[bytes.len() - 8..bytes.len() - 4] == b"IEND"
@@ -486,6 +656,9 @@ fn run_case(line: &[String], directory: &Path, counts: &mut Counts) -> Option<St
         .collect();
     if let Some((name, _)) = files.iter().find(|(name, _)| name.contains(".tmp-")) {
         return Some(format!("temporary file left: {name}"));
+    }
+    if let Some(problem) = stand_ins_changed(directory) {
+        return Some(problem);
     }
     match status.code() {
         Some(0) => {

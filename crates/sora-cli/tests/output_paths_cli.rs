@@ -1,7 +1,9 @@
-//! Output paths (issue 17): what `sora render -o` and `sora colour
-//! --swatch` do with a directory, a symbolic link and a read-only file,
-//! checked before any work (the policy is in `src/output_path.rs` and
-//! `sora render --help`).
+//! Output paths: what every output (`sora render -o`, `--dolp`, `--aop`,
+//! sequences, `sora colour --swatch`, `sora retrieve --residuals`,
+//! `--plot`) does with a directory, a symbolic link, a read-only file, a
+//! device (a FIFO or a link to /dev/null stands in for one) and two
+//! outputs on one file, checked before any work (the policy is
+//! `sora::output::output_target` and `sora render --help`).
 
 mod common;
 
@@ -211,5 +213,151 @@ fn perspective_options_with_whole_sky_cameras_are_refused() {
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// The repository's sample radiances for `sora retrieve` (it never gets to
+/// read them here: the outputs are refused first).
+fn radiances_csv() -> String {
+    format!(
+        "{}/../../docs/retrieval_case4_radiances.csv",
+        env!("CARGO_MANIFEST_DIR")
+    )
+}
+
+/// Stand-ins for devices in a temporary directory (the real /dev is never
+/// touched): a FIFO, a link to /dev/null and a link to the FIFO.
+#[cfg(unix)]
+fn device_stand_ins(dir: &std::path::Path, extension: &str) -> Vec<std::path::PathBuf> {
+    let fifo = dir.join(format!("fifo.{extension}"));
+    let status = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let null = dir.join(format!("null.{extension}"));
+    std::os::unix::fs::symlink("/dev/null", &null).unwrap();
+    let to_fifo = dir.join(format!("to-fifo.{extension}"));
+    std::os::unix::fs::symlink(&fifo, &to_fifo).unwrap();
+    vec![fifo, null, to_fifo]
+}
+
+#[cfg(unix)]
+#[test]
+fn devices_and_fifos_are_refused_by_every_output() {
+    use std::os::unix::fs::FileTypeExt;
+    let dir = tempfile::tempdir().unwrap();
+    let png = device_stand_ins(dir.path(), "png");
+    let csv = device_stand_ins(&dir.path().join("."), "csv");
+    let spectrum = dir.path().join("flat.csv");
+    std::fs::write(&spectrum, "wavelength_nm,value\n360,1\n830,1\n").unwrap();
+    let radiances = radiances_csv();
+    let fine = dir.path().join("fine.png");
+    let fine = fine.to_str().unwrap();
+    for (device, csv_device) in png.iter().zip(&csv) {
+        let device = device.to_str().unwrap();
+        let csv_device = csv_device.to_str().unwrap();
+        let runs: Vec<(Vec<&str>, &str)> = vec![
+            (vec!["render", "--sun-elevation", "30", "-o", device], "-o"),
+            (
+                vec![
+                    "render",
+                    "--sun-elevation",
+                    "30",
+                    "-o",
+                    fine,
+                    "--dolp",
+                    device,
+                ],
+                "--dolp",
+            ),
+            (
+                vec![
+                    "render",
+                    "--sun-elevation",
+                    "30",
+                    "-o",
+                    fine,
+                    "--aop",
+                    device,
+                ],
+                "--aop",
+            ),
+            (
+                vec!["colour", spectrum.to_str().unwrap(), "--swatch", device],
+                "--swatch",
+            ),
+            (
+                vec![
+                    "retrieve",
+                    "--radiances",
+                    &radiances,
+                    "--residuals",
+                    csv_device,
+                ],
+                "--residuals",
+            ),
+            (
+                vec!["retrieve", "--radiances", &radiances, "--plot", device],
+                "--plot",
+            ),
+        ];
+        for (mut args, option) in runs {
+            if args[0] == "render" {
+                args.extend(["--preset", "clear-sky-reference", "--width", "8"]);
+            }
+            let started = std::time::Instant::now();
+            let stderr = one_line_error(&sora(&args));
+            assert!(
+                stderr.contains(option) && stderr.contains("is not a regular file"),
+                "{args:?}: {stderr}"
+            );
+            assert!(started.elapsed().as_secs() < 10, "refused before any work");
+        }
+    }
+    // The stand-ins are as they were, and nothing else was written.
+    for path in png.iter().chain(&csv) {
+        let metadata = std::fs::symlink_metadata(path).unwrap();
+        assert!(metadata.file_type().is_fifo() || metadata.file_type().is_symlink());
+    }
+    assert!(!std::path::Path::new(fine).exists());
+}
+
+#[cfg(unix)]
+#[test]
+fn two_outputs_on_one_file_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let image = dir.path().join("sky.png");
+    let image = image.to_str().unwrap();
+    let stderr = one_line_error(&render(&PRESET, image, &["--dolp", image]));
+    assert!(
+        stderr.contains(&format!("--dolp {image} is the same file as -o {image}")),
+        "{stderr}"
+    );
+    // By another spelling, or through a link.
+    let spelled = format!("{}/./sky.png", dir.path().display());
+    let stderr = one_line_error(&render(&PRESET, image, &["--aop", &spelled]));
+    assert!(stderr.contains("is the same file as -o"), "{stderr}");
+    let link = dir.path().join("link.csv");
+    std::os::unix::fs::symlink("fit.png", &link).unwrap();
+    let plot = dir.path().join("fit.png");
+    let radiances = radiances_csv();
+    let stderr = one_line_error(&sora(&[
+        "retrieve",
+        "--radiances",
+        &radiances,
+        "--residuals",
+        link.to_str().unwrap(),
+        "--plot",
+        plot.to_str().unwrap(),
+    ]));
+    assert!(
+        stderr.contains("--plot") && stderr.contains("is the same file as --residuals"),
+        "{stderr}"
+    );
+    assert_eq!(
+        std::fs::read_dir(dir.path()).unwrap().count(),
+        1,
+        "only the link"
     );
 }

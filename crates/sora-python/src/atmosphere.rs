@@ -45,8 +45,8 @@ fn parse_with_files(text: &str, directory: &Path, context: &str) -> PyResult<sor
     let unreadable: RefCell<Option<String>> = RefCell::new(None);
     let mut read_file = |name: &str| {
         let path = directory.join(name);
-        std::fs::read_to_string(&path).map_err(|e| {
-            let message = format!("cannot read {}: {e}", path.display());
+        sora::input::read_text(&path).map_err(|e| {
+            let message = e.to_string();
             *unreadable.borrow_mut() = Some(message.clone());
             message
         })
@@ -76,8 +76,7 @@ impl Atmosphere {
     /// directory.
     #[staticmethod]
     fn from_toml(path: PathBuf) -> PyResult<Atmosphere> {
-        let text = std::fs::read_to_string(&path)
-            .map_err(|e| PyOSError::new_err(format!("cannot read {}: {e}", path.display())))?;
+        let text = sora::input::read_text(&path).map_err(to_py_err)?;
         let directory = path.parent().map(Path::to_path_buf).unwrap_or_default();
         Ok(Atmosphere {
             inner: parse_with_files(&text, &directory, &path.display().to_string())?,
@@ -138,7 +137,7 @@ impl Atmosphere {
         Bound<'py, PyArray1<f64>>,
     )> {
         let grid = grid_from_python(wavelengths_nm)?;
-        let optics = run_detached(py, || self.inner.compute_optics(&grid)).map_err(to_py_err)?;
+        let optics = run_detached(py, || self.inner.compute_optics(&grid))?.map_err(to_py_err)?;
         let (species, wavelengths) = (optics.species.len(), grid.len());
         let table = |f: &dyn Fn(&sora::atmosphere::SpeciesOptics) -> Vec<f64>| {
             let values: Vec<f64> = optics.species.iter().flat_map(f).collect();
@@ -191,7 +190,7 @@ impl Atmosphere {
             )));
         }
         let grid = grid_from_python(wavelengths_nm)?;
-        let optics = run_detached(py, || self.inner.compute_optics(&grid)).map_err(to_py_err)?;
+        let optics = run_detached(py, || self.inner.compute_optics(&grid))?.map_err(to_py_err)?;
         let shape = (optics.species.len(), altitudes.len(), grid.len());
         let per_altitude = |coefficients: &dyn Fn(&sora::atmosphere::SpeciesOptics) -> &[f64]| {
             let values: Vec<f64> = optics

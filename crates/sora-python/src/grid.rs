@@ -28,6 +28,16 @@ pub fn grid_from_python(value: Option<&Bound<'_, PyAny>>) -> PyResult<Wavelength
     grid_from_values(&values)
 }
 
+/// The wavelengths (nm) of the grid `text` ('start:stop:step', checked as
+/// the command line checks `--wavelengths`: 300-1100 nm, at most 10,000).
+#[pyfunction]
+pub fn wavelength_grid_nm(text: &str) -> PyResult<Vec<f64>> {
+    let grid = text
+        .parse::<WavelengthGrid>()
+        .map_err(|e| value_error(format!("wavelengths_nm = '{text}': {e}")))?;
+    Ok(grid.wavelengths_nm().collect())
+}
+
 /// The uniform grid through `values` (nm): one value, three numbers read
 /// as an array, or any evenly spaced sequence.
 fn grid_from_values(values: &[f64]) -> PyResult<WavelengthGrid> {

@@ -41,6 +41,14 @@ fn _sora(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_function(wrap_pyfunction!(atmosphere::preset_names, module)?)?;
     module.add_function(wrap_pyfunction!(atmosphere::preset_toml, module)?)?;
     module.add_function(wrap_pyfunction!(output::write_exr, module)?)?;
+    module.add_function(wrap_pyfunction!(grid::wavelength_grid_nm, module)?)?;
+    // The library's limits, which the Python layer checks arguments
+    // against before any work.
+    module.add("MAX_VIEWS", sora::sky::MAX_VIEWS)?;
+    module.add("MAX_IMAGE_SIDE", sora::sky::MAX_IMAGE_SIDE)?;
+    module.add("MAX_SAMPLES", sora::sky::MAX_SAMPLES)?;
+    module.add("MAX_REFERENCE_STEPS", sora::sky::MAX_REFERENCE_STEPS)?;
+    module.add("MAX_WAVELENGTH_COUNT", sora::spectrum::MAX_WAVELENGTH_COUNT)?;
     module.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -40,7 +40,14 @@ fn solve_chunk(m: &[Complex64], x: &[f64], out: &mut [Efficiencies]) -> Result<(
     let mut workspace = SphereWorkspace::new();
     let mut start = 0;
     while start < m.len() {
-        let end = start + m[start..].iter().take_while(|v| **v == m[start]).count();
+        // At least the first sphere: a NaN index equals nothing, not even
+        // itself (the solver then refuses it).
+        let end = start
+            + 1
+            + m[start + 1..]
+                .iter()
+                .take_while(|v| **v == m[start])
+                .count();
         compute_efficiencies_many_with(
             &mut workspace,
             m[start],
@@ -97,7 +104,7 @@ pub fn mie_efficiencies<'py>(
             })
             .filter_map(|failed| failed)
             .min()
-    });
+    })?;
     if let Some(task) = failed {
         // The first sphere the solver refuses, with its message.
         let start = task * SPHERES_PER_TASK;
@@ -162,7 +169,7 @@ pub fn mie_phase_function<'py>(
             .map(|(a, b)| if *a > 0.0 { b / a } else { 0.0 })
             .collect();
         Ok::<_, sora::mie::sphere::MieError>((phase, ratio))
-    })
+    })?
     .map_err(|e| value_error(e.to_string()))?;
     if phase.iter().chain(&ratio).any(|v| !v.is_finite()) {
         return Err(value_error(format!(
@@ -260,7 +267,7 @@ pub fn mie_ensemble<'py>(
                     .map_err(|e| format!("at {wavelength_nm} nm: {e}"))
             })
             .collect::<Result<Vec<_>, String>>()
-    })
+    })?
     .map_err(value_error)?;
     let column = |f: &dyn Fn(&sora::mie::ensemble::EnsembleCrossSections) -> f64| {
         results.iter().map(f).collect::<Vec<_>>().into_pyarray(py)

@@ -6,10 +6,12 @@ use pyo3::prelude::*;
 use sora::output::{ChannelKind, ExrOptions, LinearImage, write_exr as write_exr_file};
 
 use crate::errors::{to_py_err, value_error};
+use crate::threads::run_detached;
 
 /// Writes `rgb` (height, width, 3: linear RGB, rows top first) as a 32-bit
 /// float OpenEXR at `path`, ZIP-compressed, atomically (a failure leaves no
-/// file and an existing one unchanged), through `sora::output::write_exr`.
+/// file and an existing one unchanged), through `sora::output::write_exr`
+/// (which refuses devices, FIFOs and directories: `sora::output::output_target`).
 #[pyfunction]
 pub fn write_exr(
     py: Python<'_>,
@@ -31,9 +33,9 @@ pub fn write_exr(
                 .collect::<Vec<_>>()
         })
         .collect();
-    py.detach(|| {
+    run_detached(py, || {
         let image = LinearImage::new(width, height, ChannelKind::Rgb, pixels)?;
         write_exr_file(&path, &image, ExrOptions::default())
-    })
+    })?
     .map_err(to_py_err)
 }

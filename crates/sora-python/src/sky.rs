@@ -251,7 +251,7 @@ impl Sky {
                 .method(method)
                 .polarisation(polarisation)
                 .build()
-        })
+        })?
         .map_err(to_py_err)?;
         // Parametric phase functions carry no polarisation: say so, once per
         // species, as `sora spectrum --stokes` does on stderr.
@@ -317,9 +317,12 @@ impl Sky {
     }
 
     /// The direct normal irradiance at the eye, W m^-2 nm^-1.
-    fn direct_normal_irradiance<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        let values = run_detached(py, || self.inner.direct_normal_irradiance().into_values());
-        values.into_pyarray(py)
+    fn direct_normal_irradiance<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let values = run_detached(py, || self.inner.direct_normal_irradiance().into_values())?;
+        Ok(values.into_pyarray(py))
     }
 
     /// The colour of spectra on this sky's grid (2-D array [spectrum,
@@ -355,7 +358,7 @@ impl Sky {
                 }
             }
             Ok::<_, sora::Error>(values)
-        })
+        })?
         .map_err(to_py_err)?;
         let count = values.len() / 3;
         Ok(Array2::from_shape_vec((count, 3), values)
@@ -374,7 +377,7 @@ impl Sky {
         azimuth_deg: PyReadonlyArray1<'py, f64>,
     ) -> PyResult<(Bound<'py, PyArray2<f64>>, Option<Bound<'py, PyArray2<f64>>>)> {
         let views = views_from_arrays(&elevation_deg, &azimuth_deg)?;
-        let results = run_detached(py, || self.inner.radiances(&views)).map_err(to_py_err)?;
+        let results = run_detached(py, || self.inner.radiances(&views))?.map_err(to_py_err)?;
         let wavelengths = self.inner.wavelengths().len();
         let mut values = Vec::with_capacity(views.len() * wavelengths);
         let mut errors = Vec::new();
@@ -417,7 +420,7 @@ impl Sky {
             ));
         }
         let views = views_from_arrays(&elevation_deg, &azimuth_deg)?;
-        let results = run_detached(py, || self.inner.radiances(&views)).map_err(to_py_err)?;
+        let results = run_detached(py, || self.inner.radiances(&views))?.map_err(to_py_err)?;
         let wavelengths = self.inner.wavelengths().len();
         let shape = (4, views.len(), wavelengths);
         let mut values = Array3::<f64>::zeros(shape);
@@ -489,7 +492,7 @@ impl Sky {
         let shape = |per_pixel| (height as usize, width as usize, per_pixel);
         match output {
             "spectral" => {
-                let values = run_detached(py, || self.inner.render_spectral(&image, &|_| {}))
+                let values = run_detached(py, || self.inner.render_spectral(&image, &|_| {}))?
                     .map_err(to_py_err)?;
                 let wavelengths = self.inner.wavelengths().len();
                 // Zero-copy: the library's buffer becomes the array's.
@@ -510,7 +513,7 @@ impl Sky {
                             .flat_map(|c| [c.x, c.y, c.z])
                             .collect::<Vec<f64>>(),
                     )
-                })
+                })?
                 .map_err(to_py_err)?;
                 Ok(
                     Array4::from_shape_vec((height as usize, width as usize, 4, 3), values)
@@ -537,7 +540,7 @@ impl Sky {
                             })
                             .collect::<Vec<f64>>(),
                     )
-                })
+                })?
                 .map_err(to_py_err)?;
                 Ok(Array3::from_shape_vec(shape(3), values)
                     .expect("three values per pixel")

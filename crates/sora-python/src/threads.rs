@@ -8,6 +8,7 @@
 
 use std::sync::{Arc, Mutex};
 
+use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 
 use crate::errors::value_error;
@@ -49,15 +50,31 @@ pub fn get_num_threads() -> usize {
     }
 }
 
-/// Runs `work` with the GIL released, on the chosen pool.
-pub fn run_detached<T: Send>(py: Python<'_>, work: impl FnOnce() -> T + Send) -> T {
+/// Runs `work` with the GIL released, on the chosen pool. A panic in it
+/// (a bug: every input is checked before any work) is caught here and
+/// raised as `RuntimeError`, which `except Exception` catches, never as
+/// pyo3's `PanicException`: the last line of defence, not a way to report
+/// bad input.
+pub fn run_detached<T: Send>(py: Python<'_>, work: impl FnOnce() -> T + Send) -> PyResult<T> {
     let pool = POOL
         .lock()
         .unwrap_or_else(|poisoned| poisoned.into_inner())
         .as_ref()
         .map(|(_, pool)| Arc::clone(pool));
-    py.detach(move || match pool {
-        Some(pool) => pool.install(work),
-        None => work(),
+    let caught = py.detach(move || {
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| match pool {
+            Some(pool) => pool.install(work),
+            None => work(),
+        }))
+    });
+    caught.map_err(|payload| {
+        let message = payload
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| payload.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "no message".to_string());
+        PyRuntimeError::new_err(format!(
+            "internal error in sora (a bug; please report it with the call): {message}"
+        ))
     })
 }

@@ -1,7 +1,11 @@
 """Bad input raises a Python exception with a one-line message naming the
-bad value; nothing panics across the boundary."""
+bad value; nothing panics across the boundary. The second part holds
+inputs that once hung, panicked or raised an undocumented exception type
+(OverflowError, MemoryError, PanicException): each now returns a correct
+result or raises ValueError or TypeError at once."""
 
 import math
+import time
 
 import numpy as np
 import pytest
@@ -184,3 +188,141 @@ def test_non_numeric_input():
     with pytest.raises(ValueError) as error:
         sora.mie.efficiencies(1.5, "big")
     assert "x" in one_line(error)
+
+
+NO_SPECIES = """
+name = "vacuum"
+[planet]
+radius_m = 6360e3
+atmosphere_height_m = 100e3
+[sun]
+spectrum = "flat"
+irradiance_w_m2_nm = 1.0
+"""
+
+
+@pytest.fixture(scope="module")
+def small_sky():
+    return sora.Sky(
+        sora.Atmosphere.preset("clear-sky-reference"),
+        sun_elevation_deg=30,
+        scattering="single",
+        wavelengths_nm="500:600:100",
+    )
+
+
+def test_no_species_under_a_low_sun_is_a_black_sky():
+    vacuum = sora.Atmosphere.from_toml_str(NO_SPECIES)
+    for polarisation in ("scalar", "vector"):
+        sky = sora.Sky(vacuum, sun_elevation_deg=5, polarisation=polarisation, wavelengths_nm="500:600:100")
+        assert np.all(sky.radiance(20, 0).values == 0.0)
+        assert np.all(np.isfinite(sky.render(width=8)))
+
+
+@pytest.mark.parametrize("m", [complex("nan"), complex(1.5, math.nan), complex(math.nan, 0.01), None])
+def test_mie_efficiencies_of_a_nan_or_missing_index_return_at_once(m):
+    started = time.monotonic()
+    expected = TypeError if m is None else ValueError
+    with pytest.raises(expected) as error:
+        sora.mie.efficiencies(m, 1.0)
+    message = one_line(error)
+    assert "m" in message
+    assert time.monotonic() - started < 5.0
+
+
+def test_a_tiny_almucantar_step_is_refused_by_the_direction_limit(small_sky):
+    started = time.monotonic()
+    with pytest.raises(ValueError) as error:
+        small_sky.almucantar(1e-300)
+    assert "more than the limit of 100000" in one_line(error)
+    assert time.monotonic() - started < 1.0
+    # At the limit's edge: 0.0036 deg gives 100,000 directions.
+    elevation, azimuth = small_sky.almucantar(0.0036)
+    assert len(azimuth) == 100_000
+
+
+@pytest.mark.parametrize(
+    "arguments, exception, words",
+    [
+        (dict(sun_elevation_deg=10**400), ValueError, "sun_elevation_deg"),
+        (dict(sun_elevation_deg=30, method="path-tracing", samples=-1), ValueError, "samples = -1"),
+        (dict(sun_elevation_deg=30, method="path-tracing", seed=-1), ValueError, "seed = -1"),
+        (dict(sun_elevation_deg=30, method="path-tracing", samples=10**30), ValueError, "samples"),
+        (dict(sun_elevation_deg=30, method="reference", reference_steps=(-1, 5)), ValueError, "view steps = -1"),
+        (dict(sun_elevation_deg=30, method="reference", reference_steps=(10, 10**20)), ValueError, "sun steps"),
+        (dict(sun_elevation_deg=None), ValueError, "sun_elevation_deg"),
+        (dict(sun_elevation_deg="30"), TypeError, "sun_elevation_deg"),
+        (dict(sun_elevation_deg=30, observer_altitude_m=None), TypeError, "observer_altitude_m"),
+        (dict(sun_elevation_deg=30, method=None), TypeError, "method"),
+        (dict(sun_elevation_deg=30, wavelengths_nm="380:inf:20"), ValueError, "wavelengths_nm"),
+        (dict(sun_elevation_deg=30, wavelengths_nm="380:780:1e-9"), ValueError, "wavelengths_nm"),
+    ],
+)
+def test_sky_arguments_raise_documented_exceptions(atmosphere, arguments, exception, words):
+    started = time.monotonic()
+    with pytest.raises(exception) as error:
+        sora.Sky(atmosphere, **arguments)
+    assert words in one_line(error)
+    assert time.monotonic() - started < 2.0
+
+
+@pytest.mark.parametrize(
+    "arguments, exception, words",
+    [
+        (dict(width=-1), ValueError, "width = -1"),
+        (dict(width=16385), ValueError, "width = 16385"),
+        (dict(width=8, height=-3), ValueError, "height = -3"),
+        (dict(width=8.5), TypeError, "width"),
+        (dict(width=8, fov_deg=10**400), ValueError, "fov_deg"),
+        (dict(width=8, camera=3), TypeError, "camera"),
+    ],
+)
+def test_render_arguments_raise_documented_exceptions(small_sky, arguments, exception, words):
+    with pytest.raises(exception) as error:
+        small_sky.render(**arguments)
+    assert words in one_line(error)
+
+
+def test_set_num_threads_refuses_negative_and_huge_counts():
+    for threads in (-1, 10**30, 5000):
+        with pytest.raises(ValueError) as error:
+            sora.set_num_threads(threads)
+        assert "threads" in one_line(error)
+    with pytest.raises(TypeError):
+        sora.set_num_threads(1.5)
+    sora.set_num_threads(0)
+
+
+@pytest.mark.parametrize("wavelengths", ["380:inf:20", "380:780:1e-9", "380:780", "a:b:c"])
+def test_mie_wavelength_strings_are_checked_as_the_command_line_checks_them(wavelengths):
+    started = time.monotonic()
+    with pytest.raises(ValueError) as error:
+        sora.mie.lognormal(1.5 + 0.01j, 0.1, 2.0, wavelengths_nm=wavelengths)
+    assert "wavelengths_nm" in one_line(error)
+    assert time.monotonic() - started < 1.0
+
+
+def test_mie_ensemble_numbers_are_checked():
+    with pytest.raises(ValueError) as error:
+        sora.mie.lognormal(1.5, 10**400, 2.0)
+    assert "median_radius_um" in one_line(error)
+    with pytest.raises(TypeError):
+        sora.mie.gamma(None, 1.0, 0.1)
+    with pytest.raises(TypeError):
+        sora.mie.phase_function(None, 1.0, [0.0])
+
+
+def test_a_bad_atmosphere_height_names_the_key():
+    text = NO_SPECIES.replace("100e3", "1e-9")
+    with pytest.raises(ValueError) as error:
+        sora.Atmosphere.from_toml_str(text)
+    assert "planet.atmosphere_height_m = 1e-9 m is out of range" in one_line(error)
+
+
+def test_an_endless_atmosphere_file_is_too_large(tmp_path):
+    huge = tmp_path / "huge.toml"
+    with open(huge, "wb") as file:
+        file.truncate(300_000_000)
+    with pytest.raises(OSError) as error:
+        sora.Atmosphere.from_toml(huge)
+    assert "file too large" in one_line(error)

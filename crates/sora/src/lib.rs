@@ -64,6 +64,7 @@ pub mod camera;
 pub mod colour;
 pub mod error;
 pub mod geometry;
+pub mod input;
 pub mod inversion;
 mod linear_algebra;
 pub mod output;

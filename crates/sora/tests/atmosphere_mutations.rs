@@ -30,29 +30,14 @@
 //! files 50000, parse errors 42989, optics errors 65, ok 6946, panics 0,
 //! multi-line errors 0, NaN/negative optics 0 (665 s, release build).
 
+mod common;
+
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
 use sora::atmosphere::{Atmosphere, AtmosphereOptics, PRESETS};
 use sora::spectrum::WavelengthGrid;
 
-/// splitmix64: a small, seeded, portable generator (the same files on
-/// every machine).
-struct Rng(u64);
-
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in 0..n (n > 0).
-    fn below(&mut self, n: usize) -> usize {
-        (self.next_u64() % n as u64) as usize
-    }
-}
+use common::Rng;
 
 /// The values a number is replaced by (TOML spellings).
 const NUMBERS: [&str; 16] = [

@@ -306,6 +306,21 @@ fn assert_io_error_names(error: Error, path: &Path) {
     }
 }
 
+/// Asserts that `error` is the one-line refusal of the output path `path`
+/// (`sora::output::output_target`), saying `why`.
+fn assert_refused(error: Error, path: &Path, why: &str) {
+    match error {
+        Error::Unsupported(message) => {
+            assert!(
+                message.starts_with(&format!("output {}", path.display())) && message.contains(why),
+                "{message}"
+            );
+            assert!(!message.contains('\n'), "{message}");
+        }
+        other => panic!("expected the refusal of {}, got {other}", path.display()),
+    }
+}
+
 #[test]
 fn writing_into_a_missing_directory_fails_naming_the_path_and_leaves_nothing() {
     let directory = tempfile::tempdir().unwrap();
@@ -316,7 +331,7 @@ fn writing_into_a_missing_directory_fails_naming_the_path_and_leaves_nothing() {
         error.to_string().contains("no-such-directory/sky.png"),
         "{error}"
     );
-    assert_io_error_names(error, &png_path);
+    assert_refused(error, &png_path, "does not exist");
 
     let exr_path = missing.join("sky.exr");
     let error = write_exr(
@@ -325,7 +340,7 @@ fn writing_into_a_missing_directory_fails_naming_the_path_and_leaves_nothing() {
         ExrOptions::default(),
     )
     .unwrap_err();
-    assert_io_error_names(error, &exr_path);
+    assert_refused(error, &exr_path, "does not exist");
     assert!(!missing.exists());
     assert!(directory_entries(directory.path()).is_empty());
 }
@@ -333,14 +348,14 @@ fn writing_into_a_missing_directory_fails_naming_the_path_and_leaves_nothing() {
 #[test]
 fn writing_onto_a_directory_fails_and_leaves_no_temporary_file() {
     let directory = tempfile::tempdir().unwrap();
-    // The target is an existing directory: everything succeeds up to the
-    // final rename, which must fail and clean up the finished temporary.
+    // The target is an existing directory: refused before a temporary file
+    // is made.
     let png_target = directory.path().join("occupied.png");
     std::fs::create_dir(&png_target).unwrap();
     std::fs::write(png_target.join("keep.txt"), b"keep").unwrap();
     let error =
         write_png(&png_target, &DisplayImage16::new(2, 1, vec![9; 6]).unwrap()).unwrap_err();
-    assert_io_error_names(error, &png_target);
+    assert_refused(error, &png_target, "is a directory");
 
     let exr_target = directory.path().join("occupied.exr");
     std::fs::create_dir(&exr_target).unwrap();
@@ -350,7 +365,7 @@ fn writing_onto_a_directory_fails_and_leaves_no_temporary_file() {
         ExrOptions::default(),
     )
     .unwrap_err();
-    assert_io_error_names(error, &exr_target);
+    assert_refused(error, &exr_target, "is a directory");
 
     assert_eq!(
         directory_entries(directory.path()),

@@ -155,6 +155,51 @@ fn a_sky_without_species_is_black_above_the_horizon() {
     assert!(image.iter().all(|c| c.is_finite()));
 }
 
+/// Without species and with the sun low (10 degrees and below, where the
+/// first order of the multiple scattering is marched in a sphere) the sky
+/// is still vacuum: black radiance and Stokes vectors, the direct beam
+/// alone on the ground, for scalar and polarised light.
+#[test]
+fn a_sky_without_species_under_a_low_sun_is_black_too() {
+    let preset = sora::atmosphere::presets::find_preset("earth-clear").unwrap();
+    let text = &preset.toml[..preset.toml.find("[[species]]").unwrap()];
+    let atmosphere = Atmosphere::from_toml_str(text).unwrap();
+    let to_xyz_of = |sky: &Sky| SpectrumToXyz::new(sky.wavelengths(), Observer::Cie1931TwoDegree);
+    for elevation in [10.0, 5.0, 0.5, -3.0] {
+        for polarisation in [sora::Polarisation::Scalar, sora::Polarisation::Vector] {
+            let sky = Sky::builder(&atmosphere)
+                .sun_deg(elevation, 180.0)
+                .polarisation(polarisation)
+                .build()
+                .unwrap();
+            let up = sky
+                .radiance(ViewDirection::new(20.0, 0.0).unwrap())
+                .unwrap();
+            assert!(up.radiance_w_m2_sr_nm.values().iter().all(|l| *l == 0.0));
+            if let Some(stokes) = &up.stokes {
+                assert!(stokes.q_w_m2_sr_nm.values().iter().all(|q| *q == 0.0));
+            }
+            let image = sky
+                .render_xyz(
+                    &ImageSettings::new(Camera::Fisheye, 8, 8),
+                    &to_xyz_of(&sky),
+                    &|_| {},
+                )
+                .unwrap();
+            assert!(image.iter().all(|c| c.is_finite()));
+            let irradiance = sky.irradiance(sora::Plane::HORIZONTAL).unwrap();
+            assert!(
+                irradiance
+                    .diffuse_w_m2_nm
+                    .values()
+                    .iter()
+                    .all(|e| *e == 0.0)
+            );
+            assert_eq!(irradiance.direct_w_m2_nm, irradiance.global_w_m2_nm);
+        }
+    }
+}
+
 #[test]
 fn bad_choices_are_errors_not_panics() {
     let atmosphere = Atmosphere::preset("earth-clear").unwrap();

@@ -4,10 +4,10 @@
 
 use std::path::PathBuf;
 
-use crate::output_path::output_target;
 use anyhow::Context;
 use clap::Args;
 use sora::colour::SpectrumToXyz;
+use sora::output::output_target;
 use sora::output::{
     ChannelKind, DisplayImage, ExrOptions, LinearImage, OutputFormat, write_exr, write_png,
 };
@@ -48,7 +48,7 @@ pub struct ColourArgs {
 }
 
 pub fn run(args: ColourArgs) -> anyhow::Result<()> {
-    // Checked before any work (see `output_path`).
+    // Checked before any work (`sora::output::output_target`).
     let swatch = match &args.swatch {
         Some(path) => Some((
             OutputFormat::from_path(path)?,
@@ -58,9 +58,9 @@ pub fn run(args: ColourArgs) -> anyhow::Result<()> {
     };
     let name = args.spectrum.display().to_string();
     let text = if args.spectrum.as_os_str() == "-" {
-        std::io::read_to_string(std::io::stdin()).context("cannot read the spectrum from stdin")?
+        sora::input::read_text_from(std::io::stdin(), "stdin")?
     } else {
-        std::fs::read_to_string(&args.spectrum).with_context(|| format!("cannot read {name}"))?
+        sora::input::read_text(&args.spectrum)?
     };
     let table = TabulatedSpectrum::parse_csv(&text, &name)?;
     let sampled = Spectrum::Tabulated(table)

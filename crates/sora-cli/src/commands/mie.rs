@@ -1,7 +1,7 @@
 //! `sora mie`: Mie-theory optics of one sphere, of many (batch CSV), or of a
 //! size distribution over wavelengths.
 
-use std::io::{BufRead, BufWriter, Write};
+use std::io::{BufRead, BufWriter, Read, Write};
 use std::path::PathBuf;
 
 use anyhow::{Context, bail};
@@ -292,10 +292,13 @@ fn print_phase_table(m: Complex64, x: f64, step_deg: f64) -> anyhow::Result<()> 
     Ok(())
 }
 
+/// The longest line of a `--batch` file: a row is three numbers.
+const MAX_BATCH_LINE_BYTES: u64 = 4096;
+
 /// The `--batch` form: CSV in, CSV out, rows in order; a bad row stops the
 /// run with an error naming its line (nothing is written after it).
 fn run_batch(path: &PathBuf) -> anyhow::Result<()> {
-    let reader: Box<dyn BufRead> = if path.as_os_str() == "-" {
+    let mut reader: Box<dyn BufRead> = if path.as_os_str() == "-" {
         Box::new(std::io::stdin().lock())
     } else {
         let file =
@@ -305,14 +308,40 @@ fn run_batch(path: &PathBuf) -> anyhow::Result<()> {
     let name = path.display().to_string();
     let mut out = BufWriter::with_capacity(1 << 16, std::io::stdout().lock());
     let mut header_seen = false;
-    for (index, line) in reader.lines().enumerate() {
-        let line_number = index + 1;
-        let line = line.with_context(|| format!("{name}: cannot read line {line_number}"))?;
+    // Read in bounded pieces, streamed: a line longer than any row, or more
+    // than `sora::input::MAX_INPUT_BYTES` in all, is an error before the
+    // memory fills (`--batch /dev/zero` is one endless line).
+    let mut total_bytes = 0u64;
+    let mut buffer = Vec::new();
+    for line_number in 1.. {
+        buffer.clear();
+        let read = (&mut reader)
+            .take(MAX_BATCH_LINE_BYTES + 1)
+            .read_until(b'\n', &mut buffer)
+            .with_context(|| format!("{name}: cannot read line {line_number}"))?;
+        if read == 0 {
+            break;
+        }
+        total_bytes += read as u64;
+        if read as u64 > MAX_BATCH_LINE_BYTES {
+            bail!(
+                "{name}, line {line_number}: longer than {MAX_BATCH_LINE_BYTES} bytes, not a row m_re,m_im,x (is it a text file?)"
+            );
+        }
+        if total_bytes > sora::input::MAX_INPUT_BYTES {
+            bail!(
+                "{name}: file too large: more than the limit of {} MiB of text (split it)",
+                sora::input::MAX_INPUT_BYTES >> 20
+            );
+        }
+        let line = std::str::from_utf8(&buffer)
+            .with_context(|| format!("{name}, line {line_number}: not UTF-8 text"))?
+            .trim_end_matches(['\n', '\r']);
         // A UTF-8 byte-order mark (as some spreadsheets write) before the header is skipped.
         let line = if line_number == 1 {
             line.trim_start_matches('\u{feff}')
         } else {
-            &line
+            line
         };
         let line = line.trim();
         if line.is_empty() || line.starts_with('#') {

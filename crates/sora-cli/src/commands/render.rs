@@ -1,7 +1,7 @@
 //! `sora render`: an image of the sky, PNG (display colours) or OpenEXR
 //! (linear HDR).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, bail};
@@ -10,15 +10,13 @@ use sora::ImageSettings;
 use sora::camera::{Camera, PerspectiveCamera};
 use sora::colour::{RgbColourSpace, SpectrumToXyz};
 use sora::output::{
-    ChannelKind, DisplayImage, ExrOptions, ExrSampleType, LinearImage, OutputFormat,
-    write_exr_with_layers, write_png,
+    ChannelKind, DisplayImage, ExrOptions, ExrSampleType, LinearImage, OutputFiles, OutputFormat,
 };
 
 use crate::arguments::{
     AtmosphereSource, ColourOptions, Scattering, SunAndObserver, polarisation_name,
 };
 use crate::estimate;
-use crate::output_path::output_target;
 use crate::polarisation_maps;
 
 /// Render the sky to an image.
@@ -76,8 +74,9 @@ pub struct RenderArgs {
 
     /// Output image: .png or .exr, replaced atomically. A symbolic link is
     /// followed (the file it points to is written, the link kept); a
-    /// directory, a read-only file or a missing directory is refused before
-    /// any work
+    /// directory, a device or FIFO, a read-only file, a missing directory or
+    /// a path given to two outputs is refused before any work; the outputs
+    /// of a run (frames, --dolp, --aop) are written all or none
     #[arg(short, long, value_name = "FILE")]
     output: PathBuf,
 
@@ -121,7 +120,8 @@ pub struct RenderArgs {
     #[arg(long)]
     no_sun_disc: bool,
 
-    /// A sequence: frames from --sun-elevation to this elevation, degrees,
+    /// A sequence: frames from --sun-elevation (or the sun's elevation at
+    /// --time, at its azimuth) to this elevation, degrees,
     /// written as OUTPUT_000.png, OUTPUT_001.png, ... at one exposure (the
     /// first frame's auto exposure, or --exposure/--ev100)
     #[arg(
@@ -225,22 +225,11 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         } else {
             width
         });
-    // Every file the run will write, checked before any work (see
-    // `output_path`): a directory, a read-only file or a missing directory
-    // is refused now, not after the render.
+    // The limits of docs/limits.md, before any work: the image's sides,
+    // the exposure (--ev100), the number of frames.
+    sora::sky::check_image_size(width, height)?;
+    args.colour.display_mapping()?;
     let frame_count = frame_count(&args)?;
-    let targets = if frame_count == 1 {
-        vec![output_target(&args.output, "-o")?]
-    } else {
-        (0..frame_count)
-            .map(|frame| {
-                output_target(
-                    &frame_path(&args.output, frame),
-                    "-o (a frame of the sequence)",
-                )
-            })
-            .collect::<anyhow::Result<Vec<_>>>()?
-    };
     // The polarisation outputs: polarised light, one frame, the right
     // formats, writable paths.
     let polarisation_outputs = args.stokes || args.dolp.is_some() || args.aop.is_some();
@@ -265,23 +254,49 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             );
         }
     }
-    // The maps' targets: (--dolp, --aop).
-    let map_target = |option: &str, path: &Option<PathBuf>| -> anyhow::Result<Option<PathBuf>> {
-        let Some(path) = path else {
-            return Ok(None);
-        };
-        if OutputFormat::from_path(path)? != OutputFormat::Png {
+    for (option, path) in [("--dolp", &args.dolp), ("--aop", &args.aop)] {
+        if let Some(path) = path
+            && OutputFormat::from_path(path)? != OutputFormat::Png
+        {
             bail!(
                 "{option} {}: the map is a PNG (give FILE.png)",
                 path.display()
             );
         }
-        Ok(Some(output_target(path, option)?))
+    }
+    // Every file the run will write, checked together before any work
+    // (`sora::output::output_targets`): a directory, a device, a read-only
+    // file, a missing directory or two outputs on one file are refused now,
+    // not after the render.
+    let frame_paths: Vec<PathBuf> = if frame_count == 1 {
+        vec![args.output.clone()]
+    } else {
+        (0..frame_count)
+            .map(|frame| frame_path(&args.output, frame))
+            .collect()
     };
-    let map_targets = (
-        map_target("--dolp", &args.dolp)?,
-        map_target("--aop", &args.aop)?,
-    );
+    let frame_option = if frame_count == 1 {
+        "-o"
+    } else {
+        "-o (a frame of the sequence)"
+    };
+    let mut outputs: Vec<(&Path, &str)> = frame_paths
+        .iter()
+        .map(|path| (path.as_path(), frame_option))
+        .collect();
+    for (option, path) in [("--dolp", &args.dolp), ("--aop", &args.aop)] {
+        if let Some(path) = path {
+            outputs.push((path, option));
+        }
+    }
+    let mut targets = sora::output::output_targets(&outputs)?;
+    let map_targets = {
+        let mut maps = targets.split_off(frame_count).into_iter();
+        (
+            args.dolp.as_ref().and_then(|_| maps.next()),
+            args.aop.as_ref().and_then(|_| maps.next()),
+        )
+    };
     // Image buffers bounded before any work (see `estimate`).
     let (encoded_bytes_per_pixel, format_name) = match (format, args.png_16_bit) {
         (OutputFormat::Png, false) => (6, "8-bit PNG"),
@@ -322,6 +337,9 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     // The frames: one, or a sequence of sun elevations at one azimuth.
     let elevations = frame_elevations(&args, sky.sun_position_deg().0)?;
     let mut exposure = None;
+    // Every frame and map staged, then all renamed into place at the end:
+    // a failure in frame 7 leaves none of the sequence.
+    let mut files = OutputFiles::new();
     debug_assert_eq!(elevations.len(), targets.len());
     for (elevation, output) in elevations.iter().zip(&targets) {
         let frame_sky;
@@ -339,6 +357,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             (format, output, (&map_targets.0, &map_targets.1)),
             exposure,
             started,
+            &mut files,
         )?;
         // A sequence keeps the first frame's automatic exposure (a fixed
         // one is the same for every frame anyway).
@@ -351,6 +370,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
             }
         }
     }
+    files.commit()?;
     Ok(())
 }
 
@@ -382,16 +402,17 @@ fn camera(args: &RenderArgs) -> anyhow::Result<Camera> {
     Ok(whole_sky)
 }
 
+/// The most frames of one sequence (docs/limits.md).
+const MAX_FRAMES: usize = 10_000;
+
 /// How many frames the run writes: 1, or a sequence's (checked: at most
-/// 10000), from the options alone (before the sun is known).
+/// [`MAX_FRAMES`]), before any work (a --time's sun is computed here).
 fn frame_count(args: &RenderArgs) -> anyhow::Result<usize> {
     let Some(last) = args.sun_elevation_to else {
         return Ok(1);
     };
-    let first = args
-        .sun
-        .sun_elevation
-        .expect("clap: --sun-elevation-to requires --sun-elevation");
+    // The first frame's sun: --sun-elevation, or the sun's at --time.
+    let first = args.sun.sun_deg()?.0;
     let step = args.sun_elevation_step;
     if !(step.is_finite() && step > 0.0) {
         bail!("--sun-elevation-step = {step} deg is out of range: allowed > 0 deg");
@@ -399,11 +420,13 @@ fn frame_count(args: &RenderArgs) -> anyhow::Result<usize> {
     if !(-90.0..=90.0).contains(&last) {
         bail!("--sun-elevation-to = {last} deg is out of range: allowed -90..=90 deg");
     }
-    let count = ((last - first).abs() / step + 1e-9).floor();
-    if !(0.0..10_000.0).contains(&count) {
-        bail!("{count} frames from {first} to {last} deg every {step} deg: at most 10000");
+    let frames = ((last - first).abs() / step + 1e-9).floor() + 1.0;
+    if frames.is_nan() || frames > MAX_FRAMES as f64 {
+        bail!(
+            "{frames} frames from {first} to {last} deg every {step} deg: at most {MAX_FRAMES} (a larger --sun-elevation-step)"
+        );
     }
-    Ok(count as usize + 1)
+    Ok(frames as usize)
 }
 
 /// The sun elevations of the frames: `--sun-elevation` alone, or from it
@@ -433,10 +456,11 @@ fn frame_path(output: &std::path::Path, frame: usize) -> PathBuf {
     output.with_file_name(format!("{stem}_{frame:03}.{extension}"))
 }
 
-/// Renders `sky` and writes it to `output` (and the polarisation maps to
-/// `maps`, the targets of --dolp and --aop); with
+/// Renders `sky` and stages it in `files` for `output` (and the
+/// polarisation maps for `maps`, the targets of --dolp and --aop); with
 /// `exposure` (a sequence's) in place of the options'. Returns the PNG's
 /// exposure scale.
+#[allow(clippy::too_many_arguments)]
 fn render_frame(
     args: &RenderArgs,
     (sky, sun): (&sora::Sky, &crate::arguments::SunUsed),
@@ -449,6 +473,7 @@ fn render_frame(
     ),
     exposure: Option<sora::colour::Exposure>,
     started: Instant,
+    files: &mut OutputFiles,
 ) -> anyhow::Result<Option<f64>> {
     let (width, height) = (image.width, image.height);
     let frame_started = Instant::now();
@@ -479,11 +504,11 @@ fn render_frame(
     let (w, h) = (width as usize, height as usize);
     if let Some(path) = dolp {
         let degrees = polarisation_maps::degrees(&stokes);
-        write_png(path, &polarisation_maps::degree_map(&degrees, w, h)?)?;
+        files.png(path, &polarisation_maps::degree_map(&degrees, w, h)?)?;
     }
     if let Some(path) = aop {
         let angles = polarisation_maps::angles_deg(&stokes);
-        write_png(path, &polarisation_maps::angle_map(&angles, w, h)?)?;
+        files.png(path, &polarisation_maps::angle_map(&angles, w, h)?)?;
     }
     let render_seconds = frame_started.elapsed().as_secs_f64();
 
@@ -505,10 +530,10 @@ fn render_frame(
             png_scale = Some(mapping.exposure.scale_for_image(&xyz)?);
             if args.png_16_bit {
                 let data = mapping.to_u16(&xyz)?.into_iter().flatten().collect();
-                write_png(output, &DisplayImage::new(w, h, data)?)?;
+                files.png(output, &DisplayImage::new(w, h, data)?)?;
             } else {
                 let data = mapping.to_u8(&xyz)?.into_iter().flatten().collect();
-                write_png(output, &DisplayImage::new(w, h, data)?)?;
+                files.png(output, &DisplayImage::new(w, h, data)?)?;
             }
         }
         OutputFormat::Exr => {
@@ -596,7 +621,8 @@ fn render_frame(
             } else {
                 ""
             };
-            write_exr_with_layers(output, &main, &layers, options)
+            files
+                .exr_with_layers(output, &main, &layers, options)
                 .with_context(|| format!("writing {}{half_hint}", output.display()))?;
         }
     }

@@ -15,7 +15,6 @@ use sora::inversion::{
 
 use crate::arguments::AtmosphereSource;
 use crate::commands::atmosphere::json_string;
-use crate::output_path::output_target;
 
 /// Retrieve the aerosol from measured sky radiances: its optical depth,
 /// size distribution and refractive index, and from them its single-
@@ -116,6 +115,18 @@ pub struct RetrieveArgs {
         conflicts_with_all = ["radiances", "normalised_spectrum"]
     )]
     scan: Option<u64>,
+
+    /// With an AERONET sky file: the most scans one run retrieves (each
+    /// takes tens of seconds); a file with more is refused before any work
+    /// (retrieve them in parts with --scan, or raise this)
+    #[arg(
+        long,
+        value_name = "N",
+        default_value_t = 100,
+        value_parser = clap::value_parser!(u64).range(1..),
+        conflicts_with_all = ["radiances", "normalised_spectrum"]
+    )]
+    max_scans: u64,
 
     /// A spectrum in one direction, known up to a factor (wavelength_nm,
     /// relative_radiance)
@@ -251,16 +262,17 @@ pub fn run(args: RetrieveArgs) -> anyhow::Result<()> {
             plot.display()
         );
     }
-    let residuals_target = args
-        .residuals
-        .as_deref()
-        .map(|path| output_target(path, "--residuals"))
-        .transpose()?;
-    let plot_target = args
-        .plot
-        .as_deref()
-        .map(|path| output_target(path, "--plot"))
-        .transpose()?;
+    // Both checked together: writable, and not one file for both.
+    let outputs: Vec<(&Path, &str)> = [
+        (args.residuals.as_deref(), "--residuals"),
+        (args.plot.as_deref(), "--plot"),
+    ]
+    .into_iter()
+    .filter_map(|(path, option)| path.map(|path| (path, option)))
+    .collect();
+    let mut targets = sora::output::output_targets(&outputs)?.into_iter();
+    let residuals_target = args.residuals.as_ref().and_then(|_| targets.next());
+    let plot_target = args.plot.as_ref().and_then(|_| targets.next());
 
     let atmosphere = AtmosphereSource {
         preset: match (&args.preset, &args.atmosphere) {
@@ -331,12 +343,15 @@ pub fn run(args: RetrieveArgs) -> anyhow::Result<()> {
         Format::Csv => csv(&retrievals),
         Format::Json => json(&retrievals),
     };
+    // Both files or neither.
+    let mut files = sora::output::OutputFiles::new();
     if let Some(target) = &residuals_target {
-        sora::output::write_text(target, &residuals_csv(&retrievals))?;
+        files.text(target, &residuals_csv(&retrievals))?;
     }
     if let (Some(target), Some(image)) = (&plot_target, &plot) {
-        sora::output::write_png(target, image)?;
+        files.png(target, image)?;
     }
+    files.commit()?;
     let mut out = std::io::BufWriter::new(std::io::stdout().lock());
     out.write_all(text.as_bytes())?;
     out.flush()?;
@@ -350,7 +365,7 @@ pub fn run(args: RetrieveArgs) -> anyhow::Result<()> {
 
 /// The text of `path`, or a one-line error naming it.
 fn read(path: &Path) -> anyhow::Result<String> {
-    std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))
+    Ok(sora::input::read_text(path)?)
 }
 
 /// The scans the arguments name, read and checked; AERONET's notes on
@@ -420,6 +435,14 @@ fn read_scans(args: &RetrieveArgs) -> anyhow::Result<Vec<Scan>> {
         bail!(
             "--scan {n}: {} has {count} usable scan(s): give 1..={count}",
             path.display()
+        );
+    }
+    if scans.len() as u64 > args.max_scans {
+        bail!(
+            "{} has {} usable scans, more than --max-scans {}: retrieve one with --scan N, or raise --max-scans (each scan takes tens of seconds)",
+            path.display(),
+            scans.len(),
+            args.max_scans
         );
     }
     for note in notes {

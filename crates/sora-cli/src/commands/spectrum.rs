@@ -3,7 +3,6 @@
 use std::io::Write;
 use std::time::Instant;
 
-use anyhow::Context;
 use clap::{Args, ValueEnum};
 use sora::colour::{RgbColourSpace, SpectrumToXyz};
 use sora::{SkyRadiance, ViewDirection};
@@ -134,29 +133,11 @@ enum Format {
     Json,
 }
 
-/// Most directions one run computes (an almucantar every 0.0036 deg):
-/// checked before they are listed.
-const MAX_DIRECTIONS: usize = 100_000;
-
-/// Most values (directions x wavelengths) one run computes and prints: 1e7,
-/// 160 MB of radiances and standard errors.
-const MAX_DIRECTION_VALUES: usize = 10_000_000;
-
-/// Refuses more than [`MAX_DIRECTIONS`] directions, or more than
-/// [`MAX_DIRECTION_VALUES`] directions x wavelengths, naming what asked.
+/// Refuses more directions (or directions x wavelengths) than the library
+/// computes in one call (`sora::sky::MAX_VIEWS`, `MAX_VIEW_VALUES`), naming
+/// what asked: before the directions are listed.
 fn check_direction_count(what: &str, directions: f64, wavelengths: usize) -> anyhow::Result<()> {
-    if directions > MAX_DIRECTIONS as f64 {
-        anyhow::bail!(
-            "{what} gives {directions:e} directions, more than the limit of {MAX_DIRECTIONS}: use a coarser step or fewer directions"
-        );
-    }
-    let values = directions * wavelengths as f64;
-    if values > MAX_DIRECTION_VALUES as f64 {
-        anyhow::bail!(
-            "{what} gives {directions} directions x {wavelengths} wavelengths = {values:e} values, more than the limit of {MAX_DIRECTION_VALUES:e}: use fewer directions or a coarser --wavelengths"
-        );
-    }
-    Ok(())
+    Ok(sora::sky::check_view_count(what, directions, wavelengths)?)
 }
 
 /// Directions every `step_deg` over a turn of `span_deg`: how many, checked.
@@ -199,8 +180,7 @@ fn directions(
         return Ok(vec![ViewDirection::new(elevation, azimuth)?]);
     }
     if let Some(path) = &args.directions {
-        let text = std::fs::read_to_string(path)
-            .with_context(|| format!("cannot read {}", path.display()))?;
+        let text = sora::input::read_text(path)?;
         let views =
             parse_directions_csv(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
         check_direction_count(&path.display().to_string(), views.len() as f64, wavelengths)?;
@@ -247,6 +227,13 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
         sora::Method::PathTracing { samples, seed } => (samples, seed),
         _ => (0, 0),
     };
+    // The directions (and their limits, docs/limits.md) before any work.
+    let (sun_elevation, sun_azimuth) = args.sun.sun_deg()?;
+    let views = directions(
+        &args,
+        (sun_elevation, sun_azimuth),
+        args.sun.wavelengths.len(),
+    )?;
     let mut atmosphere = args.source.load()?;
     if args.stokes && args.sun.polarisation(method) == sora::Polarisation::Scalar {
         match method {
@@ -261,8 +248,7 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
         crate::arguments::warn_non_polarising_species(&sky);
     }
     let grid = *sky.wavelengths();
-    let (sun_elevation, sun_azimuth) = (sun.elevation_deg, sun.azimuth_deg);
-    let views = directions(&args, (sun_elevation, sun_azimuth), grid.len())?;
+    debug_assert_eq!(grid.len(), args.sun.wavelengths.len());
     let started = Instant::now();
     let path_tracing = args.method.method == MethodKind::PathTracing;
     if path_tracing {

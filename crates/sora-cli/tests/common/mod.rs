@@ -81,26 +81,9 @@ pub fn assert_no_problems(report: &str, problems: &[String]) {
 }
 
 /// The mutation campaigns' random numbers: splitmix64, seeded and
-/// portable, so a seed names the same campaign on every machine.
-pub struct Rng(pub u64);
-
-impl Rng {
-    /// The next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-
-    /// A number in 0..n.
-    pub fn below(&mut self, n: usize) -> usize {
-        (self.next_u64() % n as u64) as usize
-    }
-
-    /// One of `items`.
-    pub fn pick<'a>(&mut self, items: &[&'a str]) -> &'a str {
-        items[self.below(items.len())]
-    }
-}
+/// portable, so a seed names the same campaign on every machine (the
+/// library's tests use the same generator).
+#[path = "../../../sora/tests/common/mod.rs"]
+mod rng;
+#[allow(unused_imports)] // not every test file runs a campaign
+pub use rng::Rng;

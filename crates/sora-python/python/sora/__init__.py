@@ -30,9 +30,10 @@ from typing import Any, Dict, Optional, Sequence, Tuple, Union
 import numpy as np
 import xarray as xr
 
+from . import _checks
 from . import _sora
 from ._arrays import broadcast_flat as _broadcast_flat
-from ._sora import __version__, get_num_threads, set_num_threads
+from ._sora import __version__, get_num_threads
 
 __all__ = [
     "Atmosphere",
@@ -45,6 +46,12 @@ __all__ = [
     "RADIANCE_UNITS",
     "write_exr",
 ]
+
+def set_num_threads(threads: int) -> None:
+    """Uses ``threads`` threads for every later computation (0: one per
+    core, the default); at most 4096."""
+    _sora.set_num_threads(_checks.integer("threads", threads, 0, 4096))
+
 
 #: Units of spectral radiance, as written in ``attrs["units"]``.
 RADIANCE_UNITS = "W m-2 sr-1 nm-1"
@@ -323,23 +330,45 @@ class Sky:
                     "time is a naive datetime: give its time zone (e.g. tzinfo=datetime.timezone.utc)"
                 )
             time = time.isoformat()
+        if time is not None and not isinstance(time, str):
+            raise TypeError(f"time must be RFC 3339 text or a datetime, not {type(time).__name__}")
+        if location is not None:
+            if isinstance(location, (str, bytes)) or not hasattr(location, "__len__"):
+                raise TypeError("location must be (latitude_deg, longitude_deg[, elevation_m])")
+            location = [
+                _checks.number(name, value, unit)
+                for name, value, unit in zip(
+                    ("latitude_deg", "longitude_deg", "elevation_m"), location, ("deg", "deg", "m")
+                )
+            ] + [None] * max(0, len(location) - 3)
+            if None in location:
+                raise ValueError(
+                    f"location has {len(location)} values: give (latitude_deg, longitude_deg) or (latitude_deg, longitude_deg, elevation_m)"
+                )
+        if reference_steps is not None:
+            if isinstance(reference_steps, (str, bytes)) or not hasattr(reference_steps, "__len__") or len(reference_steps) != 2:
+                raise TypeError("reference_steps must be (view_steps, sun_steps), two integers")
+            reference_steps = tuple(
+                _checks.integer(name, value, 1, _sora.MAX_REFERENCE_STEPS)
+                for name, value in zip(("view steps", "sun steps"), reference_steps)
+            )
         arguments = dict(
-            sun_elevation_deg=None if sun_elevation_deg is None else float(sun_elevation_deg),
-            sun_azimuth_deg=None if sun_azimuth_deg is None else float(sun_azimuth_deg),
+            sun_elevation_deg=_checks.optional_number("sun_elevation_deg", sun_elevation_deg, "deg"),
+            sun_azimuth_deg=_checks.optional_number("sun_azimuth_deg", sun_azimuth_deg, "deg"),
             time=time,
-            location=None if location is None else [float(v) for v in location],
-            refraction=bool(refraction),
-            pressure_hpa=None if pressure_hpa is None else float(pressure_hpa),
-            temperature_c=None if temperature_c is None else float(temperature_c),
-            sun_distance_au=None if sun_distance_au is None else float(sun_distance_au),
-            observer_altitude_m=float(observer_altitude_m),
+            location=location,
+            refraction=_checks.flag("refraction", refraction),
+            pressure_hpa=_checks.optional_number("pressure_hpa", pressure_hpa, "hPa"),
+            temperature_c=_checks.optional_number("temperature_c", temperature_c, "C"),
+            sun_distance_au=_checks.optional_number("sun_distance_au", sun_distance_au, "AU"),
+            observer_altitude_m=_checks.number("observer_altitude_m", observer_altitude_m, "m"),
             wavelengths_nm=_native_wavelengths(wavelengths_nm),
-            scattering=scattering,
-            method=method,
-            samples=samples,
-            seed=seed,
+            scattering=_checks.text("scattering", scattering),
+            method=_checks.text("method", method),
+            samples=_checks.optional_integer("samples", samples, 2, _sora.MAX_SAMPLES, " (paths per view)"),
+            seed=_checks.optional_integer("seed", seed, 0, 2**64 - 1),
             reference_steps=reference_steps,
-            polarisation=polarisation,
+            polarisation=_checks.text("polarisation", polarisation),
         )
         self._native = _sora.Sky(atmosphere._native, **arguments)
         self._arguments = (atmosphere, arguments)
@@ -378,12 +407,20 @@ class Sky:
         """Directions of the almucantar (the sun's elevation) every
         ``step_deg`` of azimuth from the sun's, as ``sora spectrum
         --almucantar``: (view_elevation_deg, view_azimuth_deg) arrays."""
-        step = float(step_deg)
-        if not (np.isfinite(step) and 0.0 < step <= 90.0):
+        step = _checks.number("step_deg", step_deg, "deg")
+        if not 0.0 < step <= 90.0:
             raise ValueError(
                 f"step_deg = {step} deg is out of range: allowed > 0 and <= 90 deg"
             )
-        count = int(np.floor((360.0 - 1e-6) / step + 1e-9)) + 1
+        # Counted in floating point and checked before the list is made, as
+        # `sora spectrum --almucantar` does (a step of 1e-300 deg is 3.6e302
+        # directions).
+        count = np.floor((360.0 - 1e-6) / step + 1e-9) + 1
+        if not count <= _sora.MAX_VIEWS:
+            raise ValueError(
+                f"step_deg = {step:e} deg gives {count:e} directions, more than the limit of {_sora.MAX_VIEWS}: use a coarser step"
+            )
+        count = int(count)
         elevation, azimuth = self.sun_position_deg
         azimuths = np.array([(azimuth + k * step) % 360.0 for k in range(count)])
         return np.full(count, elevation), azimuths
@@ -553,9 +590,16 @@ class Sky:
         ``fov_deg`` across the width). ``height`` defaults to ``width``
         (half of it for equirectangular). Path tracing renders no images.
         """
+        side = _sora.MAX_IMAGE_SIDE
         return self._native.render(
-            camera, width, height, output, draw_sun_disc,
-            float(look_elevation_deg), float(look_azimuth_deg), float(fov_deg),
+            _checks.text("camera", camera),
+            _checks.integer("width", width, 1, side, " (pixels)"),
+            _checks.optional_integer("height", height, 1, side, " (pixels)"),
+            _checks.text("output", output),
+            _checks.flag("draw_sun_disc", draw_sun_disc),
+            _checks.number("look_elevation_deg", look_elevation_deg, "deg"),
+            _checks.number("look_azimuth_deg", look_azimuth_deg, "deg"),
+            _checks.number("fov_deg", fov_deg, "deg"),
         )
 
     def __reduce__(self):

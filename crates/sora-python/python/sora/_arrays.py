@@ -16,7 +16,8 @@ def broadcast_flat(names: Tuple[str, ...], *values, dtype=float):
     for name, value in zip(names, values):
         try:
             arrays.append(np.asarray(value, dtype=dtype))
-        except (TypeError, ValueError) as error:
+        except (TypeError, ValueError, OverflowError) as error:
+            # OverflowError: an integer past any float (10**400).
             raise ValueError(
                 f"{name} must be a number or an array of numbers ({error})"
             ) from None

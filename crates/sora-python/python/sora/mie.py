@@ -17,12 +17,13 @@ All functions release the GIL; :func:`efficiencies` runs on
 
 from __future__ import annotations
 
+import numbers
 from typing import NamedTuple, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import xarray as xr
 
-from . import _sora
+from . import _checks, _sora
 from ._arrays import broadcast_flat
 
 __all__ = ["Efficiencies", "efficiencies", "phase_function", "lognormal", "gamma"]
@@ -47,6 +48,9 @@ def efficiencies(m, x) -> Efficiencies:
 
     >>> q = efficiencies(1.5 + 0.01j, np.logspace(-1, 2, 1000))
     """
+    for name, value in (("m", m), ("x", x)):
+        if value is None:
+            raise TypeError(f"{name} must be a number or an array of numbers, not None")
     (m_flat, x_flat), shape = broadcast_flat(("m", "x"), m, x, dtype=complex)
     if np.any(x_flat.imag != 0):
         raise ValueError("x must be real (the size parameter 2 pi r / lambda)")
@@ -67,9 +71,15 @@ def phase_function(m: complex, x: float, angle_deg, polarization: bool = False):
     if not np.all(np.isfinite(angles)) or np.any((angles < 0) | (angles > 180)):
         bad = angles[~(np.isfinite(angles) & (angles >= 0) & (angles <= 180))].reshape(-1)[0]
         raise ValueError(f"angle_deg = {bad} deg is out of range: allowed 0..=180 deg")
-    m = complex(m)
+    if m is None or isinstance(m, (str, bytes, bool)) or not isinstance(m, numbers.Complex):
+        raise TypeError(f"m must be a complex number, not {type(m).__name__}")
+    try:
+        m = complex(m)
+    except OverflowError:
+        raise ValueError("m is out of range: it is not a finite complex number") from None
     phase, ratio = _sora.mie_phase_function(
-        m.real, m.imag, float(x), np.ascontiguousarray(np.cos(np.radians(angles)).reshape(-1))
+        m.real, m.imag, _checks.number("x", x, "(size parameter)"),
+        np.ascontiguousarray(np.cos(np.radians(angles)).reshape(-1)),
     )
     phase = phase.reshape(angles.shape)
     return (phase, ratio.reshape(angles.shape)) if polarization else phase
@@ -77,37 +87,49 @@ def phase_function(m: complex, x: float, angle_deg, polarization: bool = False):
 
 def _wavelengths(wavelengths_nm) -> np.ndarray:
     if isinstance(wavelengths_nm, str):
-        # The command line's start:stop:step.
-        parts = wavelengths_nm.split(":")
-        if len(parts) != 3:
-            raise ValueError(
-                f"wavelengths_nm = '{wavelengths_nm}': write start:stop:step in nm, e.g. 380:780:20"
-            )
-        start, stop, step = (float(p) for p in parts)
-        count = int(round((stop - start) / step)) + 1 if step > 0 else 0
-        if count < 1:
-            raise ValueError(f"wavelengths_nm = '{wavelengths_nm}' has no wavelengths")
-        return start + step * np.arange(count)
-    values = np.asarray(wavelengths_nm, dtype=float)
+        # The command line's start:stop:step, checked as `sora mie
+        # --wavelengths` checks it (300-1100 nm, at most 10,000).
+        return np.asarray(_sora.wavelength_grid_nm(wavelengths_nm), dtype=float)
+    if wavelengths_nm is None:
+        raise TypeError("wavelengths_nm must be 'start:stop:step' or an array of wavelengths in nm, not None")
+    try:
+        values = np.asarray(wavelengths_nm, dtype=float)
+    except (TypeError, ValueError, OverflowError) as error:
+        raise ValueError(f"wavelengths_nm must be numbers in nm ({error})") from None
     if values.ndim > 1:
         raise ValueError(f"wavelengths_nm must be 1-D (nm), not of shape {values.shape}")
+    if values.size > _sora.MAX_WAVELENGTH_COUNT:
+        raise ValueError(
+            f"wavelengths_nm has {values.size} wavelengths, more than the limit of {_sora.MAX_WAVELENGTH_COUNT}"
+        )
     return np.ascontiguousarray(values.reshape(-1))
 
 
 def _ensemble(kind, first, second, m, wavelengths_nm, radius_window_um, parameters) -> xr.Dataset:
     wavelengths = _wavelengths(wavelengths_nm)
-    m_values = np.asarray(m, dtype=complex)
+    if m is None:
+        raise TypeError("m must be a complex number or one per wavelength, not None")
+    try:
+        m_values = np.asarray(m, dtype=complex)
+    except (TypeError, ValueError, OverflowError) as error:
+        raise ValueError(f"m must be complex numbers ({error})") from None
     if m_values.ndim == 0:
         m_values = np.full(wavelengths.shape, complex(m_values))
     if m_values.shape != wavelengths.shape:
         raise ValueError(
             f"m has shape {m_values.shape}: give one index or one per wavelength ({wavelengths.size})"
         )
-    window = None if radius_window_um is None else tuple(float(v) for v in radius_window_um)
+    if radius_window_um is not None and (
+        isinstance(radius_window_um, (str, bytes)) or not hasattr(radius_window_um, "__len__")
+    ):
+        raise TypeError("radius_window_um must be (min_um, max_um)")
+    window = None if radius_window_um is None else tuple(
+        _checks.number("radius_window_um", v, "um") for v in radius_window_um
+    )
     if window is not None and len(window) != 2:
         raise ValueError("radius_window_um must be (min_um, max_um)")
     c_ext, c_sca, c_abs, albedo, g, paper_g, fraction = _sora.mie_ensemble(
-        kind, float(first), float(second),
+        kind, first, second,
         np.ascontiguousarray(m_values.real), np.ascontiguousarray(m_values.imag),
         wavelengths, window,
     )
@@ -144,10 +166,14 @@ def lognormal(
     ``radius_window_um``, at each wavelength (nm, vacuum): cross-sections
     (m^2), albedo, g, as ``sora mie --lognormal``. ``m`` is one index or
     one per wavelength."""
+    median_radius_um = _checks.number("median_radius_um", median_radius_um, "um")
+    geometric_standard_deviation = _checks.number(
+        "geometric_standard_deviation", geometric_standard_deviation, ""
+    )
     return _ensemble(
         "lognormal", median_radius_um, geometric_standard_deviation, m, wavelengths_nm,
         radius_window_um,
-        {"median_radius_um": float(median_radius_um), "geometric_standard_deviation": float(geometric_standard_deviation)},
+        {"median_radius_um": median_radius_um, "geometric_standard_deviation": geometric_standard_deviation},
     )
 
 
@@ -161,7 +187,9 @@ def gamma(
     """As :func:`lognormal` for a modified gamma population (Hansen & Travis
     1974) by effective radius (um) and effective variance, as ``sora mie
     --gamma``."""
+    effective_radius_um = _checks.number("effective_radius_um", effective_radius_um, "um")
+    effective_variance = _checks.number("effective_variance", effective_variance, "")
     return _ensemble(
         "gamma", effective_radius_um, effective_variance, m, wavelengths_nm, radius_window_um,
-        {"effective_radius_um": float(effective_radius_um), "effective_variance": float(effective_variance)},
+        {"effective_radius_um": effective_radius_um, "effective_variance": effective_variance},
     )

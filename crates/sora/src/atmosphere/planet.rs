@@ -31,8 +31,14 @@ use crate::spectrum::{SampledSpectrum, Spectrum, WavelengthGrid};
 pub const MIN_PLANET_RADIUS_M: f64 = 1e5;
 /// Largest supported planet radius, m.
 pub const MAX_PLANET_RADIUS_M: f64 = 1e10;
-/// Largest supported atmosphere height, m.
-pub const MAX_ATMOSPHERE_HEIGHT_M: f64 = 1e8;
+/// Smallest supported atmosphere height, m: 1 km, the thinnest shell the
+/// reference tests use (a plane-parallel slab); a shell of a nanometre left
+/// the tables' steps at zero width and the spectrum NaN.
+pub const MIN_ATMOSPHERE_HEIGHT_M: f64 = 1e3;
+/// Largest supported atmosphere height, m: 1,000 km, ten times Earth's
+/// 100 km top, where one spectrum still takes seconds (at 1.93e7 m a
+/// spectrum or a 16 x 16 image took more than a minute).
+pub const MAX_ATMOSPHERE_HEIGHT_M: f64 = 1e6;
 
 /// The least air a raised ground leaves below the top of the atmosphere, m.
 pub const MIN_AIR_ABOVE_GROUND_M: f64 = 1e3;
@@ -54,7 +60,7 @@ pub struct Planet {
 
 impl Planet {
     /// A planet of radius `radius_m` (1e5..=1e10 m) with an atmosphere
-    /// `atmosphere_height_m` thick (> 0, <= 1e8 m) over a Lambertian ground
+    /// `atmosphere_height_m` thick (1e3..=1e6 m) over a Lambertian ground
     /// of albedo `ground_albedo` (values in [0, 1]). Errors name the keys
     /// `planet.radius_m`, `planet.atmosphere_height_m`, `planet.ground_albedo`.
     pub fn new(radius_m: f64, atmosphere_height_m: f64, ground_albedo: Spectrum) -> Result<Planet> {
@@ -66,12 +72,12 @@ impl Planet {
                 format!("{MIN_PLANET_RADIUS_M:e}..={MAX_PLANET_RADIUS_M:e}"),
             ));
         }
-        if !(atmosphere_height_m > 0.0 && atmosphere_height_m <= MAX_ATMOSPHERE_HEIGHT_M) {
+        if !(MIN_ATMOSPHERE_HEIGHT_M..=MAX_ATMOSPHERE_HEIGHT_M).contains(&atmosphere_height_m) {
             return Err(Error::out_of_range(
                 "planet.atmosphere_height_m",
                 atmosphere_height_m,
                 "m",
-                format!("> 0 (the top above the ground) and <= {MAX_ATMOSPHERE_HEIGHT_M:e}"),
+                format!("{MIN_ATMOSPHERE_HEIGHT_M:e}..={MAX_ATMOSPHERE_HEIGHT_M:e}"),
             ));
         }
         match &ground_albedo {
@@ -250,6 +256,13 @@ mod tests {
     }
 
     #[test]
+    fn the_atmosphere_height_bounds_are_inclusive() {
+        for height in [MIN_ATMOSPHERE_HEIGHT_M, MAX_ATMOSPHERE_HEIGHT_M] {
+            assert!(Planet::new(6e6, height, Spectrum::Constant(0.0)).is_ok());
+        }
+    }
+
+    #[test]
     fn small_planet_works() {
         let planet = Planet::new(1e5, 1e4, Spectrum::Constant(0.1)).unwrap();
         assert!((planet.distance_to_top_of_atmosphere(1e5, 1.0) - 1e4).abs() < 1e-9);
@@ -273,6 +286,16 @@ mod tests {
             (
                 Planet::new(6e6, -5.0, Spectrum::Constant(0.0)),
                 "planet.atmosphere_height_m = -5 m",
+            ),
+            // A nanometre of air (NaN at the end, once) and 19,300 km (more
+            // than a minute a spectrum, once): refused, naming the bounds.
+            (
+                Planet::new(6e6, 1e-9, Spectrum::Constant(0.0)),
+                "planet.atmosphere_height_m = 1e-9 m is out of range: allowed 1e3..=1e6 m",
+            ),
+            (
+                Planet::new(6e6, 1.93e7, Spectrum::Constant(0.0)),
+                "planet.atmosphere_height_m = 1.93e7 m is out of range: allowed 1e3..=1e6 m",
             ),
             (
                 Planet::new(6e6, 1e5, Spectrum::Constant(1.5)),

@@ -2,13 +2,15 @@
 //! the target's directory, flushed to disk, and only then renamed onto the
 //! target. A reader (or a crashed run) therefore sees either the old file or
 //! the complete new one, never a partial file, and a failed write leaves
-//! neither a partial target nor a temporary file behind.
+//! neither a partial target nor a temporary file behind. The outputs of one
+//! run are renamed together ([`OutputFiles`]): all of them or none.
 
 use std::ffi::OsStr;
 use std::fs::{File, OpenOptions};
 use std::io;
 use std::path::{Path, PathBuf};
 
+use super::path::{comparable_path, directory_of, output_target};
 use crate::{Error, Result};
 
 /// How many temporary names to try before giving up: names only collide with
@@ -21,65 +23,148 @@ const MAX_TEMPORARY_NAME_ATTEMPTS: u32 = 1000;
 /// (255 bytes on most) still leaves room for the suffix.
 const MAX_TEMPORARY_NAME_PREFIX_CHARS: usize = 64;
 
-/// Writes the file at `path` atomically: `write_contents` fills a new
-/// temporary file `.<name>.tmp-<pid>-<n>` in the same directory (the same
-/// file system, so that the final rename is atomic), which is then synced
-/// to disk and renamed onto `path`, replacing any existing file.
+/// Output files of one run, written together or not at all: each is
+/// written in full to a temporary file `.<name>.tmp-<pid>-<n>` beside its
+/// target (the same file system, so that the rename is atomic) and synced
+/// ("staged": [`OutputFiles::png`], [`OutputFiles::exr_with_layers`],
+/// [`OutputFiles::text`]); [`OutputFiles::commit`] then renames them onto
+/// their targets in turn.
 ///
-/// If anything fails (creating, writing, syncing or renaming, an error
-/// returned by `write_contents`, or a panic in it), the temporary file is
-/// removed, an existing file at `path` is left untouched, and the error
-/// names `path`. The new file gets default permissions (those of the old
-/// file, if any, are not copied); a symbolic link at `path` is replaced by
-/// the file rather than followed.
-pub(crate) fn write_file_atomically(
+/// Every target is checked by [`output_target`] when it is staged and
+/// again just before its rename: only a regular file (a link is followed
+/// to its file) or a new file is written, never a device, a FIFO or a
+/// directory; two outputs on one file are refused. If anything fails
+/// (staging, a check, a rename), every temporary file is removed, the
+/// files this run had already created are removed, and the error names
+/// the path; files that existed and were already replaced keep their new
+/// contents (there is no older copy to put back). Dropping an
+/// `OutputFiles` without committing removes its temporaries. The new files
+/// get default permissions (those of the old files are not copied).
+#[derive(Debug, Default)]
+pub struct OutputFiles {
+    staged: Vec<StagedFile>,
+}
+
+/// A complete temporary file waiting to be renamed onto `target`.
+#[derive(Debug)]
+struct StagedFile {
+    /// The file to replace or create (links already followed).
+    target: PathBuf,
+    /// The path the caller gave, for messages.
+    shown: String,
+    temporary: TemporaryFileGuard,
+}
+
+impl OutputFiles {
+    /// No files yet.
+    pub fn new() -> OutputFiles {
+        OutputFiles::default()
+    }
+
+    /// Stages the file at `path`: `write_contents` fills a new temporary
+    /// file next to its target, which is then synced. On failure (an
+    /// error or a panic in `write_contents`) the temporary is removed and
+    /// the error names `path`.
+    pub(crate) fn stage(
+        &mut self,
+        path: &Path,
+        write_contents: impl FnOnce(&mut File) -> Result<()>,
+    ) -> Result<()> {
+        let target = output_target(path, "output")?;
+        let io_error = |what: &str, error: io::Error| Error::Io {
+            path: path.display().to_string(),
+            message: format!("{what}: {error}"),
+        };
+        let Some(file_name) = target.file_name() else {
+            return Err(Error::Io {
+                path: path.display().to_string(),
+                message: "not a file path (it has no file name)".to_string(),
+            });
+        };
+        let key = comparable_path(&target);
+        if let Some(earlier) = self
+            .staged
+            .iter()
+            .find(|staged| comparable_path(&staged.target) == key)
+        {
+            return Err(Error::Unsupported(format!(
+                "{} is the same file as the output {}: give each output its own file",
+                path.display(),
+                earlier.shown
+            )));
+        }
+        let (file, temporary) = create_temporary_file(directory_of(&target), file_name)
+            .map_err(|error| io_error("cannot create a temporary file next to it", error))?;
+        // The file is moved into the closure so that it is closed before the
+        // guard removes it on failure (Windows cannot remove an open file).
+        let fill_and_sync = move || {
+            let mut file = file;
+            write_contents(&mut file)?;
+            file.sync_all()
+                .map_err(|error| io_error("cannot flush the file to disk", error))
+        };
+        fill_and_sync()?;
+        self.staged.push(StagedFile {
+            target,
+            shown: path.display().to_string(),
+            temporary,
+        });
+        Ok(())
+    }
+
+    /// Renames every staged file onto its target, in the order staged; on
+    /// any failure removes the remaining temporaries and the files this
+    /// commit created, and returns the error.
+    pub fn commit(self) -> Result<()> {
+        let mut created: Vec<PathBuf> = Vec::new();
+        let undo = |created: &[PathBuf]| {
+            for path in created {
+                let _ = std::fs::remove_file(path);
+            }
+        };
+        let mut staged = self.staged.into_iter();
+        for file in staged.by_ref() {
+            // Checked again at the last moment: a device or a FIFO put there
+            // since the file was staged is not replaced either.
+            let existed = match output_target(&file.target, "output") {
+                Ok(_) => file.target.exists(),
+                Err(error) => {
+                    undo(&created);
+                    return Err(error);
+                }
+            };
+            if let Err(error) = std::fs::rename(&file.temporary.path, &file.target) {
+                undo(&created);
+                return Err(Error::Io {
+                    path: file.shown.clone(),
+                    message: format!("cannot move the finished file into place: {error}"),
+                });
+            }
+            file.temporary.disarm();
+            if !existed {
+                created.push(file.target.clone());
+            }
+            sync_directory(directory_of(&file.target));
+        }
+        Ok(())
+    }
+}
+
+/// Writes the file at `path` atomically, alone (see [`OutputFiles`]).
+#[cfg(test)]
+fn write_file_atomically(
     path: impl AsRef<Path>,
     write_contents: impl FnOnce(&mut File) -> Result<()>,
 ) -> Result<()> {
-    let path = path.as_ref();
-    let io_error = |what: &str, error: io::Error| Error::Io {
-        path: path.display().to_string(),
-        message: format!("{what}: {error}"),
-    };
-    let Some(file_name) = path.file_name() else {
-        return Err(Error::Io {
-            path: path.display().to_string(),
-            message: "not a file path (it has no file name)".to_string(),
-        });
-    };
-    let directory = directory_of(path);
-
-    let (file, temporary) = create_temporary_file(directory, file_name)
-        .map_err(|error| io_error("cannot create a temporary file next to it", error))?;
-    // The file is moved into the closure so that it is closed before the
-    // guard removes it on failure (Windows cannot remove an open file).
-    let fill_and_sync = move || {
-        let mut file = file;
-        write_contents(&mut file)?;
-        file.sync_all()
-            .map_err(|error| io_error("cannot flush the file to disk", error))
-    };
-    fill_and_sync()?;
-    std::fs::rename(&temporary.path, path)
-        .map_err(|error| io_error("cannot move the finished file into place", error))?;
-    temporary.disarm();
-    sync_directory(directory);
-    Ok(())
-}
-
-/// The directory that holds `path`: its parent, or the current directory
-/// for a bare file name (whose parent is the empty path, which cannot be
-/// opened).
-fn directory_of(path: &Path) -> &Path {
-    match path.parent() {
-        Some(parent) if !parent.as_os_str().is_empty() => parent,
-        _ => Path::new("."),
-    }
+    let mut files = OutputFiles::new();
+    files.stage(path.as_ref(), write_contents)?;
+    files.commit()
 }
 
 /// A temporary file that is removed when this guard is dropped, unless
 /// [`TemporaryFileGuard::disarm`] was called after the file was renamed into
 /// place. Removing on drop covers every early return and unwinding panics.
+#[derive(Debug)]
 struct TemporaryFileGuard {
     path: PathBuf,
 }
@@ -250,6 +335,63 @@ mod tests {
         })
         .unwrap_err();
         assert!(!called);
-        assert!(matches!(error, Error::Io { ref path, .. } if path == "/"));
+        assert_eq!(
+            error.to_string(),
+            "output / is a directory: give a file name in it"
+        );
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn outputs_are_written_together_or_not_at_all() {
+        let directory = tempfile::tempdir().unwrap();
+        let first = directory.path().join("residuals.csv");
+        let second = directory.path().join("fit.png");
+        let mut files = OutputFiles::new();
+        files
+            .stage(&first, |file| {
+                file.write_all(b"a").unwrap();
+                Ok(())
+            })
+            .unwrap();
+        files
+            .stage(&second, |file| {
+                file.write_all(b"b").unwrap();
+                Ok(())
+            })
+            .unwrap();
+        // A FIFO takes the second target's place after staging: the commit
+        // refuses it, and the first file, which it had created, goes too.
+        let status = std::process::Command::new("mkfifo")
+            .arg(&second)
+            .status()
+            .unwrap();
+        assert!(status.success());
+        let message = files.commit().unwrap_err().to_string();
+        assert!(message.contains("not a regular file"), "{message}");
+        assert_eq!(directory_entries(directory.path()), ["fit.png"]);
+        use std::os::unix::fs::FileTypeExt;
+        assert!(
+            std::fs::symlink_metadata(&second)
+                .unwrap()
+                .file_type()
+                .is_fifo()
+        );
+    }
+
+    #[test]
+    fn one_file_staged_twice_is_refused() {
+        let directory = tempfile::tempdir().unwrap();
+        let target = directory.path().join("sky.png");
+        let mut files = OutputFiles::new();
+        files.stage(&target, |_| Ok(())).unwrap();
+        let again = directory.path().join(".").join("sky.png");
+        let message = files.stage(&again, |_| Ok(())).unwrap_err().to_string();
+        assert!(
+            message.contains("is the same file as the output"),
+            "{message}"
+        );
+        drop(files);
+        assert!(directory_entries(directory.path()).is_empty());
     }
 }

@@ -32,7 +32,7 @@
 //! - The header's attributes are sorted by name (as the OpenEXR library
 //!   writes them), so the same image makes the same file byte for byte.
 //!
-//! The file is written atomically, as [`write_file_atomically`] describes.
+//! The file is written atomically, as [`OutputFiles`] describes.
 
 use std::io::Write;
 use std::path::Path;
@@ -43,7 +43,7 @@ use ::exr::meta::header::LayerAttributes;
 use ::exr::prelude::{AnyChannel, AnyChannels, Blocks, Encoding, FlatSamples, Image, Layer};
 use ::exr::prelude::{SmallVec, WritableImage, f16};
 
-use super::atomic_file::write_file_atomically;
+use super::atomic_file::OutputFiles;
 use super::image_buffer::{ChannelKind, LinearImage};
 use crate::{Error, Result};
 
@@ -111,22 +111,39 @@ pub fn write_exr_with_layers(
     layers: &[(&str, &LinearImage)],
     options: ExrOptions,
 ) -> Result<()> {
-    let path = path.as_ref();
-    // Encoded in memory first: a half-float overflow or an encoder error
-    // leaves no file behind, and the file is written in one piece.
-    let bytes = encode_exr_with_layers(image, layers, options).map_err(|error| match error {
-        Error::Io { message, .. } => Error::Io {
-            path: path.display().to_string(),
-            message,
-        },
-        other => other,
-    })?;
-    write_file_atomically(path, |file| {
-        file.write_all(&bytes).map_err(|error| Error::Io {
-            path: path.display().to_string(),
-            message: format!("cannot write OpenEXR: {error}"),
+    let mut files = OutputFiles::new();
+    files.exr_with_layers(path, image, layers, options)?;
+    files.commit()
+}
+
+impl OutputFiles {
+    /// Stages the file [`write_exr_with_layers`] writes (see
+    /// [`OutputFiles`]).
+    pub fn exr_with_layers(
+        &mut self,
+        path: impl AsRef<Path>,
+        image: &LinearImage,
+        layers: &[(&str, &LinearImage)],
+        options: ExrOptions,
+    ) -> Result<()> {
+        let path = path.as_ref();
+        // Encoded in memory first: a half-float overflow or an encoder error
+        // leaves no file behind, and the file is written in one piece.
+        let bytes =
+            encode_exr_with_layers(image, layers, options).map_err(|error| match error {
+                Error::Io { message, .. } => Error::Io {
+                    path: path.display().to_string(),
+                    message,
+                },
+                other => other,
+            })?;
+        self.stage(path, |file| {
+            file.write_all(&bytes).map_err(|error| Error::Io {
+                path: path.display().to_string(),
+                message: format!("cannot write OpenEXR: {error}"),
+            })
         })
-    })
+    }
 }
 
 /// The OpenEXR file [`write_exr`] writes, as bytes in memory (for a

@@ -19,11 +19,19 @@
 //!   uncompressed, with a `chromaticities` attribute for the primaries
 //!   (Rec. 709 / D65 for RGB; CIE XYZ's own, white (1/3, 1/3), for XYZ).
 //!
+//! What may be written: a regular file, a link to one (the file is
+//! written, the link kept) or a new file in an existing directory, never a
+//! device, a FIFO or a directory ([`output_target`], the one check every
+//! output of the command-line tool and every writer here goes through;
+//! [`output_targets`] also refuses two outputs on one file).
+//!
 //! Atomicity: every file is written in full to a temporary file in the
-//! target's directory, synced, then renamed onto the target
-//! (`write_file_atomically`). A failed write leaves no partial file and no
-//! temporary file, and an existing file at the target is replaced only when
-//! the new one is complete. Errors are [`Error::Io`](crate::Error::Io)
+//! target's directory, synced, then renamed onto the target. A failed write
+//! leaves no partial file and no temporary file, and an existing file at
+//! the target is replaced only when the new one is complete. The outputs of
+//! one run are written together or not at all ([`OutputFiles`]: staged,
+//! then renamed in turn; on a failure the files the run created are
+//! removed). Errors are [`Error::Io`](crate::Error::Io)
 //! naming the target path (image validation errors are
 //! [`Error::OutOfRange`](crate::Error::OutOfRange) naming the pixel and
 //! channel).
@@ -32,8 +40,12 @@ mod atomic_file;
 mod exr;
 mod format;
 mod image_buffer;
+mod path;
 mod png;
 mod text;
+
+pub use atomic_file::OutputFiles;
+pub use path::{MAX_SYMBOLIC_LINK_HOPS, output_target, output_targets};
 
 pub use exr::{
     ExrCompression, ExrOptions, ExrSampleType, encode_exr, encode_exr_with_layers, write_exr,

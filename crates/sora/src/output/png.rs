@@ -13,7 +13,7 @@ use std::path::Path;
 use image::codecs::png::PngEncoder;
 use image::{ExtendedColorType, ImageEncoder};
 
-use super::atomic_file::write_file_atomically;
+use super::atomic_file::OutputFiles;
 use super::image_buffer::DisplayImage;
 use crate::{Error, Result};
 
@@ -60,22 +60,38 @@ mod private {
 /// Writes `image` to `path` as an RGB PNG of 8 or 16 bits per channel (from
 /// the image's sample type), atomically: on any failure, no partial file is
 /// left and an existing file at `path` is unchanged. Errors name `path`.
+/// Only a regular file, a link to one or a new file is written
+/// ([`output_target`](super::output_target)).
 pub fn write_png<T: PngSample>(path: impl AsRef<Path>, image: &DisplayImage<T>) -> Result<()> {
-    let path = path.as_ref();
-    // Dimensions are at most `MAX_IMAGE_DIMENSION` (2^31 - 1) by construction.
-    let width = u32::try_from(image.width()).expect("image width fits in u32");
-    let height = u32::try_from(image.height()).expect("image height fits in u32");
-    let bytes = T::to_native_endian_bytes(image.data());
-    let encoding_error = |error: &dyn std::fmt::Display| Error::Io {
-        path: path.display().to_string(),
-        message: format!("cannot write PNG: {error}"),
-    };
-    write_file_atomically(path, |file| {
-        let mut buffered = BufWriter::new(file);
-        PngEncoder::new(&mut buffered)
-            .write_image(&bytes, width, height, T::RGB_COLOR_TYPE)
-            .map_err(|error| encoding_error(&error))?;
-        // Flush explicitly: dropping a `BufWriter` would swallow the error.
-        buffered.flush().map_err(|error| encoding_error(&error))
-    })
+    let mut files = OutputFiles::new();
+    files.png(path, image)?;
+    files.commit()
+}
+
+impl OutputFiles {
+    /// Stages `image` for `path` as [`write_png`] writes it (see
+    /// [`OutputFiles`]).
+    pub fn png<T: PngSample>(
+        &mut self,
+        path: impl AsRef<Path>,
+        image: &DisplayImage<T>,
+    ) -> Result<()> {
+        let path = path.as_ref();
+        // Dimensions are at most `MAX_IMAGE_DIMENSION` (2^31 - 1) by construction.
+        let width = u32::try_from(image.width()).expect("image width fits in u32");
+        let height = u32::try_from(image.height()).expect("image height fits in u32");
+        let bytes = T::to_native_endian_bytes(image.data());
+        let encoding_error = |error: &dyn std::fmt::Display| Error::Io {
+            path: path.display().to_string(),
+            message: format!("cannot write PNG: {error}"),
+        };
+        self.stage(path, |file| {
+            let mut buffered = BufWriter::new(file);
+            PngEncoder::new(&mut buffered)
+                .write_image(&bytes, width, height, T::RGB_COLOR_TYPE)
+                .map_err(|error| encoding_error(&error))?;
+            // Flush explicitly: dropping a `BufWriter` would swallow the error.
+            buffered.flush().map_err(|error| encoding_error(&error))
+        })
+    }
 }

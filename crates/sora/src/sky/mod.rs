@@ -164,6 +164,56 @@ impl Default for FastTableSize {
 /// Largest image side, pixels.
 pub const MAX_IMAGE_SIDE: u32 = 16384;
 
+/// Most paths per view of the path tracer ([`Method::PathTracing`]).
+pub use crate::transport::path_tracing::MAX_SAMPLES;
+
+/// Refuses an image side outside 1..=[`MAX_IMAGE_SIDE`] pixels: checked by
+/// every render, and by `sora render` before any work.
+pub fn check_image_size(width: u32, height: u32) -> Result<()> {
+    for (name, side) in [("image width", width), ("image height", height)] {
+        if !(1..=MAX_IMAGE_SIDE).contains(&side) {
+            return Err(Error::out_of_range(
+                name,
+                side as f64,
+                "pixels",
+                format!("1..={MAX_IMAGE_SIDE}"),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Most steps of the reference method's march along a view or toward the
+/// sun ([`Method::Reference`]).
+pub const MAX_REFERENCE_STEPS: usize = 10_000_000;
+
+/// Most views of one [`Sky::radiances`] call (an almucantar every 0.0036
+/// deg); checked before any work, as `sora spectrum` checks its directions
+/// before it lists them.
+pub const MAX_VIEWS: usize = 100_000;
+
+/// Most views x wavelengths of one [`Sky::radiances`] call: 1e7 values,
+/// 160 MB of radiances and standard errors.
+pub const MAX_VIEW_VALUES: usize = 10_000_000;
+
+/// Refuses more than [`MAX_VIEWS`] views, or more than [`MAX_VIEW_VALUES`]
+/// views x wavelengths, naming `what` asked for them (a count as f64, so
+/// that a step's count past any integer is refused too).
+pub fn check_view_count(what: &str, views: f64, wavelengths: usize) -> Result<()> {
+    if views.is_nan() || views > MAX_VIEWS as f64 {
+        return Err(Error::Unsupported(format!(
+            "{what} gives {views:e} directions, more than the limit of {MAX_VIEWS}: use a coarser step or fewer directions"
+        )));
+    }
+    let values = views * wavelengths as f64;
+    if values > MAX_VIEW_VALUES as f64 {
+        return Err(Error::Unsupported(format!(
+            "{what} gives {views} directions x {wavelengths} wavelengths = {values:e} values, more than the limit of {MAX_VIEW_VALUES:e}: use fewer directions or a coarser --wavelengths"
+        )));
+    }
+    Ok(())
+}
+
 /// Largest image buffer [`Sky::render_xyz`] or [`Sky::render_spectral`]
 /// allocates, bytes (4 GiB): width x height x values per pixel (1 XYZ of 24
 /// bytes, or one 8-byte radiance per wavelength). Checked before anything
@@ -509,7 +559,7 @@ impl Sky {
                 sun_steps,
             } => {
                 for (name, steps) in [("view steps", view_steps), ("sun steps", sun_steps)] {
-                    if !(1..=10_000_000).contains(&steps) {
+                    if !(1..=MAX_REFERENCE_STEPS).contains(&steps) {
                         return Err(Error::out_of_range(name, steps as f64, "1", "1..=1e7"));
                     }
                 }
@@ -824,6 +874,7 @@ impl Sky {
         progress: &(dyn Fn(u64, u64) + Sync),
     ) -> Result<Vec<SkyRadiance>> {
         let wavelengths = self.wavelengths().len();
+        check_view_count("the views", views.len() as f64, wavelengths)?;
         if let Method::PathTracing { samples, seed } = self.method {
             let tracer = match self.polarisation {
                 Polarisation::Scalar => PathTracer::new(&self.scene),
@@ -1259,16 +1310,7 @@ impl Sky {
         store: impl Fn(&[f64], &mut [T]) + Sync,
     ) -> Result<Vec<T>> {
         let (width, height) = (image.width, image.height);
-        for (name, side) in [("image width", width), ("image height", height)] {
-            if !(1..=MAX_IMAGE_SIDE).contains(&side) {
-                return Err(Error::out_of_range(
-                    name,
-                    side as f64,
-                    "pixels",
-                    format!("1..={MAX_IMAGE_SIDE}"),
-                ));
-            }
-        }
+        check_image_size(width, height)?;
         let buffer_bytes = u64::from(width)
             * u64::from(height)
             * per_pixel as u64

@@ -15,4 +15,6 @@ mod wavelength_grid;
 pub use function::{Spectrum, TabulatedSpectrum};
 pub use sampled::SampledSpectrum;
 pub use solar::SolarSpectrum;
-pub use wavelength_grid::{MAX_WAVELENGTH_NM, MIN_WAVELENGTH_NM, WavelengthGrid};
+pub use wavelength_grid::{
+    MAX_WAVELENGTH_COUNT, MAX_WAVELENGTH_NM, MIN_WAVELENGTH_NM, WavelengthGrid,
+};

@@ -693,7 +693,8 @@ fn compute_first_order_on_path(
     let species = inputs.profiles.len();
     let wavelengths = work.radiance.len();
     interpolate_phases(inputs.phase_table, direction.dot(sun), &mut work.phase);
-    for (i, row) in work.phase.chunks_exact(species).enumerate() {
+    // No species (an empty atmosphere): no rows, and no zero-sized chunks.
+    for (i, row) in work.phase.chunks_exact(species.max(1)).enumerate() {
         for (j, p) in row.iter().enumerate() {
             sun_work.phase[j * wavelengths + i] = *p;
         }
