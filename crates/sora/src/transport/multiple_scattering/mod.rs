@@ -20,12 +20,12 @@
 //!    so the field exists for a sun below the horizon too. One solve per
 //!    wavelength and per sun zenith angle.
 //! 2. **Spherical paths for the near-horizontal streams**
-//!    (`spherical_paths.rs`): streams within 17 degrees of the horizon are
+//!    (`spherical_paths.rs`): streams near the horizon (see Regimes) are
 //!    carried along their real straight paths through the spherical shells
 //!    (which climb out to space instead of running on forever, as a slab's
 //!    would), and their light is shifted, to first order, toward the sun
-//!    angle of the columns where it was gathered. From a sun zenith angle
-//!    of 84 degrees on (where the first order is spherical, item 3) the
+//!    angle of the columns where it was gathered. From the sun zenith
+//!    angle where the first order turns spherical (item 3; Regimes) the
 //!    columns of all those sun nodes are solved together, order by order,
 //!    and each order >= 2 of these streams is shifted exactly rather than
 //!    to first order before it is scattered into the next: read at the
@@ -42,7 +42,7 @@
 //!    too dark at -4 and -6 degrees (`docs/twilight_survey.md`, mars-dust
 //!    in twilight, fixed).
 //! 3. **The first order in the sphere** (`spherical_first_order.rs`): for
-//!    sun zenith angles from 84 degrees on, the light scattered once that
+//!    sun nodes from `FIRST_ORDER_SUN_ZENITH_DEG` on (Regimes), the light scattered once that
 //!    reaches each level in each stream is marched along the stream's
 //!    straight path through the spherical shell, with the planet's shadow
 //!    tested at every sample, and the solver's sweeps take it in place of
@@ -50,7 +50,7 @@
 //!    sunset this is what lights the shadowed air: light scattered in the
 //!    sunlit layer toward the sun, far from the point's own column. That
 //!    light is a peak a few hundredths wide in the zenith cosine, just
-//!    above the sunward horizon; from a sun zenith angle of 90 degrees on
+//!    above the sunward horizon; from `FINE_MOMENTS_SUN_ZENITH_RAD` on
 //!    its Legendre moments (all the solver, the views and the tables take
 //!    from it) are integrated on a grid graded toward each level's horizon
 //!    and the streams' values fitted to them, instead of the 8 streams'
@@ -62,8 +62,8 @@
 //!    is solved at the sun zenith angles the eye's view rays meet:
 //!    [`MultipleScatteringField::compute`] covers every point visible from
 //!    the eye (about +-10 degrees around the eye's sun zenith angle on the
-//!    ground), 3 degrees apart for a high sun and 0.75 degrees from a sun
-//!    zenith angle of 85 degrees on, where the lower atmosphere's sun sets
+//!    ground), 3 degrees apart for a high sun and 0.75 degrees near and
+//!    after sunset (Regimes), where the lower atmosphere's sun sets
 //!    and the field changes fastest (9 solves for a sun 30 degrees high, 18
 //!    for 5 degrees).
 //! 5. **Source-function integration along the real view ray**: with the
@@ -130,6 +130,30 @@
 //! Interpolations between sun zenith angles and altitudes are linear in
 //! the logarithm of the (positive) source: across sunset the field falls
 //! off exponentially, and a linear blend of two nodes overestimates it.
+//!
+//! # Regimes
+//! Which piece applies where; every switch is a constant of `regimes.rs`,
+//! documented there with the measurement that set it (a test holds this
+//! table and those constants to the same values).
+//!
+//! | piece | what it adds | applies when | constant |
+//! |---|---|---|---|
+//! | plane-parallel successive orders (`successive_orders.rs`) | the diffuse field of one column: delta-M, 2n streams, 2n harmonics | always | - |
+//! | pseudo-spherical sun beam | T*_sun along the real path, zero in the shadow | always | - |
+//! | spherical paths (`spherical_paths.rs`) | the real path lengths of the near-horizontal streams | streams with \|mu\| below | `SPHERICAL_STREAM_COSINE` = 0.3 |
+//! | first-order shift of the finished field | the near-horizontal light's horizontal displacement, to first order | sun nodes below (zenith, deg) | `FIRST_ORDER_SUN_ZENITH_DEG` = 84 |
+//! | every-order shift, nodes solved together | each order >= 2 of the spherical streams read at its sun angle | sun nodes from (zenith, deg) | `FIRST_ORDER_SUN_ZENITH_DEG` = 84 |
+//! | spherical first order (`spherical_first_order.rs`) | the first order marched through the shell, with the shadow | sun nodes from (zenith, deg) | `FIRST_ORDER_SUN_ZENITH_DEG` = 84 |
+//! | fine first-order moments | the narrow near-horizon peak of the first order after sunset | sun nodes from (zenith) | `FINE_MOMENTS_SUN_ZENITH_RAD` = 90° |
+//! | sunset sun-node spacing | sun nodes narrowing from the coarse to the fine step | from (zenith, deg) | `SUNSET_STEP_START_DEG` = 70 |
+//! | sunset sun-node spacing | sun nodes the fine step apart | from (zenith, deg) | `SUNSET_STEP_END_DEG` = 85 |
+//! | forward-peak term (`forward_peak.rs`) | what delta-M moved out of single scattering (TMS) | any species with a truncated peak | - |
+//! | k-fold peak kernel | the peak-only light, spread by the peak's k-fold convolution | within this of the sun | `PEAK_KERNEL_RADIUS_RAD` = 30° |
+//! | kernel to wide-angle blend | linear passage to one scattering by the whole phase function | from this from the sun | `PEAK_KERNEL_BLEND_START_RAD` = 20° |
+//! | tilted peak beam (`peak_beam.rs`) | the last peak scattering at its angle | point's sun elevation from (deg) | `PEAK_BEAM_LOWEST_ELEVATION_DEG` = -20 |
+//! | tilted peak beam | (as above) | point's sun elevation below (deg) | `PEAK_BEAM_HIGHEST_ELEVATION_DEG` = 12 |
+//! | tilted peak beam blend | linear passage back to delta-M's beam | point's sun elevation from (deg) | `PEAK_BEAM_BLEND_START_DEG` = 8 |
+//! | polarisation ratio (`polarisation_correction.rs`) | (I, Q, U, V) / I of the orders >= 2 | `Polarisation::Vector`, every sun: one column at the eye's sun, with its own first order and no shift | - |
 //!
 //! # Why not Hillaire (2020)
 //! Hillaire's table of the multiply scattered luminance per (altitude,
@@ -270,14 +294,14 @@
 //! 0.22 s and 0.16 s for 5 degrees (18 angles); a 512 x 512 fisheye with
 //! multiple scattering 0.51 s and 0.75 s, against 0.23 s and 0.21 s with
 //! single scattering only. The spherical first order adds 20-30 ms per
-//! sun node from 84 degrees on (10 000 marched paths each; earth-clear, 21
+//! spherical sun node (10 000 marched paths each; earth-clear, 21
 //! wavelengths), nothing for a sun higher than about 16 degrees. Measured
 //! with the `sora` binary on the quiet 2-core machine, before and after
 //! it: sun 30 degrees, one view 0.11 s and a 512 x 512 fisheye 0.30 s,
 //! unchanged; sun 5 degrees (11 of 18 nodes) 0.16 s and 0.39 s before,
 //! 0.51 s and 0.76 s after; sun -6 degrees (19 nodes) 0.15 s and 0.32 s
 //! before, 0.52 s and 0.69 s after. The twilight shift of item 2 (per
-//! wavelength, sun node from 84 degrees, spherical stream and level: a
+//! wavelength, spherical sun node, spherical stream and level: a
 //! 16-azimuth synthesis, two log-linear reads, the transform back) adds
 //! nothing for a sun higher than about 16 degrees; measured as CPU time
 //! of five earth-clear skies (suns 0 to -8 degrees, 3 wavelengths, the
@@ -304,7 +328,7 @@
 //! - Diffuse light between nearby points travels as in a column of uniform
 //!   horizontal layers with one sun zenith angle, except for the
 //!   near-horizontal streams' paths and their first-order shift, and for
-//!   the first order from 84 degrees on (spherical): exact in the
+//!   the spherical first order (Regimes): exact in the
 //!   plane-parallel limit, good for a sun above 5 degrees, within a few
 //!   per cent in civil twilight. The steeper streams' orders >= 2 still
 //!   take their sources from their own column's sun angle (shifting them
@@ -333,6 +357,7 @@ mod peak_beam;
 mod phase_fourier;
 mod phase_matrix_fourier;
 mod polarisation_correction;
+mod regimes;
 mod source_table;
 mod spherical_first_order;
 mod spherical_paths;
@@ -351,6 +376,7 @@ use self::phase_fourier::{
 };
 pub(crate) use self::polarisation_correction::PolarisationTable;
 use self::polarisation_correction::{CorrectionInputs, PolarisationCorrection};
+use self::regimes::{FIRST_ORDER_SUN_ZENITH_DEG, SUNSET_STEP_END_DEG, SUNSET_STEP_START_DEG};
 use self::spherical_first_order::{
     FirstOrderInputs, MomentQuadrature, compute_spherical_first_order,
 };
@@ -368,12 +394,6 @@ use crate::geometry::{Vector3, segment_in_atmosphere};
 
 /// Panels of the exact column integrals toward the sun from each level.
 const SUN_RAY_PANELS: usize = 12;
-
-/// The sun zenith angle from which the field's first order is computed in
-/// the spherical shell (`spherical_first_order`), degrees: higher suns
-/// keep the column's own (the two agree there, and the spherical one costs
-/// 10 000 marched paths per sun node).
-const FIRST_ORDER_SUN_ZENITH_DEG: f64 = 84.0;
 
 /// Altitude and mu nodes of the sun-column table of the spherical first
 /// order in the tests' fields: the default image tables' size
@@ -393,7 +413,8 @@ pub struct MultipleScatteringSettings {
     /// Step between the sun zenith angles at which the field is solved
     /// for a high sun, degrees.
     pub sun_zenith_step_deg: f64,
-    /// The step near and below the horizon (zenith angles from 85 degrees),
+    /// The step near and below the horizon (zenith angles from
+    /// `SUNSET_STEP_END_DEG`, 85 degrees),
     /// where the field changes fastest, degrees.
     pub sunset_sun_zenith_step_deg: f64,
     /// Gauss panels along each view ray.
@@ -472,13 +493,17 @@ impl SunZenithAxis {
     /// Nodes covering `lowest..=highest` (rad), one of them at `centre`
     /// (the eye's own sun zenith angle, where the nearest and so brightest
     /// part of every view ray is), spaced by `coarse` for a high sun and
-    /// narrowing to `fine` from 70 to 85 degrees and beyond, where the
+    /// narrowing to `fine` from `SUNSET_STEP_START_DEG` (70 degrees) to
+    /// `SUNSET_STEP_END_DEG` (85) and beyond, where the
     /// lower atmosphere's sun sets and the field changes fastest; but never
     /// closer than a quarter of the distance from `centre`: far from the
     /// eye's own sun angle lie only the far ends of grazing view rays, high
     /// in thin air.
     fn new(lowest: f64, highest: f64, centre: f64, coarse: f64, fine: f64) -> SunZenithAxis {
-        let (start, end) = (70f64.to_radians(), 85f64.to_radians());
+        let (start, end) = (
+            SUNSET_STEP_START_DEG.to_radians(),
+            SUNSET_STEP_END_DEG.to_radians(),
+        );
         let centre = centre.clamp(lowest, highest);
         let step = |theta: f64| {
             let t = ((theta - start) / (end - start)).clamp(0.0, 1.0);
@@ -1332,7 +1357,7 @@ impl MultipleScatteringField {
                 .take(first_spherical)
                 .collect();
             system.shift_toward_sources(&sun_axis.angles_rad[..fields.len()], &mut fields);
-            // From 84 degrees on, the nodes with the spherical first order,
+            // From FIRST_ORDER_SUN_ZENITH_DEG on, the nodes with the spherical first order,
             // all together: each order of the spherical streams shifted in
             // the logarithm before it is scattered again.
             if first_spherical < count {

@@ -55,6 +55,7 @@ use std::f64::consts::PI;
 use super::phase_fourier::{
     TruncatedPhase, gauss_legendre_unit_interval, normalized_associated_legendre,
 };
+use super::regimes::FINE_MOMENTS_SUN_ZENITH_RAD;
 use super::successive_orders::Streams;
 use crate::atmosphere::DensityProfile;
 use crate::geometry::{Vector3, segment_in_atmosphere};
@@ -410,14 +411,6 @@ fn fine_cosines(ground_m: f64, radius_m: f64) -> Vec<(f64, f64)> {
         })
         .collect()
 }
-
-/// The sun zenith angle from which the first order's moments are
-/// integrated finely, rad: 90 degrees, where the sun sets on the ground.
-/// Why not earlier: above the horizon the first order has no narrow peak
-/// (measured: the fine moments at every spherical sun node moved suns 0
-/// to 5 degrees by at most 0.3 % on Earth and 1 % on mars-dust) and it
-/// would cost half again the image's time at sun 5 degrees.
-const FINE_MOMENTS_SUN_ZENITH_RAD: f64 = std::f64::consts::FRAC_PI_2;
 
 /// Offsets of the fine quadrature's breakpoints from the level's horizon
 /// cosine ([`fine_cosines`]).
@@ -980,6 +973,7 @@ fn compute_first_order_along_ray(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::transport::multiple_scattering::regimes::FIRST_ORDER_SUN_ZENITH_DEG;
 
     /// Air (scale height 8 km) and aerosol (1.2 km) in a 100 km shell over
     /// a ground of radius 6 360 km, with a sun-column table of `nodes`
@@ -1041,7 +1035,7 @@ mod tests {
             streams: &streams,
             moments: MomentQuadrature::Streams,
             sun_zenith_rad: &[
-                84f64.to_radians(),
+                FIRST_ORDER_SUN_ZENITH_DEG.to_radians(),
                 89f64.to_radians(),
                 93f64.to_radians(),
                 100f64.to_radians(),

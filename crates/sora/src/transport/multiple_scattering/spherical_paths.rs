@@ -44,13 +44,7 @@
 //! the mean angle and its spread, before it is scattered into the next
 //! (`ColumnSystem::solve_shifted_orders`).
 
-/// Streams with |mu| below this (within 17 degrees of the horizon) take
-/// the spherical paths; steeper ones keep the slab's recursion: at 24
-/// degrees, the lowest of them with 8 streams per hemisphere, the path
-/// through the air below 30 km is within 3 % of the slab's, and moving the
-/// limit from 0.3 to 0.5 changes no result against the path tracer by more
-/// than its noise.
-pub(crate) const SPHERICAL_STREAM_COSINE: f64 = 0.3;
+use super::regimes::SPHERICAL_STREAM_COSINE;
 
 /// One straight step of a path inside one layer.
 #[derive(Debug, Clone, Copy)]

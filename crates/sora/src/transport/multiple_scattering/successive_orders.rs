@@ -920,6 +920,7 @@ impl<'a> ColumnSystem<'a> {
 mod tests {
     use super::*;
     use crate::atmosphere::DensityProfile;
+    use crate::transport::multiple_scattering::regimes::FIRST_ORDER_SUN_ZENITH_DEG;
 
     /// A conservative (non-absorbing) column: HG aerosol and Rayleigh air.
     /// Returns the upward flux at the top, the diffuse and direct downward
@@ -1028,7 +1029,7 @@ mod tests {
         let size = levels * total;
         let nodes = 24;
         let suns: Vec<f64> = (0..nodes)
-            .map(|n| (84.0 + 0.75 * n as f64).to_radians())
+            .map(|n| (FIRST_ORDER_SUN_ZENITH_DEG + 0.75 * n as f64).to_radians())
             .collect();
         let kappa = 50.0; // e-fold per 1.1 degree, a twilight sky's rate
         let amplitude = |k: usize, a: usize| 1.0 + 0.1 * k as f64 + 0.01 * a as f64;
