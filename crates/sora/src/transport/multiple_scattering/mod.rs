@@ -141,8 +141,8 @@
 //! | plane-parallel successive orders (`successive_orders.rs`) | the diffuse field of one column: delta-M, 2n streams, 2n harmonics | always | - |
 //! | pseudo-spherical sun beam | T*_sun along the real path, zero in the shadow | always | - |
 //! | spherical paths (`spherical_paths.rs`) | the real path lengths of the near-horizontal streams | streams with \|mu\| below | `SPHERICAL_STREAM_COSINE` = 0.3 |
-//! | first-order shift of the finished field | the near-horizontal light's horizontal displacement, to first order | sun nodes below (zenith, deg) | `FIRST_ORDER_SUN_ZENITH_DEG` = 84 |
-//! | every-order shift, nodes solved together | each order >= 2 of the spherical streams read at its sun angle | sun nodes from (zenith, deg) | `FIRST_ORDER_SUN_ZENITH_DEG` = 84 |
+//! | first-order shift of the finished field (`twilight_shift.rs`) | the near-horizontal light's horizontal displacement, to first order | sun nodes below (zenith, deg) | `FIRST_ORDER_SUN_ZENITH_DEG` = 84 |
+//! | every-order shift, nodes solved together (`twilight_shift.rs`) | each order >= 2 of the spherical streams read at its sun angle | sun nodes from (zenith, deg) | `FIRST_ORDER_SUN_ZENITH_DEG` = 84 |
 //! | spherical first order (`spherical_first_order.rs`) | the first order marched through the shell, with the shadow | sun nodes from (zenith, deg) | `FIRST_ORDER_SUN_ZENITH_DEG` = 84 |
 //! | fine first-order moments | the narrow near-horizon peak of the first order after sunset | sun nodes from (zenith) | `FINE_MOMENTS_SUN_ZENITH_RAD` = 90° |
 //! | sunset sun-node spacing | sun nodes narrowing from the coarse to the fine step | from (zenith, deg) | `SUNSET_STEP_START_DEG` = 70 |
@@ -362,6 +362,7 @@ mod source_table;
 mod spherical_first_order;
 mod spherical_paths;
 mod successive_orders;
+mod twilight_shift;
 mod vector_successive_orders;
 mod vertical_grid;
 
@@ -1344,7 +1345,7 @@ impl MultipleScatteringField {
                 ground[0] = albedo / PI * (diffuse + moved);
             }
             // The near-horizontal light comes from columns where the sun
-            // stands higher or lower (see `spherical_paths`).
+            // stands higher or lower (see `twilight_shift.rs`).
             // Only the sun nodes with the column's own first order: with the
             // spherical first order the light from lit columns is in the
             // field already, and the shift's finite difference across the

@@ -1,5 +1,6 @@
 //! The paths of the near-horizontal streams through the spherical shells,
-//! and where their light comes from.
+//! and the angles at the planet's centre over which they gather their
+//! light.
 //!
 //! In a plane-parallel slab a stream of zenith cosine mu crosses every
 //! layer with the path dz / |mu|, and the radiance at a level follows from
@@ -27,22 +28,10 @@
 //! transport matrix per stream and wavelength, L(k) = sum_j M_kj S(j) +
 //! g_k L_ground, applied at every order.
 //!
-//! **Where the light comes from.** A near-horizontal path gathers its light
-//! hundreds of kilometres away, where the sun stands higher (toward the
-//! sun's azimuth) or lower (away from it) by the angle gamma that the path
-//! subtends at the planet's centre: a low sun's sunward horizon is lit by
-//! brighter air than the column's own. Once the field is solved at every
-//! sun zenith angle, each spherical stream's radiance is shifted to first
-//! order, L(theta_s - gamma cos phi) = L - gamma cos(phi) dL/dtheta_s, with
-//! gamma the path's mean angle weighted by what a uniform source along it
-//! would contribute and dL/dtheta_s the difference between neighbouring
-//! sun nodes; cos(phi) couples each azimuthal harmonic to its neighbours.
-//! Measured against the path tracer for a sun 5 degrees high, it halves the
-//! error of the sunward horizon (-2.3 % to -1.3 % of the total at 380 nm).
-//! In twilight the first order is not enough: from a sun zenith angle of
-//! 84 degrees on, every order >= 2 is shifted exactly, per azimuth, with
-//! the mean angle and its spread, before it is scattered into the next
-//! (`ColumnSystem::solve_shifted_orders`).
+//! **Where the light comes from**: each path's mean angle at the planet's
+//! centre and its spread ([`StreamPaths::compute_transport_matrices`]),
+//! with which `twilight_shift.rs` moves the light of these streams toward
+//! the columns where it was gathered.
 
 use super::regimes::SPHERICAL_STREAM_COSINE;
 
