@@ -369,6 +369,7 @@ mod vertical_grid;
 pub use source_table::MultipleScatteringTable;
 
 use std::f64::consts::{FRAC_PI_2, PI};
+use std::ops::ControlFlow;
 
 use self::forward_peak::ForwardPeak;
 use self::peak_beam::{PeakBeam, PeakBeamInputs};
@@ -384,8 +385,7 @@ use self::spherical_first_order::{
 use self::spherical_paths::StreamPaths;
 use self::successive_orders::{ColumnSystem, ScaledSpecies, Streams};
 use self::vertical_grid::VerticalGrid;
-use super::optical_column::{ProfileCorners, compute_columns_along_ray};
-use super::quadrature::{GAUSS_NODES, GAUSS_WEIGHTS, running_integral_matrix};
+use super::optical_column::{PanelMarch, ProfileCorners, compute_columns_along_ray};
 use super::single_scattering::{SingleScatteringSky, SunColumns};
 use super::vector_exp::exp_neg_in_place;
 use crate::atmosphere::phase_matrix::PhaseMatrix;
@@ -608,14 +608,16 @@ struct ViewRayOptics {
     ground_diffuse: Vec<f64>,
     /// [s * wavelengths + i]: (A / pi) E mu_s T_sun at the ground.
     ground_direct: Vec<f64>,
-    running_integral: [[f64; 4]; 4],
 }
 
 /// Per-ray work space of the march.
 #[derive(Debug, Clone)]
 pub struct MultipleScatteringScratch {
+    /// The view ray's march, and at its current node the species'
+    /// relative densities and columns from the eye; the whole ray's
+    /// columns after it.
+    march: PanelMarch,
     densities: Vec<f64>,
-    panel_densities: Vec<[f64; 4]>,
     view_columns: Vec<f64>,
     node_columns: Vec<f64>,
     /// ln R(x, view) per wavelength at the current node (R = J / beta*_sca,
@@ -676,8 +678,8 @@ impl ViewRayOptics {
     fn scratch(&self, streams: usize) -> MultipleScatteringScratch {
         let (s, w) = (self.species, self.wavelengths);
         MultipleScatteringScratch {
+            march: PanelMarch::new(s),
             densities: vec![0.0; s],
-            panel_densities: vec![[0.0; 4]; s],
             view_columns: vec![0.0; s],
             node_columns: vec![0.0; s],
             log_source: vec![0.0; w],
@@ -746,26 +748,17 @@ impl ViewRayOptics {
             let mut view_ends = std::mem::take(&mut scratch.view_panel_ends);
             self.corners
                 .fill_panel_ends(start, view, length, self.panels, &mut view_ends);
-            for ends in view_ends.windows(2) {
-                let (centre, half) = (0.5 * (ends[0] + ends[1]), 0.5 * (ends[1] - ends[0]));
-                let mut points = [Vector3::default(); 4];
-                for (n, x) in GAUSS_NODES.iter().enumerate() {
-                    points[n] = start + view * (centre + half * x);
-                    let altitude = points[n].length() - self.ground_radius_m;
-                    for j in 0..s {
-                        scratch.panel_densities[j][n] = self.profiles[j].relative_density(altitude);
-                    }
-                }
-                for n in 0..4 {
-                    for j in 0..s {
-                        let inside: f64 = (0..4)
-                            .map(|m| self.running_integral[n][m] * scratch.panel_densities[j][m])
-                            .sum();
-                        scratch.node_columns[j] = scratch.view_columns[j] + half * inside;
-                        scratch.densities[j] = scratch.panel_densities[j][n];
-                    }
-                    let r = points[n].length();
-                    let zenith = points[n] * (1.0 / r);
+            let mut march = std::mem::take(&mut scratch.march);
+            march.march(
+                &self.profiles,
+                self.ground_radius_m,
+                (start, view),
+                &view_ends,
+                |node, node_columns, densities| {
+                    scratch.node_columns.copy_from_slice(node_columns);
+                    scratch.densities.copy_from_slice(densities);
+                    let r = node.point.length();
+                    let zenith = node.point * (1.0 / r);
                     let view_cosine = view.dot(zenith).clamp(-1.0, 1.0);
                     let sun_cosine = self.sun.dot(zenith).clamp(-1.0, 1.0);
                     let sines = ((1.0 - view_cosine * view_cosine)
@@ -787,7 +780,7 @@ impl ViewRayOptics {
                     scratch.densities = densities;
                     // T*(eye, x) beta*_sca(x) R(x): one exponential per
                     // wavelength for the transmittance and the source.
-                    let weight = half * GAUSS_WEIGHTS[n];
+                    let weight = node.weight;
                     for (i, out) in radiance.iter_mut().enumerate() {
                         let (mut tau, mut scattering) = (0.0, 0.0);
                         for j in 0..s {
@@ -809,7 +802,7 @@ impl ViewRayOptics {
                         && sun_columns.compute_columns_to_sun(
                             &self.profiles,
                             &self.corners,
-                            points[n],
+                            node.point,
                             self.sun,
                             &mut scratch.sun_panel_ends,
                             &mut scratch.sun_columns,
@@ -847,14 +840,11 @@ impl ViewRayOptics {
                             scratch.forward_integrals[(s + 1) * w + i] += only * (exact - scaled);
                         }
                     }
-                }
-                for j in 0..s {
-                    let panel: f64 = (0..4)
-                        .map(|m| GAUSS_WEIGHTS[m] * scratch.panel_densities[j][m])
-                        .sum();
-                    scratch.view_columns[j] += half * panel;
-                }
-            }
+                    ControlFlow::Continue(())
+                },
+            );
+            scratch.view_columns.copy_from_slice(march.columns());
+            scratch.march = march;
             scratch.view_panel_ends = view_ends;
         }
         let end = start + view * length;
@@ -1453,7 +1443,6 @@ impl MultipleScatteringField {
                 sun_axis,
                 ground_diffuse,
                 ground_direct,
-                running_integral: running_integral_matrix(),
             },
             phases,
             harmonics,

@@ -91,14 +91,17 @@
 //! is 10-14 degrees) and delta-M's beam, zero there, is kept. Cost: 16
 //! to 34 ms per sky of 21 wavelengths on 2 cores.
 
+use std::ops::ControlFlow;
+
 use super::phase_fourier::TruncatedPhase;
 use super::regimes::{
     PEAK_BEAM_BLEND_START_DEG, PEAK_BEAM_HIGHEST_ELEVATION_DEG, PEAK_BEAM_LOWEST_ELEVATION_DEG,
 };
 use crate::atmosphere::{AtmosphereOptics, DensityProfile};
 use crate::geometry::{Vector3, segment_in_atmosphere};
-use crate::transport::optical_column::{ProfileCorners, SunColumnRadius, SunColumnTable};
-use crate::transport::quadrature::{GAUSS_NODES, GAUSS_WEIGHTS, running_integral_matrix};
+use crate::transport::optical_column::{
+    PanelMarch, ProfileCorners, SunColumnRadius, SunColumnTable,
+};
 use crate::transport::vector_exp::exp_neg_in_place;
 
 /// The table's lowest node is this high, m: a horizontal line from it
@@ -213,7 +216,6 @@ impl PeakBeam {
         });
         let extinction = by_species(&|i, j| inputs.extinction[i * s + j]);
         let scaled_extinction = by_species(&|i, j| inputs.scaled_extinction[i * s + j]);
-        let running = running_integral_matrix();
         let node = |deg: f64| (deg - PEAK_BEAM_LOWEST_ELEVATION_DEG) / ELEVATION_STEP_DEG;
         let last_node = elevation_count() - 1;
         let first = (node(lowest_deg).floor().max(0.0) as usize).min(last_node - 1);
@@ -230,8 +232,7 @@ impl PeakBeam {
         crate::parallel::for_each_chunk_mut(&mut ln_beam, per_altitude, |a, block| {
             let x = Vector3::new(0.0, 0.0, ground + inputs.altitudes_m[a].max(LOWEST_NODE_M));
             let mut ends = Vec::with_capacity(inputs.corners.most_panel_ends(PANELS));
-            let mut densities = vec![[0.0; 4]; s];
-            let mut line_columns = vec![0.0; s];
+            let mut march = PanelMarch::new(s);
             let mut sun = vec![0.0; s];
             let mut depth = vec![0.0; w];
             let mut source = vec![0.0; w];
@@ -246,27 +247,17 @@ impl PeakBeam {
                     inputs
                         .corners
                         .fill_panel_ends(start, d, exit - enter, PANELS, &mut ends);
-                    line_columns.fill(0.0);
-                    'panels: for panel in ends.windows(2) {
-                        let (centre, half) =
-                            (0.5 * (panel[0] + panel[1]), 0.5 * (panel[1] - panel[0]));
-                        let points: [Vector3; 4] =
-                            std::array::from_fn(|q| start + d * (centre + half * GAUSS_NODES[q]));
-                        for (q, point) in points.iter().enumerate() {
-                            let altitude = point.length() - ground;
-                            for (j, profile) in inputs.profiles.iter().enumerate() {
-                                densities[j][q] = profile.relative_density(altitude);
-                            }
-                        }
-                        for (q, point) in points.iter().enumerate() {
-                            let r = point.length();
+                    march.march(
+                        inputs.profiles,
+                        ground,
+                        (start, d),
+                        &ends,
+                        |node, columns, densities| {
+                            let r = node.point.length();
                             // f beta_sca rho T(x, y) times the weight.
                             depth.fill(0.0);
                             source.fill(0.0);
                             for j in 0..s {
-                                let inside: f64 =
-                                    (0..4).map(|m| running[q][m] * densities[j][m]).sum();
-                                let column = line_columns[j] + half * inside;
                                 let rows = j * w..(j + 1) * w;
                                 for (((tau, src), ext), f_sca) in depth
                                     .iter_mut()
@@ -274,33 +265,29 @@ impl PeakBeam {
                                     .zip(&extinction[rows.clone()])
                                     .zip(&peak[rows])
                                 {
-                                    *tau += ext * column;
-                                    *src += f_sca * densities[j][q];
+                                    *tau += ext * columns[j];
+                                    *src += f_sca * densities[j];
                                 }
                             }
                             exp_neg_in_place(&mut depth);
                             // Beyond where x sees no wavelength through the
                             // line the samples add nothing: T(x, y) only falls.
                             if depth.iter().all(|t| *t < OPAQUE) {
-                                break 'panels;
+                                return ControlFlow::Break(());
                             }
-                            let weight = half * GAUSS_WEIGHTS[q];
                             for (src, t) in source.iter_mut().zip(&depth) {
-                                *src *= weight * t;
+                                *src *= node.weight * t;
                             }
                             line.located.push(inputs.sun_columns.locate_radius(r));
                             // The sun's elevation at y is the node's plus the
                             // central angle between them (the line lies in
                             // the sun's vertical plane, toward it).
-                            line.central_rad.push((point.z / r).clamp(-1.0, 1.0).acos());
+                            line.central_rad
+                                .push((node.point.z / r).clamp(-1.0, 1.0).acos());
                             line.sources.extend_from_slice(&source);
-                        }
-                        for j in 0..s {
-                            let panel: f64 =
-                                (0..4).map(|m| GAUSS_WEIGHTS[m] * densities[j][m]).sum();
-                            line_columns[j] += half * panel;
-                        }
-                    }
+                            ControlFlow::Continue(())
+                        },
+                    );
                 }
                 marched.push(line);
             }
