@@ -20,41 +20,32 @@
 //!    so the field exists for a sun below the horizon too. One solve per
 //!    wavelength and per sun zenith angle.
 //! 2. **Spherical paths for the near-horizontal streams**
-//!    (`spherical_paths.rs`): streams near the horizon (see Regimes) are
-//!    carried along their real straight paths through the spherical shells
-//!    (which climb out to space instead of running on forever, as a slab's
-//!    would), and their light is shifted, to first order, toward the sun
-//!    angle of the columns where it was gathered. From the sun zenith
-//!    angle where the first order turns spherical (item 3; Regimes) the
-//!    columns of all those sun nodes are solved together, order by order,
-//!    and each order >= 2 of these streams is shifted exactly rather than
-//!    to first order before it is scattered into the next: read at the
-//!    shifted sun angle, per azimuth, by interpolation across the sun
-//!    nodes linear in the logarithm, averaged over the mean angle +- its
-//!    spread (in twilight that light changes by orders of magnitude over a
-//!    few degrees; without it the orders >= 3 toward a sun at -6 degrees
-//!    were about a quarter too dark). Shifting only the finished field
-//!    corrected the last leg of each path and left every earlier leg in its
-//!    own column, so the n-th order missed the shift n - 2 times: where the
-//!    diffuse light is carried by many orders through air that is
-//!    optically thick at the shadow's height (mars-dust, whose dust is
-//!    mixed up to 100 km), the twilight sky away from the sun was 11-20 %
-//!    too dark at -4 and -6 degrees (`docs/twilight_survey.md`, mars-dust
-//!    in twilight, fixed).
-//! 3. **The first order in the sphere** (`spherical_first_order.rs`): for
-//!    sun nodes from `FIRST_ORDER_SUN_ZENITH_DEG` on (Regimes), the light scattered once that
-//!    reaches each level in each stream is marched along the stream's
-//!    straight path through the spherical shell, with the planet's shadow
-//!    tested at every sample, and the solver's sweeps take it in place of
-//!    their own first order (so every higher order is fed by it). After
-//!    sunset this is what lights the shadowed air: light scattered in the
-//!    sunlit layer toward the sun, far from the point's own column. That
-//!    light is a peak a few hundredths wide in the zenith cosine, just
-//!    above the sunward horizon; from `FINE_MOMENTS_SUN_ZENITH_RAD` on
-//!    its Legendre moments (all the solver, the views and the tables take
-//!    from it) are integrated on a grid graded toward each level's horizon
-//!    and the streams' values fitted to them, instead of the 8 streams'
-//!    own quadrature, which left nautical twilight 8-17 % too dark.
+//!    (`spherical_paths.rs`): the streams near the horizon are carried
+//!    along their real straight paths through the spherical shells (which
+//!    climb out to space instead of running on forever, as a slab's
+//!    would), and their light is shifted toward the sun angle of the
+//!    columns where it was gathered (`twilight_shift.rs`): the finished
+//!    field to first order for a high sun; from the sun zenith angle where
+//!    the first order turns spherical (item 3) the columns of all those
+//!    sun nodes are solved together, order by order, and each order >= 2
+//!    of these streams is read at its shifted sun angle, per azimuth, by
+//!    interpolation across the sun nodes linear in the logarithm, averaged
+//!    over the mean angle +- its spread, before it is scattered into the
+//!    next.
+//! 3. **The first order in the sphere** (`spherical_first_order.rs`): at
+//!    the low sun nodes the light scattered once that reaches each level
+//!    in each stream is marched along the stream's straight path through
+//!    the spherical shell, with the planet's shadow tested at every
+//!    sample, and the solver's sweeps take it in place of their own first
+//!    order (so every higher order is fed by it). After sunset this is
+//!    what lights the shadowed air: light scattered in the sunlit layer
+//!    toward the sun, far from the point's own column. That light is a
+//!    peak a few hundredths wide in the zenith cosine, just above the
+//!    sunward horizon; after sunset on the ground its Legendre moments
+//!    (all the solver, the views and the tables take from it) are
+//!    integrated on a grid graded toward each level's horizon and the
+//!    streams' values fitted to them, instead of the streams' own
+//!    quadrature.
 //! 4. **The sphere as local columns**: the diffuse field at a point x of
 //!    the spherical atmosphere is taken to be that of the column at x's
 //!    altitude with x's own sun zenith angle, as Bruneton & Neyret (2008)
@@ -63,9 +54,9 @@
 //!    [`MultipleScatteringField::compute`] covers every point visible from
 //!    the eye (about +-10 degrees around the eye's sun zenith angle on the
 //!    ground), 3 degrees apart for a high sun and 0.75 degrees near and
-//!    after sunset (Regimes), where the lower atmosphere's sun sets
-//!    and the field changes fastest (9 solves for a sun 30 degrees high, 18
-//!    for 5 degrees).
+//!    after sunset, where the lower atmosphere's sun sets and the field
+//!    changes fastest (9 solves for a sun 30 degrees high, 18 for 5
+//!    degrees).
 //! 5. **Source-function integration along the real view ray**: with the
 //!    scattering source of the diffuse field
 //!    J(x, w) = sum_j beta*_sca,j(x) integral p*_j(w.w') L_diffuse(x, w') dw'
@@ -89,23 +80,16 @@
 //!    peaks r = p - (1 - f) p* and once by the smooth part,
 //!    E sum_j beta_sca,j (1 - f_j) p*_j(theta) integral rho_j (T* T*_sun - T T_sun) ds,
 //!    and light scattered only in the peaks, k >= 2 times, spread by the
-//!    k-fold convolution of the peak (Legendre moments (r_l / f)^k):
-//!    negligible for the reference aerosol (HG g = 0.7, f = 0.3 %), but a
-//!    Mie dust's diffraction peak holds f ~ 40 % and without it the sky
-//!    away from the sun was 8-20 % too dark. Until the peak-only light had
-//!    its own term, the first line was taken with p_j(theta) (out of a
-//!    4.3 degree cone around the sun), which counts a path with k peak
-//!    scatterings k times with the peak at full sharpness: near a low sun
-//!    (peak optical depths of 1 to 5 along the sun's path) `mars-dust` was
-//!    3-17 % too bright within 5 degrees of it and `earth-hazy` 5-7 % too
-//!    dark within 2 degrees (accuracy below). Near a low sun the peaks'
-//!    light reaching x is not taken along the sun's line through x but
-//!    with the last peak scattering at its angle (`peak_beam.rs`): near
-//!    the horizon that line is the most attenuated a point has, and light
-//!    scattered a few degrees down comes from higher air. The ground term
-//!    likewise carries what delta-M moved from the diffuse to the direct
-//!    beam (forward-scattered sunlight on the ground, and the sunlit
-//!    ground's light forward-scattered toward the eye).
+//!    k-fold convolution of the peak (Legendre moments (r_l / f)^k), each
+//!    path counted once: negligible for the reference aerosol (HG g = 0.7,
+//!    f = 0.3 %), but a Mie dust's diffraction peak holds f ~ 40 %. Near a
+//!    low sun the peaks' light reaching x is not taken along the sun's line
+//!    through x but with the last peak scattering at its angle
+//!    (`peak_beam.rs`): near the horizon that line is the most attenuated a
+//!    point has, and light scattered a few degrees down comes from higher
+//!    air. The ground term likewise carries what delta-M moved from the
+//!    diffuse to the direct beam (forward-scattered sunlight on the ground,
+//!    and the sunlit ground's light forward-scattered toward the eye).
 //! 6. **Tables for images**: [`MultipleScatteringTable`] tabulates
 //!    ln(J / beta*_sca) over (altitude, sun zenith angle, view zenith angle,
 //!    azimuth from the sun), read quadrilinearly, only where view rays can
@@ -117,15 +101,15 @@
 //!    same sums as the table's kernels with the view direction factored
 //!    out, so a view costs degrees^2 / 2 products per node and wavelength
 //!    (an almucantar of 72 views about as much as the field itself).
-//!
-//! 7. **Polarisation** (a sky with Stokes vectors, views only): the column
-//!    at the eye's sun is solved again with Stokes vectors
+//! 7. **Polarisation** (a sky with Stokes vectors, views and images): the
+//!    column at the eye's sun is solved again with Stokes vectors
 //!    (`vector_successive_orders.rs`, `phase_matrix_fourier.rs`), and the
 //!    ratio of its multiply scattered (I, Q, U, V) to its scalar intensity
 //!    turns the scaled field's part of each view's L_ms into a Stokes
-//!    vector (`polarisation_correction.rs`; accuracy in
-//!    `docs/polarisation.md`); the forward-peak term is polarised as
-//!    single scattering through the view's angle (`forward_peak.rs`).
+//!    vector (`polarisation_correction.rs`, tabulated over directions for
+//!    images; accuracy in `docs/polarisation.md`); the forward-peak term is
+//!    polarised as single scattering through the view's angle
+//!    (`forward_peak.rs`).
 //!
 //! Interpolations between sun zenith angles and altitudes are linear in
 //! the logarithm of the (positive) source: across sunset the field falls
@@ -171,157 +155,96 @@
 //! discrete-ordinate field costs about as much per sun zenith angle as
 //! Hillaire's table and treats every order with the real phase functions.
 //!
-//! # Accuracy (measured, `transport/reference_tests/multiple_scattering_reference.rs`)
+//! # Accuracy (measured; the tests named hold it)
 //! - Against DISORT (plane-parallel, every row of the clear-sky reference,
 //!   single + multiple scattering): worst 0.074 % (black ground) and
 //!   0.061 % (albedo 0.3) with the exact synthesis, 0.10 % and 0.14 %
-//!   through the tables of an image.
+//!   through the tables of an image
+//!   (`reference_tests/multiple_scattering_reference.rs`:
+//!   `black_ground_matches_disort_at_every_row`,
+//!   `bright_ground_matches_disort_at_every_row`).
 //! - Against the Monte Carlo path tracer on the spherical planet
 //!   (`clear-sky-reference`, 400 000 paths per view, 14 views from the
 //!   zenith to 1 degree above the horizon, every wavelength): suns 90 to 10
 //!   degrees within 0.9 %; sun 5 degrees within 1.6 %, the worst 1 degree
 //!   above the horizon at 380 nm. An eye 10 km up, and a ground of albedo
-//!   0.3: within 1.1 % (100 000 paths).
+//!   0.3: within 1.1 % (100 000 paths)
+//!   (`spherical_sky_matches_the_path_tracer_within_two_percent`,
+//!   `spherical_sky_matches_the_path_tracer_exhaustively`).
 //! - Exact Mie phase functions (`earth-hazy`, suns 30 and 5 degrees, views
-//!   away from the sun, 400 000 paths): within 1.7 %. `mars-dust` (100 000
-//!   paths): within 2 % for a sun 30 degrees high. Near a low sun
-//!   (`docs/twilight_survey.md`, 400 000 and 800 000 paths, standard
-//!   errors 0.1-0.5 % there): `mars-dust` within 0.8 % of the path tracer
-//!   2 to 10 degrees from a sun 10 and 5 degrees high (its orders >= 2
-//!   within 1.6 %), `earth-hazy` within 0.7 % 2 to 5 degrees from a sun 5
-//!   degrees high; before the forward-peak term counted each path once
-//!   (item 5), `mars-dust` was 3 to 17 % too bright there (its orders >= 2
-//!   9-29 %) and `earth-hazy` -5 to -6 % 2 degrees from the sun (its
-//!   orders >= 2 8-25 % too dark), -6.5 and -6.9 % at 560 and 680 nm 2 degrees
-//!   above a sun 2 degrees high (now -1.1 and -0.9 %). Toward a sun 2
-//!   degrees high `mars-dust` is within 2.3 %, `earth-hazy` 2 degrees
+//!   away from the sun, 400 000 paths): within 1.7 %; `mars-dust` (100 000
+//!   paths) within 2 % for a sun 30 degrees high
+//!   (`mie_aerosols_match_the_path_tracer_away_from_the_sun`).
+//! - Near a low sun (`docs/twilight_survey.md`, 400 000 and 800 000 paths,
+//!   standard errors 0.1-0.5 % there; `tests/twilight.rs`:
+//!   `near_a_low_sun_with_aerosols_matches_the_path_tracer`,
+//!   `the_sun_on_the_horizon_through_dust_matches_the_path_tracer`):
+//!   `mars-dust` within 0.8 % of the path tracer 2 to 10 degrees from a sun
+//!   10 and 5 degrees high (its orders >= 2 within 1.6 %), `earth-hazy`
+//!   within 0.7 % 2 to 5 degrees from a sun 5 degrees high, -1.1 and -0.9 %
+//!   at 560 and 680 nm 2 degrees above a sun 2 degrees high. Toward a sun
+//!   2 degrees high `mars-dust` is within 2.3 %, `earth-hazy` 2 degrees
 //!   along the horizon from it -3.3 and -4.3 % at 560 and 680 nm (+-0.4,
-//!   0.9 %). With the sun on the horizon `mars-dust` 1 degree up and 0-5
-//!   degrees along the horizon from it was -5.3 to -7.5 % (+-0.7 to
-//!   1.1 %), where the eye sees almost only multiply scattered light,
-//!   most of it in the dust's peak: the forward-peak term took that light
-//!   along the sun's grazing line. With the peak's last scattering at its
-//!   angle (`peak_beam.rs`) it is -1.0 to -3.4 % (the same paths;
-//!   `docs/twilight_survey.md`, its last section), and every one of the 120
-//!   values 1 and 2 degrees up within 5 degrees of a sun at 5 to -2
-//!   degrees (mars-dust, earth-hazy) is within the bar (12 were not). The
-//!   weakest place left is the same family, 1 degree up with the sun
-//!   on the horizon or 2 degrees down: with 1 600 000 paths (standard
-//!   errors 0.35-0.8 %) -0.6 to -3.6 %, the worst at 440 nm. What is
-//!   still missing there is the peak scatterings on the view's side at
-//!   their angles (another +1.7 to +3.2 % there, measured, left out for
-//!   its cost per pixel).
-//! - Twilight (`reference_tests/twilight_survey.rs`, `tests/twilight.rs`):
-//!   the zenith and elevations 5 and 20 degrees at 0, 90 and 180 degrees
-//!   from the sun, 440/560/680 nm, 800 000 paths (standard errors 0.1-2.6
-//!   %, the largest at the zenith at 440 nm at -6 degrees). The worst
-//!   error over the 21 values of each sun, with the path tracer's
-//!   standard error:
-//!
-//!   | preset | sun -2 | sun -4 | sun -6 |
-//!   |---|---|---|---|
-//!   | `earth-clear` | -1.6 % (0.3) | -2.2 % (0.5) | -4.5 % (1.6, the zenith) |
-//!   | `earth-hazy` | -2.3 % (0.4) | -4.3 % (0.8) | -4.8 % (1.6) |
-//!   | `us-standard-1976-rayleigh` | -0.8 % (0.4) | -2.4 % (1.0) | -4.7 % (1.9, 5 degrees up away from the sun) |
-//!
-//!   (with the fine first-order moments, the shells and the single
-//!   scattering's cut at the shadow's edge, `docs/twilight_survey.md`;
-//!   before them earth-clear -1.2, -1.9, -4.7 %, earth-hazy -1.9, -4.0,
-//!   -4.9 %, us-standard +1.2, +2.8, -6.2 %)
-//!   Shifting every order of the spherical streams (item 2) then moved
-//!   them by 0 to +3.1 %, so these worst values shrink.
-//!   All 189 values are within the 3 % + 3 standard errors
-//!   (before the orders >= 2 of the near-horizontal streams were shifted,
-//!   item 2: -2.5, -3.5, -5.8; -2.9, -5.5, -6.7; -1.6, -3.9, -7.6 %, and
-//!   `earth-hazy` at -4 degrees, 5 degrees up toward the sun at 440 nm,
-//!   -5.5 % against +-0.8 % was outside). The single scattering is exact
-//!   (within 0.1 % of the paper's double march at 16 000 steps, and of
-//!   the path tracer's), and the second order is within 1-2 % (the path
-//!   tracer's second order alone, sun -6, 1 600 000 paths): what remains
-//!   is the orders >= 3, still a few per cent too dark at 440 nm toward
-//!   the sun and at the zenith (the steeper streams' sources are their own
-//!   column's, item 4), and 8 streams per hemisphere (16 move the zenith
-//!   at -6 degrees by +0.3 to +0.5 %). Earlier (`examples/twilight_accuracy.rs`,
-//!   earth-clear, 460/540/620 nm, 400 000 paths): sun 0 degrees within
-//!   1.3 %, -8 within the path tracer's 10-16 %; with the column's own
-//!   first order 0 to -8 degrees were +5.5 %, +16 %, +20 %, -39 % and
-//!   -93 %, and below -10 degrees the field collapsed (the zenith 3e5
-//!   times too dark at -10).
+//!   0.9 %). Every one of the 120 values 1 and 2 degrees up within 5
+//!   degrees of a sun at 5 to -2 degrees (mars-dust, earth-hazy) is within
+//!   3 % + 3 standard errors. The weakest place is `mars-dust` 1 degree up
+//!   with the sun on the horizon or 2 degrees down, where the eye sees
+//!   almost only multiply scattered light, most of it in the dust's peak:
+//!   with 1 600 000 paths (standard errors 0.35-0.8 %) -0.6 to -3.6 %, the
+//!   worst at 440 nm. What is missing there is the peak scatterings on the
+//!   view's side at their angles (another +1.7 to +3.2 % there, measured,
+//!   left out for its cost per pixel).
+//! - Civil twilight (`reference_tests/twilight_survey.rs`,
+//!   `tests/twilight.rs`: `civil_twilight_matches_the_path_tracer`,
+//!   `sun_six_below_matches_the_path_tracer_at_three_wavelengths`,
+//!   `twilight_matches_the_path_tracer_over_the_whole_grid`): the zenith
+//!   and elevations 5 and 20 degrees at 0, 90 and 180 degrees from the
+//!   sun, 440/560/680 nm, suns -2, -4, -6, 800 000 paths: all 189 values
+//!   of `earth-clear`, `earth-hazy` and `us-standard-1976-rayleigh` within
+//!   3 % + 3 standard errors, the worst -4.5 to -4.8 % at -6 degrees before
+//!   the every-order shift (item 2), which moved them by 0 to +3.1 %.
+//!   `mars-dust` (400 000 paths): 61 of 63 within, medians +1.7, +3.1,
+//!   +4.3 %; the two outside are 5 degrees up away from a sun at -4 at 440
+//!   and 560 nm, +22 and +15 % (+-4.7, 3.7), +11 and +8 % with 800 000
+//!   paths. The other views (1 degree up at 0-180 degrees from the
+//!   sun, 45/135 degrees at 5, 20 and 45 up; 4 presets, suns 10 to -6, 924
+//!   values): all 693 earth values within; `mars-dust`'s antisolar horizon
+//!   in civil twilight leans bright (+0.4 to +15.7 % 1 degree up,
+//!   +-2.2-4.5, within). The single scattering is exact (within 0.1 % of
+//!   the paper's double march at 16 000 steps, and of the path tracer's),
+//!   the second order within 1-2 % (sun -6, 1 600 000 paths): what remains
+//!   is the orders >= 3, a few per cent too dark at 440 nm toward the sun
+//!   and at the zenith (the steeper streams' sources are their own
+//!   column's, item 4), and 8 streams per hemisphere (16 move the zenith at
+//!   -6 degrees by +0.3 to +0.5 %, `nautical_twilight_is_converged_in_the_streams`).
 //! - **Deep twilight** (`docs/twilight_survey.md`, against the path
 //!   tracer with its directions toward the sunlit air, 1 000 000 paths a
 //!   view; the zenith and 5, 20, 45 degrees up at 0, 90, 180 degrees from
-//!   the sun, 440/560/680 nm): earth-clear and earth-hazy at -8, -10 and
-//!   -12 degrees are all within the 5 % + 3 standard errors (180
-//!   of 180; earth-clear's medians -1.0, -5.8 and -4.6 %, earth-hazy's
-//!   -0.3, -0.2 and +0.5 %). Before the first order's moments were
-//!   integrated finely (item 3) earth-clear was 8-13 % too dark at -10
-//!   and 10-17 % at -12 (7 of 30 values at -12 outside the bar), the 8
-//!   streams' quadrature of the near-horizon first order (16 streams
-//!   converged to within 0.6 % of 24). earth-clear still leans dark in
-//!   the blue: at 440 nm -1 to -10 % at -10 and -6 to -31 % at -12 (the
-//!   path tracer at +-1.4 to 18 %).
-//! - `us-standard-1976-rayleigh` at -10 and -12 (5 views): 30 of 30
-//!   within the bar, -15 to -1 %; it was -29 to +32 % off until the
-//!   first order's paths were cut at shells every 20 km
-//!   (`spherical_first_order.rs`: its atmosphere reaches 120 km and 4
-//!   Gauss panels per path left its sunlit layer under-resolved) and the
-//!   single scattering's view ray at the shadow's edge.
-//! - After every order of the spherical streams was shifted (item 2):
-//!   earth-clear +0.2 to +5.4 %, earth-hazy +1.2 to +7.9 % and
-//!   us-standard +0.2 to +3.0 % at -8 to -12 (179 of the 180 earth
-//!   values within the bar, earth-clear's medians +0.1, -3.4, -2.3 %,
-//!   earth-hazy's +2.4, +4.1, +4.4 %; earth-hazy at -12, 5 degrees up 90
-//!   degrees from the sun, 680 nm, +17.7 % against 17.3); **mars-dust in
-//!   civil twilight** (-2, -4, -6; the zenith and 5 and 20 degrees up at
-//!   0, 90, 180 degrees from the sun, 400 000 paths): 61 of 63 values
-//!   within 3 % + 3 standard errors, medians +1.7, +3.1, +4.3 % (before:
-//!   55 of 63, 11-20 % too dark 90 degrees from the sun at -4 and -6); the
-//!   two outside are 5 degrees up away from a sun at -4 at 440 and 560 nm,
-//!   +22 and +15 % (+-4.7, 3.7), where an 800 000-path run puts them at
-//!   +11 and +8 %. Re-run with 3 200 000 paths, the earth-hazy value at
-//!   -12 is +6.3 % (+-3.2), so all 180 earth values at -8 to -12 are
-//!   within. The other views (1 degree up at 0-180 degrees from
-//!   the sun, 45/135 degrees at 5, 20 and 45 up; 4 presets, suns 10 to
-//!   -6, 924 values at 100 000 paths, the misses re-run with 1 000 000):
-//!   all 693 earth values within 3 % + 3 standard errors; mars-dust's
-//!   outside are its sun on the horizon, 1 degree up within 5 degrees of
-//!   it (-5.1 to -8.9 %, +-0.5-0.7), and its antisolar horizon in civil
-//!   twilight leans bright (+0.4 to +15.7 % 1 degree up, +-2.2-4.5, within).
+//!   the sun, 440/560/680 nm): earth-clear +0.2 to +5.4 %, earth-hazy +1.2
+//!   to +7.9 % and us-standard +0.2 to +3.0 % at -8 to -12 degrees; all 180
+//!   earth values within 5 % + 3 standard errors (earth-clear's medians
+//!   +0.1, -3.4, -2.3 %, earth-hazy's +2.4, +4.1, +4.4 %; the one earth-hazy
+//!   value at -12 that 1 000 000 paths put outside is +6.3 % +-3.2 with
+//!   3 200 000), us-standard's 30 of 30 within. earth-clear leans dark in
+//!   the blue at -10 and -12.
+//!
+//! The history of these numbers (what each piece changed, measured before
+//! and after it) is in `docs/twilight_survey.md`.
 //!
 //! # Cost (measured, `benches/multiple_scattering.rs`, 2 shared cores)
-//! Per image, 21 wavelengths, `clear-sky-reference`: the field 0.12 s and
-//! the source table 0.08 s for a sun 30 degrees high (9 sun zenith angles),
-//! 0.22 s and 0.16 s for 5 degrees (18 angles); a 512 x 512 fisheye with
-//! multiple scattering 0.51 s and 0.75 s, against 0.23 s and 0.21 s with
-//! single scattering only. The spherical first order adds 20-30 ms per
-//! spherical sun node (10 000 marched paths each; earth-clear, 21
-//! wavelengths), nothing for a sun higher than about 16 degrees. Measured
-//! with the `sora` binary on the quiet 2-core machine, before and after
-//! it: sun 30 degrees, one view 0.11 s and a 512 x 512 fisheye 0.30 s,
-//! unchanged; sun 5 degrees (11 of 18 nodes) 0.16 s and 0.39 s before,
-//! 0.51 s and 0.76 s after; sun -6 degrees (19 nodes) 0.15 s and 0.32 s
-//! before, 0.52 s and 0.69 s after. The twilight shift of item 2 (per
-//! wavelength, spherical sun node, spherical stream and level: a
-//! 16-azimuth synthesis, two log-linear reads, the transform back) adds
-//! nothing for a sun higher than about 16 degrees; measured as CPU time
-//! of five earth-clear skies (suns 0 to -8 degrees, 3 wavelengths, the
-//! field and one view each, on the loaded 2-core machine) 2.56-2.63 s
-//! before and 2.72-2.80 s after, about 30 ms of CPU per sky at 3
-//! wavelengths, so about 0.2 s of CPU (0.1 s on 2 cores) at 21.
-//! The first order's fine moments and shells (item 3), measured with the
-//! `sora` binary (earth-clear, 512 x 512 fisheye, `--polarisation off`,
-//! medians of 5 runs, old and new in turn): sun 5 degrees 1.70 s against
-//! 1.72 s before, sun -6 degrees 1.87 s against 1.41 s; its transmittances
-//! are a vectorisable exp ([`crate::transport::vector_exp`]), which took
-//! half of its time as the standard library's. Shifting every order
-//! rather than the finished field (item 2; medians of 7 runs on the busy
-//! machine): sun -6 2.24 s against 2.01 s, sun 5 1.71 s against 1.60 s,
-//! so the -6 image was about 2.1 s on the quiet machine. The field is
-//! now kept in the solver's own layout (read through
-//! [`MultipleScatteringField::solution`]) and shared with its source
-//! table, not copied (it is 20-70 MB at twilight): the same pixels, the
-//! -6 image 4-10 % faster (paired runs) and its peak memory 156 -> 123
-//! MiB; `cargo bench --bench multiple_scattering -- twilight` gives 1.91 s
+//! The field is solved per wavelength and sun node, 9 nodes for a sun 30
+//! degrees high and 18 for 5 degrees (21 wavelengths, `clear-sky-reference`:
+//! the field 0.12 s and the source table 0.08 s at sun 30, 0.22 s and 0.16
+//! s at sun 5, before the twilight pieces). The spherical first order adds
+//! 20-30 ms per sun node it applies to (10 000 marched paths each;
+//! earth-clear, 21 wavelengths), its fine moments and shells about as much
+//! again after sunset, and the twilight shift about 0.1 s at 21
+//! wavelengths; none of them applies to a sun higher than about 16
+//! degrees. An earth-clear 512 x 512 fisheye with `--polarisation off`
+//! takes about 1.7 s at sun 5 degrees and 2.1 s at sun -6 on the quiet
+//! 2-core machine (peak memory 123 MiB: the field, 20-70 MB at twilight, is
+//! kept in the solver's own layout and shared with its source table);
+//! `cargo bench --bench multiple_scattering -- twilight` gives 1.91 s
 //! (1.86-1.97).
 //!
 //! # What it approximates
