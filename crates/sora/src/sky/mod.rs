@@ -65,7 +65,8 @@ use crate::error::{Error, Result};
 use crate::geometry::{Vector3, ViewDirection};
 use crate::spectrum::{SampledSpectrum, WavelengthGrid};
 use crate::transport::multiple_scattering::{
-    MultipleScatteringField, MultipleScatteringScratch, MultipleScatteringTable, PolarisationTable,
+    FieldRequest, MultipleScatteringField, MultipleScatteringScratch, MultipleScatteringTable,
+    PolarisationTable,
 };
 use crate::transport::path_tracing::worst_relative_error;
 use crate::transport::stokes::{meridian_reference, rotation_cos_sin_2eta, scattering_plane};
@@ -716,26 +717,14 @@ impl Sky {
     fn prepare_field(&self) -> Result<()> {
         if let Scattering::Multiple(settings) = self.scattering {
             if self.field.get().is_none() {
-                // The first order shares the image tables' sun-column table.
-                let (nodes, polarised) = (
-                    self.table_size.sun_column_nodes,
-                    self.polarisation == Polarisation::Vector,
-                );
-                let field = match self.lowest_view_elevation_rad {
-                    None => MultipleScatteringField::compute_with_sun_column_nodes(
-                        &self.scene,
-                        settings,
-                        nodes,
-                        polarised,
-                    )?,
-                    Some(lowest) => MultipleScatteringField::compute_for_views_above(
-                        &self.scene,
-                        settings,
-                        nodes,
-                        polarised,
-                        lowest,
-                    )?,
+                // The first order and the peak beam share the image tables'
+                // sun-column table (see `FieldRequest::sun_column_nodes`).
+                let request = FieldRequest {
+                    polarised: self.polarisation == Polarisation::Vector,
+                    lowest_view_elevation_rad: self.lowest_view_elevation_rad,
+                    ..FieldRequest::new(settings, self.table_size.sun_column_nodes)
                 };
+                let field = MultipleScatteringField::solve(&self.scene, &request)?;
                 // Another thread may have been first: either field is the same.
                 let _ = self.field.set(Arc::new(field));
             }
