@@ -708,9 +708,51 @@ impl MultipleScatteringField {
 
     /// Multiply scattered radiance (orders >= 2 and skylight reflected by
     /// the ground) seen along `view`, W m^-2 sr^-1 nm^-1, into `radiance`:
-    /// the field's exact angular synthesis at every march node, with
-    /// columns toward the sun from `sun_columns` for the forward-peak term.
+    /// the scaled field's light ([`MultipleScatteringField::compute_field_radiance`])
+    /// plus the forward-peak term of its integrals along the view (the
+    /// sky adds its terms itself, `ViewTerms` in `sky/mod.rs`).
+    #[cfg(test)]
     pub(crate) fn compute_radiance(
+        &self,
+        view: Vector3,
+        sun_columns: SunColumns,
+        scratch: &mut MultipleScatteringScratch,
+        radiance: &mut [f64],
+    ) {
+        self.compute_field_radiance(view, sun_columns, scratch, radiance);
+        self.add_forward_peak(view, scratch, radiance);
+    }
+
+    /// Adds to `radiance` the forward-peak term of the integrals the last
+    /// march along `view` left in `scratch`.
+    #[cfg(test)]
+    pub(crate) fn add_forward_peak(
+        &self,
+        view: Vector3,
+        scratch: &MultipleScatteringScratch,
+        radiance: &mut [f64],
+    ) {
+        let w = radiance.len();
+        let (mut phase, mut forward) = (vec![0.0; w], vec![0.0; w]);
+        self.compute_forward_peak_radiance(
+            view.dot(self.optics.sun),
+            scratch.forward_integrals(),
+            &mut phase,
+            &mut forward,
+        );
+        for (r, f) in radiance.iter_mut().zip(&forward) {
+            *r += f;
+        }
+    }
+
+    /// The scaled field's light seen along `view` (orders >= 2 of the
+    /// scaled problem and the skylight the ground reflects), W m^-2 sr^-1
+    /// nm^-1, into `radiance`: the field's exact angular synthesis at every
+    /// march node. The forward-peak term's integrals along the view are
+    /// left in the scratch ([`MultipleScatteringScratch::forward_integrals`],
+    /// with columns toward the sun from `sun_columns`), for
+    /// [`MultipleScatteringField::compute_forward_peak_radiance`].
+    pub(crate) fn compute_field_radiance(
         &self,
         view: Vector3,
         sun_columns: SunColumns,
@@ -721,8 +763,6 @@ impl MultipleScatteringField {
             .march(view, sun_columns, scratch, radiance, |node, _, scratch| {
                 self.compute_log_source(node, scratch)
             });
-        self.optics
-            .add_forward_peak(&self.atmosphere, view, scratch, radiance);
     }
 
     /// ln R(x, view) at one march node into `scratch.log_source`: R synthesised

@@ -8,7 +8,7 @@ use std::ops::ControlFlow;
 use super::field::SunZenithAxis;
 use super::forward_peak::{self, ForwardPeak};
 use super::peak_beam::PeakBeam;
-use crate::atmosphere::{AtmosphereOptics, DensityProfile};
+use crate::atmosphere::DensityProfile;
 use crate::geometry::{Vector3, segment_in_atmosphere};
 use crate::transport::optical_column::{PanelMarch, ProfileCorners};
 use crate::transport::single_scattering::SunColumns;
@@ -101,8 +101,6 @@ pub struct MultipleScatteringScratch {
     /// [j * wavelengths + i], m, then the peak-only rows Q and Q X-bar
     /// (`forward_peak.rs`; see [`MultipleScatteringTable::compute_radiance_parts`]).
     pub(super) forward_integrals: Vec<f64>,
-    pub(super) phase: Vec<f64>,
-    pub(super) forward_radiance: Vec<f64>,
     /// The tilted peak beam B at the current node (`peak_beam.rs`), and
     /// the node's optical depths / transmittances and peak scattering
     /// coefficients and X there ([`ViewRayOptics::add_tilted_forward_peak`]).
@@ -119,14 +117,6 @@ impl MultipleScatteringScratch {
     /// [`MultipleScatteringField::compute_forward_peak_radiance`] takes them.
     pub(crate) fn forward_integrals(&self) -> &[f64] {
         &self.forward_integrals
-    }
-
-    /// The forward-peak term of the last ray (zero for a sky without
-    /// peaks), W m^-2 sr^-1 nm^-1: the part of the radiance
-    /// [`MultipleScatteringField::compute_radiance`] gave that is not the
-    /// scaled field's.
-    pub(crate) fn forward_radiance(&self) -> &[f64] {
-        &self.forward_radiance
     }
 }
 
@@ -153,35 +143,9 @@ impl ViewRayOptics {
             view_panel_ends: Vec::with_capacity(self.corners.most_panel_ends(self.panels)),
             sun_panel_ends: Vec::with_capacity(self.corners.most_panel_ends(SUN_RAY_PANELS)),
             forward_integrals: vec![0.0; (s + forward_peak::EXTRA_ROWS) * w],
-            phase: vec![0.0; w],
-            forward_radiance: vec![0.0; w],
             beam: vec![0.0; w],
             tilted_depths: vec![0.0; 4 * w],
             tilted_peak: vec![0.0; 2 * w],
-        }
-    }
-
-    /// Adds the forward-peak term of the scratch's integrals along `view`
-    /// to `radiance` (`forward_peak.rs`).
-    pub(super) fn add_forward_peak(
-        &self,
-        optics: &AtmosphereOptics,
-        view: Vector3,
-        scratch: &mut MultipleScatteringScratch,
-        radiance: &mut [f64],
-    ) {
-        if !self.has_forward_peaks {
-            return;
-        }
-        self.forward_peak.radiance(
-            optics,
-            view.dot(self.sun),
-            &scratch.forward_integrals,
-            &mut scratch.phase,
-            &mut scratch.forward_radiance,
-        );
-        for (r, f) in radiance.iter_mut().zip(&scratch.forward_radiance) {
-            *r += f;
         }
     }
 
