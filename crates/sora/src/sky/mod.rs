@@ -147,7 +147,13 @@ pub enum Polarisation {
 /// Resolution of the fast method's image tables.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FastTableSize {
-    /// Sun-column table: altitude nodes, mu nodes.
+    /// Sun-column table: altitude nodes, mu nodes. The multiple-scattering
+    /// field's spherical first order and tilted peak beam read their
+    /// columns toward the sun from the same table, so this size reaches
+    /// the radiance of a view too at a low sun: 32 x 64 nodes move a view
+    /// by at most 0.11 % from the default at suns 5 to -8 degrees (measured
+    /// on earth-clear, earth-hazy and mars-dust, 440-680 nm), by under 1e-5
+    /// at 10 degrees.
     pub sun_column_nodes: (usize, usize),
     /// Sky-view table: nodes per half of the zenith axis, azimuth nodes.
     pub sky_view_nodes: (usize, usize),

@@ -187,7 +187,11 @@ pub(crate) struct FieldRequest {
     /// `FIRST_ORDER_SUN_ZENITH_DEG`, or a point's sun below
     /// `PEAK_BEAM_HIGHEST_ELEVATION_DEG`) depends on this size, as the
     /// images' do: a documented setting of the sky
-    /// (`FastTableSize::sun_column_nodes`).
+    /// (`FastTableSize::sun_column_nodes`). Measured (the zenith and six
+    /// views 1 to 20 degrees up toward, across and away from the sun,
+    /// 440/560/680 nm, earth-clear, earth-hazy and mars-dust): 32 x 64
+    /// nodes move a view by at most 0.11 % from 128 x 256 at suns 5 to -8
+    /// degrees (earth-hazy at 2 degrees the worst), by under 1e-5 at 10.
     pub(crate) sun_column_nodes: (usize, usize),
     /// Whether the field also solves the columns of its polarisation
     /// correction.

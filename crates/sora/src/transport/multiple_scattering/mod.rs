@@ -156,96 +156,55 @@
 //! Hillaire's table and treats every order with the real phase functions.
 //!
 //! # Accuracy (measured; the tests named hold it)
-//! - Against DISORT (plane-parallel, every row of the clear-sky reference,
-//!   single + multiple scattering): worst 0.074 % (black ground) and
-//!   0.061 % (albedo 0.3) with the exact synthesis, 0.10 % and 0.14 %
-//!   through the tables of an image
-//!   (`reference_tests/multiple_scattering_reference.rs`:
-//!   `black_ground_matches_disort_at_every_row`,
+//! - DISORT (plane-parallel, every row of the clear-sky reference): worst
+//!   0.074 % (black ground) and 0.061 % (albedo 0.3) with the exact
+//!   synthesis, 0.10 % and 0.14 % through an image's tables
+//!   (`black_ground_matches_disort_at_every_row`,
 //!   `bright_ground_matches_disort_at_every_row`).
-//! - Against the Monte Carlo path tracer on the spherical planet
-//!   (`clear-sky-reference`, 400 000 paths per view, 14 views from the
-//!   zenith to 1 degree above the horizon, every wavelength): suns 90 to 10
-//!   degrees within 0.9 %; sun 5 degrees within 1.6 %, the worst 1 degree
-//!   above the horizon at 380 nm. An eye 10 km up, and a ground of albedo
-//!   0.3: within 1.1 % (100 000 paths)
-//!   (`spherical_sky_matches_the_path_tracer_within_two_percent`,
-//!   `spherical_sky_matches_the_path_tracer_exhaustively`).
-//! - Exact Mie phase functions (`earth-hazy`, suns 30 and 5 degrees, views
-//!   away from the sun, 400 000 paths): within 1.7 %; `mars-dust` (100 000
-//!   paths) within 2 % for a sun 30 degrees high
-//!   (`mie_aerosols_match_the_path_tracer_away_from_the_sun`).
-//! - Near a low sun (`docs/twilight_survey.md`, 400 000 and 800 000 paths,
-//!   standard errors 0.1-0.5 % there; `tests/twilight.rs`:
+//! - The path tracer on the spherical planet, `clear-sky-reference`, 14
+//!   views from the zenith to 1 degree up: suns 90 to 10 degrees within
+//!   0.9 %, 5 degrees within 1.6 %; an eye 10 km up or a ground of albedo
+//!   0.3 within 1.1 % (`spherical_sky_matches_the_path_tracer_within_two_percent`,
+//!   `spherical_sky_matches_the_path_tracer_exhaustively`). Mie phase
+//!   functions away from the sun: `earth-hazy` within 1.7 %, `mars-dust`
+//!   within 2 % (`mie_aerosols_match_the_path_tracer_away_from_the_sun`).
+//! - Near a low sun (`tests/twilight.rs`:
 //!   `near_a_low_sun_with_aerosols_matches_the_path_tracer`,
 //!   `the_sun_on_the_horizon_through_dust_matches_the_path_tracer`):
-//!   `mars-dust` within 0.8 % of the path tracer 2 to 10 degrees from a sun
-//!   10 and 5 degrees high (its orders >= 2 within 1.6 %), `earth-hazy`
-//!   within 0.7 % 2 to 5 degrees from a sun 5 degrees high, -1.1 and -0.9 %
-//!   at 560 and 680 nm 2 degrees above a sun 2 degrees high. Toward a sun
-//!   2 degrees high `mars-dust` is within 2.3 %, `earth-hazy` 2 degrees
-//!   along the horizon from it -3.3 and -4.3 % at 560 and 680 nm (+-0.4,
-//!   0.9 %). Every one of the 120 values 1 and 2 degrees up within 5
-//!   degrees of a sun at 5 to -2 degrees (mars-dust, earth-hazy) is within
-//!   3 % + 3 standard errors. The weakest place is `mars-dust` 1 degree up
-//!   with the sun on the horizon or 2 degrees down, where the eye sees
-//!   almost only multiply scattered light, most of it in the dust's peak:
-//!   with 1 600 000 paths (standard errors 0.35-0.8 %) -0.6 to -3.6 %, the
-//!   worst at 440 nm. What is missing there is the peak scatterings on the
-//!   view's side at their angles (another +1.7 to +3.2 % there, measured,
-//!   left out for its cost per pixel).
-//! - Civil twilight (`reference_tests/twilight_survey.rs`,
-//!   `tests/twilight.rs`: `civil_twilight_matches_the_path_tracer`,
+//!   `mars-dust` within 0.8 % 2 to 10 degrees from a sun 10 and 5 degrees
+//!   high, `earth-hazy` within 0.7 % 2 to 5 degrees from a sun 5 degrees
+//!   high; all 120 values 1 and 2 degrees up within 5 degrees of a sun at
+//!   5 to -2 degrees within 3 % + 3 standard errors. Weakest: `mars-dust` 1
+//!   degree up with the sun on the horizon or 2 degrees down, -0.6 to
+//!   -3.6 % (1 600 000 paths; the peak scatterings on the view's side,
+//!   exactly forward here, would add +1.7 to +3.2 %).
+//! - Civil twilight, suns -2 to -6 (`civil_twilight_matches_the_path_tracer`,
 //!   `sun_six_below_matches_the_path_tracer_at_three_wavelengths`,
-//!   `twilight_matches_the_path_tracer_over_the_whole_grid`): the zenith
-//!   and elevations 5 and 20 degrees at 0, 90 and 180 degrees from the
-//!   sun, 440/560/680 nm, suns -2, -4, -6, 800 000 paths: all 189 values
-//!   of `earth-clear`, `earth-hazy` and `us-standard-1976-rayleigh` within
-//!   3 % + 3 standard errors, the worst -4.5 to -4.8 % at -6 degrees before
-//!   the every-order shift (item 2), which moved them by 0 to +3.1 %.
-//!   `mars-dust` (400 000 paths): 61 of 63 within, medians +1.7, +3.1,
-//!   +4.3 %; the two outside are 5 degrees up away from a sun at -4 at 440
-//!   and 560 nm, +22 and +15 % (+-4.7, 3.7), +11 and +8 % with 800 000
-//!   paths. The other views (1 degree up at 0-180 degrees from the
-//!   sun, 45/135 degrees at 5, 20 and 45 up; 4 presets, suns 10 to -6, 924
-//!   values): all 693 earth values within; `mars-dust`'s antisolar horizon
-//!   in civil twilight leans bright (+0.4 to +15.7 % 1 degree up,
-//!   +-2.2-4.5, within). The single scattering is exact (within 0.1 % of
-//!   the paper's double march at 16 000 steps, and of the path tracer's),
-//!   the second order within 1-2 % (sun -6, 1 600 000 paths): what remains
-//!   is the orders >= 3, a few per cent too dark at 440 nm toward the sun
-//!   and at the zenith (the steeper streams' sources are their own
-//!   column's, item 4), and 8 streams per hemisphere (16 move the zenith at
-//!   -6 degrees by +0.3 to +0.5 %, `nautical_twilight_is_converged_in_the_streams`).
-//! - **Deep twilight** (`docs/twilight_survey.md`, against the path
-//!   tracer with its directions toward the sunlit air, 1 000 000 paths a
-//!   view; the zenith and 5, 20, 45 degrees up at 0, 90, 180 degrees from
-//!   the sun, 440/560/680 nm): earth-clear +0.2 to +5.4 %, earth-hazy +1.2
-//!   to +7.9 % and us-standard +0.2 to +3.0 % at -8 to -12 degrees; all 180
-//!   earth values within 5 % + 3 standard errors (earth-clear's medians
-//!   +0.1, -3.4, -2.3 %, earth-hazy's +2.4, +4.1, +4.4 %; the one earth-hazy
-//!   value at -12 that 1 000 000 paths put outside is +6.3 % +-3.2 with
-//!   3 200 000), us-standard's 30 of 30 within. earth-clear leans dark in
-//!   the blue at -10 and -12.
+//!   `twilight_matches_the_path_tracer_over_the_whole_grid`): all 189 values
+//!   of the earth presets and `us-standard-1976-rayleigh` at the survey's
+//!   views, and all 693 earth values of the grid, within 3 % + 3
+//!   standard errors; `mars-dust` 61 of 63 (its antisolar horizon leans
+//!   bright, up to +15.7 % +-4.5 1 degree up). What remains is the third
+//!   and higher orders, a few per cent dark at 440 nm toward the sun and at the zenith
+//!   (the steeper streams' sources are their own column's, item 4); 16
+//!   streams per hemisphere move the zenith at -6 by +0.3 to +0.5 %
+//!   (`nautical_twilight_is_converged_in_the_streams`).
+//! - Deep twilight, -8 to -12 (1 000 000 paths a view): earth-clear +0.2
+//!   to +5.4 %, earth-hazy +1.2 to +7.9 %, us-standard +0.2 to +3.0 %, all
+//!   within 5 % + 3 standard errors; earth-clear leans dark in the blue.
 //!
-//! The history of these numbers (what each piece changed, measured before
-//! and after it) is in `docs/twilight_survey.md`.
+//! Each number with its paths and standard errors, and what each piece
+//! changed when it was added, is in `docs/twilight_survey.md`.
 //!
 //! # Cost (measured, `benches/multiple_scattering.rs`, 2 shared cores)
-//! The field is solved per wavelength and sun node, 9 nodes for a sun 30
-//! degrees high and 18 for 5 degrees (21 wavelengths, `clear-sky-reference`:
-//! the field 0.12 s and the source table 0.08 s at sun 30, 0.22 s and 0.16
-//! s at sun 5, before the twilight pieces). The spherical first order adds
-//! 20-30 ms per sun node it applies to (10 000 marched paths each;
-//! earth-clear, 21 wavelengths), its fine moments and shells about as much
-//! again after sunset, and the twilight shift about 0.1 s at 21
-//! wavelengths; none of them applies to a sun higher than about 16
-//! degrees. An earth-clear 512 x 512 fisheye with `--polarisation off`
-//! takes about 1.7 s at sun 5 degrees and 2.1 s at sun -6 on the quiet
-//! 2-core machine (peak memory 123 MiB: the field, 20-70 MB at twilight, is
-//! kept in the solver's own layout and shared with its source table);
-//! `cargo bench --bench multiple_scattering -- twilight` gives 1.91 s
-//! (1.86-1.97).
+//! One solve per wavelength and sun node (9 nodes for a sun 30 degrees
+//! high, 18 for 5 degrees; at 21 wavelengths the field 0.12 s and its
+//! source table 0.08 s at sun 30). The spherical first order adds 20-30 ms
+//! per node it applies to, its fine moments about as much again after
+//! sunset, the twilight shift about 0.1 s; none applies to a sun higher
+//! than about 16 degrees. An earth-clear 512 x 512 fisheye (scalar) takes
+//! about 1.7 s at sun 5 and 2.1 s at sun -6 (peak memory 123 MiB);
+//! `cargo bench --bench multiple_scattering -- twilight` 1.91 s.
 //!
 //! # What it approximates
 //! - Diffuse light between nearby points travels as in a column of uniform
