@@ -12,6 +12,9 @@
 //!   Gauss-Legendre on panels that crowd toward the ray's lowest point
 //!   (where the density peaks) and its start, cut where the ray crosses a
 //!   corner of a piecewise-linear profile ([`ProfileCorners`]).
+//! - [`PanelMarch`]: the same panels with the columns from the ray's start
+//!   to every node (a running integral inside each panel), the one march
+//!   of every integral along a path of the fast method.
 //! - [`SunColumnTable`]: the columns from any point to the top of the
 //!   atmosphere toward the sun, tabulated over (altitude, cos of the sun's
 //!   zenith angle) and read by `SunColumnTable::lookup_columns_to_sun`.
@@ -30,8 +33,9 @@
 //!   linearly).
 
 use std::borrow::Borrow;
+use std::ops::ControlFlow;
 
-use super::quadrature::{GAUSS_NODES, GAUSS_WEIGHTS};
+use super::quadrature::{GAUSS_NODES, GAUSS_WEIGHTS, running_integral_matrix};
 use crate::atmosphere::DensityProfile;
 use crate::geometry::{Vector3, ray_sphere_roots};
 
@@ -207,6 +211,111 @@ pub(crate) fn compute_columns_along_ray<P: Borrow<DensityProfile>>(
                 *column += half * w * profile.borrow().relative_density(altitude_m);
             }
         }
+    }
+}
+
+/// One node of a [`PanelMarch`]: where it is and what it weighs.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct MarchNode {
+    /// The node, planet-centred, m.
+    pub(crate) point: Vector3,
+    /// The Gauss quadrature weight of the node, m (half the panel's length
+    /// times the 4-point weight).
+    pub(crate) weight: f64,
+}
+
+/// The Gauss-panel march along a ray that every integral along a path of
+/// the fast method shares (single scattering's view ray, the multiple
+/// scattering's view ray, the spherical first order's stream paths, the
+/// tilted peak beam's lines): 4-point Gauss-Legendre nodes on the panels
+/// between consecutive panel ends ([`ProfileCorners::fill_panel_ends`]),
+/// at each node the species' relative densities and the columns from the
+/// ray's start to the node (the columns of the panels before it plus the
+/// running integral inside its own, [`running_integral_matrix`], exact for
+/// a density cubic across the panel). The march keeps its buffers between
+/// rays (allocation-free after the first).
+#[derive(Debug, Clone, Default)]
+pub(crate) struct PanelMarch {
+    running_integral: [[f64; 4]; 4],
+    /// Per species, the relative densities at the current panel's nodes.
+    panel_densities: Vec<[f64; 4]>,
+    /// Per species, the columns from the start to the current panel's
+    /// start, m (after a march: the whole ray's).
+    columns: Vec<f64>,
+    /// Per species, at the current node: the column from the start, m,
+    /// and the relative density.
+    node_columns: Vec<f64>,
+    densities: Vec<f64>,
+}
+
+impl PanelMarch {
+    /// A march for `species` species.
+    pub(crate) fn new(species: usize) -> PanelMarch {
+        PanelMarch {
+            running_integral: running_integral_matrix(),
+            panel_densities: vec![[0.0; 4]; species],
+            columns: vec![0.0; species],
+            node_columns: vec![0.0; species],
+            densities: vec![0.0; species],
+        }
+    }
+
+    /// Marches the ray from `start` (planet-centred, m) along the unit
+    /// `direction` over the panels between consecutive `panel_ends` (m
+    /// along the ray, increasing), calling `visit` at every node in order
+    /// with the node, the columns from `start` to it (m, per species) and
+    /// the relative densities there; `visit` stops the march by returning
+    /// [`ControlFlow::Break`]. Afterwards [`PanelMarch::columns`] holds the
+    /// columns of the panels marched whole.
+    pub(crate) fn march<P: Borrow<DensityProfile>>(
+        &mut self,
+        profiles: &[P],
+        ground_radius_m: f64,
+        (start, direction): (Vector3, Vector3),
+        panel_ends: &[f64],
+        mut visit: impl FnMut(MarchNode, &[f64], &[f64]) -> ControlFlow<()>,
+    ) {
+        let species = profiles.len();
+        self.columns.fill(0.0);
+        for ends in panel_ends.windows(2) {
+            let (centre, half) = (0.5 * (ends[0] + ends[1]), 0.5 * (ends[1] - ends[0]));
+            let mut points = [Vector3::default(); 4];
+            for (n, x) in GAUSS_NODES.iter().enumerate() {
+                points[n] = start + direction * (centre + half * x);
+                let altitude_m = points[n].length() - ground_radius_m;
+                for (j, profile) in profiles.iter().enumerate() {
+                    self.panel_densities[j][n] = profile.borrow().relative_density(altitude_m);
+                }
+            }
+            for (n, point) in points.into_iter().enumerate() {
+                for j in 0..species {
+                    let inside: f64 = (0..4)
+                        .map(|m| self.running_integral[n][m] * self.panel_densities[j][m])
+                        .sum();
+                    self.node_columns[j] = self.columns[j] + half * inside;
+                    self.densities[j] = self.panel_densities[j][n];
+                }
+                let node = MarchNode {
+                    point,
+                    weight: half * GAUSS_WEIGHTS[n],
+                };
+                if visit(node, &self.node_columns, &self.densities).is_break() {
+                    return;
+                }
+            }
+            for j in 0..species {
+                let panel: f64 = (0..4)
+                    .map(|m| GAUSS_WEIGHTS[m] * self.panel_densities[j][m])
+                    .sum();
+                self.columns[j] += half * panel;
+            }
+        }
+    }
+
+    /// The columns of the last march, m per species: the whole ray's
+    /// unless `visit` stopped it.
+    pub(crate) fn columns(&self) -> &[f64] {
+        &self.columns
     }
 }
 
@@ -496,6 +605,53 @@ mod tests {
         columns_along_ray(&[&air], Vector3::new(0.0, 0.0, R), up, 100e3, 32, &mut c);
         let exact = 8000.0 * (1.0 - (-100e3f64 / 8000.0).exp());
         assert!((c[0] / exact - 1.0).abs() < 1e-12, "{} vs {exact}", c[0]);
+    }
+
+    /// The march up a vertical ray through an exponential atmosphere: at
+    /// every node the column from the start is the closed form H (1 -
+    /// e^(-s / H)) (the running integral of each panel's cubic), the nodes'
+    /// weights sum to the ray's length, the whole ray's columns are the
+    /// Gauss columns of `compute_columns_along_ray`, and a break stops it.
+    #[test]
+    fn the_panel_march_carries_the_columns_to_every_node() {
+        let air = exponential(8000.0);
+        let up = Vector3::new(0.0, 0.0, 1.0);
+        let start = Vector3::new(0.0, 0.0, R);
+        let mut ends = Vec::new();
+        ProfileCorners::default().fill_panel_ends(start, up, 100e3, 32, &mut ends);
+        let mut march = PanelMarch::new(1);
+        let (mut nodes, mut length, mut worst) = (0, 0.0, 0.0f64);
+        march.march(
+            &[&air],
+            R,
+            (start, up),
+            &ends,
+            |node, columns, densities| {
+                let s = node.point.length() - R;
+                let exact = 8000.0 * (1.0 - (-s / 8000.0).exp());
+                worst = worst.max((columns[0] / exact - 1.0).abs());
+                assert_eq!(densities[0], air.relative_density(s));
+                nodes += 1;
+                length += node.weight;
+                ControlFlow::Continue(())
+            },
+        );
+        assert_eq!(nodes, 4 * 32);
+        assert!((length / 100e3 - 1.0).abs() < 1e-12, "{length}");
+        assert!(worst < 1e-6, "{worst}");
+        let mut whole = [0.0];
+        compute_columns_along_ray(&[&air], R, start, up, &ends, &mut whole);
+        assert!((march.columns()[0] / whole[0] - 1.0).abs() < 1e-12);
+        let mut visited = 0;
+        march.march(&[&air], R, (start, up), &ends, |_, _, _| {
+            visited += 1;
+            if visited == 5 {
+                ControlFlow::Break(())
+            } else {
+                ControlFlow::Continue(())
+            }
+        });
+        assert_eq!(visited, 5);
     }
 
     /// A tent layer 10-40 km peaking at 25 km: vertically its column is

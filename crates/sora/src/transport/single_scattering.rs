@@ -42,10 +42,12 @@
 //!   ([`SunColumns::Table`]) for images.
 
 use std::borrow::Borrow;
+use std::ops::ControlFlow;
 use std::sync::{Arc, Mutex};
 
-use super::optical_column::{ProfileCorners, SunColumnTable, compute_columns_along_ray};
-use super::quadrature::{GAUSS_NODES, GAUSS_WEIGHTS, running_integral_matrix};
+use super::optical_column::{
+    PanelMarch, ProfileCorners, SunColumnTable, compute_columns_along_ray,
+};
 use crate::atmosphere::phase_matrix::PhaseMatrix;
 use crate::atmosphere::{Atmosphere, AtmosphereOptics, DensityProfile};
 use crate::error::{Error, Result};
@@ -164,7 +166,6 @@ pub struct SingleScatteringSky {
     /// is also the planet-centred frame's orientation.
     sun_direction: Vector3,
     sun_angular_radius_rad: f64,
-    running_integral: [[f64; 4]; 4],
     /// The species' density profiles (a copy, so rays need no list of
     /// references).
     profiles: Vec<DensityProfile>,
@@ -179,13 +180,11 @@ pub struct SingleScatteringSky {
 /// Per-thread work space of the fast path (no allocation per ray).
 #[derive(Debug, Clone)]
 pub struct SingleScatteringScratch {
-    densities: Vec<f64>,
-    /// Columns from the eye to the start of the current panel.
+    /// The view ray's march.
+    march: PanelMarch,
+    /// Columns of the whole view ray, m.
     view_columns: Vec<f64>,
-    /// Columns from the eye to the current node.
-    node_view_columns: Vec<f64>,
     sun_columns: Vec<f64>,
-    panel_densities: Vec<[f64; 4]>,
     optical_depth: Vec<f64>,
     /// I_j(lambda), species-major: [j * wavelengths + i], m.
     inscattering_integrals: Vec<f64>,
@@ -287,7 +286,6 @@ impl SingleScatteringSky {
             observer: Vector3::new(0.0, 0.0, ground_radius_m + observer_altitude_m),
             sun_direction: direction_from_elevation_azimuth(sun_elevation_deg, sun_azimuth_deg),
             sun_angular_radius_rad,
-            running_integral: running_integral_matrix(),
             sun_column_tables: Arc::default(),
         })
     }
@@ -384,11 +382,9 @@ impl SingleScatteringSky {
     pub(crate) fn scratch(&self) -> SingleScatteringScratch {
         let (species, wavelengths) = (self.optics.species.len(), self.optics.grid.len());
         SingleScatteringScratch {
-            densities: vec![0.0; species],
+            march: PanelMarch::new(species),
             view_columns: vec![0.0; species],
-            node_view_columns: vec![0.0; species],
             sun_columns: vec![0.0; species],
-            panel_densities: vec![[0.0; 4]; species],
             optical_depth: vec![0.0; wavelengths],
             inscattering_integrals: vec![0.0; species * wavelengths],
             ground_radiance: vec![0.0; wavelengths],
@@ -434,39 +430,26 @@ impl SingleScatteringSky {
             self.ground_radius_m,
             &mut view_ends,
         );
-        for ends in view_ends.windows(2) {
-            let (centre, half) = (0.5 * (ends[0] + ends[1]), 0.5 * (ends[1] - ends[0]));
-            let mut points = [Vector3::default(); 4];
-            for (n, x) in GAUSS_NODES.iter().enumerate() {
-                points[n] = start + view * (centre + half * x);
-                let altitude_m = points[n].length() - self.ground_radius_m;
-                for (j, profile) in self.profiles.iter().enumerate() {
-                    scratch.panel_densities[j][n] = profile.relative_density(altitude_m);
-                }
-            }
-            for n in 0..4 {
-                // Column from the eye to this node: all previous panels plus
-                // the running integral inside this one.
-                for j in 0..species.len() {
-                    let inside: f64 = (0..4)
-                        .map(|m| self.running_integral[n][m] * scratch.panel_densities[j][m])
-                        .sum();
-                    scratch.densities[j] = scratch.panel_densities[j][n];
-                    scratch.node_view_columns[j] = scratch.view_columns[j] + half * inside;
-                }
+        let mut march = std::mem::take(&mut scratch.march);
+        march.march(
+            &self.profiles,
+            self.ground_radius_m,
+            (start, view),
+            &view_ends,
+            |node, node_columns, densities| {
                 if !sun_columns.compute_columns_to_sun(
                     &self.profiles,
                     &self.corners,
-                    points[n],
+                    node.point,
                     self.sun_direction,
                     &mut scratch.sun_panel_ends,
                     &mut scratch.sun_columns,
                 ) {
-                    continue;
+                    return ControlFlow::Continue(());
                 }
                 scratch.optical_depth.fill(0.0);
                 for (j, s) in species.iter().enumerate() {
-                    let column = scratch.node_view_columns[j] + scratch.sun_columns[j];
+                    let column = node_columns[j] + scratch.sun_columns[j];
                     for (tau, beta) in scratch
                         .optical_depth
                         .iter_mut()
@@ -475,26 +458,22 @@ impl SingleScatteringSky {
                         *tau += beta * column;
                     }
                 }
-                let weight = half * GAUSS_WEIGHTS[n];
                 for (j, s) in species.iter().enumerate() {
-                    let density = scratch.densities[j];
+                    let density = densities[j];
                     if density <= 0.0 || s.scattering_per_m.values().iter().all(|b| *b == 0.0) {
                         continue;
                     }
                     let row =
                         &mut scratch.inscattering_integrals[j * wavelengths..(j + 1) * wavelengths];
                     for (acc, tau) in row.iter_mut().zip(&scratch.optical_depth) {
-                        *acc += weight * density * (-tau).exp();
+                        *acc += node.weight * density * (-tau).exp();
                     }
                 }
-            }
-            for j in 0..species.len() {
-                let panel: f64 = (0..4)
-                    .map(|m| GAUSS_WEIGHTS[m] * scratch.panel_densities[j][m])
-                    .sum();
-                scratch.view_columns[j] += half * panel;
-            }
-        }
+                ControlFlow::Continue(())
+            },
+        );
+        scratch.view_columns.copy_from_slice(march.columns());
+        scratch.march = march;
         scratch.view_panel_ends = view_ends;
         // Transmittance of the whole view ray.
         for (i, t) in scratch.view_transmittance.iter_mut().enumerate() {

@@ -83,6 +83,7 @@ use std::f64::consts::PI;
 
 use super::super::quadrature::{GAUSS_NODES, GAUSS_WEIGHTS};
 use super::phase_fourier::TruncatedPhase;
+use super::regimes::{PEAK_KERNEL_BLEND_START_RAD, PEAK_KERNEL_RADIUS_RAD};
 use crate::atmosphere::phase_matrix::PhaseMatrix;
 use crate::atmosphere::{AtmosphereOptics, DensityProfile};
 
@@ -97,14 +98,6 @@ const MAX_DEGREE: usize = 768;
 /// The peak's moments are integrated up to this angle, rad (tapered
 /// from half of it).
 const MOMENT_WINDOW_RAD: f64 = 60.0 * PI / 180.0;
-
-/// G is tabulated up to this angle from the sun, rad, and zero beyond.
-const KERNEL_RADIUS_RAD: f64 = 30.0 * PI / 180.0;
-
-/// From this angle from the sun, rad, to [`KERNEL_RADIUS_RAD`] the term
-/// passes linearly to the wide-angle form E sum_j beta_sca,j p_j(theta)
-/// integral rho_j (T* T*_sun - T T_sun) ds (see the module docs).
-const BLEND_START_RAD: f64 = 20.0 * PI / 180.0;
 
 /// Nodes of G's angle axis.
 const KERNEL_ANGLES: usize = 96;
@@ -282,11 +275,11 @@ impl ForwardPeak {
                     * row[i];
             }
         }
-        if self.kernel.is_empty() || theta >= KERNEL_RADIUS_RAD {
+        if self.kernel.is_empty() || theta >= PEAK_KERNEL_RADIUS_RAD {
             return;
         }
         let s = self.species;
-        let position = (theta / KERNEL_RADIUS_RAD).sqrt() * (KERNEL_ANGLES - 1) as f64;
+        let position = (theta / PEAK_KERNEL_RADIUS_RAD).sqrt() * (KERNEL_ANGLES - 1) as f64;
         let t = (position as usize).min(KERNEL_ANGLES - 2);
         let ft = position - t as f64;
         let (q, qx) = (
@@ -359,7 +352,7 @@ impl ForwardPeak {
     /// The phase function of the first line of L_fp for species `j`
     /// (`function` its phase function) at cos(theta) = `cos_theta`, into
     /// `phase`, sr^-1: (1 - f) p* near the sun, passing to p from
-    /// [`BLEND_START_RAD`] to [`KERNEL_RADIUS_RAD`] (see the module docs),
+    /// [`PEAK_KERNEL_BLEND_START_RAD`] to [`PEAK_KERNEL_RADIUS_RAD`] (see the module docs),
     /// p itself at wavelengths where the species has no peak.
     fn smooth_phase_into(
         &self,
@@ -388,16 +381,17 @@ impl ForwardPeak {
 }
 
 /// How much of the forward-peak term takes its wide-angle form at
-/// `theta` rad from the sun: 0 up to [`BLEND_START_RAD`], 1 from
-/// [`KERNEL_RADIUS_RAD`] on, linear between.
+/// `theta` rad from the sun: 0 up to [`PEAK_KERNEL_BLEND_START_RAD`], 1 from
+/// [`PEAK_KERNEL_RADIUS_RAD`] on, linear between.
 fn wide_angle_share(theta: f64) -> f64 {
-    ((theta - BLEND_START_RAD) / (KERNEL_RADIUS_RAD - BLEND_START_RAD)).clamp(0.0, 1.0)
+    ((theta - PEAK_KERNEL_BLEND_START_RAD) / (PEAK_KERNEL_RADIUS_RAD - PEAK_KERNEL_BLEND_START_RAD))
+        .clamp(0.0, 1.0)
 }
 
 /// The angle of G's node t, rad: crowded toward the sun.
 fn kernel_angle(t: usize) -> f64 {
     let u = t as f64 / (KERNEL_ANGLES - 1) as f64;
-    KERNEL_RADIUS_RAD * u * u
+    PEAK_KERNEL_RADIUS_RAD * u * u
 }
 
 /// e^(-X) (e^(X r) - 1 - X r) / X, for X > 0 (its series for small X r).

@@ -85,29 +85,31 @@
 //! 0.1 %, `earth-hazy` within 2 % where B is 1e-3 of the sun or more.
 //! Half-degree tilts and quarter-degree sun steps change the views near
 //! a low sun by less than 0.2 %. Toward a higher sun the beam passes
-//! linearly back to delta-M's between [`BLEND_START_DEG`] and the
+//! linearly back to delta-M's between [`PEAK_BEAM_BLEND_START_DEG`] and the
 //! table's top, 12 degrees (where B / S is 0.99); below -20 degrees a
 //! point's tilted lines no longer reach lit air (the top's horizon dip
 //! is 10-14 degrees) and delta-M's beam, zero there, is kept. Cost: 16
 //! to 34 ms per sky of 21 wavelengths on 2 cores.
 
+use std::ops::ControlFlow;
+
 use super::phase_fourier::TruncatedPhase;
+use super::regimes::{
+    PEAK_BEAM_BLEND_START_DEG, PEAK_BEAM_HIGHEST_ELEVATION_DEG, PEAK_BEAM_LOWEST_ELEVATION_DEG,
+};
 use crate::atmosphere::{AtmosphereOptics, DensityProfile};
 use crate::geometry::{Vector3, segment_in_atmosphere};
-use crate::transport::optical_column::{ProfileCorners, SunColumnRadius, SunColumnTable};
-use crate::transport::quadrature::{GAUSS_NODES, GAUSS_WEIGHTS, running_integral_matrix};
+use crate::transport::optical_column::{
+    PanelMarch, ProfileCorners, SunColumnRadius, SunColumnTable,
+};
 use crate::transport::vector_exp::exp_neg_in_place;
 
 /// The table's lowest node is this high, m: a horizontal line from it
 /// clears the ground (from the ground itself it would graze it).
 const LOWEST_NODE_M: f64 = 0.1;
-/// The table's sun elevations at the point, degrees.
-const LOWEST_ELEVATION_DEG: f64 = -20.0;
-const HIGHEST_ELEVATION_DEG: f64 = 12.0;
+/// Step of the table's sun elevations at the point (from
+/// [`PEAK_BEAM_LOWEST_ELEVATION_DEG`] to [`PEAK_BEAM_HIGHEST_ELEVATION_DEG`]), degrees.
 const ELEVATION_STEP_DEG: f64 = 1.0;
-/// From this sun elevation, degrees, to [`HIGHEST_ELEVATION_DEG`] the beam
-/// passes linearly back to delta-M's.
-const BLEND_START_DEG: f64 = 8.0;
 /// The tilts' bins are TILT_STEP_DEG wide, out to +-TILT_REACH_DEG / N
 /// degrees for phases truncated to N terms: the projected peak of N = 16
 /// terms' truncation has nothing beyond 9 degrees (measured, mars-dust
@@ -214,8 +216,7 @@ impl PeakBeam {
         });
         let extinction = by_species(&|i, j| inputs.extinction[i * s + j]);
         let scaled_extinction = by_species(&|i, j| inputs.scaled_extinction[i * s + j]);
-        let running = running_integral_matrix();
-        let node = |deg: f64| (deg - LOWEST_ELEVATION_DEG) / ELEVATION_STEP_DEG;
+        let node = |deg: f64| (deg - PEAK_BEAM_LOWEST_ELEVATION_DEG) / ELEVATION_STEP_DEG;
         let last_node = elevation_count() - 1;
         let first = (node(lowest_deg).floor().max(0.0) as usize).min(last_node - 1);
         let last = (node(highest_deg).ceil().max(0.0) as usize).clamp(first + 1, last_node);
@@ -231,8 +232,7 @@ impl PeakBeam {
         crate::parallel::for_each_chunk_mut(&mut ln_beam, per_altitude, |a, block| {
             let x = Vector3::new(0.0, 0.0, ground + inputs.altitudes_m[a].max(LOWEST_NODE_M));
             let mut ends = Vec::with_capacity(inputs.corners.most_panel_ends(PANELS));
-            let mut densities = vec![[0.0; 4]; s];
-            let mut line_columns = vec![0.0; s];
+            let mut march = PanelMarch::new(s);
             let mut sun = vec![0.0; s];
             let mut depth = vec![0.0; w];
             let mut source = vec![0.0; w];
@@ -247,27 +247,17 @@ impl PeakBeam {
                     inputs
                         .corners
                         .fill_panel_ends(start, d, exit - enter, PANELS, &mut ends);
-                    line_columns.fill(0.0);
-                    'panels: for panel in ends.windows(2) {
-                        let (centre, half) =
-                            (0.5 * (panel[0] + panel[1]), 0.5 * (panel[1] - panel[0]));
-                        let points: [Vector3; 4] =
-                            std::array::from_fn(|q| start + d * (centre + half * GAUSS_NODES[q]));
-                        for (q, point) in points.iter().enumerate() {
-                            let altitude = point.length() - ground;
-                            for (j, profile) in inputs.profiles.iter().enumerate() {
-                                densities[j][q] = profile.relative_density(altitude);
-                            }
-                        }
-                        for (q, point) in points.iter().enumerate() {
-                            let r = point.length();
+                    march.march(
+                        inputs.profiles,
+                        ground,
+                        (start, d),
+                        &ends,
+                        |node, columns, densities| {
+                            let r = node.point.length();
                             // f beta_sca rho T(x, y) times the weight.
                             depth.fill(0.0);
                             source.fill(0.0);
                             for j in 0..s {
-                                let inside: f64 =
-                                    (0..4).map(|m| running[q][m] * densities[j][m]).sum();
-                                let column = line_columns[j] + half * inside;
                                 let rows = j * w..(j + 1) * w;
                                 for (((tau, src), ext), f_sca) in depth
                                     .iter_mut()
@@ -275,33 +265,29 @@ impl PeakBeam {
                                     .zip(&extinction[rows.clone()])
                                     .zip(&peak[rows])
                                 {
-                                    *tau += ext * column;
-                                    *src += f_sca * densities[j][q];
+                                    *tau += ext * columns[j];
+                                    *src += f_sca * densities[j];
                                 }
                             }
                             exp_neg_in_place(&mut depth);
                             // Beyond where x sees no wavelength through the
                             // line the samples add nothing: T(x, y) only falls.
                             if depth.iter().all(|t| *t < OPAQUE) {
-                                break 'panels;
+                                return ControlFlow::Break(());
                             }
-                            let weight = half * GAUSS_WEIGHTS[q];
                             for (src, t) in source.iter_mut().zip(&depth) {
-                                *src *= weight * t;
+                                *src *= node.weight * t;
                             }
                             line.located.push(inputs.sun_columns.locate_radius(r));
                             // The sun's elevation at y is the node's plus the
                             // central angle between them (the line lies in
                             // the sun's vertical plane, toward it).
-                            line.central_rad.push((point.z / r).clamp(-1.0, 1.0).acos());
+                            line.central_rad
+                                .push((node.point.z / r).clamp(-1.0, 1.0).acos());
                             line.sources.extend_from_slice(&source);
-                        }
-                        for j in 0..s {
-                            let panel: f64 =
-                                (0..4).map(|m| GAUSS_WEIGHTS[m] * densities[j][m]).sum();
-                            line_columns[j] += half * panel;
-                        }
-                    }
+                            ControlFlow::Continue(())
+                        },
+                    );
                 }
                 marched.push(line);
             }
@@ -371,24 +357,24 @@ impl PeakBeam {
         let farthest = (ground_m / observer_m.max(ground_m)).acos() + (ground_m / top_m).acos();
         let lowest = (eye_sun_elevation_rad - farthest)
             .to_degrees()
-            .max(LOWEST_ELEVATION_DEG);
+            .max(PEAK_BEAM_LOWEST_ELEVATION_DEG);
         let highest = (eye_sun_elevation_rad + farthest)
             .to_degrees()
-            .min(HIGHEST_ELEVATION_DEG);
+            .min(PEAK_BEAM_HIGHEST_ELEVATION_DEG);
         (lowest < highest).then_some((lowest, highest))
     }
 
     /// B per wavelength into `out` at radius `r_m` with the sun's zenith
     /// cosine `mu_sun` there, and the share of it the scaled beam takes:
-    /// 1 up to [`BLEND_START_DEG`], falling to 0 at the table's top, 0
+    /// 1 up to [`PEAK_BEAM_BLEND_START_DEG`], falling to 0 at the table's top, 0
     /// (and `out` untouched) beyond the table's elevations.
     pub(crate) fn lookup_beam(&self, r_m: f64, mu_sun: f64, out: &mut [f64]) -> f64 {
         let elevation = mu_sun.clamp(-1.0, 1.0).asin().to_degrees();
-        if !(LOWEST_ELEVATION_DEG..HIGHEST_ELEVATION_DEG).contains(&elevation) {
+        if !(PEAK_BEAM_LOWEST_ELEVATION_DEG..PEAK_BEAM_HIGHEST_ELEVATION_DEG).contains(&elevation) {
             return 0.0;
         }
-        let share = ((HIGHEST_ELEVATION_DEG - elevation)
-            / (HIGHEST_ELEVATION_DEG - BLEND_START_DEG))
+        let share = ((PEAK_BEAM_HIGHEST_ELEVATION_DEG - elevation)
+            / (PEAK_BEAM_HIGHEST_ELEVATION_DEG - PEAK_BEAM_BLEND_START_DEG))
             .min(1.0);
         let altitudes = &self.altitudes_m;
         let z = (r_m - self.ground_m).clamp(0.0, altitudes[altitudes.len() - 1]);
@@ -399,7 +385,8 @@ impl PeakBeam {
         let ta = ((z - altitudes[a]) / (altitudes[a + 1] - altitudes[a])).clamp(0.0, 1.0);
         // Within the nodes computed (a view ray's points cannot leave them).
         let elevations = self.elevations;
-        let xe = ((elevation - LOWEST_ELEVATION_DEG) / ELEVATION_STEP_DEG - self.first as f64)
+        let xe = ((elevation - PEAK_BEAM_LOWEST_ELEVATION_DEG) / ELEVATION_STEP_DEG
+            - self.first as f64)
             .clamp(0.0, (elevations - 1) as f64);
         let e = (xe as usize).min(elevations - 2);
         let te = xe - e as f64;
@@ -506,12 +493,14 @@ fn tilt_deg(k: usize, tilts: usize) -> f64 {
 }
 
 fn elevation_count() -> usize {
-    ((HIGHEST_ELEVATION_DEG - LOWEST_ELEVATION_DEG) / ELEVATION_STEP_DEG).round() as usize + 1
+    ((PEAK_BEAM_HIGHEST_ELEVATION_DEG - PEAK_BEAM_LOWEST_ELEVATION_DEG) / ELEVATION_STEP_DEG)
+        .round() as usize
+        + 1
 }
 
 /// The sun's elevation at node e, rad.
 fn elevation_rad(e: usize) -> f64 {
-    (LOWEST_ELEVATION_DEG + e as f64 * ELEVATION_STEP_DEG).to_radians()
+    (PEAK_BEAM_LOWEST_ELEVATION_DEG + e as f64 * ELEVATION_STEP_DEG).to_radians()
 }
 
 #[cfg(test)]
@@ -707,7 +696,14 @@ mod tests {
         for i in 0..w {
             weights[i * tilts + tilts / 2] = 1.0;
         }
-        let table = PeakBeam::compute_with_tilts(&inputs.beam_inputs(), &weights, (-20.0, 12.0));
+        let table = PeakBeam::compute_with_tilts(
+            &inputs.beam_inputs(),
+            &weights,
+            (
+                PEAK_BEAM_LOWEST_ELEVATION_DEG,
+                PEAK_BEAM_HIGHEST_ELEVATION_DEG,
+            ),
+        );
         let (ground, _) = inputs.corners.radii_m();
         let mut worst = 0.0f64;
         let mut looked_up = vec![0.0; w];
@@ -760,8 +756,14 @@ mod tests {
                 top - ground,
             )
             .unwrap();
-            let table =
-                PeakBeam::compute_with_tilts(&inputs.beam_inputs(), &weights, (-20.0, 12.0));
+            let table = PeakBeam::compute_with_tilts(
+                &inputs.beam_inputs(),
+                &weights,
+                (
+                    PEAK_BEAM_LOWEST_ELEVATION_DEG,
+                    PEAK_BEAM_HIGHEST_ELEVATION_DEG,
+                ),
+            );
             let mut looked_up = vec![0.0; inputs.optics.grid.len()];
             for altitude in [0.0, 150.0, 1_300.0, 6_000.0] {
                 for elevation in [-3.0, -1.0, 0.0, 3.0, 6.0] {

@@ -181,6 +181,7 @@ impl MultipleScatteringTable {
     /// Multiply scattered radiance along `view` (as
     /// [`MultipleScatteringField::compute_radiance`], with the source read
     /// from the table), W m^-2 sr^-1 nm^-1.
+    #[cfg(test)]
     pub(crate) fn compute_radiance(
         &self,
         view: Vector3,
@@ -189,9 +190,7 @@ impl MultipleScatteringTable {
         radiance: &mut [f64],
     ) {
         self.compute_radiance_parts(view, sun_columns, scratch, radiance);
-        self.field
-            .optics
-            .add_forward_peak(&self.field.atmosphere, view, scratch, radiance);
+        self.field.add_forward_peak(view, scratch, radiance);
     }
 
     /// As [`MultipleScatteringTable::compute_radiance`], without the

@@ -51,16 +51,19 @@
 //! streams' values are the ones whose quadrature gives them.
 
 use std::f64::consts::PI;
+use std::ops::ControlFlow;
 
 use super::phase_fourier::{
     TruncatedPhase, gauss_legendre_unit_interval, normalized_associated_legendre,
 };
+use super::regimes::FINE_MOMENTS_SUN_ZENITH_RAD;
 use super::successive_orders::Streams;
 use crate::atmosphere::DensityProfile;
 use crate::geometry::{Vector3, segment_in_atmosphere};
 use crate::linear_algebra::inverse;
-use crate::transport::optical_column::{ProfileCorners, SunColumnRadius, SunColumnTable};
-use crate::transport::quadrature::{GAUSS_NODES, GAUSS_WEIGHTS, running_integral_matrix};
+use crate::transport::optical_column::{
+    PanelMarch, ProfileCorners, SunColumnRadius, SunColumnTable,
+};
 #[cfg(test)]
 use crate::transport::vector_exp::exp_neg;
 use crate::transport::vector_exp::exp_neg_in_place;
@@ -133,7 +136,6 @@ pub(crate) fn compute_spherical_first_order(inputs: &FirstOrderInputs) -> Vec<f6
     let suns = inputs.sun_zenith_rad.len();
     let (ground, _) = inputs.corners.radii_m();
     let azimuths = azimuth_count(streams);
-    let running = running_integral_matrix();
     let cosines = harmonic_cosines(azimuths, streams);
     let phase_table = tabulate_phases(inputs.phases);
     let tables = &Tables::new(inputs, &phase_table);
@@ -164,10 +166,7 @@ pub(crate) fn compute_spherical_first_order(inputs: &FirstOrderInputs) -> Vec<f6
         let mut work = MarchWork {
             radiance: vec![0.0; wavelengths],
             phase: vec![0.0; wavelengths * species],
-            densities: vec![[0.0; 4]; species],
-            view_columns: vec![0.0; species],
-            #[cfg(test)]
-            node_columns: vec![0.0; species],
+            march: PanelMarch::new(species),
             #[cfg(test)]
             sun_columns: vec![0.0; species],
             ends: Vec::with_capacity(tables.march_corners.most_panel_ends(PANELS)),
@@ -191,7 +190,6 @@ pub(crate) fn compute_spherical_first_order(inputs: &FirstOrderInputs) -> Vec<f6
         let level = LevelPaths {
             tables,
             by_species,
-            running: &running,
             cosines: &cosines,
             azimuths,
             x,
@@ -272,13 +270,12 @@ pub(crate) fn compute_spherical_first_order(inputs: &FirstOrderInputs) -> Vec<f6
     out
 }
 
-/// What the paths from one level share: the inputs' tables, the march's
-/// running-integral matrix, the azimuths' transform factors
+/// What the paths from one level share: the inputs' tables, the azimuths'
+/// transform factors
 /// ([`harmonic_cosines`]) and the level's point `x`.
 struct LevelPaths<'a> {
     tables: &'a Tables<'a>,
     by_species: &'a BySpecies,
-    running: &'a [[f64; 4]; 4],
     cosines: &'a [f64],
     azimuths: usize,
     x: Vector3,
@@ -302,7 +299,7 @@ impl LevelPaths<'_> {
         for a in 0..self.azimuths {
             let phi = PI * (a as f64 + 0.5) / self.azimuths as f64;
             let direction = Vector3::new(sine * phi.cos(), sine * phi.sin(), mu);
-            if !march_path(self.tables, self.running, self.x, direction, work, path) {
+            if !march_path(self.tables, self.x, direction, work, path) {
                 continue;
             }
             for (s, sun) in suns.iter().enumerate() {
@@ -410,14 +407,6 @@ fn fine_cosines(ground_m: f64, radius_m: f64) -> Vec<(f64, f64)> {
         })
         .collect()
 }
-
-/// The sun zenith angle from which the first order's moments are
-/// integrated finely, rad: 90 degrees, where the sun sets on the ground.
-/// Why not earlier: above the horizon the first order has no narrow peak
-/// (measured: the fine moments at every spherical sun node moved suns 0
-/// to 5 degrees by at most 0.3 % on Earth and 1 % on mars-dust) and it
-/// would cost half again the image's time at sun 5 degrees.
-const FINE_MOMENTS_SUN_ZENITH_RAD: f64 = std::f64::consts::FRAC_PI_2;
 
 /// Offsets of the fine quadrature's breakpoints from the level's horizon
 /// cosine ([`fine_cosines`]).
@@ -610,7 +599,6 @@ struct MarchedPath {
 /// length in the atmosphere.
 fn march_path(
     inputs: &Tables,
-    running: &[[f64; 4]; 4],
     x: Vector3,
     direction: Vector3,
     work: &mut MarchWork,
@@ -624,7 +612,6 @@ fn march_path(
     if length <= 0.0 {
         return false;
     }
-    let species = inputs.profiles.len();
     let start = x + direction * enter;
     inputs
         .march_corners
@@ -635,37 +622,22 @@ fn march_path(
     path.weights.clear();
     path.densities.clear();
     path.node_columns.clear();
-    work.view_columns.fill(0.0);
-    for e in 0..work.ends.len() - 1 {
-        let (a, b) = (work.ends[e], work.ends[e + 1]);
-        let (centre, half) = (0.5 * (a + b), 0.5 * (b - a));
-        let mut points = [Vector3::default(); 4];
-        for (n, g) in GAUSS_NODES.iter().enumerate() {
-            points[n] = start + direction * (centre + half * g);
-            let altitude = points[n].length() - ground;
-            for j in 0..species {
-                work.densities[j][n] = inputs.profiles[j].relative_density(altitude);
-            }
-        }
-        for n in 0..4 {
-            let r = points[n].length();
-            path.points.push(points[n]);
+    work.march.march(
+        inputs.profiles,
+        ground,
+        (start, direction),
+        &work.ends,
+        |node, node_columns, densities| {
+            let r = node.point.length();
+            path.points.push(node.point);
             path.radii.push(r);
             path.located.push(inputs.sun_columns.locate_radius(r));
-            path.weights.push(half * GAUSS_WEIGHTS[n]);
-            for j in 0..species {
-                let inside: f64 = (0..4).map(|q| running[n][q] * work.densities[j][q]).sum();
-                path.node_columns.push(work.view_columns[j] + half * inside);
-                path.densities.push(work.densities[j][n]);
-            }
-        }
-        for j in 0..species {
-            let panel: f64 = (0..4)
-                .map(|q| GAUSS_WEIGHTS[q] * work.densities[j][q])
-                .sum();
-            work.view_columns[j] += half * panel;
-        }
-    }
+            path.weights.push(node.weight);
+            path.node_columns.extend_from_slice(node_columns);
+            path.densities.extend_from_slice(densities);
+            ControlFlow::Continue(())
+        },
+    );
     true
 }
 
@@ -797,7 +769,6 @@ fn compute_spherical_first_order_reference(inputs: &FirstOrderInputs) -> Vec<f64
     let suns = inputs.sun_zenith_rad.len();
     let (ground, _) = inputs.corners.radii_m();
     let mut out = vec![0.0; suns * wavelengths * solution];
-    let running = running_integral_matrix();
     let azimuths = azimuth_count(streams);
     let cosines = harmonic_cosines(azimuths, streams);
     let phase_table = tabulate_phases(inputs.phases);
@@ -808,9 +779,7 @@ fn compute_spherical_first_order_reference(inputs: &FirstOrderInputs) -> Vec<f64
         let mut work = MarchWork {
             radiance: vec![0.0; wavelengths],
             phase: vec![0.0; wavelengths * species],
-            densities: vec![[0.0; 4]; species],
-            view_columns: vec![0.0; species],
-            node_columns: vec![0.0; species],
+            march: PanelMarch::new(species),
             sun_columns: vec![0.0; species],
             ends: Vec::with_capacity(inputs.march_corners.most_panel_ends(PANELS)),
         };
@@ -825,9 +794,7 @@ fn compute_spherical_first_order_reference(inputs: &FirstOrderInputs) -> Vec<f64
                 for a in 0..azimuths {
                     let phi = PI * (a as f64 + 0.5) / azimuths as f64;
                     let direction = Vector3::new(sine * phi.cos(), sine * phi.sin(), *mu);
-                    if !compute_first_order_along_ray(
-                        inputs, &running, x, direction, sun, &mut work,
-                    ) {
+                    if !compute_first_order_along_ray(inputs, x, direction, sun, &mut work) {
                         continue;
                     }
                     for (m, row) in harmonics.chunks_exact_mut(wavelengths).enumerate() {
@@ -894,11 +861,8 @@ impl<'a> std::ops::Deref for Tables<'a> {
 struct MarchWork {
     radiance: Vec<f64>,
     phase: Vec<f64>,
-    densities: Vec<[f64; 4]>,
-    view_columns: Vec<f64>,
-    /// The oracle's columns from the level to the current node.
-    #[cfg(test)]
-    node_columns: Vec<f64>,
+    /// The paths' march.
+    march: PanelMarch,
     /// The oracle's columns toward the sun.
     #[cfg(test)]
     sun_columns: Vec<f64>,
@@ -910,7 +874,6 @@ struct MarchWork {
 #[cfg(test)]
 fn compute_first_order_along_ray(
     inputs: &Tables,
-    running: &[[f64; 4]; 4],
     x: Vector3,
     direction: Vector3,
     sun: Vector3,
@@ -931,56 +894,39 @@ fn compute_first_order_along_ray(
         .march_corners
         .fill_panel_ends(start, direction, length, PANELS, &mut work.ends);
     work.radiance.fill(0.0);
-    work.view_columns.fill(0.0);
-    for e in 0..work.ends.len() - 1 {
-        let (a, b) = (work.ends[e], work.ends[e + 1]);
-        let (centre, half) = (0.5 * (a + b), 0.5 * (b - a));
-        let mut points = [Vector3::default(); 4];
-        for (n, g) in GAUSS_NODES.iter().enumerate() {
-            points[n] = start + direction * (centre + half * g);
-            let altitude = points[n].length() - ground;
-            for j in 0..species {
-                work.densities[j][n] = inputs.profiles[j].relative_density(altitude);
+    let (phase, radiance, sun_columns) = (&work.phase, &mut work.radiance, &mut work.sun_columns);
+    work.march.march(
+        inputs.profiles,
+        ground,
+        (start, direction),
+        &work.ends,
+        |node, node_columns, densities| {
+            let r = node.point.length();
+            if !inputs
+                .sun_columns
+                .lookup_columns_to_sun(r, node.point.dot(sun) / r, sun_columns)
+            {
+                return ControlFlow::Continue(());
             }
-        }
-        for n in 0..4 {
-            for j in 0..species {
-                let inside: f64 = (0..4).map(|q| running[n][q] * work.densities[j][q]).sum();
-                work.node_columns[j] = work.view_columns[j] + half * inside;
-            }
-            let r = points[n].length();
-            if !inputs.sun_columns.lookup_columns_to_sun(
-                r,
-                points[n].dot(sun) / r,
-                &mut work.sun_columns,
-            ) {
-                continue;
-            }
-            let weight = half * GAUSS_WEIGHTS[n];
-            for (i, out) in work.radiance.iter_mut().enumerate() {
+            for (i, out) in radiance.iter_mut().enumerate() {
                 let (mut tau, mut source) = (0.0, 0.0);
                 for j in 0..species {
                     let at = i * species + j;
-                    tau +=
-                        inputs.scaled_extinction[at] * (work.node_columns[j] + work.sun_columns[j]);
-                    source += inputs.scaled_scattering[at] * work.densities[j][n] * work.phase[at];
+                    tau += inputs.scaled_extinction[at] * (node_columns[j] + sun_columns[j]);
+                    source += inputs.scaled_scattering[at] * densities[j] * phase[at];
                 }
-                *out += weight * inputs.solar_irradiance_w_m2_nm[i] * source * exp_neg(tau);
+                *out += node.weight * inputs.solar_irradiance_w_m2_nm[i] * source * exp_neg(tau);
             }
-        }
-        for j in 0..species {
-            let panel: f64 = (0..4)
-                .map(|q| GAUSS_WEIGHTS[q] * work.densities[j][q])
-                .sum();
-            work.view_columns[j] += half * panel;
-        }
-    }
+            ControlFlow::Continue(())
+        },
+    );
     true
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::transport::multiple_scattering::regimes::FIRST_ORDER_SUN_ZENITH_DEG;
 
     /// Air (scale height 8 km) and aerosol (1.2 km) in a 100 km shell over
     /// a ground of radius 6 360 km, with a sun-column table of `nodes`
@@ -1042,7 +988,7 @@ mod tests {
             streams: &streams,
             moments: MomentQuadrature::Streams,
             sun_zenith_rad: &[
-                84f64.to_radians(),
+                FIRST_ORDER_SUN_ZENITH_DEG.to_radians(),
                 89f64.to_radians(),
                 93f64.to_radians(),
                 100f64.to_radians(),
@@ -1208,13 +1154,10 @@ mod tests {
         // The oracle.
         let phase_table = tabulate_phases(&phases);
         let tables = Tables::new(&inputs, &phase_table);
-        let running = running_integral_matrix();
         let mut work = MarchWork {
             radiance: vec![0.0; 1],
             phase: vec![0.0; 2],
-            densities: vec![[0.0; 4]; 2],
-            view_columns: vec![0.0; 2],
-            node_columns: vec![0.0; 2],
+            march: PanelMarch::new(2),
             sun_columns: vec![0.0; 2],
             ends: Vec::new(),
         };
@@ -1244,9 +1187,7 @@ mod tests {
                 for a in 0..azimuths {
                     let phi = PI * (a as f64 + 0.5) / azimuths as f64;
                     let direction = Vector3::new(sine * phi.cos(), sine * phi.sin(), mu);
-                    if compute_first_order_along_ray(
-                        &tables, &running, x, direction, sun, &mut work,
-                    ) {
+                    if compute_first_order_along_ray(&tables, x, direction, sun, &mut work) {
                         for (m, h) in harmonics.iter_mut().enumerate() {
                             let factor = if m == 0 { 1.0 } else { 2.0 };
                             *h += factor / azimuths as f64

@@ -1,5 +1,6 @@
 //! The paths of the near-horizontal streams through the spherical shells,
-//! and where their light comes from.
+//! and the angles at the planet's centre over which they gather their
+//! light.
 //!
 //! In a plane-parallel slab a stream of zenith cosine mu crosses every
 //! layer with the path dz / |mu|, and the radiance at a level follows from
@@ -27,30 +28,12 @@
 //! transport matrix per stream and wavelength, L(k) = sum_j M_kj S(j) +
 //! g_k L_ground, applied at every order.
 //!
-//! **Where the light comes from.** A near-horizontal path gathers its light
-//! hundreds of kilometres away, where the sun stands higher (toward the
-//! sun's azimuth) or lower (away from it) by the angle gamma that the path
-//! subtends at the planet's centre: a low sun's sunward horizon is lit by
-//! brighter air than the column's own. Once the field is solved at every
-//! sun zenith angle, each spherical stream's radiance is shifted to first
-//! order, L(theta_s - gamma cos phi) = L - gamma cos(phi) dL/dtheta_s, with
-//! gamma the path's mean angle weighted by what a uniform source along it
-//! would contribute and dL/dtheta_s the difference between neighbouring
-//! sun nodes; cos(phi) couples each azimuthal harmonic to its neighbours.
-//! Measured against the path tracer for a sun 5 degrees high, it halves the
-//! error of the sunward horizon (-2.3 % to -1.3 % of the total at 380 nm).
-//! In twilight the first order is not enough: from a sun zenith angle of
-//! 84 degrees on, every order >= 2 is shifted exactly, per azimuth, with
-//! the mean angle and its spread, before it is scattered into the next
-//! (`ColumnSystem::solve_shifted_orders`).
+//! **Where the light comes from**: each path's mean angle at the planet's
+//! centre and its spread ([`StreamPaths::compute_transport_matrices`]),
+//! with which `twilight_shift.rs` moves the light of these streams toward
+//! the columns where it was gathered.
 
-/// Streams with |mu| below this (within 17 degrees of the horizon) take
-/// the spherical paths; steeper ones keep the slab's recursion: at 24
-/// degrees, the lowest of them with 8 streams per hemisphere, the path
-/// through the air below 30 km is within 3 % of the slab's, and moving the
-/// limit from 0.3 to 0.5 changes no result against the path tracer by more
-/// than its noise.
-pub(crate) const SPHERICAL_STREAM_COSINE: f64 = 0.3;
+use super::regimes::SPHERICAL_STREAM_COSINE;
 
 /// One straight step of a path inside one layer.
 #[derive(Debug, Clone, Copy)]

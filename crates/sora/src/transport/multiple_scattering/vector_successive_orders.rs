@@ -21,10 +21,13 @@
 //! ground's radiance. The stopping rule is the scalar solver's, on the
 //! whole Stokes field.
 //!
-//! What this solver does not do yet (the scalar field's refinements for
-//! the spherical planet): the spherical first order of a sun near or
-//! below the horizon, and the horizontal shift of the spherical streams.
-//! It is a column solver; the sky's fast method is still scalar.
+//! It is a column solver: the sky's fast method polarises its multiply
+//! scattered light with the ratio of this column's Stokes vector to the
+//! scalar column's (`polarisation_correction.rs`). What it leaves out of
+//! the scalar field's refinements for the spherical planet: the spherical
+//! first order of a sun near or below the horizon (its first order is the
+//! column's own at every sun) and the twilight shift of the spherical
+//! streams (`twilight_shift.rs`).
 
 use std::f64::consts::PI;
 

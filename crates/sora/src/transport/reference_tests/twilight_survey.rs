@@ -32,7 +32,7 @@
 
 use crate::atmosphere::Atmosphere;
 use crate::spectrum::WavelengthGrid;
-use crate::transport::multiple_scattering::MultipleScatteringField;
+use crate::transport::multiple_scattering::{FieldRequest, MultipleScatteringField};
 use crate::transport::{Observation, PathTracer, SingleScatteringSky, SunColumns};
 use crate::{FastTableSize, Method, MultipleScatteringSettings, Scattering, Sky, ViewDirection};
 
@@ -134,13 +134,11 @@ fn twilight_survey() {
                             .radiances(&directions)
                             .unwrap();
                     };
-                    let field = MultipleScatteringField::compute_with_sweeps(
-                        &scene,
-                        settings,
-                        table.sun_column_nodes,
-                        orders - 1,
-                    )
-                    .unwrap();
+                    let request = FieldRequest {
+                        sweeps: orders - 1,
+                        ..FieldRequest::new(settings, table.sun_column_nodes)
+                    };
+                    let field = MultipleScatteringField::solve(&scene, &request).unwrap();
                     let mut scratch = field.scratch();
                     directions
                         .iter()

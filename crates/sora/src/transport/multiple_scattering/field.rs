@@ -1,0 +1,1097 @@
+//! The multiple-scattering field: the steps that solve it for the sun
+//! zenith angles a sky's view rays meet, and its exact synthesis along a
+//! view ray (see the module docs of [`super`]).
+
+use std::f64::consts::{FRAC_PI_2, PI};
+
+use super::MultipleScatteringSettings;
+use super::forward_peak::{self, ForwardPeak};
+use super::peak_beam::{PeakBeam, PeakBeamInputs};
+use super::phase_fourier::{
+    TruncatedPhase, compute_truncated_phases, normalized_associated_legendre,
+};
+use super::polarisation_correction::{CorrectionInputs, PolarisationCorrection, PolarisationTable};
+use super::regimes::{FIRST_ORDER_SUN_ZENITH_DEG, SUNSET_STEP_END_DEG, SUNSET_STEP_START_DEG};
+use super::spherical_first_order::{
+    FirstOrderInputs, MomentQuadrature, compute_spherical_first_order,
+};
+use super::spherical_paths::StreamPaths;
+use super::successive_orders::{self, ColumnSystem, ScaledSpecies, Streams};
+use super::vertical_grid::VerticalGrid;
+use super::view_march::{
+    MultipleScatteringScratch, NodeGeometry, SUN_RAY_PANELS, ViewRayOptics, floored_log,
+};
+use crate::atmosphere::AtmosphereOptics;
+use crate::atmosphere::DensityProfile;
+use crate::atmosphere::phase_matrix::PhaseMatrix;
+use crate::error::Result;
+use crate::geometry::Vector3;
+use crate::transport::optical_column::{ProfileCorners, compute_columns_along_ray};
+use crate::transport::single_scattering::{SingleScatteringSky, SunColumns};
+
+/// Altitude and mu nodes of the sun-column table of the spherical first
+/// order in the tests' fields: the default image tables' size
+/// ([`crate::FastTableSize`]; a sky's field takes its own image tables'
+/// size, see [`MultipleScatteringField::compute_with_sun_column_nodes`]).
+#[cfg(test)]
+const FIRST_ORDER_SUN_COLUMN_NODES: (usize, usize) = (128, 256);
+
+/// Sun zenith angles at which the field is solved, increasing.
+#[derive(Debug, Clone)]
+pub(super) struct SunZenithAxis {
+    pub(super) angles_rad: Vec<f64>,
+}
+
+impl SunZenithAxis {
+    /// Nodes covering `lowest..=highest` (rad), one of them at `centre`
+    /// (the eye's own sun zenith angle, where the nearest and so brightest
+    /// part of every view ray is), spaced by `coarse` for a high sun and
+    /// narrowing to `fine` from `SUNSET_STEP_START_DEG` (70 degrees) to
+    /// `SUNSET_STEP_END_DEG` (85) and beyond, where the
+    /// lower atmosphere's sun sets and the field changes fastest; but never
+    /// closer than a quarter of the distance from `centre`: far from the
+    /// eye's own sun angle lie only the far ends of grazing view rays, high
+    /// in thin air.
+    pub(super) fn new(
+        lowest: f64,
+        highest: f64,
+        centre: f64,
+        coarse: f64,
+        fine: f64,
+    ) -> SunZenithAxis {
+        let (start, end) = (
+            SUNSET_STEP_START_DEG.to_radians(),
+            SUNSET_STEP_END_DEG.to_radians(),
+        );
+        let centre = centre.clamp(lowest, highest);
+        let step = |theta: f64| {
+            let t = ((theta - start) / (end - start)).clamp(0.0, 1.0);
+            let local = coarse + t * (fine - coarse);
+            local
+                .max(0.25 * (theta - centre).abs())
+                .min(coarse.max(fine))
+        };
+        let mut below = vec![centre];
+        while *below.last().unwrap() > lowest {
+            let theta = *below.last().unwrap();
+            below.push((theta - step(theta - 0.5 * step(theta))).max(0.0));
+            if theta == 0.0 {
+                break;
+            }
+        }
+        below.dedup();
+        let mut angles_rad: Vec<f64> = below.into_iter().rev().collect();
+        while *angles_rad.last().unwrap() < highest {
+            let theta = *angles_rad.last().unwrap();
+            angles_rad.push(theta + step(theta + 0.5 * step(theta)));
+        }
+        if angles_rad.len() < 2 {
+            angles_rad.push(angles_rad[0] + fine);
+        }
+        SunZenithAxis { angles_rad }
+    }
+
+    /// The nodes for the sun zenith angles within `reach` (rad) of the
+    /// eye's, at `settings`' steps.
+    fn for_reach(
+        sky: &SingleScatteringSky,
+        settings: &MultipleScatteringSettings,
+        reach: f64,
+    ) -> SunZenithAxis {
+        let (ground_radius_m, top_radius_m) = sky.radii_m();
+        let sun_zenith = sky.sun_direction().z.clamp(-1.0, 1.0).acos();
+        let (lowest_rad, highest_rad) = ((sun_zenith - reach).max(0.0), sun_zenith + reach);
+        // The sun sets for the top of a column at 90 degrees +
+        // acos(R / R_top), and a straight path from a point of the column
+        // reaches at most 2 acos(R / R_top) farther (to the top, grazing
+        // the ground): beyond 90 degrees + 3 acos(R / R_top) nothing a
+        // column's streams reach is sunlit (`spherical_first_order`), and
+        // its field is zero. The axis ends a degree past that, so that a
+        // sun angle beyond its end (read at its last node) reads darkness,
+        // not the last lit column (measured: a zenith of 1e-6 cd/m^2 with
+        // the sun 30 degrees below the horizon when it ended at 111 deg).
+        let darkest = 0.5 * PI + 3.0 * (ground_radius_m / top_radius_m).acos() + 1f64.to_radians();
+        let lowest = lowest_rad.clamp(0.0, darkest);
+        let highest = highest_rad.clamp(lowest, darkest);
+        SunZenithAxis::new(
+            lowest,
+            highest,
+            sun_zenith,
+            settings.sun_zenith_step_deg.to_radians(),
+            settings.sunset_sun_zenith_step_deg.to_radians(),
+        )
+    }
+
+    pub(super) fn count(&self) -> usize {
+        self.angles_rad.len()
+    }
+
+    pub(super) fn angle(&self, s: usize) -> f64 {
+        self.angles_rad[s]
+    }
+
+    /// Lower node and fraction for a sun zenith cosine (clamped to the axis).
+    pub(super) fn locate(&self, sun_cosine: f64) -> (usize, f64) {
+        let theta = sun_cosine.clamp(-1.0, 1.0).acos();
+        let angles = &self.angles_rad;
+        let upper = angles.partition_point(|a| *a <= theta);
+        let s = upper.clamp(1, angles.len() - 1) - 1;
+        let t = (theta - angles[s]) / (angles[s + 1] - angles[s]);
+        (s, t.clamp(0.0, 1.0))
+    }
+}
+
+/// The diffuse (multiply scattered) light field of a sky, solved at the
+/// sun zenith angles its view rays meet.
+#[derive(Debug, Clone)]
+pub struct MultipleScatteringField {
+    pub(super) settings: MultipleScatteringSettings,
+    /// The sky's optics (exact phase functions for the forward-peak term).
+    pub(super) atmosphere: AtmosphereOptics,
+    pub(super) grid: VerticalGrid,
+    pub(super) streams: Streams,
+    pub(super) optics: ViewRayOptics,
+    /// [i * species + j].
+    pub(super) phases: Vec<TruncatedPhase>,
+    pub(super) harmonics: Vec<bool>,
+    /// The solver's output as it wrote it: per wavelength i and sun node s
+    /// a block of `solution_len + 2` values, L_m(z_k, mu_b) at [(m *
+    /// levels + k) * streams + b] and then the ground's two values, blocks
+    /// [i * sun nodes + s] (read with [`MultipleScatteringField::solution`];
+    /// kept as solved, not transposed: tens of megabytes at twilight).
+    pub(super) solutions: Vec<f64>,
+    pub(super) solution_len: usize,
+    /// The source's Legendre moments for the exact synthesis, made on
+    /// first use ([`MultipleScatteringField::source_moments`]).
+    pub(super) moments: std::sync::OnceLock<Vec<f64>>,
+    /// With Stokes vectors, the columns of the polarisation correction.
+    pub(super) polarisation: Option<PolarisationCorrection>,
+}
+
+/// What a field is solved for: one request instead of a chain of
+/// constructors.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct FieldRequest {
+    pub(crate) settings: MultipleScatteringSettings,
+    /// (altitude, mu) nodes of the sun-column table that the spherical
+    /// first order and the peak beam read the columns toward the sun from:
+    /// a sky passes its image tables' size ([`crate::FastTableSize`], 128
+    /// x 256 by default), so that the two share one table. The explorer's
+    /// preview (32 x 64) then builds no second table of 128 x 256 nodes for
+    /// its first low sun (measured on one thread: its 128-pixel frame at
+    /// sun 10 0.10 -> 0.075 s), and its first order on the coarse table
+    /// moves its images by at most 0.1 % of their 99th-percentile error
+    /// against the default resolution at suns 10 to -12 degrees (the
+    /// `quality_accuracy` example of `crates/sora-web`). So a view's
+    /// radiance at a sun low enough for either (the sun nodes from
+    /// `FIRST_ORDER_SUN_ZENITH_DEG`, or a point's sun below
+    /// `PEAK_BEAM_HIGHEST_ELEVATION_DEG`) depends on this size, as the
+    /// images' do: a documented setting of the sky
+    /// (`FastTableSize::sun_column_nodes`). Measured (the zenith and six
+    /// views 1 to 20 degrees up toward, across and away from the sun,
+    /// 440/560/680 nm, earth-clear, earth-hazy and mars-dust): 32 x 64
+    /// nodes move a view by at most 0.11 % from 128 x 256 at suns 5 to -8
+    /// degrees (earth-hazy at 2 degrees the worst), by under 1e-5 at 10.
+    pub(crate) sun_column_nodes: (usize, usize),
+    /// Whether the field also solves the columns of its polarisation
+    /// correction.
+    pub(crate) polarised: bool,
+    /// The solver stops after this many orders of the field (the field's
+    /// own first order, or the spherical one, is order 1): with one, the
+    /// field is the first order and a view's multiply scattered radiance
+    /// is the second order alone (the twilight survey compares it with the
+    /// path tracer's).
+    pub(crate) sweeps: usize,
+    /// For views no lower than this elevation (rad, >= 0) only: the sun
+    /// zenith angles the field is solved for are those at the points of
+    /// such views' rays, within acos(r cos e / R_top) - e of the eye's
+    /// (the angle at the planet's centre between the eye and where a ray
+    /// of elevation e leaves the atmosphere), instead of every point the
+    /// eye sees (acos(R / R_top) + acos(R / r), 10 degrees on Earth). For an
+    /// almucantar 15 degrees up that is 3 degrees, which spares the field
+    /// the sunset's fine sun steps and spherical first order when the sun
+    /// is 15 degrees high (a retrieval's forward model: 12 times faster
+    /// there). None: every view.
+    pub(crate) lowest_view_elevation_rad: Option<f64>,
+}
+
+impl FieldRequest {
+    /// The converged, scalar field for every view, at these settings with
+    /// this sun-column table.
+    pub(crate) fn new(
+        settings: MultipleScatteringSettings,
+        sun_column_nodes: (usize, usize),
+    ) -> FieldRequest {
+        FieldRequest {
+            settings,
+            sun_column_nodes,
+            polarised: false,
+            sweeps: successive_orders::MAX_ITERATIONS,
+            lowest_view_elevation_rad: None,
+        }
+    }
+
+    /// The angle at the planet's centre (rad) within which the sun zenith
+    /// angles the field needs lie around the eye's.
+    fn reach(&self, sky: &SingleScatteringSky) -> f64 {
+        let (ground, top) = sky.radii_m();
+        match self.lowest_view_elevation_rad {
+            // A point of the atmosphere that the eye sees is at most this
+            // far (as an angle at the planet's centre) from the eye's zenith.
+            None => {
+                let r = sky.observer_radius_m();
+                (ground / r.max(ground)).min(1.0).acos() + (ground / top).acos()
+            }
+            Some(lowest) => {
+                let r = sky.observer_radius_m().max(ground);
+                let e = lowest.clamp(0.0, 0.5 * PI);
+                if r < top {
+                    (r * e.cos() / top).min(1.0).acos() - e
+                } else {
+                    (ground / r).min(1.0).acos() + (ground / top).acos()
+                }
+            }
+        }
+    }
+}
+
+/// Delta-M truncated phase functions and the scaled coefficients, per
+/// wavelength i and species j at [i * species + j], m^-1 at relative
+/// density 1.
+#[derive(Debug, Clone)]
+pub(super) struct ScaledOptics {
+    pub(super) phases: Vec<TruncatedPhase>,
+    pub(super) extinction: Vec<f64>,
+    pub(super) scaled_extinction: Vec<f64>,
+    pub(super) scaled_scattering: Vec<f64>,
+}
+
+impl ScaledOptics {
+    /// The delta-M scaling of `optics` to `degrees` Legendre terms.
+    pub(super) fn delta_m(optics: &AtmosphereOptics, degrees: usize) -> ScaledOptics {
+        let (wavelengths, species) = (optics.grid.len(), optics.species.len());
+        let phases = compute_truncated_phases(optics, degrees);
+        let mut extinction = vec![0.0; wavelengths * species];
+        let mut scaled_extinction = vec![0.0; wavelengths * species];
+        let mut scaled_scattering = vec![0.0; wavelengths * species];
+        for i in 0..wavelengths {
+            for (j, s) in optics.species.iter().enumerate() {
+                let f = phases[i * species + j].forward_fraction;
+                let (ext, sca) = (s.extinction_per_m[i], s.scattering_per_m[i]);
+                extinction[i * species + j] = ext;
+                scaled_extinction[i * species + j] = ext - f * sca;
+                scaled_scattering[i * species + j] = (1.0 - f) * sca;
+            }
+        }
+        ScaledOptics {
+            phases,
+            extinction,
+            scaled_extinction,
+            scaled_scattering,
+        }
+    }
+
+    /// The scaled and exact optical depths at wavelength `i` of `columns`
+    /// (m, one per species).
+    fn optical_depths(&self, i: usize, columns: &[f64]) -> (f64, f64) {
+        let species = columns.len();
+        let (mut scaled, mut exact) = (0.0, 0.0);
+        for (j, column) in columns.iter().enumerate() {
+            scaled += self.scaled_extinction[i * species + j] * column;
+            exact += self.extinction[i * species + j] * column;
+        }
+        (scaled, exact)
+    }
+}
+
+/// The columns' geometry: the vertical grid, the spherical streams'
+/// paths, the profiles and their corners, and the geometric columns
+/// toward the sun from every level.
+#[derive(Debug, Clone)]
+pub(super) struct ColumnGeometry {
+    pub(super) ground_radius_m: f64,
+    pub(super) top_radius_m: f64,
+    pub(super) streams: Streams,
+    pub(super) grid: VerticalGrid,
+    pub(super) paths: StreamPaths,
+    pub(super) profiles: Vec<DensityProfile>,
+    pub(super) corners: ProfileCorners,
+}
+
+impl ColumnGeometry {
+    fn new(sky: &SingleScatteringSky, settings: &MultipleScatteringSettings) -> ColumnGeometry {
+        let optics = sky.optics();
+        let (ground_radius_m, top_radius_m) = sky.radii_m();
+        let streams = Streams::new(settings.streams_per_hemisphere);
+        let profiles: Vec<DensityProfile> =
+            optics.species.iter().map(|s| s.profile.clone()).collect();
+        let grid =
+            VerticalGrid::for_optics(optics, top_radius_m - ground_radius_m, settings.layers);
+        let radii: Vec<f64> = grid
+            .altitudes_m()
+            .iter()
+            .map(|z| ground_radius_m + z)
+            .collect();
+        let paths = StreamPaths::compute(&radii, streams.cosines());
+        let corners = ProfileCorners::new(&profiles, ground_radius_m, top_radius_m);
+        ColumnGeometry {
+            ground_radius_m,
+            top_radius_m,
+            streams,
+            grid,
+            paths,
+            profiles,
+            corners,
+        }
+    }
+
+    /// Appends to `sun_columns` the geometric columns (m, per species)
+    /// toward a sun at zenith angle `theta` (rad) from every level, None in
+    /// the planet's shadow.
+    fn add_columns_toward_sun(&self, theta: f64, sun_columns: &mut Vec<Option<Vec<f64>>>) {
+        let (ground_radius_m, top_radius_m) = (self.ground_radius_m, self.top_radius_m);
+        let mut ends = Vec::with_capacity(self.corners.most_panel_ends(SUN_RAY_PANELS));
+        let direction = Vector3::new(theta.sin(), 0.0, theta.cos());
+        for &z in self.grid.altitudes_m() {
+            let r = ground_radius_m + z;
+            if crate::geometry::ray_intersects_ground(r, theta.cos(), ground_radius_m) {
+                sun_columns.push(None);
+                continue;
+            }
+            let origin = Vector3::new(0.0, 0.0, r);
+            let length =
+                crate::geometry::distance_to_top_of_atmosphere(origin, direction, top_radius_m);
+            let mut columns = vec![0.0; self.profiles.len()];
+            self.corners
+                .fill_panel_ends(origin, direction, length, SUN_RAY_PANELS, &mut ends);
+            compute_columns_along_ray(
+                &self.profiles,
+                ground_radius_m,
+                origin,
+                direction,
+                &ends,
+                &mut columns,
+            );
+            sun_columns.push(Some(columns));
+        }
+    }
+}
+
+/// The solved columns: per wavelength i and sun node s a block of
+/// `solution_len + 2` values (the field, then the ground's diffuse and
+/// direct radiances), blocks [i * sun nodes + s].
+struct SolvedColumns {
+    solved: Vec<f64>,
+    solution_len: usize,
+}
+
+impl MultipleScatteringField {
+    /// The field for `request` with the default image tables' sun-column
+    /// table.
+    #[cfg(test)]
+    pub(crate) fn compute(
+        sky: &SingleScatteringSky,
+        settings: MultipleScatteringSettings,
+        polarised: bool,
+    ) -> Result<MultipleScatteringField> {
+        MultipleScatteringField::solve(
+            sky,
+            &FieldRequest {
+                polarised,
+                ..FieldRequest::new(settings, FIRST_ORDER_SUN_COLUMN_NODES)
+            },
+        )
+    }
+
+    /// Solves the field of `sky` for `request`; an error for settings that
+    /// `MultipleScatteringSettings::validate` rejects. The steps: the sun
+    /// axis, the delta-M scaled optics, the columns' geometry and their
+    /// columns toward the sun, the polarisation correction's column, the
+    /// spherical first order, the successive orders with the twilight
+    /// shift, the ground's tables, the forward-peak term and its tilted
+    /// beam, and the view march's optics.
+    pub(crate) fn solve(
+        sky: &SingleScatteringSky,
+        request: &FieldRequest,
+    ) -> Result<MultipleScatteringField> {
+        let settings = request.settings;
+        settings.validate()?;
+        let optics = sky.optics();
+        let sun_axis = SunZenithAxis::for_reach(sky, &settings, request.reach(sky));
+        let geometry = ColumnGeometry::new(sky, &settings);
+        let scaled = ScaledOptics::delta_m(optics, geometry.streams.count());
+        let mut sun_columns: Vec<Option<Vec<f64>>> =
+            Vec::with_capacity(sun_axis.count() * geometry.grid.levels());
+        for s in 0..sun_axis.count() {
+            geometry.add_columns_toward_sun(sun_axis.angle(s), &mut sun_columns);
+        }
+        let polarisation = request
+            .polarised
+            .then(|| solve_polarisation_columns(sky, &geometry, &scaled));
+        let first_spherical = sun_axis
+            .angles_rad
+            .partition_point(|a| *a < FIRST_ORDER_SUN_ZENITH_DEG.to_radians());
+        let first_order = solve_spherical_first_order(
+            sky,
+            request.sun_column_nodes,
+            &geometry,
+            &scaled,
+            &sun_axis.angles_rad[first_spherical..],
+        );
+        let columns = solve_columns(
+            optics,
+            (&geometry, &scaled),
+            (&sun_axis, &sun_columns),
+            (first_spherical, &first_order),
+            request.sweeps,
+        );
+        let (ground_diffuse, ground_direct) = ground_tables(&columns, optics.grid.len(), &sun_axis);
+        let forward_peak = ForwardPeak::new(
+            optics,
+            &scaled.phases,
+            geometry.streams.count(),
+            &geometry.profiles,
+            geometry.top_radius_m - geometry.ground_radius_m,
+        );
+        let peak_beam = compute_peak_beam(
+            sky,
+            request.sun_column_nodes,
+            (&geometry, &scaled),
+            &forward_peak,
+        );
+        let harmonics = (0..geometry.streams.count())
+            .map(|m| {
+                scaled
+                    .phases
+                    .iter()
+                    .zip(&scaled.scaled_scattering)
+                    .any(|(p, b)| *b > 0.0 && !p.harmonic_vanishes(m))
+            })
+            .collect();
+        let ColumnGeometry {
+            ground_radius_m,
+            top_radius_m,
+            streams,
+            grid,
+            profiles,
+            corners,
+            ..
+        } = geometry;
+        let ScaledOptics {
+            phases,
+            extinction,
+            scaled_extinction,
+            scaled_scattering,
+        } = scaled;
+        Ok(MultipleScatteringField {
+            settings,
+            atmosphere: optics.clone(),
+            grid,
+            streams,
+            optics: ViewRayOptics {
+                wavelengths: optics.grid.len(),
+                species: optics.species.len(),
+                panels: settings.view_ray_panels,
+                ground_radius_m,
+                top_radius_m,
+                observer: Vector3::new(0.0, 0.0, sky.observer_radius_m()),
+                sun: sky.sun_direction(),
+                profiles,
+                corners,
+                extinction,
+                scaled_extinction,
+                has_forward_peaks: forward_peak.any(),
+                forward_peak,
+                peak_beam,
+                scaled_scattering,
+                sun_axis,
+                ground_diffuse,
+                ground_direct,
+            },
+            phases,
+            harmonics,
+            solutions: columns.solved,
+            solution_len: columns.solution_len,
+            moments: std::sync::OnceLock::new(),
+            polarisation,
+        })
+    }
+
+    /// The field L_m(z_k, mu_b) of sun node `s` at wavelength `i`, W m^-2
+    /// sr^-1 nm^-1, [(m * levels + k) * streams + b].
+    pub(super) fn solution(&self, s: usize, i: usize) -> &[f64] {
+        let block = self.solution_len + 2;
+        let at = (i * self.optics.sun_axis.count() + s) * block;
+        &self.solutions[at..at + self.solution_len]
+    }
+
+    /// The scattering source's moments per sun node s, wavelength i, level
+    /// k, harmonic m and degree l >= m (the view direction factored out):
+    ///
+    /// ```text
+    /// S[s, i, k, m, l] = c_l(k) sum_b 2 pi w_b Lambda_l^m(mu_b) L_m(z_k, mu_b; s)
+    /// c_l(k) = sum_j (beta*_sca,j(z_k) / beta*_sca(z_k)) c_jl
+    /// ```
+    ///
+    /// so that J / beta*_sca at (k, s) toward a view of zenith cosine mu_v
+    /// and azimuth phi from the sun is sum_m cos(m phi) sum_l
+    /// Lambda_l^m(mu_v) S[s, i, k, m, l]: the same sums as the harmonic
+    /// kernels p*_jm(mu_v, mu_b) of [`MultipleScatteringTable`], reordered so
+    /// that a view costs degrees^2 / 2 products per node and wavelength
+    /// instead of species x degrees^3. Laid out
+    /// [((s * wavelengths + i) * levels + k) * degrees^2 + m * degrees + l];
+    /// zero where the level does not scatter. Made once, on one thread (it
+    /// is called from inside parallel loops).
+    pub(super) fn source_moments(&self) -> &[f64] {
+        self.moments.get_or_init(|| {
+            let degrees = self.streams.count();
+            let levels = self.grid.levels();
+            let (w, species) = (self.optics.wavelengths, self.optics.species);
+            let square = degrees * degrees;
+            let suns = self.optics.sun_axis.count();
+            let mut moments = vec![0.0; suns * w * levels * square];
+            let mut mixed = vec![0.0; degrees];
+            for s in 0..suns {
+                for i in 0..w {
+                    let solution = self.solution(s, i);
+                    for k in 0..levels {
+                        let densities = self.grid.densities_at_level(k);
+                        let scattering = |j: usize| {
+                            densities[j] * self.optics.scaled_scattering[i * species + j]
+                        };
+                        let total: f64 = (0..species).map(scattering).sum();
+                        if total <= 0.0 {
+                            continue;
+                        }
+                        mixed.fill(0.0);
+                        for j in 0..species {
+                            let fraction = scattering(j) / total;
+                            let phase = &self.phases[i * species + j];
+                            for (c, p) in mixed.iter_mut().zip(&phase.coefficients) {
+                                *c += fraction * p;
+                            }
+                        }
+                        let out = &mut moments[((s * w + i) * levels + k) * square..][..square];
+                        for m in (0..degrees).filter(|m| self.harmonics[*m]) {
+                            let radiance = &solution[(m * levels + k) * degrees..][..degrees];
+                            for l in m..degrees {
+                                let moment: f64 = (0..degrees)
+                                    .map(|b| {
+                                        2.0 * PI
+                                            * self.streams.weights()[b]
+                                            * self.streams.legendre(b)[m * degrees + l]
+                                            * radiance[b]
+                                    })
+                                    .sum();
+                                out[m * degrees + l] = mixed[l] * moment;
+                            }
+                        }
+                    }
+                }
+            }
+            moments
+        })
+    }
+
+    /// For each level, the first and last sun node that a view ray from the
+    /// eye can need there: a point at altitude h that the eye sees is at
+    /// most acos(R / r_eye) + acos(R / (R + h)) from the eye (seen from the
+    /// planet's centre), and so is its sun zenith angle from the eye's. A
+    /// level takes the reach of the level above it (points between the two
+    /// read both), and one node more on each side for the interpolation.
+    pub(super) fn reachable_sun_nodes(&self) -> Vec<(usize, usize)> {
+        let optics = &self.optics;
+        let ground = optics.ground_radius_m;
+        let eye = optics.observer.length().max(ground);
+        let centre = optics
+            .sun
+            .dot(optics.observer * (1.0 / eye))
+            .clamp(-1.0, 1.0)
+            .acos();
+        let altitudes = self.grid.altitudes_m();
+        let axis = &optics.sun_axis;
+        (0..altitudes.len())
+            .map(|k| {
+                let above = altitudes[(k + 1).min(altitudes.len() - 1)];
+                let reach = (ground / eye).min(1.0).acos() + (ground / (ground + above)).acos();
+                let (low, _) = axis.locate((centre - reach).max(0.0).cos());
+                let (high, t) = axis.locate((centre + reach).min(PI).cos());
+                let high = if t > 0.0 { high + 1 } else { high };
+                (low.saturating_sub(1), (high + 1).min(axis.count() - 1))
+            })
+            .collect()
+    }
+
+    /// The forward-peak term toward a view at cos(theta) = `cos_theta` from
+    /// the sun, into `out`, from its integrals along the view ray
+    /// ([`MultipleScatteringScratch::forward_integrals`], or the sky-view
+    /// table's interpolation of them); `phase` is work space, one value per
+    /// wavelength.
+    pub(crate) fn compute_forward_peak_radiance(
+        &self,
+        cos_theta: f64,
+        integrals: &[f64],
+        phase: &mut [f64],
+        out: &mut [f64],
+    ) {
+        if !self.optics.has_forward_peaks {
+            out.fill(0.0);
+            return;
+        }
+        self.optics
+            .forward_peak
+            .radiance(&self.atmosphere, cos_theta, integrals, phase, out);
+    }
+
+    /// Rows of the forward-peak integrals per wavelength.
+    pub(crate) fn forward_integral_rows(&self) -> usize {
+        self.optics.species + forward_peak::EXTRA_ROWS
+    }
+
+    /// The scattering-plane Q of the forward-peak term toward a view at
+    /// cos(theta) = `cos_theta` from the sun, into `out` (see
+    /// `ForwardPeak::polarised_radiance`), from the same integrals as
+    /// [`MultipleScatteringField::compute_forward_peak_radiance`];
+    /// `work` is work space of one value per wavelength.
+    pub(crate) fn compute_forward_peak_polarised_radiance(
+        &self,
+        cos_theta: f64,
+        integrals: &[f64],
+        work: (&mut [f64], &mut [PhaseMatrix]),
+        out: &mut [f64],
+    ) {
+        if !self.optics.has_forward_peaks {
+            out.fill(0.0);
+            return;
+        }
+        self.optics.forward_peak.polarised_radiance(
+            &self.atmosphere,
+            cos_theta,
+            integrals,
+            work,
+            out,
+        );
+    }
+
+    /// The polarisation correction's ratios (I, Q, U, V) / I_scalar of the
+    /// light the scaled field scatters two or more times, toward the view
+    /// of zenith cosine `view_cosine` at azimuth `view_azimuth_rad` from
+    /// the sun's (clockwise) at the eye, into `ratios` ([component *
+    /// wavelengths + i]; see `polarisation_correction.rs`). None for a
+    /// scalar field.
+    pub(crate) fn compute_polarisation_ratios(
+        &self,
+        (view_cosine, view_azimuth_rad): (f64, f64),
+        ratios: &mut [f64],
+    ) -> Option<()> {
+        let correction = self.polarisation.as_ref()?;
+        correction.compute_ratios(
+            &self.atmosphere,
+            &self.phases,
+            (view_cosine, view_azimuth_rad),
+            ratios,
+        );
+        Some(())
+    }
+
+    /// The polarisation correction's ratios tabulated over view directions
+    /// on `nodes` (per half of the zenith-cosine axis, azimuths), for
+    /// images (see `polarisation_correction.rs`). None for a scalar field.
+    pub(crate) fn compute_polarisation_table(
+        &self,
+        nodes: (usize, usize),
+    ) -> Option<PolarisationTable> {
+        let correction = self.polarisation.as_ref()?;
+        Some(correction.tabulate(&self.atmosphere, &self.phases, nodes))
+    }
+
+    /// Work space for [`MultipleScatteringField::compute_radiance`].
+    pub(crate) fn scratch(&self) -> MultipleScatteringScratch {
+        self.optics.scratch(self.streams.count())
+    }
+
+    /// Multiply scattered radiance (orders >= 2 and skylight reflected by
+    /// the ground) seen along `view`, W m^-2 sr^-1 nm^-1, into `radiance`:
+    /// the scaled field's light ([`MultipleScatteringField::compute_field_radiance`])
+    /// plus the forward-peak term of its integrals along the view (the
+    /// sky adds its terms itself, `ViewTerms` in `sky/mod.rs`).
+    #[cfg(test)]
+    pub(crate) fn compute_radiance(
+        &self,
+        view: Vector3,
+        sun_columns: SunColumns,
+        scratch: &mut MultipleScatteringScratch,
+        radiance: &mut [f64],
+    ) {
+        self.compute_field_radiance(view, sun_columns, scratch, radiance);
+        self.add_forward_peak(view, scratch, radiance);
+    }
+
+    /// Adds to `radiance` the forward-peak term of the integrals the last
+    /// march along `view` left in `scratch`.
+    #[cfg(test)]
+    pub(crate) fn add_forward_peak(
+        &self,
+        view: Vector3,
+        scratch: &MultipleScatteringScratch,
+        radiance: &mut [f64],
+    ) {
+        let w = radiance.len();
+        let (mut phase, mut forward) = (vec![0.0; w], vec![0.0; w]);
+        self.compute_forward_peak_radiance(
+            view.dot(self.optics.sun),
+            scratch.forward_integrals(),
+            &mut phase,
+            &mut forward,
+        );
+        for (r, f) in radiance.iter_mut().zip(&forward) {
+            *r += f;
+        }
+    }
+
+    /// The scaled field's light seen along `view` (orders >= 2 of the
+    /// scaled problem and the skylight the ground reflects), W m^-2 sr^-1
+    /// nm^-1, into `radiance`: the field's exact angular synthesis at every
+    /// march node. The forward-peak term's integrals along the view are
+    /// left in the scratch ([`MultipleScatteringScratch::forward_integrals`],
+    /// with columns toward the sun from `sun_columns`), for
+    /// [`MultipleScatteringField::compute_forward_peak_radiance`].
+    pub(crate) fn compute_field_radiance(
+        &self,
+        view: Vector3,
+        sun_columns: SunColumns,
+        scratch: &mut MultipleScatteringScratch,
+        radiance: &mut [f64],
+    ) {
+        self.optics
+            .march(view, sun_columns, scratch, radiance, |node, _, scratch| {
+                self.compute_log_source(node, scratch)
+            });
+    }
+
+    /// ln R(x, view) at one march node into `scratch.log_source`: R synthesised
+    /// exactly from the harmonics at the four surrounding (level, sun node)
+    /// corners ([`MultipleScatteringField::source_moments`]), interpolated
+    /// linearly in ln R (as the table does).
+    pub(super) fn compute_log_source(
+        &self,
+        node: NodeGeometry,
+        scratch: &mut MultipleScatteringScratch,
+    ) {
+        let degrees = self.streams.count();
+        let square = degrees * degrees;
+        let levels = self.grid.levels();
+        let w = self.optics.wavelengths;
+        let moments = self.source_moments();
+        let (k, tz) = self.grid.locate(node.altitude_m);
+        let (sun_node, ts) = self.optics.sun_axis.locate(node.sun_cosine);
+        normalized_associated_legendre(node.view_cosine, degrees, &mut scratch.view_legendre);
+        // cos(m phi) Lambda_l^m(mu_v) by the Chebyshev recurrence for cos(m phi).
+        let mut cosine = 0.0;
+        let mut previous = 0.0;
+        for m in 0..degrees {
+            let next = match m {
+                0 => 1.0,
+                1 => node.cos_azimuth,
+                _ => 2.0 * node.cos_azimuth * cosine - previous,
+            };
+            (previous, cosine) = (cosine, next);
+            let weight = if self.harmonics[m] { cosine } else { 0.0 };
+            for value in &mut scratch.view_legendre[m * degrees + m..(m + 1) * degrees] {
+                *value *= weight;
+            }
+        }
+        let view = &scratch.view_legendre[..square];
+        for i in 0..w {
+            let mut log_value = 0.0;
+            for (kk, wk) in [(k, 1.0 - tz), (k + 1, tz)] {
+                for (ss, ws) in [(sun_node, 1.0 - ts), (sun_node + 1, ts)] {
+                    let source = &moments[((ss * w + i) * levels + kk) * square..][..square];
+                    let mut value = 0.0;
+                    for m in 0..degrees {
+                        let range = m * degrees + m..(m + 1) * degrees;
+                        value += view[range.clone()]
+                            .iter()
+                            .zip(&source[range])
+                            .map(|(a, b)| a * b)
+                            .sum::<f64>();
+                    }
+                    log_value += wk * ws * floored_log(value);
+                }
+            }
+            scratch.log_source[i] = log_value;
+        }
+    }
+}
+
+/// The polarisation correction's columns (`polarisation_correction.rs`),
+/// with the eye's own sun.
+fn solve_polarisation_columns(
+    sky: &SingleScatteringSky,
+    geometry: &ColumnGeometry,
+    scaled: &ScaledOptics,
+) -> PolarisationCorrection {
+    let optics = sky.optics();
+    let eye_sun_zenith = sky.sun_direction().z.clamp(-1.0, 1.0).acos();
+    let mut eye_columns = Vec::with_capacity(geometry.grid.levels());
+    geometry.add_columns_toward_sun(eye_sun_zenith, &mut eye_columns);
+    let sun_optical_depths: Vec<Option<(f64, f64)>> = (0..optics.grid.len())
+        .flat_map(|i| {
+            eye_columns.iter().map(move |columns| {
+                columns
+                    .as_ref()
+                    .map(|columns| scaled.optical_depths(i, columns))
+            })
+        })
+        .collect();
+    PolarisationCorrection::compute(&CorrectionInputs {
+        optics,
+        streams: &geometry.streams,
+        grid: &geometry.grid,
+        paths: &geometry.paths,
+        phases: &scaled.phases,
+        scaled_extinction: &scaled.scaled_extinction,
+        scaled_scattering: &scaled.scaled_scattering,
+        sun_cosine: eye_sun_zenith.cos(),
+        sun_optical_depths: &sun_optical_depths,
+        eye_altitude_m: sky.observer_radius_m() - geometry.ground_radius_m,
+    })
+}
+
+/// The first order in the spherical shell, with the planet's shadow, at
+/// the sun nodes `suns` (rad; those from `FIRST_ORDER_SUN_ZENITH_DEG` on),
+/// the columns toward the sun from a table of `sun_column_nodes`; empty
+/// when there are none (a high sun's nodes all stop short of them).
+fn solve_spherical_first_order(
+    sky: &SingleScatteringSky,
+    sun_column_nodes: (usize, usize),
+    geometry: &ColumnGeometry,
+    scaled: &ScaledOptics,
+    suns: &[f64],
+) -> Vec<f64> {
+    if suns.is_empty() {
+        return Vec::new();
+    }
+    let solar_irradiance: Vec<f64> = sky.optics().solar_irradiance_w_m2_nm.values().to_vec();
+    let (altitude_nodes, mu_nodes) = sun_column_nodes;
+    let table_columns = sky.sun_column_table(altitude_nodes, mu_nodes);
+    compute_spherical_first_order(&FirstOrderInputs {
+        profiles: &geometry.profiles,
+        corners: &geometry.corners,
+        sun_columns: &table_columns,
+        level_altitudes_m: geometry.grid.altitudes_m(),
+        streams: &geometry.streams,
+        moments: MomentQuadrature::Fine,
+        sun_zenith_rad: suns,
+        scaled_extinction: &scaled.scaled_extinction,
+        scaled_scattering: &scaled.scaled_scattering,
+        phases: &scaled.phases,
+        solar_irradiance_w_m2_nm: &solar_irradiance,
+    })
+}
+
+/// The successive orders of every wavelength's columns at every sun node
+/// (in parallel over wavelengths), with the twilight shift.
+fn solve_columns(
+    optics: &AtmosphereOptics,
+    (geometry, scaled): (&ColumnGeometry, &ScaledOptics),
+    (sun_axis, sun_columns): (&SunZenithAxis, &[Option<Vec<f64>>]),
+    (first_spherical, first_order): (usize, &[f64]),
+    sweeps: usize,
+) -> SolvedColumns {
+    let levels = geometry.grid.levels();
+    let degrees = geometry.streams.count();
+    let solution_len = degrees * levels * degrees;
+    // Per wavelength: every sun node's solution, then its two ground values.
+    let chunk = sun_axis.count() * (solution_len + 2);
+    let mut solved = vec![0.0; optics.grid.len() * chunk];
+    crate::parallel::for_each_chunk_mut(&mut solved, chunk, |i, out| {
+        solve_wavelength(
+            i,
+            out,
+            optics,
+            (geometry, scaled),
+            (sun_axis, sun_columns),
+            (first_spherical, first_order),
+            sweeps,
+        )
+    });
+    SolvedColumns {
+        solved,
+        solution_len,
+    }
+}
+
+/// The columns of wavelength `i` at every sun node into `out` (see
+/// [`SolvedColumns`]): each node below `first_spherical` solved on its
+/// own with the column's first order and then shifted to first order,
+/// the nodes from there on with the spherical first order `first_order`
+/// and solved together, every order shifted (`twilight_shift.rs`).
+fn solve_wavelength(
+    i: usize,
+    out: &mut [f64],
+    optics: &AtmosphereOptics,
+    (geometry, scaled_optics): (&ColumnGeometry, &ScaledOptics),
+    (sun_axis, sun_columns): (&SunZenithAxis, &[Option<Vec<f64>>]),
+    (first_spherical, first_order): (usize, &[f64]),
+    sweeps: usize,
+) {
+    let (wavelengths, species) = (optics.grid.len(), optics.species.len());
+    let (streams, grid, paths) = (&geometry.streams, &geometry.grid, &geometry.paths);
+    let levels = grid.levels();
+    let degrees = streams.count();
+    let solution_len = degrees * levels * degrees;
+    let count = sun_axis.count();
+    let ScaledOptics {
+        phases,
+        scaled_extinction,
+        scaled_scattering,
+        ..
+    } = scaled_optics;
+    // The spherical first order of node s >= first_spherical.
+    let first_of = |s: usize| {
+        &first_order[((s - first_spherical) * wavelengths + i) * solution_len..][..solution_len]
+    };
+    let scaled: Vec<ScaledSpecies> = (0..species)
+        .map(|j| ScaledSpecies {
+            extinction_per_m: scaled_extinction[i * species + j],
+            scattering_per_m: scaled_scattering[i * species + j],
+            phase: &phases[i * species + j],
+        })
+        .collect();
+    let solar = optics.solar_irradiance_w_m2_nm[i];
+    let albedo = optics.ground_albedo[i];
+    let system =
+        ColumnSystem::new(streams, grid, Some(paths), scaled, solar, albedo).with_sweeps(sweeps);
+    let mut work = Vec::new();
+    let mut transmittance = vec![0.0; levels];
+    // Per spherical node: the sunlit ground's radiance under the
+    // scaled beam, and the sunlight delta-M moved into that beam
+    // (W m^-2 nm^-1), for the ground values after the joint solve.
+    let spherical_nodes = count - first_spherical.min(count);
+    let mut ground_direct = vec![0.0; spherical_nodes];
+    let mut moved_sunlight = vec![0.0; spherical_nodes];
+    for s in 0..count {
+        let sun_cosine = sun_axis.angle(s).cos();
+        let mut exact_ground = 0.0;
+        for k in 0..levels {
+            transmittance[k] = match &sun_columns[s * levels + k] {
+                None => 0.0,
+                Some(columns) => {
+                    let (tau_scaled, tau) = scaled_optics.optical_depths(i, columns);
+                    if k == 0 {
+                        exact_ground = (-tau).exp();
+                    }
+                    (-tau_scaled).exp()
+                }
+            };
+        }
+        let block = &mut out[s * (solution_len + 2)..(s + 1) * (solution_len + 2)];
+        let (field, ground) = block.split_at_mut(solution_len);
+        let lit = sun_cosine.max(0.0);
+        // The ground's sunlight that delta-M moved into the beam
+        // (reflected as if diffuse), and the exact direct beam.
+        let moved = solar * lit * (transmittance[0] - exact_ground);
+        ground[1] = albedo / PI * solar * lit * exact_ground;
+        if s >= first_spherical {
+            // Solved below with the other spherical nodes.
+            moved_sunlight[s - first_spherical] = moved;
+            ground_direct[s - first_spherical] = albedo / PI * solar * lit * transmittance[0];
+            continue;
+        }
+        let diffuse = system.solve(sun_cosine, &transmittance, field, &mut work);
+        ground[0] = albedo / PI * (diffuse + moved);
+    }
+    // The near-horizontal light comes from columns where the sun
+    // stands higher or lower (see `twilight_shift.rs`).
+    // Only the sun nodes with the column's own first order: with the
+    // spherical first order the light from lit columns is in the
+    // field already, and the shift's finite difference across the
+    // sun axis would carry light into columns that are dark
+    // (measured: a zenith of 1e-6 cd/m^2 with the sun 30 degrees
+    // below the horizon).
+    let mut fields: Vec<&mut [f64]> = out
+        .chunks_exact_mut(solution_len + 2)
+        .map(|block| &mut block[..solution_len])
+        .take(first_spherical)
+        .collect();
+    system.shift_toward_sources(&sun_axis.angles_rad[..fields.len()], &mut fields);
+    // From FIRST_ORDER_SUN_ZENITH_DEG on, the nodes with the spherical first order,
+    // all together: each order of the spherical streams shifted in
+    // the logarithm before it is scattered again.
+    if first_spherical < count {
+        let first_orders: Vec<&[f64]> = (first_spherical..count).map(first_of).collect();
+        let (mut fields, mut grounds): (Vec<&mut [f64]>, Vec<&mut [f64]>) = out
+            .chunks_exact_mut(solution_len + 2)
+            .skip(first_spherical)
+            .map(|block| block.split_at_mut(solution_len))
+            .unzip();
+        let diffuse = system.solve_shifted_orders(
+            &sun_axis.angles_rad[first_spherical..],
+            &ground_direct,
+            &first_orders,
+            &mut fields,
+        );
+        for ((ground, diffuse), moved) in grounds.iter_mut().zip(diffuse).zip(&moved_sunlight) {
+            ground[0] = albedo / PI * (diffuse + moved);
+        }
+    }
+}
+
+/// The ground's tables per sun node s and wavelength i at
+/// [s * wavelengths + i]: (A / pi)(F*_diffuse + E mu_s (T*_sun - T_sun))
+/// and (A / pi) E mu_s T_sun, W m^-2 sr^-1 nm^-1.
+fn ground_tables(
+    columns: &SolvedColumns,
+    wavelengths: usize,
+    sun_axis: &SunZenithAxis,
+) -> (Vec<f64>, Vec<f64>) {
+    let (solved, solution_len) = (&columns.solved, columns.solution_len);
+    let count = sun_axis.count();
+    let chunk = count * (solution_len + 2);
+    let mut ground_diffuse = vec![0.0; count * wavelengths];
+    let mut ground_direct = vec![0.0; count * wavelengths];
+    for i in 0..wavelengths {
+        for s in 0..count {
+            let block = &solved[i * chunk + s * (solution_len + 2)..][..solution_len + 2];
+            ground_diffuse[s * wavelengths + i] = block[solution_len];
+            ground_direct[s * wavelengths + i] = block[solution_len + 1];
+        }
+    }
+    (ground_diffuse, ground_direct)
+}
+
+/// The tilted peak beam (`peak_beam.rs`) where the sky's view rays meet a
+/// sun low enough for it and some species has a peak.
+fn compute_peak_beam(
+    sky: &SingleScatteringSky,
+    sun_column_nodes: (usize, usize),
+    (geometry, scaled): (&ColumnGeometry, &ScaledOptics),
+    forward_peak: &ForwardPeak,
+) -> Option<PeakBeam> {
+    let eye_sun_zenith = sky.sun_direction().z.clamp(-1.0, 1.0).acos();
+    let needed = PeakBeam::needed_elevations_deg(
+        FRAC_PI_2 - eye_sun_zenith,
+        (geometry.ground_radius_m, geometry.top_radius_m),
+        sky.observer_radius_m(),
+    );
+    match needed {
+        Some(elevations_deg) if forward_peak.any() => {
+            let (altitude_nodes, mu_nodes) = sun_column_nodes;
+            PeakBeam::compute(
+                &PeakBeamInputs {
+                    optics: sky.optics(),
+                    phases: &scaled.phases,
+                    profiles: &geometry.profiles,
+                    corners: &geometry.corners,
+                    sun_columns: &sky.sun_column_table(altitude_nodes, mu_nodes),
+                    altitudes_m: geometry.grid.altitudes_m(),
+                    extinction: &scaled.extinction,
+                    scaled_extinction: &scaled.scaled_extinction,
+                },
+                elevations_deg,
+            )
+        }
+        _ => None,
+    }
+}

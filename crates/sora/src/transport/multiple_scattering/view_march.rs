@@ -1,0 +1,368 @@
+//! The view ray's march of the fast method: the scaled field's source,
+//! the forward-peak integrals and the ground's diffuse light along one
+//! view ray ([`ViewRayOptics::march`]), shared by the field's exact
+//! synthesis and its source table.
+
+use std::ops::ControlFlow;
+
+use super::field::SunZenithAxis;
+use super::forward_peak::{self, ForwardPeak};
+use super::peak_beam::PeakBeam;
+use crate::atmosphere::DensityProfile;
+use crate::geometry::{Vector3, segment_in_atmosphere};
+use crate::transport::optical_column::{PanelMarch, ProfileCorners};
+use crate::transport::single_scattering::SunColumns;
+use crate::transport::vector_exp::exp_neg_in_place;
+
+/// Panels of the exact column integrals toward the sun from each level.
+pub(super) const SUN_RAY_PANELS: usize = 12;
+
+/// Values below this are treated as zero by the logarithmic
+/// interpolations (radiances are ~1e-6..1 W m^-2 sr^-1 nm^-1).
+pub(super) const LOG_FLOOR: f64 = 1e-30;
+
+/// ln R below which the march takes the source as zero: e^-46 = 1e-20
+/// W m^-2 sr^-1 nm^-1 (the logarithms' floor is ln 1e-30 = -69), far below
+/// the night floor ([`crate::colour::NIGHT_FLOOR_CD_M2`], ~1e-11 in these
+/// units).
+pub(super) const DARK_LOG_SOURCE: f64 = -46.0;
+
+/// ln of a non-negative value, floored.
+pub(super) fn floored_log(value: f64) -> f64 {
+    value.max(LOG_FLOOR).ln()
+}
+
+/// a^(1 - t) b^t for positive a, b: exact for quantities that change
+/// exponentially between nodes, as everything does across sunset; linear
+/// when an end is zero (a ground that reflects nothing, or has no sun).
+pub(super) fn interpolate_geometrically(a: f64, b: f64, t: f64) -> f64 {
+    if a > 0.0 && b > 0.0 {
+        ((1.0 - t) * a.ln() + t * b.ln()).exp()
+    } else {
+        (1.0 - t) * a + t * b
+    }
+}
+
+/// What the view-ray march needs, shared by the field and its table.
+#[derive(Debug, Clone)]
+pub(super) struct ViewRayOptics {
+    pub(super) wavelengths: usize,
+    pub(super) species: usize,
+    pub(super) panels: usize,
+    pub(super) ground_radius_m: f64,
+    pub(super) top_radius_m: f64,
+    pub(super) observer: Vector3,
+    pub(super) sun: Vector3,
+    pub(super) profiles: Vec<DensityProfile>,
+    /// Where the profiles have corners: rays are cut there.
+    pub(super) corners: ProfileCorners,
+    /// [i * species + j], m^-1 at relative density 1.
+    pub(super) extinction: Vec<f64>,
+    pub(super) scaled_extinction: Vec<f64>,
+    pub(super) scaled_scattering: Vec<f64>,
+    pub(super) sun_axis: SunZenithAxis,
+    /// Whether any phase function lost a forward peak to delta-M.
+    pub(super) has_forward_peaks: bool,
+    /// The forward-peak term's tables (`forward_peak.rs`).
+    pub(super) forward_peak: ForwardPeak,
+    /// Near a low sun, the beam of the peaks' light with the last
+    /// scattering at its angle (`peak_beam.rs`), for that term.
+    pub(super) peak_beam: Option<PeakBeam>,
+    /// [s * wavelengths + i]: (A / pi)(F*_diffuse + E mu_s (T*_sun - T_sun))
+    /// at the ground, W m^-2 sr^-1 nm^-1.
+    pub(super) ground_diffuse: Vec<f64>,
+    /// [s * wavelengths + i]: (A / pi) E mu_s T_sun at the ground.
+    pub(super) ground_direct: Vec<f64>,
+}
+
+/// Per-ray work space of the march.
+#[derive(Debug, Clone)]
+pub struct MultipleScatteringScratch {
+    /// The view ray's march, and at its current node the species'
+    /// relative densities and columns from the eye; the whole ray's
+    /// columns after it.
+    pub(super) march: PanelMarch,
+    pub(super) densities: Vec<f64>,
+    pub(super) view_columns: Vec<f64>,
+    pub(super) node_columns: Vec<f64>,
+    /// ln R(x, view) per wavelength at the current node (R = J / beta*_sca,
+    /// radiance units).
+    pub(super) log_source: Vec<f64>,
+    /// Lambda table of the view direction times cos(m phi) (exact
+    /// synthesis), [m * streams + l].
+    pub(super) view_legendre: Vec<f64>,
+    /// Columns from the current node toward the sun, m.
+    pub(super) sun_columns: Vec<f64>,
+    /// Ends of the Gauss panels of the view ray and of a path toward the
+    /// sun, m along each.
+    pub(super) view_panel_ends: Vec<f64>,
+    pub(super) sun_panel_ends: Vec<f64>,
+    /// The forward-peak integrals of the last ray, species-major
+    /// [j * wavelengths + i], m, then the peak-only rows Q and Q X-bar
+    /// (`forward_peak.rs`; see [`MultipleScatteringTable::compute_radiance_parts`]).
+    pub(super) forward_integrals: Vec<f64>,
+    /// The tilted peak beam B at the current node (`peak_beam.rs`), and
+    /// the node's optical depths / transmittances and peak scattering
+    /// coefficients and X there ([`ViewRayOptics::add_tilted_forward_peak`]).
+    pub(super) beam: Vec<f64>,
+    pub(super) tilted_depths: Vec<f64>,
+    pub(super) tilted_peak: Vec<f64>,
+}
+
+impl MultipleScatteringScratch {
+    /// The forward-peak integrals of the last ray: integral rho_j
+    /// (T* T*_sun - T T_sun) ds, species-major [j * wavelengths + i], m,
+    /// then the peak-only rows Q = integral (sum_j f_j beta_sca,j rho_j)
+    /// T T_sun ds and Q X-bar (dimensionless), as
+    /// [`MultipleScatteringField::compute_forward_peak_radiance`] takes them.
+    pub(crate) fn forward_integrals(&self) -> &[f64] {
+        &self.forward_integrals
+    }
+}
+
+/// Local geometry of a march node.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct NodeGeometry {
+    pub(super) altitude_m: f64,
+    pub(super) sun_cosine: f64,
+    pub(super) view_cosine: f64,
+    pub(super) cos_azimuth: f64,
+}
+
+impl ViewRayOptics {
+    pub(super) fn scratch(&self, streams: usize) -> MultipleScatteringScratch {
+        let (s, w) = (self.species, self.wavelengths);
+        MultipleScatteringScratch {
+            march: PanelMarch::new(s),
+            densities: vec![0.0; s],
+            view_columns: vec![0.0; s],
+            node_columns: vec![0.0; s],
+            log_source: vec![0.0; w],
+            view_legendre: vec![0.0; streams * streams],
+            sun_columns: vec![0.0; s],
+            view_panel_ends: Vec::with_capacity(self.corners.most_panel_ends(self.panels)),
+            sun_panel_ends: Vec::with_capacity(self.corners.most_panel_ends(SUN_RAY_PANELS)),
+            forward_integrals: vec![0.0; (s + forward_peak::EXTRA_ROWS) * w],
+            beam: vec![0.0; w],
+            tilted_depths: vec![0.0; 4 * w],
+            tilted_peak: vec![0.0; 2 * w],
+        }
+    }
+
+    /// Integrates T*(eye, x) beta*_sca(x) R(x) along the view ray, with
+    /// `source` writing ln R at each node into `scratch.log_source`, and
+    /// adds the ground's diffuse term.
+    pub(super) fn march<F>(
+        &self,
+        view: Vector3,
+        sun_columns: SunColumns,
+        scratch: &mut MultipleScatteringScratch,
+        radiance: &mut [f64],
+        mut source: F,
+    ) where
+        F: FnMut(NodeGeometry, &[f64], &mut MultipleScatteringScratch),
+    {
+        radiance.fill(0.0);
+        scratch.forward_integrals.fill(0.0);
+        let (w, s) = (self.wavelengths, self.species);
+        let Some((enter, exit)) =
+            segment_in_atmosphere(self.observer, view, self.ground_radius_m, self.top_radius_m)
+        else {
+            return;
+        };
+        let start = self.observer + view * enter;
+        let length = exit - enter;
+        scratch.view_columns.fill(0.0);
+        if length > 0.0 {
+            let mut view_ends = std::mem::take(&mut scratch.view_panel_ends);
+            self.corners
+                .fill_panel_ends(start, view, length, self.panels, &mut view_ends);
+            let mut march = std::mem::take(&mut scratch.march);
+            march.march(
+                &self.profiles,
+                self.ground_radius_m,
+                (start, view),
+                &view_ends,
+                |node, node_columns, densities| {
+                    scratch.node_columns.copy_from_slice(node_columns);
+                    scratch.densities.copy_from_slice(densities);
+                    let r = node.point.length();
+                    let zenith = node.point * (1.0 / r);
+                    let view_cosine = view.dot(zenith).clamp(-1.0, 1.0);
+                    let sun_cosine = self.sun.dot(zenith).clamp(-1.0, 1.0);
+                    let sines = ((1.0 - view_cosine * view_cosine)
+                        * (1.0 - sun_cosine * sun_cosine))
+                        .sqrt();
+                    let cos_azimuth = if sines > 1e-12 {
+                        ((view.dot(self.sun) - view_cosine * sun_cosine) / sines).clamp(-1.0, 1.0)
+                    } else {
+                        1.0
+                    };
+                    let geometry = NodeGeometry {
+                        altitude_m: r - self.ground_radius_m,
+                        sun_cosine,
+                        view_cosine,
+                        cos_azimuth,
+                    };
+                    let densities = std::mem::take(&mut scratch.densities);
+                    source(geometry, &densities, scratch);
+                    scratch.densities = densities;
+                    // T*(eye, x) beta*_sca(x) R(x): one exponential per
+                    // wavelength for the transmittance and the source.
+                    let weight = node.weight;
+                    for (i, out) in radiance.iter_mut().enumerate() {
+                        let (mut tau, mut scattering) = (0.0, 0.0);
+                        for j in 0..s {
+                            tau += self.scaled_extinction[i * s + j] * scratch.node_columns[j];
+                            scattering += self.scaled_scattering[i * s + j] * scratch.densities[j];
+                        }
+                        // A source at the logarithms' floor is no light
+                        // (the interpolation between a dark node, 1e-30,
+                        // and a lit one would otherwise leave numerical
+                        // noise in the night sky).
+                        if scattering > 0.0 && scratch.log_source[i] > DARK_LOG_SOURCE {
+                            *out += weight * scattering * (scratch.log_source[i] - tau).exp();
+                        }
+                    }
+                    // What delta-M moved from single scattering into the
+                    // sun's beam and the view's transmittance (see the
+                    // module docs, TMS).
+                    let lit = self.has_forward_peaks
+                        && sun_columns.compute_columns_to_sun(
+                            &self.profiles,
+                            &self.corners,
+                            node.point,
+                            self.sun,
+                            &mut scratch.sun_panel_ends,
+                            &mut scratch.sun_columns,
+                        );
+                    let share = match &self.peak_beam {
+                        Some(beam) if self.has_forward_peaks => {
+                            beam.lookup_beam(r, sun_cosine, &mut scratch.beam)
+                        }
+                        _ => 0.0,
+                    };
+                    if share > 0.0 {
+                        self.add_tilted_forward_peak(weight, lit, share, scratch);
+                    } else if lit {
+                        for i in 0..w {
+                            let (mut scaled, mut exact, mut peak) = (0.0, 0.0, 0.0);
+                            for j in 0..s {
+                                let column = scratch.node_columns[j] + scratch.sun_columns[j];
+                                scaled += self.scaled_extinction[i * s + j] * column;
+                                exact += self.extinction[i * s + j] * column;
+                                // f_j beta_sca,j rho_j: what the peaks scatter here.
+                                peak += (self.extinction[i * s + j]
+                                    - self.scaled_extinction[i * s + j])
+                                    * scratch.densities[j];
+                            }
+                            let direct = (-exact).exp();
+                            let excess = weight * ((-scaled).exp() - direct);
+                            for j in 0..s {
+                                scratch.forward_integrals[j * w + i] +=
+                                    excess * scratch.densities[j];
+                            }
+                            // The peak-only light: its weight and the
+                            // peak optical depth X of its two legs.
+                            let only = weight * direct * peak;
+                            scratch.forward_integrals[s * w + i] += only;
+                            scratch.forward_integrals[(s + 1) * w + i] += only * (exact - scaled);
+                        }
+                    }
+                    ControlFlow::Continue(())
+                },
+            );
+            scratch.view_columns.copy_from_slice(march.columns());
+            scratch.march = march;
+            scratch.view_panel_ends = view_ends;
+        }
+        let end = start + view * length;
+        if end.length() <= self.ground_radius_m * (1.0 + 1e-12) {
+            let sun_cosine = self.sun.dot(end.normalized());
+            let (node, t) = self.sun_axis.locate(sun_cosine);
+            let next = node + 1;
+            for i in 0..w {
+                let (mut tau_scaled, mut tau) = (0.0, 0.0);
+                for j in 0..s {
+                    tau_scaled += self.scaled_extinction[i * s + j] * scratch.view_columns[j];
+                    tau += self.extinction[i * s + j] * scratch.view_columns[j];
+                }
+                let lerp = |table: &[f64]| {
+                    interpolate_geometrically(table[node * w + i], table[next * w + i], t)
+                };
+                let (scaled, exact) = ((-tau_scaled).exp(), (-tau).exp());
+                radiance[i] += scaled * lerp(&self.ground_diffuse)
+                    + (scaled - exact) * lerp(&self.ground_direct);
+            }
+        }
+    }
+
+    /// The forward-peak integrals of one view node (the march's weight
+    /// `weight`, m; its columns, densities and, where `lit`, its columns
+    /// toward the sun in `scratch`) with the peaks' light reaching the
+    /// node S = T*_sun - T_sun moved toward the tilted beam B of
+    /// `scratch.beam` by `share` (`peak_beam.rs`): the first line's
+    /// T* T*_sun - T T_sun becomes T* S~ + T_sun (T* - T), the peak-only
+    /// light's weight T T_sun is scaled by (T_sun + S~) / T*_sun.
+    pub(super) fn add_tilted_forward_peak(
+        &self,
+        weight: f64,
+        lit: bool,
+        share: f64,
+        scratch: &mut MultipleScatteringScratch,
+    ) {
+        let (w, s) = (self.wavelengths, self.species);
+        // Optical depths, then (in place) transmittances: T* and T from the
+        // eye, T*_sun and T_sun, per wavelength.
+        let (view, sun) = scratch.tilted_depths.split_at_mut(2 * w);
+        let (view_beam, view_direct) = view.split_at_mut(w);
+        let (sun_beam, sun_direct) = sun.split_at_mut(w);
+        for i in 0..w {
+            let (mut depths, mut peak) = ([0.0; 4], 0.0);
+            for j in 0..s {
+                let (scaled, exact) = (
+                    self.scaled_extinction[i * s + j],
+                    self.extinction[i * s + j],
+                );
+                depths[0] += scaled * scratch.node_columns[j];
+                depths[1] += exact * scratch.node_columns[j];
+                depths[2] += scaled * scratch.sun_columns[j];
+                depths[3] += exact * scratch.sun_columns[j];
+                // f_j beta_sca,j rho_j: what the peaks scatter here.
+                peak += (exact - scaled) * scratch.densities[j];
+            }
+            [view_beam[i], view_direct[i], sun_beam[i], sun_direct[i]] = depths;
+            scratch.tilted_peak[i] = peak;
+            // X, the peaks' optical depth of both legs.
+            scratch.tilted_peak[w + i] = (depths[1] + depths[3]) - (depths[0] + depths[2]);
+        }
+        exp_neg_in_place(&mut scratch.tilted_depths);
+        let (view, sun) = scratch.tilted_depths.split_at(2 * w);
+        let (view_beam, view_direct) = view.split_at(w);
+        let (sun_beam, sun_direct) = sun.split_at(w);
+        for i in 0..w {
+            let (sun_beam, sun_direct) = if lit {
+                (sun_beam[i], sun_direct[i])
+            } else {
+                (0.0, 0.0)
+            };
+            let forward = sun_beam - sun_direct;
+            let scattered = forward + share * (scratch.beam[i] - forward);
+            let excess =
+                weight * (view_beam[i] * scattered + sun_direct * (view_beam[i] - view_direct[i]));
+            for j in 0..s {
+                scratch.forward_integrals[j * w + i] += excess * scratch.densities[j];
+            }
+            if lit && sun_beam > 0.0 {
+                let only = weight
+                    * view_direct[i]
+                    * sun_direct
+                    * scratch.tilted_peak[i]
+                    * ((sun_direct + scattered) / sun_beam);
+                let x = scratch.tilted_peak[w + i];
+                scratch.forward_integrals[s * w + i] += only;
+                scratch.forward_integrals[(s + 1) * w + i] += only * x;
+            }
+        }
+    }
+}
