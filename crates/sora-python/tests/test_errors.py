@@ -250,6 +250,7 @@ def test_a_tiny_almucantar_step_is_refused_by_the_direction_limit(small_sky):
         (dict(sun_elevation_deg=30, method="path-tracing", samples=10**30), ValueError, "samples"),
         (dict(sun_elevation_deg=30, method="reference", reference_steps=(-1, 5)), ValueError, "view steps = -1"),
         (dict(sun_elevation_deg=30, method="reference", reference_steps=(10, 10**20)), ValueError, "sun steps"),
+        (dict(sun_elevation_deg=30, method="reference", reference_steps=(10**7, 10**7)), ValueError, "view steps x sun steps"),
         (dict(sun_elevation_deg=None), ValueError, "sun_elevation_deg"),
         (dict(sun_elevation_deg="30"), TypeError, "sun_elevation_deg"),
         (dict(sun_elevation_deg=30, observer_altitude_m=None), TypeError, "observer_altitude_m"),
