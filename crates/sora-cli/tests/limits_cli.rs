@@ -117,8 +117,7 @@ fn direction_counts_are_bounded() {
 
 /// The limits docs/limits.md says are checked before any work are: each
 /// run here names an atmosphere file that does not exist, so a check made
-/// after loading it would say that instead; and each answers in well under
-/// a second.
+/// after loading it would say that instead.
 #[test]
 fn the_documented_limits_are_checked_before_any_work() {
     let dir = tempfile::tempdir().unwrap();
@@ -195,10 +194,8 @@ fn the_documented_limits_are_checked_before_any_work() {
         ),
     ];
     for (args, expected) in cases {
-        let started = std::time::Instant::now();
         let stderr = one_line_error(&sora(&[&args[..], &missing].concat()));
         assert!(stderr.contains(expected), "{args:?}: {stderr}");
-        assert!(started.elapsed().as_secs_f64() < 5.0, "{args:?}");
     }
 }
 
@@ -207,7 +204,6 @@ fn the_documented_limits_are_checked_before_any_work() {
 #[cfg(unix)]
 #[test]
 fn endless_and_huge_inputs_are_refused_before_reading_everything() {
-    let started = std::time::Instant::now();
     let stderr = one_line_error(&sora(&["mie", "--batch", "/dev/zero"]));
     assert!(
         stderr.contains("/dev/zero, line 1: longer than 4096 bytes"),
@@ -232,7 +228,6 @@ fn endless_and_huge_inputs_are_refused_before_reading_everything() {
         "0",
     ]));
     assert!(stderr.contains("huge.toml: file too large"), "{stderr}");
-    assert!(started.elapsed().as_secs_f64() < 10.0);
 }
 
 /// The atmosphere's height is bounded (1e3..=1e6 m), named by its key in
@@ -301,7 +296,6 @@ fn retrieve_is_bounded_in_scans_per_run() {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("three.alm");
     std::fs::write(&file, text).unwrap();
-    let started = std::time::Instant::now();
     let stderr = one_line_error(&sora(&[
         "retrieve",
         "--aeronet-almucantar",
@@ -313,5 +307,4 @@ fn retrieve_is_bounded_in_scans_per_run() {
         stderr.contains("has 3 usable scans, more than --max-scans 2"),
         "{stderr}"
     );
-    assert!(started.elapsed().as_secs_f64() < 10.0);
 }

@@ -306,13 +306,11 @@ fn devices_and_fifos_are_refused_by_every_output() {
             if args[0] == "render" {
                 args.extend(["--preset", "clear-sky-reference", "--width", "8"]);
             }
-            let started = std::time::Instant::now();
             let stderr = one_line_error(&sora(&args));
             assert!(
                 stderr.contains(option) && stderr.contains("is not a regular file"),
                 "{args:?}: {stderr}"
             );
-            assert!(started.elapsed().as_secs() < 10, "refused before any work");
         }
     }
     // The stand-ins are as they were, and nothing else was written.

@@ -234,6 +234,23 @@ fn bad_choices_are_errors_not_panics() {
         error(Sky::builder(&atmosphere).scattering(Scattering::Multiple(settings)))
             .contains("multiple-scattering layers = 1")
     );
+    // The reference march: each count, and their product per view (1e7 x
+    // 1e7 steps would have run for days; the default is 1000 x 250).
+    let march = |view_steps, sun_steps| Method::Reference {
+        view_steps,
+        sun_steps,
+    };
+    assert!(error(Sky::builder(&atmosphere).method(march(0, 5))).contains("view steps = 0"));
+    assert!(
+        error(Sky::builder(&atmosphere).method(march(10_000_000, 10_000_000)))
+            .contains("view steps x sun steps = 1e14 is out of range: allowed <= 1e8")
+    );
+    assert!(
+        Sky::builder(&atmosphere)
+            .method(march(10_000, 10_000))
+            .build()
+            .is_ok()
+    );
     assert!(ViewDirection::new(120.0, 0.0).is_err());
     assert!(ViewDirection::new(0.0, f64::NAN).is_err());
     // Images: sizes, and path tracing renders no images.

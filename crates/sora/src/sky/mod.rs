@@ -194,6 +194,13 @@ pub fn check_image_size(width: u32, height: u32) -> Result<()> {
 /// sun ([`Method::Reference`]).
 pub const MAX_REFERENCE_STEPS: usize = 10_000_000;
 
+/// Most steps of the reference method's march for one view, view steps x
+/// sun steps: 1e8, 400 times the default 1000 x 250, about 3.5 s a view at
+/// 21 wavelengths by the rate of docs/limits.md (113 views/s at the
+/// default); the twilight survey's finest is 16000 x 4000. 1e7 x 1e7 steps
+/// would have taken weeks a view.
+pub const MAX_REFERENCE_MARCH_STEPS: f64 = 1e8;
+
 /// Most views of one [`Sky::radiances`] call (an almucantar every 0.0036
 /// deg); checked before any work, as `sora spectrum` checks its directions
 /// before it lists them.
@@ -609,6 +616,17 @@ impl Sky {
                     if !(1..=MAX_REFERENCE_STEPS).contains(&steps) {
                         return Err(Error::out_of_range(name, steps as f64, "1", "1..=1e7"));
                     }
+                }
+                let march = view_steps as f64 * sun_steps as f64;
+                if march > MAX_REFERENCE_MARCH_STEPS {
+                    return Err(Error::out_of_range(
+                        "view steps x sun steps",
+                        march,
+                        "1",
+                        format!(
+                            "<= {MAX_REFERENCE_MARCH_STEPS:e} (seconds a view; the default is 1000 x 250)"
+                        ),
+                    ));
                 }
             }
             Method::PathTracing { samples, .. } => {
