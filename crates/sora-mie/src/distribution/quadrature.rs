@@ -110,6 +110,11 @@ fn too_many_nodes(node_count: usize, wavelength_count: usize) -> SizeDistributio
     }
 }
 
+/// Nodes per absorption-limited resonance width at which the ripple
+/// density is capped ([`RadiusQuadratureSettings::for_refractive_index`]; see
+/// "The ripple of weakly absorbing spheres" in the module docs).
+pub const RIPPLE_NODES_PER_ABSORPTION_WIDTH: f64 = 0.15;
+
 /// How the radius quadrature lays out its panels (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RadiusQuadratureSettings {
@@ -134,6 +139,17 @@ pub struct RadiusQuadratureSettings {
     /// Size parameter below which there is no resonance structure to resolve
     /// (>= 0).
     pub min_resonant_size_parameter: f64,
+    /// Node density per unit of size parameter that resolves the ripple of
+    /// weakly absorbing spheres (>= 0; 0 disables it): nodes per unit ln r
+    /// are at least this times x, with the same relaxation with depth as
+    /// the resonance density. See "The ripple of weakly absorbing spheres"
+    /// in the module docs.
+    pub ripple_nodes_per_unit_size_parameter: f64,
+    /// Cap on the ripple density, in nodes per unit ln r (> 0, may be
+    /// infinite): [`Self::for_refractive_index`] sets it to
+    /// [`RIPPLE_NODES_PER_ABSORPTION_WIDTH`] nodes per absorption-limited
+    /// resonance width, `RIPPLE_NODES_PER_ABSORPTION_WIDTH * n / (2 k)`.
+    pub ripple_max_nodes_per_unit_ln_radius: f64,
     /// Growth of the smoothness limits (the two maximum panel widths) per
     /// e-fold of depth below the peak of the importance density (>= 0): the
     /// tails carry little of the integral and vary smoothly.
@@ -157,6 +173,8 @@ impl RadiusQuadratureSettings {
             resonance_density_decrease_per_efold: 30.0,
             resonance_density_decay_rate_per_efold: 0.0,
             min_resonant_size_parameter: 1.0,
+            ripple_nodes_per_unit_size_parameter: 0.0,
+            ripple_max_nodes_per_unit_ln_radius: f64::INFINITY,
             tail_panel_widening_per_efold: 0.25,
             tail_depth: 18.0,
         }
@@ -176,6 +194,8 @@ impl RadiusQuadratureSettings {
             resonance_density_decrease_per_efold: 0.0,
             resonance_density_decay_rate_per_efold: 0.5,
             min_resonant_size_parameter: 1.0,
+            ripple_nodes_per_unit_size_parameter: 64.0,
+            ripple_max_nodes_per_unit_ln_radius: f64::INFINITY,
             tail_panel_widening_per_efold: 0.25,
             tail_depth: 12.0,
         }
@@ -192,8 +212,25 @@ impl RadiusQuadratureSettings {
             resonance_density_decrease_per_efold: 0.0,
             resonance_density_decay_rate_per_efold: 0.0,
             min_resonant_size_parameter: 0.0,
+            ripple_nodes_per_unit_size_parameter: 0.0,
+            ripple_max_nodes_per_unit_ln_radius: f64::INFINITY,
             tail_panel_widening_per_efold: 0.0,
             tail_depth: 40.0,
+        }
+    }
+
+    /// These settings for particles of index `m = n + ik`: the ripple
+    /// density capped at [`RIPPLE_NODES_PER_ABSORPTION_WIDTH`] nodes per
+    /// absorption-limited resonance width (full width `Delta x / x = 2 k / n`),
+    /// i.e. at `RIPPLE_NODES_PER_ABSORPTION_WIDTH * n / (2 k)` nodes per unit
+    /// ln r (no cap for `k = 0`). For several indices sharing one rule, pass
+    /// the one of smallest `k / n`.
+    pub fn for_refractive_index(self, refractive_index: crate::Complex64) -> Self {
+        let cap =
+            RIPPLE_NODES_PER_ABSORPTION_WIDTH * refractive_index.re / (2.0 * refractive_index.im);
+        Self {
+            ripple_max_nodes_per_unit_ln_radius: if cap > 0.0 { cap } else { f64::INFINITY },
+            ..self
         }
     }
 
@@ -210,11 +247,14 @@ impl RadiusQuadratureSettings {
             && nonnegative_finite(self.resonance_density_decrease_per_efold)
             && nonnegative_finite(self.resonance_density_decay_rate_per_efold)
             && nonnegative_finite(self.min_resonant_size_parameter)
+            && nonnegative_finite(self.ripple_nodes_per_unit_size_parameter)
             && nonnegative_finite(self.tail_panel_widening_per_efold))
         {
             Some(
                 "the resonance node density, its decrease and the minimum resonant size parameter and the tail widening must be finite and >= 0",
             )
+        } else if !(self.ripple_max_nodes_per_unit_ln_radius > 0.0) {
+            Some("ripple_max_nodes_per_unit_ln_radius must be > 0 (infinite for no cap)")
         } else if !positive_finite(self.tail_depth) {
             Some("tail_depth must be finite and > 0")
         } else {
@@ -248,7 +288,11 @@ fn panel_width_limit(
     if wavenumber_per_m <= 0.0 || size_parameter < settings.min_resonant_size_parameter {
         return smooth_limit;
     }
-    let resonance_density = (settings.resonance_nodes_per_unit_ln_radius
+    let ripple_density = (settings.ripple_nodes_per_unit_size_parameter * size_parameter)
+        .min(settings.ripple_max_nodes_per_unit_ln_radius);
+    let resonance_density = (settings
+        .resonance_nodes_per_unit_ln_radius
+        .max(ripple_density)
         - settings.resonance_density_decrease_per_efold * depth)
         * (-settings.resonance_density_decay_rate_per_efold * depth).exp();
     let nodes_per_panel = settings.nodes_per_panel as f64;
