@@ -711,7 +711,7 @@ fn backscatter_phase_matrix_errors(
 /// rule's P11 must be within 0.5 % and F12/F11 within 0.005 of a rule with
 /// 100 times its nodes at 120-180 deg.
 #[test]
-#[ignore = "slow: the 100x oracle at x ~ 80 takes tens of seconds"]
+#[ignore = "slow: the 100x oracle at x ~ 80 takes about 4 minutes"]
 fn water_cloud_backscatter_is_converged() {
     let m = Complex64::new(1.329, 1.25e-7);
     let settings = RadiusQuadratureSettings::phase_function();
@@ -764,6 +764,13 @@ fn the_presets_phase_rules_are_unchanged_by_the_ripple_density() {
         .map(|i| 2.0 * PI / ((300.0 + 25.0 * i as f64) * 1e-9))
         .collect();
     let wolff_least_absorbing = Complex64::new(1.49670, 0.000936538);
+    // A non-absorbing index leaves the ripple density uncapped.
+    let non_absorbing =
+        RadiusQuadratureSettings::phase_function().for_refractive_index(Complex64::new(1.33, 0.0));
+    assert_eq!(
+        non_absorbing.ripple_max_nodes_per_unit_ln_radius,
+        f64::INFINITY
+    );
     for (distribution, m) in [
         // atmospheres/earth-clear.toml's continental aerosol.
         (
