@@ -819,4 +819,36 @@ fn the_presets_phase_rules_are_unchanged_by_the_ripple_density() {
         .unwrap();
         assert_eq!(ours, before);
     }
+    // And so the optics: the continental aerosol's and the Wolff-index Mars
+    // dust's at the paper wavelengths, bit for bit.
+    let before = EnsembleSettings {
+        phase_function_quadrature: without_ripple,
+        ..EnsembleSettings::default()
+    };
+    let wolff = RefractiveIndexModel::Tabulated(
+        crate::refractive_index::TabulatedRefractiveIndex::parse_csv(
+            crate::refractive_index::MARS_DUST_WOLFF2009_CSV,
+        )
+        .unwrap(),
+    );
+    for (distribution, index) in [
+        (
+            SizeDistribution::log_normal(0.0212 * MICROMETRE, 2.24)
+                .unwrap()
+                .truncated_to(RadiusWindow::from_micrometres(0.005, 20.0).unwrap())
+                .unwrap(),
+            RefractiveIndexModel::constant(Complex64::new(1.53, 0.006)).unwrap(),
+        ),
+        (
+            SizeDistribution::log_normal_from_effective_radius_and_variance(1.5 * MICROMETRE, 0.3)
+                .unwrap(),
+            wolff,
+        ),
+    ] {
+        let optics = |settings: &EnsembleSettings| {
+            compute_ensemble_optics_spectrum(&PAPER_WAVELENGTHS_NM, &index, &distribution, settings)
+                .unwrap()
+        };
+        assert_eq!(optics(&EnsembleSettings::default()), optics(&before));
+    }
 }
