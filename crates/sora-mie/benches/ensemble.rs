@@ -11,10 +11,15 @@
 //! default phase tables interpolated between reference indices, with the
 //! exact per-index tables, and with the paper's HG phase (cross-sections
 //! only, which are always computed per index).
+//!
+//! `water_cloud_800nm`: one wavelength, a water cloud (modified gamma
+//! r_eff 10 um, v_eff 0.1; m = 1.329 + 1.25e-7i, x_eff = 79) with the
+//! default rule (the ripple density) and with the ripple density off (the
+//! rule before it), side by side.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use sora_mie::Complex64;
-use sora_mie::distribution::{RadiusWindow, SizeDistribution};
+use sora_mie::distribution::{RadiusQuadratureSettings, RadiusWindow, SizeDistribution};
 use sora_mie::ensemble::{
     EnsembleSettings, PAPER_WAVELENGTHS_NM, SpectralPhaseMethod, compute_ensemble_optics_spectrum,
 };
@@ -78,6 +83,35 @@ fn bench_species(c: &mut Criterion) {
                     black_box(&PAPER_WAVELENGTHS_NM),
                     black_box(index),
                     black_box(distribution),
+                    black_box(settings),
+                )
+                .unwrap()
+            })
+        });
+    }
+    group.finish();
+
+    let cloud = SizeDistribution::modified_gamma(10e-6, 0.1).unwrap();
+    let water = RefractiveIndexModel::constant(Complex64::new(1.329, 1.25e-7)).unwrap();
+    let without_ripple = EnsembleSettings {
+        phase_function_quadrature: RadiusQuadratureSettings {
+            ripple_nodes_per_unit_size_parameter: 0.0,
+            ..RadiusQuadratureSettings::phase_function()
+        },
+        ..EnsembleSettings::default()
+    };
+    let mut group = c.benchmark_group("water_cloud_800nm");
+    group.sample_size(10);
+    for (name, settings) in [
+        ("ripple_density", &mie),
+        ("without_ripple_density", &without_ripple),
+    ] {
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                compute_ensemble_optics_spectrum(
+                    black_box(&[800.0]),
+                    black_box(&water),
+                    black_box(&cloud),
                     black_box(settings),
                 )
                 .unwrap()

@@ -56,9 +56,44 @@ pub fn compute_ensemble_phase_matrix_ratios(
     cos_theta: &[f64],
 ) -> Result<PhaseMatrixRatios, EnsembleError> {
     let wavenumber_per_m = validate_wavelength(wavelength_nm)?;
-    let quadrature = RadiusQuadrature::gauss_legendre(distribution, wavenumber_per_m, settings)?;
+    let quadrature = RadiusQuadrature::gauss_legendre(
+        distribution,
+        wavenumber_per_m,
+        &settings.for_refractive_index(refractive_index),
+    )?;
+    let (sums, _) = phase_matrix_sums(
+        wavelength_nm,
+        wavenumber_per_m,
+        refractive_index,
+        &quadrature,
+        cos_theta,
+    )?;
+    let ratio = |k: usize| -> Vec<f64> {
+        sums.iter()
+            .map(|s| if s[0] > 0.0 { s[k] / s[0] } else { 0.0 })
+            .collect()
+    };
+    Ok(PhaseMatrixRatios {
+        cos_theta: cos_theta.to_vec(),
+        f12_over_f11: ratio(1),
+        f33_over_f11: ratio(2),
+        f34_over_f11: ratio(3),
+    })
+}
+
+/// The radius sums of [S11, S12, S33, S34] at each of `cos_theta` over the
+/// nodes of `quadrature`, and the sum of `w x^2 Q_sca` (so that
+/// `P11 = S11 sum / (pi x^2 Q_sca sum)` per sr).
+pub(super) fn phase_matrix_sums(
+    wavelength_nm: f64,
+    wavenumber_per_m: f64,
+    refractive_index: Complex64,
+    quadrature: &RadiusQuadrature,
+    cos_theta: &[f64],
+) -> Result<(Vec<[f64; 4]>, f64), EnsembleError> {
     // [S11, S12, S33, S34] summed over the nodes, per angle.
     let mut sums = vec![[0.0f64; 4]; cos_theta.len()];
+    let mut scattering_x_squared = 0.0;
     // One solution's buffers serve every node (recomputed in place).
     let mut solution: Option<MieSolution> = None;
     for (&radius_m, &weight) in quadrature.radii_m().iter().zip(quadrature.weights()) {
@@ -75,6 +110,7 @@ pub fn compute_ensemble_phase_matrix_ratios(
             }
             None => solution.insert(MieSolution::compute(refractive_index, x).map_err(mie_error)?),
         };
+        scattering_x_squared += weight * x * x * solution.efficiencies().qsca;
         for (sum, &mu) in sums.iter_mut().zip(cos_theta) {
             let (s1, s2) = solution.amplitudes(mu);
             let (n1, n2) = (s1.norm_sqr(), s2.norm_sqr());
@@ -85,17 +121,7 @@ pub fn compute_ensemble_phase_matrix_ratios(
             sum[3] += weight * product.im;
         }
     }
-    let ratio = |k: usize| -> Vec<f64> {
-        sums.iter()
-            .map(|s| if s[0] > 0.0 { s[k] / s[0] } else { 0.0 })
-            .collect()
-    };
-    Ok(PhaseMatrixRatios {
-        cos_theta: cos_theta.to_vec(),
-        f12_over_f11: ratio(1),
-        f33_over_f11: ratio(2),
-        f34_over_f11: ratio(3),
-    })
+    Ok((sums, scattering_x_squared))
 }
 
 #[cfg(test)]

@@ -303,10 +303,18 @@ impl PhaseTableWorkspace {
             .iter()
             .map(|&lambda| validate_wavelength(lambda))
             .collect::<Result<Vec<f64>, EnsembleError>>()?;
+        // The ripple density of the least absorbing index serves them all.
+        let settings = match refractive_indices
+            .iter()
+            .min_by(|a, b| (a.im / a.re).total_cmp(&(b.im / b.re)))
+        {
+            Some(&m) => settings.for_refractive_index(m),
+            None => *settings,
+        };
         let quadrature = SharedSizeParameterQuadrature::gauss_legendre(
             distribution,
             &wavenumbers_per_m,
-            settings,
+            &settings,
         )?;
         let angle_count = self.cos_theta.len();
         let index_count = refractive_indices.len();
