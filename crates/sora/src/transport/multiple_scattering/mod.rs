@@ -234,6 +234,7 @@
 //! m^-1 at relative density 1 (as [`crate::atmosphere::AtmosphereOptics`]),
 //! altitudes m, angles rad inside (degrees in settings).
 
+mod column_optics;
 mod forward_peak;
 mod peak_beam;
 mod phase_fourier;
