@@ -5,28 +5,21 @@
 use std::f64::consts::{FRAC_PI_2, PI};
 
 use super::MultipleScatteringSettings;
+use super::column_optics::{ColumnGeometry, ScaledOptics};
 use super::forward_peak::{self, ForwardPeak};
 use super::peak_beam::{PeakBeam, PeakBeamInputs};
-use super::phase_fourier::{
-    TruncatedPhase, compute_truncated_phases, normalized_associated_legendre,
-};
+use super::phase_fourier::normalized_associated_legendre;
 use super::polarisation_correction::{CorrectionInputs, PolarisationCorrection, PolarisationTable};
 use super::regimes::{FIRST_ORDER_SUN_ZENITH_DEG, SUNSET_STEP_END_DEG, SUNSET_STEP_START_DEG};
 use super::spherical_first_order::{
     FirstOrderInputs, MomentQuadrature, compute_spherical_first_order,
 };
-use super::spherical_paths::StreamPaths;
-use super::successive_orders::{self, ColumnSystem, ScaledSpecies, Streams};
-use super::vertical_grid::VerticalGrid;
-use super::view_march::{
-    MultipleScatteringScratch, NodeGeometry, SUN_RAY_PANELS, ViewRayOptics, floored_log,
-};
+use super::successive_orders::{self, ColumnSystem, ScaledSpecies};
+use super::view_march::{MultipleScatteringScratch, NodeGeometry, ViewRayOptics, floored_log};
 use crate::atmosphere::AtmosphereOptics;
-use crate::atmosphere::DensityProfile;
 use crate::atmosphere::phase_matrix::PhaseMatrix;
 use crate::error::Result;
 use crate::geometry::Vector3;
-use crate::transport::optical_column::{ProfileCorners, compute_columns_along_ray};
 use crate::transport::single_scattering::{SingleScatteringSky, SunColumns};
 
 /// Altitude and mu nodes of the sun-column table of the spherical first
@@ -148,11 +141,9 @@ pub struct MultipleScatteringField {
     pub(super) settings: MultipleScatteringSettings,
     /// The sky's optics (exact phase functions for the forward-peak term).
     pub(super) atmosphere: AtmosphereOptics,
-    pub(super) grid: VerticalGrid,
-    pub(super) streams: Streams,
+    /// The view march's optics, with the scaled optics and the columns'
+    /// geometry the field was solved on.
     pub(super) optics: ViewRayOptics,
-    /// [i * species + j].
-    pub(super) phases: Vec<TruncatedPhase>,
     pub(super) harmonics: Vec<bool>,
     /// The solver's output as it wrote it: per wavelength i and sun node s
     /// a block of `solution_len + 2` values, L_m(z_k, mu_b) at [(m *
@@ -255,128 +246,6 @@ impl FieldRequest {
     }
 }
 
-/// Delta-M truncated phase functions and the scaled coefficients, per
-/// wavelength i and species j at [i * species + j], m^-1 at relative
-/// density 1.
-#[derive(Debug, Clone)]
-pub(super) struct ScaledOptics {
-    pub(super) phases: Vec<TruncatedPhase>,
-    pub(super) extinction: Vec<f64>,
-    pub(super) scaled_extinction: Vec<f64>,
-    pub(super) scaled_scattering: Vec<f64>,
-}
-
-impl ScaledOptics {
-    /// The delta-M scaling of `optics` to `degrees` Legendre terms.
-    pub(super) fn delta_m(optics: &AtmosphereOptics, degrees: usize) -> ScaledOptics {
-        let (wavelengths, species) = (optics.grid.len(), optics.species.len());
-        let phases = compute_truncated_phases(optics, degrees);
-        let mut extinction = vec![0.0; wavelengths * species];
-        let mut scaled_extinction = vec![0.0; wavelengths * species];
-        let mut scaled_scattering = vec![0.0; wavelengths * species];
-        for i in 0..wavelengths {
-            for (j, s) in optics.species.iter().enumerate() {
-                let f = phases[i * species + j].forward_fraction;
-                let (ext, sca) = (s.extinction_per_m[i], s.scattering_per_m[i]);
-                extinction[i * species + j] = ext;
-                scaled_extinction[i * species + j] = ext - f * sca;
-                scaled_scattering[i * species + j] = (1.0 - f) * sca;
-            }
-        }
-        ScaledOptics {
-            phases,
-            extinction,
-            scaled_extinction,
-            scaled_scattering,
-        }
-    }
-
-    /// The scaled and exact optical depths at wavelength `i` of `columns`
-    /// (m, one per species).
-    fn optical_depths(&self, i: usize, columns: &[f64]) -> (f64, f64) {
-        let species = columns.len();
-        let (mut scaled, mut exact) = (0.0, 0.0);
-        for (j, column) in columns.iter().enumerate() {
-            scaled += self.scaled_extinction[i * species + j] * column;
-            exact += self.extinction[i * species + j] * column;
-        }
-        (scaled, exact)
-    }
-}
-
-/// The columns' geometry: the vertical grid, the spherical streams'
-/// paths, the profiles and their corners, and the geometric columns
-/// toward the sun from every level.
-#[derive(Debug, Clone)]
-pub(super) struct ColumnGeometry {
-    pub(super) ground_radius_m: f64,
-    pub(super) top_radius_m: f64,
-    pub(super) streams: Streams,
-    pub(super) grid: VerticalGrid,
-    pub(super) paths: StreamPaths,
-    pub(super) profiles: Vec<DensityProfile>,
-    pub(super) corners: ProfileCorners,
-}
-
-impl ColumnGeometry {
-    fn new(sky: &SingleScatteringSky, settings: &MultipleScatteringSettings) -> ColumnGeometry {
-        let optics = sky.optics();
-        let (ground_radius_m, top_radius_m) = sky.radii_m();
-        let streams = Streams::new(settings.streams_per_hemisphere);
-        let profiles: Vec<DensityProfile> =
-            optics.species.iter().map(|s| s.profile.clone()).collect();
-        let grid =
-            VerticalGrid::for_optics(optics, top_radius_m - ground_radius_m, settings.layers);
-        let radii: Vec<f64> = grid
-            .altitudes_m()
-            .iter()
-            .map(|z| ground_radius_m + z)
-            .collect();
-        let paths = StreamPaths::compute(&radii, streams.cosines());
-        let corners = ProfileCorners::new(&profiles, ground_radius_m, top_radius_m);
-        ColumnGeometry {
-            ground_radius_m,
-            top_radius_m,
-            streams,
-            grid,
-            paths,
-            profiles,
-            corners,
-        }
-    }
-
-    /// Appends to `sun_columns` the geometric columns (m, per species)
-    /// toward a sun at zenith angle `theta` (rad) from every level, None in
-    /// the planet's shadow.
-    fn add_columns_toward_sun(&self, theta: f64, sun_columns: &mut Vec<Option<Vec<f64>>>) {
-        let (ground_radius_m, top_radius_m) = (self.ground_radius_m, self.top_radius_m);
-        let mut ends = Vec::with_capacity(self.corners.most_panel_ends(SUN_RAY_PANELS));
-        let direction = Vector3::new(theta.sin(), 0.0, theta.cos());
-        for &z in self.grid.altitudes_m() {
-            let r = ground_radius_m + z;
-            if crate::geometry::ray_intersects_ground(r, theta.cos(), ground_radius_m) {
-                sun_columns.push(None);
-                continue;
-            }
-            let origin = Vector3::new(0.0, 0.0, r);
-            let length =
-                crate::geometry::distance_to_top_of_atmosphere(origin, direction, top_radius_m);
-            let mut columns = vec![0.0; self.profiles.len()];
-            self.corners
-                .fill_panel_ends(origin, direction, length, SUN_RAY_PANELS, &mut ends);
-            compute_columns_along_ray(
-                &self.profiles,
-                ground_radius_m,
-                origin,
-                direction,
-                &ends,
-                &mut columns,
-            );
-            sun_columns.push(Some(columns));
-        }
-    }
-}
-
 /// The solved columns: per wavelength i and sun node s a block of
 /// `solution_len + 2` values (the field, then the ground's diffuse and
 /// direct radiances), blocks [i * sun nodes + s].
@@ -468,47 +337,24 @@ impl MultipleScatteringField {
                     .any(|(p, b)| *b > 0.0 && !p.harmonic_vanishes(m))
             })
             .collect();
-        let ColumnGeometry {
-            ground_radius_m,
-            top_radius_m,
-            streams,
-            grid,
-            profiles,
-            corners,
-            ..
-        } = geometry;
-        let ScaledOptics {
-            phases,
-            extinction,
-            scaled_extinction,
-            scaled_scattering,
-        } = scaled;
         Ok(MultipleScatteringField {
             settings,
             atmosphere: optics.clone(),
-            grid,
-            streams,
             optics: ViewRayOptics {
                 wavelengths: optics.grid.len(),
                 species: optics.species.len(),
                 panels: settings.view_ray_panels,
-                ground_radius_m,
-                top_radius_m,
                 observer: Vector3::new(0.0, 0.0, sky.observer_radius_m()),
                 sun: sky.sun_direction(),
-                profiles,
-                corners,
-                extinction,
-                scaled_extinction,
+                scaled,
+                geometry,
                 has_forward_peaks: forward_peak.any(),
                 forward_peak,
                 peak_beam,
-                scaled_scattering,
                 sun_axis,
                 ground_diffuse,
                 ground_direct,
             },
-            phases,
             harmonics,
             solutions: columns.solved,
             solution_len: columns.solution_len,
@@ -544,8 +390,8 @@ impl MultipleScatteringField {
     /// is called from inside parallel loops).
     pub(super) fn source_moments(&self) -> &[f64] {
         self.moments.get_or_init(|| {
-            let degrees = self.streams.count();
-            let levels = self.grid.levels();
+            let degrees = self.optics.geometry.streams.count();
+            let levels = self.optics.geometry.grid.levels();
             let (w, species) = (self.optics.wavelengths, self.optics.species);
             let square = degrees * degrees;
             let suns = self.optics.sun_axis.count();
@@ -555,9 +401,9 @@ impl MultipleScatteringField {
                 for i in 0..w {
                     let solution = self.solution(s, i);
                     for k in 0..levels {
-                        let densities = self.grid.densities_at_level(k);
+                        let densities = self.optics.geometry.grid.densities_at_level(k);
                         let scattering = |j: usize| {
-                            densities[j] * self.optics.scaled_scattering[i * species + j]
+                            densities[j] * self.optics.scaled.scaled_scattering[i * species + j]
                         };
                         let total: f64 = (0..species).map(scattering).sum();
                         if total <= 0.0 {
@@ -566,7 +412,7 @@ impl MultipleScatteringField {
                         mixed.fill(0.0);
                         for j in 0..species {
                             let fraction = scattering(j) / total;
-                            let phase = &self.phases[i * species + j];
+                            let phase = &self.optics.scaled.phases[i * species + j];
                             for (c, p) in mixed.iter_mut().zip(&phase.coefficients) {
                                 *c += fraction * p;
                             }
@@ -578,8 +424,9 @@ impl MultipleScatteringField {
                                 let moment: f64 = (0..degrees)
                                     .map(|b| {
                                         2.0 * PI
-                                            * self.streams.weights()[b]
-                                            * self.streams.legendre(b)[m * degrees + l]
+                                            * self.optics.geometry.streams.weights()[b]
+                                            * self.optics.geometry.streams.legendre(b)
+                                                [m * degrees + l]
                                             * radiance[b]
                                     })
                                     .sum();
@@ -601,14 +448,14 @@ impl MultipleScatteringField {
     /// read both), and one node more on each side for the interpolation.
     pub(super) fn reachable_sun_nodes(&self) -> Vec<(usize, usize)> {
         let optics = &self.optics;
-        let ground = optics.ground_radius_m;
+        let ground = optics.geometry.ground_radius_m;
         let eye = optics.observer.length().max(ground);
         let centre = optics
             .sun
             .dot(optics.observer * (1.0 / eye))
             .clamp(-1.0, 1.0)
             .acos();
-        let altitudes = self.grid.altitudes_m();
+        let altitudes = self.optics.geometry.grid.altitudes_m();
         let axis = &optics.sun_axis;
         (0..altitudes.len())
             .map(|k| {
@@ -687,7 +534,7 @@ impl MultipleScatteringField {
         let correction = self.polarisation.as_ref()?;
         correction.compute_ratios(
             &self.atmosphere,
-            &self.phases,
+            &self.optics.scaled.phases,
             (view_cosine, view_azimuth_rad),
             ratios,
         );
@@ -702,12 +549,12 @@ impl MultipleScatteringField {
         nodes: (usize, usize),
     ) -> Option<PolarisationTable> {
         let correction = self.polarisation.as_ref()?;
-        Some(correction.tabulate(&self.atmosphere, &self.phases, nodes))
+        Some(correction.tabulate(&self.atmosphere, &self.optics.scaled.phases, nodes))
     }
 
     /// Work space for [`MultipleScatteringField::compute_radiance`].
     pub(crate) fn scratch(&self) -> MultipleScatteringScratch {
-        self.optics.scratch(self.streams.count())
+        self.optics.scratch(self.optics.geometry.streams.count())
     }
 
     /// Multiply scattered radiance (orders >= 2 and skylight reflected by
@@ -778,12 +625,12 @@ impl MultipleScatteringField {
         node: NodeGeometry,
         scratch: &mut MultipleScatteringScratch,
     ) {
-        let degrees = self.streams.count();
+        let degrees = self.optics.geometry.streams.count();
         let square = degrees * degrees;
-        let levels = self.grid.levels();
+        let levels = self.optics.geometry.grid.levels();
         let w = self.optics.wavelengths;
         let moments = self.source_moments();
-        let (k, tz) = self.grid.locate(node.altitude_m);
+        let (k, tz) = self.optics.geometry.grid.locate(node.altitude_m);
         let (sun_node, ts) = self.optics.sun_axis.locate(node.sun_cosine);
         normalized_associated_legendre(node.view_cosine, degrees, &mut scratch.view_legendre);
         // cos(m phi) Lambda_l^m(mu_v) by the Chebyshev recurrence for cos(m phi).
@@ -846,12 +693,8 @@ fn solve_polarisation_columns(
         .collect();
     PolarisationCorrection::compute(&CorrectionInputs {
         optics,
-        streams: &geometry.streams,
-        grid: &geometry.grid,
-        paths: &geometry.paths,
-        phases: &scaled.phases,
-        scaled_extinction: &scaled.scaled_extinction,
-        scaled_scattering: &scaled.scaled_scattering,
+        scaled,
+        geometry,
         sun_cosine: eye_sun_zenith.cos(),
         sun_optical_depths: &sun_optical_depths,
         eye_altitude_m: sky.observer_radius_m() - geometry.ground_radius_m,
@@ -876,16 +719,11 @@ fn solve_spherical_first_order(
     let (altitude_nodes, mu_nodes) = sun_column_nodes;
     let table_columns = sky.sun_column_table(altitude_nodes, mu_nodes);
     compute_spherical_first_order(&FirstOrderInputs {
-        profiles: &geometry.profiles,
-        corners: &geometry.corners,
+        scaled,
+        geometry,
         sun_columns: &table_columns,
-        level_altitudes_m: geometry.grid.altitudes_m(),
-        streams: &geometry.streams,
         moments: MomentQuadrature::Fine,
         sun_zenith_rad: suns,
-        scaled_extinction: &scaled.scaled_extinction,
-        scaled_scattering: &scaled.scaled_scattering,
-        phases: &scaled.phases,
         solar_irradiance_w_m2_nm: &solar_irradiance,
     })
 }
@@ -1081,13 +919,9 @@ fn compute_peak_beam(
             PeakBeam::compute(
                 &PeakBeamInputs {
                     optics: sky.optics(),
-                    phases: &scaled.phases,
-                    profiles: &geometry.profiles,
-                    corners: &geometry.corners,
+                    scaled,
+                    geometry,
                     sun_columns: &sky.sun_column_table(altitude_nodes, mu_nodes),
-                    altitudes_m: geometry.grid.altitudes_m(),
-                    extinction: &scaled.extinction,
-                    scaled_extinction: &scaled.scaled_extinction,
                 },
                 elevations_deg,
             )

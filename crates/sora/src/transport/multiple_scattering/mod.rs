@@ -139,22 +139,6 @@
 //! | tilted peak beam blend | linear passage back to delta-M's beam | point's sun elevation from (deg) | `PEAK_BEAM_BLEND_START_DEG` = 8 |
 //! | polarisation ratio (`polarisation_correction.rs`) | (I, Q, U, V) / I of the orders >= 2 | `Polarisation::Vector`, every sun: one column at the eye's sun, with its own first order and no shift | - |
 //!
-//! # Why not Hillaire (2020)
-//! Hillaire's table of the multiply scattered luminance per (altitude,
-//! mu_s), 64 directions per cell and the series 1 / (1 - f_ms), assumes
-//! isotropic scattering for every order >= 2. Measured in this solver by
-//! replacing the phase functions of orders >= 2 by isotropic ones (the
-//! exact single scattering kept): errors against DISORT up to 12 % with a
-//! black ground and 34 % with albedo 0.3 on `clear-sky-reference` (its
-//! g = 0.7 aerosol sends ground light back up, not down into the sky; the
-//! isotropic assumption sends a third of it down). Computing the second
-//! order with the real phase functions and keeping the isotropic series
-//! for the rest would still leave the third and higher orders (a third of
-//! the multiply scattered light in the blue) isotropic. Bruneton's 4D
-//! scattering-order tables are too slow at 21 wavelengths on a CPU. The
-//! discrete-ordinate field costs about as much per sun zenith angle as
-//! Hillaire's table and treats every order with the real phase functions.
-//!
 //! # Accuracy (measured; the tests named hold it)
 //! - DISORT (plane-parallel, every row of the clear-sky reference): worst
 //!   0.074 % (black ground) and 0.061 % (albedo 0.3) with the exact
@@ -193,8 +177,9 @@
 //!   to +5.4 %, earth-hazy +1.2 to +7.9 %, us-standard +0.2 to +3.0 %, all
 //!   within 5 % + 3 standard errors; earth-clear leans dark in the blue.
 //!
-//! Each number with its paths and standard errors, and what each piece
-//! changed when it was added, is in `docs/twilight_survey.md`.
+//! Each number with its paths and standard errors, what each piece
+//! changed when it was added, and why the field is not Hillaire's (2020)
+//! table with isotropic orders >= 2, are in `docs/twilight_survey.md`.
 //!
 //! # Cost (measured, `benches/multiple_scattering.rs`, 2 shared cores)
 //! One solve per wavelength and sun node (9 nodes for a sun 30 degrees
@@ -234,12 +219,14 @@
 //! m^-1 at relative density 1 (as [`crate::atmosphere::AtmosphereOptics`]),
 //! altitudes m, angles rad inside (degrees in settings).
 
+mod column_optics;
 mod forward_peak;
 mod peak_beam;
 mod phase_fourier;
 mod phase_matrix_fourier;
 mod polarisation_correction;
 mod regimes;
+mod settings;
 mod source_table;
 mod spherical_first_order;
 mod spherical_paths;
@@ -248,6 +235,7 @@ mod twilight_shift;
 mod vector_successive_orders;
 mod vertical_grid;
 
+pub use settings::MultipleScatteringSettings;
 pub use source_table::MultipleScatteringTable;
 
 mod field;
@@ -257,85 +245,3 @@ pub(crate) use self::field::{FieldRequest, MultipleScatteringField};
 pub(crate) use self::polarisation_correction::PolarisationTable;
 pub use self::view_march::MultipleScatteringScratch;
 use self::view_march::{LOG_FLOOR, NodeGeometry, floored_log};
-use crate::error::{Error, Result};
-
-/// Resolution of the multiple-scattering method.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct MultipleScatteringSettings {
-    /// Discrete ordinates per hemisphere (the solver has twice as many
-    /// streams, Legendre terms and azimuthal harmonics).
-    pub streams_per_hemisphere: usize,
-    /// Layers of the vertical grid.
-    pub layers: usize,
-    /// Step between the sun zenith angles at which the field is solved
-    /// for a high sun, degrees.
-    pub sun_zenith_step_deg: f64,
-    /// The step near and below the horizon (zenith angles from
-    /// `SUNSET_STEP_END_DEG`, 85 degrees),
-    /// where the field changes fastest, degrees.
-    pub sunset_sun_zenith_step_deg: f64,
-    /// Gauss panels along each view ray.
-    pub view_ray_panels: usize,
-    /// Source table: view zenith nodes (0..180 degrees).
-    pub table_view_zenith_nodes: usize,
-    /// Source table: relative azimuth nodes (0..180 degrees).
-    pub table_azimuth_nodes: usize,
-}
-
-impl Default for MultipleScatteringSettings {
-    fn default() -> MultipleScatteringSettings {
-        MultipleScatteringSettings {
-            streams_per_hemisphere: 8,
-            layers: 40,
-            sun_zenith_step_deg: 3.0,
-            sunset_sun_zenith_step_deg: 0.75,
-            view_ray_panels: 16,
-            table_view_zenith_nodes: 37,
-            table_azimuth_nodes: 19,
-        }
-    }
-}
-
-impl MultipleScatteringSettings {
-    /// Checks that every count and step can make a solver: at least one
-    /// stream per hemisphere (at most 32), two layers, two panels, two
-    /// nodes per table axis, and positive steps.
-    pub(crate) fn validate(&self) -> Result<()> {
-        let counts = [
-            ("streams per hemisphere", self.streams_per_hemisphere, 1, 32),
-            ("multiple-scattering layers", self.layers, 2, 10_000),
-            ("view-ray panels", self.view_ray_panels, 2, 10_000),
-            (
-                "source-table view zenith nodes",
-                self.table_view_zenith_nodes,
-                2,
-                10_000,
-            ),
-            (
-                "source-table azimuth nodes",
-                self.table_azimuth_nodes,
-                2,
-                10_000,
-            ),
-        ];
-        for (name, value, low, high) in counts {
-            if !(low..=high).contains(&value) {
-                return Err(Error::out_of_range(
-                    name,
-                    value as f64,
-                    "",
-                    format!("{low}..={high}"),
-                ));
-            }
-        }
-        for (name, value) in [
-            ("sun zenith step", self.sun_zenith_step_deg),
-            ("sunset sun zenith step", self.sunset_sun_zenith_step_deg),
-        ] {
-            if !(value.is_finite() && value > 0.0 && value <= 90.0) {
-                return Err(Error::out_of_range(name, value, "deg", "> 0 and <= 90"));
-            }
-        }
-        Ok(())
-    }
-}

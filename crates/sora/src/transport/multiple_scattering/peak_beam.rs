@@ -93,15 +93,14 @@
 
 use std::ops::ControlFlow;
 
+use super::column_optics::{ColumnGeometry, ScaledOptics};
 use super::phase_fourier::TruncatedPhase;
 use super::regimes::{
     PEAK_BEAM_BLEND_START_DEG, PEAK_BEAM_HIGHEST_ELEVATION_DEG, PEAK_BEAM_LOWEST_ELEVATION_DEG,
 };
 use crate::atmosphere::{AtmosphereOptics, DensityProfile};
 use crate::geometry::{Vector3, segment_in_atmosphere};
-use crate::transport::optical_column::{
-    PanelMarch, ProfileCorners, SunColumnRadius, SunColumnTable,
-};
+use crate::transport::optical_column::{PanelMarch, SunColumnRadius, SunColumnTable};
 use crate::transport::vector_exp::exp_neg_in_place;
 
 /// The table's lowest node is this high, m: a horizontal line from it
@@ -134,16 +133,11 @@ const PROJECTION_STEP_DEG: f64 = 0.1;
 /// [i * species + j].
 pub(crate) struct PeakBeamInputs<'a> {
     pub optics: &'a AtmosphereOptics,
-    pub phases: &'a [TruncatedPhase],
-    pub profiles: &'a [DensityProfile],
-    pub corners: &'a ProfileCorners,
+    pub scaled: &'a ScaledOptics,
+    /// The columns' geometry; the table's altitudes are its levels (m,
+    /// increasing from 0: dense where the extinction is).
+    pub geometry: &'a ColumnGeometry,
     pub sun_columns: &'a SunColumnTable,
-    /// The table's altitudes, m, increasing from 0 (the field's levels:
-    /// dense where the extinction is).
-    pub altitudes_m: &'a [f64],
-    /// m^-1 at relative density 1.
-    pub extinction: &'a [f64],
-    pub scaled_extinction: &'a [f64],
 }
 
 /// A line from a table node marched once: per sample its radius located
@@ -176,9 +170,13 @@ impl PeakBeam {
     /// none has), at the table's sun elevations within `elevations_deg`
     /// (those its view rays meet, [`PeakBeam::needed_elevations_deg`]).
     pub(crate) fn compute(inputs: &PeakBeamInputs, elevations_deg: (f64, f64)) -> Option<PeakBeam> {
-        let (ground, top) = inputs.corners.radii_m();
-        let weights =
-            compute_tilt_weights(inputs.optics, inputs.phases, inputs.profiles, top - ground)?;
+        let (ground, top) = inputs.geometry.corners.radii_m();
+        let weights = compute_tilt_weights(
+            inputs.optics,
+            &inputs.scaled.phases,
+            &inputs.geometry.profiles,
+            top - ground,
+        )?;
         Some(PeakBeam::compute_with_tilts(
             inputs,
             &weights,
@@ -200,9 +198,11 @@ impl PeakBeam {
         weights: &[f64],
         (lowest_deg, highest_deg): (f64, f64),
     ) -> PeakBeam {
-        let (ground, top) = inputs.corners.radii_m();
+        let (corners, profiles) = (&inputs.geometry.corners, &inputs.geometry.profiles);
+        let altitudes_m = inputs.geometry.grid.altitudes_m();
+        let (ground, top) = corners.radii_m();
         let w = inputs.optics.grid.len();
-        let s = inputs.profiles.len();
+        let s = profiles.len();
         let tilts = weights.len() / w;
         let used: Vec<usize> = (0..tilts)
             .filter(|k| (0..w).any(|i| weights[i * tilts + k] > LIGHTEST_TILT))
@@ -212,10 +212,11 @@ impl PeakBeam {
             (0..s * w).map(|at| values(at % w, at / w)).collect()
         };
         let peak = by_species(&|i, j| {
-            inputs.phases[i * s + j].forward_fraction * inputs.optics.species[j].scattering_per_m[i]
+            inputs.scaled.phases[i * s + j].forward_fraction
+                * inputs.optics.species[j].scattering_per_m[i]
         });
-        let extinction = by_species(&|i, j| inputs.extinction[i * s + j]);
-        let scaled_extinction = by_species(&|i, j| inputs.scaled_extinction[i * s + j]);
+        let extinction = by_species(&|i, j| inputs.scaled.extinction[i * s + j]);
+        let scaled_extinction = by_species(&|i, j| inputs.scaled.scaled_extinction[i * s + j]);
         let node = |deg: f64| (deg - PEAK_BEAM_LOWEST_ELEVATION_DEG) / ELEVATION_STEP_DEG;
         let last_node = elevation_count() - 1;
         let first = (node(lowest_deg).floor().max(0.0) as usize).min(last_node - 1);
@@ -227,11 +228,11 @@ impl PeakBeam {
         // Line n has the elevation of node first + n plus the lowest tilt.
         let lines = elevations + 2 * half_tilts;
         let line_rad = |n: usize| elevation_rad(first + n) + tilt_deg(0, tilts).to_radians();
-        let altitudes = inputs.altitudes_m.len();
+        let altitudes = altitudes_m.len();
         let mut ln_beam = vec![0.0; altitudes * per_altitude];
         crate::parallel::for_each_chunk_mut(&mut ln_beam, per_altitude, |a, block| {
-            let x = Vector3::new(0.0, 0.0, ground + inputs.altitudes_m[a].max(LOWEST_NODE_M));
-            let mut ends = Vec::with_capacity(inputs.corners.most_panel_ends(PANELS));
+            let x = Vector3::new(0.0, 0.0, ground + altitudes_m[a].max(LOWEST_NODE_M));
+            let mut ends = Vec::with_capacity(corners.most_panel_ends(PANELS));
             let mut march = PanelMarch::new(s);
             let mut sun = vec![0.0; s];
             let mut depth = vec![0.0; w];
@@ -244,11 +245,9 @@ impl PeakBeam {
                     && exit > enter
                 {
                     let start = x + d * enter;
-                    inputs
-                        .corners
-                        .fill_panel_ends(start, d, exit - enter, PANELS, &mut ends);
+                    corners.fill_panel_ends(start, d, exit - enter, PANELS, &mut ends);
                     march.march(
-                        inputs.profiles,
+                        profiles,
                         ground,
                         (start, d),
                         &ends,
@@ -336,7 +335,7 @@ impl PeakBeam {
         PeakBeam {
             wavelengths: w,
             ground_m: ground,
-            altitudes_m: inputs.altitudes_m.to_vec(),
+            altitudes_m: altitudes_m.to_vec(),
             first,
             elevations,
             ln_beam,
@@ -505,7 +504,6 @@ fn elevation_rad(e: usize) -> f64 {
 
 #[cfg(test)]
 mod tests {
-    use super::super::phase_fourier::compute_truncated_phases;
     use super::super::vertical_grid::VerticalGrid;
     use super::*;
     use crate::atmosphere::Atmosphere;
@@ -516,13 +514,9 @@ mod tests {
     /// streams a hemisphere's delta-M (the sky's default).
     struct Inputs {
         optics: AtmosphereOptics,
-        phases: Vec<TruncatedPhase>,
-        profiles: Vec<DensityProfile>,
-        corners: ProfileCorners,
+        scaled: ScaledOptics,
+        geometry: ColumnGeometry,
         sun_columns: SunColumnTable,
-        altitudes_m: Vec<f64>,
-        extinction: Vec<f64>,
-        scaled_extinction: Vec<f64>,
     }
 
     impl Inputs {
@@ -530,58 +524,41 @@ mod tests {
             let atmosphere = Atmosphere::preset(preset).unwrap();
             let grid = WavelengthGrid::new(440.0, 680.0, 120.0).unwrap();
             let optics = atmosphere.compute_optics(&grid).unwrap();
-            let (w, s) = (grid.len(), optics.species.len());
             let ground = atmosphere.planet.radius_m();
             let top = ground + atmosphere.planet.atmosphere_height_m();
-            let phases = compute_truncated_phases(&optics, 16);
-            let extinction: Vec<f64> = (0..w)
-                .flat_map(|i| optics.species.iter().map(move |sp| sp.extinction_per_m[i]))
-                .collect();
-            let scaled_extinction: Vec<f64> = (0..w * s)
-                .map(|at| {
-                    let species = &optics.species[at % s];
-                    extinction[at] - phases[at].forward_fraction * species.scattering_per_m[at / s]
-                })
-                .collect();
+            let scaled = ScaledOptics::delta_m(&optics, 16);
             let profiles: Vec<DensityProfile> =
                 optics.species.iter().map(|s| s.profile.clone()).collect();
-            let corners = ProfileCorners::new(&profiles, ground, top);
             let sun_columns = SunColumnTable::compute(&profiles, ground, top, 128, 256);
             // The field's levels, as the sky's default makes them.
             let altitudes_m = VerticalGrid::for_optics(&optics, top - ground, 40)
                 .altitudes_m()
                 .to_vec();
-            assert_eq!(phases.len(), w * s);
+            let geometry = ColumnGeometry::with_levels(profiles, (ground, top), 8, &altitudes_m);
+            assert_eq!(scaled.phases.len(), grid.len() * optics.species.len());
             Inputs {
                 optics,
-                phases,
-                profiles,
-                corners,
+                scaled,
+                geometry,
                 sun_columns,
-                altitudes_m,
-                extinction,
-                scaled_extinction,
             }
         }
 
         fn beam_inputs(&self) -> PeakBeamInputs<'_> {
             PeakBeamInputs {
                 optics: &self.optics,
-                phases: &self.phases,
-                profiles: &self.profiles,
-                corners: &self.corners,
+                scaled: &self.scaled,
+                geometry: &self.geometry,
                 sun_columns: &self.sun_columns,
-                altitudes_m: &self.altitudes_m,
-                extinction: &self.extinction,
-                scaled_extinction: &self.scaled_extinction,
             }
         }
 
         /// f_j beta_sca,j at [i * species + j], m^-1.
         fn peak_scattering(&self) -> Vec<f64> {
-            self.extinction
+            self.scaled
+                .extinction
                 .iter()
-                .zip(&self.scaled_extinction)
+                .zip(&self.scaled.scaled_extinction)
                 .map(|(e, s)| e - s)
                 .collect()
         }
@@ -589,18 +566,19 @@ mod tests {
         /// Columns of every species from `point` to the top along
         /// `direction` (None through the ground), on 64 panels.
         fn columns(&self, point: Vector3, direction: Vector3) -> Option<Vec<f64>> {
-            let (ground, top) = self.corners.radii_m();
+            let (ground, top) = self.geometry.corners.radii_m();
             let r = point.length();
             if crate::geometry::ray_intersects_ground(r, point.dot(direction) / r, ground) {
                 return None;
             }
             let length = crate::geometry::distance_to_top_of_atmosphere(point, direction, top);
             let mut ends = Vec::new();
-            self.corners
+            self.geometry
+                .corners
                 .fill_panel_ends(point, direction, length, 64, &mut ends);
-            let mut columns = vec![0.0; self.profiles.len()];
+            let mut columns = vec![0.0; self.geometry.profiles.len()];
             compute_columns_along_ray(
-                &self.profiles,
+                &self.geometry.profiles,
                 ground,
                 point,
                 direction,
@@ -616,8 +594,8 @@ mod tests {
         /// columns toward the sun integrated exactly (64 panels) at every
         /// step.
         fn reference_beam(&self, weights: &[f64], altitude_m: f64, elevation_deg: f64) -> Vec<f64> {
-            let (ground, top) = self.corners.radii_m();
-            let (w, s) = (self.optics.grid.len(), self.profiles.len());
+            let (ground, top) = self.geometry.corners.radii_m();
+            let (w, s) = (self.optics.grid.len(), self.geometry.profiles.len());
             let tilts = weights.len() / w;
             // From the ground a horizontal line would graze it (the table's
             // lowest node is LOWEST_NODE_M up for that reason).
@@ -640,6 +618,7 @@ mod tests {
                     let y = x + d * (t + 0.5 * h);
                     let altitude = y.length() - ground;
                     let densities: Vec<f64> = self
+                        .geometry
                         .profiles
                         .iter()
                         .map(|p| p.relative_density(altitude))
@@ -650,8 +629,8 @@ mod tests {
                             .zip(&densities)
                             .map(|(v, d)| v + 0.5 * h * d)
                             .collect();
-                        let exact = depths(&self.extinction, &columns);
-                        let scaled = depths(&self.scaled_extinction, &sun_columns);
+                        let exact = depths(&self.scaled.extinction, &columns);
+                        let scaled = depths(&self.scaled.scaled_extinction, &sun_columns);
                         let peak = depths(&self.peak_scattering(), &densities);
                         for (((out, e), t), p) in line.iter_mut().zip(exact).zip(scaled).zip(peak) {
                             *out += h * p * (-(e + t)).exp();
@@ -691,7 +670,7 @@ mod tests {
     fn an_untilted_peak_gives_delta_ms_beam() {
         let inputs = Inputs::new("mars-dust");
         let w = inputs.optics.grid.len();
-        let tilts = tilt_count(inputs.phases[0].terms());
+        let tilts = tilt_count(inputs.scaled.phases[0].terms());
         let mut weights = vec![0.0; w * tilts];
         for i in 0..w {
             weights[i * tilts + tilts / 2] = 1.0;
@@ -704,11 +683,11 @@ mod tests {
                 PEAK_BEAM_HIGHEST_ELEVATION_DEG,
             ),
         );
-        let (ground, _) = inputs.corners.radii_m();
+        let (ground, _) = inputs.geometry.corners.radii_m();
         let mut worst = 0.0f64;
         let mut looked_up = vec![0.0; w];
         for a in [0, 3, 6, 10, 15] {
-            let z = inputs.altitudes_m[a];
+            let z = inputs.geometry.grid.altitudes_m()[a];
             for e in (18..=30).step_by(2) {
                 let elevation = elevation_rad(e);
                 let x = Vector3::new(0.0, 0.0, ground + z);
@@ -717,8 +696,8 @@ mod tests {
                     continue;
                 };
                 table.lookup_beam(x.length(), elevation.sin(), &mut looked_up);
-                let exact = depths(&inputs.extinction, &columns);
-                let scaled = depths(&inputs.scaled_extinction, &columns);
+                let exact = depths(&inputs.scaled.extinction, &columns);
+                let scaled = depths(&inputs.scaled.scaled_extinction, &columns);
                 for (i, ((b, tau), scaled)) in looked_up.iter().zip(exact).zip(scaled).enumerate() {
                     let expected = (-scaled).exp() - (-tau).exp();
                     let error = b / expected - 1.0;
@@ -748,11 +727,11 @@ mod tests {
     fn the_table_matches_a_direct_integral() {
         for (preset, bright, dark) in [("mars-dust", 0.005, 0.005), ("earth-hazy", 0.03, 0.2)] {
             let inputs = Inputs::new(preset);
-            let (ground, top) = inputs.corners.radii_m();
+            let (ground, top) = inputs.geometry.corners.radii_m();
             let weights = compute_tilt_weights(
                 &inputs.optics,
-                &inputs.phases,
-                &inputs.profiles,
+                &inputs.scaled.phases,
+                &inputs.geometry.profiles,
                 top - ground,
             )
             .unwrap();

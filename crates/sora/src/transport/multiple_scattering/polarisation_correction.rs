@@ -46,12 +46,12 @@
 
 use std::f64::consts::PI;
 
+use super::column_optics::{ColumnGeometry, ScaledOptics};
 use super::phase_fourier::{MAX_LEGENDRE_TERMS, TruncatedPhase, legendre_polynomials};
 use super::phase_matrix_fourier::{COMPONENTS, PhaseMatrixHarmonics, is_even_component};
-use super::spherical_paths::{StreamPaths, linear_source_weights};
+use super::spherical_paths::linear_source_weights;
 use super::successive_orders::{ColumnSystem, ScaledSpecies, Streams};
 use super::vector_successive_orders::VectorColumnSystem;
-use super::vertical_grid::VerticalGrid;
 use crate::atmosphere::phase_matrix::PhaseMatrix;
 use crate::atmosphere::{AtmosphereOptics, PhaseFunction};
 
@@ -62,14 +62,8 @@ const SMALLEST_VIEW_COSINE: f64 = 1e-6;
 /// Everything the correction's columns need from the scalar field.
 pub(crate) struct CorrectionInputs<'a> {
     pub(crate) optics: &'a AtmosphereOptics,
-    pub(crate) streams: &'a Streams,
-    pub(crate) grid: &'a VerticalGrid,
-    pub(crate) paths: &'a StreamPaths,
-    /// Delta-M truncated phase functions, [i * species + j].
-    pub(crate) phases: &'a [TruncatedPhase],
-    /// [i * species + j], m^-1 at relative density 1.
-    pub(crate) scaled_extinction: &'a [f64],
-    pub(crate) scaled_scattering: &'a [f64],
+    pub(crate) scaled: &'a ScaledOptics,
+    pub(crate) geometry: &'a ColumnGeometry,
     /// The eye's sun zenith cosine.
     pub(crate) sun_cosine: f64,
     /// The scaled and exact optical depths toward the sun from each level,
@@ -171,16 +165,16 @@ impl PolarisationCorrection {
         let optics = inputs.optics;
         let wavelengths = optics.grid.len();
         let species = optics.species.len();
-        let streams = inputs.streams;
+        let streams = &inputs.geometry.streams;
         let total = streams.count();
-        let grid = inputs.grid;
+        let grid = &inputs.geometry.grid;
         let levels = grid.levels();
         let cosines = streams.cosines();
         // Each species' harmonics between the streams and from the sun, at
         // every wavelength: [j][i].
         let harmonics = compute_species_harmonics(
             optics,
-            inputs.phases,
+            &inputs.scaled.phases,
             streams,
             cosines,
             Some(inputs.sun_cosine),
@@ -194,7 +188,10 @@ impl PolarisationCorrection {
         for i in 0..wavelengths {
             for k in 0..levels - 1 {
                 layer_optical_depths[i * (levels - 1) + k] = (0..species)
-                    .map(|j| inputs.scaled_extinction[i * species + j] * grid.layer_columns_m(k)[j])
+                    .map(|j| {
+                        inputs.scaled.scaled_extinction[i * species + j]
+                            * grid.layer_columns_m(k)[j]
+                    })
                     .sum();
             }
         }
@@ -202,15 +199,21 @@ impl PolarisationCorrection {
         crate::parallel::for_each_chunk_mut(&mut solutions, solution_len, |i, out| {
             let scaled: Vec<ScaledSpecies> = (0..species)
                 .map(|j| ScaledSpecies {
-                    extinction_per_m: inputs.scaled_extinction[i * species + j],
-                    scattering_per_m: inputs.scaled_scattering[i * species + j],
-                    phase: &inputs.phases[i * species + j],
+                    extinction_per_m: inputs.scaled.scaled_extinction[i * species + j],
+                    scattering_per_m: inputs.scaled.scaled_scattering[i * species + j],
+                    phase: &inputs.scaled.phases[i * species + j],
                 })
                 .collect();
             let solar = optics.solar_irradiance_w_m2_nm[i];
             let albedo = optics.ground_albedo[i];
-            let scalar =
-                ColumnSystem::new(streams, grid, Some(inputs.paths), scaled, solar, albedo);
+            let scalar = ColumnSystem::new(
+                streams,
+                grid,
+                Some(&inputs.geometry.paths),
+                scaled,
+                solar,
+                albedo,
+            );
             let per_species: Vec<&PhaseMatrixHarmonics> = harmonics.iter().map(|h| &h[i]).collect();
             let vector = VectorColumnSystem::new(scalar.clone(), &per_species);
             debug_assert_eq!(vector.field_len(), vector_len);
@@ -238,12 +241,13 @@ impl PolarisationCorrection {
             for k in 0..levels {
                 let densities = grid.densities_at_level(k);
                 let extinction: f64 = (0..species)
-                    .map(|j| inputs.scaled_extinction[i * species + j] * densities[j])
+                    .map(|j| inputs.scaled.scaled_extinction[i * species + j] * densities[j])
                     .sum();
                 if extinction > 0.0 {
                     for j in 0..species {
-                        level_albedos[(i * levels + k) * species + j] =
-                            densities[j] * inputs.scaled_scattering[i * species + j] / extinction;
+                        level_albedos[(i * levels + k) * species + j] = densities[j]
+                            * inputs.scaled.scaled_scattering[i * species + j]
+                            / extinction;
                     }
                 }
             }

@@ -51,8 +51,8 @@ impl MultipleScatteringTable {
             settings.table_view_zenith_nodes.max(2),
             settings.table_azimuth_nodes.max(2),
         );
-        let degrees = field.streams.count();
-        let levels = field.grid.levels();
+        let degrees = field.optics.geometry.streams.count();
+        let levels = field.optics.geometry.grid.levels();
         let suns = field.optics.sun_axis.count();
         let (w, species) = (field.optics.wavelengths, field.optics.species);
         let per_level = suns * azimuths * views * w;
@@ -78,15 +78,19 @@ impl MultipleScatteringTable {
         let mut kernel = vec![0.0; w * species * block];
         crate::parallel::for_each_chunk_mut(&mut kernel, species * block, |i, out| {
             for j in 0..species {
-                let phase = &field.phases[i * species + j];
+                let phase = &field.optics.scaled.phases[i * species + j];
                 for &m in &active {
                     for b in 0..degrees {
                         let row = &mut out[j * block + (m * degrees + b) * views..][..views];
                         for (value, legendre) in row.iter_mut().zip(&view_legendre) {
                             *value = 2.0
                                 * PI
-                                * field.streams.weights()[b]
-                                * phase.harmonic(m, legendre, field.streams.legendre(b));
+                                * field.optics.geometry.streams.weights()[b]
+                                * phase.harmonic(
+                                    m,
+                                    legendre,
+                                    field.optics.geometry.streams.legendre(b),
+                                );
                         }
                     }
                 }
@@ -98,7 +102,7 @@ impl MultipleScatteringTable {
         // wavelength-major buffer, transposed at the end (in cache). Only
         // the sun nodes that view rays reach at the level are filled.
         crate::parallel::for_each_chunk_mut(&mut values, per_level, |k, out| {
-            let densities = field.grid.densities_at_level(k);
+            let densities = field.optics.geometry.grid.densities_at_level(k);
             let mut combined = vec![0.0; block];
             let mut harmonics = vec![0.0; degrees * views];
             let mut sum = vec![0.0; views];
@@ -108,7 +112,7 @@ impl MultipleScatteringTable {
             for i in 0..w {
                 let plane = &mut by_wavelength[i * cells..(i + 1) * cells];
                 let total: f64 = (0..species)
-                    .map(|j| densities[j] * field.optics.scaled_scattering[i * species + j])
+                    .map(|j| densities[j] * field.optics.scaled.scaled_scattering[i * species + j])
                     .sum();
                 if total <= 0.0 {
                     plane.fill(LOG_FLOOR.ln() as f32);
@@ -116,8 +120,9 @@ impl MultipleScatteringTable {
                 }
                 combined.fill(0.0);
                 for j in 0..species {
-                    let fraction =
-                        densities[j] * field.optics.scaled_scattering[i * species + j] / total;
+                    let fraction = densities[j]
+                        * field.optics.scaled.scaled_scattering[i * species + j]
+                        / total;
                     if fraction != 0.0 {
                         let q = &kernel[(i * species + j) * block..][..block];
                         for (c, q) in combined.iter_mut().zip(q) {
@@ -219,7 +224,7 @@ impl MultipleScatteringTable {
         let w = optics.wavelengths;
         let suns = optics.sun_axis.count();
         let (views, azimuths) = (self.view_zenith_nodes, self.azimuth_nodes);
-        let (k, tz) = self.field.grid.locate(node.altitude_m);
+        let (k, tz) = self.field.optics.geometry.grid.locate(node.altitude_m);
         let (s, ts) = optics.sun_axis.locate(node.sun_cosine);
         let y = node.view_cosine.acos() / PI * (views - 1) as f64;
         let v = (y as usize).min(views - 2);

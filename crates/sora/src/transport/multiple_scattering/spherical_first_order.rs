@@ -53,12 +53,12 @@
 use std::f64::consts::PI;
 use std::ops::ControlFlow;
 
+use super::column_optics::{ColumnGeometry, ScaledOptics};
 use super::phase_fourier::{
     TruncatedPhase, gauss_legendre_unit_interval, normalized_associated_legendre,
 };
 use super::regimes::FINE_MOMENTS_SUN_ZENITH_RAD;
 use super::successive_orders::Streams;
-use crate::atmosphere::DensityProfile;
 use crate::geometry::{Vector3, segment_in_atmosphere};
 use crate::linear_algebra::inverse;
 use crate::transport::optical_column::{
@@ -78,19 +78,15 @@ const PHASE_NODES: usize = 2049;
 /// What the first-order march needs (all per wavelength i and species j
 /// at [i * species + j]).
 pub(crate) struct FirstOrderInputs<'a> {
-    pub profiles: &'a [DensityProfile],
-    pub corners: &'a ProfileCorners,
+    /// The delta-M scaled coefficients and phase functions.
+    pub scaled: &'a ScaledOptics,
+    /// The levels, the streams (their zenith cosines, quadrature weights
+    /// and Legendre functions), the profiles and their corners.
+    pub geometry: &'a ColumnGeometry,
     pub sun_columns: &'a SunColumnTable,
-    pub level_altitudes_m: &'a [f64],
-    /// The field's streams: their zenith cosines, quadrature weights and
-    /// Legendre functions.
-    pub streams: &'a Streams,
     /// How the first order's Legendre moments are integrated.
     pub moments: MomentQuadrature,
     pub sun_zenith_rad: &'a [f64],
-    pub scaled_extinction: &'a [f64],
-    pub scaled_scattering: &'a [f64],
-    pub phases: &'a [TruncatedPhase],
     pub solar_irradiance_w_m2_nm: &'a [f64],
 }
 
@@ -129,21 +125,21 @@ pub(crate) enum MomentQuadrature {
 /// result is the same bit for bit. One task per level.
 pub(crate) fn compute_spherical_first_order(inputs: &FirstOrderInputs) -> Vec<f64> {
     let wavelengths = inputs.solar_irradiance_w_m2_nm.len();
-    let species = inputs.profiles.len();
-    let levels = inputs.level_altitudes_m.len();
-    let streams = inputs.streams.count();
+    let species = inputs.geometry.profiles.len();
+    let levels = inputs.geometry.grid.altitudes_m().len();
+    let streams = inputs.geometry.streams.count();
     let solution = streams * levels * streams;
     let suns = inputs.sun_zenith_rad.len();
-    let (ground, _) = inputs.corners.radii_m();
+    let (ground, _) = inputs.geometry.corners.radii_m();
     let azimuths = azimuth_count(streams);
     let cosines = harmonic_cosines(azimuths, streams);
-    let phase_table = tabulate_phases(inputs.phases);
+    let phase_table = tabulate_phases(&inputs.scaled.phases);
     let tables = &Tables::new(inputs, &phase_table);
     let by_species = &BySpecies::new(inputs);
     let fit = match inputs.moments {
         #[cfg(test)]
         MomentQuadrature::Streams => None,
-        MomentQuadrature::Fine => StreamFit::new(inputs.streams, wavelengths),
+        MomentQuadrature::Fine => StreamFit::new(&inputs.geometry.streams, wavelengths),
     };
     // The sun nodes from a zenith angle of 90 degrees on (after sunset on
     // the ground) take the fine moments (with `MomentQuadrature::Fine`).
@@ -162,7 +158,7 @@ pub(crate) fn compute_spherical_first_order(inputs: &FirstOrderInputs) -> Vec<f6
     let per_level = suns * streams * streams * wavelengths;
     let mut by_level = vec![0.0; levels * per_level];
     crate::parallel::for_each_chunk_mut(&mut by_level, per_level, |k, block| {
-        let x = Vector3::new(0.0, 0.0, ground + inputs.level_altitudes_m[k]);
+        let x = Vector3::new(0.0, 0.0, ground + inputs.geometry.grid.altitudes_m()[k]);
         let mut work = MarchWork {
             radiance: vec![0.0; wavelengths],
             phase: vec![0.0; wavelengths * species],
@@ -195,7 +191,7 @@ pub(crate) fn compute_spherical_first_order(inputs: &FirstOrderInputs) -> Vec<f6
             x,
         };
         let per_stream = streams * wavelengths;
-        for (b, mu) in inputs.streams.cosines()[..marched_streams]
+        for (b, mu) in inputs.geometry.streams.cosines()[..marched_streams]
             .iter()
             .enumerate()
         {
@@ -217,7 +213,7 @@ pub(crate) fn compute_spherical_first_order(inputs: &FirstOrderInputs) -> Vec<f6
         // wavelengths + i] for the fine sun nodes s (from `first_fine`),
         // from the harmonics of each fine cosine, [(s * streams + m) *
         // wavelengths + i].
-        for (mu, weight) in fine_cosines(ground, ground + inputs.level_altitudes_m[k]) {
+        for (mu, weight) in fine_cosines(ground, ground + inputs.geometry.grid.altitudes_m()[k]) {
             normalized_associated_legendre(mu, streams, &mut legendre);
             fine_harmonics.fill(0.0);
             level.add_harmonics(
@@ -604,7 +600,7 @@ fn march_path(
     work: &mut MarchWork,
     path: &mut MarchedPath,
 ) -> bool {
-    let (ground, top) = inputs.corners.radii_m();
+    let (ground, top) = inputs.geometry.corners.radii_m();
     let Some((enter, exit)) = segment_in_atmosphere(x, direction, ground, top) else {
         return false;
     };
@@ -623,7 +619,7 @@ fn march_path(
     path.densities.clear();
     path.node_columns.clear();
     work.march.march(
-        inputs.profiles,
+        &inputs.geometry.profiles,
         ground,
         (start, direction),
         &work.ends,
@@ -662,7 +658,7 @@ fn compute_first_order_on_path(
     work: &mut MarchWork,
     sun_work: &mut SunWork,
 ) {
-    let species = inputs.profiles.len();
+    let species = inputs.geometry.profiles.len();
     let wavelengths = work.radiance.len();
     interpolate_phases(inputs.phase_table, direction.dot(sun), &mut work.phase);
     // No species (an empty atmosphere): no rows, and no zero-sized chunks.
@@ -729,15 +725,15 @@ struct BySpecies {
 impl BySpecies {
     fn new(inputs: &FirstOrderInputs) -> BySpecies {
         let wavelengths = inputs.solar_irradiance_w_m2_nm.len();
-        let species = inputs.profiles.len();
+        let species = inputs.geometry.profiles.len();
         let transpose = |by_wavelength: &[f64]| -> Vec<f64> {
             (0..species * wavelengths)
                 .map(|at| by_wavelength[(at % wavelengths) * species + at / wavelengths])
                 .collect()
         };
         BySpecies {
-            scaled_extinction: transpose(inputs.scaled_extinction),
-            scaled_scattering: transpose(inputs.scaled_scattering),
+            scaled_extinction: transpose(&inputs.scaled.scaled_extinction),
+            scaled_scattering: transpose(&inputs.scaled.scaled_scattering),
         }
     }
 }
@@ -762,16 +758,16 @@ struct SunWork {
 #[cfg(test)]
 fn compute_spherical_first_order_reference(inputs: &FirstOrderInputs) -> Vec<f64> {
     let wavelengths = inputs.solar_irradiance_w_m2_nm.len();
-    let species = inputs.profiles.len();
-    let levels = inputs.level_altitudes_m.len();
-    let streams = inputs.streams.count();
+    let species = inputs.geometry.profiles.len();
+    let levels = inputs.geometry.grid.altitudes_m().len();
+    let streams = inputs.geometry.streams.count();
     let solution = streams * levels * streams;
     let suns = inputs.sun_zenith_rad.len();
-    let (ground, _) = inputs.corners.radii_m();
+    let (ground, _) = inputs.geometry.corners.radii_m();
     let mut out = vec![0.0; suns * wavelengths * solution];
     let azimuths = azimuth_count(streams);
     let cosines = harmonic_cosines(azimuths, streams);
-    let phase_table = tabulate_phases(inputs.phases);
+    let phase_table = tabulate_phases(&inputs.scaled.phases);
     let inputs = &Tables::new(inputs, &phase_table);
     crate::parallel::for_each_chunk_mut(&mut out, wavelengths * solution, |s, block| {
         let theta = inputs.sun_zenith_rad[s];
@@ -786,9 +782,9 @@ fn compute_spherical_first_order_reference(inputs: &FirstOrderInputs) -> Vec<f64
         // Harmonics of one (level, stream), [m * wavelengths + i], summed
         // over the azimuths before they go to their strided places.
         let mut harmonics = vec![0.0; streams * wavelengths];
-        for (k, z) in inputs.level_altitudes_m.iter().enumerate() {
+        for (k, z) in inputs.geometry.grid.altitudes_m().iter().enumerate() {
             let x = Vector3::new(0.0, 0.0, ground + z);
-            for (b, mu) in inputs.streams.cosines().iter().enumerate() {
+            for (b, mu) in inputs.geometry.streams.cosines().iter().enumerate() {
                 let sine = (1.0 - mu * mu).max(0.0).sqrt();
                 harmonics.fill(0.0);
                 for a in 0..azimuths {
@@ -826,7 +822,7 @@ struct Tables<'a> {
 
 impl<'a> Tables<'a> {
     fn new(inputs: &'a FirstOrderInputs<'a>, phase_table: &'a [f64]) -> Tables<'a> {
-        let (ground, top) = inputs.corners.radii_m();
+        let (ground, top) = inputs.geometry.corners.radii_m();
         let shells: Vec<f64> = (1..)
             .map(|n| n as f64 * SHELL_SPACING_M)
             .take_while(|h| *h < top - ground)
@@ -834,7 +830,7 @@ impl<'a> Tables<'a> {
         Tables {
             inputs,
             phase_table,
-            march_corners: inputs.corners.with_altitudes(&shells),
+            march_corners: inputs.geometry.corners.with_altitudes(&shells),
         }
     }
 }
@@ -879,7 +875,7 @@ fn compute_first_order_along_ray(
     sun: Vector3,
     work: &mut MarchWork,
 ) -> bool {
-    let (ground, top) = inputs.corners.radii_m();
+    let (ground, top) = inputs.geometry.corners.radii_m();
     let Some((enter, exit)) = segment_in_atmosphere(x, direction, ground, top) else {
         return false;
     };
@@ -887,7 +883,7 @@ fn compute_first_order_along_ray(
     if length <= 0.0 {
         return false;
     }
-    let species = inputs.profiles.len();
+    let species = inputs.geometry.profiles.len();
     interpolate_phases(inputs.phase_table, direction.dot(sun), &mut work.phase);
     let start = x + direction * enter;
     inputs
@@ -896,7 +892,7 @@ fn compute_first_order_along_ray(
     work.radiance.fill(0.0);
     let (phase, radiance, sun_columns) = (&work.phase, &mut work.radiance, &mut work.sun_columns);
     work.march.march(
-        inputs.profiles,
+        &inputs.geometry.profiles,
         ground,
         (start, direction),
         &work.ends,
@@ -912,8 +908,8 @@ fn compute_first_order_along_ray(
                 let (mut tau, mut source) = (0.0, 0.0);
                 for j in 0..species {
                     let at = i * species + j;
-                    tau += inputs.scaled_extinction[at] * (node_columns[j] + sun_columns[j]);
-                    source += inputs.scaled_scattering[at] * densities[j] * phase[at];
+                    tau += inputs.scaled.scaled_extinction[at] * (node_columns[j] + sun_columns[j]);
+                    source += inputs.scaled.scaled_scattering[at] * densities[j] * phase[at];
                 }
                 *out += node.weight * inputs.solar_irradiance_w_m2_nm[i] * source * exp_neg(tau);
             }
@@ -926,15 +922,18 @@ fn compute_first_order_along_ray(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::atmosphere::DensityProfile;
     use crate::transport::multiple_scattering::regimes::FIRST_ORDER_SUN_ZENITH_DEG;
 
-    /// Air (scale height 8 km) and aerosol (1.2 km) in a 100 km shell over
-    /// a ground of radius 6 360 km, with a sun-column table of `nodes`
-    /// (altitude, mu) nodes: the ground radius, the profiles, their corners
-    /// and the table.
+    /// An Earth-like shell (6 360 to 6 460 km, air and a 1.2-km aerosol
+    /// layer) with levels at `levels_m` and `streams_per_hemisphere`, and
+    /// its sun-column table on `nodes` (altitude, mu) nodes: the ground
+    /// radius, the geometry and the table.
     fn earth_like_shell(
         nodes: (usize, usize),
-    ) -> (f64, Vec<DensityProfile>, ProfileCorners, SunColumnTable) {
+        streams_per_hemisphere: usize,
+        levels_m: &[f64],
+    ) -> (f64, ColumnGeometry, SunColumnTable) {
         let (ground, top) = (6_360e3, 6_460e3);
         let profiles = vec![
             DensityProfile::Exponential {
@@ -944,9 +943,25 @@ mod tests {
                 scale_height_m: 1_200.0,
             },
         ];
-        let corners = ProfileCorners::new(&profiles, ground, top);
         let sun_columns = SunColumnTable::compute(&profiles, ground, top, nodes.0, nodes.1);
-        (ground, profiles, corners, sun_columns)
+        let geometry =
+            ColumnGeometry::with_levels(profiles, (ground, top), streams_per_hemisphere, levels_m);
+        (ground, geometry, sun_columns)
+    }
+
+    /// Scaled optics of `phases` with these coefficients (the exact
+    /// extinction is not read by the first order).
+    fn scaled_optics(
+        phases: Vec<TruncatedPhase>,
+        scaled_extinction: &[f64],
+        scaled_scattering: &[f64],
+    ) -> ScaledOptics {
+        ScaledOptics {
+            phases,
+            extinction: scaled_extinction.to_vec(),
+            scaled_extinction: scaled_extinction.to_vec(),
+            scaled_scattering: scaled_scattering.to_vec(),
+        }
     }
 
     /// `count` truncated phase functions of `degrees` terms, alternately
@@ -976,16 +991,18 @@ mod tests {
     /// 84 to 100 degrees of zenith (lit, grazing and deep in the shadow).
     #[test]
     fn marching_once_for_every_sun_is_the_oracle_bit_for_bit() {
-        let (_, profiles, corners, sun_columns) = earth_like_shell((32, 64));
-        let streams = crate::transport::multiple_scattering::successive_orders::Streams::new(2);
-        let degrees = streams.count();
-        let phases = test_phases(3 * 2, degrees);
+        let (_, geometry, sun_columns) =
+            earth_like_shell((32, 64), 2, &[0.0, 1e3, 5e3, 20e3, 60e3]);
+        let degrees = geometry.streams.count();
+        let scaled = scaled_optics(
+            test_phases(3 * 2, degrees),
+            &[2.4e-5, 8e-5, 1.2e-5, 7e-5, 0.6e-5, 6e-5],
+            &[2.4e-5, 7e-5, 1.2e-5, 6e-5, 0.6e-5, 5e-5],
+        );
         let inputs = FirstOrderInputs {
-            profiles: &profiles,
-            corners: &corners,
+            scaled: &scaled,
+            geometry: &geometry,
             sun_columns: &sun_columns,
-            level_altitudes_m: &[0.0, 1e3, 5e3, 20e3, 60e3],
-            streams: &streams,
             moments: MomentQuadrature::Streams,
             sun_zenith_rad: &[
                 FIRST_ORDER_SUN_ZENITH_DEG.to_radians(),
@@ -993,9 +1010,6 @@ mod tests {
                 93f64.to_radians(),
                 100f64.to_radians(),
             ],
-            scaled_extinction: &[2.4e-5, 8e-5, 1.2e-5, 7e-5, 0.6e-5, 6e-5],
-            scaled_scattering: &[2.4e-5, 7e-5, 1.2e-5, 6e-5, 0.6e-5, 5e-5],
-            phases: &phases,
             solar_irradiance_w_m2_nm: &[1.7, 1.9, 1.5],
         };
         let fast = compute_spherical_first_order(&inputs);
@@ -1119,23 +1133,18 @@ mod tests {
     /// quadrature was within 0.7 % (48 cosines then, 40 now).
     #[test]
     fn fine_moments_match_a_brute_force_integral_after_sunset() {
-        let (ground, profiles, corners, sun_columns) = earth_like_shell((128, 256));
-        let streams = crate::transport::multiple_scattering::successive_orders::Streams::new(8);
-        let d = streams.count();
-        let phases = test_phases(2, d);
         let levels_m = [0.0, 30e3];
+        let (ground, geometry, sun_columns) = earth_like_shell((128, 256), 8, &levels_m);
+        let streams = &geometry.streams;
+        let d = streams.count();
+        let scaled = scaled_optics(test_phases(2, d), &[1.2e-5, 5e-5], &[1.2e-5, 4.5e-5]);
         let sun_zenith = 102f64.to_radians();
         let mut inputs = FirstOrderInputs {
-            profiles: &profiles,
-            corners: &corners,
+            scaled: &scaled,
+            geometry: &geometry,
             sun_columns: &sun_columns,
-            level_altitudes_m: &levels_m,
-            streams: &streams,
             moments: MomentQuadrature::Fine,
             sun_zenith_rad: &[sun_zenith],
-            scaled_extinction: &[1.2e-5, 5e-5],
-            scaled_scattering: &[1.2e-5, 4.5e-5],
-            phases: &phases,
             solar_irradiance_w_m2_nm: &[1.8],
         };
         let fine = compute_spherical_first_order(&inputs);
@@ -1152,7 +1161,7 @@ mod tests {
                 .sum()
         };
         // The oracle.
-        let phase_table = tabulate_phases(&phases);
+        let phase_table = tabulate_phases(&scaled.phases);
         let tables = Tables::new(&inputs, &phase_table);
         let mut work = MarchWork {
             radiance: vec![0.0; 1],

@@ -67,7 +67,6 @@ impl VerticalGrid {
         layers: usize,
     ) -> VerticalGrid {
         assert!(layers >= 2 && top_altitude_m > 0.0);
-        let species = profiles.len();
         // u(z) at uniform altitude steps.
         let step = top_altitude_m / PLACEMENT_STEPS as f64;
         let mut optical_depth = vec![0.0; PLACEMENT_STEPS + 1];
@@ -108,6 +107,16 @@ impl VerticalGrid {
             altitudes_m.push((i as f64 + t) * step);
         }
         altitudes_m.push(top_altitude_m);
+        VerticalGrid::with_altitudes(profiles, altitudes_m)
+    }
+
+    /// The grid of these level altitudes (m, increasing from 0) for these
+    /// profiles.
+    pub(crate) fn with_altitudes(
+        profiles: &[&DensityProfile],
+        altitudes_m: Vec<f64>,
+    ) -> VerticalGrid {
+        let species = profiles.len();
         let densities = altitudes_m
             .iter()
             .flat_map(|z| profiles.iter().map(move |p| p.relative_density(*z)))

@@ -5,17 +5,14 @@
 
 use std::ops::ControlFlow;
 
+use super::column_optics::{ColumnGeometry, SUN_RAY_PANELS, ScaledOptics};
 use super::field::SunZenithAxis;
 use super::forward_peak::{self, ForwardPeak};
 use super::peak_beam::PeakBeam;
-use crate::atmosphere::DensityProfile;
 use crate::geometry::{Vector3, segment_in_atmosphere};
-use crate::transport::optical_column::{PanelMarch, ProfileCorners};
+use crate::transport::optical_column::PanelMarch;
 use crate::transport::single_scattering::SunColumns;
 use crate::transport::vector_exp::exp_neg_in_place;
-
-/// Panels of the exact column integrals toward the sun from each level.
-pub(super) const SUN_RAY_PANELS: usize = 12;
 
 /// Values below this are treated as zero by the logarithmic
 /// interpolations (radiances are ~1e-6..1 W m^-2 sr^-1 nm^-1).
@@ -49,17 +46,12 @@ pub(super) struct ViewRayOptics {
     pub(super) wavelengths: usize,
     pub(super) species: usize,
     pub(super) panels: usize,
-    pub(super) ground_radius_m: f64,
-    pub(super) top_radius_m: f64,
     pub(super) observer: Vector3,
     pub(super) sun: Vector3,
-    pub(super) profiles: Vec<DensityProfile>,
-    /// Where the profiles have corners: rays are cut there.
-    pub(super) corners: ProfileCorners,
-    /// [i * species + j], m^-1 at relative density 1.
-    pub(super) extinction: Vec<f64>,
-    pub(super) scaled_extinction: Vec<f64>,
-    pub(super) scaled_scattering: Vec<f64>,
+    /// The delta-M scaled optics.
+    pub(super) scaled: ScaledOptics,
+    /// The columns' geometry (the profiles' corners cut the rays).
+    pub(super) geometry: ColumnGeometry,
     pub(super) sun_axis: SunZenithAxis,
     /// Whether any phase function lost a forward peak to delta-M.
     pub(super) has_forward_peaks: bool,
@@ -140,8 +132,10 @@ impl ViewRayOptics {
             log_source: vec![0.0; w],
             view_legendre: vec![0.0; streams * streams],
             sun_columns: vec![0.0; s],
-            view_panel_ends: Vec::with_capacity(self.corners.most_panel_ends(self.panels)),
-            sun_panel_ends: Vec::with_capacity(self.corners.most_panel_ends(SUN_RAY_PANELS)),
+            view_panel_ends: Vec::with_capacity(self.geometry.corners.most_panel_ends(self.panels)),
+            sun_panel_ends: Vec::with_capacity(
+                self.geometry.corners.most_panel_ends(SUN_RAY_PANELS),
+            ),
             forward_integrals: vec![0.0; (s + forward_peak::EXTRA_ROWS) * w],
             beam: vec![0.0; w],
             tilted_depths: vec![0.0; 4 * w],
@@ -165,9 +159,12 @@ impl ViewRayOptics {
         radiance.fill(0.0);
         scratch.forward_integrals.fill(0.0);
         let (w, s) = (self.wavelengths, self.species);
-        let Some((enter, exit)) =
-            segment_in_atmosphere(self.observer, view, self.ground_radius_m, self.top_radius_m)
-        else {
+        let (ground, top) = (self.geometry.ground_radius_m, self.geometry.top_radius_m);
+        let (profiles, corners) = (&self.geometry.profiles, &self.geometry.corners);
+        let (extinction, scaled_extinction) =
+            (&self.scaled.extinction, &self.scaled.scaled_extinction);
+        let scaled_scattering = &self.scaled.scaled_scattering;
+        let Some((enter, exit)) = segment_in_atmosphere(self.observer, view, ground, top) else {
             return;
         };
         let start = self.observer + view * enter;
@@ -175,12 +172,11 @@ impl ViewRayOptics {
         scratch.view_columns.fill(0.0);
         if length > 0.0 {
             let mut view_ends = std::mem::take(&mut scratch.view_panel_ends);
-            self.corners
-                .fill_panel_ends(start, view, length, self.panels, &mut view_ends);
+            corners.fill_panel_ends(start, view, length, self.panels, &mut view_ends);
             let mut march = std::mem::take(&mut scratch.march);
             march.march(
-                &self.profiles,
-                self.ground_radius_m,
+                profiles,
+                ground,
                 (start, view),
                 &view_ends,
                 |node, node_columns, densities| {
@@ -199,7 +195,7 @@ impl ViewRayOptics {
                         1.0
                     };
                     let geometry = NodeGeometry {
-                        altitude_m: r - self.ground_radius_m,
+                        altitude_m: r - ground,
                         sun_cosine,
                         view_cosine,
                         cos_azimuth,
@@ -213,8 +209,8 @@ impl ViewRayOptics {
                     for (i, out) in radiance.iter_mut().enumerate() {
                         let (mut tau, mut scattering) = (0.0, 0.0);
                         for j in 0..s {
-                            tau += self.scaled_extinction[i * s + j] * scratch.node_columns[j];
-                            scattering += self.scaled_scattering[i * s + j] * scratch.densities[j];
+                            tau += scaled_extinction[i * s + j] * scratch.node_columns[j];
+                            scattering += scaled_scattering[i * s + j] * scratch.densities[j];
                         }
                         // A source at the logarithms' floor is no light
                         // (the interpolation between a dark node, 1e-30,
@@ -229,8 +225,8 @@ impl ViewRayOptics {
                     // module docs, TMS).
                     let lit = self.has_forward_peaks
                         && sun_columns.compute_columns_to_sun(
-                            &self.profiles,
-                            &self.corners,
+                            profiles,
+                            corners,
                             node.point,
                             self.sun,
                             &mut scratch.sun_panel_ends,
@@ -249,11 +245,10 @@ impl ViewRayOptics {
                             let (mut scaled, mut exact, mut peak) = (0.0, 0.0, 0.0);
                             for j in 0..s {
                                 let column = scratch.node_columns[j] + scratch.sun_columns[j];
-                                scaled += self.scaled_extinction[i * s + j] * column;
-                                exact += self.extinction[i * s + j] * column;
+                                scaled += scaled_extinction[i * s + j] * column;
+                                exact += extinction[i * s + j] * column;
                                 // f_j beta_sca,j rho_j: what the peaks scatter here.
-                                peak += (self.extinction[i * s + j]
-                                    - self.scaled_extinction[i * s + j])
+                                peak += (extinction[i * s + j] - scaled_extinction[i * s + j])
                                     * scratch.densities[j];
                             }
                             let direct = (-exact).exp();
@@ -277,15 +272,15 @@ impl ViewRayOptics {
             scratch.view_panel_ends = view_ends;
         }
         let end = start + view * length;
-        if end.length() <= self.ground_radius_m * (1.0 + 1e-12) {
+        if end.length() <= ground * (1.0 + 1e-12) {
             let sun_cosine = self.sun.dot(end.normalized());
             let (node, t) = self.sun_axis.locate(sun_cosine);
             let next = node + 1;
             for i in 0..w {
                 let (mut tau_scaled, mut tau) = (0.0, 0.0);
                 for j in 0..s {
-                    tau_scaled += self.scaled_extinction[i * s + j] * scratch.view_columns[j];
-                    tau += self.extinction[i * s + j] * scratch.view_columns[j];
+                    tau_scaled += scaled_extinction[i * s + j] * scratch.view_columns[j];
+                    tau += extinction[i * s + j] * scratch.view_columns[j];
                 }
                 let lerp = |table: &[f64]| {
                     interpolate_geometrically(table[node * w + i], table[next * w + i], t)
@@ -321,8 +316,8 @@ impl ViewRayOptics {
             let (mut depths, mut peak) = ([0.0; 4], 0.0);
             for j in 0..s {
                 let (scaled, exact) = (
-                    self.scaled_extinction[i * s + j],
-                    self.extinction[i * s + j],
+                    self.scaled.scaled_extinction[i * s + j],
+                    self.scaled.extinction[i * s + j],
                 );
                 depths[0] += scaled * scratch.node_columns[j];
                 depths[1] += exact * scratch.node_columns[j];

@@ -1,0 +1,85 @@
+//! The multiple-scattering method's resolution: streams, layers, the
+//! sun-node steps, the view ray's panels and the source table's nodes.
+
+use crate::error::{Error, Result};
+
+/// Resolution of the multiple-scattering method.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MultipleScatteringSettings {
+    /// Discrete ordinates per hemisphere (the solver has twice as many
+    /// streams, Legendre terms and azimuthal harmonics).
+    pub streams_per_hemisphere: usize,
+    /// Layers of the vertical grid.
+    pub layers: usize,
+    /// Step between the sun zenith angles at which the field is solved
+    /// for a high sun, degrees.
+    pub sun_zenith_step_deg: f64,
+    /// The step near and below the horizon (zenith angles from
+    /// `SUNSET_STEP_END_DEG`, 85 degrees),
+    /// where the field changes fastest, degrees.
+    pub sunset_sun_zenith_step_deg: f64,
+    /// Gauss panels along each view ray.
+    pub view_ray_panels: usize,
+    /// Source table: view zenith nodes (0..180 degrees).
+    pub table_view_zenith_nodes: usize,
+    /// Source table: relative azimuth nodes (0..180 degrees).
+    pub table_azimuth_nodes: usize,
+}
+
+impl Default for MultipleScatteringSettings {
+    fn default() -> MultipleScatteringSettings {
+        MultipleScatteringSettings {
+            streams_per_hemisphere: 8,
+            layers: 40,
+            sun_zenith_step_deg: 3.0,
+            sunset_sun_zenith_step_deg: 0.75,
+            view_ray_panels: 16,
+            table_view_zenith_nodes: 37,
+            table_azimuth_nodes: 19,
+        }
+    }
+}
+
+impl MultipleScatteringSettings {
+    /// Checks that every count and step can make a solver: at least one
+    /// stream per hemisphere (at most 32), two layers, two panels, two
+    /// nodes per table axis, and positive steps.
+    pub(crate) fn validate(&self) -> Result<()> {
+        let counts = [
+            ("streams per hemisphere", self.streams_per_hemisphere, 1, 32),
+            ("multiple-scattering layers", self.layers, 2, 10_000),
+            ("view-ray panels", self.view_ray_panels, 2, 10_000),
+            (
+                "source-table view zenith nodes",
+                self.table_view_zenith_nodes,
+                2,
+                10_000,
+            ),
+            (
+                "source-table azimuth nodes",
+                self.table_azimuth_nodes,
+                2,
+                10_000,
+            ),
+        ];
+        for (name, value, low, high) in counts {
+            if !(low..=high).contains(&value) {
+                return Err(Error::out_of_range(
+                    name,
+                    value as f64,
+                    "",
+                    format!("{low}..={high}"),
+                ));
+            }
+        }
+        for (name, value) in [
+            ("sun zenith step", self.sun_zenith_step_deg),
+            ("sunset sun zenith step", self.sunset_sun_zenith_step_deg),
+        ] {
+            if !(value.is_finite() && value > 0.0 && value <= 90.0) {
+                return Err(Error::out_of_range(name, value, "deg", "> 0 and <= 90"));
+            }
+        }
+        Ok(())
+    }
+}
