@@ -7,12 +7,16 @@ mod common;
 use common::{one_line_error, sora, stdout};
 use sora::sun_position::{Location, Refraction, parse_time_utc};
 
-/// A cheap single-scattering spectrum with `sun` options, as JSON.
+/// A cheap single-scattering spectrum of earth-clear with `sun` options,
+/// as JSON.
 fn spectrum_json(sun: &[&str], views: &[&str]) -> std::process::Output {
+    spectrum_json_of(&["--preset", "earth-clear"], sun, views)
+}
+
+/// [`spectrum_json`] of the atmosphere `source` names.
+fn spectrum_json_of(source: &[&str], sun: &[&str], views: &[&str]) -> std::process::Output {
     let common = [
         "spectrum",
-        "--preset",
-        "earth-clear",
         "--scattering",
         "single",
         "--wavelengths",
@@ -20,7 +24,7 @@ fn spectrum_json(sun: &[&str], views: &[&str]) -> std::process::Output {
         "--format",
         "json",
     ];
-    sora(&[&common[..], sun, views].concat())
+    sora(&[&common[..], source, sun, views].concat())
 }
 
 const ONE_VIEW: [&str; 4] = ["--view-elevation", "10", "--view-azimuth", "0"];
@@ -401,27 +405,18 @@ fn the_locations_elevation_raises_the_ground() {
         number(&site, "sun_azimuth_deg").to_string(),
         number(&site, "sun_distance_au").to_string(),
     );
-    let by_file = stdout(&sora(&[
-        "spectrum",
-        "--atmosphere",
-        file.to_str().unwrap(),
-        "--scattering",
-        "single",
-        "--wavelengths",
-        "400:700:100",
-        "--format",
-        "json",
-        "--sun-elevation",
-        &elevation,
-        "--sun-azimuth",
-        &azimuth,
-        "--sun-distance-au",
-        &distance,
-        "--view-elevation",
-        "10",
-        "--view-azimuth",
-        "0",
-    ]));
+    let by_file = stdout(&spectrum_json_of(
+        &["--atmosphere", file.to_str().unwrap()],
+        &[
+            "--sun-elevation",
+            &elevation,
+            "--sun-azimuth",
+            &azimuth,
+            "--sun-distance-au",
+            &distance,
+        ],
+        &ONE_VIEW,
+    ));
     let radiances = |json: &str| {
         let start = json.find("\"radiance_w_m2_sr_nm\": [").unwrap();
         json[start..json[start..].find(']').unwrap() + start].to_string()
