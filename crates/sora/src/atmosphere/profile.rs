@@ -37,12 +37,15 @@
 //!   layer's exponential continues (a ray marcher that steps a few metres
 //!   past the top or below the ground gets a smooth value, not a jump).
 //!
-//! Altitudes are in metres above the ground (the planet's surface), f64.
+//! Altitudes are in metres above sea level, f64: the ground, unless the
+//! planet raises it (`Planet::with_ground_altitude_m`; the sky then reads
+//! each profile as `DensityProfile::above_ground` shifts it).
 
 use crate::error::{Error, Result};
 
 /// Relative density (dimensionless, 1 at the reference altitude) as a
-/// function of altitude above the ground (m).
+/// function of altitude above sea level (m; above the ground unless a
+/// raised ground shifts it).
 #[derive(Debug, Clone, PartialEq)]
 pub enum DensityProfile {
     /// exp(-altitude / scale_height_m).
