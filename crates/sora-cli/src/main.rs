@@ -33,6 +33,7 @@ enum Command {
     Irradiance(commands::irradiance::IrradianceArgs),
     Retrieve(commands::retrieve::RetrieveArgs),
     SelfTest(commands::self_test::SelfTestArgs),
+    Tables(commands::tables::TablesArgs),
 }
 
 fn main() {
@@ -46,6 +47,7 @@ fn main() {
         Command::Irradiance(args) => commands::irradiance::run(args),
         Command::Retrieve(args) => commands::retrieve::run(args),
         Command::SelfTest(args) => commands::self_test::run(args),
+        Command::Tables(args) => commands::tables::run(args),
     };
     if let Err(error) = result {
         if is_broken_pipe(&error) {

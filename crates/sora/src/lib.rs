@@ -62,6 +62,7 @@ pub use sora_mie as mie;
 pub mod atmosphere;
 pub mod camera;
 pub mod colour;
+pub mod engine_tables;
 pub mod error;
 pub mod geometry;
 pub mod input;

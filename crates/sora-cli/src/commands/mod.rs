@@ -8,3 +8,4 @@ pub mod render;
 pub mod retrieve;
 pub mod self_test;
 pub mod spectrum;
+pub mod tables;

@@ -54,6 +54,7 @@ mod sun_disc;
 
 pub use crate::transport::multiple_scattering::MultipleScatteringSettings;
 pub use irradiance::{Irradiance, Plane};
+pub(crate) use sun_disc::LIMB_DARKENING as SUN_LIMB_DARKENING;
 
 use std::sync::{Arc, OnceLock};
 
@@ -729,6 +730,16 @@ impl Sky {
         Ok(())
     }
 
+    /// The scene (optics, planet, eye, sun) this sky is built on.
+    pub(crate) fn scene(&self) -> &SingleScatteringSky {
+        &self.scene
+    }
+
+    /// The resolution of the fast method's image tables.
+    pub(crate) fn table_size(&self) -> FastTableSize {
+        self.table_size
+    }
+
     /// The wavelengths of every spectrum the sky returns.
     pub fn wavelengths(&self) -> &WavelengthGrid {
         &self.scene.optics().grid
@@ -1098,7 +1109,10 @@ impl Sky {
     }
 
     /// [`Sky::radiance_from_image_tables`] for every view in `views`.
-    fn radiances_from_image_tables(&self, views: &[ViewDirection]) -> Result<Vec<SkyRadiance>> {
+    pub(crate) fn radiances_from_image_tables(
+        &self,
+        views: &[ViewDirection],
+    ) -> Result<Vec<SkyRadiance>> {
         self.prepare_field_for_images()?;
         let tables = self.image_tables();
         let mut work = self.view_work();

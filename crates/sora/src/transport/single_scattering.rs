@@ -315,6 +315,67 @@ impl SingleScatteringSky {
         })
     }
 
+    /// The same atmosphere on the same grid with the eye moved to
+    /// `altitude_m` above the ground and the sun to `sun_elevation_deg`,
+    /// `sun_azimuth_deg` (optics copied, sun-column tables shared).
+    pub(crate) fn with_observer_and_sun(
+        &self,
+        altitude_m: f64,
+        sun_elevation_deg: f64,
+        sun_azimuth_deg: f64,
+    ) -> Result<SingleScatteringSky> {
+        let mut moved = self.with_sun(sun_elevation_deg, sun_azimuth_deg)?;
+        if !(altitude_m.is_finite() && altitude_m >= 0.0) {
+            return Err(Error::out_of_range(
+                "observer altitude",
+                altitude_m,
+                "m",
+                ">= 0 (on or above the ground)",
+            ));
+        }
+        moved.observer = Vector3::new(0.0, 0.0, self.ground_radius_m + altitude_m);
+        // The sun-column tables are per eye (see `sun_column_table`).
+        moved.sun_column_tables = Arc::default();
+        Ok(moved)
+    }
+
+    /// The spectral transmittance from `point` (planet-centred, m) to the
+    /// top of the atmosphere along the unit `direction`, into
+    /// `transmittance`: exp(-sum_j k_j(lambda) C_j) with the columns C_j
+    /// integrated exactly (Gauss panels cut at the profiles' corners).
+    /// False, with `transmittance` zeroed, when the ray meets the ground.
+    pub(crate) fn compute_transmittance_to_top(
+        &self,
+        point: Vector3,
+        direction: Vector3,
+        transmittance: &mut [f64],
+    ) -> bool {
+        let mut ends = Vec::new();
+        let mut columns = vec![0.0; self.profiles.len()];
+        transmittance.fill(0.0);
+        if !SunColumns::Exact.compute_columns_to_sun(
+            &self.profiles,
+            &self.corners,
+            point,
+            direction,
+            &mut ends,
+            &mut columns,
+        ) {
+            return false;
+        }
+        for (i, t) in transmittance.iter_mut().enumerate() {
+            let tau: f64 = self
+                .optics
+                .species
+                .iter()
+                .zip(&columns)
+                .map(|(species, column)| species.extinction_per_m.values()[i] * column)
+                .sum();
+            *t = (-tau).exp();
+        }
+        true
+    }
+
     /// The optics on the grid.
     pub(crate) fn optics(&self) -> &AtmosphereOptics {
         &self.optics

@@ -1,0 +1,104 @@
+//! `sora tables`: the engine tables of one atmosphere, for a real-time
+//! shader (the library's `engine_tables`).
+
+use std::path::PathBuf;
+
+use clap::Args;
+use sora::engine_tables::{EngineTableSettings, EngineTables};
+
+use crate::arguments::{AtmosphereSource, Scattering};
+
+/// Precompute what a real-time shader needs to draw this atmosphere's sky,
+/// the sun's disc, aerial perspective and the irradiance on the ground for
+/// any sun elevation from -12 to 90 degrees and any eye altitude inside
+/// the atmosphere: a directory of OpenEXR tables (CIE XYZ, 32-bit floats)
+/// and manifest.json (units, axes, lookup formulas). The reference shaders
+/// (GLSL ES 3.0 and WGSL) are in web/shaders/; docs/engine-tables.md says
+/// how to bind and read the tables.
+///
+/// -o DIR is created, or must be empty, or must hold sora's tables (they
+/// are replaced); the files are written together or not at all.
+///
+/// Example:
+///   sora tables --preset earth-clear -o earth-clear-tables
+#[derive(Debug, Args)]
+#[command(verbatim_doc_comment)]
+pub struct TablesArgs {
+    #[command(flatten)]
+    source: AtmosphereSource,
+
+    /// Wavelengths, start:stop:step in nm (colour uses 360-830)
+    #[arg(long, value_name = "START:STOP:STEP", default_value = "380:780:20")]
+    wavelengths: sora::spectrum::WavelengthGrid,
+
+    /// Replace the atmosphere's ground albedo by this constant (0..1, Lambertian)
+    #[arg(long, value_name = "A")]
+    ground_albedo: Option<f64>,
+
+    /// multiple (all orders and the skylight the ground reflects) or single
+    #[arg(long, value_enum, default_value_t = Scattering::Multiple)]
+    scattering: Scattering,
+
+    /// Sun elevation nodes over -12..90 degrees
+    #[arg(long, value_name = "N", default_value_t = EngineTableSettings::default().sun_nodes)]
+    sun_nodes: usize,
+
+    /// Eye altitude nodes over the atmosphere's thickness
+    #[arg(long, value_name = "N", default_value_t = EngineTableSettings::default().altitude_nodes)]
+    altitude_nodes: usize,
+
+    /// View zenith nodes per half (above and below the horizon)
+    #[arg(long, value_name = "N", default_value_t = EngineTableSettings::default().zenith_nodes_per_half)]
+    zenith_nodes: usize,
+
+    /// View azimuth nodes over 0..180 degrees from the sun
+    #[arg(long, value_name = "N", default_value_t = EngineTableSettings::default().azimuth_nodes)]
+    azimuth_nodes: usize,
+
+    /// Table file format (exr)
+    #[arg(long, value_name = "FORMAT", default_value = "exr")]
+    format: String,
+
+    /// Output directory
+    #[arg(short = 'o', long = "output", value_name = "DIR")]
+    output: PathBuf,
+}
+
+pub fn run(args: TablesArgs) -> anyhow::Result<()> {
+    if args.format != "exr" {
+        anyhow::bail!(
+            "--format {}: unknown table format (sora writes exr)",
+            args.format
+        );
+    }
+    let settings = EngineTableSettings {
+        sun_nodes: args.sun_nodes,
+        altitude_nodes: args.altitude_nodes,
+        zenith_nodes_per_half: args.zenith_nodes,
+        azimuth_nodes: args.azimuth_nodes,
+        ..EngineTableSettings::default()
+    };
+    settings.validate()?;
+    sora::engine_tables::check_output_directory(&args.output)?;
+    let mut atmosphere = args.source.load()?;
+    if let Some(albedo) = args.ground_albedo {
+        atmosphere.planet = atmosphere
+            .planet
+            .with_ground_albedo(sora::spectrum::Spectrum::Constant(albedo))
+            .map_err(|e| anyhow::anyhow!("--ground-albedo: {e}"))?;
+    }
+    let sky = sora::Sky::builder(&atmosphere)
+        .wavelengths(args.wavelengths)
+        .scattering(args.scattering.to_library())
+        .build()?;
+    let start = std::time::Instant::now();
+    let tables = EngineTables::bake(&sky, &settings, &|_| {})?;
+    let baked = start.elapsed().as_secs_f64();
+    tables.write(&args.output)?;
+    eprintln!(
+        "baked the tables in {baked:.2} s ({:.1} MB as 32-bit XYZ), wrote {}",
+        tables.size_bytes() as f64 / 1e6,
+        args.output.display()
+    );
+    Ok(())
+}

@@ -1,0 +1,203 @@
+//! The engine tables on disk: a directory holding `sky.exr`,
+//! `transmittance.exr`, `irradiance.exr` (32-bit float OpenEXR, channels
+//! X, Y, Z) and `manifest.json` (the format, the units, the axes, their
+//! mappings and the lookup formulas). Written together or not at all
+//! ([`OutputFiles`]); the directory is created if it does not exist, and an
+//! existing one is refused unless it is empty or holds sora's tables (a
+//! manifest of [`TABLE_FORMAT`]), so that `-o` never overwrites something
+//! else.
+
+use std::path::Path;
+
+use super::{EngineTables, axes};
+use crate::error::{Error, Result};
+use crate::output::{ChannelKind, ExrOptions, LinearImage, OutputFiles};
+
+/// The manifest's file name.
+pub const MANIFEST_FILE: &str = "manifest.json";
+
+/// The manifest's `format`.
+pub const TABLE_FORMAT: &str = "sora-engine-tables";
+
+/// The table format's version (changes with the axes or the layout).
+pub const FORMAT_VERSION: u32 = 1;
+
+/// An error unless `directory` may receive tables: it does not exist (its
+/// parent does), or it is an empty directory, or it holds a manifest of
+/// [`TABLE_FORMAT`].
+pub fn check_output_directory(directory: &Path) -> Result<()> {
+    let shown = directory.display();
+    let refuse = |why: String| Error::Unsupported(format!("-o {shown}{why}"));
+    match std::fs::symlink_metadata(directory) {
+        Err(_) => match directory.parent() {
+            Some(parent) if !parent.as_os_str().is_empty() && !parent.is_dir() => Err(refuse(
+                format!(": the directory {} does not exist", parent.display()),
+            )),
+            _ => Ok(()),
+        },
+        Ok(_) if !directory.is_dir() => Err(refuse(
+            " exists and is not a directory: give a new directory for the tables".to_string(),
+        )),
+        Ok(_) => {
+            let empty = std::fs::read_dir(directory)
+                .map_err(|error| refuse(format!(": cannot read it: {error}")))?
+                .next()
+                .is_none();
+            if empty || holds_tables(directory) {
+                Ok(())
+            } else {
+                Err(refuse(format!(
+                    " exists and is not sora's tables (no {MANIFEST_FILE} of format {TABLE_FORMAT}): give a new or empty directory"
+                )))
+            }
+        }
+    }
+}
+
+/// Whether `directory` holds a manifest of [`TABLE_FORMAT`].
+fn holds_tables(directory: &Path) -> bool {
+    let Ok(text) = std::fs::read_to_string(directory.join(MANIFEST_FILE)) else {
+        return false;
+    };
+    serde_json::from_str::<serde_json::Value>(&text)
+        .ok()
+        .and_then(|v| {
+            v.get("format")
+                .and_then(|f| f.as_str())
+                .map(|f| f == TABLE_FORMAT)
+        })
+        .unwrap_or(false)
+}
+
+impl EngineTables {
+    /// Writes the tables into `directory` (see the module docs): all four
+    /// files or none; a directory this call created is removed again if
+    /// the writing fails.
+    pub fn write(&self, directory: &Path) -> Result<()> {
+        check_output_directory(directory)?;
+        let created = !directory.exists();
+        if created {
+            std::fs::create_dir(directory).map_err(|error| Error::Io {
+                path: directory.display().to_string(),
+                message: format!("cannot create the directory: {error}"),
+            })?;
+        }
+        let result = self.stage_and_commit(directory);
+        if result.is_err() && created {
+            let _ = std::fs::remove_dir_all(directory);
+        }
+        result
+    }
+
+    fn stage_and_commit(&self, directory: &Path) -> Result<()> {
+        let settings = &self.settings;
+        let mut files = OutputFiles::new();
+        let options = ExrOptions {
+            text_attributes: vec![("format".into(), TABLE_FORMAT.into())],
+            ..ExrOptions::default()
+        };
+        let image = |width: usize, height: usize, texels: &[[f32; 3]]| {
+            LinearImage::new(width, height, ChannelKind::Xyz, texels.to_vec())
+        };
+        let sky_height = 2 * settings.zenith_nodes_per_half * settings.sky_layers();
+        files.exr_with_layers(
+            directory.join("sky.exr"),
+            &image(settings.azimuth_nodes, sky_height, &self.sky)?,
+            &[],
+            options.clone(),
+        )?;
+        let (t_altitudes, t_mu) = settings.transmittance_nodes;
+        files.exr_with_layers(
+            directory.join("transmittance.exr"),
+            &image(t_mu, t_altitudes, &self.transmittance)?,
+            &[],
+            options.clone(),
+        )?;
+        files.exr_with_layers(
+            directory.join("irradiance.exr"),
+            &image(
+                settings.sun_nodes,
+                settings.altitude_nodes,
+                &self.irradiance,
+            )?,
+            &[],
+            options,
+        )?;
+        let manifest = serde_json::to_string_pretty(&self.manifest()).map_err(|error| {
+            Error::Unsupported(format!("the manifest does not serialise: {error}"))
+        })?;
+        files.text(directory.join(MANIFEST_FILE), &(manifest + "\n"))?;
+        files.commit()
+    }
+
+    /// The manifest: format, units, axes, layout and lookup formulas.
+    pub fn manifest(&self) -> serde_json::Value {
+        let s = &self.settings;
+        let matrix = crate::colour::RgbColourSpace::Srgb.linear_rgb_from_xyz_matrix();
+        serde_json::json!({
+            "format": TABLE_FORMAT,
+            "version": FORMAT_VERSION,
+            "generator": format!("sora {}", env!("CARGO_PKG_VERSION")),
+            "colour": {
+                "channels": "CIE 1931 XYZ (2-degree observer) of the spectral quantity, 1.0 = the XYZ of a flat spectrum of 1 unit per nm (luminance in cd/m^2 = 683 Y)",
+                "linear_srgb_from_xyz": matrix,
+                "wavelengths_nm": self.provenance.wavelengths_nm,
+            },
+            "scattering": self.provenance.scattering,
+            "planet": {
+                "ground_radius_m": self.ground_radius_m,
+                "top_radius_m": self.top_radius_m,
+            },
+            "sun": {
+                "irradiance_xyz_w_m2_nm": self.solar_xyz,
+                "angular_radius_rad": self.sun_angular_radius_rad,
+                "limb_darkening": super::lookup::LIMB_DARKENING,
+                "elevation_range_deg": [axes::SUN_ELEVATION_MIN_DEG, axes::SUN_ELEVATION_MAX_DEG],
+                "axis_width_deg": axes::SUN_WIDTH_DEG,
+            },
+            "tables": {
+                "sky": {
+                    "file": "sky.exr",
+                    "unit": "W m^-2 sr^-1 nm^-1 (XYZ)",
+                    "width": s.azimuth_nodes,
+                    "height": 2 * s.zenith_nodes_per_half * s.sky_layers(),
+                    "sun_nodes": s.sun_nodes,
+                    "altitude_nodes": s.altitude_nodes,
+                    "zenith_nodes_per_half": s.zenith_nodes_per_half,
+                    "azimuth_nodes": s.azimuth_nodes,
+                    "layout": "texel (k, row) of layer L = s * altitude_nodes + a is at x = k, y = L * 2 * zenith_nodes_per_half + row (y = 0 is the file's top scan line); a 2D array texture of sun_nodes * altitude_nodes layers of azimuth_nodes x 2 zenith_nodes_per_half",
+                },
+                "transmittance": {
+                    "file": "transmittance.exr",
+                    "unit": "1 (XYZ of the transmitted solar spectrum / XYZ of the solar spectrum)",
+                    "width": s.transmittance_nodes.1,
+                    "height": s.transmittance_nodes.0,
+                    "layout": "x = mu node m, y = altitude node a",
+                },
+                "irradiance": {
+                    "file": "irradiance.exr",
+                    "unit": "W m^-2 nm^-1 (XYZ), diffuse on a horizontal plane",
+                    "width": s.sun_nodes,
+                    "height": s.altitude_nodes,
+                    "layout": "x = sun node s, y = altitude node a",
+                },
+            },
+            "axes": {
+                "sun": "s = (asinh(e / W) - asinh(-12 / W)) / (asinh(90 / W) - asinh(-12 / W)) * (S - 1), e the sun elevation in degrees clamped to -12..90, W = sun.axis_width_deg",
+                "altitude": "a = ln(1 + clamp(h, 0, H) / h0) / ln(1 + D) * (N - 1), h the altitude above the ground in m, H = top_radius_m - ground_radius_m, h0 = H / D, D = altitude_scale_divisor, N the axis's node count",
+                "altitude_scale_divisor": axes::ALTITUDE_SCALE_DIVISOR,
+                "zenith": "r = ground_radius_m + h, z_h = pi - asin(ground_radius_m / r), m = 1e-6; above the horizon (z < z_h): y = (1 - sqrt(1 - clamp(z / (z_h - m), 0, 1))) * (Z - 1), cells 0..Z-2; below: y = 2Z - 1 - (1 - sqrt(1 - clamp((pi - z) / (pi - z_h - m), 0, 1))) * (Z - 1), cells Z..2Z-2",
+                "azimuth": "k = sqrt(phi / pi) * (K - 1), phi the view's azimuth from the sun's, 0..pi",
+                "transmittance_mu": "mu_h = -sqrt(1 - (ground_radius_m / r)^2); m = sqrt(clamp((mu - mu_h) / (1 - mu_h), 0, 1)) * (M - 1); zero when mu < mu_h",
+            },
+            "lookup": {
+                "cells": "i = clamp(floor(x), lowest, highest), f = clamp(x - i, 0, 1); lowest/highest 0..nodes-2 unless the zenith axis says otherwise",
+                "sky": "bilinear in (k, y) within a layer; linear between altitude layers a and a+1; between sun layers s and s+1 exp(mix(ln max(A, 1e-30), ln max(B, 1e-30), f_s)) per channel",
+                "transmittance": "zero when mu < mu_h(eye); otherwise linear in a between rows a and a+1, each row read linearly at m computed with that row's own radius r_a = ground_radius_m + h(a) (h(a) = h0 (exp(a / (N - 1) ln(1 + D)) - 1))",
+                "irradiance": "diffuse: linear in a, geometric in s (as the sky); global = diffuse + sun.irradiance_xyz * T(h, sin e) * max(sin e, 0)",
+                "sun_disc": "within gamma < alpha of the sun's centre: sun.irradiance_xyz * T(h, sin e) * (1 - u (1 - sqrt(1 - (gamma/alpha)^2))) / (pi alpha^2 (1 - u/3)), u = sun.limb_darkening",
+                "aerial_perspective": "eye x (radius r), point p = x + d v; T(x,p) = T(r, mu) / T(r_p, mu_p), or T(r_p, -mu_p) / T(r, -mu) when v meets the ground (each channel, at most 1); in-scattered = max(S(x, v) - T(x,p) S(p, v), 0) with S the sky lookup at each end's altitude, zenith angle, azimuth from the sun and sun elevation in its own local frame",
+            },
+        })
+    }
+}

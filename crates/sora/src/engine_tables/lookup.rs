@@ -1,0 +1,291 @@
+//! Reading the engine tables: the formulas the reference shaders
+//! (`web/shaders/`) run, here in f64 so that tests can hold the tables to
+//! the library and the shaders to these.
+//!
+//! - Sky: at the eye's altitude h, the view's zenith coordinate is taken
+//!   with the eye's own horizon (`axes::zenith_coordinate`) and used on
+//!   every altitude layer; bilinear in (zenith, azimuth) within a layer,
+//!   linear between the two altitude layers, and geometric (linear in the
+//!   logarithm, each value floored at [`FLOOR`]) between the two sun
+//!   layers.
+//! - Transmittance: linear in altitude between two rows, each read
+//!   linearly at the mu coordinate of its own altitude's horizon; zero
+//!   for a view below the eye's horizon.
+//! - Irradiance: linear in altitude, geometric in sun elevation, plus the
+//!   direct beam `E_sun T(h, sin e) sin e` (zero below the horizon).
+//! - Sun disc: `E_sun T(h, mu_sun) (1 - u (1 - cos a)) / (pi alpha^2 (1 - u / 3))`
+//!   within the sun's angular radius alpha, with cos a = sqrt(1 - (gamma
+//!   / alpha)^2) (limb darkening u = 0.6, as `sky/sun_disc.rs`).
+//! - Aerial perspective: see the module docs of `engine_tables`.
+
+use super::EngineTables;
+use super::axes;
+
+/// Smallest value the sun axis's geometric interpolation takes the
+/// logarithm of (XYZ in W m^-2 sr^-1 nm^-1 units).
+pub const FLOOR: f64 = 1e-30;
+
+/// Linear limb-darkening coefficient of the sun's disc (as `sky/sun_disc.rs`).
+pub const LIMB_DARKENING: f64 = crate::sky::SUN_LIMB_DARKENING;
+
+/// A view in a point's local frame: its zenith angle and its azimuth from
+/// the sun's.
+#[derive(Debug, Clone, Copy)]
+pub struct LocalView {
+    /// Zenith angle, rad.
+    pub zenith_rad: f64,
+    /// Azimuth from the sun's, rad, 0..pi.
+    pub relative_azimuth_rad: f64,
+}
+
+impl LocalView {
+    /// The view `v` (unit) seen from a point whose local vertical is the
+    /// unit `up`, with the sun toward the unit `sun`.
+    pub fn from_vectors(v: [f64; 3], up: [f64; 3], sun: [f64; 3]) -> LocalView {
+        let mu = dot(v, up).clamp(-1.0, 1.0);
+        let vh = sub(v, scale(up, mu));
+        let sh = sub(sun, scale(up, dot(sun, up)));
+        let (nv, ns) = (dot(vh, vh).sqrt(), dot(sh, sh).sqrt());
+        let cos_phi = if nv > 1e-12 && ns > 1e-12 {
+            (dot(vh, sh) / (nv * ns)).clamp(-1.0, 1.0)
+        } else {
+            1.0
+        };
+        LocalView {
+            zenith_rad: mu.acos(),
+            relative_azimuth_rad: cos_phi.acos(),
+        }
+    }
+}
+
+pub(crate) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn scale(a: [f64; 3], k: f64) -> [f64; 3] {
+    [a[0] * k, a[1] * k, a[2] * k]
+}
+
+fn mix(a: [f64; 3], b: [f64; 3], f: f64) -> [f64; 3] {
+    std::array::from_fn(|i| a[i] + (b[i] - a[i]) * f)
+}
+
+fn mix_log(a: [f64; 3], b: [f64; 3], f: f64) -> [f64; 3] {
+    std::array::from_fn(|i| {
+        let (la, lb) = (a[i].max(FLOOR).ln(), b[i].max(FLOOR).ln());
+        (la + (lb - la) * f).exp()
+    })
+}
+
+impl EngineTables {
+    /// The sky table's value in `layer` toward zenith angle `zenith` (the
+    /// horizon at `horizon`, rad) and relative azimuth `phi`: bilinear.
+    pub(crate) fn layer_value(
+        &self,
+        layer: usize,
+        zenith: f64,
+        horizon: f64,
+        phi: f64,
+    ) -> [f64; 3] {
+        let half = self.settings.zenith_nodes_per_half;
+        let coordinate = axes::zenith_coordinate(zenith, half, horizon);
+        self.layer_value_at(layer, coordinate, phi)
+    }
+
+    fn layer_value_at(
+        &self,
+        layer: usize,
+        (y, lowest, highest): (f64, usize, usize),
+        phi: f64,
+    ) -> [f64; 3] {
+        let half = self.settings.zenith_nodes_per_half;
+        let k_count = self.settings.azimuth_nodes;
+        let (i, fy) = axes::cell(y, lowest, highest);
+        let (k, fx) = axes::cell(axes::azimuth_coordinate(phi, k_count), 0, k_count - 2);
+        let texel = |row: usize, column: usize| {
+            let t = self.sky[(layer * 2 * half + row) * k_count + column];
+            [t[0] as f64, t[1] as f64, t[2] as f64]
+        };
+        mix(
+            mix(texel(i, k), texel(i, k + 1), fx),
+            mix(texel(i + 1, k), texel(i + 1, k + 1), fx),
+            fy,
+        )
+    }
+
+    /// Sky radiance (XYZ, W m^-2 sr^-1 nm^-1 units) seen at `altitude_m`
+    /// toward `view` with the sun at `sun_elevation_deg` (no sun disc).
+    pub fn sky_xyz(&self, altitude_m: f64, view: LocalView, sun_elevation_deg: f64) -> [f64; 3] {
+        let h = altitude_m.clamp(0.0, self.thickness_m());
+        let horizon = axes::horizon_zenith(self.ground_radius_m + h, self.ground_radius_m);
+        let coordinate = axes::zenith_coordinate(
+            view.zenith_rad,
+            self.settings.zenith_nodes_per_half,
+            horizon,
+        );
+        let (a_count, s_count) = (self.settings.altitude_nodes, self.settings.sun_nodes);
+        let (a, fa) = axes::cell(
+            axes::altitude_coordinate(h, self.thickness_m(), a_count),
+            0,
+            a_count - 2,
+        );
+        let (s, fs) = axes::cell(
+            axes::sun_coordinate(sun_elevation_deg, s_count),
+            0,
+            s_count - 2,
+        );
+        let at = |s: usize, a: usize| {
+            self.layer_value_at(s * a_count + a, coordinate, view.relative_azimuth_rad)
+        };
+        mix_log(
+            mix(at(s, a), at(s, a + 1), fa),
+            mix(at(s + 1, a), at(s + 1, a + 1), fa),
+            fs,
+        )
+    }
+
+    /// Transmittance (XYZ of the transmitted sunlight over XYZ of the
+    /// sunlight) from `altitude_m` to the top of the atmosphere along view
+    /// cosine `mu`; zero below the horizon.
+    pub fn transmittance_xyz(&self, altitude_m: f64, mu: f64) -> [f64; 3] {
+        let h = altitude_m.clamp(0.0, self.thickness_m());
+        let r = self.ground_radius_m + h;
+        if mu < axes::horizon_cosine(r, self.ground_radius_m) {
+            return [0.0; 3];
+        }
+        let (a_count, m_count) = self.settings.transmittance_nodes;
+        let (a, fa) = axes::cell(
+            axes::altitude_coordinate(h, self.thickness_m(), a_count),
+            0,
+            a_count - 2,
+        );
+        // Each altitude row is read at the view cosine's coordinate for
+        // that row's own horizon: the horizon's cosine changes as
+        // sqrt(h) near the ground, and a coordinate taken for the eye's
+        // horizon would move a row's value with it (0.3 % at 9 cm).
+        let row = |a: usize| {
+            let r_a = self.ground_radius_m + axes::altitude_of_node(a, a_count, self.thickness_m());
+            let (m, fm) = axes::cell(
+                axes::transmittance_mu_coordinate(mu, m_count, r_a, self.ground_radius_m),
+                0,
+                m_count - 2,
+            );
+            let texel = |m: usize| {
+                let t = self.transmittance[a * m_count + m];
+                [t[0] as f64, t[1] as f64, t[2] as f64]
+            };
+            mix(texel(m), texel(m + 1), fm)
+        };
+        mix(row(a), row(a + 1), fa)
+    }
+
+    /// Global horizontal irradiance (XYZ, W m^-2 nm^-1 units) at
+    /// `altitude_m` with the sun at `sun_elevation_deg`: the diffuse part
+    /// from the irradiance table and the direct beam.
+    pub fn ground_irradiance_xyz(&self, altitude_m: f64, sun_elevation_deg: f64) -> [f64; 3] {
+        let h = altitude_m.clamp(0.0, self.thickness_m());
+        let (a_count, s_count) = (self.settings.altitude_nodes, self.settings.sun_nodes);
+        let (a, fa) = axes::cell(
+            axes::altitude_coordinate(h, self.thickness_m(), a_count),
+            0,
+            a_count - 2,
+        );
+        let (s, fs) = axes::cell(
+            axes::sun_coordinate(sun_elevation_deg, s_count),
+            0,
+            s_count - 2,
+        );
+        let texel = |a: usize, s: usize| {
+            let t = self.irradiance[a * s_count + s];
+            [t[0] as f64, t[1] as f64, t[2] as f64]
+        };
+        let diffuse = mix_log(
+            mix(texel(a, s), texel(a + 1, s), fa),
+            mix(texel(a, s + 1), texel(a + 1, s + 1), fa),
+            fs,
+        );
+        let mu_sun = sun_elevation_deg.to_radians().sin();
+        let t = self.transmittance_xyz(h, mu_sun);
+        std::array::from_fn(|i| diffuse[i] + self.solar_xyz[i] * t[i] * mu_sun.max(0.0))
+    }
+
+    /// The sun disc's radiance (XYZ) at angle `gamma_rad` from the sun's
+    /// centre, for an eye at `altitude_m` with the sun at
+    /// `sun_elevation_deg`; zero outside the disc.
+    pub fn sun_disc_xyz(
+        &self,
+        altitude_m: f64,
+        sun_elevation_deg: f64,
+        gamma_rad: f64,
+    ) -> [f64; 3] {
+        let alpha = self.sun_angular_radius_rad;
+        if gamma_rad >= alpha {
+            return [0.0; 3];
+        }
+        let cos_a = (1.0 - (gamma_rad / alpha).powi(2)).max(0.0).sqrt();
+        let u = LIMB_DARKENING;
+        let shape =
+            (1.0 - u * (1.0 - cos_a)) / (std::f64::consts::PI * alpha * alpha * (1.0 - u / 3.0));
+        let t = self.transmittance_xyz(altitude_m, sun_elevation_deg.to_radians().sin());
+        std::array::from_fn(|i| self.solar_xyz[i] * t[i] * shape)
+    }
+
+    /// Aerial perspective between an eye at `altitude_m` and the point at
+    /// `distance_m` along the unit `view` (eye-local east-north-up), the
+    /// sun toward the unit `sun`: (the light scattered into the segment,
+    /// XYZ radiance; the segment's transmittance, XYZ of the sun's
+    /// spectrum). `S(x, v) - T(x, p) S(p, v)` (see the module docs).
+    pub fn aerial_perspective_xyz(
+        &self,
+        altitude_m: f64,
+        view: [f64; 3],
+        sun: [f64; 3],
+        distance_m: f64,
+    ) -> ([f64; 3], [f64; 3]) {
+        let up = [0.0, 0.0, 1.0];
+        let r = self.ground_radius_m + altitude_m.clamp(0.0, self.thickness_m());
+        let p = [
+            view[0] * distance_m,
+            view[1] * distance_m,
+            r + view[2] * distance_m,
+        ];
+        let r_p = dot(p, p).sqrt();
+        let up_p = scale(p, 1.0 / r_p);
+        let h_p = (r_p - self.ground_radius_m).clamp(0.0, self.thickness_m());
+        let mu = view[2];
+        let mu_p = dot(view, up_p);
+        // T(x, p): a ratio of transmittances to the top; along the reversed
+        // rays when the view meets the ground.
+        let hits_ground = mu < axes::horizon_cosine(r, self.ground_radius_m);
+        let segment: [f64; 3] = if hits_ground {
+            let (near, far) = (
+                self.transmittance_xyz(h_p, -mu_p),
+                self.transmittance_xyz(r - self.ground_radius_m, -mu),
+            );
+            std::array::from_fn(|i| (near[i] / far[i].max(FLOOR)).min(1.0))
+        } else {
+            let (near, far) = (
+                self.transmittance_xyz(r - self.ground_radius_m, mu),
+                self.transmittance_xyz(h_p, mu_p),
+            );
+            std::array::from_fn(|i| (near[i] / far[i].max(FLOOR)).min(1.0))
+        };
+        let sun_elevation = |up: [f64; 3]| dot(sun, up).clamp(-1.0, 1.0).asin().to_degrees();
+        let at_eye = self.sky_xyz(
+            r - self.ground_radius_m,
+            LocalView::from_vectors(view, up, sun),
+            sun_elevation(up),
+        );
+        let at_point = self.sky_xyz(
+            h_p,
+            LocalView::from_vectors(view, up_p, sun),
+            sun_elevation(up_p),
+        );
+        let inscattered = std::array::from_fn(|i| (at_eye[i] - segment[i] * at_point[i]).max(0.0));
+        (inscattered, segment)
+    }
+}

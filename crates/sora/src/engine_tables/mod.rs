@@ -1,0 +1,358 @@
+//! Engine tables: what a real-time shader needs to draw a sora sky, the
+//! sun's disc, aerial perspective and the irradiance on the ground for any
+//! sun elevation from -12 to 90 degrees and any eye altitude inside the
+//! atmosphere, by table reads only (`docs/engine-tables.md`, the reference
+//! shaders in `web/shaders/`).
+//!
+//! Three tables, all CIE XYZ (1.0 = the XYZ of a flat spectrum of 1 in the
+//! quantity's unit, as `sora render --units radiance` writes; the shader
+//! converts to linear sRGB with the manifest's matrix):
+//! - **sky**: the sky radiance (W m^-2 sr^-1 nm^-1 XYZ) seen by an eye at
+//!   altitude h toward zenith angle z and azimuth phi from the sun's, with
+//!   the sun at elevation e: 4D, as layers (e, h) of 2D images (z, phi).
+//!   Each layer is the library's own image path
+//!   ([`Sky::radiance_from_image_tables`]: single scattering with the exact
+//!   phase functions, the multiple-scattering field, the sunlit ground)
+//!   at the layer's sun and eye, without the sun's disc.
+//! - **transmittance**: the transmittance of sunlight from altitude h to
+//!   the top of the atmosphere along view cosine mu (2D), as XYZ of the
+//!   transmitted solar spectrum over XYZ of the solar spectrum, per
+//!   channel (so the sun's disc and direct light are right for the sun's
+//!   own spectrum).
+//! - **irradiance**: the diffuse (sky) irradiance on a horizontal plane at
+//!   altitude h with the sun at e (W m^-2 nm^-1 XYZ), integrated from the
+//!   sky table over the upper hemisphere (cosine-weighted midpoint rule,
+//!   64 x 64 directions); the shader adds the direct beam from the
+//!   transmittance table.
+//!
+//! Why not Bruneton's parametrisation: his 4D scattering table is indexed
+//! by (r, mu, mu_s, nu) with a single mu axis over the ground and the sky
+//! and an mu_s mapping that is coarse below the horizon, which is where it
+//! breaks (the horizon band, the twilight staircase: ebruneton/
+//! precomputed_atmospheric_scattering #6, #26, #30). Here the view's zenith
+//! axis is split at the eye's own horizon with nodes crowding toward it
+//! from both sides (no cell straddles the horizon, so there is no seam),
+//! and the sun axis is an asinh mapping that puts nodes 0.4 degrees apart
+//! at sunset; along it the radiance is interpolated in its logarithm,
+//! which is what keeps the zenith's brightness smooth through twilight
+//! (the sky dims about tenfold per 3 degrees there). The cost is that the
+//! scattering angle is not an axis: the aureole close to the sun is
+//! resolved by the azimuth axis's crowding only (see the docs page).
+//!
+//! Aerial perspective is derived from the same sky table, as Bruneton does:
+//! the light scattered into the segment from the eye x to a point p is
+//! `S(x, v) - T(x, p) S(p, v)`, with S read at each end's own altitude,
+//! zenith angle and sun elevation, and `T(x, p)` the ratio of two
+//! transmittance reads (or of the reversed rays when the view meets the
+//! ground). No dedicated volume is baked: the sky table already holds
+//! every altitude and sun, and a volume would tie the tables to one sun.
+//!
+//! The lookup formulas ([`lookup`]) are those the shaders run; the
+//! manifest ([`files`]) states them for any other reader.
+
+pub mod axes;
+mod files;
+mod lookup;
+
+pub use files::{MANIFEST_FILE, TABLE_FORMAT, check_output_directory};
+
+use crate::colour::{Observer, SpectrumToXyz};
+use crate::error::{Error, Result};
+use crate::geometry::{Vector3, ViewDirection};
+use crate::sky::{Method, Sky};
+use crate::spectrum::SampledSpectrum;
+
+/// Resolution of the engine tables.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EngineTableSettings {
+    /// Sun elevation nodes over -12..90 degrees.
+    pub sun_nodes: usize,
+    /// Eye altitude nodes of the sky and irradiance tables.
+    pub altitude_nodes: usize,
+    /// View zenith nodes per half (above and below the horizon).
+    pub zenith_nodes_per_half: usize,
+    /// Relative azimuth nodes over 0..180 degrees.
+    pub azimuth_nodes: usize,
+    /// Transmittance table: altitude nodes, view cosine nodes.
+    pub transmittance_nodes: (usize, usize),
+}
+
+impl Default for EngineTableSettings {
+    fn default() -> EngineTableSettings {
+        EngineTableSettings {
+            sun_nodes: 48,
+            altitude_nodes: 6,
+            zenith_nodes_per_half: 64,
+            azimuth_nodes: 64,
+            transmittance_nodes: (32, 128),
+        }
+    }
+}
+
+impl EngineTableSettings {
+    /// Checks every count: at least 2 (3 zenith nodes per half), and the
+    /// sky table within [`MAX_SKY_TEXELS`].
+    pub fn validate(&self) -> Result<()> {
+        for (name, nodes, least) in [
+            ("sun nodes", self.sun_nodes, 2),
+            ("altitude nodes", self.altitude_nodes, 2),
+            ("zenith nodes per half", self.zenith_nodes_per_half, 3),
+            ("azimuth nodes", self.azimuth_nodes, 2),
+            (
+                "transmittance altitude nodes",
+                self.transmittance_nodes.0,
+                2,
+            ),
+            ("transmittance mu nodes", self.transmittance_nodes.1, 2),
+        ] {
+            if !(least..=4096).contains(&nodes) {
+                return Err(Error::out_of_range(
+                    name,
+                    nodes as f64,
+                    "1",
+                    format!("{least}..=4096"),
+                ));
+            }
+        }
+        let texels = self.sky_texels() as f64;
+        if texels > MAX_SKY_TEXELS as f64 {
+            return Err(Error::out_of_range(
+                "sky table texels (sun x altitude x 2 zenith x azimuth nodes)",
+                texels,
+                "1",
+                format!("<= {MAX_SKY_TEXELS} (64 MB of 32-bit XYZ)"),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Layers of the sky table (sun nodes x altitude nodes).
+    pub fn sky_layers(&self) -> usize {
+        self.sun_nodes * self.altitude_nodes
+    }
+
+    fn sky_texels(&self) -> usize {
+        self.sky_layers() * 2 * self.zenith_nodes_per_half * self.azimuth_nodes
+    }
+}
+
+/// Most texels of the sky table: 64 MB of three 32-bit floats.
+pub const MAX_SKY_TEXELS: usize = 64 * 1024 * 1024 / 12;
+
+/// The engine tables of one atmosphere (see the module docs).
+#[derive(Debug, Clone)]
+pub struct EngineTables {
+    settings: EngineTableSettings,
+    ground_radius_m: f64,
+    top_radius_m: f64,
+    sun_angular_radius_rad: f64,
+    /// XYZ of the top-of-atmosphere solar irradiance, W m^-2 nm^-1.
+    solar_xyz: [f64; 3],
+    /// [((s * A + a) * 2 Z + row) * K + k].
+    sky: Vec<[f32; 3]>,
+    /// [altitude row * M + mu node].
+    transmittance: Vec<[f32; 3]>,
+    /// Diffuse horizontal irradiance, [a * S + s].
+    irradiance: Vec<[f32; 3]>,
+    /// What the tables were baked from (for the manifest).
+    provenance: Provenance,
+}
+
+/// What the tables were baked from.
+#[derive(Debug, Clone)]
+struct Provenance {
+    wavelengths_nm: Vec<f64>,
+    scattering: String,
+}
+
+impl EngineTables {
+    /// Bakes the tables of `sky`'s atmosphere, wavelengths, physics and
+    /// fast-method table size (its sun and eye are not used; the sky must
+    /// use [`Method::Fast`]). `progress(fraction)` is called as layers of
+    /// the sky table complete.
+    pub fn bake(
+        sky: &Sky,
+        settings: &EngineTableSettings,
+        progress: &(dyn Fn(f64) + Sync),
+    ) -> Result<EngineTables> {
+        settings.validate()?;
+        if sky.method() != Method::Fast {
+            return Err(Error::Unsupported(
+                "engine tables are baked with the fast method (its image tables)".into(),
+            ));
+        }
+        let scene = sky.scene();
+        let (ground_radius_m, top_radius_m) = scene.radii_m();
+        let thickness = top_radius_m - ground_radius_m;
+        let to_xyz = SpectrumToXyz::new(sky.wavelengths(), Observer::default());
+        let xyz = |values: &[f64]| -> Result<[f64; 3]> {
+            let c = to_xyz.to_xyz(&SampledSpectrum::from_values(values.to_vec()))?;
+            Ok([c.x, c.y, c.z])
+        };
+        let solar = scene.optics().solar_irradiance_w_m2_nm.values().to_vec();
+        let solar_xyz = xyz(&solar)?;
+        let EngineTableSettings {
+            sun_nodes,
+            altitude_nodes,
+            zenith_nodes_per_half: half,
+            azimuth_nodes,
+            transmittance_nodes,
+        } = *settings;
+        let layer_texels = 2 * half * azimuth_nodes;
+        let mut sky_values = vec![[0.0f32; 3]; settings.sky_texels()];
+        let layers = settings.sky_layers();
+        for a in 0..altitude_nodes {
+            let altitude = axes::altitude_of_node(a, altitude_nodes, thickness);
+            // One scene per altitude, moved to each sun: the sun-column
+            // tables are shared by its suns.
+            let base = scene.with_observer_and_sun(altitude, 90.0, 180.0)?;
+            let horizon = axes::horizon_zenith(ground_radius_m + altitude, ground_radius_m);
+            let mut views = Vec::with_capacity(layer_texels);
+            for row in 0..2 * half {
+                let zenith = axes::zenith_of_node(row, half, horizon);
+                for k in 0..azimuth_nodes {
+                    let phi = axes::azimuth_of_node(k, azimuth_nodes);
+                    views.push(ViewDirection::new(
+                        90.0 - zenith.to_degrees(),
+                        180.0 + phi.to_degrees(),
+                    )?);
+                }
+            }
+            for s in 0..sun_nodes {
+                let elevation = axes::sun_elevation_of_node(s, sun_nodes);
+                let layer_sky = Sky::from_scene(
+                    base.with_sun(elevation, 180.0)?,
+                    sky.scattering(),
+                    Method::Fast,
+                    sky.table_size(),
+                )?;
+                let radiances = layer_sky.radiances_from_image_tables(&views)?;
+                let layer = s * altitude_nodes + a;
+                let out = &mut sky_values[layer * layer_texels..][..layer_texels];
+                for (o, radiance) in out.iter_mut().zip(&radiances) {
+                    let c = xyz(radiance.radiance_w_m2_sr_nm.values())?;
+                    *o = c.map(|v| v.max(0.0) as f32);
+                }
+                progress((a * sun_nodes + s + 1) as f64 / layers as f64);
+            }
+        }
+        let transmittance = bake_transmittance(
+            sky,
+            transmittance_nodes,
+            thickness,
+            &solar,
+            &solar_xyz,
+            &xyz,
+        )?;
+        let mut tables = EngineTables {
+            settings: *settings,
+            ground_radius_m,
+            top_radius_m,
+            sun_angular_radius_rad: scene.sun_angular_radius_rad(),
+            solar_xyz,
+            sky: sky_values,
+            transmittance,
+            irradiance: Vec::new(),
+            provenance: Provenance {
+                wavelengths_nm: sky.wavelengths().wavelengths_nm().collect(),
+                scattering: match sky.scattering() {
+                    crate::sky::Scattering::Single => "single".into(),
+                    crate::sky::Scattering::Multiple(_) => "multiple".into(),
+                },
+            },
+        };
+        tables.irradiance = tables.integrate_diffuse_irradiance();
+        Ok(tables)
+    }
+
+    /// The settings the tables were baked with.
+    pub fn settings(&self) -> &EngineTableSettings {
+        &self.settings
+    }
+
+    /// Bytes of the three tables as 32-bit XYZ (what a GPU holds).
+    pub fn size_bytes(&self) -> usize {
+        12 * (self.sky.len() + self.transmittance.len() + self.irradiance.len())
+    }
+
+    /// The atmosphere's thickness (top minus ground radius), m.
+    fn thickness_m(&self) -> f64 {
+        self.top_radius_m - self.ground_radius_m
+    }
+
+    /// Diffuse horizontal irradiance of every (sun, altitude) node from the
+    /// sky table: 2 * sum over a 64 x 64 midpoint grid in (mu, phi) of
+    /// L mu dmu dphi over mu in 0..1, phi in 0..pi.
+    fn integrate_diffuse_irradiance(&self) -> Vec<[f32; 3]> {
+        const N: usize = 64;
+        let s_count = self.settings.sun_nodes;
+        let a_count = self.settings.altitude_nodes;
+        let mut out = vec![[0.0f32; 3]; s_count * a_count];
+        let weight = 2.0 * (1.0 / N as f64) * (std::f64::consts::PI / N as f64);
+        for a in 0..a_count {
+            let altitude = axes::altitude_of_node(a, a_count, self.thickness_m());
+            let horizon =
+                axes::horizon_zenith(self.ground_radius_m + altitude, self.ground_radius_m);
+            for s in 0..s_count {
+                let layer = s * a_count + a;
+                let mut sum = [0.0; 3];
+                for i in 0..N {
+                    let mu = (i as f64 + 0.5) / N as f64;
+                    let zenith = mu.acos();
+                    for j in 0..N {
+                        let phi = (j as f64 + 0.5) / N as f64 * std::f64::consts::PI;
+                        let l = self.layer_value(layer, zenith, horizon, phi);
+                        for c in 0..3 {
+                            sum[c] += l[c] * mu * weight;
+                        }
+                    }
+                }
+                out[a * s_count + s] = sum.map(|v| v as f32);
+            }
+        }
+        out
+    }
+}
+
+/// The transmittance table: for each altitude node and view cosine node
+/// above the horizon, XYZ(E_sun T) / XYZ(E_sun) per channel.
+fn bake_transmittance(
+    sky: &Sky,
+    (altitude_nodes, mu_nodes): (usize, usize),
+    thickness_m: f64,
+    solar: &[f64],
+    solar_xyz: &[f64; 3],
+    xyz: &dyn Fn(&[f64]) -> Result<[f64; 3]>,
+) -> Result<Vec<[f32; 3]>> {
+    let scene = sky.scene();
+    let (ground, _) = scene.radii_m();
+    let mut out = vec![[0.0f32; 3]; altitude_nodes * mu_nodes];
+    let mut transmittance = vec![0.0; solar.len()];
+    let mut transmitted = vec![0.0; solar.len()];
+    for a in 0..altitude_nodes {
+        let r = ground + axes::altitude_of_node(a, altitude_nodes, thickness_m);
+        for m in 0..mu_nodes {
+            // The horizon node a hair above the horizon (a grazing ray).
+            let mu = axes::transmittance_mu_of_node(m, mu_nodes, r, ground)
+                .max(axes::horizon_cosine(r, ground) + 1e-9);
+            let direction = Vector3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
+            if scene.compute_transmittance_to_top(
+                Vector3::new(0.0, 0.0, r),
+                direction,
+                &mut transmittance,
+            ) {
+                for ((o, t), e) in transmitted.iter_mut().zip(&transmittance).zip(solar) {
+                    *o = t * e;
+                }
+                let c = xyz(&transmitted)?;
+                out[a * mu_nodes + m] = std::array::from_fn(|i| {
+                    (c[i] / solar_xyz[i].max(1e-300)).clamp(0.0, 1.0) as f32
+                });
+            }
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests;

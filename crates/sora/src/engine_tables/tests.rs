@@ -1,0 +1,256 @@
+//! The engine tables against the library they are baked from: at the
+//! nodes the lookup returns the library's image radiance (to f32), between
+//! them it stays close, the transmittance is the direct beam's, the
+//! irradiance is the library's, and the directory is written whole or not
+//! at all.
+
+use super::lookup::LocalView;
+use super::*;
+use crate::atmosphere::Atmosphere;
+use crate::colour::{Observer, SpectrumToXyz};
+use crate::sky::{FastTableSize, Plane, Scattering};
+use crate::spectrum::WavelengthGrid;
+
+/// A small, cheap sky (single scattering, 7 wavelengths, small image tables).
+fn small_sky() -> Sky {
+    let atmosphere = Atmosphere::preset("earth-clear").unwrap();
+    Sky::builder(&atmosphere)
+        .wavelengths(WavelengthGrid::new(400.0, 700.0, 50.0).unwrap())
+        .scattering(Scattering::Single)
+        .table_size(FastTableSize {
+            sun_column_nodes: (32, 64),
+            sky_view_nodes: (32, 16),
+        })
+        .build()
+        .unwrap()
+}
+
+fn small_settings() -> EngineTableSettings {
+    EngineTableSettings {
+        sun_nodes: 5,
+        altitude_nodes: 2,
+        zenith_nodes_per_half: 12,
+        azimuth_nodes: 9,
+        transmittance_nodes: (8, 32),
+    }
+}
+
+fn xyz_of(sky: &Sky, view: ViewDirection) -> [f64; 3] {
+    let to_xyz = SpectrumToXyz::new(sky.wavelengths(), Observer::default());
+    let c = to_xyz
+        .to_xyz(
+            &sky.radiance_from_image_tables(view)
+                .unwrap()
+                .radiance_w_m2_sr_nm,
+        )
+        .unwrap();
+    [c.x, c.y, c.z]
+}
+
+fn tables() -> (Sky, EngineTables) {
+    let sky = small_sky();
+    let tables = EngineTables::bake(&sky, &small_settings(), &|_| {}).unwrap();
+    (sky, tables)
+}
+
+#[test]
+fn at_the_nodes_the_tables_are_the_library_image() {
+    let (sky, tables) = tables();
+    let settings = small_settings();
+    let thickness = tables.thickness_m();
+    for s in [1, 3] {
+        let elevation = axes::sun_elevation_of_node(s, settings.sun_nodes);
+        for a in [0, 1] {
+            let altitude = axes::altitude_of_node(a, settings.altitude_nodes, thickness);
+            let node_sky = Sky::from_scene(
+                sky.scene()
+                    .with_observer_and_sun(altitude, elevation, 180.0)
+                    .unwrap(),
+                sky.scattering(),
+                Method::Fast,
+                sky.table_size(),
+            )
+            .unwrap();
+            let horizon =
+                axes::horizon_zenith(tables.ground_radius_m + altitude, tables.ground_radius_m);
+            for row in [0, 5, 11, 12, 20, 23] {
+                let zenith = axes::zenith_of_node(row, settings.zenith_nodes_per_half, horizon);
+                for k in [0, 4, 8] {
+                    let phi = axes::azimuth_of_node(k, settings.azimuth_nodes);
+                    let view =
+                        ViewDirection::new(90.0 - zenith.to_degrees(), 180.0 + phi.to_degrees())
+                            .unwrap();
+                    let expected = xyz_of(&node_sky, view);
+                    let got = tables.sky_xyz(
+                        altitude,
+                        LocalView {
+                            zenith_rad: zenith,
+                            relative_azimuth_rad: phi,
+                        },
+                        elevation,
+                    );
+                    for c in 0..3 {
+                        let error = (got[c] - expected[c]).abs() / expected[c].abs().max(1e-12);
+                        assert!(
+                            error < 1e-5,
+                            "sun {elevation} alt {altitude} row {row} k {k}: {got:?} vs {expected:?}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn the_transmittance_is_the_direct_beam_and_the_disc_keeps_its_energy() {
+    let (sky, tables) = tables();
+    let to_xyz = SpectrumToXyz::new(sky.wavelengths(), Observer::default());
+    // At the table's view cosines on the ground (nodes 31, 20, 8, 3 of
+    // 32: suns from 90 to about 1 degree), where only the two
+    // quadratures of the columns separate the table from the library's
+    // direct beam.
+    let (_, mu_nodes) = small_settings().transmittance_nodes;
+    let ground = tables.ground_radius_m;
+    for node in [31, 20, 8, 3] {
+        let mu = axes::transmittance_mu_of_node(node, mu_nodes, ground, ground);
+        let elevation = mu.asin().to_degrees();
+        let moved = sky.with_sun_deg(elevation, 180.0).unwrap();
+        let beam = moved.direct_normal_irradiance();
+        let expected = to_xyz.to_xyz(&beam).unwrap();
+        let t = tables.transmittance_xyz(0.0, mu);
+        let got = [0, 1, 2].map(|i| tables.solar_xyz[i] * t[i]);
+        for (g, e) in got.iter().zip([expected.x, expected.y, expected.z]) {
+            assert!(
+                (g / e - 1.0).abs() < 1e-4,
+                "sun {elevation}: {got:?} vs {expected:?}"
+            );
+        }
+        // The disc's radiance over its solid angle is the direct beam.
+        let alpha = tables.sun_angular_radius_rad;
+        let n = 2000;
+        let integral: f64 = (0..n)
+            .map(|i| {
+                let gamma = (i as f64 + 0.5) / n as f64 * alpha;
+                tables.sun_disc_xyz(0.0, elevation, gamma)[1]
+                    * 2.0
+                    * std::f64::consts::PI
+                    * gamma
+                    * (alpha / n as f64)
+            })
+            .sum();
+        assert!(
+            (integral / got[1] - 1.0).abs() < 1e-3,
+            "{integral} {}",
+            got[1]
+        );
+    }
+    assert_eq!(tables.transmittance_xyz(1000.0, -0.5), [0.0; 3]);
+}
+
+#[test]
+fn the_ground_irradiance_is_the_library_s() {
+    let (sky, tables) = tables();
+    let to_xyz = SpectrumToXyz::new(sky.wavelengths(), Observer::default());
+    // At a sun node, where only the quadrature and the view interpolation
+    // separate the two.
+    let elevation = axes::sun_elevation_of_node(3, small_settings().sun_nodes);
+    let moved = sky.with_sun_deg(elevation, 180.0).unwrap();
+    let irradiance = moved.irradiance(Plane::HORIZONTAL).unwrap();
+    let expected = to_xyz.to_xyz(&irradiance.global_w_m2_nm).unwrap();
+    let got = tables.ground_irradiance_xyz(0.0, elevation);
+    let error = (got[1] - expected.y).abs() / expected.y;
+    assert!(
+        error < 0.02,
+        "sun {elevation}: {got:?} vs {expected:?} ({error})"
+    );
+}
+
+#[test]
+fn aerial_perspective_vanishes_near_the_eye_and_becomes_the_sky_far_away() {
+    let (_, tables) = tables();
+    let sun = [0.0, -(10f64.to_radians().cos()), 10f64.to_radians().sin()];
+    let e = 5f64.to_radians();
+    let view = [0.0, e.cos(), e.sin()];
+    let sky = tables.sky_xyz(
+        0.0,
+        LocalView::from_vectors(view, [0.0, 0.0, 1.0], sun),
+        10.0,
+    );
+    let (zero, t_zero) = tables.aerial_perspective_xyz(0.0, view, sun, 0.0);
+    assert_eq!((zero, t_zero[1]), ([0.0; 3], 1.0));
+    // At 1 m the difference of two table reads leaves what the
+    // horizon-relative zenith axis moves between them (the docs' near
+    // limit), well under a per cent of the sky.
+    let (near, t_near) = tables.aerial_perspective_xyz(0.0, view, sun, 1.0);
+    eprintln!("1 m: {:.3e} of the sky", near[1] / sky[1]);
+    assert!(near[1] < 5e-3 * sky[1], "{near:?} {sky:?}");
+    let (far, t_far) = tables.aerial_perspective_xyz(0.0, view, sun, 1e6);
+    assert!((far[1] / sky[1] - 1.0).abs() < 1e-3, "{far:?} {sky:?}");
+    // The ray leaves the atmosphere: the segment's transmittance is the
+    // whole ray's.
+    let whole = tables.transmittance_xyz(0.0, view[2]);
+    assert!(
+        (t_far[1] / whole[1] - 1.0).abs() < 1e-9,
+        "{t_far:?} {whole:?}"
+    );
+    let (mid, t_mid) = tables.aerial_perspective_xyz(0.0, view, sun, 20e3);
+    assert!(mid[1] > near[1] && mid[1] < far[1] && t_mid[1] < t_near[1]);
+}
+
+#[test]
+fn the_directory_is_written_whole_and_others_are_refused() {
+    let (_, tables) = tables();
+    let root = tempfile::tempdir().unwrap();
+    let directory = root.path().join("tables");
+    tables.write(&directory).unwrap();
+    let mut names: Vec<String> = std::fs::read_dir(&directory)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    names.sort();
+    assert_eq!(
+        names,
+        [
+            "irradiance.exr",
+            "manifest.json",
+            "sky.exr",
+            "transmittance.exr"
+        ]
+    );
+    let manifest: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(directory.join(MANIFEST_FILE)).unwrap())
+            .unwrap();
+    assert_eq!(manifest["format"], TABLE_FORMAT);
+    assert_eq!(manifest["tables"]["sky"]["height"], 2 * 12 * 5 * 2);
+    // Sora's own tables may be replaced.
+    tables.write(&directory).unwrap();
+    // Anything else is refused in one line and left as it was.
+    let other = root.path().join("photos");
+    std::fs::create_dir(&other).unwrap();
+    std::fs::write(other.join("a.jpg"), b"x").unwrap();
+    let message = tables.write(&other).unwrap_err().to_string();
+    assert!(
+        message.contains("is not sora's tables") && !message.contains('\n'),
+        "{message}"
+    );
+    assert_eq!(std::fs::read_dir(&other).unwrap().count(), 1);
+    let file = root.path().join("file");
+    std::fs::write(&file, b"x").unwrap();
+    assert!(
+        tables
+            .write(&file)
+            .unwrap_err()
+            .to_string()
+            .contains("not a directory")
+    );
+    let missing = root.path().join("missing/tables");
+    assert!(
+        tables
+            .write(&missing)
+            .unwrap_err()
+            .to_string()
+            .contains("does not exist")
+    );
+    assert!(!root.path().join("missing").exists());
+}
