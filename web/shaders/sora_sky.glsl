@@ -1,0 +1,211 @@
+// sora engine tables: reference reader, GLSL ES 3.0 (WebGL2).
+//
+// Include this after `#version 300 es` and `precision highp float;`.
+// Everything per frame is table reads (texelFetch) and arithmetic; the
+// formulas are those of crates/sora/src/engine_tables/lookup.rs and of the
+// tables' manifest.json ("axes", "lookup"). Bind (docs/engine-tables.md):
+//   uSky           sampler2DArray, sky.exr as azimuth_nodes x 2*zenith_nodes_per_half
+//                  texels per layer, sun_nodes*altitude_nodes layers (layer = s*A + a)
+//   uTransmittance sampler2D, transmittance.exr (x = mu node, y = altitude node)
+//   uIrradiance    sampler2D, irradiance.exr (x = sun node, y = altitude node)
+// as RGBA32F (or RGB32F) textures holding X, Y, Z; no filtering is needed
+// (texelFetch only). Values are CIE XYZ in the units of manifest.json;
+// soraXyzToLinearSrgb converts to linear sRGB (Rec. 709 primaries, D65).
+
+uniform highp sampler2DArray uSky;
+uniform highp sampler2D uTransmittance;
+uniform highp sampler2D uIrradiance;
+// sun_nodes, altitude_nodes, zenith_nodes_per_half, azimuth_nodes
+uniform ivec4 uSkyNodes;
+// transmittance altitude nodes, mu nodes
+uniform ivec2 uTransmittanceNodes;
+// ground_radius_m, top_radius_m, sun angular radius (rad), limb darkening
+uniform vec4 uPlanetSun;
+// sun.irradiance_xyz_w_m2_nm
+uniform vec3 uSunIrradianceXyz;
+// sun.axis_width_deg
+uniform float uSunAxisWidthDeg;
+
+const float SORA_PI = 3.14159265358979;
+const float SORA_FLOOR = 1e-30;
+
+float soraAsinh(float x) { return sign(x) * log(abs(x) + sqrt(x * x + 1.0)); }
+
+// Fractional sun node of elevation eDeg.
+float soraSunCoordinate(float eDeg) {
+  float t0 = soraAsinh(-12.0 / uSunAxisWidthDeg);
+  float t1 = soraAsinh(90.0 / uSunAxisWidthDeg);
+  float t = soraAsinh(clamp(eDeg, -12.0, 90.0) / uSunAxisWidthDeg);
+  return clamp((t - t0) / (t1 - t0), 0.0, 1.0) * float(uSkyNodes.x - 1);
+}
+
+float soraThickness() { return uPlanetSun.y - uPlanetSun.x; }
+
+// The altitude axis: ln(1 + h / h0) / ln(1 + 50), h0 = thickness / 50.
+float soraAltitudeCoordinate(float h, int nodes) {
+  float x = clamp(h, 0.0, soraThickness()) / (soraThickness() / 50.0);
+  return clamp(log(1.0 + x) / log(51.0), 0.0, 1.0) * float(nodes - 1);
+}
+
+// Cell index and weight of fractional index x within lowest..highest.
+void soraCell(float x, int lowest, int highest, out int i, out float f) {
+  i = clamp(int(floor(max(x, 0.0))), lowest, highest);
+  f = clamp(x - float(i), 0.0, 1.0);
+}
+
+// Zenith coordinate (y, lowest cell, highest cell) for an eye at radius r.
+void soraZenithCoordinate(float zenith, float r, out float y, out int lowest, out int highest) {
+  int half_ = uSkyNodes.z;
+  float zh = SORA_PI - asin(min(uPlanetSun.x / r, 1.0));
+  float last = float(half_ - 1);
+  if (zenith < zh) {
+    float u = clamp(zenith / (zh - 1e-6), 0.0, 1.0);
+    y = (1.0 - sqrt(1.0 - u)) * last;
+    lowest = 0;
+    highest = half_ - 2;
+  } else {
+    float u = clamp((SORA_PI - zenith) / (SORA_PI - zh - 1e-6), 0.0, 1.0);
+    y = float(2 * half_ - 1) - (1.0 - sqrt(1.0 - u)) * last;
+    lowest = half_;
+    highest = 2 * half_ - 2;
+  }
+}
+
+vec3 soraSkyTexel(int layer, int row, int k) {
+  return texelFetch(uSky, ivec3(k, row, layer), 0).xyz;
+}
+
+vec3 soraLayer(int layer, int i, float fy, int k, float fx) {
+  vec3 a = mix(soraSkyTexel(layer, i, k), soraSkyTexel(layer, i, k + 1), fx);
+  vec3 b = mix(soraSkyTexel(layer, i + 1, k), soraSkyTexel(layer, i + 1, k + 1), fx);
+  return mix(a, b, fy);
+}
+
+vec3 soraMixLog(vec3 a, vec3 b, float f) {
+  return exp(mix(log(max(a, vec3(SORA_FLOOR))), log(max(b, vec3(SORA_FLOOR))), f));
+}
+
+// Sky radiance (XYZ, W m^-2 sr^-1 nm^-1) seen at altitude h (m) toward
+// zenith angle `zenith` (rad) and azimuth `phi` (rad, 0..pi) from the
+// sun's, with the sun at elevation eDeg (degrees). No sun disc.
+vec3 soraSkyXyz(float h, float zenith, float phi, float eDeg) {
+  h = clamp(h, 0.0, soraThickness());
+  float y; int lowest; int highest;
+  soraZenithCoordinate(zenith, uPlanetSun.x + h, y, lowest, highest);
+  int i; float fy; soraCell(y, lowest, highest, i, fy);
+  int K = uSkyNodes.w;
+  int k; float fx; soraCell(sqrt(clamp(phi / SORA_PI, 0.0, 1.0)) * float(K - 1), 0, K - 2, k, fx);
+  int A = uSkyNodes.y;
+  int a; float fa; soraCell(soraAltitudeCoordinate(h, A), 0, A - 2, a, fa);
+  int s; float fs; soraCell(soraSunCoordinate(eDeg), 0, uSkyNodes.x - 2, s, fs);
+  vec3 low = mix(soraLayer(s * A + a, i, fy, k, fx), soraLayer(s * A + a + 1, i, fy, k, fx), fa);
+  vec3 high = mix(soraLayer((s + 1) * A + a, i, fy, k, fx), soraLayer((s + 1) * A + a + 1, i, fy, k, fx), fa);
+  return soraMixLog(low, high, fs);
+}
+
+float soraHorizonCosine(float r) {
+  float q = min(uPlanetSun.x / r, 1.0);
+  return -sqrt(max(1.0 - q * q, 0.0));
+}
+
+// Transmittance (XYZ of the transmitted sunlight / XYZ of the sunlight)
+// from altitude h to the top along view cosine mu; zero below the horizon.
+vec3 soraTransmittance(float h, float mu) {
+  h = clamp(h, 0.0, soraThickness());
+  float r = uPlanetSun.x + h;
+  float muH = soraHorizonCosine(r);
+  if (mu < muH) return vec3(0.0);
+  int A = uTransmittanceNodes.x;
+  int M = uTransmittanceNodes.y;
+  int a; float fa; soraCell(soraAltitudeCoordinate(h, A), 0, A - 2, a, fa);
+  // Each row at the view cosine's coordinate for its own altitude's horizon.
+  float rA = uPlanetSun.x + soraThickness() / 50.0 * (exp(float(a) / float(A - 1) * log(51.0)) - 1.0);
+  float rB = uPlanetSun.x + soraThickness() / 50.0 * (exp(float(a + 1) / float(A - 1) * log(51.0)) - 1.0);
+  float muA = soraHorizonCosine(rA);
+  float muB = soraHorizonCosine(rB);
+  int m; float fm; soraCell(sqrt(clamp((mu - muA) / (1.0 - muA), 0.0, 1.0)) * float(M - 1), 0, M - 2, m, fm);
+  int n; float fn; soraCell(sqrt(clamp((mu - muB) / (1.0 - muB), 0.0, 1.0)) * float(M - 1), 0, M - 2, n, fn);
+  vec3 t0 = mix(texelFetch(uTransmittance, ivec2(m, a), 0).xyz, texelFetch(uTransmittance, ivec2(m + 1, a), 0).xyz, fm);
+  vec3 t1 = mix(texelFetch(uTransmittance, ivec2(n, a + 1), 0).xyz, texelFetch(uTransmittance, ivec2(n + 1, a + 1), 0).xyz, fn);
+  return mix(t0, t1, fa);
+}
+
+// Global horizontal irradiance (XYZ, W m^-2 nm^-1) at altitude h with the
+// sun at eDeg: the diffuse table plus the direct beam.
+vec3 soraGroundIrradianceXyz(float h, float eDeg) {
+  h = clamp(h, 0.0, soraThickness());
+  int A = uSkyNodes.y;
+  int a; float fa; soraCell(soraAltitudeCoordinate(h, A), 0, A - 2, a, fa);
+  int s; float fs; soraCell(soraSunCoordinate(eDeg), 0, uSkyNodes.x - 2, s, fs);
+  vec3 low = mix(texelFetch(uIrradiance, ivec2(s, a), 0).xyz, texelFetch(uIrradiance, ivec2(s, a + 1), 0).xyz, fa);
+  vec3 high = mix(texelFetch(uIrradiance, ivec2(s + 1, a), 0).xyz, texelFetch(uIrradiance, ivec2(s + 1, a + 1), 0).xyz, fa);
+  float muSun = sin(radians(eDeg));
+  return soraMixLog(low, high, fs) + uSunIrradianceXyz * soraTransmittance(h, muSun) * max(muSun, 0.0);
+}
+
+// The sun disc's radiance at angle gamma (rad) from its centre.
+vec3 soraSunDiscXyz(float h, float eDeg, float gamma) {
+  float alpha = uPlanetSun.z;
+  if (gamma >= alpha) return vec3(0.0);
+  float u = uPlanetSun.w;
+  float cosA = sqrt(max(1.0 - (gamma / alpha) * (gamma / alpha), 0.0));
+  float shape = (1.0 - u * (1.0 - cosA)) / (SORA_PI * alpha * alpha * (1.0 - u / 3.0));
+  return uSunIrradianceXyz * soraTransmittance(h, sin(radians(eDeg))) * shape;
+}
+
+// Zenith angle and azimuth from the sun's of view v seen from a point
+// whose local vertical is `up`, the sun toward `sun` (unit vectors).
+vec2 soraLocalView(vec3 v, vec3 up, vec3 sun) {
+  float mu = clamp(dot(v, up), -1.0, 1.0);
+  vec3 vh = v - up * mu;
+  vec3 sh = sun - up * dot(sun, up);
+  float nv = length(vh), ns = length(sh);
+  float cosPhi = (nv > 1e-6 && ns > 1e-6) ? clamp(dot(vh, sh) / (nv * ns), -1.0, 1.0) : 1.0;
+  return vec2(acos(mu), acos(cosPhi));
+}
+
+// Sky radiance for an eye at altitude h looking along unit v, the sun
+// toward unit sun; v and sun in the eye's east-north-up frame (z up).
+vec3 soraSkyView(float h, vec3 v, vec3 sun) {
+  vec2 zp = soraLocalView(v, vec3(0.0, 0.0, 1.0), sun);
+  return soraSkyXyz(h, zp.x, zp.y, degrees(asin(clamp(sun.z, -1.0, 1.0))));
+}
+
+// Aerial perspective between the eye at altitude h and the point at
+// distance d (m) along v: in-scattered radiance (XYZ) and the segment's
+// transmittance, so that L = L_point * transmittance + inscattered.
+void soraAerialPerspective(float h, vec3 v, vec3 sun, float d, out vec3 inscattered, out vec3 transmittance) {
+  float R = uPlanetSun.x;
+  h = clamp(h, 0.0, soraThickness());
+  float r = R + h;
+  // The point relative to the planet's centre; computed in a form that
+  // keeps precision for d << r.
+  vec3 p = vec3(v.xy * d, r + v.z * d);
+  float rp = length(p);
+  vec3 upP = p / rp;
+  float hp = clamp(rp - R, 0.0, soraThickness());
+  float mu = v.z;
+  float muP = dot(v, upP);
+  vec3 near, far;
+  if (mu < soraHorizonCosine(r)) {
+    near = soraTransmittance(hp, -muP);
+    far = soraTransmittance(h, -mu);
+  } else {
+    near = soraTransmittance(h, mu);
+    far = soraTransmittance(hp, muP);
+  }
+  transmittance = min(near / max(far, vec3(SORA_FLOOR)), vec3(1.0));
+  vec3 atEye = soraSkyView(h, v, sun);
+  vec2 zp = soraLocalView(v, upP, sun);
+  vec3 atPoint = soraSkyXyz(hp, zp.x, zp.y, degrees(asin(clamp(dot(sun, upP), -1.0, 1.0))));
+  inscattered = max(atEye - transmittance * atPoint, vec3(0.0));
+}
+
+// Linear sRGB (Rec. 709 primaries, D65) of XYZ; the manifest's
+// colour.linear_srgb_from_xyz.
+vec3 soraXyzToLinearSrgb(vec3 xyz) {
+  // Columns of the matrix (GLSL's mat3 constructor is column-major).
+  return mat3(3.2406, -0.9689, 0.0557,
+              -1.5372, 1.8758, -0.2040,
+              -0.4986, 0.0415, 1.0570) * xyz;
+}

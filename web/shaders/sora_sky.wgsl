@@ -1,0 +1,209 @@
+// sora engine tables: reference reader, WGSL (WebGPU).
+//
+// The same formulas as sora_sky.glsl (and crates/sora/src/engine_tables/
+// lookup.rs); table reads by textureLoad only. Bind (docs/engine-tables.md):
+//   group(0) binding(0) sky: texture_2d_array<f32>, sky.exr, layer = s * A + a
+//   group(0) binding(1) transmittance: texture_2d<f32>, transmittance.exr
+//   group(0) binding(2) irradiance: texture_2d<f32>, irradiance.exr
+//   group(0) binding(3) params: SoraTables (values from manifest.json)
+// Textures rgba32float (unfilterable is fine), holding X, Y, Z.
+
+struct SoraTables {
+  // sun_nodes, altitude_nodes, zenith_nodes_per_half, azimuth_nodes
+  sky_nodes: vec4<i32>,
+  // transmittance altitude nodes, mu nodes, unused, unused
+  transmittance_nodes: vec4<i32>,
+  // ground_radius_m, top_radius_m, sun angular radius (rad), limb darkening
+  planet_sun: vec4<f32>,
+  // sun.irradiance_xyz_w_m2_nm, sun.axis_width_deg
+  sun_irradiance_xyz_width: vec4<f32>,
+};
+
+@group(0) @binding(0) var sora_sky: texture_2d_array<f32>;
+@group(0) @binding(1) var sora_transmittance: texture_2d<f32>;
+@group(0) @binding(2) var sora_irradiance: texture_2d<f32>;
+@group(0) @binding(3) var<uniform> sora: SoraTables;
+
+const SORA_PI: f32 = 3.14159265358979;
+const SORA_FLOOR: f32 = 1e-30;
+
+fn sora_asinh(x: f32) -> f32 { return sign(x) * log(abs(x) + sqrt(x * x + 1.0)); }
+
+fn sora_sun_coordinate(e_deg: f32) -> f32 {
+  let w = sora.sun_irradiance_xyz_width.w;
+  let t0 = sora_asinh(-12.0 / w);
+  let t1 = sora_asinh(90.0 / w);
+  let t = sora_asinh(clamp(e_deg, -12.0, 90.0) / w);
+  return clamp((t - t0) / (t1 - t0), 0.0, 1.0) * f32(sora.sky_nodes.x - 1);
+}
+
+fn sora_thickness() -> f32 { return sora.planet_sun.y - sora.planet_sun.x; }
+
+// The altitude axis: ln(1 + h / h0) / ln(1 + 50), h0 = thickness / 50.
+fn sora_altitude_coordinate(h: f32, nodes: i32) -> f32 {
+  let x = clamp(h, 0.0, sora_thickness()) / (sora_thickness() / 50.0);
+  return clamp(log(1.0 + x) / log(51.0), 0.0, 1.0) * f32(nodes - 1);
+}
+
+// Cell index and the upper node's weight of fractional index x.
+struct SoraCell { i: i32, f: f32 };
+
+fn sora_cell(x: f32, lowest: i32, highest: i32) -> SoraCell {
+  let i = clamp(i32(floor(max(x, 0.0))), lowest, highest);
+  return SoraCell(i, clamp(x - f32(i), 0.0, 1.0));
+}
+
+// The zenith axis's cell for an eye at radius r (never across the horizon).
+fn sora_zenith_cell(zenith: f32, r: f32) -> SoraCell {
+  let half_nodes = sora.sky_nodes.z;
+  let zh = SORA_PI - asin(min(sora.planet_sun.x / r, 1.0));
+  let last = f32(half_nodes - 1);
+  if (zenith < zh) {
+    let u = clamp(zenith / (zh - 1e-6), 0.0, 1.0);
+    return sora_cell((1.0 - sqrt(1.0 - u)) * last, 0, half_nodes - 2);
+  }
+  let u = clamp((SORA_PI - zenith) / (SORA_PI - zh - 1e-6), 0.0, 1.0);
+  return sora_cell(f32(2 * half_nodes - 1) - (1.0 - sqrt(1.0 - u)) * last, half_nodes, 2 * half_nodes - 2);
+}
+
+fn sora_sky_texel(layer: i32, row: i32, k: i32) -> vec3<f32> {
+  return textureLoad(sora_sky, vec2<i32>(k, row), layer, 0).xyz;
+}
+
+fn sora_layer(layer: i32, z: SoraCell, k: SoraCell) -> vec3<f32> {
+  let a = mix(sora_sky_texel(layer, z.i, k.i), sora_sky_texel(layer, z.i, k.i + 1), k.f);
+  let b = mix(sora_sky_texel(layer, z.i + 1, k.i), sora_sky_texel(layer, z.i + 1, k.i + 1), k.f);
+  return mix(a, b, z.f);
+}
+
+fn sora_mix_log(a: vec3<f32>, b: vec3<f32>, f: f32) -> vec3<f32> {
+  return exp(mix(log(max(a, vec3<f32>(SORA_FLOOR))), log(max(b, vec3<f32>(SORA_FLOOR))), f));
+}
+
+// Sky radiance (XYZ, W m^-2 sr^-1 nm^-1) at altitude h (m) toward zenith
+// angle `zenith` and azimuth `phi` from the sun's (rad), sun at e_deg.
+fn sora_sky_xyz(h_in: f32, zenith: f32, phi: f32, e_deg: f32) -> vec3<f32> {
+  let h = clamp(h_in, 0.0, sora_thickness());
+  let z = sora_zenith_cell(zenith, sora.planet_sun.x + h);
+  let kn = sora.sky_nodes.w;
+  let k = sora_cell(sqrt(clamp(phi / SORA_PI, 0.0, 1.0)) * f32(kn - 1), 0, kn - 2);
+  let an = sora.sky_nodes.y;
+  let a = sora_cell(sora_altitude_coordinate(h, an), 0, an - 2);
+  let s = sora_cell(sora_sun_coordinate(e_deg), 0, sora.sky_nodes.x - 2);
+  let low = mix(sora_layer(s.i * an + a.i, z, k), sora_layer(s.i * an + a.i + 1, z, k), a.f);
+  let high = mix(sora_layer((s.i + 1) * an + a.i, z, k), sora_layer((s.i + 1) * an + a.i + 1, z, k), a.f);
+  return sora_mix_log(low, high, s.f);
+}
+
+fn sora_horizon_cosine(r: f32) -> f32 {
+  let q = min(sora.planet_sun.x / r, 1.0);
+  return -sqrt(max(1.0 - q * q, 0.0));
+}
+
+fn sora_transmittance_texel(m: i32, a: i32) -> vec3<f32> {
+  return textureLoad(sora_transmittance, vec2<i32>(m, a), 0).xyz;
+}
+
+// Transmittance from altitude h to the top along view cosine mu.
+fn sora_transmittance_xyz(h_in: f32, mu: f32) -> vec3<f32> {
+  let h = clamp(h_in, 0.0, sora_thickness());
+  let r = sora.planet_sun.x + h;
+  let mu_h = sora_horizon_cosine(r);
+  if (mu < mu_h) { return vec3<f32>(0.0); }
+  let an = sora.transmittance_nodes.x;
+  let mn = sora.transmittance_nodes.y;
+  let a = sora_cell(sora_altitude_coordinate(h, an), 0, an - 2);
+  // Each row at the view cosine's coordinate for its own altitude's horizon.
+  let h0 = sora_thickness() / 50.0;
+  let mu_a = sora_horizon_cosine(sora.planet_sun.x + h0 * (exp(f32(a.i) / f32(an - 1) * log(51.0)) - 1.0));
+  let mu_b = sora_horizon_cosine(sora.planet_sun.x + h0 * (exp(f32(a.i + 1) / f32(an - 1) * log(51.0)) - 1.0));
+  let m = sora_cell(sqrt(clamp((mu - mu_a) / (1.0 - mu_a), 0.0, 1.0)) * f32(mn - 1), 0, mn - 2);
+  let n = sora_cell(sqrt(clamp((mu - mu_b) / (1.0 - mu_b), 0.0, 1.0)) * f32(mn - 1), 0, mn - 2);
+  let t0 = mix(sora_transmittance_texel(m.i, a.i), sora_transmittance_texel(m.i + 1, a.i), m.f);
+  let t1 = mix(sora_transmittance_texel(n.i, a.i + 1), sora_transmittance_texel(n.i + 1, a.i + 1), n.f);
+  return mix(t0, t1, a.f);
+}
+
+fn sora_irradiance_texel(s: i32, a: i32) -> vec3<f32> {
+  return textureLoad(sora_irradiance, vec2<i32>(s, a), 0).xyz;
+}
+
+// Global horizontal irradiance (XYZ, W m^-2 nm^-1) at altitude h, sun at e_deg.
+fn sora_ground_irradiance_xyz(h_in: f32, e_deg: f32) -> vec3<f32> {
+  let h = clamp(h_in, 0.0, sora_thickness());
+  let an = sora.sky_nodes.y;
+  let a = sora_cell(sora_altitude_coordinate(h, an), 0, an - 2);
+  let s = sora_cell(sora_sun_coordinate(e_deg), 0, sora.sky_nodes.x - 2);
+  let low = mix(sora_irradiance_texel(s.i, a.i), sora_irradiance_texel(s.i, a.i + 1), a.f);
+  let high = mix(sora_irradiance_texel(s.i + 1, a.i), sora_irradiance_texel(s.i + 1, a.i + 1), a.f);
+  let mu_sun = sin(radians(e_deg));
+  return sora_mix_log(low, high, s.f)
+    + sora.sun_irradiance_xyz_width.xyz * sora_transmittance_xyz(h, mu_sun) * max(mu_sun, 0.0);
+}
+
+// The sun disc's radiance at angle gamma (rad) from its centre.
+fn sora_sun_disc_xyz(h: f32, e_deg: f32, gamma: f32) -> vec3<f32> {
+  let alpha = sora.planet_sun.z;
+  if (gamma >= alpha) { return vec3<f32>(0.0); }
+  let u = sora.planet_sun.w;
+  let cos_a = sqrt(max(1.0 - (gamma / alpha) * (gamma / alpha), 0.0));
+  let shape = (1.0 - u * (1.0 - cos_a)) / (SORA_PI * alpha * alpha * (1.0 - u / 3.0));
+  return sora.sun_irradiance_xyz_width.xyz * sora_transmittance_xyz(h, sin(radians(e_deg))) * shape;
+}
+
+// Zenith angle and azimuth from the sun's of v seen where `up` is vertical.
+fn sora_local_view(v: vec3<f32>, up: vec3<f32>, sun: vec3<f32>) -> vec2<f32> {
+  let mu = clamp(dot(v, up), -1.0, 1.0);
+  let vh = v - up * mu;
+  let sh = sun - up * dot(sun, up);
+  let nv = length(vh);
+  let ns = length(sh);
+  var cos_phi = 1.0;
+  if (nv > 1e-6 && ns > 1e-6) { cos_phi = clamp(dot(vh, sh) / (nv * ns), -1.0, 1.0); }
+  return vec2<f32>(acos(mu), acos(cos_phi));
+}
+
+// Sky radiance for an eye at altitude h along unit v, sun toward unit sun
+// (east-north-up, z up).
+fn sora_sky_view(h: f32, v: vec3<f32>, sun: vec3<f32>) -> vec3<f32> {
+  let zp = sora_local_view(v, vec3<f32>(0.0, 0.0, 1.0), sun);
+  return sora_sky_xyz(h, zp.x, zp.y, degrees(asin(clamp(sun.z, -1.0, 1.0))));
+}
+
+struct SoraAerial { inscattered: vec3<f32>, transmittance: vec3<f32> };
+
+// Aerial perspective between the eye at altitude h and the point at
+// distance d (m) along v: L = L_point * transmittance + inscattered.
+fn sora_aerial_perspective(h_in: f32, v: vec3<f32>, sun: vec3<f32>, d: f32) -> SoraAerial {
+  let ground = sora.planet_sun.x;
+  let h = clamp(h_in, 0.0, sora_thickness());
+  let r = ground + h;
+  let p = vec3<f32>(v.xy * d, r + v.z * d);
+  let rp = length(p);
+  let up_p = p / rp;
+  let hp = clamp(rp - ground, 0.0, sora_thickness());
+  let mu = v.z;
+  let mu_p = dot(v, up_p);
+  var near: vec3<f32>;
+  var far: vec3<f32>;
+  if (mu < sora_horizon_cosine(r)) {
+    near = sora_transmittance_xyz(hp, -mu_p);
+    far = sora_transmittance_xyz(h, -mu);
+  } else {
+    near = sora_transmittance_xyz(h, mu);
+    far = sora_transmittance_xyz(hp, mu_p);
+  }
+  let t = min(near / max(far, vec3<f32>(SORA_FLOOR)), vec3<f32>(1.0));
+  let at_eye = sora_sky_view(h, v, sun);
+  let zp = sora_local_view(v, up_p, sun);
+  let at_point = sora_sky_xyz(hp, zp.x, zp.y, degrees(asin(clamp(dot(sun, up_p), -1.0, 1.0))));
+  return SoraAerial(max(at_eye - t * at_point, vec3<f32>(0.0)), t);
+}
+
+// Linear sRGB (Rec. 709, D65) of XYZ (manifest colour.linear_srgb_from_xyz).
+fn sora_xyz_to_linear_srgb(xyz: vec3<f32>) -> vec3<f32> {
+  return mat3x3<f32>(
+    vec3<f32>(3.2406, -0.9689, 0.0557),
+    vec3<f32>(-1.5372, 1.8758, -0.2040),
+    vec3<f32>(-0.4986, 0.0415, 1.0570)) * xyz;
+}
