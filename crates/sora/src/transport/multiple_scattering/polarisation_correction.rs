@@ -27,6 +27,18 @@
 //! 10 degrees up away from a sun 5 degrees high was 0.049 against the
 //! vector path tracer's 0.073 at 440 nm (now 0.076; `docs/polarisation.md`).
 //!
+//! **Deep twilight**: the column's first order is its own, so once the
+//! sun is acos(R_ground / R_top) below the horizon (10.1 degrees on Earth)
+//! every level of it is in the planet's shadow and it has no light. Its
+//! sun stops `POLARISATION_COLUMN_MARGIN_DEG` above that (`regimes.rs`):
+//! a lower eye sun takes that column's ratios, which are flat there and
+//! match the vector path tracer's ratio of polarised to scalar intensity
+//! at the zenith to 1-2 % down to -12 degrees; from
+//! `POLARISATION_FADE_START_DEG` below the last lit sun the ratios are
+//! blended toward unpolarised light, (1, 0, 0, 0), the column's share
+//! falling as exp(-d / `POLARISATION_FADE_SCALE_DEG`) (d degrees past the
+//! start), as the path tracer's vector effect does at -14 to -18.
+//!
 //! **What it is exact for**: the plane-parallel limit, where the scalar
 //! field is the column's and the ratio turns its intensity into the
 //! polarised one. **What it assumes on the sphere**: that the sphere
@@ -64,8 +76,12 @@ pub(crate) struct CorrectionInputs<'a> {
     pub(crate) optics: &'a AtmosphereOptics,
     pub(crate) scaled: &'a ScaledOptics,
     pub(crate) geometry: &'a ColumnGeometry,
-    /// The eye's sun zenith cosine.
+    /// The column's sun zenith cosine: the eye's, or the lowest sun that
+    /// still lights the column (see the module docs).
     pub(crate) sun_cosine: f64,
+    /// The share of the column's polarisation kept, 0..1 (1 but in deep
+    /// twilight, see the module docs).
+    pub(crate) polarised_share: f64,
     /// The scaled and exact optical depths toward the sun from each level,
     /// [i * levels + k], None for a level in the planet's shadow (the
     /// eye's sun zenith angle).
@@ -90,6 +106,8 @@ pub struct PolarisationCorrection {
     layer_optical_depths: Vec<f64>,
     /// omega_j per wavelength and level, [(i * levels + k) * species + j].
     level_albedos: Vec<f64>,
+    /// The share of the column's polarisation kept ([`CorrectionInputs`]).
+    polarised_share: f64,
 }
 
 /// F*(cos theta) of species `j` at every wavelength into `out`: the exact
@@ -263,6 +281,7 @@ impl PolarisationCorrection {
             solution_len,
             layer_optical_depths,
             level_albedos,
+            polarised_share: inputs.polarised_share.clamp(0.0, 1.0),
         }
     }
 
@@ -282,11 +301,24 @@ impl PolarisationCorrection {
         let (w, harmonics) = (self.wavelengths, self.streams.count());
         for i in 0..w {
             let row = &rows[i * harmonics * ROW_VALUES..][..harmonics * ROW_VALUES];
-            let ratios = synthesise_ratios(row, view_azimuth_rad);
+            let ratios = self.blend(synthesise_ratios(row, view_azimuth_rad));
             for (c, ratio) in ratios.into_iter().enumerate() {
                 out[c * w + i] = ratio;
             }
         }
+    }
+
+    /// The column's `ratios` (I, Q, U, V) / I_scalar blended with
+    /// unpolarised light, (1, 0, 0, 0), by the share of the column's
+    /// polarisation kept.
+    fn blend(&self, ratios: [f64; COMPONENTS]) -> [f64; COMPONENTS] {
+        let w = self.polarised_share;
+        [
+            1.0 + w * (ratios[0] - 1.0),
+            w * ratios[1],
+            w * ratios[2],
+            w * ratios[3],
+        ]
     }
 
     /// The azimuthal harmonics of the columns' multiply scattered light
@@ -525,8 +557,10 @@ impl PolarisationCorrection {
                         for i in 0..w {
                             let row = &rows[(a * w + i) * harmonics * ROW_VALUES..]
                                 [..harmonics * ROW_VALUES];
-                            for (c, ratio) in
-                                synthesise_ratios(row, azimuth).into_iter().enumerate()
+                            for (c, ratio) in self
+                                .blend(synthesise_ratios(row, azimuth))
+                                .into_iter()
+                                .enumerate()
                             {
                                 out[c * w + i] = ratio as f32;
                             }
