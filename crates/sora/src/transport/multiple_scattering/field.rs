@@ -9,7 +9,9 @@ use super::column_optics::{ColumnGeometry, ScaledOptics};
 use super::forward_peak::{self, ForwardPeak};
 use super::peak_beam::{PeakBeam, PeakBeamInputs};
 use super::phase_fourier::normalized_associated_legendre;
-use super::polarisation_correction::{CorrectionInputs, PolarisationCorrection, PolarisationTable};
+use super::polarisation_correction::{
+    CorrectionInputs, PolarisationCorrection, PolarisationRows, PolarisationTable,
+};
 use super::regimes::{
     self, FIRST_ORDER_SUN_ZENITH_DEG, SUNSET_STEP_END_DEG, SUNSET_STEP_START_DEG,
 };
@@ -522,25 +524,17 @@ impl MultipleScatteringField {
         );
     }
 
-    /// The polarisation correction's ratios (I, Q, U, V) / I_scalar of the
-    /// light the scaled field scatters two or more times, toward the view
-    /// of zenith cosine `view_cosine` at azimuth `view_azimuth_rad` from
-    /// the sun's (clockwise) at the eye, into `ratios` ([component *
-    /// wavelengths + i]; see `polarisation_correction.rs`). None for a
-    /// scalar field.
-    pub(crate) fn compute_polarisation_ratios(
+    /// The polarisation correction's harmonic rows toward every distinct
+    /// cosine of `view_cosines`, from which each view's ratios (I, Q, U, V)
+    /// / I_scalar of the light the scaled field scatters two or more times
+    /// are summed at its azimuth (see `polarisation_correction.rs`). None
+    /// for a scalar field.
+    pub(crate) fn compute_polarisation_rows(
         &self,
-        (view_cosine, view_azimuth_rad): (f64, f64),
-        ratios: &mut [f64],
-    ) -> Option<()> {
+        view_cosines: &[f64],
+    ) -> Option<PolarisationRows> {
         let correction = self.polarisation.as_ref()?;
-        correction.compute_ratios(
-            &self.atmosphere,
-            &self.optics.scaled.phases,
-            (view_cosine, view_azimuth_rad),
-            ratios,
-        );
-        Some(())
+        Some(correction.compute_rows(&self.atmosphere, &self.optics.scaled.phases, view_cosines))
     }
 
     /// The polarisation correction's ratios tabulated over view directions

@@ -285,40 +285,9 @@ impl PolarisationCorrection {
         }
     }
 
-    /// The ratios (I, Q, U, V)_col / I_col,scalar toward the view of zenith
-    /// cosine `view_cosine` at azimuth `view_azimuth_rad` from the sun's
-    /// (clockwise, the sky's convention) at every wavelength, into `out`
-    /// ([component * wavelengths + i]); (1, 0, 0, 0) where the column has
-    /// no multiply scattered light.
-    pub(crate) fn compute_ratios(
-        &self,
-        optics: &AtmosphereOptics,
-        phases: &[TruncatedPhase],
-        (view_cosine, view_azimuth_rad): (f64, f64),
-        out: &mut [f64],
-    ) {
-        let rows = self.compute_harmonic_rows(optics, phases, &[view_cosine]);
-        let (w, harmonics) = (self.wavelengths, self.streams.count());
-        for i in 0..w {
-            let row = &rows[i * harmonics * ROW_VALUES..][..harmonics * ROW_VALUES];
-            let ratios = self.blend(synthesise_ratios(row, view_azimuth_rad));
-            for (c, ratio) in ratios.into_iter().enumerate() {
-                out[c * w + i] = ratio;
-            }
-        }
-    }
-
-    /// The column's `ratios` (I, Q, U, V) / I_scalar blended with
-    /// unpolarised light, (1, 0, 0, 0), by the share of the column's
-    /// polarisation kept.
+    /// The column's `ratios` blended by its polarised share ([`blend`]).
     fn blend(&self, ratios: [f64; COMPONENTS]) -> [f64; COMPONENTS] {
-        let w = self.polarised_share;
-        [
-            1.0 + w * (ratios[0] - 1.0),
-            w * ratios[1],
-            w * ratios[2],
-            w * ratios[3],
-        ]
+        blend(self.polarised_share, ratios)
     }
 
     /// The azimuthal harmonics of the columns' multiply scattered light
@@ -467,6 +436,18 @@ impl PolarisationCorrection {
     }
 }
 
+/// The column's `ratios` (I, Q, U, V) / I_scalar blended with
+/// unpolarised light, (1, 0, 0, 0), by `share`, the share of the
+/// column's polarisation kept.
+fn blend(share: f64, ratios: [f64; COMPONENTS]) -> [f64; COMPONENTS] {
+    [
+        1.0 + share * (ratios[0] - 1.0),
+        share * ratios[1],
+        share * ratios[2],
+        share * ratios[3],
+    ]
+}
+
 /// Values per harmonic in the correction's rows: the polarised I, Q, U,
 /// V, then the scalar I.
 const ROW_VALUES: usize = COMPONENTS + 1;
@@ -495,7 +476,7 @@ fn synthesise_ratios(row: &[f64], azimuth_rad: f64) -> [f64; COMPONENTS] {
 }
 
 /// The correction's ratios (I, Q, U, V) / I_scalar tabulated over view
-/// directions, for images: what [`PolarisationCorrection::compute_ratios`]
+/// directions, for images: what [`PolarisationRows::ratios`]
 /// gives per view, read per pixel by bilinear interpolation.
 ///
 /// Axes: the view's zenith cosine in two halves that meet at the column's
@@ -520,6 +501,87 @@ pub(crate) struct PolarisationTable {
 
 /// View cosines per task when the table's rows are computed.
 const COSINES_PER_TASK: usize = 4;
+
+/// The correction's harmonic rows at a list of view zenith cosines
+/// ([`PolarisationCorrection::compute_rows`]): a view whose cosine is one
+/// of them gets its ratios (I, Q, U, V)_col / I_col,scalar, its harmonics
+/// summed at its own azimuth, at the cost of a sum over the harmonics (an
+/// almucantar's views share one row).
+#[derive(Debug, Clone)]
+pub(crate) struct PolarisationRows {
+    /// The view cosines, ascending, without repeats.
+    cosines: Vec<f64>,
+    wavelengths: usize,
+    harmonics: usize,
+    /// [((a * wavelengths + i) * harmonics + m) * ROW_VALUES + n].
+    rows: Vec<f64>,
+    polarised_share: f64,
+}
+
+impl PolarisationCorrection {
+    /// The harmonic rows toward every distinct cosine of `view_cosines`
+    /// (in parallel, a few cosines a task; the result independent of the
+    /// thread count).
+    pub(crate) fn compute_rows(
+        &self,
+        optics: &AtmosphereOptics,
+        phases: &[TruncatedPhase],
+        view_cosines: &[f64],
+    ) -> PolarisationRows {
+        let mut cosines = view_cosines.to_vec();
+        cosines.sort_by(f64::total_cmp);
+        cosines.dedup();
+        let per_cosine = self.wavelengths * self.streams.count() * ROW_VALUES;
+        let mut rows = vec![0.0; cosines.len() * per_cosine];
+        crate::parallel::for_each_chunk_mut(
+            &mut rows,
+            COSINES_PER_TASK * per_cosine,
+            |task, chunk| {
+                let first = task * COSINES_PER_TASK;
+                let nodes = &cosines[first..first + chunk.len() / per_cosine];
+                chunk.copy_from_slice(&self.compute_harmonic_rows(optics, phases, nodes));
+            },
+        );
+        PolarisationRows {
+            cosines,
+            wavelengths: self.wavelengths,
+            harmonics: self.streams.count(),
+            rows,
+            polarised_share: self.polarised_share,
+        }
+    }
+}
+
+impl PolarisationRows {
+    /// The ratios (I, Q, U, V)_col / I_col,scalar toward the view of zenith
+    /// cosine `view_cosine` (one of the rows' cosines) at azimuth
+    /// `view_azimuth_rad` from the sun's (clockwise, the sky's convention)
+    /// at every wavelength, into `out` ([component * wavelengths + i]);
+    /// (1, 0, 0, 0) where the column has no multiply scattered light. None
+    /// for a cosine without a row.
+    pub(crate) fn ratios(
+        &self,
+        (view_cosine, view_azimuth_rad): (f64, f64),
+        out: &mut [f64],
+    ) -> Option<()> {
+        let a = self
+            .cosines
+            .binary_search_by(|c| c.total_cmp(&view_cosine))
+            .ok()?;
+        let (w, harmonics) = (self.wavelengths, self.harmonics);
+        for i in 0..w {
+            let row = &self.rows[(a * w + i) * harmonics * ROW_VALUES..][..harmonics * ROW_VALUES];
+            let ratios = blend(
+                self.polarised_share,
+                synthesise_ratios(row, view_azimuth_rad),
+            );
+            for (c, ratio) in ratios.into_iter().enumerate() {
+                out[c * w + i] = ratio;
+            }
+        }
+        Some(())
+    }
+}
 
 impl PolarisationCorrection {
     /// The ratios tabulated on `half_nodes` zenith-cosine nodes per half
