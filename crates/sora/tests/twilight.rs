@@ -216,7 +216,10 @@ fn suns_every_quarter_degree(start: f64, end: f64) -> Vec<f64> {
 fn zenith_radiance_is_smooth_where_it_could_kink() {
     for (polarisation, windows) in [
         (Polarisation::Scalar, &[(7.0, 4.5), (-8.5, -10.0)][..]),
-        (Polarisation::Vector, &[(-9.25, -10.75), (-11.75, -12.75)][..]),
+        (
+            Polarisation::Vector,
+            &[(-9.25, -10.75), (-11.75, -12.75)][..],
+        ),
     ] {
         for &(start, end) in windows {
             let suns = suns_every_quarter_degree(start, end);
