@@ -510,3 +510,51 @@ fn bad_directions_are_one_line_errors_and_print_nothing() {
     let out = earth_clear_spectrum(&["--almucantar", "5", "--principal-plane", "5"]);
     assert_eq!(out.status.code(), Some(2));
 }
+
+/// --streams and --layers set the field's resolution: the defaults given
+/// explicitly change nothing, 12 streams and 60 layers move the radiance
+/// (by well under the method's own error), and where there is no field
+/// they are one-line errors, as is a count out of range.
+#[test]
+fn streams_and_layers_set_the_fields_resolution() {
+    let view = [
+        "--view-elevation",
+        "30",
+        "--view-azimuth",
+        "90",
+        "--polarisation",
+        "off",
+        "--wavelengths",
+        "440:680:120",
+    ];
+    let run = |extra: &[&str]| earth_clear_spectrum(&[&view[..], extra].concat());
+    let default = stdout(&run(&[]));
+    assert_eq!(default, stdout(&run(&["--streams", "8", "--layers", "40"])));
+    let finer = stdout(&run(&["--streams", "12", "--layers", "60"]));
+    assert_ne!(default, finer);
+    for ((w, a), (v, b)) in spectrum_rows(&default)
+        .into_iter()
+        .zip(spectrum_rows(&finer))
+    {
+        assert_eq!(w, v);
+        assert!((b / a - 1.0).abs() < 0.01, "{w} nm: {a:e} against {b:e}");
+    }
+    for (extra, expected) in [
+        (&["--streams", "40"][..], "streams per hemisphere = 40"),
+        (&["--layers", "1"][..], "multiple-scattering layers = 1"),
+        (
+            &["--scattering", "single", "--streams", "12"][..],
+            "--streams and --layers apply to multiple scattering",
+        ),
+        (
+            &["--method", "path-tracing", "--layers", "60"][..],
+            "--streams and --layers apply to the fast and reference methods",
+        ),
+    ] {
+        let out = run(extra);
+        assert_eq!(out.status.code(), Some(1), "{extra:?}");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(stderr.lines().count(), 1, "{extra:?}: {stderr}");
+        assert!(stderr.contains(expected), "{extra:?}: {stderr}");
+    }
+}

@@ -6,7 +6,7 @@ use clap::{Args, ValueEnum};
 use sora::spectrum::SampledSpectrum;
 use sora::{Irradiance, Plane};
 
-use crate::arguments::{AtmosphereSource, MethodOptions, SunAndObserver};
+use crate::arguments::{AtmosphereSource, MethodOptions, Resolution, SunAndObserver};
 
 /// Irradiance on a horizontal plane (and on a tilted one): direct normal,
 /// direct, diffuse and global, per wavelength and broadband.
@@ -54,6 +54,9 @@ pub struct IrradianceArgs {
     #[command(flatten)]
     method: MethodOptions,
 
+    #[command(flatten)]
+    resolution: Resolution,
+
     /// Output format
     #[arg(long, value_enum, default_value_t = Format::Csv)]
     format: Format,
@@ -83,6 +86,7 @@ pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
     let (scattering, method) = args
         .method
         .resolve(100_000, sora::Method::REFERENCE_DEFAULT)?;
+    let scattering = args.resolution.apply(scattering, method)?;
     let mut atmosphere = args.source.load()?;
     let (sky, sun) = args.sun.sky(&mut atmosphere, scattering, method)?;
     let grid = *sky.wavelengths();

@@ -14,7 +14,7 @@ use sora::output::{
 };
 
 use crate::arguments::{
-    AtmosphereSource, ColourOptions, Scattering, SunAndObserver, polarisation_name,
+    AtmosphereSource, ColourOptions, Resolution, Scattering, SunAndObserver, polarisation_name,
 };
 use crate::estimate;
 use crate::polarisation_maps;
@@ -115,6 +115,9 @@ pub struct RenderArgs {
     /// ground) or single (sunlight scattered once, the paper's model)
     #[arg(long, value_enum, default_value_t = Scattering::Multiple)]
     scattering: Scattering,
+
+    #[command(flatten)]
+    resolution: Resolution,
 
     /// Do not draw the sun's disc
     #[arg(long)]
@@ -319,11 +322,12 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         },
         encoded_bytes_per_pixel,
     ));
+    let scattering = args
+        .resolution
+        .apply(args.scattering.to_library(), method)?;
     let mut atmosphere = args.source.load()?;
     let started = Instant::now();
-    let (sky, sun) = args
-        .sun
-        .sky(&mut atmosphere, args.scattering.to_library(), method)?;
+    let (sky, sun) = args.sun.sky(&mut atmosphere, scattering, method)?;
     if polarisation_outputs {
         crate::arguments::warn_non_polarising_species(&sky);
     }

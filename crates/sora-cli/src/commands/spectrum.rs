@@ -8,7 +8,7 @@ use sora::colour::{RgbColourSpace, SpectrumToXyz};
 use sora::{SkyRadiance, ViewDirection};
 
 use crate::arguments::{
-    AtmosphereSource, MethodKind, MethodOptions, SunAndObserver, parse_directions_csv,
+    AtmosphereSource, MethodKind, MethodOptions, Resolution, SunAndObserver, parse_directions_csv,
 };
 
 /// Spectral radiance of the sky in one direction or many.
@@ -113,6 +113,9 @@ pub struct SpectrumArgs {
 
     #[command(flatten)]
     method: MethodOptions,
+
+    #[command(flatten)]
+    resolution: Resolution,
 
     /// Polarised light: Stokes Q, U, V, the degree and the angle of
     /// polarisation (the fast method or path tracing; not the reference)
@@ -223,6 +226,7 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
             sun_steps: 800,
         },
     )?;
+    let scattering = args.resolution.apply(scattering, method)?;
     let (samples, seed) = match method {
         sora::Method::PathTracing { samples, seed } => (samples, seed),
         _ => (0, 0),

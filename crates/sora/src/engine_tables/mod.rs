@@ -226,7 +226,7 @@ impl EngineTables {
                     Method::Fast,
                     sky.table_size(),
                 )?;
-                let radiances = layer_sky.radiances_from_image_tables(&views)?;
+                let radiances = layer_sky.radiances_from_image_tables(&views, &|_, _| {})?;
                 let layer = s * altitude_nodes + a;
                 let out = &mut sky_values[layer * layer_texels..][..layer_texels];
                 for (o, radiance) in out.iter_mut().zip(&radiances) {

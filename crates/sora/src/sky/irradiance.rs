@@ -163,7 +163,7 @@ impl Sky {
         let views = hemisphere_views(normal, self.sun_direction())?;
         let directions: Vec<ViewDirection> = views.iter().map(|(v, _)| *v).collect();
         let radiances: Vec<SkyRadiance> = match self.method {
-            Method::Fast => self.radiances_from_image_tables(&directions)?,
+            Method::Fast => self.radiances_from_image_tables(&directions, &|_, _| {})?,
             _ => self.radiances(&directions)?,
         };
         let mut diffuse = SampledSpectrum::zeros(self.wavelengths().len());

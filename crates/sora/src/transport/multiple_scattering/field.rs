@@ -9,8 +9,12 @@ use super::column_optics::{ColumnGeometry, ScaledOptics};
 use super::forward_peak::{self, ForwardPeak};
 use super::peak_beam::{PeakBeam, PeakBeamInputs};
 use super::phase_fourier::normalized_associated_legendre;
-use super::polarisation_correction::{CorrectionInputs, PolarisationCorrection, PolarisationTable};
-use super::regimes::{FIRST_ORDER_SUN_ZENITH_DEG, SUNSET_STEP_END_DEG, SUNSET_STEP_START_DEG};
+use super::polarisation_correction::{
+    CorrectionInputs, PolarisationCorrection, PolarisationRows, PolarisationTable,
+};
+use super::regimes::{
+    self, FIRST_ORDER_SUN_ZENITH_DEG, SUNSET_STEP_END_DEG, SUNSET_STEP_START_DEG,
+};
 use super::spherical_first_order::{
     FirstOrderInputs, MomentQuadrature, compute_spherical_first_order,
 };
@@ -520,25 +524,17 @@ impl MultipleScatteringField {
         );
     }
 
-    /// The polarisation correction's ratios (I, Q, U, V) / I_scalar of the
-    /// light the scaled field scatters two or more times, toward the view
-    /// of zenith cosine `view_cosine` at azimuth `view_azimuth_rad` from
-    /// the sun's (clockwise) at the eye, into `ratios` ([component *
-    /// wavelengths + i]; see `polarisation_correction.rs`). None for a
-    /// scalar field.
-    pub(crate) fn compute_polarisation_ratios(
+    /// The polarisation correction's harmonic rows toward every distinct
+    /// cosine of `view_cosines`, from which each view's ratios (I, Q, U, V)
+    /// / I_scalar of the light the scaled field scatters two or more times
+    /// are summed at its azimuth (see `polarisation_correction.rs`). None
+    /// for a scalar field.
+    pub(crate) fn compute_polarisation_rows(
         &self,
-        (view_cosine, view_azimuth_rad): (f64, f64),
-        ratios: &mut [f64],
-    ) -> Option<()> {
+        view_cosines: &[f64],
+    ) -> Option<PolarisationRows> {
         let correction = self.polarisation.as_ref()?;
-        correction.compute_ratios(
-            &self.atmosphere,
-            &self.optics.scaled.phases,
-            (view_cosine, view_azimuth_rad),
-            ratios,
-        );
-        Some(())
+        Some(correction.compute_rows(&self.atmosphere, &self.optics.scaled.phases, view_cosines))
     }
 
     /// The polarisation correction's ratios tabulated over view directions
@@ -671,15 +667,35 @@ impl MultipleScatteringField {
     }
 }
 
+/// The sun zenith angle (rad) of the polarisation correction's column and
+/// the share of its polarisation kept (`polarisation_correction.rs`), for
+/// the eye's sun zenith angle `eye_sun_zenith` (rad) in a shell of radii
+/// `(ground, top)` (m): the eye's own sun down to
+/// `POLARISATION_COLUMN_MARGIN_DEG` above the column's last lit sun
+/// (-acos(R_ground / R_top) in elevation), that sun below it; the whole
+/// polarisation down to `POLARISATION_FADE_START_DEG` below the last lit
+/// sun, then a share falling as exp(-d / `POLARISATION_FADE_SCALE_DEG`).
+fn polarisation_column_sun(eye_sun_zenith: f64, (ground, top): (f64, f64)) -> (f64, f64) {
+    let last_lit = 0.5 * PI + (ground / top).min(1.0).acos();
+    let lowest = last_lit - regimes::POLARISATION_COLUMN_MARGIN_DEG.to_radians();
+    let past_fade = (eye_sun_zenith - last_lit).to_degrees() - regimes::POLARISATION_FADE_START_DEG;
+    let share = (-past_fade.max(0.0) / regimes::POLARISATION_FADE_SCALE_DEG).exp();
+    (eye_sun_zenith.min(lowest), share)
+}
+
 /// The polarisation correction's columns (`polarisation_correction.rs`),
-/// with the eye's own sun.
+/// with the eye's own sun, or the lowest that still lights the column
+/// ([`polarisation_column_sun`]).
 fn solve_polarisation_columns(
     sky: &SingleScatteringSky,
     geometry: &ColumnGeometry,
     scaled: &ScaledOptics,
 ) -> PolarisationCorrection {
     let optics = sky.optics();
-    let eye_sun_zenith = sky.sun_direction().z.clamp(-1.0, 1.0).acos();
+    let (eye_sun_zenith, polarised_share) = polarisation_column_sun(
+        sky.sun_direction().z.clamp(-1.0, 1.0).acos(),
+        (geometry.ground_radius_m, geometry.top_radius_m),
+    );
     let mut eye_columns = Vec::with_capacity(geometry.grid.levels());
     geometry.add_columns_toward_sun(eye_sun_zenith, &mut eye_columns);
     let sun_optical_depths: Vec<Option<(f64, f64)>> = (0..optics.grid.len())
@@ -696,6 +712,7 @@ fn solve_polarisation_columns(
         scaled,
         geometry,
         sun_cosine: eye_sun_zenith.cos(),
+        polarised_share,
         sun_optical_depths: &sun_optical_depths,
         eye_altitude_m: sky.observer_radius_m() - geometry.ground_radius_m,
     })

@@ -137,7 +137,10 @@
 //! | tilted peak beam (`peak_beam.rs`) | the last peak scattering at its angle | point's sun elevation from (deg) | `PEAK_BEAM_LOWEST_ELEVATION_DEG` = -20 |
 //! | tilted peak beam | (as above) | point's sun elevation below (deg) | `PEAK_BEAM_HIGHEST_ELEVATION_DEG` = 12 |
 //! | tilted peak beam blend | linear passage back to delta-M's beam | point's sun elevation from (deg) | `PEAK_BEAM_BLEND_START_DEG` = 8 |
-//! | polarisation ratio (`polarisation_correction.rs`) | (I, Q, U, V) / I of the orders >= 2 | `Polarisation::Vector`, every sun: one column at the eye's sun, with its own first order and no shift | - |
+//! | polarisation ratio (`polarisation_correction.rs`) | (I, Q, U, V) / I of the orders >= 2 | `Polarisation::Vector`: one column at the eye's sun, with its own first order and no shift | - |
+//! | polarisation column's lowest sun | the column's sun stops this far (deg) above its last lit sun, -acos(R_ground / R_top) | sun below it | `POLARISATION_COLUMN_MARGIN_DEG` = 0.5 |
+//! | polarisation fade | the column's polarisation blended toward unpolarised light | sun this far (deg) below the column's last lit sun | `POLARISATION_FADE_START_DEG` = 2 |
+//! | polarisation fade | the polarised share exp(-d / this), d degrees past the fade's start | (as above) | `POLARISATION_FADE_SCALE_DEG` = 6 |
 //!
 //! # Accuracy (measured; the tests named hold it)
 //! - DISORT (plane-parallel, every row of the clear-sky reference): worst
@@ -242,6 +245,6 @@ mod field;
 mod view_march;
 
 pub(crate) use self::field::{FieldRequest, MultipleScatteringField};
-pub(crate) use self::polarisation_correction::PolarisationTable;
+pub(crate) use self::polarisation_correction::{PolarisationRows, PolarisationTable};
 pub use self::view_march::MultipleScatteringScratch;
 use self::view_march::{LOG_FLOOR, NodeGeometry, floored_log};

@@ -27,6 +27,18 @@
 //! 10 degrees up away from a sun 5 degrees high was 0.049 against the
 //! vector path tracer's 0.073 at 440 nm (now 0.076; `docs/polarisation.md`).
 //!
+//! **Deep twilight**: the column's first order is its own, so once the
+//! sun is acos(R_ground / R_top) below the horizon (10.1 degrees on Earth)
+//! every level of it is in the planet's shadow and it has no light. Its
+//! sun stops `POLARISATION_COLUMN_MARGIN_DEG` above that (`regimes.rs`):
+//! a lower eye sun takes that column's ratios, which are flat there and
+//! match the vector path tracer's ratio of polarised to scalar intensity
+//! at the zenith to 1-2 % down to -12 degrees; from
+//! `POLARISATION_FADE_START_DEG` below the last lit sun the ratios are
+//! blended toward unpolarised light, (1, 0, 0, 0), the column's share
+//! falling as exp(-d / `POLARISATION_FADE_SCALE_DEG`) (d degrees past the
+//! start), as the path tracer's vector effect does at -14 to -18.
+//!
 //! **What it is exact for**: the plane-parallel limit, where the scalar
 //! field is the column's and the ratio turns its intensity into the
 //! polarised one. **What it assumes on the sphere**: that the sphere
@@ -64,8 +76,12 @@ pub(crate) struct CorrectionInputs<'a> {
     pub(crate) optics: &'a AtmosphereOptics,
     pub(crate) scaled: &'a ScaledOptics,
     pub(crate) geometry: &'a ColumnGeometry,
-    /// The eye's sun zenith cosine.
+    /// The column's sun zenith cosine: the eye's, or the lowest sun that
+    /// still lights the column (see the module docs).
     pub(crate) sun_cosine: f64,
+    /// The share of the column's polarisation kept, 0..1 (1 but in deep
+    /// twilight, see the module docs).
+    pub(crate) polarised_share: f64,
     /// The scaled and exact optical depths toward the sun from each level,
     /// [i * levels + k], None for a level in the planet's shadow (the
     /// eye's sun zenith angle).
@@ -90,6 +106,8 @@ pub struct PolarisationCorrection {
     layer_optical_depths: Vec<f64>,
     /// omega_j per wavelength and level, [(i * levels + k) * species + j].
     level_albedos: Vec<f64>,
+    /// The share of the column's polarisation kept ([`CorrectionInputs`]).
+    polarised_share: f64,
 }
 
 /// F*(cos theta) of species `j` at every wavelength into `out`: the exact
@@ -263,30 +281,13 @@ impl PolarisationCorrection {
             solution_len,
             layer_optical_depths,
             level_albedos,
+            polarised_share: inputs.polarised_share.clamp(0.0, 1.0),
         }
     }
 
-    /// The ratios (I, Q, U, V)_col / I_col,scalar toward the view of zenith
-    /// cosine `view_cosine` at azimuth `view_azimuth_rad` from the sun's
-    /// (clockwise, the sky's convention) at every wavelength, into `out`
-    /// ([component * wavelengths + i]); (1, 0, 0, 0) where the column has
-    /// no multiply scattered light.
-    pub(crate) fn compute_ratios(
-        &self,
-        optics: &AtmosphereOptics,
-        phases: &[TruncatedPhase],
-        (view_cosine, view_azimuth_rad): (f64, f64),
-        out: &mut [f64],
-    ) {
-        let rows = self.compute_harmonic_rows(optics, phases, &[view_cosine]);
-        let (w, harmonics) = (self.wavelengths, self.streams.count());
-        for i in 0..w {
-            let row = &rows[i * harmonics * ROW_VALUES..][..harmonics * ROW_VALUES];
-            let ratios = synthesise_ratios(row, view_azimuth_rad);
-            for (c, ratio) in ratios.into_iter().enumerate() {
-                out[c * w + i] = ratio;
-            }
-        }
+    /// The column's `ratios` blended by its polarised share ([`blend`]).
+    fn blend(&self, ratios: [f64; COMPONENTS]) -> [f64; COMPONENTS] {
+        blend(self.polarised_share, ratios)
     }
 
     /// The azimuthal harmonics of the columns' multiply scattered light
@@ -435,6 +436,18 @@ impl PolarisationCorrection {
     }
 }
 
+/// The column's `ratios` (I, Q, U, V) / I_scalar blended with
+/// unpolarised light, (1, 0, 0, 0), by `share`, the share of the
+/// column's polarisation kept.
+fn blend(share: f64, ratios: [f64; COMPONENTS]) -> [f64; COMPONENTS] {
+    [
+        1.0 + share * (ratios[0] - 1.0),
+        share * ratios[1],
+        share * ratios[2],
+        share * ratios[3],
+    ]
+}
+
 /// Values per harmonic in the correction's rows: the polarised I, Q, U,
 /// V, then the scalar I.
 const ROW_VALUES: usize = COMPONENTS + 1;
@@ -463,7 +476,7 @@ fn synthesise_ratios(row: &[f64], azimuth_rad: f64) -> [f64; COMPONENTS] {
 }
 
 /// The correction's ratios (I, Q, U, V) / I_scalar tabulated over view
-/// directions, for images: what [`PolarisationCorrection::compute_ratios`]
+/// directions, for images: what [`PolarisationRows::ratios`]
 /// gives per view, read per pixel by bilinear interpolation.
 ///
 /// Axes: the view's zenith cosine in two halves that meet at the column's
@@ -488,6 +501,87 @@ pub(crate) struct PolarisationTable {
 
 /// View cosines per task when the table's rows are computed.
 const COSINES_PER_TASK: usize = 4;
+
+/// The correction's harmonic rows at a list of view zenith cosines
+/// ([`PolarisationCorrection::compute_rows`]): a view whose cosine is one
+/// of them gets its ratios (I, Q, U, V)_col / I_col,scalar, its harmonics
+/// summed at its own azimuth, at the cost of a sum over the harmonics (an
+/// almucantar's views share one row).
+#[derive(Debug, Clone)]
+pub(crate) struct PolarisationRows {
+    /// The view cosines, ascending, without repeats.
+    cosines: Vec<f64>,
+    wavelengths: usize,
+    harmonics: usize,
+    /// [((a * wavelengths + i) * harmonics + m) * ROW_VALUES + n].
+    rows: Vec<f64>,
+    polarised_share: f64,
+}
+
+impl PolarisationCorrection {
+    /// The harmonic rows toward every distinct cosine of `view_cosines`
+    /// (in parallel, a few cosines a task; the result independent of the
+    /// thread count).
+    pub(crate) fn compute_rows(
+        &self,
+        optics: &AtmosphereOptics,
+        phases: &[TruncatedPhase],
+        view_cosines: &[f64],
+    ) -> PolarisationRows {
+        let mut cosines = view_cosines.to_vec();
+        cosines.sort_by(f64::total_cmp);
+        cosines.dedup();
+        let per_cosine = self.wavelengths * self.streams.count() * ROW_VALUES;
+        let mut rows = vec![0.0; cosines.len() * per_cosine];
+        crate::parallel::for_each_chunk_mut(
+            &mut rows,
+            COSINES_PER_TASK * per_cosine,
+            |task, chunk| {
+                let first = task * COSINES_PER_TASK;
+                let nodes = &cosines[first..first + chunk.len() / per_cosine];
+                chunk.copy_from_slice(&self.compute_harmonic_rows(optics, phases, nodes));
+            },
+        );
+        PolarisationRows {
+            cosines,
+            wavelengths: self.wavelengths,
+            harmonics: self.streams.count(),
+            rows,
+            polarised_share: self.polarised_share,
+        }
+    }
+}
+
+impl PolarisationRows {
+    /// The ratios (I, Q, U, V)_col / I_col,scalar toward the view of zenith
+    /// cosine `view_cosine` (one of the rows' cosines) at azimuth
+    /// `view_azimuth_rad` from the sun's (clockwise, the sky's convention)
+    /// at every wavelength, into `out` ([component * wavelengths + i]);
+    /// (1, 0, 0, 0) where the column has no multiply scattered light. None
+    /// for a cosine without a row.
+    pub(crate) fn ratios(
+        &self,
+        (view_cosine, view_azimuth_rad): (f64, f64),
+        out: &mut [f64],
+    ) -> Option<()> {
+        let a = self
+            .cosines
+            .binary_search_by(|c| c.total_cmp(&view_cosine))
+            .ok()?;
+        let (w, harmonics) = (self.wavelengths, self.harmonics);
+        for i in 0..w {
+            let row = &self.rows[(a * w + i) * harmonics * ROW_VALUES..][..harmonics * ROW_VALUES];
+            let ratios = blend(
+                self.polarised_share,
+                synthesise_ratios(row, view_azimuth_rad),
+            );
+            for (c, ratio) in ratios.into_iter().enumerate() {
+                out[c * w + i] = ratio;
+            }
+        }
+        Some(())
+    }
+}
 
 impl PolarisationCorrection {
     /// The ratios tabulated on `half_nodes` zenith-cosine nodes per half
@@ -525,8 +619,10 @@ impl PolarisationCorrection {
                         for i in 0..w {
                             let row = &rows[(a * w + i) * harmonics * ROW_VALUES..]
                                 [..harmonics * ROW_VALUES];
-                            for (c, ratio) in
-                                synthesise_ratios(row, azimuth).into_iter().enumerate()
+                            for (c, ratio) in self
+                                .blend(synthesise_ratios(row, azimuth))
+                                .into_iter()
+                                .enumerate()
                             {
                                 out[c * w + i] = ratio as f32;
                             }

@@ -61,6 +61,33 @@ pub(super) const PEAK_BEAM_HIGHEST_ELEVATION_DEG: f64 = 12.0;
 /// to delta-M's (B / S 0.97 and 0.96 with the sun 4 and 6 degrees up).
 pub(super) const PEAK_BEAM_BLEND_START_DEG: f64 = 8.0;
 
+/// How far above the correction column's last lit sun, degrees, its sun
+/// stops (`polarisation_correction.rs`). The column's first order is its
+/// own, so a sun below acos(R_ground / R_top) under the horizon (10.1
+/// degrees on Earth, top 100 km) leaves every level of it in the shadow,
+/// and its ratios were (1, 0, 0, 0): the polarised default stepped 9 %
+/// onto the scalar value at sun -10.25 (earth-clear, 560 nm). The
+/// column's ratio toward the zenith is flat there (earth-clear, 440/560/660
+/// nm: 0.898/0.910/0.916 at -9.5 and 0.899/0.910/0.915 at -10) and the
+/// vector path tracer's stays near it below (0.896/0.917/0.921 at -10,
+/// 0.876/0.918/0.933 at -12; 200 000 paths, the two sharing their paths).
+pub(super) const POLARISATION_COLUMN_MARGIN_DEG: f64 = 0.5;
+
+/// From this many degrees below the correction column's last lit sun
+/// (see [`POLARISATION_COLUMN_MARGIN_DEG`]; -12.1 on Earth) the column's
+/// polarisation is blended toward unpolarised light, its share falling as
+/// exp(-d / [`POLARISATION_FADE_SCALE_DEG`]) with d the degrees past this
+/// start: deeper in twilight more of the light at the eye has been
+/// scattered many times far toward the sun, and the vector path tracer's
+/// (I_vector / I_scalar - 1) at the zenith is 0.66, 0.51 and 0.37 of the
+/// column's at -14, -16 and -18 (earth-clear, the mean over 440/560/660 nm).
+pub(super) const POLARISATION_FADE_START_DEG: f64 = 2.0;
+
+/// The e-folding of the polarised share below the fade's start, degrees
+/// of sun (see [`POLARISATION_FADE_START_DEG`]): 6 puts it at 0.72, 0.51
+/// and 0.37 at -14, -16 and -18 on Earth.
+pub(super) const POLARISATION_FADE_SCALE_DEG: f64 = 6.0;
+
 /// The forward-peak term's k-fold peak kernel G is tabulated up to this
 /// angle from the sun, rad, and the term takes its wide-angle form
 /// (one scattering by the whole phase function) beyond it
@@ -95,6 +122,12 @@ mod tests {
             ("PEAK_BEAM_BLEND_START_DEG", PEAK_BEAM_BLEND_START_DEG),
             ("PEAK_KERNEL_RADIUS_RAD", PEAK_KERNEL_RADIUS_RAD),
             ("PEAK_KERNEL_BLEND_START_RAD", PEAK_KERNEL_BLEND_START_RAD),
+            (
+                "POLARISATION_COLUMN_MARGIN_DEG",
+                POLARISATION_COLUMN_MARGIN_DEG,
+            ),
+            ("POLARISATION_FADE_START_DEG", POLARISATION_FADE_START_DEG),
+            ("POLARISATION_FADE_SCALE_DEG", POLARISATION_FADE_SCALE_DEG),
         ]
     }
 
