@@ -57,14 +57,16 @@ pub(crate) fn check_grid_coverage(atmosphere: &Atmosphere, grid: &WavelengthGrid
                     )?;
                 }
             }
-            SpeciesModel::AbsorbingGas(gas) => {
-                if let AbsorptionCrossSection::Tabulated(table) = &gas.cross_section {
-                    check(
-                        &format!("{path}: absorption.cross_section_m2"),
-                        table.range_nm(),
-                    )?;
+            SpeciesModel::AbsorbingGas(gas) => match &gas.cross_section {
+                AbsorptionCrossSection::Tabulated(table) => check(
+                    &format!("{path}: absorption.cross_section_m2"),
+                    table.range_nm(),
+                )?,
+                AbsorptionCrossSection::Band(band) => {
+                    check(&format!("{path}: its band table"), band.range_nm())?
                 }
-            }
+                AbsorptionCrossSection::Binned(_) => {}
+            },
             SpeciesModel::Rayleigh(_) | SpeciesModel::ParametricAerosol(_) => {}
         }
     }

@@ -289,6 +289,8 @@ pub enum AbsorptionCrossSection {
     Binned(BinnedCrossSection),
     /// Point values, linear interpolation (user tables), m^2.
     Tabulated(TabulatedSpectrum),
+    /// A banded gas' k-distribution term (`gas_bands.rs`).
+    Band(super::gas_bands::GasBand),
 }
 
 impl AbsorptionCrossSection {
@@ -299,6 +301,7 @@ impl AbsorptionCrossSection {
             AbsorptionCrossSection::Tabulated(table) => {
                 Spectrum::Tabulated(table.clone()).sample_at_wavelengths(grid)
             }
+            AbsorptionCrossSection::Band(band) => band.sample(grid),
         }
     }
 }
