@@ -91,6 +91,11 @@ pub const AIR_MOLECULES_PER_M2_SEA_LEVEL_COLUMN: f64 = 2.1484e29;
 /// the band model.
 pub const EFFECTIVE_AIR_MASS: f64 = 2.0;
 
+/// The default scale height of water vapour's profile, m (about the
+/// mid-latitude summer atmosphere's, from its precipitable water over its
+/// surface density).
+pub const WATER_SCALE_HEIGHT_M: f64 = 2000.0;
+
 /// The scale height of the mixed gases' profile, m (the air's, near the
 /// ground).
 pub const MIXED_GAS_SCALE_HEIGHT_M: f64 = 8000.0;
@@ -483,5 +488,55 @@ mod tests {
         assert!(t(1.0) > exact(1.0) && t(5.0) < exact(5.0));
         let error5 = ((1.0 - t(5.0)) - (1.0 - exact(5.0))) / (1.0 - exact(5.0));
         assert!(error5 > 0.05, "{error5}");
+    }
+
+    const FILE: &str = "name = \"g\"\n[planet]\nradius_m = 6360e3\natmosphere_height_m = 100e3\n[sun]\nspectrum = \"astm-e490\"\n";
+
+    #[test]
+    fn the_gases_table_adds_the_two_species_and_checks_its_values() {
+        let atmosphere =
+            Atmosphere::from_toml_str(&format!("{FILE}[gases]\nprecipitable_water_cm = 2.9\n"))
+                .unwrap();
+        let names: Vec<&str> = atmosphere.species.iter().map(|s| s.name.as_str()).collect();
+        assert_eq!(names, ["water vapour", "mixed gases (O2, CO2)"]);
+        assert!(has_gas_bands(&atmosphere));
+        // 2.9 cm of water on the grid: the vertical column of the effective
+        // coefficient at 940 nm is -ln T_w(2 a_w W) / 2.
+        let grid = WavelengthGrid::new(940.0, 940.0, 10.0).unwrap();
+        let optics = atmosphere.compute_optics(&grid).unwrap();
+        let tau = optics.species[0].optical_depth_extinction()[0];
+        let a = 55.0 + (940.0 - 937.0) * (45.0 - 55.0) / 11.0; // 55 at 937, 45 at 948 nm
+        let want = -water_band_transmittance(a * 2.9 * 2.0).ln() / 2.0;
+        assert!((tau / want - 1.0).abs() < 1e-3, "{tau} vs {want}");
+        let only_water = Atmosphere::from_toml_str(&format!(
+            "{FILE}[gases]\nprecipitable_water_cm = 1\nmixed_gases = false\n"
+        ))
+        .unwrap();
+        assert_eq!(only_water.species.len(), 1);
+        for (bad, needle) in [
+            (
+                "precipitable_water_cm = -1",
+                "gases.precipitable_water_cm = -1 cm",
+            ),
+            (
+                "precipitable_water_cm = 1\nwater_scale_height_m = 0",
+                "gases.water_scale_height_m = 0 m",
+            ),
+            (
+                "precipitable_water_cm = 1\nozone = 3",
+                "unknown field `ozone`",
+            ),
+        ] {
+            let message = Atmosphere::from_toml_str(&format!("{FILE}[gases]\n{bad}\n"))
+                .unwrap_err()
+                .to_string();
+            assert!(message.contains(needle), "{message}");
+        }
+        // A file's own species may not take a name [gases] gives.
+        let clash = format!(
+            "{FILE}[[species]]\nname = \"water vapour\"\nnumber_density_m3 = 1\nprofile.exponential.scale_height_m = 8000\nabsorption.gas = \"ozone\"\n[gases]\nprecipitable_water_cm = 1\n"
+        );
+        let message = Atmosphere::from_toml_str(&clash).unwrap_err().to_string();
+        assert!(message.contains("species[0].name"), "{message}");
     }
 }
