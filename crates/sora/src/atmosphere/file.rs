@@ -382,14 +382,10 @@ fn convert_gases(gases: GasesFile) -> Result<Vec<Species>> {
         )?,
         None => gas_bands::WATER_SCALE_HEIGHT_M,
     };
-    let mut species = Vec::new();
-    if water > 0.0 {
-        species.push(gas_bands::water_vapour_species(water, scale));
-    }
-    if gases.mixed_gases.unwrap_or(true) {
-        species.push(gas_bands::mixed_gases_species());
-    }
-    Ok(species)
+    Ok(gas_bands::banded_gas_species(
+        Some((water, scale)),
+        gases.mixed_gases.unwrap_or(true),
+    ))
 }
 
 /// A TOML syntax or type error as one line with its line number.
