@@ -62,3 +62,47 @@ fn the_direct_beam_in_the_a_band_and_the_940_nm_band_is_the_band_models() {
         assert!(*w > 0.3 * c && *w < 0.9 * c, "{w} vs {c}");
     }
 }
+
+/// The README's recipe: the summer preset's irradiance over 700-1100 nm
+/// (single scattering), against earth-clear's: the same sky but for the
+/// gases, so less light on every plane.
+#[test]
+fn the_readme_recipe_reports_less_light_than_the_gas_free_preset() {
+    let run = |preset: &str, format: &str| {
+        stdout(&sora(&[
+            "irradiance",
+            "--preset",
+            preset,
+            "--sun-elevation",
+            "60",
+            "--wavelengths",
+            "700:1100:10",
+            "--scattering",
+            "single",
+            "--format",
+            format,
+        ]))
+    };
+    let table = run("earth-clear-summer", "table");
+    assert!(table.contains("700 to 1100 nm"), "{table}");
+    let number = |json: &str, key: &str| -> f64 {
+        let start = json.find(&format!("\"{key}\": ")).expect(key) + key.len() + 4;
+        let end = start + json[start..].find([',', '}']).unwrap();
+        json[start..end].trim().parse().unwrap()
+    };
+    let summer = run("earth-clear-summer", "json");
+    let clear = run("earth-clear", "json");
+    assert!(
+        summer.contains("\"broadband_range_nm\": [700, 1100]"),
+        "{summer}"
+    );
+    for key in [
+        "direct_normal_irradiance_w_m2",
+        "diffuse_horizontal_irradiance_w_m2",
+        "global_horizontal_irradiance_w_m2",
+    ] {
+        let ratio = number(&summer, key) / number(&clear, key);
+        // 2.9 cm of water and the A band take 5-20 % of 700-1100 nm.
+        assert!(ratio > 0.8 && ratio < 0.95, "{key}: {ratio}");
+    }
+}

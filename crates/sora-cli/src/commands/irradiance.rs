@@ -247,6 +247,12 @@ pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
                     list(q.spectrum.values())
                 ));
             }
+            // The band every broadband value integrates.
+            members.push(format!(
+                "\"broadband_range_nm\": [{}, {}]",
+                grid.start_nm(),
+                grid.stop_nm()
+            ));
             for (name, watts, lux) in &broadband {
                 let illuminance = name.replace("irradiance", "illuminance");
                 members.push(format!("\"{name}_w_m2\": {watts:.9e}"));
