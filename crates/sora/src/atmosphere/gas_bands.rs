@@ -188,6 +188,11 @@ pub fn band_coefficients(gas: BandGas) -> TabulatedSpectrum {
     .expect("the embedded gas band table is valid")
 }
 
+/// [`band_coefficients`] of `gas` on `grid`, interpolated linearly.
+pub fn sampled_band_coefficients(gas: BandGas, grid: &WavelengthGrid) -> Result<SampledSpectrum> {
+    Spectrum::Tabulated(band_coefficients(gas)).sample_at_wavelengths(grid)
+}
+
 impl GasBand {
     /// Molecules per m^2 in one unit of this gas' amount.
     fn molecules_per_unit(&self) -> f64 {
@@ -255,9 +260,8 @@ impl GasBand {
 
     /// Cross-section per molecule on `grid`, m^2.
     pub(crate) fn sample(&self, grid: &WavelengthGrid) -> Result<SampledSpectrum> {
-        let own = Spectrum::Tabulated(band_coefficients(self.gas)).sample_at_wavelengths(grid)?;
-        let partner = Spectrum::Tabulated(band_coefficients(self.partner_gas()))
-            .sample_at_wavelengths(grid)?;
+        let own = sampled_band_coefficients(self.gas, grid)?;
+        let partner = sampled_band_coefficients(self.partner_gas(), grid)?;
         let per_molecule = 1.0 / self.molecules_per_unit();
         Ok(SampledSpectrum::from_values(
             own.values()
@@ -464,12 +468,8 @@ mod tests {
         // only the mixed gases do (the A band), for two water columns and
         // air masses 1 and 3 (sun 90 and 19.5 degrees).
         let grid = WavelengthGrid::new(760.0, 940.0, 90.0).unwrap(); // 760, 850, 940
-        let a_w = Spectrum::Tabulated(band_coefficients(BandGas::WaterVapour))
-            .sample_at_wavelengths(&grid)
-            .unwrap();
-        let a_u = Spectrum::Tabulated(band_coefficients(BandGas::MixedGases))
-            .sample_at_wavelengths(&grid)
-            .unwrap();
+        let a_w = sampled_band_coefficients(BandGas::WaterVapour, &grid).unwrap();
+        let a_u = sampled_band_coefficients(BandGas::MixedGases, &grid).unwrap();
         assert!(a_w[0] < 1e-4); // 757.5-762.5 nm: water nearly absent
         assert!(a_u[2] == 0.0 && a_w[2] > 10.0);
         for water_cm in [0.5, 3.0] {
@@ -598,12 +598,8 @@ mod tests {
         // bands.
         use crate::sky::Sky;
         let grid = WavelengthGrid::new(700.0, 1100.0, 10.0).unwrap();
-        let a_w = Spectrum::Tabulated(band_coefficients(BandGas::WaterVapour))
-            .sample_at_wavelengths(&grid)
-            .unwrap();
-        let a_u = Spectrum::Tabulated(band_coefficients(BandGas::MixedGases))
-            .sample_at_wavelengths(&grid)
-            .unwrap();
+        let a_w = sampled_band_coefficients(BandGas::WaterVapour, &grid).unwrap();
+        let a_u = sampled_band_coefficients(BandGas::MixedGases, &grid).unwrap();
         let direct = |atmosphere: &Atmosphere, elevation: f64| {
             Sky::builder(atmosphere)
                 .sun_deg(elevation, 180.0)
