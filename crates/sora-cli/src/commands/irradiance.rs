@@ -18,6 +18,10 @@ use crate::arguments::{AtmosphereSource, MethodOptions, Resolution, SunAndObserv
 /// azimuths); global = direct + diffuse. Spectral values in W m^-2 nm^-1;
 /// broadband in W m^-2 and, for illuminance, lux (CIE 1931, 683 lm/W).
 ///
+/// With banded gases (an atmosphere file's [gases]) every value is the sum
+/// of five solves, one per k-distribution term, weighted (five times the
+/// time).
+///
 /// --format csv (default) prints one row per wavelength
 /// (wavelength_nm,direct_normal_irradiance_w_m2_nm,... with units in every
 /// name) and the broadband values on stderr; json prints both; table prints
@@ -87,19 +91,32 @@ pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
         .method
         .resolve(100_000, sora::Method::REFERENCE_DEFAULT)?;
     let scattering = args.resolution.apply(scattering, method)?;
-    let mut atmosphere = args.source.load()?;
-    let (sky, sun) = args.sun.sky(&mut atmosphere, scattering, method)?;
+    let atmosphere = args.source.load()?;
+    // Banded gases: one sky per k-distribution term, summed with the
+    // terms' weights (one sky, weight 1, without them).
+    let mut skies = Vec::new();
+    for (weight, mut at_term) in sora::atmosphere::gas_bands::k_distribution_terms(&atmosphere) {
+        skies.push((weight, args.sun.sky(&mut at_term, scattering, method)?));
+    }
+    let (sky, sun) = &skies[0].1;
     let grid = *sky.wavelengths();
     if let sora::Method::PathTracing { samples, .. } = method {
         let planes = 1 + usize::from(tilted.is_some());
         crate::estimate::announce(crate::estimate::path_tracing_estimate(
-            samples,
+            samples * skies.len() as u64,
             planes,
             grid.len(),
         ));
     }
-    let horizontal = sky.irradiance(Plane::HORIZONTAL)?;
-    let tilted = tilted.map(|plane| sky.irradiance(plane)).transpose()?;
+    let on_plane = |plane: Plane| -> anyhow::Result<Irradiance> {
+        let parts = skies
+            .iter()
+            .map(|(weight, (sky, _))| Ok((*weight, sky.irradiance(plane)?)))
+            .collect::<anyhow::Result<Vec<_>>>()?;
+        Ok(Irradiance::weighted_sum(&parts))
+    };
+    let horizontal = on_plane(Plane::HORIZONTAL)?;
+    let tilted = tilted.map(on_plane).transpose()?;
     let quantity = |name: &str, spectrum, irradiance| Quantity {
         name: name.to_string(),
         spectrum,
@@ -234,6 +251,12 @@ pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
                     list(q.spectrum.values())
                 ));
             }
+            // The band every broadband value integrates.
+            members.push(format!(
+                "\"broadband_range_nm\": [{}, {}]",
+                grid.start_nm(),
+                grid.stop_nm()
+            ));
             for (name, watts, lux) in &broadband {
                 let illuminance = name.replace("irradiance", "illuminance");
                 members.push(format!("\"{name}_w_m2\": {watts:.9e}"));

@@ -9,7 +9,8 @@
 //! - the sun's spectrum (`sun.spectrum`, a built-in table or `sun.csv_file`),
 //! - a Mie species' `scattering.mie.refractive_index` (a table or a
 //!   built-in one, e.g. Wolff's Mars dust, 263-2480 nm),
-//! - an absorbing gas' `absorption.cross_section_m2` (a table).
+//! - an absorbing gas' `absorption.cross_section_m2` (a table), and the
+//!   band table of `[gases]` (200-4000 nm).
 //!
 //! No extrapolation: a table says nothing outside its rows, and a
 //! wavelength grid past them is a mistake in one of the two (a grid chosen
@@ -57,14 +58,16 @@ pub(crate) fn check_grid_coverage(atmosphere: &Atmosphere, grid: &WavelengthGrid
                     )?;
                 }
             }
-            SpeciesModel::AbsorbingGas(gas) => {
-                if let AbsorptionCrossSection::Tabulated(table) = &gas.cross_section {
-                    check(
-                        &format!("{path}: absorption.cross_section_m2"),
-                        table.range_nm(),
-                    )?;
+            SpeciesModel::AbsorbingGas(gas) => match &gas.cross_section {
+                AbsorptionCrossSection::Tabulated(table) => check(
+                    &format!("{path}: absorption.cross_section_m2"),
+                    table.range_nm(),
+                )?,
+                AbsorptionCrossSection::Band(band) => {
+                    check(&format!("{path}: its band table"), band.range_nm())?
                 }
-            }
+                AbsorptionCrossSection::Binned(_) => {}
+            },
             SpeciesModel::Rayleigh(_) | SpeciesModel::ParametricAerosol(_) => {}
         }
     }

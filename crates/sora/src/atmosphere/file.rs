@@ -39,6 +39,7 @@ use serde::Deserialize;
 use serde::de::{self, MapAccess, SeqAccess, Visitor};
 
 use super::aerosol::{AerosolPhase, ParametricAerosol};
+use super::gas_bands;
 use super::mie_species::{MieAerosol, ParticleAmount};
 use super::ozone::{AbsorbingGas, AbsorptionCrossSection, BinnedCrossSection, GasAmount};
 use super::planet::Planet;
@@ -85,6 +86,16 @@ struct AtmosphereFile {
     sun: SunFile,
     #[serde(default)]
     species: Vec<SpeciesFile>,
+    gases: Option<GasesFile>,
+}
+
+/// `[gases]`: the banded gases of `gas_bands.rs`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct GasesFile {
+    precipitable_water_cm: f64,
+    water_scale_height_m: Option<f64>,
+    mixed_gases: Option<bool>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -326,6 +337,23 @@ pub(crate) fn parse_atmosphere(
         }
         species.push(convert_species(species_file, &path, &planet)?);
     }
+    if let Some(gases) = file.gases {
+        species.extend(convert_gases(gases)?);
+        // The gases' species are named by sora; a file's own species of the
+        // same name would make outputs ambiguous.
+        for (index, s) in species.iter().enumerate() {
+            if let Some(later) = species[index + 1..].iter().position(|t| t.name == s.name) {
+                return Err(invalid(
+                    &format!("species[{index}].name"),
+                    &format!(
+                        "'{}' is the name [gases] gives its species[{}]: rename it",
+                        s.name,
+                        index + 1 + later
+                    ),
+                ));
+            }
+        }
+    }
     Ok(Atmosphere {
         name: file.name,
         description: file.description.unwrap_or_default(),
@@ -333,6 +361,31 @@ pub(crate) fn parse_atmosphere(
         sun,
         species,
     })
+}
+
+/// The `[gases]` table as species (`gas_bands.rs`).
+fn convert_gases(gases: GasesFile) -> Result<Vec<Species>> {
+    let water = check(
+        "gases.precipitable_water_cm",
+        gases.precipitable_water_cm,
+        "cm",
+        "0..=15",
+        (0.0..=15.0).contains(&gases.precipitable_water_cm),
+    )?;
+    let scale = match gases.water_scale_height_m {
+        Some(h) => check(
+            "gases.water_scale_height_m",
+            h,
+            "m",
+            "100..=20000",
+            (100.0..=20_000.0).contains(&h),
+        )?,
+        None => gas_bands::WATER_SCALE_HEIGHT_M,
+    };
+    Ok(gas_bands::banded_gas_species(
+        Some((water, scale)),
+        gases.mixed_gases.unwrap_or(true),
+    ))
 }
 
 /// A TOML syntax or type error as one line with its line number.

@@ -39,6 +39,7 @@
 pub mod aerosol;
 mod coverage;
 pub mod file;
+pub mod gas_bands;
 pub mod mie_species;
 pub mod optical_depth;
 pub mod ozone;

@@ -64,11 +64,11 @@
 //! tables (`absorption.wavelength_nm` / `cross_section_m2`) are point
 //! values, linearly interpolated and sampled at each wavelength.
 //!
-//! Gases sora leaves out (no cross-section is embedded for them; a user
-//! may give any as an absorption table): water vapour (bands at 720, 820,
-//! 940 and 1130 nm and weak lines near 870 and 1020 nm), the O2 A (760 nm)
-//! and B (687 nm) bands and the O2-O2 collision bands (477, 577, 630, 1060
-//! nm), and NO2 (a structured continuum over 300-600 nm). Sun photometers
+//! Water vapour and the O2 and CO2 bands are `gas_bands.rs` (a band model
+//! as a k-distribution, from an atmosphere file's `[gases]`). Gases sora
+//! leaves out (no cross-section is embedded for them; a user may give any
+//! as an absorption table): the O2-O2 collision bands (477, 577, 630, 1060
+//! nm) and NO2 (a structured continuum over 300-600 nm). Sun photometers
 //! put their channels in windows between these bands (AERONET: 340, 380,
 //! 440, 500, 675, 870, 1020 nm; 940 nm is its water vapour channel) and
 //! still correct what absorption remains: AERONET's version 3 (Giles et al.
@@ -82,8 +82,9 @@
 //! 440 nm, against a Rayleigh optical depth of 0.7 and 0.24 and an aerosol
 //! optical depth of typically 0.1. Water vapour at 870 and 1020 nm and the
 //! O2 bands lie outside the photometer windows and are not quantified here;
-//! a 10 nm sora sample at 760 nm (or 940 nm) has no O2 (or water) band at
-//! all, so its radiance is that of the window either side.
+//! without `[gases]` a 10 nm sora sample at 760 nm (or 940 nm) has no O2
+//! (or water) band at all, so its radiance is that of the window either
+//! side.
 
 //! Amount: a column in Dobson units (1 DU = 2.6867e20 molecules m^-2, a
 //! 10 um layer of pure gas at 0 C and 1 atm; Earth ~300 DU), spread over
@@ -289,6 +290,8 @@ pub enum AbsorptionCrossSection {
     Binned(BinnedCrossSection),
     /// Point values, linear interpolation (user tables), m^2.
     Tabulated(TabulatedSpectrum),
+    /// A banded gas' k-distribution term (`gas_bands.rs`).
+    Band(super::gas_bands::GasBand),
 }
 
 impl AbsorptionCrossSection {
@@ -299,6 +302,7 @@ impl AbsorptionCrossSection {
             AbsorptionCrossSection::Tabulated(table) => {
                 Spectrum::Tabulated(table.clone()).sample_at_wavelengths(grid)
             }
+            AbsorptionCrossSection::Band(band) => band.sample(grid),
         }
     }
 }

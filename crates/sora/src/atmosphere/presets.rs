@@ -28,7 +28,7 @@ pub struct Preset {
 }
 
 /// Every built-in atmosphere, in the order `sora atmosphere presets` lists them.
-pub const PRESETS: [Preset; 7] = [
+pub const PRESETS: [Preset; 8] = [
     Preset {
         name: "paper-earth",
         description: "the paper's Table 1: air 2.55e25 m^-3, Mie aerosol 0.1-2.5 um (tau 0.15 at 550 nm), paper HG phase",
@@ -43,6 +43,11 @@ pub const PRESETS: [Preset; 7] = [
         name: "earth-clear",
         description: "Earth, clear: physical air, 300 DU ozone, OPAC continental aerosol tau 0.1 at 550 nm, ASTM E490 sun",
         toml: include_str!("../../../../atmospheres/earth-clear.toml"),
+    },
+    Preset {
+        name: "earth-clear-summer",
+        description: "earth-clear with 2.92 cm of water vapour (mid-latitude summer) and the O2 and CO2 bands (SPECTRL2 band model, 5-term k-distribution)",
+        toml: include_str!("../../../../atmospheres/earth-clear-summer.toml"),
     },
     Preset {
         name: "earth-hazy",

@@ -112,6 +112,42 @@ pub struct Irradiance {
 }
 
 impl Irradiance {
+    /// sum_j w_j times each part, field by field (the k-distribution's sum
+    /// over its terms, `atmosphere::gas_bands`; the parts on one grid). A
+    /// standard error adds as sum_j w_j se_j, the bound for errors that may
+    /// be correlated (the terms are traced with one seed).
+    pub fn weighted_sum(parts: &[(f64, Irradiance)]) -> Irradiance {
+        let n = parts.first().map_or(0, |(_, p)| p.global_w_m2_nm.len());
+        let sum = |field: &dyn Fn(&Irradiance) -> &SampledSpectrum| {
+            let mut total = SampledSpectrum::zeros(n);
+            for (weight, part) in parts {
+                total.add_scaled(field(part), *weight);
+            }
+            total
+        };
+        let errors = parts
+            .iter()
+            .all(|(_, p)| p.diffuse_standard_error_w_m2_nm.is_some())
+            .then(|| {
+                let mut total = SampledSpectrum::zeros(n);
+                for (weight, part) in parts {
+                    if let Some(error) = &part.diffuse_standard_error_w_m2_nm {
+                        total.add_scaled(error, *weight);
+                    }
+                }
+                total
+            })
+            .filter(|_| !parts.is_empty());
+        Irradiance {
+            direct_normal_w_m2_nm: sum(&|p| &p.direct_normal_w_m2_nm),
+            direct_beam_transmittance: sum(&|p| &p.direct_beam_transmittance),
+            direct_w_m2_nm: sum(&|p| &p.direct_w_m2_nm),
+            diffuse_w_m2_nm: sum(&|p| &p.diffuse_w_m2_nm),
+            diffuse_standard_error_w_m2_nm: errors,
+            global_w_m2_nm: sum(&|p| &p.global_w_m2_nm),
+        }
+    }
+
     /// The spectral values integrated over `grid` (the sky's), W m^-2.
     pub fn broadband_w_m2(spectrum: &SampledSpectrum, grid: &WavelengthGrid) -> f64 {
         (0..grid.len())
