@@ -395,9 +395,17 @@ fn an_output_in_a_read_only_directory_is_refused_and_nothing_is_written() {
     );
     assert!(!residuals.exists());
     // The same for an image.
-    let stderr = one_line_error(&render(&PRESET, locked.join("sky.png").to_str().unwrap(), &[]));
+    let stderr = one_line_error(&render(
+        &PRESET,
+        locked.join("sky.png").to_str().unwrap(),
+        &[],
+    ));
     assert!(stderr.contains("is read-only"), "{stderr}");
     std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o755)).unwrap();
     assert_eq!(std::fs::read_dir(&locked).unwrap().count(), 0);
-    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1, "only ro/");
+    assert_eq!(
+        std::fs::read_dir(dir.path()).unwrap().count(),
+        1,
+        "only ro/"
+    );
 }

@@ -204,7 +204,8 @@ mod tests {
                 .to_string();
             assert!(
                 message.starts_with("--plot ")
-                    && message.contains(&format!("the directory {} is read-only", locked.display())),
+                    && message
+                        .contains(&format!("the directory {} is read-only", locked.display())),
                 "{message}"
             );
         }
