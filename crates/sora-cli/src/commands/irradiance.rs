@@ -18,6 +18,12 @@ use crate::arguments::{AtmosphereSource, MethodOptions, SunAndObserver};
 /// azimuths); global = direct + diffuse. Spectral values in W m^-2 nm^-1;
 /// broadband in W m^-2 and, for illuminance, lux (CIE 1931, 683 lm/W).
 ///
+/// --method reference marches each of the 4,608 directions of the diffuse
+/// integral: at its 1000 x 250 steps that is about 80 s a wavelength, past
+/// the limit of docs/limits.md (1e8 steps), so it is a one-line error
+/// before any work; the fast method (the default) gives the same integral
+/// within 1e-3, path tracing an independent estimate with its error.
+///
 /// --format csv (default) prints one row per wavelength
 /// (wavelength_nm,direct_normal_irradiance_w_m2_nm,... with units in every
 /// name) and the broadband values on stderr; json prints both; table prints
@@ -83,6 +89,8 @@ pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
     let (scattering, method) = args
         .method
         .resolve(100_000, sora::Method::REFERENCE_DEFAULT)?;
+    // The reference march's work, before loading anything (docs/limits.md).
+    sora::sky::check_irradiance_work(method)?;
     let mut atmosphere = args.source.load()?;
     let (sky, sun) = args.sun.sky(&mut atmosphere, scattering, method)?;
     let grid = *sky.wavelengths();

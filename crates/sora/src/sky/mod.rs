@@ -53,7 +53,7 @@ mod irradiance;
 mod sun_disc;
 
 pub use crate::transport::multiple_scattering::MultipleScatteringSettings;
-pub use irradiance::{Irradiance, Plane};
+pub use irradiance::{Irradiance, MAX_REFERENCE_IRRADIANCE_STEPS, Plane, check_irradiance_work};
 
 use std::sync::{Arc, OnceLock};
 
