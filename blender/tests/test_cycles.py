@@ -126,7 +126,7 @@ def _mean_and_error(values):
 
 def _cli_sun(elevation):
     return ("--preset", "earth-clear", "--sun-elevation", f"{elevation:g}", "--sun-azimuth", "180",
-            "--polarisation", "off")
+            "--polarisation", "scalar")
 
 
 @pytest.mark.parametrize("sun_elevation_deg", SUNS)

@@ -134,7 +134,7 @@ try {
     '--sun-elevation', String(sky.sun_elevation_deg), '--sun-azimuth', String(sky.sun_azimuth_deg),
     '--observer-altitude-m', String(sky.observer_altitude_m),
     '--view-elevation', String(spectrum.view_elevation_deg), '--view-azimuth', String(spectrum.view_azimuth_deg),
-    '--format', 'json', '--polarisation', 'off']).toString()); // the explorer's sky is scalar
+    '--format', 'json', '--polarisation', 'scalar']).toString()); // the explorer's sky is scalar
   const worstCli = assertClose(spectrum.radiance_w_m2_sr_nm, fromCli.radiance_w_m2_sr_nm, 'radiance against sora spectrum');
   report.checks.push(`spectrum at elevation ${spectrum.view_elevation_deg.toFixed(3)}, azimuth ${spectrum.view_azimuth_deg.toFixed(3)} deg: worst relative difference ${worstNative.toExponential(2)} against the native engine, ${worstCli.toExponential(2)} against sora spectrum (10 digits)`);
   console.log(report.checks.at(-1));

@@ -436,43 +436,33 @@ pub struct SunAndObserver {
 
     /// vector: Stokes vectors through every scattering, so that radiances
     /// are the intensity of polarised light (up to 5 % from the scalar
-    /// one, docs/polarisation.md); off: scalar light (faster; what scalar
-    /// radiative-transfer codes compute) [default: vector; off with
-    /// --method reference, whose march is scalar]
-    #[arg(long, value_enum, value_name = "vector|off")]
-    pub polarisation: Option<PolarisationChoice>,
+    /// one, docs/polarisation.md); scalar: scalar light (faster; what
+    /// scalar radiative-transfer codes compute; `off`, its old spelling, is
+    /// still taken, with a note) [default: vector; scalar with --method
+    /// reference, whose march is scalar]
+    #[arg(long, value_parser = parse_polarisation, value_name = "vector|scalar")]
+    pub polarisation: Option<sora::Polarisation>,
 }
 
-/// A sky's polarisation as `--polarisation` names it (for summaries and
-/// JSON).
-pub fn polarisation_name(polarisation: sora::Polarisation) -> &'static str {
-    match polarisation {
-        sora::Polarisation::Vector => "vector",
-        sora::Polarisation::Scalar => "off",
+/// `--polarisation`: the library's names (`sora::Polarisation`'s
+/// `FromStr`), and `off`, the old spelling of `scalar`, with a note on
+/// stderr.
+fn parse_polarisation(value: &str) -> Result<sora::Polarisation, String> {
+    if value == "off" {
+        eprintln!("note: --polarisation off is now spelled --polarisation scalar");
+        return Ok(sora::Polarisation::Scalar);
     }
-}
-
-/// `--polarisation`: vector or off.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum PolarisationChoice {
-    /// Stokes vectors
-    Vector,
-    /// Scalar light
-    Off,
+    value.parse().map_err(|e: sora::Error| e.to_string())
 }
 
 impl SunAndObserver {
     /// The light's polarisation for `method`: as --polarisation says, or
-    /// by default vector (scalar for the reference march, which has no
-    /// Stokes vectors; an explicit `--polarisation vector` with it is the
-    /// library's one-line error).
+    /// the library's default ([`sora::Polarisation::for_method`]: vector,
+    /// scalar for the reference march; an explicit `--polarisation vector`
+    /// with it is the library's one-line error).
     pub fn polarisation(&self, method: sora::Method) -> sora::Polarisation {
-        match (self.polarisation, method) {
-            (Some(PolarisationChoice::Off), _) | (None, sora::Method::Reference { .. }) => {
-                sora::Polarisation::Scalar
-            }
-            (Some(PolarisationChoice::Vector), _) | (None, _) => sora::Polarisation::Vector,
-        }
+        self.polarisation
+            .unwrap_or(sora::Polarisation::for_method(method))
     }
 
     /// The sky these options describe, with `scattering` by `method`, its

@@ -71,3 +71,24 @@ fn bad_irradiance_arguments_are_one_line_errors() {
         assert!(error.contains(expected), "{extra:?}: {error}");
     }
 }
+
+/// `--method reference` (4,608 marches of 1000 x 250 steps, about 80 s a
+/// wavelength) is a one-line error before any work (docs/limits.md), even
+/// at one wavelength, in well under a second.
+#[test]
+fn the_reference_march_over_the_hemisphere_is_refused_before_any_work() {
+    let started = std::time::Instant::now();
+    let error = one_line_error(&sora(
+        &[
+            &BASE[..],
+            &["--method", "reference", "--wavelengths", "550:550:1"],
+        ]
+        .concat(),
+    ));
+    assert!(started.elapsed().as_secs_f64() < 10.0);
+    assert!(
+        error.contains("reference irradiance march (4608 directions x 1000 view steps x 250 sun steps) = 1.152e9 steps is out of range: allowed <= 1e8")
+            && error.contains("use the fast method"),
+        "{error}"
+    );
+}

@@ -359,3 +359,53 @@ fn two_outputs_on_one_file_are_refused() {
         "only the link"
     );
 }
+
+/// An output in a read-only directory (`sora retrieve --residuals res.csv
+/// --plot ro/fit.png`) is refused before any work, in one line naming the
+/// option and the directory, and the other output is not written either:
+/// as root too (a directory with no write permission is refused whoever
+/// runs sora, as a read-only file is).
+#[cfg(unix)]
+#[test]
+fn an_output_in_a_read_only_directory_is_refused_and_nothing_is_written() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tempfile::tempdir().unwrap();
+    let locked = dir.path().join("ro");
+    std::fs::create_dir(&locked).unwrap();
+    std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o555)).unwrap();
+    let residuals = dir.path().join("res.csv");
+    let plot = locked.join("fit.png");
+    let radiances = radiances_csv();
+    let started = std::time::Instant::now();
+    let stderr = one_line_error(&sora(&[
+        "retrieve",
+        "--radiances",
+        &radiances,
+        "--residuals",
+        residuals.to_str().unwrap(),
+        "--plot",
+        plot.to_str().unwrap(),
+    ]));
+    // Before the fit (which takes seconds even in a release build).
+    assert!(started.elapsed().as_secs_f64() < 10.0);
+    assert!(
+        stderr.contains(&format!("--plot {}", plot.display()))
+            && stderr.contains(&format!("the directory {} is read-only", locked.display())),
+        "{stderr}"
+    );
+    assert!(!residuals.exists());
+    // The same for an image.
+    let stderr = one_line_error(&render(
+        &PRESET,
+        locked.join("sky.png").to_str().unwrap(),
+        &[],
+    ));
+    assert!(stderr.contains("is read-only"), "{stderr}");
+    std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o755)).unwrap();
+    assert_eq!(std::fs::read_dir(&locked).unwrap().count(), 0);
+    assert_eq!(
+        std::fs::read_dir(dir.path()).unwrap().count(),
+        1,
+        "only ro/"
+    );
+}

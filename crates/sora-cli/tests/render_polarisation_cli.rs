@@ -1,6 +1,6 @@
 //! `sora render` with polarised light (the default): the Stokes images as
 //! OpenEXR layers (--stokes), the degree and angle maps as PNGs (--dolp,
-//! --aop), --polarisation off, and the choices that cannot work.
+//! --aop), --polarisation scalar, and the choices that cannot work.
 
 mod common;
 
@@ -107,10 +107,18 @@ fn stokes_layers_hold_the_image_and_the_skys_polarisation() {
 }
 
 #[test]
-fn polarisation_off_is_the_scalar_sky() {
+fn polarisation_scalar_is_the_scalar_sky_and_off_its_old_spelling() {
     let dir = tempfile::tempdir().unwrap();
-    let (vector, scalar) = (dir.path().join("v.exr"), dir.path().join("s.exr"));
-    for (path, extra) in [(&vector, None), (&scalar, Some("off"))] {
+    let (vector, scalar, off) = (
+        dir.path().join("v.exr"),
+        dir.path().join("s.exr"),
+        dir.path().join("o.exr"),
+    );
+    for (path, extra) in [
+        (&vector, None),
+        (&scalar, Some("scalar")),
+        (&off, Some("off")),
+    ] {
         let mut args = vec![
             "render",
             "--preset",
@@ -127,13 +135,18 @@ fn polarisation_off_is_the_scalar_sky() {
             args.extend(["--polarisation", choice]);
         }
         let out = sora(&args);
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{stderr}");
+        assert_eq!(
+            stderr.contains("note: --polarisation off is now spelled --polarisation scalar"),
+            extra == Some("off"),
+            "{stderr}"
         );
+        let said = if extra.is_some() { "scalar" } else { "vector" };
+        assert!(stderr.contains(&format!("polarisation {said}")), "{stderr}");
     }
     let (v, s) = (exr_channel(&vector, "Y"), exr_channel(&scalar, "Y"));
+    assert_eq!(s, exr_channel(&off, "Y"));
     // The polarised intensity differs from the scalar by a few per cent
     // at most (docs/polarisation.md: -5 % to +2 %).
     let worst = v
@@ -169,7 +182,7 @@ fn polarisation_outputs_that_cannot_be_made_are_one_line_errors() {
                 path("b.exr"),
                 "--stokes".into(),
                 "--polarisation".into(),
-                "off".into(),
+                "scalar".into(),
             ],
             "polarised light",
         ),

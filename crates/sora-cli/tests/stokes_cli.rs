@@ -126,9 +126,14 @@ fn the_default_method_gives_the_polarised_intensity_of_all_orders() {
     // intensity is below the scalar one (the scalar field overestimates the
     // light there, most in the blue), and the light is strongly polarised.
     // Polarised light is the default (--stokes adds columns, not physics);
-    // --polarisation off is the scalar light.
+    // --polarisation scalar is the scalar light.
     let view = ["--view-elevation", "30", "--view-azimuth", "90"];
-    let scalar = run(&[&RAYLEIGH_SUN_30[..], &view[..], &["--polarisation", "off"]].concat());
+    let scalar = run(&[
+        &RAYLEIGH_SUN_30[..],
+        &view[..],
+        &["--polarisation", "scalar"],
+    ]
+    .concat());
     let vector = run(&[&RAYLEIGH_SUN_30[..], &view[..], &["--stokes"]].concat());
     let default = run(&[&RAYLEIGH_SUN_30[..], &view[..]].concat());
     for (d, v) in default.lines().skip(1).zip(vector.lines().skip(1)) {
@@ -292,7 +297,7 @@ fn a_depolarisation_ratio_above_one_half_cannot_be_polarised() {
         &ONE_VIEW[..],
     ]
     .concat();
-    let scalar = sora(&[&args[..], &["--polarisation", "off"]].concat());
+    let scalar = sora(&[&args[..], &["--polarisation", "scalar"]].concat());
     let vector = sora(&args);
     std::fs::remove_file(&path).unwrap();
     assert!(scalar.status.success());

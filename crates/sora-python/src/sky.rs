@@ -4,8 +4,8 @@
 //!
 //! Units: angles in degrees (elevation above the horizon, azimuth clockwise
 //! from north), altitude in m, wavelengths in nm, radiance in
-//! W m^-2 sr^-1 nm^-1, XYZ in the library's photometric scale (Y in
-//! cd m^-2).
+//! W m^-2 sr^-1 nm^-1, XYZ radiometric (Y = the integral of the radiance
+//! times CIE y-bar, W m^-2 sr^-1; 683 Y is the luminance in cd m^-2).
 
 use numpy::ndarray::{Array2, Array3, Array4};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray2};
@@ -121,7 +121,8 @@ fn finite(name: &str, value: f64, unit: &str) -> PyResult<f64> {
 }
 
 /// The camera named `camera` (perspective: looking at `look_deg` with
-/// `fov_deg` across the width).
+/// `fov_deg` across the width; their defaults are the library's,
+/// `PerspectiveCamera::DEFAULT_*`, as `sora render`'s).
 fn camera_from_name(camera: &str, look_deg: (f64, f64), fov_deg: f64) -> PyResult<Camera> {
     Ok(match camera {
         "fisheye" => Camera::Fisheye,
@@ -147,7 +148,7 @@ impl Sky {
         atmosphere, *, sun_elevation_deg=None, sun_azimuth_deg=None, time=None, location=None,
         refraction=true, pressure_hpa=None, temperature_c=None, sun_distance_au=None,
         observer_altitude_m=0.0, wavelengths_nm=None, scattering="multiple",
-        method="fast", samples=None, seed=None, reference_steps=None, polarisation="scalar"
+        method="fast", samples=None, seed=None, reference_steps=None, polarisation=None
     ))]
     fn new(
         py: Python<'_>,
@@ -167,17 +168,19 @@ impl Sky {
         samples: Option<u64>,
         seed: Option<u64>,
         reference_steps: Option<(usize, usize)>,
-        polarisation: &str,
+        polarisation: Option<&str>,
     ) -> PyResult<Sky> {
-        let polarisation = match polarisation {
-            "scalar" => Polarisation::Scalar,
-            "vector" => Polarisation::Vector,
-            other => {
-                return Err(value_error(format!(
-                    "polarisation = '{other}': expected 'scalar' or 'vector'"
-                )));
-            }
-        };
+        // The library's names; None: its default for the method
+        // (`sora::Polarisation::for_method`: vector, scalar for reference).
+        let chosen = polarisation
+            .map(|name| {
+                name.parse::<Polarisation>().map_err(|_| {
+                    value_error(format!(
+                        "polarisation = '{name}' is unknown: use 'scalar' or 'vector' (or None: the default, vector; scalar for method='reference')"
+                    ))
+                })
+            })
+            .transpose()?;
         if time.is_none() && (pressure_hpa.is_some() || temperature_c.is_some()) {
             return Err(value_error(
                 "pressure_hpa and temperature_c apply with time only (the air that refracts the sun's light)",
@@ -242,6 +245,7 @@ impl Sky {
                 .map_err(|e| value_error(format!("sun_distance_au: {e}")))?;
         }
         let atmosphere = &atmosphere;
+        let polarisation = chosen.unwrap_or(Polarisation::for_method(method));
         let inner = run_detached(py, || {
             sora::Sky::builder(atmosphere)
                 .sun_deg(elevation_deg, azimuth_deg)
@@ -254,8 +258,15 @@ impl Sky {
         })?
         .map_err(to_py_err)?;
         // Parametric phase functions carry no polarisation: say so, once per
-        // species, as `sora spectrum --stokes` does on stderr.
-        for (name, kind) in inner.non_polarising_species() {
+        // species, when vector light was asked for by name (as `sora
+        // spectrum --stokes` does on stderr; the default says nothing, as
+        // the command line's does not).
+        let species = if chosen == Some(Polarisation::Vector) {
+            inner.non_polarising_species()
+        } else {
+            Vec::new()
+        };
+        for (name, kind) in species {
             let message = format!(
                 "species {name} has a {kind} phase function, which carries no polarisation: the Stokes vectors treat it as non-polarising (F12 = F34 = 0, F33 = F44 = F11)"
             );
@@ -394,13 +405,16 @@ impl Sky {
         Ok((values.into_pyarray(py), errors.map(|e| e.into_pyarray(py))))
     }
 
+    /// The wavelength grid as `start:stop:step`, nm (as `--wavelengths`).
+    #[getter]
+    fn wavelength_grid(&self) -> String {
+        self.inner.wavelengths().to_string()
+    }
+
     /// 'scalar' or 'vector'.
     #[getter]
-    fn polarisation(&self) -> &'static str {
-        match self.inner.polarisation() {
-            Polarisation::Scalar => "scalar",
-            Polarisation::Vector => "vector",
-        }
+    fn polarisation(&self) -> String {
+        self.inner.polarisation().to_string()
     }
 
     /// The Stokes vectors of views (1-D arrays of equal length, degrees),
@@ -468,7 +482,7 @@ impl Sky {
     #[allow(clippy::too_many_arguments)]
     #[pyo3(signature = (
         camera="fisheye", width=512, height=None, output="xyz", draw_sun_disc=true,
-        look_elevation_deg=0.0, look_azimuth_deg=180.0, fov_deg=60.0
+        look_elevation_deg=10.0, look_azimuth_deg=180.0, fov_deg=90.0
     ))]
     fn render<'py>(
         &self,
@@ -556,10 +570,11 @@ impl Sky {
     fn __repr__(&self) -> String {
         let (elevation, azimuth) = self.inner.sun_position_deg();
         format!(
-            "Sky(sun_elevation_deg={elevation}, sun_azimuth_deg={azimuth}, wavelengths_nm='{}', scattering='{}', method='{}')",
+            "Sky(sun_elevation_deg={elevation}, sun_azimuth_deg={azimuth}, wavelengths_nm='{}', scattering='{}', method='{}', polarisation='{}')",
             self.inner.wavelengths(),
             self.scattering(),
-            self.method()
+            self.method(),
+            self.polarisation()
         )
     }
 }

@@ -42,16 +42,20 @@ def test_radiance_equals_the_rust_library(radiance_values, preset, sun, scatteri
     np.testing.assert_allclose(got, expected, rtol=1e-12, atol=0)
 
 
-def test_almucantar_equals_the_cli(sora_cli):
+@pytest.mark.parametrize("polarisation", [None, "scalar"])
+def test_almucantar_equals_the_cli(sora_cli, polarisation):
+    """The defaults of the two front ends (polarised light) give the same
+    radiance, and so does scalar light asked for by the same name."""
+    option = [] if polarisation is None else ["--polarisation", polarisation]
     output = subprocess.run(
         [str(sora_cli), "spectrum", "--preset", "earth-hazy", "--sun-elevation", "20",
-         "--sun-azimuth", "135", "--almucantar", "30", "--format", "json",
-         # The CLI polarises by default; a Sky is scalar unless asked.
-         "--polarisation", "off"],
+         "--sun-azimuth", "135", "--almucantar", "30", "--format", "json", *option],
         check=True, capture_output=True, text=True,
     ).stdout
     cli = json.loads(output)
-    sky = sora.Sky(sora.Atmosphere.preset("earth-hazy"), sun_elevation_deg=20, sun_azimuth_deg=135)
+    sky = sora.Sky(sora.Atmosphere.preset("earth-hazy"), sun_elevation_deg=20, sun_azimuth_deg=135,
+                   polarisation=polarisation)
+    assert sky.polarisation == cli["polarisation"] == (polarisation or "vector")
     elevation, azimuth = sky.almucantar(30)
     got = sky.radiance(elevation, azimuth)
     np.testing.assert_array_equal(got.wavelength.values, cli["wavelength_nm"])

@@ -418,6 +418,9 @@ pub fn build_sky(atmosphere: &Atmosphere, spec: &SkySpec, quality: Quality) -> R
         .wavelengths(grid)
         .scattering(scattering)
         .table_size(tables)
+        // The explorer's light stays scalar (for its speed) until its
+        // own default changes; the library's default is polarised.
+        .polarisation(sora::Polarisation::Scalar)
         .build()
         .map_err(|e| e.to_string())
 }
@@ -502,6 +505,7 @@ mod tests {
         let atmosphere = Atmosphere::preset("earth-clear").unwrap();
         let sky = Sky::builder(&atmosphere)
             .sun_deg(12.5, 200.0)
+            .polarisation(sora::Polarisation::Scalar)
             .build()
             .unwrap();
         let view = ViewDirection::new(20.0, 100.0).unwrap();
@@ -511,6 +515,7 @@ mod tests {
         let single = Sky::builder(&atmosphere)
             .sun_deg(12.5, 200.0)
             .scattering(Scattering::Single)
+            .polarisation(sora::Polarisation::Scalar)
             .build()
             .unwrap()
             .radiance(view)

@@ -26,6 +26,7 @@ fn multiple_scattering_benchmarks(c: &mut Criterion) {
                 .sun_deg(sun_elevation, 180.0)
                 .wavelengths(WavelengthGrid::paper())
                 .scattering(scattering)
+                .polarisation(sora::Polarisation::Scalar)
                 .build()
                 .expect("sky")
         };
@@ -69,6 +70,7 @@ fn twilight_benchmarks(c: &mut Criterion) {
             Sky::builder(&atmosphere)
                 .sun_deg(-6.0, 270.0)
                 .scattering(Scattering::multiple())
+                .polarisation(sora::Polarisation::Scalar)
                 .build()
                 .expect("sky")
                 .render_xyz(&image, &to_xyz, &|_| {})

@@ -105,6 +105,7 @@ fn twilight_benchmarks(c: &mut Criterion) {
             Sky::builder(&atmosphere)
                 .sun_deg(sun, 270.0)
                 .method(Method::PathTracing { samples, seed: 3 })
+                .polarisation(sora::Polarisation::Scalar)
                 .build()
                 .expect("sky")
         };

@@ -12,6 +12,7 @@ fn sky(atmosphere: &Atmosphere) -> Sky {
         .sun_deg(30.0, 180.0)
         .wavelengths(WavelengthGrid::paper())
         .scattering(Scattering::Single)
+        .polarisation(sora::Polarisation::Scalar)
         .build()
         .expect("sky")
 }

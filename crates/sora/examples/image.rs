@@ -17,7 +17,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .nth(1)
         .unwrap_or_else(|| "sunset.png".into());
     let atmosphere = Atmosphere::preset("earth-clear")?;
-    let sky = Sky::builder(&atmosphere).sun_deg(3.0, 270.0).build()?;
+    let sky = Sky::builder(&atmosphere)
+        .sun_deg(3.0, 270.0)
+        .polarisation(sora::Polarisation::Scalar)
+        .build()?;
     let image = ImageSettings::new(Camera::Fisheye, 256, 256);
     let to_xyz = SpectrumToXyz::new(sky.wavelengths(), Observer::Cie1931TwoDegree);
     let xyz = sky.render_xyz(&image, &to_xyz, &|_| {})?;

@@ -194,6 +194,7 @@ fn sky(
         .sun_deg(sun.0, sun.1)
         .scattering(scattering)
         .method(method)
+        .polarisation(sora::Polarisation::Scalar)
         .build()?)
 }
 

@@ -94,7 +94,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let atmosphere = Atmosphere::preset(preset)?;
         let builder = Sky::builder(&atmosphere).sun_deg(sun, 180.0);
         let vector = builder.polarisation(Polarisation::Vector).build()?;
-        let scalar = Sky::builder(&atmosphere).sun_deg(sun, 180.0).build()?;
+        let scalar = Sky::builder(&atmosphere)
+            .sun_deg(sun, 180.0)
+            .polarisation(sora::Polarisation::Scalar)
+            .build()?;
         let to_xyz = SpectrumToXyz::new(vector.wavelengths(), Observer::Cie1931TwoDegree);
         // The sun's vertical: the sun in the south (azimuth 180).
         let above_sun = |t: f64| {

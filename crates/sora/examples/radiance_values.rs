@@ -10,7 +10,9 @@
 //! Arguments: preset, sun elevation and azimuth (deg), `single` or
 //! `multiple`, `fast`, `reference` or `path-tracing:SAMPLES:SEED`, the
 //! wavelength grid (start:stop:step, nm), then views as
-//! `ELEVATION,AZIMUTH` (deg). Prints one line per view: its angles and its
+//! `ELEVATION,AZIMUTH` (deg). The light is the library's default
+//! (`sora::Polarisation::for_method`: polarised, scalar for `reference`),
+//! as Python's. Prints one line per view: its angles and its
 //! radiance per wavelength (W m^-2 sr^-1 nm^-1), each number in Rust's
 //! shortest form that reads back to the same double.
 

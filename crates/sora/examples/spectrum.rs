@@ -17,6 +17,7 @@ fn main() -> sora::Result<()> {
     let sky = Sky::builder(&atmosphere)
         .sun_deg(sun_elevation_deg, sun_azimuth_deg)
         .wavelengths(WavelengthGrid::new(450.0, 650.0, 100.0)?)
+        .polarisation(sora::Polarisation::Scalar)
         .build()?;
     let views = (0..12)
         .map(|k| ViewDirection::new(sun_elevation_deg, sun_azimuth_deg + 30.0 * k as f64))

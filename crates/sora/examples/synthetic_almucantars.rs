@@ -183,6 +183,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     samples: paths,
                     seed: 1000 * index as u64 + w as u64,
                 })
+                .polarisation(sora::Polarisation::Scalar)
                 .build()?;
             let (mut extinction, mut scattering) = (0.0, 0.0);
             for species in sky.optics().species.iter().filter(|s| s.kind == "mie") {

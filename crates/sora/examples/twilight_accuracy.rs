@@ -36,6 +36,7 @@ fn main() -> sora::Result<()> {
         let sky = Sky::builder(&atmosphere)
             .sun_deg(sun, 0.0)
             .method(method)
+            .polarisation(sora::Polarisation::Scalar)
             .build()?;
         let results = sky.radiances(&directions)?;
         for ((el, az), r) in views.iter().zip(&results) {

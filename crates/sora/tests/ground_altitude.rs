@@ -104,6 +104,7 @@ fn a_sky_from_a_raised_ground_is_the_sea_level_sky_without_what_lies_below() {
             Sky::builder(atmosphere)
                 .sun_deg(sun_elevation, 180.0)
                 .wavelengths(grid)
+                .polarisation(sora::Polarisation::Scalar)
                 .build()
                 .unwrap()
                 .radiances(&views)

@@ -17,6 +17,7 @@ fn sky(atmosphere: &Atmosphere, sun_elevation_deg: f64, method: Method) -> Sky {
         .sun_deg(sun_elevation_deg, 180.0)
         .scattering(Scattering::multiple())
         .method(method)
+        .polarisation(sora::Polarisation::Scalar)
         .build()
         .unwrap()
 }
@@ -139,6 +140,7 @@ fn images_carry_the_sun_and_light_a_plane_as_the_irradiance_says() {
     for (sun, sun_azimuth) in [(30.0, 270.0), (45.0, 123.0), (8.0, 200.0)] {
         let sky = Sky::builder(&atmosphere)
             .sun_deg(sun, sun_azimuth)
+            .polarisation(sora::Polarisation::Scalar)
             .build()
             .unwrap();
         let n = sky.wavelengths().len();

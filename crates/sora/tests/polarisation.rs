@@ -193,7 +193,10 @@ fn path_traced_stokes_come_with_standard_errors() {
 fn choices_without_stokes_vectors_are_refused() {
     let rayleigh = rayleigh(0.0);
     // A scalar sky has no Stokes images.
-    let scalar = Sky::builder(&rayleigh).build().unwrap();
+    let scalar = Sky::builder(&rayleigh)
+        .polarisation(sora::Polarisation::Scalar)
+        .build()
+        .unwrap();
     let to_xyz = SpectrumToXyz::new(scalar.wavelengths(), Observer::Cie1931TwoDegree);
     let error = scalar
         .render_stokes_xyz(&ImageSettings::new(Camera::Fisheye, 8, 8), &to_xyz, &|_| {})

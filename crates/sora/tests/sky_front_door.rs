@@ -37,6 +37,7 @@ fn many_views_equal_one_view_at_a_time() {
             .sun_deg(20.0, 200.0)
             .scattering(scattering)
             .method(method)
+            .polarisation(sora::Polarisation::Scalar)
             .build()
             .unwrap();
         let together = sky.radiances(&views()).unwrap();
@@ -66,6 +67,7 @@ fn the_orders_of_scattering_and_the_path_tracer_agree() {
             .sun_deg(40.0, 180.0)
             .scattering(scattering)
             .method(method)
+            .polarisation(sora::Polarisation::Scalar)
             .build()
             .unwrap()
     };
@@ -108,6 +110,7 @@ fn spectral_and_xyz_images_agree() {
     let atmosphere = Atmosphere::preset("earth-clear").unwrap();
     let sky = Sky::builder(&atmosphere)
         .sun_deg(10.0, 250.0)
+        .polarisation(sora::Polarisation::Scalar)
         .build()
         .unwrap();
     let image = ImageSettings::new(Camera::Equirectangular, 24, 12);
@@ -138,6 +141,7 @@ fn a_sky_without_species_is_black_above_the_horizon() {
     assert!(atmosphere.species.is_empty());
     let sky = Sky::builder(&atmosphere)
         .sun_deg(30.0, 180.0)
+        .polarisation(sora::Polarisation::Scalar)
         .build()
         .unwrap();
     let up = sky
@@ -248,13 +252,17 @@ fn bad_choices_are_errors_not_panics() {
     assert!(
         Sky::builder(&atmosphere)
             .method(march(10_000, 10_000))
+            .polarisation(sora::Polarisation::Scalar)
             .build()
             .is_ok()
     );
     assert!(ViewDirection::new(120.0, 0.0).is_err());
     assert!(ViewDirection::new(0.0, f64::NAN).is_err());
     // Images: sizes, and path tracing renders no images.
-    let sky = Sky::builder(&atmosphere).build().unwrap();
+    let sky = Sky::builder(&atmosphere)
+        .polarisation(sora::Polarisation::Scalar)
+        .build()
+        .unwrap();
     let to_xyz = SpectrumToXyz::new(sky.wavelengths(), Observer::Cie1931TwoDegree);
     let zero = ImageSettings::new(Camera::Fisheye, 0, 8);
     assert!(
@@ -268,6 +276,7 @@ fn bad_choices_are_errors_not_panics() {
             samples: 10,
             seed: 0,
         })
+        .polarisation(sora::Polarisation::Scalar)
         .build()
         .unwrap();
     let image = ImageSettings::new(Camera::Fisheye, 4, 4);
@@ -294,6 +303,7 @@ fn image_buffers_are_bounded_before_allocating() {
             samples: 10,
             seed: 0,
         })
+        .polarisation(sora::Polarisation::Scalar)
         .build()
         .unwrap();
     let to_xyz = SpectrumToXyz::new(traced.wavelengths(), Observer::Cie1931TwoDegree);
@@ -343,11 +353,13 @@ fn moving_the_sun_equals_building_for_it() {
     let atmosphere = Atmosphere::preset("earth-clear").unwrap();
     let first = Sky::builder(&atmosphere)
         .sun_deg(20.0, 100.0)
+        .polarisation(sora::Polarisation::Scalar)
         .build()
         .unwrap();
     let moved = first.with_sun_deg(-2.0, 250.0).unwrap();
     let built = Sky::builder(&atmosphere)
         .sun_deg(-2.0, 250.0)
+        .polarisation(sora::Polarisation::Scalar)
         .build()
         .unwrap();
     assert_eq!(moved.sun_position_deg(), (-2.0, 250.0));
@@ -355,4 +367,69 @@ fn moving_the_sun_equals_building_for_it() {
         assert_eq!(moved.radiance(view).unwrap(), built.radiance(view).unwrap());
     }
     assert!(first.with_sun_deg(91.0, 0.0).is_err());
+}
+
+/// One default light for every front end, set here: polarised
+/// (`Polarisation::Vector`) for the fast method and path tracing, scalar
+/// for the reference march; the default gives the explicit choice's
+/// radiance to the bit; the names parse and print as one vocabulary.
+#[test]
+fn the_default_light_is_polarised_except_for_the_reference_march() {
+    use sora::Polarisation;
+    let atmosphere = Atmosphere::preset("us-standard-1976-rayleigh").unwrap();
+    let grid: sora::WavelengthGrid = "440:640:100".parse().unwrap();
+    let build = |method: Method, polarisation: Option<Polarisation>| {
+        let builder = Sky::builder(&atmosphere)
+            .sun_deg(30.0, 180.0)
+            .wavelengths(grid)
+            .method(method);
+        match polarisation {
+            Some(p) => builder.polarisation(p),
+            None => builder,
+        }
+        .build()
+        .unwrap()
+    };
+    let march = Method::Reference {
+        view_steps: 40,
+        sun_steps: 10,
+    };
+    let traced = Method::PathTracing {
+        samples: 20,
+        seed: 1,
+    };
+    for (method, expected) in [
+        (Method::Fast, Polarisation::Vector),
+        (traced, Polarisation::Vector),
+        (march, Polarisation::Scalar),
+    ] {
+        assert_eq!(Polarisation::for_method(method), expected);
+        let default = build(method, None);
+        assert_eq!(default.polarisation(), expected, "{method:?}");
+        let view = ViewDirection::new(20.0, 90.0).unwrap();
+        assert_eq!(
+            default.radiance(view).unwrap(),
+            build(method, Some(expected)).radiance(view).unwrap(),
+            "{method:?}"
+        );
+    }
+    // The polarised intensity differs from the scalar light's.
+    let view = ViewDirection::new(20.0, 90.0).unwrap();
+    let (vector, scalar) = (
+        build(Method::Fast, None).radiance(view).unwrap(),
+        build(Method::Fast, Some(Polarisation::Scalar))
+            .radiance(view)
+            .unwrap(),
+    );
+    assert_ne!(vector.radiance_w_m2_sr_nm, scalar.radiance_w_m2_sr_nm);
+    for polarisation in [Polarisation::Scalar, Polarisation::Vector] {
+        let name = polarisation.to_string();
+        assert_eq!(name.parse::<Polarisation>().unwrap(), polarisation);
+    }
+    assert_eq!(Polarisation::Scalar.to_string(), "scalar");
+    let message = "off".parse::<Polarisation>().unwrap_err().to_string();
+    assert_eq!(
+        message,
+        "polarisation: 'off' is unknown: use 'scalar' or 'vector'"
+    );
 }

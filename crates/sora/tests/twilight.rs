@@ -72,7 +72,11 @@ fn image_tables_agree_with_the_per_view_path_in_twilight() {
     let atmosphere = Atmosphere::preset("earth-clear").unwrap();
     let mut worst = 0.0f64;
     for sun in [0.0, -4.0, -8.0, -12.0, -16.0] {
-        let sky = Sky::builder(&atmosphere).sun_deg(sun, 0.0).build().unwrap();
+        let sky = Sky::builder(&atmosphere)
+            .sun_deg(sun, 0.0)
+            .polarisation(sora::Polarisation::Scalar)
+            .build()
+            .unwrap();
         // Measured at most 7.1e-3 (5.8e-3 down to -12 degrees, at 780 nm
         // 20 degrees up across the sun's vertical, where the sky-view
         // table's azimuth interpolation is coarsest).
@@ -127,6 +131,7 @@ fn image_tables_agree_with_the_per_view_path_near_a_low_sun_with_aerosols() {
             let sky = Sky::builder(&atmosphere)
                 .wavelengths(grid)
                 .sun_deg(sun, 0.0)
+                .polarisation(sora::Polarisation::Scalar)
                 .build()
                 .unwrap();
             worst = worst.max(worst_table_difference(
@@ -281,13 +286,18 @@ fn excess_over_path_tracer(
         .collect();
     let mut worst_excess = f64::NEG_INFINITY;
     for (n, &sun) in suns.iter().enumerate() {
-        let fast = Sky::builder(&atmosphere).sun_deg(sun, 0.0).build().unwrap();
+        let fast = Sky::builder(&atmosphere)
+            .sun_deg(sun, 0.0)
+            .polarisation(sora::Polarisation::Scalar)
+            .build()
+            .unwrap();
         let traced = Sky::builder(&atmosphere)
             .sun_deg(sun, 0.0)
             .method(Method::PathTracing {
                 samples,
                 seed: 100 + n as u64,
             })
+            .polarisation(sora::Polarisation::Scalar)
             .build()
             .unwrap()
             .radiances(&directions)
@@ -388,6 +398,7 @@ fn assert_fast_matches_the_path_tracer(
             .wavelengths(grid)
             .sun_deg(sun_deg, 0.0)
             .method(method)
+            .polarisation(sora::Polarisation::Scalar)
             .build()
             .unwrap()
             .radiances(views)
@@ -523,6 +534,7 @@ fn nautical_twilight_is_converged_in_the_streams() {
             .wavelengths(grid)
             .sun_deg(-12.0, 0.0)
             .scattering(Scattering::Multiple(settings))
+            .polarisation(sora::Polarisation::Scalar)
             .build()
             .unwrap()
             .radiances(&views)

@@ -36,6 +36,7 @@ fn worst_excess(preset: &str, grid: &str, views: &[(f64, f64)], samples: u64, se
             .sun_deg(30.0, 180.0)
             .scattering(Scattering::multiple())
             .method(method)
+            .polarisation(sora::Polarisation::Scalar)
             .build()
             .unwrap()
     };
@@ -119,6 +120,7 @@ fn colour_of_the_wide_grid_is_the_colour_of_its_visible_part() {
         let sky = Sky::builder(&atmosphere)
             .wavelengths(grid)
             .sun_deg(30.0, 180.0)
+            .polarisation(sora::Polarisation::Scalar)
             .build()
             .unwrap();
         let radiance = sky.radiance(view).unwrap();
@@ -148,6 +150,7 @@ fn a_one_point_grid_is_its_band() {
         Sky::builder(&atmosphere)
             .sun_deg(40.0, 180.0)
             .wavelengths(grid)
+            .polarisation(sora::Polarisation::Scalar)
             .build()
             .unwrap()
             .radiance(ViewDirection::new(90.0, 0.0).unwrap())

@@ -22,6 +22,12 @@ use crate::arguments::{AtmosphereSource, MethodOptions, Resolution, SunAndObserv
 /// of five solves, one per k-distribution term, weighted (five times the
 /// time).
 ///
+/// --method reference marches each of the 4,608 directions of the diffuse
+/// integral: at its 1000 x 250 steps that is about 80 s a wavelength, past
+/// the limit of docs/limits.md (1e8 steps), so it is a one-line error
+/// before any work; the fast method (the default) gives the same integral
+/// within 1e-3, path tracing an independent estimate with its error.
+///
 /// --format csv (default) prints one row per wavelength
 /// (wavelength_nm,direct_normal_irradiance_w_m2_nm,... with units in every
 /// name) and the broadband values on stderr; json prints both; table prints
@@ -91,6 +97,8 @@ pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
         .method
         .resolve(100_000, sora::Method::REFERENCE_DEFAULT)?;
     let scattering = args.resolution.apply(scattering, method)?;
+    // The reference march's work, before loading anything (docs/limits.md).
+    sora::sky::check_irradiance_work(method)?;
     let atmosphere = args.source.load()?;
     // Banded gases: one sky per k-distribution term, summed with the
     // terms' weights (one sky, weight 1, without them).

@@ -13,9 +13,7 @@ use sora::output::{
     ChannelKind, DisplayImage, ExrOptions, ExrSampleType, LinearImage, OutputFiles, OutputFormat,
 };
 
-use crate::arguments::{
-    AtmosphereSource, ColourOptions, Resolution, Scattering, SunAndObserver, polarisation_name,
-};
+use crate::arguments::{AtmosphereSource, ColourOptions, Resolution, Scattering, SunAndObserver};
 use crate::estimate;
 use crate::polarisation_maps;
 
@@ -54,7 +52,8 @@ use crate::polarisation_maps;
 ///   fisheye      the whole sky in a disc, zenith at the centre, north up,
 ///                east LEFT (a sky chart seen from below); equidistant
 ///   equirect     360x180 panorama, north at the centre, east at 3/4 width,
-///                zenith at the top row (an environment map)
+///                zenith at the top row (an environment map); also
+///                spelled equirectangular, as Python spells it
 ///   perspective  a pinhole camera: --view-elevation, --view-azimuth, --fov-deg
 ///
 /// Examples (the sun as angles; the sun over Tokyo at 05:30 local time):
@@ -200,6 +199,7 @@ enum Units {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum CameraKind {
     Fisheye,
+    #[value(alias = "equirectangular")]
     Equirect,
     Perspective,
 }
@@ -392,9 +392,11 @@ fn camera(args: &RenderArgs) -> anyhow::Result<Camera> {
         CameraKind::Equirect => ("equirect", Camera::Equirectangular),
         CameraKind::Perspective => {
             return Ok(Camera::Perspective(PerspectiveCamera::new(
-                args.view_elevation.unwrap_or(10.0),
-                args.view_azimuth.unwrap_or(180.0),
-                args.fov_deg.unwrap_or(90.0),
+                args.view_elevation
+                    .unwrap_or(PerspectiveCamera::DEFAULT_ELEVATION_DEG),
+                args.view_azimuth
+                    .unwrap_or(PerspectiveCamera::DEFAULT_AZIMUTH_DEG),
+                args.fov_deg.unwrap_or(PerspectiveCamera::DEFAULT_FOV_DEG),
             )?));
         }
     };
@@ -609,7 +611,7 @@ fn render_frame(
                 )
                 .chain([
                     ("sun_disc".into(), (!args.no_sun_disc).to_string()),
-                    ("polarisation".into(), polarisation_name(sky.polarisation()).into()),
+                    ("polarisation".into(), sky.polarisation().to_string()),
                 ])
                 .chain(args.stokes.then(|| {
                     (
@@ -643,7 +645,7 @@ fn render_frame(
         args.sun.wavelengths.len(),
         args.method,
         args.scattering,
-        polarisation_name(sky.polarisation()),
+        sky.polarisation(),
         sun.summary(),
         output.display()
     );

@@ -182,6 +182,7 @@ fn case_a_radiance(atmosphere: &Atmosphere, scattering: Scattering) -> anyhow::R
     let sky = Sky::builder(atmosphere)
         .sun_deg(SUN_DEG.0, SUN_DEG.1)
         .scattering(scattering)
+        .polarisation(sora::Polarisation::Scalar)
         .build()?;
     let radiance = sky.radiance(ViewDirection::new(VIEW_DEG.0, VIEW_DEG.1)?)?;
     let grid = sky.wavelengths();

@@ -399,7 +399,7 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
             }
         })
         .collect();
-    let polarisation = crate::arguments::polarisation_name(sky.polarisation());
+    let polarisation = sky.polarisation();
     let sun_json = format!(
         "\"sun_elevation_deg\": {sun_elevation}, \"sun_azimuth_deg\": {sun_azimuth}{}, \"polarisation\": \"{polarisation}\"",
         sun.json_members()

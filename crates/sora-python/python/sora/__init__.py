@@ -283,16 +283,21 @@ class Sky:
       ``"path-tracing"`` (Monte Carlo, all orders: ``samples`` paths per
       view, default 10000, and ``seed``, default 1; the same seed gives the
       same result on any thread count);
-    - ``polarisation``: ``"scalar"`` (default) or ``"vector"`` (Stokes
-      vectors, :meth:`stokes`, all orders, by the fast method or path
-      tracing, not ``method="reference"``; Mie aerosols get their phase
-      matrix computed; :meth:`render` gives the polarised intensity, and
-      with ``output="stokes-xyz"`` the XYZ of I, Q, U and V). With
-      ``"vector"`` the radiance is the polarised intensity I. A species
-      with a parametric phase function (Henyey-Greenstein, Cornette-Shanks,
-      isotropic) has no phase matrix: it is treated as non-polarising, with
-      a ``UserWarning`` naming it; a Rayleigh depolarisation ratio above
-      0.5 is a ``ValueError`` (polarised light only).
+    - ``polarisation``: ``"vector"`` (Stokes vectors, :meth:`stokes`, all
+      orders, by the fast method or path tracing; Mie aerosols get their
+      phase matrix computed; :meth:`render` gives the polarised intensity,
+      and with ``output="stokes-xyz"`` the XYZ of I, Q, U and V) or
+      ``"scalar"`` (faster; what scalar radiative-transfer codes compute);
+      default None: ``"vector"``, or ``"scalar"`` with
+      ``method="reference"`` (whose march is scalar), the same default as
+      ``sora spectrum`` and ``sora render``, so the two give the same
+      radiance. With ``"vector"`` the radiance is the polarised intensity
+      I (up to a few per cent from the scalar one). A species with a
+      parametric phase function (Henyey-Greenstein, Cornette-Shanks,
+      isotropic) has no phase matrix: it is treated as non-polarising,
+      with a ``UserWarning`` naming it when ``"vector"`` is asked for by
+      name; a Rayleigh depolarisation ratio above 0.5 is a ``ValueError``
+      with polarised light (give ``polarisation="scalar"``).
 
     Skies pickle (by their arguments), so Dask can ship them.
     """
@@ -318,7 +323,7 @@ class Sky:
         samples: Optional[int] = None,
         seed: Optional[int] = None,
         reference_steps: Optional[Tuple[int, int]] = None,
-        polarisation: str = "scalar",
+        polarisation: Optional[str] = None,
     ):
         if not isinstance(atmosphere, Atmosphere):
             raise ValueError(
@@ -368,7 +373,7 @@ class Sky:
             samples=_checks.optional_integer("samples", samples, 2, _sora.MAX_SAMPLES, " (paths per view)"),
             seed=_checks.optional_integer("seed", seed, 0, 2**64 - 1),
             reference_steps=reference_steps,
-            polarisation=_checks.text("polarisation", polarisation),
+            polarisation=None if polarisation is None else _checks.text("polarisation", polarisation),
         )
         self._native = _sora.Sky(atmosphere._native, **arguments)
         self._arguments = (atmosphere, arguments)
@@ -446,6 +451,8 @@ class Sky:
             "sun_azimuth_deg": azimuth,
             "scattering": self.scattering,
             "method": self.method,
+            "polarisation": self.polarisation,
+            "wavelengths_nm": self._native.wavelength_grid,
         }
 
     def radiance(self, view_elevation_deg, view_azimuth_deg) -> xr.DataArray:
@@ -550,7 +557,8 @@ class Sky:
         """The colour of spectra on this sky's wavelengths (an array whose
         last axis is :attr:`wavelengths_nm`: radiance or irradiance), as
         images' pixels are made: ``output="xyz"`` CIE 1931 XYZ (Y in
-        cd m^-2 for radiance, lux for irradiance in W m^-2 nm^-1) or
+        W m^-2 sr^-1 for radiance, W m^-2 for irradiance in W m^-2 nm^-1:
+        times 683 lm/W, cd m^-2 and lux) or
         ``"linear-srgb"``; shape ``spectra.shape[:-1] + (3,)``."""
         if output not in ("xyz", "linear-srgb"):
             raise ValueError(f"output = '{output}' is unknown: use 'xyz' or 'linear-srgb'")
@@ -568,14 +576,16 @@ class Sky:
         height: Optional[int] = None,
         output: str = "xyz",
         draw_sun_disc: bool = True,
-        look_elevation_deg: float = 0.0,
+        look_elevation_deg: float = 10.0,
         look_azimuth_deg: float = 180.0,
-        fov_deg: float = 60.0,
+        fov_deg: float = 90.0,
     ) -> np.ndarray:
         """An image as a numpy array (rows top first), handed over without a
         copy from the library's buffer:
 
-        - ``output="xyz"``: (height, width, 3), CIE 1931 XYZ (Y in cd m^-2);
+        - ``output="xyz"``: (height, width, 3), CIE 1931 XYZ of the spectral
+          radiance (Y = the integral of L(lambda) y-bar(lambda) d lambda, in
+          W m^-2 sr^-1: multiply by 683 lm/W for the luminance in cd m^-2);
         - ``"linear-srgb"``: (height, width, 3), linear sRGB of the same XYZ
           (no exposure, no clipping);
         - ``"spectral"``: (height, width, wavelengths), W m^-2 sr^-1 nm^-1;
@@ -587,7 +597,9 @@ class Sky:
         ``camera``: ``"fisheye"`` (the whole sky, zenith at the centre, north
         up, east left; black outside the circle), ``"equirectangular"`` or
         ``"perspective"`` (``look_elevation_deg``, ``look_azimuth_deg``,
-        ``fov_deg`` across the width). ``height`` defaults to ``width``
+        ``fov_deg`` across the width; by default 10 degrees up, toward the
+        south, 90 degrees wide, as ``sora render --camera perspective``).
+        ``height`` defaults to ``width``
         (half of it for equirectangular). Path tracing renders no images.
         """
         side = _sora.MAX_IMAGE_SIDE

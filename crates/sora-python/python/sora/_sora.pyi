@@ -66,7 +66,7 @@ class Sky:
         samples: Optional[int] = None,
         seed: Optional[int] = None,
         reference_steps: Optional[Tuple[int, int]] = None,
-        polarisation: str = "scalar",
+        polarisation: Optional[str] = None,
     ) -> None: ...
     @property
     def wavelengths_nm(self) -> _F64: ...
@@ -85,6 +85,8 @@ class Sky:
         """(radiance [view, wavelength], standard error or None), W m^-2 sr^-1 nm^-1."""
     @property
     def polarisation(self) -> str: ...
+    @property
+    def wavelength_grid(self) -> str: ...
     def stokes(self, elevation_deg: _F64, azimuth_deg: _F64) -> Tuple[_F64, Optional[_F64]]:
         """(I, Q, U, V [4, view, wavelength], standard errors or None), W m^-2 sr^-1 nm^-1."""
     def render(
@@ -94,9 +96,9 @@ class Sky:
         height: Optional[int] = None,
         output: str = "xyz",
         draw_sun_disc: bool = True,
-        look_elevation_deg: float = 0.0,
+        look_elevation_deg: float = 10.0,
         look_azimuth_deg: float = 180.0,
-        fov_deg: float = 60.0,
+        fov_deg: float = 90.0,
     ) -> _F64: ...
 
 def mie_efficiencies(

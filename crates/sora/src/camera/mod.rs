@@ -48,6 +48,15 @@ pub struct PerspectiveCamera {
 }
 
 impl PerspectiveCamera {
+    /// The default view of every front end (`sora render --camera
+    /// perspective`, Python's `Sky.render(camera="perspective")`): 10
+    /// degrees above the horizon, degrees.
+    pub const DEFAULT_ELEVATION_DEG: f64 = 10.0;
+    /// The default view's azimuth: south (180 degrees clockwise from north).
+    pub const DEFAULT_AZIMUTH_DEG: f64 = 180.0;
+    /// The default horizontal field of view, degrees.
+    pub const DEFAULT_FOV_DEG: f64 = 90.0;
+
     /// Looking toward `elevation_deg` above the horizon at `azimuth_deg`
     /// (clockwise from north), with `horizontal_fov_deg` across the image's width.
     pub fn new(

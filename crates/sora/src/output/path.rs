@@ -10,7 +10,9 @@
 //!   link writes the file it names;
 //! - a new file is created in an existing directory;
 //! - anything else is refused in one line: a directory, a missing
-//!   directory, a device (`/dev/full`, `/dev/null`), a FIFO, a socket, or
+//!   directory, a read-only directory (one with no write permission at
+//!   all, where no file can be created or renamed into place; refused
+//!   even for root, as a read-only file is), a device (`/dev/full`, `/dev/null`), a FIFO, a socket, or
 //!   a link to one of them.
 
 use std::path::{Path, PathBuf};
@@ -89,6 +91,15 @@ pub fn output_target(path: &Path, option: &str) -> Result<PathBuf> {
         return Err(refuse(
             &via,
             format!(": the directory {} does not exist", directory.display()),
+        ));
+    }
+    if std::fs::metadata(directory).is_ok_and(|metadata| metadata.permissions().readonly()) {
+        return Err(refuse(
+            &via,
+            format!(
+                ": the directory {} is read-only: sora cannot write there; give a file in a writable directory",
+                directory.display()
+            ),
         ));
     }
     Ok(target)
@@ -180,6 +191,25 @@ mod tests {
             assert!(message.contains(expected), "{path:?}: {message}");
             assert!(!message.contains('\n'), "{message}");
         }
+        // A read-only directory, for a new file and for an existing one
+        // (which could not be renamed into place either).
+        use std::os::unix::fs::PermissionsExt;
+        let locked = directory.path().join("locked");
+        std::fs::create_dir(&locked).unwrap();
+        std::fs::write(locked.join("old.png"), b"old").unwrap();
+        std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o555)).unwrap();
+        for name in ["new.png", "old.png"] {
+            let message = output_target(&locked.join(name), "--plot")
+                .unwrap_err()
+                .to_string();
+            assert!(
+                message.starts_with("--plot ")
+                    && message
+                        .contains(&format!("the directory {} is read-only", locked.display())),
+                "{message}"
+            );
+        }
+        std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o755)).unwrap();
         // The stand-in is untouched.
         use std::os::unix::fs::FileTypeExt;
         assert!(

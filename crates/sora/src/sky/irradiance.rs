@@ -27,7 +27,8 @@
 //! convergent for a smooth periodic integrand) in phi ([`AZIMUTH_NODES`]
 //! nodes, the first toward the sun). The fast method reads L from the
 //! image tables (about a microsecond a direction; within 1e-3 of the exact
-//! views); the reference method marches every direction (slow); path
+//! views); the reference method marches every direction (slow: bounded by
+//! [`MAX_REFERENCE_IRRADIANCE_STEPS`], checked before any work); path
 //! tracing estimates E_dif directly, cosine-weighted, with its standard
 //! error ([`crate::transport::PathTracer::compute_irradiance`]).
 //!
@@ -46,6 +47,42 @@ use crate::transport::PathTracer;
 pub const MU_NODES: usize = 48;
 /// Azimuth nodes around the plane's normal.
 pub const AZIMUTH_NODES: usize = 96;
+
+/// Most march steps of one plane's diffuse irradiance by the reference
+/// method: the [`MU_NODES`] x [`AZIMUTH_NODES`] = 4,608 directions times
+/// view steps times sun steps. 1e8 takes about 7 s a wavelength on the
+/// project's 2-core machine (release build; 4,608 marches of the default
+/// 1000 x 250 steps, 1.15e9, took 84 s at one wavelength), so the default
+/// steps are refused: the fast method (the same integral over views
+/// within 1e-3 of the reference march's) or path tracing (an independent
+/// flux estimate with its standard error) answer in about a second.
+pub const MAX_REFERENCE_IRRADIANCE_STEPS: f64 = 1e8;
+
+/// Refuses, before any work, a reference-method irradiance whose march
+/// exceeds [`MAX_REFERENCE_IRRADIANCE_STEPS`] (other methods pass).
+pub fn check_irradiance_work(method: Method) -> Result<()> {
+    if let Method::Reference {
+        view_steps,
+        sun_steps,
+    } = method
+    {
+        let directions = MU_NODES * AZIMUTH_NODES;
+        let steps = directions as f64 * view_steps as f64 * sun_steps as f64;
+        if steps > MAX_REFERENCE_IRRADIANCE_STEPS {
+            return Err(Error::out_of_range(
+                format!(
+                    "reference irradiance march ({directions} directions x {view_steps} view steps x {sun_steps} sun steps)"
+                ),
+                steps,
+                "steps",
+                format!(
+                    "<= {MAX_REFERENCE_IRRADIANCE_STEPS:e} (about 7 s a wavelength): use the fast method (within 1e-3 of the reference views) or path tracing, or fewer reference steps"
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
 
 /// A plane's orientation: tilted `tilt_deg` from horizontal (0: facing the
 /// zenith, 90: vertical) toward `azimuth_deg` (clockwise from north: the
@@ -167,6 +204,7 @@ impl Irradiance {
 impl Sky {
     /// The irradiance on `plane` (see the module docs).
     pub fn irradiance(&self, plane: Plane) -> Result<Irradiance> {
+        check_irradiance_work(self.method)?;
         let normal = plane.normal();
         let sun = self.sun_direction();
         let transmittance = self.direct_beam_transmittance();
@@ -245,4 +283,47 @@ fn hemisphere_views(normal: Vector3, sun: Vector3) -> Result<Vec<(ViewDirection,
         }
     }
     Ok(views)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The limit at its edge and one past it; the default steps (the
+    /// command line's `--method reference`) are refused in one line.
+    #[test]
+    fn reference_irradiance_work_is_bounded_before_any_work() {
+        let march = |view_steps, sun_steps| Method::Reference {
+            view_steps,
+            sun_steps,
+        };
+        // 4608 x 217 x 100 = 9.999e7; 4608 x 218 x 100 = 1.0045e8.
+        assert!(check_irradiance_work(march(217, 100)).is_ok());
+        let message = check_irradiance_work(march(218, 100))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            message.starts_with(
+                "reference irradiance march (4608 directions x 218 view steps x 100 sun steps) = 1.004544e8 steps is out of range: allowed <= 1e8"
+            ),
+            "{message}"
+        );
+        let message = check_irradiance_work(Method::REFERENCE_DEFAULT)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            message.contains("1000 view steps x 250 sun steps) = 1.152e9 steps")
+                && message.contains("use the fast method")
+                && !message.contains('\n'),
+            "{message}"
+        );
+        assert!(check_irradiance_work(Method::Fast).is_ok());
+        assert!(
+            check_irradiance_work(Method::PathTracing {
+                samples: 100,
+                seed: 1
+            })
+            .is_ok()
+        );
+    }
 }

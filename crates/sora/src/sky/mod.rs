@@ -58,7 +58,7 @@ mod irradiance;
 mod sun_disc;
 
 pub use crate::transport::multiple_scattering::MultipleScatteringSettings;
-pub use irradiance::{Irradiance, Plane};
+pub use irradiance::{Irradiance, MAX_REFERENCE_IRRADIANCE_STEPS, Plane, check_irradiance_work};
 pub(crate) use sun_disc::LIMB_DARKENING as SUN_LIMB_DARKENING;
 
 use std::sync::{Arc, OnceLock};
@@ -132,11 +132,16 @@ impl Method {
 }
 
 /// Whether the polarisation of the light is followed.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+///
+/// The default of every front end (the library's [`Sky::builder`], the
+/// command line, Python) is [`Polarisation::for_method`]: vector light,
+/// the more accurate, except with the reference march, which is scalar.
+/// Its names, `"scalar"` and `"vector"`, are the one spelling of every
+/// front end ([`std::str::FromStr`], [`std::fmt::Display`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Polarisation {
     /// Light as a scalar intensity (what radiative-transfer codes call the
     /// scalar approximation; up to a few per cent off in a clear sky).
-    #[default]
     Scalar,
     /// Stokes vectors through every scattering: the polarised intensity and
     /// Q, U and V, referred to the meridian plane of each view (the
@@ -148,6 +153,45 @@ pub enum Polarisation {
     /// intensity, [`Sky::render_stokes_xyz`] all four components. Mie
     /// species get their phase matrix computed when the sky is built.
     Vector,
+}
+
+impl Polarisation {
+    /// The default light for `method`: [`Polarisation::Vector`], except
+    /// [`Polarisation::Scalar`] for the reference march (which has no
+    /// Stokes vectors).
+    pub fn for_method(method: Method) -> Polarisation {
+        match method {
+            Method::Reference { .. } => Polarisation::Scalar,
+            Method::Fast | Method::PathTracing { .. } => Polarisation::Vector,
+        }
+    }
+}
+
+impl std::fmt::Display for Polarisation {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Polarisation::Scalar => "scalar",
+            Polarisation::Vector => "vector",
+        })
+    }
+}
+
+impl std::str::FromStr for Polarisation {
+    type Err = Error;
+
+    /// `"scalar"` or `"vector"`; anything else is a one-line error naming
+    /// the value and the choices.
+    fn from_str(name: &str) -> Result<Polarisation> {
+        match name {
+            "scalar" => Ok(Polarisation::Scalar),
+            "vector" => Ok(Polarisation::Vector),
+            other => Err(Error::parse(
+                "polarisation",
+                0,
+                format!("'{other}' is unknown: use 'scalar' or 'vector'"),
+            )),
+        }
+    }
 }
 
 /// Resolution of the fast method's image tables.
@@ -352,7 +396,7 @@ pub struct SkyBuilder<'a> {
     scattering: Scattering,
     method: Method,
     table_size: FastTableSize,
-    polarisation: Polarisation,
+    polarisation: Option<Polarisation>,
 }
 
 impl SkyBuilder<'_> {
@@ -395,20 +439,25 @@ impl SkyBuilder<'_> {
         self
     }
 
-    /// Scalar or vector (Stokes) light (default [`Polarisation::Scalar`]).
+    /// Scalar or vector (Stokes) light (default
+    /// [`Polarisation::for_method`]: vector, scalar for the reference
+    /// march).
     pub fn polarisation(mut self, polarisation: Polarisation) -> Self {
-        self.polarisation = polarisation;
+        self.polarisation = Some(polarisation);
         self
     }
 
     /// Checks every choice and puts the atmosphere on the grid (the
     /// expensive tables wait for their first use).
     pub fn build(self) -> Result<Sky> {
+        let polarisation = self
+            .polarisation
+            .unwrap_or(Polarisation::for_method(self.method));
         let scene = SingleScatteringSky::new_with_phase_matrices(
             self.atmosphere,
             &self.wavelengths,
             self.observation,
-            self.polarisation == Polarisation::Vector,
+            polarisation == Polarisation::Vector,
         )?;
         let mut sky = Sky::from_scene(scene, self.scattering, self.method, self.table_size)?;
         // The angles as given, not as recovered from the unit vector.
@@ -416,7 +465,7 @@ impl SkyBuilder<'_> {
             self.observation.sun_elevation_deg,
             self.observation.sun_azimuth_deg,
         );
-        sky.set_polarisation(self.polarisation)?;
+        sky.set_polarisation(polarisation)?;
         Ok(sky)
     }
 }
@@ -593,7 +642,8 @@ fn sky_radiance_from_values(values: &[f64], wavelengths: usize) -> SkyRadiance {
 impl Sky {
     /// Starts a sky of `atmosphere`: the sun at the zenith, the eye on the
     /// ground, the paper's wavelengths, all orders of scattering, the fast
-    /// method; change what differs, then [`SkyBuilder::build`].
+    /// method, polarised light ([`Polarisation::for_method`]); change what
+    /// differs, then [`SkyBuilder::build`].
     ///
     /// ```
     /// # fn main() -> sora::Result<()> {
@@ -617,7 +667,7 @@ impl Sky {
             scattering: Scattering::multiple(),
             method: Method::Fast,
             table_size: FastTableSize::default(),
-            polarisation: Polarisation::Scalar,
+            polarisation: None,
         }
     }
 
@@ -1555,6 +1605,7 @@ mod tests {
                 Sky::builder(&atmosphere)
                     .sun_deg(sun_elevation_deg, 180.0)
                     .wavelengths(WavelengthGrid::new(440.0, 870.0, 430.0).unwrap())
+                    .polarisation(crate::Polarisation::Scalar)
                     .build()
                     .unwrap()
             };
