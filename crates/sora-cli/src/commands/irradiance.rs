@@ -6,7 +6,7 @@ use clap::{Args, ValueEnum};
 use sora::spectrum::SampledSpectrum;
 use sora::{Irradiance, Plane};
 
-use crate::arguments::{AtmosphereSource, MethodOptions, SunAndObserver};
+use crate::arguments::{AtmosphereSource, FilterOptions, MethodOptions, SunAndObserver};
 
 /// Irradiance on a horizontal plane (and on a tilted one): direct normal,
 /// direct, diffuse and global, per wavelength and broadband.
@@ -23,7 +23,12 @@ use crate::arguments::{AtmosphereSource, MethodOptions, SunAndObserver};
 /// name) and the broadband values on stderr; json prints both; table prints
 /// the broadband values for people.
 ///
+/// With --filter (repeatable; docs/filters.md) each row is an instrument
+/// channel instead of a wavelength: filter,centre_nm and each quantity's
+/// response-weighted mean over the channel (no broadband values).
+///
 /// Example:
+///   sora irradiance --preset earth-clear --sun-elevation 30 --filter cimel
 ///   sora irradiance --preset earth-clear --sun-elevation 30 --format table
 ///   sora irradiance --preset earth-clear --sun-elevation 30 --tilt-deg 35 --plane-azimuth-deg 180
 #[derive(Debug, Args)]
@@ -54,6 +59,9 @@ pub struct IrradianceArgs {
     #[command(flatten)]
     method: MethodOptions,
 
+    #[command(flatten)]
+    filters: FilterOptions,
+
     /// Output format
     #[arg(long, value_enum, default_value_t = Format::Csv)]
     format: Format,
@@ -67,38 +75,21 @@ enum Format {
 }
 
 /// One named spectral quantity of the output.
-struct Quantity<'a> {
+struct Quantity {
     /// The name without its unit suffix, e.g. `global_horizontal_irradiance`.
     name: String,
-    spectrum: &'a SampledSpectrum,
+    spectrum: SampledSpectrum,
     /// Irradiance (W m^-2 nm^-1, with broadband and lux) or a ratio.
     irradiance: bool,
 }
 
-pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
-    let tilted = args
-        .tilt_deg
-        .map(|tilt| Plane::new(tilt, args.plane_azimuth_deg))
-        .transpose()?;
-    let (scattering, method) = args
-        .method
-        .resolve(100_000, sora::Method::REFERENCE_DEFAULT)?;
-    let mut atmosphere = args.source.load()?;
-    let (sky, sun) = args.sun.sky(&mut atmosphere, scattering, method)?;
-    let grid = *sky.wavelengths();
-    if let sora::Method::PathTracing { samples, .. } = method {
-        let planes = 1 + usize::from(tilted.is_some());
-        crate::estimate::announce(crate::estimate::path_tracing_estimate(
-            samples,
-            planes,
-            grid.len(),
-        ));
-    }
+/// The output's quantities for `sky`: horizontal, then on `tilted`.
+fn quantities(sky: &sora::Sky, tilted: Option<Plane>) -> anyhow::Result<Vec<Quantity>> {
     let horizontal = sky.irradiance(Plane::HORIZONTAL)?;
     let tilted = tilted.map(|plane| sky.irradiance(plane)).transpose()?;
-    let quantity = |name: &str, spectrum, irradiance| Quantity {
+    let quantity = |name: &str, spectrum: &SampledSpectrum, irradiance| Quantity {
         name: name.to_string(),
-        spectrum,
+        spectrum: spectrum.clone(),
         irradiance,
     };
     let mut quantities = vec![
@@ -151,6 +142,85 @@ pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
             quantities.push(quantity("diffuse_tilted_standard_error", errors, true));
         }
     }
+    Ok(quantities)
+}
+
+pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
+    let tilted = args
+        .tilt_deg
+        .map(|tilt| Plane::new(tilt, args.plane_azimuth_deg))
+        .transpose()?;
+    let (scattering, method) = args
+        .method
+        .resolve(100_000, sora::Method::REFERENCE_DEFAULT)?;
+    let filters = args.filters.filters()?;
+    let atmosphere = args.source.load()?;
+    let planes = 1 + usize::from(tilted.is_some());
+    let announce = |grid: &sora::spectrum::WavelengthGrid| {
+        if let sora::Method::PathTracing { samples, .. } = method {
+            crate::estimate::announce(crate::estimate::path_tracing_estimate(
+                samples,
+                planes,
+                grid.len(),
+            ));
+        }
+    };
+    if !filters.is_empty() {
+        // Per filter: the sky on its grid, each quantity's response-weighted
+        // mean (a standard error's: a bound, however the wavelengths'
+        // errors correlate).
+        let mut rows: Vec<Vec<f64>> = Vec::new();
+        let mut names = Vec::new();
+        let mut first_sky = None;
+        for filter in &filters {
+            let grid = filter
+                .grid()
+                .map_err(|e| anyhow::anyhow!("--filter {}: {e}", filter.name()))?;
+            let mut atmosphere = atmosphere.clone();
+            let (sky, sun) =
+                args.sun
+                    .with_wavelengths(grid)
+                    .sky(&mut atmosphere, scattering, method)?;
+            announce(&grid);
+            let quantities = quantities(&sky, tilted)?;
+            names = quantities
+                .iter()
+                .map(|q| (q.name.clone(), q.irradiance))
+                .collect();
+            rows.push(
+                quantities
+                    .iter()
+                    .map(|q| filter.weighted_mean(&grid, &q.spectrum))
+                    .collect::<sora::Result<Vec<f64>>>()?,
+            );
+            first_sky.get_or_insert((sky.sun_position_deg(), sun));
+        }
+        let ((sun_elevation_deg, sun_azimuth_deg), sun) = first_sky.expect("a filter");
+        let quantities: Vec<Quantity> = names
+            .iter()
+            .enumerate()
+            .map(|(k, (name, irradiance))| Quantity {
+                name: name.clone(),
+                spectrum: SampledSpectrum::from_values(rows.iter().map(|r| r[k]).collect()),
+                irradiance: *irradiance,
+            })
+            .collect();
+        let labels = filters
+            .iter()
+            .map(|f| Ok((f.name().to_string(), f.centre_nm()?)))
+            .collect::<sora::Result<Vec<_>>>()?;
+        return write_filtered(
+            args.format,
+            &quantities,
+            &labels,
+            (sun_elevation_deg, sun_azimuth_deg, sun),
+        );
+    }
+    let mut atmosphere = atmosphere;
+    let (sky, sun) = args.sun.sky(&mut atmosphere, scattering, method)?;
+    let grid = *sky.wavelengths();
+    announce(&grid);
+    let quantities = quantities(&sky, tilted)?;
     // Broadband: W m^-2 and lux of every irradiance (not of standard
     // errors, which do not add linearly).
     let mut broadband = Vec::new();
@@ -158,8 +228,8 @@ pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
         .iter()
         .filter(|q| q.irradiance && !q.name.ends_with("standard_error"))
     {
-        let watts = Irradiance::broadband_w_m2(q.spectrum, &grid);
-        let lux = Irradiance::illuminance_lx(q.spectrum, &grid)?;
+        let watts = Irradiance::broadband_w_m2(&q.spectrum, &grid);
+        let lux = Irradiance::illuminance_lx(&q.spectrum, &grid)?;
         broadband.push((q.name.clone(), watts, lux));
     }
     let (sun_elevation_deg, sun_azimuth_deg) = sky.sun_position_deg();
@@ -234,6 +304,95 @@ pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
                 let illuminance = name.replace("irradiance", "illuminance");
                 members.push(format!("\"{name}_w_m2\": {watts:.9e}"));
                 members.push(format!("\"{illuminance}_lx\": {lux:.9e}"));
+            }
+            writeln!(out, "{{{}}}", members.join(", "))?;
+        }
+    }
+    out.flush()?;
+    Ok(())
+}
+
+/// Writes the per-filter quantities: one row per filter (`name`,
+/// `centre_nm`), no broadband values.
+fn write_filtered(
+    format: Format,
+    quantities: &[Quantity],
+    labels: &[(String, f64)],
+    (sun_elevation_deg, sun_azimuth_deg, sun): (f64, f64, crate::arguments::SunUsed),
+) -> anyhow::Result<()> {
+    let unit = |q: &Quantity| if q.irradiance { "_w_m2_nm" } else { "" };
+    let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+    match format {
+        Format::Csv => {
+            let header: Vec<String> = quantities
+                .iter()
+                .map(|q| format!("{}{}", q.name, unit(q)))
+                .collect();
+            writeln!(out, "filter,centre_nm,{}", header.join(","))?;
+            for (i, (name, centre)) in labels.iter().enumerate() {
+                let row: Vec<String> = quantities
+                    .iter()
+                    .map(|q| format!("{:.9e}", q.spectrum[i]))
+                    .collect();
+                writeln!(out, "{name},{centre:.4},{}", row.join(","))?;
+            }
+        }
+        Format::Table => {
+            writeln!(
+                out,
+                "sun at {sun_elevation_deg:.4} deg elevation, {sun_azimuth_deg:.4} deg azimuth{}; W m^-2 nm^-1 through each filter",
+                sun.summary()
+            )?;
+            for (i, (name, centre)) in labels.iter().enumerate() {
+                writeln!(out, "{name} ({centre:.2} nm)")?;
+                for q in quantities.iter().filter(|q| q.irradiance) {
+                    writeln!(
+                        out,
+                        "  {:<34} {:>12.6}",
+                        q.name.replace('_', " "),
+                        q.spectrum[i]
+                    )?;
+                }
+            }
+        }
+        Format::Json => {
+            let list = |values: &[f64]| {
+                values
+                    .iter()
+                    .map(|v| format!("{v:.9e}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            };
+            let mut members = vec![
+                format!("\"sun_elevation_deg\": {sun_elevation_deg}"),
+                format!(
+                    "\"sun_azimuth_deg\": {sun_azimuth_deg}{}",
+                    sun.json_members()
+                ),
+                format!(
+                    "\"filter\": [{}]",
+                    labels
+                        .iter()
+                        .map(|(n, _)| crate::commands::atmosphere::json_string(n))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+                format!(
+                    "\"centre_nm\": [{}]",
+                    labels
+                        .iter()
+                        .map(|(_, c)| format!("{c:.6}"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            ];
+            for q in quantities {
+                members.push(format!(
+                    "\"{}{}\": [{}]",
+                    q.name,
+                    unit(q),
+                    list(q.spectrum.values())
+                ));
             }
             writeln!(out, "{{{}}}", members.join(", "))?;
         }
