@@ -326,6 +326,16 @@ fn bad_inputs_give_one_line_errors_and_write_nothing() {
         "{scan}"
     );
 
+    let band = run(&[
+        &["--aeronet-almucantar".into(), aeronet(ALMUCANTAR)][..],
+        &outputs(&["--band-nm", "0"]),
+    ]
+    .concat());
+    assert!(
+        band.contains("--band-nm 0 nm") && band.contains("0.01..=50"),
+        "{band}"
+    );
+
     let jpeg = run(&[
         "--radiances".into(),
         negative.clone(),

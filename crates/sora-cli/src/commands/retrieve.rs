@@ -29,6 +29,9 @@ use crate::commands::atmosphere::json_string;
 /// measurements did not constrain. A fit that did not converge is a
 /// warning, not an error (exit status 0).
 ///
+/// Each channel's sun and gas absorption are averaged over --band-nm
+/// (default 10 nm for AERONET files, as the Cimel channels are wide).
+///
 /// The model's assumptions: the particles are spheres (Mie theory; dust's
 /// spheroids are not), with one complex refractive index for both modes
 /// and every wavelength; the size distribution is two log-normal volume
@@ -199,6 +202,13 @@ pub struct RetrieveArgs {
     #[arg(long, value_name = "M", default_value_t = 1200.0)]
     aerosol_scale_height_m: f64,
 
+    /// Width of each measured channel, nm: the sun's spectrum and the gas
+    /// absorption are averaged over it (0.01..=50) [default: 10 for AERONET
+    /// files, the Cimel channels' width at 440-1020 nm (docs/filters.md);
+    /// 1 otherwise]
+    #[arg(long, value_name = "NM", allow_hyphen_values = true)]
+    band_nm: Option<f64>,
+
     /// Starting points of the fit (fine-dominated, coarse-dominated, the a
     /// priori); the lowest chi^2 wins
     #[arg(
@@ -288,7 +298,20 @@ pub fn run(args: RetrieveArgs) -> anyhow::Result<()> {
         aerosol_scale_height_m: args.aerosol_scale_height_m,
         max_iterations: args.max_iterations as usize,
         starting_points: args.starting_points as usize,
+        band_nm: args.band_nm.unwrap_or(
+            if args.aeronet_almucantar.is_some() || args.aeronet_principal_plane.is_some() {
+                10.0
+            } else {
+                1.0
+            },
+        ),
     };
+    if !(0.01..=50.0).contains(&settings.band_nm) {
+        bail!(
+            "--band-nm {} nm is out of range: allowed 0.01..=50 nm",
+            settings.band_nm
+        );
+    }
     if !(settings.aerosol_scale_height_m.is_finite() && settings.aerosol_scale_height_m > 0.0) {
         bail!(
             "--aerosol-scale-height-m {}: must be a length > 0",
