@@ -71,6 +71,13 @@ use fit::{Problem, Start};
 use forward::{AerosolOptics, ForwardModel};
 use std::sync::atomic::Ordering;
 
+/// The most distinct wavelengths one retrieval takes (checked before any
+/// work): the forward model computes one sky per wavelength (and sun
+/// position) at every evaluation, so a spectroradiometer's 1-nm spectrum
+/// (hundreds of wavelengths) would take minutes for a result that a few
+/// tens of wavelengths determine as well (a photometer has 4-7).
+pub const MAX_RETRIEVAL_WAVELENGTHS: usize = 41;
+
 /// How a retrieval runs.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RetrievalSettings {
@@ -265,6 +272,13 @@ pub fn retrieve(
         return Err(Error::out_of_range("max iterations", 0.0, "1", ">= 1"));
     }
     let wavelengths = measurements.wavelengths_nm();
+    if wavelengths.len() > MAX_RETRIEVAL_WAVELENGTHS {
+        return Err(Error::Unsupported(format!(
+            "{}: {} wavelengths, more than the {MAX_RETRIEVAL_WAVELENGTHS} one retrieval fits (the model computes a sky per wavelength at every step); keep fewer, e.g. one every 10-20 nm",
+            measurements.label,
+            wavelengths.len()
+        )));
+    }
     let reference_wavelength_nm = settings.reference_wavelength_nm.unwrap_or(
         if forward::wavelength_index(&wavelengths, 440.0).is_some() {
             440.0
