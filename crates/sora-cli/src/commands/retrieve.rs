@@ -50,8 +50,9 @@ use crate::commands::atmosphere::json_string;
 ///                            aerosol_optical_depth, uncertainty)
 ///   --aeronet-almucantar FILE, --aeronet-principal-plane FILE
 ///                            AERONET version 3 raw sky scans (.alm, .ppl),
-///                            with --aeronet-aod FILE (.lev15, .lev20) for
-///                            the optical depths nearest in time; every
+///                            with --aeronet-aod FILE (.lev15, .lev20,
+///                            version 3 or 2) for the optical depths
+///                            nearest in time; every
 ///                            usable scan of the file is retrieved, one
 ///                            after another, or the one --scan N names
 ///   --normalised-spectrum FILE.csv
@@ -100,7 +101,7 @@ pub struct RetrieveArgs {
     aeronet_principal_plane: Option<PathBuf>,
 
     /// With an AERONET sky file: its site's direct-sun optical depths
-    /// (.lev15, .lev20); each scan gets those measured nearest in time
+    /// (.lev15, .lev20; version 3 or version 2); each scan gets those measured nearest in time
     /// (within 30 minutes)
     #[arg(
         long,
