@@ -233,22 +233,11 @@ pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
         broadband.push((q.name.clone(), watts, lux));
     }
     let (sun_elevation_deg, sun_azimuth_deg) = sky.sun_position_deg();
-    let unit = |q: &Quantity| if q.irradiance { "_w_m2_nm" } else { "" };
     let mut out = std::io::BufWriter::new(std::io::stdout().lock());
     match args.format {
         Format::Csv => {
-            let header: Vec<String> = quantities
-                .iter()
-                .map(|q| format!("{}{}", q.name, unit(q)))
-                .collect();
-            writeln!(out, "wavelength_nm,{}", header.join(","))?;
-            for (i, wavelength) in grid.wavelengths_nm().enumerate() {
-                let row: Vec<String> = quantities
-                    .iter()
-                    .map(|q| format!("{:.9e}", q.spectrum[i]))
-                    .collect();
-                writeln!(out, "{wavelength},{}", row.join(","))?;
-            }
+            let labels: Vec<String> = grid.wavelengths_nm().map(|w| w.to_string()).collect();
+            write_csv(&mut out, "wavelength_nm", &labels, &quantities)?;
             for (name, watts, lux) in &broadband {
                 let illuminance = name.replace("irradiance", "illuminance");
                 eprintln!("{name}_w_m2 {watts:.6e}; {illuminance}_lx {lux:.6e}");
@@ -271,35 +260,18 @@ pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
             }
         }
         Format::Json => {
-            let list = |values: &[f64]| {
-                values
-                    .iter()
-                    .map(|v| format!("{v:.9e}"))
+            let axis = format!(
+                "\"wavelength_nm\": [{}]",
+                grid.wavelengths_nm()
+                    .map(|w| w.to_string())
                     .collect::<Vec<_>>()
                     .join(", ")
-            };
-            let mut members = vec![
-                format!("\"sun_elevation_deg\": {sun_elevation_deg}"),
-                format!(
-                    "\"sun_azimuth_deg\": {sun_azimuth_deg}{}",
-                    sun.json_members()
-                ),
-                format!(
-                    "\"wavelength_nm\": [{}]",
-                    grid.wavelengths_nm()
-                        .map(|w| w.to_string())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ),
-            ];
-            for q in &quantities {
-                members.push(format!(
-                    "\"{}{}\": [{}]",
-                    q.name,
-                    unit(q),
-                    list(q.spectrum.values())
-                ));
-            }
+            );
+            let mut members = json_members(
+                (sun_elevation_deg, sun_azimuth_deg, &sun),
+                axis,
+                &quantities,
+            );
             for (name, watts, lux) in &broadband {
                 let illuminance = name.replace("irradiance", "illuminance");
                 members.push(format!("\"{name}_w_m2\": {watts:.9e}"));
@@ -320,22 +292,14 @@ fn write_filtered(
     labels: &[(String, f64)],
     (sun_elevation_deg, sun_azimuth_deg, sun): (f64, f64, crate::arguments::SunUsed),
 ) -> anyhow::Result<()> {
-    let unit = |q: &Quantity| if q.irradiance { "_w_m2_nm" } else { "" };
     let mut out = std::io::BufWriter::new(std::io::stdout().lock());
     match format {
         Format::Csv => {
-            let header: Vec<String> = quantities
+            let labels: Vec<String> = labels
                 .iter()
-                .map(|q| format!("{}{}", q.name, unit(q)))
+                .map(|(name, centre)| format!("{name},{centre:.4}"))
                 .collect();
-            writeln!(out, "filter,centre_nm,{}", header.join(","))?;
-            for (i, (name, centre)) in labels.iter().enumerate() {
-                let row: Vec<String> = quantities
-                    .iter()
-                    .map(|q| format!("{:.9e}", q.spectrum[i]))
-                    .collect();
-                writeln!(out, "{name},{centre:.4},{}", row.join(","))?;
-            }
+            write_csv(&mut out, "filter,centre_nm", &labels, quantities)?;
         }
         Format::Table => {
             writeln!(
@@ -356,47 +320,76 @@ fn write_filtered(
             }
         }
         Format::Json => {
-            let list = |values: &[f64]| {
-                values
+            let axis = format!(
+                "\"filter\": [{}], \"centre_nm\": [{}]",
+                labels
                     .iter()
-                    .map(|v| format!("{v:.9e}"))
+                    .map(|(n, _)| crate::commands::atmosphere::json_string(n))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                labels
+                    .iter()
+                    .map(|(_, c)| format!("{c:.6}"))
                     .collect::<Vec<_>>()
                     .join(", ")
-            };
-            let mut members = vec![
-                format!("\"sun_elevation_deg\": {sun_elevation_deg}"),
-                format!(
-                    "\"sun_azimuth_deg\": {sun_azimuth_deg}{}",
-                    sun.json_members()
-                ),
-                format!(
-                    "\"filter\": [{}]",
-                    labels
-                        .iter()
-                        .map(|(n, _)| crate::commands::atmosphere::json_string(n))
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ),
-                format!(
-                    "\"centre_nm\": [{}]",
-                    labels
-                        .iter()
-                        .map(|(_, c)| format!("{c:.6}"))
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ),
-            ];
-            for q in quantities {
-                members.push(format!(
-                    "\"{}{}\": [{}]",
-                    q.name,
-                    unit(q),
-                    list(q.spectrum.values())
-                ));
-            }
+            );
+            let members =
+                json_members((sun_elevation_deg, sun_azimuth_deg, &sun), axis, quantities);
             writeln!(out, "{{{}}}", members.join(", "))?;
         }
     }
     out.flush()?;
     Ok(())
+}
+
+/// A quantity's name with its unit suffix.
+fn unit_name(q: &Quantity) -> String {
+    format!("{}{}", q.name, if q.irradiance { "_w_m2_nm" } else { "" })
+}
+
+/// The CSV: `axis` (the row label columns) and each quantity, one row per
+/// label.
+fn write_csv(
+    out: &mut impl Write,
+    axis: &str,
+    labels: &[String],
+    quantities: &[Quantity],
+) -> anyhow::Result<()> {
+    let header: Vec<String> = quantities.iter().map(unit_name).collect();
+    writeln!(out, "{axis},{}", header.join(","))?;
+    for (i, label) in labels.iter().enumerate() {
+        let row: Vec<String> = quantities
+            .iter()
+            .map(|q| format!("{:.9e}", q.spectrum[i]))
+            .collect();
+        writeln!(out, "{label},{}", row.join(","))?;
+    }
+    Ok(())
+}
+
+/// The JSON members: the sun, the row axis (`axis`, already members), each
+/// quantity's list.
+fn json_members(
+    (sun_elevation_deg, sun_azimuth_deg, sun): (f64, f64, &crate::arguments::SunUsed),
+    axis: String,
+    quantities: &[Quantity],
+) -> Vec<String> {
+    let mut members = vec![
+        format!("\"sun_elevation_deg\": {sun_elevation_deg}"),
+        format!(
+            "\"sun_azimuth_deg\": {sun_azimuth_deg}{}",
+            sun.json_members()
+        ),
+        axis,
+    ];
+    for q in quantities {
+        let values: Vec<String> = q
+            .spectrum
+            .values()
+            .iter()
+            .map(|v| format!("{v:.9e}"))
+            .collect();
+        members.push(format!("\"{}\": [{}]", unit_name(q), values.join(", ")));
+    }
+    members
 }

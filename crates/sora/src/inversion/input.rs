@@ -1499,7 +1499,10 @@ Site_A,10:06:2020,12:00:00,162,-999.,-999.,-999.,-999.,-999.,1.5,0.4402
             "Date(dd:mm:yyyy),Time(hh:mm:ss),x\n",
             "a",
         ));
-        assert!(e.contains("no AOD_<n>nm (version 3) or AOT_<n> (version 2) columns"), "{e}");
+        assert!(
+            e.contains("no AOD_<n>nm (version 3) or AOT_<n> (version 2) columns"),
+            "{e}"
+        );
     }
 
     #[test]
