@@ -181,6 +181,55 @@ impl AtmosphereSource {
     }
 }
 
+/// Instrument channels instead of a wavelength grid (`sora spectrum`,
+/// `sora irradiance`).
+#[derive(Debug, Clone, clap::Args)]
+pub struct FilterOptions {
+    /// An instrument channel instead of --wavelengths (repeatable): a CSV
+    /// file wavelength_nm,response, or a built-in sun-photometer channel
+    /// (cimel-340, cimel-380, cimel-440, cimel-500, cimel-675, cimel-870,
+    /// cimel-1020: Gaussians 10 nm wide at half maximum, 2 nm at 340, 4 nm
+    /// at 380; cimel: all seven). Each channel's value is the
+    /// response-weighted mean over its own wavelengths (docs/filters.md)
+    #[arg(long, value_name = "FILE.csv|NAME", conflicts_with = "wavelengths")]
+    pub filter: Vec<String>,
+}
+
+impl FilterOptions {
+    /// The filters asked for, in order (`cimel` expands to its seven
+    /// channels); empty without --filter. A name that is neither a
+    /// built-in filter nor a readable file is a one-line error.
+    pub fn filters(&self) -> anyhow::Result<Vec<sora::spectrum::Filter>> {
+        use sora::spectrum::Filter;
+        let mut filters = Vec::new();
+        for value in &self.filter {
+            if value == "cimel" {
+                filters.extend(
+                    Filter::builtin_names()
+                        .iter()
+                        .filter_map(|name| Filter::named(name)),
+                );
+            } else if let Some(filter) = Filter::named(value) {
+                filters.push(filter);
+            } else {
+                let path = std::path::Path::new(value);
+                if !path.exists() && !value.to_ascii_lowercase().ends_with(".csv") {
+                    anyhow::bail!(
+                        "--filter {value}: no such file, nor a built-in filter (cimel, {})",
+                        Filter::builtin_names().join(", ")
+                    );
+                }
+                let text = sora::input::read_text(path)?;
+                filters.push(
+                    Filter::parse_csv(&text, value)
+                        .map_err(|e| anyhow::anyhow!("--filter {value}: {e}"))?,
+                );
+            }
+        }
+        Ok(filters)
+    }
+}
+
 /// Which orders of scattering to compute: shared by `sora spectrum` and
 /// `sora render`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -456,6 +505,14 @@ fn parse_polarisation(value: &str) -> Result<sora::Polarisation, String> {
 }
 
 impl SunAndObserver {
+    /// These options on another wavelength grid (a filter's).
+    pub fn with_wavelengths(&self, grid: sora::spectrum::WavelengthGrid) -> SunAndObserver {
+        SunAndObserver {
+            wavelengths: grid,
+            ..self.clone()
+        }
+    }
+
     /// The light's polarisation for `method`: as --polarisation says, or
     /// the library's default ([`sora::Polarisation::for_method`]: vector,
     /// scalar for the reference march; an explicit `--polarisation vector`

@@ -326,6 +326,47 @@ fn bad_inputs_give_one_line_errors_and_write_nothing() {
         "{scan}"
     );
 
+    let band = run(&[
+        &["--aeronet-almucantar".into(), aeronet(ALMUCANTAR)][..],
+        &outputs(&["--band-nm", "0"]),
+    ]
+    .concat());
+    assert!(
+        band.contains("--band-nm 0 nm") && band.contains("0.01..=50"),
+        "{band}"
+    );
+
+    // A spectroradiometer's 1-nm spectrum is refused before any work
+    // (a retrieval computes a sky per wavelength at every step).
+    let dense = path("dense.csv");
+    let mut text = String::from("wavelength_nm,relative_radiance\n");
+    for w in 400..=480 {
+        text += &format!("{w},{}\n", (550.0 / w as f64).powi(3));
+    }
+    std::fs::write(&dense, text).unwrap();
+    let too_many = run(&[
+        &["--normalised-spectrum".into(), dense.clone()][..],
+        &outputs(&[
+            "--sun-elevation",
+            "36",
+            "--sun-azimuth",
+            "207",
+            "--view-elevation",
+            "17",
+            "--view-azimuth",
+            "347",
+            "--max-iterations",
+            "2",
+            "--starting-points",
+            "1",
+        ]),
+    ]
+    .concat());
+    assert!(
+        too_many.contains("81 wavelengths") && too_many.contains("41"),
+        "{too_many}"
+    );
+
     let jpeg = run(&[
         "--radiances".into(),
         negative.clone(),
@@ -342,11 +383,11 @@ fn bad_inputs_give_one_line_errors_and_write_nothing() {
     ]);
     assert!(no_directory.contains("--residuals"), "{no_directory}");
 
-    // Nothing but the input was written.
+    // Nothing but the inputs were written.
     let mut names: Vec<String> = std::fs::read_dir(directory.path())
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
     names.sort();
-    assert_eq!(names, ["negative.csv"]);
+    assert_eq!(names, ["dense.csv", "negative.csv"]);
 }

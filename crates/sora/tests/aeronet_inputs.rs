@@ -12,6 +12,7 @@ use sora::inversion::{
 const PPL: &str = include_str!("data/aeronet/ppl_arm_graciosa_20190103.ppl");
 const ALM: &str = include_str!("data/aeronet/alm_synthetic_karlsruhe_20050321.alm");
 const AOD: &str = include_str!("data/aeronet/aod_karlsruhe_20050321.lev15");
+const AOD_V2: &str = include_str!("data/aeronet/aod_v2_zvenigorod_20060916.lev20");
 
 fn close(a: f64, b: f64) -> bool {
     (a - b).abs() <= 1e-9 * b.abs().max(1e-12)
@@ -166,5 +167,39 @@ fn real_aod_row_is_attached_to_the_scan_of_its_site_nearest_in_time() {
     assert!(
         notes[0].starts_with("ARM_Graciosa 2019-01-03 11:11:49 principal plane: no optical depth"),
         "{notes:?}"
+    );
+}
+
+/// A real version 2 row: `AOT_<n>` columns, `-9999.` where not measured,
+/// the site on the `Location=` line, `dd:mm:yyyy` under a
+/// `Date(dd-mm-yy)` header.
+#[test]
+fn version_2_optical_depths_are_read() {
+    let entries = parse_aeronet_aod(AOD_V2, "zvenigorod.lev20").unwrap();
+    assert_eq!(entries.len(), 1);
+    let entry = &entries[0];
+    assert_eq!(entry.site, "Zvenigorod");
+    assert_eq!(
+        (
+            entry.time.year,
+            entry.time.month,
+            entry.time.day,
+            entry.time.second_of_day
+        ),
+        (2006, 9, 16, 0)
+    );
+    // Measured: 1020, 870, 675, 500, 440, 380, 340 nm (1640, 667, 555,
+    // 551, 532, 531, 490, 443 and 412 are -9999.).
+    assert_eq!(
+        entry.optical_depths,
+        [
+            (1020.0, 0.036045),
+            (870.0, 0.036734),
+            (675.0, 0.039337),
+            (500.0, 0.064670),
+            (440.0, 0.069614),
+            (380.0, 0.083549),
+            (340.0, 0.092204)
+        ]
     );
 }

@@ -399,6 +399,58 @@ fn malformed_files_get_one_line_errors_naming_the_problem() {
         ),
         (
             edit(
+                "phase.henyey_greenstein.g = 0.7",
+                "phase.tabulated = { angle_deg = [0, 90, 170], value = [3, 1, 1] }",
+            ),
+            &[
+                "species[1].scattering.parametric.phase.tabulated.angle_deg: must run from 0 to 180 deg (got 0 to 170 deg)",
+            ],
+        ),
+        (
+            edit(
+                "phase.henyey_greenstein.g = 0.7",
+                "phase.tabulated = { angle_deg = [0, 90, 60, 180], value = [3, 1, 1, 1] }",
+            ),
+            &[
+                "species[1].scattering.parametric.phase.tabulated.angle_deg[2]: angles must increase, but 60 deg follows 90 deg",
+            ],
+        ),
+        (
+            edit(
+                "phase.henyey_greenstein.g = 0.7",
+                "phase.tabulated = { angle_deg = [0, 90, 180], value = [3, -1, 1] }",
+            ),
+            &[
+                "species[1].scattering.parametric.phase.tabulated.value[1] = -1 is out of range: allowed >= 0",
+            ],
+        ),
+        (
+            edit(
+                "phase.henyey_greenstein.g = 0.7",
+                "phase.tabulated = { angle_deg = [0, 180], value = [3, 1, 1] }",
+            ),
+            &[
+                "species[1].scattering.parametric.phase.tabulated: angle_deg and value need the same length, at least 2 (got 2 and 3)",
+            ],
+        ),
+        (
+            edit(
+                "phase.henyey_greenstein.g = 0.7",
+                "phase.tabulated = { angle_deg = [0, 180], value = [0, 0] }",
+            ),
+            &["species[1].scattering.parametric.phase.tabulated.value"],
+        ),
+        (
+            edit(
+                "phase.henyey_greenstein.g = 0.7",
+                "phase.henyey_greenstein.g = 0.7, phase.tabulated = { angle_deg = [0, 180], value = [1, 1] }",
+            ),
+            &[
+                "species[1].scattering.parametric.phase: give exactly one of henyey_greenstein, cornette_shanks, tabulated",
+            ],
+        ),
+        (
+            edit(
                 "single_scattering_albedo = 0.9",
                 "single_scattering_albedo = 1.5",
             ),

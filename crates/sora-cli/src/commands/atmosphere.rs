@@ -202,7 +202,7 @@ fn table(atmosphere: &Atmosphere, optics: &AtmosphereOptics) -> String {
         let scatters = species.scattering_per_m.values().iter().any(|b| *b > 0.0);
         let polarisation = match species.phase_function {
             _ if !scatters => "",
-            PhaseFunction::Tabulated(_) => {
+            PhaseFunction::Tabulated(ref table) if !table.has_matrix_ratios() => {
                 ", polarising (its phase matrix is computed for --stokes)"
             }
             ref function if function.is_polarising() => ", polarising",

@@ -6,7 +6,9 @@ use clap::{Args, ValueEnum};
 use sora::spectrum::SampledSpectrum;
 use sora::{Irradiance, Plane};
 
-use crate::arguments::{AtmosphereSource, MethodOptions, Resolution, SunAndObserver};
+use crate::arguments::{
+    AtmosphereSource, FilterOptions, MethodOptions, Resolution, SunAndObserver,
+};
 
 /// Irradiance on a horizontal plane (and on a tilted one): direct normal,
 /// direct, diffuse and global, per wavelength and broadband.
@@ -18,6 +20,11 @@ use crate::arguments::{AtmosphereSource, MethodOptions, Resolution, SunAndObserv
 /// azimuths); global = direct + diffuse. Spectral values in W m^-2 nm^-1;
 /// broadband in W m^-2 and, for illuminance, lux (CIE 1931, 683 lm/W).
 ///
+/// --format csv (default) prints one row per wavelength
+/// (wavelength_nm,direct_normal_irradiance_w_m2_nm,... with units in every
+/// name) and the broadband values on stderr; json prints both; table prints
+/// the broadband values for people.
+///
 /// With banded gases (an atmosphere file's [gases]) every value is the sum
 /// of five solves, one per k-distribution term, weighted (five times the
 /// time).
@@ -28,12 +35,12 @@ use crate::arguments::{AtmosphereSource, MethodOptions, Resolution, SunAndObserv
 /// before any work; the fast method (the default) gives the same integral
 /// within 1e-3, path tracing an independent estimate with its error.
 ///
-/// --format csv (default) prints one row per wavelength
-/// (wavelength_nm,direct_normal_irradiance_w_m2_nm,... with units in every
-/// name) and the broadband values on stderr; json prints both; table prints
-/// the broadband values for people.
+/// With --filter (repeatable; docs/filters.md) each row is an instrument
+/// channel instead of a wavelength: filter,centre_nm and each quantity's
+/// response-weighted mean over the channel (no broadband values).
 ///
 /// Example:
+///   sora irradiance --preset earth-clear --sun-elevation 30 --filter cimel
 ///   sora irradiance --preset earth-clear --sun-elevation 30 --format table
 ///   sora irradiance --preset earth-clear --sun-elevation 30 --tilt-deg 35 --plane-azimuth-deg 180
 #[derive(Debug, Args)]
@@ -67,6 +74,9 @@ pub struct IrradianceArgs {
     #[command(flatten)]
     resolution: Resolution,
 
+    #[command(flatten)]
+    filters: FilterOptions,
+
     /// Output format
     #[arg(long, value_enum, default_value_t = Format::Csv)]
     format: Format,
@@ -80,54 +90,30 @@ enum Format {
 }
 
 /// One named spectral quantity of the output.
-struct Quantity<'a> {
+struct Quantity {
     /// The name without its unit suffix, e.g. `global_horizontal_irradiance`.
     name: String,
-    spectrum: &'a SampledSpectrum,
+    spectrum: SampledSpectrum,
     /// Irradiance (W m^-2 nm^-1, with broadband and lux) or a ratio.
     irradiance: bool,
 }
 
-pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
-    let tilted = args
-        .tilt_deg
-        .map(|tilt| Plane::new(tilt, args.plane_azimuth_deg))
-        .transpose()?;
-    let (scattering, method) = args
-        .method
-        .resolve(100_000, sora::Method::REFERENCE_DEFAULT)?;
-    let scattering = args.resolution.apply(scattering, method)?;
-    // The reference march's work, before loading anything (docs/limits.md).
-    sora::sky::check_irradiance_work(method)?;
-    let atmosphere = args.source.load()?;
-    // Banded gases: one sky per k-distribution term, summed with the
-    // terms' weights (one sky, weight 1, without them).
-    let mut skies = Vec::new();
-    for (weight, mut at_term) in sora::atmosphere::gas_bands::k_distribution_terms(&atmosphere) {
-        skies.push((weight, args.sun.sky(&mut at_term, scattering, method)?));
-    }
-    let (sky, sun) = &skies[0].1;
-    let grid = *sky.wavelengths();
-    if let sora::Method::PathTracing { samples, .. } = method {
-        let planes = 1 + usize::from(tilted.is_some());
-        crate::estimate::announce(crate::estimate::path_tracing_estimate(
-            samples * skies.len() as u64,
-            planes,
-            grid.len(),
-        ));
-    }
+/// The output's quantities for the weighted `skies` (one per
+/// k-distribution term; one of weight 1 without banded gases): horizontal,
+/// then on `tilted`.
+fn quantities(skies: &[(f64, sora::Sky)], tilted: Option<Plane>) -> anyhow::Result<Vec<Quantity>> {
     let on_plane = |plane: Plane| -> anyhow::Result<Irradiance> {
         let parts = skies
             .iter()
-            .map(|(weight, (sky, _))| Ok((*weight, sky.irradiance(plane)?)))
+            .map(|(weight, sky)| Ok((*weight, sky.irradiance(plane)?)))
             .collect::<anyhow::Result<Vec<_>>>()?;
         Ok(Irradiance::weighted_sum(&parts))
     };
     let horizontal = on_plane(Plane::HORIZONTAL)?;
     let tilted = tilted.map(on_plane).transpose()?;
-    let quantity = |name: &str, spectrum, irradiance| Quantity {
+    let quantity = |name: &str, spectrum: &SampledSpectrum, irradiance| Quantity {
         name: name.to_string(),
-        spectrum,
+        spectrum: spectrum.clone(),
         irradiance,
     };
     let mut quantities = vec![
@@ -180,6 +166,97 @@ pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
             quantities.push(quantity("diffuse_tilted_standard_error", errors, true));
         }
     }
+    Ok(quantities)
+}
+
+pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
+    let tilted = args
+        .tilt_deg
+        .map(|tilt| Plane::new(tilt, args.plane_azimuth_deg))
+        .transpose()?;
+    let (scattering, method) = args
+        .method
+        .resolve(100_000, sora::Method::REFERENCE_DEFAULT)?;
+    let scattering = args.resolution.apply(scattering, method)?;
+    // The reference march's work, before loading anything (docs/limits.md).
+    sora::sky::check_irradiance_work(method)?;
+    let filters = args.filters.filters()?;
+    let atmosphere = args.source.load()?;
+    // Banded gases: one sky per k-distribution term, summed with the
+    // terms' weights (one sky, weight 1, without them).
+    let terms = sora::atmosphere::gas_bands::k_distribution_terms(&atmosphere);
+    let skies = |sun: &SunAndObserver| -> anyhow::Result<(Vec<(f64, sora::Sky)>, crate::arguments::SunUsed)> {
+        let mut skies = Vec::new();
+        let mut used = None;
+        for (weight, mut at_term) in terms.clone() {
+            let (sky, sun) = sun.sky(&mut at_term, scattering, method)?;
+            skies.push((weight, sky));
+            used.get_or_insert(sun);
+        }
+        Ok((skies, used.expect("at least one k-distribution term")))
+    };
+    let planes = 1 + usize::from(tilted.is_some());
+    let announce = |grid: &sora::spectrum::WavelengthGrid| {
+        if let sora::Method::PathTracing { samples, .. } = method {
+            crate::estimate::announce(crate::estimate::path_tracing_estimate(
+                samples * terms.len() as u64,
+                planes,
+                grid.len(),
+            ));
+        }
+    };
+    if !filters.is_empty() {
+        // Per filter: the sky on its grid, each quantity's response-weighted
+        // mean (a standard error's: a bound, however the wavelengths'
+        // errors correlate).
+        let mut rows: Vec<Vec<f64>> = Vec::new();
+        let mut names = Vec::new();
+        let mut first_sky = None;
+        for filter in &filters {
+            let grid = filter
+                .grid()
+                .map_err(|e| anyhow::anyhow!("--filter {}: {e}", filter.name()))?;
+            let (skies, sun) = skies(&args.sun.with_wavelengths(grid))?;
+            announce(&grid);
+            let quantities = quantities(&skies, tilted)?;
+            names = quantities
+                .iter()
+                .map(|q| (q.name.clone(), q.irradiance))
+                .collect();
+            rows.push(
+                quantities
+                    .iter()
+                    .map(|q| filter.weighted_mean(&grid, &q.spectrum))
+                    .collect::<sora::Result<Vec<f64>>>()?,
+            );
+            first_sky.get_or_insert((skies[0].1.sun_position_deg(), sun));
+        }
+        let ((sun_elevation_deg, sun_azimuth_deg), sun) = first_sky.expect("a filter");
+        let quantities: Vec<Quantity> = names
+            .iter()
+            .enumerate()
+            .map(|(k, (name, irradiance))| Quantity {
+                name: name.clone(),
+                spectrum: SampledSpectrum::from_values(rows.iter().map(|r| r[k]).collect()),
+                irradiance: *irradiance,
+            })
+            .collect();
+        let labels = filters
+            .iter()
+            .map(|f| Ok((f.name().to_string(), f.centre_nm()?)))
+            .collect::<sora::Result<Vec<_>>>()?;
+        return write_filtered(
+            args.format,
+            &quantities,
+            &labels,
+            (sun_elevation_deg, sun_azimuth_deg, sun),
+        );
+    }
+    let (skies, sun) = skies(&args.sun)?;
+    let sky = &skies[0].1;
+    let grid = *sky.wavelengths();
+    announce(&grid);
+    let quantities = quantities(&skies, tilted)?;
     // Broadband: W m^-2 and lux of every irradiance (not of standard
     // errors, which do not add linearly).
     let mut broadband = Vec::new();
@@ -187,27 +264,16 @@ pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
         .iter()
         .filter(|q| q.irradiance && !q.name.ends_with("standard_error"))
     {
-        let watts = Irradiance::broadband_w_m2(q.spectrum, &grid);
-        let lux = Irradiance::illuminance_lx(q.spectrum, &grid)?;
+        let watts = Irradiance::broadband_w_m2(&q.spectrum, &grid);
+        let lux = Irradiance::illuminance_lx(&q.spectrum, &grid)?;
         broadband.push((q.name.clone(), watts, lux));
     }
     let (sun_elevation_deg, sun_azimuth_deg) = sky.sun_position_deg();
-    let unit = |q: &Quantity| if q.irradiance { "_w_m2_nm" } else { "" };
     let mut out = std::io::BufWriter::new(std::io::stdout().lock());
     match args.format {
         Format::Csv => {
-            let header: Vec<String> = quantities
-                .iter()
-                .map(|q| format!("{}{}", q.name, unit(q)))
-                .collect();
-            writeln!(out, "wavelength_nm,{}", header.join(","))?;
-            for (i, wavelength) in grid.wavelengths_nm().enumerate() {
-                let row: Vec<String> = quantities
-                    .iter()
-                    .map(|q| format!("{:.9e}", q.spectrum[i]))
-                    .collect();
-                writeln!(out, "{wavelength},{}", row.join(","))?;
-            }
+            let labels: Vec<String> = grid.wavelengths_nm().map(|w| w.to_string()).collect();
+            write_csv(&mut out, "wavelength_nm", &labels, &quantities)?;
             for (name, watts, lux) in &broadband {
                 let illuminance = name.replace("irradiance", "illuminance");
                 eprintln!("{name}_w_m2 {watts:.6e}; {illuminance}_lx {lux:.6e}");
@@ -230,35 +296,18 @@ pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
             }
         }
         Format::Json => {
-            let list = |values: &[f64]| {
-                values
-                    .iter()
-                    .map(|v| format!("{v:.9e}"))
+            let axis = format!(
+                "\"wavelength_nm\": [{}]",
+                grid.wavelengths_nm()
+                    .map(|w| w.to_string())
                     .collect::<Vec<_>>()
                     .join(", ")
-            };
-            let mut members = vec![
-                format!("\"sun_elevation_deg\": {sun_elevation_deg}"),
-                format!(
-                    "\"sun_azimuth_deg\": {sun_azimuth_deg}{}",
-                    sun.json_members()
-                ),
-                format!(
-                    "\"wavelength_nm\": [{}]",
-                    grid.wavelengths_nm()
-                        .map(|w| w.to_string())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ),
-            ];
-            for q in &quantities {
-                members.push(format!(
-                    "\"{}{}\": [{}]",
-                    q.name,
-                    unit(q),
-                    list(q.spectrum.values())
-                ));
-            }
+            );
+            let mut members = json_members(
+                (sun_elevation_deg, sun_azimuth_deg, &sun),
+                axis,
+                &quantities,
+            );
             // The band every broadband value integrates.
             members.push(format!(
                 "\"broadband_range_nm\": [{}, {}]",
@@ -275,4 +324,114 @@ pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
     }
     out.flush()?;
     Ok(())
+}
+
+/// Writes the per-filter quantities: one row per filter (`name`,
+/// `centre_nm`), no broadband values.
+fn write_filtered(
+    format: Format,
+    quantities: &[Quantity],
+    labels: &[(String, f64)],
+    (sun_elevation_deg, sun_azimuth_deg, sun): (f64, f64, crate::arguments::SunUsed),
+) -> anyhow::Result<()> {
+    let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+    match format {
+        Format::Csv => {
+            let labels: Vec<String> = labels
+                .iter()
+                .map(|(name, centre)| format!("{name},{centre:.4}"))
+                .collect();
+            write_csv(&mut out, "filter,centre_nm", &labels, quantities)?;
+        }
+        Format::Table => {
+            writeln!(
+                out,
+                "sun at {sun_elevation_deg:.4} deg elevation, {sun_azimuth_deg:.4} deg azimuth{}; W m^-2 nm^-1 through each filter",
+                sun.summary()
+            )?;
+            for (i, (name, centre)) in labels.iter().enumerate() {
+                writeln!(out, "{name} ({centre:.2} nm)")?;
+                for q in quantities.iter().filter(|q| q.irradiance) {
+                    writeln!(
+                        out,
+                        "  {:<34} {:>12.6}",
+                        q.name.replace('_', " "),
+                        q.spectrum[i]
+                    )?;
+                }
+            }
+        }
+        Format::Json => {
+            let axis = format!(
+                "\"filter\": [{}], \"centre_nm\": [{}]",
+                labels
+                    .iter()
+                    .map(|(n, _)| crate::commands::atmosphere::json_string(n))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                labels
+                    .iter()
+                    .map(|(_, c)| format!("{c:.6}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+            let members =
+                json_members((sun_elevation_deg, sun_azimuth_deg, &sun), axis, quantities);
+            writeln!(out, "{{{}}}", members.join(", "))?;
+        }
+    }
+    out.flush()?;
+    Ok(())
+}
+
+/// A quantity's name with its unit suffix.
+fn unit_name(q: &Quantity) -> String {
+    format!("{}{}", q.name, if q.irradiance { "_w_m2_nm" } else { "" })
+}
+
+/// The CSV: `axis` (the row label columns) and each quantity, one row per
+/// label.
+fn write_csv(
+    out: &mut impl Write,
+    axis: &str,
+    labels: &[String],
+    quantities: &[Quantity],
+) -> anyhow::Result<()> {
+    let header: Vec<String> = quantities.iter().map(unit_name).collect();
+    writeln!(out, "{axis},{}", header.join(","))?;
+    for (i, label) in labels.iter().enumerate() {
+        let row: Vec<String> = quantities
+            .iter()
+            .map(|q| format!("{:.9e}", q.spectrum[i]))
+            .collect();
+        writeln!(out, "{label},{}", row.join(","))?;
+    }
+    Ok(())
+}
+
+/// The JSON members: the sun, the row axis (`axis`, already members), each
+/// quantity's list.
+fn json_members(
+    (sun_elevation_deg, sun_azimuth_deg, sun): (f64, f64, &crate::arguments::SunUsed),
+    axis: String,
+    quantities: &[Quantity],
+) -> Vec<String> {
+    let mut members = vec![
+        format!("\"sun_elevation_deg\": {sun_elevation_deg}"),
+        format!(
+            "\"sun_azimuth_deg\": {sun_azimuth_deg}{}",
+            sun.json_members()
+        ),
+        axis,
+    ];
+    for q in quantities {
+        let values: Vec<String> = q
+            .spectrum
+            .values()
+            .iter()
+            .map(|v| format!("{v:.9e}"))
+            .collect();
+        members.push(format!("\"{}\": [{}]", unit_name(q), values.join(", ")));
+    }
+    members
 }

@@ -29,6 +29,9 @@ use crate::commands::atmosphere::json_string;
 /// measurements did not constrain. A fit that did not converge is a
 /// warning, not an error (exit status 0).
 ///
+/// Each channel's sun and gas absorption are averaged over --band-nm
+/// (default 10 nm for AERONET files, as the Cimel channels are wide).
+///
 /// The model's assumptions: the particles are spheres (Mie theory; dust's
 /// spheroids are not), with one complex refractive index for both modes
 /// and every wavelength; the size distribution is two log-normal volume
@@ -47,8 +50,9 @@ use crate::commands::atmosphere::json_string;
 ///                            aerosol_optical_depth, uncertainty)
 ///   --aeronet-almucantar FILE, --aeronet-principal-plane FILE
 ///                            AERONET version 3 raw sky scans (.alm, .ppl),
-///                            with --aeronet-aod FILE (.lev15, .lev20) for
-///                            the optical depths nearest in time; every
+///                            with --aeronet-aod FILE (.lev15, .lev20,
+///                            version 3 or 2) for the optical depths
+///                            nearest in time; every
 ///                            usable scan of the file is retrieved, one
 ///                            after another, or the one --scan N names
 ///   --normalised-spectrum FILE.csv
@@ -97,7 +101,7 @@ pub struct RetrieveArgs {
     aeronet_principal_plane: Option<PathBuf>,
 
     /// With an AERONET sky file: its site's direct-sun optical depths
-    /// (.lev15, .lev20); each scan gets those measured nearest in time
+    /// (.lev15, .lev20; version 3 or version 2); each scan gets those measured nearest in time
     /// (within 30 minutes)
     #[arg(
         long,
@@ -199,6 +203,13 @@ pub struct RetrieveArgs {
     #[arg(long, value_name = "M", default_value_t = 1200.0)]
     aerosol_scale_height_m: f64,
 
+    /// Width of each measured channel, nm: the sun's spectrum and the gas
+    /// absorption are averaged over it (0.01..=50) [default: 10 for AERONET
+    /// files, the Cimel channels' width at 440-1020 nm (docs/filters.md);
+    /// 1 otherwise]
+    #[arg(long, value_name = "NM", allow_hyphen_values = true)]
+    band_nm: Option<f64>,
+
     /// Starting points of the fit (fine-dominated, coarse-dominated, the a
     /// priori); the lowest chi^2 wins
     #[arg(
@@ -288,7 +299,20 @@ pub fn run(args: RetrieveArgs) -> anyhow::Result<()> {
         aerosol_scale_height_m: args.aerosol_scale_height_m,
         max_iterations: args.max_iterations as usize,
         starting_points: args.starting_points as usize,
+        band_nm: args.band_nm.unwrap_or(
+            if args.aeronet_almucantar.is_some() || args.aeronet_principal_plane.is_some() {
+                10.0
+            } else {
+                1.0
+            },
+        ),
     };
+    if !(0.01..=50.0).contains(&settings.band_nm) {
+        bail!(
+            "--band-nm {} nm is out of range: allowed 0.01..=50 nm",
+            settings.band_nm
+        );
+    }
     if !(settings.aerosol_scale_height_m.is_finite() && settings.aerosol_scale_height_m > 0.0) {
         bail!(
             "--aerosol-scale-height-m {}: must be a length > 0",

@@ -8,7 +8,8 @@ use sora::colour::{RgbColourSpace, SpectrumToXyz};
 use sora::{SkyRadiance, ViewDirection};
 
 use crate::arguments::{
-    AtmosphereSource, MethodKind, MethodOptions, Resolution, SunAndObserver, parse_directions_csv,
+    AtmosphereSource, FilterOptions, MethodKind, MethodOptions, Resolution, SunAndObserver,
+    parse_directions_csv,
 };
 
 /// Spectral radiance of the sky in one direction or many.
@@ -51,6 +52,14 @@ use crate::arguments::{
 /// light. Mie aerosols polarise by their phase matrix, computed for the run:
 ///   sora spectrum --preset us-standard-1976-rayleigh --sun-elevation 30 \
 ///       --principal-plane 10 --method path-tracing --samples 20000 --stokes
+///
+/// Instrument channels (--filter, repeatable): one value per channel and
+/// direction, the response-weighted mean radiance over the channel's own
+/// wavelengths, in columns filter,centre_nm,radiance_w_m2_sr_nm (after
+/// view_elevation_deg,view_azimuth_deg for many directions); the sun
+/// photometer's channels are built in (docs/filters.md):
+///   sora spectrum --preset earth-clear --sun-elevation 30 --almucantar 10 \
+///       --filter cimel-440 --filter cimel-870
 ///
 /// The sun from a date, a time and a place instead (--refraction off for
 /// its geometric position; the JSON reports the sun used):
@@ -117,9 +126,12 @@ pub struct SpectrumArgs {
     #[command(flatten)]
     resolution: Resolution,
 
+    #[command(flatten)]
+    filters: FilterOptions,
+
     /// Polarised light: Stokes Q, U, V, the degree and the angle of
     /// polarisation (the fast method or path tracing; not the reference)
-    #[arg(long)]
+    #[arg(long, conflicts_with = "filter")]
     stokes: bool,
 
     /// Output format
@@ -233,12 +245,31 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
     };
     // The directions (and their limits, docs/limits.md) before any work.
     let (sun_elevation, sun_azimuth) = args.sun.sun_deg()?;
-    let views = directions(
-        &args,
-        (sun_elevation, sun_azimuth),
-        args.sun.wavelengths.len(),
-    )?;
+    let filters = args.filters.filters()?;
+    let grids = filters
+        .iter()
+        .map(|f| {
+            f.grid()
+                .map_err(|e| anyhow::anyhow!("--filter {}: {e}", f.name()))
+        })
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let wavelength_count = grids
+        .iter()
+        .map(sora::spectrum::WavelengthGrid::len)
+        .max()
+        .unwrap_or(args.sun.wavelengths.len());
+    let views = directions(&args, (sun_elevation, sun_azimuth), wavelength_count)?;
     let mut atmosphere = args.source.load()?;
+    if !filters.is_empty() {
+        return run_filtered(
+            &args,
+            &filters,
+            &grids,
+            &views,
+            atmosphere,
+            (scattering, method),
+        );
+    }
     if args.stokes && args.sun.polarisation(method) == sora::Polarisation::Scalar {
         match method {
             sora::Method::Reference { .. } => anyhow::bail!(
@@ -492,6 +523,158 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
         );
     }
     out.flush()?;
+    Ok(())
+}
+
+/// `sora spectrum --filter`: per filter, the sky on its grid and the
+/// response-weighted mean radiance in every direction.
+fn run_filtered(
+    args: &SpectrumArgs,
+    filters: &[sora::spectrum::Filter],
+    grids: &[sora::spectrum::WavelengthGrid],
+    views: &[ViewDirection],
+    atmosphere: sora::Atmosphere,
+    (scattering, method): (sora::Scattering, sora::Method),
+) -> anyhow::Result<()> {
+    let started = Instant::now();
+    let path_tracing = args.method.method == MethodKind::PathTracing;
+    // [filter][direction] -> (radiance, standard error bound)
+    let mut values = Vec::with_capacity(filters.len());
+    let mut sun_json = String::new();
+    for (filter, grid) in filters.iter().zip(grids) {
+        let mut atmosphere = atmosphere.clone();
+        let options = args.sun.with_wavelengths(*grid);
+        let (sky, sun) = options.sky(&mut atmosphere, scattering, method)?;
+        if sun_json.is_empty() {
+            let (elevation, azimuth) = (sun.elevation_deg, sun.azimuth_deg);
+            let polarisation = sky.polarisation();
+            sun_json = format!(
+                "\"sun_elevation_deg\": {elevation}, \"sun_azimuth_deg\": {azimuth}{}, \"polarisation\": \"{polarisation}\"",
+                sun.json_members()
+            );
+        }
+        if path_tracing {
+            let samples = match method {
+                sora::Method::PathTracing { samples, .. } => samples,
+                _ => 0,
+            };
+            crate::estimate::announce(crate::estimate::path_tracing_estimate(
+                samples,
+                views.len(),
+                grid.len(),
+            ));
+        }
+        let results = sky.radiances(views)?;
+        let per_view = results
+            .iter()
+            .map(|r| {
+                let mean = filter.weighted_mean(grid, &r.radiance_w_m2_sr_nm)?;
+                // The response-weighted mean of the errors: a bound on the
+                // mean's error however the wavelengths' errors correlate.
+                let error = r
+                    .standard_error_w_m2_sr_nm
+                    .as_ref()
+                    .map(|e| filter.weighted_mean(grid, e))
+                    .transpose()?;
+                Ok((mean, error))
+            })
+            .collect::<sora::Result<Vec<_>>>()?;
+        values.push(per_view);
+    }
+    let centres = filters
+        .iter()
+        .map(sora::spectrum::Filter::centre_nm)
+        .collect::<sora::Result<Vec<f64>>>()?;
+    let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+    let error_header = if path_tracing {
+        ",standard_error_w_m2_sr_nm"
+    } else {
+        ""
+    };
+    let one_view = args.view_elevation.is_some();
+    match args.format {
+        Format::Csv => {
+            let view_header = if one_view {
+                ""
+            } else {
+                "view_elevation_deg,view_azimuth_deg,"
+            };
+            writeln!(
+                out,
+                "{view_header}filter,centre_nm,radiance_w_m2_sr_nm{error_header}"
+            )?;
+            for (v, view) in views.iter().enumerate() {
+                for ((filter, centre), per_view) in filters.iter().zip(&centres).zip(&values) {
+                    if !one_view {
+                        write!(out, "{},{},", view.elevation_deg(), view.azimuth_deg())?;
+                    }
+                    let (radiance, error) = per_view[v];
+                    write!(out, "{},{centre:.4},{radiance:.9e}", filter.name())?;
+                    if let Some(error) = error {
+                        write!(out, ",{error:.3e}")?;
+                    }
+                    writeln!(out)?;
+                }
+            }
+        }
+        Format::Json => {
+            let names: Vec<String> = filters
+                .iter()
+                .map(|f| crate::commands::atmosphere::json_string(f.name()))
+                .collect();
+            let centres: Vec<String> = centres.iter().map(|c| format!("{c:.6}")).collect();
+            let direction = |v: usize| {
+                let radiances: Vec<String> =
+                    values.iter().map(|p| format!("{:.9e}", p[v].0)).collect();
+                let errors: Vec<String> = values
+                    .iter()
+                    .filter_map(|p| p[v].1.map(|e| format!("{e:.3e}")))
+                    .collect();
+                let errors = if path_tracing {
+                    format!(", \"standard_error_w_m2_sr_nm\": [{}]", errors.join(", "))
+                } else {
+                    String::new()
+                };
+                format!(
+                    "\"radiance_w_m2_sr_nm\": [{}]{errors}",
+                    radiances.join(", ")
+                )
+            };
+            let head = format!(
+                "{sun_json}, \"filter\": [{}], \"centre_nm\": [{}]",
+                names.join(", "),
+                centres.join(", ")
+            );
+            if one_view {
+                writeln!(out, "{{{head}, {}}}", direction(0))?;
+            } else {
+                let directions: Vec<String> = views
+                    .iter()
+                    .enumerate()
+                    .map(|(v, view)| {
+                        format!(
+                            "{{\"view_elevation_deg\": {}, \"view_azimuth_deg\": {}, {}}}",
+                            view.elevation_deg(),
+                            view.azimuth_deg(),
+                            direction(v)
+                        )
+                    })
+                    .collect();
+                writeln!(
+                    out,
+                    "{{{head}, \"directions\": [{}]}}",
+                    directions.join(", ")
+                )?;
+            }
+        }
+    }
+    out.flush()?;
+    eprintln!(
+        "{} directions x {} filters in {:.3} s",
+        views.len(),
+        filters.len(),
+        started.elapsed().as_secs_f64()
+    );
     Ok(())
 }
 

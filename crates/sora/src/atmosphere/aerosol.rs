@@ -27,11 +27,12 @@
 //! omega 0.9, HG g = 0.7, scale height 1200 m: beta_ext = 8.333e-5 m^-1 at
 //! sea level).
 
-use super::phase::PhaseFunction;
+use super::phase::{PhaseFunction, TabulatedPhase};
+use crate::mie::ensemble::{PhaseMatrixRatios, TabulatedPhaseFunction};
 use crate::spectrum::{SampledSpectrum, WavelengthGrid};
 
 /// The shape of a parametric aerosol's phase function.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum AerosolPhase {
     /// Henyey-Greenstein with asymmetry parameter g, |g| < 1.
     HenyeyGreenstein {
@@ -43,16 +44,38 @@ pub enum AerosolPhase {
         /// The Cornette-Shanks parameter g.
         g: f64,
     },
+    /// A measured or computed phase function given as a table (the same at
+    /// every wavelength): linear in cos theta between its angles, rescaled
+    /// to integrate to 1 over the sphere, with its phase matrix as the
+    /// ratios F12/F11, F33/F11, F34/F11 on the same nodes (a sphere's
+    /// matrix: F22 = F11, F44 = F33); the ratios 0, 1, 0 of a
+    /// non-polarising scatterer when none were given.
+    Tabulated {
+        /// The phase function.
+        table: TabulatedPhaseFunction,
+        /// Its phase matrix, on the table's nodes.
+        ratios: PhaseMatrixRatios,
+    },
 }
 
 impl AerosolPhase {
-    /// The phase function on a grid of `len` wavelengths (constant g).
-    pub(crate) fn on_grid(self, len: usize) -> PhaseFunction {
+    /// The phase function on a grid of `len` wavelengths (the same at
+    /// every one).
+    pub(crate) fn on_grid(&self, len: usize) -> PhaseFunction {
         match self {
             AerosolPhase::HenyeyGreenstein { g } => PhaseFunction::HenyeyGreenstein {
-                asymmetry_g: vec![g; len],
+                asymmetry_g: vec![*g; len],
             },
-            AerosolPhase::CornetteShanks { g } => PhaseFunction::CornetteShanks { g: vec![g; len] },
+            AerosolPhase::CornetteShanks { g } => {
+                PhaseFunction::CornetteShanks { g: vec![*g; len] }
+            }
+            AerosolPhase::Tabulated { table, ratios } => {
+                let mut phase = TabulatedPhase::from_tables(vec![table.clone(); len])
+                    .expect("one valid table per wavelength");
+                let kept = phase.set_matrix_ratios(vec![ratios.clone(); len]);
+                debug_assert!(kept, "the ratios are on the table's nodes");
+                PhaseFunction::Tabulated(phase)
+            }
         }
     }
 }

@@ -198,6 +198,17 @@ struct ParametricFile {
 struct AerosolPhaseFile {
     henyey_greenstein: Option<AsymmetryFile>,
     cornette_shanks: Option<AsymmetryFile>,
+    tabulated: Option<TabulatedPhaseFile>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TabulatedPhaseFile {
+    angle_deg: Vec<f64>,
+    value: Vec<f64>,
+    f12_over_f11: Option<Vec<f64>>,
+    f33_over_f11: Option<Vec<f64>>,
+    f34_over_f11: Option<Vec<f64>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -869,17 +880,24 @@ fn convert_parametric(file: ParametricFile, path: &str, keys: &AmountKeys) -> Re
         0.0,
         1.0,
     )?;
-    let phase = match (file.phase.henyey_greenstein, file.phase.cornette_shanks) {
-        (Some(hg), None) => AerosolPhase::HenyeyGreenstein {
+    let phase = match (
+        file.phase.henyey_greenstein,
+        file.phase.cornette_shanks,
+        file.phase.tabulated,
+    ) {
+        (Some(hg), None, None) => AerosolPhase::HenyeyGreenstein {
             g: check_asymmetry(&format!("{here}.phase.henyey_greenstein.g"), hg.g)?,
         },
-        (None, Some(cs)) => AerosolPhase::CornetteShanks {
+        (None, Some(cs), None) => AerosolPhase::CornetteShanks {
             g: check_asymmetry(&format!("{here}.phase.cornette_shanks.g"), cs.g)?,
         },
+        (None, None, Some(table)) => {
+            convert_tabulated_phase(table, &format!("{here}.phase.tabulated"))?
+        }
         _ => {
             return Err(invalid(
                 &format!("{here}.phase"),
-                "give exactly one of henyey_greenstein, cornette_shanks",
+                "give exactly one of henyey_greenstein, cornette_shanks, tabulated",
             ));
         }
     };
@@ -890,6 +908,131 @@ fn convert_parametric(file: ParametricFile, path: &str, keys: &AmountKeys) -> Re
         single_scattering_albedo,
         phase,
     }))
+}
+
+/// A tabulated phase function: scattering angles from exactly 0 to exactly
+/// 180 degrees, increasing, and values >= 0 (any normalisation, not all
+/// zero), linear in cos theta between the angles.
+fn convert_tabulated_phase(file: TabulatedPhaseFile, here: &str) -> Result<AerosolPhase> {
+    let TabulatedPhaseFile {
+        angle_deg,
+        value,
+        f12_over_f11,
+        f33_over_f11,
+        f34_over_f11,
+    } = file;
+    if angle_deg.len() != value.len() || angle_deg.len() < 2 {
+        return Err(invalid(
+            here,
+            &format!(
+                "angle_deg and value need the same length, at least 2 (got {} and {})",
+                angle_deg.len(),
+                value.len()
+            ),
+        ));
+    }
+    if angle_deg[0] != 0.0 || angle_deg[angle_deg.len() - 1] != 180.0 {
+        return Err(invalid(
+            &format!("{here}.angle_deg"),
+            &format!(
+                "must run from 0 to 180 deg (got {} to {} deg)",
+                angle_deg[0],
+                angle_deg[angle_deg.len() - 1]
+            ),
+        ));
+    }
+    for (i, a) in angle_deg.iter().enumerate() {
+        check(
+            &format!("{here}.angle_deg[{i}]"),
+            *a,
+            "deg",
+            "0..=180",
+            (0.0..=180.0).contains(a),
+        )?;
+    }
+    if let Some(i) = angle_deg.windows(2).position(|w| w[1] <= w[0]) {
+        return Err(invalid(
+            &format!("{here}.angle_deg[{}]", i + 1),
+            &format!(
+                "angles must increase, but {} deg follows {} deg",
+                angle_deg[i + 1],
+                angle_deg[i]
+            ),
+        ));
+    }
+    for (i, v) in value.iter().enumerate() {
+        check(
+            &format!("{here}.value[{i}]"),
+            *v,
+            "1",
+            ">= 0",
+            v.is_finite() && *v >= 0.0,
+        )?;
+    }
+    // Nodes in increasing cos theta: from 180 deg (-1) to 0 deg (1), the
+    // ends exact.
+    let last = angle_deg.len() - 1;
+    let cos_theta: Vec<f64> = (0..=last)
+        .rev()
+        .map(|i| match i {
+            0 => 1.0,
+            i if i == last => -1.0,
+            i => angle_deg[i].to_radians().cos(),
+        })
+        .collect();
+    if let Some(i) = cos_theta.windows(2).position(|w| w[1] <= w[0]) {
+        return Err(invalid(
+            &format!("{here}.angle_deg"),
+            &format!(
+                "angles {} and {} deg are too close to tell apart in cos theta",
+                angle_deg[last - i - 1],
+                angle_deg[last - i]
+            ),
+        ));
+    }
+    // The phase matrix: all three ratios or none (non-polarising).
+    let count = angle_deg.len();
+    let ratio = |name: &str, column: Option<Vec<f64>>, none: f64| -> Result<Vec<f64>> {
+        let Some(column) = column else {
+            return Ok(vec![none; count]);
+        };
+        if column.len() != count {
+            return Err(invalid(
+                &format!("{here}.{name}"),
+                &format!("needs one value per angle ({count}), got {}", column.len()),
+            ));
+        }
+        for (i, v) in column.iter().enumerate() {
+            check(
+                &format!("{here}.{name}[{i}]"),
+                *v,
+                "1",
+                "-1..=1",
+                (-1.0..=1.0).contains(v),
+            )?;
+        }
+        Ok(column.into_iter().rev().collect())
+    };
+    let given = [&f12_over_f11, &f33_over_f11, &f34_over_f11]
+        .iter()
+        .filter(|c| c.is_some())
+        .count();
+    if given != 0 && given != 3 {
+        return Err(invalid(
+            here,
+            "give all three of f12_over_f11, f33_over_f11, f34_over_f11 (the phase matrix), or none (non-polarising)",
+        ));
+    }
+    let ratios = crate::mie::ensemble::PhaseMatrixRatios {
+        cos_theta: cos_theta.clone(),
+        f12_over_f11: ratio("f12_over_f11", f12_over_f11, 0.0)?,
+        f33_over_f11: ratio("f33_over_f11", f33_over_f11, 1.0)?,
+        f34_over_f11: ratio("f34_over_f11", f34_over_f11, 0.0)?,
+    };
+    let values: Vec<f64> = value.into_iter().rev().collect();
+    let table = crate::mie::ensemble::TabulatedPhaseFunction::from_nodes(cos_theta, values)
+        .map_err(|e| invalid(&format!("{here}.value"), &e.to_string()))?;
+    Ok(AerosolPhase::Tabulated { table, ratios })
 }
 
 fn convert_refractive_index(file: RefractiveIndexFile, here: &str) -> Result<RefractiveIndexModel> {

@@ -151,9 +151,22 @@ impl TabulatedPhase {
         true
     }
 
-    /// Whether the table carries its phase matrix.
-    pub(crate) fn has_matrix_ratios(&self) -> bool {
+    /// Whether the table carries its phase matrix (a Mie species' is
+    /// computed for polarised light only; a tabulated one has it always).
+    pub fn has_matrix_ratios(&self) -> bool {
         self.matrix_ratios.is_some()
+    }
+
+    /// Whether the table carries a phase matrix that polarises (one not
+    /// everywhere F12 = F34 = 0, F33 = F11).
+    pub(crate) fn has_polarising_matrix(&self) -> bool {
+        self.matrix_ratios.as_ref().is_some_and(|all| {
+            all.iter().any(|r| {
+                r.f12_over_f11.iter().any(|v| *v != 0.0)
+                    || r.f34_over_f11.iter().any(|v| *v != 0.0)
+                    || r.f33_over_f11.iter().any(|v| *v != 1.0)
+            })
+        })
     }
 
     /// The phase matrix of every wavelength at `cos_theta` into `out`: a1
@@ -309,16 +322,21 @@ impl PhaseFunction {
     }
 
     /// Whether this phase function has a phase matrix that polarises
-    /// (Rayleigh, and tabulated Mie functions, whose matrix a polarised
-    /// sky computes from S1 and S2). The parametric ones (isotropic,
+    /// (Rayleigh, tabulated Mie functions, whose matrix a polarised sky
+    /// computes from S1 and S2, and tabulated ones given with a polarising
+    /// matrix). The parametric ones (isotropic,
     /// Henyey-Greenstein, Cornette-Shanks) carry no polarisation: a
     /// polarised computation treats them as non-polarising, F12 = F34 = 0,
     /// F33 = F44 = F11 (`phase_matrix.rs`).
     pub fn is_polarising(&self) -> bool {
-        matches!(
-            self,
-            PhaseFunction::Rayleigh { .. } | PhaseFunction::Tabulated(_)
-        )
+        match self {
+            PhaseFunction::Rayleigh { .. } => true,
+            // A Mie table without its matrix yet: computed when needed.
+            PhaseFunction::Tabulated(table) => {
+                !table.has_matrix_ratios() || table.has_polarising_matrix()
+            }
+            _ => false,
+        }
     }
 
     /// A short name for listings.
@@ -328,7 +346,8 @@ impl PhaseFunction {
             PhaseFunction::Rayleigh { .. } => "Rayleigh",
             PhaseFunction::HenyeyGreenstein { .. } => "Henyey-Greenstein",
             PhaseFunction::CornetteShanks { .. } => "Cornette-Shanks",
-            PhaseFunction::Tabulated(_) => "tabulated (Mie)",
+            PhaseFunction::Tabulated(table) if !table.has_matrix_ratios() => "tabulated (Mie)",
+            PhaseFunction::Tabulated(_) => "tabulated",
         }
     }
 }

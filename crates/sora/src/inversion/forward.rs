@@ -9,7 +9,11 @@
 //! library's own fast method ([`crate::Sky`], all orders of scattering,
 //! scalar light, the default tables): one sky per wavelength and sun
 //! position, each on a one-wavelength grid, since a photometer's channels
-//! (440, 675, 870, 1020 nm) are not a regular grid. The optics of air and
+//! (440, 675, 870, 1020 nm) are not a regular grid; the grid's step is the
+//! channel's band (`RetrievalSettings::band_nm`), over which the sun's
+//! spectrum and the gases' cross-sections are averaged (a box of that
+//! width: the aerosol and the air's scattering, smooth in wavelength, are
+//! taken at the channel's wavelength). The optics of air and
 //! gases are computed once; only the aerosol species changes between
 //! evaluations.
 
@@ -110,12 +114,14 @@ impl ForwardModel {
     /// The model of `measurements` in `atmosphere` (whose aerosol species
     /// are set aside), with the aerosol in an exponential profile of
     /// `aerosol_scale_height_m`, and the state's optical depth given at
-    /// `reference_wavelength_nm` (one of the measured wavelengths).
+    /// `reference_wavelength_nm` (one of the measured wavelengths); each
+    /// wavelength's sun and gases averaged over a band `band_nm` wide.
     pub(crate) fn new(
         atmosphere: &Atmosphere,
         measurements: &Measurements,
         aerosol_scale_height_m: f64,
         reference_wavelength_nm: f64,
+        band_nm: f64,
     ) -> Result<ForwardModel> {
         let wavelengths_nm = measurements.wavelengths_nm();
         let reference = wavelength_index(&wavelengths_nm, reference_wavelength_nm)
@@ -133,7 +139,7 @@ impl ForwardModel {
         });
         let base_optics = wavelengths_nm
             .iter()
-            .map(|&w| base.compute_optics(&WavelengthGrid::new(w, w, 1.0)?))
+            .map(|&w| base.compute_optics(&WavelengthGrid::new(w, w, band_nm)?))
             .collect::<Result<Vec<_>>>()?;
         let profile = DensityProfile::exponential(aerosol_scale_height_m, "aerosol scale height")?;
         let column_m = profile.vertical_column_m(base.planet.atmosphere_height_m());

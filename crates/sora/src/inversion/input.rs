@@ -84,7 +84,10 @@
 //! (`.lev15`, `.lev20`, web service `AOD15`/`AOD20`): free-text lines, then a
 //! header with `Date(dd:mm:yyyy)`, `Time(hh:mm:ss)` and one `AOD_<n>nm`
 //! column per channel (`AOD_1640nm` ... `AOD_340nm`), `-999` where a channel
-//! was not measured. [`attach_nearest_optical_depths`] gives each sky scan
+//! was not measured. Version 2 files (`Version 2 Direct Sun Algorithm`)
+//! read the same way: their header has `Date(dd-mm-yy)` (the rows are
+//! `dd:mm:yyyy` all the same), `Time(hh:mm:ss)` and `AOT_<n>` columns
+//! (`AOT_1640` ... `AOT_340`), `-9999.` where a channel was not measured. [`attach_nearest_optical_depths`] gives each sky scan
 //! the optical depths measured nearest to it in time, within
 //! [`AOD_MATCH_WINDOW_S`], at the scan's own wavelengths (interpolated in
 //! log-log, the Angstrom law, between the nearest channels either side
@@ -158,6 +161,9 @@ pub const AERONET_AOD_UNCERTAINTY: f64 = 0.01;
 
 /// AERONET's missing value.
 const AERONET_MISSING: f64 = -999.0;
+
+/// AERONET version 2's "not measured" (`-9999.`).
+const AERONET_V2_MISSING: f64 = -9999.0;
 
 // ---------------------------------------------------------------------------
 // (a) sora's CSV
@@ -503,8 +509,8 @@ pub struct AeronetSky {
 pub struct AeronetOpticalDepths {
     /// When.
     pub time: AeronetTime,
-    /// The site (`AERONET_Site` or `AERONET_Site_Name`), empty when the
-    /// file has neither column.
+    /// The site (`AERONET_Site` or `AERONET_Site_Name`, or version 2's
+    /// `Location=` line), empty when the file has none of them.
     pub site: String,
     /// `(nominal wavelength nm, aerosol optical depth)`, the channels
     /// measured (`-999` left out), in the file's column order.
@@ -611,7 +617,7 @@ fn aeronet_number(
         return Ok(None);
     }
     match text.parse::<f64>() {
-        Ok(v) if v == AERONET_MISSING => Ok(None),
+        Ok(v) if v == AERONET_MISSING || v == AERONET_V2_MISSING => Ok(None),
         Ok(v) if v.is_finite() => Ok(Some(v)),
         _ => Err(Error::parse(
             what,
@@ -955,8 +961,9 @@ fn scan_measurements(
     (sky, near_sun, below_horizon)
 }
 
-/// Reads an AERONET version 3 direct-sun optical depth file (layout in the
-/// module docs): one entry per line, the `AOD_<n>nm` channels measured.
+/// Reads an AERONET version 3 or version 2 direct-sun optical depth file
+/// (layouts in the module docs): one entry per line, the `AOD_<n>nm` (or
+/// `AOT_<n>`) channels measured.
 /// Lines with no channel measured are left out; an error names the line.
 pub fn parse_aeronet_aod(text: &str, what: &str) -> Result<Vec<AeronetOpticalDepths>> {
     let file = AeronetText::new(text, what, "optical depth")?;
@@ -971,7 +978,12 @@ pub fn parse_aeronet_aod(text: &str, what: &str) -> Result<Vec<AeronetOpticalDep
         .iter()
         .enumerate()
         .filter_map(|(i, name)| {
-            let nm = name.strip_prefix("AOD_")?.strip_suffix("nm")?;
+            // Version 3: AOD_440nm; version 2: AOT_440 (not AOT_440-Total
+            // and the like of other products, which do not parse).
+            let nm = match name.strip_prefix("AOD_") {
+                Some(rest) => rest.strip_suffix("nm")?,
+                None => name.strip_prefix("AOT_")?,
+            };
             Some((i, nm.parse::<f64>().ok()?))
         })
         .collect();
@@ -979,9 +991,16 @@ pub fn parse_aeronet_aod(text: &str, what: &str) -> Result<Vec<AeronetOpticalDep
         return Err(Error::parse(
             what,
             file.lines[file.header].0,
-            "the header has no AOD_<n>nm columns: not an AERONET optical depth file",
+            "the header has no AOD_<n>nm (version 3) or AOT_<n> (version 2) columns: not an AERONET optical depth file",
         ));
     }
+    // Version 2 names its site once, on a `Location=<site>,long=...` line
+    // above the header, instead of in a column.
+    let location = file.lines[..file.header]
+        .iter()
+        .flat_map(|(_, cells)| cells.iter())
+        .find_map(|c| c.strip_prefix("Location="))
+        .unwrap_or("");
     let mut entries = Vec::new();
     for (line, cells) in file.data_lines(0) {
         let time = aeronet_time(cells, date, time, what, *line)?;
@@ -994,7 +1013,7 @@ pub fn parse_aeronet_aod(text: &str, what: &str) -> Result<Vec<AeronetOpticalDep
         if !optical_depths.is_empty() {
             entries.push(AeronetOpticalDepths {
                 time,
-                site: site.map_or(String::new(), |i| cell(cells, i).to_string()),
+                site: site.map_or(location.to_string(), |i| cell(cells, i).to_string()),
                 optical_depths,
             });
         }
@@ -1480,7 +1499,10 @@ Site_A,10:06:2020,12:00:00,162,-999.,-999.,-999.,-999.,-999.,1.5,0.4402
             "Date(dd:mm:yyyy),Time(hh:mm:ss),x\n",
             "a",
         ));
-        assert!(e.contains("no AOD_<n>nm columns"), "{e}");
+        assert!(
+            e.contains("no AOD_<n>nm (version 3) or AOT_<n> (version 2) columns"),
+            "{e}"
+        );
     }
 
     #[test]

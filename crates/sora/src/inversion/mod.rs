@@ -71,6 +71,13 @@ use fit::{Problem, Start};
 use forward::{AerosolOptics, ForwardModel};
 use std::sync::atomic::Ordering;
 
+/// The most distinct wavelengths one retrieval takes (checked before any
+/// work): the forward model computes one sky per wavelength (and sun
+/// position) at every evaluation, so a spectroradiometer's 1-nm spectrum
+/// (hundreds of wavelengths) would take minutes for a result that a few
+/// tens of wavelengths determine as well (a photometer has 4-7).
+pub const MAX_RETRIEVAL_WAVELENGTHS: usize = 41;
+
 /// How a retrieval runs.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RetrievalSettings {
@@ -85,6 +92,12 @@ pub struct RetrievalSettings {
     /// Starting points, each fitted to its own minimum; the lowest chi^2
     /// wins (see [`RetrievalSettings::starting_states`]).
     pub starting_points: usize,
+    /// Width of each measured wavelength's band, nm: the sun's spectrum and
+    /// the gases' cross-sections are averaged over [lambda - band/2,
+    /// lambda + band/2] (a one-point grid of this step), as the channel of
+    /// an instrument that wide sees them (10 nm: the Cimel channels at
+    /// 440-1020 nm, `spectrum::CIMEL_CHANNELS`); 0.01..=50.
+    pub band_nm: f64,
 }
 
 impl Default for RetrievalSettings {
@@ -94,6 +107,7 @@ impl Default for RetrievalSettings {
             aerosol_scale_height_m: 1200.0,
             max_iterations: 30,
             starting_points: 2,
+            band_nm: 1.0,
         }
     }
 }
@@ -258,6 +272,13 @@ pub fn retrieve(
         return Err(Error::out_of_range("max iterations", 0.0, "1", ">= 1"));
     }
     let wavelengths = measurements.wavelengths_nm();
+    if wavelengths.len() > MAX_RETRIEVAL_WAVELENGTHS {
+        return Err(Error::Unsupported(format!(
+            "{}: {} wavelengths, more than the {MAX_RETRIEVAL_WAVELENGTHS} one retrieval fits (the model computes a sky per wavelength at every step); keep fewer, e.g. one every 10-20 nm",
+            measurements.label,
+            wavelengths.len()
+        )));
+    }
     let reference_wavelength_nm = settings.reference_wavelength_nm.unwrap_or(
         if forward::wavelength_index(&wavelengths, 440.0).is_some() {
             440.0
@@ -265,11 +286,20 @@ pub fn retrieve(
             wavelengths[0]
         },
     );
+    if !(0.01..=50.0).contains(&settings.band_nm) {
+        return Err(Error::out_of_range(
+            "band",
+            settings.band_nm,
+            "nm",
+            "0.01..=50",
+        ));
+    }
     let forward = ForwardModel::new(
         atmosphere,
         measurements,
         settings.aerosol_scale_height_m,
         reference_wavelength_nm,
+        settings.band_nm,
     )?;
     let relative = measurements.scale == RadianceScale::Relative;
     let parameters = PARAMETERS + usize::from(relative);
@@ -594,6 +624,58 @@ mod tests {
         45.0, 50.0, 60.0, 70.0, 80.0, 90.0, 100.0, 120.0, 140.0, 160.0,
     ];
 
+    /// A channel's band averages the sun over it: at 870 nm (no gas
+    /// absorption to speak of: ozone's optical depth there is below 2e-4)
+    /// the radiances with a 10-nm band are those with a 1-nm band times
+    /// the ratio of the sun's band means.
+    #[test]
+    fn the_band_averages_the_sun_over_the_channel() {
+        let atmosphere = Atmosphere::preset("earth-clear").unwrap();
+        let state = AerosolState {
+            optical_depth: 0.2,
+            ..RetrievalSettings::starting_states(0.2)[0]
+        };
+        let mut measurements = Measurements {
+            label: "band".into(),
+            ..Measurements::default()
+        };
+        for a in [5.0, 30.0, 90.0] {
+            measurements.sky.push(SkyRadianceMeasurement {
+                wavelength_nm: 870.0,
+                sun_elevation_deg: 40.0,
+                sun_azimuth_deg: 180.0,
+                view_elevation_deg: 40.0,
+                view_azimuth_deg: 180.0 + a,
+                radiance_w_m2_sr_nm: 1.0,
+                uncertainty_w_m2_sr_nm: 0.03,
+            });
+        }
+        let radiances = |band| {
+            ForwardModel::new(&atmosphere, &measurements, 1200.0, 870.0, band)
+                .unwrap()
+                .radiances(&state)
+                .unwrap()
+                .0
+        };
+        let sun = |band| {
+            atmosphere
+                .sun
+                .sample_irradiance_w_m2_nm(
+                    &crate::spectrum::WavelengthGrid::new(870.0, 870.0, band).unwrap(),
+                )
+                .unwrap()[0]
+        };
+        let ratio = sun(10.0) / sun(1.0);
+        // The two bands' suns differ by more than the tolerance below.
+        assert!((ratio - 1.0).abs() > 3e-3, "{ratio}");
+        for (wide, narrow) in radiances(10.0).iter().zip(radiances(1.0)) {
+            assert!(
+                (wide / narrow / ratio - 1.0).abs() < 3e-4,
+                "{wide} {narrow} {ratio}"
+            );
+        }
+    }
+
     /// Without noise, the fit returns the state that made its own
     /// measurements (the forward model is the same: this checks the fit,
     /// not the physics; `tests/retrieval.rs` checks against the path
@@ -633,7 +715,7 @@ mod tests {
                 });
             }
         }
-        let forward = ForwardModel::new(&atmosphere, &measurements, 1200.0, 440.0).unwrap();
+        let forward = ForwardModel::new(&atmosphere, &measurements, 1200.0, 440.0, 1.0).unwrap();
         let (radiances, optics) = forward.radiances(&truth).unwrap();
         for (m, l) in measurements.sky.iter_mut().zip(&radiances) {
             m.radiance_w_m2_sr_nm = *l;
@@ -707,7 +789,7 @@ mod normalised_spectrum_tests {
                 uncertainty_w_m2_sr_nm: 0.02,
             });
         }
-        let forward = ForwardModel::new(&atmosphere, &measurements, 1200.0, 440.0).unwrap();
+        let forward = ForwardModel::new(&atmosphere, &measurements, 1200.0, 440.0, 1.0).unwrap();
         let (radiances, _) = forward.radiances(&truth).unwrap();
         // Normalised to 1 at 560 nm, as the paper's figure is.
         for (m, l) in measurements.sky.iter_mut().zip(&radiances) {

@@ -5,13 +5,15 @@
 //! - [`SampledSpectrum`]: the values of a quantity at those wavelengths.
 //!
 //! Plus [`SolarSpectrum`], the sun's spectral irradiance at the top of the
-//! atmosphere. Wavelengths are in nm (vacuum) throughout.
+//! atmosphere, and [`Filter`], an instrument channel's spectral response. Wavelengths are in nm (vacuum) throughout.
 
+mod filter;
 mod function;
 mod sampled;
 mod solar;
 mod wavelength_grid;
 
+pub use filter::{CIMEL_CHANNELS, Filter};
 pub use function::{Spectrum, TabulatedSpectrum};
 pub use sampled::SampledSpectrum;
 pub use solar::SolarSpectrum;
