@@ -228,3 +228,50 @@ fn bad_filters_are_one_line_errors() {
     );
     assert_eq!(out.status.code(), Some(2), "{out:?}");
 }
+
+#[test]
+fn many_directions_through_a_filter_as_csv_and_json() {
+    let base = [
+        "spectrum",
+        "--preset",
+        "earth-clear",
+        "--sun-elevation",
+        "30",
+        "--sun-azimuth",
+        "180",
+        "--almucantar",
+        "90",
+        "--scattering",
+        "single",
+        "--filter",
+        "cimel-870",
+    ];
+    let csv = stdout(&sora(&base));
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next(),
+        Some("view_elevation_deg,view_azimuth_deg,filter,centre_nm,radiance_w_m2_sr_nm")
+    );
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 4);
+    for (k, row) in rows.iter().enumerate() {
+        assert_eq!(
+            row[1].parse::<f64>().unwrap(),
+            (180.0 + 90.0 * k as f64) % 360.0
+        );
+        assert_eq!((row[2], row[3]), ("cimel-870", "870.0000"));
+    }
+    let json = stdout(&sora(&[&base[..], &["--format", "json"]].concat()));
+    assert!(
+        json.contains("\"filter\": [\"cimel-870\"], \"centre_nm\": [870.000000]"),
+        "{json}"
+    );
+    // The same radiances, one per direction, in the same order.
+    let values: Vec<&str> = json
+        .split("\"radiance_w_m2_sr_nm\": [")
+        .skip(1)
+        .map(|rest| rest.split(']').next().unwrap())
+        .collect();
+    let from_csv: Vec<&str> = rows.iter().map(|r| r[4]).collect();
+    assert_eq!(values, from_csv);
+}
