@@ -21,7 +21,10 @@ use crate::arguments::{
 /// --principal-plane): one long CSV,
 /// view_elevation_deg,view_azimuth_deg,wavelength_nm,radiance_w_m2_sr_nm,
 /// or JSON with one object per direction; every table is built once for all
-/// of them. Radiance is in W m^-2 sr^-1 nm^-1 for the atmosphere's sun.
+/// of them, and from 256 directions the fast method reads them from an
+/// image's tables (within 0.27 % of the exact per-direction path, the
+/// worst near the sun; 16,384 polarised directions cost about a 128 x 128
+/// fisheye). Radiance is in W m^-2 sr^-1 nm^-1 for the atmosphere's sun.
 ///
 /// Methods: fast and reference compute single scattering (plus the sunlit
 /// ground) and, with --scattering multiple (the default), add all higher

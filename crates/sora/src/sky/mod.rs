@@ -1101,45 +1101,70 @@ impl Sky {
             }
             _ => None,
         };
+        Ok(self.compute_views_in_parallel(
+            views,
+            VIEWS_PER_TASK,
+            progress,
+            |view, work, radiance, stokes| {
+                self.compute_view_radiance(view.to_vector(), None, work, radiance);
+                if polarised {
+                    stokes.fill(0.0);
+                    self.compute_single_scattering_stokes(
+                        (
+                            view.to_vector(),
+                            meridian_reference(view.elevation_deg(), view.azimuth_deg()),
+                        ),
+                        SingleIntegrals::View,
+                        work,
+                        stokes,
+                    );
+                    if let Some(rows) = &rows {
+                        self.add_multiple_scattering_stokes(view, rows, work, radiance, stokes);
+                    }
+                }
+            },
+        ))
+    }
+
+    /// Every view of `views` by `compute(view, work, radiance, stokes)`
+    /// (`stokes`: Q, U and V of a polarised sky, empty otherwise), in
+    /// parallel, `views_per_task` a task with one [`ViewWork`] each,
+    /// calling `progress(done, total)` as views complete.
+    fn compute_views_in_parallel(
+        &self,
+        views: &[ViewDirection],
+        views_per_task: usize,
+        progress: &(dyn Fn(u64, u64) + Sync),
+        compute: impl Fn(ViewDirection, &mut ViewWork, &mut [f64], &mut [f64]) + Sync,
+    ) -> Vec<SkyRadiance> {
+        let wavelengths = self.wavelengths().len();
+        let polarised = self.polarisation == Polarisation::Vector;
         let per_view = wavelengths * if polarised { 4 } else { 1 };
         let mut values = vec![0.0; views.len() * per_view];
         let total = views.len() as u64;
         let done = std::sync::atomic::AtomicU64::new(0);
         crate::parallel::for_each_chunk_mut(
             &mut values,
-            VIEWS_PER_TASK * per_view,
+            views_per_task * per_view,
             |task, chunk| {
                 let mut work = self.view_work();
                 for (k, out) in chunk.chunks_mut(per_view).enumerate() {
-                    let view = views[task * VIEWS_PER_TASK + k];
                     let (radiance, stokes) = out.split_at_mut(wavelengths);
-                    self.compute_view_radiance(view.to_vector(), None, &mut work, radiance);
-                    if polarised {
-                        stokes.fill(0.0);
-                        self.compute_single_scattering_stokes(
-                            (
-                                view.to_vector(),
-                                meridian_reference(view.elevation_deg(), view.azimuth_deg()),
-                            ),
-                            SingleIntegrals::View,
-                            &mut work,
-                            stokes,
-                        );
-                        if let Some(rows) = &rows {
-                            self.add_multiple_scattering_stokes(
-                                view, rows, &mut work, radiance, stokes,
-                            );
-                        }
-                    }
+                    compute(
+                        views[task * views_per_task + k],
+                        &mut work,
+                        radiance,
+                        stokes,
+                    );
                     let finished = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
                     progress(finished, total);
                 }
             },
         );
-        Ok(values
+        values
             .chunks(per_view)
             .map(|values| sky_radiance_from_values(values, wavelengths))
-            .collect())
+            .collect()
     }
 
     /// Q and U (W m^-2 sr^-1 nm^-1, referred to the view's meridian plane)
@@ -1228,33 +1253,19 @@ impl Sky {
     ) -> Result<Vec<SkyRadiance>> {
         self.prepare_field_for_images()?;
         let tables = self.image_tables();
-        let n = self.wavelengths().len();
         let polarised = self.polarisation == Polarisation::Vector;
-        let per_view = if polarised { 4 * n } else { n };
-        let mut values = vec![0.0; views.len() * per_view];
-        let total = views.len() as u64;
-        let done = std::sync::atomic::AtomicU64::new(0);
-        crate::parallel::for_each_chunk_mut(
-            &mut values,
-            PIXEL_VIEWS_PER_TASK * per_view,
-            |task, chunk| {
-                let mut work = self.view_work();
-                for (k, out) in chunk.chunks_mut(per_view).enumerate() {
-                    let view = views[task * PIXEL_VIEWS_PER_TASK + k].to_vector();
-                    let (radiance, stokes) = out.split_at_mut(n);
-                    self.compute_pixel_radiance(view, tables, &mut work, radiance);
-                    if polarised {
-                        self.add_pixel_stokes(view, tables, &mut work, radiance, stokes);
-                    }
-                    let finished = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-                    progress(finished, total);
+        Ok(self.compute_views_in_parallel(
+            views,
+            PIXEL_VIEWS_PER_TASK,
+            progress,
+            |view, work, radiance, stokes| {
+                let view = view.to_vector();
+                self.compute_pixel_radiance(view, tables, work, radiance);
+                if polarised {
+                    self.add_pixel_stokes(view, tables, work, radiance, stokes);
                 }
             },
-        );
-        Ok(values
-            .chunks(per_view)
-            .map(|values| sky_radiance_from_values(values, n))
-            .collect())
+        ))
     }
 
     /// One view's radiance without image tables (fast or reference method),
