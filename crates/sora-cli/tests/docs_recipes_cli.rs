@@ -87,20 +87,10 @@ fn a_docs_fisheye_is_what_its_command_writes() {
 /// The radiance at 380 nm of the paper's Table 1 view, as `sora spectrum`
 /// prints it with `extra` options.
 fn table1_at_380_nm(extra: &[&str]) -> f64 {
-    let base = [
-        "spectrum",
-        "--preset",
-        "paper-earth",
-        "--sun-elevation",
-        "36",
-        "--sun-azimuth",
-        "207",
-        "--view-elevation",
-        "17",
-        "--view-azimuth",
-        "347",
-    ];
-    let csv = stdout(&sora(&[&base[..], extra].concat()));
+    let base = ["spectrum", "--preset", "paper-earth"];
+    let csv = stdout(&sora(
+        &[&base[..], &common::TABLE1_GEOMETRY, extra].concat(),
+    ));
     let rows = common::spectrum_rows(&csv);
     assert_eq!(rows[0].0, 380.0);
     rows[0].1
