@@ -4,6 +4,11 @@
 //! library types (see [`arguments`]), calls the library, and prints or
 //! writes the result. Errors end the process with a one-line message on
 //! stderr and exit status 1; argument errors exit with status 2 (clap).
+//! One rule for values out of range: exit status 1 and the library's
+//! one-line message, whichever parser saw them first (an out-of-range
+//! `--wavelengths` grid, parsed by clap, is status 1 as an out-of-range
+//! `--sun-elevation`, checked later, is); only text that does not parse,
+//! unknown options and options that exclude each other are status 2.
 
 mod arguments;
 mod bitmap_text;
@@ -37,7 +42,16 @@ enum Command {
 }
 
 fn main() {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(error) => {
+            if let Some(message) = out_of_range_argument(&error) {
+                eprintln!("error: {message}");
+                std::process::exit(1);
+            }
+            error.exit()
+        }
+    };
     let result = match cli.command {
         Command::Colour(args) => commands::colour::run(args),
         Command::Mie(args) => commands::mie::run(args),
@@ -58,6 +72,23 @@ fn main() {
         eprintln!("error: {error:#}");
         std::process::exit(1);
     }
+}
+
+/// The one-line message of an argument that parsed but whose value the
+/// library refused as out of range (`sora::Error::OutOfRange`), naming the
+/// option; None for every other argument error (clap's, status 2).
+fn out_of_range_argument(error: &clap::Error) -> Option<String> {
+    use clap::error::{ContextKind, ContextValue};
+    use std::error::Error as _;
+    let library = error.source()?.downcast_ref::<sora::Error>()?;
+    if !matches!(library, sora::Error::OutOfRange { .. }) {
+        return None;
+    }
+    let option = match error.get(ContextKind::InvalidArg) {
+        Some(ContextValue::String(option)) => option.split_whitespace().next()?.to_string(),
+        _ => return None,
+    };
+    Some(format!("{option}: {library}"))
 }
 
 /// Whether `error` comes from writing to a pipe whose reader has closed it.

@@ -138,3 +138,41 @@ fn a_sequence_from_a_time_starts_at_that_suns_elevation() {
         assert!(dir.path().join(format!("s_{k:03}.png")).is_file());
     }
 }
+
+/// One rule for values out of range: status 1 and one line with the
+/// library's message, whether clap parsed the value (`--wavelengths`) or
+/// the command checked it later (`--sun-elevation`); text that does not
+/// parse at all stays clap's usage error, status 2.
+#[test]
+fn out_of_range_values_exit_1_whichever_parser_sees_them() {
+    let view = [
+        "spectrum",
+        "--preset",
+        "earth-clear",
+        "--view-elevation",
+        "30",
+        "--view-azimuth",
+        "0",
+    ];
+    for (extra, expected) in [
+        (
+            &["--sun-elevation", "30", "--wavelengths", "200:800:10"][..],
+            "--wavelengths: start_nm = 200 nm is out of range: allowed 300..=1100 nm",
+        ),
+        (&["--sun-elevation", "95"][..], "sun elevation = 95 deg"),
+    ] {
+        let out = sora(&[&view[..], extra].concat());
+        assert_eq!(out.status.code(), Some(1), "{extra:?}: {out:?}");
+        let stderr = String::from_utf8(out.stderr).unwrap();
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        assert!(stderr.contains(expected), "{extra:?}: {stderr}");
+    }
+    let out = sora(
+        &[
+            &view[..],
+            &["--sun-elevation", "30", "--wavelengths", "a:b"],
+        ]
+        .concat(),
+    );
+    assert_eq!(out.status.code(), Some(2), "{out:?}");
+}

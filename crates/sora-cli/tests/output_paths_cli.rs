@@ -225,6 +225,19 @@ fn radiances_csv() -> String {
     )
 }
 
+/// `sora retrieve` of the sample radiances with `--residuals` and `--plot`.
+fn retrieve_into(residuals: &std::path::Path, plot: &std::path::Path) -> std::process::Output {
+    sora(&[
+        "retrieve",
+        "--radiances",
+        &radiances_csv(),
+        "--residuals",
+        residuals.to_str().unwrap(),
+        "--plot",
+        plot.to_str().unwrap(),
+    ])
+}
+
 /// Stand-ins for devices in a temporary directory (the real /dev is never
 /// touched): a FIFO, a link to /dev/null and a link to the FIFO.
 #[cfg(unix)]
@@ -339,16 +352,7 @@ fn two_outputs_on_one_file_are_refused() {
     let link = dir.path().join("link.csv");
     std::os::unix::fs::symlink("fit.png", &link).unwrap();
     let plot = dir.path().join("fit.png");
-    let radiances = radiances_csv();
-    let stderr = one_line_error(&sora(&[
-        "retrieve",
-        "--radiances",
-        &radiances,
-        "--residuals",
-        link.to_str().unwrap(),
-        "--plot",
-        plot.to_str().unwrap(),
-    ]));
+    let stderr = one_line_error(&retrieve_into(&link, &plot));
     assert!(
         stderr.contains("--plot") && stderr.contains("is the same file as --residuals"),
         "{stderr}"
@@ -375,17 +379,8 @@ fn an_output_in_a_read_only_directory_is_refused_and_nothing_is_written() {
     std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o555)).unwrap();
     let residuals = dir.path().join("res.csv");
     let plot = locked.join("fit.png");
-    let radiances = radiances_csv();
     let started = std::time::Instant::now();
-    let stderr = one_line_error(&sora(&[
-        "retrieve",
-        "--radiances",
-        &radiances,
-        "--residuals",
-        residuals.to_str().unwrap(),
-        "--plot",
-        plot.to_str().unwrap(),
-    ]));
+    let stderr = one_line_error(&retrieve_into(&residuals, &plot));
     // Before the fit (which takes seconds even in a release build).
     assert!(started.elapsed().as_secs_f64() < 10.0);
     assert!(

@@ -12,24 +12,18 @@ const CASE_A_SPHERICAL: [(f64, f64); 3] = [
     (780.0, 6.343935200e-03),
 ];
 
-/// `sora spectrum` for case (a), with extra arguments.
-const CASE_A_SPECTRUM: [&str; 11] = [
-    "spectrum",
-    "--preset",
-    "clear-sky-reference",
-    "--sun-elevation",
-    "36",
-    "--sun-azimuth",
-    "207",
-    "--view-elevation",
-    "17",
-    "--view-azimuth",
-    "347",
-];
+/// `sora spectrum` for case (a), to which extra arguments are added.
+fn case_a_spectrum() -> Vec<&'static str> {
+    [
+        &["spectrum", "--preset", "clear-sky-reference"][..],
+        &common::TABLE1_GEOMETRY,
+    ]
+    .concat()
+}
 
 #[test]
 fn spectrum_csv_is_the_reference_single_scattering() {
-    let out = sora(&[&CASE_A_SPECTRUM[..], &["--scattering", "single"]].concat());
+    let out = sora(&[&case_a_spectrum()[..], &["--scattering", "single"]].concat());
     assert!(
         out.status.success(),
         "{}",
@@ -85,10 +79,10 @@ fn spectrum_csv_is_the_reference_single_scattering() {
 #[test]
 fn spectrum_defaults_to_multiple_scattering() {
     let wavelengths = ["--wavelengths", "400:700:100"];
-    let default = stdout(&sora(&[&CASE_A_SPECTRUM[..], &wavelengths].concat()));
+    let default = stdout(&sora(&[&case_a_spectrum()[..], &wavelengths].concat()));
     let multiple = stdout(&sora(
         &[
-            &CASE_A_SPECTRUM[..],
+            &case_a_spectrum()[..],
             &wavelengths,
             &["--scattering", "multiple"],
         ]
@@ -97,7 +91,7 @@ fn spectrum_defaults_to_multiple_scattering() {
     assert_eq!(default, multiple);
     let single = spectrum_rows(&stdout(&sora(
         &[
-            &CASE_A_SPECTRUM[..],
+            &case_a_spectrum()[..],
             &wavelengths,
             &["--scattering", "single"],
         ]
@@ -105,7 +99,7 @@ fn spectrum_defaults_to_multiple_scattering() {
     )));
     let traced = stdout(&sora(
         &[
-            &CASE_A_SPECTRUM[..],
+            &case_a_spectrum()[..],
             &wavelengths,
             &["--method", "path-tracing", "--samples", "40000"],
         ]
@@ -132,7 +126,7 @@ fn spectrum_defaults_to_multiple_scattering() {
 
     let out = sora(
         &[
-            &CASE_A_SPECTRUM[..],
+            &case_a_spectrum()[..],
             &["--method", "path-tracing", "--scattering", "single"],
         ]
         .concat(),
@@ -329,7 +323,7 @@ fn render_writes_png_and_exr_and_nothing_on_failure() {
 #[test]
 fn path_tracing_spectrum_has_standard_errors_and_is_deterministic() {
     let args = [
-        &CASE_A_SPECTRUM[..],
+        &case_a_spectrum()[..],
         &[
             "--wavelengths",
             "400:700:100",

@@ -9,8 +9,10 @@ into a narrower forward peak than red, so near the sun the sky is bluer
 than the sun itself, and the ratio of blue to red radiance, relative to the
 sun's direct beam, exceeds 1 within a few degrees of it and falls below 1
 farther out (the dusty sky's butterscotch). Prints the ratio; plots the
-curves where matplotlib is installed (default
-docs/python_mars_aureole.png).
+curves into OUT.png where matplotlib is installed (``pip install
+'./crates/sora-python[plot]'``; default python_mars_aureole.png in the
+current directory; the repository's docs/python_mars_aureole.png is this
+script's plot). Scalar light, as the numbers of docs/README.md.
 """
 
 # %% The sky of mars-dust with the sun 3 deg above the western horizon.
@@ -27,6 +29,7 @@ sky = sora.Sky(
     sun_elevation_deg=sun_elevation_deg,
     sun_azimuth_deg=sun_azimuth_deg,
     wavelengths_nm="440:700:20",
+    polarisation="scalar",
 )
 
 # %% The sun's vertical: from 0.5 deg above the sun to 80 deg, one call.
@@ -52,10 +55,9 @@ try:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 except ImportError:
-    sys.exit("matplotlib is not installed: no plot")
+    sys.exit("matplotlib is not installed: no plot (pip install './crates/sora-python[plot]')")
 
-repository = pathlib.Path(__file__).resolve().parents[3]
-out = pathlib.Path(sys.argv[1]) if len(sys.argv) > 1 else repository / "docs" / "python_mars_aureole.png"
+out = pathlib.Path(sys.argv[1]) if len(sys.argv) > 1 else pathlib.Path("python_mars_aureole.png")
 figure, (top, bottom) = plt.subplots(2, 1, figsize=(7, 6), dpi=110, sharex=True)
 top.semilogy(angle_deg, blue, color="tab:blue", label="440 nm")
 top.semilogy(angle_deg, red, color="tab:red", label="700 nm")

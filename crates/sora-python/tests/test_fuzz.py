@@ -10,7 +10,8 @@ past two minutes).
 ``test_public_api_fuzz`` runs in CI (300 examples, a fixed seed);
 ``test_public_api_fuzz_long`` (``@pytest.mark.slow``, deselected by
 default) runs 3,000 with another seed and prints the outcomes by kind:
-``pytest crates/sora-python/tests/test_fuzz.py -m slow -s``. The work of
+``pytest crates/sora-python/tests/test_fuzz.py -m slow -s``
+(``SORA_FUZZ_SEED`` and ``SORA_FUZZ_EXAMPLES`` change its seed and count). The work of
 each call is kept small (a few wavelengths, images of at most 8 x 8
 pixels, few paths), so that a legal call is quick too.
 """
@@ -18,6 +19,7 @@ pixels, few paths), so that a legal call is quick too.
 import collections
 import faulthandler
 import math
+import os
 import time
 
 import numpy as np
@@ -175,8 +177,8 @@ def test_public_api_fuzz(atmosphere, data):
 
 
 @pytest.mark.slow
-@seed(4815162342)
-@settings(max_examples=3000, deadline=None, database=None,
+@seed(int(os.environ.get("SORA_FUZZ_SEED", "4815162342")))
+@settings(max_examples=int(os.environ.get("SORA_FUZZ_EXAMPLES", "3000")), deadline=None, database=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 @given(data=st.data())
 def test_public_api_fuzz_long(atmosphere, data):

@@ -72,7 +72,7 @@ def test_mie_aerosols_polarise():
 
 def test_the_fast_method_polarises_all_orders(rayleigh):
     vector = sora.Sky(rayleigh, sun_elevation_deg=30, polarisation="vector")
-    scalar = sora.Sky(rayleigh, sun_elevation_deg=30)
+    scalar = sora.Sky(rayleigh, sun_elevation_deg=30, polarisation="scalar")
     stokes = vector.stokes(30, 90)
     intensity = stokes["I"].values
     ratio = intensity / scalar.radiance(30, 90).values
@@ -100,7 +100,7 @@ def test_choices_without_stokes_vectors_raise(rayleigh):
     with pytest.raises(ValueError, match="'scalar' or 'vector'"):
         sora.Sky(rayleigh, sun_elevation_deg=30, polarisation="circular")
     with pytest.raises(ValueError, match="polarisation='vector'"):
-        sora.Sky(rayleigh, sun_elevation_deg=30).stokes(90, 0)
+        sora.Sky(rayleigh, sun_elevation_deg=30, polarisation="scalar").stokes(90, 0)
 
 
 def test_a_non_polarising_species_is_a_warning(atmospheres_dir, tmp_path):
@@ -111,6 +111,8 @@ def test_a_non_polarising_species_is_a_warning(atmospheres_dir, tmp_path):
         sora.Sky(reference, sun_elevation_deg=30, scattering="single", polarisation="vector")
     with warnings.catch_warnings():
         warnings.simplefilter("error")
+        sora.Sky(reference, sun_elevation_deg=30, scattering="single", polarisation="scalar")
+        # The default (polarised) light warns only when asked for by name.
         sora.Sky(reference, sun_elevation_deg=30, scattering="single")
         sora.Sky(
             sora.Atmosphere.preset("us-standard-1976-rayleigh"),
@@ -128,6 +130,27 @@ def test_a_non_polarising_species_is_a_warning(atmospheres_dir, tmp_path):
     path = tmp_path / "depolarised.toml"
     path.write_text(depolarised)
     atmosphere = sora.Atmosphere.from_toml(path)
-    sora.Sky(atmosphere, sun_elevation_deg=30, scattering="single")
+    sora.Sky(atmosphere, sun_elevation_deg=30, scattering="single", polarisation="scalar")
     with pytest.raises(ValueError, match=r'"air" depolarization_ratio = 0.7 .*0\.\.=0\.5'):
         sora.Sky(atmosphere, sun_elevation_deg=30, scattering="single", polarisation="vector")
+
+
+def test_the_default_light_is_polarised_and_said_everywhere(rayleigh):
+    """One default with the command line and the library: vector light,
+    scalar for the reference march; repr and every DataArray say which."""
+    default = sora.Sky(rayleigh, sun_elevation_deg=30, wavelengths_nm="450:650:100")
+    assert default.polarisation == "vector"
+    named = sora.Sky(rayleigh, sun_elevation_deg=30, wavelengths_nm="450:650:100", polarisation="vector")
+    np.testing.assert_array_equal(default.radiance(40, 90).values, named.radiance(40, 90).values)
+    assert "polarisation='vector'" in repr(default)
+    attrs = default.radiance(40, 90).attrs
+    assert attrs["polarisation"] == "vector"
+    assert attrs["method"] == "fast" and attrs["scattering"] == "multiple"
+    assert attrs["wavelengths_nm"] == "450:650:100"
+    assert attrs["sun_elevation_deg"] == 30
+    march = sora.Sky(rayleigh, sun_elevation_deg=30, wavelengths_nm="550:550:1", method="reference",
+                     reference_steps=(20, 5))
+    assert march.polarisation == "scalar"
+    assert "polarisation='scalar'" in repr(march)
+    with pytest.raises(ValueError, match="polarisation = 'off' is unknown: use 'scalar' or 'vector'"):
+        sora.Sky(rayleigh, sun_elevation_deg=30, polarisation="off")

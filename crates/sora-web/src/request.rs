@@ -59,7 +59,8 @@ pub enum Request {
         view_azimuth_deg: f64,
     },
     /// The atmosphere file with the controls written in: `{"toml"}` (what
-    /// `sora --atmosphere` needs to reproduce the page's sky).
+    /// `sora spectrum --atmosphere FILE` and `sora render --atmosphere FILE`
+    /// read to reproduce the page's sky).
     AtmosphereToml {
         /// The atmosphere.
         atmosphere: AtmosphereSpec,

@@ -33,18 +33,15 @@
 //!   with the classic clear-sky illuminances beside them;
 //! - `day_strip.png`: a day over Tokyo (June solstice 2026) from before
 //!   sunrise to after sunset, fisheyes at one exposure;
-//! - `readme_tokyo.png`: the README's time-and-place command
-//!   (`sora render --preset earth-clear --time 2026-06-21T05:30:00+09:00
-//!   --location 35.68,139.77 -o tokyo.png`), identical to what it writes;
-//! - `readme_sky.png`: the picture of the README's example command
-//!   (`sora render --preset earth-clear --sun-elevation 30 -o sky.png`),
-//!   identical to what that command writes.
+//!
+//! (The README's two pictures, `readme_sky.png` and `readme_tokyo.png`, are
+//! written by the README's own commands, `sora render`, and checked against
+//! them by `crates/sora-cli/tests/docs_recipes_cli.rs`.)
 //!
 //! Every image goes through the same stages as `sora render`:
 //! [`Sky::render_xyz`] (fast method, sun disc drawn), then the
-//! colour module's [`DisplayMapping`] (sRGB; the README's pictures with the
-//! default highlights-to-white gamut mapping, the compared scenes with
-//! preserve-hue, which keeps the hue of over-exposed sky)
+//! colour module's [`DisplayMapping`] (sRGB, the preserve-hue gamut
+//! mapping, which keeps the hue of over-exposed sky; scalar light)
 //! and [`write_png`]. Exposure: each scene's multiple-scattering fisheye
 //! gets the default automatic exposure (log-average luminance -> 0.18), and
 //! the same factor is used, fixed, for every other picture of the scene
@@ -745,9 +742,6 @@ struct Scene {
     /// Render single scattering beside multiple scattering (`*_single.png`
     /// and `*_multiple.png`); otherwise multiple only.
     single_too: bool,
-    /// Polarised light, as `sora render` by default (the README's
-    /// pictures); the other figures are the scalar sky's.
-    polarised: bool,
     views: Vec<View>,
 }
 
@@ -791,36 +785,11 @@ fn scenes() -> Result<Vec<Scene>> {
     let sunset = (SUNSET_ELEVATION, SUNSET_AZIMUTH);
     Ok(vec![
         Scene {
-            name: "readme_sky",
-            atmosphere: preset("earth-clear")?,
-            sun: (30.0, 180.0),
-            sun_disc: true,
-            single_too: false,
-            polarised: true,
-            views: vec![View {
-                suffix: "",
-                ..fisheye()
-            }],
-        },
-        Scene {
-            name: "readme_tokyo",
-            atmosphere: preset("earth-clear")?,
-            sun: sun_over_tokyo("2026-06-21T05:30:00+09:00")?,
-            sun_disc: true,
-            single_too: false,
-            polarised: true,
-            views: vec![View {
-                suffix: "",
-                ..fisheye()
-            }],
-        },
-        Scene {
             name: "earth_clear_noon",
             atmosphere: preset("earth-clear")?,
             sun: (60.0, 180.0),
             sun_disc: true,
             single_too: true,
-            polarised: false,
             views: vec![fisheye(), panorama()],
         },
         Scene {
@@ -829,7 +798,6 @@ fn scenes() -> Result<Vec<Scene>> {
             sun: sunset,
             sun_disc: true,
             single_too: true,
-            polarised: false,
             views: vec![fisheye(), panorama()],
         },
         Scene {
@@ -838,7 +806,6 @@ fn scenes() -> Result<Vec<Scene>> {
             sun: (-2.0, SUNSET_AZIMUTH),
             sun_disc: true,
             single_too: true,
-            polarised: false,
             views: vec![fisheye(), panorama()],
         },
         Scene {
@@ -847,7 +814,6 @@ fn scenes() -> Result<Vec<Scene>> {
             sun: (60.0, 180.0),
             sun_disc: true,
             single_too: true,
-            polarised: false,
             views: vec![fisheye(), panorama()],
         },
         Scene {
@@ -856,7 +822,6 @@ fn scenes() -> Result<Vec<Scene>> {
             sun: sunset,
             sun_disc: true,
             single_too: true,
-            polarised: false,
             views: vec![
                 fisheye(),
                 toward_sunset(ViewExposure::Scene)?,
@@ -869,7 +834,6 @@ fn scenes() -> Result<Vec<Scene>> {
             sun: sunset,
             sun_disc: true,
             single_too: true,
-            polarised: false,
             views: vec![
                 fisheye(),
                 toward_sunset(ViewExposure::Scene)?,
@@ -886,11 +850,7 @@ fn render_scene(out: &Path, grid: &WavelengthGrid, scene: &Scene) -> Result<()> 
     let multiple_sky = Sky::builder(&scene.atmosphere)
         .wavelengths(*grid)
         .sun_deg(scene.sun.0, scene.sun.1)
-        .polarisation(if scene.polarised {
-            Polarisation::Vector
-        } else {
-            Polarisation::Scalar
-        })
+        .polarisation(Polarisation::Scalar)
         .build()?;
     let single_sky = sky(
         &scene.atmosphere,
@@ -934,18 +894,12 @@ fn render_scene(out: &Path, grid: &WavelengthGrid, scene: &Scene) -> Result<()> 
                     1.0 / peak
                 }),
             };
-            // The README's pictures are what their commands write (the
-            // default display, highlights to white); the scenes compared in
-            // docs/README.md keep the hue of over-exposed sky (preserve-hue),
-            // so that the glow around a low sun shows its colour.
-            let gamut_mapping = if scene.name.starts_with("readme") {
-                GamutMapping::default()
-            } else {
-                GamutMapping::PreserveHue
-            };
+            // The scenes compared in docs/README.md keep the hue of
+            // over-exposed sky (preserve-hue), so that the glow around a
+            // low sun shows its colour.
             let mapping = DisplayMapping {
                 exposure: Exposure::Fixed(scale),
-                gamut_mapping,
+                gamut_mapping: GamutMapping::PreserveHue,
                 ..DisplayMapping::default()
             };
             let data = mapping.to_u8(&xyz)?.into_iter().flatten().collect();

@@ -52,6 +52,11 @@
 //! 8. [`output`]: images on disk (PNG, OpenEXR), written atomically; the only
 //!    module that touches files.
 //!
+//! Beside the pipeline: [`input`] (bounded reading of text inputs),
+//! [`sun_position`] (the sun's position from a time and a place, NREL's
+//! SPA), [`inversion`] (aerosol retrieval from measured radiances, the
+//! forward model being the [`Sky`]) and [`error`].
+//!
 //! Units are SI unless a name says otherwise (`wavelength_nm`). The library
 //! has no global state and prints nothing.
 

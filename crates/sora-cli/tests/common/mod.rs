@@ -44,6 +44,19 @@ pub fn exr_channel(path: &Path, name: &str) -> Vec<f32> {
     channel.sample_data.values_as_f32().collect()
 }
 
+/// The sun and the view of the paper's Table 1 (sun 36 deg up at azimuth
+/// 207, view 17 deg up at azimuth 347), as `sora spectrum` options.
+pub const TABLE1_GEOMETRY: [&str; 8] = [
+    "--sun-elevation",
+    "36",
+    "--sun-azimuth",
+    "207",
+    "--view-elevation",
+    "17",
+    "--view-azimuth",
+    "347",
+];
+
 /// The (wavelength, radiance) rows of a one-direction `sora spectrum` CSV.
 pub fn spectrum_rows(csv: &str) -> Vec<(f64, f64)> {
     let mut lines = csv.lines();

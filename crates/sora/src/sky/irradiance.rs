@@ -49,7 +49,7 @@ pub const MU_NODES: usize = 48;
 pub const AZIMUTH_NODES: usize = 96;
 
 /// Most march steps of one plane's diffuse irradiance by the reference
-/// method: the [`MU_NODES`] x [`AZIMUTH_NODES`] = 4,608 directions times
+/// method: the `MU_NODES` x `AZIMUTH_NODES` = 4,608 directions times
 /// view steps times sun steps. 1e8 takes about 7 s a wavelength on the
 /// project's 2-core machine (release build; 4,608 marches of the default
 /// 1000 x 250 steps, 1.15e9, took 84 s at one wavelength), so the default
