@@ -272,35 +272,16 @@ pub struct Resolution {
 }
 
 impl Resolution {
-    /// `scattering` at this resolution; an error where it has no field
-    /// (single scattering, the path tracer).
+    /// `scattering` at this resolution ([`sora::Scattering::with_resolution`]):
+    /// an error where it has no field (single scattering, the path tracer).
     pub fn apply(
         &self,
         scattering: sora::Scattering,
         method: sora::Method,
     ) -> anyhow::Result<sora::Scattering> {
-        if self.streams.is_none() && self.layers.is_none() {
-            return Ok(scattering);
-        }
-        if let sora::Method::PathTracing { .. } = method {
-            anyhow::bail!(
-                "--streams and --layers apply to the fast and reference methods (the path tracer has no discrete-ordinate field)"
-            );
-        }
-        match scattering {
-            sora::Scattering::Single => anyhow::bail!(
-                "--streams and --layers apply to multiple scattering (not --scattering single)"
-            ),
-            sora::Scattering::Multiple(mut settings) => {
-                if let Some(streams) = self.streams {
-                    settings.streams_per_hemisphere = streams;
-                }
-                if let Some(layers) = self.layers {
-                    settings.layers = layers;
-                }
-                Ok(sora::Scattering::Multiple(settings))
-            }
-        }
+        scattering
+            .with_resolution(method, self.streams, self.layers)
+            .map_err(|e| anyhow::anyhow!("--streams/--layers: {e}"))
     }
 }
 

@@ -538,11 +538,11 @@ fn streams_and_layers_set_the_fields_resolution() {
         (&["--layers", "1"][..], "multiple-scattering layers = 1"),
         (
             &["--scattering", "single", "--streams", "12"][..],
-            "--streams and --layers apply to multiple scattering",
+            "streams and layers apply to multiple scattering",
         ),
         (
             &["--method", "path-tracing", "--layers", "60"][..],
-            "--streams and --layers apply to the fast and reference methods",
+            "streams and layers apply to the fast and reference methods",
         ),
     ] {
         let out = run(extra);

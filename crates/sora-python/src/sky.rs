@@ -148,7 +148,8 @@ impl Sky {
         atmosphere, *, sun_elevation_deg=None, sun_azimuth_deg=None, time=None, location=None,
         refraction=true, pressure_hpa=None, temperature_c=None, sun_distance_au=None,
         observer_altitude_m=0.0, wavelengths_nm=None, scattering="multiple",
-        method="fast", samples=None, seed=None, reference_steps=None, polarisation=None
+        method="fast", samples=None, seed=None, reference_steps=None, polarisation=None,
+        streams=None, layers=None
     ))]
     fn new(
         py: Python<'_>,
@@ -169,6 +170,8 @@ impl Sky {
         seed: Option<u64>,
         reference_steps: Option<(usize, usize)>,
         polarisation: Option<&str>,
+        streams: Option<usize>,
+        layers: Option<usize>,
     ) -> PyResult<Sky> {
         // The library's names; None: its default for the method
         // (`sora::Polarisation::for_method`: vector, scalar for reference).
@@ -223,6 +226,9 @@ impl Sky {
         let grid = grid_from_python(wavelengths_nm)?;
         let (scattering, method) =
             scattering_and_method(scattering, method, samples, seed, reference_steps)?;
+        let scattering = scattering
+            .with_resolution(method, streams, layers)
+            .map_err(to_py_err)?;
         // The sun's distance as `sora spectrum` takes it: given, or the
         // date's for a sun at 1 AU (sora::atmosphere::Sun::date_distance_au).
         let mut atmosphere = atmosphere.inner.clone();

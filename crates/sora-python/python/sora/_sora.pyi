@@ -67,6 +67,8 @@ class Sky:
         seed: Optional[int] = None,
         reference_steps: Optional[Tuple[int, int]] = None,
         polarisation: Optional[str] = None,
+        streams: Optional[int] = None,
+        layers: Optional[int] = None,
     ) -> None: ...
     @property
     def wavelengths_nm(self) -> _F64: ...

@@ -94,6 +94,42 @@ impl Scattering {
     pub fn multiple() -> Scattering {
         Scattering::Multiple(MultipleScatteringSettings::default())
     }
+
+    /// This scattering with the multiple-scattering field's `streams` per
+    /// hemisphere and `layers` where given (the CLI's `--streams` and
+    /// `--layers`, Python's `streams=` and `layers=`); validated as the
+    /// sky's builder does. Giving either for single scattering or for the
+    /// path tracer (which have no discrete-ordinate field) is an error.
+    pub fn with_resolution(
+        self,
+        method: Method,
+        streams: Option<usize>,
+        layers: Option<usize>,
+    ) -> Result<Scattering> {
+        if streams.is_none() && layers.is_none() {
+            return Ok(self);
+        }
+        if let Method::PathTracing { .. } = method {
+            return Err(Error::Unsupported(
+                "streams and layers apply to the fast and reference methods (the path tracer has no discrete-ordinate field)".into(),
+            ));
+        }
+        match self {
+            Scattering::Single => Err(Error::Unsupported(
+                "streams and layers apply to multiple scattering (not single scattering)".into(),
+            )),
+            Scattering::Multiple(mut settings) => {
+                if let Some(streams) = streams {
+                    settings.streams_per_hemisphere = streams;
+                }
+                if let Some(layers) = layers {
+                    settings.layers = layers;
+                }
+                settings.validate()?;
+                Ok(Scattering::Multiple(settings))
+            }
+        }
+    }
 }
 
 /// How the radiance is computed (see the module docs).
