@@ -464,7 +464,6 @@ struct ViewWork {
     /// forward-peak term.
     integrals: Vec<f64>,
     forward: Vec<f64>,
-    ground: Vec<f64>,
     phase: Vec<f64>,
     /// The fast method's terms of the view or pixel.
     terms: ViewTerms,
@@ -472,25 +471,37 @@ struct ViewWork {
     matrices: Vec<PhaseMatrix>,
     /// The multiply scattered light's I, Q, U, V (polarised skies).
     multiple_stokes: Vec<f64>,
+    /// The light the polarisation correction applies to
+    /// ([`ViewTerms::polarisation_corrected`]).
+    corrected: Vec<f64>,
 }
 
 /// The fast method's terms of one view or pixel, each computed on its own
 /// and added once ([`ViewTerms::add_into`]), the same way for views
 /// ([`Sky::compute_view_radiance`]) and pixels
 /// ([`Sky::compute_pixel_radiance`]); W m^-2 sr^-1 nm^-1 per wavelength.
+///
+/// The air's terms are the light scattered into the view between the eye
+/// and the ray's end (or a point at a distance, [`Sky::aerial_perspective`]);
+/// the ground's are the light the ground reflects where the ray ends on
+/// it, times the transmittance to it.
 struct ViewTerms {
-    /// Single scattering and the directly sunlit ground
-    /// (`transport/single_scattering.rs`, or the reference method's march).
+    /// Single scattering by the air (`transport/single_scattering.rs`; the
+    /// reference method's march, with its sunlit ground).
     single: Vec<f64>,
-    /// The scaled field's light: orders >= 2 and the skylight the ground
-    /// reflects, the part the polarisation correction's ratios apply to
-    /// (zero for a sky without multiple scattering). The view march keeps
-    /// the ground's diffuse light in this term because the sky-view table
-    /// stores the two together.
+    /// The scaled field's light scattered by the air: orders >= 2 (zero
+    /// for a sky without multiple scattering).
     field: Vec<f64>,
     /// The forward-peak term of delta-M (`forward_peak.rs`), polarised as
     /// single scattering.
     forward_peak: Vec<f64>,
+    /// The directly sunlit ground (A / pi) E mu_s T_sun T_view.
+    ground_sunlit: Vec<f64>,
+    /// The skylight the ground reflects (from the scaled field, with the
+    /// sunlight delta-M moved into its beam), through the scaled view
+    /// transmittance. The polarisation correction's ratios apply to it and
+    /// to `field` (the correction's own radiance holds both).
+    ground_skylit: Vec<f64>,
 }
 
 impl ViewTerms {
@@ -499,18 +510,28 @@ impl ViewTerms {
             single: vec![0.0; wavelengths],
             field: vec![0.0; wavelengths],
             forward_peak: vec![0.0; wavelengths],
+            ground_sunlit: vec![0.0; wavelengths],
+            ground_skylit: vec![0.0; wavelengths],
         }
     }
 
-    /// The radiance: single + (field + forward peak).
-    fn add_into(&self, radiance: &mut [f64]) {
-        for (((r, s), m), f) in radiance
-            .iter_mut()
-            .zip(&self.single)
-            .zip(&self.field)
-            .zip(&self.forward_peak)
-        {
-            *r = s + (m + f);
+    /// The air's light and the ground's light (either may be left out):
+    /// (single + sunlit ground) + ((field + skylit ground) + forward peak).
+    fn add_into(&self, (air, ground): (bool, bool), radiance: &mut [f64]) {
+        let ground = if ground { 1.0 } else { 0.0 };
+        let air = if air { 1.0 } else { 0.0 };
+        for (i, r) in radiance.iter_mut().enumerate() {
+            *r = (air * self.single[i] + ground * self.ground_sunlit[i])
+                + ((air * self.field[i] + ground * self.ground_skylit[i])
+                    + air * self.forward_peak[i]);
+        }
+    }
+
+    /// The light the polarisation correction's ratios apply to: the
+    /// field's and the skylit ground's, into `out`.
+    fn polarisation_corrected(&self, out: &mut [f64]) {
+        for ((o, f), g) in out.iter_mut().zip(&self.field).zip(&self.ground_skylit) {
+            *o = f + g;
         }
     }
 }
@@ -544,6 +565,33 @@ fn add_corrected_multiple_stokes(
         for c in 1..4 {
             stokes[(c - 1) * w + i] += ratios[c * w + i] * multiple;
         }
+    }
+}
+
+/// A view's [`SkyRadiance`] from the path tracer's estimates.
+fn sky_radiance_from_traced(
+    traced: crate::transport::path_tracing::PathTracedSpectrum,
+) -> SkyRadiance {
+    match traced.stokes {
+        None => SkyRadiance {
+            radiance_w_m2_sr_nm: traced.total.mean,
+            standard_error_w_m2_sr_nm: Some(traced.total.standard_error),
+            stokes: None,
+        },
+        Some([i, q, u, v]) => SkyRadiance {
+            radiance_w_m2_sr_nm: i.mean,
+            standard_error_w_m2_sr_nm: Some(i.standard_error),
+            stokes: Some(Stokes {
+                q_w_m2_sr_nm: q.mean,
+                u_w_m2_sr_nm: u.mean,
+                v_w_m2_sr_nm: v.mean,
+                standard_errors_w_m2_sr_nm: Some([
+                    q.standard_error,
+                    u.standard_error,
+                    v.standard_error,
+                ]),
+            }),
+        },
     }
 }
 
@@ -897,11 +945,11 @@ impl Sky {
                     .map_or(species, MultipleScatteringField::forward_integral_rows)
                     * wavelengths
             ],
-            ground: vec![0.0; wavelengths],
             phase: vec![0.0; wavelengths],
             terms: ViewTerms::new(wavelengths),
             matrices: vec![PhaseMatrix::default(); wavelengths],
             multiple_stokes: vec![0.0; 4 * wavelengths],
+            corrected: vec![0.0; wavelengths],
         }
     }
 
@@ -943,27 +991,7 @@ impl Sky {
                     seed,
                     &|done| progress(before + done, total),
                 )?;
-                out.push(match traced.stokes {
-                    None => SkyRadiance {
-                        radiance_w_m2_sr_nm: traced.total.mean,
-                        standard_error_w_m2_sr_nm: Some(traced.total.standard_error),
-                        stokes: None,
-                    },
-                    Some([i, q, u, v]) => SkyRadiance {
-                        radiance_w_m2_sr_nm: i.mean,
-                        standard_error_w_m2_sr_nm: Some(i.standard_error),
-                        stokes: Some(Stokes {
-                            q_w_m2_sr_nm: q.mean,
-                            u_w_m2_sr_nm: u.mean,
-                            v_w_m2_sr_nm: v.mean,
-                            standard_errors_w_m2_sr_nm: Some([
-                                q.standard_error,
-                                u.standard_error,
-                                v.standard_error,
-                            ]),
-                        }),
-                    },
-                });
+                out.push(sky_radiance_from_traced(traced));
             }
             return Ok(out);
         }
@@ -1084,7 +1112,8 @@ impl Sky {
         {
             return;
         }
-        add_corrected_multiple_stokes(&work.multiple_stokes, &work.terms.field, radiance, stokes);
+        work.terms.polarisation_corrected(&mut work.corrected);
+        add_corrected_multiple_stokes(&work.multiple_stokes, &work.corrected, radiance, stokes);
     }
 
     /// The radiance a fast-method image shows toward `view` (read from its
@@ -1130,7 +1159,22 @@ impl Sky {
         work: &mut ViewWork,
         radiance: &mut [f64],
     ) {
+        self.compute_view_terms((view, f64::INFINITY), source_table, work);
+        work.terms.add_into((true, true), radiance);
+    }
+
+    /// The terms ([`ViewTerms`]) of the segment of the view ray `view` from
+    /// the eye to `distance_m` m (`f64::INFINITY`: the whole ray) into
+    /// `work.terms`; the single-scattering scratch holds the segment's
+    /// integrals, columns and transmittance afterwards.
+    fn compute_view_terms(
+        &self,
+        (view, distance_m): (Vector3, f64),
+        source_table: Option<&MultipleScatteringTable>,
+        work: &mut ViewWork,
+    ) {
         let terms = &mut work.terms;
+        terms.ground_sunlit.fill(0.0);
         match self.method {
             Method::Reference {
                 view_steps,
@@ -1142,30 +1186,35 @@ impl Sky {
                 terms.single.copy_from_slice(spectrum.values());
             }
             _ => {
-                self.scene.compute_inscattering_integrals(
-                    view,
+                self.scene.compute_segment_integrals(
+                    (view, distance_m),
                     SunColumns::Exact,
                     &mut work.single,
                 );
                 self.scene.radiance_from_integrals(
                     view.dot(self.sun_direction()),
                     work.single.inscattering_integrals(),
-                    work.single.ground_radiance(),
                     &mut work.phase,
                     &mut terms.single,
                 );
+                terms
+                    .ground_sunlit
+                    .copy_from_slice(work.single.ground_radiance());
             }
         }
         terms.field.fill(0.0);
         terms.forward_peak.fill(0.0);
+        terms.ground_skylit.fill(0.0);
         if let (Some(field), Some(scratch)) = (self.field(), work.multiple.as_mut()) {
+            let (segment, out) = (
+                (view, distance_m),
+                (&mut terms.field[..], &mut terms.ground_skylit[..]),
+            );
             match source_table {
                 Some(table) => {
-                    table.compute_radiance_parts(view, SunColumns::Exact, scratch, &mut terms.field)
+                    table.compute_radiance_parts(segment, SunColumns::Exact, scratch, out)
                 }
-                None => {
-                    field.compute_field_radiance(view, SunColumns::Exact, scratch, &mut terms.field)
-                }
+                None => field.compute_field_radiance(segment, SunColumns::Exact, scratch, out),
             }
             // The forward-peak term from its integrals along the view
             // (kept for its Stokes vector).
@@ -1177,7 +1226,6 @@ impl Sky {
                 &mut terms.forward_peak,
             );
         }
-        terms.add_into(radiance);
     }
 
     /// One pixel's radiance from the image tables (fast method), into
@@ -1195,15 +1243,16 @@ impl Sky {
         let terms = &mut work.terms;
         tables.sky_view.lookup_with_multiple_scattering(
             view,
-            &mut work.integrals,
-            &mut work.ground,
-            &mut terms.field,
-            &mut work.forward,
+            (&mut work.integrals, &mut terms.ground_sunlit),
+            (
+                &mut terms.field,
+                &mut terms.ground_skylit,
+                &mut work.forward,
+            ),
         );
         self.scene.radiance_from_integrals(
             cos_theta,
             &work.integrals,
-            &work.ground,
             &mut work.phase,
             &mut terms.single,
         );
@@ -1216,7 +1265,7 @@ impl Sky {
             ),
             None => terms.forward_peak.fill(0.0),
         }
-        terms.add_into(radiance);
+        terms.add_into((true, true), radiance);
     }
 
     /// A polarised sky's Stokes Q, U and V of one pixel into `stokes`
@@ -1249,7 +1298,8 @@ impl Sky {
         let azimuth_rad = (azimuth_deg - self.sun_position_deg.1).to_radians();
         let ratios = &mut work.multiple_stokes;
         table.lookup_ratios((view.z, azimuth_rad), ratios);
-        add_corrected_multiple_stokes(ratios, &work.terms.field, radiance, stokes);
+        work.terms.polarisation_corrected(&mut work.corrected);
+        add_corrected_multiple_stokes(ratios, &work.corrected, radiance, stokes);
     }
 
     /// Builds everything images of this sky need (the multiple-scattering

@@ -403,6 +403,21 @@ impl SingleScatteringSky {
         sun_columns: SunColumns,
         scratch: &mut SingleScatteringScratch,
     ) {
+        self.compute_segment_integrals((view, f64::INFINITY), sun_columns, scratch);
+    }
+
+    /// As [`Self::compute_inscattering_integrals`] along the segment of
+    /// the view ray from the eye to `distance_m` m (or where the ray
+    /// leaves the atmosphere or meets the ground, if nearer): the
+    /// integrals, the transmittance and columns are the segment's, and the
+    /// ground term is there only if the segment reaches the ground
+    /// (aerial perspective, [`crate::Sky::aerial_perspective`]).
+    pub(crate) fn compute_segment_integrals(
+        &self,
+        (view, distance_m): (Vector3, f64),
+        sun_columns: SunColumns,
+        scratch: &mut SingleScatteringScratch,
+    ) {
         let species = &self.optics.species;
         let wavelengths = self.optics.grid.len();
         scratch.inscattering_integrals.fill(0.0);
@@ -415,9 +430,12 @@ impl SingleScatteringSky {
             return;
         };
         let start = self.observer + view * enter;
-        let length = exit - enter;
+        let length = exit.min(distance_m) - enter;
         if length <= 0.0 {
-            return self.add_ground_term(start, view, sun_columns, scratch);
+            if distance_m >= exit {
+                self.add_ground_term(start, view, sun_columns, scratch);
+            }
+            return;
         }
         let mut view_ends = std::mem::take(&mut scratch.view_panel_ends);
         self.corners
@@ -485,7 +503,7 @@ impl SingleScatteringSky {
             *t = (-tau).exp();
         }
         let end = start + view * length;
-        if end.length() <= self.ground_radius_m * (1.0 + 1e-12) {
+        if distance_m >= exit && end.length() <= self.ground_radius_m * (1.0 + 1e-12) {
             self.add_ground_term(end, view, sun_columns, scratch);
         }
     }
@@ -531,19 +549,20 @@ impl SingleScatteringSky {
         }
     }
 
-    /// Fast path, second half: radiance from the integrals in `scratch`
-    /// for a view at scattering-angle cosine `cos_theta` with the sun,
-    /// W m^-2 sr^-1 nm^-1, into `radiance`.
+    /// Fast path, second half: the singly scattered radiance of the air
+    /// from the integrals in `scratch` for a view at scattering-angle
+    /// cosine `cos_theta` with the sun, W m^-2 sr^-1 nm^-1, into `radiance`
+    /// (the sunlit ground, [`SingleScatteringScratch::ground_radiance`], is
+    /// a term of its own).
     pub(crate) fn radiance_from_integrals(
         &self,
         cos_theta: f64,
         integrals: &[f64],
-        ground_radiance: &[f64],
         phase: &mut [f64],
         radiance: &mut [f64],
     ) {
         let wavelengths = self.optics.grid.len();
-        radiance.copy_from_slice(ground_radiance);
+        radiance.fill(0.0);
         for (j, s) in self.optics.species.iter().enumerate() {
             let row = &integrals[j * wavelengths..(j + 1) * wavelengths];
             if row.iter().all(|v| *v == 0.0) {
@@ -607,10 +626,16 @@ impl SingleScatteringSky {
         self.radiance_from_integrals(
             cos_theta,
             &scratch.inscattering_integrals,
-            &scratch.ground_radiance,
             &mut phase,
             radiance.values_mut(),
         );
+        for (r, g) in radiance
+            .values_mut()
+            .iter_mut()
+            .zip(&scratch.ground_radiance)
+        {
+            *r += g;
+        }
     }
 
     /// Reference path (the paper's method): uniform midpoint march of
