@@ -80,8 +80,9 @@ pub use camera::Camera;
 pub use error::{Error, Result};
 pub use geometry::ViewDirection;
 pub use sky::{
-    FastTableSize, ImageSettings, Irradiance, Method, MultipleScatteringSettings, Plane,
-    Polarisation, Scattering, Sky, SkyBuilder, SkyRadiance, Stokes,
+    AerialPerspective, FastTableSize, ImageSettings, Irradiance, Method,
+    MultipleScatteringSettings, Plane, Polarisation, Scattering, Sky, SkyBuilder, SkyRadiance,
+    Stokes,
 };
 pub use spectrum::WavelengthGrid;
 pub use sun_position::{SunPosition, UtcTime};

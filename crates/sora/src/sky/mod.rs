@@ -10,6 +10,9 @@
 //!   energy-true at any resolution (`sky/sun_disc.rs`);
 //! - [`Sky::irradiance`]: direct, diffuse and global irradiance on a plane
 //!   (`sky/irradiance.rs`);
+//! - [`Sky::aerial_perspective`]: the light of the air between the eye and
+//!   a point of a scene and the segment's transmittance, the same terms
+//!   along a segment (`sky/aerial_perspective.rs`);
 //! - with [`Polarisation::Vector`], the Stokes vector of each view
 //!   ([`SkyRadiance::stokes`]) and of each pixel
 //!   ([`Sky::render_stokes_xyz`]); `docs/polarisation.md` says which
@@ -49,10 +52,12 @@
 //! views asked for together, so `radiances(&[v])[0] == radiance(v)` to the
 //! last bit.
 
+mod aerial_perspective;
 mod irradiance;
 mod sun_disc;
 
 pub use crate::transport::multiple_scattering::MultipleScatteringSettings;
+pub use aerial_perspective::AerialPerspective;
 pub use irradiance::{Irradiance, Plane};
 
 use std::sync::{Arc, OnceLock};

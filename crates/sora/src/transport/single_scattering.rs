@@ -508,6 +508,44 @@ impl SingleScatteringSky {
         }
     }
 
+    /// The transmittance of the sun's beam (toward its centre) from the top
+    /// of the atmosphere to `point` (planet-centred, m), with columns from
+    /// `sun_columns`, into `out`: zero where the planet is in the way.
+    pub(crate) fn compute_sun_transmittance_at(
+        &self,
+        point: Vector3,
+        sun_columns: SunColumns,
+        scratch: &mut SingleScatteringScratch,
+        out: &mut [f64],
+    ) {
+        out.fill(0.0);
+        if !sun_columns.compute_columns_to_sun(
+            &self.profiles,
+            &self.corners,
+            point,
+            self.sun_direction,
+            &mut scratch.sun_panel_ends,
+            &mut scratch.sun_columns,
+        ) {
+            return;
+        }
+        for (i, t) in out.iter_mut().enumerate() {
+            let tau: f64 = self
+                .optics
+                .species
+                .iter()
+                .zip(&scratch.sun_columns)
+                .map(|(s, c)| s.extinction_per_m[i] * c)
+                .sum();
+            *t = (-tau).exp();
+        }
+    }
+
+    /// The eye, planet-centred, m.
+    pub(crate) fn observer(&self) -> Vector3 {
+        self.observer
+    }
+
     /// The sunlit Lambertian ground at `ground_point`, seen through the view
     /// transmittance already in the scratch.
     fn add_ground_term(
@@ -523,30 +561,16 @@ impl SingleScatteringSky {
             return;
         }
         let point = normal * self.ground_radius_m;
-        if !sun_columns.compute_columns_to_sun(
-            &self.profiles,
-            &self.corners,
-            point,
-            self.sun_direction,
-            &mut scratch.sun_panel_ends,
-            &mut scratch.sun_columns,
-        ) {
-            return;
-        }
-        for (i, out) in scratch.ground_radiance.iter_mut().enumerate() {
-            let tau_sun: f64 = self
-                .optics
-                .species
-                .iter()
-                .zip(&scratch.sun_columns)
-                .map(|(s, c)| s.extinction_per_m[i] * c)
-                .sum();
+        let mut ground = std::mem::take(&mut scratch.ground_radiance);
+        self.compute_sun_transmittance_at(point, sun_columns, scratch, &mut ground);
+        for (i, out) in ground.iter_mut().enumerate() {
             *out = self.optics.ground_albedo[i] / std::f64::consts::PI
                 * self.optics.solar_irradiance_w_m2_nm[i]
                 * mu_sun
-                * (-tau_sun).exp()
+                * *out
                 * scratch.view_transmittance[i];
         }
+        scratch.ground_radiance = ground;
     }
 
     /// Fast path, second half: the singly scattered radiance of the air

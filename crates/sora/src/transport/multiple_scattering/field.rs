@@ -490,6 +490,24 @@ impl MultipleScatteringField {
             .radiance(&self.atmosphere, cos_theta, integrals, phase, out);
     }
 
+    /// The delta-M scaled transmittance T* = exp(-sum_j beta*_ext,j c_j) of
+    /// the last ray or segment the march of `scratch` went along, into
+    /// `out`: what the scaled field lets through, counting light
+    /// scattered into the forward peaks as unscattered.
+    pub(crate) fn scaled_transmittance_of_last_ray(
+        &self,
+        scratch: &MultipleScatteringScratch,
+        out: &mut [f64],
+    ) {
+        let s = self.optics.species;
+        for (i, t) in out.iter_mut().enumerate() {
+            let tau: f64 = (0..s)
+                .map(|j| self.optics.scaled.scaled_extinction[i * s + j] * scratch.view_columns[j])
+                .sum();
+            *t = (-tau).exp();
+        }
+    }
+
     /// Rows of the forward-peak integrals per wavelength.
     pub(crate) fn forward_integral_rows(&self) -> usize {
         self.optics.species + forward_peak::EXTRA_ROWS
