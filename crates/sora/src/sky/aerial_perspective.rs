@@ -55,7 +55,7 @@
 //! segment and is an error.
 
 use super::{
-    ImageSettings, Method, Polarisation, SingleIntegrals, Sky, SkyRadiance, meridian_reference,
+    ImageSettings, Method, Polarisation, Sky, SkyRadiance, meridian_reference,
     sky_radiance_from_values,
 };
 use crate::colour::{SpectrumToXyz, Xyz};
@@ -353,19 +353,9 @@ impl Sky {
             work.terms.ground_sunlit.fill(0.0);
             work.terms.ground_skylit.fill(0.0);
         }
-        work.terms.add_into((true, true), radiance);
+        work.terms.add_into(radiance);
         if self.polarisation == Polarisation::Vector {
-            stokes.fill(0.0);
-            self.compute_single_scattering_stokes(
-                (
-                    view.to_vector(),
-                    meridian_reference(view.elevation_deg(), view.azimuth_deg()),
-                ),
-                SingleIntegrals::View,
-                work,
-                stokes,
-            );
-            self.add_multiple_scattering_stokes(view, work, radiance, stokes);
+            self.compute_view_stokes(view, work, radiance, stokes);
         }
     }
 

@@ -520,15 +520,12 @@ impl ViewTerms {
         }
     }
 
-    /// The air's light and the ground's light (either may be left out):
+    /// The air's light and the ground's light:
     /// (single + sunlit ground) + ((field + skylit ground) + forward peak).
-    fn add_into(&self, (air, ground): (bool, bool), radiance: &mut [f64]) {
-        let ground = if ground { 1.0 } else { 0.0 };
-        let air = if air { 1.0 } else { 0.0 };
+    fn add_into(&self, radiance: &mut [f64]) {
         for (i, r) in radiance.iter_mut().enumerate() {
-            *r = (air * self.single[i] + ground * self.ground_sunlit[i])
-                + ((air * self.field[i] + ground * self.ground_skylit[i])
-                    + air * self.forward_peak[i]);
+            *r = (self.single[i] + self.ground_sunlit[i])
+                + ((self.field[i] + self.ground_skylit[i]) + self.forward_peak[i]);
         }
     }
 
@@ -1024,17 +1021,7 @@ impl Sky {
                     let (radiance, stokes) = out.split_at_mut(wavelengths);
                     self.compute_view_radiance(view.to_vector(), None, &mut work, radiance);
                     if polarised {
-                        stokes.fill(0.0);
-                        self.compute_single_scattering_stokes(
-                            (
-                                view.to_vector(),
-                                meridian_reference(view.elevation_deg(), view.azimuth_deg()),
-                            ),
-                            SingleIntegrals::View,
-                            &mut work,
-                            stokes,
-                        );
-                        self.add_multiple_scattering_stokes(view, &mut work, radiance, stokes);
+                        self.compute_view_stokes(view, &mut work, radiance, stokes);
                     }
                     let finished = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
                     progress(finished, total);
@@ -1045,6 +1032,27 @@ impl Sky {
             .chunks(per_view)
             .map(|values| sky_radiance_from_values(values, wavelengths))
             .collect())
+    }
+
+    /// A polarised view's Stokes Q, U and V into `stokes` and its polarised
+    /// intensity in place of the scalar one in `radiance`, from the terms
+    /// and integrals [`Sky::compute_view_terms`] left in `work`.
+    fn compute_view_stokes(
+        &self,
+        view: ViewDirection,
+        work: &mut ViewWork,
+        radiance: &mut [f64],
+        stokes: &mut [f64],
+    ) {
+        stokes.fill(0.0);
+        let meridian = meridian_reference(view.elevation_deg(), view.azimuth_deg());
+        self.compute_single_scattering_stokes(
+            (view.to_vector(), meridian),
+            SingleIntegrals::View,
+            work,
+            stokes,
+        );
+        self.add_multiple_scattering_stokes(view, work, radiance, stokes);
     }
 
     /// Q and U (W m^-2 sr^-1 nm^-1, referred to the view's meridian plane)
@@ -1165,7 +1173,7 @@ impl Sky {
         radiance: &mut [f64],
     ) {
         self.compute_view_terms((view, f64::INFINITY), source_table, work);
-        work.terms.add_into((true, true), radiance);
+        work.terms.add_into(radiance);
     }
 
     /// The terms ([`ViewTerms`]) of the segment of the view ray `view` from
@@ -1270,7 +1278,7 @@ impl Sky {
             ),
             None => terms.forward_peak.fill(0.0),
         }
-        terms.add_into((true, true), radiance);
+        terms.add_into(radiance);
     }
 
     /// A polarised sky's Stokes Q, U and V of one pixel into `stokes`
