@@ -475,7 +475,7 @@ mod tests {
     /// ground 2 degrees up, not 1, whose 1000 km miss 1.9e-6 of the sky).
     /// As d shrinks it goes to zero in proportion to d (a centimetre gives
     /// 1/100 of a metre's, within 2 %), and a metre gives less than 1e-3 of
-    /// the sky. (Not 1e-4, as issue 32 asks: near the ground most of it is
+    /// the sky. (Not less than 1e-4: near the ground most of it is
     /// the light from behind the point that the aerosol's forward peak
     /// scatters around it, f beta_sca d L_sky; the test prints the largest
     /// share, measured 4.3e-4 over these views (3.3e-4 at the zenith on
