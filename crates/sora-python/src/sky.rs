@@ -417,6 +417,51 @@ impl Sky {
         self.inner.wavelengths().to_string()
     }
 
+    /// Aerial perspective of points at `distance_m` along views (1-D arrays
+    /// of equal length; degrees, m): (radiance scattered into each segment
+    /// W m^-2 sr^-1 nm^-1, its transmittance, the sun's transmittance to
+    /// the point, the sky's horizontal diffuse irradiance W m^-2 nm^-1),
+    /// each [view, wavelength].
+    #[allow(clippy::type_complexity)]
+    fn aerial_perspective<'py>(
+        &self,
+        py: Python<'py>,
+        elevation_deg: PyReadonlyArray1<'py, f64>,
+        azimuth_deg: PyReadonlyArray1<'py, f64>,
+        distance_m: PyReadonlyArray1<'py, f64>,
+    ) -> PyResult<Vec<Bound<'py, PyArray2<f64>>>> {
+        let views = views_from_arrays(&elevation_deg, &azimuth_deg)?;
+        let distances = distance_m.as_array();
+        if distances.len() != views.len() {
+            return Err(value_error(format!(
+                "distance_m has {} values and the views {}: they must broadcast together",
+                distances.len(),
+                views.len()
+            )));
+        }
+        let segments: Vec<(ViewDirection, f64)> =
+            views.iter().copied().zip(distances.iter().copied()).collect();
+        let results =
+            run_detached(py, || self.inner.aerial_perspectives(&segments))?.map_err(to_py_err)?;
+        let wavelengths = self.inner.wavelengths().len();
+        let shape = (views.len(), wavelengths);
+        let mut parts = vec![Vec::with_capacity(views.len() * wavelengths); 4];
+        for ap in &results {
+            parts[0].extend_from_slice(ap.radiance.radiance_w_m2_sr_nm.values());
+            parts[1].extend_from_slice(ap.transmittance.values());
+            parts[2].extend_from_slice(ap.sun_transmittance_at_point.values());
+            parts[3].extend_from_slice(ap.sky_irradiance_at_point.values());
+        }
+        Ok(parts
+            .into_iter()
+            .map(|values| {
+                Array2::from_shape_vec(shape, values)
+                    .expect("one row per view")
+                    .into_pyarray(py)
+            })
+            .collect())
+    }
+
     /// 'scalar' or 'vector'.
     #[getter]
     fn polarisation(&self) -> String {

@@ -254,3 +254,26 @@ def test_write_exr_writes_through_the_librarys_writer(tmp_path):
     with pytest.raises(ValueError, match="does not exist"):
         sora.write_exr(tmp_path / "no-such-folder" / "map.exr", rgb)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["map.exr"]
+
+
+def test_aerial_perspective_is_a_dataset_that_broadcasts(sky):
+    far = sky.aerial_perspective(np.array([[5.0], [30.0]]), np.array([0.0, 180.0]), 1e9)
+    assert isinstance(far, xr.Dataset)
+    assert far.radiance.shape == (4, 21)
+    assert far.radiance.attrs["units"] == "W m-2 sr-1 nm-1"
+    assert far.transmittance.attrs["units"] == "1"
+    assert far.sky_irradiance_at_point.attrs["units"] == "W m-2 nm-1"
+    assert far.distance_m.attrs["units"] == "m"
+    # Past the atmosphere the segment is the whole view: the sky's radiance.
+    sky_radiance = sky.radiance(np.array([[5.0], [30.0]]), np.array([0.0, 180.0])).values
+    np.testing.assert_allclose(far.radiance.values, sky_radiance, rtol=1e-12)
+    near = sky.aerial_perspective(5.0, 0.0, [1.0, 1e3, 1e4])
+    assert np.all(np.diff(near.radiance.values, axis=0) > 0)
+    assert np.all(np.diff(near.transmittance.values, axis=0) < 0)
+    assert np.all((near.transmittance.values > 0) & (near.transmittance.values < 1))
+
+
+@pytest.mark.parametrize("bad", [0.0, -1.0, float("nan")])
+def test_aerial_perspective_refuses_bad_distances(sky, bad):
+    with pytest.raises(ValueError, match="distance_m"):
+        sky.aerial_perspective(5.0, 0.0, bad)

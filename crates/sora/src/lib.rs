@@ -86,8 +86,9 @@ pub use camera::Camera;
 pub use error::{Error, Result};
 pub use geometry::ViewDirection;
 pub use sky::{
-    FastTableSize, ImageSettings, Irradiance, Method, MultipleScatteringSettings, Plane,
-    Polarisation, Scattering, Sky, SkyBuilder, SkyRadiance, Stokes, TABLE_VIEW_COUNT,
+    AerialPerspective, FastTableSize, ImageSettings, Irradiance, Method,
+    MultipleScatteringSettings, Plane, Polarisation, Scattering, Sky, SkyBuilder, SkyRadiance,
+    Stokes, TABLE_VIEW_COUNT,
 };
 pub use spectrum::WavelengthGrid;
 pub use sun_position::{SunPosition, UtcTime};

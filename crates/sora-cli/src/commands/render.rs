@@ -48,6 +48,12 @@ use crate::polarisation_maps;
 /// are written black; when the whole sky is that dark, auto exposure says
 /// so on stderr and writes a black image.
 ///
+/// Aerial perspective (--distance-m D, or --depth DEPTH.exr with the
+/// distance per pixel in m): instead of the sky, the light the air
+/// scatters into each pixel's view between the eye and the point, and the
+/// segment's transmittance as the EXR layer transmittance; a scene pixel L
+/// is then seen as L * transmittance + image (OpenEXR only).
+///
 /// Cameras:
 ///   fisheye      the whole sky in a disc, zenith at the centre, north up,
 ///                east LEFT (a sky chart seen from below); equidistant
@@ -182,6 +188,23 @@ pub struct RenderArgs {
     /// cyclic perceptual colour map, -90..90 degrees from the vertical)
     #[arg(long, value_name = "FILE.png")]
     aop: Option<PathBuf>,
+
+    /// Aerial perspective: instead of the sky, the light the air scatters
+    /// into each pixel's view between the eye and a point this far along
+    /// it (m, > 0), and its transmittance as the EXR layer "transmittance"
+    #[arg(
+        long,
+        value_name = "M",
+        allow_hyphen_values = true,
+        conflicts_with = "depth"
+    )]
+    distance_m: Option<f64>,
+
+    /// Aerial perspective with a distance per pixel: an OpenEXR of the
+    /// image's size whose channel Z (or its only channel) holds the
+    /// distance along each pixel's view, m (> 0; infinity for the sky)
+    #[arg(long, value_name = "FILE.exr")]
+    depth: Option<PathBuf>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -233,6 +256,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     sora::sky::check_image_size(width, height)?;
     args.colour.display_mapping()?;
     let frame_count = frame_count(&args)?;
+    // Aerial perspective: its distances read and checked before any work.
+    let depth = aerial_depth(&args, (width, height), (format, frame_count))?;
     // The polarisation outputs: polarised light, one frame, the right
     // formats, writable paths.
     let polarisation_outputs = args.stokes || args.dolp.is_some() || args.aop.is_some();
@@ -338,6 +363,19 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         height,
         draw_sun_disc: !args.no_sun_disc,
     };
+    if let Some(depth) = depth {
+        let mut files = OutputFiles::new();
+        render_aerial_perspective(
+            &args,
+            &sky,
+            &image,
+            &to_xyz,
+            &depth,
+            (&targets[0], &mut files),
+        )?;
+        files.commit()?;
+        return Ok(());
+    }
     // The frames: one, or a sequence of sun elevations at one azimuth.
     let elevations = frame_elevations(&args, sky.sun_position_deg().0)?;
     let mut exposure = None;
@@ -375,6 +413,149 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         }
     }
     files.commit()?;
+    Ok(())
+}
+
+/// The distances of an aerial-perspective image (--distance-m, one for
+/// every pixel, or --depth, one per pixel), checked: None without either.
+fn aerial_depth(
+    args: &RenderArgs,
+    (width, height): (u32, u32),
+    (format, frame_count): (OutputFormat, usize),
+) -> anyhow::Result<Option<Vec<f64>>> {
+    let depth = match (&args.distance_m, &args.depth) {
+        (None, None) => return Ok(None),
+        (Some(distance), _) => {
+            if distance.is_nan() || *distance <= 0.0 {
+                bail!(
+                    "--distance-m {distance}: the distance to the points must be > 0 m (infinity: the whole sky)"
+                );
+            }
+            vec![*distance]
+        }
+        (None, Some(path)) => read_depth(path, (width, height))?,
+    };
+    if format != OutputFormat::Exr {
+        bail!(
+            "--distance-m and --depth write the in-scattered light and its transmittance as OpenEXR layers: give -o FILE.exr"
+        );
+    }
+    if frame_count > 1 || args.stokes || args.dolp.is_some() || args.aop.is_some() {
+        bail!(
+            "--distance-m and --depth make one image of the air's light, without --stokes, --dolp, --aop or a sequence"
+        );
+    }
+    Ok(Some(depth))
+}
+
+/// The distances of a depth EXR (channel Z, or its only channel), m, one
+/// per pixel of a `width` x `height` image, row-major, each > 0.
+fn read_depth(path: &Path, (width, height): (u32, u32)) -> anyhow::Result<Vec<f64>> {
+    let (w, h, depth) =
+        sora::output::read_exr_channel(path, "Z").map_err(|e| anyhow::anyhow!("--depth {e}"))?;
+    if (w, h) != (width as usize, height as usize) {
+        bail!(
+            "--depth {}: {w} x {h} pixels, the image is {width} x {height}",
+            path.display()
+        );
+    }
+    if let Some(k) = depth.iter().position(|d| d.is_nan() || *d <= 0.0) {
+        bail!(
+            "--depth {}: the distance at pixel ({}, {}) is {} m; distances must be > 0 m (infinity: the sky)",
+            path.display(),
+            k % width as usize,
+            k / width as usize,
+            depth[k]
+        );
+    }
+    Ok(depth)
+}
+
+/// Writes the aerial-perspective image: the in-scattered light as the
+/// main layer (in --units, RGB or XYZ as the sky's image would be) and
+/// the transmittance as the layer "transmittance" (per channel: the XYZ or
+/// RGB of the transmittance spectrum over that of a spectrum of ones).
+fn render_aerial_perspective(
+    args: &RenderArgs,
+    sky: &sora::Sky,
+    image: &ImageSettings,
+    to_xyz: &SpectrumToXyz,
+    depth: &[f64],
+    (output, files): (&Path, &mut OutputFiles),
+) -> anyhow::Result<()> {
+    let started = Instant::now();
+    let (radiance, transmittance) = sky.render_aerial_perspective_xyz(image, depth, to_xyz)?;
+    let (w, h) = (image.width as usize, image.height as usize);
+    let scale = match args.units {
+        Units::Radiance => 1.0,
+        Units::Luminance => sora::colour::MAXIMUM_LUMINOUS_EFFICACY_LM_PER_W,
+    };
+    let channels = |c: sora::colour::Xyz| -> [f64; 3] {
+        if args.exr_xyz {
+            [c.x, c.y, c.z]
+        } else {
+            let rgb = RgbColourSpace::Srgb.linear_rgb_from_xyz(c);
+            [rgb.r, rgb.g, rgb.b]
+        }
+    };
+    let kind = if args.exr_xyz {
+        ChannelKind::Xyz
+    } else {
+        ChannelKind::Rgb
+    };
+    let ones = sora::spectrum::SampledSpectrum::from_values(vec![1.0; sky.wavelengths().len()]);
+    let white = channels(to_xyz.to_xyz(&ones)?);
+    let main = LinearImage::new(
+        w,
+        h,
+        kind,
+        radiance
+            .iter()
+            .map(|c| channels(c.scaled(scale)).map(|v| v as f32))
+            .collect(),
+    )?;
+    let through = LinearImage::new(
+        w,
+        h,
+        kind,
+        transmittance
+            .iter()
+            .map(|c| {
+                let v = channels(*c);
+                [0, 1, 2].map(|k| (v[k] / white[k]) as f32)
+            })
+            .collect(),
+    )?;
+    let units = match args.units {
+        Units::Radiance => {
+            "radiance_w_m2_sr (XYZ of spectral radiance integrated over nm, no 683 lm/W)"
+        }
+        Units::Luminance => "luminance_cd_m2 (Y in cd/m^2)",
+    };
+    let (sun_elevation, sun_azimuth) = sky.sun_position_deg();
+    let options = ExrOptions {
+        sample_type: if args.exr_half {
+            ExrSampleType::F16Clamped
+        } else {
+            ExrSampleType::F32
+        },
+        text_attributes: vec![
+            ("units".into(), units.into()),
+            ("sun_elevation_deg".into(), sun_elevation.to_string()),
+            ("sun_azimuth_deg".into(), sun_azimuth.to_string()),
+            (
+                "aerial_perspective".into(),
+                "the main image is the light the air scatters into each view between the eye and the point at its distance; the layer transmittance is the segment's transmittance per channel (1 = all of the point's light); a scene pixel L is seen as L * transmittance + main (sora docs/aerial_perspective.md)".into(),
+            ),
+        ],
+        ..ExrOptions::default()
+    };
+    files.exr_with_layers(output, &main, &[("transmittance", &through)], options)?;
+    eprintln!(
+        "rendered the aerial perspective {w}x{h} in {:.3} s, wrote {}",
+        started.elapsed().as_secs_f64(),
+        output.display()
+    );
     Ok(())
 }
 

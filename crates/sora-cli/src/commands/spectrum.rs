@@ -64,6 +64,14 @@ use crate::arguments::{
 ///   sora spectrum --preset earth-clear --sun-elevation 30 --almucantar 10 \
 ///       --filter cimel-440 --filter cimel-870
 ///
+/// Aerial perspective (--distance-m D): the light the air scatters into
+/// the view between the eye and a point D m away (instead of the whole
+/// sky; W m^-2 sr^-1 nm^-1), and a column transmittance, the segment's
+/// Beer-Lambert transmittance; a renderer shows the point's own radiance
+/// L as L * transmittance + radiance. The fast method or path tracing:
+///   sora spectrum --preset earth-hazy --sun-elevation 10 --view-elevation 2 \
+///       --view-azimuth 0 --distance-m 20000
+///
 /// The sun from a date, a time and a place instead (--refraction off for
 /// its geometric position; the JSON reports the sun used):
 ///   sora spectrum --preset earth-clear --time 2026-06-21T05:30:00+09:00 \
@@ -131,6 +139,11 @@ pub struct SpectrumArgs {
 
     #[command(flatten)]
     filters: FilterOptions,
+
+    /// Aerial perspective: the light scattered into the view between the
+    /// eye and a point this far along it (m, > 0), and its transmittance
+    #[arg(long, value_name = "M", allow_hyphen_values = true)]
+    distance_m: Option<f64>,
 
     /// Polarised light: Stokes Q, U, V, the degree and the angle of
     /// polarisation (the fast method or path tracing; not the reference)
@@ -247,6 +260,13 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
         _ => (0, 0),
     };
     // The directions (and their limits, docs/limits.md) before any work.
+    if let Some(distance) = args.distance_m
+        && (distance.is_nan() || distance <= 0.0)
+    {
+        anyhow::bail!(
+            "--distance-m {distance}: the distance to the point must be > 0 m (infinity: the whole sky)"
+        );
+    }
     let (sun_elevation, sun_azimuth) = args.sun.sun_deg()?;
     let filters = args.filters.filters()?;
     let grids = filters
@@ -262,6 +282,11 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
         .max()
         .unwrap_or(args.sun.wavelengths.len());
     let views = directions(&args, (sun_elevation, sun_azimuth), wavelength_count)?;
+    if !filters.is_empty() && args.distance_m.is_some() {
+        anyhow::bail!(
+            "--distance-m and --filter do not combine: aerial perspective is given per wavelength"
+        );
+    }
     let mut atmosphere = args.source.load()?;
     if !filters.is_empty() {
         return run_filtered(
@@ -296,7 +321,15 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
             grid.len(),
         ));
     }
-    let results = if path_tracing {
+    let (results, transmittances) = if let Some(distance) = args.distance_m {
+        let segments: Vec<(ViewDirection, f64)> = views.iter().map(|v| (*v, distance)).collect();
+        let (radiances, transmittances) = sky
+            .aerial_perspectives(&segments)?
+            .into_iter()
+            .map(|ap| (ap.radiance, ap.transmittance))
+            .unzip();
+        (radiances, Some(transmittances))
+    } else if path_tracing {
         let bar = progress_bar(samples * views.len() as u64);
         let results = sky.radiances_with_progress(&views, &|done, _| bar.set_position(done))?;
         bar.finish_and_clear();
@@ -310,9 +343,23 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
             (samples * views.len() as u64) as f64 / seconds,
             100.0 * worst
         );
-        results
+        (results, None)
     } else {
-        sky.radiances(&views)?
+        (sky.radiances(&views)?, None)
+    };
+    // The transmittance column of a CSV row and member of a direction's
+    // JSON (empty without --distance-m).
+    let transmittance_csv = |k: usize, i: usize| {
+        transmittances
+            .as_ref()
+            .map_or(String::new(), |t: &Vec<sora::spectrum::SampledSpectrum>| {
+                format!(",{:.9e}", t[k][i])
+            })
+    };
+    let transmittance_header = if transmittances.is_some() {
+        ",transmittance"
+    } else {
+        ""
     };
     // Colour comes from the grid's wavelengths in 360-830 nm (all of them
     // for a grid inside that range); a grid with none there has no colour.
@@ -347,17 +394,23 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
     };
     let wavelengths: Vec<f64> = grid.wavelengths_nm().collect();
     // A direction's JSON members: its spectrum (and errors), its colour.
-    let json_direction =
-        |r: &SkyRadiance, (xyz, rgb): &(sora::colour::Xyz, sora::colour::LinearRgb)| {
-            let errors = match &r.standard_error_w_m2_sr_nm {
-                None => String::new(),
-                Some(errors) => format!(
-                    ", \"standard_error_w_m2_sr_nm\": [{}]",
-                    number_list(errors.values(), |e| format!("{e:.3e}"))
-                ),
-            };
-            let stokes = r.stokes.as_ref().filter(|_| args.stokes);
-            let stokes = stokes.map_or(String::new(), |stokes| {
+    let json_direction = |k: usize, (xyz, rgb): &(sora::colour::Xyz, sora::colour::LinearRgb)| {
+        let r = &results[k];
+        let mut errors = match &r.standard_error_w_m2_sr_nm {
+            None => String::new(),
+            Some(errors) => format!(
+                ", \"standard_error_w_m2_sr_nm\": [{}]",
+                number_list(errors.values(), |e| format!("{e:.3e}"))
+            ),
+        };
+        if let Some(t) = &transmittances {
+            errors += &format!(
+                ", \"transmittance\": [{}]",
+                number_list(t[k].values(), |v| format!("{v:.9e}"))
+            );
+        }
+        let stokes = r.stokes.as_ref().filter(|_| args.stokes);
+        let stokes = stokes.map_or(String::new(), |stokes| {
                 let degree = stokes.degree_of_linear_polarisation(&r.radiance_w_m2_sr_nm);
                 let angle: Vec<String> = stokes
                     .angle_of_polarisation_deg()
@@ -384,26 +437,29 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
                     angle.join(", ")
                 )
             });
-            (
+        (
+            format!(
+                "\"radiance_w_m2_sr_nm\": [{}]{errors}{stokes}",
+                number_list(r.radiance_w_m2_sr_nm.values(), |v| format!("{v:.9e}"))
+            ),
+            if colour_sample_count == 0 {
+                "\"xyz\": null, \"linear_srgb\": null".to_string()
+            } else {
                 format!(
-                    "\"radiance_w_m2_sr_nm\": [{}]{errors}{stokes}",
-                    number_list(r.radiance_w_m2_sr_nm.values(), |v| format!("{v:.9e}"))
-                ),
-                if colour_sample_count == 0 {
-                    "\"xyz\": null, \"linear_srgb\": null".to_string()
-                } else {
-                    format!(
-                        "\"xyz\": [{:.9e}, {:.9e}, {:.9e}], \"linear_srgb\": [{:.9e}, {:.9e}, {:.9e}]",
-                        xyz.x, xyz.y, xyz.z, rgb.r, rgb.g, rgb.b
-                    )
-                },
-            )
-        };
-    let run_json = if path_tracing {
+                    "\"xyz\": [{:.9e}, {:.9e}, {:.9e}], \"linear_srgb\": [{:.9e}, {:.9e}, {:.9e}]",
+                    xyz.x, xyz.y, xyz.z, rgb.r, rgb.g, rgb.b
+                )
+            },
+        )
+    };
+    let mut run_json = if path_tracing {
         format!(", \"samples\": {samples}, \"seed\": {seed}")
     } else {
         String::new()
     };
+    if let Some(distance) = args.distance_m {
+        run_json += &format!(", \"distance_m\": {distance}");
+    }
     let wavelength_json = number_list(&wavelengths, |w| format!("{w}"));
     // The Stokes columns of a CSV row (empty without --stokes).
     let stokes_header = if args.stokes {
@@ -448,13 +504,13 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
                 } else {
                     "wavelength_nm,radiance_w_m2_sr_nm"
                 };
-                writeln!(out, "{header}{stokes_header}")?;
+                writeln!(out, "{header}{transmittance_header}{stokes_header}")?;
                 for (i, wavelength) in wavelengths.iter().enumerate() {
                     write!(out, "{wavelength},{:.9e}", result.radiance_w_m2_sr_nm[i])?;
                     if let Some(errors) = &result.standard_error_w_m2_sr_nm {
                         write!(out, ",{:.3e}", errors[i])?;
                     }
-                    writeln!(out, "{}", stokes_columns[0][i])?;
+                    writeln!(out, "{}{}", transmittance_csv(0, i), stokes_columns[0][i])?;
                 }
                 if colour_sample_count == 0 {
                     eprintln!("{colour_note}");
@@ -466,7 +522,7 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
                 }
             }
             Format::Json => {
-                let (spectrum, colour) = json_direction(result, &colours[0]);
+                let (spectrum, colour) = json_direction(0, &colours[0]);
                 writeln!(
                     out,
                     "{{{sun_json}, \"wavelength_nm\": [{wavelength_json}], {spectrum}{run_json}, {colour}}}"
@@ -481,8 +537,10 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
                 } else {
                     "view_elevation_deg,view_azimuth_deg,wavelength_nm,radiance_w_m2_sr_nm"
                 };
-                writeln!(out, "{header}{stokes_header}")?;
-                for ((view, result), stokes) in views.iter().zip(&results).zip(&stokes_columns) {
+                writeln!(out, "{header}{transmittance_header}{stokes_header}")?;
+                for (k, ((view, result), stokes)) in
+                    views.iter().zip(&results).zip(&stokes_columns).enumerate()
+                {
                     for (i, wavelength) in wavelengths.iter().enumerate() {
                         write!(
                             out,
@@ -494,17 +552,17 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
                         if let Some(errors) = &result.standard_error_w_m2_sr_nm {
                             write!(out, ",{:.3e}", errors[i])?;
                         }
-                        writeln!(out, "{}", stokes[i])?;
+                        writeln!(out, "{}{}", transmittance_csv(k, i), stokes[i])?;
                     }
                 }
             }
             Format::Json => {
                 let directions: Vec<String> = views
                     .iter()
-                    .zip(&results)
                     .zip(&colours)
-                    .map(|((view, result), colour)| {
-                        let (spectrum, colour) = json_direction(result, colour);
+                    .enumerate()
+                    .map(|(k, (view, colour))| {
+                        let (spectrum, colour) = json_direction(k, colour);
                         format!(
                             "{{\"view_elevation_deg\": {}, \"view_azimuth_deg\": {}, {spectrum}, {colour}}}",
                             view.elevation_deg(),

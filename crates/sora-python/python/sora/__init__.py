@@ -508,6 +508,41 @@ class Sky:
             attrs=attrs,
         )
 
+    def aerial_perspective(self, view_elevation_deg, view_azimuth_deg, distance_m) -> xr.Dataset:
+        """Aerial perspective: the light the air scatters toward the eye
+        between it and a point ``distance_m`` (m, > 0) along each view, and
+        how much of the point's own light gets through (numbers or arrays
+        that broadcast together, as :meth:`radiance`). A Dataset with dims
+        ``(direction, wavelength)``: ``radiance`` (W m^-2 sr^-1 nm^-1, the
+        air's light), ``transmittance`` (the segment's), and what lights
+        the point, ``sun_transmittance_at_point`` and
+        ``sky_irradiance_at_point`` (the sky's horizontal diffuse
+        irradiance, W m^-2 nm^-1, computed at the eye). A scene point of
+        radiance L is seen as ``L * transmittance + radiance``
+        (docs/aerial_perspective.md)."""
+        (elevation, azimuth, distance), _ = _broadcast_flat(
+            ("view_elevation_deg", "view_azimuth_deg", "distance_m"),
+            view_elevation_deg,
+            view_azimuth_deg,
+            distance_m,
+        )
+        radiance, transmittance, sun, irradiance = self._native.aerial_perspective(
+            elevation, azimuth, distance
+        )
+        dims = ("direction", "wavelength")
+        coords = self._coords(elevation, azimuth)
+        coords["distance_m"] = ("direction", distance, {"units": "m", "long_name": "distance to the point"})
+        return xr.Dataset(
+            {
+                "radiance": (dims, radiance, {"units": RADIANCE_UNITS, "long_name": "spectral radiance scattered into the segment"}),
+                "transmittance": (dims, transmittance, {"units": "1", "long_name": "transmittance of the segment"}),
+                "sun_transmittance_at_point": (dims, sun, {"units": "1", "long_name": "transmittance of the sun's beam to the point"}),
+                "sky_irradiance_at_point": (dims, irradiance, {"units": "W m-2 nm-1", "long_name": "diffuse sky irradiance on a horizontal plane (at the eye)"}),
+            },
+            coords=coords,
+            attrs=self._attrs(),
+        )
+
     def stokes(self, view_elevation_deg, view_azimuth_deg) -> xr.Dataset:
         """The Stokes vector of the light from each direction (as
         :meth:`radiance`), for a sky with ``polarisation="vector"``: a

@@ -85,6 +85,10 @@ class Sky:
         """[spectrum, 3]: CIE 1931 XYZ or linear sRGB of each spectrum."""
     def radiances(self, elevation_deg: _F64, azimuth_deg: _F64) -> Tuple[_F64, Optional[_F64]]:
         """(radiance [view, wavelength], standard error or None), W m^-2 sr^-1 nm^-1."""
+    def aerial_perspective(
+        self, elevation_deg: _F64, azimuth_deg: _F64, distance_m: _F64
+    ) -> List[_F64]:
+        """[radiance, transmittance, sun transmittance, sky irradiance], each [view, wavelength]."""
     @property
     def polarisation(self) -> str: ...
     @property

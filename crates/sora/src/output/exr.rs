@@ -348,6 +348,32 @@ fn chromaticities(channel_kind: ChannelKind) -> Chromaticities {
     }
 }
 
+/// One channel of the first layer of an OpenEXR file (for a depth buffer,
+/// say): its `width` x `height` samples as f64, row-major, top row first;
+/// the channel named `name`, or the file's only channel. A file that cannot
+/// be read or lacks the channel is an [`Error::Io`] naming it.
+pub fn read_exr_channel(path: &Path, name: &str) -> Result<(usize, usize, Vec<f64>)> {
+    let io = |message: String| Error::Io {
+        path: path.display().to_string(),
+        message,
+    };
+    let image = ::exr::prelude::read_first_flat_layer_from_file(path)
+        .map_err(|error| io(format!("not a readable OpenEXR file ({error})")))?;
+    let size = image.layer_data.size;
+    let channels = &image.layer_data.channel_data.list;
+    let channel = channels
+        .iter()
+        .find(|c| c.name.to_string() == name)
+        .or(if channels.len() == 1 {
+            channels.first()
+        } else {
+            None
+        })
+        .ok_or_else(|| io(format!("no channel {name} (and not a single channel)")))?;
+    let values = channel.sample_data.values_as_f32().map(f64::from).collect();
+    Ok((size.0, size.1, values))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

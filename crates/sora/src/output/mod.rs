@@ -48,8 +48,8 @@ pub use atomic_file::OutputFiles;
 pub use path::{MAX_SYMBOLIC_LINK_HOPS, output_target, output_targets};
 
 pub use exr::{
-    ExrCompression, ExrOptions, ExrSampleType, encode_exr, encode_exr_with_layers, write_exr,
-    write_exr_with_layers,
+    ExrCompression, ExrOptions, ExrSampleType, encode_exr, encode_exr_with_layers,
+    read_exr_channel, write_exr, write_exr_with_layers,
 };
 pub use format::OutputFormat;
 pub use image_buffer::{

@@ -10,6 +10,9 @@
 //!   energy-true at any resolution (`sky/sun_disc.rs`);
 //! - [`Sky::irradiance`]: direct, diffuse and global irradiance on a plane
 //!   (`sky/irradiance.rs`);
+//! - [`Sky::aerial_perspective`]: the light of the air between the eye and
+//!   a point of a scene and the segment's transmittance, the same terms
+//!   along a segment (`sky/aerial_perspective.rs`);
 //! - with [`Polarisation::Vector`], the Stokes vector of each view
 //!   ([`SkyRadiance::stokes`]) and of each pixel
 //!   ([`Sky::render_stokes_xyz`]); `docs/polarisation.md` says which
@@ -54,10 +57,12 @@
 //! degrees from the sun, and 1.4e-3 in the degree of polarisation; 1 % in
 //! twilight; [`Sky::radiances_exact`] keeps the exact path).
 
+mod aerial_perspective;
 mod irradiance;
 mod sun_disc;
 
 pub use crate::transport::multiple_scattering::MultipleScatteringSettings;
+pub use aerial_perspective::AerialPerspective;
 pub use irradiance::{Irradiance, MAX_REFERENCE_IRRADIANCE_STEPS, Plane, check_irradiance_work};
 pub(crate) use sun_disc::LIMB_DARKENING as SUN_LIMB_DARKENING;
 
@@ -574,7 +579,6 @@ struct ViewWork {
     /// forward-peak term.
     integrals: Vec<f64>,
     forward: Vec<f64>,
-    ground: Vec<f64>,
     phase: Vec<f64>,
     /// The fast method's terms of the view or pixel.
     terms: ViewTerms,
@@ -582,25 +586,37 @@ struct ViewWork {
     matrices: Vec<PhaseMatrix>,
     /// The multiply scattered light's I, Q, U, V (polarised skies).
     multiple_stokes: Vec<f64>,
+    /// The light the polarisation correction applies to
+    /// ([`ViewTerms::polarisation_corrected`]).
+    corrected: Vec<f64>,
 }
 
 /// The fast method's terms of one view or pixel, each computed on its own
 /// and added once ([`ViewTerms::add_into`]), the same way for views
 /// ([`Sky::compute_view_radiance`]) and pixels
 /// ([`Sky::compute_pixel_radiance`]); W m^-2 sr^-1 nm^-1 per wavelength.
+///
+/// The air's terms are the light scattered into the view between the eye
+/// and the ray's end (or a point at a distance, [`Sky::aerial_perspective`]);
+/// the ground's are the light the ground reflects where the ray ends on
+/// it, times the transmittance to it.
 struct ViewTerms {
-    /// Single scattering and the directly sunlit ground
-    /// (`transport/single_scattering.rs`, or the reference method's march).
+    /// Single scattering by the air (`transport/single_scattering.rs`; the
+    /// reference method's march, with its sunlit ground).
     single: Vec<f64>,
-    /// The scaled field's light: orders >= 2 and the skylight the ground
-    /// reflects, the part the polarisation correction's ratios apply to
-    /// (zero for a sky without multiple scattering). The view march keeps
-    /// the ground's diffuse light in this term because the sky-view table
-    /// stores the two together.
+    /// The scaled field's light scattered by the air: orders >= 2 (zero
+    /// for a sky without multiple scattering).
     field: Vec<f64>,
     /// The forward-peak term of delta-M (`forward_peak.rs`), polarised as
     /// single scattering.
     forward_peak: Vec<f64>,
+    /// The directly sunlit ground (A / pi) E mu_s T_sun T_view.
+    ground_sunlit: Vec<f64>,
+    /// The skylight the ground reflects (from the scaled field, with the
+    /// sunlight delta-M moved into its beam), through the scaled view
+    /// transmittance. The polarisation correction's ratios apply to it and
+    /// to `field` (the correction's own radiance holds both).
+    ground_skylit: Vec<f64>,
 }
 
 impl ViewTerms {
@@ -609,18 +625,25 @@ impl ViewTerms {
             single: vec![0.0; wavelengths],
             field: vec![0.0; wavelengths],
             forward_peak: vec![0.0; wavelengths],
+            ground_sunlit: vec![0.0; wavelengths],
+            ground_skylit: vec![0.0; wavelengths],
         }
     }
 
-    /// The radiance: single + (field + forward peak).
+    /// The air's light and the ground's light:
+    /// (single + sunlit ground) + ((field + skylit ground) + forward peak).
     fn add_into(&self, radiance: &mut [f64]) {
-        for (((r, s), m), f) in radiance
-            .iter_mut()
-            .zip(&self.single)
-            .zip(&self.field)
-            .zip(&self.forward_peak)
-        {
-            *r = s + (m + f);
+        for (i, r) in radiance.iter_mut().enumerate() {
+            *r = (self.single[i] + self.ground_sunlit[i])
+                + ((self.field[i] + self.ground_skylit[i]) + self.forward_peak[i]);
+        }
+    }
+
+    /// The light the polarisation correction's ratios apply to: the
+    /// field's and the skylit ground's, into `out`.
+    fn polarisation_corrected(&self, out: &mut [f64]) {
+        for ((o, f), g) in out.iter_mut().zip(&self.field).zip(&self.ground_skylit) {
+            *o = f + g;
         }
     }
 }
@@ -654,6 +677,33 @@ fn add_corrected_multiple_stokes(
         for c in 1..4 {
             stokes[(c - 1) * w + i] += ratios[c * w + i] * multiple;
         }
+    }
+}
+
+/// A view's [`SkyRadiance`] from the path tracer's estimates.
+fn sky_radiance_from_traced(
+    traced: crate::transport::path_tracing::PathTracedSpectrum,
+) -> SkyRadiance {
+    match traced.stokes {
+        None => SkyRadiance {
+            radiance_w_m2_sr_nm: traced.total.mean,
+            standard_error_w_m2_sr_nm: Some(traced.total.standard_error),
+            stokes: None,
+        },
+        Some([i, q, u, v]) => SkyRadiance {
+            radiance_w_m2_sr_nm: i.mean,
+            standard_error_w_m2_sr_nm: Some(i.standard_error),
+            stokes: Some(Stokes {
+                q_w_m2_sr_nm: q.mean,
+                u_w_m2_sr_nm: u.mean,
+                v_w_m2_sr_nm: v.mean,
+                standard_errors_w_m2_sr_nm: Some([
+                    q.standard_error,
+                    u.standard_error,
+                    v.standard_error,
+                ]),
+            }),
+        },
     }
 }
 
@@ -1018,11 +1068,11 @@ impl Sky {
                     .map_or(species, MultipleScatteringField::forward_integral_rows)
                     * wavelengths
             ],
-            ground: vec![0.0; wavelengths],
             phase: vec![0.0; wavelengths],
             terms: ViewTerms::new(wavelengths),
             matrices: vec![PhaseMatrix::default(); wavelengths],
             multiple_stokes: vec![0.0; 4 * wavelengths],
+            corrected: vec![0.0; wavelengths],
         }
     }
 
@@ -1088,27 +1138,7 @@ impl Sky {
                     seed,
                     &|done| progress(before + done, total),
                 )?;
-                out.push(match traced.stokes {
-                    None => SkyRadiance {
-                        radiance_w_m2_sr_nm: traced.total.mean,
-                        standard_error_w_m2_sr_nm: Some(traced.total.standard_error),
-                        stokes: None,
-                    },
-                    Some([i, q, u, v]) => SkyRadiance {
-                        radiance_w_m2_sr_nm: i.mean,
-                        standard_error_w_m2_sr_nm: Some(i.standard_error),
-                        stokes: Some(Stokes {
-                            q_w_m2_sr_nm: q.mean,
-                            u_w_m2_sr_nm: u.mean,
-                            v_w_m2_sr_nm: v.mean,
-                            standard_errors_w_m2_sr_nm: Some([
-                                q.standard_error,
-                                u.standard_error,
-                                v.standard_error,
-                            ]),
-                        }),
-                    },
-                });
+                out.push(sky_radiance_from_traced(traced));
             }
             return Ok(out);
         }
@@ -1128,15 +1158,7 @@ impl Sky {
             return self.radiances_from_image_tables(views, progress);
         }
         let polarised = self.polarisation == Polarisation::Vector;
-        // The polarisation correction's rows toward every distinct view
-        // zenith cosine, once (an almucantar's views share one).
-        let rows = match (polarised, self.field()) {
-            (true, Some(field)) => {
-                let cosines: Vec<f64> = views.iter().map(view_cosine).collect();
-                field.compute_polarisation_rows(&cosines)
-            }
-            _ => None,
-        };
+        let rows = self.polarisation_rows(views.iter());
         Ok(self.compute_views_in_parallel(
             views,
             VIEWS_PER_TASK,
@@ -1144,22 +1166,24 @@ impl Sky {
             |view, work, radiance, stokes| {
                 self.compute_view_radiance(view.to_vector(), None, work, radiance);
                 if polarised {
-                    stokes.fill(0.0);
-                    self.compute_single_scattering_stokes(
-                        (
-                            view.to_vector(),
-                            meridian_reference(view.elevation_deg(), view.azimuth_deg()),
-                        ),
-                        SingleIntegrals::View,
-                        work,
-                        stokes,
-                    );
-                    if let Some(rows) = &rows {
-                        self.add_multiple_scattering_stokes(view, rows, work, radiance, stokes);
-                    }
+                    self.compute_view_stokes(view, rows.as_ref(), work, radiance, stokes);
                 }
             },
         ))
+    }
+
+    /// The polarisation correction's rows toward every distinct zenith
+    /// cosine of `views`, computed once (an almucantar's views share one);
+    /// None for scalar light or a sky without a field.
+    fn polarisation_rows<'a>(
+        &self,
+        views: impl Iterator<Item = &'a ViewDirection>,
+    ) -> Option<PolarisationRows> {
+        if self.polarisation != Polarisation::Vector {
+            return None;
+        }
+        let cosines: Vec<f64> = views.map(view_cosine).collect();
+        self.field()?.compute_polarisation_rows(&cosines)
     }
 
     /// Every view of `views` by `compute(view, work, radiance, stokes)`
@@ -1201,6 +1225,30 @@ impl Sky {
             .chunks(per_view)
             .map(|values| sky_radiance_from_values(values, wavelengths))
             .collect()
+    }
+
+    /// A polarised view's Stokes Q, U and V into `stokes` and its polarised
+    /// intensity in place of the scalar one in `radiance`, from the terms
+    /// and integrals [`Sky::compute_view_terms`] left in `work`.
+    fn compute_view_stokes(
+        &self,
+        view: ViewDirection,
+        rows: Option<&PolarisationRows>,
+        work: &mut ViewWork,
+        radiance: &mut [f64],
+        stokes: &mut [f64],
+    ) {
+        stokes.fill(0.0);
+        let meridian = meridian_reference(view.elevation_deg(), view.azimuth_deg());
+        self.compute_single_scattering_stokes(
+            (view.to_vector(), meridian),
+            SingleIntegrals::View,
+            work,
+            stokes,
+        );
+        if let Some(rows) = rows {
+            self.add_multiple_scattering_stokes(view, rows, work, radiance, stokes);
+        }
     }
 
     /// Q and U (W m^-2 sr^-1 nm^-1, referred to the view's meridian plane)
@@ -1266,7 +1314,8 @@ impl Sky {
         let azimuth_rad = (view.azimuth_deg() - self.sun_position_deg.1).to_radians();
         rows.ratios((view_cosine(&view), azimuth_rad), &mut work.multiple_stokes)
             .expect("a row for every view's cosine");
-        add_corrected_multiple_stokes(&work.multiple_stokes, &work.terms.field, radiance, stokes);
+        work.terms.polarisation_corrected(&mut work.corrected);
+        add_corrected_multiple_stokes(&work.multiple_stokes, &work.corrected, radiance, stokes);
     }
 
     /// The radiance a fast-method image shows toward `view` (read from its
@@ -1315,7 +1364,22 @@ impl Sky {
         work: &mut ViewWork,
         radiance: &mut [f64],
     ) {
+        self.compute_view_terms((view, f64::INFINITY), source_table, work);
+        work.terms.add_into(radiance);
+    }
+
+    /// The terms ([`ViewTerms`]) of the segment of the view ray `view` from
+    /// the eye to `distance_m` m (`f64::INFINITY`: the whole ray) into
+    /// `work.terms`; the single-scattering scratch holds the segment's
+    /// integrals, columns and transmittance afterwards.
+    fn compute_view_terms(
+        &self,
+        (view, distance_m): (Vector3, f64),
+        source_table: Option<&MultipleScatteringTable>,
+        work: &mut ViewWork,
+    ) {
         let terms = &mut work.terms;
+        terms.ground_sunlit.fill(0.0);
         match self.method {
             Method::Reference {
                 view_steps,
@@ -1327,30 +1391,35 @@ impl Sky {
                 terms.single.copy_from_slice(spectrum.values());
             }
             _ => {
-                self.scene.compute_inscattering_integrals(
-                    view,
+                self.scene.compute_segment_integrals(
+                    (view, distance_m),
                     SunColumns::Exact,
                     &mut work.single,
                 );
                 self.scene.radiance_from_integrals(
                     view.dot(self.sun_direction()),
                     work.single.inscattering_integrals(),
-                    work.single.ground_radiance(),
                     &mut work.phase,
                     &mut terms.single,
                 );
+                terms
+                    .ground_sunlit
+                    .copy_from_slice(work.single.ground_radiance());
             }
         }
         terms.field.fill(0.0);
         terms.forward_peak.fill(0.0);
+        terms.ground_skylit.fill(0.0);
         if let (Some(field), Some(scratch)) = (self.field(), work.multiple.as_mut()) {
+            let (segment, out) = (
+                (view, distance_m),
+                (&mut terms.field[..], &mut terms.ground_skylit[..]),
+            );
             match source_table {
                 Some(table) => {
-                    table.compute_radiance_parts(view, SunColumns::Exact, scratch, &mut terms.field)
+                    table.compute_radiance_parts(segment, SunColumns::Exact, scratch, out)
                 }
-                None => {
-                    field.compute_field_radiance(view, SunColumns::Exact, scratch, &mut terms.field)
-                }
+                None => field.compute_field_radiance(segment, SunColumns::Exact, scratch, out),
             }
             // The forward-peak term from its integrals along the view
             // (kept for its Stokes vector).
@@ -1362,7 +1431,6 @@ impl Sky {
                 &mut terms.forward_peak,
             );
         }
-        terms.add_into(radiance);
     }
 
     /// One pixel's radiance from the image tables (fast method), into
@@ -1380,15 +1448,16 @@ impl Sky {
         let terms = &mut work.terms;
         tables.sky_view.lookup_with_multiple_scattering(
             view,
-            &mut work.integrals,
-            &mut work.ground,
-            &mut terms.field,
-            &mut work.forward,
+            (&mut work.integrals, &mut terms.ground_sunlit),
+            (
+                &mut terms.field,
+                &mut terms.ground_skylit,
+                &mut work.forward,
+            ),
         );
         self.scene.radiance_from_integrals(
             cos_theta,
             &work.integrals,
-            &work.ground,
             &mut work.phase,
             &mut terms.single,
         );
@@ -1434,7 +1503,8 @@ impl Sky {
         let azimuth_rad = (azimuth_deg - self.sun_position_deg.1).to_radians();
         let ratios = &mut work.multiple_stokes;
         table.lookup_ratios((view.z, azimuth_rad), ratios);
-        add_corrected_multiple_stokes(ratios, &work.terms.field, radiance, stokes);
+        work.terms.polarisation_corrected(&mut work.corrected);
+        add_corrected_multiple_stokes(ratios, &work.corrected, radiance, stokes);
     }
 
     /// Builds everything images of this sky need (the multiple-scattering

@@ -400,6 +400,11 @@ pub struct PathTracer<'a> {
     /// otherwise).
     #[cfg(test)]
     max_interactions: u32,
+    /// A black target this far along the view from the eye, m (None:
+    /// none): a path whose first free path reaches it, or the ground before
+    /// it, ends there (aerial perspective,
+    /// [`PathTracer::with_target_distance`]).
+    target_distance_m: Option<f64>,
 }
 
 /// Per-chunk work space (no allocation per path).
@@ -576,7 +581,19 @@ impl<'a> PathTracer<'a> {
             sunlit_direction_share: SUNLIT_DIRECTION_SHARE,
             #[cfg(test)]
             max_interactions: u32::MAX,
+            target_distance_m: None,
         }
+    }
+
+    /// This tracer with a black target `distance_m` m along every view from
+    /// the eye (infinity: where the view leaves the atmosphere): the light
+    /// the air scatters into the segment between them. The first free path
+    /// ends at the target, or at the ground if that is nearer (the ground
+    /// is then the scene's point, black too); later ones, scattered off the
+    /// view, pass the target as they would a point.
+    pub(crate) fn with_target_distance(mut self, distance_m: f64) -> PathTracer<'a> {
+        self.target_distance_m = Some(distance_m);
+        self
     }
 
     /// This tracer without its draws toward the sunlit air (free paths and
@@ -861,7 +878,12 @@ impl<'a> PathTracer<'a> {
             let mut interactions = 0u32;
             loop {
                 let mut in_shadow = false;
-                let (length, ends_on_ground) = self.segment_length(position, direction);
+                let (mut length, mut ends_on_ground) = self.segment_length(position, direction);
+                if let (0, Some(target)) = (interactions, self.target_distance_m) {
+                    // The target (or the ground before it): the path ends.
+                    let target = target - (position - self.observer).length();
+                    (length, ends_on_ground) = (length.min(target.max(0.0)), false);
+                }
                 match self.sample_free_path(
                     position,
                     direction,

@@ -464,6 +464,21 @@ impl SingleScatteringSky {
         sun_columns: SunColumns,
         scratch: &mut SingleScatteringScratch,
     ) {
+        self.compute_segment_integrals((view, f64::INFINITY), sun_columns, scratch);
+    }
+
+    /// As [`Self::compute_inscattering_integrals`] along the segment of
+    /// the view ray from the eye to `distance_m` m (or where the ray
+    /// leaves the atmosphere or meets the ground, if nearer): the
+    /// integrals, the transmittance and columns are the segment's, and the
+    /// ground term is there only if the segment reaches the ground
+    /// (aerial perspective, [`crate::Sky::aerial_perspective`]).
+    pub(crate) fn compute_segment_integrals(
+        &self,
+        (view, distance_m): (Vector3, f64),
+        sun_columns: SunColumns,
+        scratch: &mut SingleScatteringScratch,
+    ) {
         let species = &self.optics.species;
         let wavelengths = self.optics.grid.len();
         scratch.inscattering_integrals.fill(0.0);
@@ -476,9 +491,12 @@ impl SingleScatteringSky {
             return;
         };
         let start = self.observer + view * enter;
-        let length = exit - enter;
+        let length = exit.min(distance_m) - enter;
         if length <= 0.0 {
-            return self.add_ground_term(start, view, sun_columns, scratch);
+            if distance_m >= exit {
+                self.add_ground_term(start, view, sun_columns, scratch);
+            }
+            return;
         }
         let mut view_ends = std::mem::take(&mut scratch.view_panel_ends);
         self.corners
@@ -546,9 +564,47 @@ impl SingleScatteringSky {
             *t = (-tau).exp();
         }
         let end = start + view * length;
-        if end.length() <= self.ground_radius_m * (1.0 + 1e-12) {
+        if distance_m >= exit && end.length() <= self.ground_radius_m * (1.0 + 1e-12) {
             self.add_ground_term(end, view, sun_columns, scratch);
         }
+    }
+
+    /// The transmittance of the sun's beam (toward its centre) from the top
+    /// of the atmosphere to `point` (planet-centred, m), with columns from
+    /// `sun_columns`, into `out`: zero where the planet is in the way.
+    pub(crate) fn compute_sun_transmittance_at(
+        &self,
+        point: Vector3,
+        sun_columns: SunColumns,
+        scratch: &mut SingleScatteringScratch,
+        out: &mut [f64],
+    ) {
+        out.fill(0.0);
+        if !sun_columns.compute_columns_to_sun(
+            &self.profiles,
+            &self.corners,
+            point,
+            self.sun_direction,
+            &mut scratch.sun_panel_ends,
+            &mut scratch.sun_columns,
+        ) {
+            return;
+        }
+        for (i, t) in out.iter_mut().enumerate() {
+            let tau: f64 = self
+                .optics
+                .species
+                .iter()
+                .zip(&scratch.sun_columns)
+                .map(|(s, c)| s.extinction_per_m[i] * c)
+                .sum();
+            *t = (-tau).exp();
+        }
+    }
+
+    /// The eye, planet-centred, m.
+    pub(crate) fn observer(&self) -> Vector3 {
+        self.observer
     }
 
     /// The sunlit Lambertian ground at `ground_point`, seen through the view
@@ -566,45 +622,32 @@ impl SingleScatteringSky {
             return;
         }
         let point = normal * self.ground_radius_m;
-        if !sun_columns.compute_columns_to_sun(
-            &self.profiles,
-            &self.corners,
-            point,
-            self.sun_direction,
-            &mut scratch.sun_panel_ends,
-            &mut scratch.sun_columns,
-        ) {
-            return;
-        }
-        for (i, out) in scratch.ground_radiance.iter_mut().enumerate() {
-            let tau_sun: f64 = self
-                .optics
-                .species
-                .iter()
-                .zip(&scratch.sun_columns)
-                .map(|(s, c)| s.extinction_per_m[i] * c)
-                .sum();
+        let mut ground = std::mem::take(&mut scratch.ground_radiance);
+        self.compute_sun_transmittance_at(point, sun_columns, scratch, &mut ground);
+        for (i, out) in ground.iter_mut().enumerate() {
             *out = self.optics.ground_albedo[i] / std::f64::consts::PI
                 * self.optics.solar_irradiance_w_m2_nm[i]
                 * mu_sun
-                * (-tau_sun).exp()
+                * *out
                 * scratch.view_transmittance[i];
         }
+        scratch.ground_radiance = ground;
     }
 
-    /// Fast path, second half: radiance from the integrals in `scratch`
-    /// for a view at scattering-angle cosine `cos_theta` with the sun,
-    /// W m^-2 sr^-1 nm^-1, into `radiance`.
+    /// Fast path, second half: the singly scattered radiance of the air
+    /// from the integrals in `scratch` for a view at scattering-angle
+    /// cosine `cos_theta` with the sun, W m^-2 sr^-1 nm^-1, into `radiance`
+    /// (the sunlit ground, [`SingleScatteringScratch::ground_radiance`], is
+    /// a term of its own).
     pub(crate) fn radiance_from_integrals(
         &self,
         cos_theta: f64,
         integrals: &[f64],
-        ground_radiance: &[f64],
         phase: &mut [f64],
         radiance: &mut [f64],
     ) {
         let wavelengths = self.optics.grid.len();
-        radiance.copy_from_slice(ground_radiance);
+        radiance.fill(0.0);
         for (j, s) in self.optics.species.iter().enumerate() {
             let row = &integrals[j * wavelengths..(j + 1) * wavelengths];
             if row.iter().all(|v| *v == 0.0) {
@@ -668,10 +711,16 @@ impl SingleScatteringSky {
         self.radiance_from_integrals(
             cos_theta,
             &scratch.inscattering_integrals,
-            &scratch.ground_radiance,
             &mut phase,
             radiance.values_mut(),
         );
+        for (r, g) in radiance
+            .values_mut()
+            .iter_mut()
+            .zip(&scratch.ground_radiance)
+        {
+            *r += g;
+        }
     }
 
     /// Reference path (the paper's method): uniform midpoint march of

@@ -22,7 +22,8 @@
 //!
 //! Optionally the table also holds the multiply scattered radiance of
 //! [`super::multiple_scattering`] per node (W m^-2 sr^-1 nm^-1, a third
-//! block of values after the ground's). It has no single phase function
+//! block of values after the ground's: the air's, then the ground's
+//! skylight, each a term of its own). It has no single phase function
 //! to factor out, but it is smooth in direction (a scattering integral of
 //! a diffuse field): it is marched at every other node of each axis
 //! (and the last node of each half) and filled in linearly between them,
@@ -47,9 +48,10 @@ pub struct SkyViewTable {
     /// Zenith angle of the horizon seen by the eye, rad.
     horizon_zenith_rad: f64,
     /// Values per node: species * wavelengths integrals (m), then
-    /// wavelengths ground radiances, then (with multiple scattering)
-    /// wavelengths multiply scattered radiances (W m^-2 sr^-1 nm^-1) and
-    /// the forward-peak integrals ((species + 2) * wavelengths, see
+    /// wavelengths sunlit ground radiances, then (with multiple scattering)
+    /// wavelengths multiply scattered radiances of the air, wavelengths
+    /// radiances of the ground's skylight (W m^-2 sr^-1 nm^-1) and the
+    /// forward-peak integrals ((species + 2) * wavelengths, see
     /// `MultipleScatteringScratch::forward_integrals`).
     values_per_node: usize,
     wavelengths: usize,
@@ -83,7 +85,7 @@ impl SkyViewTable {
         // forward-peak integrals.
         let forward_rows = multiple_scattering.map_or(0, |ms| ms.field().forward_integral_rows());
         let blocks = if has_multiple_scattering {
-            species + 2 + forward_rows
+            species + 3 + forward_rows
         } else {
             species + 1
         };
@@ -109,14 +111,15 @@ impl SkyViewTable {
         // Marched at every other node: multiple scattering's radiance and
         // forward-peak integrals, the last blocks of each node.
         let marched_values = if has_multiple_scattering {
-            (forward_rows + 1) * wavelengths
+            (forward_rows + 2) * wavelengths
         } else {
             0
         };
         let row_length = azimuth_nodes * stride;
         let fill_row = |row: usize, out: &mut [f32]| {
             let mut scratch = sky.scratch();
-            let mut ms_work = multiple_scattering.map(|ms| (ms.scratch(), vec![0.0; wavelengths]));
+            let mut ms_work = multiple_scattering
+                .map(|ms| (ms.scratch(), vec![0.0; wavelengths], vec![0.0; wavelengths]));
             let index_in_half = row % half_zenith_nodes;
             let zenith = table.zenith_of_node(row);
             for k in 0..azimuth_nodes {
@@ -138,17 +141,21 @@ impl SkyViewTable {
                 }
                 let marched_here =
                     marched(index_in_half, half_zenith_nodes) && marched(k, azimuth_nodes);
-                if let (Some(ms), Some((ms_scratch, radiance)), true) =
+                if let (Some(ms), Some((ms_scratch, air, skylit)), true) =
                     (multiple_scattering, ms_work.as_mut(), marched_here)
                 {
                     ms.compute_radiance_parts(
-                        view,
+                        (view, f64::INFINITY),
                         SunColumns::Table(sun_columns),
                         ms_scratch,
-                        radiance,
+                        (air, skylit),
                     );
-                    let (multiple, forward) = rest.split_at_mut(wavelengths);
-                    for (o, v) in multiple.iter_mut().zip(radiance.iter()) {
+                    let (multiple, rest) = rest.split_at_mut(wavelengths);
+                    let (ground_skylight, forward) = rest.split_at_mut(wavelengths);
+                    for (o, v) in multiple.iter_mut().zip(air.iter()) {
+                        *o = *v as f32;
+                    }
+                    for (o, v) in ground_skylight.iter_mut().zip(skylit.iter()) {
                         *o = *v as f32;
                     }
                     for (o, v) in forward.iter_mut().zip(ms_scratch.forward_integrals()) {
@@ -238,23 +245,29 @@ impl SkyViewTable {
         Vector3::new(sin_z * east, sin_z * north, cos_z)
     }
 
-    /// As [`SkyViewTable::lookup`], and the multiply scattered radiance into
-    /// `multiple` and its forward-peak integrals ((species + 2) * wavelengths,
-    /// see [`crate::transport::multiple_scattering::MultipleScatteringScratch::forward_integrals`])
+    /// The view's integrals and sunlit ground's radiance into `integrals`
+    /// and `ground`, and the air's multiply
+    /// scattered radiance into `multiple`, the ground's skylight into
+    /// `ground_skylight` and the forward-peak integrals ((species + 2) *
+    /// wavelengths, see [`crate::transport::multiple_scattering::MultipleScatteringScratch::forward_integrals`])
     /// into `forward` (zeros when the table has none).
     pub(crate) fn lookup_with_multiple_scattering(
         &self,
         view: Vector3,
-        integrals: &mut [f64],
-        ground: &mut [f64],
-        multiple: &mut [f64],
-        forward: &mut [f64],
+        (integrals, ground): (&mut [f64], &mut [f64]),
+        (multiple, ground_skylight, forward): (&mut [f64], &mut [f64], &mut [f64]),
     ) {
         if self.has_multiple_scattering {
-            self.interpolate(view, integrals, ground, Some((multiple, forward)));
+            self.interpolate(
+                view,
+                integrals,
+                ground,
+                Some((multiple, ground_skylight, forward)),
+            );
         } else {
             self.interpolate(view, integrals, ground, None);
             multiple.fill(0.0);
+            ground_skylight.fill(0.0);
             forward.fill(0.0);
         }
     }
@@ -264,7 +277,7 @@ impl SkyViewTable {
         view: Vector3,
         integrals: &mut [f64],
         ground: &mut [f64],
-        multiple: Option<(&mut [f64], &mut [f64])>,
+        multiple: Option<(&mut [f64], &mut [f64], &mut [f64])>,
     ) {
         let zenith = view.z.clamp(-1.0, 1.0).acos();
         let (sx, sy) = self.sun_horizontal;
@@ -308,12 +321,15 @@ impl SkyViewTable {
         for (m, out) in ground.iter_mut().enumerate() {
             *out = interpolate(split + m);
         }
-        if let Some((multiple, forward)) = multiple {
+        if let Some((multiple, ground_skylight, forward)) = multiple {
             for (m, out) in multiple.iter_mut().enumerate() {
                 *out = interpolate(split + self.wavelengths + m);
             }
-            for (m, out) in forward.iter_mut().enumerate() {
+            for (m, out) in ground_skylight.iter_mut().enumerate() {
                 *out = interpolate(split + 2 * self.wavelengths + m);
+            }
+            for (m, out) in forward.iter_mut().enumerate() {
+                *out = interpolate(split + 3 * self.wavelengths + m);
             }
         }
     }

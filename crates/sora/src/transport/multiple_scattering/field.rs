@@ -494,6 +494,24 @@ impl MultipleScatteringField {
             .radiance(&self.atmosphere, cos_theta, integrals, phase, out);
     }
 
+    /// The delta-M scaled transmittance T* = exp(-sum_j beta*_ext,j c_j) of
+    /// the last ray or segment the march of `scratch` went along, into
+    /// `out`: what the scaled field lets through, counting light
+    /// scattered into the forward peaks as unscattered.
+    pub(crate) fn scaled_transmittance_of_last_ray(
+        &self,
+        scratch: &MultipleScatteringScratch,
+        out: &mut [f64],
+    ) {
+        let s = self.optics.species;
+        for (i, t) in out.iter_mut().enumerate() {
+            let tau: f64 = (0..s)
+                .map(|j| self.optics.scaled.scaled_extinction[i * s + j] * scratch.view_columns[j])
+                .sum();
+            *t = (-tau).exp();
+        }
+    }
+
     /// Rows of the forward-peak integrals per wavelength.
     pub(crate) fn forward_integral_rows(&self) -> usize {
         self.optics.species + forward_peak::EXTRA_ROWS
@@ -566,7 +584,16 @@ impl MultipleScatteringField {
         scratch: &mut MultipleScatteringScratch,
         radiance: &mut [f64],
     ) {
-        self.compute_field_radiance(view, sun_columns, scratch, radiance);
+        let mut ground = vec![0.0; radiance.len()];
+        self.compute_field_radiance(
+            (view, f64::INFINITY),
+            sun_columns,
+            scratch,
+            (&mut *radiance, &mut ground),
+        );
+        for (r, g) in radiance.iter_mut().zip(&ground) {
+            *r += g;
+        }
         self.add_forward_peak(view, scratch, radiance);
     }
 
@@ -592,22 +619,25 @@ impl MultipleScatteringField {
         }
     }
 
-    /// The scaled field's light seen along `view` (orders >= 2 of the
-    /// scaled problem and the skylight the ground reflects), W m^-2 sr^-1
-    /// nm^-1, into `radiance`: the field's exact angular synthesis at every
-    /// march node. The forward-peak term's integrals along the view are
-    /// left in the scratch ([`MultipleScatteringScratch::forward_integrals`],
-    /// with columns toward the sun from `sun_columns`), for
+    /// The scaled field's light seen along `view` from the eye to
+    /// `distance_m` m (`f64::INFINITY`: the whole ray), W m^-2 sr^-1 nm^-1:
+    /// orders >= 2 of the scaled problem scattered by the air into `field`
+    /// (the field's exact angular synthesis at every march node), the
+    /// skylight the ground reflects into `ground` (zero unless the segment
+    /// ends on the ground). The forward-peak term's integrals along the
+    /// segment are left in the scratch
+    /// ([`MultipleScatteringScratch::forward_integrals`], with columns
+    /// toward the sun from `sun_columns`), for
     /// [`MultipleScatteringField::compute_forward_peak_radiance`].
     pub(crate) fn compute_field_radiance(
         &self,
-        view: Vector3,
+        segment: (Vector3, f64),
         sun_columns: SunColumns,
         scratch: &mut MultipleScatteringScratch,
-        radiance: &mut [f64],
+        terms: (&mut [f64], &mut [f64]),
     ) {
         self.optics
-            .march(view, sun_columns, scratch, radiance, |node, _, scratch| {
+            .march(segment, sun_columns, scratch, terms, |node, _, scratch| {
                 self.compute_log_source(node, scratch)
             });
     }

@@ -194,25 +194,36 @@ impl MultipleScatteringTable {
         scratch: &mut MultipleScatteringScratch,
         radiance: &mut [f64],
     ) {
-        self.compute_radiance_parts(view, sun_columns, scratch, radiance);
+        let mut ground = vec![0.0; radiance.len()];
+        self.compute_radiance_parts(
+            (view, f64::INFINITY),
+            sun_columns,
+            scratch,
+            (&mut *radiance, &mut ground),
+        );
+        for (r, g) in radiance.iter_mut().zip(&ground) {
+            *r += g;
+        }
         self.field.add_forward_peak(view, scratch, radiance);
     }
 
-    /// As [`MultipleScatteringTable::compute_radiance`], without the
-    /// forward-peak term: that is left in the scratch
+    /// As [`MultipleScatteringField::compute_field_radiance`] (the air's
+    /// light into `terms.0`, the ground's skylight into `terms.1`, along
+    /// the view to a distance), with the source read from the table; the
+    /// forward-peak term is left in the scratch
     /// ([`MultipleScatteringScratch::forward_integrals`]) as integrals that
     /// take the phase functions exactly as single scattering's do (the
     /// sky-view table adds them to its single-scattering integrals).
     pub(crate) fn compute_radiance_parts(
         &self,
-        view: Vector3,
+        segment: (Vector3, f64),
         sun_columns: SunColumns,
         scratch: &mut MultipleScatteringScratch,
-        radiance: &mut [f64],
+        terms: (&mut [f64], &mut [f64]),
     ) {
         self.field
             .optics
-            .march(view, sun_columns, scratch, radiance, |node, _, scratch| {
+            .march(segment, sun_columns, scratch, terms, |node, _, scratch| {
                 self.lookup_log_source(node, &mut scratch.log_source)
             });
     }

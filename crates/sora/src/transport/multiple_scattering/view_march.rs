@@ -143,20 +143,26 @@ impl ViewRayOptics {
         }
     }
 
-    /// Integrates T*(eye, x) beta*_sca(x) R(x) along the view ray, with
-    /// `source` writing ln R at each node into `scratch.log_source`, and
-    /// adds the ground's diffuse term.
+    /// Integrates T*(eye, x) beta*_sca(x) R(x) along the view ray from the
+    /// eye to `distance_m` m (or the ray's end in the atmosphere, if
+    /// nearer; `f64::INFINITY` for the whole ray), with `source` writing
+    /// ln R at each node into `scratch.log_source`, into `field`; the
+    /// ground's skylight (its diffuse term) seen where the ray ends on the
+    /// ground, through the scaled transmittance, into `ground` (zero where
+    /// the segment does not reach the ground). W m^-2 sr^-1 nm^-1.
     pub(super) fn march<F>(
         &self,
-        view: Vector3,
+        (view, distance_m): (Vector3, f64),
         sun_columns: SunColumns,
         scratch: &mut MultipleScatteringScratch,
-        radiance: &mut [f64],
+        (field, ground_out): (&mut [f64], &mut [f64]),
         mut source: F,
     ) where
         F: FnMut(NodeGeometry, &[f64], &mut MultipleScatteringScratch),
     {
+        let radiance = field;
         radiance.fill(0.0);
+        ground_out.fill(0.0);
         scratch.forward_integrals.fill(0.0);
         let (w, s) = (self.wavelengths, self.species);
         let (ground, top) = (self.geometry.ground_radius_m, self.geometry.top_radius_m);
@@ -168,7 +174,7 @@ impl ViewRayOptics {
             return;
         };
         let start = self.observer + view * enter;
-        let length = exit - enter;
+        let length = exit.min(distance_m) - enter;
         scratch.view_columns.fill(0.0);
         if length > 0.0 {
             let mut view_ends = std::mem::take(&mut scratch.view_panel_ends);
@@ -272,7 +278,7 @@ impl ViewRayOptics {
             scratch.view_panel_ends = view_ends;
         }
         let end = start + view * length;
-        if end.length() <= ground * (1.0 + 1e-12) {
+        if distance_m >= exit && end.length() <= ground * (1.0 + 1e-12) {
             let sun_cosine = self.sun.dot(end.normalized());
             let (node, t) = self.sun_axis.locate(sun_cosine);
             let next = node + 1;
@@ -286,7 +292,7 @@ impl ViewRayOptics {
                     interpolate_geometrically(table[node * w + i], table[next * w + i], t)
                 };
                 let (scaled, exact) = ((-tau_scaled).exp(), (-tau).exp());
-                radiance[i] += scaled * lerp(&self.ground_diffuse)
+                ground_out[i] = scaled * lerp(&self.ground_diffuse)
                     + (scaled - exact) * lerp(&self.ground_direct);
             }
         }
