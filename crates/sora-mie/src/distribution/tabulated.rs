@@ -56,12 +56,12 @@ pub enum TabulatedDistributionError {
     /// values of different lengths.
     BadLength { radii: usize, values: usize },
     /// A radius that is not finite and > 0.
-    BadRadius { index: usize, radius_m: f64 },
+    BadRadius { index: usize, radius_um: f64 },
     /// Radii that do not increase strictly.
     NotIncreasing {
         index: usize,
-        previous_m: f64,
-        radius_m: f64,
+        previous_um: f64,
+        radius_um: f64,
     },
     /// A value that is not finite and >= 0.
     BadValue { index: usize, value: f64 },
@@ -76,20 +76,20 @@ impl std::fmt::Display for TabulatedDistributionError {
                 f,
                 "a tabulated size distribution needs radii and values of the same length, between 2 and {MAX_TABULATED_POINTS} points (got {radii} radii and {values} values)"
             ),
-            Self::BadRadius { index, radius_m } => write!(
+            Self::BadRadius { index, radius_um } => write!(
                 f,
-                "radius {index} = {} m is invalid: it must be finite and greater than 0",
-                Number(*radius_m)
+                "radius {index} = {} um is invalid: it must be finite and greater than 0",
+                Number(*radius_um)
             ),
             Self::NotIncreasing {
                 index,
-                previous_m,
-                radius_m,
+                previous_um,
+                radius_um,
             } => write!(
                 f,
-                "radius {index} = {} m is not greater than the one before it ({} m): radii must increase strictly",
-                Number(*radius_m),
-                Number(*previous_m)
+                "radius {index} = {} um is not greater than the one before it ({} um): radii must increase strictly",
+                Number(*radius_um),
+                Number(*previous_um)
             ),
             Self::BadValue { index, value } => write!(
                 f,
@@ -131,28 +131,28 @@ fn segment_integral(t0: f64, t1: f64, v0: f64, v1: f64, c: f64) -> f64 {
 }
 
 impl TabulatedVolumeDistribution {
-    /// From radii (m, > 0, strictly increasing) and dV/d ln r values (>= 0,
-    /// not all 0), at least 2 points.
-    pub fn new(
-        radii_m: &[f64],
+    /// From radii (um, > 0, strictly increasing) and dV/d ln r values (>= 0,
+    /// not all 0), at least 2 points. Errors quote the radii in um, as given.
+    pub fn from_micrometres(
+        radii_um: &[f64],
         volume_per_ln_radius: &[f64],
     ) -> Result<Self, TabulatedDistributionError> {
-        let n = radii_m.len();
+        let n = radii_um.len();
         if n != volume_per_ln_radius.len() || !(2..=MAX_TABULATED_POINTS).contains(&n) {
             return Err(TabulatedDistributionError::BadLength {
                 radii: n,
                 values: volume_per_ln_radius.len(),
             });
         }
-        for (index, &radius_m) in radii_m.iter().enumerate() {
-            if !(radius_m.is_finite() && radius_m > 0.0) {
-                return Err(TabulatedDistributionError::BadRadius { index, radius_m });
+        for (index, &radius_um) in radii_um.iter().enumerate() {
+            if !(radius_um.is_finite() && radius_um > 0.0) {
+                return Err(TabulatedDistributionError::BadRadius { index, radius_um });
             }
-            if index > 0 && radius_m <= radii_m[index - 1] {
+            if index > 0 && radius_um <= radii_um[index - 1] {
                 return Err(TabulatedDistributionError::NotIncreasing {
                     index,
-                    previous_m: radii_m[index - 1],
-                    radius_m,
+                    previous_um: radii_um[index - 1],
+                    radius_um,
                 });
             }
         }
@@ -165,7 +165,7 @@ impl TabulatedVolumeDistribution {
             return Err(TabulatedDistributionError::AllZero);
         }
         let mut table = Self {
-            ln_radius_m: radii_m.iter().map(|r| r.ln()).collect(),
+            ln_radius_m: radii_um.iter().map(|r| (r * 1e-6).ln()).collect(),
             volume_per_ln_radius: volume_per_ln_radius.to_vec(),
             number_integral: 0.0,
         };
@@ -321,6 +321,10 @@ mod tests {
         (radii, values)
     }
 
+    fn um(radii_m: &[f64]) -> Vec<f64> {
+        radii_m.iter().map(|r| r / MICROMETRE).collect()
+    }
+
     /// AERONET's 22 radii, 0.05-15 um log-spaced (m).
     fn aeronet_radii() -> Vec<f64> {
         (0..22)
@@ -330,22 +334,22 @@ mod tests {
 
     #[test]
     fn bad_tables_are_refused_with_the_offending_value() {
-        let r = [0.1e-6, 0.2e-6, 0.3e-6];
+        let r = [0.1, 0.2, 0.3];
         let message = |radii: &[f64], values: &[f64]| {
-            TabulatedVolumeDistribution::new(radii, values)
+            TabulatedVolumeDistribution::from_micrometres(radii, values)
                 .unwrap_err()
                 .to_string()
         };
         assert!(message(&r[..1], &[1.0]).contains("got 1 radii and 1 values"));
         assert!(message(&r, &[1.0, 2.0]).contains("got 3 radii and 2 values"));
-        let m = message(&[0.1e-6, 0.3e-6, 0.2e-6], &[1.0, 1.0, 1.0]);
+        let m = message(&[0.1, 0.3, 0.2], &[1.0, 1.0, 1.0]);
         assert!(
-            m.contains("radius 2 = 2e-7 m") && m.contains("increase strictly"),
+            m.contains("radius 2 = 0.2 um") && m.contains("increase strictly"),
             "{m}"
         );
-        assert!(message(&[0.1e-6, 0.1e-6], &[1.0, 1.0]).contains("increase strictly"));
-        assert!(message(&[-0.1e-6, 0.1e-6], &[1.0, 1.0]).contains("radius 0 = -1e-7 m is invalid"));
-        assert!(message(&[f64::NAN, 0.1e-6], &[1.0, 1.0]).contains("radius 0 = NaN"));
+        assert!(message(&[0.1, 0.1], &[1.0, 1.0]).contains("increase strictly"));
+        assert!(message(&[-0.1, 0.1], &[1.0, 1.0]).contains("radius 0 = -0.1 um is invalid"));
+        assert!(message(&[f64::NAN, 0.1], &[1.0, 1.0]).contains("radius 0 = NaN"));
         assert!(message(&r, &[1.0, -0.5, 1.0]).contains("value 1 = -0.5 um^3/um^2"));
         assert!(message(&r, &[1.0, f64::NAN, 1.0]).contains("value 1 = NaN"));
         assert!(message(&r, &[0.0, 0.0, 0.0]).contains("no particles"));
@@ -362,7 +366,7 @@ mod tests {
     fn column_volume_number_and_effective_radius_match_closed_forms() {
         let (volume, r_v, s) = (0.03, 0.15 * MICROMETRE, 0.45);
         let (radii, values) = sampled_log_normal(volume, r_v, s, 8.0, 641);
-        let table = TabulatedVolumeDistribution::new(&radii, &values).unwrap();
+        let table = TabulatedVolumeDistribution::from_micrometres(&um(&radii), &values).unwrap();
         // Simpson over each table segment of the interpolated v(t) e^{ct}.
         let brute = |c: f64| {
             let mut sum = 0.0;
@@ -429,7 +433,7 @@ mod tests {
             let r_v = r_v_um * MICROMETRE;
             let (radii, values) = sampled_log_normal(1.0, r_v, s, 8.0, 641);
             let table = SizeDistribution::tabulated_volume(
-                TabulatedVolumeDistribution::new(&radii, &values).unwrap(),
+                TabulatedVolumeDistribution::from_micrometres(&um(&radii), &values).unwrap(),
             );
             // The number distribution of a volume log-normal: median r_v exp(-3 s^2).
             let log_normal =
@@ -477,7 +481,7 @@ mod tests {
                     .sum()
             })
             .collect();
-        let table = TabulatedVolumeDistribution::new(&radii, &values).unwrap();
+        let table = TabulatedVolumeDistribution::from_micrometres(&um(&radii), &values).unwrap();
         let closed = table.effective_radius_m();
         let distribution = SizeDistribution::tabulated_volume(table.clone());
         let (by_quadrature, v_eff) = distribution.effective_radius_and_variance_by_quadrature();
