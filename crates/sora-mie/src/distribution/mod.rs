@@ -4,8 +4,10 @@
 //! optics per particle are averages over the number distribution of radius,
 //! `<C> = integral C(r) dN / integral dN` (see [`crate::ensemble`]). The paper
 //! (Nakai & Sakai §2) uses a log-normal distribution truncated to a radius
-//! window; this module provides that and the gamma distribution common in the
-//! remote-sensing literature, both with the Hansen & Travis (1974, §2.3)
+//! window; this module provides that, the gamma distribution common in the
+//! remote-sensing literature, and a volume distribution dV/d ln r tabulated
+//! as sun-photometer inversions publish it ([`tabulated`]), all with the
+//! Hansen & Travis (1974, §2.3)
 //! effective radius and variance, and the quadrature over radius
 //! ([`RadiusQuadrature`]) that replaces the paper's random radius draw by the
 //! integral it estimates (same expectation, no noise).

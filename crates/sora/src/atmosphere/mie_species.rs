@@ -1,7 +1,8 @@
 //! Aerosol from Mie theory: the paper's central idea (§2-3). Particles of a
 //! given material (complex refractive index m(lambda), constant or
 //! tabulated) and size distribution (log-normal, optionally truncated to
-//! a radius window as in the paper's Tables 1-2, or gamma) have, per
+//! a radius window as in the paper's Tables 1-2, gamma, or a volume
+//! distribution dV/d ln r tabulated as measured) have, per
 //! particle, ensemble-averaged cross-sections `<C_ext>(lambda)`,
 //! `<C_sca>(lambda)` and a phase function, computed by the `sora-mie`
 //! engine (eq. 2 with its misprint corrected, integrated over the
