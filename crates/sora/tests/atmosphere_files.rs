@@ -820,3 +820,137 @@ fn no_input_panics() {
         }
     }
 }
+
+/// An AERONET-style bimodal volume distribution, dV/dlnr (um^3/um^2) at
+/// the network's 22 radii (0.05-15 um, log-spaced): fine mode r_v 0.15 um,
+/// s 0.45, V 0.03; coarse r_v 2.8 um, s 0.65, V 0.05.
+fn aeronet_table() -> (Vec<f64>, Vec<f64>) {
+    let radii: Vec<f64> = (0..22)
+        .map(|i| 0.05 * (15.0f64 / 0.05).powf(i as f64 / 21.0))
+        .collect();
+    let values = radii
+        .iter()
+        .map(|&r| {
+            [(0.03, 0.15, 0.45), (0.05, 2.8, 0.65)]
+                .iter()
+                .map(|&(v, r_v, s): &(f64, f64, f64)| {
+                    let z = (r / r_v).ln() / s;
+                    v / ((2.0 * std::f64::consts::PI).sqrt() * s) * (-0.5 * z * z).exp()
+                })
+                .sum()
+        })
+        .collect();
+    (radii, values)
+}
+
+/// `VALID` with the dust replaced by a tabulated species of index
+/// 1.45 + 0.005i and amount keys `amount` (a line, or empty).
+fn with_tabulated_dust(radii: &[f64], values: &[f64], amount: &str) -> String {
+    let list = |v: &[f64]| {
+        v.iter()
+            .map(|x| format!("{x:e}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    VALID.replacen(
+        "number_density_m3 = 2.0e6\nprofile.exponential.scale_height_m = 11000\nscattering.mie.refractive_index = { wavelength_nm = [321, 440, 500, 600, 700, 800], n = [1.49, 1.50, 1.50, 1.50, 1.50, 1.50], k = [0.0127, 0.0077, 0.0055, 0.0017, 0.0009, 0.0011] }\nscattering.mie.size_distribution.lognormal = { median_radius_um = 0.5, geometric_std_dev = 1.5, min_radius_um = 0.45, max_radius_um = 0.56 }\nscattering.mie.phase = \"paper-hg\"",
+        &format!(
+            "{amount}\nprofile.exponential.scale_height_m = 1500\nscattering.mie.refractive_index = {{ n = 1.45, k = 0.005 }}\nscattering.mie.size_distribution.tabulated = {{ radius_um = [{}], dv_dlnr_um3_per_um2 = [{}] }}",
+            list(radii),
+            list(values)
+        ),
+        1,
+    )
+}
+
+/// A measured table's column volume is its amount: the species' optical
+/// depth is the column number N = integral dV/dlnr / (4/3 pi r^3) dlnr
+/// times the per-particle extinction cross-section, at every wavelength;
+/// with `optical_depth` given instead, that optical depth is reached. The
+/// atmosphere computes the whole grid with one radius rule shared by its
+/// wavelengths (different panels from the one-wavelength rule here): the
+/// two agree to 2e-8 (1.5e-7 at the 560-nm reference), hence 1e-6.
+#[test]
+fn a_tabulated_size_distribution_sets_its_own_amount() {
+    use sora::mie::Complex64;
+    use sora::mie::distribution::{
+        RadiusQuadratureSettings, SizeDistribution, TabulatedVolumeDistribution,
+    };
+    use sora::mie::ensemble::compute_ensemble_cross_sections;
+    let (radii, values) = aeronet_table();
+    let text = with_tabulated_dust(&radii, &values, "");
+    assert!(text.contains("tabulated"), "the edit must apply");
+    let atmosphere = Atmosphere::from_toml_str(&text).unwrap();
+    let grid = WavelengthGrid::paper();
+    let optics = atmosphere.compute_optics(&grid).unwrap();
+    let tau = optics.species[2].optical_depth_extinction();
+    let table = TabulatedVolumeDistribution::from_micrometres(&radii, &values).unwrap();
+    let column_number_per_m2 = table.column_number_per_m2_from_um3_per_um2();
+    let distribution = SizeDistribution::tabulated_volume(table);
+    for (i, wavelength_nm) in grid.wavelengths_nm().enumerate().step_by(5) {
+        let c_ext = compute_ensemble_cross_sections(
+            wavelength_nm,
+            Complex64::new(1.45, 0.005),
+            &distribution,
+            &RadiusQuadratureSettings::cross_sections(),
+        )
+        .unwrap()
+        .extinction_cross_section_m2;
+        let expected = column_number_per_m2 * c_ext;
+        assert!(
+            (tau.values()[i] / expected - 1.0).abs() < 1e-6,
+            "{wavelength_nm} nm: {} vs {expected}",
+            tau.values()[i]
+        );
+        // A sane aerosol optical depth for 0.08 um^3/um^2 (AERONET sites: 0.05-0.5).
+        assert!((0.02..1.0).contains(&expected), "{expected}");
+    }
+    let scaled = with_tabulated_dust(
+        &radii,
+        &values,
+        "optical_depth = 0.3\nreference_wavelength_nm = 560",
+    );
+    let optics = Atmosphere::from_toml_str(&scaled)
+        .unwrap()
+        .compute_optics(&grid)
+        .unwrap();
+    let tau_560 = optics.species[2].optical_depth_extinction().values()[9];
+    assert!((tau_560 / 0.3 - 1.0).abs() < 1e-6, "{tau_560}");
+}
+
+#[test]
+fn bad_tables_get_one_line_errors_naming_the_key() {
+    let key = "species[2].scattering.mie.size_distribution.tabulated";
+    let cases: [(&[f64], &[f64], &str); 5] = [
+        (
+            &[0.1, 0.3, 0.2],
+            &[1.0, 1.0, 1.0],
+            "radius 2 = 0.2 um is not greater than the one before it (0.3 um)",
+        ),
+        (
+            &[0.1, 0.2, 0.3],
+            &[1.0, -0.5, 1.0],
+            "value 1 = -0.5 um^3/um^2 is invalid",
+        ),
+        (&[0.1], &[1.0], "between 2 and"),
+        (&[0.1, 0.2], &[1.0, 2.0, 3.0], "got 2 radii and 3 values"),
+        (&[0.0, 0.2], &[1.0, 2.0], "radius 0 = 0 um is invalid"),
+    ];
+    for (radii, values, expected) in cases {
+        let message = load_error(&with_tabulated_dust(radii, values, ""));
+        assert!(
+            message.contains(key) && message.contains(expected) && !message.contains('\n'),
+            "{message}"
+        );
+    }
+    // NaN has no TOML literal in a float list here; `nan` is TOML's spelling.
+    let nan = with_tabulated_dust(&[0.1, 0.2], &[1.0, 2.0], "").replace("2e0]", "nan]");
+    let message = load_error(&nan);
+    assert!(message.contains("value 1 = NaN"), "{message}");
+    // A log-normal species still needs an amount.
+    let message = load_error(&edit("number_density_m3 = 2.0e6\n", ""));
+    assert!(
+        message.contains("or neither with a tabulated size distribution"),
+        "{message}"
+    );
+}

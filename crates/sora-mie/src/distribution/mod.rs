@@ -4,8 +4,10 @@
 //! optics per particle are averages over the number distribution of radius,
 //! `<C> = integral C(r) dN / integral dN` (see [`crate::ensemble`]). The paper
 //! (Nakai & Sakai §2) uses a log-normal distribution truncated to a radius
-//! window; this module provides that and the gamma distribution common in the
-//! remote-sensing literature, both with the Hansen & Travis (1974, §2.3)
+//! window; this module provides that, the gamma distribution common in the
+//! remote-sensing literature, and a volume distribution dV/d ln r tabulated
+//! as sun-photometer inversions publish it ([`tabulated`]), all with the
+//! Hansen & Travis (1974, §2.3)
 //! effective radius and variance, and the quadrature over radius
 //! ([`RadiusQuadrature`]) that replaces the paper's random radius draw by the
 //! integral it estimates (same expectation, no noise).
@@ -94,6 +96,11 @@
 
 pub mod quadrature;
 mod special_functions;
+pub mod tabulated;
+
+pub use tabulated::{
+    MAX_TABULATED_POINTS, TabulatedDistributionError, TabulatedVolumeDistribution,
+};
 
 pub use quadrature::{
     MAX_RADIUS_QUADRATURE_NODES, MAX_SHARED_QUADRATURE_WEIGHTS, RadiusQuadrature,
@@ -438,10 +445,12 @@ impl ModifiedGammaDistribution {
 }
 
 /// The untruncated shape of a size distribution.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum SizeDistributionShape {
     LogNormal(LogNormalDistribution),
     ModifiedGamma(ModifiedGammaDistribution),
+    /// A measured volume distribution dV/d ln r at given radii (see [`tabulated`]).
+    TabulatedVolume(TabulatedVolumeDistribution),
 }
 
 impl SizeDistributionShape {
@@ -450,6 +459,7 @@ impl SizeDistributionShape {
         match self {
             SizeDistributionShape::LogNormal(d) => d.number_density_per_ln_radius(radius_m),
             SizeDistributionShape::ModifiedGamma(d) => d.number_density_per_ln_radius(radius_m),
+            SizeDistributionShape::TabulatedVolume(d) => d.number_density_per_ln_radius(radius_m),
         }
     }
 
@@ -462,6 +472,9 @@ impl SizeDistributionShape {
             SizeDistributionShape::ModifiedGamma(d) => {
                 d.number_fraction_between(min_radius_m, max_radius_m)
             }
+            SizeDistributionShape::TabulatedVolume(d) => {
+                d.number_fraction_between(min_radius_m, max_radius_m)
+            }
         }
     }
 
@@ -470,6 +483,7 @@ impl SizeDistributionShape {
         match self {
             SizeDistributionShape::LogNormal(d) => d.effective_radius_m(),
             SizeDistributionShape::ModifiedGamma(d) => d.effective_radius_m(),
+            SizeDistributionShape::TabulatedVolume(d) => d.effective_radius_m(),
         }
     }
 
@@ -478,11 +492,13 @@ impl SizeDistributionShape {
         match self {
             SizeDistributionShape::LogNormal(d) => d.effective_variance(),
             SizeDistributionShape::ModifiedGamma(d) => d.effective_variance(),
+            SizeDistributionShape::TabulatedVolume(d) => d.effective_variance(),
         }
     }
 
     /// ln of the moment-weighted density r^p dN/d ln r at t = ln r, up to an
-    /// additive constant; concave in t for both shapes.
+    /// additive constant; concave in t for both analytic shapes (a table
+    /// need not be: the quadrature takes its range and depth from the table).
     fn ln_moment_weighted_density_unnormalised(&self, ln_radius: f64, power: f64) -> f64 {
         match self {
             SizeDistributionShape::LogNormal(d) => {
@@ -494,6 +510,9 @@ impl SizeDistributionShape {
                 // r^(k+p) exp(-r/theta), with r in units of theta.
                 let t = ln_radius - d.gamma_scale_m().ln();
                 (d.gamma_shape() + power) * t - t.exp()
+            }
+            SizeDistributionShape::TabulatedVolume(d) => {
+                d.value_at(ln_radius).ln() + (power - 3.0) * ln_radius
             }
         }
     }
@@ -509,6 +528,16 @@ impl SizeDistributionShape {
             SizeDistributionShape::ModifiedGamma(d) => {
                 ((d.gamma_shape() + power) * d.gamma_scale_m()).ln()
             }
+            // The table point where it is largest.
+            SizeDistributionShape::TabulatedVolume(d) => d
+                .ln_radii()
+                .iter()
+                .copied()
+                .max_by(|&a, &b| {
+                    self.ln_moment_weighted_density_unnormalised(a, power)
+                        .total_cmp(&self.ln_moment_weighted_density_unnormalised(b, power))
+                })
+                .expect("a table has at least 2 points"),
         }
     }
 
@@ -519,6 +548,7 @@ impl SizeDistributionShape {
         match self {
             SizeDistributionShape::LogNormal(d) => d.ln_geometric_standard_deviation(),
             SizeDistributionShape::ModifiedGamma(d) => 1.0 / (d.gamma_shape() + 2.0).sqrt(),
+            SizeDistributionShape::TabulatedVolume(d) => d.ln_radius_spread(),
         }
     }
 }
@@ -572,7 +602,7 @@ impl RadiusWindow {
 /// A particle population: a distribution shape, optionally truncated to a
 /// radius window, normalised per particle of the population (of the window's
 /// particles when truncated).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct SizeDistribution {
     shape: SizeDistributionShape,
     radius_window: Option<RadiusWindow>,
@@ -621,6 +651,12 @@ impl SizeDistribution {
         Ok(Self::untruncated(SizeDistributionShape::ModifiedGamma(
             shape,
         )))
+    }
+
+    /// A measured volume distribution dV/d ln r (see [`tabulated`]),
+    /// normalised to one particle.
+    pub fn tabulated_volume(table: TabulatedVolumeDistribution) -> Self {
+        Self::untruncated(SizeDistributionShape::TabulatedVolume(table))
     }
 
     /// The population of the particles of `self`'s shape whose radius lies
@@ -738,6 +774,11 @@ impl SizeDistribution {
     /// How many e-folds the importance density at t = ln r lies below its
     /// (clipped) peak: >= 0 inside the window.
     fn importance_depth_below_peak(&self, ln_radius: f64, wavenumber_per_m: f64) -> f64 {
+        // A table need not be log-concave and vanishes at its ends: the whole
+        // support is resolved as the peak is (see [`tabulated`]).
+        if let SizeDistributionShape::TabulatedVolume(_) = self.shape {
+            return 0.0;
+        }
         let peak = self.ln_radius_of_importance_peak(wavenumber_per_m);
         self.ln_importance_density(peak, wavenumber_per_m)
             - self.ln_importance_density(ln_radius, wavenumber_per_m)
@@ -748,6 +789,14 @@ impl SizeDistribution {
     /// convex in t with its minimum at the peak, so each end is found by
     /// bracketing outwards in steps of the spread and bisecting.
     fn ln_radius_integration_range(&self, tail_depth: f64, wavenumber_per_m: f64) -> (f64, f64) {
+        if let SizeDistributionShape::TabulatedVolume(table) = &self.shape {
+            let (mut lower, mut upper) = table.ln_radius_support();
+            if let Some(w) = self.radius_window {
+                lower = lower.max(w.min_radius_m.ln());
+                upper = upper.min(w.max_radius_m.ln());
+            }
+            return (lower, upper);
+        }
         let peak = self.ln_radius_of_importance_peak(wavenumber_per_m);
         let spread = self.shape.ln_radius_spread();
         let depth = |t: f64| self.importance_depth_below_peak(t, wavenumber_per_m);
@@ -784,6 +833,25 @@ impl SizeDistribution {
     /// Spread of the area-weighted density in ln r.
     fn ln_radius_spread(&self) -> f64 {
         self.shape.ln_radius_spread()
+    }
+
+    /// The ln r (m) where the density is not smooth, increasing: the window's
+    /// edges and a table's points inside the window. Quadrature panels end there.
+    fn ln_radius_breakpoints(&self) -> Vec<f64> {
+        let mut points = Vec::new();
+        if let Some(w) = self.radius_window {
+            points.push(w.min_radius_m.ln());
+            points.push(w.max_radius_m.ln());
+        }
+        if let SizeDistributionShape::TabulatedVolume(table) = &self.shape {
+            let inside = |t: f64| {
+                self.radius_window
+                    .is_none_or(|w| t > w.min_radius_m.ln() && t < w.max_radius_m.ln())
+            };
+            points.extend(table.ln_radii().iter().copied().filter(|&t| inside(t)));
+        }
+        points.sort_by(f64::total_cmp);
+        points
     }
 }
 
@@ -966,7 +1034,7 @@ mod tests {
             // has 2e-8 of its particles below 1e-12 m, hence 1e-20).
             assert!((shape.number_fraction_between(1e-20, 1.0) - 1.0).abs() < 1e-14);
             // The truncated population integrates to one particle.
-            let truncated = SizeDistribution::untruncated(shape)
+            let truncated = SizeDistribution::untruncated(shape.clone())
                 .truncated_to(RadiusWindow::new(lo, hi).unwrap())
                 .unwrap();
             let total = RadiusQuadrature::gauss_legendre(

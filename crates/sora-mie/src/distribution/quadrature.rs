@@ -406,11 +406,9 @@ impl SharedSizeParameterQuadrature {
             })
             .collect();
         let mut breakpoints: Vec<f64> = Vec::new();
-        if let Some(window) = distribution.radius_window() {
-            for &ln_k in &ln_wavenumbers {
-                breakpoints.push(window.min_radius_m().ln() + ln_k);
-                breakpoints.push(window.max_radius_m().ln() + ln_k);
-            }
+        let ln_radius_breakpoints = distribution.ln_radius_breakpoints();
+        for &ln_k in &ln_wavenumbers {
+            breakpoints.extend(ln_radius_breakpoints.iter().map(|t| t + ln_k));
         }
         let union_end = ranges.iter().map(|r| r.1).fold(f64::NEG_INFINITY, f64::max);
         breakpoints.push(union_end);
@@ -578,15 +576,23 @@ impl RadiusQuadrature {
             distribution.ln_radius_integration_range(settings.tail_depth, wavenumber_per_m);
         let width_limit_at =
             |ln_radius: f64| panel_width_limit(distribution, settings, ln_radius, wavenumber_per_m);
+        // Panels end at a table's points (kinks of the density), never stride them.
+        let breakpoints = distribution.ln_radius_breakpoints();
         let lay_out = |visit: &mut dyn FnMut(f64, f64) -> bool| {
             let mut panel_start = lower;
             while panel_start < upper {
                 // The limit at both ends of the tentative panel: x grows across it.
                 let tentative = width_limit_at(panel_start);
                 let mut width = tentative.min(width_limit_at(panel_start + tentative));
-                // No sliver panel at the end: stretch the last one by up to a quarter.
-                if panel_start + 1.25 * width >= upper {
-                    width = upper - panel_start;
+                // No sliver panel before a breakpoint or the end: stretch the
+                // panel by up to a quarter.
+                let next_stop = breakpoints
+                    .iter()
+                    .copied()
+                    .find(|&b| b > panel_start && b < upper)
+                    .unwrap_or(upper);
+                if panel_start + 1.25 * width >= next_stop {
+                    width = next_stop - panel_start;
                 }
                 if !visit(panel_start, width) {
                     return;

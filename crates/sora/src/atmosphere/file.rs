@@ -51,7 +51,8 @@ use crate::error::{Error, Result};
 use crate::mie::Complex64;
 use crate::mie::distribution::{
     MIN_EFFECTIVE_VARIANCE, MIN_GEOMETRIC_STANDARD_DEVIATION, RadiusQuadrature,
-    RadiusQuadratureSettings, RadiusWindow, SizeDistribution,
+    RadiusQuadratureSettings, RadiusWindow, SizeDistribution, SizeDistributionShape,
+    TabulatedVolumeDistribution,
 };
 use crate::mie::paper_phase::AerosolPhaseMode;
 use crate::mie::refractive_index::{
@@ -239,6 +240,15 @@ struct RefractiveIndexFile {
 struct SizeDistributionFile {
     lognormal: Option<LognormalFile>,
     gamma: Option<GammaFile>,
+    tabulated: Option<TabulatedSizeFile>,
+}
+
+/// A measured volume size distribution: dV/dlnr (um^3 um^-2) at radii (um).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TabulatedSizeFile {
+    radius_um: Vec<f64>,
+    dv_dlnr_um3_per_um2: Vec<f64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -1153,8 +1163,8 @@ fn radius_window(
 
 fn convert_size_distribution(file: SizeDistributionFile, here: &str) -> Result<SizeDistribution> {
     let here = format!("{here}.size_distribution");
-    let (distribution, window, key) = match (file.lognormal, file.gamma) {
-        (Some(lognormal), None) => {
+    let (distribution, window, key) = match (file.lognormal, file.gamma, file.tabulated) {
+        (Some(lognormal), None, None) => {
             let key = format!("{here}.lognormal");
             let distribution = match (
                 lognormal.median_radius_um,
@@ -1183,7 +1193,7 @@ fn convert_size_distribution(file: SizeDistributionFile, here: &str) -> Result<S
             let window = radius_window(&key, lognormal.min_radius_um, lognormal.max_radius_um)?;
             (distribution, window, key)
         }
-        (None, Some(gamma)) => {
+        (None, Some(gamma), None) => {
             let key = format!("{here}.gamma");
             check_range(
                 &format!("{key}.effective_radius_um"),
@@ -1208,8 +1218,20 @@ fn convert_size_distribution(file: SizeDistributionFile, here: &str) -> Result<S
             let window = radius_window(&key, gamma.min_radius_um, gamma.max_radius_um)?;
             (distribution, window, key)
         }
+        (None, None, Some(table)) => {
+            let key = format!("{here}.tabulated");
+            let table = TabulatedVolumeDistribution::from_micrometres(
+                &table.radius_um,
+                &table.dv_dlnr_um3_per_um2,
+            )
+            .map_err(|e| invalid(&key, &e.to_string()))?;
+            (SizeDistribution::tabulated_volume(table), None, key)
+        }
         _ => {
-            return Err(invalid(&here, "give exactly one of lognormal, gamma"));
+            return Err(invalid(
+                &here,
+                "give exactly one of lognormal, gamma, tabulated",
+            ));
         }
     };
     let distribution = match window {
@@ -1306,10 +1328,22 @@ fn convert_mie(file: MieFile, path: &str, keys: &AmountKeys) -> Result<SpeciesMo
                 reference_wavelength_nm,
             }
         }
+        // A measured table is absolute: its column volume fixes the amount.
+        (None, None) => match size_distribution.shape() {
+            SizeDistributionShape::TabulatedVolume(table) => {
+                ParticleAmount::ColumnNumberPerM2(table.column_number_per_m2_from_um3_per_um2())
+            }
+            _ => {
+                return Err(invalid(
+                    path,
+                    "a Mie aerosol needs exactly one of number_density_m3 or optical_depth (with reference_wavelength_nm), or neither with a tabulated size distribution (its column volume is the amount)",
+                ));
+            }
+        },
         _ => {
             return Err(invalid(
                 path,
-                "a Mie aerosol needs exactly one of number_density_m3 or optical_depth (with reference_wavelength_nm)",
+                "a Mie aerosol needs exactly one of number_density_m3 or optical_depth (with reference_wavelength_nm), or neither with a tabulated size distribution (its column volume is the amount)",
             ));
         }
     };

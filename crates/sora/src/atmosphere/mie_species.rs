@@ -1,7 +1,8 @@
 //! Aerosol from Mie theory: the paper's central idea (§2-3). Particles of a
 //! given material (complex refractive index m(lambda), constant or
 //! tabulated) and size distribution (log-normal, optionally truncated to
-//! a radius window as in the paper's Tables 1-2, or gamma) have, per
+//! a radius window as in the paper's Tables 1-2, gamma, or a volume
+//! distribution dV/d ln r tabulated as measured) have, per
 //! particle, ensemble-averaged cross-sections `<C_ext>(lambda)`,
 //! `<C_sca>(lambda)` and a phase function, computed by the `sora-mie`
 //! engine (eq. 2 with its misprint corrected, integrated over the
@@ -17,7 +18,9 @@
 //! tables count them) or set by a column optical depth tau at a reference
 //! wavelength: `N_ref = tau / (<C_ext>(lambda_ref) column_m)`, the way
 //! aerosol amounts are measured (sun photometers) and the way the Earth
-//! presets are set.
+//! presets are set, or, for a measured (tabulated) volume distribution
+//! dV/d ln r, by the table itself: `N_ref = N_column / column_m`, with
+//! `N_column = integral dV/d ln r / (4/3 pi r^3) d ln r` the column number.
 //!
 //! Phase function, two modes (see `sora_mie::paper_phase`):
 //! - `"mie"`: the exact phase function of the distribution (scattering-
@@ -50,6 +53,9 @@ pub enum ParticleAmount {
         /// The wavelength it is given at, nm.
         reference_wavelength_nm: f64,
     },
+    /// Particles per m^2 of the whole column (ground to top): a measured
+    /// size distribution's absolute amount, `N_ref = N_column / column_m`.
+    ColumnNumberPerM2(f64),
 }
 
 /// A Mie aerosol, validated by the file loader.
@@ -104,6 +110,7 @@ impl MieAerosol {
 
         let reference_number_density_m3 = match self.amount {
             ParticleAmount::NumberDensityM3(n) => n,
+            ParticleAmount::ColumnNumberPerM2(column_number) => column_number / column_m,
             ParticleAmount::OpticalDepth {
                 optical_depth,
                 reference_wavelength_nm,
