@@ -48,8 +48,9 @@ fn the_readme_command_writes_the_tables_and_their_manifest() {
     assert_eq!(sky["height"], 2 * 4 * 3 * 2);
     let texels = exr_channel(&output.join("sky.exr"), "Y");
     assert_eq!(texels.len(), 3 * 2 * 4 * 3 * 2);
-    // The zenith at the highest sun, on the ground, is lit.
-    let top_layer_zenith = texels[(2 * 2 + 0) * 8 * 3];
+    // The zenith at the highest sun (layer s * 2 + a = 4: s = 2, a = 0,
+    // the ground; 8 rows of 3 texels a layer) is lit.
+    let top_layer_zenith = texels[4 * 8 * 3];
     assert!(top_layer_zenith > 0.0, "{top_layer_zenith}");
     for name in ["transmittance.exr", "irradiance.exr"] {
         assert!(output.join(name).is_file(), "{name}");
