@@ -18,11 +18,13 @@
 // build takes minutes per atmosphere), CHROMIUM (default /usr/bin/chromium),
 // SORA_TABLES_OUT (default target/tables-test), SORA_TABLES_PRESETS
 // (default: earth-clear,earth-hazy,mars-dust,paper-earth,paper-mars),
-// SORA_TABLES_ARGS (more arguments of `sora tables`, space-separated).
+// SORA_TABLES_ARGS (more arguments of `sora tables`, space-separated),
+// SORA_TABLES_REUSE=1 (keep the tables and CPU images of an earlier run).
 // Run: cd web/tests && npm ci && node tables.test.mjs
 
 import { createServer } from 'node:http';
-import { readFile, mkdir, writeFile, rm } from 'node:fs/promises';
+import { readFile, mkdir, writeFile, rm, stat } from 'node:fs/promises';
+import { existsSync } from 'node:fs';
 import { execFileSync } from 'node:child_process';
 import { join, resolve, dirname } from 'node:path';
 import { fileURLToPath } from 'node:url';
@@ -67,11 +69,14 @@ function serve() {
       response.writeHead(404).end();
       return;
     }
+    let body;
     try {
-      response.writeHead(200, { 'content-type': 'application/octet-stream' }).end(await readFile(file));
+      body = await readFile(file);
     } catch {
       response.writeHead(404).end();
+      return;
     }
+    response.writeHead(200, { 'content-type': 'application/octet-stream' }).end(body);
   });
   return new Promise((ok) => server.listen(0, '127.0.0.1', () => ok(server)));
 }
@@ -174,15 +179,17 @@ async function drawInPage({ shader, manifest, files, suns, size, zenithSuns, fra
     gl.drawArrays(gl.TRIANGLES, 0, 3);
     images.push(Array.from(read(size, size)));
   }
-  // Frame time: `frames` fisheyes, finished each time.
+  // Frame time: `frames` fisheyes, each waited for by reading a pixel back
+  // (gl.finish does not wait for Chromium's GPU process).
+  const pixel = new Float32Array(4);
   gl.uniform1f(u('uSunElevationDeg'), 5);
   gl.drawArrays(gl.TRIANGLES, 0, 3);
-  gl.finish();
+  gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.FLOAT, pixel);
   const start = performance.now();
   for (let i = 0; i < frames; i++) {
     gl.uniform1f(u('uSunElevationDeg'), 5 + i * 0.01);
     gl.drawArrays(gl.TRIANGLES, 0, 3);
-    gl.finish();
+    gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.FLOAT, pixel);
   }
   const frameMs = (performance.now() - start) / frames;
   gl.uniform1i(u('uMode'), 1);
@@ -241,7 +248,9 @@ function compare(gpu, cpu) {
 }
 
 async function main() {
-  await rm(out, { recursive: true, force: true });
+  // SORA_TABLES_REUSE=1 keeps the tables and images of an earlier run.
+  const reuse = process.env.SORA_TABLES_REUSE === '1';
+  if (!reuse) await rm(out, { recursive: true, force: true });
   await mkdir(out, { recursive: true });
   const shader = await readFile(join(root, 'web/shaders/sora_sky.glsl'), 'utf8');
   const server = await serve();
@@ -259,7 +268,8 @@ async function main() {
     for (const preset of presets) {
       const directory = join(out, preset);
       const bakeStart = Date.now();
-      const bakeLog = execFileSync(cli, ['tables', '--preset', preset, ...tableArguments, '-o', directory], { encoding: 'utf8', stdio: ['ignore', 'pipe', 'pipe'] });
+      const baked = reuse && (await stat(join(directory, 'manifest.json')).catch(() => null));
+      const bakeLog = baked ? '(reused)' : execFileSync(cli, ['tables', '--preset', preset, ...tableArguments, '-o', directory], { encoding: 'utf8', stdio: ['ignore', 'pipe', 'pipe'] });
       const bakeS = (Date.now() - bakeStart) / 1000;
       const manifest = JSON.parse(await readFile(join(directory, 'manifest.json'), 'utf8'));
       const files = {};
@@ -269,6 +279,7 @@ async function main() {
       }
       const references = SUNS.map((sun) => {
         const file = join(out, `${preset}-${sun}.exr`);
+        if (reuse && existsSync(file)) return file;
         execFileSync(cli, ['render', '--preset', preset, '--sun-elevation', String(sun), '--camera', 'fisheye',
           '--width', String(SIZE), '--height', String(SIZE), '--polarisation', 'off', '--no-sun-disc',
           '--exr-xyz', '--units', 'radiance', '-o', file], { stdio: ['ignore', 'ignore', 'pipe'] });
@@ -276,7 +287,7 @@ async function main() {
       });
       await page.goto(base);
       const zenithSuns = (90 + 12) * 4 + 1;
-      const drawn = await page.evaluate(drawInPage, { shader, manifest, files, suns: SUNS, size: SIZE, zenithSuns, frames: 5 });
+      const drawn = await page.evaluate(drawInPage, { shader, manifest, files, suns: SUNS, size: SIZE, zenithSuns, frames: 20 });
       const suns = {};
       for (const [k, sun] of SUNS.entries()) {
         const cpu = readExr(await readFile(references[k]));

@@ -117,6 +117,29 @@ impl EngineTables {
         )
     }
 
+    /// The cells (lower node, upper node's weight) of altitude `h` (m,
+    /// within the atmosphere) and sun elevation `sun_elevation_deg` on the
+    /// sky and irradiance tables' axes.
+    fn altitude_and_sun_cells(
+        &self,
+        h: f64,
+        sun_elevation_deg: f64,
+    ) -> ((usize, f64), (usize, f64)) {
+        let (a_count, s_count) = (self.settings.altitude_nodes, self.settings.sun_nodes);
+        (
+            axes::cell(
+                axes::altitude_coordinate(h, self.thickness_m(), a_count),
+                0,
+                a_count - 2,
+            ),
+            axes::cell(
+                axes::sun_coordinate(sun_elevation_deg, s_count),
+                0,
+                s_count - 2,
+            ),
+        )
+    }
+
     /// Sky radiance (XYZ, W m^-2 sr^-1 nm^-1 units) seen at `altitude_m`
     /// toward `view` with the sun at `sun_elevation_deg` (no sun disc).
     pub fn sky_xyz(&self, altitude_m: f64, view: LocalView, sun_elevation_deg: f64) -> [f64; 3] {
@@ -127,17 +150,8 @@ impl EngineTables {
             self.settings.zenith_nodes_per_half,
             horizon,
         );
-        let (a_count, s_count) = (self.settings.altitude_nodes, self.settings.sun_nodes);
-        let (a, fa) = axes::cell(
-            axes::altitude_coordinate(h, self.thickness_m(), a_count),
-            0,
-            a_count - 2,
-        );
-        let (s, fs) = axes::cell(
-            axes::sun_coordinate(sun_elevation_deg, s_count),
-            0,
-            s_count - 2,
-        );
+        let a_count = self.settings.altitude_nodes;
+        let ((a, fa), (s, fs)) = self.altitude_and_sun_cells(h, sun_elevation_deg);
         let at = |s: usize, a: usize| {
             self.layer_value_at(s * a_count + a, coordinate, view.relative_azimuth_rad)
         };
@@ -188,17 +202,8 @@ impl EngineTables {
     /// from the irradiance table and the direct beam.
     pub fn ground_irradiance_xyz(&self, altitude_m: f64, sun_elevation_deg: f64) -> [f64; 3] {
         let h = altitude_m.clamp(0.0, self.thickness_m());
-        let (a_count, s_count) = (self.settings.altitude_nodes, self.settings.sun_nodes);
-        let (a, fa) = axes::cell(
-            axes::altitude_coordinate(h, self.thickness_m(), a_count),
-            0,
-            a_count - 2,
-        );
-        let (s, fs) = axes::cell(
-            axes::sun_coordinate(sun_elevation_deg, s_count),
-            0,
-            s_count - 2,
-        );
+        let s_count = self.settings.sun_nodes;
+        let ((a, fa), (s, fs)) = self.altitude_and_sun_cells(h, sun_elevation_deg);
         let texel = |a: usize, s: usize| {
             let t = self.irradiance[a * s_count + s];
             [t[0] as f64, t[1] as f64, t[2] as f64]

@@ -47,8 +47,8 @@
 //! ground). No dedicated volume is baked: the sky table already holds
 //! every altitude and sun, and a volume would tie the tables to one sun.
 //!
-//! The lookup formulas ([`lookup`]) are those the shaders run; the
-//! manifest ([`files`]) states them for any other reader.
+//! The lookup formulas (`lookup.rs`) are those the shaders run; the
+//! manifest (`files.rs`) states them for any other reader.
 
 pub mod axes;
 mod files;
