@@ -22,6 +22,10 @@ use crate::arguments::{
 /// or JSON with one object per direction; every table is built once for all
 /// of them. Radiance is in W m^-2 sr^-1 nm^-1 for the atmosphere's sun.
 ///
+/// With banded gases (an atmosphere file's [gases]) every radiance is the
+/// sum of five solves, one per k-distribution term, weighted (five times
+/// the time).
+///
 /// Methods: fast and reference compute single scattering (plus the sunlit
 /// ground) and, with --scattering multiple (the default), add all higher
 /// orders and the skylight reflected by the ground (a discrete-ordinate
@@ -234,7 +238,7 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
         (sun_elevation, sun_azimuth),
         args.sun.wavelengths.len(),
     )?;
-    let mut atmosphere = args.source.load()?;
+    let atmosphere = args.source.load()?;
     if args.stokes && args.sun.polarisation(method) == sora::Polarisation::Scalar {
         match method {
             sora::Method::Reference { .. } => anyhow::bail!(
@@ -243,9 +247,15 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
             _ => anyhow::bail!("--stokes needs --polarisation vector (the default), not off"),
         }
     }
-    let (sky, sun) = args.sun.sky(&mut atmosphere, scattering, method)?;
+    // Banded gases: one sky per k-distribution term, their radiances
+    // summed with the terms' weights (one sky, weight 1, without them).
+    let mut skies = Vec::new();
+    for (weight, mut at_term) in sora::atmosphere::gas_bands::k_distribution_terms(&atmosphere) {
+        skies.push((weight, args.sun.sky(&mut at_term, scattering, method)?));
+    }
+    let (sky, sun) = &skies[0].1;
     if args.stokes {
-        crate::arguments::warn_non_polarising_species(&sky);
+        crate::arguments::warn_non_polarising_species(sky);
     }
     let grid = *sky.wavelengths();
     debug_assert_eq!(grid.len(), args.sun.wavelengths.len());
@@ -253,15 +263,39 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
     let path_tracing = args.method.method == MethodKind::PathTracing;
     if path_tracing {
         crate::estimate::announce(crate::estimate::path_tracing_estimate(
-            samples,
+            samples * skies.len() as u64,
             views.len(),
             grid.len(),
         ));
     }
-    let results = if path_tracing {
+    let terms = skies.len() as u64;
+    let per_term = |sky: &sora::Sky| -> anyhow::Result<Vec<SkyRadiance>> {
+        if !path_tracing {
+            return Ok(sky.radiances(&views)?);
+        }
         let bar = progress_bar(samples * views.len() as u64);
         let results = sky.radiances_with_progress(&views, &|done, _| bar.set_position(done))?;
         bar.finish_and_clear();
+        Ok(results)
+    };
+    let mut by_term = Vec::with_capacity(skies.len());
+    for (weight, (sky, _)) in &skies {
+        by_term.push((*weight, per_term(sky)?));
+    }
+    let results: Vec<SkyRadiance> = if by_term.len() == 1 {
+        by_term.swap_remove(0).1
+    } else {
+        (0..views.len())
+            .map(|v| {
+                let parts: Vec<(f64, SkyRadiance)> = by_term
+                    .iter()
+                    .map(|(w, results)| (*w, results[v].clone()))
+                    .collect();
+                SkyRadiance::weighted_sum(&parts)
+            })
+            .collect()
+    };
+    let results = if path_tracing {
         let seconds = started.elapsed().as_secs_f64();
         let worst = results
             .iter()
@@ -269,12 +303,12 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
             .fold(0.0, f64::max);
         eprintln!(
             "path tracing: {samples} paths per direction (seed {seed}) in {seconds:.3} s ({:.0} paths/s); largest relative standard error {:.3}%",
-            (samples * views.len() as u64) as f64 / seconds,
+            (terms * samples * views.len() as u64) as f64 / seconds,
             100.0 * worst
         );
         results
     } else {
-        sky.radiances(&views)?
+        results
     };
     // Colour comes from the grid's wavelengths in 360-830 nm (all of them
     // for a grid inside that range); a grid with none there has no colour.
