@@ -106,3 +106,40 @@ fn the_readme_recipe_reports_less_light_than_the_gas_free_preset() {
         assert!(ratio > 0.8 && ratio < 0.95, "{key}: {ratio}");
     }
 }
+
+/// `sora spectrum` sums the terms too: the zenith in the O2 A band, single
+/// scattering, sun 60 degrees, over the same sky without the gases. The
+/// library's closed-form test gives 0.777 for air alone (one effective
+/// solve: 0.827); the aerosol here moves it by well under 0.02.
+#[test]
+fn the_zenith_spectrum_in_the_a_band_is_the_k_sums() {
+    let directory = tempfile::tempdir().unwrap();
+    let reference = include_str!("../../../atmospheres/clear-sky-reference.toml");
+    let path = directory.path().join("o2.toml");
+    std::fs::write(
+        &path,
+        format!("{reference}\n[gases]\nprecipitable_water_cm = 0\n"),
+    )
+    .unwrap();
+    let zenith = |atmosphere: &str| -> f64 {
+        let csv = stdout(&sora(&[
+            "spectrum",
+            "--atmosphere",
+            atmosphere,
+            "--sun-elevation",
+            "60",
+            "--view-elevation",
+            "90",
+            "--view-azimuth",
+            "0",
+            "--wavelengths",
+            "760",
+            "--scattering",
+            "single",
+        ]));
+        common::spectrum_rows(&csv)[0].1
+    };
+    let ratio =
+        zenith(path.to_str().unwrap()) / zenith("../../atmospheres/clear-sky-reference.toml");
+    assert!(ratio > 0.76 && ratio < 0.80, "{ratio}");
+}

@@ -26,6 +26,10 @@ use crate::arguments::{
 /// worst near the sun; 16,384 polarised directions cost about a 128 x 128
 /// fisheye). Radiance is in W m^-2 sr^-1 nm^-1 for the atmosphere's sun.
 ///
+/// With banded gases (an atmosphere file's [gases]) every radiance is the
+/// sum of five solves, one per k-distribution term, weighted (five times
+/// the time).
+///
 /// Methods: fast and reference compute single scattering (plus the sunlit
 /// ground) and, with --scattering multiple (the default), add all higher
 /// orders and the skylight reflected by the ground (a discrete-ordinate
@@ -287,7 +291,15 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
             "--distance-m and --filter do not combine: aerial perspective is given per wavelength"
         );
     }
-    let mut atmosphere = args.source.load()?;
+    let atmosphere = args.source.load()?;
+    // Banded gases: one sky per k-distribution term, their radiances
+    // summed with the terms' weights (one sky, weight 1, without them).
+    let terms = sora::atmosphere::gas_bands::k_distribution_terms(&atmosphere);
+    if terms.len() > 1 && (!filters.is_empty() || args.distance_m.is_some()) {
+        anyhow::bail!(
+            "--filter and --distance-m do not yet combine with banded gases (the atmosphere's [gases]): remove [gases] or the option"
+        );
+    }
     if !filters.is_empty() {
         return run_filtered(
             &args,
@@ -306,9 +318,13 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
             _ => anyhow::bail!("--stokes needs --polarisation vector (the default), not off"),
         }
     }
-    let (sky, sun) = args.sun.sky(&mut atmosphere, scattering, method)?;
+    let mut skies = Vec::with_capacity(terms.len());
+    for (weight, mut at_term) in terms {
+        skies.push((weight, args.sun.sky(&mut at_term, scattering, method)?));
+    }
+    let (sky, sun) = &skies[0].1;
     if args.stokes {
-        crate::arguments::warn_non_polarising_species(&sky);
+        crate::arguments::warn_non_polarising_species(sky);
     }
     let grid = *sky.wavelengths();
     debug_assert_eq!(grid.len(), args.sun.wavelengths.len());
@@ -316,11 +332,29 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
     let path_tracing = args.method.method == MethodKind::PathTracing;
     if path_tracing {
         crate::estimate::announce(crate::estimate::path_tracing_estimate(
-            samples,
+            samples * skies.len() as u64,
             views.len(),
             grid.len(),
         ));
     }
+    // Each term's radiances, summed with the terms' weights.
+    let radiances = |compute: &dyn Fn(&sora::Sky) -> anyhow::Result<Vec<SkyRadiance>>| {
+        let mut by_term = Vec::with_capacity(skies.len());
+        for (weight, (sky, _)) in &skies {
+            by_term.push((*weight, compute(sky)?));
+        }
+        anyhow::Ok(
+            (0..views.len())
+                .map(|v| {
+                    let parts: Vec<(f64, SkyRadiance)> = by_term
+                        .iter()
+                        .map(|(w, results)| (*w, results[v].clone()))
+                        .collect();
+                    SkyRadiance::weighted_sum(&parts)
+                })
+                .collect::<Vec<_>>(),
+        )
+    };
     let (results, transmittances) = if let Some(distance) = args.distance_m {
         let segments: Vec<(ViewDirection, f64)> = views.iter().map(|v| (*v, distance)).collect();
         let (radiances, transmittances) = sky
@@ -330,9 +364,12 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
             .unzip();
         (radiances, Some(transmittances))
     } else if path_tracing {
-        let bar = progress_bar(samples * views.len() as u64);
-        let results = sky.radiances_with_progress(&views, &|done, _| bar.set_position(done))?;
-        bar.finish_and_clear();
+        let results = radiances(&|sky: &sora::Sky| {
+            let bar = progress_bar(samples * views.len() as u64);
+            let results = sky.radiances_with_progress(&views, &|done, _| bar.set_position(done))?;
+            bar.finish_and_clear();
+            Ok(results)
+        })?;
         let seconds = started.elapsed().as_secs_f64();
         let worst = results
             .iter()
@@ -340,12 +377,15 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
             .fold(0.0, f64::max);
         eprintln!(
             "path tracing: {samples} paths per direction (seed {seed}) in {seconds:.3} s ({:.0} paths/s); largest relative standard error {:.3}%",
-            (samples * views.len() as u64) as f64 / seconds,
+            (skies.len() as u64 * samples * views.len() as u64) as f64 / seconds,
             100.0 * worst
         );
         (results, None)
     } else {
-        (sky.radiances(&views)?, None)
+        (
+            radiances(&|sky: &sora::Sky| Ok(sky.radiances(&views)?))?,
+            None,
+        )
     };
     // The transmittance column of a CSV row and member of a direction's
     // JSON (empty without --distance-m).

@@ -154,34 +154,20 @@ impl Irradiance {
     /// standard error adds as sum_j w_j se_j, the bound for errors that may
     /// be correlated (the terms are traced with one seed).
     pub fn weighted_sum(parts: &[(f64, Irradiance)]) -> Irradiance {
-        let n = parts.first().map_or(0, |(_, p)| p.global_w_m2_nm.len());
-        let sum = |field: &dyn Fn(&Irradiance) -> &SampledSpectrum| {
-            let mut total = SampledSpectrum::zeros(n);
-            for (weight, part) in parts {
-                total.add_scaled(field(part), *weight);
-            }
-            total
+        let sum = |field: fn(&Irradiance) -> &SampledSpectrum| {
+            SampledSpectrum::weighted_sum(parts.iter().map(|(w, p)| (*w, field(p))))
         };
-        let errors = parts
-            .iter()
-            .all(|(_, p)| p.diffuse_standard_error_w_m2_nm.is_some())
-            .then(|| {
-                let mut total = SampledSpectrum::zeros(n);
-                for (weight, part) in parts {
-                    if let Some(error) = &part.diffuse_standard_error_w_m2_nm {
-                        total.add_scaled(error, *weight);
-                    }
-                }
-                total
-            })
-            .filter(|_| !parts.is_empty());
         Irradiance {
-            direct_normal_w_m2_nm: sum(&|p| &p.direct_normal_w_m2_nm),
-            direct_beam_transmittance: sum(&|p| &p.direct_beam_transmittance),
-            direct_w_m2_nm: sum(&|p| &p.direct_w_m2_nm),
-            diffuse_w_m2_nm: sum(&|p| &p.diffuse_w_m2_nm),
-            diffuse_standard_error_w_m2_nm: errors,
-            global_w_m2_nm: sum(&|p| &p.global_w_m2_nm),
+            direct_normal_w_m2_nm: sum(|p| &p.direct_normal_w_m2_nm),
+            direct_beam_transmittance: sum(|p| &p.direct_beam_transmittance),
+            direct_w_m2_nm: sum(|p| &p.direct_w_m2_nm),
+            diffuse_w_m2_nm: sum(|p| &p.diffuse_w_m2_nm),
+            diffuse_standard_error_w_m2_nm: parts
+                .iter()
+                .map(|(w, p)| p.diffuse_standard_error_w_m2_nm.as_ref().map(|e| (*w, e)))
+                .collect::<Option<Vec<_>>>()
+                .map(SampledSpectrum::weighted_sum),
+            global_w_m2_nm: sum(|p| &p.global_w_m2_nm),
         }
     }
 

@@ -416,6 +416,49 @@ impl Stokes {
 }
 
 impl SkyRadiance {
+    /// sum_j w_j times each part, field by field (the k-distribution's sum
+    /// over its terms, `atmosphere::gas_bands`; the parts of one view on
+    /// one grid). Standard errors add as sum_j w_j se_j, the bound for
+    /// errors that may be correlated (the terms are traced with one seed).
+    pub fn weighted_sum(parts: &[(f64, SkyRadiance)]) -> SkyRadiance {
+        let stokes = parts
+            .iter()
+            .map(|(w, p)| p.stokes.as_ref().map(|s| (*w, s)))
+            .collect::<Option<Vec<_>>>()
+            .map(|stokes| {
+                let sum = |field: fn(&Stokes) -> &SampledSpectrum| {
+                    SampledSpectrum::weighted_sum(stokes.iter().map(|(w, s)| (*w, field(s))))
+                };
+                Stokes {
+                    q_w_m2_sr_nm: sum(|s| &s.q_w_m2_sr_nm),
+                    u_w_m2_sr_nm: sum(|s| &s.u_w_m2_sr_nm),
+                    v_w_m2_sr_nm: sum(|s| &s.v_w_m2_sr_nm),
+                    standard_errors_w_m2_sr_nm: stokes
+                        .iter()
+                        .map(|(w, s)| s.standard_errors_w_m2_sr_nm.as_ref().map(|e| (*w, e)))
+                        .collect::<Option<Vec<_>>>()
+                        .map(|errors| {
+                            [0, 1, 2].map(|k| {
+                                SampledSpectrum::weighted_sum(
+                                    errors.iter().map(|(w, e)| (*w, &e[k])),
+                                )
+                            })
+                        }),
+                }
+            });
+        SkyRadiance {
+            radiance_w_m2_sr_nm: SampledSpectrum::weighted_sum(
+                parts.iter().map(|(w, p)| (*w, &p.radiance_w_m2_sr_nm)),
+            ),
+            standard_error_w_m2_sr_nm: parts
+                .iter()
+                .map(|(w, p)| p.standard_error_w_m2_sr_nm.as_ref().map(|e| (*w, e)))
+                .collect::<Option<Vec<_>>>()
+                .map(SampledSpectrum::weighted_sum),
+            stokes,
+        }
+    }
+
     /// The largest standard error relative to its value over the
     /// wavelengths (0 without standard errors; see
     /// `crate::transport::SpectralEstimate::worst_relative_standard_error`).

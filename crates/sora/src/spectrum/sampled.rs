@@ -84,6 +84,20 @@ impl SampledSpectrum {
         }
     }
 
+    /// sum_j w_j s_j over `parts` (w_j, s_j), all on one grid (no values
+    /// when there are no parts): a k-distribution's sum over its terms.
+    pub fn weighted_sum<'a>(
+        parts: impl IntoIterator<Item = (f64, &'a SampledSpectrum)>,
+    ) -> SampledSpectrum {
+        let mut total: Option<SampledSpectrum> = None;
+        for (weight, spectrum) in parts {
+            total
+                .get_or_insert_with(|| SampledSpectrum::zeros(spectrum.len()))
+                .add_scaled(spectrum, weight);
+        }
+        total.unwrap_or_else(|| SampledSpectrum::zeros(0))
+    }
+
     /// Replaces each value v by exp(-v): optical depth -> transmittance
     /// (Beer-Lambert).
     #[cfg(test)]
