@@ -637,6 +637,12 @@ fn run_case(line: &[String], directory: &Path, counts: &mut Counts) -> Option<St
     let stderr = String::from_utf8_lossy(&stderr_reader.join().unwrap()).into_owned();
     counts.cases += 1;
     let Some(status) = status else {
+        // Named, so that a slow case can be run again to its end.
+        eprintln!(
+            "slow (killed after {} s): sora {}",
+            TIMEOUT.as_secs(),
+            line.join(" ")
+        );
         counts.slow += 1;
         return None;
     };
