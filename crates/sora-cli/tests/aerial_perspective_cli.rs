@@ -146,7 +146,7 @@ fn render(extra: &[&str], output: &std::path::Path) -> std::process::Output {
         "--wavelengths",
         "440:680:60",
         "--polarisation",
-        "off",
+        "scalar",
         "--no-sun-disc",
         "-o",
         output.to_str().unwrap(),

@@ -43,7 +43,7 @@ fn synthetic_radiances_csv() -> String {
         "--almucantar",
         "20",
         "--polarisation",
-        "off",
+        "scalar",
     ]);
     let text = stdout(&out);
     let mut lines = text.lines();

@@ -517,7 +517,7 @@ fn streams_and_layers_set_the_fields_resolution() {
         "--view-azimuth",
         "90",
         "--polarisation",
-        "off",
+        "scalar",
         "--wavelengths",
         "440:680:120",
     ];
