@@ -346,20 +346,13 @@ fn bad_inputs_give_one_line_errors_and_write_nothing() {
     std::fs::write(&dense, text).unwrap();
     let too_many = run(&[
         &["--normalised-spectrum".into(), dense.clone()][..],
-        &outputs(&[
-            "--sun-elevation",
-            "36",
-            "--sun-azimuth",
-            "207",
-            "--view-elevation",
-            "17",
-            "--view-azimuth",
-            "347",
-            "--max-iterations",
-            "2",
-            "--starting-points",
-            "1",
-        ]),
+        &outputs(
+            &[
+                &common::TABLE1_GEOMETRY[..],
+                &["--max-iterations", "2", "--starting-points", "1"],
+            ]
+            .concat(),
+        ),
     ]
     .concat());
     assert!(
