@@ -344,7 +344,8 @@ impl Sky {
 
     /// The colour of spectra on this sky's grid (2-D array [spectrum,
     /// wavelength], W m^-2 sr^-1 nm^-1 or W m^-2 nm^-1): CIE 1931 XYZ
-    /// (Y in cd m^-2, or lux for irradiance) or, with `linear_srgb`, the
+    /// (Y in W m^-2 sr^-1, or W m^-2 for irradiance; 683 Y is cd m^-2, or
+    /// lux) or, with `linear_srgb`, the
     /// linear sRGB of that XYZ, as images' pixels are made.
     fn colours<'py>(
         &self,

@@ -337,8 +337,12 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
             grid.len(),
         ));
     }
-    // Each term's radiances, summed with the terms' weights.
+    // Each term's radiances, summed with the terms' weights (one sky's
+    // as they are, without banded gases).
     let radiances = |compute: &dyn Fn(&sora::Sky) -> anyhow::Result<Vec<SkyRadiance>>| {
+        if let [(_, (sky, _))] = skies.as_slice() {
+            return compute(sky);
+        }
         let mut by_term = Vec::with_capacity(skies.len());
         for (weight, (sky, _)) in &skies {
             by_term.push((*weight, compute(sky)?));

@@ -159,21 +159,24 @@ pub fn mixed_band_transmittance(y: f64) -> f64 {
     (-1.41 * y / (1.0 + 118.3 * y).powf(0.45)).exp()
 }
 
-/// The embedded k-distribution terms.
-pub fn k_terms() -> Vec<KTerm> {
-    let table = NumericTable::parse(K_TERMS_CSV, "embedded gas k-terms")
-        .expect("the embedded k-terms are valid");
-    let terms: Vec<KTerm> = table
-        .rows
-        .iter()
-        .map(|row| KTerm {
-            weight: row[0],
-            water_factor: row[1],
-            mixed_factor: row[2],
-        })
-        .collect();
-    assert_eq!(terms.len(), TERMS, "the embedded k-terms have {TERMS} rows");
-    terms
+/// The embedded k-distribution terms (parsed once).
+pub fn k_terms() -> &'static [KTerm] {
+    static PARSED: std::sync::LazyLock<Vec<KTerm>> = std::sync::LazyLock::new(|| {
+        let table = NumericTable::parse(K_TERMS_CSV, "embedded gas k-terms")
+            .expect("the embedded k-terms are valid");
+        let terms: Vec<KTerm> = table
+            .rows
+            .iter()
+            .map(|row| KTerm {
+                weight: row[0],
+                water_factor: row[1],
+                mixed_factor: row[2],
+            })
+            .collect();
+        assert_eq!(terms.len(), TERMS, "the embedded k-terms have {TERMS} rows");
+        terms
+    });
+    &PARSED
 }
 
 /// The band model's coefficient of `gas` against wavelength (a_w per cm,

@@ -50,6 +50,8 @@ pub struct OutputFiles {
 struct StagedFile {
     /// The file to replace or create (links already followed).
     target: PathBuf,
+    /// `target` as compared with later outputs ([`comparable_path`], once).
+    key: PathBuf,
     /// The path the caller gave, for messages.
     shown: String,
     temporary: TemporaryFileGuard,
@@ -82,11 +84,7 @@ impl OutputFiles {
             });
         };
         let key = comparable_path(&target);
-        if let Some(earlier) = self
-            .staged
-            .iter()
-            .find(|staged| comparable_path(&staged.target) == key)
-        {
+        if let Some(earlier) = self.staged.iter().find(|staged| staged.key == key) {
             return Err(Error::Unsupported(format!(
                 "{} is the same file as the output {}: give each output its own file",
                 path.display(),
@@ -106,6 +104,7 @@ impl OutputFiles {
         fill_and_sync()?;
         self.staged.push(StagedFile {
             target,
+            key,
             shown: path.display().to_string(),
             temporary,
         });

@@ -153,25 +153,12 @@ impl Sky {
         irradiance: &SampledSpectrum,
     ) -> Result<Vec<AerialPerspective>> {
         let wavelengths = self.wavelengths().len();
-        let radiances = match self.method {
-            Method::PathTracing { samples, seed } => {
-                self.trace_segments(segments, samples, seed)?
-            }
-            _ => self.compute_segment_radiances(segments)?,
-        };
         let mut scratch = self.scene.scratch();
         Ok(segments
             .iter()
-            .zip(radiances)
-            .map(|((view, distance_m), radiance)| {
+            .zip(self.compute_segment_light(segments)?)
+            .map(|((view, distance_m), (radiance, transmittance))| {
                 let (length, end) = self.segment_end(view.to_vector(), *distance_m);
-                self.scene.compute_segment_integrals(
-                    (view.to_vector(), *distance_m),
-                    crate::transport::single_scattering::SunColumns::Exact,
-                    &mut scratch,
-                );
-                let transmittance =
-                    SampledSpectrum::from_values(scratch.view_transmittance().to_vec());
                 let mut sun = vec![0.0; wavelengths];
                 self.scene.compute_sun_transmittance_at(
                     end,
@@ -186,6 +173,36 @@ impl Sky {
                     sun_transmittance_at_point: SampledSpectrum::from_values(sun),
                     sky_irradiance_at_point: irradiance.clone(),
                 }
+            })
+            .collect())
+    }
+
+    /// The light of the air along each checked segment (W m^-2 sr^-1
+    /// nm^-1) and the segment's transmittance: what an image needs, and
+    /// what [`Sky::compute_aerial_perspectives`] adds the point's light to.
+    fn compute_segment_light(
+        &self,
+        segments: &[(ViewDirection, f64)],
+    ) -> Result<Vec<(SkyRadiance, SampledSpectrum)>> {
+        let radiances = match self.method {
+            Method::PathTracing { samples, seed } => {
+                self.trace_segments(segments, samples, seed)?
+            }
+            _ => self.compute_segment_radiances(segments)?,
+        };
+        let mut scratch = self.scene.scratch();
+        Ok(segments
+            .iter()
+            .zip(radiances)
+            .map(|((view, distance_m), radiance)| {
+                self.scene.compute_segment_integrals(
+                    (view.to_vector(), *distance_m),
+                    crate::transport::single_scattering::SunColumns::Exact,
+                    &mut scratch,
+                );
+                let transmittance =
+                    SampledSpectrum::from_values(scratch.view_transmittance().to_vec());
+                (radiance, transmittance)
             })
             .collect())
     }
@@ -236,7 +253,6 @@ impl Sky {
         }
         let (mut radiance, mut transmittance) =
             (vec![Xyz::BLACK; pixels], vec![Xyz::BLACK; pixels]);
-        let no_irradiance = SampledSpectrum::zeros(self.wavelengths().len());
         // A few rows at a time: every pixel's spectra are not kept at once.
         const PIXELS_PER_BATCH: usize = 16_384;
         let mut first = 0;
@@ -254,12 +270,12 @@ impl Sky {
                     indices.push(k);
                 }
             }
-            for (k, ap) in indices
+            for (k, (light, through)) in indices
                 .into_iter()
-                .zip(self.compute_aerial_perspectives(&segments, &no_irradiance)?)
+                .zip(self.compute_segment_light(&segments)?)
             {
-                radiance[k] = to_xyz.to_xyz(&ap.radiance.radiance_w_m2_sr_nm)?;
-                transmittance[k] = to_xyz.to_xyz(&ap.transmittance)?;
+                radiance[k] = to_xyz.to_xyz(&light.radiance_w_m2_sr_nm)?;
+                transmittance[k] = to_xyz.to_xyz(&through)?;
             }
             first = last;
         }
@@ -306,6 +322,7 @@ impl Sky {
                 let mut work = self.view_work();
                 let mut whole = vec![0.0; per_view];
                 let mut hidden = vec![0.0; wavelengths];
+                let mut scaled = vec![0.0; wavelengths];
                 for (k, out) in chunk.chunks_mut(per_view).enumerate() {
                     let (view, distance_m) = segments[task * SEGMENTS_PER_TASK + k];
                     // The whole view's light (the sky's radiance), then the
@@ -332,7 +349,6 @@ impl Sky {
                     // counts as unscattered).
                     hidden.copy_from_slice(work.single.view_transmittance());
                     if let (Some(field), Some(scratch)) = (self.field(), work.multiple.as_ref()) {
-                        let mut scaled = vec![0.0; wavelengths];
                         field.scaled_transmittance_of_last_ray(scratch, &mut scaled);
                         for (h, t) in hidden.iter_mut().zip(&scaled) {
                             *h = if *t > 0.0 { *h / t } else { 1.0 };
