@@ -230,8 +230,8 @@ impl EngineTables {
                 let layer = s * altitude_nodes + a;
                 let out = &mut sky_values[layer * layer_texels..][..layer_texels];
                 for (o, radiance) in out.iter_mut().zip(&radiances) {
-                    let c = xyz(radiance.radiance_w_m2_sr_nm.values())?;
-                    *o = c.map(|v| v.max(0.0) as f32);
+                    let c = to_xyz.to_xyz(&radiance.radiance_w_m2_sr_nm)?;
+                    *o = [c.x, c.y, c.z].map(|v| v.max(0.0) as f32);
                 }
                 progress((a * sun_nodes + s + 1) as f64 / layers as f64);
             }
