@@ -33,9 +33,14 @@ const root = resolve(here, '../..');
 const webRoot = resolve(here, '..');
 const out = resolve(process.env.SORA_WEB_OUT || join(root, 'target/web-test'));
 const SIZE = 256;
-// 99th percentile of the relative luminance error (see the README of the
-// numbers in docs/explorer.md's real-time section).
-const LIMITS = { againstBakedSky: 0.04, againstExactView: 0.08 };
+// 99th percentile of the relative luminance error. The tables' 20 sun
+// nodes (1 degree apart at sunset, about 2 at -4, 8-12 near 45),
+// interpolated geometrically, and their 32 x 32 views per half are the
+// error against the sky they were baked from (measured 1.4-2.6 % at the
+// suns below, worst near a high sun's aureole and at -4); the preview
+// sky they are baked from adds its own 1-3 % against the exact view's
+// refined sky (measured 2.0-3.3 % together).
+const LIMITS = { againstBakedSky: 0.04, againstExactView: 0.05 };
 const SUNS = [45, 10, 2, -4];
 
 const TYPES = { '.html': 'text/html', '.js': 'text/javascript', '.css': 'text/css', '.wasm': 'application/wasm', '.glsl': 'text/plain' };
