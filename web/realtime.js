@@ -15,7 +15,8 @@
 //     as L_point * T + L_air (soraAerialPerspective);
 //   2 difference: the fisheye's relative luminance difference from the
 //     exact image (uExact, XYZ): red where the real-time sky is brighter,
-//     blue where it is dimmer, full colour at +-DIFFERENCE_SCALE;
+//     blue where it is dimmer, full colour at +-DIFFERENCE_SCALE; grey
+//     where the exact image is black (a night sky below its floor);
 //   3 XYZ: the fisheye's XYZ without the sun's disc, into a float target
 //     (what the browser test reads back).
 
@@ -159,6 +160,7 @@ void main() {
     vec3 realtime = soraSkyView(uAltitudeM, v, sun);
     // The exact image's rows run top first.
     vec3 exact = texelFetch(uExact, ivec2(int(gl_FragCoord.x), int(uSize.y) - 1 - int(gl_FragCoord.y)), 0).xyz;
+    if (!(exact.y > 0.0)) { colour = vec4(vec3(0.08), 1.0); return; } // a night sky: no difference
     float t = clamp((realtime.y - exact.y) / max(exact.y, 1e-30) / ${DIFFERENCE_SCALE.toFixed(4)}, -1.0, 1.0);
     vec3 grey = vec3(0.08);
     colour = vec4(t > 0.0 ? mix(grey, vec3(1.0, 0.25, 0.1), t) : mix(grey, vec3(0.2, 0.55, 1.0), -t), 1.0);

@@ -21,12 +21,12 @@
 // Environment: CHROMIUM (default /usr/bin/chromium), SORA_WEB_OUT (default
 // target/web-test). Run: cd web/tests && npm ci && node realtime.test.mjs
 
-import { createServer } from 'node:http';
-import { readFile, mkdir, writeFile } from 'node:fs/promises';
-import { extname, join, resolve, dirname } from 'node:path';
+import { mkdir, writeFile } from 'node:fs/promises';
+import { join, resolve, dirname } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import assert from 'node:assert/strict';
 import { chromium } from 'playwright-core';
+import { serveWeb } from './serve.mjs';
 
 const here = dirname(fileURLToPath(import.meta.url));
 const root = resolve(here, '../..');
@@ -42,26 +42,6 @@ const SIZE = 256;
 // refined sky (measured 2.0-3.3 % together).
 const LIMITS = { againstBakedSky: 0.04, againstExactView: 0.05 };
 const SUNS = [45, 10, 2, -4];
-
-const TYPES = { '.html': 'text/html', '.js': 'text/javascript', '.css': 'text/css', '.wasm': 'application/wasm', '.glsl': 'text/plain' };
-
-function serve() {
-  const server = createServer(async (request, response) => {
-    const path = new URL(request.url, 'http://localhost').pathname;
-    const file = resolve(webRoot, `.${path === '/' ? '/index.html' : path}`);
-    if (!file.startsWith(webRoot) || file.includes('/tests/')) {
-      response.writeHead(404).end();
-      return;
-    }
-    try {
-      const body = await readFile(file);
-      response.writeHead(200, { 'content-type': TYPES[extname(file)] || 'application/octet-stream' }).end(body);
-    } catch {
-      response.writeHead(404).end();
-    }
-  });
-  return new Promise((ok) => server.listen(0, '127.0.0.1', () => ok(server)));
-}
 
 function percentile(values, p) {
   if (values.length === 0) return 0;
@@ -99,7 +79,7 @@ function compare(gpu, cpu) {
   };
 }
 
-const server = await serve();
+const server = await serveWeb(webRoot);
 const url = `http://127.0.0.1:${server.address().port}/`;
 const browser = await chromium.launch({
   executablePath: process.env.CHROMIUM || '/usr/bin/chromium',

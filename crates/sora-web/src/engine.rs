@@ -367,9 +367,7 @@ impl Engine {
                 json!({"offset_bytes": bytes.len(), "width": width, "height": height}),
             );
             for texel in texels {
-                for value in [texel[0], texel[1], texel[2], 0.0] {
-                    bytes.extend_from_slice(&value.to_le_bytes());
-                }
+                extend_f32_le(&mut bytes, [texel[0], texel[1], texel[2], 0.0]);
             }
         }
         Ok((
@@ -393,26 +391,17 @@ impl Engine {
 
     /// The image's XYZ as 32-bit floats (see [`Request::RenderXyz`]).
     fn render_linear_xyz(&mut self, spec: &SkySpec, image: &ImageSpec) -> Outcome {
-        let sky = self.sky(spec, image.quality)?;
-        let settings = ImageSettings {
-            draw_sun_disc: image.sun_disc,
-            ..ImageSettings::new(camera(image), image.width, image.height)
-        };
-        let to_xyz = SpectrumToXyz::new(sky.wavelengths(), Default::default());
-        let xyz = sky
-            .render_xyz(&settings, &to_xyz, &|_| {})
-            .map_err(|e| e.to_string())?;
+        let (xyz, _) = self.render_xyz(spec, image)?;
         let mut bytes = Vec::with_capacity(12 * xyz.len());
         for c in &xyz {
-            for value in [c.x, c.y, c.z] {
-                bytes.extend_from_slice(&(value as f32).to_le_bytes());
-            }
+            extend_f32_le(&mut bytes, [c.x, c.y, c.z].map(|v| v as f32));
         }
+        let wavelengths = self.sky(spec, image.quality)?.wavelengths().len();
         Ok((
             json!({
                 "width": image.width,
                 "height": image.height,
-                "wavelengths": sky.wavelengths().len(),
+                "wavelengths": wavelengths,
             }),
             bytes,
         ))
@@ -609,6 +598,14 @@ pub fn quality_settings(
                 sky_view_nodes: (32, 16),
             },
         ),
+    }
+}
+
+/// Appends `values` as 32-bit little-endian floats (what a JavaScript
+/// `Float32Array` reads on every platform that runs WebAssembly).
+fn extend_f32_le<const N: usize>(bytes: &mut Vec<u8>, values: [f32; N]) {
+    for value in values {
+        bytes.extend_from_slice(&value.to_le_bytes());
     }
 }
 

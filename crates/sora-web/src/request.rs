@@ -89,8 +89,9 @@ pub enum Request {
     /// A sky image as CIE XYZ (radiance units, as `sora render --exr-xyz
     /// --units radiance`): JSON `{"width", "height", "wavelengths"}`, bytes
     /// three 32-bit little-endian floats per pixel (row-major, top row
-    /// first), without the night floor: what the real-time view's
-    /// difference is taken against.
+    /// first), all zero when the whole sky is below the page's night floor
+    /// (as `render` shows it): what the real-time view's difference is
+    /// taken against.
     RenderXyz {
         /// The sky.
         sky: SkySpec,
