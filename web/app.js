@@ -11,8 +11,17 @@
 // are coalesced: it computes only the latest state, and a result older
 // than the image shown is not drawn.
 //
-// window.soraExplorer exposes the state the browser test reads (timings,
+// Real-time view (realtime.js): when its checkbox is on, a third engine
+// bakes the atmosphere's engine tables (again when an atmosphere control or
+// the scattering changes; the worker reports the bake's progress), and the
+// page draws the sky, a scene with aerial perspective, or the difference
+// from the exact image through WebGL2 from them: moving the sun redraws at
+// once, with no engine request.
+//
+// window.soraExplorer exposes the state the browser tests read (timings,
 // the last spectrum, counts); it is not an API.
+
+import { RealtimeView, RIDGES, DIFFERENCE_SCALE } from './realtime.js';
 
 const $ = (id) => document.getElementById(id);
 
@@ -23,6 +32,7 @@ function startEngine() {
   const worker = new Worker(new URL('./worker.js', import.meta.url), { type: 'module' });
   let nextId = 1;
   const pending = new Map();
+  const progress = new Map();
   let resolveReady;
   const ready = new Promise((resolve) => { resolveReady = resolve; });
   worker.onmessage = (event) => {
@@ -32,12 +42,19 @@ function startEngine() {
       else showError(message.json.error);
       return;
     }
+    if (message.progress !== undefined) {
+      progress.get(message.id)?.(message.progress);
+      return;
+    }
     pending.get(message.id)(message);
     pending.delete(message.id);
+    progress.delete(message.id);
   };
-  const call = (request) => new Promise((resolve) => {
+  // onProgress(fraction): called as the engine reports progress.
+  const call = (request, onProgress) => new Promise((resolve) => {
     const id = nextId++;
     pending.set(id, resolve);
+    if (onProgress) progress.set(id, onProgress);
     worker.postMessage({ id, request });
   });
   return { call, ready };
@@ -136,6 +153,7 @@ function changed() {
   changedAt = performance.now();
   pumpPreview();
   pumpRefinement();
+  realtimeChanged();
 }
 
 async function pumpPreview() {
@@ -205,6 +223,177 @@ function draw(reply) {
   canvas.getContext('2d').putImageData(pixels, 0, 0);
   explorer.imageSpec = { ...imageSpec('refined'), width, height };
 }
+
+// ---- real-time view -------------------------------------------------------
+// bakes/lastBake: the tables baked (ms: the engine's wall time in the
+// worker); progress: the fractions the last bake reported; frames: draws.
+const realtime = {
+  view: null, engine: null, baking: false, bakedFor: null, failedFor: null,
+  bakes: 0, lastBake: null, progress: [], frames: 0,
+  exact: null, exactBusy: false, exactFor: null,
+};
+explorer.realtime = realtime;
+
+function realtimeStatus(text) {
+  $('realtime-status').textContent = text;
+}
+
+function tablesRequest() {
+  return { op: 'tables', atmosphere: atmosphereSpec(), scattering: $('scattering').value };
+}
+
+function realtimeState(sky = skySpec()) {
+  return {
+    mode: $('realtime-mode').value,
+    sunElevationDeg: sky.sun_elevation_deg,
+    sunAzimuthDeg: sky.sun_azimuth_deg,
+    altitudeM: sky.observer_altitude_m,
+    lookAzimuthDeg: number('look-azimuth'),
+  };
+}
+
+async function enableRealtime() {
+  const on = $('realtime').checked;
+  $('realtime-canvas').hidden = !on;
+  if (!on) return;
+  try {
+    if (!realtime.view) {
+      const view = new RealtimeView($('realtime-canvas'));
+      if (!view.supported) throw new Error('real-time view: this browser has no WebGL2');
+      await view.init();
+      realtime.engine = startEngine();
+      await realtime.engine.ready;
+      realtime.view = view;
+    }
+    realtimeChanged();
+  } catch (error) {
+    showError(String(error.message || error));
+  }
+}
+
+function realtimeChanged() {
+  if (!$('realtime').checked || !realtime.view) return;
+  pumpBake();
+  if ($('realtime-mode').value === 'difference') pumpExact();
+  requestDraw();
+}
+
+function describeTables() {
+  const { ms, settings: t, sizeBytes } = realtime.lastBake;
+  return `tables: ${t.sun_nodes} suns × ${t.altitude_nodes} altitudes × ${2 * t.zenith_nodes_per_half}×${t.azimuth_nodes} views, ${t.wavelengths} wavelengths (${t.quality} sky), ${(sizeBytes / 1e6).toFixed(1)} MB, baked in ${(ms / 1000).toFixed(1)} s in this browser`;
+}
+
+async function pumpBake() {
+  const request = tablesRequest();
+  const key = JSON.stringify(request);
+  if (realtime.baking || realtime.bakedFor === key || realtime.failedFor === key) return;
+  realtime.baking = true;
+  realtime.progress = [];
+  const previous = realtime.bakedFor ? ' (the view shows the previous tables until then)' : '';
+  realtimeStatus(`baking the engine tables${previous}…`);
+  try {
+    const reply = await realtime.engine.call(request, (fraction) => {
+      realtime.progress.push(fraction);
+      realtimeStatus(`baking the engine tables: ${Math.round(100 * fraction)} % of the sky table's layers${previous}`);
+    });
+    if (!reply.ok) {
+      realtime.failedFor = key;
+      showError(reply.json.error);
+      realtimeStatus('the tables did not bake');
+      return;
+    }
+    realtime.view.setTables(reply.json, reply.bytes);
+    realtime.bakedFor = key;
+    realtime.bakes += 1;
+    realtime.lastBake = { ms: reply.ms, settings: reply.json.settings, sizeBytes: reply.json.size_bytes, request };
+    realtimeStatus(describeTables());
+    if ($('realtime-mode').value === 'difference') pumpExact();
+    requestDraw();
+  } finally {
+    realtime.baking = false;
+    if ($('realtime').checked) pumpBake();
+  }
+}
+
+// The exact image the difference view compares with: the refinement's
+// sky as XYZ, fisheye, 256 pixels, no sun disc.
+async function pumpExact() {
+  const sky = skySpec();
+  const key = JSON.stringify(sky);
+  if (realtime.exactBusy || realtime.exactFor === key) return;
+  realtime.exactBusy = true;
+  try {
+    const reply = await engine({ op: 'render_xyz', sky, image: { camera: 'fisheye', width: 256, height: 256, quality: 'refined', sun_disc: false } });
+    if (!reply.ok) {
+      showError(reply.json.error);
+      return;
+    }
+    realtime.view.setExact(reply.json, reply.bytes);
+    realtime.exactFor = key;
+    realtime.exact = { sky, ms: reply.ms };
+    requestDraw();
+  } finally {
+    realtime.exactBusy = false;
+    if ($('realtime-mode').value === 'difference' && $('realtime').checked) pumpExact();
+  }
+}
+
+let drawRequested = false;
+function requestDraw() {
+  if (drawRequested) return;
+  drawRequested = true;
+  requestAnimationFrame(() => {
+    drawRequested = false;
+    drawRealtime();
+  });
+}
+
+function drawRealtime() {
+  const view = realtime.view;
+  if (!view || !view.tables) return;
+  const mode = $('realtime-mode').value;
+  let state = realtimeState();
+  const canvas = $('realtime-canvas');
+  // As many pixels as the exact image: a software renderer (SwiftShader)
+  // takes about 0.2 s a frame at this size; CSS scales them to 512 across.
+  const [width, height] = mode === 'scene' ? [512, 256] : [256, 256];
+  if (canvas.width !== width || canvas.height !== height) Object.assign(canvas, { width, height });
+  canvas.style.height = `${(512 * height) / width}px`;
+  let note = '';
+  if (mode === 'difference') {
+    // The difference is drawn for the exact image's sky, tables of the
+    // same atmosphere: a sun slider's newer state waits for its image.
+    const tablesKey = JSON.stringify({ op: 'tables', atmosphere: realtime.exact?.sky.atmosphere, scattering: realtime.exact?.sky.scattering });
+    if (!realtime.exact || tablesKey !== realtime.bakedFor) {
+      realtimeStatus('computing the exact image for the difference…');
+      return;
+    }
+    state = realtimeState(realtime.exact.sky);
+    note = ` — luminance (real-time − exact) / exact: red brighter, blue dimmer, full colour at ±${100 * DIFFERENCE_SCALE} %; sun ${state.sunElevationDeg}°`;
+  } else if (mode === 'scene') {
+    note = ` — ridges at ${RIDGES.map(([d]) => d / 1000).join(', ')} km, looking toward azimuth ${state.lookAzimuthDeg}°`;
+  }
+  const started = performance.now();
+  view.draw(state);
+  realtime.frames += 1;
+  realtime.lastDraw = { state, ms: performance.now() - started };
+  if (!realtime.baking) realtimeStatus(`${describeTables()}${note}`);
+}
+
+// For the browser test: the fisheye's XYZ from the tables, and the exact
+// image of the same sky at `quality`, both `size` pixels.
+realtime.compare = async (quality, size) => {
+  const sky = skySpec();
+  const gpu = realtime.view.readXyz(realtimeState(sky), size);
+  const reply = await engine({ op: 'render_xyz', sky, image: { camera: 'fisheye', width: size, height: size, quality, sun_disc: false } });
+  if (!reply.ok) throw new Error(reply.json.error);
+  return { sky, gpu: Array.from(gpu), cpu: Array.from(new Float32Array(reply.bytes)), cpuMs: reply.ms };
+};
+realtime.timeFrames = (mode, frames) => {
+  $('realtime-mode').value = mode;
+  drawRealtime();
+  return realtime.view.timeFrames(realtimeState(), frames);
+};
 
 // ---- spectrum -------------------------------------------------------------
 async function showSpectrum(view) {
@@ -381,6 +570,9 @@ async function start() {
   for (const id of SKY_CONTROLS) linkSlider(id, changed);
   for (const [id] of ATMOSPHERE_CONTROLS) linkSlider(id, atmosphereControlChanged);
   for (const id of ['scattering', 'camera']) $(id).addEventListener('change', changed);
+  $('realtime').addEventListener('change', enableRealtime);
+  $('realtime-mode').addEventListener('change', realtimeChanged);
+  linkSlider('look-azimuth', requestDraw);
   $('auto-exposure').addEventListener('change', () => {
     $('ev100').disabled = $('auto-exposure').checked;
     $('ev100-value').disabled = $('auto-exposure').checked;

@@ -5,14 +5,19 @@
 // Message in:  {id, request}            (request: see crates/sora-web/src/request.rs)
 // Message out: {id, ok, json, bytes, ms} (bytes: an ArrayBuffer, transferred;
 //              ms: the engine's wall time for this request)
-//              or {id: 0, ready: true} / {id: 0, ok: false, json: {error}} once loaded.
+//              or {id: 0, ready: true} / {id: 0, ok: false, json: {error}} once loaded;
+//              during a long request (the engine tables' bake) also
+//              {id, progress} (the fraction of its work done, as the engine
+//              reports it through its env.sora_progress import).
 
 let engine = null;
+let running = 0; // the id of the request being computed
 
 async function load() {
   const response = await fetch(new URL('./sora_web.wasm', import.meta.url));
   if (!response.ok) throw new Error(`sora_web.wasm: HTTP ${response.status} (build it with crates/sora-web/build.sh)`);
-  const { instance } = await WebAssembly.instantiate(await response.arrayBuffer(), {});
+  const imports = { env: { sora_progress: (fraction) => self.postMessage({ id: running, progress: fraction }) } };
+  const { instance } = await WebAssembly.instantiate(await response.arrayBuffer(), imports);
   engine = instance.exports;
 }
 
@@ -44,6 +49,7 @@ self.onmessage = async (event) => {
     self.postMessage({ id, ok: false, json: { error: 'the engine did not load' }, bytes: new ArrayBuffer(0), ms: 0 });
     return;
   }
+  running = id;
   const reply = call(request);
   self.postMessage({ id, ...reply }, [reply.bytes]);
 };

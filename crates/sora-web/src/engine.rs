@@ -10,6 +10,7 @@ use serde_json::{Value, json};
 
 use sora::camera::Camera;
 use sora::colour::{DisplayMapping, Exposure, RgbColourSpace, SpectrumToXyz, Xyz};
+use sora::engine_tables::{EngineTableSettings, EngineTables};
 use sora::output::{ChannelKind, ExrOptions, LinearImage, encode_exr};
 use sora::spectrum::Spectrum;
 use sora::{
@@ -108,6 +109,11 @@ impl Engine {
                 view_azimuth_deg,
             } => self.spectrum(sky, *view_elevation_deg, *view_azimuth_deg),
             Request::Optics { atmosphere } => self.optics(atmosphere),
+            Request::Tables {
+                atmosphere,
+                scattering,
+            } => self.tables(atmosphere, *scattering),
+            Request::RenderXyz { sky, image } => self.render_linear_xyz(sky, image),
             Request::AtmosphereToml { atmosphere } => {
                 let mut text = apply_controls(&atmosphere_text(atmosphere)?, atmosphere)?;
                 if let Some(albedo) = atmosphere.ground_albedo {
@@ -318,6 +324,89 @@ impl Engine {
         ))
     }
 
+    /// The engine tables of `spec` for the real-time view (see
+    /// [`Request::Tables`] and [`REALTIME_TABLES`]).
+    fn tables(&mut self, spec: &AtmosphereSpec, scattering: ScatteringChoice) -> Outcome {
+        // The sky's sun and eye are not used by the bake.
+        let sky_spec = SkySpec {
+            atmosphere: spec.clone(),
+            sun_elevation_deg: 45.0,
+            sun_azimuth_deg: 180.0,
+            observer_altitude_m: 0.0,
+            scattering,
+        };
+        let sky = build_sky(self.atmosphere(spec)?, &sky_spec, REALTIME_TABLES.quality)?;
+        let tables = EngineTables::bake(&sky, &REALTIME_TABLES.settings, &crate::report_progress)
+            .map_err(|e| e.to_string())?;
+        let settings = tables.settings();
+        let mut bytes = Vec::with_capacity(16 * tables.size_bytes() / 12);
+        let mut layout = serde_json::Map::new();
+        let half = settings.zenith_nodes_per_half;
+        for (name, texels, width, height) in [
+            (
+                "sky",
+                tables.sky_table(),
+                settings.azimuth_nodes,
+                2 * half * settings.sky_layers(),
+            ),
+            (
+                "transmittance",
+                tables.transmittance_table(),
+                settings.transmittance_nodes.1,
+                settings.transmittance_nodes.0,
+            ),
+            (
+                "irradiance",
+                tables.irradiance_table(),
+                settings.sun_nodes,
+                settings.altitude_nodes,
+            ),
+        ] {
+            layout.insert(
+                name.into(),
+                json!({"offset_bytes": bytes.len(), "width": width, "height": height}),
+            );
+            for texel in texels {
+                extend_f32_le(&mut bytes, [texel[0], texel[1], texel[2], 0.0]);
+            }
+        }
+        Ok((
+            json!({
+                "manifest": tables.manifest(),
+                "settings": {
+                    "quality": format!("{:?}", REALTIME_TABLES.quality).to_lowercase(),
+                    "wavelengths": sky.wavelengths().len(),
+                    "sun_nodes": settings.sun_nodes,
+                    "altitude_nodes": settings.altitude_nodes,
+                    "zenith_nodes_per_half": half,
+                    "azimuth_nodes": settings.azimuth_nodes,
+                    "transmittance_nodes": [settings.transmittance_nodes.0, settings.transmittance_nodes.1],
+                },
+                "tables": layout,
+                "size_bytes": tables.size_bytes(),
+            }),
+            bytes,
+        ))
+    }
+
+    /// The image's XYZ as 32-bit floats (see [`Request::RenderXyz`]).
+    fn render_linear_xyz(&mut self, spec: &SkySpec, image: &ImageSpec) -> Outcome {
+        let (xyz, _) = self.render_xyz(spec, image)?;
+        let mut bytes = Vec::with_capacity(12 * xyz.len());
+        for c in &xyz {
+            extend_f32_le(&mut bytes, [c.x, c.y, c.z].map(|v| v as f32));
+        }
+        let wavelengths = self.sky(spec, image.quality)?.wavelengths().len();
+        Ok((
+            json!({
+                "width": image.width,
+                "height": image.height,
+                "wavelengths": wavelengths,
+            }),
+            bytes,
+        ))
+    }
+
     /// The optical depths per species on the paper's wavelengths.
     fn optics(&mut self, spec: &AtmosphereSpec) -> Outcome {
         let grid = WavelengthGrid::paper();
@@ -405,6 +494,38 @@ fn camera(image: &ImageSpec) -> Camera {
     }
 }
 
+/// What the real-time view's engine tables are baked from: the sky's
+/// resolution and the tables' nodes (see [`REALTIME_TABLES`]).
+#[derive(Debug, Clone, Copy)]
+pub struct RealtimeTables {
+    /// The sky's wavelengths, multiple-scattering field and image tables.
+    pub quality: Quality,
+    /// The tables' nodes.
+    pub settings: EngineTableSettings,
+}
+
+/// The real-time view's tables: the preview's sky (every 40 nm, the coarse
+/// field) and 20 suns x 3 altitudes x (2 x 32) x 32 views, against the
+/// library's default of the paper's 21 wavelengths and 48 suns x 6
+/// altitudes x (2 x 64) x 64 views (what `sora tables` bakes), since the
+/// bake solves the multiple-scattering field once per sun and altitude
+/// node: about 1.7 s per layer natively at the default resolution, 0.18 s
+/// at this one (measured), 2-3 times that in wasm. Fewer suns cost
+/// accuracy first: 16 put the fisheye 16 % off at sun -4 and 9 % at 45
+/// (99th percentile of the luminance error; 2.4 and 2.6 % with 20, the
+/// browser test, `web/tests/realtime.test.mjs`). The one constant to
+/// raise when the bake gets faster.
+pub const REALTIME_TABLES: RealtimeTables = RealtimeTables {
+    quality: Quality::Preview,
+    settings: EngineTableSettings {
+        sun_nodes: 20,
+        altitude_nodes: 3,
+        zenith_nodes_per_half: 32,
+        azimuth_nodes: 32,
+        transmittance_nodes: (32, 128),
+    },
+};
+
 /// A new sky of `spec` on `atmosphere` at `quality` (see [`Quality`]).
 pub fn build_sky(atmosphere: &Atmosphere, spec: &SkySpec, quality: Quality) -> Result<Sky, String> {
     let (grid, settings, tables) = quality_settings(quality);
@@ -477,6 +598,14 @@ pub fn quality_settings(
                 sky_view_nodes: (32, 16),
             },
         ),
+    }
+}
+
+/// Appends `values` as 32-bit little-endian floats (what a JavaScript
+/// `Float32Array` reads on every platform that runs WebAssembly).
+fn extend_f32_le<const N: usize>(bytes: &mut Vec<u8>, values: [f32; N]) {
+    for value in values {
+        bytes.extend_from_slice(&value.to_le_bytes());
     }
 }
 
@@ -603,6 +732,70 @@ mod tests {
             o["species"][1]["optical_depth"][i].as_f64().unwrap()
         };
         assert!((at_550(&optics) / at_550(&original) - 1.0).abs() < 1e-12);
+    }
+
+    /// The tables' reply: the layout the JSON states, every texel's fourth
+    /// float zero, and the sky table's texels where they are: at the
+    /// ground with the sun at the zenith (the last sun node, the first
+    /// altitude), the zenith's and the horizon's (the first and the last
+    /// row above it) radiance within 3 % of the sky's own radiance there
+    /// (the preview's image tables against its exact view path), a layer
+    /// off being orders of magnitude off.
+    #[test]
+    fn the_tables_reply_holds_the_baked_tables_in_the_stated_layout() {
+        let mut engine = Engine::default();
+        let (reply, bytes) = request(
+            &mut engine,
+            r#"{"op": "tables", "atmosphere": {"preset": "earth-clear"}}"#,
+        );
+        let float = |i: usize| f32::from_le_bytes(bytes[4 * i..4 * i + 4].try_into().unwrap());
+        let settings = REALTIME_TABLES.settings;
+        let half = settings.zenith_nodes_per_half;
+        let sky_texels = settings.sky_layers() * 2 * half * settings.azimuth_nodes;
+        let texels = sky_texels
+            + settings.transmittance_nodes.0 * settings.transmittance_nodes.1
+            + settings.sun_nodes * settings.altitude_nodes;
+        assert_eq!(bytes.len(), 16 * texels);
+        assert_eq!(reply["size_bytes"], 12 * texels);
+        assert!((0..texels).all(|t| float(4 * t + 3) == 0.0));
+        let tables = &reply["tables"];
+        assert_eq!(tables["sky"]["offset_bytes"], 0);
+        assert_eq!(tables["transmittance"]["offset_bytes"], 16 * sky_texels);
+        assert_eq!(
+            tables["irradiance"]["offset_bytes"],
+            16 * (sky_texels + settings.transmittance_nodes.0 * settings.transmittance_nodes.1)
+        );
+        assert_eq!(
+            reply["manifest"]["tables"]["sky"]["sun_nodes"],
+            settings.sun_nodes
+        );
+        let atmosphere = Atmosphere::preset("earth-clear").unwrap();
+        let spec = SkySpec {
+            atmosphere: AtmosphereSpec::default(),
+            sun_elevation_deg: 90.0,
+            sun_azimuth_deg: 180.0,
+            observer_altitude_m: 0.0,
+            scattering: ScatteringChoice::Multiple,
+        };
+        let sky = build_sky(&atmosphere, &spec, REALTIME_TABLES.quality).unwrap();
+        let to_xyz = SpectrumToXyz::new(sky.wavelengths(), Default::default());
+        let layer = (settings.sun_nodes - 1) * settings.altitude_nodes;
+        // The eye on the ground: its horizon at 90 degrees.
+        let horizon = std::f64::consts::FRAC_PI_2;
+        for row in [0, half - 1] {
+            let zenith = sora::engine_tables::axes::zenith_of_node(row, half, horizon);
+            let view = ViewDirection::new(90.0 - zenith.to_degrees(), 0.0).unwrap();
+            let expected = to_xyz
+                .to_xyz(&sky.radiance(view).unwrap().radiance_w_m2_sr_nm)
+                .unwrap()
+                .y;
+            let texel = (layer * 2 * half + row) * settings.azimuth_nodes;
+            let got = f64::from(float(4 * texel + 1));
+            assert!(
+                (got / expected - 1.0).abs() < 0.03,
+                "row {row}: table {got:e}, sky {expected:e}"
+            );
+        }
     }
 
     #[test]

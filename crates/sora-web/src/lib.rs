@@ -28,6 +28,27 @@ thread_local! {
     static STATE: RefCell<(Engine, Reply)> = RefCell::new((Engine::default(), Reply::default()));
 }
 
+#[cfg(target_arch = "wasm32")]
+#[link(wasm_import_module = "env")]
+unsafe extern "C" {
+    /// The worker's progress callback (`web/worker.js`): posts the
+    /// fraction of the running request's work done to the page.
+    #[link_name = "sora_progress"]
+    fn sora_progress_import(fraction: f64);
+}
+
+/// Reports that `fraction` (0..1) of a long request's work is done: to the
+/// worker's `env.sora_progress` import in WebAssembly, nowhere natively.
+pub fn report_progress(fraction: f64) {
+    #[cfg(target_arch = "wasm32")]
+    // SAFETY: an imported JavaScript function taking one number.
+    unsafe {
+        sora_progress_import(fraction)
+    };
+    #[cfg(not(target_arch = "wasm32"))]
+    let _ = fraction;
+}
+
 /// Memory for a request of `len` bytes (freed with [`sora_free`]).
 #[unsafe(no_mangle)]
 pub extern "C" fn sora_alloc(len: usize) -> *mut u8 {

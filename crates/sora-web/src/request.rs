@@ -71,6 +71,33 @@ pub enum Request {
         /// The atmosphere.
         atmosphere: AtmosphereSpec,
     },
+    /// The engine tables of an atmosphere for the page's real-time
+    /// (WebGL2) view, baked at [`crate::engine::REALTIME_TABLES`]: JSON
+    /// `{"manifest", "settings", "tables": {"sky" | "transmittance" |
+    /// "irradiance": {"offset_bytes", "width", "height"}}, "size_bytes"}`,
+    /// bytes the three tables one after the other as 32-bit little-endian
+    /// floats, four per texel (X, Y, Z, 0: an RGBA32F texture), in the
+    /// manifest's layout. Progress is reported while the sky table's
+    /// layers bake (see [`crate::report_progress`]).
+    Tables {
+        /// The atmosphere.
+        atmosphere: AtmosphereSpec,
+        /// Single or multiple scattering.
+        #[serde(default)]
+        scattering: ScatteringChoice,
+    },
+    /// A sky image as CIE XYZ (radiance units, as `sora render --exr-xyz
+    /// --units radiance`): JSON `{"width", "height", "wavelengths"}`, bytes
+    /// three 32-bit little-endian floats per pixel (row-major, top row
+    /// first), all zero when the whole sky is below the page's night floor
+    /// (as `render` shows it): what the real-time view's difference is
+    /// taken against.
+    RenderXyz {
+        /// The sky.
+        sky: SkySpec,
+        /// The image (its exposure is not used).
+        image: ImageSpec,
+    },
 }
 
 /// An atmosphere: a preset or a file's text, with the page's controls

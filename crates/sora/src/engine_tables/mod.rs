@@ -270,6 +270,27 @@ impl EngineTables {
         &self.settings
     }
 
+    /// The sky table's texels (XYZ, W m^-2 sr^-1 nm^-1) in the manifest's
+    /// layout: texel (k, row) of layer `s * altitude_nodes + a` at index
+    /// `(layer * 2 * zenith_nodes_per_half + row) * azimuth_nodes + k`
+    /// (what `sky.exr` holds, top scan line first).
+    pub fn sky_table(&self) -> &[[f32; 3]] {
+        &self.sky
+    }
+
+    /// The transmittance table's texels (XYZ ratios), mu node m of
+    /// altitude node a at index `a * mu_nodes + m` (`transmittance.exr`).
+    pub fn transmittance_table(&self) -> &[[f32; 3]] {
+        &self.transmittance
+    }
+
+    /// The diffuse horizontal irradiance table's texels (XYZ, W m^-2
+    /// nm^-1), sun node s of altitude node a at index `a * sun_nodes + s`
+    /// (`irradiance.exr`).
+    pub fn irradiance_table(&self) -> &[[f32; 3]] {
+        &self.irradiance
+    }
+
     /// Bytes of the three tables as 32-bit XYZ (what a GPU holds).
     pub fn size_bytes(&self) -> usize {
         12 * (self.sky.len() + self.transmittance.len() + self.irradiance.len())
