@@ -439,6 +439,28 @@ impl SingleScatteringSky {
         table
     }
 
+    /// This sky sharing `other`'s sun-column tables (those built so far
+    /// and those to come), when the two have what the tables depend on in
+    /// common: the species' profiles (in order), the planet's radii and the
+    /// eye; else this sky unchanged. For skies of one atmosphere whose
+    /// amounts (optical depths, albedos, phase functions) change, not its
+    /// profiles: a retrieval's forward model builds one such sky per
+    /// wavelength at every evaluation, and at a low sun each would build
+    /// the same table again.
+    pub(crate) fn sharing_sun_column_tables_of(
+        mut self,
+        other: &SingleScatteringSky,
+    ) -> SingleScatteringSky {
+        if self.profiles == other.profiles
+            && self.ground_radius_m == other.ground_radius_m
+            && self.top_radius_m == other.top_radius_m
+            && self.observer.z == other.observer.z
+        {
+            self.sun_column_tables = Arc::clone(&other.sun_column_tables);
+        }
+        self
+    }
+
     /// Work space for [`SingleScatteringSky::compute_radiance`].
     pub(crate) fn scratch(&self) -> SingleScatteringScratch {
         let (species, wavelengths) = (self.optics.species.len(), self.optics.grid.len());
