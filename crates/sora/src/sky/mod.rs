@@ -1751,12 +1751,16 @@ mod tests {
 
     /// A field solved only for the sun angles an almucantar's rays meet
     /// gives the almucantar of the field solved for everything the eye
-    /// sees (its sun nodes are the same near the eye's sun), and refuses
+    /// sees (its sun nodes are the same near the eye's sun, its tilted
+    /// peak beam too where those rays meet it), and refuses
     /// lower views and images.
     #[test]
     fn a_field_for_some_views_gives_their_radiances_and_refuses_others() {
         let atmosphere = Atmosphere::preset("earth-clear").unwrap();
-        for sun_elevation_deg in [30.0, 15.0] {
+        // 15 degrees: the restricted field needs no tilted peak beam (its
+        // rays' points see the sun 12 degrees up or more); 10: a part of
+        // the full field's (`PeakBeam::needed_elevations_deg`).
+        for sun_elevation_deg in [30.0, 15.0, 10.0] {
             let views: Vec<ViewDirection> = [4.0, 10.0, 30.0, 90.0, 150.0, 180.0]
                 .iter()
                 .map(|a| ViewDirection::new(sun_elevation_deg, 180.0 + a).unwrap())

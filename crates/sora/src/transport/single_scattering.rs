@@ -439,6 +439,28 @@ impl SingleScatteringSky {
         table
     }
 
+    /// This sky sharing `other`'s sun-column tables (those built so far
+    /// and those to come), when the two have what the tables depend on in
+    /// common: the species' profiles (in order), the planet's radii and the
+    /// eye; else this sky unchanged. For skies of one atmosphere whose
+    /// amounts (optical depths, albedos, phase functions) change, not its
+    /// profiles: a retrieval's forward model builds one such sky per
+    /// wavelength at every evaluation, and at a low sun each would build
+    /// the same table again.
+    pub(crate) fn sharing_sun_column_tables_of(
+        mut self,
+        other: &SingleScatteringSky,
+    ) -> SingleScatteringSky {
+        if self.profiles == other.profiles
+            && self.ground_radius_m == other.ground_radius_m
+            && self.top_radius_m == other.top_radius_m
+            && self.observer.z == other.observer.z
+        {
+            self.sun_column_tables = Arc::clone(&other.sun_column_tables);
+        }
+        self
+    }
+
     /// Work space for [`SingleScatteringSky::compute_radiance`].
     pub(crate) fn scratch(&self) -> SingleScatteringScratch {
         let (species, wavelengths) = (self.optics.species.len(), self.optics.grid.len());
@@ -840,5 +862,55 @@ impl SingleScatteringSky {
     /// space rather than the ground.
     pub(crate) fn sees_sky(&self, direction: Vector3) -> bool {
         !crate::geometry::ray_intersects_ground(self.observer.z, direction.z, self.ground_radius_m)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::atmosphere::DensityProfile;
+
+    /// Skies of one atmosphere's profiles, radii and eye share one
+    /// sun-column table whatever their amounts and sun; a sky of other
+    /// profiles or another eye keeps its own.
+    #[test]
+    fn skies_of_the_same_profiles_and_eye_share_their_sun_column_tables() {
+        let atmosphere = Atmosphere::preset("earth-clear").unwrap();
+        let observation = |altitude_m, sun_elevation_deg| Observation {
+            observer_altitude_m: altitude_m,
+            sun_elevation_deg,
+            sun_azimuth_deg: 180.0,
+        };
+        let grid = |w| WavelengthGrid::new(w, w, 1.0).unwrap();
+        let first =
+            SingleScatteringSky::new(&atmosphere, &grid(440.0), observation(0.0, 10.0)).unwrap();
+        let optics = atmosphere.compute_optics(&grid(870.0)).unwrap();
+        let sky = |optics: &AtmosphereOptics, altitude_m| {
+            SingleScatteringSky::from_optics(
+                optics.clone(),
+                atmosphere.planet.radius_m(),
+                atmosphere.planet.top_radius_m(),
+                atmosphere.sun.angular_radius_rad(),
+                observation(altitude_m, 20.0),
+            )
+            .unwrap()
+            .sharing_sun_column_tables_of(&first)
+        };
+        let nodes = (8, 16);
+        // Another wavelength and sun, the same profiles and eye: the table
+        // the second sky builds is the first's.
+        let table = sky(&optics, 0.0).sun_column_table(nodes.0, nodes.1);
+        assert!(Arc::ptr_eq(
+            &table,
+            &first.sun_column_table(nodes.0, nodes.1)
+        ));
+        // Another eye: its own.
+        let raised = sky(&optics, 1000.0).sun_column_table(nodes.0, nodes.1);
+        assert!(!Arc::ptr_eq(&raised, &table));
+        // Another profile: its own.
+        let mut other = optics.clone();
+        other.species[0].profile = DensityProfile::exponential(5000.0, "test").unwrap();
+        let own = sky(&other, 0.0).sun_column_table(nodes.0, nodes.1);
+        assert!(!Arc::ptr_eq(&own, &table));
     }
 }

@@ -328,7 +328,7 @@ impl MultipleScatteringField {
         );
         let peak_beam = compute_peak_beam(
             sky,
-            request.sun_column_nodes,
+            (request.sun_column_nodes, request.reach(sky)),
             (&geometry, &scaled),
             &forward_peak,
         );
@@ -950,16 +950,12 @@ fn ground_tables(
 /// sun low enough for it and some species has a peak.
 fn compute_peak_beam(
     sky: &SingleScatteringSky,
-    sun_column_nodes: (usize, usize),
+    (sun_column_nodes, reach_rad): ((usize, usize), f64),
     (geometry, scaled): (&ColumnGeometry, &ScaledOptics),
     forward_peak: &ForwardPeak,
 ) -> Option<PeakBeam> {
     let eye_sun_zenith = sky.sun_direction().z.clamp(-1.0, 1.0).acos();
-    let needed = PeakBeam::needed_elevations_deg(
-        FRAC_PI_2 - eye_sun_zenith,
-        (geometry.ground_radius_m, geometry.top_radius_m),
-        sky.observer_radius_m(),
-    );
+    let needed = PeakBeam::needed_elevations_deg(FRAC_PI_2 - eye_sun_zenith, reach_rad);
     match needed {
         Some(elevations_deg) if forward_peak.any() => {
             let (altitude_nodes, mu_nodes) = sun_column_nodes;

@@ -343,21 +343,20 @@ impl PeakBeam {
     }
 
     /// The sun elevations, degrees, that the view rays of a sky whose eye
-    /// at radius `observer_m` sees the sun at `eye_sun_elevation_rad` meet
-    /// within the table's (None: none): the sun's elevation at a point
-    /// differs from the eye's by at most the central angle between them,
-    /// which the atmosphere bounds (to the ground's horizon from the eye,
-    /// then to the top's).
+    /// sees the sun at `eye_sun_elevation_rad` meet within the table's
+    /// (None: none): the sun's elevation at a point differs from the eye's
+    /// by at most the central angle between them, at most `reach_rad` (the
+    /// field's reach: to the ground's horizon from the eye, then to the
+    /// top's, or less for a field solved for views above some elevation,
+    /// `FieldRequest::lowest_view_elevation_rad`).
     pub(crate) fn needed_elevations_deg(
         eye_sun_elevation_rad: f64,
-        (ground_m, top_m): (f64, f64),
-        observer_m: f64,
+        reach_rad: f64,
     ) -> Option<(f64, f64)> {
-        let farthest = (ground_m / observer_m.max(ground_m)).acos() + (ground_m / top_m).acos();
-        let lowest = (eye_sun_elevation_rad - farthest)
+        let lowest = (eye_sun_elevation_rad - reach_rad)
             .to_degrees()
             .max(PEAK_BEAM_LOWEST_ELEVATION_DEG);
-        let highest = (eye_sun_elevation_rad + farthest)
+        let highest = (eye_sun_elevation_rad + reach_rad)
             .to_degrees()
             .min(PEAK_BEAM_HIGHEST_ELEVATION_DEG);
         (lowest < highest).then_some((lowest, highest))
