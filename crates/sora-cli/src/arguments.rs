@@ -570,19 +570,6 @@ pub struct SunUsed {
 }
 
 impl SunUsed {
-    /// `"sun_distance_au": d, "earth_sun_distance_au": R` for JSON
-    /// (members present only when known), each with a leading ", ".
-    pub fn json_members(&self) -> String {
-        let mut members = String::new();
-        if let Some(d) = self.distance_au {
-            members += &format!(", \"sun_distance_au\": {d}");
-        }
-        if let Some(r) = self.earth_sun_distance_au {
-            members += &format!(", \"earth_sun_distance_au\": {r}");
-        }
-        members
-    }
-
     /// `; the sun at d AU` for summaries, or nothing.
     pub fn summary(&self) -> String {
         self.distance_au
