@@ -170,6 +170,16 @@ fn spectrum() {
     assert!(runs[3]["xyz_w_m2_sr"].is_null() && runs[3]["linear_srgb_w_m2_sr"].is_null());
 }
 
+/// Single scattering in one direction: a quick filtered run.
+const SINGLE_VIEW: [&str; 6] = [
+    "--scattering",
+    "single",
+    "--view-elevation",
+    "40",
+    "--view-azimuth",
+    "10",
+];
+
 #[test]
 fn spectrum_through_filters() {
     let run = |extra: &[&str]| {
@@ -192,16 +202,7 @@ fn spectrum_through_filters() {
         ))
     };
     let runs = [
-        run(&[
-            "--sun-elevation",
-            "30",
-            "--scattering",
-            "single",
-            "--view-elevation",
-            "40",
-            "--view-azimuth",
-            "10",
-        ]),
+        run(&[&["--sun-elevation", "30"][..], &SINGLE_VIEW].concat()),
         run(&[
             "--sun-elevation",
             "30",
@@ -215,17 +216,15 @@ fn spectrum_through_filters() {
             "1.01",
         ]),
         run(&[
-            "--scattering",
-            "single",
-            "--view-elevation",
-            "40",
-            "--view-azimuth",
-            "10",
-            "--time",
-            "2026-06-21T03:00:00Z",
-            "--location",
-            "35.68,139.77",
-        ]),
+            &SINGLE_VIEW[..],
+            &[
+                "--time",
+                "2026-06-21T03:00:00Z",
+                "--location",
+                "35.68,139.77",
+            ],
+        ]
+        .concat()),
     ];
     check("`sora spectrum --filter`", &runs, "directions.");
     assert_eq!(numbers(&runs[0]["radiance_w_m2_sr_nm"]).len(), 2);

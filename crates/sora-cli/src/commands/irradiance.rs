@@ -60,7 +60,7 @@ pub struct IrradianceArgs {
     tilt_deg: Option<f64>,
 
     /// The tilted plane leans toward this azimuth, clockwise from north,
-    /// degrees
+    /// degrees (read modulo 360)
     #[arg(
         long,
         value_name = "DEG",

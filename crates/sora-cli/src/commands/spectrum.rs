@@ -10,7 +10,7 @@ use sora::spectrum::SampledSpectrum;
 use sora::{SkyRadiance, ViewDirection};
 
 use crate::arguments::{
-    AtmosphereSource, FilterOptions, MethodKind, MethodOptions, Resolution, SunAndObserver,
+    AtmosphereSource, FilterOptions, MethodOptions, Resolution, SunAndObserver,
     parse_directions_csv,
 };
 
@@ -102,7 +102,8 @@ pub struct SpectrumArgs {
     )]
     view_elevation: Option<f64>,
 
-    /// View azimuth clockwise from north, degrees
+    /// View azimuth clockwise from north, degrees (any finite angle, read
+    /// modulo 360: 400 is 40)
     #[arg(
         long,
         value_name = "DEG",
@@ -331,7 +332,7 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
     let grid = *sky.wavelengths();
     debug_assert_eq!(grid.len(), args.sun.wavelengths.len());
     let started = Instant::now();
-    let path_tracing = args.method.method == MethodKind::PathTracing;
+    let path_tracing = args.method.is_path_tracing();
     if path_tracing {
         crate::estimate::announce(crate::estimate::path_tracing_estimate(
             samples * skies.len() as u64,
@@ -697,7 +698,7 @@ fn run_filtered(
     (scattering, method): (sora::Scattering, sora::Method),
 ) -> anyhow::Result<()> {
     let started = Instant::now();
-    let path_tracing = args.method.method == MethodKind::PathTracing;
+    let path_tracing = args.method.is_path_tracing();
     // [filter][direction] -> (radiance, standard error bound)
     let mut values = Vec::with_capacity(filters.len());
     // The sun and the light of the first filter's sky (all are alike).
