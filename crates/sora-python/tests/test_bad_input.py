@@ -62,7 +62,7 @@ def test_the_choices_are_the_librarys_names():
     assert (sky.method, sky.scattering) == ("path-tracing", "multiple")
     small = sora.Sky(atmosphere, sun_elevation_deg=30, scattering="single", wavelengths_nm="550")
     # The panorama's older name still reads.
-    np.testing.assert_array_equal(small.render("equirect", width=8).values,
-                                  small.render("equirectangular", width=8).values)
+    np.testing.assert_array_equal(small.render("equirect", width=8),
+                                  small.render("equirectangular", width=8))
     with pytest.raises(ValueError, match="camera: 'cube' is unknown"):
         small.render("cube", width=8)
