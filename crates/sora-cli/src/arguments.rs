@@ -230,24 +230,18 @@ impl FilterOptions {
     }
 }
 
-/// Which orders of scattering to compute: shared by `sora spectrum` and
-/// `sora render`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum Scattering {
-    /// Sunlight scattered once (the paper's model), plus the sunlit ground
-    Single,
-    /// All orders of scattering, and skylight reflected by the ground
-    Multiple,
-}
-
-impl Scattering {
-    /// The library's choice, at the default resolution.
-    pub fn to_library(self) -> sora::Scattering {
-        match self {
-            Scattering::Single => sora::Scattering::Single,
-            Scattering::Multiple => sora::Scattering::multiple(),
-        }
-    }
+/// A clap parser for one of the library's choices: its names (`names`, the
+/// library's `NAMES`, which its `Display` writes) are the values clap
+/// offers and lists in --help, read by its `FromStr` with the library's
+/// defaults: one spelling in every front end.
+pub fn library_names<T>(
+    names: &'static [&'static str],
+) -> impl clap::builder::TypedValueParser<Value = T>
+where
+    T: std::str::FromStr<Err = sora::Error> + Clone + Send + Sync + 'static,
+{
+    use clap::builder::TypedValueParser as _;
+    clap::builder::PossibleValuesParser::new(names).try_map(|name| name.parse::<T>())
 }
 
 /// The multiple-scattering field's resolution: shared by `sora spectrum`,
@@ -293,14 +287,18 @@ pub struct MethodOptions {
     /// (the paper's uniform double march, slow), each with the orders of
     /// --scattering; or path-tracing (Monte Carlo, all orders of
     /// scattering, with standard errors)
-    #[arg(long, value_enum, default_value_t = MethodKind::Fast)]
-    pub method: MethodKind,
+    #[arg(
+        long,
+        value_parser = library_names::<sora::Method>(&sora::Method::NAMES),
+        default_value = "fast"
+    )]
+    pub method: sora::Method,
 
     /// fast and reference: multiple (all orders of scattering and skylight
     /// reflected by the ground) or single (sunlight scattered once, the
     /// paper's model) [default: multiple]
-    #[arg(long, value_enum)]
-    pub scattering: Option<Scattering>,
+    #[arg(long, value_parser = library_names::<sora::Scattering>(&sora::Scattering::NAMES))]
+    pub scattering: Option<sora::Scattering>,
 
     /// Path tracing: number of paths (the standard error falls as
     /// 1/sqrt(N)) [default: 10000 for a radiance, 100000 for an irradiance]
@@ -313,15 +311,12 @@ pub struct MethodOptions {
     pub seed: Option<u64>,
 }
 
-/// The methods [`MethodOptions`] offers.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum MethodKind {
-    Fast,
-    Reference,
-    PathTracing,
-}
-
 impl MethodOptions {
+    /// Whether --method is path-tracing.
+    pub fn is_path_tracing(&self) -> bool {
+        matches!(self.method, sora::Method::PathTracing { .. })
+    }
+
     /// The library's scattering and method, checked: `default_samples`
     /// paths unless --samples says otherwise, `reference` for the
     /// reference method's step counts.
@@ -330,7 +325,7 @@ impl MethodOptions {
         default_samples: u64,
         reference: sora::Method,
     ) -> anyhow::Result<(sora::Scattering, sora::Method)> {
-        let tracing = self.method == MethodKind::PathTracing;
+        let tracing = self.is_path_tracing();
         if !tracing && (self.samples.is_some() || self.seed.is_some()) {
             anyhow::bail!("--samples and --seed apply to --method path-tracing only");
         }
@@ -345,11 +340,11 @@ impl MethodOptions {
                 "--samples = {samples} is out of range: at least 2 (a standard error needs two paths)"
             );
         }
-        let scattering = self.scattering.unwrap_or(Scattering::Multiple).to_library();
+        let scattering = self.scattering.unwrap_or_else(sora::Scattering::multiple);
         Ok(match self.method {
-            MethodKind::Fast => (scattering, sora::Method::Fast),
-            MethodKind::Reference => (scattering, reference),
-            MethodKind::PathTracing => (
+            sora::Method::Fast => (scattering, sora::Method::Fast),
+            sora::Method::Reference { .. } => (scattering, reference),
+            sora::Method::PathTracing { .. } => (
                 sora::Scattering::multiple(),
                 sora::Method::PathTracing {
                     samples,
@@ -376,7 +371,8 @@ pub struct SunAndObserver {
     #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
     pub sun_elevation: Option<f64>,
 
-    /// Sun azimuth clockwise from north, degrees (0 N, 90 E, 180 S, 270 W)
+    /// Sun azimuth clockwise from north, degrees (0 N, 90 E, 180 S, 270 W;
+    /// any finite angle, read modulo 360: -90 is 270)
     #[arg(
         long,
         value_name = "DEG",
@@ -570,19 +566,6 @@ pub struct SunUsed {
 }
 
 impl SunUsed {
-    /// `"sun_distance_au": d, "earth_sun_distance_au": R` for JSON
-    /// (members present only when known), each with a leading ", ".
-    pub fn json_members(&self) -> String {
-        let mut members = String::new();
-        if let Some(d) = self.distance_au {
-            members += &format!(", \"sun_distance_au\": {d}");
-        }
-        if let Some(r) = self.earth_sun_distance_au {
-            members += &format!(", \"earth_sun_distance_au\": {r}");
-        }
-        members
-    }
-
     /// `; the sun at d AU` for summaries, or nothing.
     pub fn summary(&self) -> String {
         self.distance_au

@@ -15,6 +15,7 @@ mod bitmap_text;
 mod commands;
 mod estimate;
 mod fit_plot;
+mod json;
 mod polarisation_maps;
 
 use clap::{Parser, Subcommand};

@@ -81,7 +81,7 @@ fn spectrum(extra: &[&str]) -> std::process::Output {
 #[test]
 fn json_has_the_transmittance_and_longer_segments_are_hazier() {
     let run = |distance: &str| {
-        let out = stdout(&spectrum(&[
+        let out = common::json(&spectrum(&[
             "--wavelengths",
             "450:650:100",
             "--distance-m",
@@ -89,19 +89,11 @@ fn json_has_the_transmittance_and_longer_segments_are_hazier() {
             "--format",
             "json",
         ]));
-        let list = |key: &str| -> Vec<f64> {
-            let start = out.find(&format!("\"{key}\": [")).unwrap() + key.len() + 5;
-            let end = start + out[start..].find(']').unwrap();
-            out[start..end]
-                .split(',')
-                .map(|x| x.trim().parse().unwrap())
-                .collect()
-        };
-        assert!(
-            out.contains(&format!("\"distance_m\": {distance}")),
-            "{out}"
-        );
-        (list("radiance_w_m2_sr_nm"), list("transmittance"))
+        assert_eq!(out["distance_m"].as_f64(), distance.parse().ok(), "{out}");
+        (
+            common::numbers(&out["radiance_w_m2_sr_nm"]),
+            common::numbers(&out["transmittance"]),
+        )
     };
     let (near_l, near_t) = run("1000");
     let (far_l, far_t) = run("30000");

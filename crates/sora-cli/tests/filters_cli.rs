@@ -261,17 +261,20 @@ fn many_directions_through_a_filter_as_csv_and_json() {
         );
         assert_eq!((row[2], row[3]), ("cimel-870", "870.0000"));
     }
-    let json = stdout(&sora(&[&base[..], &["--format", "json"]].concat()));
+    let json = common::json(&sora(&[&base[..], &["--format", "json"]].concat()));
+    assert_eq!(json["filter"], serde_json::json!(["cimel-870"]));
+    let centre = common::numbers(&json["centre_nm"]);
     assert!(
-        json.contains("\"filter\": [\"cimel-870\"], \"centre_nm\": [870.000000]"),
+        centre.len() == 1 && (centre[0] - 870.0).abs() < 1e-9,
         "{json}"
     );
-    // The same radiances, one per direction, in the same order.
-    let values: Vec<&str> = json
-        .split("\"radiance_w_m2_sr_nm\": [")
-        .skip(1)
-        .map(|rest| rest.split(']').next().unwrap())
-        .collect();
-    let from_csv: Vec<&str> = rows.iter().map(|r| r[4]).collect();
-    assert_eq!(values, from_csv);
+    // The same radiances, one per direction, in the same order (the CSV's
+    // to its ten significant digits).
+    let directions = json["directions"].as_array().unwrap();
+    assert_eq!(directions.len(), rows.len());
+    for (direction, row) in directions.iter().zip(&rows) {
+        let values = common::numbers(&direction["radiance_w_m2_sr_nm"]);
+        let from_csv: f64 = row[4].parse().unwrap();
+        assert!(values.len() == 1 && (values[0] / from_csv - 1.0).abs() < 6e-10);
+    }
 }

@@ -44,16 +44,21 @@ fn csv_rows_add_up_and_json_carries_units_and_the_sun() {
         // Tilted 35 degrees toward the sun (south): more direct light.
         assert!(row[6] > row[3]);
     }
-    let json = stdout(&sora(&[&BASE[..], &["--format", "json"]].concat()));
+    let json = common::json(&sora(&[&BASE[..], &["--format", "json"]].concat()));
+    assert_eq!(json["sun_elevation_deg"], 30.0);
+    assert_eq!(json["sun_azimuth_deg"], 180.0);
     for key in [
-        "\"sun_elevation_deg\": 30",
-        "\"sun_azimuth_deg\": 180",
-        "\"global_horizontal_irradiance_w_m2\": ",
-        "\"global_horizontal_illuminance_lx\": ",
-        "\"direct_normal_illuminance_lx\": ",
-        "\"diffuse_horizontal_irradiance_w_m2_nm\": [",
+        "global_horizontal_irradiance_w_m2",
+        "global_horizontal_illuminance_lx",
+        "direct_normal_illuminance_lx",
     ] {
-        assert!(json.contains(key), "{key} not in {json}");
+        assert!(json[key].as_f64().unwrap() > 0.0, "{key} in {json}");
+    }
+    // The CSV's rows, to its ten significant digits.
+    let diffuse = common::numbers(&json["diffuse_horizontal_irradiance_w_m2_nm"]);
+    assert_eq!(diffuse.len(), rows.len());
+    for (value, row) in diffuse.iter().zip(&rows) {
+        assert!((value / row[4] - 1.0).abs() < 6e-10, "{value} vs {row:?}");
     }
 }
 

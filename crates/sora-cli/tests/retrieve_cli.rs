@@ -98,35 +98,63 @@ fn csv_radiances_give_json_residuals_and_a_plot() {
         ]
         .concat(),
     );
-    let json = stdout(&out);
-    let json = json.trim();
-    assert!(json.starts_with("[{") && json.ends_with("}]"), "{json}");
+    let json = common::json(&out);
+    let scans = json.as_array().expect("one object per scan");
+    assert_eq!(scans.len(), 1);
+    let scan = &scans[0];
+    assert_eq!(scan["scan"], 1);
+    assert!(scan["label"].is_string());
+    assert_eq!(scan["reference_wavelength_nm"], 440.0);
+    let parameters = scan["parameters"].as_object().unwrap();
+    // (serde_json's map sorts its keys.)
+    let mut names: Vec<&str> = parameters.keys().map(String::as_str).collect();
+    let mut expected = sora::inversion::PARAMETER_NAMES;
+    names.sort_unstable();
+    expected.sort_unstable();
+    assert_eq!(names, expected);
+    for estimate in parameters.values() {
+        assert!(estimate["value"].is_f64() && estimate["sigma"].is_number());
+    }
+    assert_eq!(
+        scan["correlations"]["parameters"],
+        serde_json::json!(sora::inversion::PARAMETER_NAMES)
+    );
+    let matrix = scan["correlations"]["matrix"].as_array().unwrap();
+    assert_eq!(matrix.len(), names.len());
+    for (i, row) in matrix.iter().enumerate() {
+        let row = common::numbers(row);
+        assert_eq!(row.len(), names.len());
+        assert!((row[i] - 1.0).abs() < 1e-9, "{row:?}");
+    }
+    let spectral = scan["spectral"].as_array().unwrap();
+    assert_eq!(spectral[0]["wavelength_nm"], 440.0);
     for key in [
-        "\"scan\": 1",
-        "\"label\": ",
-        "\"reference_wavelength_nm\": 440",
-        "\"parameters\": {\"aerosol_optical_depth\": {\"value\": ",
-        "\"refractive_index_imaginary\": {\"value\": ",
-        "\"correlations\": {\"parameters\": [",
-        "\"matrix\": [[",
-        "\"spectral\": [{\"wavelength_nm\": 440, \"aerosol_optical_depth\": {\"value\": ",
-        "\"single_scattering_albedo\": {\"value\": ",
-        "\"asymmetry_parameter\": {\"value\": ",
-        "\"angstrom_exponent\": {\"value\": ",
-        "\"fine_effective_radius_um\": ",
-        "\"radiance_scale\": null",
-        "\"chi_square\": ",
-        "\"converged\": ",
-        "\"warnings\": [",
-        "\"residuals\": {\"radiances\": [{\"wavelength_nm\": ",
-        "\"normalised_residual\": ",
+        "aerosol_optical_depth",
+        "single_scattering_albedo",
+        "asymmetry_parameter",
     ] {
-        assert!(json.contains(key), "{key} not in {json}");
+        assert!(spectral[0][key]["value"].is_f64(), "{key}");
     }
-    // Brackets and braces balance (no string here holds one).
-    for (open, close) in [('{', '}'), ('[', ']')] {
-        assert_eq!(json.matches(open).count(), json.matches(close).count());
+    for key in [
+        "angstrom_exponent",
+        "fine_effective_radius_um",
+        "coarse_effective_radius_um",
+    ] {
+        assert!(scan[key]["value"].is_f64(), "{key}");
     }
+    assert!(scan["radiance_scale"].is_null());
+    assert!(scan["chi_square"].as_f64().unwrap() >= 0.0);
+    assert!(scan["converged"].is_boolean() && scan["warnings"].is_array());
+    let radiances = scan["residuals"]["radiances"].as_array().unwrap();
+    assert_eq!(
+        radiances.len() as u64
+            + scan["residuals"]["optical_depths"]
+                .as_array()
+                .unwrap()
+                .len() as u64,
+        scan["measurement_count"].as_u64().unwrap()
+    );
+    assert!(radiances[0]["normalised_residual"].is_f64());
     let residual_text = std::fs::read_to_string(&residuals).unwrap();
     let mut lines = residual_text.lines();
     assert_eq!(

@@ -76,14 +76,17 @@ fn unpolarised_light_has_an_empty_angle_and_json_null() {
     let csv = run(&[&RAYLEIGH_SUN_30[..], &view, &["--wavelengths", "550"]].concat());
     let row = csv.lines().nth(1).unwrap();
     assert!(row.ends_with(",0.000000,"), "{row}");
-    let json = run(&[
-        &RAYLEIGH_SUN_30[..],
-        &view,
-        &["--wavelengths", "550", "--format", "json"],
-    ]
-    .concat());
-    assert!(
-        json.contains("\"angle_of_polarisation_deg\": [null]"),
+    let json = common::json(&sora(
+        &[
+            &RAYLEIGH_SUN_30[..],
+            &view,
+            &["--wavelengths", "550", "--format", "json"],
+        ]
+        .concat(),
+    ));
+    assert_eq!(
+        json["angle_of_polarisation_deg"],
+        serde_json::json!([null]),
         "{json}"
     );
 }

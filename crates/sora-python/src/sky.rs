@@ -35,43 +35,35 @@ fn scattering_and_method(
     seed: Option<u64>,
     reference_steps: Option<(usize, usize)>,
 ) -> PyResult<(Scattering, Method)> {
-    let scattering = match scattering {
-        "single" => Scattering::Single,
-        "multiple" => Scattering::multiple(),
-        other => {
-            return Err(value_error(format!(
-                "scattering = '{other}' is unknown: use 'single' or 'multiple'"
-            )));
-        }
-    };
-    if method != "path-tracing" && (samples.is_some() || seed.is_some()) {
+    // The library's names (`FromStr`), its defaults for what they leave open.
+    let scattering: Scattering = scattering.parse().map_err(to_py_err)?;
+    let kind: Method = method.parse().map_err(to_py_err)?;
+    if !matches!(kind, Method::PathTracing { .. }) && (samples.is_some() || seed.is_some()) {
         return Err(value_error(format!(
             "samples and seed apply to method='path-tracing' only, not method='{method}'"
         )));
     }
-    if method != "reference" && reference_steps.is_some() {
+    if !matches!(kind, Method::Reference { .. }) && reference_steps.is_some() {
         return Err(value_error(
             "reference_steps applies to method='reference' only",
         ));
     }
-    let method = match method {
-        "fast" => Method::Fast,
-        "reference" => match reference_steps {
+    let method = match kind {
+        Method::Reference { .. } => match reference_steps {
             Some((view_steps, sun_steps)) => Method::Reference {
                 view_steps,
                 sun_steps,
             },
-            None => Method::REFERENCE_DEFAULT,
+            None => kind,
         },
-        "path-tracing" => Method::PathTracing {
-            samples: samples.unwrap_or(10_000),
-            seed: seed.unwrap_or(1),
+        Method::PathTracing {
+            samples: default_samples,
+            seed: default_seed,
+        } => Method::PathTracing {
+            samples: samples.unwrap_or(default_samples),
+            seed: seed.unwrap_or(default_seed),
         },
-        other => {
-            return Err(value_error(format!(
-                "method = '{other}' is unknown: use 'fast', 'reference' or 'path-tracing'"
-            )));
-        }
+        Method::Fast => kind,
     };
     Ok((scattering, method))
 }
@@ -124,18 +116,12 @@ fn finite(name: &str, value: f64, unit: &str) -> PyResult<f64> {
 /// `fov_deg` across the width; their defaults are the library's,
 /// `PerspectiveCamera::DEFAULT_*`, as `sora render`'s).
 fn camera_from_name(camera: &str, look_deg: (f64, f64), fov_deg: f64) -> PyResult<Camera> {
-    Ok(match camera {
-        "fisheye" => Camera::Fisheye,
-        "equirectangular" | "equirect" => Camera::Equirectangular,
-        "perspective" => Camera::Perspective(
+    Ok(match camera.parse::<Camera>().map_err(to_py_err)? {
+        Camera::Perspective(_) => Camera::Perspective(
             sora::camera::PerspectiveCamera::new(look_deg.0, look_deg.1, fov_deg)
                 .map_err(to_py_err)?,
         ),
-        other => {
-            return Err(value_error(format!(
-                "camera = '{other}' is unknown: use 'fisheye', 'equirectangular' or 'perspective'"
-            )));
-        }
+        other => other,
     })
 }
 
@@ -317,20 +303,13 @@ impl Sky {
     /// The method's name ('fast', 'reference' or 'path-tracing').
     #[getter]
     fn method(&self) -> &'static str {
-        match self.inner.method() {
-            Method::Fast => "fast",
-            Method::Reference { .. } => "reference",
-            Method::PathTracing { .. } => "path-tracing",
-        }
+        self.inner.method().name()
     }
 
     /// 'single' or 'multiple'.
     #[getter]
     fn scattering(&self) -> &'static str {
-        match self.inner.scattering() {
-            Scattering::Single => "single",
-            Scattering::Multiple(_) => "multiple",
-        }
+        self.inner.scattering().name()
     }
 
     /// The direct normal irradiance at the eye, W m^-2 nm^-1.
@@ -540,8 +519,8 @@ impl Sky {
         &self,
         py: Python<'py>,
         camera: &str,
-        width: u32,
-        height: Option<u32>,
+        width: i64,
+        height: Option<i64>,
         output: &str,
         draw_sun_disc: bool,
         look_elevation_deg: f64,
@@ -549,6 +528,12 @@ impl Sky {
         fov_deg: f64,
     ) -> PyResult<Bound<'py, PyAny>> {
         let camera = camera_from_name(camera, (look_elevation_deg, look_azimuth_deg), fov_deg)?;
+        // The library's range check and message, as `sora render --width`'s.
+        let width = sora::sky::image_side("image width", width).map_err(to_py_err)?;
+        let height = height
+            .map(|h| sora::sky::image_side("image height", h))
+            .transpose()
+            .map_err(to_py_err)?;
         let height = height.unwrap_or(match camera {
             Camera::Equirectangular => width.div_ceil(2),
             _ => width,

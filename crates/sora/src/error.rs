@@ -65,6 +65,18 @@ impl Error {
         }
     }
 
+    /// The one-line error of an unknown name of a choice: `what: 'name'
+    /// is unknown: use 'a', 'b' or 'c'`.
+    pub(crate) fn unknown_name(what: &str, name: &str, choices: &[&str]) -> Error {
+        let quoted: Vec<String> = choices.iter().map(|c| format!("'{c}'")).collect();
+        let listed = match quoted.split_last() {
+            Some((last, [])) => last.clone(),
+            Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
+            None => String::new(),
+        };
+        Error::parse(what, 0, format!("'{name}' is unknown: use {listed}"))
+    }
+
     /// Shorthand for [`Error::Parse`].
     pub fn parse(what: impl Into<String>, line: usize, message: impl Into<String>) -> Error {
         Error::Parse {

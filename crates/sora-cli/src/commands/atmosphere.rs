@@ -9,6 +9,7 @@ use std::io::Write as _;
 
 use anyhow::Context;
 use clap::{Args, Subcommand, ValueEnum};
+use serde::Serialize;
 use sora::atmosphere::presets::PRESETS;
 use sora::atmosphere::{Atmosphere, AtmosphereOptics, PhaseFunction};
 use sora::spectrum::{Spectrum, WavelengthGrid};
@@ -93,7 +94,7 @@ pub fn run(args: AtmosphereArgs) -> anyhow::Result<()> {
             match show.format {
                 Format::Table => table(&atmosphere, &optics),
                 Format::Csv => csv(&optics),
-                Format::Json => json(&atmosphere, &optics),
+                Format::Json => json(&atmosphere, &optics)?,
             }
         }
     };
@@ -113,9 +114,9 @@ fn presets_listing() -> String {
     out
 }
 
-/// A number for CSV and JSON: the shortest text that reads back to the
-/// same f64, in exponent form when tiny or huge; `null` when not finite
-/// (which the library does not produce, but JSON has no NaN).
+/// A number for CSV: the shortest text that reads back to the same f64, in
+/// exponent form when tiny or huge; `null` when not finite (which the
+/// library does not produce).
 fn number(value: f64) -> String {
     if !value.is_finite() {
         "null".to_string()
@@ -255,96 +256,106 @@ fn table(atmosphere: &Atmosphere, optics: &AtmosphereOptics) -> String {
     out
 }
 
-/// A JSON string literal (also `sora retrieve`'s).
-pub(crate) fn json_string(text: &str) -> String {
-    let mut out = String::with_capacity(text.len() + 2);
-    out.push('"');
-    for c in text.chars() {
-        match c {
-            '"' => out.push_str("\\\""),
-            '\\' => out.push_str("\\\\"),
-            '\n' => out.push_str("\\n"),
-            '\r' => out.push_str("\\r"),
-            '\t' => out.push_str("\\t"),
-            c if (c as u32) < 0x20 => {
-                let _ = write!(out, "\\u{:04x}", c as u32);
-            }
-            c => out.push(c),
-        }
-    }
-    out.push('"');
-    out
+/// `sora atmosphere show --format json` (docs/json.md).
+#[derive(Serialize)]
+struct AtmosphereJson<'a> {
+    name: &'a str,
+    description: &'a str,
+    planet: PlanetJson,
+    sun: SunJson<'a>,
+    species: Vec<SpeciesJson<'a>>,
+    wavelengths_nm: Vec<f64>,
+    optics: Vec<OpticsRowJson<'a>>,
 }
 
-fn json(atmosphere: &Atmosphere, optics: &AtmosphereOptics) -> String {
+#[derive(Serialize)]
+struct PlanetJson {
+    radius_m: f64,
+    atmosphere_height_m: f64,
+    /// A number, or for a tabulated albedo its description.
+    ground_albedo: AlbedoJson,
+}
+
+#[derive(Serialize)]
+#[serde(untagged)]
+enum AlbedoJson {
+    Constant(f64),
+    Tabulated(String),
+}
+
+#[derive(Serialize)]
+struct SunJson<'a> {
+    spectrum: &'a str,
+    irradiance_scale: f64,
+    angular_diameter_deg: f64,
+}
+
+#[derive(Serialize)]
+struct SpeciesJson<'a> {
+    name: &'a str,
+    kind: &'a str,
+    profile: String,
+    vertical_column_m: f64,
+    reference_number_density_m3: Option<f64>,
+    phase_function: &'a str,
+}
+
+/// One row of [`AtmosphereOptics::summary_rows`].
+#[derive(Serialize)]
+struct OpticsRowJson<'a> {
+    wavelength_nm: f64,
+    species: &'a str,
+    tau_extinction: f64,
+    tau_scattering: f64,
+    single_scattering_albedo: f64,
+    asymmetry_g: f64,
+}
+
+fn json(atmosphere: &Atmosphere, optics: &AtmosphereOptics) -> anyhow::Result<String> {
     let planet = &atmosphere.planet;
     let sun = &atmosphere.sun;
-    let mut out = String::new();
-    let _ = writeln!(out, "{{");
-    let _ = writeln!(out, "  \"name\": {},", json_string(&atmosphere.name));
-    let _ = writeln!(
-        out,
-        "  \"description\": {},",
-        json_string(&atmosphere.description)
-    );
-    let _ = writeln!(
-        out,
-        "  \"planet\": {{\"radius_m\": {}, \"atmosphere_height_m\": {}, \"ground_albedo\": {}}},",
-        number(planet.radius_m()),
-        number(planet.atmosphere_height_m()),
-        match planet.ground_albedo() {
-            Spectrum::Constant(a) => number(*a),
-            Spectrum::Tabulated(_) => json_string(&describe_albedo(planet.ground_albedo())),
-        }
-    );
-    let _ = writeln!(
-        out,
-        "  \"sun\": {{\"spectrum\": {}, \"irradiance_scale\": {}, \"angular_diameter_deg\": {}}},",
-        json_string(sun.spectrum().name()),
-        number(sun.irradiance_scale()),
-        number(sun.angular_diameter_deg())
-    );
-    let _ = writeln!(out, "  \"species\": [");
-    for (i, species) in optics.species.iter().enumerate() {
-        let separator = if i + 1 < optics.species.len() {
-            ","
-        } else {
-            ""
-        };
-        let _ = writeln!(
-            out,
-            "    {{\"name\": {}, \"kind\": {}, \"profile\": {}, \"vertical_column_m\": {}, \"reference_number_density_m3\": {}, \"phase_function\": {}}}{separator}",
-            json_string(&species.name),
-            json_string(species.kind),
-            json_string(&species.profile.describe()),
-            number(species.vertical_column_m),
-            species
-                .reference_number_density_m3
-                .map_or("null".to_string(), number),
-            json_string(species.phase_function.kind())
-        );
-    }
-    let _ = writeln!(out, "  ],");
-    let wavelengths: Vec<String> = optics.grid.wavelengths_nm().map(number).collect();
-    let _ = writeln!(out, "  \"wavelengths_nm\": [{}],", wavelengths.join(", "));
-    let _ = writeln!(out, "  \"optics\": [");
-    let rows = optics.summary_rows();
-    for (i, row) in rows.iter().enumerate() {
-        let separator = if i + 1 < rows.len() { "," } else { "" };
-        let _ = writeln!(
-            out,
-            "    {{\"wavelength_nm\": {}, \"species\": {}, \"tau_extinction\": {}, \"tau_scattering\": {}, \"single_scattering_albedo\": {}, \"asymmetry_g\": {}}}{separator}",
-            number(row.wavelength_nm),
-            json_string(row.species),
-            number(row.tau_extinction),
-            number(row.tau_scattering),
-            number(row.single_scattering_albedo),
-            number(row.asymmetry_g)
-        );
-    }
-    let _ = writeln!(out, "  ]");
-    let _ = writeln!(out, "}}");
-    out
+    crate::json::to_string(&AtmosphereJson {
+        name: &atmosphere.name,
+        description: &atmosphere.description,
+        planet: PlanetJson {
+            radius_m: planet.radius_m(),
+            atmosphere_height_m: planet.atmosphere_height_m(),
+            ground_albedo: match planet.ground_albedo() {
+                Spectrum::Constant(a) => AlbedoJson::Constant(*a),
+                albedo @ Spectrum::Tabulated(_) => AlbedoJson::Tabulated(describe_albedo(albedo)),
+            },
+        },
+        sun: SunJson {
+            spectrum: sun.spectrum().name(),
+            irradiance_scale: sun.irradiance_scale(),
+            angular_diameter_deg: sun.angular_diameter_deg(),
+        },
+        species: optics
+            .species
+            .iter()
+            .map(|species| SpeciesJson {
+                name: &species.name,
+                kind: species.kind,
+                profile: species.profile.describe(),
+                vertical_column_m: species.vertical_column_m,
+                reference_number_density_m3: species.reference_number_density_m3,
+                phase_function: species.phase_function.kind(),
+            })
+            .collect(),
+        wavelengths_nm: optics.grid.wavelengths_nm().collect(),
+        optics: optics
+            .summary_rows()
+            .iter()
+            .map(|row| OpticsRowJson {
+                wavelength_nm: row.wavelength_nm,
+                species: row.species,
+                tau_extinction: row.tau_extinction,
+                tau_scattering: row.tau_scattering,
+                single_scattering_albedo: row.single_scattering_albedo,
+                asymmetry_g: row.asymmetry_g,
+            })
+            .collect(),
+    })
 }
 
 #[cfg(test)]
@@ -369,9 +380,7 @@ mod tests {
     }
 
     #[test]
-    fn strings_are_escaped() {
-        assert_eq!(json_string("a \"b\"\\\n"), "\"a \\\"b\\\"\\\\\\n\"");
-        assert_eq!(json_string("\u{1}"), "\"\\u0001\"");
+    fn csv_fields_are_quoted_when_needed() {
         assert_eq!(csv_field("water, soluble"), "\"water, soluble\"");
         assert_eq!(csv_field("dust"), "dust");
     }

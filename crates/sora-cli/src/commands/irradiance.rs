@@ -3,12 +3,14 @@
 use std::io::Write;
 
 use clap::{Args, ValueEnum};
+use serde::Serialize;
 use sora::spectrum::SampledSpectrum;
 use sora::{Irradiance, Plane};
 
 use crate::arguments::{
     AtmosphereSource, FilterOptions, MethodOptions, Resolution, SunAndObserver,
 };
+use crate::json::Members;
 
 /// Irradiance on a horizontal plane (and on a tilted one): direct normal,
 /// direct, diffuse and global, per wavelength and broadband.
@@ -58,7 +60,7 @@ pub struct IrradianceArgs {
     tilt_deg: Option<f64>,
 
     /// The tilted plane leans toward this azimuth, clockwise from north,
-    /// degrees
+    /// degrees (read modulo 360)
     #[arg(
         long,
         value_name = "DEG",
@@ -296,30 +298,25 @@ pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
             }
         }
         Format::Json => {
-            let axis = format!(
-                "\"wavelength_nm\": [{}]",
-                grid.wavelengths_nm()
-                    .map(|w| w.to_string())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            );
-            let mut members = json_members(
-                (sun_elevation_deg, sun_azimuth_deg, &sun),
-                axis,
-                &quantities,
-            );
-            // The band every broadband value integrates.
-            members.push(format!(
-                "\"broadband_range_nm\": [{}, {}]",
-                grid.start_nm(),
-                grid.stop_nm()
-            ));
+            let mut broadband_members = Vec::new();
             for (name, watts, lux) in &broadband {
                 let illuminance = name.replace("irradiance", "illuminance");
-                members.push(format!("\"{name}_w_m2\": {watts:.9e}"));
-                members.push(format!("\"{illuminance}_lx\": {lux:.9e}"));
+                broadband_members.push((format!("{name}_w_m2"), *watts));
+                broadband_members.push((format!("{illuminance}_lx"), *lux));
             }
-            writeln!(out, "{{{}}}", members.join(", "))?;
+            let wavelengths: Vec<f64> = grid.wavelengths_nm().collect();
+            out.write_all(
+                crate::json::to_string(&IrradianceJson {
+                    sun: crate::json::Sun::new(sun_elevation_deg, sun_azimuth_deg, &sun),
+                    wavelength_nm: Some(&wavelengths),
+                    filter: None,
+                    centre_nm: None,
+                    quantities: quantity_members(&quantities),
+                    broadband_range_nm: Some([grid.start_nm(), grid.stop_nm()]),
+                    broadband: Members(broadband_members),
+                })?
+                .as_bytes(),
+            )?;
         }
     }
     out.flush()?;
@@ -362,22 +359,20 @@ fn write_filtered(
             }
         }
         Format::Json => {
-            let axis = format!(
-                "\"filter\": [{}], \"centre_nm\": [{}]",
-                labels
-                    .iter()
-                    .map(|(n, _)| crate::commands::atmosphere::json_string(n))
-                    .collect::<Vec<_>>()
-                    .join(", "),
-                labels
-                    .iter()
-                    .map(|(_, c)| format!("{c:.6}"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            );
-            let members =
-                json_members((sun_elevation_deg, sun_azimuth_deg, &sun), axis, quantities);
-            writeln!(out, "{{{}}}", members.join(", "))?;
+            let names: Vec<&str> = labels.iter().map(|(name, _)| name.as_str()).collect();
+            let centres: Vec<f64> = labels.iter().map(|(_, centre)| *centre).collect();
+            out.write_all(
+                crate::json::to_string(&IrradianceJson {
+                    sun: crate::json::Sun::new(sun_elevation_deg, sun_azimuth_deg, &sun),
+                    wavelength_nm: None,
+                    filter: Some(&names),
+                    centre_nm: Some(&centres),
+                    quantities: quantity_members(quantities),
+                    broadband_range_nm: None,
+                    broadband: Members(Vec::new()),
+                })?
+                .as_bytes(),
+            )?;
         }
     }
     out.flush()?;
@@ -409,29 +404,36 @@ fn write_csv(
     Ok(())
 }
 
-/// The JSON members: the sun, the row axis (`axis`, already members), each
-/// quantity's list.
-fn json_members(
-    (sun_elevation_deg, sun_azimuth_deg, sun): (f64, f64, &crate::arguments::SunUsed),
-    axis: String,
-    quantities: &[Quantity],
-) -> Vec<String> {
-    let mut members = vec![
-        format!("\"sun_elevation_deg\": {sun_elevation_deg}"),
-        format!(
-            "\"sun_azimuth_deg\": {sun_azimuth_deg}{}",
-            sun.json_members()
-        ),
-        axis,
-    ];
-    for q in quantities {
-        let values: Vec<String> = q
-            .spectrum
-            .values()
+/// `sora irradiance --format json` (docs/json.md): the sun, the rows'
+/// axis (wavelengths or filters), each quantity's list and, per
+/// wavelength, the broadband values.
+#[derive(Serialize)]
+struct IrradianceJson<'a> {
+    #[serde(flatten)]
+    sun: crate::json::Sun,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    wavelength_nm: Option<&'a [f64]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    filter: Option<&'a [&'a str]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    centre_nm: Option<&'a [f64]>,
+    /// Each quantity under its name with its unit ([`unit_name`]).
+    #[serde(flatten)]
+    quantities: Members<&'a [f64]>,
+    /// The band every broadband value integrates.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    broadband_range_nm: Option<[f64; 2]>,
+    /// `NAME_w_m2` and `NAME_lx` (illuminance) of every irradiance.
+    #[serde(flatten)]
+    broadband: Members<f64>,
+}
+
+/// Each quantity's values under its name with its unit.
+fn quantity_members(quantities: &[Quantity]) -> Members<&[f64]> {
+    Members(
+        quantities
             .iter()
-            .map(|v| format!("{v:.9e}"))
-            .collect();
-        members.push(format!("\"{}\": [{}]", unit_name(q), values.join(", ")));
-    }
-    members
+            .map(|q| (unit_name(q), q.spectrum.values()))
+            .collect(),
+    )
 }

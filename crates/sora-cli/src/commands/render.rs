@@ -13,7 +13,9 @@ use sora::output::{
     ChannelKind, DisplayImage, ExrOptions, ExrSampleType, LinearImage, OutputFiles, OutputFormat,
 };
 
-use crate::arguments::{AtmosphereSource, ColourOptions, Resolution, Scattering, SunAndObserver};
+use crate::arguments::{
+    AtmosphereSource, ColourOptions, Resolution, SunAndObserver, library_names,
+};
 use crate::estimate;
 use crate::polarisation_maps;
 
@@ -90,12 +92,12 @@ pub struct RenderArgs {
     camera: CameraKind,
 
     /// Image width in pixels [default: 512; 1024 for equirect]
-    #[arg(long, value_name = "PIXELS")]
-    width: Option<u32>,
+    #[arg(long, value_name = "PIXELS", allow_hyphen_values = true)]
+    width: Option<i64>,
 
     /// Image height in pixels [default: the width; half of it for equirect]
-    #[arg(long, value_name = "PIXELS")]
-    height: Option<u32>,
+    #[arg(long, value_name = "PIXELS", allow_hyphen_values = true)]
+    height: Option<i64>,
 
     /// Perspective camera: elevation of the view direction, degrees
     /// [default: 10] (an error with the other cameras, which show the whole
@@ -104,7 +106,7 @@ pub struct RenderArgs {
     view_elevation: Option<f64>,
 
     /// Perspective camera: azimuth of the view direction, degrees clockwise
-    /// from north [default: 180]
+    /// from north, read modulo 360 [default: 180]
     #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
     view_azimuth: Option<f64>,
 
@@ -113,13 +115,21 @@ pub struct RenderArgs {
     fov_deg: Option<f64>,
 
     /// fast (tables per image) or reference (the paper's march per pixel, slow)
-    #[arg(long, value_enum, default_value_t = Method::Fast)]
-    method: Method,
+    #[arg(
+        long,
+        value_parser = library_names::<sora::Method>(RENDER_METHODS),
+        default_value = "fast"
+    )]
+    method: sora::Method,
 
     /// multiple (all orders of scattering and skylight reflected by the
     /// ground) or single (sunlight scattered once, the paper's model)
-    #[arg(long, value_enum, default_value_t = Scattering::Multiple)]
-    scattering: Scattering,
+    #[arg(
+        long,
+        value_parser = library_names::<sora::Scattering>(&sora::Scattering::NAMES),
+        default_value = "multiple"
+    )]
+    scattering: sora::Scattering,
 
     #[command(flatten)]
     resolution: Resolution,
@@ -227,26 +237,25 @@ enum CameraKind {
     Perspective,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-enum Method {
-    Fast,
-    Reference,
-}
+/// The methods that render images (the library's first two; the path
+/// tracer gives views, not images).
+const RENDER_METHODS: &[&str] = sora::Method::NAMES.split_at(2).0;
 
 pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     // Check everything cheap before the expensive work.
     let format = OutputFormat::from_path(&args.output)?;
     let camera = camera(&args)?;
-    let width = args
-        .width
-        .unwrap_or(if args.camera == CameraKind::Equirect {
+    // Any integer parses; the library checks the range (one message for
+    // --width -5, --width=-5 and --width 0).
+    let side = |name, side: Option<i64>| side.map(|s| sora::sky::image_side(name, s)).transpose();
+    let width =
+        side("image width", args.width)?.unwrap_or(if args.camera == CameraKind::Equirect {
             1024
         } else {
             512
         });
-    let height = args
-        .height
-        .unwrap_or(if args.camera == CameraKind::Equirect {
+    let height =
+        side("image height", args.height)?.unwrap_or(if args.camera == CameraKind::Equirect {
             width.div_ceil(2)
         } else {
             width
@@ -261,10 +270,7 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     // The polarisation outputs: polarised light, one frame, the right
     // formats, writable paths.
     let polarisation_outputs = args.stokes || args.dolp.is_some() || args.aop.is_some();
-    let method = match args.method {
-        Method::Fast => sora::Method::Fast,
-        Method::Reference => sora::Method::REFERENCE_DEFAULT,
-    };
+    let method = args.method;
     if polarisation_outputs {
         if args.sun.polarisation(method) == sora::Polarisation::Scalar {
             bail!(
@@ -342,14 +348,12 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
         frame_count,
         args.sun.wavelengths.len(),
         match args.method {
-            Method::Fast => estimate::RenderSpeed::Fast,
-            Method::Reference => estimate::RenderSpeed::Reference,
+            sora::Method::Fast => estimate::RenderSpeed::Fast,
+            _ => estimate::RenderSpeed::Reference,
         },
         encoded_bytes_per_pixel,
     ));
-    let scattering = args
-        .resolution
-        .apply(args.scattering.to_library(), method)?;
+    let scattering = args.resolution.apply(args.scattering, method)?;
     let mut atmosphere = args.source.load()?;
     let started = Instant::now();
     let (sky, sun) = args.sun.sky(&mut atmosphere, scattering, method)?;
@@ -822,7 +826,7 @@ fn render_frame(
     };
     let (sun_elevation, sun_azimuth) = sky.sun_position_deg();
     eprintln!(
-        "rendered {width}x{height} ({} wavelengths, {:?} method, {:?} scattering, polarisation {}, sun at {sun_elevation:.4} deg elevation, {sun_azimuth:.4} deg azimuth{}) in {render_seconds:.3} s ({rate}), wrote {} in {total_seconds:.3} s total",
+        "rendered {width}x{height} ({} wavelengths, {} method, {} scattering, polarisation {}, sun at {sun_elevation:.4} deg elevation, {sun_azimuth:.4} deg azimuth{}) in {render_seconds:.3} s ({rate}), wrote {} in {total_seconds:.3} s total",
         args.sun.wavelengths.len(),
         args.method,
         args.scattering,

@@ -7,6 +7,7 @@ use std::time::Instant;
 
 use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
+use serde::Serialize;
 use sora::inversion::{
     AeronetScan, Estimate, Measurements, PARAMETER_NAMES, Retrieval, RetrievalSettings,
     SkyGeometry, attach_nearest_optical_depths, parse_aeronet_aod, parse_aeronet_sky,
@@ -14,7 +15,7 @@ use sora::inversion::{
 };
 
 use crate::arguments::AtmosphereSource;
-use crate::commands::atmosphere::json_string;
+use crate::json::Members;
 
 /// Retrieve the aerosol from measured sky radiances: its optical depth,
 /// size distribution and refractive index, and from them its single-
@@ -365,7 +366,7 @@ pub fn run(args: RetrieveArgs) -> anyhow::Result<()> {
     let text = match args.format {
         Format::Table => table(&retrievals),
         Format::Csv => csv(&retrievals),
-        Format::Json => json(&retrievals),
+        Format::Json => json(&retrievals)?,
     };
     // Both files or neither.
     let mut files = sora::output::OutputFiles::new();
@@ -631,8 +632,8 @@ fn csv_cell(text: &str) -> String {
     }
 }
 
-/// A number for CSV and JSON: `{:.9e}`-free, shortest exact form; JSON
-/// null / CSV empty when not finite.
+/// A number for CSV: `{:.9e}`-free, shortest exact form; `missing` when
+/// not finite.
 fn number(value: f64, missing: &str) -> String {
     if value.is_finite() {
         value.to_string()
@@ -739,124 +740,166 @@ fn csv(retrievals: &[(usize, Retrieval)]) -> String {
     out
 }
 
-fn json_estimate(e: Estimate) -> String {
-    format!(
-        "{{\"value\": {}, \"sigma\": {}}}",
-        number(e.value, "null"),
-        number(e.sigma, "null")
-    )
+/// `sora retrieve --format json`: one object per scan (docs/json.md).
+#[derive(Serialize)]
+struct RetrievalJson<'a> {
+    scan: usize,
+    label: &'a str,
+    reference_wavelength_nm: f64,
+    /// Each of [`PARAMETER_NAMES`] (its unit in its name).
+    parameters: Members<EstimateJson>,
+    correlations: CorrelationsJson,
+    spectral: Vec<SpectralJson>,
+    angstrom_exponent: EstimateJson,
+    fine_effective_radius_um: EstimateJson,
+    coarse_effective_radius_um: EstimateJson,
+    radiance_scale: Option<EstimateJson>,
+    chi_square: f64,
+    measurement_count: usize,
+    chi_square_per_measurement: f64,
+    iterations: usize,
+    converged: bool,
+    warnings: &'a [String],
+    residuals: ResidualsJson,
 }
 
-fn json(retrievals: &[(usize, Retrieval)]) -> String {
-    let objects: Vec<String> = retrievals
+/// A value and its 1-sigma uncertainty, in the unit its name gives.
+#[derive(Serialize)]
+struct EstimateJson {
+    value: f64,
+    sigma: f64,
+}
+
+impl From<Estimate> for EstimateJson {
+    fn from(e: Estimate) -> Self {
+        EstimateJson {
+            value: e.value,
+            sigma: e.sigma,
+        }
+    }
+}
+
+#[derive(Serialize)]
+struct CorrelationsJson {
+    parameters: [&'static str; PARAMETER_NAMES.len()],
+    /// Row-major, one row per parameter.
+    matrix: Vec<Vec<f64>>,
+}
+
+#[derive(Serialize)]
+struct SpectralJson {
+    wavelength_nm: f64,
+    aerosol_optical_depth: EstimateJson,
+    single_scattering_albedo: EstimateJson,
+    asymmetry_parameter: EstimateJson,
+}
+
+#[derive(Serialize)]
+struct ResidualsJson {
+    radiances: Vec<RadianceResidualJson>,
+    optical_depths: Vec<OpticalDepthResidualJson>,
+}
+
+#[derive(Serialize)]
+struct RadianceResidualJson {
+    wavelength_nm: f64,
+    sun_elevation_deg: f64,
+    sun_azimuth_deg: f64,
+    view_elevation_deg: f64,
+    view_azimuth_deg: f64,
+    scattering_angle_deg: f64,
+    measured_w_m2_sr_nm: f64,
+    uncertainty_w_m2_sr_nm: f64,
+    fitted_w_m2_sr_nm: f64,
+    normalised_residual: f64,
+}
+
+#[derive(Serialize)]
+struct OpticalDepthResidualJson {
+    wavelength_nm: f64,
+    measured: f64,
+    uncertainty: f64,
+    fitted: f64,
+    normalised_residual: f64,
+}
+
+fn json(retrievals: &[(usize, Retrieval)]) -> anyhow::Result<String> {
+    let objects: Vec<RetrievalJson> = retrievals
         .iter()
-        .map(|(scan, r)| {
-            let parameters: Vec<String> = PARAMETER_NAMES
-                .iter()
-                .zip(&r.parameters)
-                .map(|(name, e)| format!("\"{name}\": {}", json_estimate(*e)))
-                .collect();
-            let n = r.parameters.len();
-            let rows: Vec<String> = r
-                .correlations
-                .chunks(n.max(1))
-                .map(|row| {
-                    let values: Vec<String> = row.iter().map(|v| number(*v, "null")).collect();
-                    format!("[{}]", values.join(", "))
-                })
-                .collect();
-            let names: Vec<String> = PARAMETER_NAMES.iter().map(|n| json_string(n)).collect();
-            let spectral: Vec<String> = r
+        .map(|(scan, r)| RetrievalJson {
+            scan: *scan,
+            label: &r.label,
+            reference_wavelength_nm: r.reference_wavelength_nm,
+            parameters: Members(
+                PARAMETER_NAMES
+                    .iter()
+                    .zip(&r.parameters)
+                    .map(|(name, e)| (name.to_string(), (*e).into()))
+                    .collect(),
+            ),
+            correlations: CorrelationsJson {
+                parameters: PARAMETER_NAMES,
+                matrix: r
+                    .correlations
+                    .chunks(r.parameters.len().max(1))
+                    .map(<[f64]>::to_vec)
+                    .collect(),
+            },
+            spectral: r
                 .spectral
                 .iter()
-                .map(|s| {
-                    format!(
-                        "{{\"wavelength_nm\": {}, \"aerosol_optical_depth\": {}, \"single_scattering_albedo\": {}, \"asymmetry_parameter\": {}}}",
-                        s.wavelength_nm,
-                        json_estimate(s.optical_depth),
-                        json_estimate(s.single_scattering_albedo),
-                        json_estimate(s.asymmetry)
-                    )
+                .map(|s| SpectralJson {
+                    wavelength_nm: s.wavelength_nm,
+                    aerosol_optical_depth: s.optical_depth.into(),
+                    single_scattering_albedo: s.single_scattering_albedo.into(),
+                    asymmetry_parameter: s.asymmetry.into(),
                 })
-                .collect();
-            let radiances: Vec<String> = r
-                .radiances
-                .iter()
-                .map(|f| {
-                    let m = &f.measured;
-                    format!(
-                        "{{\"wavelength_nm\": {}, \"sun_elevation_deg\": {}, \"sun_azimuth_deg\": {}, \"view_elevation_deg\": {}, \"view_azimuth_deg\": {}, \"scattering_angle_deg\": {}, \"measured_w_m2_sr_nm\": {}, \"uncertainty_w_m2_sr_nm\": {}, \"fitted_w_m2_sr_nm\": {}, \"normalised_residual\": {}}}",
-                        m.wavelength_nm,
-                        m.sun_elevation_deg,
-                        m.sun_azimuth_deg,
-                        m.view_elevation_deg,
-                        m.view_azimuth_deg,
-                        number(m.scattering_angle_deg(), "null"),
-                        number(m.radiance_w_m2_sr_nm, "null"),
-                        number(m.uncertainty_w_m2_sr_nm, "null"),
-                        number(f.fitted_w_m2_sr_nm, "null"),
-                        number(f.normalised_residual, "null")
-                    )
-                })
-                .collect();
-            let depths: Vec<String> = r
-                .optical_depths
-                .iter()
-                .map(|f| {
-                    format!(
-                        "{{\"wavelength_nm\": {}, \"measured\": {}, \"uncertainty\": {}, \"fitted\": {}, \"normalised_residual\": {}}}",
-                        f.measured.wavelength_nm,
-                        number(f.measured.aerosol_optical_depth, "null"),
-                        number(f.measured.uncertainty, "null"),
-                        number(f.fitted, "null"),
-                        number(f.normalised_residual, "null")
-                    )
-                })
-                .collect();
-            let warnings: Vec<String> = r.warnings.iter().map(|w| json_string(w)).collect();
-            let members = [
-                format!("\"scan\": {scan}"),
-                format!("\"label\": {}", json_string(&r.label)),
-                format!("\"reference_wavelength_nm\": {}", r.reference_wavelength_nm),
-                format!("\"parameters\": {{{}}}", parameters.join(", ")),
-                format!(
-                    "\"correlations\": {{\"parameters\": [{}], \"matrix\": [{}]}}",
-                    names.join(", "),
-                    rows.join(", ")
-                ),
-                format!("\"spectral\": [{}]", spectral.join(", ")),
-                format!("\"angstrom_exponent\": {}", json_estimate(r.angstrom_exponent)),
-                format!(
-                    "\"fine_effective_radius_um\": {}",
-                    json_estimate(r.fine_effective_radius_um)
-                ),
-                format!(
-                    "\"coarse_effective_radius_um\": {}",
-                    json_estimate(r.coarse_effective_radius_um)
-                ),
-                format!(
-                    "\"radiance_scale\": {}",
-                    r.radiance_scale.map_or("null".into(), json_estimate)
-                ),
-                format!("\"chi_square\": {}", number(r.chi_square, "null")),
-                format!("\"measurement_count\": {}", r.measurement_count),
-                format!(
-                    "\"chi_square_per_measurement\": {}",
-                    number(reduced(r), "null")
-                ),
-                format!("\"iterations\": {}", r.iterations),
-                format!("\"converged\": {}", r.converged),
-                format!("\"warnings\": [{}]", warnings.join(", ")),
-                format!(
-                    "\"residuals\": {{\"radiances\": [{}], \"optical_depths\": [{}]}}",
-                    radiances.join(", "),
-                    depths.join(", ")
-                ),
-            ];
-            format!("{{{}}}", members.join(", "))
+                .collect(),
+            angstrom_exponent: r.angstrom_exponent.into(),
+            fine_effective_radius_um: r.fine_effective_radius_um.into(),
+            coarse_effective_radius_um: r.coarse_effective_radius_um.into(),
+            radiance_scale: r.radiance_scale.map(EstimateJson::from),
+            chi_square: r.chi_square,
+            measurement_count: r.measurement_count,
+            chi_square_per_measurement: reduced(r),
+            iterations: r.iterations,
+            converged: r.converged,
+            warnings: &r.warnings,
+            residuals: ResidualsJson {
+                radiances: r
+                    .radiances
+                    .iter()
+                    .map(|f| {
+                        let m = &f.measured;
+                        RadianceResidualJson {
+                            wavelength_nm: m.wavelength_nm,
+                            sun_elevation_deg: m.sun_elevation_deg,
+                            sun_azimuth_deg: m.sun_azimuth_deg,
+                            view_elevation_deg: m.view_elevation_deg,
+                            view_azimuth_deg: m.view_azimuth_deg,
+                            scattering_angle_deg: m.scattering_angle_deg(),
+                            measured_w_m2_sr_nm: m.radiance_w_m2_sr_nm,
+                            uncertainty_w_m2_sr_nm: m.uncertainty_w_m2_sr_nm,
+                            fitted_w_m2_sr_nm: f.fitted_w_m2_sr_nm,
+                            normalised_residual: f.normalised_residual,
+                        }
+                    })
+                    .collect(),
+                optical_depths: r
+                    .optical_depths
+                    .iter()
+                    .map(|f| OpticalDepthResidualJson {
+                        wavelength_nm: f.measured.wavelength_nm,
+                        measured: f.measured.aerosol_optical_depth,
+                        uncertainty: f.measured.uncertainty,
+                        fitted: f.fitted,
+                        normalised_residual: f.normalised_residual,
+                    })
+                    .collect(),
+            },
         })
         .collect();
-    format!("[{}]\n", objects.join(",\n "))
+    crate::json::to_string(&objects)
 }
 
 /// Columns of `--residuals`.

@@ -4,11 +4,13 @@ use std::io::Write;
 use std::time::Instant;
 
 use clap::{Args, ValueEnum};
+use serde::Serialize;
 use sora::colour::{RgbColourSpace, SpectrumToXyz};
+use sora::spectrum::SampledSpectrum;
 use sora::{SkyRadiance, ViewDirection};
 
 use crate::arguments::{
-    AtmosphereSource, FilterOptions, MethodKind, MethodOptions, Resolution, SunAndObserver,
+    AtmosphereSource, FilterOptions, MethodOptions, Resolution, SunAndObserver,
     parse_directions_csv,
 };
 
@@ -100,7 +102,8 @@ pub struct SpectrumArgs {
     )]
     view_elevation: Option<f64>,
 
-    /// View azimuth clockwise from north, degrees
+    /// View azimuth clockwise from north, degrees (any finite angle, read
+    /// modulo 360: 400 is 40)
     #[arg(
         long,
         value_name = "DEG",
@@ -329,7 +332,7 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
     let grid = *sky.wavelengths();
     debug_assert_eq!(grid.len(), args.sun.wavelengths.len());
     let started = Instant::now();
-    let path_tracing = args.method.method == MethodKind::PathTracing;
+    let path_tracing = args.method.is_path_tracing();
     if path_tracing {
         crate::estimate::announce(crate::estimate::path_tracing_estimate(
             samples * skies.len() as u64,
@@ -433,78 +436,56 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
         })
         .collect::<sora::Result<Vec<_>>>()?;
     let mut out = std::io::BufWriter::new(std::io::stdout().lock());
-    let number_list = |values: &[f64], format: fn(&f64) -> String| {
-        values.iter().map(format).collect::<Vec<_>>().join(", ")
-    };
     let wavelengths: Vec<f64> = grid.wavelengths_nm().collect();
-    // A direction's JSON members: its spectrum (and errors), its colour.
-    let json_direction = |k: usize, (xyz, rgb): &(sora::colour::Xyz, sora::colour::LinearRgb)| {
-        let r = &results[k];
-        let mut errors = match &r.standard_error_w_m2_sr_nm {
-            None => String::new(),
-            Some(errors) => format!(
-                ", \"standard_error_w_m2_sr_nm\": [{}]",
-                number_list(errors.values(), |e| format!("{e:.3e}"))
-            ),
-        };
-        if let Some(t) = &transmittances {
-            errors += &format!(
-                ", \"transmittance\": [{}]",
-                number_list(t[k].values(), |v| format!("{v:.9e}"))
-            );
-        }
-        let stokes = r.stokes.as_ref().filter(|_| args.stokes);
-        let stokes = stokes.map_or(String::new(), |stokes| {
-                let degree = stokes.degree_of_linear_polarisation(&r.radiance_w_m2_sr_nm);
-                let angle: Vec<String> = stokes
-                    .angle_of_polarisation_deg()
-                    .iter()
-                    .map(|a| a.map_or("null".to_string(), |a| format!("{a:.6}")))
-                    .collect();
-                let errors = stokes
-                    .standard_errors_w_m2_sr_nm
+    // A direction's JSON: its spectrum (and errors), its colour.
+    let json_direction =
+        |k: usize,
+         view: Option<&ViewDirection>,
+         (xyz, rgb): &(sora::colour::Xyz, sora::colour::LinearRgb)| {
+            let r = &results[k];
+            let stokes = r.stokes.as_ref().filter(|_| args.stokes);
+            let stokes_errors = |i: usize| {
+                stokes
+                    .and_then(|s| s.standard_errors_w_m2_sr_nm.as_ref())
+                    .map(|errors| errors[i].values())
+            };
+            DirectionJson {
+                view_elevation_deg: view.map(|v| v.elevation_deg()),
+                view_azimuth_deg: view.map(|v| v.azimuth_deg()),
+                radiance_w_m2_sr_nm: r.radiance_w_m2_sr_nm.values(),
+                standard_error_w_m2_sr_nm: r
+                    .standard_error_w_m2_sr_nm
                     .as_ref()
-                    .map_or(String::new(), |[q, u, v]| {
-                        format!(
-                            ", \"standard_error_q_w_m2_sr_nm\": [{}], \"standard_error_u_w_m2_sr_nm\": [{}], \"standard_error_v_w_m2_sr_nm\": [{}]",
-                            number_list(q.values(), |e| format!("{e:.3e}")),
-                            number_list(u.values(), |e| format!("{e:.3e}")),
-                            number_list(v.values(), |e| format!("{e:.3e}"))
-                        )
-                    });
-                format!(
-                    ", \"q_w_m2_sr_nm\": [{}], \"u_w_m2_sr_nm\": [{}], \"v_w_m2_sr_nm\": [{}]{errors}, \"degree_of_linear_polarisation\": [{}], \"angle_of_polarisation_deg\": [{}]",
-                    number_list(stokes.q_w_m2_sr_nm.values(), |v| format!("{v:.9e}")),
-                    number_list(stokes.u_w_m2_sr_nm.values(), |v| format!("{v:.9e}")),
-                    number_list(stokes.v_w_m2_sr_nm.values(), |v| format!("{v:.9e}")),
-                    number_list(&degree, |d| format!("{d:.6}")),
-                    angle.join(", ")
-                )
-            });
-        (
-            format!(
-                "\"radiance_w_m2_sr_nm\": [{}]{errors}{stokes}",
-                number_list(r.radiance_w_m2_sr_nm.values(), |v| format!("{v:.9e}"))
-            ),
-            if colour_sample_count == 0 {
-                "\"xyz\": null, \"linear_srgb\": null".to_string()
-            } else {
-                format!(
-                    "\"xyz\": [{:.9e}, {:.9e}, {:.9e}], \"linear_srgb\": [{:.9e}, {:.9e}, {:.9e}]",
-                    xyz.x, xyz.y, xyz.z, rgb.r, rgb.g, rgb.b
-                )
-            },
-        )
+                    .map(SampledSpectrum::values),
+                transmittance: transmittances.as_ref().map(|t| t[k].values()),
+                stokes: stokes.map(|stokes| StokesJson {
+                    q_w_m2_sr_nm: stokes.q_w_m2_sr_nm.values(),
+                    u_w_m2_sr_nm: stokes.u_w_m2_sr_nm.values(),
+                    v_w_m2_sr_nm: stokes.v_w_m2_sr_nm.values(),
+                    standard_error_q_w_m2_sr_nm: stokes_errors(0),
+                    standard_error_u_w_m2_sr_nm: stokes_errors(1),
+                    standard_error_v_w_m2_sr_nm: stokes_errors(2),
+                    degree_of_linear_polarisation: stokes
+                        .degree_of_linear_polarisation(&r.radiance_w_m2_sr_nm),
+                    angle_of_polarisation_deg: stokes.angle_of_polarisation_deg(),
+                }),
+                xyz_w_m2_sr: (colour_sample_count > 0).then_some([xyz.x, xyz.y, xyz.z]),
+                linear_srgb_w_m2_sr: (colour_sample_count > 0).then_some([rgb.r, rgb.g, rgb.b]),
+            }
+        };
+    let polarisation = sky.polarisation();
+    let json = |direction: Option<DirectionJson>, directions: Option<Vec<DirectionJson>>| {
+        crate::json::to_string(&SpectrumJson {
+            sun: crate::json::Sun::new(sun_elevation, sun_azimuth, sun),
+            polarisation: polarisation.to_string(),
+            wavelength_nm: &wavelengths,
+            samples: path_tracing.then_some(samples),
+            seed: path_tracing.then_some(seed),
+            distance_m: args.distance_m,
+            direction,
+            directions,
+        })
     };
-    let mut run_json = if path_tracing {
-        format!(", \"samples\": {samples}, \"seed\": {seed}")
-    } else {
-        String::new()
-    };
-    if let Some(distance) = args.distance_m {
-        run_json += &format!(", \"distance_m\": {distance}");
-    }
-    let wavelength_json = number_list(&wavelengths, |w| format!("{w}"));
     // The Stokes columns of a CSV row (empty without --stokes).
     let stokes_header = if args.stokes {
         ",q_w_m2_sr_nm,u_w_m2_sr_nm,v_w_m2_sr_nm,degree_of_linear_polarisation,angle_of_polarisation_deg"
@@ -533,11 +514,6 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
             }
         })
         .collect();
-    let polarisation = sky.polarisation();
-    let sun_json = format!(
-        "\"sun_elevation_deg\": {sun_elevation}, \"sun_azimuth_deg\": {sun_azimuth}{}, \"polarisation\": \"{polarisation}\"",
-        sun.json_members()
-    );
     if args.view_elevation.is_some() {
         // One direction: the two- or three-column spectrum.
         let (result, (xyz, rgb)) = (&results[0], &colours[0]);
@@ -566,11 +542,7 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
                 }
             }
             Format::Json => {
-                let (spectrum, colour) = json_direction(0, &colours[0]);
-                writeln!(
-                    out,
-                    "{{{sun_json}, \"wavelength_nm\": [{wavelength_json}], {spectrum}{run_json}, {colour}}}"
-                )?;
+                out.write_all(json(Some(json_direction(0, None, &colours[0])), None)?.as_bytes())?;
             }
         }
     } else {
@@ -601,24 +573,13 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
                 }
             }
             Format::Json => {
-                let directions: Vec<String> = views
+                let directions = views
                     .iter()
                     .zip(&colours)
                     .enumerate()
-                    .map(|(k, (view, colour))| {
-                        let (spectrum, colour) = json_direction(k, colour);
-                        format!(
-                            "{{\"view_elevation_deg\": {}, \"view_azimuth_deg\": {}, {spectrum}, {colour}}}",
-                            view.elevation_deg(),
-                            view.azimuth_deg(),
-                        )
-                    })
+                    .map(|(k, (view, colour))| json_direction(k, Some(view), colour))
                     .collect();
-                writeln!(
-                    out,
-                    "{{{sun_json}, \"wavelength_nm\": [{wavelength_json}]{run_json}, \"directions\": [{}]}}",
-                    directions.join(", ")
-                )?;
+                out.write_all(json(None, Some(directions))?.as_bytes())?;
             }
         }
         eprintln!(
@@ -629,6 +590,101 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
     }
     out.flush()?;
     Ok(())
+}
+
+/// `sora spectrum --format json` (docs/json.md): the sun and the light,
+/// the wavelengths, how it was computed, and one direction's members or
+/// `directions`, a list of them.
+#[derive(Serialize)]
+struct SpectrumJson<'a> {
+    #[serde(flatten)]
+    sun: crate::json::Sun,
+    /// "vector" or "scalar" ([`sora::Polarisation`]).
+    polarisation: String,
+    wavelength_nm: &'a [f64],
+    /// Paths per direction and the seed (path tracing only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    samples: Option<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    seed: Option<u64>,
+    /// --distance-m: the aerial perspective of a point this far away.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    distance_m: Option<f64>,
+    /// One direction (--view-elevation and --view-azimuth).
+    #[serde(flatten)]
+    direction: Option<DirectionJson<'a>>,
+    /// Many directions.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    directions: Option<Vec<DirectionJson<'a>>>,
+}
+
+/// One direction's spectra and colour.
+#[derive(Serialize)]
+struct DirectionJson<'a> {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    view_elevation_deg: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    view_azimuth_deg: Option<f64>,
+    radiance_w_m2_sr_nm: &'a [f64],
+    #[serde(skip_serializing_if = "Option::is_none")]
+    standard_error_w_m2_sr_nm: Option<&'a [f64]>,
+    /// Of the path to the point (--distance-m), 0-1.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    transmittance: Option<&'a [f64]>,
+    /// --stokes.
+    #[serde(flatten)]
+    stokes: Option<StokesJson<'a>>,
+    /// CIE 1931 XYZ of the radiance, W m^-2 sr^-1 (sum of the colour-matching
+    /// functions times the radiance times the step); null when no wavelength
+    /// lies in 360-830 nm.
+    xyz_w_m2_sr: Option<[f64; 3]>,
+    /// Linear sRGB of the XYZ, the same unit; null as the XYZ is.
+    linear_srgb_w_m2_sr: Option<[f64; 3]>,
+}
+
+/// The Stokes vector's Q, U and V (referred to the view's meridian plane),
+/// their standard errors (path tracing), the degree and the angle of
+/// linear polarisation (null where the light is unpolarised).
+#[derive(Serialize)]
+struct StokesJson<'a> {
+    q_w_m2_sr_nm: &'a [f64],
+    u_w_m2_sr_nm: &'a [f64],
+    v_w_m2_sr_nm: &'a [f64],
+    #[serde(skip_serializing_if = "Option::is_none")]
+    standard_error_q_w_m2_sr_nm: Option<&'a [f64]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    standard_error_u_w_m2_sr_nm: Option<&'a [f64]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    standard_error_v_w_m2_sr_nm: Option<&'a [f64]>,
+    degree_of_linear_polarisation: Vec<f64>,
+    angle_of_polarisation_deg: Vec<Option<f64>>,
+}
+
+/// `sora spectrum --filter --format json`: per filter, the
+/// response-weighted mean radiance.
+#[derive(Serialize)]
+struct FilteredJson<'a> {
+    #[serde(flatten)]
+    sun: crate::json::Sun,
+    polarisation: String,
+    filter: &'a [&'a str],
+    centre_nm: &'a [f64],
+    #[serde(flatten)]
+    direction: Option<FilteredDirectionJson>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    directions: Option<Vec<FilteredDirectionJson>>,
+}
+
+/// One direction's mean radiance per filter.
+#[derive(Serialize)]
+struct FilteredDirectionJson {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    view_elevation_deg: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    view_azimuth_deg: Option<f64>,
+    radiance_w_m2_sr_nm: Vec<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    standard_error_w_m2_sr_nm: Option<Vec<f64>>,
 }
 
 /// `sora spectrum --filter`: per filter, the sky on its grid and the
@@ -642,22 +698,21 @@ fn run_filtered(
     (scattering, method): (sora::Scattering, sora::Method),
 ) -> anyhow::Result<()> {
     let started = Instant::now();
-    let path_tracing = args.method.method == MethodKind::PathTracing;
+    let path_tracing = args.method.is_path_tracing();
     // [filter][direction] -> (radiance, standard error bound)
     let mut values = Vec::with_capacity(filters.len());
-    let mut sun_json = String::new();
+    // The sun and the light of the first filter's sky (all are alike).
+    let mut sun_and_light = None;
     for (filter, grid) in filters.iter().zip(grids) {
         let mut atmosphere = atmosphere.clone();
         let options = args.sun.with_wavelengths(*grid);
         let (sky, sun) = options.sky(&mut atmosphere, scattering, method)?;
-        if sun_json.is_empty() {
-            let (elevation, azimuth) = (sun.elevation_deg, sun.azimuth_deg);
-            let polarisation = sky.polarisation();
-            sun_json = format!(
-                "\"sun_elevation_deg\": {elevation}, \"sun_azimuth_deg\": {azimuth}{}, \"polarisation\": \"{polarisation}\"",
-                sun.json_members()
-            );
-        }
+        sun_and_light.get_or_insert_with(|| {
+            (
+                crate::json::Sun::new(sun.elevation_deg, sun.azimuth_deg, &sun),
+                sky.polarisation().to_string(),
+            )
+        });
         if path_tracing {
             let samples = match method {
                 sora::Method::PathTracing { samples, .. } => samples,
@@ -723,54 +778,30 @@ fn run_filtered(
             }
         }
         Format::Json => {
-            let names: Vec<String> = filters
-                .iter()
-                .map(|f| crate::commands::atmosphere::json_string(f.name()))
-                .collect();
-            let centres: Vec<String> = centres.iter().map(|c| format!("{c:.6}")).collect();
-            let direction = |v: usize| {
-                let radiances: Vec<String> =
-                    values.iter().map(|p| format!("{:.9e}", p[v].0)).collect();
-                let errors: Vec<String> = values
-                    .iter()
-                    .filter_map(|p| p[v].1.map(|e| format!("{e:.3e}")))
-                    .collect();
-                let errors = if path_tracing {
-                    format!(", \"standard_error_w_m2_sr_nm\": [{}]", errors.join(", "))
-                } else {
-                    String::new()
-                };
-                format!(
-                    "\"radiance_w_m2_sr_nm\": [{}]{errors}",
-                    radiances.join(", ")
-                )
+            let (sun, polarisation) = sun_and_light.expect("at least one filter");
+            let names: Vec<&str> = filters.iter().map(sora::spectrum::Filter::name).collect();
+            let direction = |v: usize, view: Option<&ViewDirection>| FilteredDirectionJson {
+                view_elevation_deg: view.map(|v| v.elevation_deg()),
+                view_azimuth_deg: view.map(|v| v.azimuth_deg()),
+                radiance_w_m2_sr_nm: values.iter().map(|p| p[v].0).collect(),
+                standard_error_w_m2_sr_nm: path_tracing
+                    .then(|| values.iter().filter_map(|p| p[v].1).collect()),
             };
-            let head = format!(
-                "{sun_json}, \"filter\": [{}], \"centre_nm\": [{}]",
-                names.join(", "),
-                centres.join(", ")
-            );
-            if one_view {
-                writeln!(out, "{{{head}, {}}}", direction(0))?;
-            } else {
-                let directions: Vec<String> = views
-                    .iter()
-                    .enumerate()
-                    .map(|(v, view)| {
-                        format!(
-                            "{{\"view_elevation_deg\": {}, \"view_azimuth_deg\": {}, {}}}",
-                            view.elevation_deg(),
-                            view.azimuth_deg(),
-                            direction(v)
-                        )
-                    })
-                    .collect();
-                writeln!(
-                    out,
-                    "{{{head}, \"directions\": [{}]}}",
-                    directions.join(", ")
-                )?;
-            }
+            let text = crate::json::to_string(&FilteredJson {
+                sun,
+                polarisation,
+                filter: &names,
+                centre_nm: &centres,
+                direction: one_view.then(|| direction(0, None)),
+                directions: (!one_view).then(|| {
+                    views
+                        .iter()
+                        .enumerate()
+                        .map(|(v, view)| direction(v, Some(view)))
+                        .collect()
+                }),
+            })?;
+            out.write_all(text.as_bytes())?;
         }
     }
     out.flush()?;

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use clap::Args;
 use sora::engine_tables::{EngineTableSettings, EngineTables};
 
-use crate::arguments::{AtmosphereSource, Scattering};
+use crate::arguments::{AtmosphereSource, library_names};
 
 /// Precompute what a real-time shader needs to draw this atmosphere's sky,
 /// the sun's disc, aerial perspective and the irradiance on the ground for
@@ -36,8 +36,12 @@ pub struct TablesArgs {
     ground_albedo: Option<f64>,
 
     /// multiple (all orders and the skylight the ground reflects) or single
-    #[arg(long, value_enum, default_value_t = Scattering::Multiple)]
-    scattering: Scattering,
+    #[arg(
+        long,
+        value_parser = library_names::<sora::Scattering>(&sora::Scattering::NAMES),
+        default_value = "multiple"
+    )]
+    scattering: sora::Scattering,
 
     /// Sun elevation nodes over -12..90 degrees
     #[arg(long, value_name = "N", default_value_t = EngineTableSettings::default().sun_nodes)]
@@ -89,7 +93,7 @@ pub fn run(args: TablesArgs) -> anyhow::Result<()> {
     }
     let sky = sora::Sky::builder(&atmosphere)
         .wavelengths(args.wavelengths)
-        .scattering(args.scattering.to_library())
+        .scattering(args.scattering)
         .build()?;
     let start = std::time::Instant::now();
     let tables = EngineTables::bake(&sky, &settings, &|_| {})?;

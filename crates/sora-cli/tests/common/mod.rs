@@ -23,6 +23,22 @@ pub fn stdout(out: &Output) -> String {
     String::from_utf8(out.stdout.clone()).unwrap()
 }
 
+/// The JSON a run that must have succeeded printed, parsed.
+pub fn json(out: &Output) -> serde_json::Value {
+    let text = stdout(out);
+    serde_json::from_str(&text).unwrap_or_else(|e| panic!("not JSON ({e}): {text}"))
+}
+
+/// The numbers of a JSON array.
+pub fn numbers(value: &serde_json::Value) -> Vec<f64> {
+    value
+        .as_array()
+        .unwrap_or_else(|| panic!("not an array: {value}"))
+        .iter()
+        .map(|v| v.as_f64().unwrap_or_else(|| panic!("not a number: {v}")))
+        .collect()
+}
+
 /// The one-line error of a failed run (exit status 1).
 pub fn one_line_error(out: &Output) -> String {
     assert_eq!(out.status.code(), Some(1), "{out:?}");

@@ -648,11 +648,13 @@ class Sky:
         ``height`` defaults to ``width``
         (half of it for equirectangular). Path tracing renders no images.
         """
-        side = _sora.MAX_IMAGE_SIDE
+        # Any 64-bit integer passes here; the library checks the range, with
+        # the message of ``sora render --width``.
+        low, high = -(2**63), 2**63 - 1
         return self._native.render(
             _checks.text("camera", camera),
-            _checks.integer("width", width, 1, side, " (pixels)"),
-            _checks.optional_integer("height", height, 1, side, " (pixels)"),
+            _checks.integer("width", width, low, high, " (pixels)"),
+            _checks.optional_integer("height", height, low, high, " (pixels)"),
             _checks.text("output", output),
             _checks.flag("draw_sun_disc", draw_sun_disc),
             _checks.number("look_elevation_deg", look_elevation_deg, "deg"),

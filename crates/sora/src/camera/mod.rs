@@ -37,6 +37,46 @@ pub enum Camera {
     Perspective(PerspectiveCamera),
 }
 
+impl Camera {
+    /// The cameras' names, in the order of the enum.
+    pub const NAMES: [&'static str; 3] = ["fisheye", "equirectangular", "perspective"];
+
+    /// `"fisheye"`, `"equirectangular"` or `"perspective"`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Camera::Fisheye => Self::NAMES[0],
+            Camera::Equirectangular => Self::NAMES[1],
+            Camera::Perspective(_) => Self::NAMES[2],
+        }
+    }
+}
+
+impl std::fmt::Display for Camera {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for Camera {
+    type Err = Error;
+
+    /// A camera by name; `"equirect"` (the older spelling) reads as
+    /// `"equirectangular"`, and `"perspective"` is the default view
+    /// ([`PerspectiveCamera::DEFAULT_ELEVATION_DEG`] and the rest).
+    fn from_str(name: &str) -> Result<Camera> {
+        match name {
+            "fisheye" => Ok(Camera::Fisheye),
+            "equirectangular" | "equirect" => Ok(Camera::Equirectangular),
+            "perspective" => Ok(Camera::Perspective(PerspectiveCamera::new(
+                PerspectiveCamera::DEFAULT_ELEVATION_DEG,
+                PerspectiveCamera::DEFAULT_AZIMUTH_DEG,
+                PerspectiveCamera::DEFAULT_FOV_DEG,
+            )?)),
+            other => Err(Error::unknown_name("camera", other, &Camera::NAMES)),
+        }
+    }
+}
+
 /// A pinhole camera (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PerspectiveCamera {

@@ -452,15 +452,8 @@ impl AeronetTime {
 
     /// Seconds since 1970-01-01 00:00 UTC.
     pub fn unix_seconds(&self) -> i64 {
-        // Days from the civil date (proleptic Gregorian), after H. Hinnant's
-        // well-known algorithm.
-        let (month, day) = (i64::from(self.month), i64::from(self.day));
-        let year = i64::from(self.year) - i64::from(month <= 2);
-        let era = year.div_euclid(400);
-        let year_of_era = year - era * 400;
-        let day_of_year = (153 * (month + if month > 2 { -3 } else { 9 }) + 2) / 5 + day - 1;
-        let day_of_era = year_of_era * 365 + year_of_era / 4 - year_of_era / 100 + day_of_year;
-        let days = era * 146_097 + day_of_era - 719_468;
+        // The calendar of the sun's position (proleptic Gregorian).
+        let days = crate::sun_position::days_from_civil(i64::from(self.year), self.month, self.day);
         days * 86_400 + i64::from(self.second_of_day)
     }
 }
@@ -1544,5 +1537,19 @@ Site_A,10:06:2020,12:00:00,162,-999.,-999.,-999.,-999.,-999.,1.5,0.4402
             notes[0].contains("no optical depth of this site within 30 min"),
             "{notes:?}"
         );
+    }
+
+    #[test]
+    fn aeronet_times_count_seconds_by_the_suns_calendar() {
+        let at = |year, month, day, second_of_day| AeronetTime {
+            year,
+            month,
+            day,
+            second_of_day,
+        };
+        // `date -u -d 2019-07-31T12:00:00Z +%s` and the leap day of 2000.
+        assert_eq!(at(2019, 7, 31, 43_200).unix_seconds(), 1_564_574_400);
+        assert_eq!(at(2000, 2, 29, 0).unix_seconds(), 951_782_400);
+        assert_eq!(at(1970, 1, 1, 1).unix_seconds(), 1);
     }
 }

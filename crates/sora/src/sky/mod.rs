@@ -59,6 +59,7 @@
 
 mod aerial_perspective;
 mod irradiance;
+mod names;
 mod sun_disc;
 
 pub use crate::transport::multiple_scattering::MultipleScatteringSettings;
@@ -268,17 +269,22 @@ pub use crate::transport::path_tracing::MAX_SAMPLES;
 /// Refuses an image side outside 1..=[`MAX_IMAGE_SIDE`] pixels: checked by
 /// every render, and by `sora render` before any work.
 pub fn check_image_size(width: u32, height: u32) -> Result<()> {
-    for (name, side) in [("image width", width), ("image height", height)] {
-        if !(1..=MAX_IMAGE_SIDE).contains(&side) {
-            return Err(Error::out_of_range(
-                name,
-                side as f64,
-                "pixels",
-                format!("1..={MAX_IMAGE_SIDE}"),
-            ));
-        }
-    }
+    image_side("image width", width.into())?;
+    image_side("image height", height.into())?;
     Ok(())
+}
+
+/// One side of an image, `name` ("image width" or "image height"), as a
+/// user gave it (any integer: the command line's `--width -5` and
+/// Python's `width=-5` reach here), checked against 1..=[`MAX_IMAGE_SIDE`]
+/// pixels: the one message for every front end.
+pub fn image_side(name: &str, side: i64) -> Result<u32> {
+    u32::try_from(side)
+        .ok()
+        .filter(|side| (1..=MAX_IMAGE_SIDE).contains(side))
+        .ok_or_else(|| {
+            Error::out_of_range(name, side as f64, "pixels", format!("1..={MAX_IMAGE_SIDE}"))
+        })
 }
 
 /// Most steps of the reference method's march along a view or toward the
