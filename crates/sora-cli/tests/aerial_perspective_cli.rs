@@ -212,3 +212,37 @@ fn bad_depths_are_one_line_errors_with_nothing_written() {
         assert!(!out.exists());
     }
 }
+
+/// The aerial-perspective EXR is written as a plain render's: --units
+/// sets its units and whiteLuminance (1 for cd/m^2), --exr-half half
+/// floats (under --half-overflow's rule) for the image and the layer.
+#[test]
+fn the_air_exr_takes_the_renders_units_and_half_floats() {
+    let dir = tempfile::tempdir().unwrap();
+    let output = dir.path().join("air.exr");
+    stdout(&render(
+        &["--distance-m", "5000", "--units", "luminance", "--exr-half"],
+        &output,
+    ));
+    let image = exr::prelude::read_all_flat_layers_from_file(&output).unwrap();
+    let layer = &image.layer_data[0];
+    assert_eq!(layer.attributes.white_luminance, Some(1.0));
+    let units = layer
+        .attributes
+        .other
+        .get(&exr::meta::attribute::Text::from("sora:units"));
+    assert!(
+        matches!(units, Some(exr::meta::attribute::AttributeValue::Text(t)) if t.to_string().starts_with("luminance_cd_m2")),
+        "{units:?}"
+    );
+    let mut names = Vec::new();
+    for channel in &layer.channel_data.list {
+        names.push(channel.name.to_string());
+        assert!(
+            matches!(channel.sample_data, exr::prelude::FlatSamples::F16(_)),
+            "{}",
+            channel.name
+        );
+    }
+    assert!(names.contains(&"G".to_string()) && names.contains(&"transmittance.G".to_string()));
+}

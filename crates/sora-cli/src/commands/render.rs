@@ -490,71 +490,32 @@ fn render_aerial_perspective(
     let started = Instant::now();
     let (radiance, transmittance) = sky.render_aerial_perspective_xyz(image, depth, to_xyz)?;
     let (w, h) = (image.width as usize, image.height as usize);
-    let scale = match args.units {
-        Units::Radiance => 1.0,
-        Units::Luminance => sora::colour::MAXIMUM_LUMINOUS_EFFICACY_LM_PER_W,
-    };
-    let channels = |c: sora::colour::Xyz| -> [f64; 3] {
-        if args.exr_xyz {
-            [c.x, c.y, c.z]
-        } else {
-            let rgb = RgbColourSpace::Srgb.linear_rgb_from_xyz(c);
-            [rgb.r, rgb.g, rgb.b]
-        }
-    };
-    let kind = if args.exr_xyz {
-        ChannelKind::Xyz
-    } else {
-        ChannelKind::Rgb
-    };
     let ones = sora::spectrum::SampledSpectrum::from_values(vec![1.0; sky.wavelengths().len()]);
-    let white = channels(to_xyz.to_xyz(&ones)?);
-    let main = LinearImage::new(
-        w,
-        h,
-        kind,
-        radiance
-            .iter()
-            .map(|c| channels(c.scaled(scale)).map(|v| v as f32))
-            .collect(),
+    let white = exr_channels(args, to_xyz.to_xyz(&ones)?, false);
+    let main = exr_image(
+        args,
+        (w, h),
+        radiance.iter().map(|c| exr_channels(args, *c, true)),
     )?;
-    let through = LinearImage::new(
-        w,
-        h,
-        kind,
-        transmittance
-            .iter()
-            .map(|c| {
-                let v = channels(*c);
-                [0, 1, 2].map(|k| (v[k] / white[k]) as f32)
-            })
-            .collect(),
+    let through = exr_image(
+        args,
+        (w, h),
+        transmittance.iter().map(|c| {
+            let v = exr_channels(args, *c, false);
+            [0, 1, 2].map(|k| v[k] / white[k])
+        }),
     )?;
-    let units = match args.units {
-        Units::Radiance => {
-            "radiance_w_m2_sr (XYZ of spectral radiance integrated over nm, no 683 lm/W)"
-        }
-        Units::Luminance => "luminance_cd_m2 (Y in cd/m^2)",
-    };
-    let (sun_elevation, sun_azimuth) = sky.sun_position_deg();
-    let options = ExrOptions {
-        sample_type: if args.exr_half {
-            ExrSampleType::F16Clamped
-        } else {
-            ExrSampleType::F32
-        },
-        text_attributes: vec![
-            ("units".into(), units.into()),
-            ("sun_elevation_deg".into(), sun_elevation.to_string()),
-            ("sun_azimuth_deg".into(), sun_azimuth.to_string()),
-            (
-                "aerial_perspective".into(),
-                "the main image is the light the air scatters into each view between the eye and the point at its distance; the layer transmittance is the segment's transmittance per channel (1 = all of the point's light); a scene pixel L is seen as L * transmittance + main (sora docs/aerial_perspective.md)".into(),
-            ),
-        ],
-        ..ExrOptions::default()
-    };
-    files.exr_with_layers(output, &main, &[("transmittance", &through)], options)?;
+    let attributes = vec![(
+        "aerial_perspective".into(),
+        "the main image is the light the air scatters into each view between the eye and the point at its distance; the layer transmittance is the segment's transmittance per channel (1 = all of the point's light); a scene pixel L is seen as L * transmittance + main (sora docs/aerial_perspective.md)".into(),
+    )];
+    stage_exr(
+        args,
+        sky,
+        (output, files),
+        (&main, &[("transmittance", &through)]),
+        attributes,
+    )?;
     eprintln!(
         "rendered the aerial perspective {w}x{h} in {:.3} s, wrote {}",
         started.elapsed().as_secs_f64(),
@@ -728,72 +689,31 @@ fn render_frame(
             }
         }
         OutputFormat::Exr => {
-            // Luminance units: x 683 lm/W, so that Y is in cd/m^2.
-            let scale = match args.units {
-                Units::Radiance => 1.0,
-                Units::Luminance => sora::colour::MAXIMUM_LUMINOUS_EFFICACY_LM_PER_W,
-            };
-            // One image of linear values (RGB or XYZ) from XYZ per pixel.
-            let linear_image = |xyz: &mut dyn Iterator<Item = sora::colour::Xyz>| {
-                let (kind, pixels) = if args.exr_xyz {
-                    let pixels = xyz
-                        .map(|c| {
-                            [
-                                (scale * c.x) as f32,
-                                (scale * c.y) as f32,
-                                (scale * c.z) as f32,
-                            ]
-                        })
-                        .collect();
-                    (ChannelKind::Xyz, pixels)
-                } else {
-                    let space = RgbColourSpace::Srgb;
-                    let pixels = xyz
-                        .map(|c| {
-                            let rgb = space.linear_rgb_from_xyz(c.scaled(scale));
-                            [rgb.r as f32, rgb.g as f32, rgb.b as f32]
-                        })
-                        .collect();
-                    (ChannelKind::Rgb, pixels)
-                };
-                LinearImage::new(w, h, kind, pixels)
-            };
-            let main = linear_image(&mut xyz.iter().copied())?;
+            let main = exr_image(
+                args,
+                (w, h),
+                xyz.iter().map(|c| exr_channels(args, *c, true)),
+            )?;
             // --stokes: S0..S3 as layers (S0 the same as the main image).
             let layers = if args.stokes {
                 (0..4)
-                    .map(|c| linear_image(&mut stokes.iter().map(|s| s[c])))
+                    .map(|c| {
+                        exr_image(
+                            args,
+                            (w, h),
+                            stokes.iter().map(|s| exr_channels(args, s[c], true)),
+                        )
+                    })
                     .collect::<sora::Result<Vec<_>>>()?
             } else {
                 Vec::new()
             };
             let names = ["S0", "S1", "S2", "S3"];
             let layers: Vec<(&str, &LinearImage)> = names.into_iter().zip(&layers).collect();
-            let (units, white_luminance) = match args.units {
-                Units::Radiance => (
-                    "radiance_w_m2_sr (XYZ of spectral radiance integrated over nm, no 683 lm/W)",
-                    683.0,
-                ),
-                Units::Luminance => ("luminance_cd_m2 (Y in cd/m^2)", 1.0),
-            };
-            let (sun_elevation, sun_azimuth) = sky.sun_position_deg();
-            let options = ExrOptions {
-                sample_type: match (args.exr_half, args.half_overflow) {
-                    (false, _) => ExrSampleType::F32,
-                    (true, HalfOverflow::Error) => ExrSampleType::F16,
-                    (true, HalfOverflow::Clamp) => ExrSampleType::F16Clamped,
-                },
-                white_luminance_cd_m2: Some(white_luminance),
-                text_attributes: vec![
-                    ("units".into(), units.into()),
-                    ("sun_elevation_deg".into(), sun_elevation.to_string()),
-                    ("sun_azimuth_deg".into(), sun_azimuth.to_string()),
-                ]
+            let attributes = sun
+                .distance_au
+                .map(|d| ("sun_distance_au".into(), d.to_string()))
                 .into_iter()
-                .chain(
-                    sun.distance_au
-                        .map(|d| ("sun_distance_au".into(), d.to_string())),
-                )
                 .chain([
                     ("sun_disc".into(), (!args.no_sun_disc).to_string()),
                     ("polarisation".into(), sky.polarisation().to_string()),
@@ -804,17 +724,8 @@ fn render_frame(
                         "layers S0..S3 are Stokes I, Q, U, V in the units above; Q and U referred to each pixel's meridian plane (Q > 0: vertical), the angle of polarisation 0.5 atan2(U, Q) from the vertical toward the observer's left (sora docs/polarisation.md)".into(),
                     )
                 }))
-                .collect(),
-                ..ExrOptions::default()
-            };
-            let half_hint = if args.exr_half && args.half_overflow == HalfOverflow::Error {
-                " (half floats end at 65504: --half-overflow clamp clamps, --no-sun-disc leaves the sun out, and without --exr-half 32-bit floats hold everything)"
-            } else {
-                ""
-            };
-            files
-                .exr_with_layers(output, &main, &layers, options)
-                .with_context(|| format!("writing {}{half_hint}", output.display()))?;
+                .collect();
+            stage_exr(args, sky, (output, files), (&main, &layers), attributes)?;
         }
     }
     let total_seconds = started.elapsed().as_secs_f64();
@@ -835,6 +746,84 @@ fn render_frame(
         output.display()
     );
     Ok(png_scale)
+}
+
+/// A pixel's EXR channels from its CIE XYZ: X, Y, Z with --exr-xyz,
+/// linear sRGB otherwise; in --units if `in_units` (x 683 lm/W for
+/// luminance, so that Y is in cd/m^2), as they are otherwise.
+fn exr_channels(args: &RenderArgs, xyz: sora::colour::Xyz, in_units: bool) -> [f64; 3] {
+    let scale = match (in_units, args.units) {
+        (true, Units::Luminance) => sora::colour::MAXIMUM_LUMINOUS_EFFICACY_LM_PER_W,
+        _ => 1.0,
+    };
+    let c = xyz.scaled(scale);
+    if args.exr_xyz {
+        [c.x, c.y, c.z]
+    } else {
+        let rgb = RgbColourSpace::Srgb.linear_rgb_from_xyz(c);
+        [rgb.r, rgb.g, rgb.b]
+    }
+}
+
+/// One EXR image (RGB or XYZ, by --exr-xyz) of `pixels`' channels.
+fn exr_image(
+    args: &RenderArgs,
+    (w, h): (usize, usize),
+    pixels: impl Iterator<Item = [f64; 3]>,
+) -> sora::Result<LinearImage> {
+    let kind = if args.exr_xyz {
+        ChannelKind::Xyz
+    } else {
+        ChannelKind::Rgb
+    };
+    LinearImage::new(w, h, kind, pixels.map(|p| p.map(|v| v as f32)).collect())
+}
+
+/// Stages a rendered EXR, the image `main` and its `layers`: 32-bit
+/// floats, or half floats by --exr-half with --half-overflow's handling of
+/// values beyond 65504; the units and whiteLuminance of --units and the
+/// sun's position as attributes, then `attributes`.
+fn stage_exr(
+    args: &RenderArgs,
+    sky: &sora::Sky,
+    (output, files): (&Path, &mut OutputFiles),
+    (main, layers): (&LinearImage, &[(&str, &LinearImage)]),
+    attributes: Vec<(String, String)>,
+) -> anyhow::Result<()> {
+    let (units, white_luminance) = match args.units {
+        Units::Radiance => (
+            "radiance_w_m2_sr (XYZ of spectral radiance integrated over nm, no 683 lm/W)",
+            683.0,
+        ),
+        Units::Luminance => ("luminance_cd_m2 (Y in cd/m^2)", 1.0),
+    };
+    let (sun_elevation, sun_azimuth) = sky.sun_position_deg();
+    let options = ExrOptions {
+        sample_type: match (args.exr_half, args.half_overflow) {
+            (false, _) => ExrSampleType::F32,
+            (true, HalfOverflow::Error) => ExrSampleType::F16,
+            (true, HalfOverflow::Clamp) => ExrSampleType::F16Clamped,
+        },
+        white_luminance_cd_m2: Some(white_luminance),
+        text_attributes: [
+            ("units".into(), units.into()),
+            ("sun_elevation_deg".into(), sun_elevation.to_string()),
+            ("sun_azimuth_deg".into(), sun_azimuth.to_string()),
+        ]
+        .into_iter()
+        .chain(attributes)
+        .collect(),
+        ..ExrOptions::default()
+    };
+    let half_hint = if args.exr_half && args.half_overflow == HalfOverflow::Error {
+        " (half floats end at 65504: --half-overflow clamp clamps, --no-sun-disc leaves the sun out, and without --exr-half 32-bit floats hold everything)"
+    } else {
+        ""
+    };
+    files
+        .exr_with_layers(output, main, layers, options)
+        .with_context(|| format!("writing {}{half_hint}", output.display()))?;
+    Ok(())
 }
 
 /// A progress bar on stderr when it is a terminal, hidden otherwise.

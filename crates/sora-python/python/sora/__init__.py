@@ -517,7 +517,8 @@ class Sky:
         air's light), ``transmittance`` (the segment's), and what lights
         the point, ``sun_transmittance_at_point`` and
         ``sky_irradiance_at_point`` (the sky's horizontal diffuse
-        irradiance, W m^-2 nm^-1, computed at the eye). A scene point of
+        irradiance, W m^-2 nm^-1, at the point's altitude and sun
+        elevation: each such point costs a sky). A scene point of
         radiance L is seen as ``L * transmittance + radiance``
         (docs/aerial_perspective.md)."""
         (elevation, azimuth, distance), _ = _broadcast_flat(
@@ -537,7 +538,7 @@ class Sky:
                 "radiance": (dims, radiance, {"units": RADIANCE_UNITS, "long_name": "spectral radiance scattered into the segment"}),
                 "transmittance": (dims, transmittance, {"units": "1", "long_name": "transmittance of the segment"}),
                 "sun_transmittance_at_point": (dims, sun, {"units": "1", "long_name": "transmittance of the sun's beam to the point"}),
-                "sky_irradiance_at_point": (dims, irradiance, {"units": "W m-2 nm-1", "long_name": "diffuse sky irradiance on a horizontal plane (at the eye)"}),
+                "sky_irradiance_at_point": (dims, irradiance, {"units": "W m-2 nm-1", "long_name": "diffuse sky irradiance on a horizontal plane at the point"}),
             },
             coords=coords,
             attrs=self._attrs(),

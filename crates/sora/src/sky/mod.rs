@@ -1235,16 +1235,17 @@ impl Sky {
         self.field()?.compute_polarisation_rows(&cosines)
     }
 
-    /// Every view of `views` by `compute(view, work, radiance, stokes)`
+    /// Every view of `views` (a view, or a view and a distance: anything a
+    /// view's light is computed from) by `compute(view, work, radiance, stokes)`
     /// (`stokes`: Q, U and V of a polarised sky, empty otherwise), in
     /// parallel, `views_per_task` a task with one [`ViewWork`] each,
     /// calling `progress(done, total)` as views complete.
-    fn compute_views_in_parallel(
+    fn compute_views_in_parallel<V: Copy + Sync>(
         &self,
-        views: &[ViewDirection],
+        views: &[V],
         views_per_task: usize,
         progress: &(dyn Fn(u64, u64) + Sync),
-        compute: impl Fn(ViewDirection, &mut ViewWork, &mut [f64], &mut [f64]) + Sync,
+        compute: impl Fn(V, &mut ViewWork, &mut [f64], &mut [f64]) + Sync,
     ) -> Vec<SkyRadiance> {
         let wavelengths = self.wavelengths().len();
         let polarised = self.polarisation == Polarisation::Vector;

@@ -93,6 +93,12 @@ pub struct MultipleScatteringScratch {
     /// [j * wavelengths + i], m, then the peak-only rows Q and Q X-bar
     /// (`forward_peak.rs`; see [`MultipleScatteringTable::compute_radiance_parts`]).
     pub(super) forward_integrals: Vec<f64>,
+    /// The scaled part of the forward-peak integrals' first line,
+    /// integral rho_j T* (T*_sun or, near a low sun, T_sun + S~) ds,
+    /// species-major, m: what an aerial perspective needs to move the
+    /// light from behind a point to the point
+    /// ([`MultipleScatteringScratch::scaled_forward_integrals`]).
+    pub(super) scaled_forward_integrals: Vec<f64>,
     /// The tilted peak beam B at the current node (`peak_beam.rs`), and
     /// the node's optical depths / transmittances and peak scattering
     /// coefficients and X there ([`ViewRayOptics::add_tilted_forward_peak`]).
@@ -109,6 +115,17 @@ impl MultipleScatteringScratch {
     /// [`MultipleScatteringField::compute_forward_peak_radiance`] takes them.
     pub(crate) fn forward_integrals(&self) -> &[f64] {
         &self.forward_integrals
+    }
+
+    /// The scaled part of the last ray's forward-peak integrals (the
+    /// first line's integral rho_j T* T*_sun ds, species-major
+    /// [j * wavelengths + i], m; near a low sun with T*_sun replaced by
+    /// T_sun + S~ of the tilted beam): the forward integrals' species rows
+    /// are these minus integral rho_j T T_sun ds. Seen from a point at s =
+    /// d on the ray (T and T* counted from there), the rows of the ray
+    /// beyond it are these over T*(d) minus the rest over T(d).
+    pub(crate) fn scaled_forward_integrals(&self) -> &[f64] {
+        &self.scaled_forward_integrals
     }
 }
 
@@ -137,6 +154,7 @@ impl ViewRayOptics {
                 self.geometry.corners.most_panel_ends(SUN_RAY_PANELS),
             ),
             forward_integrals: vec![0.0; (s + forward_peak::EXTRA_ROWS) * w],
+            scaled_forward_integrals: vec![0.0; s * w],
             beam: vec![0.0; w],
             tilted_depths: vec![0.0; 4 * w],
             tilted_peak: vec![0.0; 2 * w],
@@ -164,6 +182,7 @@ impl ViewRayOptics {
         radiance.fill(0.0);
         ground_out.fill(0.0);
         scratch.forward_integrals.fill(0.0);
+        scratch.scaled_forward_integrals.fill(0.0);
         let (w, s) = (self.wavelengths, self.species);
         let (ground, top) = (self.geometry.ground_radius_m, self.geometry.top_radius_m);
         let (profiles, corners) = (&self.geometry.profiles, &self.geometry.corners);
@@ -258,10 +277,14 @@ impl ViewRayOptics {
                                     * scratch.densities[j];
                             }
                             let direct = (-exact).exp();
-                            let excess = weight * ((-scaled).exp() - direct);
+                            let through = (-scaled).exp();
+                            let excess = weight * (through - direct);
+                            let beam = weight * through;
                             for j in 0..s {
                                 scratch.forward_integrals[j * w + i] +=
                                     excess * scratch.densities[j];
+                                scratch.scaled_forward_integrals[j * w + i] +=
+                                    beam * scratch.densities[j];
                             }
                             // The peak-only light: its weight and the
                             // peak optical depth X of its two legs.
@@ -351,8 +374,10 @@ impl ViewRayOptics {
             let scattered = forward + share * (scratch.beam[i] - forward);
             let excess =
                 weight * (view_beam[i] * scattered + sun_direct * (view_beam[i] - view_direct[i]));
+            let beam = weight * view_beam[i] * (scattered + sun_direct);
             for j in 0..s {
                 scratch.forward_integrals[j * w + i] += excess * scratch.densities[j];
+                scratch.scaled_forward_integrals[j * w + i] += beam * scratch.densities[j];
             }
             if lit && sun_beam > 0.0 {
                 let only = weight
