@@ -13,7 +13,9 @@
 //   median of each: at most twice its bar (150 ms, 1 s; twice: the noise of
 //   a shared 2-core machine), a warning printed between the bar and twice
 //   it. The table is printed and saved (SORA_WEB_OUT/timings.json) before
-//   the guard fails.
+//   the guard fails, which it does after the other checks;
+//   SORA_WEB_SPEED=report only reports (a machine shared with other work,
+//   where every time is several times its quiet value).
 //
 // Environment: SORA_CLI (default target/debug/sora), SORA_WEB_REQUEST
 // (default target/sora-web/debug/examples/request), CHROMIUM (default
@@ -160,15 +162,23 @@ try {
   }
   await mkdir(out, { recursive: true });
   await writeFile(join(out, 'timings.json'), `${JSON.stringify({ timings: report.timings, speed: report.speed }, null, 2)}\n`);
+  const slow = [];
   for (const row of speed) {
     for (const stage of ['preview', 'refinement']) {
-      if (row[stage] === 'warn') {
-        console.log(`WARNING: the ${stage} at sun ${row.sun_elevation_deg} deg took ${row[`${stage}_median_ms`].toFixed(0)} ms (median), over its bar of ${BARS_MS[stage]} ms`);
-      }
-      assert.notEqual(row[stage], 'FAIL', `the ${stage} at sun ${row.sun_elevation_deg} deg took ${row[`${stage}_median_ms`].toFixed(0)} ms (median of ${SPEED_PASSES}), over twice its bar of ${BARS_MS[stage]} ms`);
+      const what = `the ${stage} at sun ${row.sun_elevation_deg} deg took ${row[`${stage}_median_ms`].toFixed(0)} ms (median of ${SPEED_PASSES})`;
+      if (row[stage] === 'warn') console.log(`WARNING: ${what}, over its bar of ${BARS_MS[stage]} ms`);
+      if (row[stage] === 'FAIL') slow.push(`${what}, over twice its bar of ${BARS_MS[stage]} ms`);
     }
   }
-  report.checks.push(`speed guard: every median within twice its bar (${speed.flatMap((r) => [r.preview, r.refinement]).filter((v) => v === 'warn').length} warnings)`);
+  // Judged after the other checks, so that a slow machine still runs them.
+  const speedGuard = () => {
+    if (process.env.SORA_WEB_SPEED === 'report') {
+      for (const line of slow) console.log(`WARNING (SORA_WEB_SPEED=report, not failing): ${line}`);
+      return;
+    }
+    assert.deepEqual(slow, [], 'the speed guard');
+    report.checks.push(`speed guard: every median within twice its bar (${speed.flatMap((r) => [r.preview, r.refinement]).filter((v) => v === 'warn').length} warnings)`);
+  };
   assert.notEqual(after, before, 'the image changed after the sun moved');
   report.checks.push('the image changes when the sun slider moves');
 
@@ -229,6 +239,7 @@ try {
 
   assert.deepEqual(consoleErrors, [], 'no errors in the console');
   report.checks.push('no errors in the console');
+  speedGuard();
   report.screenshot = screenshot;
   await writeFile(join(out, 'report.json'), `${JSON.stringify(report, null, 2)}\n`);
   console.log(`explorer test passed (${report.checks.length} checks); screenshot: ${screenshot}; report: ${join(out, 'report.json')}`);
