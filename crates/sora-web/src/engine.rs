@@ -446,10 +446,10 @@ pub fn build_sky(atmosphere: &Atmosphere, spec: &SkySpec, quality: Quality) -> R
 /// layers 4.1 % at -12); the preview 1.2 / 1.5 / 2.4 / 1.7 / 2.5 / 4.1 /
 /// 10 % (with 20 layers and a step of 1.5 degrees, 1.1 / 1.6 / 2.7 / 1.5 /
 /// 2.1 / 3.4 / 7.0 %). Their cost on one thread natively (CPU time, the
-/// `slider_timing` example), sun 10 / 2 / -4: the refinement 0.75 / 1.02 /
-/// 1.00 s (with 40 layers 0.90 / 1.28 / 1.34 s), the preview 0.115 /
-/// 0.156 / 0.144 s (with 20 layers and 1.5 degrees 0.145 / 0.213 / 0.224
-/// s); the sun 45 degrees up 0.04 s. The first order's fine moments after
+/// `slider_timing` example, median of three on a shared machine), sun 10 /
+/// 2 / -4: the refinement 0.73 / 1.09 / 1.22 s (with 40 layers 0.90 / 1.28
+/// / 1.34 s), the preview 0.120 / 0.171 / 0.163 s (with 20 layers and 1.5
+/// degrees 0.145 / 0.213 / 0.224 s); the sun 45 degrees up 0.04 s. The first order's fine moments after
 /// sunset (`spherical_first_order.rs` in the library) are about half of a
 /// low-sun frame.
 pub fn quality_settings(
