@@ -550,18 +550,29 @@ pub fn build_sky(atmosphere: &Atmosphere, spec: &SkySpec, quality: Quality) -> R
 /// quality. Full is the library's (and `sora render`'s) default. Preview
 /// is what a slider drag can afford in a browser: every 40 nm (11
 /// wavelengths, enough for the colour, not for the spectrum), 4 streams
-/// per hemisphere on 20 layers, sun-zenith steps twice as wide, and image
-/// tables a quarter as fine on each axis. Refined is Full with a sky-view
-/// table of 64 x 24 nodes instead of 128 x 48, and sun-zenith steps of 2
-/// degrees instead of 0.75 near sunset (from 85 degrees of zenith): with
-/// the sun 2 degrees up 11 sun nodes instead of 19, 7 of them with the
-/// spherical first order instead of 15, about half the work of a low-sun
-/// frame. What that costs against Full (99th percentile of the pixels'
-/// luminance error, 128 x 128, the `quality_accuracy` example), before
-/// -> after: 0.29 -> 0.29 % at sun 10, 0.30 -> 0.37 % at 5, 0.34 -> 0.61 %
-/// at 2, 0.38 -> 0.81 % at 0, 0.56 -> 0.75 % at -4, 0.99 -> 1.04 % at -6,
-/// 1.89 -> 1.90 % at -12 (unchanged from 20 degrees up); a step of 3
-/// degrees would reach 2.2 % at -12.
+/// per hemisphere on 16 layers, sun-zenith steps of 6 degrees (2.5 near
+/// sunset, from 85 degrees of zenith), and image tables a quarter as fine
+/// on each axis. Refined is Full with a sky-view table of 64 x 24 nodes
+/// instead of 128 x 48, 30 layers instead of 40, and sun-zenith steps of
+/// 2 degrees instead of 0.75 near sunset: with the sun 2 degrees up 11 sun
+/// nodes instead of 19, 7 of them with the spherical first order instead
+/// of 15, whose cost is each node's layers.
+///
+/// What they cost against Full (99th percentile of the pixels' luminance
+/// error, 128 x 128, earth-clear, the `quality_accuracy` example; the
+/// browser test's guard holds their time), sun 10 / 5 / 2 / 0 / -4 / -6 /
+/// -12 degrees: the refinement 0.28 / 0.41 / 0.87 / 1.18 / 0.97 / 1.0 /
+/// 1.7 % (with 40 layers 0.28 / 0.40 / 0.84 / 1.13 / 0.96 / 1.0 / 1.5 %;
+/// a sunset step of 3 degrees would reach 1.6-2.1 % at suns 2 to -4, 24
+/// layers 4.1 % at -12); the preview 1.2 / 1.5 / 2.4 / 1.7 / 2.5 / 4.1 /
+/// 10 % (with 20 layers and a step of 1.5 degrees, 1.1 / 1.6 / 2.7 / 1.5 /
+/// 2.1 / 3.4 / 7.0 %). Their cost on one thread natively (CPU time, the
+/// `slider_timing` example, median of three on a shared machine), sun 10 /
+/// 2 / -4: the refinement 0.73 / 1.09 / 1.22 s (with 40 layers 0.90 / 1.28
+/// / 1.34 s), the preview 0.120 / 0.171 / 0.163 s (with 20 layers and 1.5
+/// degrees 0.145 / 0.213 / 0.224 s); the sun 45 degrees up 0.04 s. The first order's fine moments after
+/// sunset (`spherical_first_order.rs` in the library) are about half of a
+/// low-sun frame.
 pub fn quality_settings(
     quality: Quality,
 ) -> (WavelengthGrid, MultipleScatteringSettings, FastTableSize) {
@@ -575,6 +586,7 @@ pub fn quality_settings(
             WavelengthGrid::paper(),
             MultipleScatteringSettings {
                 sunset_sun_zenith_step_deg: 2.0,
+                layers: 30,
                 ..MultipleScatteringSettings::default()
             },
             FastTableSize {
@@ -586,9 +598,9 @@ pub fn quality_settings(
             WavelengthGrid::new(380.0, 780.0, 40.0).expect("a valid grid"),
             MultipleScatteringSettings {
                 streams_per_hemisphere: 4,
-                layers: 20,
+                layers: 16,
                 sun_zenith_step_deg: 6.0,
-                sunset_sun_zenith_step_deg: 1.5,
+                sunset_sun_zenith_step_deg: 2.5,
                 view_ray_panels: 8,
                 table_view_zenith_nodes: 19,
                 table_azimuth_nodes: 10,
@@ -660,9 +672,8 @@ mod tests {
     /// refinement within 2 % from a high sun to civil twilight, the preview
     /// within 5 % down to the horizon and 7 % at sun -6. Measured at 128 x
     /// 128 (the quality_accuracy example prints the whole range): the
-    /// refinement 0.15 % at sun 45 and 1.0 % at -6; the preview 1.0 % at
-    /// 45, 2.0 % at 0 and 4.9 % at -6 (5.05 % here at 48 x 48, since the
-    /// preview's first order takes 8 azimuths instead of 16; 4.8 % before).
+    /// refinement 0.16 % at sun 45, 1.2 % at 0 and 1.0 % at -6; the preview
+    /// 1.0 % at 45, 1.7 % at 0 and 4.1 % at -6.
     #[test]
     fn preview_and_refinement_stay_close_to_the_default_resolution() {
         let atmosphere = Atmosphere::preset("earth-clear").unwrap();
