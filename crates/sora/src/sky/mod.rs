@@ -59,7 +59,10 @@
 
 mod aerial_perspective;
 mod irradiance;
+mod shared_field;
 mod sun_disc;
+
+pub(crate) use shared_field::SharedField;
 
 pub use crate::transport::multiple_scattering::MultipleScatteringSettings;
 pub use aerial_perspective::AerialPerspective;
