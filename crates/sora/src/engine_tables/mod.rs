@@ -35,9 +35,16 @@
 //! and the sun axis is an asinh mapping that puts nodes 0.4 degrees apart
 //! at sunset; along it the radiance is interpolated in its logarithm,
 //! which is what keeps the zenith's brightness smooth through twilight
-//! (the sky dims about tenfold per 3 degrees there). The cost is that the
-//! scattering angle is not an axis: the aureole close to the sun is
-//! resolved by the azimuth axis's crowding only (see the docs page).
+//! (the sky dims about tenfold per 3 degrees there). The scattering angle
+//! is not an axis, so the aureole near a high sun (whose sun layers are up
+//! to 10 degrees apart) would be blended between two places; instead each
+//! sun layer is read at the view turned with the sun to the layer's
+//! elevation, which keeps the view's angle to the sun, near the sun and
+//! away from the horizon (`lookup.rs`, the docs page).
+//!
+//! The multiple-scattering field of every layer is solved once, for every
+//! sun zenith angle, and aimed at each layer's eye and sun
+//! (`sky::shared_field`); the per-layer solve is kept as the tests' oracle.
 //!
 //! Aerial perspective is derived from the same sky table, as Bruneton does:
 //! the light scattered into the segment from the eye x to a point p is

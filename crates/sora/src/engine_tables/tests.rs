@@ -339,3 +339,57 @@ fn the_shared_field_bake_is_the_per_layer_bake() {
     assert!(median < 2e-3, "{median}");
     assert_eq!(fast.transmittance, slow.transmittance);
 }
+
+/// The sky table's read between sun nodes turns the view with the sun: a
+/// view turned by the step from the sun's elevation to a node's keeps its
+/// angle to the sun moved to the node (so the aureole stays put), stays
+/// on its side of the horizon, and is not moved at all by a zero step.
+#[test]
+fn the_turned_view_keeps_its_angle_to_the_sun() {
+    let horizon = std::f64::consts::FRAC_PI_2;
+    let angle_to_sun = |view: LocalView, e_deg: f64| {
+        let e = e_deg.to_radians();
+        let (z, phi) = (view.zenith_rad, view.relative_azimuth_rad);
+        (z.cos() * e.sin() + z.sin() * phi.cos() * e.cos()).acos()
+    };
+    for (zenith_deg, phi_deg) in [(30.0, 0.0), (25.0, 12.0), (40.0, 170.0), (5.0, 90.0)] {
+        let view = LocalView {
+            zenith_rad: f64::to_radians(zenith_deg),
+            relative_azimuth_rad: f64::to_radians(phi_deg),
+        };
+        for (e, node) in [(60.0, 52.0), (60.0, 68.0), (20.0, 17.4)] {
+            let turned = super::lookup::turned_view(view, f64::to_radians(node - e), horizon);
+            let (before, after) = (angle_to_sun(view, e), angle_to_sun(turned, node));
+            assert!((before - after).abs() < 1e-12, "{before} {after}");
+        }
+        let same = super::lookup::turned_view(view, 0.0, horizon);
+        assert_eq!(
+            (same.zenith_rad, same.relative_azimuth_rad),
+            (view.zenith_rad, view.relative_azimuth_rad)
+        );
+    }
+    // A view just above the horizon turned down stays in the sky half.
+    let low = LocalView {
+        zenith_rad: horizon - 1e-3,
+        relative_azimuth_rad: 0.0,
+    };
+    assert!(super::lookup::turned_view(low, f64::to_radians(-5.0), horizon).zenith_rad < horizon);
+    // Near the sun the whole step; by the horizon, far from the sun and
+    // for a sun near the zenith none.
+    let near = LocalView {
+        zenith_rad: f64::to_radians(35.0),
+        relative_azimuth_rad: 0.0,
+    };
+    assert_eq!(super::lookup::turn_share(near, 60.0, horizon), 1.0);
+    assert_eq!(super::lookup::turn_share(low, 2.0, horizon), 0.0);
+    let far = LocalView {
+        zenith_rad: f64::to_radians(30.0),
+        relative_azimuth_rad: std::f64::consts::PI,
+    };
+    assert_eq!(super::lookup::turn_share(far, 60.0, horizon), 0.0);
+    let zenith = LocalView {
+        zenith_rad: 0.0,
+        relative_azimuth_rad: 0.0,
+    };
+    assert_eq!(super::lookup::turn_share(zenith, 88.0, horizon), 0.0);
+}
