@@ -85,22 +85,71 @@ vec3 soraMixLog(vec3 a, vec3 b, float f) {
   return exp(mix(log(max(a, vec3(SORA_FLOOR))), log(max(b, vec3(SORA_FLOOR))), f));
 }
 
+// Elevation (degrees) of sun node s: the inverse of soraSunCoordinate.
+float soraSunElevationOfNode(int s) {
+  float t0 = soraAsinh(-12.0 / uSunAxisWidthDeg);
+  float t1 = soraAsinh(90.0 / uSunAxisWidthDeg);
+  float t = t0 + (t1 - t0) * float(s) / float(uSkyNodes.x - 1);
+  return clamp(uSunAxisWidthDeg * 0.5 * (exp(t) - exp(-t)), -12.0, 90.0);
+}
+
+// The view (zenith, phi) turned by delta (rad) about the horizontal axis
+// across the sun's azimuth, as the sun is turned from its elevation to a
+// sun node's: the scattering angle is kept. The zenith stays on its side
+// of the eye's horizon zh (the ground is never read for the sky).
+vec2 soraTurnedView(float zenith, float phi, float delta, float zh) {
+  // Unturned views keep their coordinates exactly (the horizon's band is
+  // steep in the zenith axis).
+  if (delta == 0.0) return vec2(zenith, phi);
+  float sz = sin(zenith);
+  vec3 v = vec3(sz * cos(phi), sz * sin(phi), cos(zenith));
+  float c = cos(delta), s = sin(delta);
+  float x = v.x * c - v.z * s;
+  float z = clamp(v.x * s + v.z * c, -1.0, 1.0);
+  float turned = acos(z);
+  turned = zenith < zh ? min(turned, zh - 2e-6) : max(turned, zh);
+  return vec2(turned, atan(abs(v.y), x));
+}
+
+// Share of the sun's step that the view is turned by (lookup.rs's
+// turn_share): 1 within 10 degrees of the sun (the aureole keeps its angle
+// to the sun between sun nodes), 0 beyond 40; 0 within 5 degrees of the
+// horizon (its band keeps its zenith angle), 1 from 20 up; 0 for suns
+// above 85 degrees (the zenith axis is coarser than the aureole there),
+// 1 below 70 (smoothstep ramps).
+float soraTurnShare(float zenith, float phi, float eDeg, float zh) {
+  float e = radians(eDeg);
+  float cosTheta = cos(zenith) * sin(e) + sin(zenith) * cos(phi) * cos(e);
+  return smoothstep(cos(radians(40.0)), cos(radians(10.0)), cosTheta)
+    * (1.0 - smoothstep(zh - radians(20.0), zh - radians(5.0), zenith))
+    * (1.0 - smoothstep(70.0, 85.0, eDeg));
+}
+
 // Sky radiance (XYZ, W m^-2 sr^-1 nm^-1) seen at altitude h (m) toward
 // zenith angle `zenith` (rad) and azimuth `phi` (rad, 0..pi) from the
-// sun's, with the sun at elevation eDeg (degrees). No sun disc.
+// sun's, with the sun at elevation eDeg (degrees). No sun disc. Each of
+// the two sun layers is read at the view turned with the sun to its node
+// (soraTurnedView, by soraTurnShare of the step).
 vec3 soraSkyXyz(float h, float zenith, float phi, float eDeg) {
   h = clamp(h, 0.0, soraThickness());
-  float y; int lowest; int highest;
-  soraZenithCoordinate(zenith, uPlanetSun.x + h, y, lowest, highest);
-  int i; float fy; soraCell(y, lowest, highest, i, fy);
-  int K = uSkyNodes.w;
-  int k; float fx; soraCell(sqrt(clamp(phi / SORA_PI, 0.0, 1.0)) * float(K - 1), 0, K - 2, k, fx);
+  float r = uPlanetSun.x + h;
+  float zh = SORA_PI - asin(min(uPlanetSun.x / r, 1.0));
   int A = uSkyNodes.y;
   int a; float fa; soraCell(soraAltitudeCoordinate(h, A), 0, A - 2, a, fa);
+  eDeg = clamp(eDeg, -12.0, 90.0);
   int s; float fs; soraCell(soraSunCoordinate(eDeg), 0, uSkyNodes.x - 2, s, fs);
-  vec3 low = mix(soraLayer(s * A + a, i, fy, k, fx), soraLayer(s * A + a + 1, i, fy, k, fx), fa);
-  vec3 high = mix(soraLayer((s + 1) * A + a, i, fy, k, fx), soraLayer((s + 1) * A + a + 1, i, fy, k, fx), fa);
-  return soraMixLog(low, high, fs);
+  float share = soraTurnShare(zenith, phi, eDeg, zh);
+  int K = uSkyNodes.w;
+  vec3 layers[2];
+  for (int j = 0; j < 2; j++) {
+    vec2 view = soraTurnedView(zenith, phi, radians(soraSunElevationOfNode(s + j) - eDeg) * share, zh);
+    float y; int lowest; int highest;
+    soraZenithCoordinate(view.x, r, y, lowest, highest);
+    int i; float fy; soraCell(y, lowest, highest, i, fy);
+    int k; float fx; soraCell(sqrt(clamp(view.y / SORA_PI, 0.0, 1.0)) * float(K - 1), 0, K - 2, k, fx);
+    layers[j] = mix(soraLayer((s + j) * A + a, i, fy, k, fx), soraLayer((s + j) * A + a + 1, i, fy, k, fx), fa);
+  }
+  return soraMixLog(layers[0], layers[1], fs);
 }
 
 float soraHorizonCosine(float r) {

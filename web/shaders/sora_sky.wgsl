@@ -80,19 +80,62 @@ fn sora_mix_log(a: vec3<f32>, b: vec3<f32>, f: f32) -> vec3<f32> {
   return exp(mix(log(max(a, vec3<f32>(SORA_FLOOR))), log(max(b, vec3<f32>(SORA_FLOOR))), f));
 }
 
+// Elevation (degrees) of sun node s: the inverse of sora_sun_coordinate.
+fn sora_sun_elevation_of_node(s: i32) -> f32 {
+  let w = sora.sun_irradiance_xyz_width.w;
+  let t0 = sora_asinh(-12.0 / w);
+  let t1 = sora_asinh(90.0 / w);
+  let t = t0 + (t1 - t0) * f32(s) / f32(sora.sky_nodes.x - 1);
+  return clamp(w * 0.5 * (exp(t) - exp(-t)), -12.0, 90.0);
+}
+
+// The view (zenith, phi) turned by delta (rad) about the horizontal axis
+// across the sun's azimuth, as the sun is turned to a sun node's
+// elevation (keeping the scattering angle), on its side of the horizon zh.
+fn sora_turned_view(zenith: f32, phi: f32, delta: f32, zh: f32) -> vec2<f32> {
+  if (delta == 0.0) { return vec2<f32>(zenith, phi); }
+  let sz = sin(zenith);
+  let v = vec3<f32>(sz * cos(phi), sz * sin(phi), cos(zenith));
+  let c = cos(delta);
+  let s = sin(delta);
+  let x = v.x * c - v.z * s;
+  var turned = acos(clamp(v.x * s + v.z * c, -1.0, 1.0));
+  if (zenith < zh) { turned = min(turned, zh - 2e-6); } else { turned = max(turned, zh); }
+  return vec2<f32>(turned, atan2(abs(v.y), x));
+}
+
+// Share of the sun's step the view is turned by: 1 within 10 degrees of
+// the sun, 0 beyond 40; 0 within 5 degrees of the horizon, 1 from 20 up;
+// 0 for suns above 85 degrees, 1 below 70 (smoothstep ramps).
+fn sora_turn_share(zenith: f32, phi: f32, e_deg: f32, zh: f32) -> f32 {
+  let e = radians(e_deg);
+  let cos_theta = cos(zenith) * sin(e) + sin(zenith) * cos(phi) * cos(e);
+  return smoothstep(cos(radians(40.0)), cos(radians(10.0)), cos_theta)
+    * (1.0 - smoothstep(zh - radians(20.0), zh - radians(5.0), zenith))
+    * (1.0 - smoothstep(70.0, 85.0, e_deg));
+}
+
 // Sky radiance (XYZ, W m^-2 sr^-1 nm^-1) at altitude h (m) toward zenith
-// angle `zenith` and azimuth `phi` from the sun's (rad), sun at e_deg.
-fn sora_sky_xyz(h_in: f32, zenith: f32, phi: f32, e_deg: f32) -> vec3<f32> {
+// angle `zenith` and azimuth `phi` from the sun's (rad), sun at e_deg;
+// each sun layer read at the view turned with the sun to its node.
+fn sora_sky_xyz(h_in: f32, zenith: f32, phi: f32, e_in: f32) -> vec3<f32> {
   let h = clamp(h_in, 0.0, sora_thickness());
-  let z = sora_zenith_cell(zenith, sora.planet_sun.x + h);
+  let r = sora.planet_sun.x + h;
+  let zh = SORA_PI - asin(min(sora.planet_sun.x / r, 1.0));
+  let e_deg = clamp(e_in, -12.0, 90.0);
   let kn = sora.sky_nodes.w;
-  let k = sora_cell(sqrt(clamp(phi / SORA_PI, 0.0, 1.0)) * f32(kn - 1), 0, kn - 2);
   let an = sora.sky_nodes.y;
   let a = sora_cell(sora_altitude_coordinate(h, an), 0, an - 2);
   let s = sora_cell(sora_sun_coordinate(e_deg), 0, sora.sky_nodes.x - 2);
-  let low = mix(sora_layer(s.i * an + a.i, z, k), sora_layer(s.i * an + a.i + 1, z, k), a.f);
-  let high = mix(sora_layer((s.i + 1) * an + a.i, z, k), sora_layer((s.i + 1) * an + a.i + 1, z, k), a.f);
-  return sora_mix_log(low, high, s.f);
+  let share = sora_turn_share(zenith, phi, e_deg, zh);
+  var layers: array<vec3<f32>, 2>;
+  for (var j = 0; j < 2; j++) {
+    let view = sora_turned_view(zenith, phi, radians(sora_sun_elevation_of_node(s.i + j) - e_deg) * share, zh);
+    let z = sora_zenith_cell(view.x, r);
+    let k = sora_cell(sqrt(clamp(view.y / SORA_PI, 0.0, 1.0)) * f32(kn - 1), 0, kn - 2);
+    layers[j] = mix(sora_layer((s.i + j) * an + a.i, z, k), sora_layer((s.i + j) * an + a.i + 1, z, k), a.f);
+  }
+  return sora_mix_log(layers[0], layers[1], s.f);
 }
 
 fn sora_horizon_cosine(r: f32) -> f32 {

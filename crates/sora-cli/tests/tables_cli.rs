@@ -98,4 +98,23 @@ fn bad_input_is_one_line_and_writes_nothing() {
     ]));
     assert!(message.contains("is not sora's tables"), "{message}");
     assert_eq!(std::fs::read_dir(&foreign).unwrap().count(), 1);
+    // Another tool's manifest is not sora's either (checked before the
+    // bake: the refusal is immediate), and is left as it was.
+    let other = directory.path().join("other-tables");
+    std::fs::create_dir(&other).unwrap();
+    let manifest = r#"{"format": "bruneton-textures", "version": 4}"#;
+    std::fs::write(other.join("manifest.json"), manifest).unwrap();
+    let message = one_line_error(&sora(&[
+        "tables",
+        "--preset",
+        "earth-clear",
+        "-o",
+        &other.display().to_string(),
+    ]));
+    assert!(message.contains("is not sora's tables"), "{message}");
+    assert_eq!(
+        std::fs::read_to_string(other.join("manifest.json")).unwrap(),
+        manifest
+    );
+    assert_eq!(std::fs::read_dir(&other).unwrap().count(), 1);
 }

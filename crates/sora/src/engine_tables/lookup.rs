@@ -7,7 +7,19 @@
 //!   every altitude layer; bilinear in (zenith, azimuth) within a layer,
 //!   linear between the two altitude layers, and geometric (linear in the
 //!   logarithm, each value floored at [`FLOOR`]) between the two sun
-//!   layers.
+//!   layers. Each sun layer is read at the view turned with the sun
+//!   (about the horizontal axis across the sun's azimuth) from the sun's
+//!   elevation e to the layer's e_j, by the share w of the step
+//!   ([`turn_share`]): at w = 1 the view keeps its angle to the sun, so
+//!   the aureole, which the sun axis's steps (8 degrees apart at e = 60)
+//!   would otherwise interpolate between two places, stays where it is;
+//!   at w = 0 the view keeps its zenith angle, which the horizon's band
+//!   needs. w = 1 within 10 degrees of the sun and 0 beyond 40, 0 within
+//!   5 degrees of the horizon (1 from 20 up), and 0 for suns above 85
+//!   degrees (1 below 70), where the aureole reaches the zenith and the
+//!   zenith axis's nodes (3 degrees apart there) are coarser than it
+//!   (smoothstep ramps between). At a sun node the read is the layer's
+//!   own.
 //! - Transmittance: linear in altitude between two rows, each read
 //!   linearly at the mu coordinate of its own altitude's horizon; zero
 //!   for a view below the eye's horizon.
@@ -81,6 +93,49 @@ fn mix_log(a: [f64; 3], b: [f64; 3], f: f64) -> [f64; 3] {
     })
 }
 
+/// The share of the step from the sun's elevation `e_deg` to a sun node's
+/// that `view` is turned by before a sun layer is read (see the module
+/// docs), for an eye whose horizon is at zenith angle `horizon` (rad).
+pub(crate) fn turn_share(view: LocalView, e_deg: f64, horizon: f64) -> f64 {
+    let e = e_deg.to_radians();
+    let (z, phi) = (view.zenith_rad, view.relative_azimuth_rad);
+    let cos_theta = z.cos() * e.sin() + z.sin() * phi.cos() * e.cos();
+    let degrees = |d: f64| d.to_radians();
+    smoothstep(degrees(40.0).cos(), degrees(10.0).cos(), cos_theta)
+        * (1.0 - smoothstep(horizon - degrees(20.0), horizon - degrees(5.0), z))
+        * (1.0 - smoothstep(70.0, 85.0, e_deg))
+}
+
+/// `view` turned by `delta` (rad) about the horizontal axis across the
+/// sun's azimuth, as the sun is turned from its elevation to a node's
+/// (keeping its angle to the sun), on the same side of the eye's horizon
+/// (at zenith angle `horizon`) as before; unturned (`delta` 0) exactly.
+pub(crate) fn turned_view(view: LocalView, delta: f64, horizon: f64) -> LocalView {
+    if delta == 0.0 {
+        return view;
+    }
+    let (z, phi) = (view.zenith_rad, view.relative_azimuth_rad);
+    let v = [z.sin() * phi.cos(), z.sin() * phi.sin(), z.cos()];
+    let (s, c) = delta.sin_cos();
+    let x = v[0] * c - v[2] * s;
+    let turned = (v[0] * s + v[2] * c).clamp(-1.0, 1.0).acos();
+    let turned = if z < horizon {
+        turned.min(horizon - 2e-6)
+    } else {
+        turned.max(horizon)
+    };
+    LocalView {
+        zenith_rad: turned,
+        relative_azimuth_rad: v[1].abs().atan2(x),
+    }
+}
+
+/// GLSL's smoothstep: 0 at `a`, 1 at `b`, 3 t^2 - 2 t^3 between.
+fn smoothstep(a: f64, b: f64, x: f64) -> f64 {
+    let t = ((x - a) / (b - a)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
 impl EngineTables {
     /// The sky table's value in `layer` toward zenith angle `zenith` (the
     /// horizon at `horizon`, rad) and relative azimuth `phi`: bilinear.
@@ -145,21 +200,25 @@ impl EngineTables {
     pub fn sky_xyz(&self, altitude_m: f64, view: LocalView, sun_elevation_deg: f64) -> [f64; 3] {
         let h = altitude_m.clamp(0.0, self.thickness_m());
         let horizon = axes::horizon_zenith(self.ground_radius_m + h, self.ground_radius_m);
-        let coordinate = axes::zenith_coordinate(
-            view.zenith_rad,
-            self.settings.zenith_nodes_per_half,
-            horizon,
-        );
+        let e_deg =
+            sun_elevation_deg.clamp(axes::SUN_ELEVATION_MIN_DEG, axes::SUN_ELEVATION_MAX_DEG);
         let a_count = self.settings.altitude_nodes;
-        let ((a, fa), (s, fs)) = self.altitude_and_sun_cells(h, sun_elevation_deg);
-        let at = |s: usize, a: usize| {
-            self.layer_value_at(s * a_count + a, coordinate, view.relative_azimuth_rad)
+        let ((a, fa), (s, fs)) = self.altitude_and_sun_cells(h, e_deg);
+        let share = turn_share(view, e_deg, horizon);
+        let layer = |s: usize| {
+            let node_deg = axes::sun_elevation_of_node(s, self.settings.sun_nodes);
+            let turned = turned_view(view, (node_deg - e_deg).to_radians() * share, horizon);
+            let coordinate = axes::zenith_coordinate(
+                turned.zenith_rad,
+                self.settings.zenith_nodes_per_half,
+                horizon,
+            );
+            let at = |a: usize| {
+                self.layer_value_at(s * a_count + a, coordinate, turned.relative_azimuth_rad)
+            };
+            mix(at(a), at(a + 1), fa)
         };
-        mix_log(
-            mix(at(s, a), at(s, a + 1), fa),
-            mix(at(s + 1, a), at(s + 1, a + 1), fa),
-            fs,
-        )
+        mix_log(layer(s), layer(s + 1), fs)
     }
 
     /// Transmittance (XYZ of the transmitted sunlight over XYZ of the

@@ -35,9 +35,16 @@
 //! and the sun axis is an asinh mapping that puts nodes 0.4 degrees apart
 //! at sunset; along it the radiance is interpolated in its logarithm,
 //! which is what keeps the zenith's brightness smooth through twilight
-//! (the sky dims about tenfold per 3 degrees there). The cost is that the
-//! scattering angle is not an axis: the aureole close to the sun is
-//! resolved by the azimuth axis's crowding only (see the docs page).
+//! (the sky dims about tenfold per 3 degrees there). The scattering angle
+//! is not an axis, so the aureole near a high sun (whose sun layers are up
+//! to 10 degrees apart) would be blended between two places; instead each
+//! sun layer is read at the view turned with the sun to the layer's
+//! elevation, which keeps the view's angle to the sun, near the sun and
+//! away from the horizon (`lookup.rs`, the docs page).
+//!
+//! The multiple-scattering field of every layer is solved once, for every
+//! sun zenith angle, and aimed at each layer's eye and sun
+//! (`sky::shared_field`); the per-layer solve is kept as the tests' oracle.
 //!
 //! Aerial perspective is derived from the same sky table, as Bruneton does:
 //! the light scattered into the segment from the eye x to a point p is
@@ -59,7 +66,7 @@ pub use files::{MANIFEST_FILE, TABLE_FORMAT, check_output_directory};
 use crate::colour::{Observer, SpectrumToXyz};
 use crate::error::{Error, Result};
 use crate::geometry::{Vector3, ViewDirection};
-use crate::sky::{Method, Sky};
+use crate::sky::{Method, SharedField, Sky};
 use crate::spectrum::SampledSpectrum;
 
 /// Resolution of the engine tables.
@@ -175,6 +182,18 @@ impl EngineTables {
         settings: &EngineTableSettings,
         progress: &(dyn Fn(f64) + Sync),
     ) -> Result<EngineTables> {
+        EngineTables::bake_with(sky, settings, Field::Shared, progress)
+    }
+
+    /// [`EngineTables::bake`] with the multiple-scattering field solved
+    /// once for every layer or (`Field::PerLayer`, the slow path the tests
+    /// hold the fast one to) anew for each layer's own sun and eye.
+    fn bake_with(
+        sky: &Sky,
+        settings: &EngineTableSettings,
+        field: Field,
+        progress: &(dyn Fn(f64) + Sync),
+    ) -> Result<EngineTables> {
         settings.validate()?;
         if sky.method() != Method::Fast {
             return Err(Error::Unsupported(
@@ -201,6 +220,11 @@ impl EngineTables {
         let layer_texels = 2 * half * azimuth_nodes;
         let mut sky_values = vec![[0.0f32; 3]; settings.sky_texels()];
         let layers = settings.sky_layers();
+        // The field of every layer, solved once (see `sky::shared_field`).
+        let shared: Option<SharedField> = match field {
+            Field::Shared => sky.solve_shared_field()?,
+            Field::PerLayer => None,
+        };
         for a in 0..altitude_nodes {
             let altitude = axes::altitude_of_node(a, altitude_nodes, thickness);
             // One scene per altitude, moved to each sun: the sun-column
@@ -220,12 +244,8 @@ impl EngineTables {
             }
             for s in 0..sun_nodes {
                 let elevation = axes::sun_elevation_of_node(s, sun_nodes);
-                let layer_sky = Sky::from_scene(
-                    base.with_sun(elevation, 180.0)?,
-                    sky.scattering(),
-                    Method::Fast,
-                    sky.table_size(),
-                )?;
+                let layer_sky =
+                    sky.with_shared_field(base.with_sun(elevation, 180.0)?, shared.as_ref())?;
                 let radiances = layer_sky.radiances_from_image_tables(&views, &|_, _| {})?;
                 let layer = s * altitude_nodes + a;
                 let out = &mut sky_values[layer * layer_texels..][..layer_texels];
@@ -333,6 +353,16 @@ impl EngineTables {
         }
         out
     }
+}
+
+/// Where a bake's layers take their multiple-scattering field from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Field {
+    /// One field for every sun and eye ([`Sky::solve_shared_field`]).
+    Shared,
+    /// Each layer's own, solved for its sun and eye (the slow path).
+    #[cfg_attr(not(test), allow(dead_code))]
+    PerLayer,
 }
 
 /// The transmittance table: for each altitude node and view cosine node

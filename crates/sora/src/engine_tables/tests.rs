@@ -8,7 +8,7 @@ use super::lookup::LocalView;
 use super::*;
 use crate::atmosphere::Atmosphere;
 use crate::colour::{Observer, SpectrumToXyz};
-use crate::sky::{FastTableSize, Plane, Scattering};
+use crate::sky::{FastTableSize, MultipleScatteringSettings, Plane, Scattering};
 use crate::spectrum::WavelengthGrid;
 
 /// A small, cheap sky (single scattering, 7 wavelengths, small image tables).
@@ -253,4 +253,143 @@ fn the_directory_is_written_whole_and_others_are_refused() {
             .contains("does not exist")
     );
     assert!(!root.path().join("missing").exists());
+}
+
+/// The fast bake (one multiple-scattering field for every layer) against
+/// the slow one (each layer's sky solving its own field for its sun and
+/// eye): the two differ only by the interpolation of the field between
+/// sun nodes placed differently. A layer's own nodes are centred on its
+/// sun and widen away from it, the shared field's keep the settings' step
+/// everywhere, so where the two differ most (measured: 1.3 %, sun -12
+/// degrees at the top of the atmosphere) the shared field is the closer
+/// to a bake with three times finer sun steps (0.2 % against the per-layer
+/// bake's 1.2 %). Held to: within 1 % of the per-layer bake, or closer than
+/// it to the finer bake, wherever the luminance is above 1e-3 of its
+/// layer's maximum; 0.2 % in the median (measured 0.06 %).
+#[test]
+fn the_shared_field_bake_is_the_per_layer_bake() {
+    let atmosphere = Atmosphere::preset("earth-hazy").unwrap();
+    let settings = MultipleScatteringSettings {
+        streams_per_hemisphere: 4,
+        layers: 16,
+        view_ray_panels: 6,
+        table_view_zenith_nodes: 13,
+        table_azimuth_nodes: 7,
+        ..MultipleScatteringSettings::default()
+    };
+    let sky_of = |settings| {
+        Sky::builder(&atmosphere)
+            .wavelengths(WavelengthGrid::new(420.0, 680.0, 130.0).unwrap())
+            .scattering(Scattering::Multiple(settings))
+            .table_size(FastTableSize {
+                sun_column_nodes: (24, 48),
+                sky_view_nodes: (12, 8),
+            })
+            .build()
+            .unwrap()
+    };
+    let sky = sky_of(settings);
+    let table_settings = EngineTableSettings {
+        sun_nodes: 6,
+        altitude_nodes: 2,
+        zenith_nodes_per_half: 6,
+        azimuth_nodes: 5,
+        transmittance_nodes: (4, 8),
+    };
+    let fast = EngineTables::bake(&sky, &table_settings, &|_| {}).unwrap();
+    let slow = EngineTables::bake_with(&sky, &table_settings, Field::PerLayer, &|_| {}).unwrap();
+    let finer = EngineTables::bake_with(
+        &sky_of(MultipleScatteringSettings {
+            sun_zenith_step_deg: 1.0,
+            sunset_sun_zenith_step_deg: 0.25,
+            ..settings
+        }),
+        &table_settings,
+        Field::PerLayer,
+        &|_| {},
+    )
+    .unwrap();
+    let layer_texels = 2 * 6 * 5;
+    let mut errors = Vec::new();
+    for (layer, ((f, s), r)) in fast
+        .sky
+        .chunks_exact(layer_texels)
+        .zip(slow.sky.chunks_exact(layer_texels))
+        .zip(finer.sky.chunks_exact(layer_texels))
+        .enumerate()
+    {
+        let brightest = s.iter().map(|c| c[1]).fold(0.0f32, f32::max);
+        for ((f, s), r) in f.iter().zip(s).zip(r) {
+            if s[1] > 1e-3 * brightest {
+                let error = ((f[1] - s[1]) / s[1]).abs();
+                errors.push(error);
+                assert!(
+                    error < 0.01 || (f[1] - r[1]).abs() <= (s[1] - r[1]).abs(),
+                    "layer {layer}: shared {f:?}, per layer {s:?}, finer {r:?}"
+                );
+            }
+        }
+    }
+    errors.sort_by(f32::total_cmp);
+    let median = errors[errors.len() / 2];
+    eprintln!(
+        "shared field vs per layer: median {median:.2e}, worst {:.2e}",
+        errors[errors.len() - 1]
+    );
+    assert!(median < 2e-3, "{median}");
+    assert_eq!(fast.transmittance, slow.transmittance);
+}
+
+/// The sky table's read between sun nodes turns the view with the sun: a
+/// view turned by the step from the sun's elevation to a node's keeps its
+/// angle to the sun moved to the node (so the aureole stays put), stays
+/// on its side of the horizon, and is not moved at all by a zero step.
+#[test]
+fn the_turned_view_keeps_its_angle_to_the_sun() {
+    let horizon = std::f64::consts::FRAC_PI_2;
+    let angle_to_sun = |view: LocalView, e_deg: f64| {
+        let e = e_deg.to_radians();
+        let (z, phi) = (view.zenith_rad, view.relative_azimuth_rad);
+        (z.cos() * e.sin() + z.sin() * phi.cos() * e.cos()).acos()
+    };
+    for (zenith_deg, phi_deg) in [(30.0, 0.0), (25.0, 12.0), (40.0, 170.0), (5.0, 90.0)] {
+        let view = LocalView {
+            zenith_rad: f64::to_radians(zenith_deg),
+            relative_azimuth_rad: f64::to_radians(phi_deg),
+        };
+        for (e, node) in [(60.0, 52.0), (60.0, 68.0), (20.0, 17.4)] {
+            let turned = super::lookup::turned_view(view, f64::to_radians(node - e), horizon);
+            let (before, after) = (angle_to_sun(view, e), angle_to_sun(turned, node));
+            assert!((before - after).abs() < 1e-12, "{before} {after}");
+        }
+        let same = super::lookup::turned_view(view, 0.0, horizon);
+        assert_eq!(
+            (same.zenith_rad, same.relative_azimuth_rad),
+            (view.zenith_rad, view.relative_azimuth_rad)
+        );
+    }
+    // A view just above the horizon turned down stays in the sky half.
+    let low = LocalView {
+        zenith_rad: horizon - 1e-3,
+        relative_azimuth_rad: 0.0,
+    };
+    assert!(super::lookup::turned_view(low, f64::to_radians(-5.0), horizon).zenith_rad < horizon);
+    // Near the sun the whole step; by the horizon, far from the sun and
+    // for a sun near the zenith none.
+    let near = LocalView {
+        zenith_rad: f64::to_radians(35.0),
+        relative_azimuth_rad: 0.0,
+    };
+    assert_eq!(super::lookup::turn_share(near, 60.0, horizon), 1.0);
+    assert_eq!(super::lookup::turn_share(low, 2.0, horizon), 0.0);
+    let far = LocalView {
+        zenith_rad: f64::to_radians(30.0),
+        relative_azimuth_rad: std::f64::consts::PI,
+    };
+    assert_eq!(super::lookup::turn_share(far, 60.0, horizon), 0.0);
+    let zenith = LocalView {
+        zenith_rad: 0.0,
+        relative_azimuth_rad: 0.0,
+    };
+    assert_eq!(super::lookup::turn_share(zenith, 88.0, horizon), 0.0);
 }

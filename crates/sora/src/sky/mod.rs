@@ -60,7 +60,10 @@
 mod aerial_perspective;
 mod irradiance;
 mod names;
+mod shared_field;
 mod sun_disc;
+
+pub(crate) use shared_field::SharedField;
 
 pub use crate::transport::multiple_scattering::MultipleScatteringSettings;
 pub use aerial_perspective::AerialPerspective;

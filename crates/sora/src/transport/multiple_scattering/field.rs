@@ -3,6 +3,7 @@
 //! view ray (see the module docs of [`super`]).
 
 use std::f64::consts::{FRAC_PI_2, PI};
+use std::sync::Arc;
 
 use super::MultipleScatteringSettings;
 use super::column_optics::{ColumnGeometry, ScaledOptics};
@@ -48,11 +49,13 @@ impl SunZenithAxis {
     /// lower atmosphere's sun sets and the field changes fastest; but never
     /// closer than a quarter of the distance from `centre`: far from the
     /// eye's own sun angle lie only the far ends of grazing view rays, high
-    /// in thin air.
+    /// in thin air. Without a centre (a field for every sun and eye, see
+    /// [`FieldRequest::every_sun`]) the nodes start at `lowest` and keep
+    /// the local step throughout.
     pub(super) fn new(
         lowest: f64,
         highest: f64,
-        centre: f64,
+        centre: Option<f64>,
         coarse: f64,
         fine: f64,
     ) -> SunZenithAxis {
@@ -60,13 +63,17 @@ impl SunZenithAxis {
             SUNSET_STEP_START_DEG.to_radians(),
             SUNSET_STEP_END_DEG.to_radians(),
         );
-        let centre = centre.clamp(lowest, highest);
+        let widening = centre.is_some();
+        let centre = centre.unwrap_or(lowest).clamp(lowest, highest);
         let step = |theta: f64| {
             let t = ((theta - start) / (end - start)).clamp(0.0, 1.0);
             let local = coarse + t * (fine - coarse);
-            local
-                .max(0.25 * (theta - centre).abs())
-                .min(coarse.max(fine))
+            let far = if widening {
+                0.25 * (theta - centre).abs()
+            } else {
+                0.0
+            };
+            local.max(far).min(coarse.max(fine))
         };
         let mut below = vec![centre];
         while *below.last().unwrap() > lowest {
@@ -89,15 +96,19 @@ impl SunZenithAxis {
     }
 
     /// The nodes for the sun zenith angles within `reach` (rad) of the
-    /// eye's, at `settings`' steps.
+    /// eye's, at `settings`' steps; `None`: every sun zenith angle, with no
+    /// node placed at the eye's.
     fn for_reach(
         sky: &SingleScatteringSky,
         settings: &MultipleScatteringSettings,
-        reach: f64,
+        reach: Option<f64>,
     ) -> SunZenithAxis {
         let (ground_radius_m, top_radius_m) = sky.radii_m();
         let sun_zenith = sky.sun_direction().z.clamp(-1.0, 1.0).acos();
-        let (lowest_rad, highest_rad) = ((sun_zenith - reach).max(0.0), sun_zenith + reach);
+        let (lowest_rad, highest_rad) = match reach {
+            Some(reach) => ((sun_zenith - reach).max(0.0), sun_zenith + reach),
+            None => (0.0, PI),
+        };
         // The sun sets for the top of a column at 90 degrees +
         // acos(R / R_top), and a straight path from a point of the column
         // reaches at most 2 acos(R / R_top) farther (to the top, grazing
@@ -113,7 +124,7 @@ impl SunZenithAxis {
         SunZenithAxis::new(
             lowest,
             highest,
-            sun_zenith,
+            reach.map(|_| sun_zenith),
             settings.sun_zenith_step_deg.to_radians(),
             settings.sunset_sun_zenith_step_deg.to_radians(),
         )
@@ -154,11 +165,14 @@ pub struct MultipleScatteringField {
     /// levels + k) * streams + b] and then the ground's two values, blocks
     /// [i * sun nodes + s] (read with [`MultipleScatteringField::solution`];
     /// kept as solved, not transposed: tens of megabytes at twilight).
-    pub(super) solutions: Vec<f64>,
+    pub(super) solutions: Arc<Vec<f64>>,
     pub(super) solution_len: usize,
     /// The source's Legendre moments for the exact synthesis, made on
     /// first use ([`MultipleScatteringField::source_moments`]).
-    pub(super) moments: std::sync::OnceLock<Vec<f64>>,
+    /// Shared by the fields [`MultipleScatteringField::aimed`] makes.
+    pub(super) moments: Arc<std::sync::OnceLock<Vec<f64>>>,
+    /// Solved for every sun zenith angle ([`FieldRequest::every_sun`]).
+    pub(super) every_sun: bool,
     /// With Stokes vectors, the columns of the polarisation correction.
     pub(super) polarisation: Option<PolarisationCorrection>,
 }
@@ -208,6 +222,14 @@ pub(crate) struct FieldRequest {
     /// is 15 degrees high (a retrieval's forward model: 12 times faster
     /// there). None: every view.
     pub(crate) lowest_view_elevation_rad: Option<f64>,
+    /// For every sun and eye: the sun zenith angles from 0 to where the
+    /// field is dark, at the settings' steps, and the peak beam for every
+    /// sun elevation it covers, so that one solve serves the skies of
+    /// every sun and eye altitude ([`MultipleScatteringField::aimed`], the
+    /// engine tables' bake). The nodes are not placed around the eye's
+    /// sun, so a view differs from its own sky's by the interpolation
+    /// between nodes (the engine tables' tests measure it).
+    pub(crate) every_sun: bool,
 }
 
 impl FieldRequest {
@@ -223,14 +245,18 @@ impl FieldRequest {
             polarised: false,
             sweeps: successive_orders::MAX_ITERATIONS,
             lowest_view_elevation_rad: None,
+            every_sun: false,
         }
     }
 
     /// The angle at the planet's centre (rad) within which the sun zenith
     /// angles the field needs lie around the eye's.
-    fn reach(&self, sky: &SingleScatteringSky) -> f64 {
+    fn reach(&self, sky: &SingleScatteringSky) -> Option<f64> {
+        if self.every_sun {
+            return None;
+        }
         let (ground, top) = sky.radii_m();
-        match self.lowest_view_elevation_rad {
+        Some(match self.lowest_view_elevation_rad {
             // A point of the atmosphere that the eye sees is at most this
             // far (as an angle at the planet's centre) from the eye's zenith.
             None => {
@@ -246,7 +272,7 @@ impl FieldRequest {
                     (ground / r).min(1.0).acos() + (ground / top).acos()
                 }
             }
-        }
+        })
     }
 }
 
@@ -360,11 +386,25 @@ impl MultipleScatteringField {
                 ground_direct,
             },
             harmonics,
-            solutions: columns.solved,
+            solutions: Arc::new(columns.solved),
             solution_len: columns.solution_len,
-            moments: std::sync::OnceLock::new(),
+            moments: Arc::default(),
+            every_sun: request.every_sun,
             polarisation,
         })
+    }
+
+    /// This field (solved with [`FieldRequest::every_sun`]) for an eye at
+    /// `observer_radius_m` from the planet's centre under the sun toward
+    /// `sun` (unit, east-north-up): the columns, their moments and the
+    /// peak beam are shared, not copied; only the view march's eye and sun
+    /// change.
+    pub(crate) fn aimed(&self, observer_radius_m: f64, sun: Vector3) -> MultipleScatteringField {
+        debug_assert!(self.every_sun, "a field solved for its own eye's suns only");
+        let mut aimed = self.clone();
+        aimed.optics.observer = Vector3::new(0.0, 0.0, observer_radius_m);
+        aimed.optics.sun = sun;
+        aimed
     }
 
     /// The field L_m(z_k, mu_b) of sun node `s` at wavelength `i`, W m^-2
@@ -452,6 +492,10 @@ impl MultipleScatteringField {
     /// read both), and one node more on each side for the interpolation.
     pub(super) fn reachable_sun_nodes(&self) -> Vec<(usize, usize)> {
         let optics = &self.optics;
+        let levels = self.optics.geometry.grid.levels();
+        if self.every_sun {
+            return vec![(0, optics.sun_axis.count() - 1); levels];
+        }
         let ground = optics.geometry.ground_radius_m;
         let eye = optics.observer.length().max(ground);
         let centre = optics
@@ -950,12 +994,16 @@ fn ground_tables(
 /// sun low enough for it and some species has a peak.
 fn compute_peak_beam(
     sky: &SingleScatteringSky,
-    (sun_column_nodes, reach_rad): ((usize, usize), f64),
+    (sun_column_nodes, reach_rad): ((usize, usize), Option<f64>),
     (geometry, scaled): (&ColumnGeometry, &ScaledOptics),
     forward_peak: &ForwardPeak,
 ) -> Option<PeakBeam> {
     let eye_sun_zenith = sky.sun_direction().z.clamp(-1.0, 1.0).acos();
-    let needed = PeakBeam::needed_elevations_deg(FRAC_PI_2 - eye_sun_zenith, reach_rad);
+    // No reach: the field serves every sun (engine tables).
+    let needed = match reach_rad {
+        None => Some(PeakBeam::every_elevation_deg()),
+        Some(reach) => PeakBeam::needed_elevations_deg(FRAC_PI_2 - eye_sun_zenith, reach),
+    };
     match needed {
         Some(elevations_deg) if forward_peak.any() => {
             let (altitude_nodes, mu_nodes) = sun_column_nodes;

@@ -362,6 +362,15 @@ impl PeakBeam {
         (lowest < highest).then_some((lowest, highest))
     }
 
+    /// Every sun elevation the table can cover, degrees (a field for every
+    /// sun, `FieldRequest::every_sun`).
+    pub(crate) fn every_elevation_deg() -> (f64, f64) {
+        (
+            PEAK_BEAM_LOWEST_ELEVATION_DEG,
+            PEAK_BEAM_HIGHEST_ELEVATION_DEG,
+        )
+    }
+
     /// B per wavelength into `out` at radius `r_m` with the sun's zenith
     /// cosine `mu_sun` there, and the share of it the scaled beam takes:
     /// 1 up to [`PEAK_BEAM_BLEND_START_DEG`], falling to 0 at the table's top, 0

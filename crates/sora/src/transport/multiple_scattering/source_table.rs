@@ -38,8 +38,10 @@ pub struct MultipleScatteringTable {
     view_zenith_nodes: usize,
     azimuth_nodes: usize,
     /// ln R (R in W m^-2 sr^-1 nm^-1), [(((k * suns + s) * azimuth_nodes + f)
-    /// * view_zenith_nodes + v) * wavelengths + i].
-    values: Vec<f32>,
+    /// * view_zenith_nodes + v) * wavelengths + i]
+    ///
+    /// Shared by the tables that `aimed` makes.
+    values: Arc<Vec<f32>>,
 }
 
 impl MultipleScatteringTable {
@@ -169,7 +171,18 @@ impl MultipleScatteringTable {
             field,
             view_zenith_nodes: views,
             azimuth_nodes: azimuths,
-            values,
+            values: Arc::new(values),
+        }
+    }
+
+    /// This table (of a field solved for every sun) for `field`, the same
+    /// field aimed at another eye and sun
+    /// ([`MultipleScatteringField::aimed`]): the values are shared.
+    pub(crate) fn aimed(&self, field: Arc<MultipleScatteringField>) -> MultipleScatteringTable {
+        debug_assert!(self.field.every_sun && Arc::ptr_eq(&self.field.solutions, &field.solutions));
+        MultipleScatteringTable {
+            field,
+            ..self.clone()
         }
     }
 

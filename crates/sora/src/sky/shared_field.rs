@@ -1,0 +1,70 @@
+//! One multiple-scattering field for the skies of every sun and eye
+//! altitude of an atmosphere (the engine tables' bake, which draws
+//! hundreds of them).
+//!
+//! A sky's field is solved at the sun zenith angles that its own view rays
+//! meet, around its eye's (`FieldRequest::reach`). The columns of the
+//! field do not depend on the eye or the sun, only on the sun zenith angle
+//! they are solved at: solved once at every angle from 0 to where the
+//! field is dark (`FieldRequest::every_sun`), with its source table, it is
+//! aimed at each sky's eye and sun by moving the view march's eye and sun
+//! only (`MultipleScatteringField::aimed`). The radiances differ from the
+//! sky's own field by the interpolation between sun nodes that are not
+//! placed at the sky's sun (measured in `engine_tables::tests`).
+
+use std::sync::Arc;
+
+use super::{Scattering, Sky};
+use crate::error::Result;
+use crate::transport::multiple_scattering::{
+    FieldRequest, MultipleScatteringField, MultipleScatteringTable,
+};
+use crate::transport::single_scattering::SingleScatteringSky;
+
+/// A field solved for every sun zenith angle, with its source table.
+#[derive(Debug, Clone)]
+pub(crate) struct SharedField {
+    field: Arc<MultipleScatteringField>,
+    table: MultipleScatteringTable,
+}
+
+impl Sky {
+    /// The field of this sky's atmosphere, physics and image tables' size
+    /// for every sun and eye (None for single scattering).
+    pub(crate) fn solve_shared_field(&self) -> Result<Option<SharedField>> {
+        let Scattering::Multiple(settings) = self.scattering else {
+            return Ok(None);
+        };
+        let request = FieldRequest {
+            every_sun: true,
+            ..FieldRequest::new(settings, self.table_size.sun_column_nodes)
+        };
+        let field = Arc::new(MultipleScatteringField::solve(&self.scene, &request)?);
+        let table = MultipleScatteringTable::compute(Arc::clone(&field));
+        Ok(Some(SharedField { field, table }))
+    }
+
+    /// A scalar sky of this sky's physics and image tables' size on
+    /// `scene` (the same atmosphere at another sun and eye) whose field is
+    /// `shared` (from this atmosphere's [`Sky::solve_shared_field`]) aimed
+    /// at its eye and sun, not solved anew.
+    pub(crate) fn with_shared_field(
+        &self,
+        scene: SingleScatteringSky,
+        shared: Option<&SharedField>,
+    ) -> Result<Sky> {
+        let sky = Sky::from_scene(scene, self.scattering, self.method, self.table_size())?;
+        if let Some(shared) = shared {
+            let field = Arc::new(
+                shared
+                    .field
+                    .aimed(sky.scene.observer_radius_m(), sky.scene.sun_direction()),
+            );
+            let table = shared.table.aimed(Arc::clone(&field));
+            // Fresh cells: neither can be set already.
+            let _ = sky.field.set(field);
+            let _ = sky.source_table.set(table);
+        }
+        Ok(sky)
+    }
+}
