@@ -1,5 +1,5 @@
-//! `sora spectrum` and `sora render` on grids beyond the visible (300-1100
-//! nm, issue 16): the sun-photometer grid runs, colour comes from its part
+//! `sora spectrum` and `sora render` on grids beyond the visible (300-2500
+//! nm; issue 16 opened 300-1100): the sun-photometer grid runs, colour comes from its part
 //! in 360-830 nm, a grid with no part there has no colour, and grids past
 //! the range are refused with the value and its unit.
 
@@ -102,15 +102,15 @@ fn an_infrared_grid_has_no_colour() {
 }
 
 #[test]
-fn grids_past_300_to_1100_nm_are_refused_with_value_and_unit() {
+fn grids_past_300_to_2500_nm_are_refused_with_value_and_unit() {
     for (grid, expected) in [
         (
             "290:1100:10",
-            "start_nm = 290 nm is out of range: allowed 300..=1100 nm",
+            "start_nm = 290 nm is out of range: allowed 300..=2500 nm",
         ),
         (
-            "300:1110:10",
-            "stop_nm = 1110 nm is out of range: allowed 300..=1100 nm",
+            "300:2510:10",
+            "stop_nm = 2510 nm is out of range: allowed 300..=2500 nm",
         ),
     ] {
         let out = sora(&[&["spectrum"][..], &VIEW, &["--wavelengths", grid]].concat());
