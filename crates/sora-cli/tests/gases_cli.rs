@@ -122,21 +122,11 @@ fn the_zenith_spectrum_in_the_a_band_is_the_k_sums() {
     )
     .unwrap();
     let zenith = |atmosphere: &str| -> f64 {
-        let csv = stdout(&sora(&[
-            "spectrum",
-            "--atmosphere",
+        let csv = stdout(&common::zenith_spectrum(
             atmosphere,
-            "--sun-elevation",
-            "60",
-            "--view-elevation",
-            "90",
-            "--view-azimuth",
-            "0",
-            "--wavelengths",
             "760",
-            "--scattering",
-            "single",
-        ]));
+            &["--scattering", "single"],
+        ));
         common::spectrum_rows(&csv)[0].1
     };
     let ratio =

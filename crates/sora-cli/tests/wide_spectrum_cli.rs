@@ -154,19 +154,7 @@ fn grids_past_300_to_2500_nm_are_refused_with_value_and_unit() {
 #[test]
 fn the_grid_reaches_2500_nm_with_the_water_bands_dark() {
     let zenith = |atmosphere: &str| {
-        let out = sora(&[
-            "spectrum",
-            "--atmosphere",
-            atmosphere,
-            "--sun-elevation",
-            "60",
-            "--view-elevation",
-            "90",
-            "--view-azimuth",
-            "0",
-            "--wavelengths",
-            "300:2500:100",
-        ]);
+        let out = common::zenith_spectrum(atmosphere, "300:2500:100", &[]);
         let stderr = String::from_utf8(out.stderr.clone()).unwrap();
         assert!(
             stderr.contains("colour from the 5 of 23 wavelengths in 360-830 nm"),
