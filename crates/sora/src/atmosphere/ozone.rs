@@ -33,7 +33,7 @@
 //! - 1070-1110 nm: 0. The Bogumil data end at 1066.5 nm; between 1000 and
 //!   1066 nm they average 1.8e-28 m^2, a 300 DU optical depth of 1.5e-5,
 //!   at the level of their noise. The zeros err by about that much.
-//! - 1110-2510 nm: 0, added in code ([`ZERO_BINS_END_NM`]): ozone has no
+//! - 1110-2510 nm: 0, added in code (`ZERO_BINS_END_NM`): ozone has no
 //!   band of note there (SPECTRL2's ozone coefficients, Bird & Riordan
 //!   1986, are 0 from 780 to 4000 nm), so the grid's whole range is
 //!   covered.
