@@ -157,7 +157,7 @@ fn out_of_range_values_exit_1_whichever_parser_sees_them() {
     for (extra, expected) in [
         (
             &["--sun-elevation", "30", "--wavelengths", "200:800:10"][..],
-            "--wavelengths: start_nm = 200 nm is out of range: allowed 300..=1100 nm",
+            "--wavelengths: start_nm = 200 nm is out of range: allowed 300..=2500 nm",
         ),
         (&["--sun-elevation", "95"][..], "sun elevation = 95 deg"),
     ] {

@@ -1,5 +1,5 @@
-//! `sora spectrum` and `sora render` on grids beyond the visible (300-1100
-//! nm, issue 16): the sun-photometer grid runs, colour comes from its part
+//! `sora spectrum` and `sora render` on grids beyond the visible (300-2500
+//! nm; issue 16 opened 300-1100): the sun-photometer grid runs, colour comes from its part
 //! in 360-830 nm, a grid with no part there has no colour, and grids past
 //! the range are refused with the value and its unit.
 
@@ -102,15 +102,15 @@ fn an_infrared_grid_has_no_colour() {
 }
 
 #[test]
-fn grids_past_300_to_1100_nm_are_refused_with_value_and_unit() {
+fn grids_past_300_to_2500_nm_are_refused_with_value_and_unit() {
     for (grid, expected) in [
         (
             "290:1100:10",
-            "start_nm = 290 nm is out of range: allowed 300..=1100 nm",
+            "start_nm = 290 nm is out of range: allowed 300..=2500 nm",
         ),
         (
-            "300:1110:10",
-            "stop_nm = 1110 nm is out of range: allowed 300..=1100 nm",
+            "300:2510:10",
+            "stop_nm = 2510 nm is out of range: allowed 300..=2500 nm",
         ),
     ] {
         let out = sora(&[&["spectrum"][..], &VIEW, &["--wavelengths", grid]].concat());
@@ -144,4 +144,38 @@ fn grids_past_300_to_1100_nm_are_refused_with_value_and_unit() {
         message.contains("321-800 nm") && message.contains("300-1100 nm"),
         "{message}"
     );
+}
+
+/// The whole range, 300-2500 nm: the zenith sky of `earth-clear-summer`
+/// (2.92 cm of water in `[gases]`) keeps under 1 % of the light of the same
+/// sky without the gases (`earth-clear`) in the 1400 and 1900 nm water
+/// bands and over half in the windows at 1600 and 2200 nm; colour still
+/// comes from the samples in 360-830 nm.
+#[test]
+fn the_grid_reaches_2500_nm_with_the_water_bands_dark() {
+    let zenith = |atmosphere: &str| {
+        let out = common::zenith_spectrum(atmosphere, "300:2500:100", &[]);
+        let stderr = String::from_utf8(out.stderr.clone()).unwrap();
+        assert!(
+            stderr.contains("colour from the 5 of 23 wavelengths in 360-830 nm"),
+            "{stderr}"
+        );
+        let rows = spectrum_rows(&stdout(&out));
+        assert_eq!(rows.len(), 23);
+        assert_eq!(rows[22].0, 2500.0);
+        assert!(rows.iter().all(|(_, l)| *l > 0.0), "{rows:?}");
+        rows
+    };
+    let wet = zenith("../../atmospheres/earth-clear-summer.toml");
+    let dry = zenith("../../atmospheres/earth-clear.toml");
+    let kept = |nm: f64| {
+        let i = ((nm - 300.0) / 100.0) as usize;
+        wet[i].1 / dry[i].1
+    };
+    for nm in [1400.0, 1900.0] {
+        assert!(kept(nm) < 0.01, "{nm} nm: {}", kept(nm));
+    }
+    for nm in [1600.0, 2200.0] {
+        assert!(kept(nm) > 0.5, "{nm} nm: {}", kept(nm));
+    }
 }

@@ -27,9 +27,9 @@ use crate::json::Members;
 /// name) and the broadband values on stderr; json prints both; table prints
 /// the broadband values for people.
 ///
-/// With banded gases (an atmosphere file's [gases]) every value is the sum
-/// of five solves, one per k-distribution term, weighted (five times the
-/// time).
+/// With banded gases (an atmosphere file's [gases]) every value is the
+/// library's sum of five solves, one per k-distribution term, weighted
+/// (five times the time).
 ///
 /// --method reference marches each of the 4,608 directions of the diffuse
 /// integral: at its 1000 x 250 steps that is about 80 s a wavelength, past
@@ -100,17 +100,9 @@ struct Quantity {
     irradiance: bool,
 }
 
-/// The output's quantities for the weighted `skies` (one per
-/// k-distribution term; one of weight 1 without banded gases): horizontal,
-/// then on `tilted`.
-fn quantities(skies: &[(f64, sora::Sky)], tilted: Option<Plane>) -> anyhow::Result<Vec<Quantity>> {
-    let on_plane = |plane: Plane| -> anyhow::Result<Irradiance> {
-        let parts = skies
-            .iter()
-            .map(|(weight, sky)| Ok((*weight, sky.irradiance(plane)?)))
-            .collect::<anyhow::Result<Vec<_>>>()?;
-        Ok(Irradiance::weighted_sum(&parts))
-    };
+/// The output's quantities of `sky`: horizontal, then on `tilted`.
+fn quantities(sky: &sora::Sky, tilted: Option<Plane>) -> anyhow::Result<Vec<Quantity>> {
+    let on_plane = |plane: Plane| -> anyhow::Result<Irradiance> { Ok(sky.irradiance(plane)?) };
     let horizontal = on_plane(Plane::HORIZONTAL)?;
     let tilted = tilted.map(on_plane).transpose()?;
     let quantity = |name: &str, spectrum: &SampledSpectrum, irradiance| Quantity {
@@ -184,24 +176,18 @@ pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
     sora::sky::check_irradiance_work(method)?;
     let filters = args.filters.filters()?;
     let atmosphere = args.source.load()?;
-    // Banded gases: one sky per k-distribution term, summed with the
-    // terms' weights (one sky, weight 1, without them).
-    let terms = sora::atmosphere::gas_bands::k_distribution_terms(&atmosphere);
-    let skies = |sun: &SunAndObserver| -> anyhow::Result<(Vec<(f64, sora::Sky)>, crate::arguments::SunUsed)> {
-        let mut skies = Vec::new();
-        let mut used = None;
-        for (weight, mut at_term) in terms.clone() {
-            let (sky, sun) = sun.sky(&mut at_term, scattering, method)?;
-            skies.push((weight, sky));
-            used.get_or_insert(sun);
-        }
-        Ok((skies, used.expect("at least one k-distribution term")))
+    // Banded gases: the sky sums its k-distribution terms (five solves).
+    let solves = if sora::atmosphere::gas_bands::has_gas_bands(&atmosphere) {
+        sora::atmosphere::gas_bands::TERMS
+    } else {
+        1
     };
+    let sky = |sun: &SunAndObserver| sun.sky(&mut atmosphere.clone(), scattering, method);
     let planes = 1 + usize::from(tilted.is_some());
     let announce = |grid: &sora::spectrum::WavelengthGrid| {
         if let sora::Method::PathTracing { samples, .. } = method {
             crate::estimate::announce(crate::estimate::path_tracing_estimate(
-                samples * terms.len() as u64,
+                samples * solves as u64,
                 planes,
                 grid.len(),
             ));
@@ -218,9 +204,9 @@ pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
             let grid = filter
                 .grid()
                 .map_err(|e| anyhow::anyhow!("--filter {}: {e}", filter.name()))?;
-            let (skies, sun) = skies(&args.sun.with_wavelengths(grid))?;
+            let (sky, sun) = sky(&args.sun.with_wavelengths(grid))?;
             announce(&grid);
-            let quantities = quantities(&skies, tilted)?;
+            let quantities = quantities(&sky, tilted)?;
             names = quantities
                 .iter()
                 .map(|q| (q.name.clone(), q.irradiance))
@@ -231,7 +217,7 @@ pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
                     .map(|q| filter.weighted_mean(&grid, &q.spectrum))
                     .collect::<sora::Result<Vec<f64>>>()?,
             );
-            first_sky.get_or_insert((skies[0].1.sun_position_deg(), sun));
+            first_sky.get_or_insert((sky.sun_position_deg(), sun));
         }
         let ((sun_elevation_deg, sun_azimuth_deg), sun) = first_sky.expect("a filter");
         let quantities: Vec<Quantity> = names
@@ -254,11 +240,10 @@ pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
             (sun_elevation_deg, sun_azimuth_deg, sun),
         );
     }
-    let (skies, sun) = skies(&args.sun)?;
-    let sky = &skies[0].1;
+    let (sky, sun) = sky(&args.sun)?;
     let grid = *sky.wavelengths();
     announce(&grid);
-    let quantities = quantities(&skies, tilted)?;
+    let quantities = quantities(&sky, tilted)?;
     // Broadband: W m^-2 and lux of every irradiance (not of standard
     // errors, which do not add linearly).
     let mut broadband = Vec::new();

@@ -29,8 +29,8 @@ use crate::arguments::{
 /// fisheye). Radiance is in W m^-2 sr^-1 nm^-1 for the atmosphere's sun.
 ///
 /// With banded gases (an atmosphere file's [gases]) every radiance is the
-/// sum of five solves, one per k-distribution term, weighted (five times
-/// the time).
+/// library's sum of five solves, one per k-distribution term, weighted
+/// (five times the time).
 ///
 /// Methods: fast and reference compute single scattering (plus the sunlit
 /// ground) and, with --scattering multiple (the default), add all higher
@@ -294,15 +294,13 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
             "--distance-m and --filter do not combine: aerial perspective is given per wavelength"
         );
     }
-    let atmosphere = args.source.load()?;
-    // Banded gases: one sky per k-distribution term, their radiances
-    // summed with the terms' weights (one sky, weight 1, without them).
-    let terms = sora::atmosphere::gas_bands::k_distribution_terms(&atmosphere);
-    if terms.len() > 1 && (!filters.is_empty() || args.distance_m.is_some()) {
-        anyhow::bail!(
-            "--filter and --distance-m do not yet combine with banded gases (the atmosphere's [gases]): remove [gases] or the option"
-        );
-    }
+    let mut atmosphere = args.source.load()?;
+    // Banded gases: the sky sums its k-distribution terms (five solves).
+    let solves = if sora::atmosphere::gas_bands::has_gas_bands(&atmosphere) {
+        sora::atmosphere::gas_bands::TERMS
+    } else {
+        1
+    };
     if !filters.is_empty() {
         return run_filtered(
             &args,
@@ -321,11 +319,7 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
             _ => anyhow::bail!("--stokes needs --polarisation vector (the default), not off"),
         }
     }
-    let mut skies = Vec::with_capacity(terms.len());
-    for (weight, mut at_term) in terms {
-        skies.push((weight, args.sun.sky(&mut at_term, scattering, method)?));
-    }
-    let (sky, sun) = &skies[0].1;
+    let (sky, sun) = &args.sun.sky(&mut atmosphere, scattering, method)?;
     if args.stokes {
         crate::arguments::warn_non_polarising_species(sky);
     }
@@ -335,33 +329,12 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
     let path_tracing = args.method.is_path_tracing();
     if path_tracing {
         crate::estimate::announce(crate::estimate::path_tracing_estimate(
-            samples * skies.len() as u64,
+            samples * solves as u64,
             views.len(),
             grid.len(),
         ));
     }
-    // Each term's radiances, summed with the terms' weights (one sky's
-    // as they are, without banded gases).
-    let radiances = |compute: &dyn Fn(&sora::Sky) -> anyhow::Result<Vec<SkyRadiance>>| {
-        if let [(_, (sky, _))] = skies.as_slice() {
-            return compute(sky);
-        }
-        let mut by_term = Vec::with_capacity(skies.len());
-        for (weight, (sky, _)) in &skies {
-            by_term.push((*weight, compute(sky)?));
-        }
-        anyhow::Ok(
-            (0..views.len())
-                .map(|v| {
-                    let parts: Vec<(f64, SkyRadiance)> = by_term
-                        .iter()
-                        .map(|(w, results)| (*w, results[v].clone()))
-                        .collect();
-                    SkyRadiance::weighted_sum(&parts)
-                })
-                .collect::<Vec<_>>(),
-        )
-    };
+    let radiances = |compute: &dyn Fn(&sora::Sky) -> anyhow::Result<Vec<SkyRadiance>>| compute(sky);
     let (results, transmittances) = if let Some(distance) = args.distance_m {
         let segments: Vec<(ViewDirection, f64)> = views.iter().map(|v| (*v, distance)).collect();
         let (radiances, transmittances) = sky
@@ -384,7 +357,7 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
             .fold(0.0, f64::max);
         eprintln!(
             "path tracing: {samples} paths per direction (seed {seed}) in {seconds:.3} s ({:.0} paths/s); largest relative standard error {:.3}%",
-            (skies.len() as u64 * samples * views.len() as u64) as f64 / seconds,
+            (solves as u64 * samples * views.len() as u64) as f64 / seconds,
             100.0 * worst
         );
         (results, None)

@@ -13,6 +13,26 @@ pub fn sora(args: &[&str]) -> Output {
         .expect("the sora binary runs")
 }
 
+/// `sora spectrum` of the zenith under `atmosphere` (a file) with the sun
+/// 60 degrees high on `wavelengths`, and `extra` arguments.
+pub fn zenith_spectrum(atmosphere: &str, wavelengths: &str, extra: &[&str]) -> Output {
+    let mut args = vec![
+        "spectrum",
+        "--atmosphere",
+        atmosphere,
+        "--sun-elevation",
+        "60",
+        "--view-elevation",
+        "90",
+        "--view-azimuth",
+        "0",
+        "--wavelengths",
+        wavelengths,
+    ];
+    args.extend_from_slice(extra);
+    sora(&args)
+}
+
 /// The standard output of a run that must have succeeded.
 pub fn stdout(out: &Output) -> String {
     assert!(

@@ -71,8 +71,10 @@
 //! in the A band (Rayleigh air, single scattering, sun 60 degrees) keeps
 //! 0.827 of its gas-free radiance with one solve, 0.7773 with the five
 //! terms, against 0.7773 from the plane-parallel closed form over the
-//! terms. `sora irradiance` and `sora spectrum` sum the terms; other
-//! commands solve once.
+//! terms. A [`crate::Sky`] built from an atmosphere with banded gases sums
+//! the terms itself (`sky/k_terms.rs`), so every command, Python and the
+//! explorer get the k-distribution; the effective coefficient is the
+//! sky's own optics ([`crate::Sky::optics`]).
 
 use super::ozone::{
     AbsorbingGas, AbsorptionCrossSection, GasAmount, MOLECULES_PER_M2_PER_DOBSON_UNIT,
@@ -341,6 +343,16 @@ pub fn banded_gas_species(water: Option<(f64, f64)>, mixed_gases: bool) -> Vec<S
 /// Whether `atmosphere` has a banded gas.
 pub fn has_gas_bands(atmosphere: &Atmosphere) -> bool {
     atmosphere.species.iter().any(|s| band_of(s).is_some())
+}
+
+/// Whether `atmosphere` has a banded gas at its single solve's effective
+/// coefficient (not at a k-term): the atmosphere whose terms a
+/// [`crate::Sky`] sums (`sky/k_terms.rs`).
+pub fn has_untermed_gas_bands(atmosphere: &Atmosphere) -> bool {
+    atmosphere
+        .species
+        .iter()
+        .any(|s| band_of(s).is_some_and(|band| band.term.is_none()))
 }
 
 fn band_of(species: &Species) -> Option<&GasBand> {
@@ -691,12 +703,19 @@ mod tests {
                 .unwrap()
                 .radiance_w_m2_sr_nm[0]
         };
+        // The sky sums its terms itself (`sky/k_terms.rs`): the same as
+        // summing skies built from each term's atmosphere.
         let parts: Vec<(f64, f64)> = k_distribution_terms(&gases)
             .iter()
             .map(|(w, at_term)| (*w, zenith(at_term)))
             .collect();
         let summed: f64 = parts.iter().map(|(w, l)| w * l).sum();
-        let ratio = summed / zenith(&clear);
+        let by_the_sky = zenith(&gases);
+        assert!(
+            (by_the_sky / summed - 1.0).abs() < 1e-12,
+            "{by_the_sky} vs {summed}"
+        );
+        let ratio = by_the_sky / zenith(&clear);
         let m = 1.0 / f64::to_radians(elevation).sin();
         let tau_r = clear
             .compute_optics(&grid)
@@ -711,7 +730,30 @@ mod tests {
             .sum();
         // One solve with the effective coefficient (matched to the band
         // model's direct beam at air mass 2) errs more.
-        let single = zenith(&gases) / zenith(&clear);
+        let single_solve = {
+            let scene = crate::transport::SingleScatteringSky::new_with_phase_matrices(
+                &gases,
+                &grid,
+                crate::transport::Observation {
+                    observer_altitude_m: 0.0,
+                    sun_elevation_deg: elevation,
+                    sun_azimuth_deg: 180.0,
+                },
+                false,
+            )
+            .unwrap();
+            Sky::from_scene(
+                scene,
+                Scattering::Single,
+                crate::sky::Method::Fast,
+                crate::sky::FastTableSize::default(),
+            )
+            .unwrap()
+            .radiance(ViewDirection::new(90.0, 0.0).unwrap())
+            .unwrap()
+            .radiance_w_m2_sr_nm[0]
+        };
+        let single = single_solve / zenith(&clear);
         println!(
             "zenith A band: {ratio} (k-sum), {want} (closed form), {single} (one effective solve)"
         );

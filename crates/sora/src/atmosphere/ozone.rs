@@ -33,6 +33,10 @@
 //! - 1070-1110 nm: 0. The Bogumil data end at 1066.5 nm; between 1000 and
 //!   1066 nm they average 1.8e-28 m^2, a 300 DU optical depth of 1.5e-5,
 //!   at the level of their noise. The zeros err by about that much.
+//! - 1110-2510 nm: 0, added in code (`ZERO_BINS_END_NM`): ozone has no
+//!   band of note there (SPECTRL2's ozone coefficients, Bird & Riordan
+//!   1986, are 0 from 780 to 4000 nm), so the grid's whole range is
+//!   covered.
 //!
 //! | 300 DU, vertical | 300 | 310 | 320 | 340 | 380 | 440 | 500 | 600 | 675 | 870 | 1020 nm |
 //! |---|---|---|---|---|---|---|---|---|---|---|---|
@@ -100,6 +104,11 @@ use crate::table::NumericTable;
 pub const MOLECULES_PER_M2_PER_DOBSON_UNIT: f64 = 2.6867e20;
 
 const OZONE_233K_CSV: &str = include_str!("../data/ozone_cross_section_233K_10nm.csv");
+/// The end of the ozone table's zero bins past the published data, nm
+/// (the grid's longest wavelength, 2500 nm, is the middle of its last
+/// 10 nm bin's first half).
+pub(crate) const ZERO_BINS_END_NM: f64 = 2510.0;
+
 const OZONE_233K_BOGUMIL_CSV: &str =
     include_str!("../data/ozone_cross_section_233K_10nm_bogumil2003.csv");
 
@@ -162,6 +171,20 @@ impl BinnedCrossSection {
     /// Serdyuchenko bins (360-840 nm) and the Bogumil bins on either side
     /// (see the module docs).
     pub(crate) fn ozone_233k() -> BinnedCrossSection {
+        let mut joined = Self::ozone_233k_published();
+        // Zero bins from the published data's end to ZERO_BINS_END_NM.
+        let step = joined.bin_width_nm;
+        let (_, mut end) = joined.range_nm();
+        while end < ZERO_BINS_END_NM - 0.5 * step {
+            joined.bin_starts_nm.push(end);
+            joined.cross_sections_m2.push(0.0);
+            end += step;
+        }
+        joined
+    }
+
+    /// [`BinnedCrossSection::ozone_233k`] as published: 290-1110 nm.
+    fn ozone_233k_published() -> BinnedCrossSection {
         let what = "embedded ozone cross-section";
         let serdyuchenko = BinnedCrossSection::parse_csv(OZONE_233K_CSV, what)
             .expect("the embedded ozone table is valid");
@@ -359,7 +382,11 @@ mod tests {
     #[test]
     fn embedded_table_is_the_reference_with_ten_nm_bins() {
         let ozone = BinnedCrossSection::ozone_233k();
-        assert_eq!(ozone.range_nm(), (290.0, 1110.0));
+        assert_eq!(ozone.range_nm(), (290.0, ZERO_BINS_END_NM));
+        assert_eq!(
+            BinnedCrossSection::ozone_233k_published().range_nm(),
+            (290.0, 1110.0)
+        );
         // A band inside one bin is that bin's value.
         assert_eq!(ozone.band_average_m2(600.0, 609.0).unwrap(), 5.019e-25);
         // Straddling two bins: the mean, weighted by overlap.
@@ -372,10 +399,12 @@ mod tests {
             (seam - 0.5 * (7.828e-27 + 1.18e-27)).abs() < 1e-39,
             "{seam}"
         );
-        // Outside 290-1110 nm: an error naming the range.
-        for (lo, hi) in [(280.0, 300.0), (1100.0, 1120.0)] {
+        // Past the published data: zeros to 2510 nm.
+        assert_eq!(ozone.band_average_m2(1100.0, 2500.0).unwrap(), 0.0);
+        // Outside 290-2510 nm: an error naming the range.
+        for (lo, hi) in [(280.0, 300.0), (2500.0, 2520.0)] {
             let message = ozone.band_average_m2(lo, hi).unwrap_err().to_string();
-            assert!(message.contains("290-1110 nm"), "{message}");
+            assert!(message.contains("290-2510 nm"), "{message}");
         }
     }
 
@@ -387,7 +416,7 @@ mod tests {
 
     #[test]
     fn the_joined_table_keeps_every_published_bin_unchanged() {
-        let ozone = BinnedCrossSection::ozone_233k();
+        let ozone = BinnedCrossSection::ozone_233k_published();
         let joined: Vec<(f64, f64)> = ozone
             .bin_starts_nm
             .iter()
@@ -453,8 +482,8 @@ mod tests {
         assert!((sampled[0] - 0.5 * (2.182e-28 + 2.818e-28)).abs() < 1e-40);
         // The 1 nm grid covers the whole CIE range 360-830.
         assert!(ozone.sample(&"360:830:1".parse().unwrap()).is_ok());
-        // Every grid sora accepts is covered: 300-1100 nm at 10 and 1 nm.
-        for text in ["300:1100:10", "300:1100:1", "300", "1100"] {
+        // Every grid sora accepts is covered: 300-2500 nm at 10 and 1 nm.
+        for text in ["300:2500:10", "300:2500:1", "300", "2500"] {
             let grid: WavelengthGrid = text.parse().unwrap();
             assert_eq!(ozone.sample(&grid).unwrap().len(), grid.len(), "{text}");
         }

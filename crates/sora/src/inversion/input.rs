@@ -109,12 +109,13 @@
 //! It cannot give a size distribution, an absorption, or the amount and
 //! size together.
 
+use super::measurements::MAX_RETRIEVAL_WAVELENGTH_NM as MAX_WAVELENGTH_NM;
 use crate::error::{Error, Result};
 use crate::inversion::measurements::{
     MIN_SCATTERING_ANGLE_DEG, Measurements, OpticalDepthMeasurement, RadianceScale,
     SkyRadianceMeasurement, list_nm, scattering_angle_deg,
 };
-use crate::spectrum::{MAX_WAVELENGTH_NM, MIN_WAVELENGTH_NM};
+use crate::spectrum::MIN_WAVELENGTH_NM;
 use crate::table::NumericTable;
 
 /// The columns of the sky radiance CSV, in the order.

@@ -11,7 +11,13 @@
 //! [`Measurements::validate`] checks what any of them produced.
 
 use crate::error::{Error, Result};
-use crate::spectrum::{MAX_WAVELENGTH_NM, MIN_WAVELENGTH_NM};
+use crate::spectrum::MIN_WAVELENGTH_NM;
+
+/// The longest wavelength a retrieval takes, nm: 1100 (its sun-photometer
+/// channels from 340 to 1020 nm and the tests that check them; the sky's
+/// grids reach `spectrum::MAX_WAVELENGTH_NM`, but a 1640 nm channel's water
+/// and CO2 absorption is not in the retrieval's atmosphere).
+pub const MAX_RETRIEVAL_WAVELENGTH_NM: f64 = 1100.0;
 
 /// One measured sky radiance.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -120,7 +126,7 @@ impl SkyRadianceMeasurement {
             RadianceScale::Absolute => " W m^-2 sr^-1 nm^-1",
             RadianceScale::Relative => " (relative units)",
         };
-        let (lo, hi) = (MIN_WAVELENGTH_NM, MAX_WAVELENGTH_NM);
+        let (lo, hi) = (MIN_WAVELENGTH_NM, MAX_RETRIEVAL_WAVELENGTH_NM);
         if !(lo..=hi).contains(&self.wavelength_nm) {
             return Some(format!(
                 "wavelength {} nm is outside the model's {lo}..={hi} nm",

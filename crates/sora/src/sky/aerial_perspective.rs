@@ -144,6 +144,9 @@ impl Sky {
                 "aerial perspective: the fast method (the default) or path tracing; the reference march has no segment".into(),
             ));
         }
+        if !self.k_terms.is_empty() {
+            return self.sum_term_aerial_perspectives(|term| term.aerial_perspectives(segments));
+        }
         let wavelengths = self.wavelengths().len();
         let mut scratch = self.scene.scratch();
         let mut irradiances = SkyIrradiances::default();
@@ -269,6 +272,23 @@ impl Sky {
             return Err(Error::Unsupported(
                 "an aerial-perspective image: the fast method (the default)".into(),
             ));
+        }
+        if !self.k_terms.is_empty() {
+            let mut parts = Vec::with_capacity(self.k_terms.len());
+            for (w, term) in &self.k_terms {
+                parts.push((
+                    *w,
+                    term.render_aerial_perspective_xyz(image, depth_m, to_xyz)?,
+                ));
+            }
+            let (radiances, transmittances) = parts
+                .into_iter()
+                .map(|(w, (r, t))| ((w, r), (w, t)))
+                .unzip();
+            let sum = |images| {
+                super::k_terms::weighted_images(images, super::k_terms::add_scaled_xyz, Xyz::BLACK)
+            };
+            return Ok((sum(radiances), sum(transmittances)));
         }
         let (mut radiance, mut transmittance) =
             (vec![Xyz::BLACK; pixels], vec![Xyz::BLACK; pixels]);

@@ -191,6 +191,9 @@ impl Sky {
     /// The irradiance on `plane` (see the module docs).
     pub fn irradiance(&self, plane: Plane) -> Result<Irradiance> {
         check_irradiance_work(self.method)?;
+        if !self.k_terms.is_empty() {
+            return self.sum_term_irradiance(|term| term.irradiance(plane));
+        }
         let normal = plane.normal();
         let sun = self.sun_direction();
         let transmittance = self.direct_beam_transmittance();

@@ -59,6 +59,7 @@
 
 mod aerial_perspective;
 mod irradiance;
+mod k_terms;
 mod names;
 mod shared_field;
 mod sun_disc;
@@ -543,11 +544,19 @@ impl SkyBuilder<'_> {
     /// Checks every choice and puts the atmosphere on the grid (the
     /// expensive tables wait for their first use).
     pub fn build(self) -> Result<Sky> {
+        let mut sky = self.build_for(self.atmosphere)?;
+        // Banded gases: one sky per k-distribution term (`sky/k_terms.rs`).
+        sky.k_terms = k_terms::term_skies(self.atmosphere, |at_term| self.build_for(at_term))?;
+        Ok(sky)
+    }
+
+    /// [`SkyBuilder::build`] of `atmosphere` as one solve.
+    fn build_for(&self, atmosphere: &Atmosphere) -> Result<Sky> {
         let polarisation = self
             .polarisation
             .unwrap_or(Polarisation::for_method(self.method));
         let scene = SingleScatteringSky::new_with_phase_matrices(
-            self.atmosphere,
+            atmosphere,
             &self.wavelengths,
             self.observation,
             polarisation == Polarisation::Vector,
@@ -585,6 +594,9 @@ pub struct Sky {
     /// sun angles their rays meet (`Sky::for_views_above`), and other
     /// views and images are refused.
     lowest_view_elevation_rad: Option<f64>,
+    /// The k-distribution's terms, (w_j, the sky of term j), with banded
+    /// gases; empty without them (`sky/k_terms.rs`).
+    k_terms: Vec<(f64, Sky)>,
 }
 
 #[derive(Debug)]
@@ -882,6 +894,7 @@ impl Sky {
             source_table: OnceLock::new(),
             image_tables: OnceLock::new(),
             lowest_view_elevation_rad: None,
+            k_terms: Vec::new(),
         })
     }
 
@@ -893,6 +906,11 @@ impl Sky {
         let mut sky = Sky::from_scene(scene, self.scattering, self.method, self.table_size)?;
         sky.sun_position_deg = (elevation_deg, azimuth_deg);
         sky.set_polarisation(self.polarisation)?;
+        sky.k_terms = self
+            .k_terms
+            .iter()
+            .map(|(w, term)| Ok((*w, term.with_sun_deg(elevation_deg, azimuth_deg)?)))
+            .collect::<Result<_>>()?;
         Ok(sky)
     }
 
@@ -909,6 +927,10 @@ impl Sky {
             .fold(90.0f64, f64::min)
             .max(0.0);
         self.lowest_view_elevation_rad = Some(lowest.to_radians());
+        self.k_terms = std::mem::take(&mut self.k_terms)
+            .into_iter()
+            .map(|(w, term)| (w, term.for_views_above(views)))
+            .collect();
         self
     }
 
@@ -971,6 +993,9 @@ impl Sky {
     /// The transmittance of the direct beam from the top of the atmosphere
     /// to the eye toward the sun's centre (0 where the planet is in the way).
     pub fn direct_beam_transmittance(&self) -> SampledSpectrum {
+        if !self.k_terms.is_empty() {
+            return self.sum_term_spectra(Sky::direct_beam_transmittance);
+        }
         let mut transmittance = SampledSpectrum::zeros(self.wavelengths().len());
         let sun = self.sun_direction();
         if self.scene.sees_sky(sun) {
@@ -1172,6 +1197,18 @@ impl Sky {
         progress: &(dyn Fn(u64, u64) + Sync),
         tables_allowed: bool,
     ) -> Result<Vec<SkyRadiance>> {
+        if !self.k_terms.is_empty() {
+            return self.sum_term_radiances(|k, term| {
+                term.compute_radiances(
+                    views,
+                    &|done, total| {
+                        let (done, total) = self.term_progress(k, done, total);
+                        progress(done, total)
+                    },
+                    tables_allowed,
+                )
+            });
+        }
         let wavelengths = self.wavelengths().len();
         check_view_count("the views", views.len() as f64, wavelengths)?;
         if let Method::PathTracing { samples, seed } = self.method {
@@ -1389,6 +1426,14 @@ impl Sky {
         views: &[ViewDirection],
         progress: &(dyn Fn(u64, u64) + Sync),
     ) -> Result<Vec<SkyRadiance>> {
+        if !self.k_terms.is_empty() {
+            return self.sum_term_radiances(|k, term| {
+                term.radiances_from_image_tables(views, &|done, total| {
+                    let (done, total) = self.term_progress(k, done, total);
+                    progress(done, total)
+                })
+            });
+        }
         self.prepare_field_for_images()?;
         let tables = self.image_tables();
         let polarised = self.polarisation == Polarisation::Vector;
@@ -1565,6 +1610,12 @@ impl Sky {
     /// sky-view tables), so that a progress display can show it as its
     /// own phase; rendering does it on first use otherwise.
     pub fn prepare_images(&self) -> Result<()> {
+        if !self.k_terms.is_empty() {
+            for (_, term) in &self.k_terms {
+                term.prepare_images()?;
+            }
+            return Ok(());
+        }
         self.prepare_field_for_images()?;
         self.source_table();
         if self.method == Method::Fast {
@@ -1605,6 +1656,14 @@ impl Sky {
         progress: &(dyn Fn(usize) + Sync),
     ) -> Result<Vec<Xyz>> {
         self.check_colour_conversion(to_xyz)?;
+        if !self.k_terms.is_empty() {
+            return self.sum_term_images(
+                progress,
+                Xyz::BLACK,
+                k_terms::add_scaled_xyz,
+                |term, p| term.render_xyz(image, to_xyz, p),
+            );
+        }
         let n = self.wavelengths().len();
         self.render_pixels(image, 1, Xyz::BLACK, progress, |radiance, pixel| {
             pixel[0] = to_xyz.to_xyz_unchecked(&radiance[..n])
@@ -1630,6 +1689,16 @@ impl Sky {
             ));
         }
         self.check_colour_conversion(to_xyz)?;
+        if !self.k_terms.is_empty() {
+            let add = |sum: &mut [Xyz; 4], w: f64, x: &[Xyz; 4]| {
+                for (s, x) in sum.iter_mut().zip(x) {
+                    k_terms::add_scaled_xyz(s, w, x);
+                }
+            };
+            return self.sum_term_images(progress, [Xyz::BLACK; 4], add, |term, p| {
+                term.render_stokes_xyz(image, to_xyz, p)
+            });
+        }
         let n = self.wavelengths().len();
         self.render_pixels(image, 1, [Xyz::BLACK; 4], progress, |stokes, pixel| {
             pixel[0] = [
@@ -1649,6 +1718,11 @@ impl Sky {
         image: &ImageSettings,
         progress: &(dyn Fn(usize) + Sync),
     ) -> Result<Vec<f64>> {
+        if !self.k_terms.is_empty() {
+            let add = |sum: &mut f64, w: f64, x: &f64| *sum += w * x;
+            return self
+                .sum_term_images(progress, 0.0, add, |term, p| term.render_spectral(image, p));
+        }
         let wavelengths = self.wavelengths().len();
         self.render_pixels(image, wavelengths, 0.0, progress, |radiance, pixel| {
             pixel.copy_from_slice(&radiance[..wavelengths])

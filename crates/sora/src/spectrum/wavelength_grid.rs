@@ -2,12 +2,15 @@
 //! samples into integrals over wavelength.
 //!
 //! A grid is `start:stop:step` in nanometres (vacuum wavelength), inside
-//! 300-1100 nm: the near ultraviolet to the near infrared, wide enough for
-//! the sun-photometer channels from 340 to 1020 nm. Every built-in optical
-//! property covers it: the solar spectrum (ASTM E490, 119.5 nm to 1 mm),
-//! the Rayleigh cross-sections (refractive-index formulas of Bates 1984 and
-//! Bideau-Mehu et al. 1973, both fitted over wider ranges), the ozone
-//! cross-section (`atmosphere::ozone`, 290-1110 nm) and the Mie solver; a
+//! 300-2500 nm: the near ultraviolet to the shortwave infrared, the sun's
+//! spectrum that reaches the ground (96 % of the ASTM E490 sun's energy,
+//! and the range a pyranometer's broadband value mostly holds). Every
+//! built-in optical property covers it: the solar spectrum (ASTM E490,
+//! 119.5 nm to 1 mm), the Rayleigh cross-sections (refractive-index
+//! formulas of Bates 1984 and Bideau-Mehu et al. 1973, both fitted over
+//! wider ranges), the ozone cross-section (`atmosphere::ozone`, 290-2510
+//! nm, 0 past 1070 nm), the banded gases of `[gases]` (200-4000 nm) and the
+//! Mie solver; a
 //! user table (refractive index, albedo, spectrum) that does not cover a
 //! grid is an error naming the wavelength and the table's range. Colour
 //! uses only the part of a grid inside the range of the CIE colour-matching
@@ -30,9 +33,10 @@ use crate::error::{Error, Result};
 /// it the ozone Hartley band makes the ground sky dark and the embedded
 /// ozone table ends at 290 nm).
 pub const MIN_WAVELENGTH_NM: f64 = 300.0;
-/// Longest wavelength a grid may sample, nm (the near infrared, past the
-/// 1020 nm sun-photometer channel; the embedded ozone table ends at 1110 nm).
-pub const MAX_WAVELENGTH_NM: f64 = 1100.0;
+/// Longest wavelength a grid may sample, nm (the shortwave infrared: the
+/// water and CO2 bands at 1.4, 1.9 and 2.0 um included; past 2500 nm the
+/// sun holds under 1.5 % of its energy).
+pub const MAX_WAVELENGTH_NM: f64 = 2500.0;
 
 /// The most wavelengths a grid may have (checked before anything is
 /// allocated or computed: every spectrum, image row and Mie ensemble is
@@ -224,28 +228,28 @@ mod tests {
     }
 
     #[test]
-    fn the_range_is_300_to_1100_nm() {
-        // The sun-photometer grid of issue 16: 81 samples, 300 to 1100 nm.
-        let grid: WavelengthGrid = "300:1100:10".parse().unwrap();
-        assert_eq!(grid.len(), 81);
+    fn the_range_is_300_to_2500_nm() {
+        // The whole range every 10 nm: 221 samples, 300 to 2500 nm.
+        let grid: WavelengthGrid = "300:2500:10".parse().unwrap();
+        assert_eq!(grid.len(), 221);
         assert_eq!(grid.start_nm(), MIN_WAVELENGTH_NM);
         assert_eq!(grid.stop_nm(), MAX_WAVELENGTH_NM);
-        assert_eq!(grid.to_string(), "300:1100:10");
+        assert_eq!(grid.to_string(), "300:2500:10");
         // Each end alone, and a photometer channel alone.
-        for text in ["300", "1100", "1020"] {
+        for text in ["300", "2500", "1020", "1640"] {
             assert_eq!(text.parse::<WavelengthGrid>().unwrap().len(), 1);
         }
         // Just outside either end: one line naming the value, its unit and
         // the range.
         for (text, expected) in [
             ("299.9:1100:0.1", "start_nm = 299.9 nm"),
-            ("300:1100.5:0.5", "stop_nm = 1100.5 nm"),
-            ("1101", "start_nm = 1101 nm"),
+            ("300:2500.5:0.5", "stop_nm = 2500.5 nm"),
+            ("2501", "start_nm = 2501 nm"),
             ("250", "start_nm = 250 nm"),
         ] {
             let message = text.parse::<WavelengthGrid>().unwrap_err().to_string();
             assert!(message.contains(expected), "{text}: {message}");
-            assert!(message.contains("300..=1100"), "{text}: {message}");
+            assert!(message.contains("300..=2500"), "{text}: {message}");
             assert!(!message.contains('\n'), "{text}: {message}");
         }
     }
@@ -286,12 +290,12 @@ mod tests {
         assert!(message.contains("380:779:7"), "{message}");
         assert!(message.contains("779 and 786 nm"), "{message}");
         // Past the end of the range only the stop below is offered.
-        let message = "380:1099:7"
+        let message = "380:2499:7"
             .parse::<WavelengthGrid>()
             .unwrap_err()
             .to_string();
         assert!(
-            message.contains("(try 380:1094:7): the nearest stop is 1094 nm"),
+            message.contains("(try 380:2494:7): the nearest stop is 2494 nm"),
             "{message}"
         );
         assert!(!message.contains("1101"), "{message}");
