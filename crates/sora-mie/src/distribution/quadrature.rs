@@ -810,6 +810,72 @@ mod tests {
         assert!(RadiusQuadrature::trapezoid(&d, 1e7, 1, 25.0).is_err());
     }
 
+    /// Issue 35: the phase rule's step in size parameter near the peak is
+    /// bounded whatever the size parameter (water, k ~ 0: no cap), by what
+    /// its settings promise: panels at most `nodes_per_panel / (96 x)` wide
+    /// in ln r at depth 0, widened by `exp(0.5 D)` with depth, and at most
+    /// 0.18 of a panel between neighbouring 8-point Gauss-Legendre nodes.
+    /// The rule without the ripple density (150 nodes per unit ln r) steps
+    /// about `x / 150` instead.
+    #[test]
+    fn the_ripple_step_in_size_parameter_is_bounded_whatever_the_size_parameter() {
+        let water = crate::Complex64::new(1.329, 1.25e-7);
+        let settings = RadiusQuadratureSettings::phase_function().for_refractive_index(water);
+        let without_ripple = RadiusQuadratureSettings {
+            ripple_nodes_per_unit_size_parameter: 0.0,
+            ..settings
+        };
+        let wavenumber = 2.0 * std::f64::consts::PI / 800e-9;
+        let (unit_nodes, _) = gauss_legendre(settings.nodes_per_panel);
+        // Widest gap between neighbours in a panel, or across its edge, as a
+        // fraction of the panel's width.
+        let widest_gap_fraction = unit_nodes
+            .windows(2)
+            .map(|w| 0.5 * (w[1] - w[0]).abs())
+            .fold(
+                1.0 - unit_nodes.iter().fold(0.0f64, |a, &u| a.max(u.abs())),
+                f64::max,
+            );
+        assert!(widest_gap_fraction < 0.19, "{widest_gap_fraction}");
+        // Pairs of neighbours within one e-fold of the peak of the importance
+        // density; the panels they lie in reach at most half a panel deeper.
+        let max_depth = 1.5;
+        let step_bound = widest_gap_fraction * settings.nodes_per_panel as f64
+            / settings.ripple_nodes_per_unit_size_parameter
+            * (settings.resonance_density_decay_rate_per_efold * max_depth).exp();
+        let widest_step = |distribution: &SizeDistribution, settings| {
+            let q = RadiusQuadrature::gauss_legendre(distribution, wavenumber, settings).unwrap();
+            let near_peak =
+                |r: f64| distribution.importance_depth_below_peak(r.ln(), wavenumber) <= 1.0;
+            let steps = q
+                .radii_m()
+                .windows(2)
+                .filter(|w| near_peak(w[0]) && near_peak(w[1]))
+                .map(|w| wavenumber * (w[1] - w[0]))
+                .collect::<Vec<_>>();
+            assert!(steps.len() > 10);
+            (q.len(), steps.into_iter().fold(0.0, f64::max))
+        };
+        for effective_radius_um in [2.0, 10.0, 40.0] {
+            for distribution in [
+                SizeDistribution::modified_gamma(effective_radius_um * MICROMETRE, 0.1).unwrap(),
+                SizeDistribution::log_normal_from_effective_radius_and_variance(
+                    effective_radius_um * MICROMETRE,
+                    0.1,
+                )
+                .unwrap(),
+            ] {
+                let (nodes, step) = widest_step(&distribution, &settings);
+                let (nodes_before, step_before) = widest_step(&distribution, &without_ripple);
+                eprintln!(
+                    "r_eff {effective_radius_um} um: {nodes} nodes, widest step in x near the peak {step:.4} (bound {step_bound:.4}); without the ripple density {nodes_before} nodes, {step_before:.3}"
+                );
+                assert!(step <= step_bound, "{step} > {step_bound}");
+                assert!(step_before > 0.1, "{step_before}");
+            }
+        }
+    }
+
     /// Issue 17: the node count is bounded before anything is allocated. A
     /// panel narrower than the spacing of doubles in ln r (which once made
     /// the rule allocate without end) stops the counting pass at the bound;

@@ -852,3 +852,29 @@ fn the_presets_phase_rules_are_unchanged_by_the_ripple_density() {
         assert_eq!(optics(&EnsembleSettings::default()), optics(&before));
     }
 }
+
+/// Issue 35 at the short end of the visible: the same water cloud (modified
+/// gamma r_eff 10 um, v_eff 0.1) at 400 nm, x_eff = 157, where the phase
+/// rule takes twice the nodes, by the same criteria against 100 times them.
+/// Measured: 17488 nodes, P11 within 3.0e-3 and F12/F11 within 1.7e-3 (at
+/// 800 nm 2.0e-3 and 1.7e-3: the error grows slowly with x, the narrowest
+/// resonances narrowing as x grows).
+#[test]
+#[ignore = "slow: the 100x oracle at x ~ 160 takes about 4 minutes"]
+fn water_cloud_backscatter_is_converged_at_400_nm() {
+    let m = Complex64::new(1.339, 1.86e-9);
+    let distribution = SizeDistribution::modified_gamma(10.0 * MICROMETRE, 0.1).unwrap();
+    let started = std::time::Instant::now();
+    let (nodes, p11, p12) = backscatter_phase_matrix_errors(
+        &distribution,
+        400.0,
+        m,
+        &RadiusQuadratureSettings::phase_function(),
+        100,
+    );
+    eprintln!(
+        "{nodes} nodes, P11 {p11:.2e}, F12/F11 {p12:.2e} ({:.1} s)",
+        started.elapsed().as_secs_f64()
+    );
+    assert!(p11 < 5e-3 && p12 < 5e-3, "P11 {p11}, F12/F11 {p12}");
+}
