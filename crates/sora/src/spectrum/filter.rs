@@ -360,8 +360,8 @@ mod tests {
             "f.csv",
         ));
         assert!(m.contains("250") && m.contains("nm"), "{m}");
-        let m = message(Filter::gaussian("g", 1095.0, 10.0));
-        assert!(m.contains("1095") && m.contains("centre"), "{m}");
+        let m = message(Filter::gaussian("g", 2495.0, 10.0));
+        assert!(m.contains("2495") && m.contains("centre"), "{m}");
         let m = message(Filter::gaussian("g", 500.0, 0.0));
         assert!(m.contains("width"), "{m}");
         let filter = Filter::named("cimel-440").unwrap();
