@@ -11,7 +11,7 @@ use serde_json::{Value, json};
 use sora::camera::Camera;
 use sora::colour::{DisplayMapping, Exposure, RgbColourSpace, SpectrumToXyz, Xyz};
 use sora::engine_tables::{EngineTableSettings, EngineTables};
-use sora::output::{ChannelKind, ExrOptions, LinearImage, encode_exr};
+use sora::output::{ChannelKind, ExrOptions, LinearImage, SkyImageUnits, encode_exr};
 use sora::spectrum::Spectrum;
 use sora::{
     Atmosphere, FastTableSize, ImageSettings, MultipleScatteringSettings, Scattering, Sky,
@@ -258,21 +258,14 @@ impl Engine {
             pixels,
         )
         .map_err(|e| e.to_string())?;
-        let options =
-            ExrOptions {
-                white_luminance_cd_m2: Some(683.0),
-                text_attributes: vec![
-                (
-                    "units".into(),
-                    "radiance_w_m2_sr (XYZ of spectral radiance integrated over nm, no 683 lm/W)"
-                        .into(),
-                ),
-                ("sun_elevation_deg".into(), spec.sun_elevation_deg.to_string()),
-                ("sun_azimuth_deg".into(), spec.sun_azimuth_deg.to_string()),
-                ("sun_disc".into(), image.sun_disc.to_string()),
-            ],
-                ..ExrOptions::default()
-            };
+        let mut options = ExrOptions::sky_image(
+            SkyImageUnits::Radiance,
+            spec.sun_elevation_deg,
+            spec.sun_azimuth_deg,
+        );
+        options
+            .text_attributes
+            .push(("sun_disc".into(), image.sun_disc.to_string()));
         let bytes = encode_exr(&linear, options).map_err(|e| e.to_string())?;
         Ok((json!({ "bytes": bytes.len() }), bytes))
     }
