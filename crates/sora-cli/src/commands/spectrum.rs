@@ -219,8 +219,7 @@ fn directions(
     }
     if let Some(path) = &args.directions {
         let text = sora::input::read_text(path)?;
-        let views =
-            parse_directions_csv(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+        let views = parse_directions_csv(&text, &path.display().to_string())?;
         check_direction_count(&path.display().to_string(), views.len() as f64, wavelengths)?;
         return Ok(views);
     }
