@@ -433,12 +433,25 @@ pub fn read_exr_channel(path: &Path, name: &str) -> Result<(usize, usize, Vec<f6
 mod tests {
     use super::*;
 
+    /// An encoded file read back with the `exr` crate: every channel and
+    /// attribute of its one layer.
+    fn decode(bytes: &[u8]) -> Image<Layer<AnyChannels<FlatSamples>>> {
+        use ::exr::prelude::{ReadChannels, ReadLayers};
+        ::exr::prelude::read()
+            .no_deep_data()
+            .largest_resolution_level()
+            .all_channels()
+            .first_valid_layer()
+            .all_attributes()
+            .from_buffered(std::io::Cursor::new(bytes))
+            .unwrap()
+    }
+
     /// The same image and attributes make the same bytes every time (the
     /// `exr` crate's attribute map has a random order per instance), and
     /// the file still reads back with every attribute and pixel.
     #[test]
     fn the_same_image_encodes_to_the_same_bytes() {
-        use ::exr::prelude::{ReadChannels, ReadLayers};
         let image = LinearImage::new(
             2,
             2,
@@ -457,14 +470,7 @@ mod tests {
         for _ in 0..8 {
             assert_eq!(encode_exr(&image, options()).unwrap(), first);
         }
-        let decoded = ::exr::prelude::read()
-            .no_deep_data()
-            .largest_resolution_level()
-            .all_channels()
-            .first_valid_layer()
-            .all_attributes()
-            .from_buffered(std::io::Cursor::new(&first))
-            .unwrap();
+        let decoded = decode(&first);
         let attributes = &decoded.layer_data.attributes.other;
         for n in 0..8 {
             assert_eq!(
@@ -490,7 +496,6 @@ mod tests {
     /// with the 683 lm/W that separates them.
     #[test]
     fn a_sky_image_header_names_its_units_and_sun() {
-        use ::exr::prelude::{ReadChannels, ReadLayers};
         let image = LinearImage::new(1, 1, ChannelKind::Xyz, vec![[1.0, 2.0, 3.0]]).unwrap();
         for (units, white, unit_text) in [
             (SkyImageUnits::Radiance, 683.0, "radiance_w_m2_sr"),
@@ -502,14 +507,7 @@ mod tests {
                 .push(("sun_disc".into(), "false".into()));
             assert_eq!(options.sample_type, ExrSampleType::F32);
             let bytes = encode_exr(&image, options).unwrap();
-            let decoded = ::exr::prelude::read()
-                .no_deep_data()
-                .largest_resolution_level()
-                .all_channels()
-                .first_valid_layer()
-                .all_attributes()
-                .from_buffered(std::io::Cursor::new(&bytes))
-                .unwrap();
+            let decoded = decode(&bytes);
             let layer = &decoded.layer_data.attributes;
             assert_eq!(layer.white_luminance, Some(white));
             let text = |name: &str| match layer.other.get(&Text::from(name)) {
