@@ -114,6 +114,7 @@ pub struct SpectrumArgs {
 
     /// Many directions: a CSV file with the header
     /// view_elevation_deg,view_azimuth_deg and one direction per line
+    /// (lines starting with # are comments)
     #[arg(long, value_name = "FILE.csv", group = "views")]
     directions: Option<std::path::PathBuf>,
 
