@@ -697,54 +697,30 @@ mod location_tests {
 /// Header of a directions file (`sora spectrum --directions`).
 pub const DIRECTIONS_HEADER: &str = "view_elevation_deg,view_azimuth_deg";
 
-/// Parses a directions file: the header [`DIRECTIONS_HEADER`], then one
-/// direction per line (elevation -90..=90 and azimuth clockwise from north,
-/// degrees). Blank lines are skipped and a UTF-8 byte-order mark is
-/// allowed. Errors name the line (1-based) and the bad value.
-pub fn parse_directions_csv(text: &str) -> Result<Vec<sora::ViewDirection>, String> {
-    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let mut lines = text
-        .lines()
-        .enumerate()
-        .map(|(i, line)| (i + 1, line.trim()))
-        .filter(|(_, line)| !line.is_empty());
-    let Some((number, header)) = lines.next() else {
-        return Err(format!(
-            "the file is empty: expected the header {DIRECTIONS_HEADER} and one direction per line"
-        ));
-    };
-    let columns: Vec<&str> = header.split(',').map(str::trim).collect();
-    if columns != DIRECTIONS_HEADER.split(',').collect::<Vec<_>>() {
-        return Err(format!(
-            "line {number}: the header is '{header}', expected {DIRECTIONS_HEADER}"
-        ));
-    }
-    let mut directions = Vec::new();
-    for (number, line) in lines {
-        let values: Vec<&str> = line.split(',').map(str::trim).collect();
-        if values.len() != 2 {
-            return Err(format!(
-                "line {number}: {} values in '{line}', expected 2 ({DIRECTIONS_HEADER})",
-                values.len()
-            ));
-        }
-        let mut angles = [0.0; 2];
-        for ((angle, text), name) in angles.iter_mut().zip(&values).zip(&columns) {
-            *angle = text
-                .parse()
-                .map_err(|_| format!("line {number}: {name} '{text}' is not a number"))?;
-        }
-        directions.push(
-            sora::ViewDirection::new(angles[0], angles[1])
-                .map_err(|e| format!("line {number}: {e}"))?,
+/// Parses a directions file: a numeric CSV table (the library's dialect,
+/// [`sora::table`]: `#` comments, blank lines and a byte-order mark
+/// allowed) with the header [`DIRECTIONS_HEADER`], one direction per row
+/// (elevation -90..=90 and azimuth clockwise from north, degrees). `what`
+/// names the file in errors, which give the line (1-based) and the bad
+/// value.
+pub fn parse_directions_csv(text: &str, what: &str) -> anyhow::Result<Vec<sora::ViewDirection>> {
+    let table = sora::table::NumericTable::parse(text, what)?;
+    if table.column_names.join(",") != DIRECTIONS_HEADER {
+        anyhow::bail!(
+            "{what}, line {}: the header is '{}', expected {DIRECTIONS_HEADER}",
+            table.header_line,
+            table.column_names.join(",")
         );
     }
-    if directions.is_empty() {
-        return Err(format!(
-            "no directions after the header {DIRECTIONS_HEADER}"
-        ));
-    }
-    Ok(directions)
+    table
+        .rows
+        .iter()
+        .zip(&table.line_numbers)
+        .map(|(row, line)| {
+            sora::ViewDirection::new(row[0], row[1])
+                .map_err(|e| anyhow::anyhow!("{what}, line {line}: {e}"))
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -754,7 +730,8 @@ mod direction_tests {
     #[test]
     fn directions_files() {
         let parsed = parse_directions_csv(
-            "\u{feff}view_elevation_deg, view_azimuth_deg\n\n10,20\n-5.5 , 359\n",
+            "\u{feff}# measured views\nview_elevation_deg, view_azimuth_deg\n\n10,20\n-5.5 , 359\n",
+            "views.csv",
         )
         .unwrap();
         assert_eq!(parsed.len(), 2);
@@ -763,20 +740,27 @@ mod direction_tests {
             (-5.5, 359.0)
         );
         for (text, expected) in [
-            ("", "empty"),
-            ("view_elevation_deg,view_azimuth_deg\n", "no directions"),
-            ("elevation,azimuth\n1,2\n", "line 1: the header"),
+            ("", "views.csv: the table is empty"),
+            (
+                "view_elevation_deg,view_azimuth_deg\n",
+                "header but no rows",
+            ),
+            ("elevation,azimuth\n1,2\n", "views.csv, line 1: the header"),
+            (
+                "# a comment\nelevation,azimuth\n1,2\n",
+                "line 2: the header is 'elevation,azimuth'",
+            ),
             (
                 "view_elevation_deg,view_azimuth_deg\n1,2\n3\n",
-                "line 3: 1 values",
+                "views.csv, line 3: 1 fields, expected 2",
             ),
             (
                 "view_elevation_deg,view_azimuth_deg\n1,2,3\n",
-                "line 2: 3 values",
+                "line 2: 3 fields",
             ),
             (
                 "view_elevation_deg,view_azimuth_deg\nx,2\n",
-                "line 2: view_elevation_deg 'x'",
+                "line 2: view_elevation_deg = 'x' is not a finite number",
             ),
             (
                 "view_elevation_deg,view_azimuth_deg\n120,2\n",
@@ -784,14 +768,16 @@ mod direction_tests {
             ),
             (
                 "view_elevation_deg,view_azimuth_deg\nNaN,2\n",
-                "line 2: view elevation = NaN",
+                "line 2: view_elevation_deg = 'NaN' is not a finite number",
             ),
             (
                 "view_elevation_deg,view_azimuth_deg\n1,inf\n",
-                "line 2: view azimuth = inf",
+                "line 2: view_azimuth_deg = 'inf' is not a finite number",
             ),
         ] {
-            let error = parse_directions_csv(text).unwrap_err();
+            let error = parse_directions_csv(text, "views.csv")
+                .unwrap_err()
+                .to_string();
             assert!(error.contains(expected), "{text:?}: {error}");
             assert!(!error.contains('\n'), "{error}");
         }

@@ -471,9 +471,12 @@ fn bad_directions_are_one_line_errors_and_print_nothing() {
     let header = "view_elevation_deg,view_azimuth_deg\n";
     for (content, expected) in [
         (String::new(), "empty"),
-        (header.to_string(), "no directions"),
-        (format!("{header}10,0\n20\n"), "line 3: 1 values"),
-        (format!("{header}NaN,0\n"), "line 2: view elevation = NaN"),
+        (header.to_string(), "header but no rows"),
+        (format!("{header}10,0\n20\n"), "line 3: 1 fields"),
+        (
+            format!("{header}NaN,0\n"),
+            "line 2: view_elevation_deg = 'NaN' is not a finite number",
+        ),
         (
             format!("{header}10,0\n120,45\n"),
             "line 3: view elevation = 120 deg",

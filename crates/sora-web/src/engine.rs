@@ -11,7 +11,7 @@ use serde_json::{Value, json};
 use sora::camera::Camera;
 use sora::colour::{DisplayMapping, Exposure, RgbColourSpace, SpectrumToXyz, Xyz};
 use sora::engine_tables::{EngineTableSettings, EngineTables};
-use sora::output::{ChannelKind, ExrOptions, LinearImage, encode_exr};
+use sora::output::{ChannelKind, ExrOptions, LinearImage, SkyImageUnits, encode_exr};
 use sora::spectrum::Spectrum;
 use sora::{
     Atmosphere, FastTableSize, ImageSettings, MultipleScatteringSettings, Scattering, Sky,
@@ -258,21 +258,14 @@ impl Engine {
             pixels,
         )
         .map_err(|e| e.to_string())?;
-        let options =
-            ExrOptions {
-                white_luminance_cd_m2: Some(683.0),
-                text_attributes: vec![
-                (
-                    "units".into(),
-                    "radiance_w_m2_sr (XYZ of spectral radiance integrated over nm, no 683 lm/W)"
-                        .into(),
-                ),
-                ("sun_elevation_deg".into(), spec.sun_elevation_deg.to_string()),
-                ("sun_azimuth_deg".into(), spec.sun_azimuth_deg.to_string()),
-                ("sun_disc".into(), image.sun_disc.to_string()),
-            ],
-                ..ExrOptions::default()
-            };
+        let mut options = ExrOptions::sky_image(
+            SkyImageUnits::Radiance,
+            spec.sun_elevation_deg,
+            spec.sun_azimuth_deg,
+        );
+        options
+            .text_attributes
+            .push(("sun_disc".into(), image.sun_disc.to_string()));
         let bytes = encode_exr(&linear, options).map_err(|e| e.to_string())?;
         Ok((json!({ "bytes": bytes.len() }), bytes))
     }
@@ -665,6 +658,42 @@ mod tests {
         let got: Vec<f64> =
             serde_json::from_value(reply["single_scattering_w_m2_sr_nm"].clone()).unwrap();
         assert_eq!(got, single.values());
+    }
+
+    /// The explorer's EXR download carries the header `sora render -o
+    /// sky.exr` writes (sora::output::ExrOptions::sky_image): radiance
+    /// units, whiteLuminance 683, the sun as asked, and the sun disc.
+    #[test]
+    fn the_exr_download_has_the_sky_image_header() {
+        let (reply, bytes) = request(
+            &mut Engine::default(),
+            r#"{"op": "exr", "sky": {"atmosphere": {"preset": "earth-clear"}, "sun_elevation_deg": 12.5, "sun_azimuth_deg": 200},
+                "image": {"camera": "fisheye", "width": 6, "height": 6, "sun_disc": false}}"#,
+        );
+        assert_eq!(reply["bytes"], bytes.len());
+        assert_eq!(&bytes[..4], &20000630u32.to_le_bytes());
+        let find = |needle: &str| {
+            bytes
+                .windows(needle.len())
+                .position(|w| w == needle.as_bytes())
+                .unwrap_or_else(|| panic!("no {needle:?} in the file"))
+                + needle.len()
+        };
+        // An attribute is its name, NUL, its type, NUL, its size, its value.
+        let text = |name: &str| {
+            let value = &bytes[find(&format!("sora:{name}\0string\0"))..];
+            let size = u32::from_le_bytes(value[..4].try_into().unwrap()) as usize;
+            String::from_utf8(value[4..4 + size].to_vec()).unwrap()
+        };
+        assert!(text("units").starts_with("radiance_w_m2_sr"));
+        assert_eq!(text("sun_elevation_deg"), "12.5");
+        assert_eq!(text("sun_azimuth_deg"), "200");
+        assert_eq!(text("sun_disc"), "false");
+        let white = find("whiteLuminance\0float\0");
+        assert_eq!(
+            f32::from_le_bytes(bytes[white + 4..white + 8].try_into().unwrap()),
+            683.0
+        );
     }
 
     /// The page's images against the library's default resolution (99th

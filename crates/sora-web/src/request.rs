@@ -131,15 +131,31 @@ pub struct AtmosphereSpec {
     pub ground_albedo: Option<f64>,
 }
 
-/// Which orders of scattering.
+/// Which orders of scattering, by the library's names
+/// ([`sora::Scattering::NAMES`], read by its `FromStr`: `"single"`,
+/// `"multiple"`); the resolution of the field is the engine's, by quality.
 #[derive(Debug, Clone, Copy, Default, Deserialize, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
+#[serde(try_from = "String")]
 pub enum ScatteringChoice {
     /// The sun's light scattered once (the paper's model).
     Single,
     /// All orders (the default, as in the CLI).
     #[default]
     Multiple,
+}
+
+impl TryFrom<String> for ScatteringChoice {
+    type Error = String;
+
+    fn try_from(name: String) -> Result<Self, String> {
+        match name
+            .parse::<sora::Scattering>()
+            .map_err(|e| e.to_string())?
+        {
+            sora::Scattering::Single => Ok(Self::Single),
+            sora::Scattering::Multiple(_) => Ok(Self::Multiple),
+        }
+    }
 }
 
 /// A sky: atmosphere, sun, eye and physics.
@@ -165,15 +181,31 @@ fn default_sun_azimuth_deg() -> f64 {
     180.0
 }
 
-/// A camera projection.
+/// A camera projection, by the library's names ([`sora::Camera::NAMES`],
+/// read by its `FromStr`: `"fisheye"`, `"equirectangular"` or its older
+/// spelling `"equirect"`); the explorer draws no perspective view.
 #[derive(Debug, Clone, Copy, Default, Deserialize, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
+#[serde(try_from = "String")]
 pub enum CameraChoice {
     /// The whole sky in a disc, zenith at the centre, north up, east left.
     #[default]
     Fisheye,
     /// A 360 x 180 degree panorama, north at the centre.
     Equirect,
+}
+
+impl TryFrom<String> for CameraChoice {
+    type Error = String;
+
+    fn try_from(name: String) -> Result<Self, String> {
+        match name.parse::<sora::Camera>().map_err(|e| e.to_string())? {
+            sora::Camera::Fisheye => Ok(Self::Fisheye),
+            sora::Camera::Equirectangular => Ok(Self::Equirect),
+            sora::Camera::Perspective(_) => Err(format!(
+                "camera: '{name}' is not drawn by the explorer: use 'fisheye' or 'equirectangular'"
+            )),
+        }
+    }
 }
 
 /// How finely an image is computed.
@@ -217,4 +249,48 @@ pub struct ImageSpec {
 
 fn default_true() -> bool {
     true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The camera and the scattering are read by the library's names, with
+    /// its one-line errors.
+    #[test]
+    fn choices_are_read_by_the_librarys_names() {
+        let camera = |name: &str| {
+            serde_json::from_str::<ImageSpec>(&format!(
+                r#"{{"camera": "{name}", "width": 4, "height": 4}}"#
+            ))
+            .map(|image| image.camera)
+            .map_err(|e| e.to_string())
+        };
+        assert_eq!(camera("fisheye"), Ok(CameraChoice::Fisheye));
+        assert_eq!(camera("equirect"), Ok(CameraChoice::Equirect));
+        assert_eq!(camera("equirectangular"), Ok(CameraChoice::Equirect));
+        let error = camera("perspective").unwrap_err();
+        assert!(error.contains("not drawn by the explorer"), "{error}");
+        let error = camera("sideways").unwrap_err();
+        assert!(
+            error.contains(
+                "'sideways' is unknown: use 'fisheye', 'equirectangular' or 'perspective'"
+            ),
+            "{error}"
+        );
+        let scattering = |name: &str| {
+            serde_json::from_str::<SkySpec>(&format!(
+                r#"{{"atmosphere": {{"preset": "earth-clear"}}, "sun_elevation_deg": 10, "scattering": "{name}"}}"#
+            ))
+            .map(|sky| sky.scattering)
+            .map_err(|e| e.to_string())
+        };
+        assert_eq!(scattering("single"), Ok(ScatteringChoice::Single));
+        assert_eq!(scattering("multiple"), Ok(ScatteringChoice::Multiple));
+        let error = scattering("double").unwrap_err();
+        assert!(
+            error.contains("'double' is unknown: use 'single' or 'multiple'"),
+            "{error}"
+        );
+    }
 }

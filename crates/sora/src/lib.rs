@@ -53,6 +53,7 @@
 //!    module that touches files.
 //!
 //! Beside the pipeline: [`input`] (bounded reading of text inputs),
+//! [`table`] (the one reader of numeric CSV tables),
 //! [`sun_position`] (the sun's position from a time and a place, NREL's
 //! SPA), [`inversion`] (aerosol retrieval from measured radiances, the
 //! forward model being the [`Sky`]) and [`error`].
@@ -78,7 +79,7 @@ mod parallel;
 pub mod sky;
 pub mod spectrum;
 pub mod sun_position;
-pub(crate) mod table;
+pub mod table;
 pub mod transport;
 
 pub use atmosphere::Atmosphere;

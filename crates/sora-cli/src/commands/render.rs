@@ -11,6 +11,7 @@ use sora::camera::{Camera, PerspectiveCamera};
 use sora::colour::{RgbColourSpace, SpectrumToXyz};
 use sora::output::{
     ChannelKind, DisplayImage, ExrOptions, ExrSampleType, LinearImage, OutputFiles, OutputFormat,
+    SkyImageUnits,
 };
 
 use crate::arguments::{
@@ -790,31 +791,18 @@ fn stage_exr(
     (main, layers): (&LinearImage, &[(&str, &LinearImage)]),
     attributes: Vec<(String, String)>,
 ) -> anyhow::Result<()> {
-    let (units, white_luminance) = match args.units {
-        Units::Radiance => (
-            "radiance_w_m2_sr (XYZ of spectral radiance integrated over nm, no 683 lm/W)",
-            683.0,
-        ),
-        Units::Luminance => ("luminance_cd_m2 (Y in cd/m^2)", 1.0),
+    let units = match args.units {
+        Units::Radiance => SkyImageUnits::Radiance,
+        Units::Luminance => SkyImageUnits::Luminance,
     };
     let (sun_elevation, sun_azimuth) = sky.sun_position_deg();
-    let options = ExrOptions {
-        sample_type: match (args.exr_half, args.half_overflow) {
-            (false, _) => ExrSampleType::F32,
-            (true, HalfOverflow::Error) => ExrSampleType::F16,
-            (true, HalfOverflow::Clamp) => ExrSampleType::F16Clamped,
-        },
-        white_luminance_cd_m2: Some(white_luminance),
-        text_attributes: [
-            ("units".into(), units.into()),
-            ("sun_elevation_deg".into(), sun_elevation.to_string()),
-            ("sun_azimuth_deg".into(), sun_azimuth.to_string()),
-        ]
-        .into_iter()
-        .chain(attributes)
-        .collect(),
-        ..ExrOptions::default()
+    let mut options = ExrOptions::sky_image(units, sun_elevation, sun_azimuth);
+    options.sample_type = match (args.exr_half, args.half_overflow) {
+        (false, _) => ExrSampleType::F32,
+        (true, HalfOverflow::Error) => ExrSampleType::F16,
+        (true, HalfOverflow::Clamp) => ExrSampleType::F16Clamped,
     };
+    options.text_attributes.extend(attributes);
     let half_hint = if args.exr_half && args.half_overflow == HalfOverflow::Error {
         " (half floats end at 65504: --half-overflow clamp clamps, --no-sun-disc leaves the sun out, and without --exr-half 32-bit floats hold everything)"
     } else {

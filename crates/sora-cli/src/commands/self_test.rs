@@ -136,19 +136,14 @@ fn relative_error(value: f64, reference: f64) -> f64 {
 
 fn mie_checks() -> anyhow::Result<Vec<Check>> {
     let mut checks = Vec::new();
-    for line in MIE_REFERENCE
-        .lines()
-        .filter(|l| !l.starts_with('#') && !l.starts_with("m_re"))
-    {
-        let numbers: Vec<f64> = line
-            .split(',')
-            .map(|field| field.trim().parse::<f64>())
-            .collect::<Result<_, _>>()?;
-        let [m_re, m_im, x, qext, qsca, qabs, qback, g] = numbers[..] else {
-            bail!(
-                "self_test_mie.csv: a row has {} fields, not 8",
-                numbers.len()
-            );
+    let table = sora::table::NumericTable::parse(MIE_REFERENCE, "self_test_mie.csv")?;
+    let header = "m_re,m_im,x,qext,qsca,qabs,qback,g";
+    if table.column_names.join(",") != header {
+        bail!("self_test_mie.csv: the header is not {header}");
+    }
+    for row in &table.rows {
+        let [m_re, m_im, x, qext, qsca, qabs, qback, g] = row[..] else {
+            bail!("self_test_mie.csv: a row has {} fields, not 8", row.len());
         };
         let m = Complex64::new(m_re, m_im);
         let q = compute_efficiencies(m, x)?;

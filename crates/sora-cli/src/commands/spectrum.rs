@@ -114,6 +114,7 @@ pub struct SpectrumArgs {
 
     /// Many directions: a CSV file with the header
     /// view_elevation_deg,view_azimuth_deg and one direction per line
+    /// (lines starting with # are comments)
     #[arg(long, value_name = "FILE.csv", group = "views")]
     directions: Option<std::path::PathBuf>,
 
@@ -219,8 +220,7 @@ fn directions(
     }
     if let Some(path) = &args.directions {
         let text = sora::input::read_text(path)?;
-        let views =
-            parse_directions_csv(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+        let views = parse_directions_csv(&text, &path.display().to_string())?;
         check_direction_count(&path.display().to_string(), views.len() as f64, wavelengths)?;
         return Ok(views);
     }

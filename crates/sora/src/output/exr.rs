@@ -86,6 +86,61 @@ pub struct ExrOptions {
     pub text_attributes: Vec<(String, String)>,
 }
 
+/// What the channels of a sky image hold, as [`ExrOptions::sky_image`]
+/// labels them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum SkyImageUnits {
+    /// CIE XYZ (or linear RGB from it) of the spectral radiance integrated
+    /// over nm, without the 683 lm/W: W m^-2 sr^-1 weighted by the
+    /// colour-matching functions. `whiteLuminance` is 683.
+    #[default]
+    Radiance,
+    /// As [`SkyImageUnits::Radiance`] times 683 lm/W, so that Y is the
+    /// luminance in cd/m^2. `whiteLuminance` is 1.
+    Luminance,
+}
+
+impl SkyImageUnits {
+    /// The `sora:units` attribute's text.
+    pub fn description(self) -> &'static str {
+        match self {
+            Self::Radiance => {
+                "radiance_w_m2_sr (XYZ of spectral radiance integrated over nm, no 683 lm/W)"
+            }
+            Self::Luminance => "luminance_cd_m2 (Y in cd/m^2)",
+        }
+    }
+
+    /// The `whiteLuminance` attribute: cd/m^2 of a channel value of 1.
+    pub fn white_luminance_cd_m2(self) -> f32 {
+        match self {
+            Self::Radiance => 683.0,
+            Self::Luminance => 1.0,
+        }
+    }
+}
+
+impl ExrOptions {
+    /// The header of a rendered sky image, as `sora render -o sky.exr` and
+    /// the explorer's download write it: `whiteLuminance` and `sora:units`
+    /// from `units`, then `sora:sun_elevation_deg` and
+    /// `sora:sun_azimuth_deg` (the sun's apparent position, degrees);
+    /// 32-bit floats, ZIP compressed. Callers add their own attributes to
+    /// [`ExrOptions::text_attributes`] and choose
+    /// [`ExrOptions::sample_type`].
+    pub fn sky_image(units: SkyImageUnits, sun_elevation_deg: f64, sun_azimuth_deg: f64) -> Self {
+        Self {
+            white_luminance_cd_m2: Some(units.white_luminance_cd_m2()),
+            text_attributes: vec![
+                ("units".into(), units.description().into()),
+                ("sun_elevation_deg".into(), sun_elevation_deg.to_string()),
+                ("sun_azimuth_deg".into(), sun_azimuth_deg.to_string()),
+            ],
+            ..Self::default()
+        }
+    }
+}
+
 /// The largest finite half-float value.
 const HALF_FLOAT_MAX: f32 = 65504.0;
 
@@ -378,12 +433,25 @@ pub fn read_exr_channel(path: &Path, name: &str) -> Result<(usize, usize, Vec<f6
 mod tests {
     use super::*;
 
+    /// An encoded file read back with the `exr` crate: every channel and
+    /// attribute of its one layer.
+    fn decode(bytes: &[u8]) -> Image<Layer<AnyChannels<FlatSamples>>> {
+        use ::exr::prelude::{ReadChannels, ReadLayers};
+        ::exr::prelude::read()
+            .no_deep_data()
+            .largest_resolution_level()
+            .all_channels()
+            .first_valid_layer()
+            .all_attributes()
+            .from_buffered(std::io::Cursor::new(bytes))
+            .unwrap()
+    }
+
     /// The same image and attributes make the same bytes every time (the
     /// `exr` crate's attribute map has a random order per instance), and
     /// the file still reads back with every attribute and pixel.
     #[test]
     fn the_same_image_encodes_to_the_same_bytes() {
-        use ::exr::prelude::{ReadChannels, ReadLayers};
         let image = LinearImage::new(
             2,
             2,
@@ -402,14 +470,7 @@ mod tests {
         for _ in 0..8 {
             assert_eq!(encode_exr(&image, options()).unwrap(), first);
         }
-        let decoded = ::exr::prelude::read()
-            .no_deep_data()
-            .largest_resolution_level()
-            .all_channels()
-            .first_valid_layer()
-            .all_attributes()
-            .from_buffered(std::io::Cursor::new(&first))
-            .unwrap();
+        let decoded = decode(&first);
         let attributes = &decoded.layer_data.attributes.other;
         for n in 0..8 {
             assert_eq!(
@@ -428,6 +489,41 @@ mod tests {
             .unwrap();
         let values: Vec<f32> = red.sample_data.values_as_f32().collect();
         assert_eq!(values, [0.25, 2.0, 0.0, 1e-3]);
+    }
+
+    /// A sky image's header reads back with its units, whiteLuminance and
+    /// sun, for both units, and the two units' whiteLuminance values agree
+    /// with the 683 lm/W that separates them.
+    #[test]
+    fn a_sky_image_header_names_its_units_and_sun() {
+        let image = LinearImage::new(1, 1, ChannelKind::Xyz, vec![[1.0, 2.0, 3.0]]).unwrap();
+        for (units, white, unit_text) in [
+            (SkyImageUnits::Radiance, 683.0, "radiance_w_m2_sr"),
+            (SkyImageUnits::Luminance, 1.0, "luminance_cd_m2"),
+        ] {
+            let mut options = ExrOptions::sky_image(units, 12.5, -0.25);
+            options
+                .text_attributes
+                .push(("sun_disc".into(), "false".into()));
+            assert_eq!(options.sample_type, ExrSampleType::F32);
+            let bytes = encode_exr(&image, options).unwrap();
+            let decoded = decode(&bytes);
+            let layer = &decoded.layer_data.attributes;
+            assert_eq!(layer.white_luminance, Some(white));
+            let text = |name: &str| match layer.other.get(&Text::from(name)) {
+                Some(AttributeValue::Text(text)) => text.to_string(),
+                other => panic!("{name}: {other:?}"),
+            };
+            assert!(text("sora:units").starts_with(unit_text));
+            assert_eq!(text("sora:sun_elevation_deg"), "12.5");
+            assert_eq!(text("sora:sun_azimuth_deg"), "-0.25");
+            assert_eq!(text("sora:sun_disc"), "false");
+        }
+        assert_eq!(
+            SkyImageUnits::Radiance.white_luminance_cd_m2()
+                / SkyImageUnits::Luminance.white_luminance_cd_m2(),
+            crate::colour::MAXIMUM_LUMINOUS_EFFICACY_LM_PER_W as f32
+        );
     }
 
     #[test]

@@ -48,7 +48,7 @@ pub use atomic_file::OutputFiles;
 pub use path::{MAX_SYMBOLIC_LINK_HOPS, output_target, output_targets};
 
 pub use exr::{
-    ExrCompression, ExrOptions, ExrSampleType, encode_exr, encode_exr_with_layers,
+    ExrCompression, ExrOptions, ExrSampleType, SkyImageUnits, encode_exr, encode_exr_with_layers,
     read_exr_channel, write_exr, write_exr_with_layers,
 };
 pub use format::OutputFormat;
