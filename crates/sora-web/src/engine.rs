@@ -498,20 +498,21 @@ pub struct RealtimeTables {
 }
 
 /// The real-time view's tables: the preview's sky (every 40 nm, the coarse
-/// field) and 20 suns x 3 altitudes x (2 x 32) x 32 views, against the
-/// library's default of the paper's 21 wavelengths and 48 suns x 6
-/// altitudes x (2 x 64) x 64 views (what `sora tables` bakes), since the
-/// bake solves the multiple-scattering field once per sun and altitude
-/// node: about 1.7 s per layer natively at the default resolution, 0.18 s
-/// at this one (measured), 2-3 times that in wasm. Fewer suns cost
-/// accuracy first: 16 put the fisheye 16 % off at sun -4 and 9 % at 45
-/// (99th percentile of the luminance error; 2.4 and 2.6 % with 20, the
-/// browser test, `web/tests/realtime.test.mjs`). The one constant to
-/// raise when the bake gets faster.
+/// field) and 48 suns x 3 altitudes x (2 x 32) x 32 views (3.6 MB), against
+/// the library's default of the paper's 21 wavelengths and 48 suns x 6
+/// altitudes x (2 x 64) x 64 views (what `sora tables` bakes). The bake
+/// solves one multiple-scattering field for every layer; in headless
+/// Chromium on the 2-core machine it takes 4.8-5.7 s (2.2 s with 20 suns).
+/// Measured by the browser test (`web/tests/realtime.test.mjs`; 99th
+/// percentile of the fisheye's luminance error against the sky the tables
+/// were baked from, suns 45 / 10 / 2 / -4): 0.54 / 0.54 / 3.4 / 2.5 % with
+/// 48 suns, 1.1 / 1.4 / 3.2 / 2.7 % with 20, 9 % at 45 and 16 % at -4 with
+/// 16. 64 zenith nodes per half instead of 32 moved none of these by more
+/// than 0.15 points, so the low suns' error is not the zenith axis.
 pub const REALTIME_TABLES: RealtimeTables = RealtimeTables {
     quality: Quality::Preview,
     settings: EngineTableSettings {
-        sun_nodes: 20,
+        sun_nodes: 48,
         altitude_nodes: 3,
         zenith_nodes_per_half: 32,
         azimuth_nodes: 32,
