@@ -22,12 +22,12 @@
 // /usr/bin/chromium), SORA_WEB_OUT (default target/web-test: screenshot and
 // report). Run: cd web/tests && npm ci && npm test
 
-import { createServer } from 'node:http';
-import { readFile, mkdir, writeFile } from 'node:fs/promises';
+import { mkdir, writeFile } from 'node:fs/promises';
 import { execFileSync } from 'node:child_process';
-import { extname, join, resolve, dirname } from 'node:path';
+import { join, resolve, dirname } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import assert from 'node:assert/strict';
+import { serveWeb } from './serve.mjs';
 import { chromium } from 'playwright-core';
 
 const here = dirname(fileURLToPath(import.meta.url));
@@ -56,26 +56,6 @@ function verdict(ms, bar) {
   return ms <= 2 * bar ? 'warn' : 'FAIL';
 }
 
-const TYPES = { '.html': 'text/html', '.js': 'text/javascript', '.css': 'text/css', '.wasm': 'application/wasm' };
-
-function serve() {
-  const server = createServer(async (request, response) => {
-    const path = new URL(request.url, 'http://localhost').pathname;
-    const file = resolve(webRoot, `.${path === '/' ? '/index.html' : path}`);
-    if (!file.startsWith(webRoot) || file.includes('/tests/')) {
-      response.writeHead(404).end();
-      return;
-    }
-    try {
-      const body = await readFile(file);
-      response.writeHead(200, { 'content-type': TYPES[extname(file)] || 'application/octet-stream' }).end(body);
-    } catch {
-      response.writeHead(404).end();
-    }
-  });
-  return new Promise((ok) => server.listen(0, '127.0.0.1', () => ok(server)));
-}
-
 function relativeDifference(a, b) {
   return Math.abs(a - b) / Math.max(Math.abs(b), 1e-300);
 }
@@ -90,7 +70,7 @@ function assertClose(actual, expected, what) {
   return worst;
 }
 
-const server = await serve();
+const server = await serveWeb(webRoot);
 const url = `http://127.0.0.1:${server.address().port}/`;
 const browser = await chromium.launch({
   executablePath: process.env.CHROMIUM || '/usr/bin/chromium',

@@ -1,5 +1,5 @@
 // Serves the explorer's files (web/, not web/tests/) on a free localhost
-// port for the browser tests; resolves to the listening http.Server.
+// port for the browser tests (explorer.test.mjs, realtime.test.mjs); resolves to the listening http.Server.
 
 import { createServer } from 'node:http';
 import { readFile } from 'node:fs/promises';
