@@ -3,7 +3,7 @@
 // - the page loads and draws a sky, and moving the sun slider changes it;
 // - a clicked direction's spectrum equals the native library's for the same
 //   inputs to 1e-9 relative: the same engine compiled natively (full
-//   precision) and `sora spectrum` (the CLI, 10 significant digits);
+//   precision) and `sora spectrum --format json` (the CLI, every digit);
 // - bad input (an out-of-range value typed into a field, an atmosphere file
 //   that does not parse) shows the library's one-line error and keeps the
 //   previous sky;
@@ -185,7 +185,7 @@ try {
     '--view-elevation', String(spectrum.view_elevation_deg), '--view-azimuth', String(spectrum.view_azimuth_deg),
     '--format', 'json', '--polarisation', 'scalar']).toString()); // the explorer's sky is scalar
   const worstCli = assertClose(spectrum.radiance_w_m2_sr_nm, fromCli.radiance_w_m2_sr_nm, 'radiance against sora spectrum');
-  report.checks.push(`spectrum at elevation ${spectrum.view_elevation_deg.toFixed(3)}, azimuth ${spectrum.view_azimuth_deg.toFixed(3)} deg: worst relative difference ${worstNative.toExponential(2)} against the native engine, ${worstCli.toExponential(2)} against sora spectrum (10 digits)`);
+  report.checks.push(`spectrum at elevation ${spectrum.view_elevation_deg.toFixed(3)}, azimuth ${spectrum.view_azimuth_deg.toFixed(3)} deg: worst relative difference ${worstNative.toExponential(2)} against the native engine, ${worstCli.toExponential(2)} against sora spectrum (JSON, every digit)`);
   console.log(report.checks.at(-1));
   const csv = await page.evaluate(() => window.soraExplorer.spectrumCsv());
   assert.match(csv, /^wavelength_nm,radiance_w_m2_sr_nm,single_scattering_w_m2_sr_nm\n380,/);

@@ -176,12 +176,8 @@ pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
     sora::sky::check_irradiance_work(method)?;
     let filters = args.filters.filters()?;
     let atmosphere = args.source.load()?;
-    // Banded gases: the sky sums its k-distribution terms (five solves).
-    let solves = if sora::atmosphere::gas_bands::has_gas_bands(&atmosphere) {
-        sora::atmosphere::gas_bands::TERMS
-    } else {
-        1
-    };
+    // Banded gases: the sky sums its k-distribution terms.
+    let solves = sora::atmosphere::gas_bands::solves_per_wavelength(&atmosphere);
     let sky = |sun: &SunAndObserver| sun.sky(&mut atmosphere.clone(), scattering, method);
     let planes = 1 + usize::from(tilted.is_some());
     let announce = |grid: &sora::spectrum::WavelengthGrid| {

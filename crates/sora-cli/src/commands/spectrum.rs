@@ -295,12 +295,8 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
         );
     }
     let mut atmosphere = args.source.load()?;
-    // Banded gases: the sky sums its k-distribution terms (five solves).
-    let solves = if sora::atmosphere::gas_bands::has_gas_bands(&atmosphere) {
-        sora::atmosphere::gas_bands::TERMS
-    } else {
-        1
-    };
+    // Banded gases: the sky sums its k-distribution terms.
+    let solves = sora::atmosphere::gas_bands::solves_per_wavelength(&atmosphere);
     if !filters.is_empty() {
         return run_filtered(
             &args,

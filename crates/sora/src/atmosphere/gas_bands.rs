@@ -345,6 +345,12 @@ pub fn has_gas_bands(atmosphere: &Atmosphere) -> bool {
     atmosphere.species.iter().any(|s| band_of(s).is_some())
 }
 
+/// How many monochromatic solves a [`crate::Sky`] of `atmosphere` makes per
+/// wavelength: [`TERMS`] with a banded gas (it sums the k-terms), else 1.
+pub fn solves_per_wavelength(atmosphere: &Atmosphere) -> usize {
+    if has_gas_bands(atmosphere) { TERMS } else { 1 }
+}
+
 /// Whether `atmosphere` has a banded gas at its single solve's effective
 /// coefficient (not at a k-term): the atmosphere whose terms a
 /// [`crate::Sky`] sums (`sky/k_terms.rs`).

@@ -100,9 +100,11 @@ pub(crate) fn turn_share(view: LocalView, e_deg: f64, horizon: f64) -> f64 {
     let e = e_deg.to_radians();
     let (z, phi) = (view.zenith_rad, view.relative_azimuth_rad);
     let cos_theta = z.cos() * e.sin() + z.sin() * phi.cos() * e.cos();
-    let degrees = |d: f64| d.to_radians();
-    smoothstep(degrees(40.0).cos(), degrees(10.0).cos(), cos_theta)
-        * (1.0 - smoothstep(horizon - degrees(20.0), horizon - degrees(5.0), z))
+    smoothstep(
+        40f64.to_radians().cos(),
+        10f64.to_radians().cos(),
+        cos_theta,
+    ) * (1.0 - smoothstep(horizon - 20f64.to_radians(), horizon - 5f64.to_radians(), z))
         * (1.0 - smoothstep(70.0, 85.0, e_deg))
 }
 

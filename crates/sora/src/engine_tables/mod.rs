@@ -12,8 +12,9 @@
 //!   the sun at elevation e: 4D, as layers (e, h) of 2D images (z, phi).
 //!   Each layer is the library's own image path
 //!   ([`Sky::radiance_from_image_tables`]: single scattering with the exact
-//!   phase functions, the multiple-scattering field, the sunlit ground)
-//!   at the layer's sun and eye, without the sun's disc.
+//!   phase functions, the multiple-scattering field solved once for every
+//!   sun and aimed at the layer's eye and sun, the sunlit ground) at the
+//!   layer's sun and eye, without the sun's disc.
 //! - **transmittance**: the transmittance of sunlight from altitude h to
 //!   the top of the atmosphere along view cosine mu (2D), as XYZ of the
 //!   transmitted solar spectrum over XYZ of the solar spectrum, per
@@ -176,7 +177,8 @@ impl EngineTables {
     /// Bakes the tables of `sky`'s atmosphere, wavelengths, physics and
     /// fast-method table size (its sun and eye are not used; the sky must
     /// use [`Method::Fast`]). `progress(fraction)` is called as layers of
-    /// the sky table complete.
+    /// the sky table complete. The multiple-scattering field is solved once
+    /// for all layers (`sky/shared_field.rs`).
     pub fn bake(
         sky: &Sky,
         settings: &EngineTableSettings,

@@ -114,7 +114,7 @@ impl SkyImageUnits {
     /// The `whiteLuminance` attribute: cd/m^2 of a channel value of 1.
     pub fn white_luminance_cd_m2(self) -> f32 {
         match self {
-            Self::Radiance => 683.0,
+            Self::Radiance => crate::colour::MAXIMUM_LUMINOUS_EFFICACY_LM_PER_W as f32,
             Self::Luminance => 1.0,
         }
     }

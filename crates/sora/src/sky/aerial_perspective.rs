@@ -506,6 +506,9 @@ impl Sky {
 /// (altitude, sun elevation) and taken from the sky itself at the eye.
 #[derive(Default)]
 struct SkyIrradiances {
+    /// Irradiances known so far (W m^-2 nm^-1), keyed by the bits of the
+    /// point's distance from the planet's centre (m) and the sine of the
+    /// sun's elevation there.
     known: Vec<((u64, u64), SampledSpectrum)>,
 }
 

@@ -161,8 +161,8 @@ impl Sky {
             .collect())
     }
 
-    /// Calls `progress` for term `k` of the terms' work: `done` of `total`
-    /// in term k is (k total + done) of (terms x total).
+    /// Term `k`'s progress (`done` of `total`) as a share of all the terms'
+    /// work, for a `progress` callback: (k total + done) of (terms x total).
     pub(super) fn term_progress(&self, k: usize, done: u64, total: u64) -> (u64, u64) {
         let terms = self.k_terms.len() as u64;
         (k as u64 * total + done, terms * total)

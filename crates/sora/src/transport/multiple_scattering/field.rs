@@ -150,7 +150,8 @@ impl SunZenithAxis {
 }
 
 /// The diffuse (multiply scattered) light field of a sky, solved at the
-/// sun zenith angles its view rays meet.
+/// sun zenith angles its view rays meet, or at every sun zenith angle
+/// ([`FieldRequest::every_sun`]: one field aimed at many skies).
 #[derive(Debug, Clone)]
 pub struct MultipleScatteringField {
     pub(super) settings: MultipleScatteringSettings,
@@ -316,7 +317,8 @@ impl MultipleScatteringField {
         let settings = request.settings;
         settings.validate()?;
         let optics = sky.optics();
-        let sun_axis = SunZenithAxis::for_reach(sky, &settings, request.reach(sky));
+        let reach = request.reach(sky);
+        let sun_axis = SunZenithAxis::for_reach(sky, &settings, reach);
         let geometry = ColumnGeometry::new(sky, &settings);
         let scaled = ScaledOptics::delta_m(optics, geometry.streams.count());
         let mut sun_columns: Vec<Option<Vec<f64>>> =
@@ -354,7 +356,7 @@ impl MultipleScatteringField {
         );
         let peak_beam = compute_peak_beam(
             sky,
-            (request.sun_column_nodes, request.reach(sky)),
+            (request.sun_column_nodes, reach),
             (&geometry, &scaled),
             &forward_peak,
         );
@@ -396,9 +398,10 @@ impl MultipleScatteringField {
 
     /// This field (solved with [`FieldRequest::every_sun`]) for an eye at
     /// `observer_radius_m` from the planet's centre under the sun toward
-    /// `sun` (unit, east-north-up): the columns, their moments and the
-    /// peak beam are shared, not copied; only the view march's eye and sun
-    /// change.
+    /// `sun` (unit, east-north-up): the columns and their moments are
+    /// shared (`Arc`), not copied; the rest of the optics (the peak beam,
+    /// the forward-peak tables) is cloned; only the view march's eye and
+    /// sun change.
     pub(crate) fn aimed(&self, observer_radius_m: f64, sun: Vector3) -> MultipleScatteringField {
         debug_assert!(self.every_sun, "a field solved for its own eye's suns only");
         let mut aimed = self.clone();
