@@ -78,6 +78,11 @@ fn the_docs_fisheyes_are_what_their_commands_write() {
     assert!(docs.contains(&format!("(`sora render ... {common} -o FILE.png`;")));
     for (name, atmosphere, sun) in [
         ("earth_clear_noon", "earth-clear", "60 / 180"),
+        ("earth_clear_sunset", "earth-clear", "3 / 270"),
+        ("earth_clear_twilight", "earth-clear", "-2 / 270"),
+        ("paper_earth_noon", "paper-earth", "60 / 180"),
+        ("paper_mars_sunset", "paper-mars", ""),
+        ("mars_dust_sunset", "mars-dust", ""),
     ] {
         let (elevation, azimuth) = sun.split_once(" / ").unwrap_or(("3", "270"));
         let mut options = format!("--preset {atmosphere} --sun-elevation {elevation}");
