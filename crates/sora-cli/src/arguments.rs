@@ -606,7 +606,7 @@ impl SunAndObserver {
                 .expect("clap requires --sun-elevation or --time");
             return Ok(SunUsed {
                 elevation_deg: elevation,
-                azimuth_deg: self.sun_azimuth,
+                azimuth_deg: sora::geometry::azimuth_in_one_turn_deg(self.sun_azimuth),
                 distance_au: self.sun_distance_au,
                 earth_sun_distance_au: None,
                 site_elevation_m: None,

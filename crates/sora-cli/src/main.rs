@@ -13,6 +13,7 @@
 mod arguments;
 mod bitmap_text;
 mod commands;
+mod csv;
 mod estimate;
 mod fit_plot;
 mod json;

@@ -88,8 +88,8 @@ fn out_of_range_values_exit_1_whichever_parser_saw_them() {
 }
 
 /// The radiance `sora spectrum` gives for the sun and the view at these
-/// azimuths.
-fn zenith_angle_spectrum(sun_azimuth: &str, view_azimuth: &str) -> Vec<f64> {
+/// azimuths, and the sun's azimuth its JSON reports.
+fn zenith_angle_spectrum(sun_azimuth: &str, view_azimuth: &str) -> (Vec<f64>, f64) {
     let out = json(&sora(&[
         "spectrum",
         "--preset",
@@ -107,14 +107,20 @@ fn zenith_angle_spectrum(sun_azimuth: &str, view_azimuth: &str) -> Vec<f64> {
         "--format",
         "json",
     ]));
-    numbers(&out["radiance_w_m2_sr_nm"])
+    (
+        numbers(&out["radiance_w_m2_sr_nm"]),
+        out["sun_azimuth_deg"].as_f64().unwrap(),
+    )
 }
 
 #[test]
 fn azimuths_are_read_modulo_360() {
-    let base = zenith_angle_spectrum("320", "40");
+    let (base, sun_azimuth) = zenith_angle_spectrum("320", "40");
+    assert_eq!(sun_azimuth, 320.0);
     for (sun, view) in [("-400", "40"), ("320", "400"), ("680", "-320")] {
-        let turned = zenith_angle_spectrum(sun, view);
+        let (turned, sun_azimuth) = zenith_angle_spectrum(sun, view);
+        // Reported in one turn, as the sky used it.
+        assert_eq!(sun_azimuth, 320.0, "{sun}");
         for (a, b) in turned.iter().zip(&base) {
             // The same direction up to the rounding of the sine and cosine.
             assert!((a / b - 1.0).abs() < 1e-9, "{sun} {view}: {a} vs {b}");

@@ -69,19 +69,37 @@ fn the_readme_command_writes_the_readme_picture() {
     assert_render_writes(tokyo, "docs/readme_tokyo.png");
 }
 
+/// docs/README.md: "the multiple-scattering fisheyes byte for byte", each
+/// by the command of its table row with the page's common options.
 #[test]
-fn a_docs_fisheye_is_what_its_command_writes() {
+fn the_docs_fisheyes_are_what_their_commands_write() {
     let docs = document("docs/README.md");
-    let options = "--preset earth-clear --sun-elevation 60";
-    assert!(docs.contains(&format!(
-        "| `earth_clear_noon_fisheye_*.png` | earth-clear | 60 / 180 | `{options}` |"
-    )));
     let common = "--gamut preserve-hue --polarisation scalar";
     assert!(docs.contains(&format!("(`sora render ... {common} -o FILE.png`;")));
-    assert_render_writes(
-        &format!("{options} {common}"),
-        "docs/earth_clear_noon_fisheye_multiple.png",
-    );
+    for (name, atmosphere, sun) in [
+        ("earth_clear_noon", "earth-clear", "60 / 180"),
+        ("earth_clear_sunset", "earth-clear", "3 / 270"),
+        ("earth_clear_twilight", "earth-clear", "-2 / 270"),
+        ("paper_earth_noon", "paper-earth", "60 / 180"),
+        ("paper_mars_sunset", "paper-mars", ""),
+        ("mars_dust_sunset", "mars-dust", ""),
+    ] {
+        let (elevation, azimuth) = sun.split_once(" / ").unwrap_or(("3", "270"));
+        let mut options = format!("--preset {atmosphere} --sun-elevation {elevation}");
+        if azimuth != "180" {
+            options.push_str(&format!(" --sun-azimuth {azimuth}"));
+        }
+        let row = if sun.is_empty() {
+            format!("| `{name}_fisheye_*.png` | {atmosphere} | `{options}` |")
+        } else {
+            format!("| `{name}_fisheye_*.png` | {atmosphere} | {sun} | `{options}` |")
+        };
+        assert!(docs.contains(&row), "docs/README.md has no row {row}");
+        assert_render_writes(
+            &format!("{options} {common}"),
+            &format!("docs/{name}_fisheye_multiple.png"),
+        );
+    }
 }
 
 /// The radiance at 380 nm of the paper's Table 1 view, as `sora spectrum`
@@ -114,4 +132,48 @@ fn the_table1_numbers_are_what_sora_spectrum_prints() {
         );
     }
     assert!(polarised < multiple);
+}
+
+/// docs/retrieval.md's example: its command (the README's, with the plot
+/// into `docs/`) prints the table the document shows, digit for digit (the
+/// timing line on stderr aside), and writes `docs/retrieval_fit.png` byte
+/// for byte.
+#[test]
+fn the_retrieval_example_prints_its_table_and_draws_its_plot() {
+    let docs = document("docs/retrieval.md");
+    let inputs = "--radiances docs/retrieval_case4_radiances.csv \\\n    --optical-depths docs/retrieval_case4_optical_depths.csv";
+    assert!(docs.contains(&format!(
+        "sora retrieve {inputs} --plot docs/retrieval_fit.png\n```"
+    )));
+    assert!(document("README.md").contains(&format!(
+        "target/release/sora retrieve {inputs} --plot fit.png\n```"
+    )));
+    let shown = docs
+        .split("```text\n")
+        .nth(1)
+        .and_then(|rest| rest.split("```").next())
+        .unwrap();
+    let (table, timing) = shown.trim_end().rsplit_once('\n').unwrap();
+    assert!(timing.starts_with("1 scan(s) retrieved in "), "{timing}");
+    let dir = tempfile::tempdir().unwrap();
+    let plot = dir.path().join("fit.png");
+    // From the repository's root, as the document runs it (the table names
+    // the file as given).
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_sora"))
+        .current_dir(repository_file(""))
+        .arg("retrieve")
+        .args(inputs.replace("\\\n", " ").split_whitespace())
+        .args(["--plot", plot.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let printed = stdout(&out);
+    assert_eq!(printed.trim_end(), table, "docs/retrieval.md's table");
+    let (written, documented) = (
+        std::fs::read(&plot).unwrap(),
+        std::fs::read(repository_file("docs/retrieval_fit.png")).unwrap(),
+    );
+    assert!(
+        written == documented,
+        "--plot differs from docs/retrieval_fit.png"
+    );
 }

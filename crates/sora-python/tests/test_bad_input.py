@@ -31,6 +31,28 @@ def test_bad_widths_are_the_cli_message(sora_cli, sky, tmp_path, width):
     assert not output.exists()
 
 
+@pytest.mark.parametrize("python, cli, library", [
+    ({"wavelengths_nm": "200:800:10"}, ["--sun-elevation", "30", "--wavelengths", "200:800:10"],
+     "start_nm = 200 nm is out of range: allowed 300..=2500 nm"),
+    ({"sun_elevation_deg": 95}, ["--sun-elevation", "95"],
+     "sun elevation = 95 deg is out of range: allowed -90..=90 deg"),
+])
+def test_out_of_range_values_are_the_librarys_message(sora_cli, python, cli, library):
+    # The sky's ValueError and the command's one line (status 1) both end in
+    # the library's message, whichever parser read the value first.
+    settings = {"sun_elevation_deg": 30, **python}
+    with pytest.raises(ValueError) as error:
+        sora.Sky(sora.Atmosphere.preset("earth-clear"), **settings)
+    assert str(error.value).endswith(library), str(error.value)
+    command = [str(sora_cli), "spectrum", "--preset", "earth-clear", "--view-elevation", "10",
+               "--view-azimuth", "0", *cli]
+    result = subprocess.run(command, capture_output=True, text=True)
+    assert result.returncode == 1, result
+    assert result.stderr.startswith("error: ") and result.stderr.endswith(f"{library}\n"), result.stderr
+    assert result.stderr.count("\n") == 1, result.stderr
+    assert result.stdout == ""
+
+
 def test_a_bad_height_is_the_librarys_message(sky):
     with pytest.raises(ValueError, match=r"^image height = -3 pixels is out of range"):
         sky.render(width=8, height=-3)

@@ -11,7 +11,7 @@ use serde_json::{Value, json};
 use sora::camera::Camera;
 use sora::colour::{DisplayMapping, Exposure, RgbColourSpace, SpectrumToXyz, Xyz};
 use sora::engine_tables::{EngineTableSettings, EngineTables};
-use sora::output::{ChannelKind, ExrOptions, LinearImage, SkyImageUnits, encode_exr};
+use sora::output::{ChannelKind, ExrOptions, SkyImageUnits, encode_exr};
 use sora::spectrum::Spectrum;
 use sora::{
     Atmosphere, FastTableSize, ImageSettings, MultipleScatteringSettings, Scattering, Sky,
@@ -243,21 +243,14 @@ impl Engine {
             ..image.clone()
         };
         let (xyz, _) = self.render_xyz(spec, &full)?;
-        let space = RgbColourSpace::Srgb;
-        let pixels = xyz
-            .iter()
-            .map(|c| {
-                let rgb = space.linear_rgb_from_xyz(*c);
-                [rgb.r as f32, rgb.g as f32, rgb.b as f32]
-            })
-            .collect();
-        let linear = LinearImage::new(
-            image.width as usize,
-            image.height as usize,
-            ChannelKind::Rgb,
-            pixels,
-        )
-        .map_err(|e| e.to_string())?;
+        let linear = SkyImageUnits::Radiance
+            .image(
+                ChannelKind::Rgb,
+                image.width as usize,
+                image.height as usize,
+                xyz.iter().copied(),
+            )
+            .map_err(|e| e.to_string())?;
         let mut options = ExrOptions::sky_image(
             SkyImageUnits::Radiance,
             spec.sun_elevation_deg,

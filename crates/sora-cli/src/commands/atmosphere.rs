@@ -127,15 +127,6 @@ fn number(value: f64) -> String {
     }
 }
 
-/// CSV field: quoted when it holds a comma, a quote or a line break.
-fn csv_field(text: &str) -> String {
-    if text.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", text.replace('"', "\"\""))
-    } else {
-        text.to_string()
-    }
-}
-
 fn csv(optics: &AtmosphereOptics) -> String {
     let mut out = String::new();
     let _ = writeln!(out, "{CSV_HEADER}");
@@ -144,7 +135,7 @@ fn csv(optics: &AtmosphereOptics) -> String {
             out,
             "{},{},{},{},{},{}",
             number(row.wavelength_nm),
-            csv_field(row.species),
+            crate::csv::cell(row.species),
             number(row.tau_extinction),
             number(row.tau_scattering),
             number(row.single_scattering_albedo),
@@ -377,11 +368,5 @@ mod tests {
         }
         assert_eq!(number(f64::NAN), "null");
         assert_eq!(number(380.0), "380");
-    }
-
-    #[test]
-    fn csv_fields_are_quoted_when_needed() {
-        assert_eq!(csv_field("water, soluble"), "\"water, soluble\"");
-        assert_eq!(csv_field("dust"), "dust");
     }
 }

@@ -1,7 +1,7 @@
 //! `sora mie`: Mie-theory optics of one sphere, of many (batch CSV), or of a
 //! size distribution over wavelengths.
 
-use std::io::{BufRead, BufWriter, Read, Write};
+use std::io::{BufWriter, Write};
 use std::path::PathBuf;
 
 use anyhow::{Context, bail};
@@ -292,86 +292,33 @@ fn print_phase_table(m: Complex64, x: f64, step_deg: f64) -> anyhow::Result<()> 
     Ok(())
 }
 
-/// The longest line of a `--batch` file: a row is three numbers.
-const MAX_BATCH_LINE_BYTES: u64 = 4096;
-
-/// The `--batch` form: CSV in, CSV out, rows in order; a bad row stops the
-/// run with an error naming its line (nothing is written after it).
+/// The `--batch` form: CSV in (read whole, at most
+/// [`sora::input::MAX_INPUT_BYTES`], by [`sora::table::NumericTable`], the
+/// library's one CSV reader), CSV out, rows in order; a row the Mie code
+/// refuses stops the run with an error naming its line (nothing is written
+/// after it).
 fn run_batch(path: &PathBuf) -> anyhow::Result<()> {
-    let mut reader: Box<dyn BufRead> = if path.as_os_str() == "-" {
-        Box::new(std::io::stdin().lock())
+    let (text, name) = if path.as_os_str() == "-" {
+        let name = "stdin".to_string();
+        (
+            sora::input::read_text_from(std::io::stdin().lock(), &name)?,
+            name,
+        )
     } else {
-        let file =
-            std::fs::File::open(path).with_context(|| format!("cannot open {}", path.display()))?;
-        Box::new(std::io::BufReader::new(file))
+        (sora::input::read_text(path)?, path.display().to_string())
     };
-    let name = path.display().to_string();
-    let mut out = BufWriter::with_capacity(1 << 16, std::io::stdout().lock());
-    let mut header_seen = false;
-    // Read in bounded pieces, streamed: a line longer than any row, or more
-    // than `sora::input::MAX_INPUT_BYTES` in all, is an error before the
-    // memory fills (`--batch /dev/zero` is one endless line).
-    let mut total_bytes = 0u64;
-    let mut buffer = Vec::new();
-    for line_number in 1.. {
-        buffer.clear();
-        let read = (&mut reader)
-            .take(MAX_BATCH_LINE_BYTES + 1)
-            .read_until(b'\n', &mut buffer)
-            .with_context(|| format!("{name}: cannot read line {line_number}"))?;
-        if read == 0 {
-            break;
-        }
-        total_bytes += read as u64;
-        if read as u64 > MAX_BATCH_LINE_BYTES {
-            bail!(
-                "{name}, line {line_number}: longer than {MAX_BATCH_LINE_BYTES} bytes, not a row m_re,m_im,x (is it a text file?)"
-            );
-        }
-        if total_bytes > sora::input::MAX_INPUT_BYTES {
-            bail!(
-                "{name}: file too large: more than the limit of {} MiB of text (split it)",
-                sora::input::MAX_INPUT_BYTES >> 20
-            );
-        }
-        let line = std::str::from_utf8(&buffer)
-            .with_context(|| format!("{name}, line {line_number}: not UTF-8 text"))?
-            .trim_end_matches(['\n', '\r']);
-        // A UTF-8 byte-order mark (as some spreadsheets write) before the header is skipped.
-        let line = if line_number == 1 {
-            line.trim_start_matches('\u{feff}')
-        } else {
-            line
-        };
-        let line = line.trim();
-        if line.is_empty() || line.starts_with('#') {
-            continue;
-        }
-        let fields: Vec<&str> = line.split(',').map(str::trim).collect();
-        if !header_seen {
-            if fields != ["m_re", "m_im", "x"] {
-                bail!("{name}, line {line_number}: the header must be m_re,m_im,x, found '{line}'");
-            }
-            header_seen = true;
-            writeln!(out, "m_re,m_im,x,qext,qsca,qabs,qback,g")?;
-            continue;
-        }
-        let [m_re, m_im, x] = fields.as_slice() else {
-            bail!(
-                "{name}, line {line_number}: expected 3 fields m_re,m_im,x, found {}: '{line}'",
-                fields.len()
-            );
-        };
-        let number = |field: &str, column: &str| {
-            field.parse::<f64>().with_context(|| {
-                format!("{name}, line {line_number}: {column} = '{field}' is not a number")
-            })
-        };
-        let (re, im, x) = (
-            number(m_re, "m_re")?,
-            number(m_im, "m_im")?,
-            number(x, "x")?,
+    let table = sora::table::NumericTable::parse(&text, &name)?;
+    if table.column_names != ["m_re", "m_im", "x"] {
+        bail!(
+            "{name}, line {}: the header must be m_re,m_im,x, found '{}'",
+            table.header_line,
+            table.column_names.join(",")
         );
+    }
+    let mut out = BufWriter::with_capacity(1 << 16, std::io::stdout().lock());
+    writeln!(out, "m_re,m_im,x,qext,qsca,qabs,qback,g")?;
+    for (row, line_number) in table.rows.iter().zip(&table.line_numbers) {
+        let (re, im, x) = (row[0], row[1], row[2]);
         let q = compute_efficiencies(Complex64::new(re, im), x)
             .with_context(|| format!("{name}, line {line_number}"))?;
         writeln!(
@@ -386,9 +333,6 @@ fn run_batch(path: &PathBuf) -> anyhow::Result<()> {
             q.qback,
             q.g
         )?;
-    }
-    if !header_seen {
-        bail!("{name}: empty input, expected the header m_re,m_im,x and one row per sphere");
     }
     out.flush()?;
     Ok(())

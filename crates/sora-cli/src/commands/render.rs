@@ -8,7 +8,7 @@ use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
 use sora::ImageSettings;
 use sora::camera::{Camera, PerspectiveCamera};
-use sora::colour::{RgbColourSpace, SpectrumToXyz};
+use sora::colour::SpectrumToXyz;
 use sora::output::{
     ChannelKind, DisplayImage, ExrOptions, ExrSampleType, LinearImage, OutputFiles, OutputFormat,
     SkyImageUnits,
@@ -492,19 +492,21 @@ fn render_aerial_perspective(
     let (radiance, transmittance) = sky.render_aerial_perspective_xyz(image, depth, to_xyz)?;
     let (w, h) = (image.width as usize, image.height as usize);
     let ones = sora::spectrum::SampledSpectrum::from_values(vec![1.0; sky.wavelengths().len()]);
-    let white = exr_channels(args, to_xyz.to_xyz(&ones)?, false);
-    let main = exr_image(
-        args,
-        (w, h),
-        radiance.iter().map(|c| exr_channels(args, *c, true)),
-    )?;
-    let through = exr_image(
-        args,
-        (w, h),
-        transmittance.iter().map(|c| {
-            let v = exr_channels(args, *c, false);
-            [0, 1, 2].map(|k| v[k] / white[k])
-        }),
+    // The transmittance is a ratio: its channels without --units' scale.
+    let (kind, ratio) = (exr_kind(args), SkyImageUnits::Radiance);
+    let white = ratio.channels(kind, to_xyz.to_xyz(&ones)?);
+    let main = exr_units(args).image(kind, w, h, radiance.iter().copied())?;
+    let through = LinearImage::new(
+        w,
+        h,
+        kind,
+        transmittance
+            .iter()
+            .map(|c| {
+                let v = ratio.channels(kind, *c);
+                [0, 1, 2].map(|k| (v[k] / white[k]) as f32)
+            })
+            .collect(),
     )?;
     let attributes = vec![(
         "aerial_perspective".into(),
@@ -690,21 +692,12 @@ fn render_frame(
             }
         }
         OutputFormat::Exr => {
-            let main = exr_image(
-                args,
-                (w, h),
-                xyz.iter().map(|c| exr_channels(args, *c, true)),
-            )?;
+            let (kind, units) = (exr_kind(args), exr_units(args));
+            let main = units.image(kind, w, h, xyz.iter().copied())?;
             // --stokes: S0..S3 as layers (S0 the same as the main image).
             let layers = if args.stokes {
                 (0..4)
-                    .map(|c| {
-                        exr_image(
-                            args,
-                            (w, h),
-                            stokes.iter().map(|s| exr_channels(args, s[c], true)),
-                        )
-                    })
+                    .map(|c| units.image(kind, w, h, stokes.iter().map(|s| s[c])))
                     .collect::<sora::Result<Vec<_>>>()?
             } else {
                 Vec::new()
@@ -749,35 +742,22 @@ fn render_frame(
     Ok(png_scale)
 }
 
-/// A pixel's EXR channels from its CIE XYZ: X, Y, Z with --exr-xyz,
-/// linear sRGB otherwise; in --units if `in_units` (x 683 lm/W for
-/// luminance, so that Y is in cd/m^2), as they are otherwise.
-fn exr_channels(args: &RenderArgs, xyz: sora::colour::Xyz, in_units: bool) -> [f64; 3] {
-    let scale = match (in_units, args.units) {
-        (true, Units::Luminance) => sora::colour::MAXIMUM_LUMINOUS_EFFICACY_LM_PER_W,
-        _ => 1.0,
-    };
-    let c = xyz.scaled(scale);
+/// The EXR image's channels: X, Y, Z with --exr-xyz, linear sRGB
+/// otherwise.
+fn exr_kind(args: &RenderArgs) -> ChannelKind {
     if args.exr_xyz {
-        [c.x, c.y, c.z]
-    } else {
-        let rgb = RgbColourSpace::Srgb.linear_rgb_from_xyz(c);
-        [rgb.r, rgb.g, rgb.b]
-    }
-}
-
-/// One EXR image (RGB or XYZ, by --exr-xyz) of `pixels`' channels.
-fn exr_image(
-    args: &RenderArgs,
-    (w, h): (usize, usize),
-    pixels: impl Iterator<Item = [f64; 3]>,
-) -> sora::Result<LinearImage> {
-    let kind = if args.exr_xyz {
         ChannelKind::Xyz
     } else {
         ChannelKind::Rgb
-    };
-    LinearImage::new(w, h, kind, pixels.map(|p| p.map(|v| v as f32)).collect())
+    }
+}
+
+/// The EXR image's units, from --units.
+fn exr_units(args: &RenderArgs) -> SkyImageUnits {
+    match args.units {
+        Units::Radiance => SkyImageUnits::Radiance,
+        Units::Luminance => SkyImageUnits::Luminance,
+    }
 }
 
 /// Stages a rendered EXR, the image `main` and its `layers`: 32-bit
@@ -791,12 +771,8 @@ fn stage_exr(
     (main, layers): (&LinearImage, &[(&str, &LinearImage)]),
     attributes: Vec<(String, String)>,
 ) -> anyhow::Result<()> {
-    let units = match args.units {
-        Units::Radiance => SkyImageUnits::Radiance,
-        Units::Luminance => SkyImageUnits::Luminance,
-    };
     let (sun_elevation, sun_azimuth) = sky.sun_position_deg();
-    let mut options = ExrOptions::sky_image(units, sun_elevation, sun_azimuth);
+    let mut options = ExrOptions::sky_image(exr_units(args), sun_elevation, sun_azimuth);
     options.sample_type = match (args.exr_half, args.half_overflow) {
         (false, _) => ExrSampleType::F32,
         (true, HalfOverflow::Error) => ExrSampleType::F16,

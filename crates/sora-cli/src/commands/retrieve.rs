@@ -623,15 +623,6 @@ fn table(retrievals: &[(usize, Retrieval)]) -> String {
     out
 }
 
-/// A CSV cell: quoted when it holds a comma, a quote or a line break.
-fn csv_cell(text: &str) -> String {
-    if text.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", text.replace('"', "\"\""))
-    } else {
-        text.to_string()
-    }
-}
-
 /// A number for CSV: `{:.9e}`-free, shortest exact form; `missing` when
 /// not finite.
 fn number(value: f64, missing: &str) -> String {
@@ -697,7 +688,7 @@ fn csv(retrievals: &[(usize, Retrieval)]) -> String {
     for (number_of_scan, r) in retrievals {
         let mut row: Vec<String> = vec![
             number_of_scan.to_string(),
-            csv_cell(&r.label),
+            crate::csv::cell(&r.label),
             number(r.reference_wavelength_nm, ""),
         ];
         let estimate = |row: &mut Vec<String>, e: Option<Estimate>| match e {
@@ -730,10 +721,7 @@ fn csv(retrievals: &[(usize, Retrieval)]) -> String {
         row.push(r.iterations.to_string());
         row.push(r.converged.to_string());
         // Always quoted, so that a reader sees one cell even when empty.
-        row.push(format!(
-            "\"{}\"",
-            r.warnings.join("; ").replace('"', "\"\"")
-        ));
+        row.push(crate::csv::quoted(&r.warnings.join("; ")));
         out.push_str(&row.join(","));
         out.push('\n');
     }
@@ -943,12 +931,5 @@ mod tests {
         assert_eq!(plus_minus(e(0.5, 0.0)), "0.5000 ± 0.0000");
         assert_eq!(plus_minus(e(0.5, f64::NAN)), "0.5000 ± n/a");
         assert_eq!(plus_minus(e(f64::NAN, 0.1)), "n/a");
-    }
-
-    #[test]
-    fn csv_cells_are_quoted_when_needed() {
-        assert_eq!(csv_cell("a b"), "a b");
-        assert_eq!(csv_cell("a,b"), "\"a,b\"");
-        assert_eq!(csv_cell("say \"x\""), "\"say \"\"x\"\"\"");
     }
 }

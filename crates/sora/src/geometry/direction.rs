@@ -142,6 +142,18 @@ pub(crate) fn direction_from_elevation_azimuth(elevation_deg: f64, azimuth_deg: 
     Vector3::new(cos_el * sin_az, cos_el * cos_az, sin_el)
 }
 
+/// `azimuth_deg` read modulo 360 into `[0, 360)`, degrees (-400 is 320,
+/// 400 is 40; -0 and a negative angle too small to move off 360 are 0); a
+/// value that is not finite is returned as it is, for the checks that
+/// refuse it to name it.
+pub fn azimuth_in_one_turn_deg(azimuth_deg: f64) -> f64 {
+    if !azimuth_deg.is_finite() {
+        return azimuth_deg;
+    }
+    let turned = azimuth_deg.rem_euclid(360.0) + 0.0;
+    if turned >= 360.0 { 0.0 } else { turned }
+}
+
 /// Elevation above the horizon and azimuth clockwise from north (0..360),
 /// both in degrees, of a unit direction in the east-north-up frame.
 pub(crate) fn elevation_azimuth_from_direction(direction: Vector3) -> (f64, f64) {
@@ -172,6 +184,26 @@ pub fn angle_between_deg(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn azimuths_are_read_into_one_turn() {
+        for (given, turned) in [
+            (-400.0, 320.0),
+            (400.0, 40.0),
+            (360.0, 0.0),
+            (720.0, 0.0),
+            (-90.0, 270.0),
+            (180.0, 180.0),
+            (-0.0, 0.0),
+            (-1e-20, 0.0),
+        ] {
+            let got = azimuth_in_one_turn_deg(given);
+            assert_eq!(got, turned, "{given}");
+            assert!(got.is_sign_positive() && got < 360.0, "{given}: {got}");
+        }
+        assert_eq!(azimuth_in_one_turn_deg(f64::INFINITY), f64::INFINITY);
+        assert!(azimuth_in_one_turn_deg(f64::NAN).is_nan());
+    }
 
     #[test]
     fn compass_directions() {

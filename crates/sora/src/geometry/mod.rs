@@ -11,7 +11,7 @@ pub(crate) mod planet_sphere;
 pub(crate) use direction::{
     Vector3, direction_from_elevation_azimuth, elevation_azimuth_from_direction,
 };
-pub use direction::{ViewDirection, angle_between_deg};
+pub use direction::{ViewDirection, angle_between_deg, azimuth_in_one_turn_deg};
 pub(crate) use planet_sphere::{
     distance_to_ground_boundary, distance_to_top_boundary, distance_to_top_of_atmosphere,
     ray_intersects_ground, ray_sphere_roots, segment_in_atmosphere,

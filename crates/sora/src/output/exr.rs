@@ -28,6 +28,9 @@
 //!   illuminant E), the convention OpenEXR uses to mark XYZ data. Generic
 //!   viewers map `R, G, B` channels to the screen; `X, Y, Z` channels are
 //!   for tools that read them by name (many show `Y` as luminance).
+//! - A sky image's channels from its CIE XYZ: [`SkyImageUnits::image`],
+//!   the one conversion (XYZ or linear sRGB, radiance or luminance units)
+//!   behind `sora render -o sky.exr` and the explorer's EXR download.
 //! - The `software` attribute is `sora <version>`.
 //! - The header's attributes are sorted by name (as the OpenEXR library
 //!   writes them), so the same image makes the same file byte for byte.
@@ -45,6 +48,7 @@ use ::exr::prelude::{SmallVec, WritableImage, f16};
 
 use super::atomic_file::OutputFiles;
 use super::image_buffer::{ChannelKind, LinearImage};
+use crate::colour::{RgbColourSpace, Xyz};
 use crate::{Error, Result};
 
 /// The sample type of the channels in an OpenEXR file.
@@ -117,6 +121,43 @@ impl SkyImageUnits {
             Self::Radiance => crate::colour::MAXIMUM_LUMINOUS_EFFICACY_LM_PER_W as f32,
             Self::Luminance => 1.0,
         }
+    }
+}
+
+impl SkyImageUnits {
+    /// A colour's three channels of `kind` in these units: CIE XYZ as
+    /// rendered (radiance units), times 683 lm/W for
+    /// [`SkyImageUnits::Luminance`], then kept as XYZ
+    /// ([`ChannelKind::Xyz`]) or taken to linear sRGB
+    /// ([`ChannelKind::Rgb`], [`RgbColourSpace::Srgb`]'s matrix).
+    pub fn channels(self, kind: ChannelKind, xyz: Xyz) -> [f64; 3] {
+        let c = match self {
+            Self::Radiance => xyz,
+            Self::Luminance => xyz.scaled(crate::colour::MAXIMUM_LUMINOUS_EFFICACY_LM_PER_W),
+        };
+        match kind {
+            ChannelKind::Xyz => [c.x, c.y, c.z],
+            ChannelKind::Rgb => RgbColourSpace::Srgb.linear_rgb_from_xyz(c).to_array(),
+        }
+    }
+
+    /// A sky image of `kind`'s channels in these units from its pixels'
+    /// CIE XYZ (radiance units, row-major, top row first), as `sora render
+    /// -o sky.exr` and the explorer's download write it: each pixel
+    /// through [`SkyImageUnits::channels`], stored as `f32`. Fails as
+    /// [`LinearImage::new`] does.
+    pub fn image(
+        self,
+        kind: ChannelKind,
+        width: usize,
+        height: usize,
+        xyz: impl IntoIterator<Item = Xyz>,
+    ) -> Result<LinearImage> {
+        let pixels = xyz
+            .into_iter()
+            .map(|c| self.channels(kind, c).map(|v| v as f32))
+            .collect();
+        LinearImage::new(width, height, kind, pixels)
     }
 }
 
@@ -432,6 +473,38 @@ pub fn read_exr_channel(path: &Path, name: &str) -> Result<(usize, usize, Vec<f6
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn sky_image_channels_are_xyz_or_srgb_in_radiance_or_luminance() {
+        let xyz = Xyz::new(0.2, 0.25, 0.3);
+        let k = crate::colour::MAXIMUM_LUMINOUS_EFFICACY_LM_PER_W;
+        let radiance = SkyImageUnits::Radiance;
+        let luminance = SkyImageUnits::Luminance;
+        assert_eq!(radiance.channels(ChannelKind::Xyz, xyz), [0.2, 0.25, 0.3]);
+        assert_eq!(
+            luminance.channels(ChannelKind::Xyz, xyz),
+            [0.2 * k, 0.25 * k, 0.3 * k]
+        );
+        // Back through the inverse matrix: the same XYZ.
+        let rgb = radiance.channels(ChannelKind::Rgb, xyz);
+        let back = RgbColourSpace::Srgb
+            .xyz_from_linear_rgb(crate::colour::LinearRgb::new(rgb[0], rgb[1], rgb[2]));
+        for (got, want) in [back.x, back.y, back.z].into_iter().zip([0.2, 0.25, 0.3]) {
+            assert!((got - want).abs() < 1e-12, "{got} vs {want}");
+        }
+        // A value of 1 is whiteLuminance cd/m^2 in either unit.
+        for units in [radiance, luminance] {
+            let y = units.channels(ChannelKind::Xyz, xyz)[1];
+            let cd_m2 = y * f64::from(units.white_luminance_cd_m2());
+            assert!((cd_m2 / (0.25 * k) - 1.0).abs() < 1e-12, "{units:?}");
+        }
+        let image = luminance
+            .image(ChannelKind::Rgb, 2, 1, [xyz, Xyz::BLACK])
+            .unwrap();
+        let want = luminance.channels(ChannelKind::Rgb, xyz).map(|v| v as f32);
+        assert_eq!(image.pixels(), &[want, [0.0; 3]]);
+        assert!(luminance.image(ChannelKind::Rgb, 3, 1, [xyz]).is_err());
+    }
 
     /// An encoded file read back with the `exr` crate: every channel and
     /// attribute of its one layer.

@@ -562,10 +562,11 @@ impl SkyBuilder<'_> {
             polarisation == Polarisation::Vector,
         )?;
         let mut sky = Sky::from_scene(scene, self.scattering, self.method, self.table_size)?;
-        // The angles as given, not as recovered from the unit vector.
+        // The angles as given (the azimuth in one turn), not as recovered
+        // from the unit vector.
         sky.sun_position_deg = (
             self.observation.sun_elevation_deg,
-            self.observation.sun_azimuth_deg,
+            crate::geometry::azimuth_in_one_turn_deg(self.observation.sun_azimuth_deg),
         );
         sky.set_polarisation(polarisation)?;
         Ok(sky)
@@ -904,7 +905,10 @@ impl Sky {
     pub fn with_sun_deg(&self, elevation_deg: f64, azimuth_deg: f64) -> Result<Sky> {
         let scene = self.scene.with_sun(elevation_deg, azimuth_deg)?;
         let mut sky = Sky::from_scene(scene, self.scattering, self.method, self.table_size)?;
-        sky.sun_position_deg = (elevation_deg, azimuth_deg);
+        sky.sun_position_deg = (
+            elevation_deg,
+            crate::geometry::azimuth_in_one_turn_deg(azimuth_deg),
+        );
         sky.set_polarisation(self.polarisation)?;
         sky.k_terms = self
             .k_terms
@@ -1023,7 +1027,8 @@ impl Sky {
     }
 
     /// The sun's elevation above the horizon and azimuth clockwise from
-    /// north, degrees (as given to the builder).
+    /// north, degrees (as given to the builder, the azimuth read modulo
+    /// 360 into `[0, 360)`).
     pub fn sun_position_deg(&self) -> (f64, f64) {
         self.sun_position_deg
     }
