@@ -384,9 +384,10 @@ function drawRealtime() {
 }
 
 // For the browser test: the fisheye's XYZ from the tables, and the exact
-// image of the same sky at `quality`, both `size` pixels.
+// image of the same sky at `quality`, both `size` pixels (scalar light, the
+// tables' own, as the difference view's).
 realtime.compare = async (quality, size) => {
-  const sky = skySpec();
+  const sky = { ...skySpec(), polarisation: 'scalar' };
   const gpu = realtime.view.readXyz(realtimeState(sky), size);
   const reply = await engine({ op: 'render_xyz', sky, image: { camera: 'fisheye', width: size, height: size, quality, sun_disc: false } });
   if (!reply.ok) throw new Error(reply.json.error);
