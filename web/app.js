@@ -106,6 +106,7 @@ function skySpec() {
     sun_azimuth_deg: number('sun-azimuth'),
     observer_altitude_m: number('observer-altitude'),
     scattering: $('scattering').value,
+    polarisation: $('polarisation').value,
   };
 }
 
@@ -318,7 +319,9 @@ async function pumpBake() {
 // The exact image the difference view compares with: the refinement's
 // sky as XYZ, fisheye, 256 pixels, no sun disc.
 async function pumpExact() {
-  const sky = skySpec();
+  // The engine tables hold scalar light (docs/engine-tables.md), so the
+  // image they are compared with is scalar too.
+  const sky = { ...skySpec(), polarisation: 'scalar' };
   const key = JSON.stringify(sky);
   if (realtime.exactBusy || realtime.exactFor === key) return;
   realtime.exactBusy = true;
@@ -381,9 +384,10 @@ function drawRealtime() {
 }
 
 // For the browser test: the fisheye's XYZ from the tables, and the exact
-// image of the same sky at `quality`, both `size` pixels.
+// image of the same sky at `quality`, both `size` pixels (scalar light, the
+// tables' own, as the difference view's).
 realtime.compare = async (quality, size) => {
-  const sky = skySpec();
+  const sky = { ...skySpec(), polarisation: 'scalar' };
   const gpu = realtime.view.readXyz(realtimeState(sky), size);
   const reply = await engine({ op: 'render_xyz', sky, image: { camera: 'fisheye', width: size, height: size, quality, sun_disc: false } });
   if (!reply.ok) throw new Error(reply.json.error);
@@ -569,7 +573,7 @@ function atmosphereControlChanged() {
 async function start() {
   for (const id of SKY_CONTROLS) linkSlider(id, changed);
   for (const [id] of ATMOSPHERE_CONTROLS) linkSlider(id, atmosphereControlChanged);
-  for (const id of ['scattering', 'camera']) $(id).addEventListener('change', changed);
+  for (const id of ['scattering', 'polarisation', 'camera']) $(id).addEventListener('change', changed);
   $('realtime').addEventListener('change', enableRealtime);
   $('realtime-mode').addEventListener('change', realtimeChanged);
   linkSlider('look-azimuth', requestDraw);

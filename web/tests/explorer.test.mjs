@@ -3,7 +3,9 @@
 // - the page loads and draws a sky, and moving the sun slider changes it;
 // - a clicked direction's spectrum equals the native library's for the same
 //   inputs to 1e-9 relative: the same engine compiled natively (full
-//   precision) and `sora spectrum --format json` (the CLI, every digit);
+//   precision), `sora spectrum --format json` (the CLI, every digit) and
+//   Python's `sora.Sky(...).radiance` (SORA_PYTHON), each front end with its
+//   default light (polarised; the page's default is checked to be it);
 // - bad input (an out-of-range value typed into a field, an atmosphere file
 //   that does not parse) shows the library's one-line error and keeps the
 //   previous sky;
@@ -17,10 +19,14 @@
 //   SORA_WEB_SPEED=report only reports (a machine shared with other work,
 //   where every time is several times its quiet value).
 //
-// Environment: SORA_CLI (default target/debug/sora), SORA_WEB_REQUEST
+// Environment: SORA_CLI (default target/debug/sora), SORA_PYTHON (a python
+// with the sora package installed; unset: no Python comparison; CI sets
+// it), SORA_WEB_REQUEST
 // (default target/sora-web/debug/examples/request), CHROMIUM (default
 // /usr/bin/chromium), SORA_WEB_OUT (default target/web-test: screenshot and
-// report). Run: cd web/tests && npm ci && npm test
+// report), SORA_WEB_LIGHT ('scalar' or 'vector': the light the page is
+// switched to before the timings; default: the page's own, the CLI's
+// default). Run: cd web/tests && npm ci && npm test
 
 import { mkdir, writeFile } from 'node:fs/promises';
 import { execFileSync } from 'node:child_process';
@@ -88,6 +94,13 @@ try {
   await page.goto(url);
   await page.waitForFunction(() => window.soraExplorer?.stats.refinements >= 1, null, { timeout: 120000 });
   const pixels = () => page.evaluate(() => document.getElementById('sky').toDataURL());
+  if (process.env.SORA_WEB_LIGHT) {
+    await page.selectOption('#polarisation', process.env.SORA_WEB_LIGHT);
+    const n = await page.evaluate(() => window.soraExplorer.stats.refinements);
+    await page.waitForFunction((k) => window.soraExplorer.stats.refinements > k, n, { timeout: 120000 });
+  }
+  report.light = await page.evaluate(() => document.getElementById('polarisation').value);
+  console.log(`light: ${report.light}`);
   const before = await pixels();
 
   // Move the sun slider (as a drag does: input events on the range), wait
@@ -141,7 +154,7 @@ try {
     console.log(`  ${String(row.sun_elevation_deg).padStart(7)}  ${row.preview_median_ms.toFixed(0).padStart(6)} ${row.preview.padEnd(5)}  ${row.refinement_median_ms.toFixed(0).padStart(8)} ${row.refinement}`);
   }
   await mkdir(out, { recursive: true });
-  await writeFile(join(out, 'timings.json'), `${JSON.stringify({ timings: report.timings, speed: report.speed }, null, 2)}\n`);
+  await writeFile(join(out, 'timings.json'), `${JSON.stringify({ light: report.light, timings: report.timings, speed: report.speed }, null, 2)}\n`);
   const slow = [];
   for (const row of speed) {
     for (const stage of ['preview', 'refinement']) {
@@ -183,9 +196,37 @@ try {
     '--sun-elevation', String(sky.sun_elevation_deg), '--sun-azimuth', String(sky.sun_azimuth_deg),
     '--observer-altitude-m', String(sky.observer_altitude_m),
     '--view-elevation', String(spectrum.view_elevation_deg), '--view-azimuth', String(spectrum.view_azimuth_deg),
-    '--format', 'json', '--polarisation', 'scalar']).toString()); // the explorer's sky is scalar
+    '--format', 'json', ...(sky.polarisation === 'vector' ? [] : ['--polarisation', sky.polarisation])]).toString());
+  // The page's default light is the CLI's (no --polarisation above).
+  if (!process.env.SORA_WEB_LIGHT) assert.equal(sky.polarisation, 'vector', "the explorer's default light is the CLI's");
   const worstCli = assertClose(spectrum.radiance_w_m2_sr_nm, fromCli.radiance_w_m2_sr_nm, 'radiance against sora spectrum');
   report.checks.push(`spectrum at elevation ${spectrum.view_elevation_deg.toFixed(3)}, azimuth ${spectrum.view_azimuth_deg.toFixed(3)} deg: worst relative difference ${worstNative.toExponential(2)} against the native engine, ${worstCli.toExponential(2)} against sora spectrum (JSON, every digit)`);
+  console.log(report.checks.at(-1));
+  // The third front end: Python's sora.Sky with its default light (as the
+  // CLI above, no polarisation named unless the page was switched).
+  if (process.env.SORA_PYTHON) {
+    const script = [
+      'import json, sys, sora',
+      'a = json.load(sys.stdin)',
+      "options = {} if a['polarisation'] is None else {'polarisation': a['polarisation']}",
+      "sky = sora.Sky(sora.Atmosphere.preset(a['preset']), sun_elevation_deg=a['sun'][0], sun_azimuth_deg=a['sun'][1], observer_altitude_m=a['altitude'], **options)",
+      "print(json.dumps({'polarisation': sky.polarisation, 'radiance': sky.radiance(a['view'][0], a['view'][1]).values[0].tolist()}))",
+    ].join('\n');
+    const fromPython = JSON.parse(execFileSync(process.env.SORA_PYTHON, ['-c', script], {
+      input: JSON.stringify({
+        preset: sky.atmosphere.preset,
+        sun: [sky.sun_elevation_deg, sky.sun_azimuth_deg],
+        altitude: sky.observer_altitude_m,
+        view: [spectrum.view_elevation_deg, spectrum.view_azimuth_deg],
+        polarisation: sky.polarisation === 'vector' ? null : sky.polarisation,
+      }),
+    }).toString());
+    assert.equal(fromPython.polarisation, sky.polarisation, "Python's light");
+    const worstPython = assertClose(spectrum.radiance_w_m2_sr_nm, fromPython.radiance, 'radiance against Python');
+    report.checks.push(`the same spectrum against Python's sora.Sky (${fromPython.polarisation} light, its default: ${!process.env.SORA_WEB_LIGHT}): worst relative difference ${worstPython.toExponential(2)}`);
+  } else {
+    report.checks.push('not compared with Python (SORA_PYTHON unset: a python with the sora package)');
+  }
   console.log(report.checks.at(-1));
   const csv = await page.evaluate(() => window.soraExplorer.spectrumCsv());
   assert.match(csv, /^wavelength_nm,radiance_w_m2_sr_nm,single_scattering_w_m2_sr_nm\n380,/);

@@ -14,7 +14,7 @@ use sora::camera::Camera;
 use sora::colour::{SpectrumToXyz, Xyz};
 use sora::{Atmosphere, ImageSettings};
 use sora_web::engine::build_sky;
-use sora_web::request::{AtmosphereSpec, Quality, ScatteringChoice, SkySpec};
+use sora_web::request::{AtmosphereSpec, PolarisationChoice, Quality, ScatteringChoice, SkySpec};
 
 const SIDE: u32 = 128;
 
@@ -25,6 +25,7 @@ fn render(atmosphere: &Atmosphere, sun_elevation_deg: f64, quality: Quality) -> 
         sun_azimuth_deg: 180.0,
         observer_altitude_m: 0.0,
         scattering: ScatteringChoice::Multiple,
+        polarisation: PolarisationChoice::default(),
     };
     let started = Instant::now();
     let sky = build_sky(atmosphere, &spec, quality).expect("a valid sky");

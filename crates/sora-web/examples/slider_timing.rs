@@ -2,7 +2,7 @@
 //! natively: the preview (128 pixels) and the refinement (256 pixels)
 //! skies moved to each sun of the browser test's speed guard in its order
 //! (45, 20, 10, 5, 2, -4; `SUNS` to change them, `REPS` to repeat each,
-//! `QUALITIES=preview` for one quality), the wall time and the thread's CPU
+//! `QUALITIES=preview` for one quality, `POLARISATION=scalar` for scalar light), the wall time and the thread's CPU
 //! time (on a shared machine the wall time also counts the waits for a
 //! core; the browser's times were 1.4-1.7 times the native CPU time), and
 //! a hash of the image's XYZ bits, to check that a change to the library
@@ -17,7 +17,7 @@ use sora::camera::Camera;
 use sora::colour::SpectrumToXyz;
 use sora::{Atmosphere, ImageSettings};
 use sora_web::engine::build_sky;
-use sora_web::request::{AtmosphereSpec, Quality, ScatteringChoice, SkySpec};
+use sora_web::request::{AtmosphereSpec, PolarisationChoice, Quality, ScatteringChoice, SkySpec};
 
 fn main() {
     let atmosphere = Atmosphere::preset("earth-clear").unwrap();
@@ -29,6 +29,7 @@ fn main() {
     let reps: usize = std::env::var("REPS")
         .map(|r| r.parse().unwrap())
         .unwrap_or(1);
+    let polarisation = std::env::var("POLARISATION").unwrap_or("vector".into());
     let qualities = std::env::var("QUALITIES").unwrap_or("preview,refined".into());
     for (quality, side) in [(Quality::Preview, 128), (Quality::Refined, 256)] {
         if !qualities.contains(&format!("{quality:?}").to_lowercase()) {
@@ -40,6 +41,7 @@ fn main() {
             sun_azimuth_deg: 180.0,
             observer_altitude_m: 0.0,
             scattering: ScatteringChoice::Multiple,
+            polarisation: PolarisationChoice::try_from(polarisation.clone()).unwrap(),
         };
         let base = build_sky(&atmosphere, &spec(30.0), quality).unwrap();
         for &sun in &suns {

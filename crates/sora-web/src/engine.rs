@@ -22,7 +22,8 @@ use crate::atmosphere_controls::{
     DEFAULT_REFERENCE_WAVELENGTH_NM, apply_controls, read_controls, set_ground_albedo,
 };
 use crate::request::{
-    AtmosphereSpec, CameraChoice, ImageSpec, Quality, Request, ScatteringChoice, SkySpec,
+    AtmosphereSpec, CameraChoice, ImageSpec, PolarisationChoice, Quality, Request,
+    ScatteringChoice, SkySpec,
 };
 
 /// One reply: JSON text, bytes, and whether it is an error.
@@ -320,6 +321,8 @@ impl Engine {
             sun_azimuth_deg: 180.0,
             observer_altitude_m: 0.0,
             scattering,
+            // The engine tables hold scalar light (`docs/engine-tables.md`).
+            polarisation: PolarisationChoice(sora::Polarisation::Scalar),
         };
         let sky = build_sky(self.atmosphere(spec)?, &sky_spec, REALTIME_TABLES.quality)?;
         let tables = EngineTables::bake(&sky, &REALTIME_TABLES.settings, &crate::report_progress)
@@ -526,9 +529,7 @@ pub fn build_sky(atmosphere: &Atmosphere, spec: &SkySpec, quality: Quality) -> R
         .wavelengths(grid)
         .scattering(scattering)
         .table_size(tables)
-        // The explorer's light stays scalar (for its speed) until its
-        // own default changes; the library's default is polarised.
-        .polarisation(sora::Polarisation::Scalar)
+        .polarisation(spec.polarisation.0)
         .build()
         .map_err(|e| e.to_string())
 }
@@ -559,7 +560,12 @@ pub fn build_sky(atmosphere: &Atmosphere, spec: &SkySpec, quality: Quality) -> R
 /// / 1.34 s), the preview 0.120 / 0.171 / 0.163 s (with 20 layers and 1.5
 /// degrees 0.145 / 0.213 / 0.224 s); the sun 45 degrees up 0.04 s. The first order's fine moments after
 /// sunset (`spherical_first_order.rs` in the library) are about half of a
-/// low-sun frame.
+/// low-sun frame. Those are scalar light; the polarised light of the
+/// default (the spec's `polarisation`) adds, sun 45 / 10 / 2 / -4, 0.30 /
+/// 0.22 / 0.26 / 0.23 s to the refinement and 0.02-0.03 s to the preview
+/// (the same measurement, once a sky has drawn an image: a sky moved to a
+/// new sun keeps the polarisation table's phase-matrix harmonics; 0.52-0.60
+/// s before it did).
 pub fn quality_settings(
     quality: Quality,
 ) -> (WavelengthGrid, MultipleScatteringSettings, FastTableSize) {
@@ -631,11 +637,12 @@ mod tests {
                 "view_elevation_deg": 20, "view_azimuth_deg": 100}"#,
         );
         let atmosphere = Atmosphere::preset("earth-clear").unwrap();
+        // The library's default light (polarised), as the CLI's and Python's.
         let sky = Sky::builder(&atmosphere)
             .sun_deg(12.5, 200.0)
-            .polarisation(sora::Polarisation::Scalar)
             .build()
             .unwrap();
+        assert_eq!(sky.polarisation(), sora::Polarisation::Vector);
         let view = ViewDirection::new(20.0, 100.0).unwrap();
         let expected = sky.radiance(view).unwrap().radiance_w_m2_sr_nm;
         let got: Vec<f64> = serde_json::from_value(reply["radiance_w_m2_sr_nm"].clone()).unwrap();
@@ -643,7 +650,6 @@ mod tests {
         let single = Sky::builder(&atmosphere)
             .sun_deg(12.5, 200.0)
             .scattering(Scattering::Single)
-            .polarisation(sora::Polarisation::Scalar)
             .build()
             .unwrap()
             .radiance(view)
@@ -707,6 +713,7 @@ mod tests {
                 sun_azimuth_deg: 180.0,
                 observer_altitude_m: 0.0,
                 scattering: ScatteringChoice::Multiple,
+                polarisation: PolarisationChoice::default(),
             };
             let image = ImageSettings {
                 draw_sun_disc: false,
@@ -810,6 +817,7 @@ mod tests {
             sun_azimuth_deg: 180.0,
             observer_altitude_m: 0.0,
             scattering: ScatteringChoice::Multiple,
+            polarisation: PolarisationChoice(sora::Polarisation::Scalar),
         };
         let sky = build_sky(&atmosphere, &spec, REALTIME_TABLES.quality).unwrap();
         let to_xyz = SpectrumToXyz::new(sky.wavelengths(), Default::default());

@@ -175,6 +175,34 @@ pub struct SkySpec {
     /// Single or multiple scattering.
     #[serde(default)]
     pub scattering: ScatteringChoice,
+    /// Scalar or polarised light, by the library's names
+    /// ([`sora::Polarisation`]'s `FromStr`: `"scalar"`, `"vector"`); the
+    /// default is the library's (and the CLI's and Python's): the polarised
+    /// intensity.
+    #[serde(default)]
+    pub polarisation: PolarisationChoice,
+}
+
+/// Scalar or polarised light ([`SkySpec::polarisation`]).
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(try_from = "String")]
+pub struct PolarisationChoice(pub sora::Polarisation);
+
+impl Default for PolarisationChoice {
+    /// The library's default for the fast method (the CLI's and Python's).
+    fn default() -> Self {
+        Self(sora::Polarisation::for_method(sora::Method::Fast))
+    }
+}
+
+impl TryFrom<String> for PolarisationChoice {
+    type Error = String;
+
+    fn try_from(name: String) -> Result<Self, String> {
+        name.parse()
+            .map(Self)
+            .map_err(|e: sora::Error| e.to_string())
+    }
 }
 
 fn default_sun_azimuth_deg() -> f64 {
@@ -290,6 +318,28 @@ mod tests {
         let error = scattering("double").unwrap_err();
         assert!(
             error.contains("'double' is unknown: use 'single' or 'multiple'"),
+            "{error}"
+        );
+        let light = |field: &str| {
+            serde_json::from_str::<SkySpec>(&format!(
+                r#"{{"atmosphere": {{"preset": "earth-clear"}}, "sun_elevation_deg": 10{field}}}"#
+            ))
+            .map(|sky| sky.polarisation.0)
+            .map_err(|e| e.to_string())
+        };
+        // The default is the library's, the CLI's and Python's.
+        assert_eq!(light(""), Ok(sora::Polarisation::Vector));
+        assert_eq!(
+            light(r#", "polarisation": "scalar""#),
+            Ok(sora::Polarisation::Scalar)
+        );
+        assert_eq!(
+            light(r#", "polarisation": "vector""#),
+            Ok(sora::Polarisation::Vector)
+        );
+        let error = light(r#", "polarisation": "off""#).unwrap_err();
+        assert!(
+            error.contains("'off' is unknown: use 'scalar' or 'vector'"),
             "{error}"
         );
     }

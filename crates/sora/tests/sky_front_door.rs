@@ -369,6 +369,40 @@ fn moving_the_sun_equals_building_for_it() {
     assert!(first.with_sun_deg(91.0, 0.0).is_err());
 }
 
+/// A polarised sky moved to another sun draws the image of the sky built
+/// for that sun, to the bit: the polarisation table's harmonics that the
+/// first sky's image kept (they do not depend on the sun) are the ones the
+/// new sun would compute.
+#[test]
+fn a_moved_polarised_sky_draws_the_image_built_for_its_sun() {
+    let atmosphere = Atmosphere::preset("earth-hazy").unwrap();
+    let coarse = sora::MultipleScatteringSettings {
+        streams_per_hemisphere: 4,
+        layers: 12,
+        ..Default::default()
+    };
+    let build = |sun: f64| {
+        Sky::builder(&atmosphere)
+            .sun_deg(sun, 120.0)
+            .wavelengths(sora::WavelengthGrid::new(440.0, 660.0, 110.0).unwrap())
+            .scattering(Scattering::Multiple(coarse))
+            .polarisation(sora::Polarisation::Vector)
+            .build()
+            .unwrap()
+    };
+    let image = ImageSettings::new(Camera::Fisheye, 12, 12);
+    let first = build(25.0);
+    let drawn_first = first.render_spectral(&image, &|_| {}).unwrap();
+    let moved = first.with_sun_deg(3.0, 120.0).unwrap();
+    let built = build(3.0);
+    assert_eq!(
+        moved.render_spectral(&image, &|_| {}).unwrap(),
+        built.render_spectral(&image, &|_| {}).unwrap()
+    );
+    // And the first sky's image is its own, not the moved one's.
+    assert_ne!(drawn_first, built.render_spectral(&image, &|_| {}).unwrap());
+}
+
 /// One default light for every front end, set here: polarised
 /// (`Polarisation::Vector`) for the fast method and path tracing, scalar
 /// for the reference march; the default gives the explicit choice's

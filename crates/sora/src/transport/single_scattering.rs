@@ -45,6 +45,7 @@ use std::borrow::Borrow;
 use std::ops::ControlFlow;
 use std::sync::{Arc, Mutex};
 
+use super::multiple_scattering::ViewHarmonicsCache;
 use super::optical_column::{
     PanelMarch, ProfileCorners, SunColumnTable, compute_columns_along_ray,
 };
@@ -175,6 +176,10 @@ pub struct SingleScatteringSky {
     /// profiles and radii only, so every sky moved to another sun
     /// ([`SingleScatteringSky::with_sun`]) shares them.
     sun_column_tables: Arc<Mutex<Vec<Arc<SunColumnTable>>>>,
+    /// The polarisation correction's image-table harmonics computed so far
+    /// (`ViewHarmonicsCache`): they depend on the optics and not on the
+    /// sun or the eye, so every sky moved to another sun shares them.
+    view_harmonics: Arc<ViewHarmonicsCache>,
 }
 
 /// Per-thread work space of the fast path (no allocation per ray).
@@ -287,6 +292,7 @@ impl SingleScatteringSky {
             sun_direction: direction_from_elevation_azimuth(sun_elevation_deg, sun_azimuth_deg),
             sun_angular_radius_rad,
             sun_column_tables: Arc::default(),
+            view_harmonics: Arc::default(),
         })
     }
 
@@ -311,6 +317,7 @@ impl SingleScatteringSky {
         )?;
         Ok(SingleScatteringSky {
             sun_column_tables: Arc::clone(&self.sun_column_tables),
+            view_harmonics: Arc::clone(&self.view_harmonics),
             ..moved
         })
     }
@@ -437,6 +444,12 @@ impl SingleScatteringSky {
         }
         tables.push(Arc::clone(&table));
         table
+    }
+
+    /// The store of the polarisation correction's image-table harmonics
+    /// this sky shares with the skies moved from it to other suns.
+    pub(crate) fn view_harmonics_cache(&self) -> Arc<ViewHarmonicsCache> {
+        Arc::clone(&self.view_harmonics)
     }
 
     /// This sky sharing `other`'s sun-column tables (those built so far

@@ -792,6 +792,7 @@ fn solve_polarisation_columns(
         polarised_share,
         sun_optical_depths: &sun_optical_depths,
         eye_altitude_m: sky.observer_radius_m() - geometry.ground_radius_m,
+        view_harmonics: sky.view_harmonics_cache(),
     })
 }
 

@@ -245,6 +245,8 @@ mod field;
 mod view_march;
 
 pub(crate) use self::field::{FieldRequest, MultipleScatteringField};
-pub(crate) use self::polarisation_correction::{PolarisationRows, PolarisationTable};
+pub(crate) use self::polarisation_correction::{
+    PolarisationRows, PolarisationTable, ViewHarmonicsCache,
+};
 pub use self::view_march::MultipleScatteringScratch;
 use self::view_march::{LOG_FLOOR, NodeGeometry, floored_log};

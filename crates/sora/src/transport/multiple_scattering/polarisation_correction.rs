@@ -57,6 +57,7 @@
 //! non-polarising species, whose ratios are 0 and 1).
 
 use std::f64::consts::PI;
+use std::sync::{Arc, Mutex};
 
 use super::column_optics::{ColumnGeometry, ScaledOptics};
 use super::phase_fourier::{MAX_LEGENDRE_TERMS, TruncatedPhase, legendre_polynomials};
@@ -87,6 +88,82 @@ pub(crate) struct CorrectionInputs<'a> {
     /// eye's sun zenith angle).
     pub(crate) sun_optical_depths: &'a [Option<(f64, f64)>],
     pub(crate) eye_altitude_m: f64,
+    /// The sky's store of the image table's harmonics
+    /// ([`ViewHarmonicsCache`]), shared by the skies moved to other suns.
+    pub(crate) view_harmonics: Arc<ViewHarmonicsCache>,
+}
+
+/// Each species' phase-matrix harmonics from the streams into the view
+/// zenith cosines of the image table's nodes ([`PolarisationTable`]; what
+/// `compute_species_harmonics` gives without the sun), kept once computed:
+/// they depend on the optics, the streams and those fixed cosines, not on
+/// the sun, so a sky moved to another sun (`SingleScatteringSky::with_sun`,
+/// a slider drag) reads them instead of computing them again, the same
+/// numbers bit for bit. They were three quarters of the phase-matrix work
+/// of a polarised image's field (the correction's own stream-to-stream
+/// harmonics, with the sun, are still computed per sun). Size: harmonics x
+/// 16 x streams x cosines x wavelengths x species doubles (66 MB at 8
+/// streams per hemisphere, 21 wavelengths and 2 scattering species; the
+/// explorer's preview 9 MB); only the table's nodes are kept, not a list of
+/// directions' cosines.
+#[derive(Debug, Default)]
+pub(crate) struct ViewHarmonicsCache(Mutex<Vec<ViewHarmonics>>);
+
+/// One entry of [`ViewHarmonicsCache`]: its key (the streams' and the
+/// views' cosines, bit for bit, and the wavelengths) and the harmonics.
+#[derive(Debug)]
+struct ViewHarmonics {
+    stream_cosines: Vec<u64>,
+    view_cosines: Vec<u64>,
+    wavelengths: usize,
+    harmonics: Arc<Vec<Vec<PhaseMatrixHarmonics>>>,
+}
+
+impl ViewHarmonicsCache {
+    /// The harmonics for these streams, view cosines and wavelengths: the
+    /// kept ones, or `compute()`'s (computed without the lock, which the
+    /// thread pool's other tasks may want; of two threads that race, the
+    /// first one's are kept).
+    fn get_or_compute(
+        &self,
+        (streams, view_cosines, wavelengths): (&Streams, &[f64], usize),
+        compute: impl FnOnce() -> Vec<Vec<PhaseMatrixHarmonics>>,
+    ) -> Arc<Vec<Vec<PhaseMatrixHarmonics>>> {
+        let bits = |values: &[f64]| values.iter().map(|v| v.to_bits()).collect::<Vec<u64>>();
+        let (stream_cosines, view_cosines) = (bits(streams.cosines()), bits(view_cosines));
+        // A poisoned lock only means that another thread panicked: the
+        // entries in it are whole (each is pushed when complete).
+        let lock = || {
+            self.0
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner)
+        };
+        let find = |entries: &[ViewHarmonics]| {
+            entries
+                .iter()
+                .find(|e| {
+                    e.stream_cosines == stream_cosines
+                        && e.view_cosines == view_cosines
+                        && e.wavelengths == wavelengths
+                })
+                .map(|e| Arc::clone(&e.harmonics))
+        };
+        if let Some(harmonics) = find(&lock()) {
+            return harmonics;
+        }
+        let harmonics = Arc::new(compute());
+        let mut entries = lock();
+        if let Some(first) = find(&entries) {
+            return first;
+        }
+        entries.push(ViewHarmonics {
+            stream_cosines,
+            view_cosines,
+            wavelengths,
+            harmonics: Arc::clone(&harmonics),
+        });
+        harmonics
+    }
 }
 
 /// The two columns' fields at the eye's sun zenith angle (see the module
@@ -108,6 +185,8 @@ pub struct PolarisationCorrection {
     level_albedos: Vec<f64>,
     /// The share of the column's polarisation kept ([`CorrectionInputs`]).
     polarised_share: f64,
+    /// The image table's harmonics, kept ([`ViewHarmonicsCache`]).
+    view_harmonics: Arc<ViewHarmonicsCache>,
 }
 
 /// F*(cos theta) of species `j` at every wavelength into `out`: the exact
@@ -282,6 +361,7 @@ impl PolarisationCorrection {
             layer_optical_depths,
             level_albedos,
             polarised_share: inputs.polarised_share.clamp(0.0, 1.0),
+            view_harmonics: Arc::clone(&inputs.view_harmonics),
         }
     }
 
@@ -303,6 +383,7 @@ impl PolarisationCorrection {
         optics: &AtmosphereOptics,
         phases: &[TruncatedPhase],
         view_cosines: &[f64],
+        keep_harmonics: bool,
     ) -> Vec<f64> {
         let (w, species, levels) = (self.wavelengths, self.species, self.levels);
         let total = self.streams.count();
@@ -320,7 +401,15 @@ impl PolarisationCorrection {
                 }
             })
             .collect();
-        let harmonics = compute_species_harmonics(optics, phases, &self.streams, &cosines, None);
+        // The image table's nodes keep their harmonics for the next sun
+        // (`keep_harmonics`); a list of directions' cosines does not.
+        let compute = || compute_species_harmonics(optics, phases, &self.streams, &cosines, None);
+        let harmonics = if keep_harmonics {
+            self.view_harmonics
+                .get_or_compute((&self.streams, &cosines, w), compute)
+        } else {
+            Arc::new(compute())
+        };
         // Which species' harmonics scatter at all (Rayleigh's end at m = 2).
         let active: Vec<Vec<bool>> = harmonics
             .iter()
@@ -539,7 +628,7 @@ impl PolarisationCorrection {
             |task, chunk| {
                 let first = task * COSINES_PER_TASK;
                 let nodes = &cosines[first..first + chunk.len() / per_cosine];
-                chunk.copy_from_slice(&self.compute_harmonic_rows(optics, phases, nodes));
+                chunk.copy_from_slice(&self.compute_harmonic_rows(optics, phases, nodes, false));
             },
         );
         PolarisationRows {
@@ -612,7 +701,7 @@ impl PolarisationCorrection {
             |task, chunk| {
                 let first = task * COSINES_PER_TASK;
                 let nodes = &cosines[first..first + chunk.len() / per_node];
-                let rows = self.compute_harmonic_rows(optics, phases, nodes);
+                let rows = self.compute_harmonic_rows(optics, phases, nodes, true);
                 for (a, node_values) in chunk.chunks_exact_mut(per_node).enumerate() {
                     for (k, out) in node_values.chunks_exact_mut(COMPONENTS * w).enumerate() {
                         let azimuth = PI * k as f64 / (azimuth_nodes - 1) as f64;
