@@ -69,10 +69,32 @@ pub(super) fn amplitudes_table(
     s1: &mut [Complex64],
     s2: &mut [Complex64],
 ) {
-    for_each_block(a, b, mu, |start, b1, b2| {
-        s1[start..start + b1.len()].copy_from_slice(b1);
-        s2[start..start + b2.len()].copy_from_slice(b2);
-    });
+    crate::simd::dispatch(AmplitudesTable { a, b, mu, s1, s2 });
+}
+
+/// [`amplitudes_table`] as a kernel of [`crate::simd`]: compiled for the
+/// widest vectors the processor has, with the plain multiplications and
+/// additions of [`amplitudes_block`] in every build (it takes no fused
+/// multiply-adds), so the numbers do not depend on the build.
+struct AmplitudesTable<'a> {
+    a: &'a [Complex64],
+    b: &'a [Complex64],
+    mu: &'a [f64],
+    s1: &'a mut [Complex64],
+    s2: &'a mut [Complex64],
+}
+
+impl crate::simd::Kernel for AmplitudesTable<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn run<A: crate::simd::MultiplyAdd>(self) {
+        let AmplitudesTable { a, b, mu, s1, s2 } = self;
+        for_each_block(a, b, mu, |start, b1, b2| {
+            s1[start..start + b1.len()].copy_from_slice(b1);
+            s2[start..start + b2.len()].copy_from_slice(b2);
+        });
+    }
 }
 
 /// S11 alone at every mu of `mu`.
@@ -86,6 +108,7 @@ pub(super) fn s11_table(a: &[Complex64], b: &[Complex64], mu: &[f64], s11: &mut 
 
 /// Run the amplitude sums over `mu` in blocks of LANES angles and hand each
 /// block's (first index, S1, S2) to `consume`.
+#[inline(always)]
 fn for_each_block<F: FnMut(usize, &[Complex64], &[Complex64])>(
     a: &[Complex64],
     b: &[Complex64],
