@@ -20,7 +20,8 @@
 //! ensemble, a mixture, depolarises: the sum is at most F11^2.
 //!
 //! This is the straightforward path (the amplitudes of every node at every
-//! angle, no vector kernels), for polarised computations only: the scalar
+//! angle, by the sphere's blocked amplitude recurrences, not the phase
+//! tables' vector kernels), for polarised computations only: the scalar
 //! phase tables keep their fast angular sums (`angular_sums.rs`).
 
 use super::{EnsembleError, validate_wavelength};
@@ -94,8 +95,11 @@ pub(super) fn phase_matrix_sums(
     // [S11, S12, S33, S34] summed over the nodes, per angle.
     let mut sums = vec![[0.0f64; 4]; cos_theta.len()];
     let mut scattering_x_squared = 0.0;
-    // One solution's buffers serve every node (recomputed in place).
+    // One solution's buffers serve every node (recomputed in place), and
+    // the amplitudes of every angle one node's.
     let mut solution: Option<MieSolution> = None;
+    let zero = Complex64::new(0.0, 0.0);
+    let (mut s1, mut s2) = (vec![zero; cos_theta.len()], vec![zero; cos_theta.len()]);
     for (&radius_m, &weight) in quadrature.radii_m().iter().zip(quadrature.weights()) {
         let x = wavenumber_per_m * radius_m;
         let mie_error = |error| EnsembleError::Mie {
@@ -111,8 +115,8 @@ pub(super) fn phase_matrix_sums(
             None => solution.insert(MieSolution::compute(refractive_index, x).map_err(mie_error)?),
         };
         scattering_x_squared += weight * x * x * solution.efficiencies().qsca;
-        for (sum, &mu) in sums.iter_mut().zip(cos_theta) {
-            let (s1, s2) = solution.amplitudes(mu);
+        solution.amplitudes_table(cos_theta, &mut s1, &mut s2);
+        for ((sum, s1), s2) in sums.iter_mut().zip(&s1).zip(&s2) {
             let (n1, n2) = (s1.norm_sqr(), s2.norm_sqr());
             let product = s2 * s1.conj();
             sum[0] += weight * 0.5 * (n2 + n1);

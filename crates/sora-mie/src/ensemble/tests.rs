@@ -878,3 +878,33 @@ fn water_cloud_backscatter_is_converged_at_400_nm() {
     );
     assert!(p11 < 5e-3 && p12 < 5e-3, "P11 {p11}, F12/F11 {p12}");
 }
+
+#[test]
+fn the_binned_search_finds_the_interval_the_whole_table_search_finds() {
+    // Nodes crowded toward the forward direction (many in one bin), and
+    // cosines at the nodes, at the bins' edges, between, outside and NaN.
+    let nodes: Vec<f64> = (0..=400)
+        .map(|k| {
+            let t = k as f64 / 400.0;
+            (std::f64::consts::PI * (1.0 - t).powi(3)).cos()
+        })
+        .collect();
+    let mut nodes = nodes;
+    nodes[0] = -1.0;
+    nodes[400] = 1.0;
+    let values = vec![1.0; nodes.len()];
+    let table = TabulatedPhaseFunction::from_nodes(nodes.clone(), values).unwrap();
+    let whole = |x: f64| {
+        let upper = nodes.partition_point(|&mu| mu <= x);
+        upper.clamp(1, nodes.len() - 1) - 1
+    };
+    let mut cosines: Vec<f64> = nodes.clone();
+    cosines.extend((0..=2048).map(|b| -1.0 + 2.0 * b as f64 / 2048.0));
+    cosines.extend((0..10_000).map(|k| (0.618_033_988_75 * k as f64).fract() * 2.0 - 1.0));
+    cosines.extend(nodes.iter().map(|mu| mu + 1e-17));
+    cosines.extend(nodes.iter().map(|mu| mu - 1e-17));
+    cosines.extend([-1.5, 1.5, f64::NAN, f64::INFINITY, f64::NEG_INFINITY]);
+    for x in cosines {
+        assert_eq!(table.interval_index(x), whole(x), "cos theta {x}");
+    }
+}

@@ -59,6 +59,44 @@ pub(super) fn s11_s12_table(
     });
 }
 
+/// (S1, S2) at every mu of `mu` (equal lengths checked by the caller):
+/// each angle's the same numbers [`amplitudes`] gives it alone (the lanes
+/// of a block do the same operations in the same order).
+pub(super) fn amplitudes_table(
+    a: &[Complex64],
+    b: &[Complex64],
+    mu: &[f64],
+    s1: &mut [Complex64],
+    s2: &mut [Complex64],
+) {
+    crate::simd::dispatch(AmplitudesTable { a, b, mu, s1, s2 });
+}
+
+/// [`amplitudes_table`] as a kernel of [`crate::simd`]: compiled for the
+/// widest vectors the processor has, with the plain multiplications and
+/// additions of [`amplitudes_block`] in every build (it takes no fused
+/// multiply-adds), so the numbers do not depend on the build.
+struct AmplitudesTable<'a> {
+    a: &'a [Complex64],
+    b: &'a [Complex64],
+    mu: &'a [f64],
+    s1: &'a mut [Complex64],
+    s2: &'a mut [Complex64],
+}
+
+impl crate::simd::Kernel for AmplitudesTable<'_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn run<A: crate::simd::MultiplyAdd>(self) {
+        let AmplitudesTable { a, b, mu, s1, s2 } = self;
+        for_each_block(a, b, mu, |start, b1, b2| {
+            s1[start..start + b1.len()].copy_from_slice(b1);
+            s2[start..start + b2.len()].copy_from_slice(b2);
+        });
+    }
+}
+
 /// S11 alone at every mu of `mu`.
 pub(super) fn s11_table(a: &[Complex64], b: &[Complex64], mu: &[f64], s11: &mut [f64]) {
     for_each_block(a, b, mu, |start, s1, s2| {
@@ -70,6 +108,7 @@ pub(super) fn s11_table(a: &[Complex64], b: &[Complex64], mu: &[f64], s11: &mut 
 
 /// Run the amplitude sums over `mu` in blocks of LANES angles and hand each
 /// block's (first index, S1, S2) to `consume`.
+#[inline(always)]
 fn for_each_block<F: FnMut(usize, &[Complex64], &[Complex64])>(
     a: &[Complex64],
     b: &[Complex64],
@@ -138,6 +177,27 @@ fn amplitudes_block<const L: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_amplitude_table_gives_each_angle_its_own_amplitudes_to_the_last_bit() {
+        // 19 angles: two blocks of 8 and a remainder of 3.
+        let terms = 40;
+        let a: Vec<Complex64> = (0..terms)
+            .map(|n| Complex64::new((0.3 * n as f64).sin() / (n + 1) as f64, 0.01 * n as f64))
+            .collect();
+        let b: Vec<Complex64> = (0..terms)
+            .map(|n| Complex64::new((0.7 * n as f64).cos() / (n + 2) as f64, -0.02))
+            .collect();
+        let mu: Vec<f64> = (0..19).map(|k| -1.0 + 2.0 * k as f64 / 18.0).collect();
+        let zero = Complex64::new(0.0, 0.0);
+        let (mut s1, mut s2) = (vec![zero; mu.len()], vec![zero; mu.len()]);
+        amplitudes_table(&a, &b, &mu, &mut s1, &mut s2);
+        for (k, &m) in mu.iter().enumerate() {
+            let (one, two) = amplitudes(&a, &b, m);
+            assert_eq!((s1[k], s2[k]), (one, two), "mu {m}");
+        }
+        assert!(s1.iter().any(|s| s.norm() > 1.0));
+    }
 
     #[test]
     fn angular_functions_have_their_forward_and_backward_values() {

@@ -417,6 +417,21 @@ impl MieSolution {
         (s1 * self.scale, s2 * self.scale)
     }
 
+    /// [`MieSolution::amplitudes`] at each mu of `cos_theta`, into `s1` and
+    /// `s2` (the same numbers, to the last bit, in blocks of angles whose
+    /// recurrences run side by side). The slices must have equal lengths.
+    pub fn amplitudes_table(&self, cos_theta: &[f64], s1: &mut [Complex64], s2: &mut [Complex64]) {
+        assert!(
+            cos_theta.len() == s1.len() && cos_theta.len() == s2.len(),
+            "amplitudes_table: cos_theta, s1 and s2 must have equal lengths"
+        );
+        amplitude::amplitudes_table(&self.a_scaled, &self.b_scaled, cos_theta, s1, s2);
+        for (s1, s2) in s1.iter_mut().zip(s2.iter_mut()) {
+            *s1 *= self.scale;
+            *s2 *= self.scale;
+        }
+    }
+
     /// (S11, S12) at mu = cos(theta): S11 = (|S1|^2 + |S2|^2)/2, S12 = (|S2|^2 - |S1|^2)/2.
     pub fn s11_s12(&self, cos_theta: f64) -> (f64, f64) {
         let (s1, s2) = self.amplitudes(cos_theta);

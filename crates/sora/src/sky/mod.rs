@@ -53,8 +53,8 @@
 //! last bit, with one exception: from [`TABLE_VIEW_COUNT`] views on,
 //! [`Sky::radiances`] of the fast method reads its views from the image
 //! tables, as an image's pixels are (measured over 256 views of
-//! earth-clear: within 0.27 % of the exact path in I, the worst about 10
-//! degrees from the sun, and 1.4e-3 in the degree of polarisation; 1 % in
+//! earth-clear: within 0.27 % of the exact path in I, the worst near the
+//! horizon 10 degrees in azimuth from the sun, and 1.4e-3 in the degree of polarisation; 1 % in
 //! twilight; [`Sky::radiances_exact`] keeps the exact path).
 
 mod aerial_perspective;
@@ -1168,7 +1168,8 @@ impl Sky {
     /// every table (see the module docs). With [`Method::Fast`] and at
     /// least [`TABLE_VIEW_COUNT`] views the views are read from the image
     /// tables ([`Sky::radiance_from_image_tables`]; within 0.27 % of the
-    /// exact path by day, the worst near the sun, 1 % in twilight);
+    /// exact path by day, the worst near the horizon close to the sun's
+    /// azimuth, 1 % in twilight);
     /// [`Sky::radiances_exact`] keeps the exact per-view path for any
     /// number of views.
     pub fn radiances(&self, views: &[ViewDirection]) -> Result<Vec<SkyRadiance>> {
@@ -1415,8 +1416,8 @@ impl Sky {
 
     /// The radiance a fast-method image shows toward `view` (read from its
     /// tables, without the sun's disc): within 0.1 % of [`Sky::radiance`]
-    /// with [`Method::Fast`] by day away from the sun (0.27 % about 10
-    /// degrees from it, earth-clear) and within 1 % in twilight (measured
+    /// with [`Method::Fast`] by day away from the sun (0.27 % near the
+    /// horizon 10 degrees in azimuth from it, earth-clear) and within 1 % in twilight (measured
     /// 0.7 %, sun 0 to -16 degrees, `tests/twilight.rs`), which is what the
     /// tests hold it to: values that match a rendered image pixel for pixel.
     pub fn radiance_from_image_tables(&self, view: ViewDirection) -> Result<SkyRadiance> {

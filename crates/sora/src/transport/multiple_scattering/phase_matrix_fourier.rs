@@ -131,11 +131,22 @@ impl PhaseMatrixHarmonics {
         let nodes = half + 1;
         let node_weight = |k: usize| if k == 0 { 1.0 } else { 2.0 };
         // Z at every node for one pair of directions, [(i * nodes + k) * 16 + e]
-        // (e = row * 4 + column), and its cosine and sine transforms,
-        // [m * 16 + e]: whole 16-element rows, so the transforms vectorise.
+        // (e = row * 4 + column), and its transforms, [m * 16 + e]: whole
+        // 16-element rows, so the transforms vectorise. Each element keeps
+        // one transform only (the cosine transform of the even elements,
+        // the sine transform of the odd ones, see the module docs), so each
+        // node's factor is the node weight times cos(m Delta_k) or
+        // sin(m Delta_k) by element, [(k * harmonics + m) * 16 + e].
         let mut z_nodes = vec![0.0; wavelengths * nodes * ELEMENTS];
-        let mut cosine_part = vec![0.0; harmonics * ELEMENTS];
-        let mut sine_part = vec![0.0; harmonics * ELEMENTS];
+        let mut transforms = vec![0.0; harmonics * ELEMENTS];
+        let factors: Vec<f64> = (0..nodes)
+            .flat_map(|k| (0..harmonics).map(move |m| (k, m)))
+            .flat_map(|(k, m)| {
+                let (cos_m, sin_m) = trig[k * harmonics + m];
+                let (cos_m, sin_m) = (node_weight(k) * cos_m, node_weight(k) * sin_m);
+                (0..ELEMENTS).map(move |e| if is_even_element(e) { cos_m } else { sin_m })
+            })
+            .collect();
         for (a, &mu_out) in output_cosines.iter().enumerate() {
             let outs: Vec<LookDirection> = (0..nodes)
                 .map(|k| LookDirection::new(mu_out, k as f64 * step))
@@ -154,39 +165,36 @@ impl PhaseMatrixHarmonics {
                     }
                 }
                 for (i, h) in all.iter_mut().enumerate() {
-                    cosine_part.fill(0.0);
-                    sine_part.fill(0.0);
+                    transforms.fill(0.0);
                     let values = &z_nodes[i * nodes * ELEMENTS..][..nodes * ELEMENTS];
                     for (k, z) in values.chunks_exact(ELEMENTS).enumerate() {
-                        let weight = node_weight(k);
-                        for m in 0..harmonics {
-                            let (cos_m, sin_m) = trig[k * harmonics + m];
-                            let (cos_m, sin_m) = (weight * cos_m, weight * sin_m);
-                            let range = m * ELEMENTS..(m + 1) * ELEMENTS;
-                            for ((c, s), v) in cosine_part[range.clone()]
-                                .iter_mut()
-                                .zip(&mut sine_part[range])
-                                .zip(z)
-                            {
-                                *c += v * cos_m;
-                                *s += v * sin_m;
+                        let node_factors =
+                            &factors[k * harmonics * ELEMENTS..][..harmonics * ELEMENTS];
+                        for (part, factors) in transforms
+                            .chunks_exact_mut(ELEMENTS)
+                            .zip(node_factors.chunks_exact(ELEMENTS))
+                        {
+                            for ((t, v), f) in part.iter_mut().zip(z).zip(factors) {
+                                *t += v * f;
                             }
                         }
                     }
-                    h.store_transforms((&cosine_part, &sine_part), (a, b), weight, step);
+                    h.store_transforms(&transforms, (a, b), weight, step);
                 }
             }
         }
         all
     }
 
-    /// Stores the cosine and sine transforms over the azimuth nodes of the
-    /// rotated matrix from input (or sun) `b` into output `a`, [m * 16 +
-    /// e], as this wavelength's harmonics: the scattering blocks with the
-    /// input's quadrature weight `weight`, or (None) the sun's.
+    /// Stores the transforms over the azimuth nodes of the rotated matrix
+    /// from input (or sun) `b` into output `a`, [m * 16 + e] (the cosine
+    /// transform of the even elements, the sine transform of the odd ones:
+    /// [`is_even_element`]), as this wavelength's harmonics: the scattering
+    /// blocks with the input's quadrature weight `weight`, or (None) the
+    /// sun's.
     fn store_transforms(
         &mut self,
-        (cosine_part, sine_part): (&[f64], &[f64]),
+        transforms: &[f64],
         (a, b): (usize, usize),
         weight: Option<f64>,
         step: f64,
@@ -195,10 +203,7 @@ impl PhaseMatrixHarmonics {
         let (harmonics, inputs, outputs) = (self.harmonics, self.inputs, self.outputs);
         let block = COMPONENTS * outputs;
         for m in 0..harmonics {
-            let (cosine, sine) = (
-                &cosine_part[m * ELEMENTS..(m + 1) * ELEMENTS],
-                &sine_part[m * ELEMENTS..(m + 1) * ELEMENTS],
-            );
+            let transform = &transforms[m * ELEMENTS..(m + 1) * ELEMENTS];
             for row in 0..COMPONENTS {
                 match weight {
                     Some(weight) => {
@@ -206,9 +211,8 @@ impl PhaseMatrixHarmonics {
                             let e = row * COMPONENTS + column;
                             let projected =
                                 match (is_even_component(row), is_even_component(column)) {
-                                    (true, true) | (false, false) => cosine[e],
-                                    (true, false) => -sine[e],
-                                    (false, true) => sine[e],
+                                    (true, true) | (false, false) | (false, true) => transform[e],
+                                    (true, false) => -transform[e],
                                 };
                             self.scattering[((m * COMPONENTS + column) * inputs + b) * block
                                 + row * outputs
@@ -216,12 +220,7 @@ impl PhaseMatrixHarmonics {
                         }
                     }
                     None => {
-                        let e = row * COMPONENTS;
-                        let projected = if is_even_component(row) {
-                            cosine[e]
-                        } else {
-                            sine[e]
-                        };
+                        let projected = transform[row * COMPONENTS];
                         let norm = if m == 0 { 2.0 * PI } else { PI };
                         self.sun[(m * COMPONENTS + row) * outputs + a] = step / norm * projected;
                     }
@@ -341,6 +340,13 @@ impl PhaseMatrixHarmonics {
             .chain(self.sun(m))
             .all(|v| v.abs() <= 1e-14 * largest)
     }
+}
+
+/// Whether element `e` (row * 4 + column) of Z is even in the azimuth
+/// difference (its two components both even or both odd: it keeps its
+/// cosine transform) or odd (its sine transform).
+fn is_even_element(e: usize) -> bool {
+    is_even_component(e / COMPONENTS) == is_even_component(e % COMPONENTS)
 }
 
 /// The azimuth rule of the transforms: `nodes` = 4 harmonics + 1 points
