@@ -132,6 +132,8 @@ fn csv_radiances_give_json_residuals_and_a_plot() {
         "aerosol_optical_depth",
         "single_scattering_albedo",
         "asymmetry_parameter",
+        "refractive_index_real",
+        "refractive_index_imaginary",
     ] {
         assert!(spectral[0][key]["value"].is_f64(), "{key}");
     }
@@ -269,6 +271,8 @@ fn every_scan_of_a_file_one_row_each_and_a_fit_that_does_not_converge_is_a_warni
         "fine_volume_median_radius_um_sigma",
         "single_scattering_albedo_1020nm",
         "asymmetry_parameter_1020nm",
+        "refractive_index_real_1020nm",
+        "refractive_index_imaginary_1020nm_sigma",
         "angstrom_exponent",
         "fine_effective_radius_um",
         "chi_square",
