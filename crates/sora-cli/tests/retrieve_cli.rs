@@ -416,3 +416,67 @@ fn bad_inputs_give_one_line_errors_and_write_nothing() {
     names.sort();
     assert_eq!(names, ["dense.csv", "negative.csv"]);
 }
+
+#[test]
+fn filters_and_one_index_are_taken_and_a_filter_off_the_channels_is_an_error() {
+    let directory = tempfile::tempdir().unwrap();
+    let input = directory.path().join("sky.csv");
+    std::fs::write(&input, synthetic_radiances_csv()).unwrap();
+    let input = input.to_str().unwrap();
+    let spectral = |extra: &[&str]| -> Vec<(f64, f64, f64)> {
+        let out = sora(
+            &[
+                &["retrieve", "--radiances", input, "--format", "json"][..],
+                &QUICK,
+                extra,
+            ]
+            .concat(),
+        );
+        let json = common::json(&out);
+        json[0]["spectral"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|s| {
+                (
+                    s["wavelength_nm"].as_f64().unwrap(),
+                    s["refractive_index_real"]["value"].as_f64().unwrap(),
+                    s["refractive_index_imaginary"]["value"].as_f64().unwrap(),
+                )
+            })
+            .collect()
+    };
+    // `cimel` takes its channels that cover the measured 440 and 680 nm
+    // (cimel-440, cimel-675); an index per wavelength.
+    let filtered = spectral(&["--filter", "cimel"]);
+    assert_eq!(filtered.len(), 2);
+    assert_eq!((filtered[0].0, filtered[1].0), (440.0, 680.0));
+    // One index: the same n and k at both.
+    let one = spectral(&["--one-index"]);
+    assert_eq!((one[0].1, one[0].2), (one[1].1, one[1].2));
+
+    let error = one_line_error(&sora(&[
+        "retrieve",
+        "--radiances",
+        input,
+        "--filter",
+        "cimel-870",
+    ]));
+    assert!(
+        error.contains("cimel-870") && error.contains("covers none of the measured wavelengths"),
+        "{error}"
+    );
+    let error = one_line_error(&sora(&[
+        "retrieve",
+        "--radiances",
+        input,
+        "--filter",
+        "cimel-440",
+        "--filter",
+        "cimel-440",
+    ]));
+    assert!(
+        error.contains("both cover the measured wavelength 440 nm"),
+        "{error}"
+    );
+}

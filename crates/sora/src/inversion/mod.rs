@@ -14,8 +14,9 @@
 //!   text (sora's CSV, AERONET version 3 almucantar, principal-plane and
 //!   optical-depth files, a normalised spectrum in one direction);
 //! - `state.rs`: what is fitted ([`AerosolState`]: the optical depth at a
-//!   reference wavelength, two log-normal volume modes, one refractive
-//!   index), its bounds and its a priori;
+//!   reference wavelength, two log-normal volume modes, a refractive
+//!   index, fitted per wavelength with a smoothness prior, [`IndexSpectrum`]),
+//!   its bounds and its a priori;
 //! - `kernels.rs`: Mie kernels per radius node, so that a new size
 //!   distribution costs no Mie solution;
 //! - `forward.rs`: the forward model, the library's fast multiple-
@@ -29,7 +30,7 @@
 //! almucantar, and linear for optical depths, which may be near 0.
 //!
 //! Assumptions, stated: spheres (Mie theory; AERONET adds spheroids for
-//! dust); one refractive index for both modes and every wavelength; the
+//! dust); one refractive index per wavelength for both modes; the
 //! aerosol in one exponential layer (scale height
 //! [`RetrievalSettings::aerosol_scale_height_m`]; an almucantar depends on
 //! it very little, since every view sees the same air mass); scalar light
@@ -907,6 +908,51 @@ mod tests {
         45.0, 50.0, 60.0, 70.0, 80.0, 90.0, 100.0, 120.0, 140.0, 160.0,
     ];
 
+    /// An almucantar at 440-1020 nm made by the forward model from
+    /// `truth`'s size distribution with index `indices[i]` at each channel
+    /// (3 % uncertainties, no noise), with its optical depths (0.01); and
+    /// the truth's albedo per channel.
+    pub(crate) fn self_made_almucantar(
+        truth: &AerosolState,
+        indices: &[Complex64],
+    ) -> (Measurements, Vec<f64>) {
+        let atmosphere = Atmosphere::preset("earth-clear").unwrap();
+        let (sun_elevation_deg, sun_azimuth_deg) = (30.0, 180.0);
+        let mut measurements = Measurements {
+            label: "self".into(),
+            ..Measurements::default()
+        };
+        for wavelength_nm in [440.0, 675.0, 870.0, 1020.0] {
+            for a in ALMUCANTAR_AZIMUTHS_DEG {
+                measurements.sky.push(SkyRadianceMeasurement {
+                    wavelength_nm,
+                    sun_elevation_deg,
+                    sun_azimuth_deg,
+                    view_elevation_deg: sun_elevation_deg,
+                    view_azimuth_deg: sun_azimuth_deg + a,
+                    radiance_w_m2_sr_nm: 1.0,
+                    uncertainty_w_m2_sr_nm: 0.03,
+                });
+            }
+        }
+        let forward =
+            ForwardModel::new(&atmosphere, &measurements, 1200.0, 440.0, 1.0, &[]).unwrap();
+        let (radiances, optics) = forward.radiances(truth, indices).unwrap();
+        for (m, l) in measurements.sky.iter_mut().zip(&radiances) {
+            m.radiance_w_m2_sr_nm = *l;
+            m.uncertainty_w_m2_sr_nm = 0.03 * l;
+        }
+        for (w, o) in forward.wavelengths_nm.iter().zip(&optics) {
+            measurements.optical_depths.push(OpticalDepthMeasurement {
+                wavelength_nm: *w,
+                aerosol_optical_depth: o.optical_depth,
+                uncertainty: 0.01,
+            });
+        }
+        let albedos = optics.iter().map(|o| o.single_scattering_albedo).collect();
+        (measurements, albedos)
+    }
+
     /// A channel's band averages the sun over it: at 870 nm (no gas
     /// absorption to speak of: ozone's optical depth there is below 2e-4)
     /// the radiances with a 10-nm band are those with a 1-nm band times
@@ -1037,7 +1083,7 @@ mod tests {
     }
 
     /// Without noise, the fit returns the state that made its own
-    /// measurements (the forward model is the same: this checks the fit,
+    /// measurements, a spectrally flat index as flat (the forward model is the same: this checks the fit,
     /// not the physics; `tests/retrieval.rs` checks against the path
     /// tracer).
     #[test]
@@ -1057,38 +1103,7 @@ mod tests {
             refractive_index_real: 1.47,
             refractive_index_imaginary: 0.012,
         };
-        let (sun_elevation_deg, sun_azimuth_deg) = (30.0, 180.0);
-        let mut measurements = Measurements {
-            label: "self".into(),
-            ..Measurements::default()
-        };
-        for wavelength_nm in [440.0, 675.0, 870.0, 1020.0] {
-            for a in ALMUCANTAR_AZIMUTHS_DEG {
-                measurements.sky.push(SkyRadianceMeasurement {
-                    wavelength_nm,
-                    sun_elevation_deg,
-                    sun_azimuth_deg,
-                    view_elevation_deg: sun_elevation_deg,
-                    view_azimuth_deg: sun_azimuth_deg + a,
-                    radiance_w_m2_sr_nm: 1.0,
-                    uncertainty_w_m2_sr_nm: 0.03,
-                });
-            }
-        }
-        let forward =
-            ForwardModel::new(&atmosphere, &measurements, 1200.0, 440.0, 1.0, &[]).unwrap();
-        let (radiances, optics) = forward.radiances(&truth, &[index_of(&truth); 4]).unwrap();
-        for (m, l) in measurements.sky.iter_mut().zip(&radiances) {
-            m.radiance_w_m2_sr_nm = *l;
-            m.uncertainty_w_m2_sr_nm = 0.03 * l;
-        }
-        for (w, o) in forward.wavelengths_nm.iter().zip(&optics) {
-            measurements.optical_depths.push(OpticalDepthMeasurement {
-                wavelength_nm: *w,
-                aerosol_optical_depth: o.optical_depth,
-                uncertainty: 0.01,
-            });
-        }
+        let (measurements, albedos) = self_made_almucantar(&truth, &[index_of(&truth); 4]);
         let started = std::time::Instant::now();
         let retrieval =
             retrieve(&atmosphere, &measurements, &RetrievalSettings::default()).unwrap();
@@ -1116,58 +1131,25 @@ mod tests {
                 PARAMETER_NAMES[k]
             );
         }
+        // The index is spectrally flat: the per-wavelength fit (the
+        // default) finds it flat, every channel's albedo within 0.01, k
+        // within 15 % and n within 0.02.
+        let worst = super::index_spectrum_tests::worst_albedo_error("flat", &retrieval, &albedos);
+        assert!(worst < 0.01, "{worst}");
+        for s in &retrieval.spectral {
+            assert!((s.refractive_index_imaginary.value / 0.012 - 1.0).abs() < 0.15);
+            assert!((s.refractive_index_real.value - 1.47).abs() < 0.02);
+        }
     }
 }
 
 #[cfg(test)]
 mod index_spectrum_tests {
-    use super::tests::ALMUCANTAR_AZIMUTHS_DEG;
+    use super::tests::self_made_almucantar;
     use super::*;
 
-    /// An almucantar at 440-1020 nm made by the forward model from
-    /// `truth`'s size distribution with index `indices[i]` at each channel
-    /// (3 % uncertainties, no noise), with its optical depths (0.01); and
-    /// the truth's albedo per channel.
-    fn almucantar(truth: &AerosolState, indices: &[Complex64]) -> (Measurements, Vec<f64>) {
-        let atmosphere = Atmosphere::preset("earth-clear").unwrap();
-        let (sun_elevation_deg, sun_azimuth_deg) = (30.0, 180.0);
-        let mut measurements = Measurements {
-            label: "index spectrum".into(),
-            ..Measurements::default()
-        };
-        for wavelength_nm in [440.0, 675.0, 870.0, 1020.0] {
-            for a in ALMUCANTAR_AZIMUTHS_DEG {
-                measurements.sky.push(SkyRadianceMeasurement {
-                    wavelength_nm,
-                    sun_elevation_deg,
-                    sun_azimuth_deg,
-                    view_elevation_deg: sun_elevation_deg,
-                    view_azimuth_deg: sun_azimuth_deg + a,
-                    radiance_w_m2_sr_nm: 1.0,
-                    uncertainty_w_m2_sr_nm: 0.03,
-                });
-            }
-        }
-        let forward =
-            ForwardModel::new(&atmosphere, &measurements, 1200.0, 440.0, 1.0, &[]).unwrap();
-        let (radiances, optics) = forward.radiances(truth, indices).unwrap();
-        for (m, l) in measurements.sky.iter_mut().zip(&radiances) {
-            m.radiance_w_m2_sr_nm = *l;
-            m.uncertainty_w_m2_sr_nm = 0.03 * l;
-        }
-        for (w, o) in forward.wavelengths_nm.iter().zip(&optics) {
-            measurements.optical_depths.push(OpticalDepthMeasurement {
-                wavelength_nm: *w,
-                aerosol_optical_depth: o.optical_depth,
-                uncertainty: 0.01,
-            });
-        }
-        let albedos = optics.iter().map(|o| o.single_scattering_albedo).collect();
-        (measurements, albedos)
-    }
-
     /// The largest albedo error over the channels, printing each.
-    fn worst_albedo_error(name: &str, retrieval: &Retrieval, truth: &[f64]) -> f64 {
+    pub(crate) fn worst_albedo_error(name: &str, retrieval: &Retrieval, truth: &[f64]) -> f64 {
         let mut worst = 0.0f64;
         for (s, t) in retrieval.spectral.iter().zip(truth) {
             let error = s.single_scattering_albedo.value - t;
@@ -1208,7 +1190,7 @@ mod index_spectrum_tests {
             .iter()
             .map(|w: &f64| Complex64::new(1.45, 0.004 * (w / 440.0).powf(1.5)))
             .collect();
-        let (measurements, albedos) = almucantar(&truth, &indices);
+        let (measurements, albedos) = self_made_almucantar(&truth, &indices);
         let per_wavelength =
             retrieve(&atmosphere, &measurements, &RetrievalSettings::default()).unwrap();
         let one = retrieve(
@@ -1227,38 +1209,6 @@ mod index_spectrum_tests {
         assert!(worst_one > 0.01, "{worst_one}");
         for (s, m) in per_wavelength.spectral.iter().zip(&indices) {
             assert!((s.refractive_index_imaginary.value / m.im - 1.0).abs() < 0.15);
-        }
-    }
-
-    /// A spectrally flat index (k 0.012 at every channel) is recovered as
-    /// flat by the per-wavelength fit: each channel's albedo within 0.01
-    /// and each channel's k within 15 %.
-    #[test]
-    fn per_wavelength_index_recovers_a_flat_index() {
-        let atmosphere = Atmosphere::preset("earth-clear").unwrap();
-        let truth = AerosolState {
-            optical_depth: 0.45,
-            fine: LogNormalMode {
-                volume_median_radius_um: 0.17,
-                width: 0.45,
-            },
-            coarse: LogNormalMode {
-                volume_median_radius_um: 2.8,
-                width: 0.62,
-            },
-            fine_volume_fraction: 0.45,
-            refractive_index_real: 1.47,
-            refractive_index_imaginary: 0.012,
-        };
-        let (measurements, albedos) = almucantar(&truth, &[index_of(&truth); 4]);
-        let retrieval =
-            retrieve(&atmosphere, &measurements, &RetrievalSettings::default()).unwrap();
-        let worst = worst_albedo_error("flat", &retrieval, &albedos);
-        assert!(retrieval.converged);
-        assert!(worst < 0.01, "{worst}");
-        for s in &retrieval.spectral {
-            assert!((s.refractive_index_imaginary.value / 0.012 - 1.0).abs() < 0.15);
-            assert!((s.refractive_index_real.value - 1.47).abs() < 0.02);
         }
     }
 }
