@@ -418,7 +418,7 @@ fn bad_inputs_give_one_line_errors_and_write_nothing() {
 }
 
 #[test]
-fn filters_and_one_index_are_taken_and_a_filter_off_the_channels_is_an_error() {
+fn filters_and_the_index_per_wavelength_are_taken_and_a_filter_off_the_channels_is_an_error() {
     let directory = tempfile::tempdir().unwrap();
     let input = directory.path().join("sky.csv");
     std::fs::write(&input, synthetic_radiances_csv()).unwrap();
@@ -447,13 +447,22 @@ fn filters_and_one_index_are_taken_and_a_filter_off_the_channels_is_an_error() {
             .collect()
     };
     // `cimel` takes its channels that cover the measured 440 and 680 nm
-    // (cimel-440, cimel-675); an index per wavelength.
+    // (cimel-440, cimel-675); one index (the default): the same n and k at
+    // both.
     let filtered = spectral(&["--filter", "cimel"]);
     assert_eq!(filtered.len(), 2);
     assert_eq!((filtered[0].0, filtered[1].0), (440.0, 680.0));
-    // One index: the same n and k at both.
-    let one = spectral(&["--one-index"]);
-    assert_eq!((one[0].1, one[0].2), (one[1].1, one[1].2));
+    assert_eq!(
+        (filtered[0].1, filtered[0].2),
+        (filtered[1].1, filtered[1].2)
+    );
+    // An index per wavelength: each its own (two channels, no smoothness
+    // prior under three).
+    let per_wavelength = spectral(&["--index-per-wavelength"]);
+    assert_ne!(
+        (per_wavelength[0].1, per_wavelength[0].2),
+        (per_wavelength[1].1, per_wavelength[1].2)
+    );
 
     let error = one_line_error(&sora(&[
         "retrieve",

@@ -32,11 +32,13 @@ use crate::json::Members;
 /// warning, not an error (exit status 0).
 ///
 /// Each channel's sun and gas absorption are averaged over --band-nm
-/// (default 10 nm for AERONET files, as the Cimel channels are wide).
+/// (default 10 nm for AERONET files, as the Cimel channels are wide), or
+/// weighted by its --filter's response (docs/filters.md).
 ///
 /// The model's assumptions: the particles are spheres (Mie theory; dust's
 /// spheroids are not), with one complex refractive index for both modes
-/// and every wavelength; the size distribution is two log-normal volume
+/// and every wavelength (--index-per-wavelength: one per wavelength, smooth
+/// in wavelength, as AERONET's inversion has); the size distribution is two log-normal volume
 /// modes (fine and coarse); the aerosol lies in one exponential layer
 /// (--aerosol-scale-height-m); light is scalar (polarisation changes
 /// radiances by up to a few per cent); the air, ozone and ground are the
@@ -222,10 +224,11 @@ pub struct RetrieveArgs {
     #[arg(long, value_name = "FILE.csv|NAME")]
     filter: Vec<String>,
 
-    /// Fit one refractive index for every wavelength, instead of one per
-    /// wavelength smooth in wavelength (the default: docs/retrieval.md)
+    /// Fit a refractive index per wavelength, smooth in wavelength (a
+    /// second-difference prior, as AERONET's inversion has), instead of one
+    /// for every wavelength (docs/retrieval.md)
     #[arg(long)]
-    one_index: bool,
+    index_per_wavelength: bool,
 
     /// Starting points of the fit (fine-dominated, coarse-dominated, the a
     /// priori); the lowest chi^2 wins
@@ -323,10 +326,10 @@ pub fn run(args: RetrieveArgs) -> anyhow::Result<()> {
                 1.0
             },
         ),
-        index: if args.one_index {
-            IndexSpectrum::One
-        } else {
+        index: if args.index_per_wavelength {
             IndexSpectrum::PerWavelength
+        } else {
+            IndexSpectrum::One
         },
         filters: Vec::new(),
     };
