@@ -67,6 +67,9 @@ const SKY_CACHE_SIZE: usize = 32;
 /// wavelength's (which scales the optical depth), compared bit for bit.
 type OpticsKey = [f64; 10];
 
+/// One group's last skies: the radiances of each, by its optics' key.
+type SkyCache = Mutex<Vec<(OpticsKey, Vec<f64>)>>;
+
 /// Where `wavelength_nm` is in `wavelengths_nm` (the measurements'
 /// wavelengths, equal to within `SAME_WAVELENGTH_NM` as
 /// [`Measurements::wavelengths_nm`] merges them).
@@ -120,7 +123,7 @@ pub(crate) struct ForwardModel {
     kernels: Mutex<Vec<(usize, Arc<MieKernels>)>>,
     /// Per group: the radiances of the last skies computed, by what the
     /// aerosol's optics at the group's wavelength depend on.
-    sky_cache: Vec<Mutex<Vec<(OpticsKey, Vec<f64>)>>>,
+    sky_cache: Vec<SkyCache>,
     /// The first sky's scene, whose sun-column tables every later sky
     /// shares: they depend on the profiles, the radii and the eye only,
     /// which no evaluation changes, and at a low sun (where the first
