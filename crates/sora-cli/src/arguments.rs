@@ -200,34 +200,41 @@ impl FilterOptions {
     /// channels); empty without --filter. A name that is neither a
     /// built-in filter nor a readable file is a one-line error.
     pub fn filters(&self) -> anyhow::Result<Vec<sora::spectrum::Filter>> {
-        use sora::spectrum::Filter;
-        let mut filters = Vec::new();
-        for value in &self.filter {
-            if value == "cimel" {
-                filters.extend(
-                    Filter::builtin_names()
-                        .iter()
-                        .filter_map(|name| Filter::named(name)),
-                );
-            } else if let Some(filter) = Filter::named(value) {
-                filters.push(filter);
-            } else {
-                let path = std::path::Path::new(value);
-                if !path.exists() && !value.to_ascii_lowercase().ends_with(".csv") {
-                    anyhow::bail!(
-                        "--filter {value}: no such file, nor a built-in filter (cimel, {})",
-                        Filter::builtin_names().join(", ")
-                    );
-                }
-                let text = sora::input::read_text(path)?;
-                filters.push(
-                    Filter::parse_csv(&text, value)
-                        .map_err(|e| anyhow::anyhow!("--filter {value}: {e}"))?,
+        parse_filters(&self.filter)
+    }
+}
+
+/// The filters `values` name (each a built-in name, `cimel` for its seven
+/// channels, or a CSV file), in order; a one-line error for a value that is
+/// neither a built-in filter nor a readable file.
+pub fn parse_filters(values: &[String]) -> anyhow::Result<Vec<sora::spectrum::Filter>> {
+    use sora::spectrum::Filter;
+    let mut filters = Vec::new();
+    for value in values {
+        if value == "cimel" {
+            filters.extend(
+                Filter::builtin_names()
+                    .iter()
+                    .filter_map(|name| Filter::named(name)),
+            );
+        } else if let Some(filter) = Filter::named(value) {
+            filters.push(filter);
+        } else {
+            let path = std::path::Path::new(value);
+            if !path.exists() && !value.to_ascii_lowercase().ends_with(".csv") {
+                anyhow::bail!(
+                    "--filter {value}: no such file, nor a built-in filter (cimel, {})",
+                    Filter::builtin_names().join(", ")
                 );
             }
+            let text = sora::input::read_text(path)?;
+            filters.push(
+                Filter::parse_csv(&text, value)
+                    .map_err(|e| anyhow::anyhow!("--filter {value}: {e}"))?,
+            );
         }
-        Ok(filters)
     }
+    Ok(filters)
 }
 
 /// A clap parser for one of the library's choices: its names (`names`, the

@@ -132,6 +132,8 @@ fn csv_radiances_give_json_residuals_and_a_plot() {
         "aerosol_optical_depth",
         "single_scattering_albedo",
         "asymmetry_parameter",
+        "refractive_index_real",
+        "refractive_index_imaginary",
     ] {
         assert!(spectral[0][key]["value"].is_f64(), "{key}");
     }
@@ -269,6 +271,8 @@ fn every_scan_of_a_file_one_row_each_and_a_fit_that_does_not_converge_is_a_warni
         "fine_volume_median_radius_um_sigma",
         "single_scattering_albedo_1020nm",
         "asymmetry_parameter_1020nm",
+        "refractive_index_real_1020nm",
+        "refractive_index_imaginary_1020nm_sigma",
         "angstrom_exponent",
         "fine_effective_radius_um",
         "chi_square",
@@ -411,4 +415,77 @@ fn bad_inputs_give_one_line_errors_and_write_nothing() {
         .collect();
     names.sort();
     assert_eq!(names, ["dense.csv", "negative.csv"]);
+}
+
+#[test]
+fn filters_and_the_index_per_wavelength_are_taken_and_a_filter_off_the_channels_is_an_error() {
+    let directory = tempfile::tempdir().unwrap();
+    let input = directory.path().join("sky.csv");
+    std::fs::write(&input, synthetic_radiances_csv()).unwrap();
+    let input = input.to_str().unwrap();
+    let spectral = |extra: &[&str]| -> Vec<(f64, f64, f64)> {
+        let out = sora(
+            &[
+                &["retrieve", "--radiances", input, "--format", "json"][..],
+                &QUICK,
+                extra,
+            ]
+            .concat(),
+        );
+        let json = common::json(&out);
+        json[0]["spectral"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|s| {
+                (
+                    s["wavelength_nm"].as_f64().unwrap(),
+                    s["refractive_index_real"]["value"].as_f64().unwrap(),
+                    s["refractive_index_imaginary"]["value"].as_f64().unwrap(),
+                )
+            })
+            .collect()
+    };
+    // `cimel` takes its channels that cover the measured 440 and 680 nm
+    // (cimel-440, cimel-675); one index (the default): the same n and k at
+    // both.
+    let filtered = spectral(&["--filter", "cimel"]);
+    assert_eq!(filtered.len(), 2);
+    assert_eq!((filtered[0].0, filtered[1].0), (440.0, 680.0));
+    assert_eq!(
+        (filtered[0].1, filtered[0].2),
+        (filtered[1].1, filtered[1].2)
+    );
+    // An index per wavelength: each its own (two channels, no smoothness
+    // prior under three).
+    let per_wavelength = spectral(&["--index-per-wavelength"]);
+    assert_ne!(
+        (per_wavelength[0].1, per_wavelength[0].2),
+        (per_wavelength[1].1, per_wavelength[1].2)
+    );
+
+    let error = one_line_error(&sora(&[
+        "retrieve",
+        "--radiances",
+        input,
+        "--filter",
+        "cimel-870",
+    ]));
+    assert!(
+        error.contains("cimel-870") && error.contains("covers none of the measured wavelengths"),
+        "{error}"
+    );
+    let error = one_line_error(&sora(&[
+        "retrieve",
+        "--radiances",
+        input,
+        "--filter",
+        "cimel-440",
+        "--filter",
+        "cimel-440",
+    ]));
+    assert!(
+        error.contains("both cover the measured wavelength 440 nm"),
+        "{error}"
+    );
 }

@@ -9,9 +9,10 @@ use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
 use serde::Serialize;
 use sora::inversion::{
-    AeronetScan, Estimate, Measurements, PARAMETER_NAMES, Retrieval, RetrievalSettings,
-    SkyGeometry, attach_nearest_optical_depths, parse_aeronet_aod, parse_aeronet_sky,
-    parse_normalised_spectrum_csv, parse_optical_depth_csv, parse_sky_radiance_csv, retrieve,
+    AeronetScan, Estimate, IndexSpectrum, Measurements, PARAMETER_NAMES, Retrieval,
+    RetrievalSettings, SkyGeometry, attach_nearest_optical_depths, parse_aeronet_aod,
+    parse_aeronet_sky, parse_normalised_spectrum_csv, parse_optical_depth_csv,
+    parse_sky_radiance_csv, retrieve,
 };
 
 use crate::arguments::AtmosphereSource;
@@ -31,11 +32,13 @@ use crate::json::Members;
 /// warning, not an error (exit status 0).
 ///
 /// Each channel's sun and gas absorption are averaged over --band-nm
-/// (default 10 nm for AERONET files, as the Cimel channels are wide).
+/// (default 10 nm for AERONET files, as the Cimel channels are wide), or
+/// weighted by its --filter's response (docs/filters.md).
 ///
 /// The model's assumptions: the particles are spheres (Mie theory; dust's
 /// spheroids are not), with one complex refractive index for both modes
-/// and every wavelength; the size distribution is two log-normal volume
+/// and every wavelength (--index-per-wavelength: one per wavelength, smooth
+/// in wavelength, as AERONET's inversion has); the size distribution is two log-normal volume
 /// modes (fine and coarse); the aerosol lies in one exponential layer
 /// (--aerosol-scale-height-m); light is scalar (polarisation changes
 /// radiances by up to a few per cent); the air, ozone and ground are the
@@ -211,6 +214,22 @@ pub struct RetrieveArgs {
     #[arg(long, value_name = "NM", allow_hyphen_values = true)]
     band_nm: Option<f64>,
 
+    /// An instrument channel (repeatable): a CSV file wavelength_nm,response
+    /// or a built-in sun-photometer channel (cimel-440, cimel-675,
+    /// cimel-870, cimel-1020, ...; cimel: those of the seven that cover a
+    /// measured wavelength). The measured wavelength inside the filter's
+    /// support nearest its centre is computed as the channel sees it, the
+    /// sun and the air weighted by the response, instead of --band-nm's box
+    /// (docs/filters.md)
+    #[arg(long, value_name = "FILE.csv|NAME")]
+    filter: Vec<String>,
+
+    /// Fit a refractive index per wavelength, smooth in wavelength (a
+    /// second-difference prior, as AERONET's inversion has), instead of one
+    /// for every wavelength (docs/retrieval.md)
+    #[arg(long)]
+    index_per_wavelength: bool,
+
     /// Starting points of the fit (fine-dominated, coarse-dominated, the a
     /// priori); the lowest chi^2 wins
     #[arg(
@@ -307,6 +326,12 @@ pub fn run(args: RetrieveArgs) -> anyhow::Result<()> {
                 1.0
             },
         ),
+        index: if args.index_per_wavelength {
+            IndexSpectrum::PerWavelength
+        } else {
+            IndexSpectrum::One
+        },
+        filters: Vec::new(),
     };
     if !(0.01..=50.0).contains(&settings.band_nm) {
         bail!(
@@ -320,7 +345,37 @@ pub fn run(args: RetrieveArgs) -> anyhow::Result<()> {
             settings.aerosol_scale_height_m
         );
     }
+    let explicit: Vec<String> = args
+        .filter
+        .iter()
+        .filter(|f| *f != "cimel")
+        .cloned()
+        .collect();
+    let explicit = crate::arguments::parse_filters(&explicit)?;
+    let cimel = if args.filter.iter().any(|f| f == "cimel") {
+        crate::arguments::parse_filters(&["cimel".to_string()])?
+    } else {
+        Vec::new()
+    };
     let scans = read_scans(&args)?;
+    // Each scan's filters, checked before any work.
+    let mut scan_settings = Vec::with_capacity(scans.len());
+    for scan in &scans {
+        let wavelengths = scan.measurements.wavelengths_nm();
+        let mut filters = explicit.clone();
+        filters.extend(
+            cimel
+                .iter()
+                .filter(|f| wavelengths.iter().any(|w| f.response_at(*w) > 0.0))
+                .cloned(),
+        );
+        sora::inversion::assign_filters(&filters, &wavelengths)
+            .map_err(|e| anyhow::anyhow!("--filter: {}: {e}", scan.measurements.label))?;
+        scan_settings.push(RetrievalSettings {
+            filters,
+            ..settings.clone()
+        });
+    }
     if let Some(reference) = args.reference_wavelength {
         for scan in &scans {
             let wavelengths = scan.measurements.wavelengths_nm();
@@ -338,8 +393,8 @@ pub fn run(args: RetrieveArgs) -> anyhow::Result<()> {
     let bar = progress_bar(scans.len() as u64);
     let started = Instant::now();
     let mut retrievals: Vec<(usize, Retrieval)> = Vec::with_capacity(scans.len());
-    for (done, scan) in scans.iter().enumerate() {
-        let retrieval = retrieve(&atmosphere, &scan.measurements, &settings)
+    for (done, (scan, settings)) in scans.iter().zip(&scan_settings).enumerate() {
+        let retrieval = retrieve(&atmosphere, &scan.measurements, settings)
             .with_context(|| scan.measurements.label.clone())?;
         bar.suspend(|| {
             for warning in &retrieval.warnings {
@@ -571,17 +626,23 @@ fn table(retrievals: &[(usize, Retrieval)]) -> String {
         }
         let _ = writeln!(
             out,
-            "  {:>13}  {:<22}{:<26}asymmetry parameter",
-            "wavelength nm", "optical depth", "single-scat. albedo"
+            "  {:>13}  {:<22}{:<26}{:<26}{:<22}refr. index, imag. part",
+            "wavelength nm",
+            "optical depth",
+            "single-scat. albedo",
+            "asymmetry parameter",
+            "refr. index, real part"
         );
         for s in &r.spectral {
             let _ = writeln!(
                 out,
-                "  {:>13}  {:<22}{:<26}{}",
+                "  {:>13}  {:<22}{:<26}{:<26}{:<22}{}",
                 s.wavelength_nm,
                 plus_minus(s.optical_depth),
                 plus_minus(s.single_scattering_albedo),
-                plus_minus(s.asymmetry)
+                plus_minus(s.asymmetry),
+                plus_minus(s.refractive_index_real),
+                plus_minus(s.refractive_index_imaginary)
             );
         }
         let _ = writeln!(
@@ -664,6 +725,12 @@ fn csv(retrievals: &[(usize, Retrieval)]) -> String {
     for w in &wavelengths {
         pair(&mut header, format!("asymmetry_parameter_{w}nm"));
     }
+    for w in &wavelengths {
+        pair(&mut header, format!("refractive_index_real_{w}nm"));
+    }
+    for w in &wavelengths {
+        pair(&mut header, format!("refractive_index_imaginary_{w}nm"));
+    }
     for name in [
         "angstrom_exponent",
         "fine_effective_radius_um",
@@ -710,6 +777,12 @@ fn csv(retrievals: &[(usize, Retrieval)]) -> String {
         }
         for w in &wavelengths {
             estimate(&mut row, at(*w).map(|s| s.asymmetry));
+        }
+        for w in &wavelengths {
+            estimate(&mut row, at(*w).map(|s| s.refractive_index_real));
+        }
+        for w in &wavelengths {
+            estimate(&mut row, at(*w).map(|s| s.refractive_index_imaginary));
         }
         estimate(&mut row, Some(r.angstrom_exponent));
         estimate(&mut row, Some(r.fine_effective_radius_um));
@@ -780,6 +853,8 @@ struct SpectralJson {
     aerosol_optical_depth: EstimateJson,
     single_scattering_albedo: EstimateJson,
     asymmetry_parameter: EstimateJson,
+    refractive_index_real: EstimateJson,
+    refractive_index_imaginary: EstimateJson,
 }
 
 #[derive(Serialize)]
@@ -841,6 +916,8 @@ fn json(retrievals: &[(usize, Retrieval)]) -> anyhow::Result<String> {
                     aerosol_optical_depth: s.optical_depth.into(),
                     single_scattering_albedo: s.single_scattering_albedo.into(),
                     asymmetry_parameter: s.asymmetry.into(),
+                    refractive_index_real: s.refractive_index_real.into(),
+                    refractive_index_imaginary: s.refractive_index_imaginary.into(),
                 })
                 .collect(),
             angstrom_exponent: r.angstrom_exponent.into(),

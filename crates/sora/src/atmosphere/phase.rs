@@ -134,6 +134,11 @@ impl TabulatedPhase {
         })
     }
 
+    /// The table of wavelength sample `wavelength_index`.
+    pub(crate) fn row(&self, wavelength_index: usize) -> &TabulatedPhaseFunction {
+        &self.rows[wavelength_index]
+    }
+
     /// The cosines of the table's nodes (every wavelength's).
     pub(crate) fn cos_theta_nodes(&self) -> &[f64] {
         self.rows[0].cos_theta_nodes()

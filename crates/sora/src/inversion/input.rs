@@ -1109,6 +1109,131 @@ pub fn attach_nearest_optical_depths(
     notes
 }
 
+// ---------------------------------------------------------------------------
+// AERONET version 2 inversion products (the network's own retrievals)
+// ---------------------------------------------------------------------------
+
+/// One channel of an AERONET inversion: the network's retrieved optics at
+/// that wavelength (`None` where the file has `-9999.`: version 2 level 2.0
+/// gives n, k and the albedo only when tau(440) >= 0.4).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AeronetInversionChannel {
+    /// The wavelength the columns are named by, nm (`REFR(1018)`: 1018).
+    pub wavelength_nm: f64,
+    /// `REFR(<nm>)`.
+    pub refractive_index_real: Option<f64>,
+    /// `REFI(<nm>)`.
+    pub refractive_index_imaginary: Option<f64>,
+    /// `SSA<nm>-T`.
+    pub single_scattering_albedo: Option<f64>,
+    /// `AOTExt<nm>-T`: the retrieval's total extinction optical depth.
+    pub extinction_optical_depth: Option<f64>,
+}
+
+/// One row of an AERONET version 2 inversion product file (`Level 1.5` or
+/// `2.0 Almucantar Retrievals, Version 2`; all points or daily averages).
+#[derive(Debug, Clone, PartialEq)]
+pub struct AeronetInversion {
+    /// When.
+    pub time: AeronetTime,
+    /// The site (the `Locations=` entry of the first line).
+    pub site: String,
+    /// Per channel, in the order of the file's `REFR(<nm>)` columns.
+    pub channels: Vec<AeronetInversionChannel>,
+    /// The volume size distribution dV/d ln r, um^3 um^-2, at the radii
+    /// (um) that name its columns (22 from 0.05 to 15 um), `(radius,
+    /// value)`; bins with `-9999.` left out.
+    pub size_distribution: Vec<(f64, f64)>,
+    /// `VolCon-T`: the total volume concentration, um^3 um^-2.
+    pub volume_concentration_um3_um2: Option<f64>,
+}
+
+/// Reads an AERONET version 2 inversion product file: a line
+/// `dd:mm:yyyy,Locations=<site>,long=...`, `Level <l> Almucantar
+/// Retrievals, Version 2`, the product's name, then the header
+/// `Date(dd-mm-yyyy),Time(hh:mm:ss),...` and one row per retrieval (the
+/// dates of the rows are `dd:mm:yyyy`). What it takes: `REFR(<nm>)`,
+/// `REFI(<nm>)`, `SSA<nm>-T`, `AOTExt<nm>-T`, the size distribution's
+/// columns (named by their radius in um) and `VolCon-T`; a file with other
+/// products' columns only (`Spectral Flux`) gives rows without channels.
+/// Version 3's inversion files name their columns otherwise and are not
+/// read here.
+pub fn parse_aeronet_inversion(text: &str, what: &str) -> Result<Vec<AeronetInversion>> {
+    let file = AeronetText::new(text, what, "inversion")?;
+    let preamble = &file.lines[..file.header];
+    if !preamble.iter().any(|(_, cells)| {
+        cells
+            .iter()
+            .any(|c| c.contains("Retrievals, Version 2") || *c == "Version 2")
+    }) {
+        return Err(Error::parse(
+            what,
+            file.lines[file.header].0,
+            "no `... Retrievals, Version 2` line above the header: not an AERONET version 2 inversion file",
+        ));
+    }
+    let site = preamble
+        .iter()
+        .flat_map(|(_, cells)| cells.iter())
+        .find_map(|c| c.strip_prefix("Locations="))
+        .unwrap_or("")
+        .to_string();
+    let date = file.column(what, "Date(")?;
+    let time = file.column(what, "Time(")?;
+    let header = file.header_cells();
+    let named = |name: &str| header.iter().position(|c| *c == name);
+    let wavelengths: Vec<(String, f64)> = header
+        .iter()
+        .filter_map(|c| {
+            let nm = c.strip_prefix("REFR(")?.strip_suffix(')')?;
+            Some((nm.to_string(), nm.parse::<f64>().ok()?))
+        })
+        .collect();
+    let bins: Vec<(usize, f64)> = header
+        .iter()
+        .enumerate()
+        .filter_map(|(i, c)| {
+            let radius = c.parse::<f64>().ok()?;
+            (radius > 0.0).then_some((i, radius))
+        })
+        .collect();
+    let volume = named("VolCon-T");
+    let mut rows = Vec::new();
+    for (line, cells) in file.data_lines(0) {
+        let number = |column: Option<usize>, name: &str| -> Result<Option<f64>> {
+            column.map_or(Ok(None), |i| aeronet_number(cells, i, name, what, *line))
+        };
+        let mut channels = Vec::new();
+        for (nm, wavelength_nm) in &wavelengths {
+            let column = |name: String| -> Result<Option<f64>> { number(named(&name), &name) };
+            channels.push(AeronetInversionChannel {
+                wavelength_nm: *wavelength_nm,
+                refractive_index_real: column(format!("REFR({nm})"))?,
+                refractive_index_imaginary: column(format!("REFI({nm})"))?,
+                single_scattering_albedo: column(format!("SSA{nm}-T"))?,
+                extinction_optical_depth: column(format!("AOTExt{nm}-T"))?,
+            });
+        }
+        let mut size_distribution = Vec::new();
+        for &(column, radius_um) in &bins {
+            if let Some(v) = number(Some(column), header[column])? {
+                size_distribution.push((radius_um, v));
+            }
+        }
+        rows.push(AeronetInversion {
+            time: aeronet_time(cells, date, time, what, *line)?,
+            site: site.clone(),
+            channels,
+            size_distribution,
+            volume_concentration_um3_um2: number(volume, "VolCon-T")?,
+        });
+    }
+    if rows.is_empty() {
+        return Err(Error::parse(what, 0, "no retrieval rows after the header"));
+    }
+    Ok(rows)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1552,5 +1677,71 @@ Site_A,10:06:2020,12:00:00,162,-999.,-999.,-999.,-999.,-999.,1.5,0.4402
         assert_eq!(at(2019, 7, 31, 43_200).unix_seconds(), 1_564_574_400);
         assert_eq!(at(2000, 2, 29, 0).unix_seconds(), 951_782_400);
         assert_eq!(at(1970, 1, 1, 1).unix_seconds(), 1);
+    }
+
+    /// The real version 2 inversion sample (Karlsruhe, daily average of
+    /// 23 March 2005, level 2.0; tests/data/aeronet/README.md): the
+    /// channels' optical depths, n and k missing as the file has them, and
+    /// the 22-bin size distribution, whose trapezoid integral over ln r is
+    /// the file's own total volume concentration (0.056, to its rounding).
+    #[test]
+    fn version_2_inversion_file_parses() {
+        let text = include_str!("../../tests/data/aeronet/inv_v2_karlsruhe_20050323.dubovikday");
+        let rows = parse_aeronet_inversion(text, "inv").unwrap();
+        assert_eq!(rows.len(), 1);
+        let row = &rows[0];
+        assert_eq!(row.site, "Karlsruhe");
+        assert_eq!(row.time.to_string(), "2005-03-23 00:00:00");
+        let wavelengths: Vec<f64> = row.channels.iter().map(|c| c.wavelength_nm).collect();
+        assert_eq!(wavelengths, [440.0, 675.0, 870.0, 1018.0]);
+        let depths: Vec<Option<f64>> = row
+            .channels
+            .iter()
+            .map(|c| c.extinction_optical_depth)
+            .collect();
+        assert_eq!(
+            depths,
+            [
+                Some(0.298250),
+                Some(0.161350),
+                Some(0.108300),
+                Some(0.083750)
+            ]
+        );
+        for c in &row.channels {
+            assert_eq!(c.refractive_index_real, None);
+            assert_eq!(c.refractive_index_imaginary, None);
+            assert_eq!(c.single_scattering_albedo, None);
+        }
+        assert_eq!(row.size_distribution.len(), 22);
+        assert_eq!(row.size_distribution[0], (0.05, 0.000335));
+        assert_eq!(row.size_distribution[21], (15.0, 0.000272));
+        let h = (15.0f64 / 0.05).ln() / 21.0;
+        let volume: f64 = row
+            .size_distribution
+            .iter()
+            .enumerate()
+            .map(|(i, (_, v))| {
+                if i == 0 || i == 21 {
+                    v * h / 2.0
+                } else {
+                    v * h
+                }
+            })
+            .sum();
+        let stated = row.volume_concentration_um3_um2.unwrap();
+        assert_eq!(stated, 0.056);
+        assert!((volume - stated).abs() < 0.0006, "{volume}");
+        // A version 3 or other file is refused in one line.
+        let error = parse_aeronet_inversion(
+            "Date(dd:mm:yyyy),Time(hh:mm:ss),AOD_440nm\n01:01:2020,00:00:00,0.1\n",
+            "v3",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            error.contains("not an AERONET version 2 inversion file"),
+            "{error}"
+        );
     }
 }

@@ -27,8 +27,8 @@
 //! so E and S are extinction and scattering per unit volume of particles,
 //! and P the ensemble's phase function. The kernels depend on the
 //! wavelength and the refractive index only: [`MieKernels`] holds them for
-//! one index, and the retrieval keeps a small cache of them keyed by the
-//! index (`forward.rs`), so the Jacobian's columns in radius, width and
+//! one index, and the retrieval keeps a small cache of them per wavelength
+//! keyed by the index (`forward.rs`), so the Jacobian's columns in radius, width and
 //! volume fraction, and every step that moves only the size distribution,
 //! cost no Mie solution.
 //!

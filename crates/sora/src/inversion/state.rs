@@ -14,10 +14,11 @@
 //!   with r_mode the volume median radius (um) and s_mode the standard
 //!   deviation of ln r (so sigma_g = exp(s)); c_fine = f, c_coarse = 1 - f
 //!   with f the fine mode's fraction of the volume;
-//! - one complex refractive index n + ik for both modes and every
-//!   wavelength (AERONET retrieves one per wavelength; one index is the
-//!   smallest model that carries absorption, and what the synthetic tests
-//!   have).
+//! - a complex refractive index n + ik for both modes: here the one at
+//!   the reference wavelength. The retrieval fits one per measured
+//!   wavelength, smooth in wavelength, as AERONET does (or, with
+//!   `IndexSpectrum::One`, one for every wavelength: `mod.rs`); each
+//!   wavelength's has these bounds and this a priori.
 //!
 //! Each parameter lives in a bounded interval (below); the fit moves in
 //! `t = logit((g(x) - g(lo)) / (g(hi) - g(lo)))`, g = ln for the positive
