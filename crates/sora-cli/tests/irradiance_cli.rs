@@ -62,6 +62,61 @@ fn csv_rows_add_up_and_json_carries_units_and_the_sun() {
     }
 }
 
+/// Every broadband value says its band and the sun's share in it: the
+/// sun's irradiance on the grid (its samples' direct normal irradiance over
+/// the transmittance toward the sun, summed over their bands) and in its
+/// whole table (ASTM E490, 1366.1 W m^-2 over 119.5 nm to 1 mm).
+#[test]
+fn broadband_values_name_their_band_and_the_suns_share_in_it() {
+    let grid = ["--wavelengths", "450:650:100"];
+    let json = common::json(&sora(&[&BASE[..], &grid, &["--format", "json"]].concat()));
+    assert_eq!(common::numbers(&json["broadband_range_nm"]), [450.0, 650.0]);
+    assert_eq!(
+        common::numbers(&json["sun_table_range_nm"]),
+        [119.5, 1_000_000.0]
+    );
+    let total = json["sun_table_irradiance_w_m2"].as_f64().unwrap();
+    assert!((total - 1366.1).abs() < 1.4, "{total}");
+    let direct = common::numbers(&json["direct_normal_irradiance_w_m2_nm"]);
+    let transmittance = common::numbers(&json["direct_beam_transmittance"]);
+    let sun: f64 = direct
+        .iter()
+        .zip(&transmittance)
+        .map(|(e, t)| e / t * 100.0)
+        .sum();
+    let in_band = json["extraterrestrial_in_band_w_m2"].as_f64().unwrap();
+    assert!((in_band / sun - 1.0).abs() < 1e-9, "{in_band} vs {sun}");
+    // The table and the CSV's stderr say the same.
+    let table = stdout(&sora(&[&BASE[..], &grid, &["--format", "table"]].concat()));
+    let share = format!(
+        "extraterrestrial irradiance over 450-650 nm: {in_band:.4} W m^-2 ({:.2} % of the sun's {total:.1} W m^-2 over 119.5-1000000 nm)",
+        100.0 * in_band / total
+    );
+    assert!(table.contains(&share), "{table}");
+    let csv = sora(&[&BASE[..], &grid].concat());
+    let stderr = String::from_utf8(csv.stderr).unwrap();
+    assert!(
+        stderr.contains("global_horizontal_irradiance_w_m2 ")
+            && stderr.contains("; over 450-650 nm")
+            && stderr.contains(&share),
+        "{stderr}"
+    );
+    // --broadband takes the widest grid itself: with --wavelengths or
+    // --filter it is clap's argument error (status 2, its first line says
+    // why) before any work.
+    for extra in [&["--wavelengths", "300:2500:5"][..], &["--filter", "cimel"]] {
+        let out = sora(&[&BASE[..], &["--broadband"], extra].concat());
+        assert_eq!(out.status.code(), Some(2), "{extra:?}: {out:?}");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        let first = stderr.lines().next().unwrap_or_default();
+        assert!(
+            first.contains("the argument '--broadband' cannot be used with"),
+            "{extra:?}: {stderr}"
+        );
+        assert!(out.stdout.is_empty());
+    }
+}
+
 #[test]
 fn bad_irradiance_arguments_are_one_line_errors() {
     for (extra, expected) in [

@@ -25,7 +25,18 @@ use crate::json::Members;
 /// --format csv (default) prints one row per wavelength
 /// (wavelength_nm,direct_normal_irradiance_w_m2_nm,... with units in every
 /// name) and the broadband values on stderr; json prints both; table prints
-/// the broadband values for people.
+/// the broadband values for people. Every broadband value integrates the
+/// grid (each sample its step-wide band) and says so: the band in nm, and
+/// the sun's own irradiance on that band and in its whole table (ASTM
+/// E490: 1366.1 W m^-2 over 119.5 nm to 1 mm), so that a value is never
+/// read as more of the spectrum than it holds.
+///
+/// --broadband: the grid becomes the widest sora solves, 300:2500:10 nm
+/// (instead of --wavelengths; its samples' bands span 295-2505 nm, 95.8 %
+/// of the ASTM E490 sun's energy). Left out, and named in the output: the
+/// 1.1 % below 300 nm (most of it absorbed by ozone's Hartley band) and
+/// the 3.3 % beyond 2500 nm (water and CO2 bands), which sora does not
+/// solve (docs/spectrum.md).
 ///
 /// With banded gases (an atmosphere file's [gases]) every value is the
 /// library's sum of five solves, one per k-distribution term, weighted
@@ -78,6 +89,11 @@ pub struct IrradianceArgs {
 
     #[command(flatten)]
     filters: FilterOptions,
+
+    /// Broadband over the widest grid sora solves, 300:2500:10 nm (95.6 %
+    /// of the ASTM E490 sun), instead of --wavelengths
+    #[arg(long, conflicts_with_all = ["wavelengths", "filter"])]
+    broadband: bool,
 
     /// Output format
     #[arg(long, value_enum, default_value_t = Format::Csv)]
@@ -175,6 +191,11 @@ pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
     // The reference march's work, before loading anything (docs/limits.md).
     sora::sky::check_irradiance_work(method)?;
     let filters = args.filters.filters()?;
+    let sun_options = if args.broadband {
+        args.sun.with_wavelengths(broadband_grid())
+    } else {
+        args.sun.clone()
+    };
     let atmosphere = args.source.load()?;
     // Banded gases: the sky sums its k-distribution terms.
     let solves = sora::atmosphere::gas_bands::solves_per_wavelength(&atmosphere);
@@ -236,8 +257,13 @@ pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
             (sun_elevation_deg, sun_azimuth_deg, sun),
         );
     }
-    let (sky, sun) = sky(&args.sun)?;
+    let mut moved = atmosphere.clone();
+    let (sky, sun) = sun_options.sky(&mut moved, scattering, method)?;
     let grid = *sky.wavelengths();
+    // The sun's own irradiance on the grid and in its whole table.
+    let sun_in_band_w_m2 = moved.sun.grid_irradiance_w_m2(&grid)?;
+    let sun_table = moved.sun.table_irradiance_w_m2();
+    let band = format!("{}-{} nm", grid.start_nm(), grid.stop_nm());
     announce(&grid);
     let quantities = quantities(&sky, tilted)?;
     // Broadband: W m^-2 and lux of every irradiance (not of standard
@@ -259,8 +285,9 @@ pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
             write_csv(&mut out, "wavelength_nm", &labels, &quantities)?;
             for (name, watts, lux) in &broadband {
                 let illuminance = name.replace("irradiance", "illuminance");
-                eprintln!("{name}_w_m2 {watts:.6e}; {illuminance}_lx {lux:.6e}");
+                eprintln!("{name}_w_m2 {watts:.6e}; {illuminance}_lx {lux:.6e}; over {band}");
             }
+            eprintln!("{}", sun_share(sun_in_band_w_m2, sun_table, &band));
         }
         Format::Table => {
             writeln!(
@@ -277,6 +304,7 @@ pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
                     name.replace('_', " ")
                 )?;
             }
+            writeln!(out, "{}", sun_share(sun_in_band_w_m2, sun_table, &band))?;
         }
         Format::Json => {
             let mut broadband_members = Vec::new();
@@ -294,6 +322,9 @@ pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
                     centre_nm: None,
                     quantities: quantity_members(&quantities),
                     broadband_range_nm: Some([grid.start_nm(), grid.stop_nm()]),
+                    extraterrestrial_in_band_w_m2: Some(sun_in_band_w_m2),
+                    sun_table_range_nm: sun_table.map(|((lo, hi), _)| [lo, hi]),
+                    sun_table_irradiance_w_m2: sun_table.map(|(_, total)| total),
                     broadband: Members(broadband_members),
                 })?
                 .as_bytes(),
@@ -302,6 +333,26 @@ pub fn run(args: IrradianceArgs) -> anyhow::Result<()> {
     }
     out.flush()?;
     Ok(())
+}
+
+/// The grid of --broadband: the widest sora solves, every 10 nm.
+fn broadband_grid() -> sora::spectrum::WavelengthGrid {
+    use sora::spectrum::{MAX_WAVELENGTH_NM, MIN_WAVELENGTH_NM};
+    sora::spectrum::WavelengthGrid::new(MIN_WAVELENGTH_NM, MAX_WAVELENGTH_NM, 10.0)
+        .expect("the widest grid is valid")
+}
+
+/// One line for people: the sun's irradiance on the broadband values'
+/// band and, for a tabulated sun, in its whole table.
+fn sun_share(in_band_w_m2: f64, table: Option<((f64, f64), f64)>, band: &str) -> String {
+    let mut line = format!("extraterrestrial irradiance over {band}: {in_band_w_m2:.4} W m^-2");
+    if let Some(((lo, hi), total)) = table {
+        line += &format!(
+            " ({:.2} % of the sun's {total:.1} W m^-2 over {lo}-{hi} nm)",
+            100.0 * in_band_w_m2 / total
+        );
+    }
+    line
 }
 
 /// Writes the per-filter quantities: one row per filter (`name`,
@@ -350,6 +401,9 @@ fn write_filtered(
                     centre_nm: Some(&centres),
                     quantities: quantity_members(quantities),
                     broadband_range_nm: None,
+                    extraterrestrial_in_band_w_m2: None,
+                    sun_table_range_nm: None,
+                    sun_table_irradiance_w_m2: None,
                     broadband: Members(Vec::new()),
                 })?
                 .as_bytes(),
@@ -404,6 +458,15 @@ struct IrradianceJson<'a> {
     /// The band every broadband value integrates.
     #[serde(skip_serializing_if = "Option::is_none")]
     broadband_range_nm: Option<[f64; 2]>,
+    /// The sun's top-of-atmosphere irradiance on that band, W m^-2.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    extraterrestrial_in_band_w_m2: Option<f64>,
+    /// The whole solar table's range (not for a flat sun).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    sun_table_range_nm: Option<[f64; 2]>,
+    /// The sun's irradiance over its whole table, W m^-2.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    sun_table_irradiance_w_m2: Option<f64>,
     /// `NAME_w_m2` and `NAME_lx` (illuminance) of every irradiance.
     #[serde(flatten)]
     broadband: Members<f64>,

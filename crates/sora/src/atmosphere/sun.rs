@@ -134,6 +134,31 @@ impl Sun {
         irradiance *= self.irradiance_scale;
         Ok(irradiance)
     }
+
+    /// The top-of-atmosphere irradiance (normal to the rays) integrated
+    /// over `grid` with its quadrature (each sample its band, `step_nm`
+    /// wide), W m^-2: the sun's share of a broadband value on that grid.
+    pub fn grid_irradiance_w_m2(&self, grid: &WavelengthGrid) -> Result<f64> {
+        let sampled = self.sample_irradiance_w_m2_nm(grid)?;
+        Ok((0..grid.len())
+            .map(|i| sampled[i] * grid.quadrature_weight_nm(i))
+            .sum())
+    }
+
+    /// The whole solar table's range, nm, and its irradiance integrated
+    /// over it (trapezoids between the rows), scaled, W m^-2; `None` for a
+    /// flat sun, which has no ends. ASTM E490: 119.5 nm to 1 mm, 1366.1 W
+    /// m^-2 at 1 AU.
+    pub fn table_irradiance_w_m2(&self) -> Option<((f64, f64), f64)> {
+        match self.spectrum.irradiance_w_m2_nm() {
+            crate::spectrum::Spectrum::Constant(_) => None,
+            crate::spectrum::Spectrum::Tabulated(table) => {
+                let (lo, hi) = table.range_nm();
+                let mean = table.band_average(lo, hi).ok()?;
+                Some(((lo, hi), mean * (hi - lo) * self.irradiance_scale))
+            }
+        }
+    }
 }
 
 #[cfg(test)]
@@ -160,6 +185,30 @@ mod tests {
             .sample_irradiance_w_m2_nm(&WavelengthGrid::paper())
             .unwrap();
         assert_eq!(e.values(), &[0.5; 21]);
+    }
+
+    #[test]
+    fn the_suns_energy_in_a_band_and_in_its_whole_table() {
+        // A flat sun has no table; on a grid each sample holds step_nm.
+        let flat = Sun::new(SolarSpectrum::flat(2.0).unwrap(), 0.5, 0.53).unwrap();
+        assert_eq!(flat.table_irradiance_w_m2(), None);
+        let grid = WavelengthGrid::new(400.0, 700.0, 10.0).unwrap();
+        assert!((flat.grid_irradiance_w_m2(&grid).unwrap() - 310.0).abs() < 1e-9);
+        // ASTM E490: 1366.1 W m^-2 over 119.5 nm to 1 mm (trapezoids within
+        // 0.1 %), 95.56 % of it on 300:2500:10 (295-2505 nm; the trapezoids
+        // over the table's rows from 300 to 2500 nm hold 1305.46 W m^-2, and
+        // 295-300 and 2500-2505 nm add about 3 W m^-2), scaled at 2 AU.
+        let e490 = Sun::new(SolarSpectrum::astm_e490(), 1.0, 0.53).unwrap();
+        let ((lo, hi), total) = e490.table_irradiance_w_m2().unwrap();
+        assert_eq!((lo, hi), (119.5, 1e6));
+        assert!((total - 1366.1).abs() < 1.4, "{total}");
+        let wide = WavelengthGrid::new(300.0, 2500.0, 10.0).unwrap();
+        let in_band = e490.grid_irradiance_w_m2(&wide).unwrap();
+        assert!((1306.0..1312.0).contains(&in_band), "{in_band}");
+        let far = e490.at_distance_au(2.0).unwrap();
+        let ((_, _), quarter) = far.table_irradiance_w_m2().unwrap();
+        assert!((quarter / total - 0.25).abs() < 1e-12);
+        assert!((far.grid_irradiance_w_m2(&wide).unwrap() / in_band - 0.25).abs() < 1e-12);
     }
 
     #[test]
