@@ -2,14 +2,17 @@
 pictures of docs/measured-skies.md.
 
     python scripts/measured_skies/plot.py OUT_DIR --may MAY.csv --september SEPTEMBER.csv \
+        --may-points FILE... --september-points FILE... \
         --may-no-aerosol FILE... --september-no-aerosol FILE...
 
 Each file is the long CSV of `sora spectrum ... --directions
 crates/sora-cli/tests/data/measured/kider2014_directions.csv` for that
-capture (the commands are on the page): the preset's sky on `--wavelengths
-360:1100:10`, and the aerosol-free sky at least at the maps' wavelengths
-(one file per one-point grid `W:W:10` will do; several files per option are
-merged). The measured radiances are read from
+capture (the commands are on the page): `--may`/`--september` the preset's
+sky on `--wavelengths 360:1100:10` (the spectra and the table per
+direction), `--*-points` the preset's sky and `--*-no-aerosol` the
+aerosol-free sky at the maps' wavelengths, one file per one-point grid
+`W:W:10` (the maps and the table per wavelength; several files per option
+are merged). The measured radiances are read from
 crates/sora-cli/tests/data/measured/ (10-nm box means, W m^-2 sr^-1 nm^-1,
 the same grid). Prints the page's tables (sora / measured per wavelength
 over the 81 directions, and per direction over 360-1100 nm) and writes,
@@ -71,24 +74,28 @@ def main():
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("out_dir", type=pathlib.Path)
-    for name in ["may", "september", "may-no-aerosol", "september-no-aerosol"]:
+    for name in ["may", "september", "may-points", "september-points", "may-no-aerosol", "september-no-aerosol"]:
         parser.add_argument(f"--{name}", nargs="+", required=True)
     args = parser.parse_args()
     out_dir = args.out_dir
     skies = []
-    for (stem, label), paths, free_paths in zip(
-        CAPTURES, [args.may, args.september], [args.may_no_aerosol, args.september_no_aerosol]
+    for (stem, label), paths, point_paths, free_paths in zip(
+        CAPTURES,
+        [args.may, args.september],
+        [args.may_points, args.september_points],
+        [args.may_no_aerosol, args.september_no_aerosol],
     ):
         elevation, azimuth, wl, measured = read_measured(stem)
-        model = read_model(paths, elevation, azimuth, wl, wl)
+        full = read_model(paths, elevation, azimuth, wl, wl)
+        points = read_model(point_paths, elevation, azimuth, wl, MAP_NM)
         free = read_model(free_paths, elevation, azimuth, wl, MAP_NM)
-        skies.append((stem, label, elevation, azimuth, wl, measured, model, free))
+        skies.append((stem, label, elevation, azimuth, wl, measured, full, points, free))
 
     print(
         "capture | wavelength_nm | mean sora/measured | rms(sora/measured - 1) | rms after dividing by the mean"
         " | directions measured between the aerosol-free sky and the preset's"
     )
-    for stem, label, elevation, azimuth, wl, measured, model, free in skies:
+    for stem, label, elevation, azimuth, wl, measured, _, model, free in skies:
         for w in MAP_NM:
             j = int(np.flatnonzero(wl == w)[0])
             mean, rms, shape = stats(model[:, j] / measured[:, j])
@@ -96,13 +103,13 @@ def main():
             between = int(((lo <= measured[:, j]) & (measured[:, j] <= hi)).sum())
             print(f"| {label} | {w} | {mean:.3f} | {100 * rms:.1f} % | {100 * shape:.1f} % | {between} |")
     print("the aerosol-free sky: capture | wavelength_nm | mean | rms | rms after the mean")
-    for stem, label, elevation, azimuth, wl, measured, model, free in skies:
+    for stem, label, elevation, azimuth, wl, measured, _, _, free in skies:
         for w in MAP_NM:
             j = int(np.flatnonzero(wl == w)[0])
             mean, rms, shape = stats(free[:, j] / measured[:, j])
             print(f"| {label}, no aerosol | {w} | {mean:.3f} | {100 * rms:.1f} % | {100 * shape:.1f} % |")
     print("capture | index | elevation_deg | azimuth_deg | mean sora/measured 360-1100 nm | rms | rms after dividing by the mean")
-    for stem, label, elevation, azimuth, wl, measured, model, _ in skies:
+    for stem, label, elevation, azimuth, wl, measured, model, _, _ in skies:
         for i in SPECTRA_INDEX:
             mean, rms, shape = stats(model[i] / measured[i])
             print(
@@ -118,7 +125,7 @@ def main():
     except ImportError:
         sys.exit("matplotlib is not installed: no pictures")
 
-    for stem, label, elevation, azimuth, wl, measured, model, _ in skies:
+    for stem, label, elevation, azimuth, wl, measured, _, model, _ in skies:
         fig, axes = plt.subplots(3, 4, figsize=(11, 8.4), subplot_kw={"projection": "polar"})
         theta, r = np.radians(azimuth), 90 - elevation
         for col, w in enumerate(MAP_NM):
@@ -144,17 +151,17 @@ def main():
                 ax.set_title(f"{name}, {w} nm", fontsize=9)
                 fig.colorbar(sc, ax=ax, shrink=0.7, pad=0.1)
         fig.suptitle(
-            f"Cornell, {label}: radiance (W m$^{{-2}}$ sr$^{{-1}}$ nm$^{{-1}}$) in the 81 directions; "
+            f"Cornell, {label}: radiance (W m$^{{-2}}$ sr$^{{-1}}$ nm$^{{-1}}$) in the 81 directions\n"
             "zenith at the centre, horizon at the rim, north up, east left"
         )
         fig.tight_layout()
         path = out_dir / f"measured_skies_maps_{stem}.png"
-        fig.savefig(path, dpi=70)
+        fig.savefig(path, dpi=56)
         plt.close(fig)
         print("wrote", path)
 
     fig, axes = plt.subplots(len(skies), len(SPECTRA_INDEX), figsize=(13, 6), sharex=True)
-    for row, (stem, label, elevation, azimuth, wl, measured, model, _) in enumerate(skies):
+    for row, (stem, label, elevation, azimuth, wl, measured, model, _, _) in enumerate(skies):
         for col, i in enumerate(SPECTRA_INDEX):
             ax = axes[row, col]
             ax.plot(wl, measured[i], "k-", label="measured")
