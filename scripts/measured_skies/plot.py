@@ -28,10 +28,12 @@ import numpy as np
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 DATA = ROOT / "crates/sora-cli/tests/data/measured"
 CAPTURES = [
-    # (file stem, label, the sun as sora computes it for --time at the site)
+    # (file stem, label); the sun (elevation, azimuth in degrees) as sora's JSON
+    # reports it for the page's --location and --time, drawn as a star on the maps
     ("2013-05-27_120000", "2013-05-27 12:00 EDT"),
     ("2013-09-24_131000", "2013-09-24 13:10 EDT"),
 ]
+SUN_DEG = {"2013-05-27_120000": (65.16, 142.97), "2013-09-24_131000": (46.76, 184.46)}
 MAP_NM = [450, 550, 650, 850]
 # Directions for the spectra, by the archive's index: the zenith, the 53-degree ring
 # and the 12-degree ring (see the page for where each lies from the sun).
@@ -143,6 +145,8 @@ def main():
                 ax.set_theta_zero_location("N")
                 ax.set_theta_direction(1)  # east left: a sky chart held overhead
                 sc = ax.scatter(theta, r, c=values, cmap=cmap, norm=nrm, s=70, edgecolors="none")
+                sun_elevation, sun_azimuth = SUN_DEG[stem]
+                ax.plot(np.radians(sun_azimuth), 90 - sun_elevation, "*", color="orange", ms=12, mec="k")
                 ax.set_ylim(0, 90)
                 ax.set_yticks([30, 60])
                 ax.set_yticklabels([])
