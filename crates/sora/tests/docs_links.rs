@@ -18,6 +18,7 @@ fn markdown_files() -> Vec<PathBuf> {
         "docs",
         "crates/sora/tests/data/aeronet",
         "crates/sora/tests/data/retrieval",
+        "crates/sora-cli/tests/data/measured",
     ] {
         let mut found: Vec<PathBuf> = std::fs::read_dir(root().join(folder))
             .unwrap()
