@@ -393,3 +393,55 @@ fn the_turned_view_keeps_its_angle_to_the_sun() {
     };
     assert_eq!(super::lookup::turn_share(zenith, 88.0, horizon), 0.0);
 }
+
+/// The layers of an eye on the ground (altitude node 0) and its irradiance
+/// do not depend on how many altitude nodes the tables have: what the
+/// browser test draws (an eye on the ground) is the same with 2 altitude
+/// nodes as with the default 6, so CI bakes 2 (`.ci/run`).
+#[test]
+fn the_ground_layers_do_not_depend_on_the_altitude_nodes() {
+    let atmosphere = Atmosphere::preset("earth-hazy").unwrap();
+    let sky = Sky::builder(&atmosphere)
+        .wavelengths(WavelengthGrid::new(420.0, 680.0, 130.0).unwrap())
+        .scattering(Scattering::Multiple(MultipleScatteringSettings {
+            streams_per_hemisphere: 4,
+            layers: 16,
+            view_ray_panels: 6,
+            table_view_zenith_nodes: 13,
+            table_azimuth_nodes: 7,
+            ..MultipleScatteringSettings::default()
+        }))
+        .table_size(FastTableSize {
+            sun_column_nodes: (24, 48),
+            sky_view_nodes: (12, 8),
+        })
+        .build()
+        .unwrap();
+    let bake = |altitude_nodes| {
+        let settings = EngineTableSettings {
+            sun_nodes: 5,
+            altitude_nodes,
+            zenith_nodes_per_half: 6,
+            azimuth_nodes: 5,
+            transmittance_nodes: (4, 8),
+        };
+        EngineTables::bake(&sky, &settings, &|_| {}).unwrap()
+    };
+    let (two, three) = (bake(2), bake(3));
+    let layer = 2 * 6 * 5;
+    for s in 0..5 {
+        let ground = |tables: &EngineTables, altitude_nodes: usize| {
+            tables.sky_table()[s * altitude_nodes * layer..][..layer].to_vec()
+        };
+        assert_eq!(ground(&two, 2), ground(&three, 3), "sun node {s}");
+        assert_eq!(two.irradiance_table()[s], three.irradiance_table()[s]);
+    }
+    // At the ground the lookups are the same too.
+    let view = LocalView {
+        zenith_rad: 1.2,
+        relative_azimuth_rad: 2.0,
+    };
+    for e in [30.0, 0.7, -5.0] {
+        assert_eq!(two.sky_xyz(0.0, view, e), three.sky_xyz(0.0, view, e));
+    }
+}
