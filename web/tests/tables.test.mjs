@@ -19,7 +19,9 @@
 // SORA_TABLES_OUT (default target/tables-test), SORA_TABLES_PRESETS
 // (default: earth-clear,earth-hazy,mars-dust,paper-earth,paper-mars),
 // SORA_TABLES_ARGS (more arguments of `sora tables`, space-separated),
-// SORA_TABLES_REUSE=1 (keep the tables and CPU images of an earlier run).
+// SORA_TABLES_REUSE=1 (keep the tables and CPU images of an earlier run),
+// SORA_TABLES_SUNS (sun elevations in degrees, comma-separated; default
+// 60,20,5,0,-4,-8,-12).
 // Run: cd web/tests && npm ci && node tables.test.mjs
 
 import { createServer } from 'node:http';
@@ -39,7 +41,7 @@ const out = resolve(process.env.SORA_TABLES_OUT || join(root, 'target/tables-tes
 const presets = (process.env.SORA_TABLES_PRESETS || 'earth-clear,earth-hazy,mars-dust,paper-earth,paper-mars').split(',');
 // Extra arguments of `sora tables` (e.g. fewer nodes, to bake faster).
 const tableArguments = (process.env.SORA_TABLES_ARGS || '').split(' ').filter((a) => a);
-const SUNS = [60, 20, 5, 0, -4, -8, -12];
+const SUNS = (process.env.SORA_TABLES_SUNS || '60,20,5,0,-4,-8,-12').split(',').map(Number);
 const SIZE = 256;
 const LIMITS = { luminance: 0.02, chromaticity: 0.005, secondDifference: 0.05 };
 
