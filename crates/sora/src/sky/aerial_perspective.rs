@@ -1047,14 +1047,11 @@ mod tests {
     /// degrees, views 1, 10 and 30 degrees up (a view 0 degrees up from the
     /// ground is the ground's) at azimuths 0, 90 and 180 from the sun, d =
     /// 1, 10 and 50 km, 440, 560 and 680 nm (ignored: 10 minutes on 2
-    /// cores). Fails: 11 of its 648 values, all earth-clear at suns 2 and
-    /// -4 degrees, 5-14 % too bright (3.5-5.6 standard errors; at most
-    /// 1.48 times the tolerance), seven at 1 km, the rest on the view 10
-    /// degrees up toward a sun 4 degrees down: there the scaled field's
-    /// light along the segment is most of L_air (96 % at 1 km, sun 2, 440
-    /// nm), and the field's source near the ground is too bright while
-    /// the whole view agrees with the path tracer within 2.7 %
-    /// (docs/aerial_perspective.md).
+    /// cores). Fails: 2 of its 648 values, earth-clear at sun -4 degrees,
+    /// 30 degrees up toward the sun, 1 km, 560 and 680 nm (+9.0 % and +5.7
+    /// %, 1.09 and 1.15 times the tolerance): the polarisation of the
+    /// twilight column's lowest air (docs/aerial_perspective.md). Until
+    /// each segment took its own column's polarisation ratio, 11 failed.
     #[test]
     #[ignore]
     fn aerial_perspective_matches_the_path_tracer_everywhere() {
