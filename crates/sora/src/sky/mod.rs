@@ -1253,7 +1253,7 @@ impl Sky {
             return self.radiances_from_image_tables(views, progress);
         }
         let polarised = self.polarisation == Polarisation::Vector;
-        let rows = self.polarisation_rows(views.iter());
+        let rows = self.polarisation_rows(views.iter().map(|view| (view, f64::INFINITY)));
         Ok(self.compute_views_in_parallel(
             views,
             VIEWS_PER_TASK,
@@ -1261,6 +1261,7 @@ impl Sky {
             |view, work, radiance, stokes| {
                 self.compute_view_radiance(view.to_vector(), None, work, radiance);
                 if polarised {
+                    let view = (view, f64::INFINITY);
                     self.compute_view_stokes(view, rows.as_ref(), work, radiance, stokes);
                 }
             },
@@ -1268,16 +1269,18 @@ impl Sky {
     }
 
     /// The polarisation correction's rows toward every distinct zenith
-    /// cosine of `views`, computed once (an almucantar's views share one);
-    /// None for scalar light or a sky without a field.
+    /// cosine and end altitude (m; infinity for the whole ray, see
+    /// `polarisation_correction.rs`) of `views`, computed once (an
+    /// almucantar's views share one); None for scalar light or a sky
+    /// without a field.
     fn polarisation_rows<'a>(
         &self,
-        views: impl Iterator<Item = &'a ViewDirection>,
+        views: impl Iterator<Item = (&'a ViewDirection, f64)>,
     ) -> Option<PolarisationRows> {
         if self.polarisation != Polarisation::Vector {
             return None;
         }
-        let cosines: Vec<f64> = views.map(view_cosine).collect();
+        let cosines: Vec<(f64, f64)> = views.map(|(view, end)| (view_cosine(view), end)).collect();
         self.field()?.compute_polarisation_rows(&cosines)
     }
 
@@ -1325,10 +1328,12 @@ impl Sky {
 
     /// A polarised view's Stokes Q, U and V into `stokes` and its polarised
     /// intensity in place of the scalar one in `radiance`, from the terms
-    /// and integrals [`Sky::compute_view_terms`] left in `work`.
+    /// and integrals [`Sky::compute_view_terms`] left in `work` (the view,
+    /// and the altitude its segment ends at, m, infinity for the whole
+    /// ray).
     fn compute_view_stokes(
         &self,
-        view: ViewDirection,
+        (view, end_altitude_m): (ViewDirection, f64),
         rows: Option<&PolarisationRows>,
         work: &mut ViewWork,
         radiance: &mut [f64],
@@ -1343,7 +1348,13 @@ impl Sky {
             stokes,
         );
         if let Some(rows) = rows {
-            self.add_multiple_scattering_stokes(view, rows, work, radiance, stokes);
+            self.add_multiple_scattering_stokes(
+                (view, end_altitude_m),
+                rows,
+                work,
+                radiance,
+                stokes,
+            );
         }
     }
 
@@ -1401,15 +1412,18 @@ impl Sky {
     /// [`add_corrected_multiple_stokes`]).
     fn add_multiple_scattering_stokes(
         &self,
-        view: ViewDirection,
+        (view, end_altitude_m): (ViewDirection, f64),
         rows: &PolarisationRows,
         work: &mut ViewWork,
         radiance: &mut [f64],
         stokes: &mut [f64],
     ) {
         let azimuth_rad = (view.azimuth_deg() - self.sun_position_deg.1).to_radians();
-        rows.ratios((view_cosine(&view), azimuth_rad), &mut work.multiple_stokes)
-            .expect("a row for every view's cosine");
+        rows.ratios(
+            ((view_cosine(&view), end_altitude_m), azimuth_rad),
+            &mut work.multiple_stokes,
+        )
+        .expect("a row for every view's cosine");
         work.terms.polarisation_corrected(&mut work.corrected);
         add_corrected_multiple_stokes(&work.multiple_stokes, &work.corrected, radiance, stokes);
     }

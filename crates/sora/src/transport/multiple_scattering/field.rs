@@ -590,16 +590,17 @@ impl MultipleScatteringField {
     }
 
     /// The polarisation correction's harmonic rows toward every distinct
-    /// cosine of `view_cosines`, from which each view's ratios (I, Q, U, V)
+    /// view of `views` (its zenith cosine and the altitude its segment ends
+    /// at, infinity for the whole ray), from which each view's ratios (I, Q, U, V)
     /// / I_scalar of the light the scaled field scatters two or more times
     /// are summed at its azimuth (see `polarisation_correction.rs`). None
     /// for a scalar field.
     pub(crate) fn compute_polarisation_rows(
         &self,
-        view_cosines: &[f64],
+        views: &[(f64, f64)],
     ) -> Option<PolarisationRows> {
         let correction = self.polarisation.as_ref()?;
-        Some(correction.compute_rows(&self.atmosphere, &self.optics.scaled.phases, view_cosines))
+        Some(correction.compute_rows(&self.atmosphere, &self.optics.scaled.phases, views))
     }
 
     /// The polarisation correction's ratios tabulated over view directions

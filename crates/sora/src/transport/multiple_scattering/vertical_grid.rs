@@ -156,12 +156,18 @@ impl VerticalGrid {
     /// The layer containing `altitude_m` and the fraction of the way up it
     /// (clamped to the grid).
     pub(crate) fn locate(&self, altitude_m: f64) -> (usize, f64) {
-        let levels = self.altitudes_m.len();
-        let upper = self.altitudes_m.partition_point(|z| *z <= altitude_m);
-        let k = upper.clamp(1, levels - 1) - 1;
-        let (z0, z1) = (self.altitudes_m[k], self.altitudes_m[k + 1]);
-        (k, ((altitude_m - z0) / (z1 - z0)).clamp(0.0, 1.0))
+        locate_among(&self.altitudes_m, altitude_m)
     }
+}
+
+/// The layer of the level altitudes `altitudes_m` (ascending, m) holding
+/// `altitude_m` and the fraction of the way up it (clamped to the grid).
+pub(crate) fn locate_among(altitudes_m: &[f64], altitude_m: f64) -> (usize, f64) {
+    let levels = altitudes_m.len();
+    let upper = altitudes_m.partition_point(|z| *z <= altitude_m);
+    let k = upper.clamp(1, levels - 1) - 1;
+    let (z0, z1) = (altitudes_m[k], altitudes_m[k + 1]);
+    (k, ((altitude_m - z0) / (z1 - z0)).clamp(0.0, 1.0))
 }
 
 #[cfg(test)]
