@@ -463,6 +463,15 @@ fn filters_and_the_index_per_wavelength_are_taken_and_a_filter_off_the_channels_
         (per_wavelength[0].1, per_wavelength[0].2),
         (per_wavelength[1].1, per_wavelength[1].2)
     );
+    // The table shows the index's columns only when it varies.
+    let header = |extra: &[&str]| -> bool {
+        let out = sora(&[&["retrieve", "--radiances", input][..], &QUICK, extra].concat());
+        let table = String::from_utf8(out.stdout).unwrap();
+        let header = table.lines().find(|l| l.contains("wavelength nm")).unwrap();
+        header.ends_with("refr. index, real part    refr. index, imag. part")
+    };
+    assert!(header(&["--index-per-wavelength"]));
+    assert!(!header(&[]));
 
     let error = one_line_error(&sora(&[
         "retrieve",

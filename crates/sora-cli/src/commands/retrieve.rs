@@ -10,8 +10,8 @@ use clap::{Args, ValueEnum};
 use serde::Serialize;
 use sora::inversion::{
     AeronetScan, Estimate, IndexSpectrum, Measurements, PARAMETER_NAMES, Retrieval,
-    RetrievalSettings, SkyGeometry, attach_nearest_optical_depths, parse_aeronet_aod,
-    parse_aeronet_sky, parse_normalised_spectrum_csv, parse_optical_depth_csv,
+    RetrievalSettings, SkyGeometry, SpectralOptics, attach_nearest_optical_depths,
+    parse_aeronet_aod, parse_aeronet_sky, parse_normalised_spectrum_csv, parse_optical_depth_csv,
     parse_sky_radiance_csv, retrieve,
 };
 
@@ -624,26 +624,44 @@ fn table(retrievals: &[(usize, Retrieval)]) -> String {
                 plus_minus(scale)
             );
         }
-        let _ = writeln!(
-            out,
-            "  {:>13}  {:<22}{:<26}{:<26}{:<22}refr. index, imag. part",
-            "wavelength nm",
-            "optical depth",
-            "single-scat. albedo",
-            "asymmetry parameter",
-            "refr. index, real part"
+        // The index's columns only where it differs between wavelengths
+        // (`--index-per-wavelength`); one index is the state's lines above.
+        let index_varies = r.spectral.windows(2).any(|pair| {
+            let index = |s: &SpectralOptics| {
+                (
+                    s.refractive_index_real.value,
+                    s.refractive_index_imaginary.value,
+                )
+            };
+            index(&pair[0]) != index(&pair[1])
+        });
+        let mut header = format!(
+            "  {:>13}  {:<22}{:<26}{}",
+            "wavelength nm", "optical depth", "single-scat. albedo", "asymmetry parameter"
         );
+        if index_varies {
+            header = format!(
+                "{header:<91}{:<26}refr. index, imag. part",
+                "refr. index, real part"
+            );
+        }
+        let _ = writeln!(out, "{header}");
         for s in &r.spectral {
-            let _ = writeln!(
-                out,
-                "  {:>13}  {:<22}{:<26}{:<26}{:<22}{}",
+            let mut row = format!(
+                "  {:>13}  {:<22}{:<26}{}",
                 s.wavelength_nm,
                 plus_minus(s.optical_depth),
                 plus_minus(s.single_scattering_albedo),
-                plus_minus(s.asymmetry),
-                plus_minus(s.refractive_index_real),
-                plus_minus(s.refractive_index_imaginary)
+                plus_minus(s.asymmetry)
             );
+            if index_varies {
+                row = format!(
+                    "{row:<91}{:<26}{}",
+                    plus_minus(s.refractive_index_real),
+                    plus_minus(s.refractive_index_imaginary)
+                );
+            }
+            let _ = writeln!(out, "{row}");
         }
         let _ = writeln!(
             out,
