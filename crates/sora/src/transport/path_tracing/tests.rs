@@ -3,9 +3,7 @@
 
 use std::f64::consts::PI;
 
-use super::estimate::{
-    ChunkStatistics, MAX_SAMPLES, SAMPLES_PER_CHUNK, SpectralEstimate, worst_relative_error,
-};
+use super::estimate::{ChunkStatistics, MAX_SAMPLES, SpectralEstimate, worst_relative_error};
 use super::free_path::sunlit_parts;
 use super::tracer::PathTracer;
 use crate::atmosphere::{Atmosphere, AtmosphereOptics, DensityProfile, PhaseFunction};
@@ -244,7 +242,7 @@ fn results_do_not_depend_on_the_thread_count() {
     let tracer = PathTracer::new(&sky);
     let view = direction_from_elevation_azimuth(17.0, 347.0);
     // Not a multiple of the chunk size: the last chunk is partial.
-    let samples = 5 * SAMPLES_PER_CHUNK + 37;
+    let samples = 5 * super::estimate::SAMPLES_PER_CHUNK + 37;
     let on = |threads: usize, seed: u64| {
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
