@@ -37,9 +37,7 @@ fn bench_species(c: &mut Criterion) {
         .truncated_to(RadiusWindow::from_micrometres(0.1, 2.5).unwrap())
         .unwrap();
     let table1_index = RefractiveIndexModel::constant(Complex64::new(1.5, 0.01)).unwrap();
-    let wolff = RefractiveIndexModel::Tabulated(
-        TabulatedRefractiveIndex::parse_csv(MARS_DUST_WOLFF2009_CSV).unwrap(),
-    );
+    let wolff = RefractiveIndexModel::Tabulated(mars_dust_wolff2009());
     let mie = EnsembleSettings::default();
     let paper_hg = EnsembleSettings {
         phase_mode: AerosolPhaseMode::PaperHenyeyGreenstein,
@@ -123,3 +121,12 @@ fn bench_species(c: &mut Criterion) {
 
 criterion_group!(benches, bench_species);
 criterion_main!(benches);
+
+#[path = "../tests/support/mars_dust.rs"]
+mod mars_dust;
+
+/// The built-in Wolff et al. (2009) Mars dust table.
+fn mars_dust_wolff2009() -> TabulatedRefractiveIndex {
+    let (wavelength_nm, n, k) = mars_dust::wavelength_nm_n_k(MARS_DUST_WOLFF2009_CSV);
+    TabulatedRefractiveIndex::from_columns(wavelength_nm, n, k).unwrap()
+}

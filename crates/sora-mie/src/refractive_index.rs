@@ -26,16 +26,17 @@
 //!
 //! The table is never extrapolated: a wavelength outside `[lambda_first,
 //! lambda_last]` is an error that names it and the table's range (nm). A
-//! table is parsed from text ([`TabulatedRefractiveIndex::parse_csv`]);
-//! reading the file is the caller's business (no I/O here). One table is
+//! table is built from its columns ([`TabulatedRefractiveIndex::from_columns`]);
+//! reading tables from text or files is the caller's business (sora reads
+//! refractive-index CSV with its one numeric-table reader). One table is
 //! built in, as text: [`MARS_DUST_WOLFF2009_CSV`].
 
 use crate::Complex64;
 
 /// The Mars dust refractive index of Wolff et al. (2009, JGR 114, E00D04;
 /// CRISM retrieval, with two ultraviolet rows from Wolff's distributed
-/// compilation), as the CSV text [`TabulatedRefractiveIndex::parse_csv`]
-/// reads: wavelength (um), n, k, 263-2480 nm, its provenance in the leading
+/// compilation), as CSV text (header `wavelength_um,n,k`; sora reads it):
+/// wavelength (um), n, k, 263-2480 nm, its provenance in the leading
 /// comment lines. Embedded once, here, for this crate's tests and benches and
 /// for sora's built-in `mars-dust-wolff2009`.
 pub const MARS_DUST_WOLFF2009_CSV: &str =
@@ -55,8 +56,6 @@ pub enum RefractiveIndexError {
     /// A refractive index that Mie theory cannot use: `n` must be finite and
     /// > 0, `k` finite and >= 0.
     InvalidRefractiveIndex { real_part: f64, imaginary_part: f64 },
-    /// The table text could not be read (line numbers count from 1).
-    Parse { line_number: usize, message: String },
     /// The rows do not make a table: too few, unsorted, or columns of
     /// different lengths.
     InvalidTable { message: String },
@@ -84,10 +83,6 @@ impl std::fmt::Display for RefractiveIndexError {
                 f,
                 "refractive index {real_part}{imaginary_part:+}i is invalid: the real part must be finite and > 0, the imaginary part (absorption) finite and >= 0"
             ),
-            RefractiveIndexError::Parse {
-                line_number,
-                message,
-            } => write!(f, "refractive-index table, line {line_number}: {message}"),
             RefractiveIndexError::InvalidTable { message } => {
                 write!(f, "invalid refractive-index table: {message}")
             }
@@ -181,68 +176,6 @@ impl TabulatedRefractiveIndex {
         })
     }
 
-    /// Parse a CSV table. Lines starting with `#` and blank lines are
-    /// skipped; the first other line is the header, which must name a
-    /// wavelength column `wavelength_um` or `wavelength_nm` (the unit is taken
-    /// from the name) and the columns `n` and `k`, in any order (other columns
-    /// are ignored). Every following line is one row.
-    pub fn parse_csv(text: &str) -> Result<Self, RefractiveIndexError> {
-        let mut lines = text
-            .lines()
-            .enumerate()
-            .map(|(index, line)| (index + 1, line.trim()))
-            .filter(|(_, line)| !line.is_empty() && !line.starts_with('#'));
-        let (header_line_number, header) = lines.next().ok_or(RefractiveIndexError::Parse {
-            line_number: 0,
-            message: "no header line (only comments or blank lines)".to_string(),
-        })?;
-        let column_names: Vec<&str> = header.split(',').map(str::trim).collect();
-        let find_column = |name: &str| column_names.iter().position(|c| *c == name);
-        let (wavelength_column, nm_per_unit) = if let Some(c) = find_column("wavelength_nm") {
-            (c, 1.0)
-        } else if let Some(c) = find_column("wavelength_um") {
-            (c, 1000.0)
-        } else {
-            return Err(RefractiveIndexError::Parse {
-                line_number: header_line_number,
-                message: format!(
-                    "header `{header}` has no column `wavelength_nm` or `wavelength_um`"
-                ),
-            });
-        };
-        let missing = |name: &str| RefractiveIndexError::Parse {
-            line_number: header_line_number,
-            message: format!("header `{header}` has no column `{name}`"),
-        };
-        let real_column = find_column("n").ok_or_else(|| missing("n"))?;
-        let imaginary_column = find_column("k").ok_or_else(|| missing("k"))?;
-
-        let mut wavelength_nm = Vec::new();
-        let mut real_part = Vec::new();
-        let mut imaginary_part = Vec::new();
-        for (line_number, line) in lines {
-            let fields: Vec<&str> = line.split(',').map(str::trim).collect();
-            let field = |column: usize, name: &str| -> Result<f64, RefractiveIndexError> {
-                let text = fields
-                    .get(column)
-                    .ok_or_else(|| RefractiveIndexError::Parse {
-                        line_number,
-                        message: format!("missing column `{name}` in `{line}`"),
-                    })?;
-                text.parse::<f64>()
-                    .map_err(|error| RefractiveIndexError::Parse {
-                        line_number,
-                        message: format!("column `{name}`: `{text}` is not a number ({error})"),
-                    })
-            };
-            wavelength_nm
-                .push(field(wavelength_column, column_names[wavelength_column])? * nm_per_unit);
-            real_part.push(field(real_column, "n")?);
-            imaginary_part.push(field(imaginary_column, "k")?);
-        }
-        Self::from_columns(wavelength_nm, real_part, imaginary_part)
-    }
-
     /// The wavelength range covered, `(first, last)` row, in nm.
     pub fn wavelength_range_nm(&self) -> (f64, f64) {
         (
@@ -332,17 +265,19 @@ impl RefractiveIndexModel {
 mod tests {
     use super::*;
 
-    const SMALL_TABLE: &str = "# a comment\n\
-        # another: interpolate k in log space\n\
-        wavelength_um,n,k\n\
-        0.400,1.50,0.0100\n\
-        \n\
-        0.500,1.52,0.0010\n\
-        0.600,1.51,0.0000\n";
+    /// 400, 500 and 600 nm; `k` falls a decade, then to 0.
+    fn small_table() -> TabulatedRefractiveIndex {
+        TabulatedRefractiveIndex::from_columns(
+            vec![400.0, 500.0, 600.0],
+            vec![1.50, 1.52, 1.51],
+            vec![0.0100, 0.0010, 0.0000],
+        )
+        .unwrap()
+    }
 
     #[test]
-    fn parses_comments_header_and_units() {
-        let table = TabulatedRefractiveIndex::parse_csv(SMALL_TABLE).unwrap();
+    fn nodes_return_the_rows() {
+        let table = small_table();
         assert_eq!(table.wavelengths_nm(), &[400.0, 500.0, 600.0]);
         assert_eq!(table.wavelength_range_nm(), (400.0, 600.0));
         let m = table.refractive_index_at(500.0).unwrap();
@@ -350,22 +285,8 @@ mod tests {
     }
 
     #[test]
-    fn columns_may_come_in_any_order_with_nanometres() {
-        let text = "k,extra,n,wavelength_nm\n0.1,x,1.4,300\n0.2,y,1.6,700\n";
-        let table = TabulatedRefractiveIndex::parse_csv(text).unwrap();
-        assert_eq!(
-            table.refractive_index_at(300.0).unwrap(),
-            Complex64::new(1.4, 0.1)
-        );
-        assert_eq!(
-            table.refractive_index_at(700.0).unwrap(),
-            Complex64::new(1.6, 0.2)
-        );
-    }
-
-    #[test]
     fn n_is_linear_and_k_geometric_between_rows() {
-        let table = TabulatedRefractiveIndex::parse_csv(SMALL_TABLE).unwrap();
+        let table = small_table();
         let m = table.refractive_index_at(450.0).unwrap();
         assert!((m.re - 1.51).abs() < 1e-14);
         // Half-way between k = 0.01 and 0.001 in log space: sqrt(1e-5).
@@ -381,7 +302,7 @@ mod tests {
 
     #[test]
     fn outside_the_table_is_an_error_naming_wavelength_and_range() {
-        let table = TabulatedRefractiveIndex::parse_csv(SMALL_TABLE).unwrap();
+        let table = small_table();
         let error = table.refractive_index_at(380.0).unwrap_err();
         assert_eq!(
             error,
@@ -401,39 +322,35 @@ mod tests {
     }
 
     #[test]
-    fn malformed_tables_are_rejected_with_line_numbers() {
-        let error = TabulatedRefractiveIndex::parse_csv("# c\nwavelength_um,n,k\n0.4,1.5,abc\n")
-            .unwrap_err();
-        assert!(
-            matches!(error, RefractiveIndexError::Parse { line_number: 3, .. }),
-            "{error:?}"
-        );
-        let error = TabulatedRefractiveIndex::parse_csv("lambda,n,k\n0.4,1.5,0.1\n").unwrap_err();
-        assert!(
-            matches!(error, RefractiveIndexError::Parse { line_number: 1, .. }),
-            "{error:?}"
-        );
-        let error =
-            TabulatedRefractiveIndex::parse_csv("wavelength_nm,n,k\n500,1.5,0.1\n400,1.5,0.1\n")
-                .unwrap_err();
+    fn malformed_columns_are_rejected() {
+        let table = |w: &[f64], n: &[f64], k: &[f64]| {
+            TabulatedRefractiveIndex::from_columns(w.to_vec(), n.to_vec(), k.to_vec())
+        };
+        let error = table(&[500.0, 400.0], &[1.5, 1.5], &[0.1, 0.1]).unwrap_err();
         assert!(
             matches!(error, RefractiveIndexError::InvalidTable { .. }),
             "{error:?}"
         );
-        let error =
-            TabulatedRefractiveIndex::parse_csv("wavelength_nm,n,k\n400,1.5,-0.1\n500,1.5,0.1\n")
-                .unwrap_err();
+        let error = table(&[400.0, 500.0], &[1.5, 1.5], &[-0.1, 0.1]).unwrap_err();
         assert!(
             matches!(error, RefractiveIndexError::InvalidRefractiveIndex { .. }),
             "{error:?}"
         );
-        let error =
-            TabulatedRefractiveIndex::parse_csv("wavelength_nm,n,k\n400,1.5,0.1\n").unwrap_err();
+        let error = table(&[400.0], &[1.5], &[0.1]).unwrap_err();
         assert!(
             matches!(error, RefractiveIndexError::InvalidTable { .. }),
             "{error:?}"
         );
-        assert!(TabulatedRefractiveIndex::parse_csv("# only comments\n").is_err());
+        let error = table(&[400.0, 500.0], &[1.5], &[0.1, 0.1]).unwrap_err();
+        assert!(
+            matches!(error, RefractiveIndexError::InvalidTable { .. }),
+            "{error:?}"
+        );
+        let error = table(&[-400.0, 500.0], &[1.5, 1.5], &[0.1, 0.1]).unwrap_err();
+        assert!(
+            matches!(error, RefractiveIndexError::InvalidWavelength { .. }),
+            "{error:?}"
+        );
     }
 
     #[test]
@@ -446,36 +363,5 @@ mod tests {
         assert!(model.refractive_index_at(-1.0).is_err());
         assert!(RefractiveIndexModel::constant(Complex64::new(1.5, -0.01)).is_err());
         assert!(RefractiveIndexModel::constant(Complex64::new(0.0, 0.0)).is_err());
-    }
-
-    /// The built-in Mars dust table of Wolff et al. (2009): the rows this project relies on (380-780 nm) come out as
-    /// the published values at the nodes and geometric means in between.
-    #[test]
-    fn mars_dust_table_covers_the_visible() {
-        let table = TabulatedRefractiveIndex::parse_csv(MARS_DUST_WOLFF2009_CSV).unwrap();
-        assert_eq!(table.wavelength_range_nm(), (263.0, 2480.0));
-        let model = RefractiveIndexModel::Tabulated(table);
-        assert_eq!(
-            model.refractive_index_at(500.0).unwrap(),
-            Complex64::new(1.5, 0.00548876)
-        );
-        assert_eq!(
-            model.refractive_index_at(440.0).unwrap(),
-            Complex64::new(1.49915, 0.00767169)
-        );
-        let m_380 = model.refractive_index_at(380.0).unwrap();
-        // Between the 321 nm (k 0.0127) and 440 nm (k 0.00767169) rows.
-        let t = (380.0 - 321.0) / (440.0 - 321.0);
-        let expected_k = 0.0127f64.powf(1.0 - t) * 0.00767169f64.powf(t);
-        assert!((m_380.im / expected_k - 1.0).abs() < 1e-13);
-        assert!((m_380.re - (1.49413 + t * (1.49915 - 1.49413))).abs() < 1e-14);
-        for lambda in (380..=780).step_by(20) {
-            let m = model.refractive_index_at(lambda as f64).unwrap();
-            assert!(
-                m.re > 1.49 && m.re < 1.51 && m.im > 8e-4 && m.im < 0.011,
-                "{lambda}: {m}"
-            );
-        }
-        assert!(model.refractive_index_at(250.0).is_err());
     }
 }

@@ -261,7 +261,7 @@ fn mars_dust_wolff() -> (SizeDistribution, RefractiveIndexModel) {
     let distribution =
         SizeDistribution::log_normal_from_effective_radius_and_variance(1.5 * MICROMETRE, 0.3)
             .unwrap();
-    let table = TabulatedRefractiveIndex::parse_csv(MARS_DUST_WOLFF2009_CSV).unwrap();
+    let table = mars_dust_wolff2009();
     (distribution, RefractiveIndexModel::Tabulated(table))
 }
 
@@ -457,4 +457,13 @@ fn index_interpolation_is_order_independent_and_only_for_varying_indices() {
     let mut non_absorbing = indices;
     non_absorbing[3].im = 0.0;
     assert!(!index_interpolation_applies(&non_absorbing));
+}
+
+#[path = "support/mars_dust.rs"]
+mod mars_dust;
+
+/// The built-in Wolff et al. (2009) Mars dust table.
+fn mars_dust_wolff2009() -> TabulatedRefractiveIndex {
+    let (wavelength_nm, n, k) = mars_dust::wavelength_nm_n_k(MARS_DUST_WOLFF2009_CSV);
+    TabulatedRefractiveIndex::from_columns(wavelength_nm, n, k).unwrap()
 }

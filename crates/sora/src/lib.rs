@@ -43,10 +43,11 @@
 //! 5. [`sky`]: the [`Sky`], where single scattering (the paper's eq. 4-5)
 //!    and multiple scattering are composed, for views and images, as
 //!    scalar light or as Stokes vectors ([`Polarisation`]);
-//! 6. the engine underneath it, private to the crate (`transport/`):
-//!    single scattering, its reference march and its tables; the
-//!    multiple-scattering field; the Monte Carlo path tracer. [`Sky`] is
-//!    its interface; its reference tests live beside it;
+//! 6. [`transport`], the engine underneath it: single scattering, its
+//!    reference march and its tables; the multiple-scattering field; the
+//!    Monte Carlo path tracer. [`Sky`] is its interface (its types are
+//!    public to be named, their constructors and kernels private to the
+//!    crate); its reference tests live beside it;
 //! 7. [`colour`]: spectral radiance -> CIE XYZ -> RGB (paper §4, eq. 6),
 //!    exposure and gamut mapping;
 //! 8. [`output`]: images on disk (PNG, OpenEXR), written atomically; the only
@@ -56,7 +57,9 @@
 //! [`table`] (the one reader of numeric CSV tables),
 //! [`sun_position`] (the sun's position from a time and a place, NREL's
 //! SPA), [`inversion`] (aerosol retrieval from measured radiances, the
-//! forward model being the [`Sky`]) and [`error`].
+//! forward model being the [`Sky`]), [`engine_tables`] (the tables a
+//! real-time shader reads to draw a sora sky, `docs/engine-tables.md`) and
+//! [`error`].
 //!
 //! Units are SI unless a name says otherwise (`wavelength_nm`). The library
 //! has no global state and prints nothing.

@@ -567,11 +567,7 @@ fn paper_mode_carries_the_weighted_paper_g() {
 /// results match the constant-index computation at that index.
 #[test]
 fn tabulated_index_is_used_per_wavelength() {
-    let table = crate::refractive_index::TabulatedRefractiveIndex::parse_csv(
-        crate::refractive_index::MARS_DUST_WOLFF2009_CSV,
-    )
-    .unwrap();
-    let model = RefractiveIndexModel::Tabulated(table);
+    let model = RefractiveIndexModel::Tabulated(mars_dust_wolff2009());
     let settings = EnsembleSettings {
         phase_mode: AerosolPhaseMode::PaperHenyeyGreenstein,
         ..EnsembleSettings::default()
@@ -825,12 +821,7 @@ fn the_presets_phase_rules_are_unchanged_by_the_ripple_density() {
         phase_function_quadrature: without_ripple,
         ..EnsembleSettings::default()
     };
-    let wolff = RefractiveIndexModel::Tabulated(
-        crate::refractive_index::TabulatedRefractiveIndex::parse_csv(
-            crate::refractive_index::MARS_DUST_WOLFF2009_CSV,
-        )
-        .unwrap(),
-    );
+    let wolff = RefractiveIndexModel::Tabulated(mars_dust_wolff2009());
     for (distribution, index) in [
         (
             SizeDistribution::log_normal(0.0212 * MICROMETRE, 2.24)
@@ -907,4 +898,14 @@ fn the_binned_search_finds_the_interval_the_whole_table_search_finds() {
     for x in cosines {
         assert_eq!(table.interval_index(x), whole(x), "cos theta {x}");
     }
+}
+
+#[path = "../../tests/support/mars_dust.rs"]
+mod mars_dust;
+
+/// The built-in Wolff et al. (2009) Mars dust table.
+fn mars_dust_wolff2009() -> crate::refractive_index::TabulatedRefractiveIndex {
+    let (wavelength_nm, n, k) =
+        mars_dust::wavelength_nm_n_k(crate::refractive_index::MARS_DUST_WOLFF2009_CSV);
+    crate::refractive_index::TabulatedRefractiveIndex::from_columns(wavelength_nm, n, k).unwrap()
 }

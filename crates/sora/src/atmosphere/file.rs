@@ -45,6 +45,7 @@ use super::ozone::{AbsorbingGas, AbsorptionCrossSection, BinnedCrossSection, Gas
 use super::planet::Planet;
 use super::profile::{DensityProfile, ProfileTable};
 use super::rayleigh::RayleighGas;
+use super::refractive_index::parse_refractive_index_csv;
 use super::sun::{EARTH_SUN_ANGULAR_DIAMETER_DEG, Sun};
 use super::{Atmosphere, RayleighScatterer, Species, SpeciesModel};
 use crate::error::{Error, Result};
@@ -67,7 +68,7 @@ pub const BUILTIN_REFRACTIVE_INDICES: [&str; 1] = ["mars-dust-wolff2009"];
 pub(crate) fn builtin_refractive_index(name: &str) -> Option<TabulatedRefractiveIndex> {
     match name {
         "mars-dust-wolff2009" => Some(
-            TabulatedRefractiveIndex::parse_csv(MARS_DUST_WOLFF2009_CSV)
+            parse_refractive_index_csv(MARS_DUST_WOLFF2009_CSV, "built-in refractive index table")
                 .expect("the embedded Mars dust table is valid"),
         ),
         _ => None,

@@ -51,6 +51,7 @@ pub mod profile;
 pub mod rayleigh;
 #[cfg(test)]
 mod reference_tests;
+mod refractive_index;
 pub mod sun;
 
 pub use aerosol::{AerosolPhase, ParametricAerosol};

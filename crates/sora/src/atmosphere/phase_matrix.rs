@@ -41,8 +41,6 @@
 
 use std::f64::consts::PI;
 
-use super::phase::PhaseFunction;
-
 /// The six independent elements of a phase matrix at one angle, sr^-1
 /// (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -113,58 +111,9 @@ pub(crate) fn rayleigh_phase_matrix(rho: f64, mu: f64) -> PhaseMatrix {
     }
 }
 
-impl PhaseFunction {
-    /// Whether a polarised computation can use this phase function: every
-    /// kind but a tabulated (Mie) one without its matrix ratios (which
-    /// `Atmosphere::add_phase_matrices` computes).
-    pub(crate) fn has_phase_matrix(&self) -> bool {
-        match self {
-            PhaseFunction::Tabulated(table) => table.has_matrix_ratios(),
-            _ => true,
-        }
-    }
-
-    /// The phase matrix at every wavelength at scattering-angle cosine
-    /// `cos_theta`, into `out` (one per wavelength sample; no allocation).
-    /// A tabulated function without its ratios gets its non-polarising
-    /// matrix: callers check [`PhaseFunction::has_phase_matrix`] first.
-    pub(crate) fn phase_matrix_into(&self, cos_theta: f64, out: &mut [PhaseMatrix]) {
-        match self {
-            PhaseFunction::Tabulated(table) => table.phase_matrix_into(cos_theta, out),
-            PhaseFunction::Rayleigh {
-                depolarization_ratios,
-            } => {
-                for (m, rho) in out.iter_mut().zip(depolarization_ratios) {
-                    *m = rayleigh_phase_matrix(*rho, cos_theta);
-                }
-            }
-            _ => {
-                for (i, m) in out.iter_mut().enumerate() {
-                    *m = PhaseMatrix::non_polarising(self.eval(i, cos_theta));
-                }
-            }
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn rayleigh_a1_is_the_scalar_phase_function() {
-        for rho in [0.0, 0.0279, 0.1, 0.3] {
-            let phase = PhaseFunction::Rayleigh {
-                depolarization_ratios: vec![rho],
-            };
-            for k in 0..=20 {
-                let mu = -1.0 + 0.1 * k as f64;
-                let m = rayleigh_phase_matrix(rho, mu);
-                let p = phase.eval(0, mu);
-                assert!((m.a1 - p).abs() <= 1e-15 * p, "rho {rho} mu {mu}");
-            }
-        }
-    }
 
     #[test]
     fn rayleigh_degree_of_polarisation_has_its_closed_forms() {
@@ -210,56 +159,5 @@ mod tests {
                 }
             }
         }
-    }
-
-    #[test]
-    fn tabulated_functions_carry_their_ratios() {
-        use super::super::phase::TabulatedPhase;
-        use crate::mie::ensemble::PhaseMatrixRatios;
-        let nodes = vec![-1.0, 0.0, 1.0];
-        let mut table = TabulatedPhase::new(nodes.clone(), vec![vec![1.0, 0.5, 2.0]]).unwrap();
-        assert!(!PhaseFunction::Tabulated(table.clone()).has_phase_matrix());
-        let ratios = PhaseMatrixRatios {
-            cos_theta: nodes.clone(),
-            f12_over_f11: vec![0.0, -0.8, 0.0],
-            f33_over_f11: vec![-1.0, 0.1, 1.0],
-            f34_over_f11: vec![0.0, 0.2, 0.0],
-        };
-        // Ratios on other nodes, or for another number of wavelengths, are refused.
-        let shifted = PhaseMatrixRatios {
-            cos_theta: vec![-1.0, 0.1, 1.0],
-            ..ratios.clone()
-        };
-        assert!(!table.set_matrix_ratios(vec![shifted]));
-        assert!(!table.set_matrix_ratios(vec![ratios.clone(), ratios.clone()]));
-        assert!(table.set_matrix_ratios(vec![ratios]));
-        let phase = PhaseFunction::Tabulated(table);
-        assert!(phase.has_phase_matrix());
-        // At a node: a1 the table's value, the rest a1 times the ratios;
-        // halfway between nodes, linear in cos theta.
-        let mut out = [PhaseMatrix::default()];
-        phase.phase_matrix_into(0.0, &mut out);
-        let a1 = phase.eval(0, 0.0);
-        assert!((out[0].a1 - a1).abs() < 1e-15 && (out[0].b1 + 0.8 * a1).abs() < 1e-15);
-        assert!((out[0].a3 - 0.1 * a1).abs() < 1e-15 && (out[0].b2 - 0.2 * a1).abs() < 1e-15);
-        assert_eq!((out[0].a2, out[0].a4), (out[0].a1, out[0].a3));
-        phase.phase_matrix_into(0.5, &mut out);
-        let a1 = phase.eval(0, 0.5);
-        assert!((out[0].b1 + 0.4 * a1).abs() < 1e-12, "{:?}", out[0]);
-    }
-
-    #[test]
-    fn parametric_functions_do_not_polarise() {
-        let phase = PhaseFunction::HenyeyGreenstein {
-            asymmetry_g: vec![0.7, 0.2],
-        };
-        let mut out = [PhaseMatrix::default(); 2];
-        phase.phase_matrix_into(0.3, &mut out);
-        for (i, m) in out.iter().enumerate() {
-            assert_eq!(m.b1, 0.0);
-            assert_eq!(m.normalised_matrix()[1][1], 1.0);
-            assert_eq!(m.a1, phase.eval(i, 0.3));
-        }
-        assert!(phase.has_phase_matrix());
     }
 }

@@ -181,9 +181,51 @@ pub fn angle_between_deg(
     a.cross(b).length().atan2(a.dot(b)).to_degrees()
 }
 
+/// An orthonormal basis (t1, t2) perpendicular to the unit vector `n`
+/// (Duff et al. 2017, "Building an orthonormal basis, revisited").
+pub(crate) fn perpendicular_basis(n: Vector3) -> (Vector3, Vector3) {
+    let sign = 1f64.copysign(n.z);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    (
+        Vector3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
+        Vector3::new(b, sign + n.y * n.y * a, -n.y),
+    )
+}
+
+/// The unit vector at angle acos(`cos_theta`) from the unit `axis`, at
+/// azimuth `phi` about it.
+pub(crate) fn direction_about(axis: Vector3, cos_theta: f64, phi: f64) -> Vector3 {
+    let (t1, t2) = perpendicular_basis(axis);
+    let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+    let (sin_phi, cos_phi) = phi.sin_cos();
+    (t1 * (sin_theta * cos_phi) + t2 * (sin_theta * sin_phi) + axis * cos_theta).normalized()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn perpendicular_basis_is_orthonormal() {
+        for n in [
+            Vector3::new(0.0, 0.0, 1.0),
+            Vector3::new(0.0, 0.0, -1.0),
+            Vector3::new(0.6, 0.0, 0.8),
+            Vector3::new(-0.48, 0.6, -0.64),
+            Vector3::new(1.0, 0.0, 0.0),
+        ] {
+            let (a, b) = perpendicular_basis(n);
+            for (x, y) in [(a, a), (b, b), (n, n)] {
+                assert!((x.dot(y) - 1.0).abs() < 1e-14);
+            }
+            for (x, y) in [(a, b), (a, n), (b, n)] {
+                assert!(x.dot(y).abs() < 1e-14);
+            }
+            let d = direction_about(n, 0.3, 1.0);
+            assert!((d.dot(n) - 0.3).abs() < 1e-14);
+        }
+    }
 
     #[test]
     fn azimuths_are_read_into_one_turn() {

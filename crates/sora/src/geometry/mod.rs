@@ -9,7 +9,8 @@ pub(crate) mod direction;
 pub(crate) mod planet_sphere;
 
 pub(crate) use direction::{
-    Vector3, direction_from_elevation_azimuth, elevation_azimuth_from_direction,
+    Vector3, direction_about, direction_from_elevation_azimuth, elevation_azimuth_from_direction,
+    perpendicular_basis,
 };
 pub use direction::{ViewDirection, angle_between_deg, azimuth_in_one_turn_deg};
 pub(crate) use planet_sphere::{

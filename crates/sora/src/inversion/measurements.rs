@@ -7,7 +7,7 @@
 //! spectral, W m^-2 sr^-1 nm^-1, for the sun of the atmosphere they are
 //! compared with (a measured radiance is divided by nothing: its sun is the
 //! real one at that date, see `RadianceScale`). Readers of text formats
-//! (the CSV of the issue, AERONET version 3 files) live in `input.rs`;
+//! (the CSV of the issue, AERONET version 3 files) live in `input/` (`csv.rs`, `aeronet.rs`);
 //! [`Measurements::validate`] checks what any of them produced.
 
 use crate::error::{Error, Result};

@@ -10,7 +10,7 @@
 //! effective radii, each with an uncertainty.
 //!
 //! - `measurements.rs`: what is measured ([`Measurements`]), and its
-//!   checks ([`Measurements::validate`]); `input.rs`: its readers from
+//!   checks ([`Measurements::validate`]); `input/`: its readers from
 //!   text (sora's CSV, AERONET version 3 almucantar, principal-plane and
 //!   optical-depth files (and version 2 optical depths), a normalised
 //!   spectrum in one direction), and of the network's own version 2
@@ -46,7 +46,7 @@
 //! uncertainties, and says so in its warnings; an almucantar's angular
 //! shape is what carries the size distribution.
 //!
-//! No I/O: text formats are read in `input.rs` from strings; the CLI
+//! No I/O: text formats are read in `input/` from strings; the CLI
 //! (`sora retrieve`) reads the files and writes the outputs.
 
 mod fit;

@@ -14,7 +14,7 @@
 //! of the sun's beam and the higher orders). This is the sky's own
 //! composition along a segment instead of the whole ray: the same march
 //! ([`crate::transport::optical_column::PanelMarch`]) and the same terms
-//! ([`super::ViewTerms`]: single scattering, the scaled field's light, the
+//! ([`super::composition::ViewTerms`]: single scattering, the scaled field's light, the
 //! forward-peak term) with the segment ending at min(d, where the ray
 //! leaves the atmosphere or meets the ground), L_seg. The ground's terms
 //! (its sunlit and skylit light) are left out of it: the point is the
@@ -64,12 +64,14 @@
 //! paths reaching it, with standard errors); the reference march has no
 //! segment and is an error.
 
-use super::{ImageSettings, Method, Polarisation, Sky, SkyRadiance, meridian_reference};
+use super::composition::{ViewWork, sky_radiance_from_traced};
+use super::{ImageSettings, Method, Polarisation, Sky, SkyRadiance};
 use crate::colour::{SpectrumToXyz, Xyz};
 use crate::error::{Error, Result};
 use crate::geometry::{Vector3, ViewDirection, segment_in_atmosphere};
 use crate::spectrum::SampledSpectrum;
 use crate::transport::path_tracing::PathTracer;
+use crate::transport::stokes::meridian_reference;
 
 /// The air between the eye and a point of a scene
 /// ([`Sky::aerial_perspective`]; see the module docs for the compositing
@@ -411,7 +413,7 @@ impl Sky {
     /// [`crate::transport::multiple_scattering::MultipleScatteringScratch::scaled_forward_integrals`]);
     /// its peak-only line has T Q_behind = Q_sky - Q_seg and mean X less
     /// the segment's peak optical depth ln(T* / T).
-    fn compute_segment_terms(&self, view: Vector3, distance_m: f64, work: &mut super::ViewWork) {
+    fn compute_segment_terms(&self, view: Vector3, distance_m: f64, work: &mut ViewWork) {
         let wavelengths = self.wavelengths().len();
         // The whole ray's field, ground and forward-peak integrals.
         self.compute_view_terms((view, f64::INFINITY), None, work);
@@ -520,7 +522,7 @@ impl Sky {
                         seed,
                         &|_| {},
                     )?;
-                Ok(super::sky_radiance_from_traced(traced))
+                Ok(sky_radiance_from_traced(traced))
             })
             .collect()
     }

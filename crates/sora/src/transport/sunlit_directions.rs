@@ -72,7 +72,7 @@ impl SunlitDirections {
         let toward_sun = if horizontal.length() > 1e-9 {
             horizontal.normalized()
         } else {
-            super::path_tracing::perpendicular_basis(up).0
+            crate::geometry::perpendicular_basis(up).0
         };
         let ratio = (ground_radius_m / r).min(1.0);
         let horizon_mu = -(1.0 - ratio * ratio).max(0.0).sqrt();

@@ -623,7 +623,7 @@ impl MultipleScatteringField {
     /// the ground) seen along `view`, W m^-2 sr^-1 nm^-1, into `radiance`:
     /// the scaled field's light ([`MultipleScatteringField::compute_field_radiance`])
     /// plus the forward-peak term of its integrals along the view (the
-    /// sky adds its terms itself, `ViewTerms` in `sky/mod.rs`).
+    /// sky adds its terms itself, `ViewTerms` in `sky/composition.rs`).
     #[cfg(test)]
     pub(crate) fn compute_radiance(
         &self,

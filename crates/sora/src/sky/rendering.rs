@@ -1,0 +1,238 @@
+//! Images: the tables images need ([`Sky::prepare_images`]) and the
+//! renders ([`Sky::render_xyz`], [`Sky::render_stokes_xyz`],
+//! [`Sky::render_spectral`]), each pixel composed as a view is, the sun's
+//! disc drawn energy-true (`sky/sun_disc.rs`).
+
+use super::options::{
+    ImageSettings, MAX_IMAGE_BUFFER_BYTES, Method, Polarisation, check_image_size,
+};
+use super::setup::Sky;
+use super::{k_terms, sun_disc};
+
+use crate::colour::{SpectrumToXyz, Xyz};
+use crate::error::{Error, Result};
+
+impl Sky {
+    /// Builds everything images of this sky need (the multiple-scattering
+    /// field and its source table; for the fast method the sun-column and
+    /// sky-view tables), so that a progress display can show it as its
+    /// own phase; rendering does it on first use otherwise.
+    pub fn prepare_images(&self) -> Result<()> {
+        if !self.k_terms.is_empty() {
+            for (_, term) in &self.k_terms {
+                term.prepare_images()?;
+            }
+            return Ok(());
+        }
+        self.prepare_field_for_images()?;
+        self.source_table();
+        if self.method == Method::Fast {
+            self.image_tables();
+        }
+        Ok(())
+    }
+
+    /// `to_xyz` must be on the sky's grid, and the grid must have a
+    /// wavelength in 360-830 nm (colour comes from those; see
+    /// [`SpectrumToXyz`]).
+    pub(super) fn check_colour_conversion(&self, to_xyz: &SpectrumToXyz) -> Result<()> {
+        if to_xyz.grid() != self.wavelengths() {
+            return Err(Error::InvalidSpectrum(
+                "the colour conversion and the sky use different wavelength grids".into(),
+            ));
+        }
+        if to_xyz.colour_sample_count() == 0 {
+            return Err(Error::Unsupported(format!(
+                "no wavelength of the grid {} lies in {}-{} nm, the range of the colour-matching functions, so it gives no colour: use a grid that overlaps that range (a spectral image takes any grid)",
+                self.wavelengths(),
+                crate::colour::CIE_MIN_WAVELENGTH_NM,
+                crate::colour::CIE_MAX_WAVELENGTH_NM
+            )));
+        }
+        Ok(())
+    }
+
+    /// The image `image` as CIE XYZ per pixel (row-major, top row first;
+    /// black where the camera sees nothing), converted by `to_xyz` (which
+    /// must be on the sky's grid; colour comes from the grid's wavelengths
+    /// in 360-830 nm, and a grid with none there is an error);
+    /// `progress(rows)` is called as rows complete (from worker threads).
+    pub fn render_xyz(
+        &self,
+        image: &ImageSettings,
+        to_xyz: &SpectrumToXyz,
+        progress: &(dyn Fn(usize) + Sync),
+    ) -> Result<Vec<Xyz>> {
+        self.check_colour_conversion(to_xyz)?;
+        if !self.k_terms.is_empty() {
+            return self.sum_term_images(
+                progress,
+                Xyz::BLACK,
+                k_terms::add_scaled_xyz,
+                |term, p| term.render_xyz(image, to_xyz, p),
+            );
+        }
+        let n = self.wavelengths().len();
+        self.render_pixels(image, 1, Xyz::BLACK, progress, |radiance, pixel| {
+            pixel[0] = to_xyz.to_xyz_unchecked(&radiance[..n])
+        })
+    }
+
+    /// The image `image` of a polarised sky ([`Polarisation::Vector`]) as
+    /// the CIE XYZ of its Stokes vector per pixel: [S0, S1, S2, S3] = the
+    /// XYZ of the spectra I, Q, U and V (XYZ is linear in the spectrum, so
+    /// Q, U and V map as I does and may be negative), Q and U referred to
+    /// each pixel's meridian plane (the convention of [`Stokes`](super::Stokes)); the
+    /// sun's disc, unpolarised, adds to S0 only. Row-major, top row first,
+    /// black where the camera sees nothing. An error for a scalar sky.
+    pub fn render_stokes_xyz(
+        &self,
+        image: &ImageSettings,
+        to_xyz: &SpectrumToXyz,
+        progress: &(dyn Fn(usize) + Sync),
+    ) -> Result<Vec<[Xyz; 4]>> {
+        if self.polarisation != Polarisation::Vector {
+            return Err(Error::Unsupported(
+                "Stokes images: the sky is scalar; build it with Polarisation::Vector".into(),
+            ));
+        }
+        self.check_colour_conversion(to_xyz)?;
+        if !self.k_terms.is_empty() {
+            let add = |sum: &mut [Xyz; 4], w: f64, x: &[Xyz; 4]| {
+                for (s, x) in sum.iter_mut().zip(x) {
+                    k_terms::add_scaled_xyz(s, w, x);
+                }
+            };
+            return self.sum_term_images(progress, [Xyz::BLACK; 4], add, |term, p| {
+                term.render_stokes_xyz(image, to_xyz, p)
+            });
+        }
+        let n = self.wavelengths().len();
+        self.render_pixels(image, 1, [Xyz::BLACK; 4], progress, |stokes, pixel| {
+            pixel[0] = [
+                to_xyz.to_xyz_unchecked(&stokes[..n]),
+                to_xyz.weighted_sum(&stokes[n..2 * n]),
+                to_xyz.weighted_sum(&stokes[2 * n..3 * n]),
+                to_xyz.weighted_sum(&stokes[3 * n..]),
+            ]
+        })
+    }
+
+    /// The image `image` as spectral radiance, W m^-2 sr^-1 nm^-1:
+    /// `width * height * wavelengths` values, pixel-major (row-major
+    /// pixels, top row first, each pixel's wavelengths together).
+    pub fn render_spectral(
+        &self,
+        image: &ImageSettings,
+        progress: &(dyn Fn(usize) + Sync),
+    ) -> Result<Vec<f64>> {
+        if !self.k_terms.is_empty() {
+            let add = |sum: &mut f64, w: f64, x: &f64| *sum += w * x;
+            return self
+                .sum_term_images(progress, 0.0, add, |term, p| term.render_spectral(image, p));
+        }
+        let wavelengths = self.wavelengths().len();
+        self.render_pixels(image, wavelengths, 0.0, progress, |radiance, pixel| {
+            pixel.copy_from_slice(&radiance[..wavelengths])
+        })
+    }
+
+    /// Renders every pixel's radiance and stores it through `store` into
+    /// `per_pixel` values of type T: `store` gets the pixel's spectral
+    /// radiance (the polarised intensity I of a polarised sky), followed
+    /// for a polarised sky by its Q, U and V.
+    fn render_pixels<T: Copy + Send>(
+        &self,
+        image: &ImageSettings,
+        per_pixel: usize,
+        black: T,
+        progress: &(dyn Fn(usize) + Sync),
+        store: impl Fn(&[f64], &mut [T]) + Sync,
+    ) -> Result<Vec<T>> {
+        let (width, height) = (image.width, image.height);
+        check_image_size(width, height)?;
+        let buffer_bytes = u64::from(width)
+            * u64::from(height)
+            * per_pixel as u64
+            * std::mem::size_of::<T>() as u64;
+        if buffer_bytes > MAX_IMAGE_BUFFER_BYTES {
+            return Err(Error::out_of_range(
+                format!(
+                    "image buffer ({width} x {height} pixels x {per_pixel} values of {} bytes)",
+                    std::mem::size_of::<T>()
+                ),
+                buffer_bytes as f64 / f64::from(1u32 << 30),
+                "GiB",
+                format!(
+                    "<= {}: render fewer pixels (or fewer wavelengths for a spectral image)",
+                    MAX_IMAGE_BUFFER_BYTES >> 30
+                ),
+            ));
+        }
+        if let Method::PathTracing { .. } = self.method {
+            return Err(Error::Unsupported(
+                "path tracing computes views, not images: render with the fast or reference method"
+                    .into(),
+            ));
+        }
+        // Tables first, outside the parallel loop (see `prepare_field`).
+        self.prepare_field_for_images()?;
+        let source_table = self.source_table();
+        let tables = (self.method == Method::Fast).then(|| self.image_tables());
+        let wavelengths = self.wavelengths().len();
+        let polarised = self.polarisation == Polarisation::Vector;
+        let components = if polarised { 4 } else { 1 };
+        // The sun's disc: its share of each pixel it touches, per sr.
+        let direct_normal = self.direct_normal_irradiance();
+        let disc = if image.draw_sun_disc {
+            sun_disc::compute_disc_pixels(
+                &image.camera,
+                width,
+                height,
+                self.sun_direction(),
+                self.scene.sun_angular_radius_rad(),
+                |direction| self.scene.sees_sky(direction),
+            )
+        } else {
+            Vec::new()
+        };
+        let rows_done = std::sync::atomic::AtomicUsize::new(0);
+        let row_length = width as usize * per_pixel;
+        let mut pixels = vec![black; row_length * height as usize];
+        crate::parallel::for_each_chunk_mut(&mut pixels, row_length, |row, values| {
+            let mut work = self.view_work();
+            let mut spectra = vec![0.0; components * wavelengths];
+            for (column, pixel) in values.chunks_mut(per_pixel).enumerate() {
+                let Some(view) =
+                    image
+                        .camera
+                        .direction_for_pixel(column as u32, row as u32, width, height)
+                else {
+                    continue;
+                };
+                let (radiance, stokes) = spectra.split_at_mut(wavelengths);
+                // A polarised sky has the fast method's tables (the
+                // reference march is scalar: `Sky::set_polarisation`).
+                match tables {
+                    Some(tables) => {
+                        self.compute_pixel_radiance(view, tables, &mut work, radiance);
+                        if polarised {
+                            self.add_pixel_stokes(view, tables, &mut work, radiance, stokes);
+                        }
+                    }
+                    None => self.compute_view_radiance(view, source_table, &mut work, radiance),
+                }
+                let index = row * width as usize + column;
+                if let Ok(k) = disc.binary_search_by_key(&index, |(pixel, _)| *pixel) {
+                    let per_sr = disc[k].1;
+                    for (r, e) in radiance.iter_mut().zip(direct_normal.values()) {
+                        *r += e * per_sr;
+                    }
+                }
+                store(&spectra, pixel);
+            }
+            progress(rows_done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
+        });
+        Ok(pixels)
+    }
+}
