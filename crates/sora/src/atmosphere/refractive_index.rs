@@ -6,8 +6,9 @@
 //! (the unit is taken from the name; micrometres are multiplied by 1000)
 //! and the columns `n` and `k`, in any order; other columns are allowed and
 //! ignored, but, as in every numeric table, every cell is a number. Rows
-//! must be sorted by increasing wavelength, `n > 0`, `k >= 0`. Errors name
-//! the table, the 1-based line, the column and its unit. The built-in
+//! must be sorted by increasing wavelength, `n > 0`, `k >= 0` (checked by
+//! [`TabulatedRefractiveIndex::from_columns`], naming the values); a cell
+//! or header that does not read is named by its 1-based line. The built-in
 //! Mars dust table of Wolff et al. (2009) is the one table read this way
 //! ([`super::file`]'s `refractive_index.builtin`).
 
@@ -25,10 +26,10 @@ pub(crate) fn parse_refractive_index_csv(
     let table = NumericTable::parse(text, what)?;
     let header = table.column_names.join(",");
     let find = |name: &str| table.column_names.iter().position(|c| c == name);
-    let (wavelength_column, wavelength_unit, nm_per_unit) = if let Some(c) = find("wavelength_nm") {
-        (c, "nm", 1.0)
+    let (wavelength_column, nm_per_unit) = if let Some(c) = find("wavelength_nm") {
+        (c, 1.0)
     } else if let Some(c) = find("wavelength_um") {
-        (c, "um", 1000.0)
+        (c, 1000.0)
     } else {
         return Err(Error::parse(
             what,
@@ -48,48 +49,13 @@ pub(crate) fn parse_refractive_index_csv(
     let real_column = required("n")?;
     let imaginary_column = required("k")?;
 
-    let mut wavelength_nm = Vec::with_capacity(table.rows.len());
-    for (row, &line) in table.rows.iter().zip(&table.line_numbers) {
-        let (wavelength, n, k) = (
-            row[wavelength_column],
-            row[real_column],
-            row[imaginary_column],
-        );
-        let name = &table.column_names[wavelength_column];
-        if wavelength <= 0.0 {
-            return Err(Error::parse(
-                what,
-                line,
-                format!("{name} = {wavelength} {wavelength_unit} must be > 0"),
-            ));
-        }
-        let previous = wavelength_nm.last().copied().unwrap_or(0.0);
-        if wavelength * nm_per_unit <= previous {
-            return Err(Error::parse(
-                what,
-                line,
-                format!(
-                    "{name} = {wavelength} {wavelength_unit} does not increase on the row before ({} {wavelength_unit}): rows must be sorted by increasing wavelength",
-                    previous / nm_per_unit
-                ),
-            ));
-        }
-        if n <= 0.0 {
-            return Err(Error::parse(
-                what,
-                line,
-                format!("n = {n} (real part, unitless) must be > 0"),
-            ));
-        }
-        if k < 0.0 {
-            return Err(Error::parse(
-                what,
-                line,
-                format!("k = {k} (imaginary part, absorption, unitless) must be >= 0"),
-            ));
-        }
-        wavelength_nm.push(wavelength * nm_per_unit);
-    }
+    // The values' checks (positive, increasing wavelengths; n > 0, k >= 0)
+    // are the Mie crate's, for tables from any source.
+    let wavelength_nm = table
+        .column(wavelength_column)
+        .into_iter()
+        .map(|w| w * nm_per_unit)
+        .collect();
     TabulatedRefractiveIndex::from_columns(
         wavelength_nm,
         table.column(real_column),
@@ -159,24 +125,15 @@ mod tests {
         );
         let m = message("wavelength_nm,n,k\n500,1.5,0.1\n400,1.5,0.1\n");
         assert!(
-            m.starts_with("dust.csv, line 3:") && m.contains("wavelength_nm = 400 nm"),
+            m.starts_with("dust.csv: ") && m.contains("500 nm is followed by 400 nm"),
             "{m}"
         );
         let m = message("# x\nwavelength_um,n,k\n0.4,1.5,0.1\n-0.5,1.5,0.1\n");
-        assert!(
-            m.starts_with("dust.csv, line 4:") && m.contains("wavelength_um = -0.5 um"),
-            "{m}"
-        );
+        assert!(m.starts_with("dust.csv: ") && m.contains("-500"), "{m}");
         let m = message("wavelength_nm,n,k\n400,1.5,-0.1\n500,1.5,0.1\n");
-        assert!(
-            m.starts_with("dust.csv, line 2:") && m.contains("k = -0.1"),
-            "{m}"
-        );
+        assert!(m.starts_with("dust.csv: ") && m.contains("-0.1"), "{m}");
         let m = message("wavelength_nm,n,k\n400,1.5,0.1\n500,0,0.1\n");
-        assert!(
-            m.starts_with("dust.csv, line 3:") && m.contains("n = 0"),
-            "{m}"
-        );
+        assert!(m.starts_with("dust.csv: ") && m.contains('0'), "{m}");
         let m = message("wavelength_nm,n,k\n400,1.5,0.1\n");
         assert!(
             m.starts_with("dust.csv: ") && m.contains("at least 2"),
