@@ -93,6 +93,25 @@ impl Canvas {
         });
     }
 
+    /// The outline of the axis-aligned rectangle with corners `(x0, y0)`
+    /// and `(x1, y1)`: its four sides as lines `thickness` wide.
+    pub fn outline(
+        &mut self,
+        (x0, y0): (f64, f64),
+        (x1, y1): (f64, f64),
+        thickness: f64,
+        colour: [u8; 3],
+    ) {
+        for (a, b) in [
+            ((x0, y0), (x1, y0)),
+            ((x1, y0), (x1, y1)),
+            ((x1, y1), (x0, y1)),
+            ((x0, y1), (x0, y0)),
+        ] {
+            self.line(a, b, thickness, colour);
+        }
+    }
+
     /// A polyline; `dash` = Some((on, off)) in pixels makes it dashed, the
     /// pattern running on across the corners.
     pub fn polyline(

@@ -213,15 +213,7 @@ impl LinePlot {
         }
         canvas.set_clip(None);
 
-        // The frame.
-        for (a, b) in [
-            ((left, top), (right, top)),
-            ((right, top), (right, bottom)),
-            ((right, bottom), (left, bottom)),
-            ((left, bottom), (left, top)),
-        ] {
-            canvas.line(a, b, 1.5, BLACK);
-        }
+        canvas.outline((left, top), (right, bottom), 1.5, BLACK);
         self.legend(&mut canvas, (top, right));
         canvas
     }
@@ -247,14 +239,7 @@ impl LinePlot {
         let (bx, by) = (right - box_width - 10.0, top + 10.0);
         let (bx1, by1) = (bx + box_width, by + rows * line_height + 10.0);
         canvas.fill_rect(bx, by, bx1, by1, WHITE);
-        for (a, b) in [
-            ((bx, by), (bx1, by)),
-            ((bx1, by), (bx1, by1)),
-            ((bx1, by1), (bx, by1)),
-            ((bx, by1), (bx, by)),
-        ] {
-            canvas.line(a, b, 1.0, GREY);
-        }
+        canvas.outline((bx, by), (bx1, by1), 1.0, GREY);
         for (k, series) in entries.iter().enumerate() {
             let y = by + 10.0 + k as f64 * line_height;
             let middle = y + 0.5 * glyph - 0.5;
