@@ -11,7 +11,6 @@
 //! unknown options and options that exclude each other are status 2.
 
 mod arguments;
-mod bitmap_text;
 mod commands;
 mod csv;
 mod estimate;

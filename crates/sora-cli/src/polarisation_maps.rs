@@ -19,14 +19,13 @@
 //!   here because `colorous` has no perceptually uniform cyclic map.
 //!
 //! Pixels the camera does not see, and wholly unpolarised ones for the
-//! angle, are black. The legend's text is an 8 x 8 bitmap font
-//! (`font8x8`, drawn by `bitmap_text`), at twice its size when the image
-//! is wide enough.
+//! angle, are black. The legend's text is the plots' 8 x 8 bitmap font
+//! (`sora_plot::text`), at twice its size when the image is wide enough.
 
 use sora::colour::{TransferCurve, Xyz};
 use sora::output::DisplayImage;
 
-use crate::bitmap_text::draw_text;
+use sora_plot::text::draw_text;
 
 /// The legend's text colour.
 const WHITE: [u8; 3] = [255, 255, 255];

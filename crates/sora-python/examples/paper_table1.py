@@ -6,7 +6,8 @@ Python (a notebook-style script: run it cell by cell or whole).
 Prints the two spectra and, where matplotlib is installed (``pip install
 './crates/sora-python[plot]'``), plots them into OUT.png (default
 python_table1_spectrum.png in the current directory; the repository's
-docs/python_table1_spectrum.png is this script's plot). The geometry is
+picture of this spectrum, docs/table1_spectrum.png, is drawn by the Rust
+example paper_figures, not by this script). The geometry is
 the paper's Table 1: sun 36 deg up at azimuth 207, view 17 deg up at
 azimuth 347, atmosphere ``paper-earth``, scalar light as the paper's (the
 polarised intensity, sora's default, is 1-3 % lower here).

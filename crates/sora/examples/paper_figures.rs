@@ -46,9 +46,9 @@
 //! gets the default automatic exposure (log-average luminance -> 0.18), and
 //! the same factor is used, fixed, for every other picture of the scene
 //! (its other views, and single scattering), so they compare directly.
-
-#[path = "paper_figures/plot.rs"]
-mod plot;
+//!
+//! The line plots are drawn by the workspace's `sora-plot` crate, which
+//! also draws `sora retrieve --plot`.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -67,6 +67,11 @@ use sora::sun_position::{Location, Refraction, SunPosition, parse_time_utc};
 use sora::{
     ImageSettings, Irradiance, Method, Plane, Polarisation, Scattering, Sky, ViewDirection,
 };
+use sora_plot::{Axis, LinePlot, Series};
+
+/// Image pixels per font pixel of the line plots' text (12-pixel
+/// characters, sora-plot's 8 x 8 font).
+const TEXT_SCALE: f64 = 1.5;
 
 type Result<T> = std::result::Result<T, Box<dyn std::error::Error>>;
 
@@ -315,42 +320,44 @@ fn twilight_brightness(out: &Path, grid: &WavelengthGrid) -> Result<()> {
         vec![(elevation, low.log10()), (elevation, high.log10())]
     };
     let mut series = vec![
-        plot::Series {
-            label: "HORIZONTAL ILLUMINANCE (LX)".into(),
-            colour: [200, 60, 40],
-            dashed: false,
-            points: illuminance,
-        },
-        plot::Series {
-            label: "ZENITH LUMINANCE (CD/M2)".into(),
-            colour: [40, 90, 200],
-            dashed: false,
-            points: luminance,
-        },
+        Series::curve(
+            "HORIZONTAL ILLUMINANCE (LX)",
+            [200, 60, 40],
+            false,
+            illuminance,
+        ),
+        Series::curve("ZENITH LUMINANCE (CD/M2)", [40, 90, 200], false, luminance),
     ];
     for (label, elevation, low, high) in [
         ("CLASSIC: 400-700 LX AT 0", 0.0, 400.0, 700.0),
         ("CLASSIC: 2-4 LX AT -6", -6.0, 2.0, 4.0),
         ("CLASSIC: ABOUT 0.01 LX AT -12", -12.0, 0.007, 0.013),
     ] {
-        series.push(plot::Series {
-            label: label.into(),
-            colour: [0, 0, 0],
-            dashed: false,
-            points: classic(elevation, low, high),
-        });
+        series.push(Series::curve(
+            label,
+            [0, 0, 0],
+            false,
+            classic(elevation, low, high),
+        ));
     }
-    let figure = plot::LinePlot {
+    let figure = LinePlot {
         title: "TWILIGHT, EARTH-CLEAR, FAST METHOD, ALL ORDERS".into(),
-        x_label: "SUN ELEVATION (DEG)".into(),
-        y_label: "LOG10 OF THE VALUE".into(),
-        x_range: (-18.5, 10.5),
+        x: Axis::linear(
+            "SUN ELEVATION (DEG)",
+            (-18.5, 10.5),
+            (0..7).map(|k| -18.0 + 4.0 * k as f64),
+            0,
+        ),
         // Room above the curves for the legend.
-        y_range: (-6.0, 9.0),
-        x_ticks: ((0..7).map(|k| -18.0 + 4.0 * k as f64).collect(), 0),
-        y_ticks: ((0..7).map(|k| -6.0 + 2.0 * k as f64).collect(), 0),
+        y: Axis::linear(
+            "LOG10 OF THE VALUE",
+            (-6.0, 9.0),
+            (0..7).map(|k| -6.0 + 2.0 * k as f64),
+            0,
+        ),
         series,
         notes: vec!["BELOW -12 DEG THE METHOD IS NOT VALIDATED".into()],
+        text_scale: TEXT_SCALE,
     };
     let (w, h, data) = figure.render(900, 640).into_rgb8();
     let path = out.join("twilight_brightness.png");
@@ -465,29 +472,36 @@ fn polarisation_principal_plane(out: &Path) -> Result<()> {
                     }
                 }
             }
-            series.push(plot::Series {
-                label: format!("SUN {sun_elevation} DEG, {}", scattering.to_uppercase()),
+            series.push(Series::curve(
+                format!("SUN {sun_elevation} DEG, {}", scattering.to_uppercase()),
                 colour,
                 dashed,
                 points,
-            });
+            ));
         }
     }
     let path = out.join("polarisation_principal_plane.csv");
     std::fs::write(&path, csv)?;
     wrote(&path, "polarisation along the principal plane", started);
     notes.push("SOLID: ALL ORDERS (PATH TRACER), DASHED: SINGLE".into());
-    let figure = plot::LinePlot {
+    let figure = LinePlot {
         title: "DEGREE OF POLARISATION, SUN'S VERTICAL, RAYLEIGH SKY, 550 NM".into(),
-        x_label: "DEGREES FROM THE HORIZON UNDER THE SUN (ZENITH AT 90)".into(),
-        y_label: "-Q / I".into(),
-        x_range: (0.0, 180.0),
+        x: Axis::linear(
+            "DEGREES FROM THE HORIZON UNDER THE SUN (ZENITH AT 90)",
+            (0.0, 180.0),
+            (0..7).map(|k| 30.0 * k as f64),
+            0,
+        ),
         // Room above the curves for the legend.
-        y_range: (-0.2, 2.0),
-        x_ticks: ((0..7).map(|k| 30.0 * k as f64).collect(), 0),
-        y_ticks: ((0..7).map(|k| -0.2 + 0.2 * k as f64).collect(), 1),
+        y: Axis::linear(
+            "-Q / I",
+            (-0.2, 2.0),
+            (0..7).map(|k| -0.2 + 0.2 * k as f64),
+            1,
+        ),
         series,
         notes,
+        text_scale: TEXT_SCALE,
     };
     let (w, h, data) = figure.render(900, 640).into_rgb8();
     let path = out.join("polarisation_principal_plane.png");
@@ -601,17 +615,19 @@ fn table1_spectrum(out: &Path, grid: &WavelengthGrid) -> Result<()> {
             .map(|(w, v)| (w, v / scale))
             .collect()
     };
-    let plot = |series: Vec<plot::Series>, y_label: &str, notes: Vec<String>| plot::LinePlot {
+    let plot = |series: Vec<Series>, y_label: &str, notes: Vec<String>| LinePlot {
         title: "TABLE 1: SUN 36 DEG / AZ 207, VIEW 17 DEG / AZ 347".into(),
-        x_label: "WAVELENGTH (NM)".into(),
-        y_label: y_label.into(),
-        x_range: (370.0, 790.0),
+        x: Axis::linear(
+            "WAVELENGTH (NM)",
+            (370.0, 790.0),
+            (0..8).map(|k| 400.0 + 50.0 * k as f64),
+            0,
+        ),
         // Room above the curves for the legend.
-        y_range: (0.0, 1.65),
-        x_ticks: ((0..8).map(|k| 400.0 + 50.0 * k as f64).collect(), 0),
-        y_ticks: ((0..6).map(|k| 0.2 * k as f64).collect(), 1),
+        y: Axis::linear(y_label, (0.0, 1.65), (0..6).map(|k| 0.2 * k as f64), 1),
         series,
         notes,
+        text_scale: TEXT_SCALE,
     };
     // 1. Single beside multiple scattering, for the paper's atmosphere and
     // sun and for the physical Earth: each pair divided by the maximum of
@@ -627,12 +643,12 @@ fn table1_spectrum(out: &Path, grid: &WavelengthGrid) -> Result<()> {
         for (scattering, spectrum, dashed) in
             [("MULTIPLE", multiple, false), ("SINGLE", single, true)]
         {
-            series.push(plot::Series {
-                label: format!("{name}, {scattering} SCATTERING"),
-                colour: *colour,
+            series.push(Series::curve(
+                format!("{name}, {scattering} SCATTERING"),
+                *colour,
                 dashed,
-                points: curve(spectrum, scale),
-            });
+                curve(spectrum, scale),
+            ));
         }
     }
     let figure = plot(
@@ -660,12 +676,12 @@ fn table1_spectrum(out: &Path, grid: &WavelengthGrid) -> Result<()> {
             if *key == "earth_clear" && dashed {
                 continue;
             }
-            series.push(plot::Series {
-                label: format!("{label}{scattering}"),
-                colour: *colour,
+            series.push(Series::curve(
+                format!("{label}{scattering}"),
+                *colour,
                 dashed,
-                points: curve(spectrum, spectrum.max_value()),
-            });
+                curve(spectrum, spectrum.max_value()),
+            ));
         }
     }
     let figure = plot(
