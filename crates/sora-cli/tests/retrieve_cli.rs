@@ -473,6 +473,25 @@ fn filters_and_the_index_per_wavelength_are_taken_and_a_filter_off_the_channels_
     assert!(header(&[]));
     assert!(header(&["--index-per-wavelength"]));
     assert!(!header(&["--one-index"]));
+    // Both at once: clap's argument error (status 2) before any work.
+    let both = sora(&[
+        "retrieve",
+        "--radiances",
+        input,
+        "--one-index",
+        "--index-per-wavelength",
+    ]);
+    assert_eq!(both.status.code(), Some(2), "{both:?}");
+    let stderr = String::from_utf8_lossy(&both.stderr);
+    assert!(
+        stderr
+            .lines()
+            .next()
+            .unwrap_or_default()
+            .contains("the argument '--one-index' cannot be used with"),
+        "{stderr}"
+    );
+    assert!(both.stdout.is_empty());
 
     let error = one_line_error(&sora(&[
         "retrieve",
