@@ -447,18 +447,18 @@ fn filters_and_the_index_per_wavelength_are_taken_and_a_filter_off_the_channels_
             .collect()
     };
     // `cimel` takes its channels that cover the measured 440 and 680 nm
-    // (cimel-440, cimel-675); one index (the default): the same n and k at
+    // (cimel-440, cimel-675); one index (--one-index): the same n and k at
     // both.
-    let filtered = spectral(&["--filter", "cimel"]);
+    let filtered = spectral(&["--filter", "cimel", "--one-index"]);
     assert_eq!(filtered.len(), 2);
     assert_eq!((filtered[0].0, filtered[1].0), (440.0, 680.0));
     assert_eq!(
         (filtered[0].1, filtered[0].2),
         (filtered[1].1, filtered[1].2)
     );
-    // An index per wavelength: each its own (two channels, no smoothness
-    // prior under three).
-    let per_wavelength = spectral(&["--index-per-wavelength"]);
+    // An index per wavelength (the default): each its own (two channels:
+    // only n's slope has a prior, no curvature under three).
+    let per_wavelength = spectral(&[]);
     assert_ne!(
         (per_wavelength[0].1, per_wavelength[0].2),
         (per_wavelength[1].1, per_wavelength[1].2)
@@ -470,8 +470,28 @@ fn filters_and_the_index_per_wavelength_are_taken_and_a_filter_off_the_channels_
         let header = table.lines().find(|l| l.contains("wavelength nm")).unwrap();
         header.ends_with("refr. index, real part    refr. index, imag. part")
     };
+    assert!(header(&[]));
     assert!(header(&["--index-per-wavelength"]));
-    assert!(!header(&[]));
+    assert!(!header(&["--one-index"]));
+    // Both at once: clap's argument error (status 2) before any work.
+    let both = sora(&[
+        "retrieve",
+        "--radiances",
+        input,
+        "--one-index",
+        "--index-per-wavelength",
+    ]);
+    assert_eq!(both.status.code(), Some(2), "{both:?}");
+    let stderr = String::from_utf8_lossy(&both.stderr);
+    assert!(
+        stderr
+            .lines()
+            .next()
+            .unwrap_or_default()
+            .contains("the argument '--one-index' cannot be used with"),
+        "{stderr}"
+    );
+    assert!(both.stdout.is_empty());
 
     let error = one_line_error(&sora(&[
         "retrieve",

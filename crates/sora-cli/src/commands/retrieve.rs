@@ -37,8 +37,9 @@ use crate::json::Members;
 ///
 /// The model's assumptions: the particles are spheres (Mie theory; dust's
 /// spheroids are not), with one complex refractive index for both modes
-/// and every wavelength (--index-per-wavelength: one per wavelength, smooth
-/// in wavelength, as AERONET's inversion has); the size distribution is two log-normal volume
+/// per wavelength, smooth in wavelength as AERONET's inversion has it (n
+/// nearly flat, k along a smooth curve; --one-index: one for every
+/// wavelength); the size distribution is two log-normal volume
 /// modes (fine and coarse); the aerosol lies in one exponential layer
 /// (--aerosol-scale-height-m); light is scalar (polarisation changes
 /// radiances by up to a few per cent); the air, ozone and ground are the
@@ -224,11 +225,16 @@ pub struct RetrieveArgs {
     #[arg(long, value_name = "FILE.csv|NAME")]
     filter: Vec<String>,
 
-    /// Fit a refractive index per wavelength, smooth in wavelength (a
-    /// second-difference prior, as AERONET's inversion has), instead of one
-    /// for every wavelength (docs/retrieval.md)
+    /// Fit a refractive index per wavelength, smooth in wavelength (the
+    /// default; smoothness priors across the channels, as AERONET's
+    /// inversion has: docs/retrieval.md)
     #[arg(long)]
     index_per_wavelength: bool,
+
+    /// Fit one refractive index for every wavelength instead of one per
+    /// wavelength
+    #[arg(long, conflicts_with = "index_per_wavelength")]
+    one_index: bool,
 
     /// Starting points of the fit (fine-dominated, coarse-dominated, the a
     /// priori); the lowest chi^2 wins
@@ -326,10 +332,11 @@ pub fn run(args: RetrieveArgs) -> anyhow::Result<()> {
                 1.0
             },
         ),
-        index: if args.index_per_wavelength {
-            IndexSpectrum::PerWavelength
-        } else {
+        // The two flags conflict: --index-per-wavelength is the default's name.
+        index: if args.one_index && !args.index_per_wavelength {
             IndexSpectrum::One
+        } else {
+            IndexSpectrum::PerWavelength
         },
         filters: Vec::new(),
     };
@@ -625,7 +632,7 @@ fn table(retrievals: &[(usize, Retrieval)]) -> String {
             );
         }
         // The index's columns only where it differs between wavelengths
-        // (`--index-per-wavelength`); one index is the state's lines above.
+        // (by default); one index (`--one-index`) is the state's lines above.
         let index_varies = r.spectral.windows(2).any(|pair| {
             let index = |s: &SpectralOptics| {
                 (

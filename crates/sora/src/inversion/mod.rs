@@ -104,14 +104,10 @@ pub struct RetrievalSettings {
     /// an instrument that wide sees them (10 nm: the Cimel channels at
     /// 440-1020 nm, `spectrum::CIMEL_CHANNELS`); 0.01..=50.
     pub band_nm: f64,
-    /// The refractive index: one for every wavelength (the default), or one
-    /// n + ik per measured wavelength, smooth in wavelength (a
-    /// second-difference prior across the channels, as AERONET's inversion
-    /// has, Dubovik & King 2000; see [`IndexSpectrum`]). Not yet the
-    /// default: on the validation set's case 1 (a weakly absorbing fine
-    /// aerosol) the per-wavelength fit trades n's spectrum against the fine
-    /// radius and misses the fine effective radius bar (-18.6 % against
-    /// 15 %; docs/retrieval.md).
+    /// The refractive index: one n + ik per measured wavelength, smooth in
+    /// wavelength (the default: a smoothness prior across the channels, as
+    /// AERONET's inversion has, Dubovik & King 2000; see
+    /// [`IndexSpectrum`]), or one for every wavelength.
     pub index: IndexSpectrum,
     /// Instrument channels (docs/filters.md): each measured wavelength
     /// inside a filter's support (the nearest to its weighted centre) is
@@ -130,7 +126,10 @@ pub enum IndexSpectrum {
     /// estimated by the second divided differences of consecutive channels,
     /// have a priori standard deviations [`SMOOTHNESS_SIGMA_N`] and
     /// [`SMOOTHNESS_SIGMA_LN_K`] (a straight line in ln lambda costs
-    /// nothing; a power law k ~ lambda^p is such a line in ln k).
+    /// nothing; a power law k ~ lambda^p is such a line in ln k), and n's
+    /// first derivative, estimated by the first divided difference of each
+    /// two consecutive channels, [`SMOOTHNESS_SIGMA_SLOPE_N`]: n may vary a
+    /// little with wavelength, k freely along a smooth curve. The default.
     PerWavelength,
     /// One n and one k for every wavelength.
     One,
@@ -141,6 +140,16 @@ pub enum IndexSpectrum {
 /// Aerosols' n varies by a few hundredths over 440-1020 nm: a curvature of
 /// 0.5 over that span (0.84 in ln lambda) bends n by about 0.04.
 pub const SMOOTHNESS_SIGMA_N: f64 = 0.5;
+
+/// A priori standard deviation of dn / d(ln lambda) between consecutive
+/// channels. Aerosols' n changes by a few hundredths at most over
+/// 440-1020 nm (water 1.337 to 1.327), below the retrieval's bar for n
+/// (0.04), and an almucantar cannot tell n's slope from the fine mode's
+/// size (docs/retrieval.md: without this prior, the validation set's
+/// case 1 missed the fine effective radius by 18.6 %), so n is held
+/// nearly flat: at 440/675/870/1020 nm a slope s costs 3 (s / 0.01)^2, so
+/// 1 sigma is a change of n of about 0.005 over the span.
+pub const SMOOTHNESS_SIGMA_SLOPE_N: f64 = 0.01;
 
 /// A priori standard deviation of d^2 ln k / d(ln lambda)^2 between
 /// consecutive channels. Dust's k (falling steeply from 440 to 675 nm,
@@ -155,7 +164,7 @@ impl Default for RetrievalSettings {
             max_iterations: 30,
             starting_points: 2,
             band_nm: 1.0,
-            index: IndexSpectrum::One,
+            index: IndexSpectrum::PerWavelength,
             filters: Vec::new(),
         }
     }
@@ -561,23 +570,22 @@ struct Layout {
 /// The state's parameters before the refractive index.
 const SHARED_PARAMETERS: usize = 6;
 
-/// One row of the smoothness prior: c . (n or ln k at three consecutive
-/// wavelengths) / sigma, the estimate of the second derivative with respect
-/// to ln lambda in units of its a priori standard deviation.
+/// One row of the smoothness prior: c . (n or ln k at consecutive
+/// wavelengths) / sigma, the estimate of a derivative with respect to
+/// ln lambda in units of its a priori standard deviation.
 #[derive(Debug, Clone)]
 struct SmoothnessRow {
     first: usize,
-    coefficients: [f64; 3],
+    coefficients: Vec<f64>,
     imaginary: bool,
 }
 
 impl SmoothnessRow {
     fn evaluate(&self, indices: &[Complex64]) -> f64 {
-        (0..3)
-            .map(|j| {
-                let m = indices[self.first + j];
-                self.coefficients[j] * if self.imaginary { m.im.ln() } else { m.re }
-            })
+        self.coefficients
+            .iter()
+            .zip(&indices[self.first..])
+            .map(|(c, m)| c * if self.imaginary { m.im.ln() } else { m.re })
             .sum()
     }
 }
@@ -660,28 +668,37 @@ impl Layout {
         (AerosolState::from_fit(&t8), indices)
     }
 
-    /// The smoothness prior's rows (none for one index or under three
-    /// wavelengths): for each three consecutive wavelengths, the second
-    /// divided difference in x = ln lambda,
+    /// The smoothness prior's rows (none for one index or one wavelength):
+    /// for each three consecutive wavelengths, the second divided
+    /// difference in x = ln lambda,
     /// 2 [(f2 - f1)/(x2 - x1) - (f1 - f0)/(x1 - x0)] / (x2 - x0),
-    /// of n and of ln k, over its a priori standard deviation.
+    /// of n and of ln k, and for each two, n's first divided difference
+    /// (n1 - n0)/(x1 - x0), each over its a priori standard deviation.
     fn smoothness_rows(&self, wavelengths_nm: &[f64]) -> Vec<SmoothnessRow> {
-        if !self.per_wavelength || wavelengths_nm.len() < 3 {
+        if !self.per_wavelength || wavelengths_nm.len() < 2 {
             return Vec::new();
         }
         let x: Vec<f64> = wavelengths_nm.iter().map(|w| w.ln()).collect();
         let mut rows = Vec::new();
         for (imaginary, sigma) in [(false, SMOOTHNESS_SIGMA_N), (true, SMOOTHNESS_SIGMA_LN_K)] {
-            for first in 0..x.len() - 2 {
+            for first in 0..x.len().saturating_sub(2) {
                 let (x0, x1, x2) = (x[first], x[first + 1], x[first + 2]);
                 let a = 2.0 / ((x1 - x0) * (x2 - x0));
                 let c = 2.0 / ((x2 - x1) * (x2 - x0));
                 rows.push(SmoothnessRow {
                     first,
-                    coefficients: [a / sigma, -(a + c) / sigma, c / sigma],
+                    coefficients: vec![a / sigma, -(a + c) / sigma, c / sigma],
                     imaginary,
                 });
             }
+        }
+        for first in 0..x.len() - 1 {
+            let d = 1.0 / ((x[first + 1] - x[first]) * SMOOTHNESS_SIGMA_SLOPE_N);
+            rows.push(SmoothnessRow {
+                first,
+                coefficients: vec![-d, d],
+                imaginary: false,
+            });
         }
         rows
     }
