@@ -241,7 +241,8 @@ impl TryFrom<String> for CameraChoice {
 #[serde(rename_all = "snake_case")]
 pub enum Quality {
     /// What a slider drag shows at once: every 40 nm, a coarse
-    /// multiple-scattering field and small image tables.
+    /// multiple-scattering field and small image tables, in scalar light
+    /// (see [`crate::engine::build_sky`]).
     Preview,
     /// What the page refines to: the library's defaults but a sky-view
     /// table half as fine on each axis (enough for images up to 512 pixels
