@@ -33,6 +33,17 @@ mod threads;
 fn _sora(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_class::<atmosphere::Atmosphere>()?;
     module.add_class::<sky::Sky>()?;
+    // The library's camera defaults, which `Sky.render`'s signature shows
+    // as literals (tests/test_sky.py holds them equal).
+    use sora::camera::PerspectiveCamera;
+    module.add(
+        "PERSPECTIVE_DEFAULTS",
+        (
+            PerspectiveCamera::DEFAULT_ELEVATION_DEG,
+            PerspectiveCamera::DEFAULT_AZIMUTH_DEG,
+            PerspectiveCamera::DEFAULT_FOV_DEG,
+        ),
+    )?;
     module.add_function(wrap_pyfunction!(threads::set_num_threads, module)?)?;
     module.add_function(wrap_pyfunction!(threads::get_num_threads, module)?)?;
     module.add_function(wrap_pyfunction!(mie::mie_efficiencies, module)?)?;

@@ -419,13 +419,18 @@ impl Sky {
                 views.len()
             )));
         }
-        let segments: Vec<(ViewDirection, f64)> =
-            views.iter().copied().zip(distances.iter().copied()).collect();
+        let segments: Vec<(ViewDirection, f64)> = views
+            .iter()
+            .copied()
+            .zip(distances.iter().copied())
+            .collect();
         let results =
             run_detached(py, || self.inner.aerial_perspectives(&segments))?.map_err(to_py_err)?;
         let wavelengths = self.inner.wavelengths().len();
         let shape = (views.len(), wavelengths);
-        let mut parts = vec![Vec::with_capacity(views.len() * wavelengths); 4];
+        let mut parts: Vec<Vec<_>> = (0..4)
+            .map(|_| Vec::with_capacity(views.len() * wavelengths))
+            .collect();
         for ap in &results {
             parts[0].extend_from_slice(ap.radiance.radiance_w_m2_sr_nm.values());
             parts[1].extend_from_slice(ap.transmittance.values());
@@ -505,21 +510,23 @@ impl Sky {
         ))
     }
 
-    /// An image: `output` 'xyz' (height, width, 3; CIE 1931 XYZ),
+    /// An image, `width` x `height` pixels (default 512 x 512; 1024 x 512
+    /// for 'equirectangular'; with only a width, the height is the width,
+    /// half of it for 'equirectangular'): `output` 'xyz' (height, width, 3; CIE 1931 XYZ),
     /// 'linear-srgb' (height, width, 3), 'spectral' (height, width,
     /// wavelengths; W m^-2 sr^-1 nm^-1) or, for a vector sky, 'stokes-xyz'
     /// (height, width, 4, 3: the XYZ of I, Q, U, V); black outside a
     /// fisheye's circle.
     #[allow(clippy::too_many_arguments)]
     #[pyo3(signature = (
-        camera="fisheye", width=512, height=None, output="xyz", draw_sun_disc=true,
+        camera="fisheye", width=None, height=None, output="xyz", draw_sun_disc=true,
         look_elevation_deg=10.0, look_azimuth_deg=180.0, fov_deg=90.0
     ))]
     fn render<'py>(
         &self,
         py: Python<'py>,
         camera: &str,
-        width: i64,
+        width: Option<i64>,
         height: Option<i64>,
         output: &str,
         draw_sun_disc: bool,
@@ -529,15 +536,14 @@ impl Sky {
     ) -> PyResult<Bound<'py, PyAny>> {
         let camera = camera_from_name(camera, (look_elevation_deg, look_azimuth_deg), fov_deg)?;
         // The library's range check and message, as `sora render --width`'s.
-        let width = sora::sky::image_side("image width", width).map_err(to_py_err)?;
-        let height = height
-            .map(|h| sora::sky::image_side("image height", h))
-            .transpose()
-            .map_err(to_py_err)?;
-        let height = height.unwrap_or(match camera {
-            Camera::Equirectangular => width.div_ceil(2),
-            _ => width,
-        });
+        // The library's default sizes, as `sora render`'s.
+        let side = |name, side: Option<i64>| {
+            side.map(|s| sora::sky::image_side(name, s))
+                .transpose()
+                .map_err(to_py_err)
+        };
+        let width = side("image width", width)?.unwrap_or(camera.default_width_px());
+        let height = side("image height", height)?.unwrap_or(camera.default_height_px(width));
         let mut image = ImageSettings::new(camera, width, height);
         image.draw_sun_disc = draw_sun_disc;
         let shape = |per_pixel| (height as usize, width as usize, per_pixel);

@@ -94,6 +94,18 @@ def test_equirectangular_default_height(sky):
     assert sky.render(camera="equirectangular", width=16, output="xyz").shape == (8, 16, 3)
 
 
+def test_render_defaults_are_the_librarys_and_the_clis(atmosphere):
+    import inspect
+
+    parameters = inspect.signature(sora.Sky.render).parameters
+    shown = tuple(parameters[name].default for name in ("look_elevation_deg", "look_azimuth_deg", "fov_deg"))
+    assert shown == sora._sora.PERSPECTIVE_DEFAULTS == (10.0, 180.0, 90.0)
+    # Image sizes as `sora render`'s: 512 x 512, 1024 x 512 for the panorama.
+    small = sora.Sky(atmosphere, sun_elevation_deg=30, wavelengths_nm="500:600:100", scattering="single")
+    assert small.render(output="xyz").shape == (512, 512, 3)
+    assert small.render(camera="equirectangular", output="xyz").shape == (512, 1024, 3)
+
+
 def test_path_tracing_standard_errors_and_seed(atmosphere):
     def traced(seed, threads):
         sora.set_num_threads(threads)

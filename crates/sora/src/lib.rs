@@ -43,11 +43,10 @@
 //! 5. [`sky`]: the [`Sky`], where single scattering (the paper's eq. 4-5)
 //!    and multiple scattering are composed, for views and images, as
 //!    scalar light or as Stokes vectors ([`Polarisation`]);
-//! 6. [`transport`], the engine underneath it: single scattering, its
-//!    reference march and its tables; the multiple-scattering field; the
-//!    Monte Carlo path tracer. [`Sky`] is its interface (its types are
-//!    public to be named, their constructors and kernels private to the
-//!    crate); its reference tests live beside it;
+//! 6. `transport/`, the engine underneath it, private to the crate:
+//!    single scattering, its reference march and its tables; the
+//!    multiple-scattering field; the Monte Carlo path tracer. [`Sky`] is
+//!    its interface; its reference tests live beside it;
 //! 7. [`colour`]: spectral radiance -> CIE XYZ -> RGB (paper §4, eq. 6),
 //!    exposure and gamut mapping;
 //! 8. [`output`]: images on disk (PNG, OpenEXR), written atomically; the only
@@ -83,7 +82,7 @@ pub mod sky;
 pub mod spectrum;
 pub mod sun_position;
 pub mod table;
-pub mod transport;
+pub(crate) mod transport;
 
 pub use atmosphere::Atmosphere;
 pub use camera::Camera;

@@ -16,6 +16,10 @@
 //!   `-1.5`, `2e-3`) and must be finite (`NaN`, `inf` are refused);
 //! - at least one row.
 //!
+//! The cell rule alone ([`cells`]: split at commas, trim) is also what the
+//! AERONET readers split their lines with: those files are CSV too, but
+//! hold dates and `N/A` beside their numbers.
+//!
 //! Every error is an [`Error::Parse`] naming the table (`what`) and the
 //! 1-based line. Parsing works on `&str`: reading the file is the caller's
 //! business ([`crate::input::read_text`]), so this module stays free of
@@ -52,11 +56,11 @@ impl NumericTable {
         let Some((header_line, header)) = lines.next() else {
             return Err(Error::parse(what, 0, "the table is empty (no header line)"));
         };
-        let column_names: Vec<String> = header.split(',').map(|s| s.trim().to_string()).collect();
+        let column_names: Vec<String> = cells(header).into_iter().map(str::to_string).collect();
         let mut rows = Vec::new();
         let mut line_numbers = Vec::new();
         for (line_number, line) in lines {
-            let fields: Vec<&str> = line.split(',').map(str::trim).collect();
+            let fields = cells(line);
             if fields.len() != column_names.len() {
                 return Err(Error::parse(
                     what,
@@ -100,6 +104,14 @@ impl NumericTable {
     pub fn column(&self, index: usize) -> Vec<f64> {
         self.rows.iter().map(|row| row[index]).collect()
     }
+}
+
+/// The cells of one CSV line in sora's dialect: split at every comma
+/// (no quoting: no cell of a numeric table or of the network's files
+/// holds one), each trimmed. [`NumericTable::parse`] and the AERONET
+/// readers share it.
+pub fn cells(line: &str) -> Vec<&str> {
+    line.split(',').map(str::trim).collect()
 }
 
 #[cfg(test)]

@@ -249,18 +249,8 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     // Any integer parses; the library checks the range (one message for
     // --width -5, --width=-5 and --width 0).
     let side = |name, side: Option<i64>| side.map(|s| sora::sky::image_side(name, s)).transpose();
-    let width =
-        side("image width", args.width)?.unwrap_or(if args.camera == CameraKind::Equirect {
-            1024
-        } else {
-            512
-        });
-    let height =
-        side("image height", args.height)?.unwrap_or(if args.camera == CameraKind::Equirect {
-            width.div_ceil(2)
-        } else {
-            width
-        });
+    let width = side("image width", args.width)?.unwrap_or(camera.default_width_px());
+    let height = side("image height", args.height)?.unwrap_or(camera.default_height_px(width));
     // The limits of docs/limits.md, before any work: the image's sides,
     // the exposure (--ev100), the number of frames.
     sora::sky::check_image_size(width, height)?;

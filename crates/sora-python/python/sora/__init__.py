@@ -619,7 +619,7 @@ class Sky:
     def render(
         self,
         camera: str = "fisheye",
-        width: int = 512,
+        width: Optional[int] = None,
         height: Optional[int] = None,
         output: str = "xyz",
         draw_sun_disc: bool = True,
@@ -646,15 +646,16 @@ class Sky:
         ``"perspective"`` (``look_elevation_deg``, ``look_azimuth_deg``,
         ``fov_deg`` across the width; by default 10 degrees up, toward the
         south, 90 degrees wide, as ``sora render --camera perspective``).
-        ``height`` defaults to ``width``
-        (half of it for equirectangular). Path tracing renders no images.
+        ``width`` defaults to 512 pixels (1024 for equirectangular) and
+        ``height`` to ``width`` (half of it for equirectangular), as
+        ``sora render``'s. Path tracing renders no images.
         """
         # Any 64-bit integer passes here; the library checks the range, with
         # the message of ``sora render --width``.
         low, high = -(2**63), 2**63 - 1
         return self._native.render(
             _checks.text("camera", camera),
-            _checks.integer("width", width, low, high, " (pixels)"),
+            _checks.optional_integer("width", width, low, high, " (pixels)"),
             _checks.optional_integer("height", height, low, high, " (pixels)"),
             _checks.text("output", output),
             _checks.flag("draw_sun_disc", draw_sun_disc),

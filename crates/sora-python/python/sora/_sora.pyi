@@ -98,7 +98,7 @@ class Sky:
     def render(
         self,
         camera: str = "fisheye",
-        width: int = 512,
+        width: Optional[int] = None,
         height: Optional[int] = None,
         output: str = "xyz",
         draw_sun_disc: bool = True,

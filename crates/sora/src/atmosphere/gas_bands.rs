@@ -737,7 +737,7 @@ mod tests {
         // One solve with the effective coefficient (matched to the band
         // model's direct beam at air mass 2) errs more.
         let single_solve = {
-            let scene = crate::transport::SingleScatteringSky::new_with_phase_matrices(
+            let scene = crate::transport::SingleScatteringScene::new_with_phase_matrices(
                 &gases,
                 &grid,
                 crate::transport::Observation {

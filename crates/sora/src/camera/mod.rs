@@ -51,6 +51,29 @@ impl Camera {
     }
 }
 
+impl Camera {
+    /// The image width a front end draws when none is given, pixels: 512,
+    /// and 1024 for the equirectangular panorama (its height is half its
+    /// width, [`Camera::default_height_px`]). `sora render` and Python's
+    /// `Sky.render` share it.
+    pub fn default_width_px(&self) -> u32 {
+        match self {
+            Camera::Equirectangular => 1024,
+            Camera::Fisheye | Camera::Perspective(_) => 512,
+        }
+    }
+
+    /// The image height for `width` when none is given, pixels: half the
+    /// width (rounded up) for the equirectangular panorama, 360 x 180
+    /// degrees with square pixels; the width otherwise.
+    pub fn default_height_px(&self, width: u32) -> u32 {
+        match self {
+            Camera::Equirectangular => width.div_ceil(2),
+            Camera::Fisheye | Camera::Perspective(_) => width,
+        }
+    }
+}
+
 impl std::fmt::Display for Camera {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(self.name())

@@ -33,7 +33,7 @@ use crate::mie::Complex64;
 use crate::mie::ensemble::TabulatedPhaseFunction;
 use crate::sky::{FastTableSize, Method, MultipleScatteringSettings, Scattering, Sky};
 use crate::spectrum::{Filter, SampledSpectrum, WavelengthGrid};
-use crate::transport::{Observation, SingleScatteringSky};
+use crate::transport::{Observation, SingleScatteringScene};
 
 /// The multiple-scattering solver of the forward model: the default's 8
 /// streams per hemisphere, with 20 layers instead of 40 and 8 panels per
@@ -129,7 +129,7 @@ pub(crate) struct ForwardModel {
     /// which no evaluation changes, and at a low sun (where the first
     /// order and the forward peak read them) building one took 70 % of a
     /// retrieval's time when each sky built its own.
-    column_tables: OnceLock<SingleScatteringSky>,
+    column_tables: OnceLock<SingleScatteringScene>,
     /// How many times the radiances and the kernels were computed.
     pub(crate) evaluations: AtomicUsize,
     pub(crate) kernel_computations: AtomicUsize,
@@ -372,7 +372,7 @@ impl ForwardModel {
 
     /// The radiances of one group's views.
     fn group_radiances(&self, group: &SkyGroup, aerosol: &AerosolOptics) -> Result<Vec<f64>> {
-        let scene = SingleScatteringSky::from_optics(
+        let scene = SingleScatteringScene::from_optics(
             self.optics_at(group.wavelength, aerosol),
             self.ground_radius_m,
             self.top_radius_m,

@@ -414,7 +414,7 @@ impl Sky {
         // Views in groups, each group with its own buffers; each view's
         // values are I, then Q, U and V when polarised (single scattering
         // of unpolarised sunlight has no V: see
-        // `SingleScatteringSky::polarised_radiance_from_integrals`).
+        // `SingleScatteringScene::polarised_radiance_from_integrals`).
         for view in views {
             self.check_within_restricted_field(Some(view.elevation_deg()))?;
         }

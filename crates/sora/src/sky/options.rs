@@ -11,7 +11,7 @@ use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::spectrum::WavelengthGrid;
 use crate::transport::multiple_scattering::MultipleScatteringSettings;
-use crate::transport::{Observation, SingleScatteringSky};
+use crate::transport::{Observation, SingleScatteringScene};
 
 /// Which orders of scattering a sky has.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -355,7 +355,7 @@ impl SkyBuilder<'_> {
         let polarisation = self
             .polarisation
             .unwrap_or(Polarisation::for_method(self.method));
-        let scene = SingleScatteringSky::new_with_phase_matrices(
+        let scene = SingleScatteringScene::new_with_phase_matrices(
             atmosphere,
             &self.wavelengths,
             self.observation,

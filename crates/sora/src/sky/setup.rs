@@ -16,13 +16,13 @@ use crate::spectrum::{SampledSpectrum, WavelengthGrid};
 use crate::transport::multiple_scattering::{
     FieldRequest, MultipleScatteringField, MultipleScatteringTable, PolarisationTable,
 };
-use crate::transport::{PathTracer, SingleScatteringSky, SkyViewTable, SunColumns};
+use crate::transport::{PathTracer, SingleScatteringScene, SkyViewTable, SunColumns};
 
 /// A sky: an atmosphere on a wavelength grid, the sun, the eye, and the
 /// choice of physics and method (see the module docs).
 #[derive(Debug)]
 pub struct Sky {
-    pub(super) scene: SingleScatteringSky,
+    pub(super) scene: SingleScatteringScene,
     /// Sun elevation and azimuth, degrees.
     pub(super) sun_position_deg: (f64, f64),
     pub(super) scattering: Scattering,
@@ -65,7 +65,7 @@ const POLARISATION_TABLE_NODES: (usize, usize) = (24, 48);
 impl Sky {
     /// A sky from a scene already on its grid (optics, planet, eye, sun).
     pub(crate) fn from_scene(
-        scene: SingleScatteringSky,
+        scene: SingleScatteringScene,
         scattering: Scattering,
         method: Method,
         table_size: FastTableSize,
@@ -210,7 +210,7 @@ impl Sky {
     }
 
     /// The scene (optics, planet, eye, sun) this sky is built on.
-    pub(crate) fn scene(&self) -> &SingleScatteringSky {
+    pub(crate) fn scene(&self) -> &SingleScatteringScene {
         &self.scene
     }
 

@@ -19,7 +19,7 @@ use crate::error::Result;
 use crate::transport::multiple_scattering::{
     FieldRequest, MultipleScatteringField, MultipleScatteringTable,
 };
-use crate::transport::single_scattering::SingleScatteringSky;
+use crate::transport::single_scattering::SingleScatteringScene;
 
 /// A field solved for every sun zenith angle, with its source table.
 #[derive(Debug, Clone)]
@@ -50,7 +50,7 @@ impl Sky {
     /// at its eye and sun, not solved anew.
     pub(crate) fn with_shared_field(
         &self,
-        scene: SingleScatteringSky,
+        scene: SingleScatteringScene,
         shared: Option<&SharedField>,
     ) -> Result<Sky> {
         let sky = Sky::from_scene(scene, self.scattering, self.method, self.table_size())?;

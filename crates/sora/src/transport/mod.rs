@@ -40,6 +40,6 @@ pub(crate) mod vector_exp;
 
 pub use path_tracing::PathTracer;
 pub use single_scattering::{
-    Observation, SingleScatteringScratch, SingleScatteringSky, SunColumns,
+    Observation, SingleScatteringScene, SingleScatteringScratch, SunColumns,
 };
 pub use sky_view_table::SkyViewTable;

@@ -21,11 +21,11 @@
 //! is a point (parallel rays) for the sky; its disc is drawn separately.
 //!
 //! Two ways to compute it, kept side by side (the RustFFT habit):
-//! - the **reference path**, [`SingleScatteringSky::compute_radiance_reference`]:
+//! - the **reference path**, [`SingleScatteringScene::compute_radiance_reference`]:
 //!   the paper's method: a uniform midpoint march along the view ray, and at
 //!   every sample a second uniform march toward the sun. Obviously right,
 //!   second-order in the step, slow.
-//! - the **fast path**, [`SingleScatteringSky::compute_radiance`]: with
+//! - the **fast path**, [`SingleScatteringScene::compute_radiance`]: with
 //!   parallel sun rays theta is the same along the whole view ray, so the
 //!   phase functions come out of the integral:
 //!   L = E sum_j beta_sca,j p_j(theta) I_j with
@@ -157,7 +157,7 @@ impl SunColumns<'_> {
 /// An atmosphere on a wavelength grid, seen from one place with the sun in
 /// one place: everything single scattering needs, precomputed.
 #[derive(Debug, Clone)]
-pub struct SingleScatteringSky {
+pub struct SingleScatteringScene {
     optics: AtmosphereOptics,
     ground_radius_m: f64,
     top_radius_m: f64,
@@ -174,7 +174,7 @@ pub struct SingleScatteringSky {
     corners: ProfileCorners,
     /// The sun-column tables built so far, by size: they depend on the
     /// profiles and radii only, so every sky moved to another sun
-    /// ([`SingleScatteringSky::with_sun`]) shares them.
+    /// ([`SingleScatteringScene::with_sun`]) shares them.
     sun_column_tables: Arc<Mutex<Vec<Arc<SunColumnTable>>>>,
     /// The polarisation correction's image-table harmonics computed so far
     /// (`ViewHarmonicsCache`): they depend on the optics and not on the
@@ -221,30 +221,30 @@ impl SingleScatteringScratch {
     }
 }
 
-impl SingleScatteringSky {
+impl SingleScatteringScene {
     /// Puts `atmosphere` on `grid` and places the eye and the sun.
     #[cfg(test)]
     pub(crate) fn new(
         atmosphere: &Atmosphere,
         grid: &WavelengthGrid,
         observation: Observation,
-    ) -> Result<SingleScatteringSky> {
-        SingleScatteringSky::new_with_phase_matrices(atmosphere, grid, observation, false)
+    ) -> Result<SingleScatteringScene> {
+        SingleScatteringScene::new_with_phase_matrices(atmosphere, grid, observation, false)
     }
 
-    /// [`SingleScatteringSky::new`], with the Mie species' phase matrices
+    /// [`SingleScatteringScene::new`], with the Mie species' phase matrices
     /// when `phase_matrices` (for polarised skies).
     pub(crate) fn new_with_phase_matrices(
         atmosphere: &Atmosphere,
         grid: &WavelengthGrid,
         observation: Observation,
         phase_matrices: bool,
-    ) -> Result<SingleScatteringSky> {
+    ) -> Result<SingleScatteringScene> {
         let mut optics = atmosphere.compute_optics(grid)?;
         if phase_matrices {
             atmosphere.add_phase_matrices(&mut optics)?;
         }
-        SingleScatteringSky::from_optics(
+        SingleScatteringScene::from_optics(
             optics,
             atmosphere.planet.radius_m(),
             atmosphere.planet.top_radius_m(),
@@ -260,7 +260,7 @@ impl SingleScatteringSky {
         top_radius_m: f64,
         sun_angular_radius_rad: f64,
         observation: Observation,
-    ) -> Result<SingleScatteringSky> {
+    ) -> Result<SingleScatteringScene> {
         let Observation {
             observer_altitude_m,
             sun_elevation_deg,
@@ -282,7 +282,7 @@ impl SingleScatteringSky {
         let profiles: Vec<DensityProfile> =
             optics.species.iter().map(|s| s.profile.clone()).collect();
         let corners = ProfileCorners::new(&profiles, ground_radius_m, top_radius_m);
-        Ok(SingleScatteringSky {
+        Ok(SingleScatteringScene {
             optics,
             profiles,
             corners,
@@ -303,8 +303,8 @@ impl SingleScatteringSky {
         &self,
         sun_elevation_deg: f64,
         sun_azimuth_deg: f64,
-    ) -> Result<SingleScatteringSky> {
-        let moved = SingleScatteringSky::from_optics(
+    ) -> Result<SingleScatteringScene> {
+        let moved = SingleScatteringScene::from_optics(
             self.optics.clone(),
             self.ground_radius_m,
             self.top_radius_m,
@@ -315,7 +315,7 @@ impl SingleScatteringSky {
                 sun_azimuth_deg,
             },
         )?;
-        Ok(SingleScatteringSky {
+        Ok(SingleScatteringScene {
             sun_column_tables: Arc::clone(&self.sun_column_tables),
             view_harmonics: Arc::clone(&self.view_harmonics),
             ..moved
@@ -330,7 +330,7 @@ impl SingleScatteringSky {
         altitude_m: f64,
         sun_elevation_deg: f64,
         sun_azimuth_deg: f64,
-    ) -> Result<SingleScatteringSky> {
+    ) -> Result<SingleScatteringScene> {
         let mut moved = self.with_sun(sun_elevation_deg, sun_azimuth_deg)?;
         if !(altitude_m.is_finite() && altitude_m >= 0.0) {
             return Err(Error::out_of_range(
@@ -462,8 +462,8 @@ impl SingleScatteringSky {
     /// the same table again.
     pub(crate) fn sharing_sun_column_tables_of(
         mut self,
-        other: &SingleScatteringSky,
-    ) -> SingleScatteringSky {
+        other: &SingleScatteringScene,
+    ) -> SingleScatteringScene {
         if self.profiles == other.profiles
             && self.ground_radius_m == other.ground_radius_m
             && self.top_radius_m == other.top_radius_m
@@ -474,7 +474,7 @@ impl SingleScatteringSky {
         self
     }
 
-    /// Work space for [`SingleScatteringSky::compute_radiance`].
+    /// Work space for [`SingleScatteringScene::compute_radiance`].
     pub(crate) fn scratch(&self) -> SingleScatteringScratch {
         let (species, wavelengths) = (self.optics.species.len(), self.optics.grid.len());
         SingleScatteringScratch {
@@ -896,10 +896,10 @@ mod tests {
         };
         let grid = |w| WavelengthGrid::new(w, w, 1.0).unwrap();
         let first =
-            SingleScatteringSky::new(&atmosphere, &grid(440.0), observation(0.0, 10.0)).unwrap();
+            SingleScatteringScene::new(&atmosphere, &grid(440.0), observation(0.0, 10.0)).unwrap();
         let optics = atmosphere.compute_optics(&grid(870.0)).unwrap();
         let sky = |optics: &AtmosphereOptics, altitude_m| {
-            SingleScatteringSky::from_optics(
+            SingleScatteringScene::from_optics(
                 optics.clone(),
                 atmosphere.planet.radius_m(),
                 atmosphere.planet.top_radius_m(),

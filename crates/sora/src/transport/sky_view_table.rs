@@ -9,7 +9,7 @@
 //! point sun the scattering angle is fixed along each view ray, so the
 //! phase functions, which carry all the sharp structure (the aerosol's
 //! forward peak, the Mie glory), are applied exactly per pixel by
-//! `SingleScatteringSky::radiance_from_integrals`. What remains varies
+//! `SingleScatteringScene::radiance_from_integrals`. What remains varies
 //! smoothly with direction, except across the horizon.
 //!
 //! Axes: the view's zenith angle and its azimuth relative to the sun's,
@@ -36,7 +36,7 @@
 
 use super::multiple_scattering::MultipleScatteringTable;
 use super::optical_column::SunColumnTable;
-use super::single_scattering::{SingleScatteringSky, SunColumns};
+use super::single_scattering::{SingleScatteringScene, SunColumns};
 use crate::geometry::Vector3;
 
 /// In-scattering integrals over view directions (see the module docs).
@@ -70,7 +70,7 @@ impl SkyViewTable {
     /// in parallel with the `parallel` feature; the result does not depend
     /// on the thread count.
     pub(crate) fn compute_with_multiple_scattering(
-        sky: &SingleScatteringSky,
+        sky: &SingleScatteringScene,
         sun_columns: &SunColumnTable,
         multiple_scattering: Option<&MultipleScatteringTable>,
         half_zenith_nodes: usize,

@@ -258,7 +258,7 @@ fn split_aeronet_line(line: &str) -> Vec<&str> {
     for wrapper in ["<html><body><div>", "<html><body>"] {
         line = line.strip_prefix(wrapper).unwrap_or(line).trim_start();
     }
-    line.split(',').map(str::trim).collect()
+    crate::table::cells(line)
 }
 
 fn cell<'a>(cells: &[&'a str], index: usize) -> &'a str {

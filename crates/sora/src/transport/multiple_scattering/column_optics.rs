@@ -12,7 +12,7 @@ use crate::atmosphere::AtmosphereOptics;
 use crate::atmosphere::DensityProfile;
 use crate::geometry::Vector3;
 use crate::transport::optical_column::{ProfileCorners, compute_columns_along_ray};
-use crate::transport::single_scattering::SingleScatteringSky;
+use crate::transport::single_scattering::SingleScatteringScene;
 
 /// Panels of the exact column integrals toward the sun from each level.
 pub(super) const SUN_RAY_PANELS: usize = 12;
@@ -82,7 +82,7 @@ pub(super) struct ColumnGeometry {
 
 impl ColumnGeometry {
     pub(super) fn new(
-        sky: &SingleScatteringSky,
+        sky: &SingleScatteringScene,
         settings: &MultipleScatteringSettings,
     ) -> ColumnGeometry {
         let optics = sky.optics();

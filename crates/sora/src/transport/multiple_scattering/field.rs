@@ -25,7 +25,7 @@ use crate::atmosphere::AtmosphereOptics;
 use crate::atmosphere::phase_matrix::PhaseMatrix;
 use crate::error::Result;
 use crate::geometry::Vector3;
-use crate::transport::single_scattering::{SingleScatteringSky, SunColumns};
+use crate::transport::single_scattering::{SingleScatteringScene, SunColumns};
 
 /// Altitude and mu nodes of the sun-column table of the spherical first
 /// order in the tests' fields: the default image tables' size
@@ -99,7 +99,7 @@ impl SunZenithAxis {
     /// eye's, at `settings`' steps; `None`: every sun zenith angle, with no
     /// node placed at the eye's.
     fn for_reach(
-        sky: &SingleScatteringSky,
+        sky: &SingleScatteringScene,
         settings: &MultipleScatteringSettings,
         reach: Option<f64>,
     ) -> SunZenithAxis {
@@ -252,7 +252,7 @@ impl FieldRequest {
 
     /// The angle at the planet's centre (rad) within which the sun zenith
     /// angles the field needs lie around the eye's.
-    fn reach(&self, sky: &SingleScatteringSky) -> Option<f64> {
+    fn reach(&self, sky: &SingleScatteringScene) -> Option<f64> {
         if self.every_sun {
             return None;
         }
@@ -290,7 +290,7 @@ impl MultipleScatteringField {
     /// table.
     #[cfg(test)]
     pub(crate) fn compute(
-        sky: &SingleScatteringSky,
+        sky: &SingleScatteringScene,
         settings: MultipleScatteringSettings,
         polarised: bool,
     ) -> Result<MultipleScatteringField> {
@@ -311,7 +311,7 @@ impl MultipleScatteringField {
     /// shift, the ground's tables, the forward-peak term and its tilted
     /// beam, and the view march's optics.
     pub(crate) fn solve(
-        sky: &SingleScatteringSky,
+        sky: &SingleScatteringScene,
         request: &FieldRequest,
     ) -> Result<MultipleScatteringField> {
         let settings = request.settings;
@@ -765,7 +765,7 @@ fn polarisation_column_sun(eye_sun_zenith: f64, (ground, top): (f64, f64)) -> (f
 /// with the eye's own sun, or the lowest that still lights the column
 /// ([`polarisation_column_sun`]).
 fn solve_polarisation_columns(
-    sky: &SingleScatteringSky,
+    sky: &SingleScatteringScene,
     geometry: &ColumnGeometry,
     scaled: &ScaledOptics,
 ) -> PolarisationCorrection {
@@ -802,7 +802,7 @@ fn solve_polarisation_columns(
 /// the columns toward the sun from a table of `sun_column_nodes`; empty
 /// when there are none (a high sun's nodes all stop short of them).
 fn solve_spherical_first_order(
-    sky: &SingleScatteringSky,
+    sky: &SingleScatteringScene,
     sun_column_nodes: (usize, usize),
     geometry: &ColumnGeometry,
     scaled: &ScaledOptics,
@@ -998,7 +998,7 @@ fn ground_tables(
 /// The tilted peak beam (`peak_beam.rs`) where the sky's view rays meet a
 /// sun low enough for it and some species has a peak.
 fn compute_peak_beam(
-    sky: &SingleScatteringSky,
+    sky: &SingleScatteringScene,
     (sun_column_nodes, reach_rad): ((usize, usize), Option<f64>),
     (geometry, scaled): (&ColumnGeometry, &ScaledOptics),
     forward_peak: &ForwardPeak,

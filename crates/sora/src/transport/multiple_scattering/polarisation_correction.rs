@@ -110,7 +110,7 @@ pub(crate) struct CorrectionInputs<'a> {
 /// zenith cosines of the image table's nodes ([`PolarisationTable`]; what
 /// `compute_species_harmonics` gives without the sun), kept once computed:
 /// they depend on the optics, the streams and those fixed cosines, not on
-/// the sun, so a sky moved to another sun (`SingleScatteringSky::with_sun`,
+/// the sun, so a sky moved to another sun (`SingleScatteringScene::with_sun`,
 /// a slider drag) reads them instead of computing them again, the same
 /// numbers bit for bit. They were three quarters of the phase-matrix work
 /// of a polarised image's field (the correction's own stream-to-stream

@@ -4,7 +4,7 @@
 //! # What it estimates
 //! The radiance L(x0, w) (W m^-2 sr^-1 nm^-1) arriving at the eye x0 from
 //! the view direction w (unit, pointing away from the eye), in the same
-//! sky as [`SingleScatteringSky`]: a spherical shell of species with
+//! sky as [`SingleScatteringScene`]: a spherical shell of species with
 //! beta(h, lambda) = relative_density(h) beta(lambda), a point sun of
 //! irradiance E(lambda) on a plane normal to its parallel rays, unit
 //! vector s toward it, and a Lambertian ground of albedo a(lambda). With
@@ -165,7 +165,7 @@
 //! for three parts by the light's history:
 //! - `single_scattering`: exactly one scattering in the air and no ground
 //!   (NEE at the first vertex when it is in the air), what
-//!   [`SingleScatteringSky::compute_radiance`] integrates by quadrature;
+//!   [`SingleScatteringScene::compute_radiance`] integrates by quadrature;
 //! - `sunlit_ground`: the directly lit ground seen along the view (NEE at
 //!   the first vertex when it is the ground), the single-scattering code's
 //!   ground term; so single + sunlit ground is the single-scattering

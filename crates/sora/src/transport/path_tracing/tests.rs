@@ -10,10 +10,10 @@ use crate::atmosphere::{Atmosphere, AtmosphereOptics, DensityProfile, PhaseFunct
 use crate::geometry::{Vector3, direction_from_elevation_azimuth};
 use crate::spectrum::{SampledSpectrum, WavelengthGrid};
 use crate::transport::random::RandomStream;
-use crate::transport::single_scattering::SingleScatteringSky;
+use crate::transport::single_scattering::SingleScatteringScene;
 use crate::transport::{Observation, SunColumns};
 
-fn clear_sky(ground_albedo: f64) -> SingleScatteringSky {
+fn clear_sky(ground_albedo: f64) -> SingleScatteringScene {
     let atmosphere = Atmosphere::preset("clear-sky-reference").unwrap();
     let mut optics = atmosphere.compute_optics(&WavelengthGrid::paper()).unwrap();
     optics.ground_albedo = SampledSpectrum::constant(optics.grid.len(), ground_albedo);
@@ -22,7 +22,7 @@ fn clear_sky(ground_albedo: f64) -> SingleScatteringSky {
         sun_elevation_deg: 36.0,
         sun_azimuth_deg: 207.0,
     };
-    SingleScatteringSky::from_optics(
+    SingleScatteringScene::from_optics(
         optics,
         atmosphere.planet.radius_m(),
         atmosphere.planet.top_radius_m(),
@@ -98,7 +98,7 @@ fn sunlit_sampling_is_unbiased_at_twilight() {
             sun_azimuth_deg: 270.0,
         };
         let sky =
-            SingleScatteringSky::new(&atmosphere, &WavelengthGrid::paper(), observation).unwrap();
+            SingleScatteringScene::new(&atmosphere, &WavelengthGrid::paper(), observation).unwrap();
         let with = PathTracer::new(&sky);
         let without = PathTracer::new(&sky).without_twilight_sampling();
         for (name, view) in [
@@ -161,7 +161,7 @@ fn error_bars_are_calibrated_at_twilight() {
         sun_elevation_deg: -6.0,
         sun_azimuth_deg: 270.0,
     };
-    let sky = SingleScatteringSky::new(&atmosphere, &grid, observation).unwrap();
+    let sky = SingleScatteringScene::new(&atmosphere, &grid, observation).unwrap();
     let tracer = PathTracer::new(&sky);
     for (name, view) in [
         ("zenith", Vector3::new(0.0, 0.0, 1.0)),
@@ -283,7 +283,7 @@ fn an_empty_sky_shows_the_sunlit_ground_exactly() {
         sun_elevation_deg: 30.0,
         sun_azimuth_deg: 0.0,
     };
-    let sky = SingleScatteringSky::from_optics(optics, 6360e3, 6460e3, 0.0, observation).unwrap();
+    let sky = SingleScatteringScene::from_optics(optics, 6360e3, 6460e3, 0.0, observation).unwrap();
     let tracer = PathTracer::new(&sky);
     let down = tracer
         .compute_radiance(direction_from_elevation_azimuth(-40.0, 10.0), 100, 1)
@@ -341,7 +341,7 @@ fn a_layer_profile_is_sampled_without_bias() {
             sun_azimuth_deg: 0.0,
         };
         let sky =
-            SingleScatteringSky::from_optics(optics, 6360e3, 6460e3, 0.0, observation).unwrap();
+            SingleScatteringScene::from_optics(optics, 6360e3, 6460e3, 0.0, observation).unwrap();
         let view = direction_from_elevation_azimuth(elevation, 150.0);
         let march = sky.compute_radiance_reference(view, 20_000, 2_000);
         let mut fast = SampledSpectrum::zeros(n);

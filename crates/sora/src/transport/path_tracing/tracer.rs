@@ -19,7 +19,7 @@ use crate::geometry::{
 use crate::transport::optical_column::ProfileCorners;
 use crate::transport::quadrature::running_integral_matrix;
 use crate::transport::random::RandomStream;
-use crate::transport::single_scattering::{SUN_RAY_PANELS, SingleScatteringSky};
+use crate::transport::single_scattering::{SUN_RAY_PANELS, SingleScatteringScene};
 use crate::transport::stokes::{IDENTITY, Mueller};
 use crate::transport::sunlit_directions::SunlitDirections;
 
@@ -36,7 +36,7 @@ pub(crate) const RUSSIAN_ROULETTE_THRESHOLD: f64 = 0.5;
 /// zenith, 560 nm, 200 000 paths) is 112; sparing two, 17.7.
 pub(super) const SHADOW_INTERACTIONS_WITHOUT_ROULETTE: u32 = 2;
 
-/// The sky of a [`SingleScatteringSky`] (atmosphere on a grid, planet,
+/// The sky of a [`SingleScatteringScene`] (atmosphere on a grid, planet,
 /// eye, sun), ready for path tracing.
 #[derive(Debug, Clone)]
 pub struct PathTracer<'a> {
@@ -143,7 +143,7 @@ pub(super) struct PathScratch {
 
 impl<'a> PathTracer<'a> {
     /// The path tracer of `sky`'s atmosphere, eye and sun.
-    pub(crate) fn new(sky: &'a SingleScatteringSky) -> PathTracer<'a> {
+    pub(crate) fn new(sky: &'a SingleScatteringScene) -> PathTracer<'a> {
         let optics = sky.optics();
         let (ground_radius_m, top_radius_m) = sky.radii_m();
         let wavelengths = optics.grid.len();
@@ -215,7 +215,7 @@ impl<'a> PathTracer<'a> {
     /// as [`PathTracer::new`] (the same random numbers decide them), and the
     /// Stokes vector of the total besides. Fails for a species whose phase
     /// matrix is not known (a tabulated Mie phase function).
-    pub(crate) fn new_polarised(sky: &'a SingleScatteringSky) -> Result<PathTracer<'a>> {
+    pub(crate) fn new_polarised(sky: &'a SingleScatteringScene) -> Result<PathTracer<'a>> {
         let mut tracer = PathTracer::new(sky);
         if let Some(species) = tracer
             .optics

@@ -28,7 +28,7 @@ use crate::spectrum::{SampledSpectrum, Spectrum, WavelengthGrid};
 use crate::transport::multiple_scattering::{
     MultipleScatteringField, MultipleScatteringSettings, MultipleScatteringTable,
 };
-use crate::transport::{Observation, PathTracer, SingleScatteringSky, SunColumns};
+use crate::transport::{Observation, PathTracer, SingleScatteringScene, SunColumns};
 use crate::{FastTableSize, ImageSettings, Method, Scattering, Sky, ViewDirection};
 
 use super::reference_data::reference_rows;
@@ -37,13 +37,13 @@ fn sky(
     atmosphere: &Atmosphere,
     sun_elevation_deg: f64,
     observer_altitude_m: f64,
-) -> SingleScatteringSky {
+) -> SingleScatteringScene {
     let observation = Observation {
         observer_altitude_m,
         sun_elevation_deg,
         sun_azimuth_deg: 0.0,
     };
-    SingleScatteringSky::new(atmosphere, &WavelengthGrid::paper(), observation).unwrap()
+    SingleScatteringScene::new(atmosphere, &WavelengthGrid::paper(), observation).unwrap()
 }
 
 /// Worst relative errors against DISORT (field, source table, sky-view
@@ -155,7 +155,7 @@ fn directions(count: usize) -> Vec<Vector3> {
 
 /// Single and multiple scattering (exact synthesis) along `view`.
 fn both(
-    sky: &SingleScatteringSky,
+    sky: &SingleScatteringScene,
     field: &MultipleScatteringField,
     view: Vector3,
 ) -> (Vec<f64>, Vec<f64>) {

@@ -36,7 +36,7 @@
 use crate::atmosphere::{Atmosphere, Planet};
 use crate::geometry::{Vector3, direction_from_elevation_azimuth};
 use crate::spectrum::{SampledSpectrum, Spectrum, WavelengthGrid};
-use crate::transport::{Observation, PathTracer, SingleScatteringSky, SunColumns};
+use crate::transport::{Observation, PathTracer, SingleScatteringScene, SunColumns};
 
 /// The plane-parallel limit's planet radius, m.
 const PLANE_PARALLEL_RADIUS_M: f64 = 6.36e9;
@@ -51,7 +51,7 @@ fn reference_sky(
     ground_albedo: f64,
     observer_altitude_m: f64,
     sun_elevation_deg: f64,
-) -> SingleScatteringSky {
+) -> SingleScatteringScene {
     let mut atmosphere = Atmosphere::preset("clear-sky-reference").unwrap();
     atmosphere.planet = Planet::new(radius_m, 100e3, Spectrum::Constant(ground_albedo)).unwrap();
     let observation = Observation {
@@ -59,7 +59,7 @@ fn reference_sky(
         sun_elevation_deg,
         sun_azimuth_deg: 0.0,
     };
-    SingleScatteringSky::new(&atmosphere, &WavelengthGrid::paper(), observation).unwrap()
+    SingleScatteringScene::new(&atmosphere, &WavelengthGrid::paper(), observation).unwrap()
 }
 
 /// Worst |error| / sigma and worst relative error of a comparison, and
@@ -372,7 +372,7 @@ fn energy_is_conserved_without_absorption() {
                 sun_elevation_deg,
                 sun_azimuth_deg: 0.0,
             };
-            let sky = SingleScatteringSky::new(&atmosphere, &grid, observation).unwrap();
+            let sky = SingleScatteringScene::new(&atmosphere, &grid, observation).unwrap();
             let flux = PathTracer::new(&sky)
                 .compute_irradiance(down, 100_000, seed)
                 .unwrap();

@@ -18,7 +18,7 @@ use crate::atmosphere::{Atmosphere, Planet};
 use crate::geometry::direction_from_elevation_azimuth;
 use crate::spectrum::{Spectrum, WavelengthGrid};
 use crate::transport::stokes::meridian_reference;
-use crate::transport::{Observation, PathTracer, SingleScatteringSky};
+use crate::transport::{Observation, PathTracer, SingleScatteringScene};
 
 /// A pure Rayleigh layer of vertical optical depth `tau` at 550 nm
 /// (exponential, scale height `top_m` / 12.5, top at `top_m`),
@@ -67,20 +67,20 @@ const EARTH: (f64, f64) = (6.36e6, 100e3);
 /// off).
 const PLANE_PARALLEL: (f64, f64) = (6.36e9, 1e3);
 
-fn scene(atmosphere: &Atmosphere, altitude_m: f64, sun: (f64, f64)) -> SingleScatteringSky {
+fn scene(atmosphere: &Atmosphere, altitude_m: f64, sun: (f64, f64)) -> SingleScatteringScene {
     let observation = Observation {
         observer_altitude_m: altitude_m,
         sun_elevation_deg: sun.0,
         sun_azimuth_deg: sun.1,
     };
     let grid = WavelengthGrid::new(550.0, 550.0, 20.0).unwrap();
-    SingleScatteringSky::new(atmosphere, &grid, observation).unwrap()
+    SingleScatteringScene::new(atmosphere, &grid, observation).unwrap()
 }
 
 /// (I, Q, U, V) and their standard errors at 550 nm of the view
 /// (elevation, azimuth), referred to its meridian plane.
 fn stokes(
-    scene: &SingleScatteringSky,
+    scene: &SingleScatteringScene,
     view: (f64, f64),
     samples: u64,
     seed: u64,
@@ -91,7 +91,7 @@ fn stokes(
 
 /// [`stokes`], and the scalar estimate of the same paths.
 fn stokes_and_scalar(
-    scene: &SingleScatteringSky,
+    scene: &SingleScatteringScene,
     view: (f64, f64),
     samples: u64,
     seed: u64,
@@ -230,7 +230,7 @@ scattering.parametric = { angstrom_exponent = 1.3, single_scattering_albedo = 0.
         sun_azimuth_deg: 100.0,
     };
     let scene =
-        SingleScatteringSky::new(&atmosphere, &WavelengthGrid::paper(), observation).unwrap();
+        SingleScatteringScene::new(&atmosphere, &WavelengthGrid::paper(), observation).unwrap();
     let view = (15.0, 130.0);
     let tracer = PathTracer::new_polarised(&scene).unwrap();
     let traced = tracer

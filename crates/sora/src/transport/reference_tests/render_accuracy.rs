@@ -5,7 +5,7 @@ use crate::atmosphere::Atmosphere;
 use crate::camera::Camera;
 use crate::colour::{Observer, SpectrumToXyz};
 use crate::spectrum::WavelengthGrid;
-use crate::transport::{Observation, SingleScatteringSky};
+use crate::transport::{Observation, SingleScatteringScene};
 use crate::{FastTableSize, ImageSettings, Method, Scattering, Sky, ViewDirection};
 
 /// A deterministic stream of numbers in [0, 1) (64-bit LCG, Knuth's MMIX).
@@ -20,7 +20,7 @@ impl Lcg {
     }
 }
 
-fn sky(preset: &str, sun_elevation_deg: f64, observer_altitude_m: f64) -> SingleScatteringSky {
+fn sky(preset: &str, sun_elevation_deg: f64, observer_altitude_m: f64) -> SingleScatteringScene {
     sky_of(
         &Atmosphere::preset(preset).unwrap(),
         sun_elevation_deg,
@@ -32,17 +32,17 @@ fn sky_of(
     atmosphere: &Atmosphere,
     sun_elevation_deg: f64,
     observer_altitude_m: f64,
-) -> SingleScatteringSky {
+) -> SingleScatteringScene {
     let observation = Observation {
         observer_altitude_m,
         sun_elevation_deg,
         sun_azimuth_deg: 207.0,
     };
-    SingleScatteringSky::new(atmosphere, &WavelengthGrid::paper(), observation).unwrap()
+    SingleScatteringScene::new(atmosphere, &WavelengthGrid::paper(), observation).unwrap()
 }
 
 /// The single-scattering sky of `scene` by `method`.
-fn single(scene: &SingleScatteringSky, method: Method) -> Sky {
+fn single(scene: &SingleScatteringScene, method: Method) -> Sky {
     Sky::from_scene(
         scene.clone(),
         Scattering::Single,
@@ -54,7 +54,7 @@ fn single(scene: &SingleScatteringSky, method: Method) -> Sky {
 
 /// Worst relative difference between the table lookup and the exact fast
 /// path over random directions, for radiances above 1e-3 of the largest.
-fn worst_table_error(scene: &SingleScatteringSky, directions: usize) -> f64 {
+fn worst_table_error(scene: &SingleScatteringScene, directions: usize) -> f64 {
     let sky = single(scene, Method::Fast);
     let mut random = Lcg(7);
     let mut samples = Vec::new();
@@ -127,7 +127,7 @@ fn worst_image_difference(preset: &str, sun_elevation_deg: f64, size: u32) -> f6
 
 fn worst_difference_of_images(
     name: &str,
-    sky: &SingleScatteringSky,
+    sky: &SingleScatteringScene,
     sun_elevation_deg: f64,
     size: u32,
 ) -> f64 {

@@ -4,7 +4,7 @@
 use crate::atmosphere::Atmosphere;
 use crate::geometry::direction_from_elevation_azimuth;
 use crate::spectrum::{SampledSpectrum, WavelengthGrid};
-use crate::transport::{Observation, SingleScatteringSky, SunColumns};
+use crate::transport::{Observation, SingleScatteringScene, SunColumns};
 
 /// Pure Rayleigh air, exponential with an 8 km scale height, flat sun of
 /// 1 W m^-2 nm^-1, black ground.
@@ -24,17 +24,17 @@ profile.exponential.scale_height_m = 8000
 scattering.rayleigh = { coefficient_per_m = 1.16e-5, reference_wavelength_nm = 550, wavelength_exponent = 4.0 }
 "#;
 
-fn sky(text: &str, sun_elevation_deg: f64, sun_azimuth_deg: f64) -> SingleScatteringSky {
+fn sky(text: &str, sun_elevation_deg: f64, sun_azimuth_deg: f64) -> SingleScatteringScene {
     let atmosphere = Atmosphere::from_toml_str(text).unwrap();
     let observation = Observation {
         observer_altitude_m: 0.0,
         sun_elevation_deg,
         sun_azimuth_deg,
     };
-    SingleScatteringSky::new(&atmosphere, &WavelengthGrid::paper(), observation).unwrap()
+    SingleScatteringScene::new(&atmosphere, &WavelengthGrid::paper(), observation).unwrap()
 }
 
-fn fast(sky: &SingleScatteringSky, elevation: f64, azimuth: f64) -> SampledSpectrum {
+fn fast(sky: &SingleScatteringScene, elevation: f64, azimuth: f64) -> SampledSpectrum {
     let mut scratch = sky.scratch();
     let mut radiance = SampledSpectrum::zeros(sky.optics().grid.len());
     sky.compute_radiance(
@@ -178,7 +178,7 @@ fn the_sun_disc_is_never_drawn_on_the_ground() {
             sun_azimuth_deg: 270.0,
         };
         let sky =
-            SingleScatteringSky::new(&atmosphere, &WavelengthGrid::paper(), observation).unwrap();
+            SingleScatteringScene::new(&atmosphere, &WavelengthGrid::paper(), observation).unwrap();
         assert_eq!(
             sky.is_in_sun_disc(sky.sun_direction()),
             visible,

@@ -8,17 +8,17 @@
 use crate::atmosphere::{Atmosphere, Planet};
 use crate::geometry::direction_from_elevation_azimuth;
 use crate::spectrum::{SampledSpectrum, Spectrum, WavelengthGrid};
-use crate::transport::{Observation, SingleScatteringSky, SunColumns};
+use crate::transport::{Observation, SingleScatteringScene, SunColumns};
 
 use super::reference_data::{ReferenceRow as Row, reference_rows};
 
-fn sky(atmosphere: &Atmosphere, sun_elevation_deg: f64) -> SingleScatteringSky {
+fn sky(atmosphere: &Atmosphere, sun_elevation_deg: f64) -> SingleScatteringScene {
     let observation = Observation {
         observer_altitude_m: 0.0,
         sun_elevation_deg,
         sun_azimuth_deg: 0.0,
     };
-    SingleScatteringSky::new(atmosphere, &WavelengthGrid::paper(), observation).unwrap()
+    SingleScatteringScene::new(atmosphere, &WavelengthGrid::paper(), observation).unwrap()
 }
 
 /// Worst relative error of the fast path (exact sun columns) and of the
@@ -108,7 +108,7 @@ fn single_scattering_is_exact_across_the_shadow_edge() {
         sun_elevation_deg: -10.0,
         sun_azimuth_deg: 0.0,
     };
-    let sky = SingleScatteringSky::new(&atmosphere, &grid, observation).unwrap();
+    let sky = SingleScatteringScene::new(&atmosphere, &grid, observation).unwrap();
     let mut scratch = sky.scratch();
     let mut fast = SampledSpectrum::zeros(grid.len());
     for (elevation, azimuth) in [(90.0, 0.0), (20.0, 0.0), (20.0, 90.0), (45.0, 0.0)] {

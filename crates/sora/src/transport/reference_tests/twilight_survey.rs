@@ -33,7 +33,7 @@
 use crate::atmosphere::Atmosphere;
 use crate::spectrum::WavelengthGrid;
 use crate::transport::multiple_scattering::{FieldRequest, MultipleScatteringField};
-use crate::transport::{Observation, PathTracer, SingleScatteringSky, SunColumns};
+use crate::transport::{Observation, PathTracer, SingleScatteringScene, SunColumns};
 use crate::{FastTableSize, Method, MultipleScatteringSettings, Scattering, Sky, ViewDirection};
 
 /// The default settings and tables with a variant's changes (module docs).
@@ -114,7 +114,7 @@ fn twilight_survey() {
                 sun_elevation_deg: sun,
                 sun_azimuth_deg: 0.0,
             };
-            let scene = SingleScatteringSky::new(&atmosphere, &grid, observation).unwrap();
+            let scene = SingleScatteringScene::new(&atmosphere, &grid, observation).unwrap();
             let sky = |scattering, table| {
                 Sky::from_scene(scene.clone(), scattering, Method::Fast, table).unwrap()
             };
@@ -250,7 +250,7 @@ fn twilight_single_scattering_survey() {
                 sun_elevation_deg: sun,
                 sun_azimuth_deg: 0.0,
             };
-            let scene = SingleScatteringSky::new(&atmosphere, &grid, observation).unwrap();
+            let scene = SingleScatteringScene::new(&atmosphere, &grid, observation).unwrap();
             let radiances = |method| {
                 Sky::from_scene(
                     scene.clone(),
