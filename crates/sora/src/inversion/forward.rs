@@ -170,14 +170,7 @@ impl ForwardModel {
             .iter()
             .enumerate()
             .map(|(i, &w)| match filters.get(i).and_then(Option::as_ref) {
-                Some(filter) => {
-                    let grid = filter.grid()?;
-                    let response: Vec<f64> = grid
-                        .wavelengths_nm()
-                        .map(|l| filter.response_at(l))
-                        .collect();
-                    band_optics(&base.compute_optics(&grid)?, &response, w)
-                }
+                Some(filter) => band_optics(&base.compute_optics(&filter.grid()?)?, filter, w),
                 None => base.compute_optics(&WavelengthGrid::new(w, w, band_nm)?),
             })
             .collect::<Result<Vec<_>>>()?;
@@ -424,8 +417,8 @@ impl ForwardModel {
     }
 }
 
-/// The optics of air and gases that a channel of spectral response
-/// `response` (one value per wavelength of `optics.grid`) sees, as one
+/// The optics of air and gases that a channel of spectral response R
+/// (`filter`'s, at the wavelengths of `optics.grid`) sees, as one
 /// wavelength at `wavelength_nm` (the aerosol's):
 ///
 /// ```text
@@ -444,14 +437,20 @@ impl ForwardModel {
 /// filter's wavelengths).
 pub(crate) fn band_optics(
     optics: &AtmosphereOptics,
-    response: &[f64],
+    filter: &Filter,
     wavelength_nm: f64,
 ) -> Result<AtmosphereOptics> {
+    let sun_through_filter =
+        filter.weighted_mean(&optics.grid, &optics.solar_irradiance_w_m2_nm)?;
     let sun = optics.solar_irradiance_w_m2_nm.values();
-    let weights: Vec<f64> = response.iter().zip(sun).map(|(r, s)| r * s).collect();
+    let weights: Vec<f64> = optics
+        .grid
+        .wavelengths_nm()
+        .zip(sun)
+        .map(|(l, s)| filter.response_at(l) * s)
+        .collect();
     let total: f64 = weights.iter().sum();
-    let response_total: f64 = response.iter().sum();
-    if !(total > 0.0 && response_total > 0.0) || response.len() != sun.len() {
+    if total.is_nan() || total <= 0.0 {
         return Err(Error::Unsupported(format!(
             "a filter at {wavelength_nm} nm: its response sees no sunlight on its grid"
         )));
@@ -461,8 +460,6 @@ pub(crate) fn band_optics(
     };
     let one =
         |spectrum: &SampledSpectrum| SampledSpectrum::from_values(vec![mean(spectrum.values())]);
-    let sun_through_filter =
-        sun.iter().zip(response).map(|(s, r)| s * r).sum::<f64>() / response_total;
     let species = optics
         .species
         .iter()

@@ -570,6 +570,12 @@ struct Layout {
 /// The state's parameters before the refractive index.
 const SHARED_PARAMETERS: usize = 6;
 
+/// The refractive index's real and imaginary parts in the state's
+/// [`PARAMETER_NAMES`] order, after the shared parameters.
+const REAL: usize = SHARED_PARAMETERS;
+/// See [`REAL`].
+const IMAGINARY: usize = SHARED_PARAMETERS + 1;
+
 /// One row of the smoothness prior: c . (n or ln k at consecutive
 /// wavelengths) / sigma, the estimate of a derivative with respect to
 /// ln lambda in units of its a priori standard deviation.
@@ -626,17 +632,17 @@ impl Layout {
             let k = if position < SHARED_PARAMETERS {
                 position
             } else if position < SHARED_PARAMETERS + self.indices() {
-                6
+                REAL
             } else {
-                7
+                IMAGINARY
             };
             return PARAMETER_NAMES[k].to_string();
         }
         let offset = position - SHARED_PARAMETERS;
         let (k, w) = if offset < self.wavelengths {
-            (6, offset)
+            (REAL, offset)
         } else {
-            (7, offset - self.wavelengths)
+            (IMAGINARY, offset - self.wavelengths)
         };
         format!("{} at {} nm", PARAMETER_NAMES[k], wavelengths_nm[w])
     }
@@ -645,8 +651,8 @@ impl Layout {
     fn start(&self, state: &AerosolState) -> Vec<f64> {
         let t = state.to_fit();
         let mut v = t[..SHARED_PARAMETERS].to_vec();
-        v.extend(std::iter::repeat_n(t[6], self.indices()));
-        v.extend(std::iter::repeat_n(t[7], self.indices()));
+        v.extend(std::iter::repeat_n(t[REAL], self.indices()));
+        v.extend(std::iter::repeat_n(t[IMAGINARY], self.indices()));
         v
     }
 
@@ -655,13 +661,13 @@ impl Layout {
     fn unpack(&self, t: &[f64]) -> (AerosolState, Vec<Complex64>) {
         let mut t8 = [0.0; PARAMETERS];
         t8[..SHARED_PARAMETERS].copy_from_slice(&t[..SHARED_PARAMETERS]);
-        t8[6] = t[self.real(self.reference)];
-        t8[7] = t[self.imaginary(self.reference)];
+        t8[REAL] = t[self.real(self.reference)];
+        t8[IMAGINARY] = t[self.imaginary(self.reference)];
         let indices = (0..self.wavelengths)
             .map(|w| {
                 Complex64::new(
-                    BOUNDS[6].from_fit(t[self.real(w)]),
-                    BOUNDS[7].from_fit(t[self.imaginary(w)]),
+                    BOUNDS[REAL].from_fit(t[self.real(w)]),
+                    BOUNDS[IMAGINARY].from_fit(t[self.imaginary(w)]),
                 )
             })
             .collect();
