@@ -90,7 +90,7 @@ pub struct IrradianceArgs {
     #[command(flatten)]
     filters: FilterOptions,
 
-    /// Broadband over the widest grid sora solves, 300:2500:10 nm (95.6 %
+    /// Broadband over the widest grid sora solves, 300:2500:10 nm (95.8 %
     /// of the ASTM E490 sun), instead of --wavelengths
     #[arg(long, conflicts_with_all = ["wavelengths", "filter"])]
     broadband: bool,

@@ -195,7 +195,7 @@ mod tests {
         let grid = WavelengthGrid::new(400.0, 700.0, 10.0).unwrap();
         assert!((flat.grid_irradiance_w_m2(&grid).unwrap() - 310.0).abs() < 1e-9);
         // ASTM E490: 1366.1 W m^-2 over 119.5 nm to 1 mm (trapezoids within
-        // 0.1 %), 95.56 % of it on 300:2500:10 (295-2505 nm; the trapezoids
+        // 0.1 %), 95.78 % of it on 300:2500:10 (295-2505 nm; the trapezoids
         // over the table's rows from 300 to 2500 nm hold 1305.46 W m^-2, and
         // 295-300 and 2500-2505 nm add about 3 W m^-2), scaled at 2 AU.
         let e490 = Sun::new(SolarSpectrum::astm_e490(), 1.0, 0.53).unwrap();
