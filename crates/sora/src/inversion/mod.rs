@@ -17,7 +17,9 @@
 //!   inversion products, to compare with ([`parse_aeronet_inversion`]);
 //! - `state.rs`: what is fitted ([`AerosolState`]: the optical depth at a
 //!   reference wavelength, two log-normal volume modes, a refractive
-//!   index, fitted per wavelength with a smoothness prior, [`IndexSpectrum`]),
+//!   index per wavelength with a smoothness prior on n's slope and on the
+//!   curvature of n and ln k in ln lambda, or one for every wavelength,
+//!   [`IndexSpectrum`]),
 //!   its bounds and its a priori;
 //! - `kernels.rs`: Mie kernels per radius node, so that a new size
 //!   distribution costs no Mie solution;
