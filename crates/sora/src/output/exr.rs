@@ -1,6 +1,9 @@
 //! OpenEXR output: a [`LinearImage`] written as a single-part, scan-line
-//! OpenEXR file with three linear channels, with the `exr` crate (default
-//! features off, so no threads: blocks are compressed sequentially).
+//! OpenEXR file with three linear channels, with the `exr` crate. With the
+//! `parallel` feature (the default) its blocks are compressed on a pool of
+//! threads and written in increasing line order, so the file's bytes are
+//! those of the sequential writer (the browser build, without the
+//! feature).
 //!
 //! - Channels: `R, G, B` for [`ChannelKind::Rgb`], `X, Y, Z` for
 //!   [`ChannelKind::Xyz`] (OpenEXR stores channels sorted by name, so an RGB
@@ -306,7 +309,6 @@ pub fn encode_exr_with_layers(
     let mut bytes = Vec::new();
     exr_image
         .write()
-        .non_parallel()
         .to_buffered(std::io::Cursor::new(&mut bytes))
         .map_err(|error| Error::Io {
             path: "(memory)".to_string(),
