@@ -259,10 +259,10 @@ pub struct Resolution {
     /// Multiple scattering: discrete ordinates per hemisphere of the
     /// field (1..32; the solver has twice as many streams and harmonics).
     /// The default 8 (with 40 layers) holds the Coulson tables (polarised,
-    /// plane-parallel) to 5.4e-4 absolute at their grazing rows;
-    /// --streams 12 --layers 60 holds them within 1e-4, at 2.3 times the
-    /// CPU time of a polarised view and 2.1 times that of an image (16
-    /// streams: 5.1 and 4.1 times; docs/polarisation.md) [default: 8]
+    /// plane-parallel) to 1.1e-4 absolute at their grazing rows;
+    /// --streams 10 holds them within 1e-4 (5.6e-5), at 1.6 times the CPU
+    /// time of a polarised view and 1.5 times that of an image (12
+    /// streams: 2.6 and 2.0 times; docs/polarisation.md) [default: 8]
     #[arg(long, value_name = "N")]
     pub streams: Option<usize>,
 
