@@ -463,7 +463,7 @@ pub struct SunAndObserver {
     #[arg(long, value_name = "A")]
     pub ground_albedo: Option<f64>,
 
-    /// Wavelengths, start:stop:step in nm (within 300-2500; colour uses 360-830)
+    /// Wavelengths, start:stop:step in nm (within 280-2500; colour uses 360-830)
     #[arg(long, value_name = "START:STOP:STEP", default_value = "380:780:20")]
     pub wavelengths: sora::spectrum::WavelengthGrid,
 

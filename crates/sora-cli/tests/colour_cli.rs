@@ -96,13 +96,13 @@ fn bad_spectra_are_one_line_errors() {
         "colour",
         &data("case_a_multi_albedo0.csv"),
         "--wavelengths",
-        "290:780:20",
+        "270:780:20",
     ]);
     // Out of range: status 1 and the library's one line, as every
     // out-of-range value (crates/sora-cli/src/main.rs).
     let error = common::one_line_error(&out);
     assert!(
-        error.starts_with("error: --wavelengths: start_nm = 290 nm"),
+        error.starts_with("error: --wavelengths: start_nm = 270 nm"),
         "{error}"
     );
 }

@@ -1,4 +1,4 @@
-//! `sora spectrum` and `sora render` on grids beyond the visible (300-2500
+//! `sora spectrum` and `sora render` on grids beyond the visible (280-2500
 //! nm; issue 16 opened 300-1100): the sun-photometer grid runs, colour comes from its part
 //! in 360-830 nm, a grid with no part there has no colour, and grids past
 //! the range are refused with the value and its unit.
@@ -102,15 +102,15 @@ fn an_infrared_grid_has_no_colour() {
 }
 
 #[test]
-fn grids_past_300_to_2500_nm_are_refused_with_value_and_unit() {
+fn grids_past_280_to_2500_nm_are_refused_with_value_and_unit() {
     for (grid, expected) in [
         (
-            "290:1100:10",
-            "start_nm = 290 nm is out of range: allowed 300..=2500 nm",
+            "270:1100:10",
+            "start_nm = 270 nm is out of range: allowed 280..=2500 nm",
         ),
         (
-            "300:2510:10",
-            "stop_nm = 2510 nm is out of range: allowed 300..=2500 nm",
+            "280:2510:10",
+            "stop_nm = 2510 nm is out of range: allowed 280..=2500 nm",
         ),
     ] {
         let out = sora(&[&["spectrum"][..], &VIEW, &["--wavelengths", grid]].concat());
@@ -178,4 +178,41 @@ fn the_grid_reaches_2500_nm_with_the_water_bands_dark() {
     for nm in [1600.0, 2200.0] {
         assert!(kept(nm) > 0.5, "{nm} nm: {}", kept(nm));
     }
+}
+
+/// The grid's short end, 280 nm, on the long-wave edge of ozone's Hartley
+/// band: the zenith sky of `earth-clear` (sun 60 degrees) darkens by 16
+/// orders of magnitude from 320 to 280 nm (10 of them from 290 to 280 nm),
+/// as 300 DU of ozone go from 0.24 to 33 vertical optical depths, and
+/// stays positive and finite; the direct beam's transmittance at 280 nm is
+/// below 1e-15.
+#[test]
+fn the_grid_reaches_280_nm_where_the_hartley_band_darkens_the_sky() {
+    let out = common::zenith_spectrum("../../atmospheres/earth-clear.toml", "280:320:10", &[]);
+    let rows = spectrum_rows(&stdout(&out));
+    assert_eq!(rows.len(), 5);
+    assert_eq!(rows[0].0, 280.0);
+    assert!(
+        rows.iter().all(|(_, l)| l.is_finite() && *l > 0.0),
+        "{rows:?}"
+    );
+    for pair in rows.windows(2) {
+        let ratio = pair[1].1 / pair[0].1;
+        assert!(ratio > 2.0, "{pair:?}: {ratio}");
+    }
+    assert!(rows[0].1 < 1e-8 * rows[1].1, "{rows:?}");
+    assert!(rows[0].1 < 1e-14 * rows[4].1, "{rows:?}");
+    let out = sora(&[
+        "irradiance",
+        "--atmosphere",
+        "../../atmospheres/earth-clear.toml",
+        "--sun-elevation",
+        "60",
+        "--wavelengths",
+        "280:320:10",
+    ]);
+    let text = stdout(&out);
+    let row_280 = text.lines().find(|l| l.starts_with("280,")).unwrap();
+    let transmittance: f64 = row_280.split(',').nth(2).unwrap().parse().unwrap();
+    assert!(transmittance > 0.0 && transmittance < 1e-15, "{row_280}");
 }

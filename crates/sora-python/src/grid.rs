@@ -29,7 +29,7 @@ pub fn grid_from_python(value: Option<&Bound<'_, PyAny>>) -> PyResult<Wavelength
 }
 
 /// The wavelengths (nm) of the grid `text` ('start:stop:step', checked as
-/// the command line checks `--wavelengths`: 300-2500 nm, at most 10,000).
+/// the command line checks `--wavelengths`: 280-2500 nm, at most 10,000).
 #[pyfunction]
 pub fn wavelength_grid_nm(text: &str) -> PyResult<Vec<f64>> {
     let grid = text

@@ -33,7 +33,7 @@ def test_bad_widths_are_the_cli_message(sora_cli, sky, tmp_path, width):
 
 @pytest.mark.parametrize("python, cli, library", [
     ({"wavelengths_nm": "200:800:10"}, ["--sun-elevation", "30", "--wavelengths", "200:800:10"],
-     "start_nm = 200 nm is out of range: allowed 300..=2500 nm"),
+     "start_nm = 200 nm is out of range: allowed 280..=2500 nm"),
     ({"sun_elevation_deg": 95}, ["--sun-elevation", "95"],
      "sun elevation = 95 deg is out of range: allowed -90..=90 deg"),
 ])

@@ -62,7 +62,7 @@ struct ShowArgs {
     #[command(flatten)]
     source: AtmosphereSource,
 
-    /// Wavelengths, start:stop:step in nm (within 300-2500; colour uses 360-830), or one wavelength
+    /// Wavelengths, start:stop:step in nm (within 280-2500; colour uses 360-830), or one wavelength
     #[arg(long, value_name = "START:STOP:STEP", default_value = "380:780:20")]
     wavelengths: WavelengthGrid,
 

@@ -33,7 +33,7 @@ pub struct ColourArgs {
     #[arg(value_name = "SPECTRUM.csv")]
     spectrum: PathBuf,
 
-    /// Wavelengths to integrate on, start:stop:step in nm (within 300-2500; colour uses 360-830)
+    /// Wavelengths to integrate on, start:stop:step in nm (within 280-2500; colour uses 360-830)
     #[arg(long, value_name = "START:STOP:STEP", default_value = "380:780:20")]
     wavelengths: WavelengthGrid,
 

@@ -88,7 +88,7 @@ def phase_function(m: complex, x: float, angle_deg, polarization: bool = False):
 def _wavelengths(wavelengths_nm) -> np.ndarray:
     if isinstance(wavelengths_nm, str):
         # The command line's start:stop:step, checked as `sora mie
-        # --wavelengths` checks it (300-2500 nm, at most 10,000).
+        # --wavelengths` checks it (280-2500 nm, at most 10,000).
         return np.asarray(_sora.wavelength_grid_nm(wavelengths_nm), dtype=float)
     if wavelengths_nm is None:
         raise TypeError("wavelengths_nm must be 'start:stop:step' or an array of wavelengths in nm, not None")

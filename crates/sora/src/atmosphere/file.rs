@@ -1245,8 +1245,8 @@ fn convert_size_distribution(file: SizeDistributionFile, here: &str) -> Result<S
     Ok(distribution)
 }
 
-/// Largest particle radius sora integrates over, m: size parameter ~2100
-/// at 300 nm, the shortest wavelength of any grid. Larger particles are not
+/// Largest particle radius sora integrates over, m: size parameter ~2240
+/// at 280 nm, the shortest wavelength of any grid. Larger particles are not
 /// aerosol (they fall out within minutes), and their Mie series grow long
 /// enough to make a preset slow.
 const MAX_INTEGRATED_RADIUS_M: f64 = 100e-6;
@@ -1256,7 +1256,7 @@ const MAX_INTEGRATED_RADIUS_M: f64 = 100e-6;
 const MIN_INTEGRATED_RADIUS_M: f64 = 1.8e-13;
 
 /// The radii that matter in `distribution` (the nodes of the engine's own
-/// cross-section quadrature at 300 nm, the shortest wavelength of any
+/// cross-section quadrature at 280 nm, the shortest wavelength of any
 /// grid) must lie in the range the Mie engine handles quickly.
 fn check_radius_range(distribution: &SizeDistribution, key: &str) -> Result<()> {
     let wavenumber_per_m = 2.0 * std::f64::consts::PI / (MIN_WAVELENGTH_NM * 1e-9);

@@ -13,19 +13,20 @@
 //! (broad, peaking near 600 nm) absorbs orange light along the long slant
 //! path. The embedded cross-section is at 233 K (a typical temperature of
 //! the stratospheric ozone layer), bin averages over [lambda, lambda + 10)
-//! nm (vacuum) from 290 to 1110 nm, put together from two published data
+//! nm (vacuum) from 270 to 1110 nm, put together from two published data
 //! sets of IUP Bremen:
 //!
 //! - 360-840 nm (`data/ozone_cross_section_233K_10nm.csv`): Serdyuchenko,
 //!   Gorshelev et al. 2014 (AMT 7, 625), as averaged and used by Bruneton
 //!   2017. These are the only bins that touch colour, and they are unchanged.
-//! - 290-360 nm (the Huggins band) and 840-1066 nm (the Wulf band)
+//! - 270-360 nm (the long-wave edge of the Hartley band, 270-300 nm, and
+//!   the Huggins band) and 840-1066 nm (the Wulf band)
 //!   (`data/ozone_cross_section_233K_10nm_bogumil2003.csv`): Bogumil et al.
 //!   2003 (J. Photochem. Photobiol. A 157, 167), SCIAMACHY pre-flight
 //!   cross-sections, at 233 K from their quadratic temperature fit as
 //!   libRadtran distributes it, converted from air to vacuum wavelengths and
 //!   averaged over the same bins (the CSV header gives the details and the
-//!   file copied). Serdyuchenko's own data reach 1100 nm, but no copy of
+//!   file copied; `scripts/gases/make_ozone_bogumil2003.py` writes it). Serdyuchenko's own data reach 1100 nm, but no copy of
 //!   them could be obtained; where the two sets overlap Bogumil's bins are
 //!   2-7.5 % above Serdyuchenko's (440-810 nm), so the seams at 360 and 840
 //!   nm are steps of a few per cent in cross-sections whose 300 DU optical
@@ -38,9 +39,9 @@
 //!   1986, are 0 from 780 to 4000 nm), so the grid's whole range is
 //!   covered.
 //!
-//! | 300 DU, vertical | 300 | 310 | 320 | 340 | 380 | 440 | 500 | 600 | 675 | 870 | 1020 nm |
-//! |---|---|---|---|---|---|---|---|---|---|---|---|
-//! | ozone optical depth | 3.9 | 1.0 | 0.24 | 0.012 | 2.0e-5 | 9.8e-4 | 0.0096 | 0.039 | 0.012 | 4.7e-4 | 6.6e-6 |
+//! | 300 DU, vertical | 280 | 290 | 300 | 310 | 320 | 340 | 380 | 440 | 500 | 600 | 675 | 870 | 1020 nm |
+//! |---|---|---|---|---|---|---|---|---|---|---|---|---|---|
+//! | ozone optical depth | 33 | 13 | 3.9 | 1.0 | 0.24 | 0.012 | 2.0e-5 | 9.8e-4 | 0.0096 | 0.039 | 0.012 | 4.7e-4 | 6.6e-6 |
 //!
 //! (the mean over the 10 nm band centred on each wavelength, what a sample
 //! of a 10 nm grid gets; at 675 nm that is the 670 nm bin.) In the Huggins
@@ -52,7 +53,11 @@
 //! mean cross-section overestimates the absorption of a long path there
 //! (the transmittance of the mean is below the mean transmittance), so
 //! below 320 nm sora's radiances are a band model's, not a line-by-line
-//! code's.
+//! code's. On the Hartley band's long-wave edge (270-300 nm) the
+//! cross-section falls by 2.3-3.2 times per bin and hardly depends on
+//! temperature (243 K is 0.2, 0.8 and 1.7 % above 223 K in the 270, 280
+//! and 290 nm bins); 300 DU are 13-34 vertical optical depths there, so
+//! the ground receives almost none of the sun's light below 295 nm.
 //!
 //! sora treats the table as the piecewise-constant function it describes
 //! and puts it on a wavelength grid by the band average over each sample's
@@ -167,7 +172,7 @@ impl BinnedCrossSection {
         })
     }
 
-    /// Ozone at 233 K, 10 nm bins from 290 to 1110 nm (embedded): the
+    /// Ozone at 233 K, 10 nm bins from 270 to 1110 nm (embedded): the
     /// Serdyuchenko bins (360-840 nm) and the Bogumil bins on either side
     /// (see the module docs).
     pub(crate) fn ozone_233k() -> BinnedCrossSection {
@@ -183,7 +188,7 @@ impl BinnedCrossSection {
         joined
     }
 
-    /// [`BinnedCrossSection::ozone_233k`] as published: 290-1110 nm.
+    /// [`BinnedCrossSection::ozone_233k`] as published: 270-1110 nm.
     fn ozone_233k_published() -> BinnedCrossSection {
         let what = "embedded ozone cross-section";
         let serdyuchenko = BinnedCrossSection::parse_csv(OZONE_233K_CSV, what)
@@ -382,10 +387,10 @@ mod tests {
     #[test]
     fn embedded_table_is_the_reference_with_ten_nm_bins() {
         let ozone = BinnedCrossSection::ozone_233k();
-        assert_eq!(ozone.range_nm(), (290.0, ZERO_BINS_END_NM));
+        assert_eq!(ozone.range_nm(), (270.0, ZERO_BINS_END_NM));
         assert_eq!(
             BinnedCrossSection::ozone_233k_published().range_nm(),
-            (290.0, 1110.0)
+            (270.0, 1110.0)
         );
         // A band inside one bin is that bin's value.
         assert_eq!(ozone.band_average_m2(600.0, 609.0).unwrap(), 5.019e-25);
@@ -401,10 +406,10 @@ mod tests {
         );
         // Past the published data: zeros to 2510 nm.
         assert_eq!(ozone.band_average_m2(1100.0, 2500.0).unwrap(), 0.0);
-        // Outside 290-2510 nm: an error naming the range.
-        for (lo, hi) in [(280.0, 300.0), (2500.0, 2520.0)] {
+        // Outside 270-2510 nm: an error naming the range.
+        for (lo, hi) in [(260.0, 280.0), (2500.0, 2520.0)] {
             let message = ozone.band_average_m2(lo, hi).unwrap_err().to_string();
-            assert!(message.contains("290-2510 nm"), "{message}");
+            assert!(message.contains("270-2510 nm"), "{message}");
         }
     }
 
@@ -423,26 +428,32 @@ mod tests {
             .copied()
             .zip(ozone.cross_sections_m2.iter().copied())
             .collect();
-        assert_eq!(joined.len(), 82); // 290, 300, ..., 1100
+        assert_eq!(joined.len(), 84); // 270, 280, ..., 1100
         // Serdyuchenko's 48 bins (360-830 nm, today's numbers) are the
         // joined table's, bit for bit, and so are Bogumil's 34 outside them.
         let serdyuchenko = csv_bins(OZONE_233K_CSV);
         assert_eq!(serdyuchenko.len(), 48);
         let bogumil = csv_bins(OZONE_233K_BOGUMIL_CSV);
-        assert_eq!(bogumil.len(), 34);
+        assert_eq!(bogumil.len(), 36);
         for bin in serdyuchenko.iter().chain(&bogumil) {
             assert!(joined.contains(bin), "{bin:?}");
         }
-        assert_eq!(&joined[7..55], &serdyuchenko[..]);
+        assert_eq!(&joined[9..57], &serdyuchenko[..]);
         // The Huggins band: the cross-section rises monotonically towards
         // the ultraviolet, by 3.5 to 6 times per 10 nm, across the seam too.
-        for pair in joined[..9].windows(2) {
+        for pair in joined[2..11].windows(2) {
             let ratio = pair[0].1 / pair[1].1;
             assert!((3.5..7.0).contains(&ratio), "{pair:?}: {ratio}");
         }
+        // Into the Hartley band (its peak is near 255 nm) the rise slows:
+        // 3.2 times from 290 to 280 nm, 2.3 times from 280 to 270 nm.
+        for (pair, range) in joined[..3].windows(2).zip([2.0..2.6, 3.0..3.5]) {
+            let ratio = pair[0].1 / pair[1].1;
+            assert!(range.contains(&ratio), "{pair:?}: {ratio}");
+        }
         // Past the end of the data (1066.5 nm) the bins are 0.
-        assert!(joined[78..].iter().all(|(_, sigma)| *sigma == 0.0));
-        assert!(joined[..78].iter().all(|(_, sigma)| *sigma > 0.0));
+        assert!(joined[80..].iter().all(|(_, sigma)| *sigma == 0.0));
+        assert!(joined[..80].iter().all(|(_, sigma)| *sigma > 0.0));
     }
 
     #[test]
@@ -452,6 +463,8 @@ mod tests {
         let ozone = BinnedCrossSection::ozone_233k();
         let column_m2 = 300.0 * MOLECULES_PER_M2_PER_DOBSON_UNIT;
         let expected = [
+            (280.0, 33.5),
+            (290.0, 13.2),
             (300.0, 3.9),
             (310.0, 1.0),
             (320.0, 0.24),
@@ -482,8 +495,9 @@ mod tests {
         assert!((sampled[0] - 0.5 * (2.182e-28 + 2.818e-28)).abs() < 1e-40);
         // The 1 nm grid covers the whole CIE range 360-830.
         assert!(ozone.sample(&"360:830:1".parse().unwrap()).is_ok());
-        // Every grid sora accepts is covered: 300-2500 nm at 10 and 1 nm.
-        for text in ["300:2500:10", "300:2500:1", "300", "2500"] {
+        // Every grid sora accepts is covered: 280-2500 nm at 20, 10 and 1
+        // nm.
+        for text in ["280:2500:20", "280:2500:10", "280:2500:1", "280", "2500"] {
             let grid: WavelengthGrid = text.parse().unwrap();
             assert_eq!(ozone.sample(&grid).unwrap().len(), grid.len(), "{text}");
         }

@@ -20,7 +20,7 @@
 //! differences; grids on whole nanometres, such as the paper's, hit the rows
 //! exactly). Outside 360-830 nm they are not defined; asking there is an
 //! error, not a zero. A wavelength grid may reach beyond them (sora's grids
-//! span 300-2500 nm): colour is then integrated over the part of the grid
+//! span 280-2500 nm): colour is then integrated over the part of the grid
 //! inside 360-830 nm, the range over which the CIE defines colorimetric
 //! integrals (see `xyz.rs`).
 

@@ -11,7 +11,7 @@
 //! with x̄, ȳ, z̄ the observer's colour-matching functions at the sample
 //! wavelengths (interpolated linearly between their 1 nm rows), the sum
 //! running over the samples inside 360-830 nm, the range of the tables. A
-//! grid that reaches beyond it (sora's span 300-2500 nm, for the
+//! grid that reaches beyond it (sora's span 280-2500 nm, for the
 //! sun-photometer channels and the solar infrared) gives its ultraviolet and infrared samples
 //! weight 0: the CIE defines colorimetric integrals over 360-830 nm, and the
 //! functions there fall to 1e-4 (x̄ at 360 nm) and 1e-6 (at 830 nm) of their

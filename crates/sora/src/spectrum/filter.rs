@@ -66,7 +66,7 @@ pub struct Filter {
 impl Filter {
     /// A Gaussian response centred at `centre_nm` with full width at half
     /// maximum `fwhm_nm` (0.01 nm or more), cut at two widths from the
-    /// centre; its support must lie within 300-2500 nm.
+    /// centre; its support must lie within 280-2500 nm.
     pub fn gaussian(name: &str, centre_nm: f64, fwhm_nm: f64) -> Result<Filter> {
         if !(fwhm_nm.is_finite() && fwhm_nm >= 0.01) {
             return Err(Error::out_of_range(
@@ -115,7 +115,7 @@ impl Filter {
 
     /// A tabulated response from CSV text: a header (`wavelength_nm,
     /// response`, any names), `#` comments, rows with increasing
-    /// wavelengths inside 300-2500 nm and responses >= 0, at least one of
+    /// wavelengths inside 280-2500 nm and responses >= 0, at least one of
     /// them > 0. `name` names the filter in output and errors.
     pub fn parse_csv(text: &str, name: &str) -> Result<Filter> {
         let table = TabulatedSpectrum::parse_csv(text, name)?;

@@ -2,13 +2,15 @@
 //! samples into integrals over wavelength.
 //!
 //! A grid is `start:stop:step` in nanometres (vacuum wavelength), inside
-//! 300-2500 nm: the near ultraviolet to the shortwave infrared, the sun's
-//! spectrum that reaches the ground (96 % of the ASTM E490 sun's energy,
-//! and the range a pyranometer's broadband value mostly holds). Every
+//! 280-2500 nm: the near ultraviolet (from the long-wave edge of ozone's
+//! Hartley band, where the ground's sky goes dark) to the shortwave
+//! infrared, the sun's spectrum that reaches the ground (96 % of the ASTM
+//! E490 sun's energy, and the range a pyranometer's broadband value mostly
+//! holds). Every
 //! built-in optical property covers it: the solar spectrum (ASTM E490,
 //! 119.5 nm to 1 mm), the Rayleigh cross-sections (refractive-index
 //! formulas of Bates 1984 and Bideau-Mehu et al. 1973, both fitted over
-//! wider ranges), the ozone cross-section (`atmosphere::ozone`, 290-2510
+//! wider ranges), the ozone cross-section (`atmosphere::ozone`, 270-2510
 //! nm, 0 past 1070 nm), the banded gases of `[gases]` (200-4000 nm) and the
 //! Mie solver; a
 //! user table (refractive index, albedo, spectrum) that does not cover a
@@ -29,10 +31,11 @@ use std::str::FromStr;
 
 use crate::error::{Error, Result};
 
-/// Shortest wavelength a grid may sample, nm (the near ultraviolet; below
-/// it the ozone Hartley band makes the ground sky dark and the embedded
-/// ozone table ends at 290 nm).
-pub const MIN_WAVELENGTH_NM: f64 = 300.0;
+/// Shortest wavelength a grid may sample, nm (the near ultraviolet: at 280
+/// nm 300 DU of ozone have a vertical optical depth of about 20, so the
+/// ground's sky is dark below it; the embedded ozone table starts at 270
+/// nm, so a 280 nm sample's band is covered for steps up to 20 nm).
+pub const MIN_WAVELENGTH_NM: f64 = 280.0;
 /// Longest wavelength a grid may sample, nm (the shortwave infrared: the
 /// water and CO2 bands at 1.4, 1.9 and 2.0 um included; past 2500 nm the
 /// sun holds under 1.5 % of its energy).
@@ -228,28 +231,28 @@ mod tests {
     }
 
     #[test]
-    fn the_range_is_300_to_2500_nm() {
-        // The whole range every 10 nm: 221 samples, 300 to 2500 nm.
-        let grid: WavelengthGrid = "300:2500:10".parse().unwrap();
-        assert_eq!(grid.len(), 221);
+    fn the_range_is_280_to_2500_nm() {
+        // The whole range every 10 nm: 223 samples, 280 to 2500 nm.
+        let grid: WavelengthGrid = "280:2500:10".parse().unwrap();
+        assert_eq!(grid.len(), 223);
         assert_eq!(grid.start_nm(), MIN_WAVELENGTH_NM);
         assert_eq!(grid.stop_nm(), MAX_WAVELENGTH_NM);
-        assert_eq!(grid.to_string(), "300:2500:10");
+        assert_eq!(grid.to_string(), "280:2500:10");
         // Each end alone, and a photometer channel alone.
-        for text in ["300", "2500", "1020", "1640"] {
+        for text in ["280", "2500", "1020", "1640"] {
             assert_eq!(text.parse::<WavelengthGrid>().unwrap().len(), 1);
         }
         // Just outside either end: one line naming the value, its unit and
         // the range.
         for (text, expected) in [
-            ("299.9:1100:0.1", "start_nm = 299.9 nm"),
-            ("300:2500.5:0.5", "stop_nm = 2500.5 nm"),
+            ("279.9:1100:0.1", "start_nm = 279.9 nm"),
+            ("280:2500.5:0.5", "stop_nm = 2500.5 nm"),
             ("2501", "start_nm = 2501 nm"),
             ("250", "start_nm = 250 nm"),
         ] {
             let message = text.parse::<WavelengthGrid>().unwrap_err().to_string();
             assert!(message.contains(expected), "{text}: {message}");
-            assert!(message.contains("300..=2500"), "{text}: {message}");
+            assert!(message.contains("280..=2500"), "{text}: {message}");
             assert!(!message.contains('\n'), "{text}: {message}");
         }
     }
@@ -264,7 +267,7 @@ mod tests {
     #[test]
     fn bad_grids_are_rejected_with_the_offending_value() {
         let cases = [
-            ("290:780:20", "start_nm = 290 nm"),
+            ("270:780:20", "start_nm = 270 nm"),
             ("380:1110:20", "stop_nm = 1110 nm"),
             ("780:380:20", "stop_nm = 380 nm"),
             ("380:780:0", "step_nm = 0 nm"),
