@@ -345,7 +345,7 @@ fn marched(index: usize, count: usize) -> bool {
 /// Along one axis of `count` nodes, `step` values apart in `values`: fills
 /// the `width` values at `offset` of every unmarched node by the cubic
 /// through the four marched nodes around it, (9 (b + c) - (a + d)) / 16
-/// for nodes a, b, [here], c, d two apart, where that lies between b and
+/// for nodes a, b, (this one), c, d two apart, where that lies between b and
 /// c; otherwise (next to an end of the axis, at a peak or where the values
 /// change by orders of magnitude, as in deep twilight, where the cubic
 /// could even turn negative) the mean of b and c. The cubic's error falls
