@@ -375,8 +375,8 @@ impl Sky {
     /// below the exact field's light (earth-clear, 440 nm; 4e-5 at half the
     /// steps), and its kinks in azimuth more than doubled the sky-view
     /// table's error between its nodes (`docs/polarisation.md`). It costs
-    /// about three times the image tables' source table, which images
-    /// would pay for every frame.
+    /// three to five times the image tables' source table (measured at
+    /// suns 30 and 5), which images would pay for every frame.
     pub(super) fn view_tables(&self) -> &ImageTables {
         self.view_tables.get_or_init(|| {
             let source = self
