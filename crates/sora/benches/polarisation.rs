@@ -39,7 +39,7 @@ fn polarisation_benchmarks(c: &mut Criterion) {
 
 /// Views against images (issue 38), earth-clear, sun 30, 21 wavelengths,
 /// polarised, the sky built in each iteration: 16 384 directions (read
-/// from the image tables, `Sky::radiances`) beside a 128 x 128 fisheye
+/// from tables as pixels are, `Sky::radiances`) beside a 128 x 128 fisheye
 /// (bound 2x), and an almucantar of 72 directions (the exact path, one
 /// polarisation row for all) beside one direction (bound 2x).
 fn direction_benchmarks(c: &mut Criterion) {

@@ -351,7 +351,8 @@ fn assert_same_to_rounding(a: &sora::SkyRadiance, b: &sora::SkyRadiance) {
     }
 }
 
-/// From `TABLE_VIEW_COUNT` views `Sky::radiances` reads the image tables:
+/// From `TABLE_VIEW_COUNT` views `Sky::radiances` reads tables as an
+/// image's pixels are (with a source table at half the image's steps):
 /// against the exact per-view path (`Sky::radiances_exact`, whose views
 /// are each `Sky::radiance` to the last bit, an almucantar's sharing one
 /// polarisation row), scalar and polarised, by day and with a low sun
@@ -406,15 +407,14 @@ fn many_views_read_the_image_tables_within_their_stated_accuracy() {
                 "sun {sun}, {polarisation:?}: tables against the exact path, I within {worst_i:.2e}, degree within {worst_degree:.2e}"
             );
             assert!(worst_i > 0.0, "the tables were read");
-            // Measured (440/560/680 nm): I within 2.3e-3 (sun 30) and
-            // 2.7e-3 (sun 5), the worst 2.5 degrees up and 10 degrees in
-            // azimuth from the sun at 440 nm, from the multiply scattered
-            // light's table read (with single scattering alone, 3.8e-4 at
-            // sun 30; 4 x 2 times the sky-view table's nodes leave 1.2e-3,
-            // docs/polarisation.md); the degree within 9.7e-4 and 1.4e-3.
-            assert!(worst_i < 4e-3, "sun {sun}, {polarisation:?}: I {worst_i}");
+            // Measured (440/560/680 nm): I within 6.7e-4 scalar and 7.1e-4
+            // polarised (sun 30), 8.0e-4 and 9.5e-4 (sun 5), the worst near
+            // the horizon close to the sun's azimuth at 440 nm; the degree
+            // within 9.0e-4 and 1.3e-3. The image tables' source table
+            // (5 and 10 degrees) left 2.3e-3 and 2.7e-3 (docs/polarisation.md).
+            assert!(worst_i < 1e-3, "sun {sun}, {polarisation:?}: I {worst_i}");
             assert!(
-                worst_degree < 2e-3,
+                worst_degree < 1.5e-3,
                 "sun {sun}, {polarisation:?}: degree {worst_degree}"
             );
         }

@@ -24,9 +24,10 @@ use crate::arguments::{
 /// view_elevation_deg,view_azimuth_deg,wavelength_nm,radiance_w_m2_sr_nm,
 /// or JSON with one object per direction; every table is built once for all
 /// of them, and from 256 directions the fast method reads them from an
-/// image's tables (within 0.27 % of the exact per-direction path, the
-/// worst near the sun; 16,384 polarised directions cost about a 128 x 128
-/// fisheye). Radiance is in W m^-2 sr^-1 nm^-1 for the atmosphere's sun.
+/// image's kinds of tables (within 0.1 % of the exact per-direction
+/// path, the worst near the sun; 16,384 polarised directions cost about
+/// 1.3 times a 128 x 128 fisheye). Radiance is in W m^-2 sr^-1 nm^-1 for
+/// the atmosphere's sun.
 ///
 /// With banded gases (an atmosphere file's [gases]) every radiance is the
 /// library's sum of five solves, one per k-distribution term, weighted

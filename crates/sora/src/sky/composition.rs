@@ -138,14 +138,15 @@ impl SkyRadiance {
 }
 
 /// From this many views [`Sky::radiances`] (fast method) reads them from
-/// the image tables instead of the exact per-view path. Measured
-/// (earth-clear, sun 30, 21 wavelengths, CPU time): the tables cost about
-/// as much as 80 exact polarised views of distinct elevations (0.85 s)
-/// and 300 scalar ones (0.43 s); 16 384 polarised views through them cost
-/// 1.1 times a 128 x 128 polarised fisheye (`docs/polarisation.md`).
+/// tables as an image's pixels are (`Sky::view_tables`) instead of the
+/// exact per-view path. Measured (earth-clear, sun 30, 21 wavelengths,
+/// CPU time): the image tables cost about as much as 80 exact polarised
+/// views of distinct elevations (0.85 s) and 300 scalar ones (0.43 s);
+/// 16 384 polarised views through the views' tables cost 1.27 times a
+/// 128 x 128 polarised fisheye (`docs/polarisation.md`).
 pub const TABLE_VIEW_COUNT: usize = 256;
 
-/// Views a task when many views are read from the image tables.
+/// Views a task when many views are read from tables as pixels are.
 const PIXEL_VIEWS_PER_TASK: usize = 64;
 
 /// Views a task on the exact per-view path.
@@ -231,6 +232,15 @@ impl ViewTerms {
             *o = f + g;
         }
     }
+}
+
+/// Which tables views are read from: an image's
+/// ([`Sky::radiance_from_image_tables`]) or those of many views
+/// ([`Sky::radiances`] from [`TABLE_VIEW_COUNT`] views; `Sky::view_tables`).
+#[derive(Debug, Clone, Copy)]
+enum Tables {
+    Image,
+    Views,
 }
 
 /// Where a view's single-scattering integrals are: in
@@ -340,10 +350,11 @@ impl Sky {
 
     /// The spectral radiance of every view in `views`, in order, reusing
     /// every table (see the module docs). With [`Method::Fast`] and at
-    /// least [`TABLE_VIEW_COUNT`] views the views are read from the image
-    /// tables ([`Sky::radiance_from_image_tables`]; within 0.27 % of the
-    /// exact path by day, the worst near the horizon close to the sun's
-    /// azimuth, 1 % in twilight);
+    /// least [`TABLE_VIEW_COUNT`] views the views are read from tables as
+    /// an image's pixels are, with a source table at half the image's steps
+    /// (within 0.1 % of the exact path by day: 0.095 % at most over 256
+    /// views of earth-clear at suns 30 and 5, the worst near the horizon
+    /// close to the sun's azimuth; 1 % in twilight);
     /// [`Sky::radiances_exact`] keeps the exact per-view path for any
     /// number of views.
     pub fn radiances(&self, views: &[ViewDirection]) -> Result<Vec<SkyRadiance>> {
@@ -424,7 +435,7 @@ impl Sky {
             && self.lowest_view_elevation_rad.is_none()
             && views.len() >= TABLE_VIEW_COUNT
         {
-            return self.radiances_from_image_tables(views, progress);
+            return self.radiances_from_tables(views, progress, Tables::Views);
         }
         let polarised = self.polarisation == Polarisation::Vector;
         let rows = self.polarisation_rows(views.iter().map(|view| (view, f64::INFINITY)));
@@ -604,8 +615,9 @@ impl Sky {
 
     /// The radiance a fast-method image shows toward `view` (read from its
     /// tables, without the sun's disc): within 0.1 % of [`Sky::radiance`]
-    /// with [`Method::Fast`] by day away from the sun (0.27 % near the
-    /// horizon 10 degrees in azimuth from it, earth-clear) and within 1 % in twilight (measured
+    /// with [`Method::Fast`] by day away from the sun (0.22 % near the
+    /// horizon 10 degrees in azimuth from it, earth-clear; [`Sky::radiances`]
+    /// of many views reads finer tables) and within 1 % in twilight (measured
     /// 0.7 %, sun 0 to -16 degrees, `tests/twilight.rs`), which is what the
     /// tests hold it to: values that match a rendered image pixel for pixel.
     pub fn radiance_from_image_tables(&self, view: ViewDirection) -> Result<SkyRadiance> {
@@ -620,16 +632,34 @@ impl Sky {
         views: &[ViewDirection],
         progress: &(dyn Fn(u64, u64) + Sync),
     ) -> Result<Vec<SkyRadiance>> {
+        self.radiances_from_tables(views, progress, Tables::Image)
+    }
+
+    /// Every view in `views` read from `tables` as an image's pixels are,
+    /// in parallel, calling `progress(done, total)` as views complete.
+    fn radiances_from_tables(
+        &self,
+        views: &[ViewDirection],
+        progress: &(dyn Fn(u64, u64) + Sync),
+        tables: Tables,
+    ) -> Result<Vec<SkyRadiance>> {
         if !self.k_terms.is_empty() {
             return self.sum_term_radiances(|k, term| {
-                term.radiances_from_image_tables(views, &|done, total| {
-                    let (done, total) = self.term_progress(k, done, total);
-                    progress(done, total)
-                })
+                term.radiances_from_tables(
+                    views,
+                    &|done, total| {
+                        let (done, total) = self.term_progress(k, done, total);
+                        progress(done, total)
+                    },
+                    tables,
+                )
             });
         }
         self.prepare_field_for_images()?;
-        let tables = self.image_tables();
+        let tables = match tables {
+            Tables::Image => self.image_tables(),
+            Tables::Views => self.view_tables(),
+        };
         let polarised = self.polarisation == Polarisation::Vector;
         Ok(self.compute_views_in_parallel(
             views,

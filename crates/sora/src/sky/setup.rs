@@ -36,6 +36,10 @@ pub struct Sky {
     pub(super) source_table: OnceLock<MultipleScatteringTable>,
     /// The fast method's image tables (built on first use).
     pub(super) image_tables: OnceLock<ImageTables>,
+    /// The tables many views are read from: the image tables' kinds, with
+    /// a source table at half the steps (built on first use; see
+    /// [`Sky::view_tables`]).
+    pub(super) view_tables: OnceLock<ImageTables>,
     /// Views no lower than this (rad) only: the field is solved for the
     /// sun angles their rays meet (`Sky::for_views_above`), and other
     /// views and images are refused.
@@ -135,6 +139,7 @@ impl Sky {
             field: OnceLock::new(),
             source_table: OnceLock::new(),
             image_tables: OnceLock::new(),
+            view_tables: OnceLock::new(),
             lowest_view_elevation_rad: None,
             k_terms: Vec::new(),
         })
@@ -357,25 +362,52 @@ impl Sky {
 
     /// The fast method's image tables, built on first use.
     pub(super) fn image_tables(&self) -> &ImageTables {
-        self.image_tables.get_or_init(|| {
-            let (altitude_nodes, mu_nodes) = self.table_size.sun_column_nodes;
-            let sun_columns = self.scene.sun_column_table(altitude_nodes, mu_nodes);
-            let (half_zenith, azimuth) = self.table_size.sky_view_nodes;
-            let sky_view = SkyViewTable::compute_with_multiple_scattering(
-                &self.scene,
-                &sun_columns,
-                self.source_table(),
-                half_zenith,
-                azimuth,
-            );
-            let polarisation = self
-                .field()
-                .and_then(|field| field.compute_polarisation_table(POLARISATION_TABLE_NODES));
-            ImageTables {
-                sky_view,
-                polarisation,
-            }
+        self.image_tables
+            .get_or_init(|| self.compute_tables(self.source_table()))
+    }
+
+    /// The tables that many views are read from ([`Sky::radiances`] from
+    /// [`super::TABLE_VIEW_COUNT`] views), built on first use: the image
+    /// tables' kinds and sizes, with the multiply scattered light marched
+    /// through a source table at half the steps of the settings' (73 x 37
+    /// nodes by default, 2.5 and 5 degrees). The image tables' source
+    /// table alone put a view 2.5 degrees up near the sun's azimuth 1.2e-3
+    /// below the exact field's light (earth-clear, 440 nm; 4e-5 at half the
+    /// steps), and its kinks in azimuth more than doubled the sky-view
+    /// table's error between its nodes (`docs/polarisation.md`). It costs
+    /// three to five times the image tables' source table (measured at
+    /// suns 30 and 5), which images would pay for every frame.
+    pub(super) fn view_tables(&self) -> &ImageTables {
+        self.view_tables.get_or_init(|| {
+            let source = self
+                .field
+                .get()
+                .map(|field| MultipleScatteringTable::compute_at_half_steps(Arc::clone(field)));
+            self.compute_tables(source.as_ref())
         })
+    }
+
+    /// The sky-view table from `source` (None: single scattering) and the
+    /// polarisation table (polarised skies with multiple scattering), at
+    /// the sky's table sizes.
+    fn compute_tables(&self, source: Option<&MultipleScatteringTable>) -> ImageTables {
+        let (altitude_nodes, mu_nodes) = self.table_size.sun_column_nodes;
+        let sun_columns = self.scene.sun_column_table(altitude_nodes, mu_nodes);
+        let (half_zenith, azimuth) = self.table_size.sky_view_nodes;
+        let sky_view = SkyViewTable::compute_with_multiple_scattering(
+            &self.scene,
+            &sun_columns,
+            source,
+            half_zenith,
+            azimuth,
+        );
+        let polarisation = self
+            .field()
+            .and_then(|field| field.compute_polarisation_table(POLARISATION_TABLE_NODES));
+        ImageTables {
+            sky_view,
+            polarisation,
+        }
     }
 }
 

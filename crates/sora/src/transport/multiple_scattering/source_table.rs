@@ -49,10 +49,33 @@ impl MultipleScatteringTable {
     /// optics and for exact comparisons), at the table size of its settings.
     pub(crate) fn compute(field: Arc<MultipleScatteringField>) -> MultipleScatteringTable {
         let settings = field.settings;
-        let (views, azimuths) = (
-            settings.table_view_zenith_nodes.max(2),
-            settings.table_azimuth_nodes.max(2),
+        let nodes = (
+            settings.table_view_zenith_nodes,
+            settings.table_azimuth_nodes,
         );
+        MultipleScatteringTable::compute_with_nodes(field, nodes)
+    }
+
+    /// [`MultipleScatteringTable::compute`] at half the steps of the
+    /// settings' nodes on both view axes (2 n - 1 nodes for n).
+    pub(crate) fn compute_at_half_steps(
+        field: Arc<MultipleScatteringField>,
+    ) -> MultipleScatteringTable {
+        let settings = field.settings;
+        let nodes = (
+            2 * settings.table_view_zenith_nodes.max(2) - 1,
+            2 * settings.table_azimuth_nodes.max(2) - 1,
+        );
+        MultipleScatteringTable::compute_with_nodes(field, nodes)
+    }
+
+    /// [`MultipleScatteringTable::compute`] with `(view zenith, azimuth)`
+    /// nodes of its own instead of the settings'.
+    fn compute_with_nodes(
+        field: Arc<MultipleScatteringField>,
+        (views, azimuths): (usize, usize),
+    ) -> MultipleScatteringTable {
+        let (views, azimuths) = (views.max(2), azimuths.max(2));
         let degrees = field.optics.geometry.streams.count();
         let levels = field.optics.geometry.grid.levels();
         let suns = field.optics.sun_axis.count();
