@@ -89,6 +89,10 @@ pub(crate) fn is_even_component(i: usize) -> bool {
 #[derive(Debug, Clone)]
 pub struct PhaseMatrixHarmonics {
     harmonics: usize,
+    /// The harmonics kept, 0..stored; those from `stored` on are zero (a
+    /// phase matrix whose harmonics end there, Rayleigh's at m = 2) and
+    /// not stored.
+    stored: usize,
     outputs: usize,
     inputs: usize,
     /// w_b Z^m_ic(mu_a, mu_b), by columns (c, b) of each harmonic's
@@ -108,18 +112,48 @@ impl PhaseMatrixHarmonics {
     /// at zenith cosine `sun_cosine` if given (zeros if not), into those of
     /// `output_cosines`. The rotations are computed once for all
     /// wavelengths.
+    #[cfg(test)]
     pub(crate) fn compute(
+        phase: &dyn Fn(f64, &mut [PhaseMatrix]),
+        wavelengths: usize,
+        output_cosines: &[f64],
+        inputs: (&[f64], &[f64]),
+        sun_cosine: Option<f64>,
+        harmonics: usize,
+    ) -> Vec<PhaseMatrixHarmonics> {
+        PhaseMatrixHarmonics::compute_nonzero(
+            phase,
+            wavelengths,
+            output_cosines,
+            inputs,
+            sun_cosine,
+            (harmonics, harmonics),
+        )
+    }
+
+    /// [`PhaseMatrixHarmonics::compute`] for a phase matrix whose
+    /// harmonics from `nonzero` on vanish (Rayleigh's, from 3: its elements
+    /// are quadratic in the scattering angle's cosine, so Z's are
+    /// trigonometric polynomials of degree 2 in the azimuth): harmonics
+    /// 0..`harmonics`, only 0..`nonzero` computed and stored, the same
+    /// numbers as [`PhaseMatrixHarmonics::compute`]'s to the bit (the same
+    /// azimuth rule and sums); the others are zero where
+    /// [`PhaseMatrixHarmonics::compute`] gives rounding (below 1e-14 of
+    /// the largest element).
+    pub(crate) fn compute_nonzero(
         phase: &dyn Fn(f64, &mut [PhaseMatrix]),
         wavelengths: usize,
         output_cosines: &[f64],
         (input_cosines, input_weights): (&[f64], &[f64]),
         sun_cosine: Option<f64>,
-        harmonics: usize,
+        (harmonics, nonzero): (usize, usize),
     ) -> Vec<PhaseMatrixHarmonics> {
         const ELEMENTS: usize = COMPONENTS * COMPONENTS;
         let (outputs, inputs) = (output_cosines.len(), input_cosines.len());
         let AzimuthRule { nodes, step, trig } = AzimuthRule::new(harmonics);
-        let mut all = PhaseMatrixHarmonics::zeros(wavelengths, harmonics, outputs, inputs);
+        let stored = nonzero.min(harmonics);
+        let mut all =
+            PhaseMatrixHarmonics::zeros(wavelengths, (harmonics, stored), outputs, inputs);
         let mut matrices = vec![PhaseMatrix::default(); wavelengths];
         let inputs_and_sun = inputs_and_sun((input_cosines, input_weights), sun_cosine);
         // The mirror symmetry about the sun's vertical, Z(-Delta) =
@@ -138,9 +172,9 @@ impl PhaseMatrixHarmonics {
         // node's factor is the node weight times cos(m Delta_k) or
         // sin(m Delta_k) by element, [(k * harmonics + m) * 16 + e].
         let mut z_nodes = vec![0.0; wavelengths * nodes * ELEMENTS];
-        let mut transforms = vec![0.0; harmonics * ELEMENTS];
+        let mut transforms = vec![0.0; stored * ELEMENTS];
         let factors: Vec<f64> = (0..nodes)
-            .flat_map(|k| (0..harmonics).map(move |m| (k, m)))
+            .flat_map(|k| (0..stored).map(move |m| (k, m)))
             .flat_map(|(k, m)| {
                 let (cos_m, sin_m) = trig[k * harmonics + m];
                 let (cos_m, sin_m) = (node_weight(k) * cos_m, node_weight(k) * sin_m);
@@ -168,8 +202,7 @@ impl PhaseMatrixHarmonics {
                     transforms.fill(0.0);
                     let values = &z_nodes[i * nodes * ELEMENTS..][..nodes * ELEMENTS];
                     for (k, z) in values.chunks_exact(ELEMENTS).enumerate() {
-                        let node_factors =
-                            &factors[k * harmonics * ELEMENTS..][..harmonics * ELEMENTS];
+                        let node_factors = &factors[k * stored * ELEMENTS..][..stored * ELEMENTS];
                         for (part, factors) in transforms
                             .chunks_exact_mut(ELEMENTS)
                             .zip(node_factors.chunks_exact(ELEMENTS))
@@ -200,9 +233,9 @@ impl PhaseMatrixHarmonics {
         step: f64,
     ) {
         const ELEMENTS: usize = COMPONENTS * COMPONENTS;
-        let (harmonics, inputs, outputs) = (self.harmonics, self.inputs, self.outputs);
+        let (stored, inputs, outputs) = (self.stored, self.inputs, self.outputs);
         let block = COMPONENTS * outputs;
-        for m in 0..harmonics {
+        for m in 0..stored {
             let transform = &transforms[m * ELEMENTS..(m + 1) * ELEMENTS];
             for row in 0..COMPONENTS {
                 match weight {
@@ -243,7 +276,8 @@ impl PhaseMatrixHarmonics {
         let (outputs, inputs) = (output_cosines.len(), input_cosines.len());
         let AzimuthRule { nodes, step, trig } = AzimuthRule::new(harmonics);
         let block = COMPONENTS * outputs;
-        let mut all = PhaseMatrixHarmonics::zeros(wavelengths, harmonics, outputs, inputs);
+        let mut all =
+            PhaseMatrixHarmonics::zeros(wavelengths, (harmonics, harmonics), outputs, inputs);
         let mut matrices = vec![PhaseMatrix::default(); wavelengths];
         let inputs_and_sun = inputs_and_sun((input_cosines, input_weights), sun_cosine);
         for (a, &mu_out) in output_cosines.iter().enumerate() {
@@ -292,10 +326,11 @@ impl PhaseMatrixHarmonics {
         all
     }
 
-    /// Zero harmonics at each of `wavelengths` wavelengths.
+    /// Zero harmonics 0..`harmonics` at each of `wavelengths` wavelengths,
+    /// of which 0..`stored` are stored.
     pub(crate) fn zeros(
         wavelengths: usize,
-        harmonics: usize,
+        (harmonics, stored): (usize, usize),
         outputs: usize,
         inputs: usize,
     ) -> Vec<PhaseMatrixHarmonics> {
@@ -303,32 +338,50 @@ impl PhaseMatrixHarmonics {
         (0..wavelengths)
             .map(|_| PhaseMatrixHarmonics {
                 harmonics,
+                stored,
                 outputs,
                 inputs,
-                scattering: vec![0.0; harmonics * COMPONENTS * inputs * block],
-                sun: vec![0.0; harmonics * block],
+                scattering: vec![0.0; stored * COMPONENTS * inputs * block],
+                sun: vec![0.0; stored * block],
             })
             .collect()
+    }
+
+    /// The harmonics of a species that scatters nothing, at each of
+    /// `wavelengths` wavelengths: none stored (every harmonic vanishes).
+    pub(crate) fn none(wavelengths: usize, harmonics: usize) -> Vec<PhaseMatrixHarmonics> {
+        PhaseMatrixHarmonics::zeros(wavelengths, (harmonics, 0), 0, 0)
     }
 
     pub(crate) fn harmonics(&self) -> usize {
         self.harmonics
     }
 
-    /// Harmonic m's matrix by columns: [(c * inputs + b) * 4 * outputs + i * outputs + a].
+    /// Harmonic m's matrix by columns: [(c * inputs + b) * 4 * outputs + i * outputs + a];
+    /// empty for a harmonic not stored (zero, [`PhaseMatrixHarmonics::compute_nonzero`]).
     pub(crate) fn scattering(&self, m: usize) -> &[f64] {
+        if m >= self.stored {
+            return &[];
+        }
         let size = COMPONENTS * self.inputs * COMPONENTS * self.outputs;
         &self.scattering[m * size..(m + 1) * size]
     }
 
-    /// B^m: [i * outputs + a].
+    /// B^m: [i * outputs + a]; empty for a harmonic not stored.
     pub(crate) fn sun(&self, m: usize) -> &[f64] {
+        if m >= self.stored {
+            return &[];
+        }
         let size = COMPONENTS * self.outputs;
         &self.sun[m * size..(m + 1) * size]
     }
 
-    /// True when harmonic m vanishes (to rounding) for every element.
+    /// True when harmonic m vanishes (to rounding) for every element (and
+    /// for every harmonic not stored).
     pub(crate) fn harmonic_vanishes(&self, m: usize) -> bool {
+        if m >= self.stored {
+            return true;
+        }
         // Harmonic 0's I <- I block holds the largest values (w_b times the
         // phase function's mean over azimuth, 2 pi p_0 > 0).
         let largest = self
