@@ -164,21 +164,22 @@ impl PhaseMatrixHarmonics {
         let half = (nodes - 1) / 2;
         let nodes = half + 1;
         let node_weight = |k: usize| if k == 0 { 1.0 } else { 2.0 };
-        // Z at every node for one pair of directions, [(i * nodes + k) * 16 + e]
-        // (e = row * 4 + column), and its transforms, [m * 16 + e]: whole
+        // Z at every node for one pair of directions, [i * nodes + k][e]
+        // (e = row * 4 + column), and its transforms, [m][e]: whole
         // 16-element rows, so the transforms vectorise. Each element keeps
         // one transform only (the cosine transform of the even elements,
         // the sine transform of the odd ones, see the module docs), so each
         // node's factor is the node weight times cos(m Delta_k) or
-        // sin(m Delta_k) by element, [(k * harmonics + m) * 16 + e].
-        let mut z_nodes = vec![0.0; wavelengths * nodes * ELEMENTS];
-        let mut transforms = vec![0.0; stored * ELEMENTS];
-        let factors: Vec<f64> = (0..nodes)
-            .flat_map(|k| (0..stored).map(move |m| (k, m)))
-            .flat_map(|(k, m)| {
+        // sin(m Delta_k) by element, [m * nodes + k][e]. Each harmonic's
+        // sum over the nodes runs in k's order in one accumulator.
+        let mut z_nodes = vec![[0.0; ELEMENTS]; wavelengths * nodes];
+        let mut transforms = vec![[0.0; ELEMENTS]; stored];
+        let factors: Vec<[f64; ELEMENTS]> = (0..stored)
+            .flat_map(|m| (0..nodes).map(move |k| (k, m)))
+            .map(|(k, m)| {
                 let (cos_m, sin_m) = trig[k * harmonics + m];
                 let (cos_m, sin_m) = (node_weight(k) * cos_m, node_weight(k) * sin_m);
-                (0..ELEMENTS).map(move |e| if is_even_element(e) { cos_m } else { sin_m })
+                std::array::from_fn(|e| if is_even_element(e) { cos_m } else { sin_m })
             })
             .collect();
         for (a, &mu_out) in output_cosines.iter().enumerate() {
@@ -192,25 +193,24 @@ impl PhaseMatrixHarmonics {
                     phase(geometry.cos_theta, &mut matrices);
                     for (i, f) in matrices.iter().enumerate() {
                         let z = geometry.rotate(f);
-                        let target = &mut z_nodes[(i * nodes + k) * ELEMENTS..][..ELEMENTS];
+                        let target = &mut z_nodes[i * nodes + k];
                         for (t, v) in target.iter_mut().zip(z.iter().flatten()) {
                             *t = *v;
                         }
                     }
                 }
                 for (i, h) in all.iter_mut().enumerate() {
-                    transforms.fill(0.0);
-                    let values = &z_nodes[i * nodes * ELEMENTS..][..nodes * ELEMENTS];
-                    for (k, z) in values.chunks_exact(ELEMENTS).enumerate() {
-                        let node_factors = &factors[k * stored * ELEMENTS..][..stored * ELEMENTS];
-                        for (part, factors) in transforms
-                            .chunks_exact_mut(ELEMENTS)
-                            .zip(node_factors.chunks_exact(ELEMENTS))
-                        {
-                            for ((t, v), f) in part.iter_mut().zip(z).zip(factors) {
-                                *t += v * f;
+                    let values = &z_nodes[i * nodes..(i + 1) * nodes];
+                    for (transform, node_factors) in
+                        transforms.iter_mut().zip(factors.chunks_exact(nodes))
+                    {
+                        let mut sum = [0.0; ELEMENTS];
+                        for (z, f) in values.iter().zip(node_factors) {
+                            for e in 0..ELEMENTS {
+                                sum[e] += z[e] * f[e];
                             }
                         }
+                        *transform = sum;
                     }
                     h.store_transforms(&transforms, (a, b), weight, step);
                 }
@@ -220,23 +220,22 @@ impl PhaseMatrixHarmonics {
     }
 
     /// Stores the transforms over the azimuth nodes of the rotated matrix
-    /// from input (or sun) `b` into output `a`, [m * 16 + e] (the cosine
+    /// from input (or sun) `b` into output `a`, [m][e] (the cosine
     /// transform of the even elements, the sine transform of the odd ones:
     /// [`is_even_element`]), as this wavelength's harmonics: the scattering
     /// blocks with the input's quadrature weight `weight`, or (None) the
     /// sun's.
     fn store_transforms(
         &mut self,
-        transforms: &[f64],
+        transforms: &[[f64; COMPONENTS * COMPONENTS]],
         (a, b): (usize, usize),
         weight: Option<f64>,
         step: f64,
     ) {
-        const ELEMENTS: usize = COMPONENTS * COMPONENTS;
         let (stored, inputs, outputs) = (self.stored, self.inputs, self.outputs);
         let block = COMPONENTS * outputs;
         for m in 0..stored {
-            let transform = &transforms[m * ELEMENTS..(m + 1) * ELEMENTS];
+            let transform = &transforms[m];
             for row in 0..COMPONENTS {
                 match weight {
                     Some(weight) => {

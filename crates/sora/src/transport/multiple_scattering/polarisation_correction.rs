@@ -340,7 +340,7 @@ impl PolarisationCorrection {
                 );
                 let per_species: Vec<&PhaseMatrixHarmonics> =
                     harmonics.iter().map(|h| &h[i]).collect();
-                let vector = VectorColumnSystem::new(scalar.clone(), &per_species);
+                let vector = VectorColumnSystem::new(scalar, &per_species);
                 debug_assert_eq!(vector.field_len(), vector_len);
                 let optical_depths = &inputs.sun_optical_depths[i * levels..(i + 1) * levels];
                 let transmittance: Vec<f64> = optical_depths
@@ -352,7 +352,10 @@ impl PolarisationCorrection {
                 let (scalar_field, ground) = rest.split_at_mut(scalar_len);
                 let sun_cosine = inputs.sun_cosine;
                 let down_vector = vector.solve(sun_cosine, &transmittance, vector_field, work);
-                let down_scalar = scalar.solve(sun_cosine, &transmittance, scalar_field, work);
+                let down_scalar =
+                    vector
+                        .scalar()
+                        .solve(sun_cosine, &transmittance, scalar_field, work);
                 // The ground's diffuse light as the scalar field's ground
                 // term takes it (the sunlit ground's single reflection is
                 // exact elsewhere; delta-M's share of the beam stays here).
