@@ -234,8 +234,7 @@ impl PhaseMatrixHarmonics {
     ) {
         let (stored, inputs, outputs) = (self.stored, self.inputs, self.outputs);
         let block = COMPONENTS * outputs;
-        for m in 0..stored {
-            let transform = &transforms[m];
+        for (m, transform) in transforms[..stored].iter().enumerate() {
             for row in 0..COMPONENTS {
                 match weight {
                     Some(weight) => {
@@ -567,6 +566,39 @@ mod tests {
                 );
             }
             assert_eq!(harmonics.harmonic_vanishes(m), m > 2, "m {m}");
+        }
+    }
+
+    #[test]
+    fn rayleigh_harmonics_from_three_on_vanish_and_are_not_stored() {
+        // compute_nonzero's harmonics 0..3 are compute's to the bit; the
+        // ones it does not store are rounding in compute's.
+        let phase = |c: f64, out: &mut [PhaseMatrix]| {
+            for (i, m) in out.iter_mut().enumerate() {
+                *m = rayleigh_phase_matrix(0.01 * i as f64, c);
+            }
+        };
+        let (mu, w) = double_gauss(4);
+        let outputs = [0.8, -0.3, 0.02];
+        let full = PhaseMatrixHarmonics::compute(&phase, 2, &outputs, (&mu, &w), Some(0.4), 8);
+        let kept = PhaseMatrixHarmonics::compute_nonzero(
+            &phase,
+            2,
+            &outputs,
+            (&mu, &w),
+            Some(0.4),
+            (8, 3),
+        );
+        for (f, k) in full.iter().zip(&kept) {
+            for m in 0..8 {
+                assert!(f.harmonic_vanishes(m) == (m >= 3) && k.harmonic_vanishes(m) == (m >= 3));
+                if m < 3 {
+                    assert_eq!(f.scattering(m), k.scattering(m), "m {m}");
+                    assert_eq!(f.sun(m), k.sun(m), "m {m}");
+                } else {
+                    assert!(k.scattering(m).is_empty() && k.sun(m).is_empty());
+                }
+            }
         }
     }
 

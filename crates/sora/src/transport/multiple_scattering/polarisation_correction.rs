@@ -114,11 +114,12 @@ pub(crate) struct CorrectionInputs<'a> {
 /// a slider drag) reads them instead of computing them again, the same
 /// numbers bit for bit. They were three quarters of the phase-matrix work
 /// of a polarised image's field (the correction's own stream-to-stream
-/// harmonics, with the sun, are still computed per sun). Size: harmonics x
-/// 16 x streams x cosines x wavelengths x species doubles (66 MB at 8
-/// streams per hemisphere, 21 wavelengths and 2 scattering species; the
-/// explorer's preview 9 MB); only the table's nodes are kept, not a list of
-/// directions' cosines.
+/// harmonics, with the sun, are still computed per sun). Size: the
+/// harmonics stored (all 2N of a Mie or Henyey-Greenstein species, 3 of
+/// Rayleigh's, none of an absorber's) x 16 x streams x cosines x
+/// wavelengths doubles (39 MB at 8 streams per hemisphere, 21 wavelengths,
+/// Rayleigh and one aerosol; the explorer's preview about 5 MB); only the
+/// table's nodes are kept, not a list of directions' cosines.
 #[derive(Debug, Default)]
 pub(crate) struct ViewHarmonicsCache(Mutex<Vec<ViewHarmonics>>);
 
