@@ -163,6 +163,12 @@ impl PhaseMatrixHarmonics {
         // 0..=half are computed, the others counted twice.
         let half = (nodes - 1) / 2;
         let nodes = half + 1;
+        // The mirror symmetry through the horizontal plane, Z(-mu, -mu',
+        // Delta) = D Z(mu, mu', Delta) D (the mirror keeps I and Q and
+        // changes the sign of U and V): of two pairs of directions that
+        // are each other's image (streams are symmetric about the
+        // horizon), the second takes the first's harmonics.
+        let mirrors = Mirrors::new(output_cosines, (input_cosines, input_weights));
         let node_weight = |k: usize| if k == 0 { 1.0 } else { 2.0 };
         // Z at every node for one pair of directions, [i * nodes + k][e]
         // (e = row * 4 + column), and its transforms, [m][e]: whole
@@ -187,6 +193,16 @@ impl PhaseMatrixHarmonics {
                 .map(|k| LookDirection::new(mu_out, k as f64 * step))
                 .collect();
             for (b, &(mu_in, weight)) in inputs_and_sun.iter().enumerate() {
+                // The mirror image through the horizontal plane of a pair
+                // already computed: its harmonics with D's signs.
+                if let Some((a_mirror, b_mirror)) = mirrors.pair(a, b)
+                    && (a_mirror, b_mirror) < (a, b)
+                {
+                    for h in all.iter_mut() {
+                        h.store_mirror((a, b), (a_mirror, b_mirror));
+                    }
+                    continue;
+                }
                 let incoming = LookDirection::new(mu_in, 0.0);
                 for (k, out) in outs.iter().enumerate() {
                     let geometry = ScatteringGeometry::new(*out, incoming);
@@ -255,6 +271,30 @@ impl PhaseMatrixHarmonics {
                         let norm = if m == 0 { 2.0 * PI } else { PI };
                         self.sun[(m * COMPONENTS + row) * outputs + a] = step / norm * projected;
                     }
+                }
+            }
+        }
+    }
+
+    /// Stores as the harmonics from input `b` into output `a` those from
+    /// their mirror images `b_mirror` into `a_mirror` (already stored):
+    /// D Z^m D, the (I, Q) x (U, V) and (U, V) x (I, Q) blocks negated.
+    fn store_mirror(&mut self, (a, b): (usize, usize), (a_mirror, b_mirror): (usize, usize)) {
+        let (inputs, outputs) = (self.inputs, self.outputs);
+        let block = COMPONENTS * outputs;
+        for m in 0..self.stored {
+            for column in 0..COMPONENTS {
+                for row in 0..COMPONENTS {
+                    let at = |a: usize, b: usize| {
+                        ((m * COMPONENTS + column) * inputs + b) * block + row * outputs + a
+                    };
+                    let value = self.scattering[at(a_mirror, b_mirror)];
+                    self.scattering[at(a, b)] =
+                        if is_even_component(row) == is_even_component(column) {
+                            value
+                        } else {
+                            -value
+                        };
                 }
             }
         }
@@ -418,6 +458,39 @@ impl AzimuthRule {
             .map(|(s, c)| (c, s))
             .collect();
         AzimuthRule { nodes, step, trig }
+    }
+}
+
+/// Each output's and input's mirror image through the horizontal plane
+/// among the outputs and the inputs (the cosine negated, an input's weight
+/// the same), if there is one.
+struct Mirrors {
+    outputs: Vec<Option<usize>>,
+    inputs: Vec<Option<usize>>,
+}
+
+impl Mirrors {
+    fn new(output_cosines: &[f64], (input_cosines, input_weights): (&[f64], &[f64])) -> Mirrors {
+        let find = |values: &[f64], mu: f64| values.iter().position(|v| *v == -mu);
+        Mirrors {
+            outputs: output_cosines
+                .iter()
+                .map(|mu| find(output_cosines, *mu))
+                .collect(),
+            inputs: input_cosines
+                .iter()
+                .enumerate()
+                .map(|(b, mu)| {
+                    find(input_cosines, *mu).filter(|m| input_weights[*m] == input_weights[b])
+                })
+                .collect(),
+        }
+    }
+
+    /// The mirror image of the pair (output `a`, input `b`); None for the
+    /// sun (input `inputs`, not mirrored) or a direction without one.
+    fn pair(&self, a: usize, b: usize) -> Option<(usize, usize)> {
+        Some((self.outputs[a]?, (*self.inputs.get(b)?)?))
     }
 }
 
@@ -703,7 +776,9 @@ mod tests {
             }
         };
         let (mu, w) = double_gauss(3);
-        let outputs = [0.7, -0.2, 0.05];
+        // Outputs with and without mirror images (those with take their
+        // mirror's harmonics with D's signs), and the streams themselves.
+        let outputs = [0.7, -0.2, 0.05, -0.7, 0.2, mu[1], mu[4]];
         let fast = PhaseMatrixHarmonics::compute(&phase, 3, &outputs, (&mu, &w), Some(0.3), 6);
         let reference =
             PhaseMatrixHarmonics::compute_reference(&phase, 3, &outputs, (&mu, &w), Some(0.3), 6);
