@@ -60,9 +60,12 @@
 //! rotations: no generalised spherical functions to derive and test, and
 //! the same rotation code as the path tracer the solver is tested
 //! against. The mirror symmetry about the sun's vertical halves the
-//! nodes (2N + 1 of them are computed); the cost, streams^2 (2N + 1)
-//! rotations per species for all wavelengths and the transforms per
-//! wavelength, is small beside a solve.
+//! nodes (2N + 1 of them are computed), and the mirror symmetry through
+//! the horizontal plane, Z(-mu, -mu') = D Z(mu, mu') D with D =
+//! diag(1, 1, -1, -1), the pairs of streams; the cost, streams^2 (2N + 1)
+//! / 2 rotations per species for all wavelengths and the transforms per
+//! wavelength (only harmonics 0..3 of Rayleigh's, whose others vanish), is
+//! small beside a solve.
 
 use std::f64::consts::PI;
 
