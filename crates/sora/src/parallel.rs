@@ -30,3 +30,34 @@ pub(crate) fn for_each_chunk_mut<T: Send>(
             .for_each(|(i, chunk)| work(i, chunk));
     }
 }
+
+/// [`for_each_chunk_mut`] with work space: `work(state, chunk_index,
+/// chunk)`, where `state` is made by `init` once per run of chunks that one
+/// thread takes in turn (rayon's `for_each_init`), not once per chunk, so
+/// a large buffer is allocated (and its pages touched) a few times instead
+/// of once per chunk. `work` must not depend on what an earlier chunk left
+/// in `state` (results do not depend on the number of threads).
+pub(crate) fn for_each_chunk_mut_with<T: Send, S>(
+    data: &mut [T],
+    chunk_length: usize,
+    init: impl Fn() -> S + Sync + Send,
+    work: impl Fn(&mut S, usize, &mut [T]) + Sync + Send,
+) {
+    if data.is_empty() {
+        return;
+    }
+    #[cfg(feature = "parallel")]
+    {
+        use rayon::prelude::*;
+        data.par_chunks_mut(chunk_length)
+            .enumerate()
+            .for_each_init(init, |state, (i, chunk)| work(state, i, chunk));
+    }
+    #[cfg(not(feature = "parallel"))]
+    {
+        let mut state = init();
+        data.chunks_mut(chunk_length)
+            .enumerate()
+            .for_each(|(i, chunk)| work(&mut state, i, chunk));
+    }
+}

@@ -60,9 +60,12 @@
 //! rotations: no generalised spherical functions to derive and test, and
 //! the same rotation code as the path tracer the solver is tested
 //! against. The mirror symmetry about the sun's vertical halves the
-//! nodes (2N + 1 of them are computed); the cost, streams^2 (2N + 1)
-//! rotations per species for all wavelengths and the transforms per
-//! wavelength, is small beside a solve.
+//! nodes (2N + 1 of them are computed), and the mirror symmetry through
+//! the horizontal plane, Z(-mu, -mu') = D Z(mu, mu') D with D =
+//! diag(1, 1, -1, -1), the pairs of streams; the cost, streams^2 (2N + 1)
+//! / 2 rotations per species for all wavelengths and the transforms per
+//! wavelength (only harmonics 0..3 of Rayleigh's, whose others vanish), is
+//! small beside a solve.
 
 use std::f64::consts::PI;
 
@@ -89,6 +92,10 @@ pub(crate) fn is_even_component(i: usize) -> bool {
 #[derive(Debug, Clone)]
 pub struct PhaseMatrixHarmonics {
     harmonics: usize,
+    /// The harmonics kept, 0..stored; those from `stored` on are zero (a
+    /// phase matrix whose harmonics end there, Rayleigh's at m = 2) and
+    /// not stored.
+    stored: usize,
     outputs: usize,
     inputs: usize,
     /// w_b Z^m_ic(mu_a, mu_b), by columns (c, b) of each harmonic's
@@ -108,18 +115,48 @@ impl PhaseMatrixHarmonics {
     /// at zenith cosine `sun_cosine` if given (zeros if not), into those of
     /// `output_cosines`. The rotations are computed once for all
     /// wavelengths.
+    #[cfg(test)]
     pub(crate) fn compute(
+        phase: &dyn Fn(f64, &mut [PhaseMatrix]),
+        wavelengths: usize,
+        output_cosines: &[f64],
+        inputs: (&[f64], &[f64]),
+        sun_cosine: Option<f64>,
+        harmonics: usize,
+    ) -> Vec<PhaseMatrixHarmonics> {
+        PhaseMatrixHarmonics::compute_nonzero(
+            phase,
+            wavelengths,
+            output_cosines,
+            inputs,
+            sun_cosine,
+            (harmonics, harmonics),
+        )
+    }
+
+    /// [`PhaseMatrixHarmonics::compute`] for a phase matrix whose
+    /// harmonics from `nonzero` on vanish (Rayleigh's, from 3: its elements
+    /// are quadratic in the scattering angle's cosine, so Z's are
+    /// trigonometric polynomials of degree 2 in the azimuth): harmonics
+    /// 0..`harmonics`, only 0..`nonzero` computed and stored, the same
+    /// numbers as [`PhaseMatrixHarmonics::compute`]'s to the bit (the same
+    /// azimuth rule and sums); the others are zero where
+    /// [`PhaseMatrixHarmonics::compute`] gives rounding (below 1e-14 of
+    /// the largest element).
+    pub(crate) fn compute_nonzero(
         phase: &dyn Fn(f64, &mut [PhaseMatrix]),
         wavelengths: usize,
         output_cosines: &[f64],
         (input_cosines, input_weights): (&[f64], &[f64]),
         sun_cosine: Option<f64>,
-        harmonics: usize,
+        (harmonics, nonzero): (usize, usize),
     ) -> Vec<PhaseMatrixHarmonics> {
         const ELEMENTS: usize = COMPONENTS * COMPONENTS;
         let (outputs, inputs) = (output_cosines.len(), input_cosines.len());
         let AzimuthRule { nodes, step, trig } = AzimuthRule::new(harmonics);
-        let mut all = PhaseMatrixHarmonics::zeros(wavelengths, harmonics, outputs, inputs);
+        let stored = nonzero.min(harmonics);
+        let mut all =
+            PhaseMatrixHarmonics::zeros(wavelengths, (harmonics, stored), outputs, inputs);
         let mut matrices = vec![PhaseMatrix::default(); wavelengths];
         let inputs_and_sun = inputs_and_sun((input_cosines, input_weights), sun_cosine);
         // The mirror symmetry about the sun's vertical, Z(-Delta) =
@@ -129,22 +166,29 @@ impl PhaseMatrixHarmonics {
         // 0..=half are computed, the others counted twice.
         let half = (nodes - 1) / 2;
         let nodes = half + 1;
+        // The mirror symmetry through the horizontal plane, Z(-mu, -mu',
+        // Delta) = D Z(mu, mu', Delta) D (the mirror keeps I and Q and
+        // changes the sign of U and V): of two pairs of directions that
+        // are each other's image (streams are symmetric about the
+        // horizon), the second takes the first's harmonics.
+        let mirrors = Mirrors::new(output_cosines, (input_cosines, input_weights));
         let node_weight = |k: usize| if k == 0 { 1.0 } else { 2.0 };
-        // Z at every node for one pair of directions, [(i * nodes + k) * 16 + e]
-        // (e = row * 4 + column), and its transforms, [m * 16 + e]: whole
+        // Z at every node for one pair of directions, [i * nodes + k][e]
+        // (e = row * 4 + column), and its transforms, [m][e]: whole
         // 16-element rows, so the transforms vectorise. Each element keeps
         // one transform only (the cosine transform of the even elements,
         // the sine transform of the odd ones, see the module docs), so each
         // node's factor is the node weight times cos(m Delta_k) or
-        // sin(m Delta_k) by element, [(k * harmonics + m) * 16 + e].
-        let mut z_nodes = vec![0.0; wavelengths * nodes * ELEMENTS];
-        let mut transforms = vec![0.0; harmonics * ELEMENTS];
-        let factors: Vec<f64> = (0..nodes)
-            .flat_map(|k| (0..harmonics).map(move |m| (k, m)))
-            .flat_map(|(k, m)| {
+        // sin(m Delta_k) by element, [m * nodes + k][e]. Each harmonic's
+        // sum over the nodes runs in k's order in one accumulator.
+        let mut z_nodes = vec![[0.0; ELEMENTS]; wavelengths * nodes];
+        let mut transforms = vec![[0.0; ELEMENTS]; stored];
+        let factors: Vec<[f64; ELEMENTS]> = (0..stored)
+            .flat_map(|m| (0..nodes).map(move |k| (k, m)))
+            .map(|(k, m)| {
                 let (cos_m, sin_m) = trig[k * harmonics + m];
                 let (cos_m, sin_m) = (node_weight(k) * cos_m, node_weight(k) * sin_m);
-                (0..ELEMENTS).map(move |e| if is_even_element(e) { cos_m } else { sin_m })
+                std::array::from_fn(|e| if is_even_element(e) { cos_m } else { sin_m })
             })
             .collect();
         for (a, &mu_out) in output_cosines.iter().enumerate() {
@@ -152,32 +196,40 @@ impl PhaseMatrixHarmonics {
                 .map(|k| LookDirection::new(mu_out, k as f64 * step))
                 .collect();
             for (b, &(mu_in, weight)) in inputs_and_sun.iter().enumerate() {
+                // The mirror image through the horizontal plane of a pair
+                // already computed: its harmonics with D's signs.
+                if let Some((a_mirror, b_mirror)) = mirrors.pair(a, b)
+                    && (a_mirror, b_mirror) < (a, b)
+                {
+                    for h in all.iter_mut() {
+                        h.store_mirror((a, b), (a_mirror, b_mirror));
+                    }
+                    continue;
+                }
                 let incoming = LookDirection::new(mu_in, 0.0);
                 for (k, out) in outs.iter().enumerate() {
                     let geometry = ScatteringGeometry::new(*out, incoming);
                     phase(geometry.cos_theta, &mut matrices);
                     for (i, f) in matrices.iter().enumerate() {
                         let z = geometry.rotate(f);
-                        let target = &mut z_nodes[(i * nodes + k) * ELEMENTS..][..ELEMENTS];
+                        let target = &mut z_nodes[i * nodes + k];
                         for (t, v) in target.iter_mut().zip(z.iter().flatten()) {
                             *t = *v;
                         }
                     }
                 }
                 for (i, h) in all.iter_mut().enumerate() {
-                    transforms.fill(0.0);
-                    let values = &z_nodes[i * nodes * ELEMENTS..][..nodes * ELEMENTS];
-                    for (k, z) in values.chunks_exact(ELEMENTS).enumerate() {
-                        let node_factors =
-                            &factors[k * harmonics * ELEMENTS..][..harmonics * ELEMENTS];
-                        for (part, factors) in transforms
-                            .chunks_exact_mut(ELEMENTS)
-                            .zip(node_factors.chunks_exact(ELEMENTS))
-                        {
-                            for ((t, v), f) in part.iter_mut().zip(z).zip(factors) {
-                                *t += v * f;
+                    let values = &z_nodes[i * nodes..(i + 1) * nodes];
+                    for (transform, node_factors) in
+                        transforms.iter_mut().zip(factors.chunks_exact(nodes))
+                    {
+                        let mut sum = [0.0; ELEMENTS];
+                        for (z, f) in values.iter().zip(node_factors) {
+                            for e in 0..ELEMENTS {
+                                sum[e] += z[e] * f[e];
                             }
                         }
+                        *transform = sum;
                     }
                     h.store_transforms(&transforms, (a, b), weight, step);
                 }
@@ -187,23 +239,21 @@ impl PhaseMatrixHarmonics {
     }
 
     /// Stores the transforms over the azimuth nodes of the rotated matrix
-    /// from input (or sun) `b` into output `a`, [m * 16 + e] (the cosine
+    /// from input (or sun) `b` into output `a`, [m][e] (the cosine
     /// transform of the even elements, the sine transform of the odd ones:
     /// [`is_even_element`]), as this wavelength's harmonics: the scattering
     /// blocks with the input's quadrature weight `weight`, or (None) the
     /// sun's.
     fn store_transforms(
         &mut self,
-        transforms: &[f64],
+        transforms: &[[f64; COMPONENTS * COMPONENTS]],
         (a, b): (usize, usize),
         weight: Option<f64>,
         step: f64,
     ) {
-        const ELEMENTS: usize = COMPONENTS * COMPONENTS;
-        let (harmonics, inputs, outputs) = (self.harmonics, self.inputs, self.outputs);
+        let (stored, inputs, outputs) = (self.stored, self.inputs, self.outputs);
         let block = COMPONENTS * outputs;
-        for m in 0..harmonics {
-            let transform = &transforms[m * ELEMENTS..(m + 1) * ELEMENTS];
+        for (m, transform) in transforms[..stored].iter().enumerate() {
             for row in 0..COMPONENTS {
                 match weight {
                     Some(weight) => {
@@ -229,6 +279,30 @@ impl PhaseMatrixHarmonics {
         }
     }
 
+    /// Stores as the harmonics from input `b` into output `a` those from
+    /// their mirror images `b_mirror` into `a_mirror` (already stored):
+    /// D Z^m D, the (I, Q) x (U, V) and (U, V) x (I, Q) blocks negated.
+    fn store_mirror(&mut self, (a, b): (usize, usize), (a_mirror, b_mirror): (usize, usize)) {
+        let (inputs, outputs) = (self.inputs, self.outputs);
+        let block = COMPONENTS * outputs;
+        for m in 0..self.stored {
+            for column in 0..COMPONENTS {
+                for row in 0..COMPONENTS {
+                    let at = |a: usize, b: usize| {
+                        ((m * COMPONENTS + column) * inputs + b) * block + row * outputs + a
+                    };
+                    let value = self.scattering[at(a_mirror, b_mirror)];
+                    self.scattering[at(a, b)] =
+                        if is_even_component(row) == is_even_component(column) {
+                            value
+                        } else {
+                            -value
+                        };
+                }
+            }
+        }
+    }
+
     /// [`PhaseMatrixHarmonics::compute`] element by element, node by node:
     /// the obvious sums the fast one is tested against.
     #[cfg(test)]
@@ -243,7 +317,8 @@ impl PhaseMatrixHarmonics {
         let (outputs, inputs) = (output_cosines.len(), input_cosines.len());
         let AzimuthRule { nodes, step, trig } = AzimuthRule::new(harmonics);
         let block = COMPONENTS * outputs;
-        let mut all = PhaseMatrixHarmonics::zeros(wavelengths, harmonics, outputs, inputs);
+        let mut all =
+            PhaseMatrixHarmonics::zeros(wavelengths, (harmonics, harmonics), outputs, inputs);
         let mut matrices = vec![PhaseMatrix::default(); wavelengths];
         let inputs_and_sun = inputs_and_sun((input_cosines, input_weights), sun_cosine);
         for (a, &mu_out) in output_cosines.iter().enumerate() {
@@ -292,10 +367,11 @@ impl PhaseMatrixHarmonics {
         all
     }
 
-    /// Zero harmonics at each of `wavelengths` wavelengths.
+    /// Zero harmonics 0..`harmonics` at each of `wavelengths` wavelengths,
+    /// of which 0..`stored` are stored.
     pub(crate) fn zeros(
         wavelengths: usize,
-        harmonics: usize,
+        (harmonics, stored): (usize, usize),
         outputs: usize,
         inputs: usize,
     ) -> Vec<PhaseMatrixHarmonics> {
@@ -303,32 +379,50 @@ impl PhaseMatrixHarmonics {
         (0..wavelengths)
             .map(|_| PhaseMatrixHarmonics {
                 harmonics,
+                stored,
                 outputs,
                 inputs,
-                scattering: vec![0.0; harmonics * COMPONENTS * inputs * block],
-                sun: vec![0.0; harmonics * block],
+                scattering: vec![0.0; stored * COMPONENTS * inputs * block],
+                sun: vec![0.0; stored * block],
             })
             .collect()
+    }
+
+    /// The harmonics of a species that scatters nothing, at each of
+    /// `wavelengths` wavelengths: none stored (every harmonic vanishes).
+    pub(crate) fn none(wavelengths: usize, harmonics: usize) -> Vec<PhaseMatrixHarmonics> {
+        PhaseMatrixHarmonics::zeros(wavelengths, (harmonics, 0), 0, 0)
     }
 
     pub(crate) fn harmonics(&self) -> usize {
         self.harmonics
     }
 
-    /// Harmonic m's matrix by columns: [(c * inputs + b) * 4 * outputs + i * outputs + a].
+    /// Harmonic m's matrix by columns: [(c * inputs + b) * 4 * outputs + i * outputs + a];
+    /// empty for a harmonic not stored (zero, [`PhaseMatrixHarmonics::compute_nonzero`]).
     pub(crate) fn scattering(&self, m: usize) -> &[f64] {
+        if m >= self.stored {
+            return &[];
+        }
         let size = COMPONENTS * self.inputs * COMPONENTS * self.outputs;
         &self.scattering[m * size..(m + 1) * size]
     }
 
-    /// B^m: [i * outputs + a].
+    /// B^m: [i * outputs + a]; empty for a harmonic not stored.
     pub(crate) fn sun(&self, m: usize) -> &[f64] {
+        if m >= self.stored {
+            return &[];
+        }
         let size = COMPONENTS * self.outputs;
         &self.sun[m * size..(m + 1) * size]
     }
 
-    /// True when harmonic m vanishes (to rounding) for every element.
+    /// True when harmonic m vanishes (to rounding) for every element (and
+    /// for every harmonic not stored).
     pub(crate) fn harmonic_vanishes(&self, m: usize) -> bool {
+        if m >= self.stored {
+            return true;
+        }
         // Harmonic 0's I <- I block holds the largest values (w_b times the
         // phase function's mean over azimuth, 2 pi p_0 > 0).
         let largest = self
@@ -367,6 +461,39 @@ impl AzimuthRule {
             .map(|(s, c)| (c, s))
             .collect();
         AzimuthRule { nodes, step, trig }
+    }
+}
+
+/// Each output's and input's mirror image through the horizontal plane
+/// among the outputs and the inputs (the cosine negated, an input's weight
+/// the same), if there is one.
+struct Mirrors {
+    outputs: Vec<Option<usize>>,
+    inputs: Vec<Option<usize>>,
+}
+
+impl Mirrors {
+    fn new(output_cosines: &[f64], (input_cosines, input_weights): (&[f64], &[f64])) -> Mirrors {
+        let find = |values: &[f64], mu: f64| values.iter().position(|v| *v == -mu);
+        Mirrors {
+            outputs: output_cosines
+                .iter()
+                .map(|mu| find(output_cosines, *mu))
+                .collect(),
+            inputs: input_cosines
+                .iter()
+                .enumerate()
+                .map(|(b, mu)| {
+                    find(input_cosines, *mu).filter(|m| input_weights[*m] == input_weights[b])
+                })
+                .collect(),
+        }
+    }
+
+    /// The mirror image of the pair (output `a`, input `b`); None for the
+    /// sun (input `inputs`, not mirrored) or a direction without one.
+    fn pair(&self, a: usize, b: usize) -> Option<(usize, usize)> {
+        Some((self.outputs[a]?, (*self.inputs.get(b)?)?))
     }
 }
 
@@ -519,6 +646,39 @@ mod tests {
     }
 
     #[test]
+    fn rayleigh_harmonics_from_three_on_vanish_and_are_not_stored() {
+        // compute_nonzero's harmonics 0..3 are compute's to the bit; the
+        // ones it does not store are rounding in compute's.
+        let phase = |c: f64, out: &mut [PhaseMatrix]| {
+            for (i, m) in out.iter_mut().enumerate() {
+                *m = rayleigh_phase_matrix(0.01 * i as f64, c);
+            }
+        };
+        let (mu, w) = double_gauss(4);
+        let outputs = [0.8, -0.3, 0.02];
+        let full = PhaseMatrixHarmonics::compute(&phase, 2, &outputs, (&mu, &w), Some(0.4), 8);
+        let kept = PhaseMatrixHarmonics::compute_nonzero(
+            &phase,
+            2,
+            &outputs,
+            (&mu, &w),
+            Some(0.4),
+            (8, 3),
+        );
+        for (f, k) in full.iter().zip(&kept) {
+            for m in 0..8 {
+                assert!(f.harmonic_vanishes(m) == (m >= 3) && k.harmonic_vanishes(m) == (m >= 3));
+                if m < 3 {
+                    assert_eq!(f.scattering(m), k.scattering(m), "m {m}");
+                    assert_eq!(f.sun(m), k.sun(m), "m {m}");
+                } else {
+                    assert!(k.scattering(m).is_empty() && k.sun(m).is_empty());
+                }
+            }
+        }
+    }
+
+    #[test]
     fn the_sun_term_synthesises_the_rotated_single_scattering() {
         // sum_m B^m_i(mu) {cos, sin}(m phi) is Z_i1(mu, phi; sun) itself.
         let rho = 0.0;
@@ -619,7 +779,9 @@ mod tests {
             }
         };
         let (mu, w) = double_gauss(3);
-        let outputs = [0.7, -0.2, 0.05];
+        // Outputs with and without mirror images (those with take their
+        // mirror's harmonics with D's signs), and the streams themselves.
+        let outputs = [0.7, -0.2, 0.05, -0.7, 0.2, mu[1], mu[4]];
         let fast = PhaseMatrixHarmonics::compute(&phase, 3, &outputs, (&mu, &w), Some(0.3), 6);
         let reference =
             PhaseMatrixHarmonics::compute_reference(&phase, 3, &outputs, (&mu, &w), Some(0.3), 6);

@@ -114,11 +114,12 @@ pub(crate) struct CorrectionInputs<'a> {
 /// a slider drag) reads them instead of computing them again, the same
 /// numbers bit for bit. They were three quarters of the phase-matrix work
 /// of a polarised image's field (the correction's own stream-to-stream
-/// harmonics, with the sun, are still computed per sun). Size: harmonics x
-/// 16 x streams x cosines x wavelengths x species doubles (66 MB at 8
-/// streams per hemisphere, 21 wavelengths and 2 scattering species; the
-/// explorer's preview 9 MB); only the table's nodes are kept, not a list of
-/// directions' cosines.
+/// harmonics, with the sun, are still computed per sun). Size: the
+/// harmonics stored (all 2N of a Mie or Henyey-Greenstein species, 3 of
+/// Rayleigh's, none of an absorber's) x 16 x streams x cosines x
+/// wavelengths doubles (39 MB at 8 streams per hemisphere, 21 wavelengths,
+/// Rayleigh and one aerosol; the explorer's preview about 5 MB); only the
+/// table's nodes are kept, not a list of directions' cosines.
 #[derive(Debug, Default)]
 pub(crate) struct ViewHarmonicsCache(Mutex<Vec<ViewHarmonics>>);
 
@@ -232,6 +233,9 @@ fn truncated_phase_matrix_into(
     }
 }
 
+/// The harmonics of the Rayleigh phase matrix that do not vanish, m = 0, 1, 2.
+const RAYLEIGH_HARMONICS: usize = 3;
+
 /// Each species' harmonics of its truncated phase matrix from the streams
 /// (and the sun, if given) into the look directions of zenith cosines
 /// `outputs`, at every wavelength: [j][i]. The species are independent
@@ -247,16 +251,18 @@ fn compute_species_harmonics(
     let mut all: Vec<Vec<PhaseMatrixHarmonics>> = vec![Vec::new(); species];
     crate::parallel::for_each_chunk_mut(&mut all, 1, |j, slot| {
         let s = &optics.species[j];
-        // An absorber (ozone) scatters nothing: its harmonics are zero.
+        // An absorber (ozone) scatters nothing: its harmonics are zero, and
+        // none are stored.
         slot[0] = if s.scattering_per_m.values().iter().all(|b| *b == 0.0) {
-            PhaseMatrixHarmonics::zeros(
-                optics.grid.len(),
-                streams.count(),
-                outputs.len(),
-                streams.count(),
-            )
+            PhaseMatrixHarmonics::none(optics.grid.len(), streams.count())
         } else {
-            PhaseMatrixHarmonics::compute(
+            // Rayleigh's harmonics end at m = 2 (its phase matrix is
+            // quadratic in the scattering angle's cosine, and not truncated).
+            let nonzero = match s.phase_function {
+                PhaseFunction::Rayleigh { .. } => RAYLEIGH_HARMONICS,
+                _ => streams.count(),
+            };
+            PhaseMatrixHarmonics::compute_nonzero(
                 &|c, out| {
                     truncated_phase_matrix_into(&s.phase_function, phases, (j, species), c, out)
                 },
@@ -264,7 +270,7 @@ fn compute_species_harmonics(
                 outputs,
                 (streams.cosines(), streams.weights()),
                 sun_cosine,
-                streams.count(),
+                (streams.count(), nonzero),
             )
         };
     });
@@ -308,46 +314,57 @@ impl PolarisationCorrection {
             }
         }
         let lit = inputs.sun_cosine.max(0.0);
-        crate::parallel::for_each_chunk_mut(&mut solutions, solution_len, |i, out| {
-            let scaled: Vec<ScaledSpecies> = (0..species)
-                .map(|j| ScaledSpecies {
-                    extinction_per_m: inputs.scaled.scaled_extinction[i * species + j],
-                    scattering_per_m: inputs.scaled.scaled_scattering[i * species + j],
-                    phase: &inputs.scaled.phases[i * species + j],
-                })
-                .collect();
-            let solar = optics.solar_irradiance_w_m2_nm[i];
-            let albedo = optics.ground_albedo[i];
-            let scalar = ColumnSystem::new(
-                streams,
-                grid,
-                Some(&inputs.geometry.paths),
-                scaled,
-                solar,
-                albedo,
-            );
-            let per_species: Vec<&PhaseMatrixHarmonics> = harmonics.iter().map(|h| &h[i]).collect();
-            let vector = VectorColumnSystem::new(scalar.clone(), &per_species);
-            debug_assert_eq!(vector.field_len(), vector_len);
-            let optical_depths = &inputs.sun_optical_depths[i * levels..(i + 1) * levels];
-            let transmittance: Vec<f64> = optical_depths
-                .iter()
-                .map(|t| t.map_or(0.0, |(scaled, _)| (-scaled).exp()))
-                .collect();
-            let exact_ground = optical_depths[0].map_or(0.0, |(_, exact)| (-exact).exp());
-            let (vector_field, rest) = out.split_at_mut(vector_len);
-            let (scalar_field, ground) = rest.split_at_mut(scalar_len);
-            let mut work = Vec::new();
-            let sun_cosine = inputs.sun_cosine;
-            let down_vector = vector.solve(sun_cosine, &transmittance, vector_field, &mut work);
-            let down_scalar = scalar.solve(sun_cosine, &transmittance, scalar_field, &mut work);
-            // The ground's diffuse light as the scalar field's ground
-            // term takes it (the sunlit ground's single reflection is
-            // exact elsewhere; delta-M's share of the beam stays here).
-            let beam = solar * lit * (transmittance[0] - exact_ground);
-            ground[0] = albedo / PI * (down_vector + beam);
-            ground[1] = albedo / PI * (down_scalar + beam);
-        });
+        // The solves' work space (1.4 MB at 8 streams per hemisphere and 40
+        // layers) is kept from one wavelength to the next a thread takes.
+        let init = Vec::new;
+        crate::parallel::for_each_chunk_mut_with(
+            &mut solutions,
+            solution_len,
+            init,
+            |work, i, out| {
+                let scaled: Vec<ScaledSpecies> = (0..species)
+                    .map(|j| ScaledSpecies {
+                        extinction_per_m: inputs.scaled.scaled_extinction[i * species + j],
+                        scattering_per_m: inputs.scaled.scaled_scattering[i * species + j],
+                        phase: &inputs.scaled.phases[i * species + j],
+                    })
+                    .collect();
+                let solar = optics.solar_irradiance_w_m2_nm[i];
+                let albedo = optics.ground_albedo[i];
+                let scalar = ColumnSystem::new(
+                    streams,
+                    grid,
+                    Some(&inputs.geometry.paths),
+                    scaled,
+                    solar,
+                    albedo,
+                );
+                let per_species: Vec<&PhaseMatrixHarmonics> =
+                    harmonics.iter().map(|h| &h[i]).collect();
+                let vector = VectorColumnSystem::new(scalar, &per_species);
+                debug_assert_eq!(vector.field_len(), vector_len);
+                let optical_depths = &inputs.sun_optical_depths[i * levels..(i + 1) * levels];
+                let transmittance: Vec<f64> = optical_depths
+                    .iter()
+                    .map(|t| t.map_or(0.0, |(scaled, _)| (-scaled).exp()))
+                    .collect();
+                let exact_ground = optical_depths[0].map_or(0.0, |(_, exact)| (-exact).exp());
+                let (vector_field, rest) = out.split_at_mut(vector_len);
+                let (scalar_field, ground) = rest.split_at_mut(scalar_len);
+                let sun_cosine = inputs.sun_cosine;
+                let down_vector = vector.solve(sun_cosine, &transmittance, vector_field, work);
+                let down_scalar =
+                    vector
+                        .scalar()
+                        .solve(sun_cosine, &transmittance, scalar_field, work);
+                // The ground's diffuse light as the scalar field's ground
+                // term takes it (the sunlit ground's single reflection is
+                // exact elsewhere; delta-M's share of the beam stays here).
+                let beam = solar * lit * (transmittance[0] - exact_ground);
+                ground[0] = albedo / PI * (down_vector + beam);
+                ground[1] = albedo / PI * (down_scalar + beam);
+            },
+        );
         // The level albedos are the scalar system's (the same for both).
         for i in 0..wavelengths {
             for k in 0..levels {

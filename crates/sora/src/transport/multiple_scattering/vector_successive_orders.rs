@@ -40,7 +40,9 @@ use super::successive_orders::{ColumnSystem, MAX_ITERATIONS, StoppingRule};
 pub struct VectorColumnSystem<'a> {
     scalar: ColumnSystem<'a>,
     harmonics: Vec<&'a PhaseMatrixHarmonics>,
-    active_harmonics: Vec<bool>,
+    /// Per harmonic m, the species whose harmonic m does not vanish
+    /// (Rayleigh's end at m = 2; none: the harmonic is not solved).
+    active_species: Vec<Vec<usize>>,
 }
 
 impl<'a> VectorColumnSystem<'a> {
@@ -53,47 +55,45 @@ impl<'a> VectorColumnSystem<'a> {
     ) -> VectorColumnSystem<'a> {
         let total = scalar.streams.count();
         debug_assert!(harmonics.iter().all(|h| h.harmonics() == total));
-        let active_harmonics: Vec<bool> = (0..total)
-            .map(|m| harmonics.iter().any(|h| !h.harmonic_vanishes(m)))
+        let active_species = (0..total)
+            .map(|m| {
+                (0..harmonics.len())
+                    .filter(|j| !harmonics[*j].harmonic_vanishes(m))
+                    .collect()
+            })
             .collect();
         VectorColumnSystem {
             scalar,
             harmonics: harmonics.to_vec(),
-            active_harmonics,
+            active_species,
         }
     }
 
-    /// Harmonic m's matrix at every level,
-    /// sum_j omega_j w_b Z^m_j(mu_a, mu_b) by columns (c, b),
-    /// [k * size^2 + (c * streams + b) * size + i * streams + a] (size = 4
-    /// streams), and its sun source E sum_j omega_j B^m_j,
-    /// [k * size + i * streams + a]; made per harmonic, in the solve's
-    /// work space, rather than for all harmonics at once (16 MB at 8
-    /// streams per hemisphere and 40 layers).
-    fn mix_harmonic(&self, m: usize, matrices: &mut [f64], sun_sources: &mut [f64]) {
+    /// Harmonic m's sun source at every level, E sum_j omega_j B^m_j,
+    /// [k * size + i * streams + a] (size = 4 streams), the species'
+    /// terms added in their order.
+    fn sun_sources(&self, m: usize, sun_sources: &mut [f64]) {
         let scalar = &self.scalar;
         let species = self.harmonics.len();
-        let size = COMPONENTS * scalar.streams.count();
-        matrices.fill(0.0);
         sun_sources.fill(0.0);
-        for ((k, matrix), sun) in matrices
-            .chunks_exact_mut(size * size)
-            .enumerate()
-            .zip(sun_sources.chunks_exact_mut(size))
-        {
-            for (j, h) in self.harmonics.iter().enumerate() {
+        let size = COMPONENTS * scalar.streams.count();
+        for (k, sun) in sun_sources.chunks_exact_mut(size).enumerate() {
+            for &j in &self.active_species[m] {
                 let omega = scalar.level_albedo[k * species + j];
                 if omega == 0.0 {
                     continue;
                 }
-                for (out, value) in matrix.iter_mut().zip(h.scattering(m)) {
-                    *out += omega * value;
-                }
-                for (out, value) in sun.iter_mut().zip(h.sun(m)) {
+                for (out, value) in sun.iter_mut().zip(self.harmonics[j].sun(m)) {
                     *out += scalar.solar_irradiance * omega * value;
                 }
             }
         }
+    }
+
+    /// The scalar system it was made from (its streams, layers and
+    /// transport), for the scalar solve beside the polarised one.
+    pub(crate) fn scalar(&self) -> &ColumnSystem<'a> {
+        &self.scalar
     }
 
     /// The values of a field: harmonics x components x levels x streams,
@@ -122,12 +122,9 @@ impl<'a> VectorColumnSystem<'a> {
         let size = COMPONENTS * total;
         let block = levels * total;
         let field_size = COMPONENTS * block;
-        work.resize(
-            4 * field_size + levels * size * (size + 1) + 2 * size + 2 * levels,
-            0.0,
-        );
-        let (matrices, rest) = work.split_at_mut(levels * size * size);
-        let (sun_sources, rest) = rest.split_at_mut(levels * size);
+        let species = self.harmonics.len();
+        work.resize(4 * field_size + levels * size + 2 * size + 2 * levels, 0.0);
+        let (sun_sources, rest) = work.split_at_mut(levels * size);
         let (direct_source, rest) = rest.split_at_mut(field_size);
         let (source, rest) = rest.split_at_mut(field_size);
         let (previous, rest) = rest.split_at_mut(field_size);
@@ -141,8 +138,8 @@ impl<'a> VectorColumnSystem<'a> {
             0.0
         };
         let mut ground_diffuse_irradiance = 0.0;
-        for m in (0..total).filter(|m| self.active_harmonics[*m]) {
-            self.mix_harmonic(m, matrices, sun_sources);
+        for m in (0..total).filter(|m| !self.active_species[*m].is_empty()) {
+            self.sun_sources(m, sun_sources);
             // Single scattering of the sun's beam into every stream and
             // component.
             for k in 0..levels {
@@ -173,27 +170,36 @@ impl<'a> VectorColumnSystem<'a> {
                 }
                 // Scattering of the new field: the next order's source,
                 // level by level (gathered into one Stokes-and-streams
-                // vector, multiplied by whole columns).
+                // vector), species by species: omega_j(z) times the
+                // species' matrix (the same at every level, so it stays
+                // in cache) times the field, by whole columns.
                 source.copy_from_slice(direct_source);
-                for (k, matrix) in matrices.chunks_exact(size * size).enumerate() {
+                for k in 0..levels {
                     for i in 0..COMPONENTS {
                         gathered[i * total..(i + 1) * total]
                             .copy_from_slice(&field[i * block + k * total..][..total]);
                     }
-                    scattered.fill(0.0);
-                    for (value, column) in gathered.iter().zip(matrix.chunks_exact(size)) {
-                        if *value != 0.0 {
-                            for (o, p) in scattered.iter_mut().zip(column) {
-                                *o += value * p;
+                    for &j in &self.active_species[m] {
+                        let omega = scalar.level_albedo[k * species + j];
+                        if omega == 0.0 {
+                            continue;
+                        }
+                        let matrix = self.harmonics[j].scattering(m);
+                        scattered.fill(0.0);
+                        for (value, column) in gathered.iter().zip(matrix.chunks_exact(size)) {
+                            if *value != 0.0 {
+                                for (o, p) in scattered.iter_mut().zip(column) {
+                                    *o += value * p;
+                                }
                             }
                         }
-                    }
-                    for i in 0..COMPONENTS {
-                        for (s, v) in source[i * block + k * total..][..total]
-                            .iter_mut()
-                            .zip(&scattered[i * total..(i + 1) * total])
-                        {
-                            *s += v;
+                        for i in 0..COMPONENTS {
+                            for (s, v) in source[i * block + k * total..][..total]
+                                .iter_mut()
+                                .zip(&scattered[i * total..(i + 1) * total])
+                            {
+                                *s += omega * v;
+                            }
                         }
                     }
                 }
