@@ -65,6 +65,7 @@
 //! wavelength, is small beside a solve.
 
 use std::f64::consts::PI;
+use std::sync::Arc;
 
 use crate::atmosphere::phase_matrix::PhaseMatrix;
 use crate::geometry::{Vector3, direction_from_elevation_azimuth};
@@ -93,8 +94,10 @@ pub struct PhaseMatrixHarmonics {
     inputs: usize,
     /// w_b Z^m_ic(mu_a, mu_b), by columns (c, b) of each harmonic's
     /// (4 outputs) x (4 inputs) matrix:
-    /// [((m * 4 + c) * inputs + b) * 4 * outputs + i * outputs + a].
-    scattering: Vec<f64>,
+    /// [((m * 4 + c) * inputs + b) * 4 * outputs + i * outputs + a];
+    /// shared by the harmonics that differ in their sun only
+    /// ([`PhaseMatrixHarmonics::with_sun_of`]).
+    scattering: Arc<Vec<f64>>,
     /// B^m_i(mu_a): [(m * 4 + i) * outputs + a].
     sun: Vec<f64>,
 }
@@ -202,6 +205,7 @@ impl PhaseMatrixHarmonics {
         const ELEMENTS: usize = COMPONENTS * COMPONENTS;
         let (harmonics, inputs, outputs) = (self.harmonics, self.inputs, self.outputs);
         let block = COMPONENTS * outputs;
+        let scattering = Arc::make_mut(&mut self.scattering);
         for m in 0..harmonics {
             let transform = &transforms[m * ELEMENTS..(m + 1) * ELEMENTS];
             for row in 0..COMPONENTS {
@@ -214,7 +218,7 @@ impl PhaseMatrixHarmonics {
                                     (true, true) | (false, false) | (false, true) => transform[e],
                                     (true, false) => -transform[e],
                                 };
-                            self.scattering[((m * COMPONENTS + column) * inputs + b) * block
+                            scattering[((m * COMPONENTS + column) * inputs + b) * block
                                 + row * outputs
                                 + a] = weight * step * projected;
                         }
@@ -273,7 +277,8 @@ impl PhaseMatrixHarmonics {
                                                 (true, false) => -sin_m,
                                                 (false, true) => sin_m,
                                             };
-                                            h.scattering[column(c)] += weight * step * value * g;
+                                            Arc::make_mut(&mut h.scattering)[column(c)] +=
+                                                weight * step * value * g;
                                         }
                                     }
                                     None => {
@@ -305,7 +310,7 @@ impl PhaseMatrixHarmonics {
                 harmonics,
                 outputs,
                 inputs,
-                scattering: vec![0.0; harmonics * COMPONENTS * inputs * block],
+                scattering: Arc::new(vec![0.0; harmonics * COMPONENTS * inputs * block]),
                 sun: vec![0.0; harmonics * block],
             })
             .collect()
@@ -313,6 +318,25 @@ impl PhaseMatrixHarmonics {
 
     pub(crate) fn harmonics(&self) -> usize {
         self.harmonics
+    }
+
+    /// These harmonics from the inputs (shared, not copied) with the sun's
+    /// of `sun`, computed for the same outputs and harmonics (with any
+    /// inputs): the two parts are computed apart
+    /// ([`PhaseMatrixHarmonics::compute`] takes each pair of directions on
+    /// its own), so this is bit for bit what one computation with this sun
+    /// gives.
+    pub(crate) fn with_sun_of(&self, sun: &PhaseMatrixHarmonics) -> PhaseMatrixHarmonics {
+        assert_eq!(
+            (self.harmonics, self.outputs),
+            (sun.harmonics, sun.outputs),
+            "harmonics for other outputs"
+        );
+        PhaseMatrixHarmonics {
+            scattering: Arc::clone(&self.scattering),
+            sun: sun.sun.clone(),
+            ..*self
+        }
     }
 
     /// Harmonic m's matrix by columns: [(c * inputs + b) * 4 * outputs + i * outputs + a].
@@ -627,10 +651,49 @@ mod tests {
             for (a, b) in f
                 .scattering
                 .iter()
-                .zip(&r.scattering)
+                .zip(r.scattering.iter())
                 .chain(f.sun.iter().zip(&r.sun))
             {
                 assert!((a - b).abs() <= 1e-14 * (1.0 + b.abs()), "{a} vs {b}");
+            }
+        }
+    }
+
+    /// The harmonics from the streams with those from the sun alone
+    /// (computed apart, joined by `with_sun_of`) are one computation's
+    /// with the sun, bit for bit.
+    #[test]
+    fn harmonics_joined_with_the_suns_are_those_computed_with_it() {
+        let phase = |c: f64, out: &mut [PhaseMatrix]| {
+            for (i, m) in out.iter_mut().enumerate() {
+                let g = 0.2 * i as f64;
+                let p = (1.0 - g * g) / (1.0 + g * g - 2.0 * g * c).powf(1.5) / (4.0 * PI);
+                *m = PhaseMatrix {
+                    a1: p,
+                    a2: 0.8 * p,
+                    a3: 0.9 * p * c,
+                    a4: 0.7 * p * c,
+                    b1: -0.3 * p * (1.0 - c * c),
+                    b2: 0.1 * p * (1.0 - c * c),
+                };
+            }
+        };
+        let (mu, w) = double_gauss(3);
+        let outputs = mu.clone();
+        for sun in [0.9, 0.3, -0.05] {
+            let whole = PhaseMatrixHarmonics::compute(&phase, 3, &outputs, (&mu, &w), Some(sun), 6);
+            let streams = PhaseMatrixHarmonics::compute(&phase, 3, &outputs, (&mu, &w), None, 6);
+            let sun_only =
+                PhaseMatrixHarmonics::compute(&phase, 3, &outputs, (&[], &[]), Some(sun), 6);
+            for ((whole, streams), sun_only) in whole.iter().zip(&streams).zip(&sun_only) {
+                let joined = streams.with_sun_of(sun_only);
+                assert!(Arc::ptr_eq(&joined.scattering, &streams.scattering));
+                for m in 0..6 {
+                    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                    assert_eq!(bits(joined.scattering(m)), bits(whole.scattering(m)));
+                    assert_eq!(bits(joined.sun(m)), bits(whole.sun(m)));
+                    assert!(whole.sun(m).iter().any(|v| *v != 0.0) || m > 0);
+                }
             }
         }
     }
