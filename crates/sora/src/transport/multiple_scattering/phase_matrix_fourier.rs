@@ -624,24 +624,28 @@ mod tests {
         }
     }
 
+    /// A Mie-like matrix at each of `out`'s "wavelengths" (different
+    /// shapes) at scattering-angle cosine `c`.
+    fn mie_like_phase(c: f64, out: &mut [PhaseMatrix]) {
+        for (i, m) in out.iter_mut().enumerate() {
+            let g = 0.2 * i as f64;
+            let a1 = (1.0 - g * g) / (1.0 + g * g - 2.0 * g * c).powf(1.5) / (4.0 * PI);
+            *m = PhaseMatrix {
+                a1,
+                a2: 0.9 * a1,
+                a3: a1 * c,
+                a4: 0.8 * a1 * c,
+                b1: -0.4 * a1 * (1.0 - c * c),
+                b2: 0.1 * a1 * (1.0 - c * c),
+            };
+        }
+    }
+
     #[test]
     fn the_fast_transform_is_the_reference_sum() {
-        // A Mie-like matrix at three "wavelengths" (different shapes), from
-        // streams and the sun into other directions.
-        let phase = |c: f64, out: &mut [PhaseMatrix]| {
-            for (i, m) in out.iter_mut().enumerate() {
-                let g = 0.2 * i as f64;
-                let a1 = (1.0 - g * g) / (1.0 + g * g - 2.0 * g * c).powf(1.5) / (4.0 * PI);
-                *m = PhaseMatrix {
-                    a1,
-                    a2: 0.9 * a1,
-                    a3: a1 * c,
-                    a4: 0.8 * a1 * c,
-                    b1: -0.4 * a1 * (1.0 - c * c),
-                    b2: 0.1 * a1 * (1.0 - c * c),
-                };
-            }
-        };
+        // Three "wavelengths", from streams and the sun into other
+        // directions.
+        let phase = mie_like_phase;
         let (mu, w) = double_gauss(3);
         let outputs = [0.7, -0.2, 0.05];
         let fast = PhaseMatrixHarmonics::compute(&phase, 3, &outputs, (&mu, &w), Some(0.3), 6);
@@ -664,20 +668,7 @@ mod tests {
     /// with the sun, bit for bit.
     #[test]
     fn harmonics_joined_with_the_suns_are_those_computed_with_it() {
-        let phase = |c: f64, out: &mut [PhaseMatrix]| {
-            for (i, m) in out.iter_mut().enumerate() {
-                let g = 0.2 * i as f64;
-                let p = (1.0 - g * g) / (1.0 + g * g - 2.0 * g * c).powf(1.5) / (4.0 * PI);
-                *m = PhaseMatrix {
-                    a1: p,
-                    a2: 0.8 * p,
-                    a3: 0.9 * p * c,
-                    a4: 0.7 * p * c,
-                    b1: -0.3 * p * (1.0 - c * c),
-                    b2: 0.1 * p * (1.0 - c * c),
-                };
-            }
-        };
+        let phase = mie_like_phase;
         let (mu, w) = double_gauss(3);
         let outputs = mu.clone();
         for sun in [0.9, 0.3, -0.05] {
