@@ -568,16 +568,18 @@ pub fn build_sky(atmosphere: &Atmosphere, spec: &SkySpec, quality: Quality) -> R
 /// 10 % (with 20 layers and a step of 1.5 degrees, 1.1 / 1.6 / 2.7 / 1.5 /
 /// 2.1 / 3.4 / 7.0 %). Their cost on one thread natively (CPU time, the
 /// `slider_timing` example, median of three on a shared machine), sun 10 /
-/// 2 / -4: the refinement 0.73 / 1.09 / 1.22 s (with 40 layers 0.90 / 1.28
-/// / 1.34 s), the preview 0.120 / 0.171 / 0.163 s (with 20 layers and 1.5
-/// degrees 0.145 / 0.213 / 0.224 s); the sun 45 degrees up 0.04 s. The first order's fine moments after
-/// sunset (`spherical_first_order.rs` in the library) are about half of a
-/// low-sun frame. Those are scalar light; the polarised light of the
-/// default (the spec's `polarisation`) adds, sun 45 / 10 / 2 / -4, 0.30 /
-/// 0.22 / 0.26 / 0.23 s to the refinement (the same measurement, once a
-/// sky has drawn an image: a sky moved to a new sun keeps the polarisation
-/// table's phase-matrix harmonics; 0.52-0.60 s before it did); the preview
-/// stays scalar ([`build_sky`]).
+/// 2 / -4: the refinement 0.67 / 0.99 / 1.00 s (40 layers cost 1.1-1.25
+/// times as much), the preview 0.094 / 0.133 / 0.130 s (20 layers and 1.5
+/// degrees 1.2-1.4 times as much); the sun 45 degrees up 0.03 s. The first
+/// order's fine moments after sunset (`spherical_first_order.rs` in the
+/// library) are about half of a low-sun frame, the tilted peak beam
+/// (`peak_beam.rs`) a sixth of a low-sun preview. Those are scalar light;
+/// the polarised light of the default (the spec's `polarisation`) adds,
+/// sun 10 / 2 / -4, 0.19 / 0.21 / 0.22 s to the refinement (the same
+/// measurement, once a sky has drawn an image: a sky moved to a new sun
+/// keeps the phase-matrix harmonics from the streams, the polarisation
+/// table's and the columns'; the first image also computes them, 0.5 s);
+/// the preview stays scalar ([`build_sky`]).
 pub fn quality_settings(
     quality: Quality,
 ) -> (WavelengthGrid, MultipleScatteringSettings, FastTableSize) {

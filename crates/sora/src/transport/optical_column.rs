@@ -342,6 +342,10 @@ pub struct SunColumnTable {
     /// (column_m / d), -inf where it is zero, index
     /// [(altitude * mu_nodes + mu) * species + s].
     log_mean_densities: Vec<f64>,
+    /// Their exponentials, the mean densities themselves (the same bits
+    /// as exp() of the logarithms at a lookup): what the layers' lookups
+    /// blend, four per lookup that would each take an exp.
+    mean_densities: Vec<f64>,
 }
 
 impl SunColumnTable {
@@ -368,6 +372,7 @@ impl SunColumnTable {
                 .map(|p| !matches!(p.borrow(), DensityProfile::PiecewiseLinear(_)))
                 .collect(),
             log_mean_densities: Vec::new(),
+            mean_densities: Vec::new(),
         };
         let mut log_mean_densities = vec![0.0; altitude_nodes * mu_nodes * species];
         // One altitude row per task; each row is the same computation
@@ -413,6 +418,7 @@ impl SunColumnTable {
             },
         );
         SunColumnTable {
+            mean_densities: log_mean_densities.iter().map(|v| v.exp()).collect(),
             log_mean_densities,
             ..table
         }
@@ -516,9 +522,14 @@ impl SunColumnTable {
         let fx = at_radius.altitude_weight;
         let fy = y - j as f64;
         let s = self.species;
-        let at =
-            |ii: usize, jj: usize| &self.log_mean_densities[(ii * self.mu_nodes + jj) * s..][..s];
-        let (c00, c01, c10, c11) = (at(i, j), at(i, j + 1), at(i + 1, j), at(i + 1, j + 1));
+        // The four corners' first species, [(ii * mu_nodes + jj) * s].
+        let corner = |ii: usize, jj: usize| (ii * self.mu_nodes + jj) * s;
+        let nodes = [
+            corner(i, j),
+            corner(i, j + 1),
+            corner(i + 1, j),
+            corner(i + 1, j + 1),
+        ];
         let weights = [
             (1.0 - fx) * (1.0 - fy),
             (1.0 - fx) * fy,
@@ -526,7 +537,7 @@ impl SunColumnTable {
             fx * fy,
         ];
         for (k, column) in columns_m.iter_mut().enumerate().take(s) {
-            let corners = [c00[k], c01[k], c10[k], c11[k]];
+            let corners = nodes.map(|n| self.log_mean_densities[n + k]);
             let mean_density = if self.logarithmic[k] && corners.iter().all(|v| v.is_finite()) {
                 corners
                     .iter()
@@ -535,11 +546,12 @@ impl SunColumnTable {
                     .sum::<f64>()
                     .exp()
             } else {
-                // A layer profile: interpolate the density itself.
-                corners
+                // A layer profile: interpolate the density itself (the
+                // corners' exp() kept in the table).
+                nodes
                     .iter()
                     .zip(weights)
-                    .map(|(c, w)| c.exp() * w)
+                    .map(|(n, w)| self.mean_densities[n + k] * w)
                     .sum::<f64>()
             };
             *column = mean_density * length;

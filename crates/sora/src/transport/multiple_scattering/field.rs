@@ -8,7 +8,7 @@ use std::sync::Arc;
 use super::MultipleScatteringSettings;
 use super::column_optics::{ColumnGeometry, ScaledOptics};
 use super::forward_peak::{self, ForwardPeak};
-use super::peak_beam::{PeakBeam, PeakBeamInputs};
+use super::peak_beam::{NeededElevations, PeakBeam, PeakBeamInputs};
 use super::phase_fourier::normalized_associated_legendre;
 use super::polarisation_correction::{
     CorrectionInputs, PolarisationCorrection, PolarisationRows, PolarisationTable,
@@ -1003,11 +1003,23 @@ fn compute_peak_beam(
     (geometry, scaled): (&ColumnGeometry, &ScaledOptics),
     forward_peak: &ForwardPeak,
 ) -> Option<PeakBeam> {
-    let eye_sun_zenith = sky.sun_direction().z.clamp(-1.0, 1.0).acos();
+    let eye_sun_elevation = FRAC_PI_2 - sky.sun_direction().z.clamp(-1.0, 1.0).acos();
     // No reach: the field serves every sun (engine tables).
-    let needed = match reach_rad {
-        None => Some(PeakBeam::every_elevation_deg()),
-        Some(reach) => PeakBeam::needed_elevations_deg(FRAC_PI_2 - eye_sun_zenith, reach),
+    let (needed, per_altitude) = match reach_rad {
+        None => (
+            Some(PeakBeam::every_elevation_deg()),
+            NeededElevations::Everywhere,
+        ),
+        Some(reach) => (
+            PeakBeam::needed_elevations_deg(eye_sun_elevation, reach),
+            NeededElevations::around_eye(
+                eye_sun_elevation,
+                sky.observer_radius_m(),
+                sky.radii_m(),
+                geometry.grid.altitudes_m(),
+                reach,
+            ),
+        ),
     };
     match needed {
         Some(elevations_deg) if forward_peak.any() => {
@@ -1020,6 +1032,7 @@ fn compute_peak_beam(
                     sun_columns: &sky.sun_column_table(altitude_nodes, mu_nodes),
                 },
                 elevations_deg,
+                &per_altitude,
             )
         }
         _ => None,

@@ -75,7 +75,12 @@
 //! extinction is: the haze, the lowest air) and the sun's elevation at
 //! the point, every [`ELEVATION_STEP_DEG`] from -20 to +12 degrees but
 //! only where the sky's view rays can go
-//! ([`PeakBeam::needed_elevations_deg`]); ln B read bilinearly. The
+//! ([`PeakBeam::needed_elevations_deg`]), and at each altitude only
+//! those its points on the rays can have ([`NeededElevations`]: a point
+//! 1 km up is within 1 degree of the eye's sun, 10 km up 3.2 degrees,
+//! where the sky reaches 10; the same table where they read it, bit for
+//! bit, at 0.9 times the explorer's preview time at suns 2 to -4);
+//! ln B read bilinearly. The
 //! tilts are bins of [`TILT_STEP_DEG`] over +-[`TILT_REACH_DEG`] / N
 //! degrees (9 for the default N = 16; see there),
 //! each tilted line marched on [`PANELS`] Gauss panels cut at the
@@ -168,8 +173,14 @@ pub(crate) struct PeakBeam {
 impl PeakBeam {
     /// The table for a sky whose species have forward peaks (None when
     /// none has), at the table's sun elevations within `elevations_deg`
-    /// (those its view rays meet, [`PeakBeam::needed_elevations_deg`]).
-    pub(crate) fn compute(inputs: &PeakBeamInputs, elevations_deg: (f64, f64)) -> Option<PeakBeam> {
+    /// (those its view rays meet, [`PeakBeam::needed_elevations_deg`]),
+    /// per altitude of the table (its field's levels) those within
+    /// `needed` there (None: none; see [`NeededElevations`]).
+    pub(crate) fn compute(
+        inputs: &PeakBeamInputs,
+        elevations_deg: (f64, f64),
+        needed: &NeededElevations,
+    ) -> Option<PeakBeam> {
         let (ground, top) = inputs.geometry.corners.radii_m();
         let weights = compute_tilt_weights(
             inputs.optics,
@@ -181,6 +192,7 @@ impl PeakBeam {
             inputs,
             &weights,
             elevations_deg,
+            needed,
         ))
     }
 
@@ -192,11 +204,15 @@ impl PeakBeam {
     /// whole number of the sun's elevation steps, so each is marched once
     /// per altitude (its samples' radii, central angles from x and
     /// f beta_sca rho T(x, y) kept) and read by every sun elevation and tilt
-    /// that meet on it.
+    /// that meet on it. At each altitude only the elevations `needed`
+    /// there (and a node beyond each end, for the interpolation) are
+    /// computed, and only the lines they read are marched; the others
+    /// hold ln of the smallest positive number, what no light gives.
     fn compute_with_tilts(
         inputs: &PeakBeamInputs,
         weights: &[f64],
         (lowest_deg, highest_deg): (f64, f64),
+        needed: &NeededElevations,
     ) -> PeakBeam {
         let (corners, profiles) = (&inputs.geometry.corners, &inputs.geometry.profiles);
         let altitudes_m = inputs.geometry.grid.altitudes_m();
@@ -237,9 +253,22 @@ impl PeakBeam {
             let mut sun = vec![0.0; s];
             let mut depth = vec![0.0; w];
             let mut source = vec![0.0; w];
+            // This altitude's elevation nodes (relative to `first`),
+            // empty when it needs none.
+            let (from, to) = match needed.at_altitude(a) {
+                Some((low, high)) => (
+                    (node(low).floor() - 1.0).max(first as f64) as usize - first,
+                    ((node(high).ceil() + 1.0).max(0.0) as usize).min(last) - first,
+                ),
+                None => (1, 0),
+            };
             let mut marched: Vec<MarchedLine> = Vec::with_capacity(lines);
             for n in 0..lines {
                 let mut line = MarchedLine::default();
+                if n < from || n > to + 2 * half_tilts {
+                    marched.push(line);
+                    continue;
+                }
                 let d = Vector3::new(line_rad(n).cos(), 0.0, line_rad(n).sin());
                 if let Some((enter, exit)) = segment_in_atmosphere(x, d, ground, top)
                     && exit > enter
@@ -295,6 +324,10 @@ impl PeakBeam {
                 let elevation = elevation_rad(first + e);
                 let beam = &mut block[e * w..(e + 1) * w];
                 beam.fill(0.0);
+                if e < from || e > to {
+                    beam.fill(f64::MIN_POSITIVE.ln());
+                    continue;
+                }
                 for &k in &used {
                     let line = &marched[e + k * steps_per_tilt];
                     line_sum.fill(0.0);
@@ -494,6 +527,67 @@ fn tilt_count(terms: usize) -> usize {
     2 * (TILT_REACH_DEG / (terms.max(1) as f64 * TILT_STEP_DEG)).ceil() as usize + 1
 }
 
+/// The sun elevations that a sky's view rays meet at each altitude of
+/// the table: a point at radius r on a ray from an eye at radius r_e is at
+/// most acos(R / r_e) + acos(R / r) from the eye's zenith (as an angle at
+/// the planet's centre; to the ground's horizon, then out to r), and its
+/// sun's elevation differs from the eye's by at most that angle. A point
+/// between the table's altitudes z_a and z_a+1 reads both rows, so row a
+/// takes the angle of z_a+1 (the top of the atmosphere for the last row,
+/// which serves every point above it).
+#[derive(Debug, Clone)]
+pub(crate) enum NeededElevations {
+    /// Every altitude the whole range (a field for every sun and eye).
+    Everywhere,
+    /// The eye's sun elevation (rad) and per altitude the largest central
+    /// angle (rad) of the points that read its row.
+    AroundEye {
+        eye_elevation_rad: f64,
+        reach_rad: Vec<f64>,
+    },
+}
+
+impl NeededElevations {
+    /// Around an eye at radius `eye_radius_m` whose sun is
+    /// `eye_elevation_rad` up, for the table's `altitudes_m` above a
+    /// ground of radius `ground_m` under a top of radius `top_m`, each
+    /// reach at most `reach_rad` (the field's).
+    pub(crate) fn around_eye(
+        eye_elevation_rad: f64,
+        eye_radius_m: f64,
+        (ground_m, top_m): (f64, f64),
+        altitudes_m: &[f64],
+        reach_rad: f64,
+    ) -> NeededElevations {
+        let eye = (ground_m / eye_radius_m.max(ground_m)).min(1.0).acos();
+        let reach_rad = (0..altitudes_m.len())
+            .map(|a| {
+                let r = altitudes_m
+                    .get(a + 1)
+                    .map_or(top_m, |z| ground_m + z)
+                    .max(ground_m);
+                (eye + (ground_m / r).min(1.0).acos()).min(reach_rad)
+            })
+            .collect();
+        NeededElevations::AroundEye {
+            eye_elevation_rad,
+            reach_rad,
+        }
+    }
+
+    /// The elevations (degrees) needed at altitude `a` within the table's
+    /// range, None when none.
+    fn at_altitude(&self, a: usize) -> Option<(f64, f64)> {
+        match self {
+            NeededElevations::Everywhere => Some(PeakBeam::every_elevation_deg()),
+            NeededElevations::AroundEye {
+                eye_elevation_rad,
+                reach_rad,
+            } => PeakBeam::needed_elevations_deg(*eye_elevation_rad, reach_rad[a]),
+        }
+    }
+}
+
 /// The tilt of bin k of `tilts`, degrees.
 fn tilt_deg(k: usize, tilts: usize) -> f64 {
     (k as f64 - (tilts / 2) as f64) * TILT_STEP_DEG
@@ -690,6 +784,7 @@ mod tests {
                 PEAK_BEAM_LOWEST_ELEVATION_DEG,
                 PEAK_BEAM_HIGHEST_ELEVATION_DEG,
             ),
+            &NeededElevations::Everywhere,
         );
         let (ground, _) = inputs.geometry.corners.radii_m();
         let mut worst = 0.0f64;
@@ -721,6 +816,81 @@ mod tests {
         eprintln!("worst relative error: {worst:.2e}");
     }
 
+    /// A table restricted to the elevations an eye's view rays meet at
+    /// each altitude reads, everywhere they can read it (every altitude
+    /// from the ground to the top, every sun elevation within the central
+    /// angle a point there can have from the eye), the same bits as the
+    /// whole table; eyes on the ground and 3 km up, suns from 10 degrees
+    /// up to 6 below. And it computes fewer of them.
+    #[test]
+    fn a_table_for_an_eyes_rays_reads_as_the_whole_table_where_they_go() {
+        let inputs = Inputs::new("earth-hazy");
+        let (ground, top) = inputs.geometry.corners.radii_m();
+        let altitudes = inputs.geometry.grid.altitudes_m();
+        let whole = PeakBeam::compute(
+            &inputs.beam_inputs(),
+            PeakBeam::every_elevation_deg(),
+            &NeededElevations::Everywhere,
+        )
+        .unwrap();
+        let w = inputs.optics.grid.len();
+        let (mut a_out, mut b_out) = (vec![0.0; w], vec![0.0; w]);
+        for eye_altitude in [0.0, 3_000.0] {
+            let eye = ground + eye_altitude;
+            let reach = (ground / eye).acos() + (ground / top).acos();
+            for eye_sun_deg in [10.0, 5.0, 2.0, 0.0, -3.0, -6.0] {
+                let eye_sun = f64::to_radians(eye_sun_deg);
+                let needed =
+                    NeededElevations::around_eye(eye_sun, eye, (ground, top), altitudes, reach);
+                let Some(range) = PeakBeam::needed_elevations_deg(eye_sun, reach) else {
+                    continue;
+                };
+                let restricted = PeakBeam::compute(&inputs.beam_inputs(), range, &needed).unwrap();
+                // Entries the whole table has light at and the restricted
+                // one left out (no light: ln of the smallest number).
+                let floor = f64::MIN_POSITIVE.ln();
+                let at = |table: &PeakBeam, a: usize, e: usize| {
+                    table.ln_beam[(a * table.elevations + e) * w]
+                };
+                let left_out = (0..altitudes.len())
+                    .flat_map(|a| (0..restricted.elevations).map(move |e| (a, e)))
+                    .filter(|&(a, e)| {
+                        at(&restricted, a, e) == floor
+                            && at(&whole, a, e + restricted.first - whole.first) != floor
+                    })
+                    .count();
+                assert!(
+                    left_out > 0,
+                    "eye {eye_altitude} m, sun {eye_sun_deg}: nothing left out"
+                );
+                let mut compared = 0;
+                for step in 0..=400 {
+                    let z = (top - ground) * (step as f64 / 400.0).powi(3);
+                    let r = ground + z;
+                    let angle = (ground / eye).acos() + (ground / r).min(1.0).acos();
+                    for t in -20..=20 {
+                        let elevation = eye_sun + angle * t as f64 / 20.0;
+                        let a_share = whole.lookup_beam(r, elevation.sin(), &mut a_out);
+                        let b_share = restricted.lookup_beam(r, elevation.sin(), &mut b_out);
+                        assert_eq!(a_share.to_bits(), b_share.to_bits());
+                        if a_share > 0.0 {
+                            compared += 1;
+                            for (x, y) in a_out.iter().zip(&b_out) {
+                                assert_eq!(
+                                    x.to_bits(),
+                                    y.to_bits(),
+                                    "eye {eye_altitude} m, sun {eye_sun_deg}, {z} m, {} deg",
+                                    elevation.to_degrees()
+                                );
+                            }
+                        }
+                    }
+                }
+                assert!(compared > 1000, "{compared}");
+            }
+        }
+    }
+
     /// The table at the field's levels and between them against the oracle
     /// with the same tilts (its Gauss panels, line sharing, sun-column
     /// table and interpolation in altitude; the sun at the table's
@@ -750,6 +920,7 @@ mod tests {
                     PEAK_BEAM_LOWEST_ELEVATION_DEG,
                     PEAK_BEAM_HIGHEST_ELEVATION_DEG,
                 ),
+                &NeededElevations::Everywhere,
             );
             let mut looked_up = vec![0.0; inputs.optics.grid.len()];
             for altitude in [0.0, 150.0, 1_300.0, 6_000.0] {

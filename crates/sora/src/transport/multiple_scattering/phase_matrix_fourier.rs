@@ -68,6 +68,7 @@
 //! small beside a solve.
 
 use std::f64::consts::PI;
+use std::sync::Arc;
 
 use crate::atmosphere::phase_matrix::PhaseMatrix;
 use crate::geometry::{Vector3, direction_from_elevation_azimuth};
@@ -100,8 +101,10 @@ pub struct PhaseMatrixHarmonics {
     inputs: usize,
     /// w_b Z^m_ic(mu_a, mu_b), by columns (c, b) of each harmonic's
     /// (4 outputs) x (4 inputs) matrix:
-    /// [((m * 4 + c) * inputs + b) * 4 * outputs + i * outputs + a].
-    scattering: Vec<f64>,
+    /// [((m * 4 + c) * inputs + b) * 4 * outputs + i * outputs + a];
+    /// shared by the harmonics that differ in their sun only
+    /// ([`PhaseMatrixHarmonics::with_sun_of`]).
+    scattering: Arc<Vec<f64>>,
     /// B^m_i(mu_a): [(m * 4 + i) * outputs + a].
     sun: Vec<f64>,
 }
@@ -253,6 +256,7 @@ impl PhaseMatrixHarmonics {
     ) {
         let (stored, inputs, outputs) = (self.stored, self.inputs, self.outputs);
         let block = COMPONENTS * outputs;
+        let scattering = Arc::make_mut(&mut self.scattering);
         for (m, transform) in transforms[..stored].iter().enumerate() {
             for row in 0..COMPONENTS {
                 match weight {
@@ -264,7 +268,7 @@ impl PhaseMatrixHarmonics {
                                     (true, true) | (false, false) | (false, true) => transform[e],
                                     (true, false) => -transform[e],
                                 };
-                            self.scattering[((m * COMPONENTS + column) * inputs + b) * block
+                            scattering[((m * COMPONENTS + column) * inputs + b) * block
                                 + row * outputs
                                 + a] = weight * step * projected;
                         }
@@ -285,14 +289,15 @@ impl PhaseMatrixHarmonics {
     fn store_mirror(&mut self, (a, b): (usize, usize), (a_mirror, b_mirror): (usize, usize)) {
         let (inputs, outputs) = (self.inputs, self.outputs);
         let block = COMPONENTS * outputs;
+        let scattering = Arc::make_mut(&mut self.scattering);
         for m in 0..self.stored {
             for column in 0..COMPONENTS {
                 for row in 0..COMPONENTS {
                     let at = |a: usize, b: usize| {
                         ((m * COMPONENTS + column) * inputs + b) * block + row * outputs + a
                     };
-                    let value = self.scattering[at(a_mirror, b_mirror)];
-                    self.scattering[at(a, b)] =
+                    let value = scattering[at(a_mirror, b_mirror)];
+                    scattering[at(a, b)] =
                         if is_even_component(row) == is_even_component(column) {
                             value
                         } else {
@@ -348,7 +353,8 @@ impl PhaseMatrixHarmonics {
                                                 (true, false) => -sin_m,
                                                 (false, true) => sin_m,
                                             };
-                                            h.scattering[column(c)] += weight * step * value * g;
+                                            Arc::make_mut(&mut h.scattering)[column(c)] +=
+                                                weight * step * value * g;
                                         }
                                     }
                                     None => {
@@ -382,7 +388,7 @@ impl PhaseMatrixHarmonics {
                 stored,
                 outputs,
                 inputs,
-                scattering: vec![0.0; stored * COMPONENTS * inputs * block],
+                scattering: Arc::new(vec![0.0; stored * COMPONENTS * inputs * block]),
                 sun: vec![0.0; stored * block],
             })
             .collect()
@@ -396,6 +402,25 @@ impl PhaseMatrixHarmonics {
 
     pub(crate) fn harmonics(&self) -> usize {
         self.harmonics
+    }
+
+    /// These harmonics from the inputs (shared, not copied) with the sun's
+    /// of `sun`, computed for the same outputs and harmonics (with any
+    /// inputs): the two parts are computed apart
+    /// ([`PhaseMatrixHarmonics::compute`] takes each pair of directions on
+    /// its own), so this is bit for bit what one computation with this sun
+    /// gives.
+    pub(crate) fn with_sun_of(&self, sun: &PhaseMatrixHarmonics) -> PhaseMatrixHarmonics {
+        assert_eq!(
+            (self.harmonics, self.stored, self.outputs),
+            (sun.harmonics, sun.stored, sun.outputs),
+            "harmonics for other outputs"
+        );
+        PhaseMatrixHarmonics {
+            scattering: Arc::clone(&self.scattering),
+            sun: sun.sun.clone(),
+            ..*self
+        }
     }
 
     /// Harmonic m's matrix by columns: [(c * inputs + b) * 4 * outputs + i * outputs + a];
@@ -760,24 +785,28 @@ mod tests {
         }
     }
 
+    /// A Mie-like matrix at each of `out`'s "wavelengths" (different
+    /// shapes) at scattering-angle cosine `c`.
+    fn mie_like_phase(c: f64, out: &mut [PhaseMatrix]) {
+        for (i, m) in out.iter_mut().enumerate() {
+            let g = 0.2 * i as f64;
+            let a1 = (1.0 - g * g) / (1.0 + g * g - 2.0 * g * c).powf(1.5) / (4.0 * PI);
+            *m = PhaseMatrix {
+                a1,
+                a2: 0.9 * a1,
+                a3: a1 * c,
+                a4: 0.8 * a1 * c,
+                b1: -0.4 * a1 * (1.0 - c * c),
+                b2: 0.1 * a1 * (1.0 - c * c),
+            };
+        }
+    }
+
     #[test]
     fn the_fast_transform_is_the_reference_sum() {
-        // A Mie-like matrix at three "wavelengths" (different shapes), from
-        // streams and the sun into other directions.
-        let phase = |c: f64, out: &mut [PhaseMatrix]| {
-            for (i, m) in out.iter_mut().enumerate() {
-                let g = 0.2 * i as f64;
-                let a1 = (1.0 - g * g) / (1.0 + g * g - 2.0 * g * c).powf(1.5) / (4.0 * PI);
-                *m = PhaseMatrix {
-                    a1,
-                    a2: 0.9 * a1,
-                    a3: a1 * c,
-                    a4: 0.8 * a1 * c,
-                    b1: -0.4 * a1 * (1.0 - c * c),
-                    b2: 0.1 * a1 * (1.0 - c * c),
-                };
-            }
-        };
+        // Three "wavelengths", from streams and the sun into other
+        // directions.
+        let phase = mie_like_phase;
         let (mu, w) = double_gauss(3);
         // Outputs with and without mirror images (those with take their
         // mirror's harmonics with D's signs), and the streams themselves.
@@ -789,10 +818,36 @@ mod tests {
             for (a, b) in f
                 .scattering
                 .iter()
-                .zip(&r.scattering)
+                .zip(r.scattering.iter())
                 .chain(f.sun.iter().zip(&r.sun))
             {
                 assert!((a - b).abs() <= 1e-14 * (1.0 + b.abs()), "{a} vs {b}");
+            }
+        }
+    }
+
+    /// The harmonics from the streams with those from the sun alone
+    /// (computed apart, joined by `with_sun_of`) are one computation's
+    /// with the sun, bit for bit.
+    #[test]
+    fn harmonics_joined_with_the_suns_are_those_computed_with_it() {
+        let phase = mie_like_phase;
+        let (mu, w) = double_gauss(3);
+        let outputs = mu.clone();
+        for sun in [0.9, 0.3, -0.05] {
+            let whole = PhaseMatrixHarmonics::compute(&phase, 3, &outputs, (&mu, &w), Some(sun), 6);
+            let streams = PhaseMatrixHarmonics::compute(&phase, 3, &outputs, (&mu, &w), None, 6);
+            let sun_only =
+                PhaseMatrixHarmonics::compute(&phase, 3, &outputs, (&[], &[]), Some(sun), 6);
+            for ((whole, streams), sun_only) in whole.iter().zip(&streams).zip(&sun_only) {
+                let joined = streams.with_sun_of(sun_only);
+                assert!(Arc::ptr_eq(&joined.scattering, &streams.scattering));
+                for m in 0..6 {
+                    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                    assert_eq!(bits(joined.scattering(m)), bits(whole.scattering(m)));
+                    assert_eq!(bits(joined.sun(m)), bits(whole.sun(m)));
+                    assert!(whole.sun(m).iter().any(|v| *v != 0.0) || m > 0);
+                }
             }
         }
     }

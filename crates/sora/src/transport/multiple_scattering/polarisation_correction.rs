@@ -101,25 +101,29 @@ pub(crate) struct CorrectionInputs<'a> {
     /// eye's sun zenith angle).
     pub(crate) sun_optical_depths: &'a [Option<(f64, f64)>],
     pub(crate) eye_altitude_m: f64,
-    /// The sky's store of the image table's harmonics
-    /// ([`ViewHarmonicsCache`]), shared by the skies moved to other suns.
+    /// The sky's store of the image table's and the columns' harmonics
+    /// from the streams ([`ViewHarmonicsCache`]), shared by the skies moved
+    /// to other suns.
     pub(crate) view_harmonics: Arc<ViewHarmonicsCache>,
 }
 
 /// Each species' phase-matrix harmonics from the streams into the view
-/// zenith cosines of the image table's nodes ([`PolarisationTable`]; what
+/// zenith cosines of the image table's nodes ([`PolarisationTable`]) and
+/// into the streams themselves (the columns' own; what
 /// `compute_species_harmonics` gives without the sun), kept once computed:
 /// they depend on the optics, the streams and those fixed cosines, not on
 /// the sun, so a sky moved to another sun (`SingleScatteringScene::with_sun`,
 /// a slider drag) reads them instead of computing them again, the same
-/// numbers bit for bit. They were three quarters of the phase-matrix work
-/// of a polarised image's field (the correction's own stream-to-stream
-/// harmonics, with the sun, are still computed per sun). Size: the
-/// harmonics stored (all 2N of a Mie or Henyey-Greenstein species, 3 of
-/// Rayleigh's, none of an absorber's) x 16 x streams x cosines x
-/// wavelengths doubles (39 MB at 8 streams per hemisphere, 21 wavelengths,
-/// Rayleigh and one aerosol; the explorer's preview about 5 MB); only the
-/// table's nodes are kept, not a list of directions' cosines.
+/// numbers bit for bit; only the columns' harmonics from the sun are
+/// computed per sun ([`PhaseMatrixHarmonics::with_sun_of`]). The table's
+/// were three quarters of the phase-matrix work of a polarised image's
+/// field, the columns' the rest. Size: the harmonics stored (all 2N of a
+/// Mie or Henyey-Greenstein species, 3 of Rayleigh's, none of an
+/// absorber's) x 16 x streams x cosines x wavelengths doubles (39 MB at 8
+/// streams per hemisphere, 21 wavelengths, Rayleigh and one aerosol, for
+/// the table's 48 cosines, and a third of that for the streams' 16; the
+/// explorer's preview is scalar); only the table's nodes and the streams
+/// are kept, not a list of directions' cosines.
 #[derive(Debug, Default)]
 pub(crate) struct ViewHarmonicsCache(Mutex<Vec<ViewHarmonics>>);
 
@@ -236,14 +240,15 @@ fn truncated_phase_matrix_into(
 /// The harmonics of the Rayleigh phase matrix that do not vanish, m = 0, 1, 2.
 const RAYLEIGH_HARMONICS: usize = 3;
 
-/// Each species' harmonics of its truncated phase matrix from the streams
-/// (and the sun, if given) into the look directions of zenith cosines
-/// `outputs`, at every wavelength: [j][i]. The species are independent
-/// and computed in parallel.
+/// Each species' harmonics 0..`harmonics` of its truncated phase matrix
+/// from the look directions of zenith cosines and weights `inputs` (the
+/// streams, or none) and the sun, if given, into the look directions of
+/// zenith cosines `outputs`, at every wavelength: [j][i]. The species are
+/// independent and computed in parallel.
 fn compute_species_harmonics(
     optics: &AtmosphereOptics,
     phases: &[TruncatedPhase],
-    streams: &Streams,
+    (inputs, harmonics): ((&[f64], &[f64]), usize),
     outputs: &[f64],
     sun_cosine: Option<f64>,
 ) -> Vec<Vec<PhaseMatrixHarmonics>> {
@@ -254,13 +259,13 @@ fn compute_species_harmonics(
         // An absorber (ozone) scatters nothing: its harmonics are zero, and
         // none are stored.
         slot[0] = if s.scattering_per_m.values().iter().all(|b| *b == 0.0) {
-            PhaseMatrixHarmonics::none(optics.grid.len(), streams.count())
+            PhaseMatrixHarmonics::none(optics.grid.len(), harmonics)
         } else {
             // Rayleigh's harmonics end at m = 2 (its phase matrix is
             // quadratic in the scattering angle's cosine, and not truncated).
             let nonzero = match s.phase_function {
                 PhaseFunction::Rayleigh { .. } => RAYLEIGH_HARMONICS,
-                _ => streams.count(),
+                _ => harmonics,
             };
             PhaseMatrixHarmonics::compute_nonzero(
                 &|c, out| {
@@ -268,13 +273,30 @@ fn compute_species_harmonics(
                 },
                 optics.grid.len(),
                 outputs,
-                (streams.cosines(), streams.weights()),
+                inputs,
                 sun_cosine,
-                (streams.count(), nonzero),
+                (harmonics, nonzero),
             )
         };
     });
     all
+}
+
+/// [`compute_species_harmonics`] from the streams `streams`.
+fn compute_species_harmonics_from_streams(
+    optics: &AtmosphereOptics,
+    phases: &[TruncatedPhase],
+    streams: &Streams,
+    outputs: &[f64],
+    sun_cosine: Option<f64>,
+) -> Vec<Vec<PhaseMatrixHarmonics>> {
+    compute_species_harmonics(
+        optics,
+        phases,
+        ((streams.cosines(), streams.weights()), streams.count()),
+        outputs,
+        sun_cosine,
+    )
 }
 
 impl PolarisationCorrection {
@@ -290,13 +312,31 @@ impl PolarisationCorrection {
         let cosines = streams.cosines();
         // Each species' harmonics between the streams and from the sun, at
         // every wavelength: [j][i].
-        let harmonics = compute_species_harmonics(
+        // (The streams' kept, the sun's computed now.)
+        let phases = &inputs.scaled.phases;
+        let from_streams = inputs
+            .view_harmonics
+            .get_or_compute((streams, cosines, wavelengths), || {
+                compute_species_harmonics_from_streams(optics, phases, streams, cosines, None)
+            });
+        let from_sun = compute_species_harmonics(
             optics,
-            &inputs.scaled.phases,
-            streams,
+            phases,
+            ((&[], &[]), total),
             cosines,
             Some(inputs.sun_cosine),
         );
+        let harmonics: Vec<Vec<PhaseMatrixHarmonics>> = from_streams
+            .iter()
+            .zip(&from_sun)
+            .map(|(streams, sun)| {
+                streams
+                    .iter()
+                    .zip(sun)
+                    .map(|(h, s)| h.with_sun_of(s))
+                    .collect()
+            })
+            .collect();
         let vector_len = total * COMPONENTS * levels * total;
         let scalar_len = total * levels * total;
         let solution_len = vector_len + scalar_len + 2;
@@ -441,7 +481,9 @@ impl PolarisationCorrection {
             .collect();
         // The image table's nodes keep their harmonics for the next sun
         // (`keep_harmonics`); a list of directions' cosines does not.
-        let compute = || compute_species_harmonics(optics, phases, &self.streams, &cosines, None);
+        let compute = || {
+            compute_species_harmonics_from_streams(optics, phases, &self.streams, &cosines, None)
+        };
         let harmonics = if keep_harmonics {
             self.view_harmonics
                 .get_or_compute((&self.streams, &cosines, w), compute)
