@@ -47,13 +47,20 @@ impl Sky {
     /// A scalar sky of this sky's physics and image tables' size on
     /// `scene` (the same atmosphere at another sun and eye) whose field is
     /// `shared` (from this atmosphere's [`Sky::solve_shared_field`]) aimed
-    /// at its eye and sun, not solved anew.
+    /// at its eye and sun, not solved anew; its sky-view table has
+    /// `sky_view_nodes` (per half of the zenith axis, azimuth; None: this
+    /// sky's own, as its images have).
     pub(crate) fn with_shared_field(
         &self,
         scene: SingleScatteringScene,
         shared: Option<&SharedField>,
+        sky_view_nodes: Option<(usize, usize)>,
     ) -> Result<Sky> {
-        let sky = Sky::from_scene(scene, self.scattering, self.method, self.table_size())?;
+        let mut table_size = self.table_size();
+        if let Some(nodes) = sky_view_nodes {
+            table_size.sky_view_nodes = nodes;
+        }
+        let sky = Sky::from_scene(scene, self.scattering, self.method, table_size)?;
         if let Some(shared) = shared {
             let field = Arc::new(
                 shared
