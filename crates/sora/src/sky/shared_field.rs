@@ -48,19 +48,23 @@ impl Sky {
     /// `scene` (the same atmosphere at another sun and eye) whose field is
     /// `shared` (from this atmosphere's [`Sky::solve_shared_field`]) aimed
     /// at its eye and sun, not solved anew; its sky-view table has
-    /// `sky_view_nodes` (per half of the zenith axis, azimuth; None: this
-    /// sky's own, as its images have).
+    /// `sky_view`'s nodes (per half of the zenith axis, azimuth) and
+    /// multiple-scattering strides (zenith, azimuth; None: this sky's own
+    /// table, as its images have).
     pub(crate) fn with_shared_field(
         &self,
         scene: SingleScatteringScene,
         shared: Option<&SharedField>,
-        sky_view_nodes: Option<(usize, usize)>,
+        sky_view: Option<((usize, usize), (usize, usize))>,
     ) -> Result<Sky> {
         let mut table_size = self.table_size();
-        if let Some(nodes) = sky_view_nodes {
+        if let Some((nodes, _)) = sky_view {
             table_size.sky_view_nodes = nodes;
         }
-        let sky = Sky::from_scene(scene, self.scattering, self.method, table_size)?;
+        let mut sky = Sky::from_scene(scene, self.scattering, self.method, table_size)?;
+        if let Some((_, stride)) = sky_view {
+            sky.multiple_stride = stride;
+        }
         if let Some(shared) = shared {
             let field = Arc::new(
                 shared
