@@ -40,6 +40,10 @@ pub struct Sky {
     /// a source table at half the steps (built on first use; see
     /// [`Sky::view_tables`]).
     pub(super) view_tables: OnceLock<ImageTables>,
+    /// The sky-view table marches multiply scattered light at every this
+    /// many nodes of its zenith and azimuth axes ([`IMAGE_MULTIPLE_STRIDE`]
+    /// for images).
+    pub(super) multiple_stride: (usize, usize),
     /// Views no lower than this (rad) only: the field is solved for the
     /// sun angles their rays meet (`Sky::for_views_above`), and other
     /// views and images are refused.
@@ -65,6 +69,10 @@ pub(super) struct ImageTables {
 /// 3e-4 at 32 x 64; the table costs about a third of a polarised image's
 /// precomputation.
 const POLARISATION_TABLE_NODES: (usize, usize) = (24, 48);
+
+/// The images' sky-view table marches multiply scattered light at every
+/// other node of each axis (`transport/sky_view_table.rs`).
+pub(super) const IMAGE_MULTIPLE_STRIDE: (usize, usize) = (2, 2);
 
 impl Sky {
     /// A sky from a scene already on its grid (optics, planet, eye, sun).
@@ -140,6 +148,7 @@ impl Sky {
             source_table: OnceLock::new(),
             image_tables: OnceLock::new(),
             view_tables: OnceLock::new(),
+            multiple_stride: IMAGE_MULTIPLE_STRIDE,
             lowest_view_elevation_rad: None,
             k_terms: Vec::new(),
         })
@@ -400,6 +409,7 @@ impl Sky {
             source,
             half_zenith,
             azimuth,
+            self.multiple_stride,
         );
         let polarisation = self
             .field()

@@ -47,13 +47,24 @@ impl Sky {
     /// A scalar sky of this sky's physics and image tables' size on
     /// `scene` (the same atmosphere at another sun and eye) whose field is
     /// `shared` (from this atmosphere's [`Sky::solve_shared_field`]) aimed
-    /// at its eye and sun, not solved anew.
+    /// at its eye and sun, not solved anew; its sky-view table has
+    /// `sky_view`'s nodes (per half of the zenith axis, azimuth) and
+    /// multiple-scattering strides (zenith, azimuth; None: this sky's own
+    /// table, as its images have).
     pub(crate) fn with_shared_field(
         &self,
         scene: SingleScatteringScene,
         shared: Option<&SharedField>,
+        sky_view: Option<((usize, usize), (usize, usize))>,
     ) -> Result<Sky> {
-        let sky = Sky::from_scene(scene, self.scattering, self.method, self.table_size())?;
+        let mut table_size = self.table_size();
+        if let Some((nodes, _)) = sky_view {
+            table_size.sky_view_nodes = nodes;
+        }
+        let mut sky = Sky::from_scene(scene, self.scattering, self.method, table_size)?;
+        if let Some((_, stride)) = sky_view {
+            sky.multiple_stride = stride;
+        }
         if let Some(shared) = shared {
             let field = Arc::new(
                 shared

@@ -190,6 +190,8 @@ pub struct SingleScatteringScratch {
     /// Columns of the whole view ray, m.
     view_columns: Vec<f64>,
     sun_columns: Vec<f64>,
+    /// One view node's optical depth eye-node-sun per wavelength, then
+    /// its transmittance.
     optical_depth: Vec<f64>,
     /// I_j(lambda), species-major: [j * wavelengths + i], m.
     inscattering_integrals: Vec<f64>,
@@ -572,6 +574,11 @@ impl SingleScatteringScene {
                         *tau += beta * column;
                     }
                 }
+                // The transmittance eye-node-sun, one exponential per
+                // wavelength for every species.
+                for tau in scratch.optical_depth.iter_mut() {
+                    *tau = (-*tau).exp();
+                }
                 for (j, s) in species.iter().enumerate() {
                     let density = densities[j];
                     if density <= 0.0 || s.scattering_per_m.values().iter().all(|b| *b == 0.0) {
@@ -579,8 +586,8 @@ impl SingleScatteringScene {
                     }
                     let row =
                         &mut scratch.inscattering_integrals[j * wavelengths..(j + 1) * wavelengths];
-                    for (acc, tau) in row.iter_mut().zip(&scratch.optical_depth) {
-                        *acc += node.weight * density * (-tau).exp();
+                    for (acc, transmittance) in row.iter_mut().zip(&scratch.optical_depth) {
+                        *acc += node.weight * density * transmittance;
                     }
                 }
                 ControlFlow::Continue(())

@@ -27,7 +27,8 @@
 //! to factor out, but it is smooth in direction (a scattering integral of
 //! a diffuse field): it is marched at every other node of each axis
 //! (and the last node of each half) and filled in between them by cubics
-//! (`fill_unmarched`), which quarters its cost. The same march gives the forward-peak
+//! (`fill_unmarched`), which quarters its cost (images; the engine tables'
+//! layers march it at every row of their coarser zenith axis). The same march gives the forward-peak
 //! integrals of delta-M (light that the multiple-scattering solver counts
 //! as unscattered and that single scattering with the real transmittances
 //! misses), a fourth block: like single scattering's integrals they take
@@ -66,7 +67,10 @@ impl SkyViewTable {
     /// Fills the table with `half_zenith_nodes` nodes above and below the
     /// horizon and `azimuth_nodes` over 0..180 degrees, with sun columns
     /// from `sun_columns`, and with `multiple_scattering` the multiply
-    /// scattered radiance at every node too (see the module docs). Rows run
+    /// scattered radiance at every node too, marched at every
+    /// `multiple_stride.0`-th node of the zenith axis's halves and
+    /// `multiple_stride.1`-th of the azimuth axis (and the last of each)
+    /// and filled in linearly between (see the module docs). Rows run
     /// in parallel with the `parallel` feature; the result does not depend
     /// on the thread count.
     pub(crate) fn compute_with_multiple_scattering(
@@ -75,8 +79,10 @@ impl SkyViewTable {
         multiple_scattering: Option<&MultipleScatteringTable>,
         half_zenith_nodes: usize,
         azimuth_nodes: usize,
+        multiple_stride: (usize, usize),
     ) -> SkyViewTable {
         assert!(half_zenith_nodes >= 2 && azimuth_nodes >= 2);
+        assert!(multiple_stride.0 >= 1 && multiple_stride.1 >= 1);
         let optics = sky.optics();
         let wavelengths = optics.grid.len();
         let has_multiple_scattering = multiple_scattering.is_some();
@@ -139,8 +145,8 @@ impl SkyViewTable {
                 for (o, v) in ground.iter_mut().zip(scratch.ground_radiance()) {
                     *o = *v as f32;
                 }
-                let marched_here =
-                    marched(index_in_half, half_zenith_nodes) && marched(k, azimuth_nodes);
+                let marched_here = marched(index_in_half, half_zenith_nodes, multiple_stride.0)
+                    && marched(k, azimuth_nodes, multiple_stride.1);
                 if let (Some(ms), Some((ms_scratch, air, skylit)), true) =
                     (multiple_scattering, ms_work.as_mut(), marched_here)
                 {
@@ -169,8 +175,8 @@ impl SkyViewTable {
                     out,
                     azimuth_nodes,
                     stride,
-                    stride - marched_values,
-                    marched_values,
+                    (stride - marched_values, marched_values),
+                    multiple_stride.1,
                 );
             }
         };
@@ -183,7 +189,13 @@ impl SkyViewTable {
                     [..half_zenith_nodes * row_length];
                 for k in 0..azimuth_nodes {
                     let offset = k * stride + stride - marched_values;
-                    fill_unmarched(rows, half_zenith_nodes, row_length, offset, marched_values);
+                    fill_unmarched(
+                        rows,
+                        half_zenith_nodes,
+                        row_length,
+                        (offset, marched_values),
+                        multiple_stride.0,
+                    );
                 }
             }
         }
@@ -336,35 +348,51 @@ impl SkyViewTable {
 }
 
 /// Whether node `index` of an axis of `count` nodes gets its multiply
-/// scattered radiance marched (the others are interpolated): every other
-/// node and the last.
-fn marched(index: usize, count: usize) -> bool {
-    index % 2 == 0 || index + 1 == count
+/// scattered radiance marched (the others are interpolated): every
+/// `stride`-th node and the last.
+fn marched(index: usize, count: usize, stride: usize) -> bool {
+    index % stride == 0 || index + 1 == count
 }
 
 /// Along one axis of `count` nodes, `step` values apart in `values`: fills
-/// the `width` values at `offset` of every unmarched node by the cubic
-/// through the four marched nodes around it, (9 (b + c) - (a + d)) / 16
-/// for nodes a, b, (this one), c, d two apart, where that lies between b and
-/// c; otherwise (next to an end of the axis, at a peak or where the values
-/// change by orders of magnitude, as in deep twilight, where the cubic
-/// could even turn negative) the mean of b and c. The cubic's error falls
-/// as the fourth power of the step, the mean's as the square: the mean put
-/// a view 2.5 degrees up near the sun's azimuth 3.6e-4 lower than the
-/// cubic (earth-clear, 440 nm, `docs/polarisation.md`).
-fn fill_unmarched(values: &mut [f32], count: usize, step: usize, offset: usize, width: usize) {
-    for i in (1..count.saturating_sub(1)).filter(|i| !marched(*i, count)) {
-        // Marched nodes are the even ones and the last, so an unmarched
-        // node (odd) has marched nodes at i +- 1 and i +- 3 within the axis.
-        let outer = i >= 3 && i + 3 < count;
+/// the `width` values at `offset` of every node that is not [`marched`]
+/// at `stride`. At stride 2 (images) by the cubic through the four marched
+/// nodes around it, (9 (b + c) - (a + d)) / 16 for nodes a, b, (this one),
+/// c, d two apart, where that lies between b and c; otherwise (next to an
+/// end of the axis, at a peak or where the values change by orders of
+/// magnitude, as in deep twilight, where the cubic could even turn
+/// negative) the mean of b and c. The cubic's error falls as the fourth
+/// power of the step, the mean's as the square: the mean put a view 2.5
+/// degrees up near the sun's azimuth 3.6e-4 lower than the cubic
+/// (earth-clear, 440 nm, `docs/polarisation.md`). At other strides,
+/// linearly between the marched nodes on either side.
+fn fill_unmarched(
+    values: &mut [f32],
+    count: usize,
+    step: usize,
+    (offset, width): (usize, usize),
+    stride: usize,
+) {
+    for i in (1..count.saturating_sub(1)).filter(|i| !marched(*i, count, stride)) {
+        let before = i - i % stride;
+        let after = (before + stride).min(count - 1);
+        // At stride 2 marched nodes are the even ones and the last, so an
+        // unmarched node (odd) has marched nodes at i +- 1 and i +- 3
+        // within the axis.
+        let outer = after - before == 2 && i >= 3 && i + 3 < count;
         for m in 0..width {
             let at = |node: usize| values[node * step + offset + m];
-            let (before, after) = (at(i - 1), at(i + 1));
-            let mean = 0.5 * (before + after);
-            let cubic = outer
-                .then(|| (9.0 * (before + after) - (at(i - 3) + at(i + 3))) / 16.0)
-                .filter(|c| before.min(after) <= *c && *c <= before.max(after));
-            values[i * step + offset + m] = cubic.unwrap_or(mean);
+            let (b, c) = (at(before), at(after));
+            values[i * step + offset + m] = if after - before == 2 {
+                let mean = 0.5 * (b + c);
+                outer
+                    .then(|| (9.0 * (b + c) - (at(i - 3) + at(i + 3))) / 16.0)
+                    .filter(|cubic| b.min(c) <= *cubic && *cubic <= b.max(c))
+                    .unwrap_or(mean)
+            } else {
+                let t = (i - before) as f32 / (after - before) as f32;
+                (1.0 - t) * b + t * c
+            };
         }
     }
 }
