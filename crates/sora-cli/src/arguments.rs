@@ -260,9 +260,9 @@ pub struct Resolution {
     /// field (1..32; the solver has twice as many streams and harmonics).
     /// The default 8 (with 40 layers) holds the Coulson tables (polarised,
     /// plane-parallel) to 1.1e-4 absolute at their grazing rows;
-    /// --streams 10 holds them within 1e-4 (5.6e-5), at 1.6 times the CPU
-    /// time of a polarised view and 1.5 times that of an image (12
-    /// streams: 2.6 and 2.0 times; docs/polarisation.md) [default: 8]
+    /// --streams 10 holds them within 1e-4 (5.6e-5), at 1.5 times the CPU
+    /// time of a polarised view and 1.4 times that of an image (12
+    /// streams: 2.3 and 1.8 times; docs/polarisation.md) [default: 8]
     #[arg(long, value_name = "N")]
     pub streams: Option<usize>,
 

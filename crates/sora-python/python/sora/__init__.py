@@ -301,8 +301,8 @@ class Sky:
     - ``streams`` and ``layers``: the multiple-scattering field's
       resolution, as ``sora spectrum --streams --layers`` (default None: 8
       streams per hemisphere and 40 layers, which hold Coulson's tables to
-      1.1e-4; ``streams=10`` holds them within 1e-4 at about 1.5 times
-      the cost, docs/polarisation.md); not with
+      1.1e-4; ``streams=10`` holds them within 1e-4 at about 1.4-1.5
+      times the cost, docs/polarisation.md); not with
       ``scattering="single"`` or ``method="path-tracing"``.
 
     Skies pickle (by their arguments), so Dask can ship them.

@@ -297,12 +297,11 @@ impl PhaseMatrixHarmonics {
                         ((m * COMPONENTS + column) * inputs + b) * block + row * outputs + a
                     };
                     let value = scattering[at(a_mirror, b_mirror)];
-                    scattering[at(a, b)] =
-                        if is_even_component(row) == is_even_component(column) {
-                            value
-                        } else {
-                            -value
-                        };
+                    scattering[at(a, b)] = if is_even_component(row) == is_even_component(column) {
+                        value
+                    } else {
+                        -value
+                    };
                 }
             }
         }
