@@ -364,7 +364,7 @@ mod tests {
             ..good()
         });
         assert!(
-            e.contains("1640 nm is outside the model's 300..=1100 nm"),
+            e.contains("1640 nm is outside the model's 280..=1100 nm"),
             "{e}"
         );
         let e = error_of(SkyRadianceMeasurement {

@@ -67,7 +67,7 @@
 //! * Wavelengths are the nominal ones (`Nominal_Wavelength(nm)`: 440, 675,
 //!   870, 1020, in newer instruments also 380, 500, 1640); the exact ones
 //!   differ by a few nanometres at most. Channels outside the model's
-//!   300..=1100 nm (1640 nm) are left out, and said so.
+//!   280..=1100 nm (1640 nm) are left out, and said so.
 //! * A scan is the rows of one date and scan type taken within
 //!   [`AERONET_SCAN_WINDOW_S`] of its first row, each wavelength once.
 //! * Points closer to the sun than [`MIN_SCATTERING_ANGLE_DEG`](crate::inversion::MIN_SCATTERING_ANGLE_DEG) (AERONET
