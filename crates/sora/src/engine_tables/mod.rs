@@ -71,7 +71,7 @@ pub use files::{MANIFEST_FILE, TABLE_FORMAT, check_output_directory};
 use crate::colour::{Observer, SpectrumToXyz};
 use crate::error::{Error, Result};
 use crate::geometry::{Vector3, ViewDirection};
-use crate::sky::{Method, SharedField, Sky};
+use crate::sky::{Method, SharedField, Sky, SkyViewGrid};
 use crate::spectrum::SampledSpectrum;
 
 /// Resolution of the engine tables.
@@ -402,15 +402,15 @@ enum Layers {
 /// 128 x 48: half the single-scattering marches, and the multiply
 /// scattered light marched at as many rows as the images'
 /// ([`LAYER_MULTIPLE_STRIDE`]).
-fn layer_sky_view(sky: &Sky, settings: &EngineTableSettings) -> ((usize, usize), (usize, usize)) {
+fn layer_sky_view(sky: &Sky, settings: &EngineTableSettings) -> SkyViewGrid {
     let (image_half, image_azimuth) = sky.table_size().sky_view_nodes;
-    (
-        (
+    SkyViewGrid {
+        nodes: (
             image_half.min(settings.zenith_nodes_per_half),
             image_azimuth.min(settings.azimuth_nodes),
         ),
-        LAYER_MULTIPLE_STRIDE,
-    )
+        multiple_stride: LAYER_MULTIPLE_STRIDE,
+    }
 }
 
 /// A layer's sky-view table marches multiply scattered light at every

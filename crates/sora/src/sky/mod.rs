@@ -92,5 +92,5 @@ pub use setup::Sky;
 /// Most paths per view of the path tracer ([`Method::PathTracing`]).
 pub use crate::transport::path_tracing::MAX_SAMPLES;
 
-pub(crate) use shared_field::SharedField;
+pub(crate) use shared_field::{SharedField, SkyViewGrid};
 pub(crate) use sun_disc::LIMB_DARKENING as SUN_LIMB_DARKENING;

@@ -21,6 +21,17 @@ use crate::transport::multiple_scattering::{
 };
 use crate::transport::single_scattering::SingleScatteringScene;
 
+/// The layout of a sky's sky-view table (`transport/sky_view_table.rs`)
+/// when it is not the images' own.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct SkyViewGrid {
+    /// Nodes per half of the zenith axis, and azimuth nodes.
+    pub(crate) nodes: (usize, usize),
+    /// The multiply scattered light is marched at every this many nodes of
+    /// the zenith and azimuth axes, and filled in between.
+    pub(crate) multiple_stride: (usize, usize),
+}
+
 /// A field solved for every sun zenith angle, with its source table.
 #[derive(Debug, Clone)]
 pub(crate) struct SharedField {
@@ -47,23 +58,21 @@ impl Sky {
     /// A scalar sky of this sky's physics and image tables' size on
     /// `scene` (the same atmosphere at another sun and eye) whose field is
     /// `shared` (from this atmosphere's [`Sky::solve_shared_field`]) aimed
-    /// at its eye and sun, not solved anew; its sky-view table has
-    /// `sky_view`'s nodes (per half of the zenith axis, azimuth) and
-    /// multiple-scattering strides (zenith, azimuth; None: this sky's own
-    /// table, as its images have).
+    /// at its eye and sun, not solved anew; its sky-view table is laid out
+    /// as `sky_view` says (None: this sky's own table, as its images have).
     pub(crate) fn with_shared_field(
         &self,
         scene: SingleScatteringScene,
         shared: Option<&SharedField>,
-        sky_view: Option<((usize, usize), (usize, usize))>,
+        sky_view: Option<SkyViewGrid>,
     ) -> Result<Sky> {
         let mut table_size = self.table_size();
-        if let Some((nodes, _)) = sky_view {
-            table_size.sky_view_nodes = nodes;
+        if let Some(grid) = sky_view {
+            table_size.sky_view_nodes = grid.nodes;
         }
         let mut sky = Sky::from_scene(scene, self.scattering, self.method, table_size)?;
-        if let Some((_, stride)) = sky_view {
-            sky.multiple_stride = stride;
+        if let Some(grid) = sky_view {
+            sky.multiple_stride = grid.multiple_stride;
         }
         if let Some(shared) = shared {
             let field = Arc::new(

@@ -70,7 +70,7 @@ impl SkyViewTable {
     /// scattered radiance at every node too, marched at every
     /// `multiple_stride.0`-th node of the zenith axis's halves and
     /// `multiple_stride.1`-th of the azimuth axis (and the last of each)
-    /// and filled in linearly between (see the module docs). Rows run
+    /// and filled in between (`fill_unmarched`; see the module docs). Rows run
     /// in parallel with the `parallel` feature; the result does not depend
     /// on the thread count.
     pub(crate) fn compute_with_multiple_scattering(
