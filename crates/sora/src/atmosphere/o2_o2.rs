@@ -15,10 +15,10 @@
 //! # Where it comes from
 //! `[gases] o2_o2 = true` in an atmosphere file (default false: an
 //! atmosphere without the key has no O4 and is unchanged) adds the species
-//! "O2-O2 (collision-induced)" ([`o2_o2_species`]). It follows the
+//! [`SPECIES_NAME`] (`o2_o2_species`). It follows the
 //! atmosphere's own air, the species that Rayleigh-scatters as gas "air"
 //! with a number density: n_O2 is 0.2095 of that density and the profile is
-//! the square of the air's ([`DensityProfile::squared`]: an exponential of
+//! the square of the air's (`DensityProfile::squared`: an exponential of
 //! half the scale height, a tabulated profile's rows squared). So the O4
 //! column is that of the air the sky scatters with: for the Earth presets'
 //! air (2.546899e25 m^-3, an exponential of 8435 m) it is n_O2^2 H / 2 =
