@@ -59,23 +59,27 @@ Checks the script makes on itself: each source file's sha256; the mean of
 ten 1 nm bins against the 10 nm mean integrated directly from the source
 points (they agree to the rounding); no 1 nm bin above 2.5e-45 cm^5 (the strongest band, 1.27 um, peaks at 2.1e-45).
 
-Run: python3 scripts/gases/make_no2_o4.py PATH_TO_SASKTRAN_GIT_DIR  (Python 3 and git only)
+Run: python3 scripts/gases/make_no2_o4.py PATH_TO_SASKTRAN_GIT_DIR  (git, and numpy for the
+import of make_ozone_bogumil2003.py, whose air-to-vacuum conversion this shares; about 3 s)
 """
 
 import hashlib
+import itertools
 import pathlib
 import subprocess
 import sys
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-from make_ozone_bogumil2003 import edlen_refractive_index  # noqa: E402
+from make_ozone_bogumil2003 import edlen_refractive_index
 
 COMMIT = "f3957aa2a6a57f5b1e9ee47dd7952b76090f0f81"
 DATA = pathlib.Path(__file__).resolve().parents[2] / "crates/sora/src/data"
 NO2_OUT = DATA / "no2_cross_section_294K_1nm_vandaele1998.csv"
 O4_OUT = DATA / "o2_o2_cia_1nm_thalman2013_hitran2016.csv"
 
-NO2_FILE = "src/core/skopticalproperties/sources/no2/Vandaele_1998/vandaelele_xsection.h"
+NO2_FILE = (
+    "src/core/skopticalproperties/sources/no2/Vandaele_1998/vandaelele_xsection.h"
+)
 HITRAN = "src/core/skopticalproperties/sources/o2-o2/Hitran2016/"
 # In order of wavenumber.
 O4_FILES = [
@@ -157,7 +161,7 @@ def bin_means(curves, starts, width, end=None):
 
 
 def sig4(v):
-    return "0" if v <= 0.0 else "%.4g" % v
+    return "0" if v <= 0.0 else f"{v:.4g}"
 
 
 def no2(repo):
@@ -167,9 +171,9 @@ def no2(repo):
     values = numbers_in_array(data.decode("latin-1"))
     air_nm, s220, s294 = values[0::3], values[1::3], values[2::3]
     vac = [w * edlen_refractive_index(w) for w in air_nm]
-    assert all(b > a for a, b in zip(vac, vac[1:]))
-    m2 = lambda s: [v * 1e-4 for v in s]  # noqa: E731
-    curve294, curve220 = (vac, m2(s294)), (vac, m2(s220))
+    assert all(b > a for a, b in itertools.pairwise(vac))
+    curve294 = (vac, [v * 1e-4 for v in s294])
+    curve220 = (vac, [v * 1e-4 for v in s220])
     starts = list(range(239, 667))
     means = bin_means([curve294], starts, 1.0, end=vac[-1])
     rows = [(s, sig4(v)) for s, v in zip(starts, means)]
@@ -180,7 +184,9 @@ def no2(repo):
         from_bins = sum(float(v) for s, v in rows if lo <= s < lo + 10) / 10
         cold = bin_means([curve220], [lo], 10.0)[0]
         assert abs(from_bins / direct - 1) < 1e-3, (lo, direct, from_bins)
-        print(f"  [{lo}, {lo + 10}): {direct:.4e} / {from_bins:.4e}, ratio 220/294 K {cold / direct:.3f}")
+        print(
+            f"  [{lo}, {lo + 10}): {direct:.4e} / {from_bins:.4e}, ratio 220/294 K {cold / direct:.3f}"
+        )
     peak = max(float(v) for _, v in rows if v != "0")
     print(f"  largest 1 nm bin: {peak:.3e} m^2")
     header = f"""\
@@ -197,7 +203,7 @@ def hitran_curve(repo, name):
     data, digest = read(repo, HITRAN + name)
     values = numbers_in_array(data.decode("latin-1"))
     nu, k = values[0::2], values[1::2]
-    assert all(b > a for a, b in zip(nu, nu[1:])), name
+    assert all(b > a for a, b in itertools.pairwise(nu)), name
     # Vacuum nm, increasing; cm^5 -> m^5.
     nm = [1e7 / v for v in reversed(nu)]
     m5 = [v * 1e-10 for v in reversed(k)]
@@ -208,7 +214,9 @@ def clip_below_nm(curve, nm_end):
     """The part of `curve` (increasing nm) below nm_end, ending at it."""
     xs, ys = curve
     keep = [i for i, x in enumerate(xs) if x < nm_end]
-    return [xs[i] for i in keep] + [nm_end], [ys[i] for i in keep] + [interp(nm_end, xs, ys)]
+    return [xs[i] for i in keep] + [nm_end], [ys[i] for i in keep] + [
+        interp(nm_end, xs, ys)
+    ]
 
 
 def thalman_curve(repo, name):
@@ -217,7 +225,7 @@ def thalman_curve(repo, name):
     values = numbers_in_array(data.decode("latin-1"))
     air_nm, k = values[0::2], values[1::2]
     nm = [w * edlen_refractive_index(w) for w in air_nm]
-    assert all(b > a for a, b in zip(nm, nm[1:])), name
+    assert all(b > a for a, b in itertools.pairwise(nm)), name
     return (nm, [v * 1e-10 for v in k]), digest, len(data)
 
 
@@ -240,17 +248,23 @@ def o4(repo):
     assert all(float(v) < 2.5e-55 for _, v in rows), "a bin above 2.5e-45 cm^5"
     cold, _, _ = thalman_curve(repo, THALMAN_273K)
     cold = clip_below_nm(cold, seam_nm)
-    print("O4 10 nm means (m^5), direct / from the 1 nm bins; Thalman & Volkamer 273 K / 293 K:")
+    print(
+        "O4 10 nm means (m^5), direct / from the 1 nm bins; Thalman & Volkamer 273 K / 293 K:"
+    )
     for lo in (355, 375, 442, 472, 528, 572, 625, 685, 755, 1060, 1265):
         direct = max(0.0, bin_means(curves, [lo], 10.0)[0])
         from_bins = sum(float(v) for s, v in rows if lo <= s < lo + 10) / 10
         assert abs(from_bins - direct) <= 2e-3 * direct + 1e-58, (lo, direct, from_bins)
         warm = bin_means([visible], [lo], 10.0)[0]
-        ratio = f"{bin_means([cold], [lo], 10.0)[0] / warm:.3f}" if warm > 1e-57 else "-"
+        ratio = (
+            f"{bin_means([cold], [lo], 10.0)[0] / warm:.3f}" if warm > 1e-57 else "-"
+        )
         print(f"  [{lo}, {lo + 10}): {direct:.4e} / {from_bins:.4e}; {ratio}")
     for nm in (477, 577, 630, 1065, 1265):
         near = max((float(v), s) for s, v in rows if abs(s - nm) <= 3)
-        print(f"  largest 1 nm bin near {nm} nm: {near[0]:.4e} m^5 at [{near[1]}, {near[1] + 1})")
+        print(
+            f"  largest 1 nm bin near {nm} nm: {near[0]:.4e} m^5 at [{near[1]}, {near[1] + 1})"
+        )
     header = (
         "# O2-O2 collision-induced absorption: the binary absorption coefficient k, m^5 molecule^-2 (the absorption coefficient is k n_O2^2), bin-averaged over [lambda, lambda + 1) nm (vacuum). Written by scripts/gases/make_no2_o4.py.\n"
         "# Data: 336-600 nm: Thalman & Volkamer (2013), PCCP 15, 15371, doi:10.1039/c3cp50968k, at 293 K (air wavelengths; no data, taken as 0, in 389.4-427.7 and 496.5-509.5 nm, where no O4 band lies). 600-1343 nm: HITRAN 2016 collision-induced absorption (Karman et al. 2019, Icarus 328, 160, doi:10.1016/j.icarus.2019.02.034), the O2-O2 sets at the temperature nearest 293 K: 600-654 nm (287 K, Thalman & Volkamer 2013), B band (293 K, Spiering et al. 2011), A band (296 K, Tran et al. 2006), 0.91 um (293 K, Spiering & van der Zande 2012), 1.06 um (293 K, Karman et al. 2018), 1.27 um (296 K, Mate et al. 1999).\n"

@@ -1,4 +1,4 @@
-//! Absorbing gases: ozone and any gas given by an absorption cross-section
+//! Absorbing gases: ozone, NO2 and any gas given by an absorption cross-section
 //! table. They take light out of the beam and scatter none of it (single-
 //! scattering albedo 0); their extinction is absorption,
 //!
