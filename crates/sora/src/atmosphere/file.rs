@@ -41,6 +41,7 @@ use serde::de::{self, MapAccess, SeqAccess, Visitor};
 use super::aerosol::{AerosolPhase, ParametricAerosol};
 use super::gas_bands;
 use super::mie_species::{MieAerosol, ParticleAmount};
+use super::o2_o2;
 use super::ozone::{AbsorbingGas, AbsorptionCrossSection, BinnedCrossSection, GasAmount};
 use super::planet::Planet;
 use super::profile::{DensityProfile, ProfileTable};
@@ -98,6 +99,7 @@ struct GasesFile {
     precipitable_water_cm: f64,
     water_scale_height_m: Option<f64>,
     mixed_gases: Option<bool>,
+    o2_o2: Option<bool>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -360,7 +362,13 @@ pub(crate) fn parse_atmosphere(
         species.push(convert_species(species_file, &path, &planet)?);
     }
     if let Some(gases) = file.gases {
+        let o2_o2 = if gases.o2_o2.unwrap_or(false) {
+            Some(o2_o2::o2_o2_species(&species).map_err(|e| invalid("gases.o2_o2", &e))?)
+        } else {
+            None
+        };
         species.extend(convert_gases(gases)?);
+        species.extend(o2_o2);
         // The gases' species are named by sora; a file's own species of the
         // same name would make outputs ambiguous.
         for (index, s) in species.iter().enumerate() {
@@ -1369,11 +1377,12 @@ fn convert_absorption(file: AbsorptionFile, path: &str, keys: &AmountKeys) -> Re
     let cross_section = match (file.gas, file.wavelength_nm, file.cross_section_m2) {
         (Some(gas), None, None) => match gas.as_str() {
             "ozone" => AbsorptionCrossSection::Binned(BinnedCrossSection::ozone_233k()),
+            "no2" => AbsorptionCrossSection::Binned(BinnedCrossSection::no2_294k()),
             other => {
                 return Err(invalid(
                     &format!("{here}.gas"),
                     &format!(
-                        "'{other}' has no built-in cross-section: use \"ozone\", or give wavelength_nm and cross_section_m2"
+                        "'{other}' has no built-in cross-section: use \"ozone\" or \"no2\", or give wavelength_nm and cross_section_m2"
                     ),
                 ));
             }
@@ -1395,7 +1404,7 @@ fn convert_absorption(file: AbsorptionFile, path: &str, keys: &AmountKeys) -> Re
         _ => {
             return Err(invalid(
                 &here,
-                "give gas = \"ozone\", or wavelength_nm and cross_section_m2 (a table), not both",
+                "give gas = \"ozone\" or \"no2\", or wavelength_nm and cross_section_m2 (a table), not both",
             ));
         }
     };

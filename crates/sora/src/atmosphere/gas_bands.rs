@@ -62,7 +62,9 @@
 //! km is the sea-level band with a quarter of the air above. Its
 //! resolution is its coefficients' (a 10 nm grid sample at 760 nm reads
 //! a_u = 2.0, half way between 757.5 and 762.5 nm). It has no O2-O2
-//! collision bands, no NO2 and no CH4 (its mixed gases are O2 and CO2).
+//! collision bands (`o2_o2.rs`, `[gases] o2_o2 = true`), no NO2 (a
+//! cross-section species, `absorption.gas = "no2"`) and no CH4 (its mixed
+//! gases are O2 and CO2).
 //! When one solve is asked for (a sky built from an atmosphere with gases,
 //! not summed over terms), each banded gas acts with one effective
 //! coefficient: the one whose Beer-Lambert transmittance equals the band

@@ -21,7 +21,10 @@
 //!   Tables 1-2);
 //! - [`aerosol`]: the parametric aerosol (optical depth, Angstrom exponent,
 //!   single-scattering albedo, Henyey-Greenstein / Cornette-Shanks);
-//! - [`ozone`]: gases that only absorb (ozone, 300 DU on Earth).
+//! - [`ozone`]: gases that only absorb (ozone, 300 DU on Earth; NO2);
+//!   [`o2_o2`]: O2-O2 collision-induced absorption, which follows the
+//!   air's density squared; [`gas_bands`]: water vapour and the O2 and CO2
+//!   bands as a k-distribution.
 //!
 //! Atmospheres are read from TOML ([`file`](mod@file), the one place where files
 //! become validated model types; [`Atmosphere::from_toml_str`]) or taken
@@ -41,6 +44,7 @@ mod coverage;
 pub mod file;
 pub mod gas_bands;
 pub mod mie_species;
+pub mod o2_o2;
 pub mod optical_depth;
 pub mod ozone;
 pub mod phase;

@@ -1,4 +1,4 @@
-//! Absorbing gases: ozone and any gas given by an absorption cross-section
+//! Absorbing gases: ozone, NO2 and any gas given by an absorption cross-section
 //! table. They take light out of the beam and scatter none of it (single-
 //! scattering albedo 0); their extinction is absorption,
 //!
@@ -73,27 +73,42 @@
 //! tables (`absorption.wavelength_nm` / `cross_section_m2`) are point
 //! values, linearly interpolated and sampled at each wavelength.
 //!
+//! # NO2
+//! `absorption.gas = "no2"`: nitrogen dioxide, whose structured continuum
+//! absorbs from the ultraviolet to the orange (peak 10 nm means of 6e-19
+//! cm^2 near 400-420 nm). The embedded cross-section
+//! (`data/no2_cross_section_294K_1nm_vandaele1998.csv`, written by
+//! `scripts/gases/make_no2_o4.py`; the CSV header names the file and its
+//! sha256) is Vandaele et al. (1998, JQSRT 59, 171) at 294 K, converted
+//! from air to vacuum wavelengths and averaged over 1 nm bins from 239 to
+//! 667 nm: finer than ozone's 10 nm because NO2's vibronic structure
+//! (bands ~5 nm apart) is what a 1-5 nm grid should see; on a 10 nm grid
+//! the band averages are the 10 nm means all the same. Past 667 nm (the end
+//! of the copy read; the paper reaches 1000 nm) the table is 0: there the
+//! cross-section is below 1e-20 cm^2, a 1 DU optical depth below 3e-4.
+//! One temperature, 294 K, that of the polluted boundary layer where NO2
+//! columns are large; at 220 K (stratospheric NO2) Vandaele's 10 nm means
+//! are 1-2 % lower at 400-510 nm, 7 % at 340 nm and 10 % at 600 nm (the
+//! script prints the ratios): for a background column of 0.2 DU an error
+//! below 1e-4 in optical depth. The amount is a column in Dobson units as
+//! for ozone (1 DU = 2.6867e16 molecules cm^-2): a clean background has
+//! about 0.1-0.2 DU (mostly stratospheric; the AFGL mid-latitude summer
+//! atmosphere, Anderson et al. 1986, has 0.22 DU, 5.97e15 cm^-2), a
+//! polluted city 1 DU or more. Vertical optical depths per DU (10 nm bands
+//! centred there, tested below):
+//!
+//! | 1 DU NO2, vertical | 340 | 380 | 440 | 500 | 550 | 600 nm |
+//! |---|---|---|---|---|---|---|
+//! | optical depth | 0.0105 | 0.0161 | 0.0137 | 0.0062 | 0.0030 | 0.00086 |
+//!
+//! Sun photometers put their channels in windows between gas bands
+//! (AERONET: 340, 380, 440, 500, 675, 870, 1020 nm) and still correct
+//! ozone, NO2 and water vapour (Giles et al. 2019, AMT 12, 169): NO2 at 440
+//! nm is 0.014 per DU against a Rayleigh optical depth of 0.24.
+//!
 //! Water vapour and the O2 and CO2 bands are `gas_bands.rs` (a band model
-//! as a k-distribution, from an atmosphere file's `[gases]`). Gases sora
-//! leaves out (no cross-section is embedded for them; a user may give any
-//! as an absorption table): the O2-O2 collision bands (477, 577, 630, 1060
-//! nm) and NO2 (a structured continuum over 300-600 nm). Sun photometers
-//! put their channels in windows between these bands (AERONET: 340, 380,
-//! 440, 500, 675, 870, 1020 nm; 940 nm is its water vapour channel) and
-//! still correct what absorption remains: AERONET's version 3 (Giles et al.
-//! 2019, AMT 12, 169; Sinyuk et al. 2020, AMT 13, 3375) removes ozone, NO2
-//! and water vapour optical depths. What leaving them out costs sora is
-//! that absorption. NO2, from the Bogumil et al. (2003) NO2 cross-sections
-//! (libRadtran's `crs_NO2_UBremen_cf.dat`, 10 nm means read off the table):
-//! about 4e-19 cm^2 at 340 nm and 5e-19 cm^2 at 440 nm, so a column of
-//! 1e16 molecules cm^-2 (0.37 DU; clean air has a few 1e15, a polluted
-//! city a few 1e16) has an optical depth of 0.004 at 340 nm and 0.005 at
-//! 440 nm, against a Rayleigh optical depth of 0.7 and 0.24 and an aerosol
-//! optical depth of typically 0.1. Water vapour at 870 and 1020 nm and the
-//! O2 bands lie outside the photometer windows and are not quantified here;
-//! without `[gases]` a 10 nm sora sample at 760 nm (or 940 nm) has no O2
-//! (or water) band at all, so its radiance is that of the window either
-//! side.
+//! as a k-distribution, from an atmosphere file's `[gases]`), the O2-O2
+//! collision bands `o2_o2.rs` (`[gases] o2_o2 = true`).
 
 //! Amount: a column in Dobson units (1 DU = 2.6867e20 molecules m^-2, a
 //! 10 um layer of pure gas at 0 C and 1 atm; Earth ~300 DU), spread over
@@ -116,6 +131,13 @@ pub(crate) const ZERO_BINS_END_NM: f64 = 2510.0;
 
 const OZONE_233K_BOGUMIL_CSV: &str =
     include_str!("../data/ozone_cross_section_233K_10nm_bogumil2003.csv");
+/// The start of the first zero bin the embedded tables are padded from
+/// where their data start later (ozone's first bin; the grid's shortest
+/// wavelength is 280 nm).
+pub(crate) const ZERO_BINS_START_NM: f64 = 270.0;
+
+const NO2_294K_CSV: &str = include_str!("../data/no2_cross_section_294K_1nm_vandaele1998.csv");
+const O2_O2_CSV: &str = include_str!("../data/o2_o2_cia_1nm_thalman2013_hitran2016.csv");
 
 /// Cross-sections averaged over bins [start, start + width) of equal width.
 #[derive(Debug, Clone, PartialEq)]
@@ -174,18 +196,62 @@ impl BinnedCrossSection {
 
     /// Ozone at 233 K, 10 nm bins from 270 to 1110 nm (embedded): the
     /// Serdyuchenko bins (360-840 nm) and the Bogumil bins on either side
-    /// (see the module docs).
+    /// (see the module docs), then zeros to [`ZERO_BINS_END_NM`].
     pub(crate) fn ozone_233k() -> BinnedCrossSection {
-        let mut joined = Self::ozone_233k_published();
-        // Zero bins from the published data's end to ZERO_BINS_END_NM.
-        let step = joined.bin_width_nm;
-        let (_, mut end) = joined.range_nm();
+        Self::ozone_233k_published().padded_with_zeros()
+    }
+
+    /// NO2 at 294 K, 1 nm bins from 239 to 667 nm (Vandaele et al. 1998,
+    /// embedded; see the module docs), then zeros to [`ZERO_BINS_END_NM`].
+    pub(crate) fn no2_294k() -> BinnedCrossSection {
+        BinnedCrossSection::parse_csv(NO2_294K_CSV, "embedded NO2 cross-section")
+            .expect("the embedded NO2 table is valid")
+            .padded_with_zeros()
+    }
+
+    /// The O2-O2 binary absorption coefficient k, m^5 per molecule^2, 1 nm
+    /// bins from 335 to 1343 nm (Thalman & Volkamer 2013 and HITRAN 2016
+    /// CIA, embedded; see
+    /// `o2_o2.rs`), zeros on either side from [`ZERO_BINS_START_NM`] to
+    /// [`ZERO_BINS_END_NM`]. Its extinction is k n_O2^2.
+    pub(crate) fn o2_o2_cia() -> BinnedCrossSection {
+        BinnedCrossSection::parse_csv(O2_O2_CSV, "embedded O2-O2 coefficient")
+            .expect("the embedded O2-O2 table is valid")
+            .padded_with_zeros()
+    }
+
+    /// This table with zero bins added (in its own bin width) from
+    /// [`ZERO_BINS_START_NM`] to its first bin and from its end to
+    /// [`ZERO_BINS_END_NM`], so that every grid sora accepts (280-2500
+    /// nm) is covered: the gas absorbs nothing where it has no data.
+    fn padded_with_zeros(mut self) -> BinnedCrossSection {
+        let step = self.bin_width_nm;
+        let (mut first, mut end) = self.range_nm();
+        let mut below = Vec::new();
+        while first > ZERO_BINS_START_NM + 0.5 * step {
+            first -= step;
+            below.push(first);
+        }
+        below.reverse();
+        self.cross_sections_m2
+            .splice(0..0, std::iter::repeat_n(0.0, below.len()));
+        self.bin_starts_nm.splice(0..0, below);
         while end < ZERO_BINS_END_NM - 0.5 * step {
-            joined.bin_starts_nm.push(end);
-            joined.cross_sections_m2.push(0.0);
+            self.bin_starts_nm.push(end);
+            self.cross_sections_m2.push(0.0);
             end += step;
         }
-        joined
+        self
+    }
+
+    /// This table times `factor` (>= 0): e.g. a pair coefficient k (m^5)
+    /// times one partner's density (m^-3), a cross-section per molecule of
+    /// the other.
+    pub(crate) fn scaled(mut self, factor: f64) -> BinnedCrossSection {
+        for value in &mut self.cross_sections_m2 {
+            *value *= factor;
+        }
+        self
     }
 
     /// [`BinnedCrossSection::ozone_233k`] as published: 270-1110 nm.
@@ -540,6 +606,88 @@ mod tests {
     }
 
     #[test]
+    fn the_no2_table_reproduces_vandaeles_ten_nm_means() {
+        // The 10 nm means the script integrated directly from Vandaele's
+        // 294 K points (its printout), against the means of the embedded 1
+        // nm bins: the same within their 4-digit rounding.
+        let no2 = BinnedCrossSection::no2_294k();
+        for (lo, direct) in [
+            (300.0, 1.5687e-23),
+            (340.0, 4.3036e-23),
+            (400.0, 6.1559e-23),
+            (410.0, 5.9226e-23),
+            (430.0, 5.5397e-23),
+            (440.0, 4.9094e-23),
+            (500.0, 2.2347e-23),
+            (600.0, 2.4947e-24),
+        ] {
+            let mean = no2.band_average_m2(lo, lo + 10.0).unwrap();
+            assert!(
+                (mean / direct - 1.0).abs() < 2e-4,
+                "{lo}: {mean} vs {direct}"
+            );
+        }
+        // The data's range, 1 nm bins, zeros past 667 nm and to 2510 nm.
+        assert_eq!(no2.bin_width_nm, 1.0);
+        assert_eq!(no2.range_nm(), (239.0, ZERO_BINS_END_NM));
+        assert!(no2.band_average_m2(667.0, 2510.0).unwrap() == 0.0);
+        assert!(no2.band_average_m2(666.0, 667.0).unwrap() > 0.0);
+        // The largest 1 nm bin: 7.3e-19 cm^2 (the 413 nm band's peak).
+        let largest = no2.cross_sections_m2.iter().cloned().fold(0.0, f64::max);
+        assert!((largest / 7.316e-23 - 1.0).abs() < 1e-9, "{largest}");
+    }
+
+    #[test]
+    fn no2_optical_depths_per_dobson_unit() {
+        // The module docs' table: 1 DU, vertical, 10 nm band centred on each
+        // wavelength.
+        let no2 = BinnedCrossSection::no2_294k();
+        for (nm, want) in [
+            (340.0, 0.0105),
+            (380.0, 0.0161),
+            (440.0, 0.0137),
+            (500.0, 0.0062),
+            (550.0, 0.0030),
+            (600.0, 0.00086),
+        ] {
+            let got =
+                MOLECULES_PER_M2_PER_DOBSON_UNIT * no2.band_average_m2(nm - 5.0, nm + 5.0).unwrap();
+            assert!((got / want - 1.0).abs() < 0.03, "{nm} nm: {got} vs {want}");
+        }
+        // Every grid sora accepts is covered.
+        for text in ["280:2500:20", "280:2500:1", "280", "2500"] {
+            let grid: WavelengthGrid = text.parse().unwrap();
+            assert_eq!(no2.sample(&grid).unwrap().len(), grid.len(), "{text}");
+        }
+    }
+
+    #[test]
+    fn zero_padding_keeps_the_published_bins_and_covers_270_to_2510_nm() {
+        let o4 = BinnedCrossSection::o2_o2_cia();
+        assert_eq!(o4.range_nm(), (ZERO_BINS_START_NM, ZERO_BINS_END_NM));
+        let published = csv_bins(O2_O2_CSV);
+        assert_eq!(published.len(), 1008); // 335, 336, ..., 1342
+        let first = o4.bin_starts_nm.iter().position(|s| *s == 335.0).unwrap();
+        assert_eq!(first, 65);
+        for (i, (start, value)) in published.iter().enumerate() {
+            assert_eq!(o4.bin_starts_nm[first + i], *start);
+            assert_eq!(o4.cross_sections_m2[first + i], *value);
+        }
+        assert!(o4.cross_sections_m2[..first].iter().all(|v| *v == 0.0));
+        assert!(
+            o4.cross_sections_m2[first + 1008..]
+                .iter()
+                .all(|v| *v == 0.0)
+        );
+        // Scaling multiplies every bin.
+        let scaled = o4.clone().scaled(2.0);
+        assert_eq!(
+            scaled.cross_sections_m2[first + 142],
+            2.0 * o4.cross_sections_m2[first + 142]
+        );
+    }
+
+    #[test]
     fn dobson_units_set_the_column() {
         let gas = AbsorbingGas {
             cross_section: AbsorptionCrossSection::Binned(BinnedCrossSection::ozone_233k()),
@@ -552,5 +700,41 @@ mod tests {
         let tau = ext[0] * column_m;
         assert!((tau - 300.0 * 2.6867e20 * 5.019e-25).abs() < 1e-12, "{tau}");
         assert_eq!(sca[0], 0.0);
+    }
+
+    #[test]
+    fn no2_in_a_file_and_its_errors() {
+        use crate::atmosphere::{Atmosphere, SpeciesModel};
+        let file = |column: &str| {
+            format!(
+                "name = \"g\"\n[planet]\nradius_m = 6360e3\natmosphere_height_m = 100e3\n[sun]\nspectrum = \"astm-e490\"\n[[species]]\nname = \"NO2\"\ncolumn_dobson_units = {column}\nprofile.exponential.scale_height_m = 1000\nabsorption.gas = \"no2\"\n"
+            )
+        };
+        let atmosphere = Atmosphere::from_toml_str(&file("1")).unwrap();
+        let SpeciesModel::AbsorbingGas(gas) = &atmosphere.species[0].model else {
+            panic!("not a gas");
+        };
+        assert_eq!(
+            gas.cross_section,
+            AbsorptionCrossSection::Binned(BinnedCrossSection::no2_294k())
+        );
+        // 1 DU: the vertical optical depth of the 440 nm band is 0.0137.
+        let grid: WavelengthGrid = "430:450:10".parse().unwrap();
+        let optics = atmosphere.compute_optics(&grid).unwrap();
+        let tau = optics.species[0].optical_depth_extinction()[1];
+        assert!((tau / 0.0137 - 1.0).abs() < 0.01, "{tau}");
+        // A negative column names the key, the value and the unit.
+        let message = Atmosphere::from_toml_str(&file("-0.5"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            message.contains("species[0].column_dobson_units = -0.5 DU"),
+            "{message}"
+        );
+        // An unknown gas lists the built-in ones.
+        let message = Atmosphere::from_toml_str(&file("1").replace("\"no2\"", "\"so2\""))
+            .unwrap_err()
+            .to_string();
+        assert!(message.contains("\"ozone\" or \"no2\""), "{message}");
     }
 }

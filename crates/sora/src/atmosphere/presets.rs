@@ -46,7 +46,7 @@ pub const PRESETS: [Preset; 8] = [
     },
     Preset {
         name: "earth-clear-summer",
-        description: "earth-clear with 2.92 cm of water vapour (mid-latitude summer) and the O2 and CO2 bands (SPECTRL2 band model, 5-term k-distribution)",
+        description: "earth-clear with 2.92 cm of water vapour (mid-latitude summer), the O2 and CO2 bands (SPECTRL2 band model, 5-term k-distribution), O2-O2 (Thalman & Volkamer 2013, HITRAN 2016) and 0.22 DU of NO2 (AFGL mid-latitude summer)",
         toml: include_str!("../../../../atmospheres/earth-clear-summer.toml"),
     },
     Preset {

@@ -183,6 +183,29 @@ impl DensityProfile {
         }
     }
 
+    /// The profile of the square of this one's relative density (what a
+    /// pair absorption such as O2-O2's follows): exact for an exponential
+    /// (half the scale height) and a log-linear table (its rows squared:
+    /// ln rho^2 is linear wherever ln rho is); a piecewise-linear table has
+    /// its rows squared and stays linear between them, which is at least
+    /// the square between rows (rho^2 is convex), by (r1 - r0)^2 / 4 at
+    /// most at a layer's middle.
+    pub(crate) fn squared(&self) -> DensityProfile {
+        let squared = |table: &ProfileTable| ProfileTable {
+            altitudes_m: table.altitudes_m.clone(),
+            relative_densities: table.relative_densities.iter().map(|r| r * r).collect(),
+        };
+        match self {
+            DensityProfile::Exponential { scale_height_m } => DensityProfile::Exponential {
+                scale_height_m: 0.5 * scale_height_m,
+            },
+            DensityProfile::PiecewiseLinear(table) => {
+                DensityProfile::PiecewiseLinear(squared(table))
+            }
+            DensityProfile::LogLinear(table) => DensityProfile::LogLinear(squared(table)),
+        }
+    }
+
     /// An exponential profile; `scale_height_m` must be finite and > 0.
     /// `name` is the key in errors.
     pub(crate) fn exponential(scale_height_m: f64, name: &str) -> Result<DensityProfile> {
@@ -375,6 +398,41 @@ mod tests {
     fn midpoint(f: impl Fn(f64) -> f64, a: f64, b: f64, n: usize) -> f64 {
         let h = (b - a) / n as f64;
         (0..n).map(|i| f(a + (i as f64 + 0.5) * h)).sum::<f64>() * h
+    }
+
+    #[test]
+    fn the_squared_profile_is_the_square_of_the_density() {
+        // Exponential and log-linear: exactly rho^2 at every height, and the
+        // column is that of rho^2 (Simpson over the whole profile).
+        let tent = DensityProfile::tent(25e3, 15e3, "t").unwrap();
+        for profile in [
+            DensityProfile::Exponential {
+                scale_height_m: 8435.0,
+            },
+            us_1976_like(),
+            tent.clone(),
+        ] {
+            let squared = profile.squared();
+            for h in [0.0, 500.0, 7000.0, 11000.0, 33000.0, 90000.0] {
+                let want = profile.relative_density(h).powi(2);
+                let got = squared.relative_density(h);
+                if matches!(profile, DensityProfile::PiecewiseLinear(_)) {
+                    // At or above the square between rows (convexity).
+                    assert!(got >= want - 1e-15, "{h}: {got} vs {want}");
+                } else {
+                    assert!((got / want - 1.0).abs() < 1e-12, "{h}: {got} vs {want}");
+                }
+            }
+            let column = squared.vertical_column_m(100e3);
+            let direct = simpson(|h| profile.relative_density(h).powi(2), 0.0, 100e3, 20000);
+            if let DensityProfile::PiecewiseLinear(_) = profile {
+                // The tent's rows (0, 1, 0) squared are the same tent: its
+                // column 15 km against the square's 10 km (2/3 of it).
+                assert!((column - 15e3).abs() < 1e-6 && (direct - 10e3).abs() < 1.0);
+            } else {
+                assert!((column / direct - 1.0).abs() < 1e-6, "{column} vs {direct}");
+            }
+        }
     }
 
     fn us_1976_like() -> DensityProfile {
