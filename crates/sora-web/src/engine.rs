@@ -611,6 +611,7 @@ pub fn quality_settings(
                 view_ray_panels: 8,
                 table_view_zenith_nodes: 19,
                 table_azimuth_nodes: 10,
+                polarisation_wavelength_stride: 2,
             },
             FastTableSize {
                 sun_column_nodes: (32, 64),

@@ -747,7 +747,7 @@ mod tests {
                     sun_elevation_deg: elevation,
                     sun_azimuth_deg: 180.0,
                 },
-                false,
+                None,
             )
             .unwrap();
             Sky::from_scene(

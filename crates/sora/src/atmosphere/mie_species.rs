@@ -39,7 +39,7 @@ use crate::mie::ensemble::{
 };
 use crate::mie::paper_phase::AerosolPhaseMode;
 use crate::mie::refractive_index::{RefractiveIndexError, RefractiveIndexModel};
-use crate::spectrum::{SampledSpectrum, WavelengthGrid};
+use crate::spectrum::{SampledSpectrum, WavelengthAnchors, WavelengthGrid};
 
 /// How much aerosol there is.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -171,17 +171,23 @@ impl MieAerosol {
 impl MieAerosol {
     /// The phase-matrix ratios of the ensemble at every wavelength of
     /// `grid`, on the nodes of its phase table `table`, kept in the table
-    /// (`phase_matrix.rs`; the radius rule of the phase tables). `name`
-    /// prefixes errors.
+    /// (`phase_matrix.rs`; the radius rule of the phase tables): computed
+    /// at the wavelengths `anchors` and, between them, interpolated in
+    /// wavelength node by node ([`WavelengthAnchors::blend`]). `name` prefixes errors.
     pub(crate) fn compute_phase_matrix(
         &self,
         grid: &WavelengthGrid,
+        anchors: &WavelengthAnchors,
         table: &mut TabulatedPhase,
         name: &str,
     ) -> Result<()> {
         let settings = EnsembleSettings::default().phase_function_quadrature;
         let nodes = table.cos_theta_nodes().to_vec();
-        let wavelengths_nm: Vec<f64> = grid.wavelengths_nm().collect();
+        let wavelengths_nm: Vec<f64> = anchors
+            .anchors()
+            .iter()
+            .map(|&i| grid.wavelength_nm(i))
+            .collect();
         // One wavelength a task: each is a Mie solution per radius node and
         // angle, the whole cost (a polarised sky's build waited on it).
         let mut per_wavelength: Vec<Option<Result<PhaseMatrixRatios>>> =
@@ -205,10 +211,34 @@ impl MieAerosol {
             );
         });
         // The first error in wavelength order, whatever the threads did.
-        let ratios = per_wavelength
+        let at_anchors = per_wavelength
             .into_iter()
             .flatten()
             .collect::<Result<Vec<_>>>()?;
+        let ratios = (0..grid.len())
+            .map(|i| {
+                let blend = anchors.blend(i);
+                let mix = |of: fn(&PhaseMatrixRatios) -> &Vec<f64>| -> Vec<f64> {
+                    (0..nodes.len())
+                        .map(|node| {
+                            blend
+                                .iter()
+                                .map(|(n, w)| w * of(&at_anchors[*n])[node])
+                                .sum()
+                        })
+                        .collect()
+                };
+                match blend {
+                    [(n, _)] => at_anchors[*n].clone(),
+                    _ => PhaseMatrixRatios {
+                        cos_theta: nodes.clone(),
+                        f12_over_f11: mix(|r| &r.f12_over_f11),
+                        f33_over_f11: mix(|r| &r.f33_over_f11),
+                        f34_over_f11: mix(|r| &r.f34_over_f11),
+                    },
+                }
+            })
+            .collect();
         if !table.set_matrix_ratios(ratios) {
             return Err(Error::InvalidSpectrum(format!(
                 "{name}: the phase matrix does not match the phase table's nodes"

@@ -181,8 +181,15 @@ impl Atmosphere {
     /// Adds to `optics` (this atmosphere's, on its grid) the phase matrix
     /// of every Mie species with a tabulated phase function, for polarised
     /// skies (`phase_matrix.rs`): one Mie solution per radius node and
-    /// wavelength, the cost of the phase tables again or more.
-    pub(crate) fn add_phase_matrices(&self, optics: &mut AtmosphereOptics) -> Result<()> {
+    /// wavelength, the cost of the phase tables again or more; computed at
+    /// every `stride` wavelengths (`spectrum/anchors.rs`; 1: every one) and
+    /// interpolated in wavelength between them.
+    pub(crate) fn add_phase_matrices(
+        &self,
+        optics: &mut AtmosphereOptics,
+        stride: usize,
+    ) -> Result<()> {
+        let anchors = crate::spectrum::WavelengthAnchors::new(&optics.grid, stride);
         for (index, (species, species_optics)) in
             self.species.iter().zip(&mut optics.species).enumerate()
         {
@@ -190,7 +197,7 @@ impl Atmosphere {
                 (&species.model, &mut species_optics.phase_function)
             {
                 let path = format!("species[{index}] ({})", species.name);
-                mie.compute_phase_matrix(&optics.grid, table, &path)?;
+                mie.compute_phase_matrix(&optics.grid, &anchors, table, &path)?;
             }
         }
         Ok(())

@@ -49,6 +49,7 @@ const RETRIEVAL_SOLVER: MultipleScatteringSettings = MultipleScatteringSettings 
     view_ray_panels: 8,
     table_view_zenith_nodes: 37,
     table_azimuth_nodes: 19,
+    polarisation_wavelength_stride: 2,
 };
 
 /// Mie kernels kept per wavelength (the fit's current point, its index

@@ -355,11 +355,19 @@ impl SkyBuilder<'_> {
         let polarisation = self
             .polarisation
             .unwrap_or(Polarisation::for_method(self.method));
+        // The fast method's multiple scattering takes the Mie phase
+        // matrices at its polarisation stride; the rest at every wavelength.
+        let stride = match (self.method, self.scattering) {
+            (Method::Fast, Scattering::Multiple(settings)) => {
+                settings.polarisation_wavelength_stride
+            }
+            _ => 1,
+        };
         let scene = SingleScatteringScene::new_with_phase_matrices(
             atmosphere,
             &self.wavelengths,
             self.observation,
-            polarisation == Polarisation::Vector,
+            (polarisation == Polarisation::Vector).then_some(stride),
         )?;
         let mut sky = Sky::from_scene(scene, self.scattering, self.method, self.table_size)?;
         // The angles as given (the azimuth in one turn), not as recovered

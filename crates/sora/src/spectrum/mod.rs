@@ -7,12 +7,14 @@
 //! Plus [`SolarSpectrum`], the sun's spectral irradiance at the top of the
 //! atmosphere, and [`Filter`], an instrument channel's spectral response. Wavelengths are in nm (vacuum) throughout.
 
+mod anchors;
 mod filter;
 mod function;
 mod sampled;
 mod solar;
 mod wavelength_grid;
 
+pub(crate) use anchors::WavelengthAnchors;
 pub use filter::{CIMEL_CHANNELS, Filter};
 pub use function::{Spectrum, TabulatedSpectrum};
 pub use sampled::SampledSpectrum;

@@ -231,20 +231,21 @@ impl SingleScatteringScene {
         grid: &WavelengthGrid,
         observation: Observation,
     ) -> Result<SingleScatteringScene> {
-        SingleScatteringScene::new_with_phase_matrices(atmosphere, grid, observation, false)
+        SingleScatteringScene::new_with_phase_matrices(atmosphere, grid, observation, None)
     }
 
     /// [`SingleScatteringScene::new`], with the Mie species' phase matrices
-    /// when `phase_matrices` (for polarised skies).
+    /// (for polarised skies) when `phase_matrices` gives their wavelength
+    /// stride (`Atmosphere::add_phase_matrices`; 1: at every wavelength).
     pub(crate) fn new_with_phase_matrices(
         atmosphere: &Atmosphere,
         grid: &WavelengthGrid,
         observation: Observation,
-        phase_matrices: bool,
+        phase_matrices: Option<usize>,
     ) -> Result<SingleScatteringScene> {
         let mut optics = atmosphere.compute_optics(grid)?;
-        if phase_matrices {
-            atmosphere.add_phase_matrices(&mut optics)?;
+        if let Some(stride) = phase_matrices {
+            atmosphere.add_phase_matrices(&mut optics, stride)?;
         }
         SingleScatteringScene::from_optics(
             optics,

@@ -25,6 +25,7 @@ use crate::atmosphere::AtmosphereOptics;
 use crate::atmosphere::phase_matrix::PhaseMatrix;
 use crate::error::Result;
 use crate::geometry::Vector3;
+use crate::spectrum::WavelengthAnchors;
 use crate::transport::single_scattering::{SingleScatteringScene, SunColumns};
 
 /// Altitude and mu nodes of the sun-column table of the spherical first
@@ -326,9 +327,11 @@ impl MultipleScatteringField {
         for s in 0..sun_axis.count() {
             geometry.add_columns_toward_sun(sun_axis.angle(s), &mut sun_columns);
         }
-        let polarisation = request
-            .polarised
-            .then(|| solve_polarisation_columns(sky, &geometry, &scaled));
+        let polarisation = request.polarised.then(|| {
+            let anchors =
+                WavelengthAnchors::new(&sky.optics().grid, settings.polarisation_wavelength_stride);
+            solve_polarisation_columns(sky, (&geometry, &scaled), &anchors)
+        });
         let first_spherical = sun_axis
             .angles_rad
             .partition_point(|a| *a < FIRST_ORDER_SUN_ZENITH_DEG.to_radians());
@@ -763,11 +766,12 @@ fn polarisation_column_sun(eye_sun_zenith: f64, (ground, top): (f64, f64)) -> (f
 
 /// The polarisation correction's columns (`polarisation_correction.rs`),
 /// with the eye's own sun, or the lowest that still lights the column
-/// ([`polarisation_column_sun`]).
+/// ([`polarisation_column_sun`]), solved at the wavelengths `anchors`
+/// and interpolated between them.
 fn solve_polarisation_columns(
     sky: &SingleScatteringScene,
-    geometry: &ColumnGeometry,
-    scaled: &ScaledOptics,
+    (geometry, scaled): (&ColumnGeometry, &ScaledOptics),
+    anchors: &WavelengthAnchors,
 ) -> PolarisationCorrection {
     let optics = sky.optics();
     let (eye_sun_zenith, polarised_share) = polarisation_column_sun(
@@ -794,6 +798,7 @@ fn solve_polarisation_columns(
         sun_optical_depths: &sun_optical_depths,
         eye_altitude_m: sky.observer_radius_m() - geometry.ground_radius_m,
         view_harmonics: sky.view_harmonics_cache(),
+        anchors,
     })
 }
 

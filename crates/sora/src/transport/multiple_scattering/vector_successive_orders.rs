@@ -90,12 +90,6 @@ impl<'a> VectorColumnSystem<'a> {
         }
     }
 
-    /// The scalar system it was made from (its streams, layers and
-    /// transport), for the scalar solve beside the polarised one.
-    pub(crate) fn scalar(&self) -> &ColumnSystem<'a> {
-        &self.scalar
-    }
-
     /// The values of a field: harmonics x components x levels x streams,
     /// [((m * 4 + i) * levels + k) * streams + a].
     pub(crate) fn field_len(&self) -> usize {
