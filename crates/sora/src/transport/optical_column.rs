@@ -60,6 +60,9 @@ pub(crate) fn ray_panel(tangent_distance: f64, length: f64, panels: usize, k: us
         (b - (b - a) * u0 * u0, b - (b - a) * u1 * u1)
     };
     debug_assert!(panels >= 1 && k < panels);
+    if panels == 1 {
+        return (0.0, length);
+    }
     let half = panels / 2;
     if tangent_distance <= 0.0 {
         // Climbs all the way.
