@@ -3,6 +3,9 @@
 //! elevation: the luminance's median and 99th-percentile relative
 //! difference over the sky's pixels (the sun's disc left out) and the
 //! largest chromaticity difference, and the time each takes on one thread.
+//! `SUNS` to change the suns; `POLARISATION=scalar` for scalar light (the
+//! preview is scalar whatever the light, so against the polarised default
+//! its error includes the polarisation's).
 //!
 //! ```text
 //! cargo run --release --manifest-path crates/sora-web/Cargo.toml --example quality_accuracy
@@ -25,7 +28,9 @@ fn render(atmosphere: &Atmosphere, sun_elevation_deg: f64, quality: Quality) -> 
         sun_azimuth_deg: 180.0,
         observer_altitude_m: 0.0,
         scattering: ScatteringChoice::Multiple,
-        polarisation: PolarisationChoice::default(),
+        polarisation: std::env::var("POLARISATION")
+            .map(|p| PolarisationChoice::try_from(p).expect("vector or scalar"))
+            .unwrap_or_default(),
     };
     let started = Instant::now();
     let sky = build_sky(atmosphere, &spec, quality).expect("a valid sky");

@@ -556,13 +556,28 @@ pub fn build_sky(atmosphere: &Atmosphere, spec: &SkySpec, quality: Quality) -> R
 /// instead of 128 x 48, 30 layers instead of 40, and sun-zenith steps of
 /// 2 degrees instead of 0.75 near sunset: with the sun 2 degrees up 11 sun
 /// nodes instead of 19, 7 of them with the spherical first order instead
-/// of 15, whose cost is each node's layers.
+/// of 15, whose cost is each node's layers. Both march that twilight first
+/// order more coarsely than Full (4 panels along each path, 40 cosines in
+/// its fine moments after sunset): the refinement with 2 panels and 2
+/// nodes on each panel near the horizon, the preview with 1 panel and 2
+/// nodes (24 cosines each; `first_order_panels`, `first_order_fine_nodes`).
+/// Measured (`quality_accuracy`, earth-clear, sun 10 / 5 / 2 / -4, 99th
+/// percentile against Full; 4 and 40 before): the refinement 0.19 / 0.38
+/// / 0.89 / 0.75 % (0.19 / 0.36 / 0.86 / 0.88 %), max xy 1.1e-3 (1.2e-3);
+/// the preview against a scalar Full 1.1 / 1.6 / 2.3 / 2.3 % (1.1 / 1.3 /
+/// 2.2 / 2.2 %), against the polarised one 3.4 / 3.5 / 4.3 / 7.2 % (3.4 /
+/// 3.5 / 4.3 / 7.3 %). They cut, on one thread natively (CPU time,
+/// `slider_timing`, best of 3, load 9-11 on 2 cores), sun 10 / 5 / 2 /
+/// -4: the refinement 0.83 / 1.01 / 1.18 / 1.25 s to 0.71 / 0.84 / 0.93 /
+/// 0.96 s, the preview 0.089 / 0.129 / 0.130 / 0.126 s to 0.072 / 0.091 /
+/// 0.094 / 0.091 s (one node near the horizon would save 7 % more, but
+/// its moments were 12 % off in the library's test).
 ///
 /// What they cost against Full (99th percentile of the pixels' luminance
 /// error, 128 x 128, earth-clear, the `quality_accuracy` example; the
 /// browser test's guard holds their time), sun 10 / 5 / 2 / 0 / -4 / -6 /
-/// -12 degrees: the refinement 0.28 / 0.41 / 0.87 / 1.18 / 0.97 / 1.0 /
-/// 1.7 % (with 40 layers 0.28 / 0.40 / 0.84 / 1.13 / 0.96 / 1.0 / 1.5 %;
+/// -12 degrees, before the coarser first orders: the refinement 0.28 /
+/// 0.41 / 0.87 / 1.18 / 0.97 / 1.0 / 1.7 % (with 40 layers 0.28 / 0.40 / 0.84 / 1.13 / 0.96 / 1.0 / 1.5 %;
 /// a sunset step of 3 degrees would reach 1.6-2.1 % at suns 2 to -4, 24
 /// layers 4.1 % at -12); the preview 1.2 / 1.5 / 2.4 / 1.7 / 2.5 / 4.1 /
 /// 10 % (with 20 layers and a step of 1.5 degrees, 1.1 / 1.6 / 2.7 / 1.5 /
@@ -572,7 +587,7 @@ pub fn build_sky(atmosphere: &Atmosphere, spec: &SkySpec, quality: Quality) -> R
 /// times as much), the preview 0.094 / 0.133 / 0.130 s (20 layers and 1.5
 /// degrees 1.2-1.4 times as much); the sun 45 degrees up 0.03 s. The first
 /// order's fine moments after sunset (`spherical_first_order.rs` in the
-/// library) are about half of a low-sun frame, the tilted peak beam
+/// library) were about half of a low-sun frame, the tilted peak beam
 /// (`peak_beam.rs`) a sixth of a low-sun preview. Those are scalar light;
 /// the polarised light of the default (the spec's `polarisation`) adds,
 /// sun 10 / 2 / -4, 0.19 / 0.21 / 0.22 s to the refinement (the same
@@ -594,6 +609,8 @@ pub fn quality_settings(
             MultipleScatteringSettings {
                 sunset_sun_zenith_step_deg: 2.0,
                 layers: 30,
+                first_order_panels: 2,
+                first_order_fine_nodes: 2,
                 ..MultipleScatteringSettings::default()
             },
             FastTableSize {
@@ -612,6 +629,8 @@ pub fn quality_settings(
                 table_view_zenith_nodes: 19,
                 table_azimuth_nodes: 10,
                 polarisation_wavelength_stride: 2,
+                first_order_panels: 1,
+                first_order_fine_nodes: 2,
             },
             FastTableSize {
                 sun_column_nodes: (32, 64),

@@ -50,6 +50,8 @@ const RETRIEVAL_SOLVER: MultipleScatteringSettings = MultipleScatteringSettings 
     table_view_zenith_nodes: 37,
     table_azimuth_nodes: 19,
     polarisation_wavelength_stride: 2,
+    first_order_panels: 4,
+    first_order_fine_nodes: 4,
 };
 
 /// Mie kernels kept per wavelength (the fit's current point, its index

@@ -47,7 +47,9 @@ use crate::geometry::{Vector3, ray_sphere_roots};
 /// largest: toward the start (the eye, or the point the sun's light
 /// reaches) when the ray only climbs; toward the tangent point from both
 /// sides when it first descends and then climbs; toward both ends when it
-/// only descends (to the ground or the far side).
+/// only descends (to the ground or the far side). One panel is the whole
+/// ray (the explorer's preview marches its twilight first order so, cut
+/// only at the shells and the profiles' corners).
 pub(crate) fn ray_panel(tangent_distance: f64, length: f64, panels: usize, k: usize) -> (f64, f64) {
     let crowded_toward_start = |a: f64, b: f64, n: usize, i: usize| {
         let (u0, u1) = (i as f64 / n as f64, (i + 1) as f64 / n as f64);
@@ -57,7 +59,10 @@ pub(crate) fn ray_panel(tangent_distance: f64, length: f64, panels: usize, k: us
         let (u0, u1) = ((n - i) as f64 / n as f64, (n - i - 1) as f64 / n as f64);
         (b - (b - a) * u0 * u0, b - (b - a) * u1 * u1)
     };
-    debug_assert!(panels >= 2 && k < panels);
+    debug_assert!(panels >= 1 && k < panels);
+    if panels == 1 {
+        return (0.0, length);
+    }
     let half = panels / 2;
     if tangent_distance <= 0.0 {
         // Climbs all the way.
@@ -718,16 +723,18 @@ mod tests {
             (150.0, 100.0),
             (100.0, 100.0),
         ] {
-            let mut end = 0.0;
-            for k in 0..16 {
-                let (a, b) = ray_panel(tangent, length, 16, k);
-                assert!(
-                    (a - end).abs() < 1e-9 && b >= a,
-                    "{tangent} {length} {k}: {a} {b} after {end}"
-                );
-                end = b;
+            for panels in [1, 2, 3, 16] {
+                let mut end = 0.0;
+                for k in 0..panels {
+                    let (a, b) = ray_panel(tangent, length, panels, k);
+                    assert!(
+                        (a - end).abs() < 1e-9 && b >= a,
+                        "{tangent} {length} {panels} {k}: {a} {b} after {end}"
+                    );
+                    end = b;
+                }
+                assert!((end - length).abs() < 1e-9);
             }
-            assert!((end - length).abs() < 1e-9);
         }
     }
 

@@ -337,7 +337,7 @@ impl MultipleScatteringField {
             .partition_point(|a| *a < FIRST_ORDER_SUN_ZENITH_DEG.to_radians());
         let first_order = solve_spherical_first_order(
             sky,
-            request.sun_column_nodes,
+            (request.sun_column_nodes, &settings),
             &geometry,
             &scaled,
             &sun_axis.angles_rad[first_spherical..],
@@ -804,11 +804,12 @@ fn solve_polarisation_columns(
 
 /// The first order in the spherical shell, with the planet's shadow, at
 /// the sun nodes `suns` (rad; those from `FIRST_ORDER_SUN_ZENITH_DEG` on),
-/// the columns toward the sun from a table of `sun_column_nodes`; empty
+/// the columns toward the sun from a table of `sun_column_nodes`, the
+/// quadrature's panels and nodes from `settings`; empty
 /// when there are none (a high sun's nodes all stop short of them).
 fn solve_spherical_first_order(
     sky: &SingleScatteringScene,
-    sun_column_nodes: (usize, usize),
+    (sun_column_nodes, settings): ((usize, usize), &MultipleScatteringSettings),
     geometry: &ColumnGeometry,
     scaled: &ScaledOptics,
     suns: &[f64],
@@ -826,6 +827,8 @@ fn solve_spherical_first_order(
         moments: MomentQuadrature::Fine,
         sun_zenith_rad: suns,
         solar_irradiance_w_m2_nm: &solar_irradiance,
+        panels: settings.first_order_panels,
+        fine_nodes: settings.first_order_fine_nodes,
     })
 }
 

@@ -1,7 +1,9 @@
 //! The multiple-scattering method's resolution: streams, layers, the
-//! sun-node steps, the view ray's panels, the source table's nodes and the
-//! wavelengths the polarisation correction is solved at.
+//! sun-node steps, the view ray's panels, the source table's nodes, the
+//! twilight first order's quadrature and the wavelengths the polarisation
+//! correction is solved at.
 
+use super::spherical_first_order;
 use crate::error::{Error, Result};
 
 /// Resolution of the multiple-scattering method.
@@ -34,6 +36,17 @@ pub struct MultipleScatteringSettings {
     /// degree for Mars's dust); 1 computes them at every wavelength, the
     /// exact path.
     pub polarisation_wavelength_stride: usize,
+    /// Gauss panels along each path of the twilight first order (the
+    /// first order marched through the spherical shell for the sun nodes
+    /// from 84 degrees of zenith), besides its cuts at the profiles'
+    /// corners and every 20 km of altitude.
+    pub first_order_panels: usize,
+    /// Gauss nodes on each of the 8 panels of zenith cosine within 0.25 of
+    /// each level's horizon over which the twilight first order's moments
+    /// are integrated for the sun nodes from 90 degrees of zenith (the two
+    /// wide outer panels take at least 4): 40 cosines by default, each
+    /// marched at as many azimuths as the solver has harmonics.
+    pub first_order_fine_nodes: usize,
 }
 
 impl Default for MultipleScatteringSettings {
@@ -47,14 +60,17 @@ impl Default for MultipleScatteringSettings {
             table_view_zenith_nodes: 37,
             table_azimuth_nodes: 19,
             polarisation_wavelength_stride: 3,
+            first_order_panels: spherical_first_order::PANELS,
+            first_order_fine_nodes: spherical_first_order::FINE_PANEL_NODES,
         }
     }
 }
 
 impl MultipleScatteringSettings {
     /// Checks that every count and step can make a solver: at least one
-    /// stream per hemisphere (at most 32), two layers, two panels, two
-    /// nodes per table axis, and positive steps.
+    /// stream per hemisphere (at most 32), two layers, two view-ray panels,
+    /// two nodes per table axis, a first-order panel and node (at most 64
+    /// nodes), and positive steps.
     pub(crate) fn validate(&self) -> Result<()> {
         let counts = [
             ("streams per hemisphere", self.streams_per_hemisphere, 1, 32),
@@ -77,6 +93,13 @@ impl MultipleScatteringSettings {
                 self.polarisation_wavelength_stride,
                 1,
                 10_000,
+            ),
+            ("first-order panels", self.first_order_panels, 1, 10_000),
+            (
+                "first-order fine-quadrature nodes",
+                self.first_order_fine_nodes,
+                1,
+                64,
             ),
         ];
         for (name, value, low, high) in counts {
