@@ -87,6 +87,10 @@ pub struct EngineTableSettings {
     pub azimuth_nodes: usize,
     /// Transmittance table: altitude nodes, view cosine nodes.
     pub transmittance_nodes: (usize, usize),
+    /// Aerial-perspective table: view zenith nodes per half, relative
+    /// azimuth nodes, distance nodes (its sun and altitude nodes are the
+    /// sky table's).
+    pub aerial_nodes: (usize, usize, usize),
 }
 
 impl Default for EngineTableSettings {
@@ -97,6 +101,7 @@ impl Default for EngineTableSettings {
             zenith_nodes_per_half: 64,
             azimuth_nodes: 64,
             transmittance_nodes: (32, 128),
+            aerial_nodes: (16, 16, 8),
         }
     }
 }
@@ -116,6 +121,9 @@ impl EngineTableSettings {
                 2,
             ),
             ("transmittance mu nodes", self.transmittance_nodes.1, 2),
+            ("aerial zenith nodes per half", self.aerial_nodes.0, 3),
+            ("aerial azimuth nodes", self.aerial_nodes.1, 2),
+            ("aerial distance nodes", self.aerial_nodes.2, 2),
         ] {
             if !(least..=4096).contains(&nodes) {
                 return Err(Error::out_of_range(
@@ -126,10 +134,10 @@ impl EngineTableSettings {
                 ));
             }
         }
-        let texels = self.sky_texels() as f64;
+        let texels = (self.sky_texels() + self.aerial_texels()) as f64;
         if texels > MAX_SKY_TEXELS as f64 {
             return Err(Error::out_of_range(
-                "sky table texels (sun x altitude x 2 zenith x azimuth nodes)",
+                "sky and aerial-perspective tables' texels (sun x altitude x 2 zenith x azimuth (x distance) nodes)",
                 texels,
                 "1",
                 format!("<= {MAX_SKY_TEXELS} (64 MB of 32-bit XYZ)"),
@@ -146,9 +154,20 @@ impl EngineTableSettings {
     fn sky_texels(&self) -> usize {
         self.sky_layers() * 2 * self.zenith_nodes_per_half * self.azimuth_nodes
     }
+
+    /// Texels of one slice (one distance node of one layer) of the
+    /// aerial-perspective table.
+    fn aerial_slice_texels(&self) -> usize {
+        2 * self.aerial_nodes.0 * self.aerial_nodes.1
+    }
+
+    fn aerial_texels(&self) -> usize {
+        self.sky_layers() * self.aerial_nodes.2 * self.aerial_slice_texels()
+    }
 }
 
-/// Most texels of the sky table: 64 MB of three 32-bit floats.
+/// Most texels of the sky and aerial-perspective tables together: 64 MB
+/// of three 32-bit floats.
 pub const MAX_SKY_TEXELS: usize = 64 * 1024 * 1024 / 12;
 
 /// The engine tables of one atmosphere (see the module docs).
@@ -164,6 +183,9 @@ pub struct EngineTables {
     sky: Vec<[f32; 3]>,
     /// [altitude row * M + mu node].
     transmittance: Vec<[f32; 3]>,
+    /// The aerial-perspective ratio R, [(((s * A + a) * D + j) * 2 Z + row)
+    /// * K + k] (the aerial nodes' Z, K, D).
+    aerial: Vec<[f32; 3]>,
     /// Diffuse horizontal irradiance, [a * S + s].
     irradiance: Vec<[f32; 3]>,
     /// What the tables were baked from (for the manifest).
@@ -224,9 +246,15 @@ impl EngineTables {
             zenith_nodes_per_half: half,
             azimuth_nodes,
             transmittance_nodes,
+            ..
         } = *settings;
         let layer_texels = 2 * half * azimuth_nodes;
         let mut sky_values = vec![[0.0f32; 3]; settings.sky_texels()];
+        // The segments' light (XYZ) first; the ratio once the sky and
+        // transmittance tables are there.
+        let mut aerial_light = vec![[0.0f64; 3]; settings.aerial_texels()];
+        let aerial_slice = settings.aerial_slice_texels();
+        let (aerial_half, aerial_azimuth, aerial_distances) = settings.aerial_nodes;
         let layer_count = settings.sky_layers();
         // The field of every layer, solved once (see `sky::shared_field`).
         let shared: Option<SharedField> = match field {
@@ -254,6 +282,30 @@ impl EngineTables {
                     )?);
                 }
             }
+            let mut segments = Vec::with_capacity(aerial_distances * aerial_slice);
+            for j in 0..aerial_distances {
+                for row in 0..2 * aerial_half {
+                    let zenith = axes::zenith_of_node(row, aerial_half, horizon);
+                    let range = axes::distance_range(
+                        thickness,
+                        axes::ray_length(
+                            ground_radius_m + altitude,
+                            zenith.cos(),
+                            ground_radius_m,
+                            top_radius_m,
+                        ),
+                    );
+                    let d = axes::distance_of_node(j, aerial_distances, range);
+                    for k in 0..aerial_azimuth {
+                        let phi = axes::azimuth_of_node(k, aerial_azimuth);
+                        let view = ViewDirection::new(
+                            90.0 - zenith.to_degrees(),
+                            180.0 + phi.to_degrees(),
+                        )?;
+                        segments.push((view, d));
+                    }
+                }
+            }
             for s in 0..sun_nodes {
                 let elevation = axes::sun_elevation_of_node(s, sun_nodes);
                 let layer_sky = sky.with_shared_field(
@@ -267,6 +319,19 @@ impl EngineTables {
                 for (o, radiance) in out.iter_mut().zip(&radiances) {
                     let c = to_xyz.to_xyz(&radiance.radiance_w_m2_sr_nm)?;
                     *o = [c.x, c.y, c.z].map(|v| v.max(0.0) as f32);
+                }
+                let out = &mut aerial_light[layer * segments.len()..][..segments.len()];
+                for (o, (light, _)) in out
+                    .iter_mut()
+                    .zip(layer_sky.compute_segment_light(&segments)?)
+                {
+                    // A grazing ray from the very top of the atmosphere
+                    // (earth-hazy, the sun at the horizon) once gave a
+                    // negative value at one wavelength; it counts as none.
+                    let values = light.radiance_w_m2_sr_nm.values().iter();
+                    let clean = values.map(|v| if *v >= 0.0 { *v } else { 0.0 }).collect();
+                    let c = to_xyz.to_xyz(&SampledSpectrum::from_values(clean))?;
+                    *o = [c.x, c.y, c.z];
                 }
                 progress((a * sun_nodes + s + 1) as f64 / layer_count as f64);
             }
@@ -287,6 +352,7 @@ impl EngineTables {
             solar_xyz,
             sky: sky_values,
             transmittance,
+            aerial: Vec::new(),
             irradiance: Vec::new(),
             provenance: Provenance {
                 wavelengths_nm: sky.wavelengths().wavelengths_nm().collect(),
@@ -297,6 +363,7 @@ impl EngineTables {
             },
         };
         tables.irradiance = tables.integrate_diffuse_irradiance();
+        tables.aerial = tables.aerial_ratios(&aerial_light);
         Ok(tables)
     }
 
@@ -326,9 +393,75 @@ impl EngineTables {
         &self.irradiance
     }
 
-    /// Bytes of the three tables as 32-bit XYZ (what a GPU holds).
+    /// The aerial-perspective table's texels (XYZ ratios R, see the module
+    /// docs): texel (k, row) of distance node j of layer `s *
+    /// altitude_nodes + a` at index `((layer * distance_nodes + j) * 2
+    /// zenith_nodes + row) * azimuth_nodes + k` with the aerial nodes'
+    /// counts (what `aerial.exr` holds, top scan line first).
+    pub fn aerial_table(&self) -> &[[f32; 3]] {
+        &self.aerial
+    }
+
+    /// Bytes of the four tables as 32-bit XYZ (what a GPU holds).
     pub fn size_bytes(&self) -> usize {
-        12 * (self.sky.len() + self.transmittance.len() + self.irradiance.len())
+        12 * (self.sky.len() + self.aerial.len() + self.transmittance.len() + self.irradiance.len())
+    }
+
+    /// The aerial-perspective table from the segments' light `light`
+    /// (XYZ, in its layout): R = L / (S w) per channel, S the sky table's
+    /// read at the eye and w = (1 - T) / (1 - T_end) the segment's share
+    /// of the whole ray's extinction as the lookup takes them, so that at
+    /// every node the lookup returns L. A view out through the top ends
+    /// as the sky table draws it: its last node (the ray's end, w = 1) is
+    /// R = 1. Where S w vanishes (no air, or no light) R is 1; it is at
+    /// most [`MAX_AERIAL_RATIO`].
+    fn aerial_ratios(&self, light: &[[f64; 3]]) -> Vec<[f32; 3]> {
+        let (half, azimuth, distances) = self.settings.aerial_nodes;
+        let slice = self.settings.aerial_slice_texels();
+        let mut out = vec![[0.0f32; 3]; light.len()];
+        for s in 0..self.settings.sun_nodes {
+            let elevation = axes::sun_elevation_of_node(s, self.settings.sun_nodes);
+            for a in 0..self.settings.altitude_nodes {
+                let altitude =
+                    axes::altitude_of_node(a, self.settings.altitude_nodes, self.thickness_m());
+                let horizon =
+                    axes::horizon_zenith(self.ground_radius_m + altitude, self.ground_radius_m);
+                let layer = s * self.settings.altitude_nodes + a;
+                for j in 0..distances {
+                    for row in 0..2 * half {
+                        let zenith = axes::zenith_of_node(row, half, horizon);
+                        let range = self.aerial_distance_range(altitude, zenith.cos());
+                        let d = axes::distance_of_node(j, distances, range);
+                        let view = [zenith.sin(), 0.0, zenith.cos()];
+                        let (_, share) = self.aerial_share_xyz(altitude, view, d);
+                        for k in 0..azimuth {
+                            let local = lookup::LocalView {
+                                zenith_rad: zenith,
+                                relative_azimuth_rad: axes::azimuth_of_node(k, azimuth),
+                            };
+                            let sky = self.sky_xyz(altitude, local, elevation);
+                            let index = ((layer * distances + j) * slice) + row * azimuth + k;
+                            // A view out through the top ends as the sky
+                            // table draws it.
+                            let light = if j + 1 == distances && row < half {
+                                sky
+                            } else {
+                                light[index]
+                            };
+                            out[index] = std::array::from_fn(|c| {
+                                let below = sky[c] * share[c];
+                                if below > 1e-30 {
+                                    (light[c] / below).clamp(0.0, MAX_AERIAL_RATIO) as f32
+                                } else {
+                                    1.0
+                                }
+                            });
+                        }
+                    }
+                }
+            }
+        }
+        out
     }
 
     /// The atmosphere's thickness (top minus ground radius), m.
@@ -369,6 +502,11 @@ impl EngineTables {
         out
     }
 }
+
+/// The aerial-perspective table's ratios are at most this (a segment's
+/// light is of the order of S (1 - T); the bound keeps a near-zero
+/// denominator from making a node that interpolation would spread).
+pub const MAX_AERIAL_RATIO: f64 = 100.0;
 
 /// Where a bake's layers take their multiple-scattering field from.
 #[derive(Debug, Clone, Copy, PartialEq)]

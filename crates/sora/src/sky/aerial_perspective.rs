@@ -203,8 +203,9 @@ impl Sky {
 
     /// The light of the air along each checked segment (W m^-2 sr^-1
     /// nm^-1) and the segment's transmittance: what an image needs, and
-    /// what [`Sky::aerial_perspectives`] adds the point's light to.
-    fn compute_segment_light(
+    /// what [`Sky::aerial_perspectives`] adds the point's light to (and
+    /// what the engine tables' aerial-perspective table is baked from).
+    pub(crate) fn compute_segment_light(
         &self,
         segments: &[(ViewDirection, f64)],
     ) -> Result<Vec<(SkyRadiance, SampledSpectrum)>> {
