@@ -442,7 +442,8 @@ impl EngineTables {
     /// spectrum). The light is `S(x, v) R(x, v, d) (1 - T(x, p))` per
     /// channel, S the sky table's read at the eye, R the
     /// aerial-perspective table's (see the module docs of
-    /// `engine_tables`).
+    /// `engine_tables`); tables baked without an aerial-perspective table
+    /// take [`Self::aerial_perspective_by_difference_xyz`].
     pub fn aerial_perspective_xyz(
         &self,
         altitude_m: f64,
@@ -450,6 +451,9 @@ impl EngineTables {
         sun: [f64; 3],
         distance_m: f64,
     ) -> ([f64; 3], [f64; 3]) {
+        if self.aerial.is_empty() {
+            return self.aerial_perspective_by_difference_xyz(altitude_m, view, sun, distance_m);
+        }
         let (segment, share) = self.aerial_share_xyz(altitude_m, view, distance_m);
         let up = [0.0, 0.0, 1.0];
         let local = LocalView::from_vectors(view, up, sun);
@@ -486,17 +490,18 @@ impl EngineTables {
         (segment, share)
     }
 
-    /// The former aerial perspective, from the sky table alone: `S(x, v) -
-    /// T(x, p) S(p, v)`, S read at each end's own altitude, zenith angle
-    /// and sun elevation (kept to measure the table's against).
-    #[cfg(test)]
-    pub(crate) fn aerial_perspective_by_difference_xyz(
+    /// Aerial perspective from the sky table alone (tables without an
+    /// aerial-perspective table): `S(x, v) - T(x, p) S(p, v)`, S read at
+    /// each end's own altitude, zenith angle and sun elevation. A
+    /// difference of two nearly equal reads for short segments, so not
+    /// within 2 % of the library there (`docs/engine-tables.md`).
+    pub fn aerial_perspective_by_difference_xyz(
         &self,
         altitude_m: f64,
         view: [f64; 3],
         sun: [f64; 3],
         distance_m: f64,
-    ) -> [f64; 3] {
+    ) -> ([f64; 3], [f64; 3]) {
         let up = [0.0, 0.0, 1.0];
         let (segment, r_p, up_p) = self.segment_transmittance_xyz(altitude_m, view, distance_m);
         let h_p = (r_p - self.ground_radius_m).clamp(0.0, self.thickness_m());
@@ -511,6 +516,7 @@ impl EngineTables {
             LocalView::from_vectors(view, up_p, sun),
             sun_elevation(up_p),
         );
-        std::array::from_fn(|i| (at_eye[i] - segment[i] * at_point[i]).max(0.0))
+        let inscattered = std::array::from_fn(|i| (at_eye[i] - segment[i] * at_point[i]).max(0.0));
+        (inscattered, segment)
     }
 }

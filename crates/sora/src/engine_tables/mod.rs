@@ -89,7 +89,8 @@ pub struct EngineTableSettings {
     pub transmittance_nodes: (usize, usize),
     /// Aerial-perspective table: view zenith nodes per half, relative
     /// azimuth nodes, distance nodes (its sun and altitude nodes are the
-    /// sky table's).
+    /// sky table's); (0, 0, 0) for none (the aerial perspective is then
+    /// the sky table's difference, see `lookup.rs`).
     pub aerial_nodes: (usize, usize, usize),
 }
 
@@ -125,7 +126,8 @@ impl EngineTableSettings {
             ("aerial azimuth nodes", self.aerial_nodes.1, 2),
             ("aerial distance nodes", self.aerial_nodes.2, 2),
         ] {
-            if !(least..=4096).contains(&nodes) {
+            let no_aerial = self.aerial_nodes == (0, 0, 0) && name.starts_with("aerial");
+            if !(least..=4096).contains(&nodes) && !no_aerial {
                 return Err(Error::out_of_range(
                     name,
                     nodes as f64,
@@ -320,6 +322,10 @@ impl EngineTables {
                     let c = to_xyz.to_xyz(&radiance.radiance_w_m2_sr_nm)?;
                     *o = [c.x, c.y, c.z].map(|v| v.max(0.0) as f32);
                 }
+                if segments.is_empty() {
+                    progress((a * sun_nodes + s + 1) as f64 / layer_count as f64);
+                    continue;
+                }
                 let out = &mut aerial_light[layer * segments.len()..][..segments.len()];
                 for (o, (light, _)) in out
                     .iter_mut()
@@ -363,7 +369,9 @@ impl EngineTables {
             },
         };
         tables.irradiance = tables.integrate_diffuse_irradiance();
-        tables.aerial = tables.aerial_ratios(&aerial_light);
+        if !aerial_light.is_empty() {
+            tables.aerial = tables.aerial_ratios(&aerial_light);
+        }
         Ok(tables)
     }
 

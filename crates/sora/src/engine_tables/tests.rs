@@ -219,6 +219,7 @@ fn the_directory_is_written_whole_and_others_are_refused() {
     assert_eq!(
         names,
         [
+            "aerial.exr",
             "irradiance.exr",
             "manifest.json",
             "sky.exr",
@@ -650,7 +651,9 @@ fn the_aerial_perspective_matches_the_library() {
                     let got = if method == 0 {
                         tables.aerial_perspective_xyz(0.0, *v, sun, d).0
                     } else {
-                        tables.aerial_perspective_by_difference_xyz(0.0, *v, sun, d)
+                        tables
+                            .aerial_perspective_by_difference_xyz(0.0, *v, sun, d)
+                            .0
                     };
                     let error = (got[1] / e[1] - 1.0).abs();
                     if errors.iter().all(|x| error > *x) {
