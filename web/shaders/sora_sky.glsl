@@ -278,7 +278,14 @@ float soraRayLength(float h, float mu) {
 // table (read as the sky, linear between its distance slices, spaced in
 // ln d from thickness / 1000 to the ray's end) and w = (1 - T) / (1 -
 // T_end) the segment's share of the whole ray's extinction.
+void soraAerialPerspectiveFromSky(float h, vec3 v, vec3 sun, float d, out vec3 inscattered, out vec3 transmittance);
+
 void soraAerialPerspective(float h, vec3 v, vec3 sun, float d, out vec3 inscattered, out vec3 transmittance) {
+  // Tables without an aerial table (uAerialNodes zero): the sky's difference.
+  if (uAerialNodes.z < 2) {
+    soraAerialPerspectiveFromSky(h, v, sun, d, inscattered, transmittance);
+    return;
+  }
   h = clamp(h, 0.0, soraThickness());
   transmittance = soraSegmentTransmittance(h, v, d);
   float length_ = soraRayLength(h, v.z);

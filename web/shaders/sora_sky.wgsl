@@ -277,6 +277,8 @@ struct SoraAerial { inscattered: vec3<f32>, transmittance: vec3<f32> };
 // linear between its distance slices, spaced in ln d from thickness / 1000
 // to the ray's end, w = (1 - T) / (1 - T_end)).
 fn sora_aerial_perspective(h_in: f32, v: vec3<f32>, sun: vec3<f32>, d: f32) -> SoraAerial {
+  // Tables without an aerial table (aerial_nodes zero): the sky's difference.
+  if (sora.aerial_nodes.z < 2) { return sora_aerial_perspective_from_sky(h_in, v, sun, d); }
   let h = clamp(h_in, 0.0, sora_thickness());
   let t = sora_segment_transmittance(h, v, d);
   let length_ = sora_ray_length(h, v.z);

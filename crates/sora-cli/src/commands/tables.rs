@@ -59,15 +59,16 @@ pub struct TablesArgs {
     #[arg(long, value_name = "N", default_value_t = EngineTableSettings::default().azimuth_nodes)]
     azimuth_nodes: usize,
 
-    /// Aerial-perspective table: view zenith nodes per half
+    /// Aerial-perspective table: view zenith nodes per half (0, with the
+    /// other two 0, for none: the default; e.g. 8 8 6)
     #[arg(long, value_name = "N", default_value_t = EngineTableSettings::default().aerial_nodes.0)]
     aerial_zenith_nodes: usize,
 
-    /// Aerial-perspective table: view azimuth nodes over 0..180 degrees
+    /// Aerial-perspective table: view azimuth nodes over 0..180 degrees (0: none)
     #[arg(long, value_name = "N", default_value_t = EngineTableSettings::default().aerial_nodes.1)]
     aerial_azimuth_nodes: usize,
 
-    /// Aerial-perspective table: distance nodes (the nearest to the ray's end)
+    /// Aerial-perspective table: distance nodes, the nearest to the ray's end (0: none)
     #[arg(long, value_name = "N", default_value_t = EngineTableSettings::default().aerial_nodes.2)]
     aerial_distance_nodes: usize,
 

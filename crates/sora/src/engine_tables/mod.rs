@@ -34,15 +34,16 @@
 //!   (1 - T_end) the segment's share of the whole ray's extinction, from
 //!   the transmittance table): the library's own light of each segment
 //!   (`Sky::compute_segment_light`) at every sun and altitude layer of the
-//!   sky table, on a coarser view grid (16 x 16 per half at the defaults)
-//!   and 8 distances spaced in ln d from the thickness / 1000 to the ray's
-//!   end. Dividing by S w takes out what changes fast (the aureole, the
+//!   sky table, on a coarser view grid (e.g. 8 x 8 per half) and a few
+//!   distances spaced in ln d from the thickness / 1000 to the ray's end
+//!   (none by default: not yet within 2 % of the library, and it triples
+//!   the bake; `docs/engine-tables.md`). Dividing by S w takes out what changes fast (the aureole, the
 //!   horizon, the saturation with d), so the ratio interpolates smoothly;
 //!   a view out through the top ends (R = 1) as the sky table draws it.
 //!   The sky table's difference `S(x, v) - T(x, p) S(p, v)` (Bruneton's)
-//!   cancels for short segments: 9 % off at 10 km
-//!   (`docs/engine-tables.md`); it is still what tables baked without the
-//!   aerial table (`aerial_nodes` (0, 0, 0)) give.
+//!   cancels for short segments (11-124 % off at 1 km against 9-11 % from
+//!   the table; `docs/engine-tables.md`); it is what tables baked without
+//!   the aerial table (`aerial_nodes` (0, 0, 0), the default) give.
 //!
 //! Why not Bruneton's parametrisation: his 4D scattering table is indexed
 //! by (r, mu, mu_s, nu) with a single mu axis over the ground and the sky
@@ -109,7 +110,10 @@ impl Default for EngineTableSettings {
             zenith_nodes_per_half: 64,
             azimuth_nodes: 64,
             transmittance_nodes: (32, 128),
-            aerial_nodes: (16, 16, 8),
+            // No aerial table by default: at (8, 8, 6) it is not yet
+            // within 2 % of the library and triples the bake
+            // (`docs/engine-tables.md`); `sora tables --aerial-*-nodes`.
+            aerial_nodes: (0, 0, 0),
         }
     }
 }

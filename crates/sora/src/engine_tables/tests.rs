@@ -589,7 +589,8 @@ fn at_the_nodes_the_aerial_perspective_is_the_library_s() {
     }
 }
 
-/// The aerial perspective of the default tables against the library's
+/// The aerial perspective of the default tables with an aerial table of
+/// 8 x 8 views per half and 6 distances against the library's
 /// (`Sky::compute_segment_light`, scalar light, CIE XYZ): earth-clear, the
 /// eye on the ground, suns 60, 10, 2 and -4 degrees, views 1 to 70 degrees
 /// up at azimuths 0 to 180 from the sun, d = 1, 10 and 50 km; the
@@ -603,8 +604,11 @@ fn at_the_nodes_the_aerial_perspective_is_the_library_s() {
 fn the_aerial_perspective_matches_the_library() {
     let atmosphere = Atmosphere::preset("earth-clear").unwrap();
     let base = Sky::builder(&atmosphere).build().unwrap();
-    // SORA_AERIAL_NODES=Z,K,D measures other aerial nodes.
-    let mut settings = EngineTableSettings::default();
+    // SORA_AERIAL_NODES=Z,K,D measures other aerial nodes than 8, 8, 6.
+    let mut settings = EngineTableSettings {
+        aerial_nodes: (8, 8, 6),
+        ..EngineTableSettings::default()
+    };
     if let Ok(nodes) = std::env::var("SORA_AERIAL_NODES") {
         let n: Vec<usize> = nodes.split(',').map(|n| n.parse().unwrap()).collect();
         settings.aerial_nodes = (n[0], n[1], n[2]);
