@@ -444,9 +444,10 @@ impl EngineTables {
     /// `distance_m` along the unit `view` (eye-local east-north-up), the
     /// sun toward the unit `sun`: (the light scattered into the segment,
     /// XYZ radiance; the segment's transmittance, XYZ of the sun's
-    /// spectrum). The light is `S(x, v) R(x, v, d) (1 - T(x, p))` per
-    /// channel, S the sky table's read at the eye, R the
-    /// aerial-perspective table's (see the module docs of
+    /// spectrum). The light is `S(x, v) R(x, v, d) w` per channel, S the
+    /// sky table's read at the eye, R the aerial-perspective table's and w
+    /// the segment's share of the whole ray's extinction
+    /// ((1 - T) / (1 - T_end), T_end to the ray's end; see the module docs of
     /// `engine_tables`); tables baked without an aerial-perspective table
     /// take [`Self::aerial_perspective_by_difference_xyz`].
     pub fn aerial_perspective_xyz(

@@ -60,6 +60,22 @@ fn tables() -> (Sky, EngineTables) {
     (sky, tables)
 }
 
+/// `sky` with the eye at `altitude` and the sun at `elevation` (a node's),
+/// and the eye's horizon's zenith angle.
+fn node_sky(sky: &Sky, tables: &EngineTables, altitude: f64, elevation: f64) -> (Sky, f64) {
+    let node_sky = Sky::from_scene(
+        sky.scene()
+            .with_observer_and_sun(altitude, elevation, 180.0)
+            .unwrap(),
+        sky.scattering(),
+        Method::Fast,
+        sky.table_size(),
+    )
+    .unwrap();
+    let horizon = axes::horizon_zenith(tables.ground_radius_m + altitude, tables.ground_radius_m);
+    (node_sky, horizon)
+}
+
 #[test]
 fn at_the_nodes_the_tables_are_the_library_image() {
     let (sky, tables) = tables();
@@ -69,17 +85,7 @@ fn at_the_nodes_the_tables_are_the_library_image() {
         let elevation = axes::sun_elevation_of_node(s, settings.sun_nodes);
         for a in [0, 1] {
             let altitude = axes::altitude_of_node(a, settings.altitude_nodes, thickness);
-            let node_sky = Sky::from_scene(
-                sky.scene()
-                    .with_observer_and_sun(altitude, elevation, 180.0)
-                    .unwrap(),
-                sky.scattering(),
-                Method::Fast,
-                sky.table_size(),
-            )
-            .unwrap();
-            let horizon =
-                axes::horizon_zenith(tables.ground_radius_m + altitude, tables.ground_radius_m);
+            let (node_sky, horizon) = node_sky(&sky, &tables, altitude, elevation);
             for row in [0, 5, 11, 12, 20, 23] {
                 let zenith = axes::zenith_of_node(row, settings.zenith_nodes_per_half, horizon);
                 for k in [0, 4, 8] {
@@ -536,17 +542,7 @@ fn at_the_nodes_the_aerial_perspective_is_the_library_s() {
         ];
         for a in [0, 1] {
             let altitude = axes::altitude_of_node(a, settings.altitude_nodes, tables.thickness_m());
-            let node_sky = Sky::from_scene(
-                sky.scene()
-                    .with_observer_and_sun(altitude, elevation, 180.0)
-                    .unwrap(),
-                sky.scattering(),
-                Method::Fast,
-                sky.table_size(),
-            )
-            .unwrap();
-            let horizon =
-                axes::horizon_zenith(tables.ground_radius_m + altitude, tables.ground_radius_m);
+            let (node_sky, horizon) = node_sky(&sky, &tables, altitude, elevation);
             let mut segments = Vec::new();
             let mut lookups = Vec::new();
             for row in [0, 3, 5, 6, 9, 11] {
