@@ -12,7 +12,8 @@
 //     procedural ridges at 1, 4, 12, 35 and 90 km (heights in metres in
 //     RIDGES), each point lit by the sky irradiance and the sun through the
 //     transmittance at its own altitude and local vertical, and composited
-//     as L_point * T + L_air (soraAerialPerspective);
+//     as L_point * T + L_air (soraAerialPerspectiveFromSky: the tables
+//     baked here have no aerial-perspective table);
 //   2 difference: the fisheye's relative luminance difference from the
 //     exact image (uExact, XYZ): red where the real-time sky is brighter,
 //     blue where it is dimmer, full colour at +-DIFFERENCE_SCALE; grey
@@ -105,7 +106,7 @@ vec3 scene(vec3 v, vec3 sun) {
     }
   }
   if (d < 0.0) return skyWithSun(v, sun);
-  // The point's own altitude and vertical (as soraAerialPerspective finds them).
+  // The point's own altitude and vertical (as soraAerialPerspectiveFromSky finds them).
   vec3 p = vec3(v.xy * d, R + uAltitudeM + v.z * d);
   vec3 up = normalize(p);
   float hp = max(length(p) - R, 0.0);
@@ -118,7 +119,7 @@ vec3 scene(vec3 v, vec3 sun) {
   vec3 n = normalize(normal + (up - vec3(0.0, 0.0, 1.0)));
   vec3 lit = ALBEDO / SORA_PI * (diffuse * 0.5 * (1.0 + dot(n, up)) + direct * max(dot(n, sun), 0.0));
   vec3 inscattered, transmittance;
-  soraAerialPerspective(uAltitudeM, v, sun, d, inscattered, transmittance);
+  soraAerialPerspectiveFromSky(uAltitudeM, v, sun, d, inscattered, transmittance);
   return lit * transmittance + inscattered;
 }
 

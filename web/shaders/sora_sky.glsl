@@ -6,6 +6,9 @@
 // tables' manifest.json ("axes", "lookup"). Bind (docs/engine-tables.md):
 //   uSky           sampler2DArray, sky.exr as azimuth_nodes x 2*zenith_nodes_per_half
 //                  texels per layer, sun_nodes*altitude_nodes layers (layer = s*A + a)
+//   uAerial        sampler2DArray, aerial.exr as azimuth nodes x 2*zenith_nodes_per_half*
+//                  distance_nodes texels per layer (the distance slices one above
+//                  another), the sky's sun_nodes*altitude_nodes layers
 //   uTransmittance sampler2D, transmittance.exr (x = mu node, y = altitude node)
 //   uIrradiance    sampler2D, irradiance.exr (x = sun node, y = altitude node)
 // as RGBA32F (or RGB32F) textures holding X, Y, Z; no filtering is needed
@@ -15,6 +18,9 @@
 uniform highp sampler2DArray uSky;
 uniform highp sampler2D uTransmittance;
 uniform highp sampler2D uIrradiance;
+uniform highp sampler2DArray uAerial;
+// aerial: zenith_nodes_per_half, azimuth_nodes, distance_nodes
+uniform ivec3 uAerialNodes;
 // sun_nodes, altitude_nodes, zenith_nodes_per_half, azimuth_nodes
 uniform ivec4 uSkyNodes;
 // transmittance altitude nodes, mu nodes
@@ -53,9 +59,9 @@ void soraCell(float x, int lowest, int highest, out int i, out float f) {
   f = clamp(x - float(i), 0.0, 1.0);
 }
 
-// Zenith coordinate (y, lowest cell, highest cell) for an eye at radius r.
-void soraZenithCoordinate(float zenith, float r, out float y, out int lowest, out int highest) {
-  int half_ = uSkyNodes.z;
+// Zenith coordinate (y, lowest cell, highest cell) for an eye at radius r
+// on an axis of half_ nodes per half.
+void soraZenithCoordinate(float zenith, float r, int half_, out float y, out int lowest, out int highest) {
   float zh = SORA_PI - asin(min(uPlanetSun.x / r, 1.0));
   float last = float(half_ - 1);
   if (zenith < zh) {
@@ -71,13 +77,10 @@ void soraZenithCoordinate(float zenith, float r, out float y, out int lowest, ou
   }
 }
 
-vec3 soraSkyTexel(int layer, int row, int k) {
-  return texelFetch(uSky, ivec3(k, row, layer), 0).xyz;
-}
-
-vec3 soraLayer(int layer, int i, float fy, int k, float fx) {
-  vec3 a = mix(soraSkyTexel(layer, i, k), soraSkyTexel(layer, i, k + 1), fx);
-  vec3 b = mix(soraSkyTexel(layer, i + 1, k), soraSkyTexel(layer, i + 1, k + 1), fx);
+// Bilinear read of slice row0 (its first row) of a layer of `table`.
+vec3 soraLayer(highp sampler2DArray table, int layer, int row0, int i, float fy, int k, float fx) {
+  vec3 a = mix(texelFetch(table, ivec3(k, row0 + i, layer), 0).xyz, texelFetch(table, ivec3(k + 1, row0 + i, layer), 0).xyz, fx);
+  vec3 b = mix(texelFetch(table, ivec3(k, row0 + i + 1, layer), 0).xyz, texelFetch(table, ivec3(k + 1, row0 + i + 1, layer), 0).xyz, fx);
   return mix(a, b, fy);
 }
 
@@ -125,12 +128,14 @@ float soraTurnShare(float zenith, float phi, float eDeg, float zh) {
     * (1.0 - smoothstep(70.0, 85.0, eDeg));
 }
 
-// Sky radiance (XYZ, W m^-2 sr^-1 nm^-1) seen at altitude h (m) toward
-// zenith angle `zenith` (rad) and azimuth `phi` (rad, 0..pi) from the
-// sun's, with the sun at elevation eDeg (degrees). No sun disc. Each of
-// the two sun layers is read at the view turned with the sun to its node
-// (soraTurnedView, by soraTurnShare of the step).
-vec3 soraSkyXyz(float h, float zenith, float phi, float eDeg) {
+// A layer table (the sky, or the aerial-perspective table with Z zenith
+// nodes per half, K azimuth nodes, and its distance slices j and j + 1
+// blended by fj) at altitude h (m), toward zenith angle `zenith` (rad) and
+// azimuth `phi` (rad, 0..pi) from the sun's, with the sun at elevation
+// eDeg (degrees): bilinear in a layer, linear in altitude, geometric
+// between the two sun layers, each read at the view turned with the sun
+// to its node (soraTurnedView, by soraTurnShare of the step).
+vec3 soraLayersXyz(highp sampler2DArray table, int Z, int K, int j, float fj, float h, float zenith, float phi, float eDeg) {
   h = clamp(h, 0.0, soraThickness());
   float r = uPlanetSun.x + h;
   float zh = SORA_PI - asin(min(uPlanetSun.x / r, 1.0));
@@ -139,17 +144,28 @@ vec3 soraSkyXyz(float h, float zenith, float phi, float eDeg) {
   eDeg = clamp(eDeg, -12.0, 90.0);
   int s; float fs; soraCell(soraSunCoordinate(eDeg), 0, uSkyNodes.x - 2, s, fs);
   float share = soraTurnShare(zenith, phi, eDeg, zh);
-  int K = uSkyNodes.w;
+  int row0 = 2 * Z * j;
+  int row1 = fj > 0.0 ? row0 + 2 * Z : row0;
   vec3 layers[2];
-  for (int j = 0; j < 2; j++) {
-    vec2 view = soraTurnedView(zenith, phi, radians(soraSunElevationOfNode(s + j) - eDeg) * share, zh);
+  for (int n = 0; n < 2; n++) {
+    vec2 view = soraTurnedView(zenith, phi, radians(soraSunElevationOfNode(s + n) - eDeg) * share, zh);
     float y; int lowest; int highest;
-    soraZenithCoordinate(view.x, r, y, lowest, highest);
+    soraZenithCoordinate(view.x, r, Z, y, lowest, highest);
     int i; float fy; soraCell(y, lowest, highest, i, fy);
     int k; float fx; soraCell(sqrt(clamp(view.y / SORA_PI, 0.0, 1.0)) * float(K - 1), 0, K - 2, k, fx);
-    layers[j] = mix(soraLayer((s + j) * A + a, i, fy, k, fx), soraLayer((s + j) * A + a + 1, i, fy, k, fx), fa);
+    int low = (s + n) * A + a;
+    vec3 ground = mix(soraLayer(table, low, row0, i, fy, k, fx), soraLayer(table, low, row1, i, fy, k, fx), fj);
+    vec3 above = mix(soraLayer(table, low + 1, row0, i, fy, k, fx), soraLayer(table, low + 1, row1, i, fy, k, fx), fj);
+    layers[n] = mix(ground, above, fa);
   }
   return soraMixLog(layers[0], layers[1], fs);
+}
+
+// Sky radiance (XYZ, W m^-2 sr^-1 nm^-1) seen at altitude h (m) toward
+// zenith angle `zenith` (rad) and azimuth `phi` (rad, 0..pi) from the
+// sun's, with the sun at elevation eDeg (degrees). No sun disc.
+vec3 soraSkyXyz(float h, float zenith, float phi, float eDeg) {
+  return soraLayersXyz(uSky, uSkyNodes.z, uSkyNodes.w, 0, 0.0, h, zenith, phi, eDeg);
 }
 
 float soraHorizonCosine(float r) {
@@ -220,10 +236,10 @@ vec3 soraSkyView(float h, vec3 v, vec3 sun) {
   return soraSkyXyz(h, zp.x, zp.y, degrees(asin(clamp(sun.z, -1.0, 1.0))));
 }
 
-// Aerial perspective between the eye at altitude h and the point at
-// distance d (m) along v: in-scattered radiance (XYZ) and the segment's
-// transmittance, so that L = L_point * transmittance + inscattered.
-void soraAerialPerspective(float h, vec3 v, vec3 sun, float d, out vec3 inscattered, out vec3 transmittance) {
+// Transmittance of the segment from the eye at altitude h to the point at
+// distance d (m) along v (a ratio of two reads of the transmittance table;
+// of the reversed rays when v meets the ground), each channel at most 1.
+vec3 soraSegmentTransmittance(float h, vec3 v, float d) {
   float R = uPlanetSun.x;
   h = clamp(h, 0.0, soraThickness());
   float r = R + h;
@@ -243,7 +259,62 @@ void soraAerialPerspective(float h, vec3 v, vec3 sun, float d, out vec3 inscatte
     near = soraTransmittance(h, mu);
     far = soraTransmittance(hp, muP);
   }
-  transmittance = min(near / max(far, vec3(SORA_FLOOR)), vec3(1.0));
+  return min(near / max(far, vec3(SORA_FLOOR)), vec3(1.0));
+}
+
+// Length (m) of the ray from altitude h along view cosine mu to the ground
+// (below the horizon) or the top of the atmosphere.
+float soraRayLength(float h, float mu) {
+  float r = uPlanetSun.x + clamp(h, 0.0, soraThickness());
+  float b = r * mu, c = r * r;
+  if (mu < soraHorizonCosine(r)) return max(-b - sqrt(max(b * b - c + uPlanetSun.x * uPlanetSun.x, 0.0)), 0.0);
+  return max(-b + sqrt(max(b * b - c + uPlanetSun.y * uPlanetSun.y, 0.0)), 0.0);
+}
+
+// Aerial perspective between the eye at altitude h and the point at
+// distance d (m) along v: in-scattered radiance (XYZ) and the segment's
+// transmittance, so that L = L_point * transmittance + inscattered. The
+// light is S(x, v) R(x, v, d) w per channel: S the sky, R the aerial
+// table (read as the sky, linear between its distance slices, spaced in
+// ln d from thickness / 1000 to the ray's end) and w = (1 - T) / (1 -
+// T_end) the segment's share of the whole ray's extinction.
+void soraAerialPerspectiveFromSky(float h, vec3 v, vec3 sun, float d, out vec3 inscattered, out vec3 transmittance);
+
+void soraAerialPerspective(float h, vec3 v, vec3 sun, float d, out vec3 inscattered, out vec3 transmittance) {
+  // Tables without an aerial table (uAerialNodes zero): the sky's difference.
+  if (uAerialNodes.z < 2) {
+    soraAerialPerspectiveFromSky(h, v, sun, d, inscattered, transmittance);
+    return;
+  }
+  h = clamp(h, 0.0, soraThickness());
+  transmittance = soraSegmentTransmittance(h, v, d);
+  float length_ = soraRayLength(h, v.z);
+  vec3 whole = soraSegmentTransmittance(h, v, length_);
+  vec3 all_ = vec3(1.0) - whole;
+  vec3 share = mix(vec3(1.0), clamp((vec3(1.0) - transmittance) / max(all_, vec3(1e-9)), 0.0, 1.0), greaterThan(all_, vec3(1e-9)));
+  float nearest = soraThickness() / 1000.0;
+  float last = max(length_, 2.0 * nearest);
+  int D = uAerialNodes.z;
+  float x = clamp(log(max(d, nearest) / nearest) / log(last / nearest), 0.0, 1.0) * float(D - 1);
+  int j; float fj; soraCell(x, 0, D - 2, j, fj);
+  vec2 zp = soraLocalView(v, vec3(0.0, 0.0, 1.0), sun);
+  float eDeg = degrees(asin(clamp(sun.z, -1.0, 1.0)));
+  vec3 sky = soraSkyXyz(h, zp.x, zp.y, eDeg);
+  vec3 ratio = soraLayersXyz(uAerial, uAerialNodes.x, uAerialNodes.y, j, fj, h, zp.x, zp.y, eDeg);
+  inscattered = sky * ratio * share;
+}
+
+// The former aerial perspective from the sky table alone, S(x, v) - T S(p,
+// v) (S read at each end's own altitude, zenith angle and sun elevation):
+// no aerial table needed, but not within 2 % of the library for short
+// segments (docs/engine-tables.md).
+void soraAerialPerspectiveFromSky(float h, vec3 v, vec3 sun, float d, out vec3 inscattered, out vec3 transmittance) {
+  float R = uPlanetSun.x;
+  h = clamp(h, 0.0, soraThickness());
+  vec3 p = vec3(v.xy * d, R + h + v.z * d);
+  vec3 upP = normalize(p);
+  float hp = clamp(length(p) - R, 0.0, soraThickness());
+  transmittance = soraSegmentTransmittance(h, v, d);
   vec3 atEye = soraSkyView(h, v, sun);
   vec2 zp = soraLocalView(v, upP, sun);
   vec3 atPoint = soraSkyXyz(hp, zp.x, zp.y, degrees(asin(clamp(dot(sun, upP), -1.0, 1.0))));

@@ -6,6 +6,8 @@
 //   group(0) binding(1) transmittance: texture_2d<f32>, transmittance.exr
 //   group(0) binding(2) irradiance: texture_2d<f32>, irradiance.exr
 //   group(0) binding(3) params: SoraTables (values from manifest.json)
+//   group(0) binding(4) aerial: texture_2d_array<f32>, aerial.exr, layer = s * A + a,
+//                       its distance slices one above another in each layer
 // Textures rgba32float (unfilterable is fine), holding X, Y, Z.
 
 struct SoraTables {
@@ -17,12 +19,15 @@ struct SoraTables {
   planet_sun: vec4<f32>,
   // sun.irradiance_xyz_w_m2_nm, sun.axis_width_deg
   sun_irradiance_xyz_width: vec4<f32>,
+  // aerial: zenith_nodes_per_half, azimuth_nodes, distance_nodes, unused
+  aerial_nodes: vec4<i32>,
 };
 
 @group(0) @binding(0) var sora_sky: texture_2d_array<f32>;
 @group(0) @binding(1) var sora_transmittance: texture_2d<f32>;
 @group(0) @binding(2) var sora_irradiance: texture_2d<f32>;
 @group(0) @binding(3) var<uniform> sora: SoraTables;
+@group(0) @binding(4) var sora_aerial: texture_2d_array<f32>;
 
 const SORA_PI: f32 = 3.14159265358979;
 const SORA_FLOOR: f32 = 1e-30;
@@ -53,9 +58,9 @@ fn sora_cell(x: f32, lowest: i32, highest: i32) -> SoraCell {
   return SoraCell(i, clamp(x - f32(i), 0.0, 1.0));
 }
 
-// The zenith axis's cell for an eye at radius r (never across the horizon).
-fn sora_zenith_cell(zenith: f32, r: f32) -> SoraCell {
-  let half_nodes = sora.sky_nodes.z;
+// The zenith axis's cell for an eye at radius r on an axis of half_nodes
+// nodes per half (never across the horizon).
+fn sora_zenith_cell(zenith: f32, r: f32, half_nodes: i32) -> SoraCell {
   let zh = SORA_PI - asin(min(sora.planet_sun.x / r, 1.0));
   let last = f32(half_nodes - 1);
   if (zenith < zh) {
@@ -66,13 +71,12 @@ fn sora_zenith_cell(zenith: f32, r: f32) -> SoraCell {
   return sora_cell(f32(2 * half_nodes - 1) - (1.0 - sqrt(1.0 - u)) * last, half_nodes, 2 * half_nodes - 2);
 }
 
-fn sora_sky_texel(layer: i32, row: i32, k: i32) -> vec3<f32> {
-  return textureLoad(sora_sky, vec2<i32>(k, row), layer, 0).xyz;
-}
-
-fn sora_layer(layer: i32, z: SoraCell, k: SoraCell) -> vec3<f32> {
-  let a = mix(sora_sky_texel(layer, z.i, k.i), sora_sky_texel(layer, z.i, k.i + 1), k.f);
-  let b = mix(sora_sky_texel(layer, z.i + 1, k.i), sora_sky_texel(layer, z.i + 1, k.i + 1), k.f);
+// Bilinear read of the slice whose first row is row0 of a layer of `table`.
+fn sora_layer(table: texture_2d_array<f32>, layer: i32, row0: i32, z: SoraCell, k: SoraCell) -> vec3<f32> {
+  let a = mix(textureLoad(table, vec2<i32>(k.i, row0 + z.i), layer, 0).xyz,
+              textureLoad(table, vec2<i32>(k.i + 1, row0 + z.i), layer, 0).xyz, k.f);
+  let b = mix(textureLoad(table, vec2<i32>(k.i, row0 + z.i + 1), layer, 0).xyz,
+              textureLoad(table, vec2<i32>(k.i + 1, row0 + z.i + 1), layer, 0).xyz, k.f);
   return mix(a, b, z.f);
 }
 
@@ -115,27 +119,42 @@ fn sora_turn_share(zenith: f32, phi: f32, e_deg: f32, zh: f32) -> f32 {
     * (1.0 - smoothstep(70.0, 85.0, e_deg));
 }
 
-// Sky radiance (XYZ, W m^-2 sr^-1 nm^-1) at altitude h (m) toward zenith
-// angle `zenith` and azimuth `phi` from the sun's (rad), sun at e_deg;
-// each sun layer read at the view turned with the sun to its node.
-fn sora_sky_xyz(h_in: f32, zenith: f32, phi: f32, e_in: f32) -> vec3<f32> {
+// A layer table (the sky, or the aerial-perspective table with zn zenith
+// nodes per half, kn azimuth nodes, its distance slices j and j + 1
+// blended by fj) at altitude h (m) toward zenith angle `zenith` and
+// azimuth `phi` from the sun's (rad), sun at e_deg: bilinear in a layer,
+// linear in altitude, geometric between the sun layers, each read at the
+// view turned with the sun to its node.
+fn sora_layers_xyz(table: texture_2d_array<f32>, zn: i32, kn: i32, j: i32, fj: f32,
+                   h_in: f32, zenith: f32, phi: f32, e_in: f32) -> vec3<f32> {
   let h = clamp(h_in, 0.0, sora_thickness());
   let r = sora.planet_sun.x + h;
   let zh = SORA_PI - asin(min(sora.planet_sun.x / r, 1.0));
   let e_deg = clamp(e_in, -12.0, 90.0);
-  let kn = sora.sky_nodes.w;
   let an = sora.sky_nodes.y;
   let a = sora_cell(sora_altitude_coordinate(h, an), 0, an - 2);
   let s = sora_cell(sora_sun_coordinate(e_deg), 0, sora.sky_nodes.x - 2);
   let share = sora_turn_share(zenith, phi, e_deg, zh);
+  let row0 = 2 * zn * j;
+  var row1 = row0;
+  if (fj > 0.0) { row1 = row0 + 2 * zn; }
   var layers: array<vec3<f32>, 2>;
-  for (var j = 0; j < 2; j++) {
-    let view = sora_turned_view(zenith, phi, radians(sora_sun_elevation_of_node(s.i + j) - e_deg) * share, zh);
-    let z = sora_zenith_cell(view.x, r);
+  for (var n = 0; n < 2; n++) {
+    let view = sora_turned_view(zenith, phi, radians(sora_sun_elevation_of_node(s.i + n) - e_deg) * share, zh);
+    let z = sora_zenith_cell(view.x, r, zn);
     let k = sora_cell(sqrt(clamp(view.y / SORA_PI, 0.0, 1.0)) * f32(kn - 1), 0, kn - 2);
-    layers[j] = mix(sora_layer((s.i + j) * an + a.i, z, k), sora_layer((s.i + j) * an + a.i + 1, z, k), a.f);
+    let low = (s.i + n) * an + a.i;
+    let ground = mix(sora_layer(table, low, row0, z, k), sora_layer(table, low, row1, z, k), fj);
+    let above = mix(sora_layer(table, low + 1, row0, z, k), sora_layer(table, low + 1, row1, z, k), fj);
+    layers[n] = mix(ground, above, a.f);
   }
   return sora_mix_log(layers[0], layers[1], s.f);
+}
+
+// Sky radiance (XYZ, W m^-2 sr^-1 nm^-1) at altitude h (m) toward zenith
+// angle `zenith` and azimuth `phi` from the sun's (rad), sun at e_deg.
+fn sora_sky_xyz(h_in: f32, zenith: f32, phi: f32, e_in: f32) -> vec3<f32> {
+  return sora_layers_xyz(sora_sky, sora.sky_nodes.z, sora.sky_nodes.w, 0, 0.0, h_in, zenith, phi, e_in);
 }
 
 fn sora_horizon_cosine(r: f32) -> f32 {
@@ -213,11 +232,10 @@ fn sora_sky_view(h: f32, v: vec3<f32>, sun: vec3<f32>) -> vec3<f32> {
   return sora_sky_xyz(h, zp.x, zp.y, degrees(asin(clamp(sun.z, -1.0, 1.0))));
 }
 
-struct SoraAerial { inscattered: vec3<f32>, transmittance: vec3<f32> };
-
-// Aerial perspective between the eye at altitude h and the point at
-// distance d (m) along v: L = L_point * transmittance + inscattered.
-fn sora_aerial_perspective(h_in: f32, v: vec3<f32>, sun: vec3<f32>, d: f32) -> SoraAerial {
+// Transmittance of the segment from the eye at altitude h to the point at
+// distance d along v (a ratio of two transmittance reads; of the reversed
+// rays when v meets the ground), each channel at most 1.
+fn sora_segment_transmittance(h_in: f32, v: vec3<f32>, d: f32) -> vec3<f32> {
   let ground = sora.planet_sun.x;
   let h = clamp(h_in, 0.0, sora_thickness());
   let r = ground + h;
@@ -236,7 +254,58 @@ fn sora_aerial_perspective(h_in: f32, v: vec3<f32>, sun: vec3<f32>, d: f32) -> S
     near = sora_transmittance_xyz(h, mu);
     far = sora_transmittance_xyz(hp, mu_p);
   }
-  let t = min(near / max(far, vec3<f32>(SORA_FLOOR)), vec3<f32>(1.0));
+  return min(near / max(far, vec3<f32>(SORA_FLOOR)), vec3<f32>(1.0));
+}
+
+// Length (m) of the ray from altitude h along view cosine mu to the ground
+// (below the horizon) or the top of the atmosphere.
+fn sora_ray_length(h: f32, mu: f32) -> f32 {
+  let r = sora.planet_sun.x + clamp(h, 0.0, sora_thickness());
+  let b = r * mu;
+  let c = r * r;
+  if (mu < sora_horizon_cosine(r)) {
+    return max(-b - sqrt(max(b * b - c + sora.planet_sun.x * sora.planet_sun.x, 0.0)), 0.0);
+  }
+  return max(-b + sqrt(max(b * b - c + sora.planet_sun.y * sora.planet_sun.y, 0.0)), 0.0);
+}
+
+struct SoraAerial { inscattered: vec3<f32>, transmittance: vec3<f32> };
+
+// Aerial perspective between the eye at altitude h and the point at
+// distance d (m) along v: L = L_point * transmittance + inscattered, the
+// light S(x, v) R(x, v, d) w per channel (S the sky, R the aerial table
+// linear between its distance slices, spaced in ln d from thickness / 1000
+// to the ray's end, w = (1 - T) / (1 - T_end)).
+fn sora_aerial_perspective(h_in: f32, v: vec3<f32>, sun: vec3<f32>, d: f32) -> SoraAerial {
+  // Tables without an aerial table (aerial_nodes zero): the sky's difference.
+  if (sora.aerial_nodes.z < 2) { return sora_aerial_perspective_from_sky(h_in, v, sun, d); }
+  let h = clamp(h_in, 0.0, sora_thickness());
+  let t = sora_segment_transmittance(h, v, d);
+  let length_ = sora_ray_length(h, v.z);
+  let all_ = vec3<f32>(1.0) - sora_segment_transmittance(h, v, length_);
+  let share = select(vec3<f32>(1.0), clamp((vec3<f32>(1.0) - t) / max(all_, vec3<f32>(1e-9)), vec3<f32>(0.0), vec3<f32>(1.0)), all_ > vec3<f32>(1e-9));
+  let nearest = sora_thickness() / 1000.0;
+  let last = max(length_, 2.0 * nearest);
+  let dn = sora.aerial_nodes.z;
+  let x = clamp(log(max(d, nearest) / nearest) / log(last / nearest), 0.0, 1.0) * f32(dn - 1);
+  let j = sora_cell(x, 0, dn - 2);
+  let zp = sora_local_view(v, vec3<f32>(0.0, 0.0, 1.0), sun);
+  let e_deg = degrees(asin(clamp(sun.z, -1.0, 1.0)));
+  let sky = sora_sky_xyz(h, zp.x, zp.y, e_deg);
+  let ratio = sora_layers_xyz(sora_aerial, sora.aerial_nodes.x, sora.aerial_nodes.y, j.i, j.f, h, zp.x, zp.y, e_deg);
+  return SoraAerial(sky * ratio * share, t);
+}
+
+// The former aerial perspective from the sky table alone, S(x, v) - T S(p,
+// v): no aerial table needed, but not within 2 % of the library for short
+// segments (docs/engine-tables.md).
+fn sora_aerial_perspective_from_sky(h_in: f32, v: vec3<f32>, sun: vec3<f32>, d: f32) -> SoraAerial {
+  let ground = sora.planet_sun.x;
+  let h = clamp(h_in, 0.0, sora_thickness());
+  let p = vec3<f32>(v.xy * d, ground + h + v.z * d);
+  let up_p = normalize(p);
+  let hp = clamp(length(p) - ground, 0.0, sora_thickness());
+  let t = sora_segment_transmittance(h, v, d);
   let at_eye = sora_sky_view(h, v, sun);
   let zp = sora_local_view(v, up_p, sun);
   let at_point = sora_sky_xyz(hp, zp.x, zp.y, degrees(asin(clamp(dot(sun, up_p), -1.0, 1.0))));

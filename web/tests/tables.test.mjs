@@ -11,6 +11,14 @@
 // - the zenith's luminance against the sun's elevation (90 to -12 in
 //   0.25-degree steps, drawn by the shader): |second difference of ln L|
 //   below 0.05 per step.
+// - aerial perspective (soraAerialPerspective), for the presets in
+//   SORA_TABLES_AERIAL (default none; their tables are baked with an
+//   aerial table, SORA_TABLES_AERIAL_ARGS, default 8 x 8 views per half
+//   and 6 distances): a 48 x 48 fisheye of the light scattered into the
+//   segment to d = 1, 10 and 50 km, suns 60, 10, 2 and -4 degrees, against
+//   `sora render --distance-m D`'s: the same luminance and chromaticity
+//   bounds at suns 60, 10 and 2 (-4 reported). Not in CI yet: the aerial
+//   table is not within 2 % (docs/engine-tables.md).
 // It reports the numbers and the frame time in SwiftShader to
 // SORA_TABLES_OUT/report.json.
 //
@@ -43,6 +51,12 @@ const presets = (process.env.SORA_TABLES_PRESETS || 'earth-clear,earth-hazy,mars
 const tableArguments = (process.env.SORA_TABLES_ARGS || '').split(' ').filter((a) => a);
 const SUNS = (process.env.SORA_TABLES_SUNS || '60,20,5,0,-4,-8,-12').split(',').map(Number);
 const SIZE = 256;
+// Aerial perspective: the presets, a smaller fisheye (the CPU's image costs
+// two view marches a pixel), its suns (the last reported only) and distances.
+const AERIAL_PRESETS = (process.env.SORA_TABLES_AERIAL ?? '').split(',').filter((p) => p);
+const aerialArguments = (process.env.SORA_TABLES_AERIAL_ARGS
+  ?? '--aerial-zenith-nodes 8 --aerial-azimuth-nodes 8 --aerial-distance-nodes 6').split(' ').filter((a) => a);
+const AERIAL = { size: 48, suns: [60, 10, 2, -4], checkedSuns: [60, 10, 2], distances: [1000, 10000, 50000] };
 const LIMITS = { luminance: 0.02, chromaticity: 0.005, secondDifference: 0.05 };
 
 // Tables as RGBA float arrays (X, Y, Z, 0) for texture upload, from EXR.
@@ -84,7 +98,7 @@ function serve() {
 }
 
 // Runs in the page: binds the tables, draws, reads back.
-async function drawInPage({ shader, manifest, files, suns, size, zenithSuns, frames }) {
+async function drawInPage({ shader, manifest, files, suns, size, zenithSuns, frames, aerial }) {
   const canvas = document.getElementById('c');
   canvas.width = size;
   canvas.height = size;
@@ -108,6 +122,13 @@ async function drawInPage({ shader, manifest, files, suns, size, zenithSuns, fra
   gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA32F, t.transmittance.width, t.transmittance.height, 0, gl.RGBA, gl.FLOAT, await fetchFloats(files.transmittance));
   texture(gl.TEXTURE_2D, 2);
   gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA32F, t.irradiance.width, t.irradiance.height, 0, gl.RGBA, gl.FLOAT, await fetchFloats(files.irradiance));
+  texture(gl.TEXTURE_2D_ARRAY, 3);
+  if (t.aerial) {
+    gl.texImage3D(gl.TEXTURE_2D_ARRAY, 0, gl.RGBA32F, t.aerial.width, t.aerial.height / layers, layers, 0, gl.RGBA, gl.FLOAT, await fetchFloats(files.aerial));
+  } else {
+    // No aerial table: soraAerialPerspective takes the sky's difference.
+    gl.texImage3D(gl.TEXTURE_2D_ARRAY, 0, gl.RGBA32F, 1, 1, 1, 0, gl.RGBA, gl.FLOAT, new Float32Array(4));
+  }
   const vertex = `#version 300 es
     void main() { vec2 p = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2)); gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0); }`;
   const fragment = `#version 300 es
@@ -117,6 +138,7 @@ async function drawInPage({ shader, manifest, files, suns, size, zenithSuns, fra
     uniform float uSunElevationDeg;
     uniform int uMode;
     uniform vec2 uSize;
+    uniform float uDistanceM;
     out vec4 colour;
     void main() {
       if (uMode == 1) {
@@ -137,6 +159,13 @@ async function drawInPage({ shader, manifest, files, suns, size, zenithSuns, fra
       vec3 v = vec3(-sx * horizontal, sy * horizontal, cos(z));
       float e = radians(uSunElevationDeg);
       vec3 sun = vec3(0.0, -cos(e), sin(e));
+      if (uMode == 2) {
+        // The light of the air between the eye and the point at uDistanceM.
+        vec3 inscattered, transmittance;
+        soraAerialPerspective(0.0, v, sun, uDistanceM, inscattered, transmittance);
+        colour = vec4(inscattered, 1.0);
+        return;
+      }
       colour = vec4(soraSkyView(0.0, v, sun), 1.0);
     }`;
   const compile = (type, source) => {
@@ -156,6 +185,9 @@ async function drawInPage({ shader, manifest, files, suns, size, zenithSuns, fra
   gl.uniform1i(u('uSky'), 0);
   gl.uniform1i(u('uTransmittance'), 1);
   gl.uniform1i(u('uIrradiance'), 2);
+  gl.uniform1i(u('uAerial'), 3);
+  if (t.aerial) gl.uniform3i(u('uAerialNodes'), t.aerial.zenith_nodes_per_half, t.aerial.azimuth_nodes, t.aerial.distance_nodes);
+  else gl.uniform3i(u('uAerialNodes'), 0, 0, 0);
   gl.uniform4i(u('uSkyNodes'), t.sky.sun_nodes, t.sky.altitude_nodes, t.sky.zenith_nodes_per_half, t.sky.azimuth_nodes);
   gl.uniform2i(u('uTransmittanceNodes'), t.transmittance.height, t.transmittance.width);
   gl.uniform4f(u('uPlanetSun'), manifest.planet.ground_radius_m, manifest.planet.top_radius_m, manifest.sun.angular_radius_rad, manifest.sun.limb_darkening);
@@ -198,8 +230,24 @@ async function drawInPage({ shader, manifest, files, suns, size, zenithSuns, fra
   gl.viewport(0, 0, zenithSuns, 1);
   gl.drawArrays(gl.TRIANGLES, 0, 3);
   const zenith = Array.from(read(zenithSuns, 1)).filter((_, i) => i % 4 === 1);
+  // Aerial perspective: one small fisheye per (sun, distance), in order.
+  const aerialImages = [];
+  if (aerial) {
+    gl.uniform1i(u('uMode'), 2);
+    gl.uniform2f(u('uSize'), aerial.size, aerial.size);
+    gl.viewport(0, 0, aerial.size, aerial.size);
+    for (const sun of aerial.suns) {
+      for (const d of aerial.distances) {
+        gl.uniform1f(u('uSunElevationDeg'), sun);
+        gl.uniform1f(u('uDistanceM'), d);
+        gl.drawArrays(gl.TRIANGLES, 0, 3);
+        aerialImages.push(Array.from(read(aerial.size, aerial.size)));
+      }
+    }
+  }
   return {
     images,
+    aerialImages,
     zenith,
     frameMs,
     renderer: gl.getParameter(gl.RENDERER),
@@ -213,8 +261,9 @@ function percentile(values, p) {
   return sorted[Math.min(sorted.length - 1, Math.floor(p * sorted.length))];
 }
 
-// GPU image (RGBA = XYZ, rows bottom first) against the CPU's (rows top first).
-function compare(gpu, cpu) {
+// GPU image (RGBA = XYZ, rows bottom first) against the CPU's (rows top
+// first), both SIZE x SIZE unless `SIZE` is given.
+function compare(gpu, cpu, SIZE = 256) {
   const { X, Y, Z } = cpu.channels;
   let max = 0;
   for (let i = 0; i < Y.length; i++) max = Math.max(max, Y[i]);
@@ -271,11 +320,13 @@ async function main() {
       const directory = join(out, preset);
       const bakeStart = Date.now();
       const baked = reuse && (await stat(join(directory, 'manifest.json')).catch(() => null));
-      const bakeLog = baked ? '(reused)' : execFileSync(cli, ['tables', '--preset', preset, ...tableArguments, '-o', directory], { encoding: 'utf8', stdio: ['ignore', 'pipe', 'pipe'] });
+      const withAerial = AERIAL_PRESETS.includes(preset);
+      const bakeArguments = [...tableArguments, ...(withAerial ? aerialArguments : [])];
+      const bakeLog = baked ? '(reused)' : execFileSync(cli, ['tables', '--preset', preset, ...bakeArguments, '-o', directory], { encoding: 'utf8', stdio: ['ignore', 'pipe', 'pipe'] });
       const bakeS = (Date.now() - bakeStart) / 1000;
       const manifest = JSON.parse(await readFile(join(directory, 'manifest.json'), 'utf8'));
       const files = {};
-      for (const name of ['sky', 'transmittance', 'irradiance']) {
+      for (const name of ['sky', 'transmittance', 'irradiance', ...(manifest.tables.aerial ? ['aerial'] : [])]) {
         await tableBinary(join(directory, `${name}.exr`), `${preset}-${name}.bin`);
         files[name] = `${base}/${preset}-${name}.bin`;
       }
@@ -287,9 +338,19 @@ async function main() {
           '--exr-xyz', '--units', 'radiance', '-o', file], { stdio: ['ignore', 'ignore', 'pipe'] });
         return file;
       });
+      const aerialStart = Date.now();
+      const aerialReferences = withAerial ? AERIAL.suns.flatMap((sun) => AERIAL.distances.map((d) => {
+        const file = join(out, `${preset}-${sun}-aerial-${d}.exr`);
+        if (reuse && existsSync(file)) return file;
+        execFileSync(cli, ['render', '--preset', preset, '--sun-elevation', String(sun), '--camera', 'fisheye',
+          '--width', String(AERIAL.size), '--height', String(AERIAL.size), '--polarisation', 'off', '--no-sun-disc',
+          '--distance-m', String(d), '--exr-xyz', '--units', 'radiance', '-o', file], { stdio: ['ignore', 'ignore', 'pipe'] });
+        return file;
+      })) : [];
+      const aerialReferenceS = (Date.now() - aerialStart) / 1000;
       await page.goto(base);
       const zenithSuns = (90 + 12) * 4 + 1;
-      const drawn = await page.evaluate(drawInPage, { shader, manifest, files, suns: SUNS, size: SIZE, zenithSuns, frames: 20 });
+      const drawn = await page.evaluate(drawInPage, { shader, manifest, files, suns: SUNS, size: SIZE, zenithSuns, frames: 20, aerial: withAerial ? AERIAL : null });
       const suns = {};
       for (const [k, sun] of SUNS.entries()) {
         const cpu = readExr(await readFile(references[k]));
@@ -298,6 +359,17 @@ async function main() {
         for (const [region, r] of Object.entries(result)) {
           if (r.luminanceP99 > LIMITS.luminance || r.chromaticityP99 > LIMITS.chromaticity) {
             failures.push(`${preset} sun ${sun} ${region}: luminance p99 ${r.luminanceP99.toFixed(4)}, xy p99 ${r.chromaticityP99.toFixed(4)}`);
+          }
+        }
+      }
+      const aerial = {};
+      for (const [k, sun] of (withAerial ? AERIAL.suns : []).entries()) {
+        for (const [n, d] of AERIAL.distances.entries()) {
+          const cpu = readExr(await readFile(aerialReferences[k * AERIAL.distances.length + n]));
+          const { all } = compare(drawn.aerialImages[k * AERIAL.distances.length + n], cpu, AERIAL.size);
+          aerial[`${sun} ${d}`] = all;
+          if (AERIAL.checkedSuns.includes(sun) && (all.luminanceP99 > LIMITS.luminance || all.chromaticityP99 > LIMITS.chromaticity)) {
+            failures.push(`${preset} aerial perspective sun ${sun} d ${d} m: luminance p99 ${all.luminanceP99.toFixed(4)}, xy p99 ${all.chromaticityP99.toFixed(4)}`);
           }
         }
       }
@@ -323,11 +395,18 @@ async function main() {
         zenithSecondDifferenceMax: worstSecond,
         zenithSecondDifferenceAtSunDeg: worstAt,
         suns,
+        aerial,
+        aerialReferenceS,
       };
       console.log(`${preset}: baked in ${bakeS.toFixed(1)} s, frame ${drawn.frameMs.toFixed(1)} ms, zenith |d2 ln L| ${worstSecond.toFixed(4)} at ${worstAt}`);
       for (const sun of SUNS) {
         const { all, horizon } = suns[sun];
         console.log(`  sun ${sun}: luminance p99 ${(100 * all.luminanceP99).toFixed(2)} % (max ${(100 * all.luminanceMax).toFixed(1)} %), xy p99 ${all.chromaticityP99.toFixed(4)} (max ${all.chromaticityMax.toFixed(4)}); horizon band p99 ${(100 * horizon.luminanceP99).toFixed(2)} %, xy ${horizon.chromaticityP99.toFixed(4)}`);
+      }
+      if (withAerial) console.log(`  aerial perspective (CPU references ${aerialReferenceS.toFixed(1)} s):`);
+      for (const [key, all] of Object.entries(aerial)) {
+        const [sun, d] = key.split(' ');
+        console.log(`    sun ${sun} d ${Number(d) / 1000} km: luminance p99 ${(100 * all.luminanceP99).toFixed(2)} % (max ${(100 * all.luminanceMax).toFixed(1)} %), xy p99 ${all.chromaticityP99.toFixed(4)}`);
       }
     }
     assert.deepEqual(errors, [], 'page errors');

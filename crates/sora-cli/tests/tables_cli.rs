@@ -1,4 +1,4 @@
-//! `sora tables`: the README's command writes the four files the docs
+//! `sora tables`: the README's command writes the five files the docs
 //! promise, and bad input (an unknown format, a directory that is not
 //! sora's tables, a bad node count) is a one-line error that writes nothing.
 
@@ -29,7 +29,8 @@ fn the_readme_command_writes_the_tables_and_their_manifest() {
     // Fewer nodes and single scattering: the same code at a debug build's
     // pace (the default tables take minutes there).
     args.extend(
-        "--scattering single --sun-nodes 3 --altitude-nodes 2 --zenith-nodes 4 --azimuth-nodes 3"
+        "--scattering single --sun-nodes 3 --altitude-nodes 2 --zenith-nodes 4 --azimuth-nodes 3 \
+         --aerial-zenith-nodes 3 --aerial-azimuth-nodes 2 --aerial-distance-nodes 2"
             .split_whitespace()
             .map(String::from),
     );
@@ -52,6 +53,10 @@ fn the_readme_command_writes_the_tables_and_their_manifest() {
     // the ground; 8 rows of 3 texels a layer) is lit.
     let top_layer_zenith = texels[4 * 8 * 3];
     assert!(top_layer_zenith > 0.0, "{top_layer_zenith}");
+    assert_eq!(
+        exr_channel(&output.join("aerial.exr"), "Y").len(),
+        2 * 2 * 3 * 2 * 3 * 2
+    );
     for name in ["transmittance.exr", "irradiance.exr"] {
         assert!(output.join(name).is_file(), "{name}");
     }

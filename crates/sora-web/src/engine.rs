@@ -513,6 +513,10 @@ pub const REALTIME_TABLES: RealtimeTables = RealtimeTables {
         zenith_nodes_per_half: 32,
         azimuth_nodes: 32,
         transmittance_nodes: (32, 128),
+        // No aerial-perspective table (its bake marches every node's
+        // segments): the scene view takes the sky table's difference
+        // (`soraAerialPerspectiveFromSky`).
+        aerial_nodes: (0, 0, 0),
     },
 };
 

@@ -59,6 +59,19 @@ pub struct TablesArgs {
     #[arg(long, value_name = "N", default_value_t = EngineTableSettings::default().azimuth_nodes)]
     azimuth_nodes: usize,
 
+    /// Aerial-perspective table: view zenith nodes per half (0, with the
+    /// other two 0, for none: the default; e.g. 8 8 6)
+    #[arg(long, value_name = "N", default_value_t = EngineTableSettings::default().aerial_nodes.0)]
+    aerial_zenith_nodes: usize,
+
+    /// Aerial-perspective table: view azimuth nodes over 0..180 degrees (0: none)
+    #[arg(long, value_name = "N", default_value_t = EngineTableSettings::default().aerial_nodes.1)]
+    aerial_azimuth_nodes: usize,
+
+    /// Aerial-perspective table: distance nodes, the nearest to the ray's end (0: none)
+    #[arg(long, value_name = "N", default_value_t = EngineTableSettings::default().aerial_nodes.2)]
+    aerial_distance_nodes: usize,
+
     /// Table file format (exr)
     #[arg(long, value_name = "FORMAT", default_value = "exr")]
     format: String,
@@ -80,6 +93,11 @@ pub fn run(args: TablesArgs) -> anyhow::Result<()> {
         altitude_nodes: args.altitude_nodes,
         zenith_nodes_per_half: args.zenith_nodes,
         azimuth_nodes: args.azimuth_nodes,
+        aerial_nodes: (
+            args.aerial_zenith_nodes,
+            args.aerial_azimuth_nodes,
+            args.aerial_distance_nodes,
+        ),
         ..EngineTableSettings::default()
     };
     settings.validate()?;

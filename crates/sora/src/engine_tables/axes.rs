@@ -157,6 +157,46 @@ pub fn transmittance_mu_coordinate(mu: f64, nodes: usize, r_m: f64, ground_m: f6
     ((mu - mu_h) / (1.0 - mu_h)).clamp(0.0, 1.0).sqrt() * (nodes - 1) as f64
 }
 
+/// The aerial-perspective table's nearest distance node is the
+/// atmosphere's thickness over this (100 m for a 100 km atmosphere).
+pub const AERIAL_NEAREST_DIVISOR: f64 = 1000.0;
+
+/// Length (m) of the ray from radius `r_m` along view cosine `mu` to where
+/// it meets the ground (below the horizon) or leaves the top of the
+/// atmosphere.
+pub fn ray_length(r_m: f64, mu: f64, ground_m: f64, top_m: f64) -> f64 {
+    let b = r_m * mu;
+    let c = r_m * r_m;
+    if mu < horizon_cosine(r_m, ground_m) {
+        (-b - (b * b - c + ground_m * ground_m).max(0.0).sqrt()).max(0.0)
+    } else {
+        (-b + (b * b - c + top_m * top_m).max(0.0).sqrt()).max(0.0)
+    }
+}
+
+/// The aerial-perspective table's distance axis for a ray of length
+/// `length_m` in an atmosphere `thickness_m` thick: (nearest node, last
+/// node), the last the ray's end (at least twice the nearest).
+pub fn distance_range(thickness_m: f64, length_m: f64) -> (f64, f64) {
+    let nearest = thickness_m / AERIAL_NEAREST_DIVISOR;
+    (nearest, length_m.max(2.0 * nearest))
+}
+
+/// Fractional node index of distance `d_m` on `nodes` nodes spaced evenly
+/// in ln d over `(nearest, last)` (clamped to the axis).
+pub fn distance_coordinate(d_m: f64, nodes: usize, (nearest, last): (f64, f64)) -> f64 {
+    ((d_m.max(nearest) / nearest).ln() / (last / nearest).ln()).clamp(0.0, 1.0) * (nodes - 1) as f64
+}
+
+/// Distance (m) of node `index` of `nodes` over `(nearest, last)` (the
+/// last node exactly `last`).
+pub fn distance_of_node(index: usize, nodes: usize, (nearest, last): (f64, f64)) -> f64 {
+    if index + 1 == nodes {
+        return last;
+    }
+    nearest * (last / nearest).powf(index as f64 / (nodes - 1) as f64)
+}
+
 /// The cell and the weight of the upper node for fractional index `x` on
 /// an axis whose cells run lowest..=highest.
 pub fn cell(x: f64, lowest: usize, highest: usize) -> (usize, f64) {
@@ -178,6 +218,10 @@ mod tests {
                 assert!((altitude_coordinate(h, 100e3, n) - i as f64).abs() < 1e-9);
                 let phi = azimuth_of_node(i, n);
                 assert!((azimuth_coordinate(phi, n) - i as f64).abs() < 1e-9);
+                let range =
+                    distance_range(100e3, ray_length(6.371e6 + 10.0, 0.1, 6.371e6, 6.471e6));
+                let d = distance_of_node(i, n, range);
+                assert!((distance_coordinate(d, n, range) - i as f64).abs() < 1e-9);
                 let r = 6.371e6 + 5e3;
                 let mu = transmittance_mu_of_node(i, n, r, 6.371e6);
                 assert!((transmittance_mu_coordinate(mu, n, r, 6.371e6) - i as f64).abs() < 1e-6);

@@ -1,5 +1,6 @@
 //! The engine tables on disk: a directory holding `sky.exr`,
-//! `transmittance.exr`, `irradiance.exr` (32-bit float OpenEXR, channels
+//! `aerial.exr`, `transmittance.exr`, `irradiance.exr` (32-bit float
+//! OpenEXR, channels
 //! X, Y, Z) and `manifest.json` (the format, the units, the axes, their
 //! mappings and the lookup formulas). Written together or not at all
 //! ([`OutputFiles`]); the directory is created if it does not exist, and an
@@ -20,7 +21,7 @@ pub const MANIFEST_FILE: &str = "manifest.json";
 pub const TABLE_FORMAT: &str = "sora-engine-tables";
 
 /// The table format's version (changes with the axes or the layout).
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
 
 /// An error unless `directory` may receive tables: it does not exist (its
 /// parent does), or it is an empty directory, or it holds a manifest of
@@ -70,8 +71,8 @@ fn holds_tables(directory: &Path) -> bool {
 }
 
 impl EngineTables {
-    /// Writes the tables into `directory` (see the module docs): all four
-    /// files or none; a directory this call created is removed again if
+    /// Writes the tables into `directory` (see the module docs): all five
+    /// files (four without an aerial-perspective table) or none; a directory this call created is removed again if
     /// the writing fails.
     pub fn write(&self, directory: &Path) -> Result<()> {
         check_output_directory(directory)?;
@@ -106,6 +107,19 @@ impl EngineTables {
             &[],
             options.clone(),
         )?;
+        let (_, aerial_azimuth, _) = settings.aerial_nodes;
+        if !self.aerial.is_empty() {
+            files.exr_with_layers(
+                directory.join("aerial.exr"),
+                &image(
+                    aerial_azimuth,
+                    self.aerial.len() / aerial_azimuth,
+                    &self.aerial,
+                )?,
+                &[],
+                options.clone(),
+            )?;
+        }
         let (t_altitudes, t_mu) = settings.transmittance_nodes;
         files.exr_with_layers(
             directory.join("transmittance.exr"),
@@ -134,7 +148,7 @@ impl EngineTables {
     pub fn manifest(&self) -> serde_json::Value {
         let s = &self.settings;
         let matrix = crate::colour::RgbColourSpace::Srgb.linear_rgb_from_xyz_matrix();
-        serde_json::json!({
+        let mut manifest = serde_json::json!({
             "format": TABLE_FORMAT,
             "version": FORMAT_VERSION,
             "generator": format!("sora {}", env!("CARGO_PKG_VERSION")),
@@ -167,6 +181,16 @@ impl EngineTables {
                     "azimuth_nodes": s.azimuth_nodes,
                     "layout": "texel (k, row) of layer L = s * altitude_nodes + a is at x = k, y = L * 2 * zenith_nodes_per_half + row (y = 0 is the file's top scan line); a 2D array texture of sun_nodes * altitude_nodes layers of azimuth_nodes x 2 zenith_nodes_per_half",
                 },
+                "aerial": {
+                    "file": "aerial.exr",
+                    "unit": "1 (the ratio R of the segment's in-scattered light to S w, per channel; see lookup.aerial_perspective)",
+                    "width": s.aerial_nodes.1,
+                    "height": 2 * s.aerial_nodes.0 * s.aerial_nodes.2 * s.sky_layers(),
+                    "zenith_nodes_per_half": s.aerial_nodes.0,
+                    "azimuth_nodes": s.aerial_nodes.1,
+                    "distance_nodes": s.aerial_nodes.2,
+                    "layout": "texel (k, row) of distance node j of layer L = s * altitude_nodes + a is at x = k, y = (L * distance_nodes + j) * 2 zenith_nodes_per_half + row; a 2D array texture of sun_nodes * altitude_nodes * distance_nodes layers of azimuth_nodes x 2 zenith_nodes_per_half (array layer L * distance_nodes + j)",
+                },
                 "transmittance": {
                     "file": "transmittance.exr",
                     "unit": "1 (XYZ of the transmitted solar spectrum / XYZ of the solar spectrum)",
@@ -188,6 +212,8 @@ impl EngineTables {
                 "altitude_scale_divisor": axes::ALTITUDE_SCALE_DIVISOR,
                 "zenith": "r = ground_radius_m + h, z_h = pi - asin(ground_radius_m / r), m = 1e-6; above the horizon (z < z_h): y = (1 - sqrt(1 - clamp(z / (z_h - m), 0, 1))) * (Z - 1), cells 0..Z-2; below: y = 2Z - 1 - (1 - sqrt(1 - clamp((pi - z) / (pi - z_h - m), 0, 1))) * (Z - 1), cells Z..2Z-2",
                 "azimuth": "k = sqrt(phi / pi) * (K - 1), phi the view's azimuth from the sun's, 0..pi",
+        "distance": "the ray's length l from the eye (radius r) along view cosine mu to the ground (mu < mu_h) or the top: l = -r mu - sqrt(r^2 mu^2 - r^2 + ground_radius_m^2) or -r mu + sqrt(r^2 mu^2 - r^2 + top_radius_m^2); d0 = H / nearest_divisor, l' = max(l, 2 d0); j = clamp(ln(max(d, d0) / d0) / ln(l' / d0), 0, 1) * (D - 1)",
+                "distance_nearest_divisor": axes::AERIAL_NEAREST_DIVISOR,
                 "transmittance_mu": "mu_h = -sqrt(1 - (ground_radius_m / r)^2); m = sqrt(clamp((mu - mu_h) / (1 - mu_h), 0, 1)) * (M - 1); zero when mu < mu_h",
             },
             "lookup": {
@@ -196,8 +222,15 @@ impl EngineTables {
                 "transmittance": "zero when mu < mu_h(eye); otherwise linear in a between rows a and a+1, each row read linearly at m computed with that row's own radius r_a = ground_radius_m + h(a) (h(a) = h0 (exp(a / (N - 1) ln(1 + D)) - 1))",
                 "irradiance": "diffuse: linear in a, geometric in s (as the sky); global = diffuse + sun.irradiance_xyz * T(h, sin e) * max(sin e, 0)",
                 "sun_disc": "within gamma < alpha of the sun's centre: sun.irradiance_xyz * T(h, sin e) * (1 - u (1 - sqrt(1 - (gamma/alpha)^2))) / (pi alpha^2 (1 - u/3)), u = sun.limb_darkening",
-                "aerial_perspective": "eye x (radius r), point p = x + d v; T(x,p) = T(r, mu) / T(r_p, mu_p), or T(r_p, -mu_p) / T(r, -mu) when v meets the ground (each channel, at most 1); in-scattered = max(S(x, v) - T(x,p) S(p, v), 0) with S the sky lookup at each end's altitude, zenith angle, azimuth from the sun and sun elevation in its own local frame",
+                "aerial_perspective": "eye x (radius r), point p = x + d v; T(x,p) = T(r, mu) / T(r_p, mu_p), or T(r_p, -mu_p) / T(r, -mu) when v meets the ground (each channel, at most 1); T_end = T(x, x + l v) (l the ray's length, axes.distance); w = clamp((1 - T) / (1 - T_end), 0, 1), 1 where 1 - T_end <= 1e-9; in-scattered = S(x, v) R(x, v, d) w per channel, S the sky lookup at the eye and R the aerial table read as the sky table (the same cells, turned views and sun blend, its own zenith and azimuth node counts), linear in the distance coordinate j between the slices j and j+1 of each layer",
             },
-        })
+        });
+        if self.aerial.is_empty() {
+            manifest["tables"]
+                .as_object_mut()
+                .map(|tables| tables.remove("aerial"));
+            manifest["lookup"]["aerial_perspective"] = "no aerial table: in-scattered = max(S(x, v) - T(x, p) S(p, v), 0), S the sky lookup at each end's altitude, zenith angle, azimuth from the sun and sun elevation in its own local frame, T(x, p) as above".into();
+        }
+        manifest
     }
 }

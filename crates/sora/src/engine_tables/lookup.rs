@@ -28,7 +28,12 @@
 //! - Sun disc: `E_sun T(h, mu_sun) (1 - u (1 - cos a)) / (pi alpha^2 (1 - u / 3))`
 //!   within the sun's angular radius alpha, with cos a = sqrt(1 - (gamma
 //!   / alpha)^2) (limb darkening u = 0.6, as `sky/sun_disc.rs`).
-//! - Aerial perspective: see the module docs of `engine_tables`.
+//! - Aerial perspective: `S(x, v) R(x, v, d) w` per channel, S the sky
+//!   read at the eye, R the aerial table read as the sky table (its own
+//!   view nodes) and linear in ln d between its two distance slices (d
+//!   from the thickness / 1000 to the ray's end), w = (1 - T) / (1 -
+//!   T_end) from the transmittance table (see the module docs of
+//!   `engine_tables`).
 
 use super::EngineTables;
 use super::axes;
@@ -132,13 +137,67 @@ pub(crate) fn turned_view(view: LocalView, delta: f64, horizon: f64) -> LocalVie
     }
 }
 
+/// Slice `slice` (of all layers' slices) of `table` at zenith coordinate
+/// `(y, lowest, highest)` and relative azimuth `phi`: bilinear.
+fn layer_value_at(
+    table: LayerTable<'_>,
+    slice: usize,
+    (y, lowest, highest): (f64, usize, usize),
+    phi: f64,
+) -> [f64; 3] {
+    let k_count = table.azimuth;
+    let (i, fy) = axes::cell(y, lowest, highest);
+    let (k, fx) = axes::cell(axes::azimuth_coordinate(phi, k_count), 0, k_count - 2);
+    let texel = |row: usize, column: usize| {
+        let t = table.texels[(slice * 2 * table.half + row) * k_count + column];
+        [t[0] as f64, t[1] as f64, t[2] as f64]
+    };
+    mix(
+        mix(texel(i, k), texel(i, k + 1), fx),
+        mix(texel(i + 1, k), texel(i + 1, k + 1), fx),
+        fy,
+    )
+}
+
 /// GLSL's smoothstep: 0 at `a`, 1 at `b`, 3 t^2 - 2 t^3 between.
 fn smoothstep(a: f64, b: f64, x: f64) -> f64 {
     let t = ((x - a) / (b - a)).clamp(0.0, 1.0);
     t * t * (3.0 - 2.0 * t)
 }
 
+/// A table of layers (sun node s, altitude node a; layer s * A + a), each
+/// `slices` images of `2 half` zenith rows by `azimuth` nodes: the sky
+/// table (one slice) and the aerial-perspective table (one per distance
+/// node), texel (k, row) of slice j of layer L at index
+/// `((L * slices + j) * 2 half + row) * azimuth + k`.
+#[derive(Clone, Copy)]
+pub(crate) struct LayerTable<'a> {
+    pub texels: &'a [[f32; 3]],
+    pub half: usize,
+    pub azimuth: usize,
+    pub slices: usize,
+}
+
 impl EngineTables {
+    pub(crate) fn sky_layers_table(&self) -> LayerTable<'_> {
+        LayerTable {
+            texels: &self.sky,
+            half: self.settings.zenith_nodes_per_half,
+            azimuth: self.settings.azimuth_nodes,
+            slices: 1,
+        }
+    }
+
+    pub(crate) fn aerial_layers_table(&self) -> LayerTable<'_> {
+        let (half, azimuth, slices) = self.settings.aerial_nodes;
+        LayerTable {
+            texels: &self.aerial,
+            half,
+            azimuth,
+            slices,
+        }
+    }
+
     /// The sky table's value in `layer` toward zenith angle `zenith` (the
     /// horizon at `horizon`, rad) and relative azimuth `phi`: bilinear.
     pub(crate) fn layer_value(
@@ -148,30 +207,9 @@ impl EngineTables {
         horizon: f64,
         phi: f64,
     ) -> [f64; 3] {
-        let half = self.settings.zenith_nodes_per_half;
-        let coordinate = axes::zenith_coordinate(zenith, half, horizon);
-        self.layer_value_at(layer, coordinate, phi)
-    }
-
-    fn layer_value_at(
-        &self,
-        layer: usize,
-        (y, lowest, highest): (f64, usize, usize),
-        phi: f64,
-    ) -> [f64; 3] {
-        let half = self.settings.zenith_nodes_per_half;
-        let k_count = self.settings.azimuth_nodes;
-        let (i, fy) = axes::cell(y, lowest, highest);
-        let (k, fx) = axes::cell(axes::azimuth_coordinate(phi, k_count), 0, k_count - 2);
-        let texel = |row: usize, column: usize| {
-            let t = self.sky[(layer * 2 * half + row) * k_count + column];
-            [t[0] as f64, t[1] as f64, t[2] as f64]
-        };
-        mix(
-            mix(texel(i, k), texel(i, k + 1), fx),
-            mix(texel(i + 1, k), texel(i + 1, k + 1), fx),
-            fy,
-        )
+        let table = self.sky_layers_table();
+        let coordinate = axes::zenith_coordinate(zenith, table.half, horizon);
+        layer_value_at(table, layer, coordinate, phi)
     }
 
     /// The cells (lower node, upper node's weight) of altitude `h` (m,
@@ -200,6 +238,28 @@ impl EngineTables {
     /// Sky radiance (XYZ, W m^-2 sr^-1 nm^-1 units) seen at `altitude_m`
     /// toward `view` with the sun at `sun_elevation_deg` (no sun disc).
     pub fn sky_xyz(&self, altitude_m: f64, view: LocalView, sun_elevation_deg: f64) -> [f64; 3] {
+        self.layers_xyz(
+            self.sky_layers_table(),
+            altitude_m,
+            view,
+            sun_elevation_deg,
+            (0, 0.0),
+        )
+    }
+
+    /// A layer table's value at `altitude_m` toward `view` with the sun at
+    /// `sun_elevation_deg`, linear between slices `slice.0` and
+    /// `slice.0 + 1` by `slice.1` (see the module docs: bilinear in the
+    /// layer, linear in altitude, geometric in the sun's elevation, each
+    /// sun layer read at the view turned with the sun).
+    pub(crate) fn layers_xyz(
+        &self,
+        table: LayerTable<'_>,
+        altitude_m: f64,
+        view: LocalView,
+        sun_elevation_deg: f64,
+        (j, fj): (usize, f64),
+    ) -> [f64; 3] {
         let h = altitude_m.clamp(0.0, self.thickness_m());
         let horizon = axes::horizon_zenith(self.ground_radius_m + h, self.ground_radius_m);
         let e_deg =
@@ -210,13 +270,17 @@ impl EngineTables {
         let layer = |s: usize| {
             let node_deg = axes::sun_elevation_of_node(s, self.settings.sun_nodes);
             let turned = turned_view(view, (node_deg - e_deg).to_radians() * share, horizon);
-            let coordinate = axes::zenith_coordinate(
-                turned.zenith_rad,
-                self.settings.zenith_nodes_per_half,
-                horizon,
-            );
+            let coordinate = axes::zenith_coordinate(turned.zenith_rad, table.half, horizon);
             let at = |a: usize| {
-                self.layer_value_at(s * a_count + a, coordinate, turned.relative_azimuth_rad)
+                let first = (s * a_count + a) * table.slices + j;
+                let value = |slice: usize| {
+                    layer_value_at(table, slice, coordinate, turned.relative_azimuth_rad)
+                };
+                if fj > 0.0 {
+                    mix(value(first), value(first + 1), fj)
+                } else {
+                    value(first)
+                }
             };
             mix(at(a), at(a + 1), fa)
         };
@@ -300,19 +364,17 @@ impl EngineTables {
         std::array::from_fn(|i| self.solar_xyz[i] * t[i] * shape)
     }
 
-    /// Aerial perspective between an eye at `altitude_m` and the point at
-    /// `distance_m` along the unit `view` (eye-local east-north-up), the
-    /// sun toward the unit `sun`: (the light scattered into the segment,
-    /// XYZ radiance; the segment's transmittance, XYZ of the sun's
-    /// spectrum). `S(x, v) - T(x, p) S(p, v)` (see the module docs).
-    pub fn aerial_perspective_xyz(
+    /// The transmittance (XYZ of the sun's spectrum, per channel) of the
+    /// segment from an eye at `altitude_m` to the point `distance_m` along
+    /// the unit `view` (eye-local east-north-up): a ratio of two
+    /// transmittances to the top, along the reversed rays when the view
+    /// meets the ground; and the point's radius and unit vertical.
+    pub(crate) fn segment_transmittance_xyz(
         &self,
         altitude_m: f64,
         view: [f64; 3],
-        sun: [f64; 3],
         distance_m: f64,
-    ) -> ([f64; 3], [f64; 3]) {
-        let up = [0.0, 0.0, 1.0];
+    ) -> ([f64; 3], f64, [f64; 3]) {
         let r = self.ground_radius_m + altitude_m.clamp(0.0, self.thickness_m());
         let p = [
             view[0] * distance_m,
@@ -324,25 +386,134 @@ impl EngineTables {
         let h_p = (r_p - self.ground_radius_m).clamp(0.0, self.thickness_m());
         let mu = view[2];
         let mu_p = dot(view, up_p);
-        // T(x, p): a ratio of transmittances to the top; along the reversed
-        // rays when the view meets the ground.
         let hits_ground = mu < axes::horizon_cosine(r, self.ground_radius_m);
-        let segment: [f64; 3] = if hits_ground {
-            let (near, far) = (
+        let (near, far) = if hits_ground {
+            (
                 self.transmittance_xyz(h_p, -mu_p),
                 self.transmittance_xyz(r - self.ground_radius_m, -mu),
-            );
-            std::array::from_fn(|i| (near[i] / far[i].max(FLOOR)).min(1.0))
+            )
         } else {
-            let (near, far) = (
+            (
                 self.transmittance_xyz(r - self.ground_radius_m, mu),
                 self.transmittance_xyz(h_p, mu_p),
-            );
-            std::array::from_fn(|i| (near[i] / far[i].max(FLOOR)).min(1.0))
+            )
         };
+        (
+            std::array::from_fn(|i| (near[i] / far[i].max(FLOOR)).min(1.0)),
+            r_p,
+            up_p,
+        )
+    }
+
+    /// The aerial-perspective table's value (the ratio R of the segment's
+    /// light to `S (1 - T)`) for an eye at `altitude_m` toward `view`, the
+    /// sun at `sun_elevation_deg`, at distance `distance_m`: as the sky
+    /// table, and linear in ln d between the two distance slices.
+    pub(crate) fn aerial_ratio_xyz(
+        &self,
+        altitude_m: f64,
+        view: LocalView,
+        sun_elevation_deg: f64,
+        distance_m: f64,
+    ) -> [f64; 3] {
+        let table = self.aerial_layers_table();
+        let slice = axes::cell(
+            axes::distance_coordinate(
+                distance_m,
+                table.slices,
+                self.aerial_distance_range(altitude_m, view.zenith_rad.cos()),
+            ),
+            0,
+            table.slices - 2,
+        );
+        self.layers_xyz(table, altitude_m, view, sun_elevation_deg, slice)
+    }
+
+    /// The aerial-perspective table's distance axis (m) for an eye at
+    /// `altitude_m` along view cosine `mu`: from the nearest node to the
+    /// ray's end.
+    pub(crate) fn aerial_distance_range(&self, altitude_m: f64, mu: f64) -> (f64, f64) {
+        let r = self.ground_radius_m + altitude_m.clamp(0.0, self.thickness_m());
+        axes::distance_range(
+            self.thickness_m(),
+            axes::ray_length(r, mu, self.ground_radius_m, self.top_radius_m),
+        )
+    }
+
+    /// Aerial perspective between an eye at `altitude_m` and the point at
+    /// `distance_m` along the unit `view` (eye-local east-north-up), the
+    /// sun toward the unit `sun`: (the light scattered into the segment,
+    /// XYZ radiance; the segment's transmittance, XYZ of the sun's
+    /// spectrum). The light is `S(x, v) R(x, v, d) w` per channel, S the
+    /// sky table's read at the eye, R the aerial-perspective table's and w
+    /// the segment's share of the whole ray's extinction
+    /// ((1 - T) / (1 - T_end), T_end to the ray's end; see the module docs of
+    /// `engine_tables`); tables baked without an aerial-perspective table
+    /// take [`Self::aerial_perspective_by_difference_xyz`].
+    pub fn aerial_perspective_xyz(
+        &self,
+        altitude_m: f64,
+        view: [f64; 3],
+        sun: [f64; 3],
+        distance_m: f64,
+    ) -> ([f64; 3], [f64; 3]) {
+        if self.aerial.is_empty() {
+            return self.aerial_perspective_by_difference_xyz(altitude_m, view, sun, distance_m);
+        }
+        let (segment, share) = self.aerial_share_xyz(altitude_m, view, distance_m);
+        let up = [0.0, 0.0, 1.0];
+        let local = LocalView::from_vectors(view, up, sun);
+        let e = dot(sun, up).clamp(-1.0, 1.0).asin().to_degrees();
+        let sky = self.sky_xyz(altitude_m, local, e);
+        let ratio = self.aerial_ratio_xyz(altitude_m, local, e, distance_m);
+        let inscattered = std::array::from_fn(|i| sky[i] * ratio[i] * share[i]);
+        (inscattered, segment)
+    }
+
+    /// The segment's transmittance T (as [`Self::segment_transmittance_xyz`])
+    /// and the share of the whole ray's extinction it holds, (1 - T) / (1 -
+    /// T_end) per channel, T_end the transmittance to the ray's end (the
+    /// top of the atmosphere or the ground); 1 where the whole ray has no
+    /// extinction.
+    pub(crate) fn aerial_share_xyz(
+        &self,
+        altitude_m: f64,
+        view: [f64; 3],
+        distance_m: f64,
+    ) -> ([f64; 3], [f64; 3]) {
+        let (segment, _, _) = self.segment_transmittance_xyz(altitude_m, view, distance_m);
+        let r = self.ground_radius_m + altitude_m.clamp(0.0, self.thickness_m());
+        let length = axes::ray_length(r, view[2], self.ground_radius_m, self.top_radius_m);
+        let (whole, _, _) = self.segment_transmittance_xyz(altitude_m, view, length);
+        let share = std::array::from_fn(|i| {
+            let (part, all) = (1.0 - segment[i], 1.0 - whole[i]);
+            if all > 1e-9 {
+                (part / all).clamp(0.0, 1.0)
+            } else {
+                1.0
+            }
+        });
+        (segment, share)
+    }
+
+    /// Aerial perspective from the sky table alone (tables without an
+    /// aerial-perspective table): `S(x, v) - T(x, p) S(p, v)`, S read at
+    /// each end's own altitude, zenith angle and sun elevation. A
+    /// difference of two nearly equal reads for short segments, so not
+    /// within 2 % of the library there (`docs/engine-tables.md`).
+    pub fn aerial_perspective_by_difference_xyz(
+        &self,
+        altitude_m: f64,
+        view: [f64; 3],
+        sun: [f64; 3],
+        distance_m: f64,
+    ) -> ([f64; 3], [f64; 3]) {
+        let up = [0.0, 0.0, 1.0];
+        let (segment, r_p, up_p) = self.segment_transmittance_xyz(altitude_m, view, distance_m);
+        let h_p = (r_p - self.ground_radius_m).clamp(0.0, self.thickness_m());
         let sun_elevation = |up: [f64; 3]| dot(sun, up).clamp(-1.0, 1.0).asin().to_degrees();
         let at_eye = self.sky_xyz(
-            r - self.ground_radius_m,
+            altitude_m.clamp(0.0, self.thickness_m()),
             LocalView::from_vectors(view, up, sun),
             sun_elevation(up),
         );

@@ -64,7 +64,7 @@
 //! paths reaching it, with standard errors); the reference march has no
 //! segment and is an error.
 
-use super::composition::{ViewWork, sky_radiance_from_traced};
+use super::composition::{SegmentSky, ViewWork, sky_radiance_from_traced};
 use super::{ImageSettings, Method, Polarisation, Sky, SkyRadiance};
 use crate::colour::{SpectrumToXyz, Xyz};
 use crate::error::{Error, Result};
@@ -203,8 +203,9 @@ impl Sky {
 
     /// The light of the air along each checked segment (W m^-2 sr^-1
     /// nm^-1) and the segment's transmittance: what an image needs, and
-    /// what [`Sky::aerial_perspectives`] adds the point's light to.
-    fn compute_segment_light(
+    /// what [`Sky::aerial_perspectives`] adds the point's light to (and
+    /// what the engine tables' aerial-perspective table is baked from).
+    pub(crate) fn compute_segment_light(
         &self,
         segments: &[(ViewDirection, f64)],
     ) -> Result<Vec<(SkyRadiance, SampledSpectrum)>> {
@@ -415,28 +416,40 @@ impl Sky {
     /// the segment's peak optical depth ln(T* / T).
     fn compute_segment_terms(&self, view: Vector3, distance_m: f64, work: &mut ViewWork) {
         let wavelengths = self.wavelengths().len();
-        // The whole ray's field, ground and forward-peak integrals.
-        self.compute_view_terms((view, f64::INFINITY), None, work);
-        let sky_terms = work.terms.field.clone();
-        let sky_ground = (
-            work.terms.ground_sunlit.clone(),
-            work.terms.ground_skylit.clone(),
-        );
-        let sky_integrals = work.multiple.as_ref().map(|scratch| {
-            (
-                scratch.forward_integrals().to_vec(),
-                scratch.scaled_forward_integrals().to_vec(),
-            )
-        });
+        // The whole ray's field, ground and forward-peak integrals, kept
+        // for the next segment along the same view.
+        let key = [view.x.to_bits(), view.y.to_bits(), view.z.to_bits()];
+        let sky = match work.segment_sky.take() {
+            Some(sky) if sky.view == key => sky,
+            _ => {
+                self.compute_view_terms((view, f64::INFINITY), None, work);
+                SegmentSky {
+                    view: key,
+                    field: work.terms.field.clone(),
+                    ground: (
+                        work.terms.ground_sunlit.clone(),
+                        work.terms.ground_skylit.clone(),
+                    ),
+                    integrals: work.multiple.as_ref().map(|scratch| {
+                        (
+                            scratch.forward_integrals().to_vec(),
+                            scratch.scaled_forward_integrals().to_vec(),
+                        )
+                    }),
+                }
+            }
+        };
         // The segment's terms; the ground beyond it is the point's.
         self.compute_view_terms((view, distance_m), None, work);
         work.terms.ground_sunlit.fill(0.0);
         work.terms.ground_skylit.fill(0.0);
         let (Some(field), Some(scratch), Some((sky_forward, sky_scaled))) =
-            (self.field(), work.multiple.as_ref(), sky_integrals)
+            (self.field(), work.multiple.as_ref(), sky.integrals.as_ref())
         else {
+            work.segment_sky = Some(sky);
             return;
         };
+        let (sky_terms, sky_ground) = (&sky.field, &sky.ground);
         // 1 - T / T* per wavelength, and the segment's peak optical depth.
         let mut scaled = vec![0.0; wavelengths];
         field.scaled_transmittance_of_last_ray(scratch, &mut scaled);
@@ -495,6 +508,7 @@ impl Sky {
         for (p, h) in terms.forward_peak.iter_mut().zip(&hidden) {
             *p -= h;
         }
+        work.segment_sky = Some(sky);
     }
 
     /// The path tracer's light of the air along each segment: a black
@@ -627,6 +641,40 @@ mod tests {
             }
         }
         tau
+    }
+
+    /// Segments along one view in a row share its whole ray's terms
+    /// (`ViewWork::segment_sky`): their light is bit for bit that of each
+    /// segment alone, polarised and scalar, with the multiple-scattering
+    /// field and without.
+    #[test]
+    fn segments_along_one_view_are_each_segment_alone() {
+        for (scattering, polarisation) in [
+            (Scattering::multiple(), Polarisation::Scalar),
+            (Scattering::multiple(), Polarisation::Vector),
+            (Scattering::Single, Polarisation::Scalar),
+        ] {
+            let sky = Sky::builder(&Atmosphere::preset("earth-hazy").unwrap())
+                .sun_deg(10.0, 180.0)
+                .wavelengths(WavelengthGrid::new(440.0, 680.0, 120.0).unwrap())
+                .scattering(scattering)
+                .polarisation(polarisation)
+                .build()
+                .unwrap();
+            let segments: Vec<(ViewDirection, f64)> = [(5.0, 0.0), (30.0, 90.0)]
+                .iter()
+                .flat_map(|(e, a)| {
+                    let view = ViewDirection::new(*e, 180.0 + a).unwrap();
+                    [300.0, 1e3, 10e3, 50e3].map(move |d| (view, d))
+                })
+                .collect();
+            let together = sky.compute_segment_light(&segments).unwrap();
+            for (segment, (light, through)) in segments.iter().zip(&together) {
+                let (alone, alone_through) = air(&sky, segment.0, segment.1);
+                assert_eq!(light, &alone, "{segment:?}");
+                assert_eq!(through, &alone_through);
+            }
+        }
     }
 
     /// The segment's transmittance is exp(-tau) of an independent

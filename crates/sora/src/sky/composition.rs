@@ -175,6 +175,21 @@ pub(super) struct ViewWork {
     /// The light the polarisation correction applies to
     /// ([`ViewTerms::polarisation_corrected`]).
     corrected: Vec<f64>,
+    /// The whole ray's terms of the last segment's view
+    /// ([`Sky::compute_segment_terms`]), kept for the next segment along
+    /// the same view.
+    pub(super) segment_sky: Option<SegmentSky>,
+}
+
+/// The whole ray's terms a segment's light is taken from (see
+/// [`ViewWork::segment_sky`]): its view's bits, the scaled field's light,
+/// the ground's sunlit and skylit light, and the forward-peak integrals
+/// (all and scaled) when there is a field.
+pub(super) struct SegmentSky {
+    pub(super) view: [u64; 3],
+    pub(super) field: Vec<f64>,
+    pub(super) ground: (Vec<f64>, Vec<f64>),
+    pub(super) integrals: Option<(Vec<f64>, Vec<f64>)>,
 }
 
 /// The fast method's terms of one view or pixel, each computed on its own
@@ -339,6 +354,7 @@ impl Sky {
             matrices: vec![PhaseMatrix::default(); wavelengths],
             multiple_stokes: vec![0.0; 4 * wavelengths],
             corrected: vec![0.0; wavelengths],
+            segment_sky: None,
         }
     }
 
