@@ -1,6 +1,6 @@
 //! The polarised fast method's wavelength stride
-//! (`MultipleScatteringSettings::polarisation_wavelength_stride`, default
-//! 3): the polarisation correction's columns and the Mie phase-matrix
+//! (`MultipleScatteringSettings::polarisation_wavelength_stride`, an
+//! option; the default 1 is the exact path): the polarisation correction's columns and the Mie phase-matrix
 //! ratios computed at every third wavelength and interpolated by cubics,
 //! held to the exact path (stride 1: every wavelength) over suns 30, 5 and
 //! -4, earth-clear, earth-hazy and mars-dust, the principal plane and an

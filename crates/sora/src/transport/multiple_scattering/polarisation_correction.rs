@@ -64,7 +64,8 @@
 //!
 //! **Wavelengths**: the columns are solved at the anchors of
 //! `MultipleScatteringSettings::polarisation_wavelength_stride` (every
-//! third wavelength by default, and the last, at most 60 nm apart:
+//! wavelength by default; at a stride above 1 every stride-th and the
+//! last, at most 60 nm apart:
 //! `spectrum/anchors.rs`); at the other wavelengths both columns' fields,
 //! per unit of solar irradiance, are the cubic through the four nearest
 //! anchors' (the same weights for both, so their ratio is a weighted mean
