@@ -426,23 +426,11 @@ fn convert_gases(gases: GasesFile) -> Result<Vec<Species>> {
                 "goes with the O2 and CO2 bands, but mixed_gases = false",
             ));
         }
-        Some(ppm) => check(
-            "gases.co2_ppm",
-            ppm,
-            "ppm",
-            "0..=10000",
-            (0.0..=10_000.0).contains(&ppm),
-        )?,
+        Some(ppm) => check_range("gases.co2_ppm", ppm, "ppm", 0.0, 10_000.0)?,
         None => gas_bands::CO2_REFERENCE_PPM,
     };
     let ch4_ppm = match gases.ch4_ppm {
-        Some(ppm) => check(
-            "gases.ch4_ppm",
-            ppm,
-            "ppm",
-            "0..=1000",
-            (0.0..=1000.0).contains(&ppm),
-        )?,
+        Some(ppm) => check_range("gases.ch4_ppm", ppm, "ppm", 0.0, 1000.0)?,
         None => 0.0,
     };
     Ok(gas_bands::banded_gas_species(&gas_bands::BandedGases {
