@@ -557,25 +557,35 @@ pub fn build_sky(atmosphere: &Atmosphere, spec: &SkySpec, quality: Quality) -> R
 /// per hemisphere on 16 layers, sun-zenith steps of 6 degrees (2.5 near
 /// sunset, from 85 degrees of zenith), and image tables a quarter as fine
 /// on each axis. Refined is Full with a sky-view table of 64 x 24 nodes
-/// instead of 128 x 48, 30 layers instead of 40, and sun-zenith steps of
-/// 2 degrees instead of 0.75 near sunset: with the sun 2 degrees up 11 sun
+/// instead of 128 x 48, 30 layers instead of 40, sun-zenith steps of 2
+/// degrees instead of 0.75 near sunset (with the sun 2 degrees up 11 sun
 /// nodes instead of 19, 7 of them with the spherical first order instead
-/// of 15, whose cost is each node's layers. Both march that twilight first
-/// order more coarsely than Full (4 panels along each path, 40 cosines in
-/// its fine moments after sunset): the refinement with 2 panels and 2
-/// nodes on each panel near the horizon, the preview with 1 panel and 2
-/// nodes (24 cosines each; `first_order_panels`, `first_order_fine_nodes`).
+/// of 15, whose cost is each node's layers), 12 Gauss panels along each
+/// view ray instead of 16, and the polarisation correction's columns
+/// solved at every third wavelength (`polarisation_wavelength_stride`,
+/// cubics between; the library's default solves every one). Both march
+/// the twilight first order more coarsely than Full (4 panels along each
+/// path, 40 cosines in its fine moments after sunset): 1 panel and 2
+/// nodes on each panel near the horizon (24 cosines; `first_order_panels`,
+/// `first_order_fine_nodes`).
 /// Measured (`quality_accuracy`, earth-clear, sun 10 / 5 / 2 / -4, 99th
-/// percentile against Full; 4 and 40 before): the refinement 0.19 / 0.38
-/// / 0.89 / 0.75 % (0.19 / 0.36 / 0.86 / 0.88 %), max xy 1.1e-3 (1.2e-3);
-/// the preview against a scalar Full 1.1 / 1.6 / 2.3 / 2.3 % (1.1 / 1.3 /
-/// 2.2 / 2.2 %), against the polarised one 3.4 / 3.5 / 4.3 / 7.2 % (3.4 /
-/// 3.5 / 4.3 / 7.3 %). They cut, on one thread natively (CPU time,
-/// `slider_timing`, best of 3, load 9-11 on 2 cores), sun 10 / 5 / 2 /
-/// -4: the refinement 0.83 / 1.01 / 1.18 / 1.25 s to 0.71 / 0.84 / 0.93 /
-/// 0.96 s, the preview 0.089 / 0.129 / 0.130 / 0.126 s to 0.072 / 0.091 /
-/// 0.094 / 0.091 s (one node near the horizon would save 7 % more, but
-/// its moments were 12 % off in the library's test).
+/// percentile against Full): the refinement 0.19 / 0.28 / 0.81 / 0.75 %,
+/// max xy 1.1e-3 (with 16 view-ray panels, every wavelength and 2
+/// first-order panels 0.19 / 0.38 / 0.89 / 0.75 %, 1.1e-3; at suns 0 to
+/// -12 the same or within 0.05 points, xy within 2.7e-3); the preview
+/// against a scalar Full 1.1 / 1.6 / 2.3 / 2.3 %, against the polarised
+/// one 3.4 / 3.5 / 4.3 / 7.2 %. The view-ray panels, the stride and the
+/// single first-order panel cut the refinement's CPU time on one thread
+/// (`slider_timing`, best of 3, load 4 on 2 cores), sun 10 / 5 / 2 / -4,
+/// from 0.71 / 0.82 / 0.96 / 0.91 s to 0.62 / 0.70 / 0.82 / 0.83 s (7
+/// streams per hemisphere would save 8-12 % more, but the 99th percentile
+/// at sun 5 rose to 0.48 %). The coarser first orders before them cut, on
+/// one thread natively (CPU time, `slider_timing`, best of 3, load 9-11
+/// on 2 cores), sun 10 / 5 / 2 / -4: the refinement 0.83 / 1.01 / 1.18 /
+/// 1.25 s to 0.71 / 0.84 / 0.93 / 0.96 s, the preview 0.089 / 0.129 /
+/// 0.130 / 0.126 s to 0.072 / 0.091 / 0.094 / 0.091 s (one node near the
+/// horizon would save 7 % more, but its moments were 12 % off in the
+/// library's test).
 ///
 /// What they cost against Full (99th percentile of the pixels' luminance
 /// error, 128 x 128, earth-clear, the `quality_accuracy` example; the
@@ -613,7 +623,9 @@ pub fn quality_settings(
             MultipleScatteringSettings {
                 sunset_sun_zenith_step_deg: 2.0,
                 layers: 30,
-                first_order_panels: 2,
+                view_ray_panels: 12,
+                polarisation_wavelength_stride: 3,
+                first_order_panels: 1,
                 first_order_fine_nodes: 2,
                 ..MultipleScatteringSettings::default()
             },
