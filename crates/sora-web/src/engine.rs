@@ -556,30 +556,32 @@ pub fn build_sky(atmosphere: &Atmosphere, spec: &SkySpec, quality: Quality) -> R
 /// wavelengths, enough for the colour, not for the spectrum), 4 streams
 /// per hemisphere on 16 layers, sun-zenith steps of 6 degrees (2.5 near
 /// sunset, from 85 degrees of zenith), and image tables a quarter as fine
-/// on each axis. Refined is Full with a sky-view table of 64 x 24 nodes
-/// instead of 128 x 48, 30 layers instead of 40, sun-zenith steps of 2
-/// degrees instead of 0.75 near sunset (with the sun 2 degrees up 11 sun
-/// nodes instead of 19, 7 of them with the spherical first order instead
-/// of 15, whose cost is each node's layers), 12 Gauss panels along each
-/// view ray instead of 16, and the polarisation correction's columns
-/// solved at every third wavelength (`polarisation_wavelength_stride`,
-/// cubics between; the library's default solves every one). Both march
-/// the twilight first order more coarsely than Full (4 panels along each
-/// path, 40 cosines in its fine moments after sunset): 1 panel and 2
-/// nodes on each panel near the horizon (24 cosines; `first_order_panels`,
-/// `first_order_fine_nodes`).
-/// Measured (`quality_accuracy`, earth-clear, sun 10 / 5 / 2 / -4, 99th
-/// percentile against Full): the refinement 0.19 / 0.28 / 0.81 / 0.75 %,
-/// max xy 1.1e-3 (with 16 view-ray panels, every wavelength and 2
-/// first-order panels 0.19 / 0.38 / 0.89 / 0.75 %, 1.1e-3; at suns 0 to
-/// -12 the same or within 0.05 points, xy within 2.7e-3); the preview
-/// against a scalar Full 1.1 / 1.6 / 2.3 / 2.3 %, against the polarised
-/// one 3.4 / 3.5 / 4.3 / 7.2 %. The view-ray panels, the stride and the
-/// single first-order panel cut the refinement's CPU time on one thread
-/// (`slider_timing`, best of 3, load 4 on 2 cores), sun 10 / 5 / 2 / -4,
-/// from 0.71 / 0.82 / 0.96 / 0.91 s to 0.62 / 0.70 / 0.82 / 0.83 s (7
-/// streams per hemisphere would save 8-12 % more, but the 99th percentile
-/// at sun 5 rose to 0.48 %). The coarser first orders before them cut, on
+/// on each axis. Refined is Full with 7 streams per hemisphere instead of
+/// 8, a sky-view table of 64 x 24 nodes instead of 128 x 48, 30 layers
+/// instead of 40, sun-zenith steps of 2 degrees instead of 0.75 near
+/// sunset (with the sun 2 degrees up 11 sun nodes instead of 19, 7 of them
+/// with the spherical first order instead of 15, whose cost is each node's
+/// layers), 12 Gauss panels along each view ray instead of 16, and the
+/// polarisation correction's columns solved at every third wavelength
+/// (`polarisation_wavelength_stride`, cubics between; the library's
+/// default solves every one). Both march the twilight first order more
+/// coarsely than Full (4 panels along each path, 40 cosines in its fine
+/// moments after sunset): 1 panel and 2 nodes on each panel near the
+/// horizon (24 cosines; `first_order_panels`, `first_order_fine_nodes`).
+/// Measured (`quality_accuracy`, earth-clear, sun 10 / 5 / 2 / 0 / -2 /
+/// -4 / -6 / -12, 99th percentile against Full): the refinement 0.23 /
+/// 0.48 / 0.83 / 0.72 / 0.69 / 0.74 / 1.1 / 2.3 %, max xy 2.0e-3 (at sun
+/// 0; 1.2e-3 at -4); with 8 streams 0.19 / 0.28 / 0.81 / 0.99 / 1.12 /
+/// 0.75 / 0.83 / 2.0 %, and with 8 streams, 16 view-ray panels, every
+/// wavelength and 2 first-order panels (before) 0.19 / 0.38 / 0.89 / 1.04
+/// / 1.12 / 0.75 / 0.84 / 2.1 %, xy 2.1e-3 (at -2); the preview against a
+/// scalar Full 1.1 / 1.6 / 2.3 / 2.3 % at suns 10 / 5 / 2 / -4, against
+/// the polarised one 3.4 / 3.5 / 4.3 / 7.2 %. On one thread natively (CPU
+/// time, the settings interleaved in one process, best of 4, load 4-8 on
+/// 2 cores), sun 5 / 2 / -4, the refinement before took 0.84 / 0.92 /
+/// 0.92 s; with the view-ray panels, the stride and the single
+/// first-order panel 0.73 / 0.81 / 0.84 s, and with 7 streams too 0.65 /
+/// 0.73 / 0.74 s. The coarser first orders before them cut, on
 /// one thread natively (CPU time, `slider_timing`, best of 3, load 9-11
 /// on 2 cores), sun 10 / 5 / 2 / -4: the refinement 0.83 / 1.01 / 1.18 /
 /// 1.25 s to 0.71 / 0.84 / 0.93 / 0.96 s, the preview 0.089 / 0.129 /
@@ -621,6 +623,7 @@ pub fn quality_settings(
         Quality::Refined => (
             WavelengthGrid::paper(),
             MultipleScatteringSettings {
+                streams_per_hemisphere: 7,
                 sunset_sun_zenith_step_deg: 2.0,
                 layers: 30,
                 view_ray_panels: 12,
