@@ -755,7 +755,7 @@ mod tests {
     /// (scalar light, against the default resolution's scalar image)
     /// within 5 % down to the horizon and 7 % at sun -6. Measured at 128 x
     /// 128 (the quality_accuracy example prints the whole range): the
-    /// refinement 0.16 % at sun 45, 1.2 % at 0 and 1.0 % at -6; the preview
+    /// refinement 0.13 % at sun 45, 0.72 % at 0 and 1.1 % at -6; the preview
     /// 1.0 % at 45, 1.7 % at 0 and 4.1 % at -6.
     #[test]
     fn preview_and_refinement_stay_close_to_the_default_resolution() {
