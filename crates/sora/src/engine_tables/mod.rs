@@ -16,8 +16,10 @@
 //!   sun and aimed at the layer's eye and sun, the sunlit ground) at the
 //!   layer's sun and eye, without the sun's disc, with a sky-view table on
 //!   the layer's own grid: its zenith rows are the layer's (half the
-//!   images' at the defaults, and the layer's views on them), which cuts
-//!   the bake from 150 to about 95 CPU-s (`docs/engine-tables.md`).
+//!   images' at the defaults, and the layer's views on them), and its
+//!   multiply scattered light marched in 8 view-ray panels, not the
+//!   field's 16 (`LAYER_MULTIPLE_PANELS`): about 75 CPU-s instead of
+//!   the images' tables' 150 (`docs/engine-tables.md`).
 //! - **transmittance**: the transmittance of sunlight from altitude h to
 //!   the top of the atmosphere along view cosine mu (2D), as XYZ of the
 //!   transmitted solar spectrum over XYZ of the solar spectrum, per
@@ -328,10 +330,18 @@ impl EngineTables {
             }
             for s in 0..sun_nodes {
                 let elevation = axes::sun_elevation_of_node(s, sun_nodes);
+                // In deep twilight the field's own panels
+                // (`LAYER_MULTIPLE_PANELS_ABOVE_DEG`).
+                let layer_view = sky_view.map(|grid| SkyViewGrid {
+                    multiple_panels: grid
+                        .multiple_panels
+                        .filter(|_| elevation >= LAYER_MULTIPLE_PANELS_ABOVE_DEG),
+                    ..grid
+                });
                 let layer_sky = sky.with_shared_field(
                     base.with_sun(elevation, 180.0)?,
                     shared.as_ref(),
-                    sky_view,
+                    layer_view,
                 )?;
                 let radiances = layer_sky.radiances_from_image_tables(&views, &|_, _| {})?;
                 let layer = s * altitude_nodes + a;
@@ -610,8 +620,22 @@ fn layer_multiple_panels(sky: &Sky) -> Option<usize> {
 /// degrees) where 16 panels are within 6.1e-5 and 3.1e-4; the layers'
 /// sky-view tables took 18 % less time (`docs/engine-tables.md`).
 /// Single scattering's marches keep their 16 panels: at 8 the sky table
-/// moved by 0.21 % (p99) and 12 % at most.
+/// moved by 0.21 % (p99) and 12 % at most. Below
+/// [`LAYER_MULTIPLE_PANELS_ABOVE_DEG`] the layers keep the field's panels.
 const LAYER_MULTIPLE_PANELS: usize = 8;
+
+/// Sun elevation (degrees) from which the layers march their multiply
+/// scattered light in [`LAYER_MULTIPLE_PANELS`]; below it (5 of the
+/// default 48 sun nodes, -12 to -6.9 degrees) in the field's own. In deep
+/// twilight the source along a ray falls by orders of magnitude where the
+/// ray crosses the planet's shadow, and 8 panels missed it: earth-hazy's
+/// layers at the sun nodes -12 to -9.1 degrees moved by 1.3-1.5 % just
+/// above the horizon (2.4 and 100 km) and, at 100 km just below the
+/// horizon, one texel (the layer's brightest) by 41 %, 47 % from 32
+/// panels' where 16 are 3.9 % from them. From -6.9 degrees up no texel
+/// of earth-clear's, earth-hazy's or mars-dust's tables moved by more
+/// than 1 % (`docs/engine-tables.md`).
+const LAYER_MULTIPLE_PANELS_ABOVE_DEG: f64 = -6.0;
 
 /// A layer's sky-view table marches multiply scattered light at every
 /// zenith row (the images' table, with twice the rows, at every other one)
