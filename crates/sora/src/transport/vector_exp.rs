@@ -2,7 +2,9 @@
 //! that the compiler vectorises a loop of them (the spherical first
 //! order's, `multiple_scattering/spherical_first_order.rs`: one per
 //! wavelength, sample, path and sun node, half of its time with the
-//! standard library's scalar `exp`).
+//! standard library's scalar `exp`; the fast method's view marches', one
+//! or three per wavelength and node), and e^y of either sign
+//! ([`exp_in_place`]: the view march's source term, ln R - tau).
 //!
 //! Method (Cody & Waite range reduction, as libm's): with n the integer
 //! nearest -x / ln 2 (by the 1.5 2^52 shift, no rounding call),
