@@ -16,8 +16,10 @@
 //!   sun and aimed at the layer's eye and sun, the sunlit ground) at the
 //!   layer's sun and eye, without the sun's disc, with a sky-view table on
 //!   the layer's own grid: its zenith rows are the layer's (half the
-//!   images' at the defaults, and the layer's views on them), which cuts
-//!   the bake from 150 to about 95 CPU-s (`docs/engine-tables.md`).
+//!   images' at the defaults, and the layer's views on them), and its
+//!   multiply scattered light marched in 8 view-ray panels, not the
+//!   field's 16 (`LAYER_MULTIPLE_PANELS`): about 75 CPU-s instead of
+//!   the images' tables' 150 (`docs/engine-tables.md`).
 //! - **transmittance**: the transmittance of sunlight from altitude h to
 //!   the top of the atmosphere along view cosine mu (2D), as XYZ of the
 //!   transmitted solar spectrum over XYZ of the solar spectrum, per
@@ -275,7 +277,8 @@ impl EngineTables {
             Field::PerLayer => None,
         };
         let sky_view = match layers {
-            Layers::Grid => Some(layer_sky_view(sky, settings)),
+            Layers::Grid => Some(layer_sky_view(sky, settings, false)),
+            Layers::GridFieldPanels => Some(layer_sky_view(sky, settings, true)),
             Layers::Image => None,
         };
         for a in 0..altitude_nodes {
@@ -327,10 +330,18 @@ impl EngineTables {
             }
             for s in 0..sun_nodes {
                 let elevation = axes::sun_elevation_of_node(s, sun_nodes);
+                // In deep twilight the field's own panels
+                // (`LAYER_MULTIPLE_PANELS_ABOVE_DEG`).
+                let layer_view = sky_view.map(|grid| SkyViewGrid {
+                    multiple_panels: grid
+                        .multiple_panels
+                        .filter(|_| elevation >= LAYER_MULTIPLE_PANELS_ABOVE_DEG),
+                    ..grid
+                });
                 let layer_sky = sky.with_shared_field(
                     base.with_sun(elevation, 180.0)?,
                     shared.as_ref(),
-                    sky_view,
+                    layer_view,
                 )?;
                 let radiances = layer_sky.radiances_from_image_tables(&views, &|_, _| {})?;
                 let layer = s * altitude_nodes + a;
@@ -550,6 +561,11 @@ enum Layers {
     /// From a sky-view table on the layer's own grid
     /// ([`layer_sky_view`]).
     Grid,
+    /// As `Grid`, with the multiply scattered light marched in the field's
+    /// own view-ray panels, not [`layer_multiple_panels`] (the slow path
+    /// the tests hold `Grid` to).
+    #[cfg_attr(not(test), allow(dead_code))]
+    GridFieldPanels,
     /// From the library's image tables, as `sora render` draws (the slow
     /// path).
     #[cfg_attr(not(test), allow(dead_code))]
@@ -565,8 +581,9 @@ enum Layers {
 /// At the default settings this is 64 x 48 nodes instead of the images'
 /// 128 x 48: half the single-scattering marches, and the multiply
 /// scattered light marched at as many rows as the images'
-/// ([`LAYER_MULTIPLE_STRIDE`]).
-fn layer_sky_view(sky: &Sky, settings: &EngineTableSettings) -> SkyViewGrid {
+/// ([`LAYER_MULTIPLE_STRIDE`]) in fewer view-ray panels than the field's
+/// (`field_panels` false; [`layer_multiple_panels`]).
+fn layer_sky_view(sky: &Sky, settings: &EngineTableSettings, field_panels: bool) -> SkyViewGrid {
     let (image_half, image_azimuth) = sky.table_size().sky_view_nodes;
     SkyViewGrid {
         nodes: (
@@ -574,8 +591,51 @@ fn layer_sky_view(sky: &Sky, settings: &EngineTableSettings) -> SkyViewGrid {
             image_azimuth.min(settings.azimuth_nodes),
         ),
         multiple_stride: LAYER_MULTIPLE_STRIDE,
+        multiple_panels: if field_panels {
+            None
+        } else {
+            layer_multiple_panels(sky)
+        },
     }
 }
+
+/// The Gauss panels of a layer's multiply-scattered-light marches along
+/// each view ray: [`LAYER_MULTIPLE_PANELS`], or the field's own
+/// `view_ray_panels` if fewer. None for single scattering.
+fn layer_multiple_panels(sky: &Sky) -> Option<usize> {
+    match sky.scattering() {
+        crate::sky::Scattering::Multiple(settings) => {
+            Some(settings.view_ray_panels.min(LAYER_MULTIPLE_PANELS))
+        }
+        crate::sky::Scattering::Single => None,
+    }
+}
+
+/// A layer's multiply scattered light is marched in 8 Gauss panels (of 4
+/// nodes, cut at the profiles' corners) along each view ray, half the
+/// field's default 16: the source along a view ray is smooth (a
+/// scattering integral of a diffuse field). Measured on earth-clear's
+/// sky table (`--altitude-nodes 2`) against 32 panels: 1.5e-4 (p99) and
+/// 2.2e-3 at most (just above the horizon at 100 km, the sun at -12
+/// degrees) where 16 panels are within 6.1e-5 and 3.1e-4; the layers'
+/// sky-view tables took 18 % less time (`docs/engine-tables.md`).
+/// Single scattering's marches keep their 16 panels: at 8 the sky table
+/// moved by 0.21 % (p99) and 12 % at most. Below
+/// [`LAYER_MULTIPLE_PANELS_ABOVE_DEG`] the layers keep the field's panels.
+const LAYER_MULTIPLE_PANELS: usize = 8;
+
+/// Sun elevation (degrees) from which the layers march their multiply
+/// scattered light in [`LAYER_MULTIPLE_PANELS`]; below it (5 of the
+/// default 48 sun nodes, -12 to -6.9 degrees) in the field's own. In deep
+/// twilight the source along a ray falls by orders of magnitude where the
+/// ray crosses the planet's shadow, and 8 panels missed it: earth-hazy's
+/// layers at the sun nodes -12 to -9.1 degrees moved by 1.3-1.5 % just
+/// above the horizon (2.4 and 100 km) and, at 100 km just below the
+/// horizon, one texel (the layer's brightest) by 41 %, 47 % from 32
+/// panels' where 16 are 3.9 % from them. From -6.9 degrees up no texel
+/// of earth-clear's, earth-hazy's or mars-dust's tables moved by more
+/// than 1 % (`docs/engine-tables.md`).
+const LAYER_MULTIPLE_PANELS_ABOVE_DEG: f64 = -6.0;
 
 /// A layer's sky-view table marches multiply scattered light at every
 /// zenith row (the images' table, with twice the rows, at every other one)

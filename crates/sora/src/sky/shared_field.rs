@@ -30,6 +30,9 @@ pub(crate) struct SkyViewGrid {
     /// The multiply scattered light is marched at every this many nodes of
     /// the zenith and azimuth axes, and filled in between.
     pub(crate) multiple_stride: (usize, usize),
+    /// Gauss panels of those marches along each view ray (None: the
+    /// field's settings', `view_ray_panels`).
+    pub(crate) multiple_panels: Option<usize>,
 }
 
 /// A field solved for every sun zenith angle, with its source table.
@@ -75,11 +78,13 @@ impl Sky {
             sky.multiple_stride = grid.multiple_stride;
         }
         if let Some(shared) = shared {
-            let field = Arc::new(
-                shared
-                    .field
-                    .aimed(sky.scene.observer_radius_m(), sky.scene.sun_direction()),
-            );
+            let aimed = shared
+                .field
+                .aimed(sky.scene.observer_radius_m(), sky.scene.sun_direction());
+            let field = Arc::new(match sky_view.and_then(|grid| grid.multiple_panels) {
+                Some(panels) => aimed.with_view_ray_panels(panels),
+                None => aimed,
+            });
             let table = shared.table.aimed(Arc::clone(&field));
             // Fresh cells: neither can be set already.
             let _ = sky.field.set(field);

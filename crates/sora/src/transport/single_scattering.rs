@@ -49,6 +49,7 @@ use super::multiple_scattering::ViewHarmonicsCache;
 use super::optical_column::{
     PanelMarch, ProfileCorners, SunColumnTable, compute_columns_along_ray,
 };
+use super::vector_exp::exp_neg_in_place;
 use crate::atmosphere::phase_matrix::PhaseMatrix;
 use crate::atmosphere::{Atmosphere, AtmosphereOptics, DensityProfile};
 use crate::error::{Error, Result};
@@ -576,10 +577,9 @@ impl SingleScatteringScene {
                     }
                 }
                 // The transmittance eye-node-sun, one exponential per
-                // wavelength for every species.
-                for tau in scratch.optical_depth.iter_mut() {
-                    *tau = (-*tau).exp();
-                }
+                // wavelength for every species, all together (a loop the
+                // compiler vectorises, `vector_exp.rs`).
+                exp_neg_in_place(&mut scratch.optical_depth);
                 for (j, s) in species.iter().enumerate() {
                     let density = densities[j];
                     if density <= 0.0 || s.scattering_per_m.values().iter().all(|b| *b == 0.0) {

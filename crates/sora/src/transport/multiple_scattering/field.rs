@@ -413,6 +413,14 @@ impl MultipleScatteringField {
         aimed
     }
 
+    /// This field with its view rays marched in `panels` Gauss panels
+    /// instead of the settings' `view_ray_panels` (the engine tables'
+    /// layers, `engine_tables/mod.rs`).
+    pub(crate) fn with_view_ray_panels(mut self, panels: usize) -> MultipleScatteringField {
+        self.optics.panels = panels.max(1);
+        self
+    }
+
     /// The field L_m(z_k, mu_b) of sun node `s` at wavelength `i`, W m^-2
     /// sr^-1 nm^-1, [(m * levels + k) * streams + b].
     pub(super) fn solution(&self, s: usize, i: usize) -> &[f64] {

@@ -12,7 +12,7 @@ use super::peak_beam::PeakBeam;
 use crate::geometry::{Vector3, segment_in_atmosphere};
 use crate::transport::optical_column::PanelMarch;
 use crate::transport::single_scattering::SunColumns;
-use crate::transport::vector_exp::exp_neg_in_place;
+use crate::transport::vector_exp::{exp_in_place, exp_neg_in_place};
 
 /// Values below this are treated as zero by the logarithmic
 /// interpolations (radiances are ~1e-6..1 W m^-2 sr^-1 nm^-1).
@@ -104,6 +104,9 @@ pub struct MultipleScatteringScratch {
     /// coefficients and X there ([`ViewRayOptics::add_tilted_forward_peak`]).
     pub(super) beam: Vec<f64>,
     pub(super) tilted_depths: Vec<f64>,
+    /// Per wavelength at the current node, 4 blocks of work space for the
+    /// march's exponentials (`ViewRayOptics::march`).
+    pub(super) node_terms: Vec<f64>,
     pub(super) tilted_peak: Vec<f64>,
 }
 
@@ -157,6 +160,7 @@ impl ViewRayOptics {
             scaled_forward_integrals: vec![0.0; s * w],
             beam: vec![0.0; w],
             tilted_depths: vec![0.0; 4 * w],
+            node_terms: vec![0.0; 4 * w],
             tilted_peak: vec![0.0; 2 * w],
         }
     }
@@ -231,18 +235,26 @@ impl ViewRayOptics {
                     // T*(eye, x) beta*_sca(x) R(x): one exponential per
                     // wavelength for the transmittance and the source.
                     let weight = node.weight;
-                    for (i, out) in radiance.iter_mut().enumerate() {
+                    let (exponents, scatterings) = scratch.node_terms.split_at_mut(w);
+                    for i in 0..w {
                         let (mut tau, mut scattering) = (0.0, 0.0);
                         for j in 0..s {
                             tau += scaled_extinction[i * s + j] * scratch.node_columns[j];
                             scattering += scaled_scattering[i * s + j] * scratch.densities[j];
                         }
+                        exponents[i] = scratch.log_source[i] - tau;
+                        scatterings[i] = scattering;
+                    }
+                    // The exponentials together (a loop the compiler
+                    // vectorises, `vector_exp.rs`).
+                    exp_in_place(exponents);
+                    for (i, out) in radiance.iter_mut().enumerate() {
                         // A source at the logarithms' floor is no light
                         // (the interpolation between a dark node, 1e-30,
                         // and a lit one would otherwise leave numerical
                         // noise in the night sky).
-                        if scattering > 0.0 && scratch.log_source[i] > DARK_LOG_SOURCE {
-                            *out += weight * scattering * (scratch.log_source[i] - tau).exp();
+                        if scatterings[i] > 0.0 && scratch.log_source[i] > DARK_LOG_SOURCE {
+                            *out += weight * scatterings[i] * exponents[i];
                         }
                     }
                     // What delta-M moved from single scattering into the
@@ -266,18 +278,33 @@ impl ViewRayOptics {
                     if share > 0.0 {
                         self.add_tilted_forward_peak(weight, lit, share, scratch);
                     } else if lit {
+                        // Optical depths (exact, scaled), then in place
+                        // their transmittances, all together.
+                        let (exact_depths, rest) = scratch.node_terms.split_at_mut(w);
+                        let scaled_depths = &mut rest[..w];
                         for i in 0..w {
-                            let (mut scaled, mut exact, mut peak) = (0.0, 0.0, 0.0);
+                            let (mut scaled, mut exact) = (0.0, 0.0);
                             for j in 0..s {
                                 let column = scratch.node_columns[j] + scratch.sun_columns[j];
                                 scaled += scaled_extinction[i * s + j] * column;
                                 exact += extinction[i * s + j] * column;
+                            }
+                            exact_depths[i] = exact;
+                            scaled_depths[i] = scaled;
+                        }
+                        // [exact depths, scaled depths, direct, through].
+                        let (depths, transmittances) = scratch.node_terms.split_at_mut(2 * w);
+                        transmittances.copy_from_slice(depths);
+                        exp_neg_in_place(transmittances);
+                        for i in 0..w {
+                            let mut peak = 0.0;
+                            for j in 0..s {
                                 // f_j beta_sca,j rho_j: what the peaks scatter here.
                                 peak += (extinction[i * s + j] - scaled_extinction[i * s + j])
                                     * scratch.densities[j];
                             }
-                            let direct = (-exact).exp();
-                            let through = (-scaled).exp();
+                            let (exact, scaled) = (depths[i], depths[w + i]);
+                            let (direct, through) = (transmittances[i], transmittances[w + i]);
                             let excess = weight * (through - direct);
                             let beam = weight * through;
                             for j in 0..s {
