@@ -3,8 +3,9 @@
 // (worker.js, sora_web.wasm). Plain ES module, no dependencies.
 //
 // Progressive rendering: every change asks for a 128-pixel preview (coarse
-// tables, every 40 nm) and a 256-pixel refinement (the library's resolution
-// but for its image tables and sunset steps, see crates/sora-web), at once,
+// tables, every 40 nm) and a 256-pixel refinement (the library's wavelengths,
+// a somewhat coarser field and image tables, see quality_settings in
+// crates/sora-web/src/engine.rs), at once,
 // from two engines in two workers (two cores: the refinement does not wait
 // for the preview, and a slider drag's previews do not wait for a
 // refinement or a spectrum). Changes that arrive while an engine is busy

@@ -136,6 +136,7 @@ def make_atmosphere(settings: SkySettings) -> Tuple[sora.Atmosphere, dict]:
             )
         for i in ozone:
             species[i].pop("number_density_m3", None)
+            species[i].pop("column_molecules_cm2", None)
             species[i]["column_dobson_units"] = float(settings.ozone_dobson_units)
     if settings.ground_albedo is not None:
         table.setdefault("planet", {})["ground_albedo"] = float(settings.ground_albedo)

@@ -12,6 +12,7 @@
 //! built-in refractive index has no single imaginary part).
 
 use serde::Serialize;
+use sora::atmosphere::ozone::MOLECULES_PER_CM2_PER_DOBSON_UNIT;
 use toml::{Table, Value};
 
 use crate::request::AtmosphereSpec;
@@ -91,8 +92,13 @@ pub fn read_controls(text: &str) -> Result<Controls, String> {
         .iter()
         .filter_map(Value::as_table)
         .find(|s| is_ozone(s))
-        .and_then(|s| s.get("column_dobson_units"))
-        .and_then(number);
+        .and_then(|s| {
+            s.get("column_dobson_units").and_then(number).or_else(|| {
+                s.get("column_molecules_cm2")
+                    .and_then(number)
+                    .map(|n| n / MOLECULES_PER_CM2_PER_DOBSON_UNIT)
+            })
+        });
     Ok(controls)
 }
 
@@ -160,6 +166,7 @@ pub fn apply_controls(text: &str, spec: &AtmosphereSpec) -> Result<String, Strin
             .find(|s| is_ozone(s))
             .ok_or("ozone column: this atmosphere has no ozone")?;
         ozone.remove("number_density_m3");
+        ozone.remove("column_molecules_cm2");
         ozone.insert("column_dobson_units".into(), Value::Float(du));
     }
     toml::to_string(&table).map_err(|e| format!("atmosphere file: {e}"))
@@ -344,6 +351,28 @@ mod tests {
             Some(550.0)
         );
         sora::Atmosphere::from_toml_str(&paper).unwrap();
+    }
+
+    /// An ozone column given in molecules cm^-2 reads as Dobson units and
+    /// is replaced, not doubled, when the slider writes one.
+    #[test]
+    fn an_ozone_column_in_molecules_is_read_and_replaced() {
+        let du = preset("earth-clear");
+        let molecules = du.replace(
+            "column_dobson_units = 300",
+            "column_molecules_cm2 = 8.0601e18",
+        );
+        assert_ne!(du, molecules, "the preset gives its ozone in DU");
+        let read = read_controls(&molecules).unwrap().ozone_column_du.unwrap();
+        assert!((read - 300.0).abs() < 1e-9, "{read}");
+        let spec = AtmosphereSpec {
+            ozone_column_du: Some(250.0),
+            ..AtmosphereSpec::default()
+        };
+        let text = apply_controls(&molecules, &spec).unwrap();
+        assert!(!text.contains("column_molecules_cm2"), "{text}");
+        assert_eq!(read_controls(&text).unwrap().ozone_column_du, Some(250.0));
+        sora::Atmosphere::from_toml_str(&text).unwrap();
     }
 
     #[test]

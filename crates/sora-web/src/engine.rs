@@ -556,26 +556,38 @@ pub fn build_sky(atmosphere: &Atmosphere, spec: &SkySpec, quality: Quality) -> R
 /// wavelengths, enough for the colour, not for the spectrum), 4 streams
 /// per hemisphere on 16 layers, sun-zenith steps of 6 degrees (2.5 near
 /// sunset, from 85 degrees of zenith), and image tables a quarter as fine
-/// on each axis. Refined is Full with a sky-view table of 64 x 24 nodes
-/// instead of 128 x 48, 30 layers instead of 40, and sun-zenith steps of
-/// 2 degrees instead of 0.75 near sunset: with the sun 2 degrees up 11 sun
-/// nodes instead of 19, 7 of them with the spherical first order instead
-/// of 15, whose cost is each node's layers. Both march that twilight first
-/// order more coarsely than Full (4 panels along each path, 40 cosines in
-/// its fine moments after sunset): the refinement with 2 panels and 2
-/// nodes on each panel near the horizon, the preview with 1 panel and 2
-/// nodes (24 cosines each; `first_order_panels`, `first_order_fine_nodes`).
-/// Measured (`quality_accuracy`, earth-clear, sun 10 / 5 / 2 / -4, 99th
-/// percentile against Full; 4 and 40 before): the refinement 0.19 / 0.38
-/// / 0.89 / 0.75 % (0.19 / 0.36 / 0.86 / 0.88 %), max xy 1.1e-3 (1.2e-3);
-/// the preview against a scalar Full 1.1 / 1.6 / 2.3 / 2.3 % (1.1 / 1.3 /
-/// 2.2 / 2.2 %), against the polarised one 3.4 / 3.5 / 4.3 / 7.2 % (3.4 /
-/// 3.5 / 4.3 / 7.3 %). They cut, on one thread natively (CPU time,
-/// `slider_timing`, best of 3, load 9-11 on 2 cores), sun 10 / 5 / 2 /
-/// -4: the refinement 0.83 / 1.01 / 1.18 / 1.25 s to 0.71 / 0.84 / 0.93 /
-/// 0.96 s, the preview 0.089 / 0.129 / 0.130 / 0.126 s to 0.072 / 0.091 /
-/// 0.094 / 0.091 s (one node near the horizon would save 7 % more, but
-/// its moments were 12 % off in the library's test).
+/// on each axis. Refined is Full with 7 streams per hemisphere instead of
+/// 8, a sky-view table of 64 x 24 nodes instead of 128 x 48, 30 layers
+/// instead of 40, sun-zenith steps of 2 degrees instead of 0.75 near
+/// sunset (with the sun 2 degrees up 11 sun nodes instead of 19, 7 of them
+/// with the spherical first order instead of 15, whose cost is each node's
+/// layers), 12 Gauss panels along each view ray instead of 16, and the
+/// polarisation correction's columns solved at every third wavelength
+/// (`polarisation_wavelength_stride`, cubics between; the library's
+/// default solves every one). Both march the twilight first order more
+/// coarsely than Full (4 panels along each path, 40 cosines in its fine
+/// moments after sunset): 1 panel and 2 nodes on each panel near the
+/// horizon (24 cosines; `first_order_panels`, `first_order_fine_nodes`).
+/// Measured (`quality_accuracy`, earth-clear, sun 10 / 5 / 2 / 0 / -2 /
+/// -4 / -6 / -12, 99th percentile against Full): the refinement 0.23 /
+/// 0.48 / 0.83 / 0.72 / 0.69 / 0.74 / 1.1 / 2.3 %, max xy 2.0e-3 (at sun
+/// 0; 1.2e-3 at -4); with 8 streams 0.19 / 0.28 / 0.81 / 0.99 / 1.12 /
+/// 0.75 / 0.83 / 2.0 %, and with 8 streams, 16 view-ray panels, every
+/// wavelength and 2 first-order panels (before) 0.19 / 0.38 / 0.89 / 1.04
+/// / 1.12 / 0.75 / 0.84 / 2.1 %, xy 2.1e-3 (at -2); the preview against a
+/// scalar Full 1.1 / 1.6 / 2.3 / 2.3 % at suns 10 / 5 / 2 / -4, against
+/// the polarised one 3.4 / 3.5 / 4.3 / 7.2 %. On one thread natively (CPU
+/// time, the settings interleaved in one process, best of 4, load 4-8 on
+/// 2 cores), sun 5 / 2 / -4, the refinement before took 0.84 / 0.92 /
+/// 0.92 s; with the view-ray panels, the stride and the single
+/// first-order panel 0.73 / 0.81 / 0.84 s, and with 7 streams too 0.65 /
+/// 0.73 / 0.74 s. The coarser first orders before them cut, on
+/// one thread natively (CPU time, `slider_timing`, best of 3, load 9-11
+/// on 2 cores), sun 10 / 5 / 2 / -4: the refinement 0.83 / 1.01 / 1.18 /
+/// 1.25 s to 0.71 / 0.84 / 0.93 / 0.96 s, the preview 0.089 / 0.129 /
+/// 0.130 / 0.126 s to 0.072 / 0.091 / 0.094 / 0.091 s (one node near the
+/// horizon would save 7 % more, but its moments were 12 % off in the
+/// library's test).
 ///
 /// What they cost against Full (99th percentile of the pixels' luminance
 /// error, 128 x 128, earth-clear, the `quality_accuracy` example; the
@@ -611,9 +623,12 @@ pub fn quality_settings(
         Quality::Refined => (
             WavelengthGrid::paper(),
             MultipleScatteringSettings {
+                streams_per_hemisphere: 7,
                 sunset_sun_zenith_step_deg: 2.0,
                 layers: 30,
-                first_order_panels: 2,
+                view_ray_panels: 12,
+                polarisation_wavelength_stride: 3,
+                first_order_panels: 1,
                 first_order_fine_nodes: 2,
                 ..MultipleScatteringSettings::default()
             },
@@ -740,7 +755,7 @@ mod tests {
     /// (scalar light, against the default resolution's scalar image)
     /// within 5 % down to the horizon and 7 % at sun -6. Measured at 128 x
     /// 128 (the quality_accuracy example prints the whole range): the
-    /// refinement 0.16 % at sun 45, 1.2 % at 0 and 1.0 % at -6; the preview
+    /// refinement 0.13 % at sun 45, 0.72 % at 0 and 1.1 % at -6; the preview
     /// 1.0 % at 45, 1.7 % at 0 and 4.1 % at -6.
     #[test]
     fn preview_and_refinement_stay_close_to_the_default_resolution() {

@@ -354,7 +354,7 @@ fn malformed_files_get_one_line_errors_naming_the_problem() {
                 "column_dobson_units = 300\nnumber_density_m3 = 1e18",
             ),
             &[
-                "species[3]: an absorbing gas needs exactly one of column_dobson_units or number_density_m3",
+                "species[3]: an absorbing gas needs exactly one of column_dobson_units, column_molecules_cm2 or number_density_m3",
             ],
         ),
         // Rayleigh.

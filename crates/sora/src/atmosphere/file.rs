@@ -42,7 +42,10 @@ use super::aerosol::{AerosolPhase, ParametricAerosol};
 use super::gas_bands;
 use super::mie_species::{MieAerosol, ParticleAmount};
 use super::o2_o2;
-use super::ozone::{AbsorbingGas, AbsorptionCrossSection, BinnedCrossSection, GasAmount};
+use super::ozone::{
+    AbsorbingGas, AbsorptionCrossSection, BinnedCrossSection, GasAmount,
+    MOLECULES_PER_CM2_PER_DOBSON_UNIT,
+};
 use super::planet::Planet;
 use super::profile::{DensityProfile, ProfileTable};
 use super::rayleigh::RayleighGas;
@@ -99,6 +102,8 @@ struct GasesFile {
     precipitable_water_cm: f64,
     water_scale_height_m: Option<f64>,
     mixed_gases: Option<bool>,
+    co2_ppm: Option<f64>,
+    ch4_ppm: Option<f64>,
     o2_o2: Option<bool>,
 }
 
@@ -136,6 +141,7 @@ struct SpeciesFile {
     optical_depth: Option<f64>,
     reference_wavelength_nm: Option<f64>,
     column_dobson_units: Option<f64>,
+    column_molecules_cm2: Option<f64>,
     profile: ProfileFile,
     scattering: Option<ScatteringFile>,
     absorption: Option<AbsorptionFile>,
@@ -412,10 +418,27 @@ fn convert_gases(gases: GasesFile) -> Result<Vec<Species>> {
         )?,
         None => gas_bands::WATER_SCALE_HEIGHT_M,
     };
-    Ok(gas_bands::banded_gas_species(
-        Some((water, scale)),
-        gases.mixed_gases.unwrap_or(true),
-    ))
+    let mixed_gases = gases.mixed_gases.unwrap_or(true);
+    let co2_ppm = match gases.co2_ppm {
+        Some(_) if !mixed_gases => {
+            return Err(invalid(
+                "gases.co2_ppm",
+                "goes with the O2 and CO2 bands, but mixed_gases = false",
+            ));
+        }
+        Some(ppm) => check_range("gases.co2_ppm", ppm, "ppm", 0.0, 10_000.0)?,
+        None => gas_bands::CO2_REFERENCE_PPM,
+    };
+    let ch4_ppm = match gases.ch4_ppm {
+        Some(ppm) => check_range("gases.ch4_ppm", ppm, "ppm", 0.0, 1000.0)?,
+        None => 0.0,
+    };
+    Ok(gas_bands::banded_gas_species(&gas_bands::BandedGases {
+        water: Some((water, scale)),
+        mixed_gases,
+        co2_ppm,
+        ch4_ppm,
+    }))
 }
 
 /// A TOML syntax or type error as one line with its line number.
@@ -658,11 +681,36 @@ fn convert_species(file: SpeciesFile, path: &str, planet: &Planet) -> Result<Spe
     if let Some(du) = file.column_dobson_units {
         check_range(&format!("{path}.column_dobson_units"), du, "DU", 0.0, 1e6)?;
     }
+    if let Some(n) = file.column_molecules_cm2 {
+        // The same range as column_dobson_units' 0..=1e6 DU.
+        check(
+            &format!("{path}.column_molecules_cm2"),
+            n,
+            "molecules cm^-2",
+            "0..=2.6867e22",
+            (0.0..=1e6 * MOLECULES_PER_CM2_PER_DOBSON_UNIT).contains(&n),
+        )?;
+    }
+    let column_dobson_units = match (file.column_dobson_units, file.column_molecules_cm2) {
+        (Some(_), Some(_)) => {
+            return Err(invalid(
+                path,
+                "give the column as column_dobson_units or column_molecules_cm2, not both",
+            ));
+        }
+        (du, None) => du,
+        (None, Some(n)) => Some(n / MOLECULES_PER_CM2_PER_DOBSON_UNIT),
+    };
     let keys = AmountKeys {
         number_density_m3: file.number_density_m3,
         optical_depth: file.optical_depth,
         reference_wavelength_nm: file.reference_wavelength_nm,
-        column_dobson_units: file.column_dobson_units,
+        column_dobson_units,
+        column_key: if file.column_molecules_cm2.is_some() {
+            "column_molecules_cm2"
+        } else {
+            "column_dobson_units"
+        },
     };
     // Each converter takes the amount keys its model uses and rejects the others.
     let model = match (file.scattering, file.absorption) {
@@ -694,7 +742,11 @@ struct AmountKeys {
     number_density_m3: Option<f64>,
     optical_depth: Option<f64>,
     reference_wavelength_nm: Option<f64>,
+    /// The column in DU, from `column_dobson_units` or
+    /// `column_molecules_cm2`.
     column_dobson_units: Option<f64>,
+    /// Which of the two keys gave the column (for errors).
+    column_key: &'static str,
 }
 
 fn convert_scattering(file: ScatteringFile, path: &str, keys: &AmountKeys) -> Result<SpeciesModel> {
@@ -711,10 +763,10 @@ fn convert_scattering(file: ScatteringFile, path: &str, keys: &AmountKeys) -> Re
     }
     not_used(
         path,
-        "column_dobson_units",
+        keys.column_key,
         keys.column_dobson_units.is_some(),
         "a scattering species",
-        "only an absorbing gas takes a column in Dobson units",
+        "only an absorbing gas takes a column (Dobson units or molecules cm^-2)",
     )?;
     if let Some(rayleigh) = file.rayleigh {
         return convert_rayleigh(rayleigh, path, keys);
@@ -1372,7 +1424,7 @@ fn convert_absorption(file: AbsorptionFile, path: &str, keys: &AmountKeys) -> Re
         "optical_depth",
         keys.optical_depth.is_some(),
         kind,
-        "give column_dobson_units or number_density_m3",
+        "give column_dobson_units, column_molecules_cm2 or number_density_m3",
     )?;
     let cross_section = match (file.gas, file.wavelength_nm, file.cross_section_m2) {
         (Some(gas), None, None) => match gas.as_str() {
@@ -1414,7 +1466,7 @@ fn convert_absorption(file: AbsorptionFile, path: &str, keys: &AmountKeys) -> Re
         _ => {
             return Err(invalid(
                 path,
-                "an absorbing gas needs exactly one of column_dobson_units or number_density_m3",
+                "an absorbing gas needs exactly one of column_dobson_units, column_molecules_cm2 or number_density_m3",
             ));
         }
     };

@@ -1,7 +1,7 @@
-//! Banded gases: water vapour and the uniformly mixed gases (O2 A, B and
-//! gamma bands; CO2 beyond 1100 nm), from a published band model turned
-//! into a k-distribution so that a band's radiance is a weighted sum of a
-//! few monochromatic solves.
+//! Banded gases: water vapour, the uniformly mixed gases (O2 A, B and
+//! gamma bands; CO2 beyond 1100 nm) and CH4 (1.63-2.43 um), from published
+//! band models turned into a k-distribution so that a band's radiance is a
+//! weighted sum of a few monochromatic solves.
 //!
 //! # The band model
 //! Bird & Riordan (1986, J. Climate Appl. Meteor. 25, 87; SPECTRL2, after
@@ -27,6 +27,46 @@
 //! 3-clause) is interpolated linearly in wavelength at each grid sample;
 //! below 593 nm (water) and 687 nm (mixed gases) both are 0.
 //!
+//! # CO2
+//! The band model lumps O2 and CO2 in one coefficient array a_u. Its rows
+//! are split by band at [`O2_CO2_SPLIT_NM`]: those below 1300 nm (the O2 B
+//! and A bands, 690-767.5 nm, and O2's 1.27 um band, 1240-1290 nm) are O2,
+//! those above (1.4, 1.6, 2.0 and 2.7 um, and the weak rows between) CO2;
+//! the table has no row near 628 nm (the gamma band is below its
+//! resolution). y = a_u M is the absorber's path, so `co2_ppm` scales the
+//! CO2 rows by `co2_ppm` / [`CO2_REFERENCE_PPM`] and the same k-terms then
+//! apply (term j's optical depth is c_u,j times the scaled a_u M). The
+//! reference, 330 ppm, is assumed, not read from Leckner (1978), whose
+//! paper was not at hand: it is the CO2 of the AFGL/LOWTRAN model
+//! atmospheres of the band model's time (LOWTRAN 7's uniformly mixed
+//! gases: 330 ppm at every level) and of the air then (Mauna Loa's annual
+//! means 1975-1978: 331-335 ppm). At 330 ppm the table is used as it is,
+//! unsplit, so an atmosphere without `co2_ppm` is unchanged bit for bit.
+//!
+//! # CH4
+//! LOWTRAN 7's band model (Kneizys et al. 1988, AFGL-TR-88-0177; Pierluissi
+//! & Peng 1985, Opt. Eng. 24, 541): the mean transmittance of a 20 cm^-1
+//! band is exp(-(C W)^a), a = [`METHANE_EXPONENT`], C per atm cm every
+//! 5 cm^-1 over 4110-4690 and 5865-6135 cm^-1 (2.13-2.43 and 1.63-1.71 um;
+//! `data/gas_bands_ch4_lowtran7.csv`, written by
+//! `scripts/gases/make_ch4_lowtran7.py` from LOWTRAN 7's source, a U.S.
+//! Government work), 0 elsewhere (LOWTRAN 7 has no CH4 band below 1.63 um:
+//! the weak 1.33 and 0.89 um bands are left out). W is the CH4 path in atm
+//! cm scaled by (p / 1013.25 hPa)^0.7139 (T0 / T)^-0.4185; here c ppm in M
+//! air columns is W = c M [`ATM_CM_PER_PPM_AIR_COLUMN`] times
+//! [`METHANE_PRESSURE_WEIGHT`] (the pressure scaling over an exponential
+//! profile of the air's scale height) and T = T0 = 273.15 K (between 220
+//! and 290 K the temperature factor is 0.91-1.03: (C W)^a 5 % less at
+//! 220 K, 1.5 % more at 290 K), so
+//! the band coefficient is a_m = C [`ATM_CM_PER_PPM_AIR_COLUMN`]
+//! [`METHANE_PRESSURE_WEIGHT`] per ppm of one air column and z = a_m c M.
+//! exp(-z^a) is a mixture of exponentials; its factors c_m,j for the shared
+//! weights (`data/gas_bands_ch4_k_terms.csv`, the same script) reproduce
+//! it within 3.0 % of max(1 - T, 0.01) over z in [1e-4, 1e3] and within
+//! 7.2e-4 of T below (tested: the weights are fixed by water and the mixed
+//! gases, so the fit is coarser than theirs). 1.8 ppm absorbs 1 % of the 1.666 um Q branch's 20 cm^-1
+//! band and up to 14 % in the 2.3 um band, vertically.
+//!
 //! # The k-distribution
 //! Both transmittances are fitted by one exponential sum with shared
 //! weights (`data/gas_bands_k_terms.csv`, the same script; Wiscombe &
@@ -45,26 +85,34 @@
 //! is exact for inhomogeneous paths wherever the band model's scaling with
 //! amount holds (the correlated-k assumption). A radiance, irradiance or
 //! transmittance of the atmosphere is sum_j w_j times that of the
-//! atmosphere with term j ([`k_distribution_terms`]). Where both gases
-//! absorb (690-710 nm here; 1.4, 1.9 and 2.7 um in the table) the one that
-//! absorbs less at air mass 2 takes its effective coefficient (below) in
-//! every term, so the two overlap at random rather than fully correlated:
+//! atmosphere with term j ([`k_distribution_terms`]). Where several gases
+//! absorb (690-710 nm here; 1.4, 1.9 and 2.7 um in the table; CH4 with
+//! water and CO2 at 1.63-1.71 and 2.13-2.43 um) each one that absorbs less
+//! at air mass 2 than another takes its effective coefficient (below) in
+//! every term, so the weaker overlap the strongest at random rather than
+//! fully correlated:
 //! the direct beam through the sky's spherical shell then matches
 //! T_w T_u within 1.9 % of the absorption there (tested: 0.5 and 3 cm of
 //! water, sun at 90 and 30 degrees), and within 1.3 % where one gas
 //! absorbs (the A band, the 720, 820, 940 and 1130 nm water bands on a 10
-//! nm grid from 700 to 1100 nm).
+//! nm grid from 700 to 1100 nm). CH4's curve of growth (z^0.58) is far from
+//! Beer-Lambert even where it is weak, so where it overlaps water its
+//! effective coefficient errs more: with 2.9 cm of water and 1.8 ppm, sun
+//! at 60 degrees, the direct beam is within 12 % of max(1 - T, 0.01) of
+//! T_w T_m over 1640-2440 nm, 9.8 % at 2270 nm (tested; from the tables,
+//! fully correlated terms would err 25 %).
 //!
 //! # What the model is and is not
 //! The band model scales with the absorber amount only: pressure and
 //! temperature enter through M (the column of air above a raised ground or
 //! an observer aloft), not through line widths, so the A band seen from 10
-//! km is the sea-level band with a quarter of the air above. Its
+//! km is the sea-level band with a quarter of the air above (CH4's
+//! pressure and temperature scaling is folded into a_m once, for the
+//! column above sea level). Its
 //! resolution is its coefficients' (a 10 nm grid sample at 760 nm reads
 //! a_u = 2.0, half way between 757.5 and 762.5 nm). It has no O2-O2
-//! collision bands (`o2_o2.rs`, `[gases] o2_o2 = true`), no NO2 (a
-//! cross-section species, `absorption.gas = "no2"`) and no CH4 (its mixed
-//! gases are O2 and CO2).
+//! collision bands (`o2_o2.rs`, `[gases] o2_o2 = true`) and no NO2 (a
+//! cross-section species, `absorption.gas = "no2"`).
 //! When one solve is asked for (a sky built from an atmosphere with gases,
 //! not summed over terms), each banded gas acts with one effective
 //! coefficient: the one whose Beer-Lambert transmittance equals the band
@@ -89,6 +137,8 @@ use crate::table::NumericTable;
 
 const SPECTRL2_CSV: &str = include_str!("../data/gas_bands_spectrl2.csv");
 const K_TERMS_CSV: &str = include_str!("../data/gas_bands_k_terms.csv");
+const CH4_CSV: &str = include_str!("../data/gas_bands_ch4_lowtran7.csv");
+const CH4_K_TERMS_CSV: &str = include_str!("../data/gas_bands_ch4_k_terms.csv");
 
 /// Terms of the k-distribution.
 pub const TERMS: usize = 5;
@@ -112,16 +162,93 @@ pub const EFFECTIVE_AIR_MASS: f64 = 2.0;
 pub const WATER_SCALE_HEIGHT_M: f64 = 2000.0;
 
 /// The scale height of the mixed gases' profile, m (the air's, near the
-/// ground).
+/// ground). CH4's profile is the same.
 pub const MIXED_GAS_SCALE_HEIGHT_M: f64 = 8000.0;
+
+/// The CO2 mixing ratio, ppm by volume, the band model's mixed-gas
+/// coefficients stand for (see the module docs): `gases.co2_ppm`'s
+/// default.
+pub const CO2_REFERENCE_PPM: f64 = 330.0;
+
+/// Where the mixed-gas table passes from O2 to CO2, nm: its coefficients
+/// below (the O2 B, A and 1.27 um bands, 690-1290 nm) are O2's, those above
+/// (1.4, 1.6, 2.0 and 2.7 um and beyond) CO2's.
+pub const O2_CO2_SPLIT_NM: f64 = 1300.0;
+
+/// The exponent a of LOWTRAN 7's CH4 band transmittance exp(-(C W)^a).
+pub const METHANE_EXPONENT: f64 = 0.5844;
+
+/// Molecules per m^3 of an ideal gas at 273.15 K and 1013.25 hPa (the
+/// Loschmidt constant, CODATA 2018): the unit of LOWTRAN's atm cm.
+pub const LOSCHMIDT_M3: f64 = 2.686_780e25;
+
+/// LOWTRAN 7's pressure scaling of the CH4 amount, (p / p0)^n with n =
+/// 0.7139, over an exponential profile of the air's scale height: the
+/// scaled column is 1 / (1 + n) of the column.
+pub const METHANE_PRESSURE_WEIGHT: f64 = 1.0 / (1.0 + 0.7139);
+
+/// Atm cm of a gas at 1 ppm in one sea-level air column
+/// ([`AIR_MOLECULES_PER_M2_SEA_LEVEL_COLUMN`] / [`LOSCHMIDT_M3`], in cm,
+/// times 1e-6): 0.79963.
+pub const ATM_CM_PER_PPM_AIR_COLUMN: f64 =
+    AIR_MOLECULES_PER_M2_SEA_LEVEL_COLUMN / LOSCHMIDT_M3 * 100.0 * 1e-6;
 
 /// Which banded gas.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum BandGas {
-    /// Water vapour (amount: precipitable water).
+    /// Water vapour (amount: precipitable water, cm).
     WaterVapour,
     /// The uniformly mixed gases, O2 and CO2 (amount: air columns).
     MixedGases,
+    /// CH4 (amount: ppm of one air column).
+    Methane,
+}
+
+impl BandGas {
+    /// Every banded gas.
+    pub const ALL: [BandGas; 3] = [BandGas::WaterVapour, BandGas::MixedGases, BandGas::Methane];
+}
+
+/// The banded gases of an atmosphere and their vertical amounts above sea
+/// level; every banded species carries them, since where several absorb
+/// the one that absorbs most keeps the k-terms (see the module docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BandAmounts {
+    /// Precipitable water, cm (`None`: no water vapour).
+    pub water_cm: Option<f64>,
+    /// Air columns of O2 and CO2 (`None`: no mixed gases).
+    pub mixed_columns: Option<f64>,
+    /// CO2, ppm by volume (scales the CO2 part of the mixed gases' table by
+    /// `co2_ppm / CO2_REFERENCE_PPM`).
+    pub co2_ppm: f64,
+    /// CH4, ppm by volume of one air column (`None`: no CH4).
+    pub methane_ppm: Option<f64>,
+}
+
+impl BandAmounts {
+    /// The vertical amount of `gas`, in its unit, when the atmosphere has
+    /// it.
+    pub fn vertical(&self, gas: BandGas) -> Option<f64> {
+        match gas {
+            BandGas::WaterVapour => self.water_cm,
+            BandGas::MixedGases => self.mixed_columns,
+            BandGas::Methane => self.methane_ppm,
+        }
+    }
+
+    /// The band coefficient of `gas` on `grid` for these amounts: the
+    /// table's, with the mixed gases' CO2 part scaled to `co2_ppm`.
+    pub fn sampled_coefficients(
+        &self,
+        gas: BandGas,
+        grid: &WavelengthGrid,
+    ) -> Result<SampledSpectrum> {
+        if gas == BandGas::MixedGases && self.co2_ppm != CO2_REFERENCE_PPM {
+            sampled_mixed_coefficients(grid, self.co2_ppm)
+        } else {
+            sampled_band_coefficients(gas, grid)
+        }
+    }
 }
 
 /// A banded gas' absorption: the band model's coefficient, per molecule,
@@ -133,16 +260,14 @@ pub struct GasBand {
     /// The k-distribution term (0..[`TERMS`]); `None`: the effective
     /// coefficient of a single solve.
     pub term: Option<usize>,
-    /// The vertical amount the effective coefficient is fitted for: cm of
-    /// precipitable water, or air columns (1 at sea level).
-    pub vertical_amount: f64,
-    /// The other banded gas' vertical amount, when the atmosphere has it:
-    /// where the other absorbs more, this one takes its effective
-    /// coefficient in every term (see the module docs).
-    pub partner_vertical_amount: Option<f64>,
+    /// The atmosphere's banded gases: this one's vertical amount (the one
+    /// the effective coefficient is fitted for) and the others', for the
+    /// overlaps.
+    pub amounts: BandAmounts,
 }
 
-/// One term: its weight and the factors of x (water) and y (mixed gases).
+/// One term: its weight and the factors of x (water), y (mixed gases) and
+/// z (CH4).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct KTerm {
     /// w_j (the weights sum to 1).
@@ -151,6 +276,8 @@ pub struct KTerm {
     pub water_factor: f64,
     /// c_u,j.
     pub mixed_factor: f64,
+    /// c_m,j.
+    pub methane_factor: f64,
 }
 
 /// The band model's transmittance of water vapour for x = a_w u.
@@ -163,38 +290,99 @@ pub fn mixed_band_transmittance(y: f64) -> f64 {
     (-1.41 * y / (1.0 + 118.3 * y).powf(0.45)).exp()
 }
 
+/// LOWTRAN 7's transmittance of CH4 for z = a_m c M (c in ppm, M air
+/// columns): exp(-z^a).
+pub fn methane_band_transmittance(z: f64) -> f64 {
+    if z <= 0.0 {
+        1.0
+    } else {
+        (-z.powf(METHANE_EXPONENT)).exp()
+    }
+}
+
 /// The embedded k-distribution terms (parsed once).
 pub fn k_terms() -> &'static [KTerm] {
     static PARSED: std::sync::LazyLock<Vec<KTerm>> = std::sync::LazyLock::new(|| {
         let table = NumericTable::parse(K_TERMS_CSV, "embedded gas k-terms")
             .expect("the embedded k-terms are valid");
+        let methane = NumericTable::parse(CH4_K_TERMS_CSV, "embedded CH4 k-terms")
+            .expect("the embedded CH4 k-terms are valid");
         let terms: Vec<KTerm> = table
             .rows
             .iter()
-            .map(|row| KTerm {
-                weight: row[0],
-                water_factor: row[1],
-                mixed_factor: row[2],
+            .zip(&methane.rows)
+            .map(|(row, methane)| {
+                assert_eq!(row[0], methane[0], "the CH4 k-terms share the weights");
+                KTerm {
+                    weight: row[0],
+                    water_factor: row[1],
+                    mixed_factor: row[2],
+                    methane_factor: methane[1],
+                }
             })
             .collect();
         assert_eq!(terms.len(), TERMS, "the embedded k-terms have {TERMS} rows");
+        assert_eq!(
+            methane.rows.len(),
+            TERMS,
+            "the CH4 k-terms have {TERMS} rows"
+        );
         terms
     });
     &PARSED
 }
 
-/// The band model's coefficient of `gas` against wavelength (a_w per cm,
-/// or a_u per air column), 200-4000 nm.
+/// The band model's coefficient of `gas` against wavelength: a_w per cm
+/// and a_u per air column (at [`CO2_REFERENCE_PPM`]), a_m per ppm of one
+/// air column, 200-4000 nm.
 pub fn band_coefficients(gas: BandGas) -> TabulatedSpectrum {
+    if gas == BandGas::Methane {
+        return methane_coefficients();
+    }
     let table = NumericTable::parse(SPECTRL2_CSV, "embedded gas band table")
         .expect("the embedded gas band table is valid");
     let column = match gas {
         BandGas::WaterVapour => 1,
-        BandGas::MixedGases => 2,
+        _ => 2,
     };
     TabulatedSpectrum::new(
         table.column(0),
         table.column(column),
+        "embedded gas band table",
+    )
+    .expect("the embedded gas band table is valid")
+}
+
+/// CH4's a_m = C [`ATM_CM_PER_PPM_AIR_COLUMN`] [`METHANE_PRESSURE_WEIGHT`]
+/// per ppm of one air column, from LOWTRAN 7's C per atm cm.
+fn methane_coefficients() -> TabulatedSpectrum {
+    let table = NumericTable::parse(CH4_CSV, "embedded CH4 band table")
+        .expect("the embedded CH4 band table is valid");
+    let per_ppm_column = ATM_CM_PER_PPM_AIR_COLUMN * METHANE_PRESSURE_WEIGHT;
+    TabulatedSpectrum::new(
+        table.column(0),
+        table.column(1).iter().map(|c| c * per_ppm_column).collect(),
+        "embedded CH4 band table",
+    )
+    .expect("the embedded CH4 band table is valid")
+}
+
+/// The O2 (`co2 == false`) or CO2 (`co2 == true`) part of the mixed gases'
+/// table: a_u on its side of [`O2_CO2_SPLIT_NM`], 0 on the other.
+pub fn mixed_gas_part(co2: bool) -> TabulatedSpectrum {
+    let all = band_coefficients(BandGas::MixedGases);
+    let values = all
+        .wavelengths_nm()
+        .iter()
+        .zip(all.values())
+        .map(|(wavelength, a)| {
+            let keep = (*wavelength >= O2_CO2_SPLIT_NM) == co2;
+            if keep { *a } else { 0.0 }
+        })
+        .collect();
+    TabulatedSpectrum::new(
+        all.wavelengths_nm().to_vec(),
+        values,
         "embedded gas band table",
     )
     .expect("the embedded gas band table is valid")
@@ -205,12 +393,29 @@ pub fn sampled_band_coefficients(gas: BandGas, grid: &WavelengthGrid) -> Result<
     Spectrum::Tabulated(band_coefficients(gas)).sample_at_wavelengths(grid)
 }
 
+/// The mixed gases' a_u on `grid` with `co2_ppm` of CO2: the O2 part plus
+/// `co2_ppm / CO2_REFERENCE_PPM` times the CO2 part (the band model's y =
+/// a_u M is the absorber's path, so a CO2 amount scales its a_u).
+pub fn sampled_mixed_coefficients(grid: &WavelengthGrid, co2_ppm: f64) -> Result<SampledSpectrum> {
+    let o2 = Spectrum::Tabulated(mixed_gas_part(false)).sample_at_wavelengths(grid)?;
+    let co2 = Spectrum::Tabulated(mixed_gas_part(true)).sample_at_wavelengths(grid)?;
+    let scale = co2_ppm / CO2_REFERENCE_PPM;
+    Ok(SampledSpectrum::from_values(
+        o2.values()
+            .iter()
+            .zip(co2.values())
+            .map(|(o2, co2)| o2 + scale * co2)
+            .collect(),
+    ))
+}
+
 impl GasBand {
     /// Molecules per m^2 in one unit of this gas' amount.
     fn molecules_per_unit(&self) -> f64 {
         match self.gas {
             BandGas::WaterVapour => MOLECULES_PER_M2_PER_CM_PRECIPITABLE_WATER,
             BandGas::MixedGases => AIR_MOLECULES_PER_M2_SEA_LEVEL_COLUMN,
+            BandGas::Methane => 1e-6 * AIR_MOLECULES_PER_M2_SEA_LEVEL_COLUMN,
         }
     }
 
@@ -220,21 +425,20 @@ impl GasBand {
         match gas {
             BandGas::WaterVapour => water_band_transmittance(a * amount),
             BandGas::MixedGases => mixed_band_transmittance(a * amount),
+            BandGas::Methane => methane_band_transmittance(a * amount),
         }
     }
 
-    fn partner_gas(&self) -> BandGas {
-        match self.gas {
-            BandGas::WaterVapour => BandGas::MixedGases,
-            BandGas::MixedGases => BandGas::WaterVapour,
-        }
+    /// This gas' vertical amount (0 if the amounts lack it).
+    pub fn vertical_amount(&self) -> f64 {
+        self.amounts.vertical(self.gas).unwrap_or(0.0)
     }
 
     /// The effective (single-solve) coefficient per unit amount at band
     /// coefficient `a`: Beer-Lambert matching the band model at
     /// [`EFFECTIVE_AIR_MASS`].
     pub fn effective_coefficient_per_unit_amount(&self, a: f64) -> f64 {
-        let slant = EFFECTIVE_AIR_MASS * self.vertical_amount;
+        let slant = EFFECTIVE_AIR_MASS * self.vertical_amount();
         if a <= 0.0 || slant <= 0.0 {
             0.0
         } else {
@@ -243,22 +447,27 @@ impl GasBand {
     }
 
     /// Absorption coefficient per unit amount (per cm of precipitable water,
-    /// per air column) at band coefficient `a`, where the partner gas'
-    /// coefficient is `a_partner`.
-    pub fn coefficient_per_unit_amount(&self, a: f64, a_partner: f64) -> f64 {
+    /// per air column, per ppm of an air column) at band coefficient `a`,
+    /// where the other banded gases of the atmosphere have coefficients
+    /// `others` (gas, a): if one of them absorbs more at
+    /// [`EFFECTIVE_AIR_MASS`], this gas takes its effective coefficient in
+    /// every term.
+    pub fn coefficient_per_unit_amount(
+        &self,
+        a: f64,
+        others: impl IntoIterator<Item = (BandGas, f64)>,
+    ) -> f64 {
         let Some(j) = self.term else {
             return self.effective_coefficient_per_unit_amount(a);
         };
-        if let Some(partner_amount) = self.partner_vertical_amount {
-            let own = 1.0
-                - Self::band_transmittance(self.gas, a, EFFECTIVE_AIR_MASS * self.vertical_amount);
-            let partner = 1.0
-                - Self::band_transmittance(
-                    self.partner_gas(),
-                    a_partner,
-                    EFFECTIVE_AIR_MASS * partner_amount,
-                );
-            if partner > own {
+        let own = 1.0
+            - Self::band_transmittance(self.gas, a, EFFECTIVE_AIR_MASS * self.vertical_amount());
+        for (gas, a_other) in others {
+            let Some(amount) = self.amounts.vertical(gas).filter(|_| gas != self.gas) else {
+                continue;
+            };
+            let other = 1.0 - Self::band_transmittance(gas, a_other, EFFECTIVE_AIR_MASS * amount);
+            if other > own {
                 return self.effective_coefficient_per_unit_amount(a);
             }
         }
@@ -266,21 +475,28 @@ impl GasBand {
         let factor = match self.gas {
             BandGas::WaterVapour => term.water_factor,
             BandGas::MixedGases => term.mixed_factor,
+            BandGas::Methane => term.methane_factor,
         };
         factor * a
     }
 
     /// Cross-section per molecule on `grid`, m^2.
     pub(crate) fn sample(&self, grid: &WavelengthGrid) -> Result<SampledSpectrum> {
-        let own = sampled_band_coefficients(self.gas, grid)?;
-        let partner = sampled_band_coefficients(self.partner_gas(), grid)?;
+        let own = self.amounts.sampled_coefficients(self.gas, grid)?;
+        let mut others = Vec::new();
+        for gas in BandGas::ALL {
+            if gas != self.gas && self.amounts.vertical(gas).is_some() {
+                others.push((gas, self.amounts.sampled_coefficients(gas, grid)?));
+            }
+        }
         let per_molecule = 1.0 / self.molecules_per_unit();
         Ok(SampledSpectrum::from_values(
             own.values()
                 .iter()
-                .zip(partner.values())
-                .map(|(a, a_partner)| {
-                    self.coefficient_per_unit_amount(*a, *a_partner) * per_molecule
+                .enumerate()
+                .map(|(i, a)| {
+                    let others = others.iter().map(|(gas, values)| (*gas, values[i]));
+                    self.coefficient_per_unit_amount(*a, others) * per_molecule
                 })
                 .collect(),
         ))
@@ -292,54 +508,87 @@ impl GasBand {
     }
 }
 
-/// The banded gases as species: water vapour (`water`: precipitable
-/// water above sea level, cm, and the scale height of its exponential
-/// profile, m), named `water vapour`, and, when `mixed_gases`, the O2 and
-/// CO2 of one sea-level air column over an exponential profile of
-/// [`MIXED_GAS_SCALE_HEIGHT_M`], named `mixed gases (O2, CO2)`.
-pub fn banded_gas_species(water: Option<(f64, f64)>, mixed_gases: bool) -> Vec<Species> {
-    let water = water.filter(|(cm, _)| *cm > 0.0);
-    let mixed_amount = mixed_gases.then_some(1.0);
-    let mut species = Vec::new();
+/// What an atmosphere file's `[gases]` asks for (`banded_gas_species`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BandedGases {
+    /// Precipitable water above sea level, cm, and the scale height of its
+    /// exponential profile, m (`None`, or 0 cm: no water vapour).
+    pub water: Option<(f64, f64)>,
+    /// The O2 and CO2 of one sea-level air column.
+    pub mixed_gases: bool,
+    /// CO2 in the mixed gases, ppm ([`CO2_REFERENCE_PPM`]: the band model's).
+    pub co2_ppm: f64,
+    /// CH4, ppm of one sea-level air column (0: none).
+    pub ch4_ppm: f64,
+}
+
+impl BandedGases {
+    /// Water vapour (`water`) and the mixed gases (`mixed_gases`) at the
+    /// band model's CO2, no CH4.
+    pub fn new(water: Option<(f64, f64)>, mixed_gases: bool) -> BandedGases {
+        BandedGases {
+            water,
+            mixed_gases,
+            co2_ppm: CO2_REFERENCE_PPM,
+            ch4_ppm: 0.0,
+        }
+    }
+}
+
+/// The banded gases as species: water vapour (precipitable water above
+/// sea level, cm, on an exponential profile), named `water vapour`; when
+/// `mixed_gases`, the O2 and CO2 of one sea-level air column over an
+/// exponential profile of [`MIXED_GAS_SCALE_HEIGHT_M`], named
+/// `mixed gases (O2, CO2)`; with `ch4_ppm` > 0, that much CH4 in one air
+/// column on the same profile, named `methane (CH4)`.
+pub fn banded_gas_species(gases: &BandedGases) -> Vec<Species> {
+    let water = gases.water.filter(|(cm, _)| *cm > 0.0);
+    let amounts = BandAmounts {
+        water_cm: water.map(|(cm, _)| cm),
+        mixed_columns: gases.mixed_gases.then_some(1.0),
+        co2_ppm: gases.co2_ppm,
+        methane_ppm: (gases.ch4_ppm > 0.0).then_some(gases.ch4_ppm),
+    };
+    let species = |name: &str, gas: BandGas, scale_height_m: f64, molecules_per_m2: f64| Species {
+        name: name.into(),
+        profile: DensityProfile::Exponential { scale_height_m },
+        model: SpeciesModel::AbsorbingGas(AbsorbingGas {
+            cross_section: AbsorptionCrossSection::Band(GasBand {
+                gas,
+                term: None,
+                amounts,
+            }),
+            amount: GasAmount::ColumnDobsonUnits(
+                molecules_per_m2 / MOLECULES_PER_M2_PER_DOBSON_UNIT,
+            ),
+        }),
+    };
+    let mut out = Vec::new();
     if let Some((cm, scale_height_m)) = water {
-        species.push(Species {
-            name: "water vapour".into(),
-            profile: DensityProfile::Exponential { scale_height_m },
-            model: SpeciesModel::AbsorbingGas(AbsorbingGas {
-                cross_section: AbsorptionCrossSection::Band(GasBand {
-                    gas: BandGas::WaterVapour,
-                    term: None,
-                    vertical_amount: cm,
-                    partner_vertical_amount: mixed_amount,
-                }),
-                amount: GasAmount::ColumnDobsonUnits(
-                    cm * MOLECULES_PER_M2_PER_CM_PRECIPITABLE_WATER
-                        / MOLECULES_PER_M2_PER_DOBSON_UNIT,
-                ),
-            }),
-        });
+        out.push(species(
+            "water vapour",
+            BandGas::WaterVapour,
+            scale_height_m,
+            cm * MOLECULES_PER_M2_PER_CM_PRECIPITABLE_WATER,
+        ));
     }
-    if let Some(amount) = mixed_amount {
-        species.push(Species {
-            name: "mixed gases (O2, CO2)".into(),
-            profile: DensityProfile::Exponential {
-                scale_height_m: MIXED_GAS_SCALE_HEIGHT_M,
-            },
-            model: SpeciesModel::AbsorbingGas(AbsorbingGas {
-                cross_section: AbsorptionCrossSection::Band(GasBand {
-                    gas: BandGas::MixedGases,
-                    term: None,
-                    vertical_amount: amount,
-                    partner_vertical_amount: water.map(|(cm, _)| cm),
-                }),
-                amount: GasAmount::ColumnDobsonUnits(
-                    amount * AIR_MOLECULES_PER_M2_SEA_LEVEL_COLUMN
-                        / MOLECULES_PER_M2_PER_DOBSON_UNIT,
-                ),
-            }),
-        });
+    if let Some(columns) = amounts.mixed_columns {
+        out.push(species(
+            "mixed gases (O2, CO2)",
+            BandGas::MixedGases,
+            MIXED_GAS_SCALE_HEIGHT_M,
+            columns * AIR_MOLECULES_PER_M2_SEA_LEVEL_COLUMN,
+        ));
     }
-    species
+    if let Some(ppm) = amounts.methane_ppm {
+        out.push(species(
+            "methane (CH4)",
+            BandGas::Methane,
+            MIXED_GAS_SCALE_HEIGHT_M,
+            ppm * 1e-6 * AIR_MOLECULES_PER_M2_SEA_LEVEL_COLUMN,
+        ));
+    }
+    out
 }
 
 /// Whether `atmosphere` has a banded gas.
@@ -465,7 +714,11 @@ mod tests {
             let tau: Vec<f64> = optics
                 .species
                 .iter()
-                .filter(|s| s.name == "water vapour" || s.name.starts_with("mixed gases"))
+                .filter(|s| {
+                    s.name == "water vapour"
+                        || s.name.starts_with("mixed gases")
+                        || s.name.starts_with("methane")
+                })
                 .fold(vec![0.0; grid.len()], |mut acc, s| {
                     for (a, v) in acc.iter_mut().zip(s.optical_depth_extinction().values()) {
                         *a += v;
@@ -483,7 +736,10 @@ mod tests {
         let mut atmosphere = Atmosphere::preset("earth-clear").unwrap();
         atmosphere
             .species
-            .extend(banded_gas_species(Some((water_cm, 2000.0)), true));
+            .extend(banded_gas_species(&BandedGases::new(
+                Some((water_cm, 2000.0)),
+                true,
+            )));
         atmosphere
     }
 
@@ -553,11 +809,15 @@ mod tests {
         let band = GasBand {
             gas: BandGas::WaterVapour,
             term: None,
-            vertical_amount: 1.5,
-            partner_vertical_amount: Some(1.0),
+            amounts: BandAmounts {
+                water_cm: Some(1.5),
+                mixed_columns: Some(1.0),
+                co2_ppm: CO2_REFERENCE_PPM,
+                methane_ppm: None,
+            },
         };
         let a = 27.0; // 930 nm
-        let k = band.coefficient_per_unit_amount(a, 0.0);
+        let k = band.coefficient_per_unit_amount(a, [(BandGas::MixedGases, 0.0)]);
         let t = |m: f64| (-k * 1.5 * m).exp();
         let exact = |m: f64| water_band_transmittance(a * 1.5 * m);
         assert!((t(2.0) - exact(2.0)).abs() < 1e-12);
@@ -614,6 +874,273 @@ mod tests {
         );
         let message = Atmosphere::from_toml_str(&clash).unwrap_err().to_string();
         assert!(message.contains("species[0].name"), "{message}");
+    }
+
+    /// The banded species' vertical optical depths on `grid` for each
+    /// k-term and the effective solve.
+    fn band_optical_depths(atmosphere: &Atmosphere, grid: &WavelengthGrid) -> Vec<Vec<f64>> {
+        let mut terms = k_distribution_terms(atmosphere);
+        terms.push((1.0, atmosphere.clone()));
+        terms
+            .iter()
+            .flat_map(|(_, at_term)| {
+                at_term
+                    .compute_optics(grid)
+                    .unwrap()
+                    .species
+                    .iter()
+                    .map(|s| s.optical_depth_extinction().values().to_vec())
+                    .collect::<Vec<_>>()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn co2_at_the_band_models_amount_is_the_key_absent_bit_for_bit() {
+        // 1200-2100 nm every 5 nm: the O2 1.27 um band, the O2/CO2 split
+        // (1290-1320 nm), water's 1.4 and 1.9 um bands and CO2's.
+        let grid = WavelengthGrid::new(1200.0, 2100.0, 5.0).unwrap();
+        let absent =
+            Atmosphere::from_toml_str(&format!("{FILE}[gases]\nprecipitable_water_cm = 2.9\n"))
+                .unwrap();
+        let given = Atmosphere::from_toml_str(&format!(
+            "{FILE}[gases]\nprecipitable_water_cm = 2.9\nco2_ppm = 330\n"
+        ))
+        .unwrap();
+        assert_eq!(absent, given);
+        assert_eq!(
+            band_optical_depths(&absent, &grid),
+            band_optical_depths(&given, &grid)
+        );
+        // The split table summed back is the table (its two parts cover
+        // every row once): to rounding, on a grid that falls between rows.
+        let fine = WavelengthGrid::new(600.0, 2500.0, 1.0).unwrap();
+        let whole = sampled_band_coefficients(BandGas::MixedGases, &fine).unwrap();
+        let split = sampled_mixed_coefficients(&fine, CO2_REFERENCE_PPM).unwrap();
+        for i in 0..fine.len() {
+            assert!(
+                (whole[i] - split[i]).abs() <= 1e-14 * whole[i].abs(),
+                "{} nm: {} vs {}",
+                fine.wavelength_nm(i),
+                whole[i],
+                split[i]
+            );
+        }
+    }
+
+    #[test]
+    fn doubling_co2_deepens_the_2_um_band_as_the_band_model_says_and_leaves_o2_alone() {
+        // Mixed gases only (no water), 330 and 660 ppm of CO2: at 2005 nm
+        // (a_u = 21, CO2's 2.0 um band) the k-sum of the slant column is
+        // T_u(s a_u M m) with s = 1 and 2; the A band (760 nm) and the
+        // 1.27 um O2 band keep their optical depths bit for bit.
+        let grid = WavelengthGrid::new(760.0, 2005.0, 5.0).unwrap();
+        let index = |nm: f64| ((nm - 760.0) / 5.0).round() as usize;
+        let at = |ppm: f64| {
+            Atmosphere::from_toml_str(&format!(
+                "{FILE}[gases]\nprecipitable_water_cm = 0\nco2_ppm = {ppm}\n"
+            ))
+            .unwrap()
+        };
+        let (single, double) = (at(330.0), at(660.0));
+        let a_u = sampled_band_coefficients(BandGas::MixedGases, &grid).unwrap();
+        let column = 1.0 - (-100e3 / MIXED_GAS_SCALE_HEIGHT_M).exp();
+        let i = index(2005.0);
+        assert_eq!(a_u[i], 21.0);
+        for air_mass in [1.0, 3.0] {
+            let t1 = k_transmittance(&single, &grid, air_mass)[i];
+            let t2 = k_transmittance(&double, &grid, air_mass)[i];
+            let want1 = mixed_band_transmittance(a_u[i] * column * air_mass);
+            let want2 = mixed_band_transmittance(2.0 * a_u[i] * column * air_mass);
+            println!(
+                "2005 nm, air mass {air_mass}: 1 - T = {} (330 ppm), {} (660 ppm); band model {} and {}",
+                1.0 - t1,
+                1.0 - t2,
+                1.0 - want1,
+                1.0 - want2
+            );
+            for (got, want) in [(t1, want1), (t2, want2)] {
+                assert!((got - want).abs() / (1.0 - want) < 0.02, "{got} vs {want}");
+            }
+            // Deeper, by less than double (the band saturates), and by the
+            // band model's ratio within the two 2 % errors.
+            let ratio = (1.0 - t2) / (1.0 - t1);
+            let want = (1.0 - want2) / (1.0 - want1);
+            assert!(ratio > 1.1 && ratio < 2.0, "{ratio}");
+            assert!((ratio / want - 1.0).abs() < 0.03, "{ratio} vs {want}");
+        }
+        let (d1, d2) = (
+            band_optical_depths(&single, &grid),
+            band_optical_depths(&double, &grid),
+        );
+        for nm in [760.0, 1270.0] {
+            for (one, two) in d1.iter().zip(&d2) {
+                assert_eq!(one[index(nm)], two[index(nm)], "{nm} nm");
+            }
+        }
+        assert!(d2[0][i] > 1.5 * d1[0][i]);
+        // No CO2: the 2.0 um band is gone, the A band stays.
+        let none = band_optical_depths(&at(0.0), &grid);
+        assert_eq!(none[0][i], 0.0);
+        assert_eq!(none[0][index(760.0)], d1[0][index(760.0)]);
+    }
+
+    #[test]
+    fn the_ch4_k_distribution_reproduces_lowtran7s_transmittance() {
+        // exp(-y^0.5844) against sum_j w_j exp(-c_m,j y): within 3.1 % of
+        // max(1 - T, 0.01) over y in [1e-4, 1e3] (the script's fit: 0.0304),
+        // and within 7.3e-4 of T below (where 1 - T < 0.0046).
+        let k = |y: f64| -> f64 {
+            k_terms()
+                .iter()
+                .map(|term| term.weight * (-term.methane_factor * y).exp())
+                .sum()
+        };
+        let mut worst: f64 = 0.0;
+        for y in log_points(1e-4, 1e3, 2000) {
+            let t = methane_band_transmittance(y);
+            worst = worst.max((k(y) - t).abs() / (1.0 - t).max(0.01));
+        }
+        let mut worst_weak: f64 = 0.0;
+        for y in log_points(1e-9, 1e-4, 2000) {
+            worst_weak = worst_weak.max((k(y) - methane_band_transmittance(y)).abs());
+        }
+        println!(
+            "CH4 k-terms: {worst} of max(1 - T, 0.01) above y = 1e-4, {worst_weak} of T below"
+        );
+        assert!(worst < 0.031 && worst > 0.01, "{worst}");
+        assert!(worst_weak < 7.3e-4 && worst_weak > 1e-4, "{worst_weak}");
+    }
+
+    #[test]
+    fn ch4_columns_follow_lowtran7s_band_model() {
+        // 1.8 ppm of CH4 alone (no water, no mixed gases): the k-sum of the
+        // slant column at the 1.666 um Q branch and in the 2.3 um band is
+        // exp(-(a_m c M m)^0.5844), within the fit's error.
+        let atmosphere = Atmosphere::from_toml_str(&format!(
+            "{FILE}[gases]\nprecipitable_water_cm = 0\nmixed_gases = false\nch4_ppm = 1.8\n"
+        ))
+        .unwrap();
+        let names: Vec<&str> = atmosphere.species.iter().map(|s| s.name.as_str()).collect();
+        assert_eq!(names, ["methane (CH4)"]);
+        let grid = WavelengthGrid::new(1650.0, 2400.0, 5.0).unwrap();
+        let a_m = sampled_band_coefficients(BandGas::Methane, &grid).unwrap();
+        let column = 1.0 - (-100e3 / MIXED_GAS_SCALE_HEIGHT_M).exp();
+        for air_mass in [1.0, 3.0] {
+            let k = k_transmittance(&atmosphere, &grid, air_mass);
+            let mut deepest: (f64, f64) = (0.0, 1.0);
+            for i in 0..grid.len() {
+                let z = a_m[i] * 1.8 * column * air_mass;
+                let want = methane_band_transmittance(z);
+                let ok = if z >= 1e-4 {
+                    (k[i] - want).abs() / (1.0 - want).max(0.01) < 0.031
+                } else {
+                    (k[i] - want).abs() < 7.3e-4
+                };
+                assert!(
+                    ok,
+                    "{} nm, m {air_mass}: {} vs {want}",
+                    grid.wavelength_nm(i),
+                    k[i]
+                );
+                if want < deepest.1 {
+                    deepest = (grid.wavelength_nm(i), want);
+                }
+            }
+            println!(
+                "CH4 1.8 ppm, air mass {air_mass}: deepest T = {} at {} nm",
+                deepest.1, deepest.0
+            );
+        }
+        // The 1.666 um Q branch (LOWTRAN 7's C' = -3.3351 at 6005 cm^-1):
+        // a_m = 10^C' 0.79963 / 1.7139 per ppm of one air column.
+        let q = WavelengthGrid::new(1e7 / 6005.0, 1e7 / 6005.0, 1.0).unwrap();
+        let a_q = sampled_band_coefficients(BandGas::Methane, &q).unwrap()[0];
+        let want = 10f64.powf(-3.3351) * 0.79963 / 1.7139;
+        assert!((a_q / want - 1.0).abs() < 1e-4, "{a_q} vs {want}");
+        // Nothing below 1.63 um, nor between the bands.
+        let outside = WavelengthGrid::new(700.0, 1620.0, 10.0).unwrap();
+        let none = sampled_band_coefficients(BandGas::Methane, &outside).unwrap();
+        assert!(none.values().iter().all(|v| *v == 0.0));
+        let between = WavelengthGrid::new(1720.0, 2120.0, 10.0).unwrap();
+        let none = sampled_band_coefficients(BandGas::Methane, &between).unwrap();
+        assert!(none.values().iter().all(|v| *v == 0.0));
+    }
+
+    #[test]
+    fn where_ch4_and_water_overlap_the_stronger_keeps_the_terms() {
+        // 2.9 cm of water and 1.8 ppm of CH4 over CH4's two bands: the
+        // direct beam through the sky's slant path, summed over the terms,
+        // over the gas-free beam, against T_w T_m (random overlap). The
+        // weaker gas takes its Beer-Lambert coefficient exact at air mass
+        // 2, and CH4's curve of growth (z^0.58) is far from Beer-Lambert even
+        // where it is weak: with the sun at 60 degrees the k-sum is within
+        // 12 % of max(1 - T, 0.01) (10 % expected from the tables at 5 nm).
+        use crate::sky::Sky;
+        let with = |gases: &str| {
+            Atmosphere::from_toml_str(&format!(
+                "{FILE}[[species]]\nname = \"air\"\nnumber_density_m3 = 2.545e25\nprofile.exponential.scale_height_m = 8000\nscattering.rayleigh.gas = \"air\"\n{gases}"
+            ))
+            .unwrap()
+        };
+        let clear = with("");
+        let gases =
+            with("[gases]\nprecipitable_water_cm = 2.9\nmixed_gases = false\nch4_ppm = 1.8\n");
+        let grid = WavelengthGrid::new(1640.0, 2440.0, 10.0).unwrap();
+        let a_w = sampled_band_coefficients(BandGas::WaterVapour, &grid).unwrap();
+        let a_m = sampled_band_coefficients(BandGas::Methane, &grid).unwrap();
+        let direct = |atmosphere: &Atmosphere| {
+            Sky::builder(atmosphere)
+                .sun_deg(60.0, 180.0)
+                .wavelengths(grid)
+                .build()
+                .unwrap()
+                .direct_normal_irradiance()
+        };
+        let (reference, summed) = (direct(&clear), direct(&gases));
+        let air_mass = 1.0 / 60f64.to_radians().sin();
+        let (mut worst, mut at): (f64, f64) = (0.0, 0.0);
+        for i in 0..grid.len() {
+            if a_m[i] == 0.0 {
+                continue;
+            }
+            let t = summed[i] / reference[i];
+            let want = water_band_transmittance(a_w[i] * 2.9 * air_mass)
+                * methane_band_transmittance(a_m[i] * 1.8 * air_mass);
+            let error = (t - want).abs() / (1.0 - want).max(0.01);
+            if error > worst {
+                (worst, at) = (error, grid.wavelength_nm(i));
+            }
+            assert!(error < 0.12, "{} nm: {t} vs {want}", grid.wavelength_nm(i));
+        }
+        println!("water and CH4: worst error {worst} of max(1 - T, 0.01), at {at} nm");
+        assert!(worst > 0.02, "{worst}");
+    }
+
+    #[test]
+    fn the_gases_table_checks_co2_and_ch4() {
+        for (bad, needle) in [
+            ("co2_ppm = -1", "gases.co2_ppm = -1 ppm"),
+            ("co2_ppm = 20000", "gases.co2_ppm = 20000 ppm"),
+            ("ch4_ppm = -0.1", "gases.ch4_ppm = -0.1 ppm"),
+            (
+                "mixed_gases = false\nco2_ppm = 400",
+                "gases.co2_ppm: goes with the O2 and CO2 bands, but mixed_gases = false",
+            ),
+        ] {
+            let message = Atmosphere::from_toml_str(&format!(
+                "{FILE}[gases]\nprecipitable_water_cm = 1\n{bad}\n"
+            ))
+            .unwrap_err()
+            .to_string();
+            assert!(message.contains(needle), "{message}");
+        }
+        // ch4_ppm = 0 is no CH4 (the default).
+        let zero = Atmosphere::from_toml_str(&format!(
+            "{FILE}[gases]\nprecipitable_water_cm = 1\nch4_ppm = 0\n"
+        ))
+        .unwrap();
+        assert_eq!(zero.species.len(), 2);
     }
 
     #[test]
@@ -697,7 +1224,9 @@ mod tests {
         let mut clear = Atmosphere::preset("clear-sky-reference").unwrap();
         clear.species.retain(|s| s.name == "air");
         let mut gases = clear.clone();
-        gases.species.extend(banded_gas_species(None, true));
+        gases
+            .species
+            .extend(banded_gas_species(&BandedGases::new(None, true)));
         let grid = WavelengthGrid::new(760.0, 760.0, 10.0).unwrap();
         let elevation = 60.0;
         let zenith = |atmosphere: &Atmosphere| {

@@ -123,6 +123,11 @@ use crate::table::NumericTable;
 /// Molecules per m^2 in one Dobson unit.
 pub const MOLECULES_PER_M2_PER_DOBSON_UNIT: f64 = 2.6867e20;
 
+/// Molecules per cm^2 in one Dobson unit: 0.01 mm of the gas at 273.15 K
+/// and 1013.25 hPa, 1e-3 cm times the Loschmidt constant 2.686780e19
+/// cm^-3 (CODATA 2018), written 2.6867e16 as the m^-2 value above.
+pub const MOLECULES_PER_CM2_PER_DOBSON_UNIT: f64 = 2.6867e16;
+
 const OZONE_233K_CSV: &str = include_str!("../data/ozone_cross_section_233K_10nm.csv");
 /// The end of the ozone table's zero bins past the published data, nm
 /// (the grid's longest wavelength, 2500 nm, is the middle of its last
@@ -736,5 +741,58 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(message.contains("\"ozone\" or \"no2\""), "{message}");
+    }
+
+    #[test]
+    fn a_column_in_molecules_per_cm2_is_the_same_column_in_dobson_units() {
+        use crate::atmosphere::Atmosphere;
+        let file = |amount: &str| {
+            Atmosphere::from_toml_str(&format!(
+                "name = \"g\"\n[planet]\nradius_m = 6360e3\natmosphere_height_m = 100e3\n[sun]\nspectrum = \"astm-e490\"\n[[species]]\nname = \"NO2\"\n{amount}\nprofile.exponential.scale_height_m = 1000\nabsorption.gas = \"no2\"\n"
+            ))
+        };
+        // 0.22 DU = 0.22 x 2.6867e16 = 5.91074e15 molecules cm^-2.
+        let grid: WavelengthGrid = "400:460:10".parse().unwrap();
+        let tau = |atmosphere: Atmosphere| {
+            atmosphere.compute_optics(&grid).unwrap().species[0]
+                .optical_depth_extinction()
+                .values()
+                .to_vec()
+        };
+        let du = tau(file("column_dobson_units = 0.22").unwrap());
+        let molecules = tau(file("column_molecules_cm2 = 5.91074e15").unwrap());
+        for (a, b) in du.iter().zip(&molecules) {
+            assert!(*a > 1e-3 && (a / b - 1.0).abs() < 1e-12, "{a} vs {b}");
+        }
+        // Both, or neither of the three amounts: one line naming the keys.
+        for (amount, needle) in [
+            (
+                "column_dobson_units = 0.22\ncolumn_molecules_cm2 = 5.9e15",
+                "species[0]: give the column as column_dobson_units or column_molecules_cm2, not both",
+            ),
+            (
+                "",
+                "species[0]: an absorbing gas needs exactly one of column_dobson_units, column_molecules_cm2 or number_density_m3",
+            ),
+            (
+                "column_molecules_cm2 = -1",
+                "species[0].column_molecules_cm2 = -1 molecules cm^-2",
+            ),
+        ] {
+            let message = file(amount).unwrap_err().to_string();
+            assert!(message.contains(needle), "{message}");
+            assert!(!message.contains('\n'), "{message}");
+        }
+        // A scattering species takes no column, in either unit.
+        let message = Atmosphere::from_toml_str(
+            "name = \"g\"\n[planet]\nradius_m = 6360e3\natmosphere_height_m = 100e3\n[sun]\nspectrum = \"astm-e490\"\n[[species]]\nname = \"air\"\nnumber_density_m3 = 2.5e25\ncolumn_molecules_cm2 = 1e16\nprofile.exponential.scale_height_m = 8000\nscattering.rayleigh.gas = \"air\"\n",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            message
+                .contains("species[0].column_molecules_cm2: is not used by a scattering species"),
+            "{message}"
+        );
     }
 }

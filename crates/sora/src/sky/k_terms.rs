@@ -199,7 +199,7 @@ impl Sky {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::atmosphere::gas_bands::banded_gas_species;
+    use crate::atmosphere::gas_bands::{BandedGases, banded_gas_species};
     use crate::camera::Camera;
     use crate::geometry::ViewDirection;
     use crate::sky::{ImageSettings, Method, Plane, Polarisation};
@@ -218,7 +218,10 @@ mod tests {
         let mut atmosphere = Atmosphere::preset("earth-clear").unwrap();
         atmosphere
             .species
-            .extend(banded_gas_species(Some((2.9, 2000.0)), true));
+            .extend(banded_gas_species(&BandedGases::new(
+                Some((2.9, 2000.0)),
+                true,
+            )));
         let grid = WavelengthGrid::new(740.0, 780.0, 20.0).unwrap();
         let build = |a: &Atmosphere| {
             Sky::builder(a)

@@ -1188,17 +1188,18 @@ mod tests {
     /// `crates/sora-web`) against the same oracle, marched at the default 4
     /// panels: the preview's 4 streams per hemisphere, one panel along each
     /// path besides its cuts and 2 nodes on each panel near the horizon (24
-    /// cosines), and the refinement's 8 streams, 2 panels and 2 nodes.
+    /// cosines), and the refinement's 7 streams, 1 panel and 2 nodes.
     /// Measured, on the ground and at 30 km: the preview 1.2 % and 0.44 %
     /// (its quadrature with 4 panels 0.21 % and 1.1 %; 4 streams with the
     /// default panels and quadrature 0.05 % and 0.27 %), the refinement
-    /// 0.78 % and 0.14 %. One node near the horizon (16 cosines) is 12 % and
+    /// 1.17 % and 0.090 % (8 streams: 1.15 % and 0.095 %, with 2 panels
+    /// 0.78 % and 0.14 %). One node near the horizon (16 cosines) is 12 % and
     /// 9 % off with 4 streams, which is why it is not used.
     #[test]
     fn the_explorers_coarser_quadratures_stay_near_the_brute_force_integral() {
         for (k, (fine, _)) in fine_moment_errors(4, 1, 2)
             .into_iter()
-            .chain(fine_moment_errors(8, 2, 2))
+            .chain(fine_moment_errors(7, 1, 2))
             .enumerate()
         {
             assert!(
