@@ -563,8 +563,8 @@ pub fn build_sky(atmosphere: &Atmosphere, spec: &SkySpec, quality: Quality) -> R
 /// with the spherical first order instead of 15, whose cost is each node's
 /// layers), 12 Gauss panels along each view ray instead of 16, and the
 /// polarisation correction's columns solved at every third wavelength
-/// (`polarisation_wavelength_stride`, cubics between; the library's
-/// default solves every one). Both march the twilight first order more
+/// (`polarisation_wavelength_stride`, cubics between, as the library's
+/// default, and wherever the sky's absorption needs). Both march the twilight first order more
 /// coarsely than Full (4 panels along each path, 40 cosines in its fine
 /// moments after sunset): 1 panel and 2 nodes on each panel near the
 /// horizon (24 cosines; `first_order_panels`, `first_order_fine_nodes`).

@@ -328,8 +328,10 @@ impl MultipleScatteringField {
             geometry.add_columns_toward_sun(sun_axis.angle(s), &mut sun_columns);
         }
         let polarisation = request.polarised.then(|| {
-            let anchors =
-                WavelengthAnchors::new(&sky.optics().grid, settings.polarisation_wavelength_stride);
+            let anchors = WavelengthAnchors::following_optics(
+                sky.optics(),
+                settings.polarisation_wavelength_stride,
+            );
             solve_polarisation_columns(sky, (&geometry, &scaled), &anchors)
         });
         let first_spherical = sun_axis

@@ -63,21 +63,26 @@
 //! ratio made such segments 5-6 % too bright.
 //!
 //! **Wavelengths**: the columns are solved at the anchors of
-//! `MultipleScatteringSettings::polarisation_wavelength_stride` (every
-//! wavelength by default; at a stride above 1 every stride-th and the
-//! last, at most 60 nm apart:
-//! `spectrum/anchors.rs`); at the other wavelengths both columns' fields,
+//! `MultipleScatteringSettings::polarisation_wavelength_stride` that
+//! follow the sky's absorption (every third wavelength by default and the
+//! last, at most 60 nm apart, and every wavelength where the anchors'
+//! cubic misses the column's absorbing optical depth, scattering optical
+//! depth or ground albedo: `spectrum/anchors.rs`; stride 1: every
+//! wavelength); at the other wavelengths both columns' fields,
 //! per unit of solar irradiance, are the cubic through the four nearest
 //! anchors' (the same weights for both, so their ratio is a weighted mean
 //! of the anchors'), and the views' source integration is the
 //! wavelength's own (its optical depths and albedos). Against every
 //! wavelength solved (stride 1, the exact path and the test's oracle,
 //! `tests/polarisation_wavelength_stride.rs`; the Mie ratios interpolated
-//! alike), over suns 30, 5 and -4, the principal plane and an almucantar,
-//! 380-780 nm every 20 nm: within 4.9e-4 in I and 1.5e-3 in the degree of
-//! polarisation for earth-clear and earth-hazy, 7e-5 and 4.3e-3 for
-//! mars-dust (its Mie ratios at 760 nm); a grid of one or two
-//! wavelengths, or one coarser than 60 nm, is solved at every wavelength.
+//! alike), over suns 30, 5 and -4, 380-780 nm every 20 nm: within 5e-4 in
+//! I and 1.5e-3 in the degree of polarisation for earth-clear and
+//! earth-hazy, 7e-5 and 4.3e-3 for mars-dust (its Mie ratios at 760 nm);
+//! earth-clear-summer (ozone, NO2, O2-O2, the water and O2 bands) within
+//! 5e-4 and 1.1e-3 on 280-360, 680-800 and 880-1000 nm every 5 nm,
+//! 380-780 and 280-2500 nm every 20 nm (docs/polarisation.md); a grid of
+//! one or two wavelengths, or one coarser than 60 nm, is solved at every
+//! wavelength.
 //!
 //! **The truncated phase matrix**: delta-M truncates the phase function
 //! (`phase_fourier.rs`); the matrix's other elements are taken in the

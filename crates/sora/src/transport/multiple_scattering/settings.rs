@@ -30,12 +30,14 @@ pub struct MultipleScatteringSettings {
     /// Polarised light (the fast method): the polarisation correction's
     /// columns and the Mie phase-matrix ratios computed at every this many
     /// wavelengths (and the last; at most 60 nm apart) and interpolated in
-    /// wavelength between them by cubics (`spectrum/anchors.rs`; the
-    /// measured error at 3 is in `docs/polarisation.md`: within 5e-4 in I
-    /// and 1.5e-3 in the degree of polarisation on Earth over 380-780 nm,
-    /// 4.3e-3 in the degree for Mars's dust, but 0.35 in I at 290 nm, in
-    /// ozone's Hartley band, and 4.7e-3 in I in the 940-nm water band); 1,
-    /// the default, computes them at every wavelength, the exact path.
+    /// wavelength between them by cubics; the columns also at every
+    /// wavelength where the anchors' cubic would miss the sky's absorbing
+    /// optical depth (gas bands, `spectrum/anchors.rs`). The measured error
+    /// of the default 3 is in `docs/polarisation.md`: within 5e-4 in I and
+    /// 1.1e-3 in the degree of polarisation on Earth (earth-clear-summer's
+    /// gas bands included, 280-2500 nm), 4.3e-3 in the degree for Mars's
+    /// dust (its Mie ratios). 1 computes them at every wavelength, the
+    /// exact path.
     pub polarisation_wavelength_stride: usize,
     /// Gauss panels along each path of the twilight first order (the
     /// first order marched through the spherical shell for the sun nodes
@@ -60,7 +62,7 @@ impl Default for MultipleScatteringSettings {
             view_ray_panels: 16,
             table_view_zenith_nodes: 37,
             table_azimuth_nodes: 19,
-            polarisation_wavelength_stride: 1,
+            polarisation_wavelength_stride: 3,
             first_order_panels: spherical_first_order::PANELS,
             first_order_fine_nodes: spherical_first_order::FINE_PANEL_NODES,
         }
