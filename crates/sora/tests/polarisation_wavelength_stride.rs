@@ -152,7 +152,7 @@ fn the_anchors_follow_the_o2_a_band() {
     holds_on_earth_clear_summer((680.0, 800.0, 5.0));
 }
 
-// Measured: I 1.2e-5 (sun -4), degree 5.4e-4 (sun 5).
+// Measured: I 1.6e-5, degree 1.3e-4 (sun -4).
 #[test]
 fn the_anchors_follow_the_water_band_at_940_nm() {
     holds_on_earth_clear_summer((880.0, 1000.0, 5.0));
@@ -164,8 +164,10 @@ fn the_anchors_follow_the_gases_on_the_paper_grid() {
     holds_on_earth_clear_summer((380.0, 780.0, 20.0));
 }
 
-// Measured: I 2.4e-4 (sun 5), degree 1.2e-3 (sun -4).
+// Measured: I 2.4e-4 (sun 5), degree 1.2e-3 (sun -4). About 3.5 minutes
+// on 2 cores: a long validation run (README, "Run the tests").
 #[test]
+#[ignore]
 fn the_anchors_follow_the_gases_from_280_to_2500_nm() {
     holds_on_earth_clear_summer((280.0, 2500.0, 20.0));
 }

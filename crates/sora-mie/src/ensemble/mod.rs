@@ -235,7 +235,10 @@ pub use index_interpolation::{
     MAX_INTERPOLATED_ABSORPTION_RATIO, MAX_INTERPOLATED_REAL_INDEX_SPREAD,
     index_interpolation_applies,
 };
-pub use phase_matrix::{PhaseMatrixRatios, compute_ensemble_phase_matrix_ratios};
+pub use phase_matrix::{
+    PhaseMatrixRatios, compute_ensemble_phase_matrix_ratios,
+    compute_shared_ensemble_phase_matrix_ratios,
+};
 pub use phase_table::{
     InvalidPhaseTable, TabulatedPhaseFunction, compute_ensemble_phase_function,
     ensemble_phase_table_angles_deg,

@@ -31,11 +31,12 @@
 
 use super::phase::{PhaseFunction, TabulatedPhase};
 use crate::error::{Error, Result};
+use crate::mie::Complex64;
 use crate::mie::distribution::SizeDistribution;
 use crate::mie::ensemble::{
     AerosolPhaseFunction, EnsembleError, EnsembleOptics, EnsembleSettings, PhaseMatrixRatios,
     compute_ensemble_cross_sections, compute_ensemble_optics_spectrum,
-    compute_ensemble_phase_matrix_ratios,
+    compute_shared_ensemble_phase_matrix_ratios,
 };
 use crate::mie::paper_phase::AerosolPhaseMode;
 use crate::mie::refractive_index::{RefractiveIndexError, RefractiveIndexModel};
@@ -183,38 +184,52 @@ impl MieAerosol {
     ) -> Result<()> {
         let settings = EnsembleSettings::default().phase_function_quadrature;
         let nodes = table.cos_theta_nodes().to_vec();
-        let wavelengths_nm: Vec<f64> = anchors
-            .anchors()
-            .iter()
-            .map(|&i| grid.wavelength_nm(i))
-            .collect();
-        // One wavelength a task: each is a Mie solution per radius node and
-        // angle, the whole cost (a polarised sky's build waited on it).
-        let mut per_wavelength: Vec<Option<Result<PhaseMatrixRatios>>> =
-            wavelengths_nm.iter().map(|_| None).collect();
-        crate::parallel::for_each_chunk_mut(&mut per_wavelength, 1, |i, slot| {
-            let wavelength_nm = wavelengths_nm[i];
+        // The anchors grouped by the particles' index, in first-seen
+        // order: one group (one Mie solution per node of a quadrature in
+        // size parameter shared by its wavelengths,
+        // `compute_shared_ensemble_phase_matrix_ratios`) a task.
+        let mut groups: Vec<(Complex64, Vec<usize>)> = Vec::new();
+        for (n, &i) in anchors.anchors().iter().enumerate() {
+            let m = self
+                .refractive_index
+                .refractive_index_at(grid.wavelength_nm(i))
+                .map_err(|e| ensemble_error(name, e.into()))?;
+            match groups.iter_mut().find(|(index, _)| *index == m) {
+                Some((_, members)) => members.push(n),
+                None => groups.push((m, vec![n])),
+            }
+        }
+        let mut per_group: Vec<Option<Result<Vec<PhaseMatrixRatios>>>> =
+            groups.iter().map(|_| None).collect();
+        crate::parallel::for_each_chunk_mut(&mut per_group, 1, |g, slot| {
+            let (m, members) = &groups[g];
+            let wavelengths_nm: Vec<f64> = members
+                .iter()
+                .map(|&n| grid.wavelength_nm(anchors.anchors()[n]))
+                .collect();
             slot[0] = Some(
-                self.refractive_index
-                    .refractive_index_at(wavelength_nm)
-                    .map_err(|e| ensemble_error(name, e.into()))
-                    .and_then(|m| {
-                        compute_ensemble_phase_matrix_ratios(
-                            wavelength_nm,
-                            m,
-                            &self.size_distribution,
-                            &settings,
-                            &nodes,
-                        )
-                        .map_err(|e| ensemble_error(name, e))
-                    }),
+                compute_shared_ensemble_phase_matrix_ratios(
+                    &wavelengths_nm,
+                    *m,
+                    &self.size_distribution,
+                    &settings,
+                    &nodes,
+                )
+                .map_err(|e| ensemble_error(name, e)),
             );
         });
-        // The first error in wavelength order, whatever the threads did.
-        let at_anchors = per_wavelength
+        // Back in anchor order; the first error in group order.
+        let mut at_anchors: Vec<Option<PhaseMatrixRatios>> =
+            anchors.anchors().iter().map(|_| None).collect();
+        for ((_, members), ratios) in groups.iter().zip(per_group.into_iter().flatten()) {
+            for (&n, ratios) in members.iter().zip(ratios?) {
+                at_anchors[n] = Some(ratios);
+            }
+        }
+        let at_anchors: Vec<PhaseMatrixRatios> = at_anchors
             .into_iter()
-            .flatten()
-            .collect::<Result<Vec<_>>>()?;
+            .map(|r| r.expect("every anchor is in one group"))
+            .collect();
         let ratios = (0..grid.len())
             .map(|i| {
                 let blend = anchors.blend(i);
