@@ -26,7 +26,7 @@ use crate::arguments::{
 /// of them, and from 256 directions the fast method reads them from an
 /// image's kinds of tables (within 0.1 % of the exact per-direction
 /// path, the worst near the sun; 16,384 polarised directions cost about
-/// 1.3 times a 128 x 128 fisheye). Radiance is in W m^-2 sr^-1 nm^-1 for
+/// 1.4 times a 128 x 128 fisheye). Radiance is in W m^-2 sr^-1 nm^-1 for
 /// the atmosphere's sun.
 ///
 /// With banded gases (an atmosphere file's [gases]) every radiance is the

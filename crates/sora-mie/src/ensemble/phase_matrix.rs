@@ -41,7 +41,7 @@ use crate::Complex64;
 use crate::distribution::{
     RadiusQuadrature, RadiusQuadratureSettings, SharedSizeParameterQuadrature, SizeDistribution,
 };
-use crate::sphere::MieSolution;
+use crate::sphere::{MieError, MieSolution};
 
 /// F12/F11, F33/F11 and F34/F11 of an ensemble at the scattering-angle
 /// cosines it was computed at (dimensionless; 0 where F11 is 0).
@@ -116,18 +116,13 @@ pub fn compute_shared_ensemble_phase_matrix_ratios(
         if weights.iter().all(|&w| w == 0.0) {
             continue;
         }
-        let mie_error = |error| EnsembleError::Mie {
-            wavelength_nm: wavelengths_nm[0],
-            radius_m: x / wavenumbers_per_m[0],
-            error,
-        };
-        let solution = match &mut solution {
-            Some(solution) => {
-                solution.recompute(refractive_index, x).map_err(mie_error)?;
-                solution
+        let solution = solve_in_place(&mut solution, refractive_index, x).map_err(|error| {
+            EnsembleError::Mie {
+                wavelength_nm: wavelengths_nm[0],
+                radius_m: x / wavenumbers_per_m[0],
+                error,
             }
-            None => solution.insert(MieSolution::compute(refractive_index, x).map_err(mie_error)?),
-        };
+        })?;
         solution.amplitudes_table(cos_theta, &mut s1, &mut s2);
         for (sums, &weight) in sums.iter_mut().zip(weights) {
             if weight != 0.0 {
@@ -139,6 +134,22 @@ pub fn compute_shared_ensemble_phase_matrix_ratios(
         .iter()
         .map(|sums| ratios_of_sums(sums, cos_theta))
         .collect())
+}
+
+/// The sphere of size parameter `x` and index `refractive_index` in
+/// `solution`: its buffers recomputed in place, or made on the first node.
+fn solve_in_place(
+    solution: &mut Option<MieSolution>,
+    refractive_index: Complex64,
+    x: f64,
+) -> Result<&MieSolution, MieError> {
+    match solution {
+        Some(solution) => {
+            solution.recompute(refractive_index, x)?;
+            Ok(solution)
+        }
+        None => Ok(solution.insert(MieSolution::compute(refractive_index, x)?)),
+    }
 }
 
 /// Adds one node's [S11, S12, S33, S34] at each angle, times `weight`, to
@@ -190,18 +201,13 @@ pub(super) fn phase_matrix_sums(
     let (mut s1, mut s2) = (vec![zero; cos_theta.len()], vec![zero; cos_theta.len()]);
     for (&radius_m, &weight) in quadrature.radii_m().iter().zip(quadrature.weights()) {
         let x = wavenumber_per_m * radius_m;
-        let mie_error = |error| EnsembleError::Mie {
-            wavelength_nm,
-            radius_m,
-            error,
-        };
-        let solution = match &mut solution {
-            Some(solution) => {
-                solution.recompute(refractive_index, x).map_err(mie_error)?;
-                solution
+        let solution = solve_in_place(&mut solution, refractive_index, x).map_err(|error| {
+            EnsembleError::Mie {
+                wavelength_nm,
+                radius_m,
+                error,
             }
-            None => solution.insert(MieSolution::compute(refractive_index, x).map_err(mie_error)?),
-        };
+        })?;
         scattering_x_squared += weight * x * x * solution.efficiencies().qsca;
         solution.amplitudes_table(cos_theta, &mut s1, &mut s2);
         add_node(&mut sums, weight, &s1, &s2);

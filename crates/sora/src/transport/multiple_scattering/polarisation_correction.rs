@@ -79,7 +79,7 @@
 //! I and 1.5e-3 in the degree of polarisation for earth-clear and
 //! earth-hazy, 7e-5 and 4.3e-3 for mars-dust (its Mie ratios at 760 nm);
 //! earth-clear-summer (ozone, NO2, O2-O2, the water and O2 bands) within
-//! 5e-4 and 1.1e-3 on 280-360, 680-800 and 880-1000 nm every 5 nm,
+//! 5e-4 and 1.2e-3 on 280-360, 680-800 and 880-1000 nm every 5 nm,
 //! 380-780 and 280-2500 nm every 20 nm (docs/polarisation.md); a grid of
 //! one or two wavelengths, or one coarser than 60 nm, is solved at every
 //! wavelength.

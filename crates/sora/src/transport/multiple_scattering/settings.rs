@@ -34,8 +34,8 @@ pub struct MultipleScatteringSettings {
     /// wavelength where the anchors' cubic would miss the sky's absorbing
     /// optical depth (gas bands, `spectrum/anchors.rs`). The measured error
     /// of the default 3 is in `docs/polarisation.md`: within 5e-4 in I and
-    /// 1.1e-3 in the degree of polarisation on Earth (earth-clear-summer's
-    /// gas bands included, 280-2500 nm), 4.3e-3 in the degree for Mars's
+    /// 1.4e-3 in the degree of polarisation on Earth (earth-clear-summer's
+    /// gas bands, 280-2500 nm, within 1.2e-3), 4.3e-3 in the degree for Mars's
     /// dust (its Mie ratios). 1 computes them at every wavelength, the
     /// exact path.
     pub polarisation_wavelength_stride: usize,
