@@ -40,6 +40,9 @@ pub struct Sky {
     /// a source table at half the steps (built on first use; see
     /// [`Sky::view_tables`]).
     pub(super) view_tables: OnceLock<ImageTables>,
+    /// The polarisation correction's table (built on first use; see
+    /// [`Sky::polarisation_table`]).
+    pub(super) polarisation_table: OnceLock<Option<Arc<PolarisationTable>>>,
     /// The sky-view table marches multiply scattered light at every this
     /// many nodes of its zenith and azimuth axes ([`IMAGE_MULTIPLE_STRIDE`]
     /// for images).
@@ -58,7 +61,9 @@ pub(super) struct ImageTables {
     pub(super) sky_view: SkyViewTable,
     /// The polarisation correction's ratios over view directions
     /// (polarised skies with multiple scattering).
-    pub(super) polarisation: Option<PolarisationTable>,
+    /// One table per sky, shared by the image and the view tables
+    /// ([`Sky::polarisation_table`]).
+    pub(super) polarisation: Option<Arc<PolarisationTable>>,
 }
 
 /// Nodes of the polarisation table (per half of the zenith-cosine axis,
@@ -148,6 +153,7 @@ impl Sky {
             source_table: OnceLock::new(),
             image_tables: OnceLock::new(),
             view_tables: OnceLock::new(),
+            polarisation_table: OnceLock::new(),
             multiple_stride: IMAGE_MULTIPLE_STRIDE,
             lowest_view_elevation_rad: None,
             k_terms: Vec::new(),
@@ -411,13 +417,23 @@ impl Sky {
             azimuth,
             self.multiple_stride,
         );
-        let polarisation = self
-            .field()
-            .and_then(|field| field.compute_polarisation_table(POLARISATION_TABLE_NODES));
         ImageTables {
             sky_view,
-            polarisation,
+            polarisation: self.polarisation_table(),
         }
+    }
+
+    /// The polarisation correction's ratios over view directions (polarised
+    /// skies with multiple scattering), built on first use: it depends on
+    /// the field only, so images and many views share it.
+    fn polarisation_table(&self) -> Option<Arc<PolarisationTable>> {
+        self.polarisation_table
+            .get_or_init(|| {
+                self.field()
+                    .and_then(|field| field.compute_polarisation_table(POLARISATION_TABLE_NODES))
+                    .map(Arc::new)
+            })
+            .clone()
     }
 }
 
