@@ -78,7 +78,10 @@ degrees. Water does not enter the O2 reference (the A band's H2O lines
 absorb less than 0.1 %), so its rows are for any water column.
 
 Run: target/python-venv/bin/python scripts/gases/make_lbl_reference.py
-(numpy, hitran-api; about 15 s).
+(numpy, hitran-api; about 15 s). With --curve-of-growth it also prints,
+for 10 and 5 nm bands, the one band-model coefficient that fits the
+line-by-line curve of growth best over air masses 1-8 and its largest
+error (what a refit of sora's table alone could reach; not written).
 """
 
 import argparse
@@ -262,9 +265,37 @@ def optical_depths(lines, molecule, masses, nu, layer_list, vmr):
     return tau
 
 
+def curve_of_growth_fits(lines, layer_list):
+    """What a refit of the band model's coefficient could reach (printed only).
+
+    For each band, the line-by-line band mean T(m) for a vertical path
+    scaled by air masses m = 1-8 (plane parallel), and the one coefficient
+    a_u for which the SPECTRL2 curve of growth T_u(a_u m) =
+    exp(-1.41 y / (1 + 118.3 y)^0.45) comes closest to it (least largest
+    error in units of 1 - T).
+    """
+    air_masses = np.array([1.0, 1.155, 1.5, 2.0, 3.0, 3.86, 5.0, 8.0])
+    candidates = np.logspace(-3, 2, 4000)
+    print("curve-of-growth fits (band model, one coefficient, air mass 1-8):")
+    for lo_nm, hi_nm in [(755.0, 765.0), (760.0, 770.0), (765.0, 775.0), (757.5, 762.5),
+                         (760.0, 765.0), (762.5, 767.5), (765.0, 770.0)]:
+        nu = np.arange(1e7 / hi_nm, 1e7 / lo_nm, GRID_STEP)
+        tau = optical_depths(lines, 7, O2_MASS, nu, layer_list, O2_VMR).sum(axis=0)
+        weight = 1.0 / nu**2
+        t = np.array([(np.exp(-m * tau) * weight).sum() / weight.sum() for m in air_masses])
+        y = np.outer(candidates, air_masses)
+        model = np.exp(-1.41 * y / (1 + 118.3 * y) ** 0.45)
+        worst = (np.abs(model - t[None, :]) / (1 - t[None, :])).max(axis=1)
+        best = int(np.argmin(worst))
+        print(f"  {lo_nm:g}-{hi_nm:g} nm: 1 - T {np.round(1 - t, 4)}; a_u {candidates[best]:.4g}, "
+              f"largest error {100 * worst[best]:.1f} % of 1 - T")
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--o2-lines", default=str(ROOT / "target" / "lbl-lines" / "O2.data"))
+    parser.add_argument("--curve-of-growth", action="store_true",
+                        help="also print the best one-coefficient band-model fits (not written)")
     args = parser.parse_args()
     digest = hashlib.sha256(pathlib.Path(args.o2_lines).read_bytes()).hexdigest()
     if digest != O2_SHA256:
@@ -303,6 +334,8 @@ def main():
     )
     OUT.write_text(header + body)
     print(f"wrote {OUT.relative_to(ROOT)}")
+    if args.curve_of_growth:
+        curve_of_growth_fits(lines, layer_list)
 
 
 if __name__ == "__main__":
