@@ -81,7 +81,10 @@ Run: target/python-venv/bin/python scripts/gases/make_lbl_reference.py
 (numpy, hitran-api; about 15 s). With --curve-of-growth it also prints,
 for 10 and 5 nm bands, the one band-model coefficient that fits the
 line-by-line curve of growth best over air masses 1-8 and its largest
-error (what a refit of sora's table alone could reach; not written).
+error (what a refit of sora's table alone could reach), and the largest
+error of exponential sums fitted to each 10 nm band's T(m) (air mass
+1-20) with the band's own weights (3-5 terms) and with sora's 5 shared
+weights (needs scipy; printed, not written).
 """
 
 import argparse
@@ -289,6 +292,46 @@ def curve_of_growth_fits(lines, layer_list):
         best = int(np.argmin(worst))
         print(f"  {lo_nm:g}-{hi_nm:g} nm: 1 - T {np.round(1 - t, 4)}; a_u {candidates[best]:.4g}, "
               f"largest error {100 * worst[best]:.1f} % of 1 - T")
+    print("exponential-sum fits of the 10 nm bands' T(m), air mass 1-20 (needs scipy):")
+    for lo_nm, hi_nm in BANDS_NM:
+        nu = np.arange(1e7 / hi_nm, 1e7 / lo_nm, GRID_STEP)
+        tau = optical_depths(lines, 7, O2_MASS, nu, layer_list, O2_VMR).sum(axis=0)
+        weight = 1.0 / nu**2
+        m = np.logspace(0.0, np.log10(20.0), 60)
+        t = np.array([(np.exp(-mm * tau) * weight).sum() / weight.sum() for mm in m])
+        own = {n: exp_sum_fit(m, t, n, None) for n in (3, 4, 5)}
+        shared = exp_sum_fit(m, t, 5, SORA_K_WEIGHTS)
+        print(f"  {lo_nm:g}-{hi_nm:g} nm: the band's own weights: "
+              + ", ".join(f"{n} terms {100 * e:.2f} %" for n, e in own.items())
+              + f"; sora's 5 shared weights, the band's own k: {100 * shared:.2f} % of 1 - T")
+
+
+# The weights of sora's k-terms (crates/sora/src/data/gas_bands_k_terms.csv).
+SORA_K_WEIGHTS = np.array([0.4860725, 0.3700889, 0.1094314, 0.02870301, 0.00570418])
+
+
+def exp_sum_fit(m, t, terms, weights):
+    """Largest error, in units of 1 - T, of the best sum_j w_j exp(-k_j m) fit of t(m).
+
+    weights None: the weights are fitted too; otherwise they are fixed.
+    """
+    from scipy.optimize import least_squares
+
+    def model(p):
+        if weights is None:
+            w = np.exp(p[:terms])
+            w, k = w / w.sum(), np.exp(p[terms:])
+        else:
+            w, k = weights, np.exp(p)
+        return (w[None, :] * np.exp(-np.outer(m, k))).sum(axis=1)
+
+    best = np.inf
+    for trial in range(8):
+        k0 = np.log(np.logspace(-4, 1.5, terms)) + np.random.default_rng(trial).normal(0, 0.5, terms) * (trial > 0)
+        p0 = k0 if weights is not None else np.concatenate([np.zeros(terms), k0])
+        r = least_squares(lambda p: (model(p) - t) / (1 - t), p0, max_nfev=5000)
+        best = min(best, float(np.abs((model(r.x) - t) / (1 - t)).max()))
+    return best
 
 
 def main():
