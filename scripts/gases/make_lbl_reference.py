@@ -63,6 +63,13 @@ Model
   (sqrt(r2^2 - b^2) - sqrt(r1^2 - b^2)) / (r2 - r1), b = R cos(elevation).
   The direct-beam transmittance at wavenumber nu is
   exp(-sum_i m_i tau_i(nu)).
+- Independent check (--check-hapi, measured): HAPI 1.3.0.0's own
+  absorptionCoefficient_Voigt on the same lines gives the same optical
+  depths over 760-770 nm in layers at 0-1, 12-13 and 32.5-35 km (within
+  4.5e-6 of the peak; band-mean 1 - T equal to 5 decimals at air masses 1
+  and 5). It needs O2.header beside O2.data (HAPI's column description,
+  data/O2.header at the same commit, sha256
+  251ae813bd86b6b86e7a7ba02155d021c47bd34c1ba8c6d88f8883a187bb2a0f).
 - Band average: the mean over the band's wavelengths, uniform in
   wavelength (weight d lambda = d nu / nu^2), of that transmittance.
 - Convergence (760-770 nm, suns 60 and 15 degrees; measured): a 0.001
@@ -306,6 +313,37 @@ def curve_of_growth_fits(lines, layer_list):
               + f"; sora's 5 shared weights, the band's own k: {100 * shared:.2f} % of 1 - T")
 
 
+def check_against_hapi(lines, layer_list, lines_dir):
+    """Our layer optical depths against HAPI's own Voigt code (printed only).
+
+    hapi.absorptionCoefficient_Voigt reads the same lines (the directory
+    holding O2.data also needs O2.header, HAPI's description of its
+    columns) with air broadening and the same 25 cm^-1 wing, for three
+    layers over 760-770 nm; prints the band-mean 1 - T of each for air
+    masses 1 and 5 and the largest relative difference of the optical depth.
+    """
+    import hapi
+
+    hapi.db_begin(str(lines_dir))
+    nu = np.arange(1e7 / 770.0, 1e7 / 760.0, GRID_STEP)
+    weight = 1.0 / nu**2
+    for index in (0, 12, 25):
+        z1, z2, column, p, t = layer_list[index]
+        ours = optical_depths(lines, 7, O2_MASS, nu, [layer_list[index]], O2_VMR)[0]
+        _, coefficient = hapi.absorptionCoefficient_Voigt(
+            SourceTables="O2", HITRAN_units=True, Environment={"p": p / P0_HPA, "T": t},
+            Diluent={"air": 1.0}, WavenumberGrid=nu, WavenumberWing=WING)
+        theirs = coefficient * O2_VMR * column
+        band = [
+            [1 - (np.exp(-m * tau) * weight).sum() / weight.sum() for tau in (ours, theirs)]
+            for m in (1.0, 5.0)
+        ]
+        differs = np.abs(ours - theirs).max() / theirs.max()
+        print(f"  layer {z1:g}-{z2:g} km ({p:.1f} hPa, {t:.1f} K): 1 - T ours/HAPI "
+              f"{band[0][0]:.5f}/{band[0][1]:.5f} (m 1), {band[1][0]:.5f}/{band[1][1]:.5f} (m 5); "
+              f"optical depth differs by {differs:.1e} of its peak")
+
+
 # The weights of sora's k-terms (crates/sora/src/data/gas_bands_k_terms.csv).
 SORA_K_WEIGHTS = np.array([0.4860725, 0.3700889, 0.1094314, 0.02870301, 0.00570418])
 
@@ -337,6 +375,8 @@ def exp_sum_fit(m, t, terms, weights):
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--o2-lines", default=str(ROOT / "target" / "lbl-lines" / "O2.data"))
+    parser.add_argument("--check-hapi", action="store_true",
+                        help="also compare three layers' optical depths with HAPI's Voigt code")
     parser.add_argument("--curve-of-growth", action="store_true",
                         help="also print the best one-coefficient band-model fits (not written)")
     args = parser.parse_args()
@@ -377,6 +417,8 @@ def main():
     )
     OUT.write_text(header + body)
     print(f"wrote {OUT.relative_to(ROOT)}")
+    if args.check_hapi:
+        check_against_hapi(lines, layer_list, pathlib.Path(args.o2_lines).parent)
     if args.curve_of_growth:
         curve_of_growth_fits(lines, layer_list)
 
