@@ -56,8 +56,8 @@ Model
   peak). Lines within 25 cm^-1 of the band's edges, each computed out to
   25 cm^-1 from its centre. No line mixing, no O2-O2 collision-induced
   absorption (sora has that as a separate species, `o2_o2`).
-- Grid: 0.002 cm^-1, a sixth of the smallest Doppler half width (0.0118
-  cm^-1 at 13000 cm^-1 and 216.65 K), over each band.
+- Grid: 0.002 cm^-1, a sixth of the smallest Doppler half width (0.0120
+  cm^-1: 16O2 at 12850 cm^-1 and 216.65 K), over each band.
 - Path: a spherical shell of radius 6360 km (sora's Earth presets), no
   refraction: layer i's slant column is its vertical column times
   (sqrt(r2^2 - b^2) - sqrt(r1^2 - b^2)) / (r2 - r1), b = R cos(elevation).
