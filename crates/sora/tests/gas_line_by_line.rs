@@ -1,0 +1,201 @@
+//! The banded gases' direct beam against a line-by-line reference (issue 36).
+//!
+//! `data/gas_line_by_line_reference.csv` (written by
+//! `scripts/gases/make_lbl_reference.py` from HITRAN 2016 lines through the
+//! U.S. Standard Atmosphere 1976, a spherical shell of radius 6360 km)
+//! holds the direct-beam transmittance T of the O2 A band averaged over 10 nm
+//! bands, for the sun at 60 and 15 degrees. Here sora's is computed for the
+//! same cases: the direct normal irradiance of a Rayleigh atmosphere (the
+//! same U.S. standard air, radius 6360 km) with `[gases]` (the O2 and CO2
+//! bands, no water) over that of the atmosphere without, summed over the
+//! k-terms by the sky itself, sampled every 1 nm across the band and
+//! averaged (trapezoid), and also read at the band's centre (what one
+//! sample of a 10 nm grid gives). The error is in units of the reference's
+//! absorption 1 - T.
+
+use sora::spectrum::WavelengthGrid;
+use sora::{Atmosphere, Sky};
+
+const REFERENCE: &str = include_str!("data/gas_line_by_line_reference.csv");
+const AIR: &str = include_str!("data/atmosphere_us-standard-1976-rayleigh.toml");
+
+/// One row of the reference.
+struct Case {
+    lo_nm: f64,
+    hi_nm: f64,
+    gas: String,
+    elevation_deg: f64,
+    transmittance: f64,
+}
+
+fn reference() -> Vec<Case> {
+    let mut lines = REFERENCE
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.trim().is_empty());
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let column = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (lo, hi, gas, elevation, t) = (
+        column("band_lo_nm"),
+        column("band_hi_nm"),
+        column("gas"),
+        column("sun_elevation_deg"),
+        column("transmittance"),
+    );
+    lines
+        .map(|line| {
+            let f: Vec<&str> = line.split(',').collect();
+            Case {
+                lo_nm: f[lo].parse().unwrap(),
+                hi_nm: f[hi].parse().unwrap(),
+                gas: f[gas].to_string(),
+                elevation_deg: f[elevation].parse().unwrap(),
+                transmittance: f[t].parse().unwrap(),
+            }
+        })
+        .collect()
+}
+
+/// The U.S. standard Rayleigh air on sora's Earth radius, with `gases` as
+/// its `[gases]` table when given.
+fn atmosphere(gases: Option<&str>) -> Atmosphere {
+    let air = AIR.replace("radius_m = 6370e3", "radius_m = 6360e3");
+    assert!(air.contains("radius_m = 6360e3"));
+    let text = match gases {
+        Some(table) => format!("{air}\n[gases]\n{table}\n"),
+        None => air,
+    };
+    Atmosphere::from_toml_str(&text).unwrap()
+}
+
+/// sora's direct-beam transmittance of `gases` alone on `grid`, sun at
+/// `elevation_deg`.
+fn gas_transmittance(gases: &str, grid: WavelengthGrid, elevation_deg: f64) -> Vec<f64> {
+    let direct = |atmosphere: &Atmosphere| {
+        Sky::builder(atmosphere)
+            .sun_deg(elevation_deg, 180.0)
+            .wavelengths(grid)
+            .build()
+            .unwrap()
+            .direct_normal_irradiance()
+    };
+    let (with, without) = (direct(&atmosphere(Some(gases))), direct(&atmosphere(None)));
+    (0..grid.len()).map(|i| with[i] / without[i]).collect()
+}
+
+/// sora against one reference case: (band mean, band centre) transmittance.
+fn sora_case(case: &Case) -> (f64, f64) {
+    let gases = match case.gas.as_str() {
+        "O2" => "precipitable_water_cm = 0",
+        other => panic!("no sora case for gas {other}"),
+    };
+    let grid = WavelengthGrid::new(case.lo_nm, case.hi_nm, 1.0).unwrap();
+    let t = gas_transmittance(gases, grid, case.elevation_deg);
+    let n = t.len();
+    let mean = (t[1..n - 1].iter().sum::<f64>() + 0.5 * (t[0] + t[n - 1])) / (n - 1) as f64;
+    let centre = t[n / 2];
+    assert_eq!(n % 2, 1, "the band's centre is a sample");
+    (mean, centre)
+}
+
+/// Error of `t` in units of the reference's absorption, percent.
+fn error_percent(t: f64, reference: f64) -> f64 {
+    100.0 * ((1.0 - t) - (1.0 - reference)) / (1.0 - reference)
+}
+
+/// Each case: the reference's 1 - T and sora's 1 - T (band mean, band
+/// centre), printed as a table.
+fn comparison() -> Vec<(Case, f64, f64)> {
+    println!("band nm   sun  ref 1-T  sora 1-T (mean, centre)  error % of 1-T (mean, centre)");
+    reference()
+        .into_iter()
+        .map(|case| {
+            let (mean, centre) = sora_case(&case);
+            println!(
+                "{}-{} {:>4} {:.4}  {:.4} {:.4}  {:+.1} {:+.1}",
+                case.lo_nm,
+                case.hi_nm,
+                case.elevation_deg,
+                1.0 - case.transmittance,
+                1.0 - mean,
+                1.0 - centre,
+                error_percent(mean, case.transmittance),
+                error_percent(centre, case.transmittance)
+            );
+            (case, mean, centre)
+        })
+        .collect()
+}
+
+#[test]
+fn the_reference_is_a_curve_of_growth_and_sora_reads_it() {
+    // The reference's own physics: each band absorbs more for the lower sun,
+    // but less than in proportion to the air mass (its strong lines are
+    // saturated); the band of the P branch (760-770 nm) absorbs most. sora's
+    // transmittances are computed for every case and lie in (0, 1), lower
+    // for the lower sun.
+    let rows = comparison();
+    assert_eq!(rows.len(), 6);
+    let air_mass = |e: f64| 1.0 / e.to_radians().sin();
+    for pair in rows.chunks(2) {
+        let [(high, sora_high, _), (low, sora_low, _)] = pair else {
+            unreachable!()
+        };
+        assert_eq!((high.elevation_deg, low.elevation_deg), (60.0, 15.0));
+        assert_eq!((high.lo_nm, high.hi_nm), (low.lo_nm, low.hi_nm));
+        let ratio = (1.0 - low.transmittance) / (1.0 - high.transmittance);
+        assert!(
+            ratio > 1.2 && ratio < air_mass(15.0) / air_mass(60.0),
+            "{}-{} nm: {ratio}",
+            low.lo_nm,
+            low.hi_nm
+        );
+        assert!(0.0 < *sora_low && sora_low < sora_high && *sora_high < 1.0);
+    }
+    let core = rows.iter().filter(|(c, ..)| c.lo_nm == 760.0);
+    for (case, ..) in core {
+        let others = rows
+            .iter()
+            .filter(|(c, ..)| c.lo_nm != 760.0 && c.elevation_deg == case.elevation_deg);
+        for (other, ..) in others {
+            assert!(case.transmittance < other.transmittance);
+        }
+    }
+}
+
+/// The first "Done when" of issue 36 for the O2 A band: sora's band-mean
+/// direct beam within 2 % of the line-by-line absorption. It fails today, by
+/// this much (measured; suns 60 and 15 degrees, error of sora's band mean
+/// and of its band-centre sample in % of the reference's 1 - T):
+///
+/// ```text
+/// band nm   ref 1-T        sora band mean   error          centre sample
+/// 755-765   0.309 0.433    0.177 0.303      -43 % -30 %    -26 % -9 %
+/// 760-770   0.344 0.502    0.205 0.354      -41 % -30 %    -31 % -19 %
+/// 765-775   0.065 0.116    0.103 0.188      +57 % +62 %    +26 % +36 %
+/// ```
+///
+/// The gap is the band model's (SPECTRL2 after Leckner 1978: a_u = 4 at
+/// 762.5 nm, 0.35 at 767.5 nm, 0 at 757.5 and 780 nm, read by linear
+/// interpolation), not the k-terms' (they reproduce it within 1.6 %; the
+/// unit tests of `gas_bands.rs`): its 760-765 nm absorbs 32 % at air mass
+/// 1.15 where the lines absorb 56 %, and its 765-770 nm 9 % where they
+/// absorb 13 %. No single coefficient on the band model's curve of growth
+/// fits a 10 nm band within 2 % from air mass 1 to 8 (best: 11-18 % at
+/// 755-770 nm, 7.3 % at 765-775 nm; 2.1-4.8 % for the 5 nm bands 760-765,
+/// 762.5-767.5 and 765-770 nm, 19 % for 757.5-762.5 nm; printed by
+/// `make_lbl_reference.py --curve-of-growth`), since a 10 nm band is partly
+/// transparent. k-terms fitted to the lines band by band do meet it: an
+/// exponential sum with the band's own weights fits each 10 nm band's T(m)
+/// within 0.5 % of 1 - T with 3 terms and 0.04 % with 4 (air mass 1-20),
+/// but with sora's 5 weights, shared by all wavelengths today, and the
+/// band's own k only within 1.5-4.8 % (the same option of the script).
+#[test]
+#[ignore = "measured gap: sora's A band (SPECTRL2 band model) is 30-43 % short of line-by-line 1 - T at 755-770 nm and 57-62 % over at 765-775 nm"]
+fn o2_a_band_within_two_percent_of_line_by_line() {
+    let mut worst: f64 = 0.0;
+    for (case, mean, _) in comparison() {
+        worst = worst.max(error_percent(mean, case.transmittance).abs());
+    }
+    println!("worst band-mean error: {worst:.1} % of 1 - T");
+    assert!(worst < 2.0, "{worst:.1} % of 1 - T");
+}
