@@ -761,3 +761,333 @@ fn the_aerial_perspective_matches_the_library() {
     }
     assert!(worst <= 0.02, "{worst}");
 }
+
+/// The views and distances of `the_aerial_perspective_matches_the_library`.
+fn aerial_test_segments(d: f64) -> Vec<(ViewDirection, f64)> {
+    let mut segments = Vec::new();
+    for elevation in [1.0, 2.0, 5.0, 10.0, 20.0, 30.0, 45.0, 70.0] {
+        for relative in [0.0, 10.0, 45.0, 90.0, 135.0, 180.0] {
+            segments.push((ViewDirection::new(elevation, 180.0 + relative).unwrap(), d));
+        }
+    }
+    segments
+}
+
+/// Columns (m) of every species from `p` to the top of the atmosphere
+/// toward `s` (midpoint rule, `steps` steps), None in the planet's shadow.
+fn columns_to_top(
+    optics: &crate::atmosphere::AtmosphereOptics,
+    (ground, top): (f64, f64),
+    p: Vector3,
+    s: Vector3,
+    steps: usize,
+) -> Option<Vec<f64>> {
+    let b = p.dot(s);
+    let c = p.dot(p);
+    // The planet in the way: the ray's closest approach below the ground
+    // ahead of the point.
+    if b < 0.0 && c - b * b < ground * ground {
+        return None;
+    }
+    let length = -b + (b * b - c + top * top).max(0.0).sqrt();
+    let ds = length / steps as f64;
+    let mut columns = vec![0.0; optics.species.len()];
+    for k in 0..steps {
+        let h = (p + s * ((k as f64 + 0.5) * ds)).length() - ground;
+        for (col, sp) in columns.iter_mut().zip(&optics.species) {
+            *col += sp.profile.relative_density(h.max(0.0)) * ds;
+        }
+    }
+    Some(columns)
+}
+
+/// Prototype measurements (ignored; `--nocapture` prints them) for a
+/// march of the segment in a shader, against `Sky::compute_segment_light`
+/// on the views and distances of `the_aerial_perspective_matches_the_library`:
+/// - which terms make the segment's light (single scattering, the
+///   segment's own scaled field, the light from behind its peaks scatter
+///   forward, the forward-peak term), as shares of its luminance;
+/// - single scattering marched here spectrally (exact phase functions,
+///   midpoint rule) against the library's, and with the spectrum
+///   collapsed to the three XYZ channels (per channel, every species'
+///   coefficients and phase function weighted by the channel's matching
+///   function times the solar spectrum) or to `bands` bands;
+/// - the multiply scattered light spread along the ray as its scattering
+///   coefficient is, `L(d) = SS(d) + (L(l) - SS(l)) M(d) / M(l)`,
+///   M(d) = integral_0^d T beta_sca ds (library SS and L; no table).
+#[test]
+#[ignore]
+fn aerial_march_prototype() {
+    use crate::geometry::segment_in_atmosphere;
+    use crate::transport::{Observation, SingleScatteringScene};
+    let atmosphere = Atmosphere::preset("earth-clear").unwrap();
+    let xy = |c: [f64; 3]| {
+        let sum = c[0] + c[1] + c[2];
+        [c[0] / sum, c[1] / sum]
+    };
+    let bands: usize = std::env::var("SORA_BANDS")
+        .ok()
+        .map(|b| b.parse().unwrap())
+        .unwrap_or(8);
+    for sun_deg in [60.0, 10.0, 2.0, -4.0] {
+        let sky = Sky::builder(&atmosphere)
+            .sun_deg(sun_deg, 180.0)
+            .build()
+            .unwrap();
+        let scene = SingleScatteringScene::new(
+            &atmosphere,
+            sky.wavelengths(),
+            Observation {
+                observer_altitude_m: 0.0,
+                sun_elevation_deg: sun_deg,
+                sun_azimuth_deg: 180.0,
+            },
+        )
+        .unwrap();
+        let optics = scene.optics();
+        let radii = scene.radii_m();
+        let (ground, top) = radii;
+        let n = sky.wavelengths().len();
+        let to_xyz = SpectrumToXyz::new(sky.wavelengths(), Observer::default());
+        let xyz = |s: &[f64]| {
+            let c = to_xyz
+                .to_xyz(&crate::spectrum::SampledSpectrum::from_values(s.to_vec()))
+                .unwrap();
+            [c.x, c.y, c.z]
+        };
+        // The XYZ of a unit spike at each wavelength: the channels' weights.
+        let weights: Vec<[f64; 3]> = (0..n)
+            .map(|i| {
+                let mut spike = vec![0.0; n];
+                spike[i] = 1.0;
+                xyz(&spike)
+            })
+            .collect();
+        let sun = crate::geometry::direction_from_elevation_azimuth(sun_deg, 180.0);
+        let solar = optics.solar_irradiance_w_m2_nm.values();
+        let species = optics.species.len();
+        let eye = Vector3::new(0.0, 0.0, ground);
+        // Single scattering of the segment, spectral, and collapsed to
+        // `groups` (each a weight per wavelength): the group's solar
+        // irradiance and, per species, its mean extinction, scattering and
+        // scattering-weighted phase function.
+        let march_single = |v: Vector3, d: f64, groups: &[Vec<f64>]| -> (Vec<f64>, Vec<f64>) {
+            let (enter, exit) = segment_in_atmosphere(eye, v, ground, top).unwrap();
+            let length = exit.min(d) - enter;
+            let steps = 400;
+            let ds = length / steps as f64;
+            let mut phase = vec![vec![0.0; n]; species];
+            for (row, sp) in phase.iter_mut().zip(&optics.species) {
+                sp.phase_function.eval_into(v.dot(sun), row);
+            }
+            let mean = |w: &[f64], f: &dyn Fn(usize) -> f64| -> f64 {
+                let total: f64 = w.iter().sum();
+                w.iter().enumerate().map(|(i, w)| w * f(i)).sum::<f64>() / total
+            };
+            // Per group: (E, [ext_j], [sca_j p_j]).
+            let collapsed: Vec<(f64, Vec<f64>, Vec<f64>)> = groups
+                .iter()
+                .map(|w| {
+                    let we: Vec<f64> = w.iter().zip(solar).map(|(a, e)| a * e).collect();
+                    let e = mean(w, &|i| solar[i]);
+                    let ext = (0..species)
+                        .map(|j| mean(&we, &|i| optics.species[j].extinction_per_m[i]))
+                        .collect();
+                    let sca = (0..species)
+                        .map(|j| {
+                            mean(&we, &|i| {
+                                optics.species[j].scattering_per_m[i] * phase[j][i]
+                            })
+                        })
+                        .collect();
+                    (e, ext, sca)
+                })
+                .collect();
+            let mut spectral = vec![0.0; n];
+            let mut grouped = vec![0.0; groups.len()];
+            let mut columns = vec![0.0; species];
+            for k in 0..steps {
+                let p = eye + v * (enter + (k as f64 + 0.5) * ds);
+                let h = (p.length() - ground).max(0.0);
+                let rho: Vec<f64> = optics
+                    .species
+                    .iter()
+                    .map(|sp| sp.profile.relative_density(h))
+                    .collect();
+                let here: Vec<f64> = (0..species)
+                    .map(|j| columns[j] + 0.5 * rho[j] * ds)
+                    .collect();
+                if let Some(to_sun) = columns_to_top(optics, radii, p, sun, 200) {
+                    for (i, out) in spectral.iter_mut().enumerate() {
+                        let (mut tau, mut source) = (0.0, 0.0);
+                        for (j, sp) in optics.species.iter().enumerate() {
+                            tau += sp.extinction_per_m[i] * (here[j] + to_sun[j]);
+                            source += sp.scattering_per_m[i] * phase[j][i] * rho[j];
+                        }
+                        *out += solar[i] * source * (-tau).exp() * ds;
+                    }
+                    for (out, (e, ext, sca)) in grouped.iter_mut().zip(&collapsed) {
+                        let (mut tau, mut source) = (0.0, 0.0);
+                        for j in 0..species {
+                            tau += ext[j] * (here[j] + to_sun[j]);
+                            source += sca[j] * rho[j];
+                        }
+                        *out += e * source * (-tau).exp() * ds;
+                    }
+                }
+                for (c, r) in columns.iter_mut().zip(&rho) {
+                    *c += r * ds;
+                }
+            }
+            (spectral, grouped)
+        };
+        let march_m = |v: Vector3, d: f64| -> Vec<f64> {
+            let (enter, exit) = segment_in_atmosphere(eye, v, ground, top).unwrap();
+            let length = exit.min(d) - enter;
+            let steps = 2000;
+            let ds = length / steps as f64;
+            let mut columns = vec![0.0; species];
+            let mut m = vec![0.0; n];
+            for k in 0..steps {
+                let p = eye + v * (enter + (k as f64 + 0.5) * ds);
+                let h = (p.length() - ground).max(0.0);
+                let rho: Vec<f64> = optics
+                    .species
+                    .iter()
+                    .map(|sp| sp.profile.relative_density(h))
+                    .collect();
+                for (i, out) in m.iter_mut().enumerate() {
+                    let (mut tau, mut sca) = (0.0, 0.0);
+                    for (j, sp) in optics.species.iter().enumerate() {
+                        tau += sp.extinction_per_m[i] * (columns[j] + 0.5 * rho[j] * ds);
+                        sca += sp.scattering_per_m[i] * rho[j];
+                    }
+                    *out += (-tau).exp() * sca * ds;
+                }
+                for (c, r) in columns.iter_mut().zip(&rho) {
+                    *c += r * ds;
+                }
+            }
+            m
+        };
+        // The groups: the three XYZ channels, and `bands` bands of equal
+        // width in wavelength, each band's XYZ its own.
+        let xyz_groups: Vec<Vec<f64>> = (0..3)
+            .map(|c| weights.iter().map(|w| w[c]).collect())
+            .collect();
+        let band_of = |i: usize| (i * bands) / n;
+        let band_groups: Vec<Vec<f64>> = (0..bands)
+            .map(|b| {
+                (0..n)
+                    .map(|i| if band_of(i) == b { 1.0 } else { 0.0 })
+                    .collect()
+            })
+            .collect();
+        // A band's XYZ weights: its wavelengths' weights times the solar
+        // spectrum, normalised by its mean solar irradiance (the grouped
+        // march carries E).
+        let band_xyz = |grouped: &[f64]| -> [f64; 3] {
+            let mut out = [0.0; 3];
+            for (b, g) in grouped.iter().enumerate() {
+                let members: Vec<usize> = (0..n).filter(|i| band_of(*i) == b).collect();
+                let e: f64 = members.iter().map(|i| solar[*i]).sum::<f64>() / members.len() as f64;
+                for i in &members {
+                    for c in 0..3 {
+                        out[c] += g * weights[*i][c] * solar[*i] / e / members.len() as f64
+                            * members.len() as f64;
+                    }
+                }
+            }
+            out
+        };
+        for d in [1e3, 10e3, 50e3] {
+            let segments = aerial_test_segments(d);
+            let whole: Vec<_> = segments.iter().map(|(v, _)| (*v, f64::INFINITY)).collect();
+            let full_d = sky.compute_segment_light(&segments).unwrap();
+            let full_l = sky.compute_segment_light(&whole).unwrap();
+            let largest = full_d
+                .iter()
+                .map(|(l, _)| xyz(l.radiance_w_m2_sr_nm.values())[1])
+                .fold(0.0, f64::max);
+            // Per view: luminance shares of the terms, and the errors.
+            let mut shares = [0.0f64; 4];
+            let mut errors: [Vec<f64>; 4] = Default::default();
+            let mut xy_worst = [0.0f64; 4];
+            for (k, (view, _)) in segments.iter().enumerate() {
+                let v = view.to_vector();
+                let expected = xyz(full_d[k].0.radiance_w_m2_sr_nm.values());
+                if expected[1] <= 1e-3 * largest {
+                    continue;
+                }
+                let parts = sky.segment_term_parts(v, d);
+                let y = |s: &[f64]| xyz(s)[1] / expected[1];
+                let behind: Vec<f64> = (0..n).map(|i| parts[2][i] - parts[1][i]).collect();
+                for (share, part) in
+                    shares
+                        .iter_mut()
+                        .zip([y(&parts[0]), y(&parts[1]), y(&behind), y(&parts[3])])
+                {
+                    *share = share.max(part.abs());
+                }
+                let (ss, grouped) = march_single(v, d, &xyz_groups);
+                let (_, banded) = march_single(v, d, &band_groups);
+                let library_ss = xyz(&parts[0]);
+                let marched = xyz(&ss);
+                let (md, ml) = (march_m(v, d), march_m(v, f64::INFINITY));
+                let parts_l = sky.segment_term_parts(v, f64::INFINITY);
+                let fl = full_l[k].0.radiance_w_m2_sr_nm.values();
+                let spread: Vec<f64> = (0..n)
+                    .map(|i| parts[0][i] + (fl[i] - parts_l[0][i]) * md[i] / ml[i])
+                    .collect();
+                // Errors of single scattering against the library's single
+                // scattering, as a share of the whole light (what it would
+                // add to the aerial perspective's error).
+                let candidates = [
+                    marched,
+                    std::array::from_fn(|c| grouped[c] * weights.iter().map(|w| w[c]).sum::<f64>()),
+                    band_xyz(&banded),
+                ];
+                for (m, c) in candidates.iter().enumerate() {
+                    errors[m].push(((c[1] - library_ss[1]) / expected[1]).abs());
+                    let got: [f64; 3] = std::array::from_fn(|q| expected[q] - library_ss[q] + c[q]);
+                    let (a, b) = (xy(got), xy(expected));
+                    xy_worst[m] = xy_worst[m].max((a[0] - b[0]).abs().max((a[1] - b[1]).abs()));
+                }
+                let s = xyz(&spread);
+                errors[3].push((s[1] / expected[1] - 1.0).abs());
+                let (a, b) = (xy(s), xy(expected));
+                xy_worst[3] = xy_worst[3].max((a[0] - b[0]).abs().max((a[1] - b[1]).abs()));
+            }
+            let p99 = |e: &mut Vec<f64>| {
+                e.sort_by(f64::total_cmp);
+                (
+                    100.0 * e[((e.len() - 1) as f64 * 0.99).round() as usize],
+                    100.0 * e[e.len() / 2],
+                )
+            };
+            eprintln!(
+                "sun {sun_deg} d {} km: largest shares: single {:.0} %, own field {:.0} %, from behind {:.0} %, peak {:.0} %",
+                d / 1e3,
+                100.0 * shares[0],
+                100.0 * shares[1],
+                100.0 * shares[2],
+                100.0 * shares[3]
+            );
+            for (m, name) in [
+                "single marched here, spectral",
+                "single in XYZ",
+                &format!("single in {bands} bands"),
+                "multiple spread by beta_sca",
+            ]
+            .iter()
+            .enumerate()
+            {
+                let (p, med) = p99(&mut errors[m]);
+                eprintln!(
+                    "    {name}: p99 {p:.2} % (median {med:.2} %), xy {:.4}",
+                    xy_worst[m]
+                );
+            }
+        }
+    }
+}
