@@ -900,6 +900,63 @@ fn aerial_march_prototype() {
         // `groups` (each a weight per wavelength): the group's solar
         // irradiance and, per species, its mean extinction, scattering and
         // scattering-weighted phase function.
+        // SORA_SUN_TABLE=A,M: the columns toward the sun read from a
+        // table over the transmittance table's axes (A altitude nodes, M
+        // view-cosine nodes, each row's own horizon), linear in both,
+        // instead of integrated at each step.
+        let thickness = top - ground;
+        let sun_table = std::env::var("SORA_SUN_TABLE").ok().map(|nodes| {
+            let n: Vec<usize> = nodes.split(',').map(|n| n.parse().unwrap()).collect();
+            let (a_count, m_count) = (n[0], n[1]);
+            let mut table = vec![vec![0.0; species]; a_count * m_count];
+            for a in 0..a_count {
+                let r = ground + axes::altitude_of_node(a, a_count, thickness);
+                for m in 0..m_count {
+                    let mu = axes::transmittance_mu_of_node(m, m_count, r, ground)
+                        .max(axes::horizon_cosine(r, ground) + 1e-9);
+                    let direction = Vector3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
+                    table[a * m_count + m] =
+                        columns_to_top(optics, radii, Vector3::new(0.0, 0.0, r), direction, 400)
+                            .unwrap_or(vec![0.0; species]);
+                }
+            }
+            (a_count, m_count, table)
+        });
+        let sun_columns = |p: Vector3| -> Option<Vec<f64>> {
+            let Some((a_count, m_count, table)) = &sun_table else {
+                return columns_to_top(optics, radii, p, sun, 200);
+            };
+            let r = p.length();
+            let h = (r - ground).clamp(0.0, thickness);
+            let mu = sun.dot(p * (1.0 / r));
+            if mu < axes::horizon_cosine(ground + h, ground) {
+                return None;
+            }
+            let (a, fa) = axes::cell(
+                axes::altitude_coordinate(h, thickness, *a_count),
+                0,
+                a_count - 2,
+            );
+            let row = |a: usize| -> Vec<f64> {
+                let r_a = ground + axes::altitude_of_node(a, *a_count, thickness);
+                let (m, fm) = axes::cell(
+                    axes::transmittance_mu_coordinate(mu, *m_count, r_a, ground),
+                    0,
+                    m_count - 2,
+                );
+                (0..species)
+                    .map(|j| {
+                        table[a * m_count + m][j] * (1.0 - fm) + table[a * m_count + m + 1][j] * fm
+                    })
+                    .collect()
+            };
+            let (low, high) = (row(a), row(a + 1));
+            Some(
+                (0..species)
+                    .map(|j| low[j] * (1.0 - fa) + high[j] * fa)
+                    .collect(),
+            )
+        };
         let march_single_steps =
             |v: Vector3, d: f64, groups: &[Vec<f64>], steps: usize| -> (Vec<f64>, Vec<f64>) {
                 let (enter, exit) = segment_in_atmosphere(eye, v, ground, top).unwrap();
@@ -952,7 +1009,7 @@ fn aerial_march_prototype() {
                     }
                     (previous, previous_rho) = (at, rho.clone());
                     let here = columns.clone();
-                    if let Some(to_sun) = columns_to_top(optics, radii, p, sun, 200) {
+                    if let Some(to_sun) = sun_columns(p) {
                         for (i, out) in spectral.iter_mut().enumerate() {
                             let (mut tau, mut source) = (0.0, 0.0);
                             for (j, sp) in optics.species.iter().enumerate() {
@@ -981,6 +1038,7 @@ fn aerial_march_prototype() {
             let n: Vec<usize> = nodes.split(',').map(|n| n.parse().unwrap()).collect();
             Sky::builder(&atmosphere)
                 .sun_deg(sun_deg, 180.0)
+                .polarisation(polarisation)
                 .scattering(Scattering::Multiple(MultipleScatteringSettings {
                     table_view_zenith_nodes: n[0],
                     table_azimuth_nodes: n[1],
@@ -994,6 +1052,10 @@ fn aerial_march_prototype() {
             .unwrap_or(&sky)
             .source_table_for_tests()
             .unwrap();
+        eprintln!(
+            "sun {sun_deg}: source table (levels, suns, view zeniths, azimuths, wavelengths) {:?}",
+            table.nodes()
+        );
         let march_m = |v: Vector3, d: f64| -> Vec<f64> {
             let (enter, exit) = segment_in_atmosphere(eye, v, ground, top).unwrap();
             let length = exit.min(d) - enter;

@@ -264,6 +264,21 @@ impl MultipleScatteringTable {
             });
     }
 
+    /// The table's nodes (prototype measurements, `engine_tables` tests):
+    /// (altitude levels, sun nodes, view zenith nodes, azimuth nodes,
+    /// wavelengths).
+    #[cfg(test)]
+    pub(crate) fn nodes(&self) -> (usize, usize, usize, usize, usize) {
+        let optics = &self.field.optics;
+        (
+            optics.geometry.grid.levels(),
+            optics.sun_axis.count(),
+            self.view_zenith_nodes,
+            self.azimuth_nodes,
+            optics.wavelengths,
+        )
+    }
+
     /// Prototype measurements (`engine_tables` tests): the scaled field's
     /// light along the segment by a midpoint march of `steps` even steps
     /// from this table's source, per wavelength, and per group of
