@@ -338,15 +338,31 @@ impl MultipleScatteringTable {
                 1.0
             };
             let altitude_m = (r - ground).max(0.0);
-            self.lookup_log_source(
-                NodeGeometry {
-                    altitude_m,
-                    sun_cosine,
-                    view_cosine,
-                    cos_azimuth,
-                },
-                &mut log_source,
-            );
+            let node = |altitude_m: f64| NodeGeometry {
+                altitude_m,
+                sun_cosine,
+                view_cosine,
+                cos_azimuth,
+            };
+            // SORA_LEVEL_STRIDE=q: the source read at every q-th level
+            // only (and the top), linear in ln R between them.
+            match std::env::var("SORA_LEVEL_STRIDE").map(|q| q.parse::<usize>().unwrap()) {
+                Ok(q) if q > 1 => {
+                    let all = optics.geometry.grid.altitudes_m();
+                    let mut kept: Vec<f64> = all.iter().step_by(q).copied().collect();
+                    if kept.last() != all.last() {
+                        kept.push(*all.last().unwrap());
+                    }
+                    let (k, t) = super::vertical_grid::locate_among(&kept, altitude_m);
+                    let mut upper = vec![0.0; w];
+                    self.lookup_log_source(node(kept[k]), &mut log_source);
+                    self.lookup_log_source(node(kept[k + 1]), &mut upper);
+                    for (l, u) in log_source.iter_mut().zip(&upper) {
+                        *l += t * (u - *l);
+                    }
+                }
+                _ => self.lookup_log_source(node(altitude_m), &mut log_source),
+            }
             let rho = density(at);
             for j in 0..s {
                 columns[j] += 0.5 * (previous_rho[j] + rho[j]) * (at - previous);
