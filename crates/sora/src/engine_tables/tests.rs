@@ -837,7 +837,19 @@ fn columns_to_top(
 ///   function times the solar spectrum) or to `bands` bands;
 /// - the multiply scattered light spread along the ray as its scattering
 ///   coefficient is, `L(d) = SS(d) + (L(l) - SS(l)) M(d) / M(l)`,
-///   M(d) = integral_0^d T beta_sca ds (library SS and L; no table).
+///   M(d) = integral_0^d T beta_sca ds (library SS and L; no table);
+/// - the march a shader would do: single scattering plus the scaled
+///   field from the library's source table, N steps crowded toward the
+///   eye ([`march_node`]), at every wavelength and in bands.
+///
+/// Scalar light (`SORA_AERIAL_VECTOR=1`: vector). Settings by environment:
+/// `SORA_BANDS` (16), `SORA_STEPS` (32, a comma-separated list),
+/// `SORA_SPACING=even`, `SORA_TABLE_NODES=Z,K` (the source table's view
+/// nodes), `SORA_LEVEL_STRIDE=q` (the source at every q-th level),
+/// `SORA_SUN_TABLE=A,M` (sun columns from a table). With none set it
+/// asserts the issue's bar, 2 %, on the 32-step march in 16 bands (p99
+/// at most 0.59 % measured; docs/engine-tables.md, "A march of the
+/// segment").
 #[test]
 #[ignore]
 fn aerial_march_prototype() {
@@ -851,7 +863,19 @@ fn aerial_march_prototype() {
     let bands: usize = std::env::var("SORA_BANDS")
         .ok()
         .map(|b| b.parse().unwrap())
-        .unwrap_or(8);
+        .unwrap_or(16);
+    let defaults = [
+        "SORA_AERIAL_VECTOR",
+        "SORA_BANDS",
+        "SORA_STEPS",
+        "SORA_SPACING",
+        "SORA_TABLE_NODES",
+        "SORA_LEVEL_STRIDE",
+        "SORA_SUN_TABLE",
+    ]
+    .iter()
+    .all(|name| std::env::var(name).is_err());
+    let mut worst = 0.0f64;
     for sun_deg in [60.0, 10.0, 2.0, -4.0] {
         let polarisation = if std::env::var("SORA_AERIAL_VECTOR").is_ok() {
             Polarisation::Vector
@@ -1133,7 +1157,7 @@ fn aerial_march_prototype() {
         let march_steps: Vec<usize> = std::env::var("SORA_STEPS")
             .ok()
             .map(|s| s.split(',').map(|x| x.parse().unwrap()).collect())
-            .unwrap_or(vec![64, 32]);
+            .unwrap_or(vec![32]);
         for d in [1e3, 10e3, 50e3] {
             let segments = aerial_test_segments(d);
             let whole: Vec<_> = segments.iter().map(|(v, _)| (*v, f64::INFINITY)).collect();
@@ -1280,6 +1304,9 @@ fn aerial_march_prototype() {
             for (q, steps) in march_steps.iter().enumerate() {
                 for (m, name) in ["spectral", "bands"].iter().enumerate() {
                     let (p, med) = p99(&mut march_errors[2 * q + m]);
+                    if *steps == 32 && m == 1 {
+                        worst = worst.max(p / 100.0);
+                    }
                     eprintln!(
                         "    march of {steps} steps, {name}, source table: p99 {p:.2} % (median {med:.2} %), xy {:.4}",
                         march_xy[2 * q + m]
@@ -1287,5 +1314,8 @@ fn aerial_march_prototype() {
                 }
             }
         }
+    }
+    if defaults {
+        assert!(worst <= 0.02, "{worst}");
     }
 }
