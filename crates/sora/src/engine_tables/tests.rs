@@ -691,33 +691,18 @@ fn the_aerial_perspective_matches_the_library() {
     };
     let mut worst = 0.0f64;
     for sun_deg in [60.0, 10.0, 2.0, -4.0] {
-        // Scalar light, as the tables' sky and aerial layers are (the
-        // builder's default for the fast method is vector light, whose
-        // intensity differs by up to 9 % here; SORA_AERIAL_VECTOR=1
-        // measures against it).
-        let polarisation = if std::env::var("SORA_AERIAL_VECTOR").is_ok() {
-            Polarisation::Vector
-        } else {
-            Polarisation::Scalar
-        };
-        let sky = Sky::builder(&atmosphere)
-            .sun_deg(sun_deg, 180.0)
-            .polarisation(polarisation)
-            .build()
-            .unwrap();
+        let (sky, _) = aerial_reference_sky(&atmosphere, sun_deg);
         let s = sky.sun_direction();
         let sun = [s.x, s.y, s.z];
         for d in [1e3, 10e3, 50e3] {
-            let mut segments = Vec::new();
-            let mut vectors = Vec::new();
-            for elevation in [1.0, 2.0, 5.0, 10.0, 20.0, 30.0, 45.0, 70.0] {
-                for relative in [0.0, 10.0, 45.0, 90.0, 135.0, 180.0] {
-                    let view = ViewDirection::new(elevation, 180.0 + relative).unwrap();
+            let segments = aerial_test_segments(d);
+            let vectors: Vec<[f64; 3]> = segments
+                .iter()
+                .map(|(view, _)| {
                     let v = view.to_vector();
-                    segments.push((view, d));
-                    vectors.push([v.x, v.y, v.z]);
-                }
-            }
+                    [v.x, v.y, v.z]
+                })
+                .collect();
             let light = sky.compute_segment_light(&segments).unwrap();
             let expected: Vec<[f64; 3]> = light
                 .iter()
@@ -770,6 +755,24 @@ fn the_aerial_perspective_matches_the_library() {
         }
     }
     assert!(worst <= 0.02, "{worst}");
+}
+
+/// The aerial tests' reference sky at `sun_deg` and its light: scalar, as
+/// the tables' sky and aerial layers are (the builder's default for the
+/// fast method is vector light, whose intensity differs by up to 9 % on
+/// these segments; `SORA_AERIAL_VECTOR=1` measures against it).
+fn aerial_reference_sky(atmosphere: &Atmosphere, sun_deg: f64) -> (Sky, Polarisation) {
+    let polarisation = if std::env::var("SORA_AERIAL_VECTOR").is_ok() {
+        Polarisation::Vector
+    } else {
+        Polarisation::Scalar
+    };
+    let sky = Sky::builder(atmosphere)
+        .sun_deg(sun_deg, 180.0)
+        .polarisation(polarisation)
+        .build()
+        .unwrap();
+    (sky, polarisation)
 }
 
 /// The views and distances of `the_aerial_perspective_matches_the_library`.
@@ -877,16 +880,7 @@ fn aerial_march_prototype() {
     .all(|name| std::env::var(name).is_err());
     let mut worst = 0.0f64;
     for sun_deg in [60.0, 10.0, 2.0, -4.0] {
-        let polarisation = if std::env::var("SORA_AERIAL_VECTOR").is_ok() {
-            Polarisation::Vector
-        } else {
-            Polarisation::Scalar
-        };
-        let sky = Sky::builder(&atmosphere)
-            .sun_deg(sun_deg, 180.0)
-            .polarisation(polarisation)
-            .build()
-            .unwrap();
+        let (sky, polarisation) = aerial_reference_sky(&atmosphere, sun_deg);
         let scene = SingleScatteringScene::new(
             &atmosphere,
             sky.wavelengths(),
