@@ -846,7 +846,7 @@ fn columns_to_top(
 ///   eye ([`march_node`]), at every wavelength and in bands.
 ///
 /// Scalar light (`SORA_AERIAL_VECTOR=1`: vector). Settings by environment:
-/// `SORA_BANDS` (16), `SORA_STEPS` (32, a comma-separated list),
+/// `SORA_PRESET` (earth-clear), `SORA_BANDS` (16), `SORA_STEPS` (32, a comma-separated list),
 /// `SORA_SPACING=even`, `SORA_TABLE_NODES=Z,K` (the source table's view
 /// nodes), `SORA_LEVEL_STRIDE=q` (the source at every q-th level),
 /// `SORA_SUN_TABLE=A,M` (sun columns from a table). With none set it
@@ -858,7 +858,8 @@ fn columns_to_top(
 fn aerial_march_prototype() {
     use crate::geometry::segment_in_atmosphere;
     use crate::transport::{Observation, SingleScatteringScene};
-    let atmosphere = Atmosphere::preset("earth-clear").unwrap();
+    let preset = std::env::var("SORA_PRESET").unwrap_or("earth-clear".into());
+    let atmosphere = Atmosphere::preset(&preset).unwrap();
     let xy = |c: [f64; 3]| {
         let sum = c[0] + c[1] + c[2];
         [c[0] / sum, c[1] / sum]
@@ -869,6 +870,7 @@ fn aerial_march_prototype() {
         .unwrap_or(16);
     let defaults = [
         "SORA_AERIAL_VECTOR",
+        "SORA_PRESET",
         "SORA_BANDS",
         "SORA_STEPS",
         "SORA_SPACING",
@@ -896,20 +898,22 @@ fn aerial_march_prototype() {
         let (ground, top) = radii;
         let n = sky.wavelengths().len();
         let to_xyz = SpectrumToXyz::new(sky.wavelengths(), Observer::default());
-        let xyz = |s: &[f64]| {
-            let c = to_xyz
-                .to_xyz(&crate::spectrum::SampledSpectrum::from_values(s.to_vec()))
-                .unwrap();
-            [c.x, c.y, c.z]
-        };
-        // The XYZ of a unit spike at each wavelength: the channels' weights.
+        // The XYZ of a unit spike at each wavelength: the channels' weights
+        // (XYZ is linear in the spectrum; a part of the light, the
+        // difference of two, may be negative, which `to_xyz` refuses).
         let weights: Vec<[f64; 3]> = (0..n)
             .map(|i| {
                 let mut spike = vec![0.0; n];
                 spike[i] = 1.0;
-                xyz(&spike)
+                let c = to_xyz
+                    .to_xyz(&crate::spectrum::SampledSpectrum::from_values(spike))
+                    .unwrap();
+                [c.x, c.y, c.z]
             })
             .collect();
+        let xyz = |s: &[f64]| -> [f64; 3] {
+            std::array::from_fn(|c| s.iter().zip(&weights).map(|(v, w)| v * w[c]).sum())
+        };
         let sun = crate::geometry::direction_from_elevation_azimuth(sun_deg, 180.0);
         let solar = optics.solar_irradiance_w_m2_nm.values();
         let species = optics.species.len();
