@@ -685,4 +685,4 @@ fn bake_transmittance(
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

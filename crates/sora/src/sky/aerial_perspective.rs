@@ -511,6 +511,34 @@ impl Sky {
         work.segment_sky = Some(sky);
     }
 
+    /// The parts of the light of the air along one segment (prototype
+    /// measurements, `engine_tables` tests): [single scattering, the
+    /// segment's own scaled field, the field with the light from behind
+    /// that the segment's peaks scatter forward, the forward-peak term,
+    /// the ground's share].
+    #[cfg(test)]
+    pub(crate) fn segment_term_parts(&self, view: Vector3, distance_m: f64) -> [Vec<f64>; 5] {
+        self.prepare_field().unwrap();
+        let mut work = self.view_work();
+        self.compute_view_terms((view, distance_m), None, &mut work);
+        let own = work.terms.field.clone();
+        self.compute_segment_terms(view, distance_m, &mut work);
+        let t = &work.terms;
+        let ground = t
+            .ground_sunlit
+            .iter()
+            .zip(&t.ground_skylit)
+            .map(|(a, b)| a + b)
+            .collect();
+        [
+            t.single.clone(),
+            own,
+            t.field.clone(),
+            t.forward_peak.clone(),
+            ground,
+        ]
+    }
+
     /// The path tracer's light of the air along each segment: a black
     /// target at its end.
     fn trace_segments(

@@ -375,6 +375,14 @@ impl Sky {
         )
     }
 
+    /// The multiple-scattering source table (prototype measurements,
+    /// `engine_tables` tests), the field solved first.
+    #[cfg(test)]
+    pub(crate) fn source_table_for_tests(&self) -> Option<&MultipleScatteringTable> {
+        self.prepare_field().unwrap();
+        self.source_table()
+    }
+
     /// The fast method's image tables, built on first use.
     pub(super) fn image_tables(&self) -> &ImageTables {
         self.image_tables

@@ -264,6 +264,138 @@ impl MultipleScatteringTable {
             });
     }
 
+    /// The table's nodes (prototype measurements, `engine_tables` tests):
+    /// (altitude levels, sun nodes, view zenith nodes, azimuth nodes,
+    /// wavelengths).
+    #[cfg(test)]
+    pub(crate) fn nodes(&self) -> (usize, usize, usize, usize, usize) {
+        let optics = &self.field.optics;
+        (
+            optics.geometry.grid.levels(),
+            optics.sun_axis.count(),
+            self.view_zenith_nodes,
+            self.azimuth_nodes,
+            optics.wavelengths,
+        )
+    }
+
+    /// Prototype measurements (`engine_tables` tests): the scaled field's
+    /// light along the segment by a midpoint march of `steps` even steps
+    /// from this table's source, per wavelength, and per group of
+    /// wavelengths in `groups` with every quantity (the species' scaled
+    /// extinction and scattering, the source R) the group's mean.
+    #[cfg(test)]
+    pub(crate) fn march_segment_coarse(
+        &self,
+        (view, distance_m): (Vector3, f64),
+        steps: usize,
+        groups: &[Vec<usize>],
+    ) -> (Vec<f64>, Vec<f64>) {
+        let optics = &self.field.optics;
+        let (w, s) = (optics.wavelengths, optics.species);
+        let (ground, top) = (
+            optics.geometry.ground_radius_m,
+            optics.geometry.top_radius_m,
+        );
+        let (scaled_extinction, scaled_scattering) = (
+            &optics.scaled.scaled_extinction,
+            &optics.scaled.scaled_scattering,
+        );
+        let (mut spectral, mut grouped) = (vec![0.0; w], vec![0.0; groups.len()]);
+        let Some((enter, exit)) =
+            crate::geometry::segment_in_atmosphere(optics.observer, view, ground, top)
+        else {
+            return (spectral, grouped);
+        };
+        let length = exit.min(distance_m) - enter;
+        let mean = |g: &[usize], f: &dyn Fn(usize) -> f64| {
+            g.iter().map(|i| f(*i)).sum::<f64>() / g.len() as f64
+        };
+        let mut columns = vec![0.0; s];
+        let mut log_source = vec![0.0; w];
+        let density = |s: f64| -> Vec<f64> {
+            let h = ((optics.observer + view * (enter + s)).length() - ground).max(0.0);
+            optics
+                .geometry
+                .profiles
+                .iter()
+                .map(|p| p.relative_density(h))
+                .collect()
+        };
+        let (mut previous, mut previous_rho) = (0.0, density(0.0));
+        for k in 0..steps {
+            let (at, ds) = crate::engine_tables::tests::march_node(length, k, steps);
+            let point = optics.observer + view * (enter + at);
+            let r = point.length();
+            let zenith = point * (1.0 / r);
+            let view_cosine = view.dot(zenith).clamp(-1.0, 1.0);
+            let sun_cosine = optics.sun.dot(zenith).clamp(-1.0, 1.0);
+            let sines =
+                ((1.0 - view_cosine * view_cosine) * (1.0 - sun_cosine * sun_cosine)).sqrt();
+            let cos_azimuth = if sines > 1e-12 {
+                ((view.dot(optics.sun) - view_cosine * sun_cosine) / sines).clamp(-1.0, 1.0)
+            } else {
+                1.0
+            };
+            let altitude_m = (r - ground).max(0.0);
+            let node = |altitude_m: f64| NodeGeometry {
+                altitude_m,
+                sun_cosine,
+                view_cosine,
+                cos_azimuth,
+            };
+            // SORA_LEVEL_STRIDE=q: the source read at every q-th level
+            // only (and the top), linear in ln R between them.
+            match std::env::var("SORA_LEVEL_STRIDE").map(|q| q.parse::<usize>().unwrap()) {
+                Ok(q) if q > 1 => {
+                    let all = optics.geometry.grid.altitudes_m();
+                    let mut kept: Vec<f64> = all.iter().step_by(q).copied().collect();
+                    if kept.last() != all.last() {
+                        kept.push(*all.last().unwrap());
+                    }
+                    let (k, t) = super::vertical_grid::locate_among(&kept, altitude_m);
+                    let mut upper = vec![0.0; w];
+                    self.lookup_log_source(node(kept[k]), &mut log_source);
+                    self.lookup_log_source(node(kept[k + 1]), &mut upper);
+                    for (l, u) in log_source.iter_mut().zip(&upper) {
+                        *l += t * (u - *l);
+                    }
+                }
+                _ => self.lookup_log_source(node(altitude_m), &mut log_source),
+            }
+            let rho = density(at);
+            for j in 0..s {
+                columns[j] += 0.5 * (previous_rho[j] + rho[j]) * (at - previous);
+            }
+            (previous, previous_rho) = (at, rho.clone());
+            let here = columns.clone();
+            let source = |i: usize| {
+                if log_source[i] > super::view_march::DARK_LOG_SOURCE {
+                    log_source[i].exp()
+                } else {
+                    0.0
+                }
+            };
+            for (i, out) in spectral.iter_mut().enumerate() {
+                let (mut tau, mut scattering) = (0.0, 0.0);
+                for j in 0..s {
+                    tau += scaled_extinction[i * s + j] * here[j];
+                    scattering += scaled_scattering[i * s + j] * rho[j];
+                }
+                *out += ds * scattering * source(i) * (-tau).exp();
+            }
+            for (out, g) in grouped.iter_mut().zip(groups) {
+                let (mut tau, mut scattering) = (0.0, 0.0);
+                for j in 0..s {
+                    tau += mean(g, &|i| scaled_extinction[i * s + j]) * here[j];
+                    scattering += mean(g, &|i| scaled_scattering[i * s + j]) * rho[j];
+                }
+                *out += ds * scattering * mean(g, &source) * (-tau).exp();
+            }
+        }
+        (spectral, grouped)
+    }
+
     /// ln R(x, view) at one march node, into `log_source`: quadrilinear
     /// in ln R.
     fn lookup_log_source(&self, node: NodeGeometry, log_source: &mut [f64]) {
