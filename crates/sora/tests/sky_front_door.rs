@@ -403,6 +403,40 @@ fn a_moved_polarised_sky_draws_the_image_built_for_its_sun() {
     assert_ne!(drawn_first, built.render_spectral(&image, &|_| {}).unwrap());
 }
 
+/// A sky moved from sun to sun as a slider moves it draws at each sun the
+/// image of the sky built for it, to the bit: the forward-peak tables and
+/// the tilted beam's rows that the skies before it kept (they do not depend
+/// on the sun) are the ones its own sun would compute.
+#[test]
+fn a_sky_moved_down_through_twilight_draws_the_images_built_for_its_suns() {
+    let atmosphere = Atmosphere::preset("earth-hazy").unwrap();
+    let coarse = sora::MultipleScatteringSettings {
+        streams_per_hemisphere: 4,
+        layers: 12,
+        ..Default::default()
+    };
+    let build = |sun: f64| {
+        Sky::builder(&atmosphere)
+            .sun_deg(sun, 120.0)
+            .wavelengths(sora::WavelengthGrid::new(440.0, 660.0, 110.0).unwrap())
+            .scattering(Scattering::Multiple(coarse))
+            .polarisation(sora::Polarisation::Scalar)
+            .build()
+            .unwrap()
+    };
+    let image = ImageSettings::new(Camera::Fisheye, 12, 12);
+    let first = build(10.0);
+    first.render_spectral(&image, &|_| {}).unwrap();
+    for sun in [5.0, 2.0, -4.0, 5.0] {
+        let moved = first.with_sun_deg(sun, 120.0).unwrap();
+        assert_eq!(
+            moved.render_spectral(&image, &|_| {}).unwrap(),
+            build(sun).render_spectral(&image, &|_| {}).unwrap(),
+            "sun {sun}"
+        );
+    }
+}
+
 /// One default light for every front end, set here: polarised
 /// (`Polarisation::Vector`) for the fast method and path tracing, scalar
 /// for the reference march; the default gives the explicit choice's
