@@ -17,7 +17,7 @@ use super::regimes::{
     self, FIRST_ORDER_SUN_ZENITH_DEG, SUNSET_STEP_END_DEG, SUNSET_STEP_START_DEG,
 };
 use super::spherical_first_order::{
-    FirstOrderInputs, MomentQuadrature, compute_spherical_first_order,
+    FirstOrderInputs, MomentQuadrature, compute_spherical_first_order_with_phases, tabulate_phases,
 };
 use super::successive_orders::{self, ColumnSystem, ScaledSpecies};
 use super::view_march::{MultipleScatteringScratch, NodeGeometry, ViewRayOptics, floored_log};
@@ -334,14 +334,25 @@ impl MultipleScatteringField {
             );
             solve_polarisation_columns(sky, (&geometry, &scaled), &anchors)
         });
+        let sun_free = sky.sun_free_field_parts();
+        let (forward_peak, first_order_phases) =
+            sun_free.for_streams(geometry.streams.count(), || StreamParts {
+                forward_peak: ForwardPeak::new(
+                    optics,
+                    &scaled.phases,
+                    geometry.streams.count(),
+                    &geometry.profiles,
+                    geometry.top_radius_m - geometry.ground_radius_m,
+                ),
+                first_order_phases: Arc::new(tabulate_phases(&scaled.phases)),
+            });
         let first_spherical = sun_axis
             .angles_rad
             .partition_point(|a| *a < FIRST_ORDER_SUN_ZENITH_DEG.to_radians());
         let first_order = solve_spherical_first_order(
             sky,
             (request.sun_column_nodes, &settings),
-            &geometry,
-            &scaled,
+            (&geometry, &scaled, &first_order_phases),
             &sun_axis.angles_rad[first_spherical..],
         );
         let columns = solve_columns(
@@ -352,16 +363,6 @@ impl MultipleScatteringField {
             request.sweeps,
         );
         let (ground_diffuse, ground_direct) = ground_tables(&columns, optics.grid.len(), &sun_axis);
-        let sun_free = sky.sun_free_field_parts();
-        let forward_peak = sun_free.forward_peak(geometry.streams.count(), || {
-            ForwardPeak::new(
-                optics,
-                &scaled.phases,
-                geometry.streams.count(),
-                &geometry.profiles,
-                geometry.top_radius_m - geometry.ground_radius_m,
-            )
-        });
         let peak_beam = compute_peak_beam(
             sky,
             (request.sun_column_nodes, reach),
@@ -823,8 +824,7 @@ fn solve_polarisation_columns(
 fn solve_spherical_first_order(
     sky: &SingleScatteringScene,
     (sun_column_nodes, settings): ((usize, usize), &MultipleScatteringSettings),
-    geometry: &ColumnGeometry,
-    scaled: &ScaledOptics,
+    (geometry, scaled, phase_table): (&ColumnGeometry, &ScaledOptics, &[f64]),
     suns: &[f64],
 ) -> Vec<f64> {
     if suns.is_empty() {
@@ -833,16 +833,19 @@ fn solve_spherical_first_order(
     let solar_irradiance: Vec<f64> = sky.optics().solar_irradiance_w_m2_nm.values().to_vec();
     let (altitude_nodes, mu_nodes) = sun_column_nodes;
     let table_columns = sky.sun_column_table(altitude_nodes, mu_nodes);
-    compute_spherical_first_order(&FirstOrderInputs {
-        scaled,
-        geometry,
-        sun_columns: &table_columns,
-        moments: MomentQuadrature::Fine,
-        sun_zenith_rad: suns,
-        solar_irradiance_w_m2_nm: &solar_irradiance,
-        panels: settings.first_order_panels,
-        fine_nodes: settings.first_order_fine_nodes,
-    })
+    compute_spherical_first_order_with_phases(
+        &FirstOrderInputs {
+            scaled,
+            geometry,
+            sun_columns: &table_columns,
+            moments: MomentQuadrature::Fine,
+            sun_zenith_rad: suns,
+            solar_irradiance_w_m2_nm: &solar_irradiance,
+            panels: settings.first_order_panels,
+            fine_nodes: settings.first_order_fine_nodes,
+        },
+        phase_table,
+    )
 }
 
 /// The successive orders of every wavelength's columns at every sun node
@@ -1063,48 +1066,70 @@ fn compute_peak_beam(
 }
 
 /// The parts of a field that depend on the optics and the eye but not on
-/// the sun: the forward-peak tables (per number of streams) and the tilted
-/// beam's rows. A sky moved to another sun (`SingleScatteringScene::with_sun`)
-/// shares them, so that a slider moving the sun computes the tables once and
-/// at each new sun only the rows it needs that no sun before it did (they
-/// were 9 % and 21 % of the explorer's preview at suns 5 to -4 degrees,
+/// the sun: per number of streams the forward-peak tables and the first
+/// order's phase-function table, and the tilted beam's rows. A sky moved
+/// to another sun (`SingleScatteringScene::with_sun`) shares them, so that
+/// a slider moving the sun computes the tables once and at each new sun
+/// only the beam's rows it needs that no sun before it did (they were 7 %,
+/// 3 % and 23 % of the explorer's preview at suns 5 to -4 degrees,
 /// measured by `perf`). Each field reads the same numbers as it would
 /// compute (tested: the peak beam's `the_kept_rows_give_the_table_computed_anew`
 /// and the sky's images, `tests/sky_front_door.rs`).
 #[derive(Debug, Default)]
 pub(crate) struct SunFreeParts {
-    forward_peaks: Mutex<Vec<(usize, ForwardPeak)>>,
+    by_streams: Mutex<Vec<(usize, StreamParts)>>,
     peak_beams: PeakBeamCache,
 }
 
+/// The parts of [`SunFreeParts`] kept per number of streams (the delta-M
+/// truncation).
+#[derive(Debug, Clone)]
+struct StreamParts {
+    forward_peak: ForwardPeak,
+    /// The first order's phase functions ([`tabulate_phases`]).
+    first_order_phases: Arc<Vec<f64>>,
+}
+
 impl SunFreeParts {
-    /// The forward-peak tables for `streams` streams: a copy of the kept
-    /// ones, or `compute()`'s, kept (computed without the lock, which the
-    /// thread pool's other tasks may want; of two threads that race, the
-    /// first one's are kept: the same numbers).
-    fn forward_peak(&self, streams: usize, compute: impl FnOnce() -> ForwardPeak) -> ForwardPeak {
+    /// The parts for `streams` streams: a copy of the kept ones, or
+    /// `compute()`'s, kept (computed without the lock, which the thread
+    /// pool's other tasks may want; of two threads that race, the first
+    /// one's are kept: the same numbers).
+    fn for_streams(
+        &self,
+        streams: usize,
+        compute: impl FnOnce() -> StreamParts,
+    ) -> (ForwardPeak, Arc<Vec<f64>>) {
         // A poisoned lock only means that another thread panicked: the
         // entries in it are whole (each is pushed when complete).
         let lock = || {
-            self.forward_peaks
+            self.by_streams
                 .lock()
                 .unwrap_or_else(PoisonError::into_inner)
         };
-        let find = |entries: &[(usize, ForwardPeak)]| {
+        let find = |entries: &[(usize, StreamParts)]| {
             entries
                 .iter()
                 .find(|(n, _)| *n == streams)
-                .map(|(_, peak)| peak.clone())
+                .map(|(_, parts)| parts.clone())
         };
-        if let Some(peak) = find(&lock()) {
-            return peak;
-        }
-        let peak = compute();
-        let mut entries = lock();
-        if let Some(first) = find(&entries) {
-            return first;
-        }
-        entries.push((streams, peak.clone()));
-        peak
+        // The guard dropped before `compute()` (the lock is not held while
+        // computing, nor taken twice).
+        let kept = find(&lock());
+        let parts = match kept {
+            Some(parts) => parts,
+            None => {
+                let parts = compute();
+                let mut entries = lock();
+                match find(&entries) {
+                    Some(first) => first,
+                    None => {
+                        entries.push((streams, parts.clone()));
+                        parts
+                    }
+                }
+            }
+        };
+        (parts.forward_peak, parts.first_order_phases)
     }
 }
