@@ -604,8 +604,24 @@ pub fn build_sky(atmosphere: &Atmosphere, spec: &SkySpec, quality: Quality) -> R
 /// degrees 1.2-1.4 times as much); the sun 45 degrees up 0.03 s. The first
 /// order's fine moments after sunset (`spherical_first_order.rs` in the
 /// library) were about half of a low-sun frame, the tilted peak beam
-/// (`peak_beam.rs`) a sixth of a low-sun preview. Those are scalar light;
-/// the polarised light of the default (the spec's `polarisation`) adds,
+/// (`peak_beam.rs`) a fifth of a low-sun preview, the forward-peak
+/// tables a fifteenth and the first order's phase table a thirtieth
+/// (`perf`, suns 5 / 2 / -4). None depends on the sun, and a sky moved to
+/// a new sun now keeps them (the library's `SunFreeParts`; of the peak
+/// beam the rows computed so far, so that a new sun computes only those no
+/// sun before it did; the same images bit for bit). Measured
+/// (`slider_timing`, the browser test's order 45 / 20 / 10 / 5 / 2 / -4
+/// three times, the old and new library alternately, medians of 3 runs,
+/// CPU time, load 6 on 2 cores), sun 10 / 5 / 2 / -4: the preview 0.074 /
+/// 0.096 / 0.099 / 0.094 s before; after, the first pass 0.064 / 0.075 /
+/// 0.071 / 0.077 s, the later passes 0.045 / 0.061 / 0.067 / 0.068 s (sun
+/// 45 and 20: 0.030 / 0.036 s to 0.024 / 0.023 s); the refinement 4-8 %
+/// faster (the same images). The preview's error is unchanged: against a
+/// scalar Full, sun 10 / 5 / 2 / 0 / -2 / -4 / -6 / -12, 1.1 / 1.6 / 2.3 /
+/// 1.5 / 1.5 / 2.3 / 3.5 / 7.9 %, against the polarised Full 3.4 / 3.5 /
+/// 4.3 / 5.9 / 6.9 / 7.2 / 8.0 / 12 % (the refinement's times here are
+/// its polarised light, the ones before scalar light). The polarised
+/// light of the default (the spec's `polarisation`) adds,
 /// sun 10 / 2 / -4, 0.19 / 0.21 / 0.22 s to the refinement (the same
 /// measurement, once a sky has drawn an image: a sky moved to a new sun
 /// keeps the phase-matrix harmonics from the streams, the polarisation

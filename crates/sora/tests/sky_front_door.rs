@@ -369,6 +369,23 @@ fn moving_the_sun_equals_building_for_it() {
     assert!(first.with_sun_deg(91.0, 0.0).is_err());
 }
 
+/// A coarse sky of `atmosphere` (4 streams a hemisphere, 12 layers, 3
+/// wavelengths) with the sun `sun_deg` up at azimuth 120 degrees.
+fn coarse_sky(atmosphere: &Atmosphere, sun_deg: f64, polarisation: sora::Polarisation) -> Sky {
+    let coarse = sora::MultipleScatteringSettings {
+        streams_per_hemisphere: 4,
+        layers: 12,
+        ..Default::default()
+    };
+    Sky::builder(atmosphere)
+        .sun_deg(sun_deg, 120.0)
+        .wavelengths(sora::WavelengthGrid::new(440.0, 660.0, 110.0).unwrap())
+        .scattering(Scattering::Multiple(coarse))
+        .polarisation(polarisation)
+        .build()
+        .unwrap()
+}
+
 /// A polarised sky moved to another sun draws the image of the sky built
 /// for that sun, to the bit: the polarisation table's harmonics that the
 /// first sky's image kept (they do not depend on the sun) are the ones the
@@ -376,20 +393,7 @@ fn moving_the_sun_equals_building_for_it() {
 #[test]
 fn a_moved_polarised_sky_draws_the_image_built_for_its_sun() {
     let atmosphere = Atmosphere::preset("earth-hazy").unwrap();
-    let coarse = sora::MultipleScatteringSettings {
-        streams_per_hemisphere: 4,
-        layers: 12,
-        ..Default::default()
-    };
-    let build = |sun: f64| {
-        Sky::builder(&atmosphere)
-            .sun_deg(sun, 120.0)
-            .wavelengths(sora::WavelengthGrid::new(440.0, 660.0, 110.0).unwrap())
-            .scattering(Scattering::Multiple(coarse))
-            .polarisation(sora::Polarisation::Vector)
-            .build()
-            .unwrap()
-    };
+    let build = |sun: f64| coarse_sky(&atmosphere, sun, sora::Polarisation::Vector);
     let image = ImageSettings::new(Camera::Fisheye, 12, 12);
     let first = build(25.0);
     let drawn_first = first.render_spectral(&image, &|_| {}).unwrap();
@@ -401,6 +405,27 @@ fn a_moved_polarised_sky_draws_the_image_built_for_its_sun() {
     );
     // And the first sky's image is its own, not the moved one's.
     assert_ne!(drawn_first, built.render_spectral(&image, &|_| {}).unwrap());
+}
+
+/// A sky moved from sun to sun as a slider moves it draws at each sun the
+/// image of the sky built for it, to the bit: the forward-peak tables and
+/// the tilted beam's rows that the skies before it kept (they do not depend
+/// on the sun) are the ones its own sun would compute.
+#[test]
+fn a_sky_moved_down_through_twilight_draws_the_images_built_for_its_suns() {
+    let atmosphere = Atmosphere::preset("earth-hazy").unwrap();
+    let build = |sun: f64| coarse_sky(&atmosphere, sun, sora::Polarisation::Scalar);
+    let image = ImageSettings::new(Camera::Fisheye, 12, 12);
+    let first = build(10.0);
+    first.render_spectral(&image, &|_| {}).unwrap();
+    for sun in [5.0, 2.0, -4.0, 5.0] {
+        let moved = first.with_sun_deg(sun, 120.0).unwrap();
+        assert_eq!(
+            moved.render_spectral(&image, &|_| {}).unwrap(),
+            build(sun).render_spectral(&image, &|_| {}).unwrap(),
+            "sun {sun}"
+        );
+    }
 }
 
 /// One default light for every front end, set here: polarised

@@ -45,7 +45,7 @@ use std::borrow::Borrow;
 use std::ops::ControlFlow;
 use std::sync::{Arc, Mutex};
 
-use super::multiple_scattering::ViewHarmonicsCache;
+use super::multiple_scattering::{SunFreeParts, ViewHarmonicsCache};
 use super::optical_column::{
     PanelMarch, ProfileCorners, SunColumnTable, compute_columns_along_ray,
 };
@@ -181,6 +181,10 @@ pub struct SingleScatteringScene {
     /// (`ViewHarmonicsCache`): they depend on the optics and not on the
     /// sun or the eye, so every sky moved to another sun shares them.
     view_harmonics: Arc<ViewHarmonicsCache>,
+    /// What the multiple-scattering field computes that depends on the
+    /// optics and the eye but not on the sun (`SunFreeParts`): every sky
+    /// moved to another sun shares it.
+    sun_free_field_parts: Arc<SunFreeParts>,
 }
 
 /// Per-thread work space of the fast path (no allocation per ray).
@@ -297,6 +301,7 @@ impl SingleScatteringScene {
             sun_angular_radius_rad,
             sun_column_tables: Arc::default(),
             view_harmonics: Arc::default(),
+            sun_free_field_parts: Arc::default(),
         })
     }
 
@@ -322,6 +327,7 @@ impl SingleScatteringScene {
         Ok(SingleScatteringScene {
             sun_column_tables: Arc::clone(&self.sun_column_tables),
             view_harmonics: Arc::clone(&self.view_harmonics),
+            sun_free_field_parts: Arc::clone(&self.sun_free_field_parts),
             ..moved
         })
     }
@@ -347,6 +353,7 @@ impl SingleScatteringScene {
         moved.observer = Vector3::new(0.0, 0.0, self.ground_radius_m + altitude_m);
         // The sun-column tables are per eye (see `sun_column_table`).
         moved.sun_column_tables = Arc::default();
+        moved.sun_free_field_parts = Arc::default();
         Ok(moved)
     }
 
@@ -454,6 +461,12 @@ impl SingleScatteringScene {
     /// this sky shares with the skies moved from it to other suns.
     pub(crate) fn view_harmonics_cache(&self) -> Arc<ViewHarmonicsCache> {
         Arc::clone(&self.view_harmonics)
+    }
+
+    /// The field's sun-independent parts kept for this sky's optics and
+    /// eye (`SunFreeParts`), shared with every sky moved to another sun.
+    pub(crate) fn sun_free_field_parts(&self) -> Arc<SunFreeParts> {
+        Arc::clone(&self.sun_free_field_parts)
     }
 
     /// This sky sharing `other`'s sun-column tables (those built so far

@@ -3,12 +3,12 @@
 //! view ray (see the module docs of [`super`]).
 
 use std::f64::consts::{FRAC_PI_2, PI};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex, PoisonError};
 
 use super::MultipleScatteringSettings;
 use super::column_optics::{ColumnGeometry, ScaledOptics};
 use super::forward_peak::{self, ForwardPeak};
-use super::peak_beam::{NeededElevations, PeakBeam, PeakBeamInputs};
+use super::peak_beam::{NeededElevations, PeakBeam, PeakBeamCache, PeakBeamInputs};
 use super::phase_fourier::normalized_associated_legendre;
 use super::polarisation_correction::{
     CorrectionInputs, PolarisationCorrection, PolarisationRows, PolarisationTable,
@@ -17,7 +17,7 @@ use super::regimes::{
     self, FIRST_ORDER_SUN_ZENITH_DEG, SUNSET_STEP_END_DEG, SUNSET_STEP_START_DEG,
 };
 use super::spherical_first_order::{
-    FirstOrderInputs, MomentQuadrature, compute_spherical_first_order,
+    FirstOrderInputs, MomentQuadrature, compute_spherical_first_order_with_phases, tabulate_phases,
 };
 use super::successive_orders::{self, ColumnSystem, ScaledSpecies};
 use super::view_march::{MultipleScatteringScratch, NodeGeometry, ViewRayOptics, floored_log};
@@ -334,14 +334,25 @@ impl MultipleScatteringField {
             );
             solve_polarisation_columns(sky, (&geometry, &scaled), &anchors)
         });
+        let sun_free = sky.sun_free_field_parts();
+        let (forward_peak, first_order_phases) =
+            sun_free.for_streams(geometry.streams.count(), || StreamParts {
+                forward_peak: ForwardPeak::new(
+                    optics,
+                    &scaled.phases,
+                    geometry.streams.count(),
+                    &geometry.profiles,
+                    geometry.top_radius_m - geometry.ground_radius_m,
+                ),
+                first_order_phases: Arc::new(tabulate_phases(&scaled.phases)),
+            });
         let first_spherical = sun_axis
             .angles_rad
             .partition_point(|a| *a < FIRST_ORDER_SUN_ZENITH_DEG.to_radians());
         let first_order = solve_spherical_first_order(
             sky,
             (request.sun_column_nodes, &settings),
-            &geometry,
-            &scaled,
+            (&geometry, &scaled, &first_order_phases),
             &sun_axis.angles_rad[first_spherical..],
         );
         let columns = solve_columns(
@@ -352,18 +363,11 @@ impl MultipleScatteringField {
             request.sweeps,
         );
         let (ground_diffuse, ground_direct) = ground_tables(&columns, optics.grid.len(), &sun_axis);
-        let forward_peak = ForwardPeak::new(
-            optics,
-            &scaled.phases,
-            geometry.streams.count(),
-            &geometry.profiles,
-            geometry.top_radius_m - geometry.ground_radius_m,
-        );
         let peak_beam = compute_peak_beam(
             sky,
             (request.sun_column_nodes, reach),
             (&geometry, &scaled),
-            &forward_peak,
+            (&forward_peak, &sun_free.peak_beams),
         );
         let harmonics = (0..geometry.streams.count())
             .map(|m| {
@@ -820,8 +824,7 @@ fn solve_polarisation_columns(
 fn solve_spherical_first_order(
     sky: &SingleScatteringScene,
     (sun_column_nodes, settings): ((usize, usize), &MultipleScatteringSettings),
-    geometry: &ColumnGeometry,
-    scaled: &ScaledOptics,
+    (geometry, scaled, phase_table): (&ColumnGeometry, &ScaledOptics, &[f64]),
     suns: &[f64],
 ) -> Vec<f64> {
     if suns.is_empty() {
@@ -830,16 +833,19 @@ fn solve_spherical_first_order(
     let solar_irradiance: Vec<f64> = sky.optics().solar_irradiance_w_m2_nm.values().to_vec();
     let (altitude_nodes, mu_nodes) = sun_column_nodes;
     let table_columns = sky.sun_column_table(altitude_nodes, mu_nodes);
-    compute_spherical_first_order(&FirstOrderInputs {
-        scaled,
-        geometry,
-        sun_columns: &table_columns,
-        moments: MomentQuadrature::Fine,
-        sun_zenith_rad: suns,
-        solar_irradiance_w_m2_nm: &solar_irradiance,
-        panels: settings.first_order_panels,
-        fine_nodes: settings.first_order_fine_nodes,
-    })
+    compute_spherical_first_order_with_phases(
+        &FirstOrderInputs {
+            scaled,
+            geometry,
+            sun_columns: &table_columns,
+            moments: MomentQuadrature::Fine,
+            sun_zenith_rad: suns,
+            solar_irradiance_w_m2_nm: &solar_irradiance,
+            panels: settings.first_order_panels,
+            fine_nodes: settings.first_order_fine_nodes,
+        },
+        phase_table,
+    )
 }
 
 /// The successive orders of every wavelength's columns at every sun node
@@ -1014,12 +1020,14 @@ fn ground_tables(
 }
 
 /// The tilted peak beam (`peak_beam.rs`) where the sky's view rays meet a
-/// sun low enough for it and some species has a peak.
+/// sun low enough for it and some species has a peak, from the rows
+/// `kept` holds and with those it adds (the same table as computed anew,
+/// bit for bit).
 fn compute_peak_beam(
     sky: &SingleScatteringScene,
     (sun_column_nodes, reach_rad): ((usize, usize), Option<f64>),
     (geometry, scaled): (&ColumnGeometry, &ScaledOptics),
-    forward_peak: &ForwardPeak,
+    (forward_peak, kept): (&ForwardPeak, &PeakBeamCache),
 ) -> Option<PeakBeam> {
     let eye_sun_elevation = FRAC_PI_2 - sky.sun_direction().z.clamp(-1.0, 1.0).acos();
     // No reach: the field serves every sun (engine tables).
@@ -1042,7 +1050,7 @@ fn compute_peak_beam(
     match needed {
         Some(elevations_deg) if forward_peak.any() => {
             let (altitude_nodes, mu_nodes) = sun_column_nodes;
-            PeakBeam::compute(
+            kept.compute(
                 &PeakBeamInputs {
                     optics: sky.optics(),
                     scaled,
@@ -1054,5 +1062,74 @@ fn compute_peak_beam(
             )
         }
         _ => None,
+    }
+}
+
+/// The parts of a field that depend on the optics and the eye but not on
+/// the sun: per number of streams the forward-peak tables and the first
+/// order's phase-function table, and the tilted beam's rows. A sky moved
+/// to another sun (`SingleScatteringScene::with_sun`) shares them, so that
+/// a slider moving the sun computes the tables once and at each new sun
+/// only the beam's rows it needs that no sun before it did (they were 7 %,
+/// 3 % and 23 % of the explorer's preview at suns 5 to -4 degrees,
+/// measured by `perf`). Each field reads the same numbers as it would
+/// compute (tested: the peak beam's `the_kept_rows_give_the_table_computed_anew`
+/// and the sky's images, `tests/sky_front_door.rs`).
+#[derive(Debug, Default)]
+pub(crate) struct SunFreeParts {
+    by_streams: Mutex<Vec<(usize, StreamParts)>>,
+    peak_beams: PeakBeamCache,
+}
+
+/// The parts of [`SunFreeParts`] kept per number of streams (the delta-M
+/// truncation).
+#[derive(Debug, Clone)]
+struct StreamParts {
+    forward_peak: ForwardPeak,
+    /// The first order's phase functions ([`tabulate_phases`]).
+    first_order_phases: Arc<Vec<f64>>,
+}
+
+impl SunFreeParts {
+    /// The parts for `streams` streams: a copy of the kept ones, or
+    /// `compute()`'s, kept (computed without the lock, which the thread
+    /// pool's other tasks may want; of two threads that race, the first
+    /// one's are kept: the same numbers).
+    fn for_streams(
+        &self,
+        streams: usize,
+        compute: impl FnOnce() -> StreamParts,
+    ) -> (ForwardPeak, Arc<Vec<f64>>) {
+        // A poisoned lock only means that another thread panicked: the
+        // entries in it are whole (each is pushed when complete).
+        let lock = || {
+            self.by_streams
+                .lock()
+                .unwrap_or_else(PoisonError::into_inner)
+        };
+        let find = |entries: &[(usize, StreamParts)]| {
+            entries
+                .iter()
+                .find(|(n, _)| *n == streams)
+                .map(|(_, parts)| parts.clone())
+        };
+        // The guard dropped before `compute()` (the lock is not held while
+        // computing, nor taken twice).
+        let kept = find(&lock());
+        let parts = match kept {
+            Some(parts) => parts,
+            None => {
+                let parts = compute();
+                let mut entries = lock();
+                match find(&entries) {
+                    Some(first) => first,
+                    None => {
+                        entries.push((streams, parts.clone()));
+                        parts
+                    }
+                }
+            }
+        };
+        (parts.forward_peak, parts.first_order_phases)
     }
 }

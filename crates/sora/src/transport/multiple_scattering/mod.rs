@@ -244,7 +244,7 @@ pub use source_table::MultipleScatteringTable;
 mod field;
 mod view_march;
 
-pub(crate) use self::field::{FieldRequest, MultipleScatteringField};
+pub(crate) use self::field::{FieldRequest, MultipleScatteringField, SunFreeParts};
 pub(crate) use self::polarisation_correction::{
     PolarisationRows, PolarisationTable, ViewHarmonicsCache,
 };

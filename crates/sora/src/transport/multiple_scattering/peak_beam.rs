@@ -94,9 +94,13 @@
 //! table's top, 12 degrees (where B / S is 0.99); below -20 degrees a
 //! point's tilted lines no longer reach lit air (the top's horizon dip
 //! is 10-14 degrees) and delta-M's beam, zero there, is kept. Cost: 16
-//! to 34 ms per sky of 21 wavelengths on 2 cores.
+//! to 34 ms per sky of 21 wavelengths on 2 cores. A row does not depend
+//! on the eye's sun, so the skies of one atmosphere and eye keep the rows
+//! computed so far ([`PeakBeamCache`]): a sky moved to another sun computes
+//! only the rows its sun needs and no sun before it did.
 
 use std::ops::ControlFlow;
+use std::sync::{Arc, Mutex, PoisonError};
 
 use super::column_optics::{ColumnGeometry, ScaledOptics};
 use super::phase_fourier::TruncatedPhase;
@@ -175,29 +179,29 @@ impl PeakBeam {
     /// none has), at the table's sun elevations within `elevations_deg`
     /// (those its view rays meet, [`PeakBeam::needed_elevations_deg`]),
     /// per altitude of the table (its field's levels) those within
-    /// `needed` there (None: none; see [`NeededElevations`]).
+    /// `needed` there (None: none; see [`NeededElevations`]). Every row
+    /// computed anew: the tests' table (a sky's field takes its rows from
+    /// a [`PeakBeamCache`], the same numbers).
+    #[cfg(test)]
     pub(crate) fn compute(
         inputs: &PeakBeamInputs,
         elevations_deg: (f64, f64),
         needed: &NeededElevations,
     ) -> Option<PeakBeam> {
-        let (ground, top) = inputs.geometry.corners.radii_m();
-        let weights = compute_tilt_weights(
-            inputs.optics,
-            &inputs.scaled.phases,
-            &inputs.geometry.profiles,
-            top - ground,
-        )?;
+        let weights = tilt_weights(inputs)?;
+        let mut known = KnownRows::new(inputs);
         Some(PeakBeam::compute_with_tilts(
             inputs,
             &weights,
             elevations_deg,
             needed,
+            &mut known,
         ))
     }
 
     /// The table with the tilts' weights given, [i * tilts + k] (bin k
-    /// centred on [`tilt_deg`]).
+    /// centred on [`tilt_deg`]), taking the rows that `known` holds and
+    /// adding to it those it computes.
     ///
     /// A line from a node depends on its own elevation only, not on the
     /// sun's: the lines are on one grid of elevations, the tilts being a
@@ -206,13 +210,17 @@ impl PeakBeam {
     /// f beta_sca rho T(x, y) kept) and read by every sun elevation and tilt
     /// that meet on it. At each altitude only the elevations `needed`
     /// there (and a node beyond each end, for the interpolation) are
-    /// computed, and only the lines they read are marched; the others
-    /// hold ln of the smallest positive number, what no light gives.
+    /// computed, those `known` does not hold yet, and only the lines they
+    /// read are marched; the others hold ln of the smallest positive
+    /// number, what no light gives. A row is the same numbers whichever
+    /// sun asked for it first (its sums do not depend on the eye's sun):
+    /// the table is the same bit for bit with `known` empty or not.
     fn compute_with_tilts(
         inputs: &PeakBeamInputs,
         weights: &[f64],
         (lowest_deg, highest_deg): (f64, f64),
         needed: &NeededElevations,
+        known: &mut KnownRows,
     ) -> PeakBeam {
         let (corners, profiles) = (&inputs.geometry.corners, &inputs.geometry.profiles);
         let altitudes_m = inputs.geometry.grid.altitudes_m();
@@ -234,38 +242,56 @@ impl PeakBeam {
         let extinction = by_species(&|i, j| inputs.scaled.extinction[i * s + j]);
         let scaled_extinction = by_species(&|i, j| inputs.scaled.scaled_extinction[i * s + j]);
         let node = |deg: f64| (deg - PEAK_BEAM_LOWEST_ELEVATION_DEG) / ELEVATION_STEP_DEG;
-        let last_node = elevation_count() - 1;
+        let all = elevation_count();
+        let last_node = all - 1;
         let first = (node(lowest_deg).floor().max(0.0) as usize).min(last_node - 1);
         let last = (node(highest_deg).ceil().max(0.0) as usize).clamp(first + 1, last_node);
         let elevations = last - first + 1;
-        let per_altitude = elevations * w;
         let steps_per_tilt = (TILT_STEP_DEG / ELEVATION_STEP_DEG).round() as usize;
         let half_tilts = (tilts / 2) * steps_per_tilt;
-        // Line n has the elevation of node first + n plus the lowest tilt.
-        let lines = elevations + 2 * half_tilts;
-        let line_rad = |n: usize| elevation_rad(first + n) + tilt_deg(0, tilts).to_radians();
+        // Line n has the elevation of the table's node n plus the lowest
+        // tilt; elevation node g reads lines g + k * steps_per_tilt.
+        let lines = all + 2 * half_tilts;
+        let line_rad = |n: usize| elevation_rad(n) + tilt_deg(0, tilts).to_radians();
         let altitudes = altitudes_m.len();
-        let mut ln_beam = vec![0.0; altitudes * per_altitude];
-        crate::parallel::for_each_chunk_mut(&mut ln_beam, per_altitude, |a, block| {
+        // Per altitude, the elevation nodes it needs (from..=to of the
+        // table's grid, within first..=last), None when none.
+        let windows: Vec<Option<(usize, usize)>> = (0..altitudes)
+            .map(|a| {
+                let (low, high) = needed.at_altitude(a)?;
+                let from = (node(low).floor() - 1.0).max(first as f64) as usize;
+                let to = ((node(high).ceil() + 1.0).max(0.0) as usize).min(last);
+                (from <= to).then_some((from, to))
+            })
+            .collect();
+        let KnownRows { computed, ln_beam } = known;
+        let computed_before: &[bool] = computed;
+        crate::parallel::for_each_chunk_mut(ln_beam, all * w, |a, block| {
+            let Some((from, to)) = windows[a] else {
+                return;
+            };
+            let missing: Vec<usize> = (from..=to)
+                .filter(|g| !computed_before[a * all + g])
+                .collect();
+            if missing.is_empty() {
+                return;
+            }
+            let mut read = vec![false; lines];
+            for g in &missing {
+                for k in &used {
+                    read[g + k * steps_per_tilt] = true;
+                }
+            }
             let x = Vector3::new(0.0, 0.0, ground + altitudes_m[a].max(LOWEST_NODE_M));
             let mut ends = Vec::with_capacity(corners.most_panel_ends(PANELS));
             let mut march = PanelMarch::new(s);
             let mut sun = vec![0.0; s];
             let mut depth = vec![0.0; w];
             let mut source = vec![0.0; w];
-            // This altitude's elevation nodes (relative to `first`),
-            // empty when it needs none.
-            let (from, to) = match needed.at_altitude(a) {
-                Some((low, high)) => (
-                    (node(low).floor() - 1.0).max(first as f64) as usize - first,
-                    ((node(high).ceil() + 1.0).max(0.0) as usize).min(last) - first,
-                ),
-                None => (1, 0),
-            };
             let mut marched: Vec<MarchedLine> = Vec::with_capacity(lines);
-            for n in 0..lines {
+            for (n, read) in read.iter().enumerate() {
                 let mut line = MarchedLine::default();
-                if n < from || n > to + 2 * half_tilts {
+                if !read {
                     marched.push(line);
                     continue;
                 }
@@ -320,16 +346,12 @@ impl PeakBeam {
                 marched.push(line);
             }
             let mut line_sum = vec![0.0; w];
-            for e in 0..elevations {
-                let elevation = elevation_rad(first + e);
-                let beam = &mut block[e * w..(e + 1) * w];
+            for g in missing {
+                let elevation = elevation_rad(g);
+                let beam = &mut block[g * w..(g + 1) * w];
                 beam.fill(0.0);
-                if e < from || e > to {
-                    beam.fill(f64::MIN_POSITIVE.ln());
-                    continue;
-                }
                 for &k in &used {
-                    let line = &marched[e + k * steps_per_tilt];
+                    let line = &marched[g + k * steps_per_tilt];
                     line_sum.fill(0.0);
                     for (y, located) in line.located.iter().enumerate() {
                         let mu_sun = (elevation + line.central_rad[y]).sin();
@@ -365,13 +387,25 @@ impl PeakBeam {
                 }
             }
         });
+        // The table: the rows each altitude needs, no light elsewhere.
+        let mut table = vec![f64::MIN_POSITIVE.ln(); altitudes * elevations * w];
+        for (a, window) in windows.iter().enumerate() {
+            let Some((from, to)) = *window else {
+                continue;
+            };
+            for g in from..=to {
+                computed[a * all + g] = true;
+            }
+            table[(a * elevations + from - first) * w..(a * elevations + to + 1 - first) * w]
+                .copy_from_slice(&ln_beam[(a * all + from) * w..(a * all + to + 1) * w]);
+        }
         PeakBeam {
             wavelengths: w,
             ground_m: ground,
             altitudes_m: altitudes_m.to_vec(),
             first,
             elevations,
-            ln_beam,
+            ln_beam: table,
         }
     }
 
@@ -440,6 +474,127 @@ impl PeakBeam {
         }
         exp_neg_in_place(out);
         share
+    }
+}
+
+/// The tilts' weights of [`compute_tilt_weights`] for these inputs.
+fn tilt_weights(inputs: &PeakBeamInputs) -> Option<Vec<f64>> {
+    let (ground, top) = inputs.geometry.corners.radii_m();
+    compute_tilt_weights(
+        inputs.optics,
+        &inputs.scaled.phases,
+        &inputs.geometry.profiles,
+        top - ground,
+    )
+}
+
+/// Rows of ln B on the table's whole grid of sun elevations, per altitude
+/// of the field's levels: those computed so far
+/// ([`PeakBeam::compute_with_tilts`] adds to them).
+#[derive(Debug, Clone)]
+struct KnownRows {
+    /// [a * elevation_count() + g].
+    computed: Vec<bool>,
+    /// [(a * elevation_count() + g) * wavelengths + i].
+    ln_beam: Vec<f64>,
+}
+
+impl KnownRows {
+    /// None computed yet.
+    fn new(inputs: &PeakBeamInputs) -> KnownRows {
+        let rows = inputs.geometry.grid.altitudes_m().len() * elevation_count();
+        KnownRows {
+            computed: vec![false; rows],
+            ln_beam: vec![0.0; rows * inputs.optics.grid.len()],
+        }
+    }
+
+    /// Adds the rows `other` has computed and this has not.
+    fn merge(&mut self, other: &KnownRows) {
+        let w = self.ln_beam.len() / self.computed.len().max(1);
+        for (n, (mine, theirs)) in self.computed.iter_mut().zip(&other.computed).enumerate() {
+            if *theirs && !*mine {
+                *mine = true;
+                self.ln_beam[n * w..(n + 1) * w]
+                    .copy_from_slice(&other.ln_beam[n * w..(n + 1) * w]);
+            }
+        }
+    }
+}
+
+/// The tilted beams' rows computed so far for the skies of one atmosphere
+/// and eye, whatever their sun (a row does not depend on it): shared by
+/// every sky moved to another sun (`SingleScatteringScene::with_sun`), so
+/// that a slider moving the sun computes only the rows its new sun needs
+/// and no sky computed before it did. Keyed by what the rows depend on
+/// besides the optics: the streams (the delta-M truncation), the field's
+/// levels (bit for bit) and the sun-column table's nodes.
+#[derive(Debug, Default)]
+pub(crate) struct PeakBeamCache(Mutex<Vec<PeakBeamRows>>);
+
+/// One entry of [`PeakBeamCache`].
+#[derive(Debug)]
+struct PeakBeamRows {
+    streams: usize,
+    altitudes_m: Vec<u64>,
+    sun_column_nodes: (usize, usize),
+    /// The tilts' weights (None: no species has a peak).
+    weights: Option<Arc<Vec<f64>>>,
+    known: KnownRows,
+}
+
+impl PeakBeamCache {
+    /// [`PeakBeam::compute`] for these inputs, the same table bit for bit,
+    /// from the rows kept and those it adds. The rows are copied out and
+    /// merged back under the lock, not computed under it (the computation
+    /// runs on the thread pool, whose tasks may be other skies' fields); two
+    /// threads that race compute the same rows.
+    pub(crate) fn compute(
+        &self,
+        inputs: &PeakBeamInputs,
+        elevations_deg: (f64, f64),
+        needed: &NeededElevations,
+    ) -> Option<PeakBeam> {
+        let streams = inputs.geometry.streams.count();
+        let altitudes_m: Vec<u64> = inputs
+            .geometry
+            .grid
+            .altitudes_m()
+            .iter()
+            .map(|z| z.to_bits())
+            .collect();
+        let sun_column_nodes = inputs.sun_columns.node_counts();
+        let matches = |entry: &PeakBeamRows| {
+            entry.streams == streams
+                && entry.altitudes_m == altitudes_m
+                && entry.sun_column_nodes == sun_column_nodes
+        };
+        // A poisoned lock only means that another thread panicked: the
+        // entries in it are whole (each row is merged when complete).
+        let lock = || self.0.lock().unwrap_or_else(PoisonError::into_inner);
+        let kept = lock()
+            .iter()
+            .find(|e| matches(e))
+            .map(|e| (e.weights.clone(), e.known.clone()));
+        let (weights, mut known) = match kept {
+            Some(kept) => kept,
+            None => (tilt_weights(inputs).map(Arc::new), KnownRows::new(inputs)),
+        };
+        let beam = weights.as_ref().map(|weights| {
+            PeakBeam::compute_with_tilts(inputs, weights, elevations_deg, needed, &mut known)
+        });
+        let mut entries = lock();
+        match entries.iter_mut().find(|e| matches(e)) {
+            Some(entry) => entry.known.merge(&known),
+            None => entries.push(PeakBeamRows {
+                streams,
+                altitudes_m,
+                sun_column_nodes,
+                weights,
+                known,
+            }),
+        }
+        beam
     }
 }
 
@@ -785,6 +940,7 @@ mod tests {
                 PEAK_BEAM_HIGHEST_ELEVATION_DEG,
             ),
             &NeededElevations::Everywhere,
+            &mut KnownRows::new(&inputs.beam_inputs()),
         );
         let (ground, _) = inputs.geometry.corners.radii_m();
         let mut worst = 0.0f64;
@@ -891,6 +1047,68 @@ mod tests {
         }
     }
 
+    /// The cache's tables are the ones computed anew, bit for bit, for a
+    /// sun moving down as a slider moves it (and back up), eyes on the
+    /// ground and 3 km up; a sun a degree below the last computes one row
+    /// a level, and a sun met again none.
+    #[test]
+    fn the_kept_rows_give_the_table_computed_anew() {
+        let inputs = Inputs::new("earth-hazy");
+        let (ground, top) = inputs.geometry.corners.radii_m();
+        let altitudes = inputs.geometry.grid.altitudes_m();
+        for eye_altitude in [0.0, 3_000.0] {
+            let cache = PeakBeamCache::default();
+            let eye = ground + eye_altitude;
+            let reach = (ground / eye).acos() + (ground / top).acos();
+            let computed = |cache: &PeakBeamCache| {
+                let entries = cache.0.lock().unwrap();
+                entries[0].known.computed.iter().filter(|c| **c).count()
+            };
+            let mut before = 0;
+            for (n, eye_sun_deg) in [20.0, 10.0, 5.0, 2.0, -4.0, -5.0, 2.0]
+                .into_iter()
+                .enumerate()
+            {
+                let eye_sun = f64::to_radians(eye_sun_deg);
+                let needed =
+                    NeededElevations::around_eye(eye_sun, eye, (ground, top), altitudes, reach);
+                let range = PeakBeam::needed_elevations_deg(eye_sun, reach).unwrap();
+                let anew = PeakBeam::compute(&inputs.beam_inputs(), range, &needed).unwrap();
+                let kept = cache
+                    .compute(&inputs.beam_inputs(), range, &needed)
+                    .unwrap();
+                assert_eq!((kept.first, kept.elevations), (anew.first, anew.elevations));
+                assert_eq!(kept.altitudes_m, anew.altitudes_m);
+                assert!(
+                    kept.ln_beam
+                        .iter()
+                        .zip(&anew.ln_beam)
+                        .all(|(a, b)| a.to_bits() == b.to_bits()),
+                    "eye {eye_altitude} m, sun {eye_sun_deg}"
+                );
+                // The rows this sun added: after a sun 1 degree above it,
+                // one a level (under half of those with light in a table
+                // anew); at a sun met before, none.
+                let added = computed(&cache) - before;
+                let lit_rows = anew
+                    .ln_beam
+                    .chunks_exact(anew.wavelengths)
+                    .filter(|row| row[0] != f64::MIN_POSITIVE.ln())
+                    .count();
+                match n {
+                    0 => assert!(added >= lit_rows, "{added} of {lit_rows}"),
+                    5 => assert!(
+                        added == altitudes.len() && added < lit_rows / 2,
+                        "{added} of {lit_rows}"
+                    ),
+                    6 => assert_eq!(added, 0),
+                    _ => {}
+                }
+                before += added;
+            }
+        }
+    }
+
     /// The table at the field's levels and between them against the oracle
     /// with the same tilts (its Gauss panels, line sharing, sun-column
     /// table and interpolation in altitude; the sun at the table's
@@ -921,6 +1139,7 @@ mod tests {
                     PEAK_BEAM_HIGHEST_ELEVATION_DEG,
                 ),
                 &NeededElevations::Everywhere,
+                &mut KnownRows::new(&inputs.beam_inputs()),
             );
             let mut looked_up = vec![0.0; inputs.optics.grid.len()];
             for altitude in [0.0, 150.0, 1_300.0, 6_000.0] {

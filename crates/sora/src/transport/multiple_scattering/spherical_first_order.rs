@@ -131,7 +131,18 @@ pub(crate) enum MomentQuadrature {
 /// same order as marching it per sun node
 /// (`compute_spherical_first_order_reference`, the test's oracle), so the
 /// result is the same bit for bit. One task per level.
+#[cfg(test)]
 pub(crate) fn compute_spherical_first_order(inputs: &FirstOrderInputs) -> Vec<f64> {
+    compute_spherical_first_order_with_phases(inputs, &tabulate_phases(&inputs.scaled.phases))
+}
+
+/// [`compute_spherical_first_order`] with the phase functions' table of
+/// [`tabulate_phases`] given (it does not depend on the sun: a sky moved
+/// to another sun keeps it).
+pub(crate) fn compute_spherical_first_order_with_phases(
+    inputs: &FirstOrderInputs,
+    phase_table: &[f64],
+) -> Vec<f64> {
     let wavelengths = inputs.solar_irradiance_w_m2_nm.len();
     let species = inputs.geometry.profiles.len();
     let levels = inputs.geometry.grid.altitudes_m().len();
@@ -141,8 +152,7 @@ pub(crate) fn compute_spherical_first_order(inputs: &FirstOrderInputs) -> Vec<f6
     let (ground, _) = inputs.geometry.corners.radii_m();
     let azimuths = azimuth_count(streams);
     let cosines = harmonic_cosines(azimuths, streams);
-    let phase_table = tabulate_phases(&inputs.scaled.phases);
-    let tables = &Tables::new(inputs, &phase_table);
+    let tables = &Tables::new(inputs, phase_table);
     let by_species = &BySpecies::new(inputs);
     let fit = match inputs.moments {
         #[cfg(test)]
@@ -581,7 +591,7 @@ impl StreamFit {
 
 /// p*_ij tabulated over cos theta on `PHASE_NODES` nodes in [-1, 1],
 /// [(i * species + j) * PHASE_NODES + n], sr^-1.
-fn tabulate_phases(phases: &[TruncatedPhase]) -> Vec<f64> {
+pub(crate) fn tabulate_phases(phases: &[TruncatedPhase]) -> Vec<f64> {
     phases
         .iter()
         .flat_map(|phase| {
