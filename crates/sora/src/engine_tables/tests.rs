@@ -476,12 +476,23 @@ fn layer_luminance_differences(
     slow: &EngineTables,
     layer_texels: usize,
 ) -> [(f32, f32, f32); 2] {
+    layer_luminance_differences_of(fast, slow, layer_texels, |_| true)
+}
+
+/// [`layer_luminance_differences`] over the layers `of(layer)` takes.
+fn layer_luminance_differences_of(
+    fast: &EngineTables,
+    slow: &EngineTables,
+    layer_texels: usize,
+    of: impl Fn(usize) -> bool,
+) -> [(f32, f32, f32); 2] {
     let mut errors = [Vec::new(), Vec::new()];
     for (layer, (f, s)) in fast
         .sky
         .chunks_exact(layer_texels)
         .zip(slow.sky.chunks_exact(layer_texels))
         .enumerate()
+        .filter(|(layer, _)| of(*layer))
     {
         let brightest = s.iter().map(|c| c[1]).fold(0.0f32, f32::max);
         for (f, s) in f.iter().zip(s) {
@@ -536,6 +547,20 @@ fn the_grid_layers_are_the_image_layers() {
     assert_eq!(fast.transmittance, slow.transmittance);
 }
 
+/// earth-hazy with the default multiple-scattering settings, 3
+/// wavelengths and a small sun-column table.
+fn hazy_sky_with_default_field() -> Sky {
+    Sky::builder(&Atmosphere::preset("earth-hazy").unwrap())
+        .wavelengths(WavelengthGrid::new(420.0, 680.0, 130.0).unwrap())
+        .scattering(Scattering::Multiple(MultipleScatteringSettings::default()))
+        .table_size(FastTableSize {
+            sun_column_nodes: (24, 48),
+            ..FastTableSize::default()
+        })
+        .build()
+        .unwrap()
+}
+
 /// The bake's layers with their multiply scattered light marched in
 /// `LAYER_MULTIPLE_PANELS` (8) view-ray panels against the same layers
 /// marched in the field's own 16 (`Layers::GridFieldPanels`, the slow
@@ -550,15 +575,7 @@ fn the_grid_layers_are_the_image_layers() {
 /// same table and the irradiance within 1e-3.
 #[test]
 fn the_layers_marched_in_fewer_panels_are_the_field_s() {
-    let sky = Sky::builder(&Atmosphere::preset("earth-hazy").unwrap())
-        .wavelengths(WavelengthGrid::new(420.0, 680.0, 130.0).unwrap())
-        .scattering(Scattering::Multiple(MultipleScatteringSettings::default()))
-        .table_size(FastTableSize {
-            sun_column_nodes: (24, 48),
-            ..FastTableSize::default()
-        })
-        .build()
-        .unwrap();
+    let sky = hazy_sky_with_default_field();
     assert_eq!(MultipleScatteringSettings::default().view_ray_panels, 16);
     let settings = EngineTableSettings {
         sun_nodes: 4,
@@ -568,7 +585,13 @@ fn the_layers_marched_in_fewer_panels_are_the_field_s() {
         transmittance_nodes: (4, 8),
         ..EngineTableSettings::default()
     };
-    let fast = EngineTables::bake(&sky, &settings, &|_| {}).unwrap();
+    let fast = EngineTables::bake_with(
+        &sky,
+        &settings,
+        (Field::Shared, Layers::GridEverySun),
+        &|_| {},
+    )
+    .unwrap();
     let slow = EngineTables::bake_with(
         &sky,
         &settings,
@@ -589,6 +612,59 @@ fn the_layers_marched_in_fewer_panels_are_the_field_s() {
     for (f, s) in fast.irradiance.iter().zip(&slow.irradiance) {
         assert!(((f[1] - s[1]) / s[1]).abs() < 1e-3, "{f:?} {s:?}");
     }
+}
+
+/// The bake's layers with the multiply scattered light of every other sun
+/// node just above the horizon blended from its neighbours'
+/// (`multiple_from_neighbours`) against the same layers marched at every
+/// sun node (`Layers::GridEverySun`, the slow path): earth-hazy with the
+/// default multiple-scattering settings, the default 48 sun nodes, few
+/// wavelengths, a coarse view grid, the ground and the top of the
+/// atmosphere. The layers of the nodes that march are the slow path's
+/// bit for bit; the blended ones' luminance (relative difference wherever
+/// it is above 1e-3 of its layer's maximum) is held to what was measured
+/// (on the ground 0.13 % median, 1.21 % p99 and at worst, at the top
+/// 0.07 %, 0.38 % and 0.56 %) with a margin: 2 %, 2 %, 0.6 % and 1 %.
+/// The transmittance is the same table.
+#[test]
+fn the_layers_blended_between_suns_are_the_marched_layers() {
+    let sky = hazy_sky_with_default_field();
+    let settings = EngineTableSettings {
+        altitude_nodes: 2,
+        zenith_nodes_per_half: 24,
+        azimuth_nodes: 16,
+        transmittance_nodes: (4, 8),
+        ..EngineTableSettings::default()
+    };
+    let blended: Vec<usize> = (0..settings.sun_nodes)
+        .filter(|s| multiple_from_neighbours(*s, settings.sun_nodes))
+        .collect();
+    assert_eq!(blended, (17..=31).step_by(2).collect::<Vec<_>>());
+    let fast = EngineTables::bake(&sky, &settings, &|_| {}).unwrap();
+    let slow = EngineTables::bake_with(
+        &sky,
+        &settings,
+        (Field::Shared, Layers::GridEverySun),
+        &|_| {},
+    )
+    .unwrap();
+    let layer_texels = 2 * 24 * 16;
+    let is_blended = |layer: usize| blended.contains(&(layer / settings.altitude_nodes));
+    for (layer, (f, s)) in fast
+        .sky
+        .chunks_exact(layer_texels)
+        .zip(slow.sky.chunks_exact(layer_texels))
+        .enumerate()
+        .filter(|(layer, _)| !is_blended(*layer))
+    {
+        assert_eq!(f, s, "layer {layer} marches: the slow path's layer");
+    }
+    let [ground, top] = layer_luminance_differences_of(&fast, &slow, layer_texels, is_blended);
+    eprintln!("blended vs marched (median, p99, worst): ground {ground:?}, top {top:?}");
+    assert!(ground.1 > 0.0, "the blending changed nothing: {ground:?}");
+    assert!(ground.1 < 0.02 && ground.2 < 0.02, "ground {ground:?}");
+    assert!(top.1 < 0.006 && top.2 < 0.01, "top {top:?}");
+    assert_eq!(fast.transmittance, slow.transmittance);
 }
 
 /// At its nodes (a sun and an altitude node, the aerial table's views

@@ -386,7 +386,7 @@ impl Sky {
     /// The fast method's image tables, built on first use.
     pub(super) fn image_tables(&self) -> &ImageTables {
         self.image_tables
-            .get_or_init(|| self.compute_tables(self.source_table()))
+            .get_or_init(|| self.compute_tables(self.source_table(), true))
     }
 
     /// The tables that many views are read from ([`Sky::radiances`] from
@@ -406,14 +406,20 @@ impl Sky {
                 .field
                 .get()
                 .map(|field| MultipleScatteringTable::compute_at_half_steps(Arc::clone(field)));
-            self.compute_tables(source.as_ref())
+            self.compute_tables(source.as_ref(), true)
         })
     }
 
     /// The sky-view table from `source` (None: single scattering) and the
     /// polarisation table (polarised skies with multiple scattering), at
-    /// the sky's table sizes.
-    fn compute_tables(&self, source: Option<&MultipleScatteringTable>) -> ImageTables {
+    /// the sky's table sizes; with `march_multiple` false the sky-view
+    /// table's multiply scattered light is left zero (for
+    /// `SkyViewTable::blend_multiple_from`).
+    pub(super) fn compute_tables(
+        &self,
+        source: Option<&MultipleScatteringTable>,
+        march_multiple: bool,
+    ) -> ImageTables {
         let (altitude_nodes, mu_nodes) = self.table_size.sun_column_nodes;
         let sun_columns = self.scene.sun_column_table(altitude_nodes, mu_nodes);
         let (half_zenith, azimuth) = self.table_size.sky_view_nodes;
@@ -421,9 +427,9 @@ impl Sky {
             &self.scene,
             &sun_columns,
             source,
-            half_zenith,
-            azimuth,
+            (half_zenith, azimuth),
             self.multiple_stride,
+            march_multiple,
         );
         ImageTables {
             sky_view,

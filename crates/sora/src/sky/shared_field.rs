@@ -92,4 +92,28 @@ impl Sky {
         }
         Ok(sky)
     }
+
+    /// Builds this scalar sky's image tables (from [`Sky::with_shared_field`])
+    /// with the multiply scattered light of its sky-view table not marched
+    /// but blended from two skies of the same atmosphere, eye and table
+    /// layout with the sun at neighbouring elevations, `t` of the way from
+    /// `neighbours.0` to `neighbours.1` (in the logarithm; its single
+    /// scattering and sunlit ground are its own). What the engine tables
+    /// do at every other sun node just above the horizon (`engine_tables`).
+    pub(crate) fn blend_multiple_scattering_from(
+        &self,
+        neighbours: (&Sky, &Sky),
+        t: f64,
+    ) -> Result<()> {
+        debug_assert!(self.polarisation == super::Polarisation::Scalar);
+        self.prepare_field_for_images()?;
+        let (below, above) = (neighbours.0.image_tables(), neighbours.1.image_tables());
+        let mut tables = self.compute_tables(self.source_table(), false);
+        tables
+            .sky_view
+            .blend_multiple_from((&below.sky_view, &above.sky_view), t);
+        let fresh = self.image_tables.set(tables).is_ok();
+        assert!(fresh, "the sky's image tables were built already");
+        Ok(())
+    }
 }

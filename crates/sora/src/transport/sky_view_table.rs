@@ -28,7 +28,9 @@
 //! a diffuse field): it is marched at every other node of each axis
 //! (and the last node of each half) and filled in between them by cubics
 //! (`fill_unmarched`), which quarters its cost (images; the engine tables'
-//! layers march it at every row of their coarser zenith axis). The same march gives the forward-peak
+//! layers march it at every row of their coarser zenith axis, or blend it
+//! from the tables of the sun nodes either side,
+//! [`SkyViewTable::blend_multiple_from`]). The same march gives the forward-peak
 //! integrals of delta-M (light that the multiple-scattering solver counts
 //! as unscattered and that single scattering with the real transmittances
 //! misses), a fourth block: like single scattering's integrals they take
@@ -57,6 +59,10 @@ pub struct SkyViewTable {
     values_per_node: usize,
     wavelengths: usize,
     has_multiple_scattering: bool,
+    /// Values per node of the multiply scattered light's blocks (the
+    /// air's, the ground's skylight, the forward-peak integrals), the
+    /// last of each node; 0 without multiple scattering.
+    multiple_values: usize,
     /// [(half * half_zenith_nodes + i) * azimuth_nodes + k] * values_per_node.
     values: Vec<f32>,
     /// Unit vector of the sun's azimuth in the horizontal plane.
@@ -70,16 +76,18 @@ impl SkyViewTable {
     /// scattered radiance at every node too, marched at every
     /// `multiple_stride.0`-th node of the zenith axis's halves and
     /// `multiple_stride.1`-th of the azimuth axis (and the last of each)
-    /// and filled in between (`fill_unmarched`; see the module docs). Rows run
+    /// and filled in between (`fill_unmarched`; see the module docs); with
+    /// `march_multiple` false its blocks are laid out but left zero, for
+    /// [`SkyViewTable::blend_multiple_from`] to fill. Rows run
     /// in parallel with the `parallel` feature; the result does not depend
     /// on the thread count.
     pub(crate) fn compute_with_multiple_scattering(
         sky: &SingleScatteringScene,
         sun_columns: &SunColumnTable,
         multiple_scattering: Option<&MultipleScatteringTable>,
-        half_zenith_nodes: usize,
-        azimuth_nodes: usize,
+        (half_zenith_nodes, azimuth_nodes): (usize, usize),
         multiple_stride: (usize, usize),
+        march_multiple: bool,
     ) -> SkyViewTable {
         assert!(half_zenith_nodes >= 2 && azimuth_nodes >= 2);
         assert!(multiple_stride.0 >= 1 && multiple_stride.1 >= 1);
@@ -110,17 +118,18 @@ impl SkyViewTable {
             values_per_node,
             wavelengths,
             has_multiple_scattering,
+            // Marched at every other node: multiple scattering's radiance
+            // and forward-peak integrals.
+            multiple_values: if has_multiple_scattering {
+                (forward_rows + 2) * wavelengths
+            } else {
+                0
+            },
             values: Vec::new(),
             sun_horizontal: horizontal.unwrap_or((0.0, 1.0)),
         };
         let stride = values_per_node;
-        // Marched at every other node: multiple scattering's radiance and
-        // forward-peak integrals, the last blocks of each node.
-        let marched_values = if has_multiple_scattering {
-            (forward_rows + 2) * wavelengths
-        } else {
-            0
-        };
+        let marched_values = table.multiple_values;
         let row_length = azimuth_nodes * stride;
         let fill_row = |row: usize, out: &mut [f32]| {
             let mut scratch = sky.scratch();
@@ -145,7 +154,8 @@ impl SkyViewTable {
                 for (o, v) in ground.iter_mut().zip(scratch.ground_radiance()) {
                     *o = *v as f32;
                 }
-                let marched_here = marched(index_in_half, half_zenith_nodes, multiple_stride.0)
+                let marched_here = march_multiple
+                    && marched(index_in_half, half_zenith_nodes, multiple_stride.0)
                     && marched(k, azimuth_nodes, multiple_stride.1);
                 if let (Some(ms), Some((ms_scratch, air, skylit)), true) =
                     (multiple_scattering, ms_work.as_mut(), marched_here)
@@ -169,7 +179,7 @@ impl SkyViewTable {
                     }
                 }
             }
-            if has_multiple_scattering {
+            if has_multiple_scattering && march_multiple {
                 // Fill the azimuths between marched ones.
                 fill_unmarched(
                     out,
@@ -182,7 +192,7 @@ impl SkyViewTable {
         };
         let mut values = vec![0.0f32; 2 * half_zenith_nodes * row_length];
         crate::parallel::for_each_chunk_mut(&mut values, row_length, fill_row);
-        if has_multiple_scattering {
+        if has_multiple_scattering && march_multiple {
             // Fill the rows between marched ones, within each half.
             for half in [0, 1] {
                 let rows = &mut values[half * half_zenith_nodes * row_length..]
@@ -201,6 +211,55 @@ impl SkyViewTable {
         }
         table.values = values;
         table
+    }
+
+    /// Fills the multiply scattered light's blocks of every node (left
+    /// zero by `march_multiple` false) from two tables of the same layout
+    /// with the sun at other elevations, `t` of the way from `below` to
+    /// `above`: geometrically (linear in the logarithm, as the engine
+    /// tables' sun axis is read) where both are positive, linearly
+    /// otherwise. Node for node, at the same zenith angle and azimuth from
+    /// the sun (engine tables: `engine_tables::layer_sky_view`).
+    pub(crate) fn blend_multiple_from(
+        &mut self,
+        (below, above): (&SkyViewTable, &SkyViewTable),
+        t: f64,
+    ) {
+        for other in [below, above] {
+            assert_eq!(
+                (
+                    other.half_zenith_nodes,
+                    other.azimuth_nodes,
+                    other.values_per_node,
+                    other.multiple_values
+                ),
+                (
+                    self.half_zenith_nodes,
+                    self.azimuth_nodes,
+                    self.values_per_node,
+                    self.multiple_values
+                )
+            );
+        }
+        let (n, m) = (self.values_per_node, self.multiple_values);
+        if m == 0 {
+            return;
+        }
+        let t32 = t as f32;
+        for ((node, a), b) in self
+            .values
+            .chunks_exact_mut(n)
+            .zip(below.values.chunks_exact(n))
+            .zip(above.values.chunks_exact(n))
+        {
+            for ((o, a), b) in node[n - m..].iter_mut().zip(&a[n - m..]).zip(&b[n - m..]) {
+                *o = if *a > 0.0 && *b > 0.0 {
+                    ((1.0 - t) * f64::from(*a).ln() + t * f64::from(*b).ln()).exp() as f32
+                } else {
+                    (1.0 - t32) * a + t32 * b
+                };
+            }
+        }
     }
 
     /// Zenith angle (rad) of zenith-axis node `row` (0 = the zenith,
