@@ -131,6 +131,7 @@
 //! explorer get the k-distribution; the effective coefficient is the
 //! sky's own optics ([`crate::Sky::optics`]).
 
+use super::o2_a_band;
 use super::ozone::{
     AbsorbingGas, AbsorptionCrossSection, GasAmount, MOLECULES_PER_M2_PER_DOBSON_UNIT,
 };
@@ -254,6 +255,58 @@ impl BandAmounts {
             sampled_band_coefficients(gas, grid)
         }
     }
+}
+
+impl BandAmounts {
+    /// Each sample's absorber of `gas` on `grid`: the band model's
+    /// coefficient ([`Self::sampled_coefficients`]), except the mixed gases'
+    /// samples in the O2 A band ([`o2_a_band::A_BAND_RANGE_NM`]), which take
+    /// the k-terms fitted to its lines over their band (the band model has
+    /// no CO2 there).
+    pub fn sampled_absorbers(
+        &self,
+        gas: BandGas,
+        grid: &WavelengthGrid,
+    ) -> Result<Vec<SampleAbsorber>> {
+        let a = self.sampled_coefficients(gas, grid)?;
+        let lines = if gas == BandGas::MixedGases {
+            o2_a_band::terms_on(grid)
+        } else {
+            vec![None; grid.len()]
+        };
+        Ok(a.values()
+            .iter()
+            .zip(lines)
+            .map(|(a, k)| k.map_or(SampleAbsorber::Band(*a), SampleAbsorber::Terms))
+            .collect())
+    }
+
+    /// The banded transmittance of `gas` at each sample of `grid` for
+    /// `air_mass` times this vertical amount (the band model's, or the sum
+    /// over the O2 A band's k-terms): what the k-distribution reproduces.
+    pub fn sampled_transmittance(
+        &self,
+        gas: BandGas,
+        grid: &WavelengthGrid,
+        air_mass: f64,
+    ) -> Result<Vec<f64>> {
+        let amount = air_mass * self.vertical(gas).unwrap_or(0.0);
+        Ok(self
+            .sampled_absorbers(gas, grid)?
+            .into_iter()
+            .map(|absorber| GasBand::absorber_transmittance(gas, absorber, amount))
+            .collect())
+    }
+}
+
+/// One sample's absorption by one banded gas.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SampleAbsorber {
+    /// The band model's coefficient (a_w, a_u or a_m).
+    Band(f64),
+    /// k-terms per unit amount, one per shared weight (the O2 A band's,
+    /// from its lines: [`o2_a_band`]).
+    Terms([f64; TERMS]),
 }
 
 /// A banded gas' absorption: the band model's coefficient, per molecule,
@@ -439,16 +492,35 @@ impl GasBand {
         self.amounts.vertical(self.gas).unwrap_or(0.0)
     }
 
+    /// The transmittance of `gas` as `absorber` describes it for slant
+    /// amount `amount`.
+    fn absorber_transmittance(gas: BandGas, absorber: SampleAbsorber, amount: f64) -> f64 {
+        match absorber {
+            SampleAbsorber::Band(a) => Self::band_transmittance(gas, a, amount),
+            SampleAbsorber::Terms(k) => o2_a_band::terms_transmittance(&k, amount),
+        }
+    }
+
+    /// The effective (single-solve) coefficient per unit amount of
+    /// `absorber`: Beer-Lambert matching it at [`EFFECTIVE_AIR_MASS`].
+    fn effective_coefficient_of(&self, absorber: SampleAbsorber) -> f64 {
+        let slant = EFFECTIVE_AIR_MASS * self.vertical_amount();
+        let absorbs = match absorber {
+            SampleAbsorber::Band(a) => a > 0.0,
+            SampleAbsorber::Terms(k) => k.iter().any(|k| *k > 0.0),
+        };
+        if !absorbs || slant <= 0.0 {
+            0.0
+        } else {
+            -Self::absorber_transmittance(self.gas, absorber, slant).ln() / slant
+        }
+    }
+
     /// The effective (single-solve) coefficient per unit amount at band
     /// coefficient `a`: Beer-Lambert matching the band model at
     /// [`EFFECTIVE_AIR_MASS`].
     pub fn effective_coefficient_per_unit_amount(&self, a: f64) -> f64 {
-        let slant = EFFECTIVE_AIR_MASS * self.vertical_amount();
-        if a <= 0.0 || slant <= 0.0 {
-            0.0
-        } else {
-            -Self::band_transmittance(self.gas, a, slant).ln() / slant
-        }
+        self.effective_coefficient_of(SampleAbsorber::Band(a))
     }
 
     /// Absorption coefficient per unit amount (per cm of precipitable water,
@@ -462,46 +534,66 @@ impl GasBand {
         a: f64,
         others: impl IntoIterator<Item = (BandGas, f64)>,
     ) -> f64 {
+        self.coefficient_of(
+            SampleAbsorber::Band(a),
+            others
+                .into_iter()
+                .map(|(gas, a)| (gas, SampleAbsorber::Band(a))),
+        )
+    }
+
+    /// [`Self::coefficient_per_unit_amount`] for any sample's absorber (the
+    /// band model's coefficient or the O2 A band's k-terms).
+    fn coefficient_of(
+        &self,
+        own: SampleAbsorber,
+        others: impl IntoIterator<Item = (BandGas, SampleAbsorber)>,
+    ) -> f64 {
         let Some(j) = self.term else {
-            return self.effective_coefficient_per_unit_amount(a);
+            return self.effective_coefficient_of(own);
         };
-        let own = 1.0
-            - Self::band_transmittance(self.gas, a, EFFECTIVE_AIR_MASS * self.vertical_amount());
-        for (gas, a_other) in others {
+        let absorption = |gas: BandGas, absorber: SampleAbsorber, vertical: f64| {
+            1.0 - Self::absorber_transmittance(gas, absorber, EFFECTIVE_AIR_MASS * vertical)
+        };
+        let mine = absorption(self.gas, own, self.vertical_amount());
+        for (gas, other) in others {
             let Some(amount) = self.amounts.vertical(gas).filter(|_| gas != self.gas) else {
                 continue;
             };
-            let other = 1.0 - Self::band_transmittance(gas, a_other, EFFECTIVE_AIR_MASS * amount);
-            if other > own {
-                return self.effective_coefficient_per_unit_amount(a);
+            if absorption(gas, other, amount) > mine {
+                return self.effective_coefficient_of(own);
             }
         }
-        let term = k_terms()[j];
-        let factor = match self.gas {
-            BandGas::WaterVapour => term.water_factor,
-            BandGas::MixedGases => term.mixed_factor,
-            BandGas::Methane => term.methane_factor,
-        };
-        factor * a
+        match own {
+            SampleAbsorber::Terms(k) => k[j],
+            SampleAbsorber::Band(a) => {
+                let term = k_terms()[j];
+                let factor = match self.gas {
+                    BandGas::WaterVapour => term.water_factor,
+                    BandGas::MixedGases => term.mixed_factor,
+                    BandGas::Methane => term.methane_factor,
+                };
+                factor * a
+            }
+        }
     }
 
     /// Cross-section per molecule on `grid`, m^2.
     pub(crate) fn sample(&self, grid: &WavelengthGrid) -> Result<SampledSpectrum> {
-        let own = self.amounts.sampled_coefficients(self.gas, grid)?;
+        let own = self.amounts.sampled_absorbers(self.gas, grid)?;
         let mut others = Vec::new();
         for gas in BandGas::ALL {
             if gas != self.gas && self.amounts.vertical(gas).is_some() {
-                others.push((gas, self.amounts.sampled_coefficients(gas, grid)?));
+                others.push((gas, self.amounts.sampled_absorbers(gas, grid)?));
             }
         }
         let per_molecule = 1.0 / self.molecules_per_unit();
         Ok(SampledSpectrum::from_values(
-            own.values()
-                .iter()
+            own.iter()
                 .enumerate()
-                .map(|(i, a)| {
+                .map(|(i, absorber)| {
                     let others = others.iter().map(|(gas, values)| (*gas, values[i]));
-                    self.coefficient_per_unit_amount(*a, others) * per_molecule
+                    self.coefficient_of(*absorber, others) * per_molecule
                 })
                 .collect(),
         ))
