@@ -751,6 +751,20 @@ pub fn k_distribution_terms(atmosphere: &Atmosphere) -> Vec<(f64, Atmosphere)> {
 mod tests {
     use super::*;
 
+    /// The mixed gases' banded transmittance on `grid` for `columns` air
+    /// columns: T_u(a_u columns), or in the O2 A band the sum over its
+    /// line-derived k-terms.
+    fn mixed_transmittance(grid: &WavelengthGrid, columns: f64) -> Vec<f64> {
+        BandAmounts {
+            water_cm: None,
+            mixed_columns: Some(1.0),
+            co2_ppm: CO2_REFERENCE_PPM,
+            methane_ppm: None,
+        }
+        .sampled_transmittance(BandGas::MixedGases, grid, columns)
+        .unwrap()
+    }
+
     fn log_points(lo: f64, hi: f64, n: usize) -> impl Iterator<Item = f64> {
         (0..n).map(move |i| lo * (hi / lo).powf(i as f64 / (n - 1) as f64))
     }
@@ -860,9 +874,9 @@ mod tests {
                 // The atmosphere's top (100 km) cuts exp(-100/8) of the mixed
                 // gases' column and nothing measurable of water's.
                 let air_column = 1.0 - (-atmosphere.planet.top_above_sea_level_m() / 8000.0).exp();
+                let t_u = mixed_transmittance(&grid, air_column * air_mass);
                 for i in 0..3 {
-                    let want = mixed_band_transmittance(a_u[i] * air_column * air_mass)
-                        * water_band_transmittance(a_w[i] * water_cm * air_mass);
+                    let want = t_u[i] * water_band_transmittance(a_w[i] * water_cm * air_mass);
                     let error = (k[i] - want).abs() / (1.0 - want);
                     assert!(
                         error < 0.02,
@@ -886,10 +900,9 @@ mod tests {
         high.planet = high.planet.with_ground_altitude_m(10_000.0).unwrap();
         let t_sea = k_transmittance(&sea, &grid, 1.0)[0];
         let t_high = k_transmittance(&high, &grid, 1.0)[0];
-        let a_u = 2.0; // half way between 0 at 757.5 and 4.0 at 762.5 nm
         let fraction = (-10_000.0 / 8000.0f64).exp();
-        let want_sea = mixed_band_transmittance(a_u);
-        let want_high = mixed_band_transmittance(a_u * fraction);
+        let want_sea = mixed_transmittance(&grid, 1.0)[0];
+        let want_high = mixed_transmittance(&grid, fraction)[0];
         for (got, want) in [(t_sea, want_sea), (t_high, want_high)] {
             assert!((got - want).abs() / (1.0 - want) < 0.02, "{got} vs {want}");
         }
@@ -1251,7 +1264,6 @@ mod tests {
         use crate::sky::Sky;
         let grid = WavelengthGrid::new(700.0, 1100.0, 10.0).unwrap();
         let a_w = sampled_band_coefficients(BandGas::WaterVapour, &grid).unwrap();
-        let a_u = sampled_band_coefficients(BandGas::MixedGases, &grid).unwrap();
         let direct = |atmosphere: &Atmosphere, elevation: f64| {
             Sky::builder(atmosphere)
                 .sun_deg(elevation, 180.0)
@@ -1267,13 +1279,14 @@ mod tests {
             for elevation in [90.0, 30.0] {
                 let air_mass = 1.0 / f64::to_radians(elevation).sin();
                 let reference = direct(&clear, elevation);
+                let mixed = mixed_transmittance(&grid, air_mass);
                 let mut summed = SampledSpectrum::zeros(grid.len());
                 for (weight, at_term) in k_distribution_terms(&gases) {
                     summed.add_scaled(&direct(&at_term, elevation), weight);
                 }
                 for i in 0..grid.len() {
                     let t = summed[i] / reference[i];
-                    let t_u = mixed_band_transmittance(a_u[i] * air_mass);
+                    let t_u = mixed[i];
                     let t_w = water_band_transmittance(a_w[i] * water_cm * air_mass);
                     let want = t_u * t_w;
                     if want > 0.999 {
@@ -1355,12 +1368,23 @@ mod tests {
             .compute_optics(&grid)
             .unwrap()
             .total_optical_depth_extinction()[0];
-        let a_u = sampled_band_coefficients(BandGas::MixedGases, &grid).unwrap()[0];
+        // Term j's optical depth per air column: the A band's k-terms.
+        let SampleAbsorber::Terms(k) = BandAmounts {
+            water_cm: None,
+            mixed_columns: Some(1.0),
+            co2_ppm: CO2_REFERENCE_PPM,
+            methane_ppm: None,
+        }
+        .sampled_absorbers(BandGas::MixedGases, &grid)
+        .unwrap()[0] else {
+            panic!("760 nm is in the A band's line-derived range")
+        };
         let column = 1.0 - (-100e3 / MIXED_GAS_SCALE_HEIGHT_M).exp();
         let f = |tau: f64| (tau_r / tau) * (-tau).exp() * (1.0 - (-tau * (m - 1.0)).exp());
         let want: f64 = k_terms()
             .iter()
-            .map(|t| t.weight * f(tau_r + t.mixed_factor * a_u * column) / f(tau_r))
+            .zip(k)
+            .map(|(t, k)| t.weight * f(tau_r + k * column) / f(tau_r))
             .sum();
         // One solve with the effective coefficient (matched to the band
         // model's direct beam at air mass 2) errs more.
