@@ -1,7 +1,9 @@
 //! Banded gases: water vapour, the uniformly mixed gases (O2 A, B and
 //! gamma bands; CO2 beyond 1100 nm) and CH4 (1.63-2.43 um), from published
 //! band models turned into a k-distribution so that a band's radiance is a
-//! weighted sum of a few monochromatic solves.
+//! weighted sum of a few monochromatic solves; the O2 A band (samples at
+//! 750-780 nm) from k-terms fitted to its lines instead
+//! ([`super::o2_a_band`]).
 //!
 //! # The band model
 //! Bird & Riordan (1986, J. Climate Appl. Meteor. 25, 87; SPECTRL2, after
@@ -109,13 +111,23 @@
 //! km is the sea-level band with a quarter of the air above (CH4's
 //! pressure and temperature scaling is folded into a_m once, for the
 //! column above sea level). Its
-//! resolution is its coefficients' (a 10 nm grid sample at 760 nm reads
-//! a_u = 2.0, half way between 757.5 and 762.5 nm). Against line by line
-//! (HITRAN 2016 lines through the U.S. standard atmosphere,
-//! `tests/data/gas_line_by_line_reference.csv`) the A band's direct beam
-//! averaged over 10 nm errs by -43 to +62 % of the absorption 1 - T
-//! (755-765, 760-770 and 765-775 nm, suns 60 and 15 degrees; measured in
-//! `tests/gas_line_by_line.rs`, whose 2 % bar is an ignored test). It has no O2-O2
+//! resolution is its coefficients' (the 940 nm water band is the 925-948 nm
+//! points, read by linear interpolation at each sample).
+//!
+//! # The O2 A band from its lines
+//! Samples at 750-780 nm ([`super::o2_a_band::A_BAND_RANGE_NM`]) take the
+//! mixed gases' absorption not from a_u (whose A band is one strong point,
+//! 762.5 nm, and a weak one, 767.5 nm) but from k-terms fitted, per 0.5 nm
+//! bin, to HITRAN 2016 O2 lines through the U.S. Standard Atmosphere 1976
+//! (`data/o2_a_band_k_terms.csv`, written by
+//! `scripts/gases/make_lbl_reference.py`) and re-sorted into each sample's
+//! band ([`SampleAbsorber::Terms`]; the band model has no CO2 there).
+//! Against line by line (`tests/data/gas_line_by_line_reference.csv`, the
+//! same lines through the layered, spherical atmosphere) the direct beam
+//! averaged over the 1 nm samples of 755-765, 760-770 and 765-775 nm errs
+//! by -0.8 to +0.1 % of the absorption 1 - T, a 10 nm grid's sample at each
+//! band's centre by -4.4 to +4.0 % (suns 60 and 15 degrees; measured in
+//! `tests/gas_line_by_line.rs`); the band model erred -43 to +62 %. It has no O2-O2
 //! collision bands (`o2_o2.rs`, `[gases] o2_o2 = true`) and no NO2 (a
 //! cross-section species, `absorption.gas = "no2"`).
 //! When one solve is asked for (a sky built from an atmosphere with gases,
@@ -123,10 +135,10 @@
 //! coefficient: the one whose Beer-Lambert transmittance equals the band
 //! model's for twice the vertical column ([`EFFECTIVE_AIR_MASS`]); that is
 //! exact at air mass 2 and errs elsewhere (tested below): the zenith sky
-//! in the A band (Rayleigh air, single scattering, sun 60 degrees) keeps
-//! 0.827 of its gas-free radiance with one solve, 0.7773 with the five
-//! terms, against 0.7773 from the plane-parallel closed form over the
-//! terms. A [`crate::Sky`] built from an atmosphere with banded gases sums
+//! in the A band (760 nm on a 10 nm grid; Rayleigh air, single scattering,
+//! sun 60 degrees) keeps 0.782 of its gas-free radiance with one solve,
+//! 0.7123 with the five terms, against 0.7122 from the plane-parallel
+//! closed form over the terms. A [`crate::Sky`] built from an atmosphere with banded gases sums
 //! the terms itself (`sky/k_terms.rs`), so every command, Python and the
 //! explorer get the k-distribution; the effective coefficient is the
 //! sky's own optics ([`crate::Sky::optics`]).
