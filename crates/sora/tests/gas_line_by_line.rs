@@ -83,10 +83,10 @@ fn gas_transmittance(gases: &str, grid: WavelengthGrid, elevation_deg: f64) -> V
 }
 
 /// sora against one reference case: (band mean, band centre) transmittance.
-/// The band mean is the plain mean of the 1 nm samples whose bands ([lambda
-/// - 0.5, lambda + 0.5] nm, what each sample stands for) tile the band; the
-/// band centre is the one sample of a grid of the band's width there (what
-/// a user on a 10 nm grid gets at that wavelength).
+/// The band mean is the plain mean of the 1 nm samples whose bands (each
+/// sample stands for the 1 nm around it) tile the band; the band centre is
+/// the one sample of a grid of the band's width there (what a user on a
+/// 10 nm grid gets at that wavelength).
 fn sora_case(case: &Case) -> (f64, f64) {
     let gases = match case.gas.as_str() {
         "O2" => "precipitable_water_cm = 0",

@@ -257,12 +257,14 @@ fn solve(mut a: [[f64; TERMS]; TERMS], mut b: [f64; TERMS]) -> Option<[f64; TERM
         }
         a.swap(col, pivot);
         b.swap(col, pivot);
-        for row in col + 1..TERMS {
-            let f = a[row][col] / a[col][col];
-            for c in col..TERMS {
-                a[row][c] -= f * a[col][c];
+        let (pivot_row, below) = a.split_at_mut(col + 1);
+        let pivot_row = pivot_row[col];
+        for (offset, row) in below.iter_mut().enumerate() {
+            let f = row[col] / pivot_row[col];
+            for (x, p) in row[col..].iter_mut().zip(&pivot_row[col..]) {
+                *x -= f * p;
             }
-            b[row] -= f * b[col];
+            b[col + 1 + offset] -= f * b[col];
         }
     }
     let mut x = [0.0; TERMS];
