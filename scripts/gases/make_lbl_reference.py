@@ -7,6 +7,13 @@ line by line from HITRAN line data through a layered U.S. Standard
 Atmosphere 1976, for two sun elevations. crates/sora/tests/gas_line_by_line.rs
 compares sora's banded gases with it.
 
+Also writes crates/sora/src/data/o2_a_band_k_terms.csv, sora's O2 A band: for
+each 0.5 nm bin of 750-780 nm, the coefficients of sora's 5 shared k-term
+weights fitted (least squares, air masses 1-20) to the bin's line-by-line
+column transmittance T(M), per molecule of air (bin_k_terms, write_k_terms;
+about 50 s in all). sora re-sorts the bins into each grid sample's band
+(crates/sora/src/atmosphere/o2_a_band.rs).
+
 What it covers, and what not
 ----------------------------
 Only the O2 A band (750-780 nm). The water bands (940, 1130, 1400 and

@@ -71,15 +71,10 @@ fn the_direct_beam_in_the_a_band_and_the_940_nm_band_is_the_band_models() {
 /// The mixed gases' banded transmittance on `grid` for `columns` sea-level
 /// air columns (in the O2 A band, the sum over its line-derived k-terms).
 fn o2_transmittance(grid: &sora::spectrum::WavelengthGrid, columns: f64) -> Vec<f64> {
-    use sora::atmosphere::gas_bands::{BandAmounts, BandGas, CO2_REFERENCE_PPM};
-    BandAmounts {
-        water_cm: None,
-        mixed_columns: Some(1.0),
-        co2_ppm: CO2_REFERENCE_PPM,
-        methane_ppm: None,
-    }
-    .sampled_transmittance(BandGas::MixedGases, grid, columns)
-    .unwrap()
+    use sora::atmosphere::gas_bands::{BandAmounts, BandGas};
+    BandAmounts::one_air_column()
+        .sampled_transmittance(BandGas::MixedGases, grid, columns)
+        .unwrap()
 }
 
 /// The README's recipe: the summer preset's irradiance over 700-1100 nm

@@ -270,6 +270,17 @@ impl BandAmounts {
 }
 
 impl BandAmounts {
+    /// One sea-level air column of the mixed gases at the band model's CO2,
+    /// no water, no CH4.
+    pub fn one_air_column() -> BandAmounts {
+        BandAmounts {
+            water_cm: None,
+            mixed_columns: Some(1.0),
+            co2_ppm: CO2_REFERENCE_PPM,
+            methane_ppm: None,
+        }
+    }
+
     /// Each sample's absorber of `gas` on `grid`: the band model's
     /// coefficient ([`Self::sampled_coefficients`]), except the mixed gases'
     /// samples in the O2 A band ([`o2_a_band::A_BAND_RANGE_NM`]), which take
@@ -767,14 +778,9 @@ mod tests {
     /// columns: T_u(a_u columns), or in the O2 A band the sum over its
     /// line-derived k-terms.
     fn mixed_transmittance(grid: &WavelengthGrid, columns: f64) -> Vec<f64> {
-        BandAmounts {
-            water_cm: None,
-            mixed_columns: Some(1.0),
-            co2_ppm: CO2_REFERENCE_PPM,
-            methane_ppm: None,
-        }
-        .sampled_transmittance(BandGas::MixedGases, grid, columns)
-        .unwrap()
+        BandAmounts::one_air_column()
+            .sampled_transmittance(BandGas::MixedGases, grid, columns)
+            .unwrap()
     }
 
     fn log_points(lo: f64, hi: f64, n: usize) -> impl Iterator<Item = f64> {
@@ -1381,14 +1387,10 @@ mod tests {
             .unwrap()
             .total_optical_depth_extinction()[0];
         // Term j's optical depth per air column: the A band's k-terms.
-        let SampleAbsorber::Terms(k) = BandAmounts {
-            water_cm: None,
-            mixed_columns: Some(1.0),
-            co2_ppm: CO2_REFERENCE_PPM,
-            methane_ppm: None,
-        }
-        .sampled_absorbers(BandGas::MixedGases, &grid)
-        .unwrap()[0] else {
+        let SampleAbsorber::Terms(k) = BandAmounts::one_air_column()
+            .sampled_absorbers(BandGas::MixedGases, &grid)
+            .unwrap()[0]
+        else {
             panic!("760 nm is in the A band's line-derived range")
         };
         let column = 1.0 - (-100e3 / MIXED_GAS_SCALE_HEIGHT_M).exp();
