@@ -171,7 +171,7 @@ pub const MOLECULES_PER_M2_PER_CM_PRECIPITABLE_WATER: f64 = 3.3429e26;
 pub const AIR_MOLECULES_PER_M2_SEA_LEVEL_COLUMN: f64 = 2.1484e29;
 
 /// The air mass at which a single solve's effective coefficient matches
-/// the band model.
+/// the banded transmittance (the band model's, or the O2 A band's k-terms).
 pub const EFFECTIVE_AIR_MASS: f64 = 2.0;
 
 /// The default scale height of water vapour's profile, m (about the
