@@ -7,6 +7,13 @@ line by line from HITRAN line data through a layered U.S. Standard
 Atmosphere 1976, for two sun elevations. crates/sora/tests/gas_line_by_line.rs
 compares sora's banded gases with it.
 
+Also writes crates/sora/src/data/o2_a_band_k_terms.csv, sora's O2 A band: for
+each 0.5 nm bin of 750-780 nm, the coefficients of sora's 5 shared k-term
+weights fitted (least squares, air masses 1-20) to the bin's line-by-line
+column transmittance T(M), per molecule of air (bin_k_terms, write_k_terms;
+about 50 s in all). sora re-sorts the bins into each grid sample's band
+(crates/sora/src/atmosphere/o2_a_band.rs).
+
 What it covers, and what not
 ----------------------------
 Only the O2 A band (750-780 nm). The water bands (940, 1130, 1400 and
@@ -104,6 +111,14 @@ import numpy as np
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 OUT = ROOT / "crates" / "sora" / "tests" / "data" / "gas_line_by_line_reference.csv"
+K_TERMS_OUT = ROOT / "crates" / "sora" / "src" / "data" / "o2_a_band_k_terms.csv"
+# The O2 A band's k-terms: 0.5 nm bins over 750-780 nm (the lines span
+# 749.7-778.4 nm; the band model's O2 is 0 from 740 to 757.5 nm and from 780
+# to 800 nm, so sora swaps the one for the other over this range only).
+K_BINS_NM = (750.0, 780.0, 0.5)
+# sora's unit of mixed-gas amount: one sea-level air column, cm^-2
+# (AIR_MOLECULES_PER_M2_SEA_LEVEL_COLUMN).
+SORA_AIR_COLUMN = 2.1484e25
 O2_SHA256 = "f95b8ae4526e2edb2e99b7af78f844579f58c156f87636bb7274aa4a04f2b35e"
 
 C2 = 1.4387769  # cm K, second radiation constant
@@ -374,6 +389,76 @@ def exp_sum_fit(m, t, terms, weights):
     return best
 
 
+def bin_k_terms(tau_column, nu, lo_nm, hi_nm):
+    """sora's 5 shared weights' coefficients for one bin's line-by-line T(M).
+
+    T(M) is the bin's mean (uniform in wavelength) of exp(-M tau), tau the
+    vertical column's optical depth, M = 1-20 (40 log-spaced points). The
+    start is the bin's own k-distribution ranked into the weights'
+    g-intervals (each interval's k matching its transmittance at M = 2);
+    then least squares in log k of the error in units of max(1 - T, 0.01).
+    Returns (k_j sorted, largest error in units of max(1 - T, 0.01)).
+    """
+    from scipy.optimize import least_squares
+
+    lam = 1e7 / nu
+    keep = (lam >= lo_nm) & (lam < hi_nm)
+    weight = 1.0 / nu[keep] ** 2
+    weight /= weight.sum()
+    order = np.argsort(tau_column[keep])
+    k_sorted, w_sorted = tau_column[keep][order], weight[order]
+    g = np.concatenate([[0.0], np.cumsum(w_sorted)])
+    g_terms = np.concatenate([[0.0], np.cumsum(SORA_K_WEIGHTS)])
+    start = []
+    for j in range(len(SORA_K_WEIGHTS)):
+        overlap = np.clip(np.minimum(g[1:], g_terms[j + 1]) - np.maximum(g[:-1], g_terms[j]), 0, None)
+        inside = overlap > 0
+        x = -2.0 * k_sorted[inside]
+        top = x.max()
+        t = (overlap[inside] * np.exp(x - top)).sum() / overlap.sum()
+        start.append(max(-(top + np.log(t)) / 2.0, 1e-12))
+    m = np.logspace(0.0, np.log10(20.0), 40)
+    t = np.array([(np.exp(-mm * tau_column[keep]) * weight).sum() for mm in m])
+    scale = np.maximum(1.0 - t, 1e-2)
+
+    def residual(p):
+        k = np.exp(np.sort(p))
+        return ((SORA_K_WEIGHTS[None, :] * np.exp(-np.outer(m, k))).sum(axis=1) - t) / scale
+
+    fit = least_squares(residual, np.log(start), max_nfev=4000)
+    return np.exp(np.sort(fit.x)), float(np.abs(residual(fit.x)).max())
+
+
+def write_k_terms(lines, layer_list, air_column):
+    """The O2 A band's k-terms per 0.5 nm bin (crates/sora/src/data/o2_a_band_k_terms.csv)."""
+    lo_nm, hi_nm, step = K_BINS_NM
+    nu = np.arange(1e7 / hi_nm, 1e7 / lo_nm, GRID_STEP)
+    tau = optical_depths(lines, 7, O2_MASS, nu, layer_list, O2_VMR).sum(axis=0)
+    # Per molecule of air: sora's column holds SORA_AIR_COLUMN molecules.
+    tau_sora = tau * SORA_AIR_COLUMN / air_column
+    edges = np.arange(lo_nm, hi_nm + 0.5 * step, step)
+    rows, worst = [], 0.0
+    for a, b in zip(edges[:-1], edges[1:]):
+        k, error = bin_k_terms(tau_sora, nu, a, b)
+        worst = max(worst, error)
+        rows.append((a, b, k))
+    print(f"k-terms: {len(rows)} bins of {step:g} nm, largest fit error {100 * worst:.2f} % of max(1 - T, 0.01)")
+    header = (
+        "# The O2 A band's k-terms: for each 0.5 nm bin (uniform in wavelength), the coefficients k_j, per "
+        f"sora sea-level air column ({SORA_AIR_COLUMN:.4e} molecules cm^-2; the line-by-line optical depth per "
+        "molecule of air), of sora's 5 shared weights (data/gas_bands_k_terms.csv) fitted to the bin's "
+        "line-by-line T(M) = mean exp(-M tau) of the vertical U.S. Standard Atmosphere 1976 column scaled by "
+        "M = 1-20 (least squares in units of max(1 - T, 0.01); largest error "
+        f"{100 * worst:.2f} %). Lines, layers and line shapes as in tests/data/gas_line_by_line_reference.csv "
+        "(HITRAN 2016 O2, sha256 " + O2_SHA256 + "). Written by scripts/gases/make_lbl_reference.py.\n"
+    )
+    body = "lo_nm,hi_nm,k1,k2,k3,k4,k5\n" + "".join(
+        f"{a:g},{b:g}," + ",".join(f"{v:.6e}" for v in k) + "\n" for a, b, k in rows
+    )
+    K_TERMS_OUT.write_text(header + body)
+    print(f"wrote {K_TERMS_OUT.relative_to(ROOT)}")
+
+
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--o2-lines", default=str(ROOT / "target" / "lbl-lines" / "O2.data"))
@@ -419,6 +504,7 @@ def main():
     )
     OUT.write_text(header + body)
     print(f"wrote {OUT.relative_to(ROOT)}")
+    write_k_terms(lines, layer_list, air_column)
     if args.check_hapi:
         check_against_hapi(lines, layer_list, pathlib.Path(args.o2_lines).parent)
     if args.curve_of_growth:

@@ -8,9 +8,9 @@
 //! same cases: the direct normal irradiance of a Rayleigh atmosphere (the
 //! same U.S. standard air, radius 6360 km) with `[gases]` (the O2 and CO2
 //! bands, no water) over that of the atmosphere without, summed over the
-//! k-terms by the sky itself, sampled every 1 nm across the band and
-//! averaged (trapezoid), and also read at the band's centre (what one
-//! sample of a 10 nm grid gives). The error is in units of the reference's
+//! k-terms by the sky itself, averaged over the 1 nm samples whose bands
+//! tile the band, and also read at the band's centre on a grid of the
+//! band's width (what one sample of a 10 nm grid gives). The error is in units of the reference's
 //! absorption 1 - T.
 
 use sora::spectrum::WavelengthGrid;
@@ -83,17 +83,22 @@ fn gas_transmittance(gases: &str, grid: WavelengthGrid, elevation_deg: f64) -> V
 }
 
 /// sora against one reference case: (band mean, band centre) transmittance.
+/// The band mean is the plain mean of the 1 nm samples whose bands (each
+/// sample stands for the 1 nm around it) tile the band; the band centre is
+/// the one sample of a grid of the band's width there (what a user on a
+/// 10 nm grid gets at that wavelength).
 fn sora_case(case: &Case) -> (f64, f64) {
     let gases = match case.gas.as_str() {
         "O2" => "precipitable_water_cm = 0",
         other => panic!("no sora case for gas {other}"),
     };
-    let grid = WavelengthGrid::new(case.lo_nm, case.hi_nm, 1.0).unwrap();
+    let grid = WavelengthGrid::new(case.lo_nm + 0.5, case.hi_nm - 0.5, 1.0).unwrap();
     let t = gas_transmittance(gases, grid, case.elevation_deg);
-    let n = t.len();
-    let mean = (t[1..n - 1].iter().sum::<f64>() + 0.5 * (t[0] + t[n - 1])) / (n - 1) as f64;
-    let centre = t[n / 2];
-    assert_eq!(n % 2, 1, "the band's centre is a sample");
+    let mean = t.iter().sum::<f64>() / t.len() as f64;
+    let width = case.hi_nm - case.lo_nm;
+    let centre = 0.5 * (case.lo_nm + case.hi_nm);
+    let one = WavelengthGrid::new(centre, centre, width).unwrap();
+    let centre = gas_transmittance(gases, one, case.elevation_deg)[0];
     (mean, centre)
 }
 
@@ -163,39 +168,34 @@ fn the_reference_is_a_curve_of_growth_and_sora_reads_it() {
 }
 
 /// The first "Done when" of issue 36 for the O2 A band: sora's band-mean
-/// direct beam within 2 % of the line-by-line absorption. It fails today, by
-/// this much (measured; suns 60 and 15 degrees, error of sora's band mean
-/// and of its band-centre sample in % of the reference's 1 - T):
+/// direct beam within 2 % of the line-by-line absorption. sora's O2 in
+/// 750-780 nm is k-terms fitted to the same lines (`atmosphere/o2_a_band.rs`,
+/// 0.5 nm bins re-sorted into each sample's band), so it does (measured;
+/// suns 60 and 15 degrees, error in % of the reference's 1 - T):
 ///
 /// ```text
-/// band nm   ref 1-T        sora band mean   error          centre sample
-/// 755-765   0.309 0.433    0.177 0.303      -43 % -30 %    -26 % -9 %
-/// 760-770   0.344 0.502    0.205 0.354      -41 % -30 %    -31 % -19 %
-/// 765-775   0.065 0.116    0.103 0.188      +57 % +62 %    +26 % +36 %
+/// band nm   ref 1-T        sora band mean   error          10 nm grid sample
+/// 755-765   0.309 0.433    0.307 0.432      -0.8 -0.1 %    -4.4 +4.0 %
+/// 760-770   0.344 0.502    0.343 0.501      -0.4 -0.3 %    -2.2 +2.1 %
+/// 765-775   0.066 0.116    0.065 0.116      -0.8 +0.1 %    -0.7 +0.2 %
 /// ```
 ///
-/// The gap is the band model's (SPECTRL2 after Leckner 1978: a_u = 4 at
-/// 762.5 nm, 0.35 at 767.5 nm, 0 at 757.5 and 780 nm, read by linear
-/// interpolation), not the k-terms' (they reproduce it within 1.6 %; the
-/// unit tests of `gas_bands.rs`): its 760-765 nm absorbs 32 % at air mass
-/// 1.15 where the lines absorb 56 %, and its 765-770 nm 9 % where they
-/// absorb 13 %. No single coefficient on the band model's curve of growth
-/// fits a 10 nm band within 2 % from air mass 1 to 8 (best: 11-18 % at
-/// 755-770 nm, 7.3 % at 765-775 nm; 2.1-4.8 % for the 5 nm bands 760-765,
-/// 762.5-767.5 and 765-770 nm, 19 % for 757.5-762.5 nm; printed by
-/// `make_lbl_reference.py --curve-of-growth`), since a 10 nm band is partly
-/// transparent. k-terms fitted to the lines band by band do meet it: an
-/// exponential sum with the band's own weights fits each 10 nm band's T(m)
-/// within 0.5 % of 1 - T with 3 terms and 0.04 % with 4 (air mass 1-20),
-/// but with sora's 5 weights, shared by all wavelengths today, and the
-/// band's own k only within 1.5-4.8 % (the same option of the script).
+/// A 10 nm grid's one sample per band errs more, 4.4 % at most: five
+/// weights shared by every wavelength cannot hold a 10 nm band's curve of
+/// growth closer (the script's own least-squares fit with them, 1.5-4.8 %);
+/// that bar is the second assertion. Before (the SPECTRL2 band model, point
+/// samples, trapezoid mean): -43/-30 %, -41/-30 % and +57/+62 %.
 #[test]
-#[ignore = "measured gap: sora's A band (SPECTRL2 band model) is 30-43 % short of line-by-line 1 - T at 755-770 nm and 57-62 % over at 765-775 nm"]
 fn o2_a_band_within_two_percent_of_line_by_line() {
-    let mut worst: f64 = 0.0;
-    for (case, mean, _) in comparison() {
+    let (mut worst, mut worst_centre): (f64, f64) = (0.0, 0.0);
+    for (case, mean, centre) in comparison() {
         worst = worst.max(error_percent(mean, case.transmittance).abs());
+        worst_centre = worst_centre.max(error_percent(centre, case.transmittance).abs());
     }
-    println!("worst band-mean error: {worst:.1} % of 1 - T");
+    println!("worst band-mean error: {worst:.1} % of 1 - T; 10 nm grid: {worst_centre:.1} %");
     assert!(worst < 2.0, "{worst:.1} % of 1 - T");
+    assert!(
+        worst_centre < 5.0,
+        "10 nm grid: {worst_centre:.1} % of 1 - T"
+    );
 }

@@ -1,7 +1,9 @@
 //! Banded gases: water vapour, the uniformly mixed gases (O2 A, B and
 //! gamma bands; CO2 beyond 1100 nm) and CH4 (1.63-2.43 um), from published
 //! band models turned into a k-distribution so that a band's radiance is a
-//! weighted sum of a few monochromatic solves.
+//! weighted sum of a few monochromatic solves; the O2 A band (samples at
+//! 750-780 nm) from k-terms fitted to its lines instead
+//! ([`super::o2_a_band`]).
 //!
 //! # The band model
 //! Bird & Riordan (1986, J. Climate Appl. Meteor. 25, 87; SPECTRL2, after
@@ -109,13 +111,23 @@
 //! km is the sea-level band with a quarter of the air above (CH4's
 //! pressure and temperature scaling is folded into a_m once, for the
 //! column above sea level). Its
-//! resolution is its coefficients' (a 10 nm grid sample at 760 nm reads
-//! a_u = 2.0, half way between 757.5 and 762.5 nm). Against line by line
-//! (HITRAN 2016 lines through the U.S. standard atmosphere,
-//! `tests/data/gas_line_by_line_reference.csv`) the A band's direct beam
-//! averaged over 10 nm errs by -43 to +62 % of the absorption 1 - T
-//! (755-765, 760-770 and 765-775 nm, suns 60 and 15 degrees; measured in
-//! `tests/gas_line_by_line.rs`, whose 2 % bar is an ignored test). It has no O2-O2
+//! resolution is its coefficients' (the 940 nm water band is the 925-948 nm
+//! points, read by linear interpolation at each sample).
+//!
+//! # The O2 A band from its lines
+//! Samples at 750-780 nm ([`super::o2_a_band::A_BAND_RANGE_NM`]) take the
+//! mixed gases' absorption not from a_u (whose A band is one strong point,
+//! 762.5 nm, and a weak one, 767.5 nm) but from k-terms fitted, per 0.5 nm
+//! bin, to HITRAN 2016 O2 lines through the U.S. Standard Atmosphere 1976
+//! (`data/o2_a_band_k_terms.csv`, written by
+//! `scripts/gases/make_lbl_reference.py`) and re-sorted into each sample's
+//! band ([`SampleAbsorber::Terms`]; the band model has no CO2 there).
+//! Against line by line (`tests/data/gas_line_by_line_reference.csv`, the
+//! same lines through the layered, spherical atmosphere) the direct beam
+//! averaged over the 1 nm samples of 755-765, 760-770 and 765-775 nm errs
+//! by -0.8 to +0.1 % of the absorption 1 - T, a 10 nm grid's sample at each
+//! band's centre by -4.4 to +4.0 % (suns 60 and 15 degrees; measured in
+//! `tests/gas_line_by_line.rs`); the band model erred -43 to +62 %. It has no O2-O2
 //! collision bands (`o2_o2.rs`, `[gases] o2_o2 = true`) and no NO2 (a
 //! cross-section species, `absorption.gas = "no2"`).
 //! When one solve is asked for (a sky built from an atmosphere with gases,
@@ -123,14 +135,15 @@
 //! coefficient: the one whose Beer-Lambert transmittance equals the band
 //! model's for twice the vertical column ([`EFFECTIVE_AIR_MASS`]); that is
 //! exact at air mass 2 and errs elsewhere (tested below): the zenith sky
-//! in the A band (Rayleigh air, single scattering, sun 60 degrees) keeps
-//! 0.827 of its gas-free radiance with one solve, 0.7773 with the five
-//! terms, against 0.7773 from the plane-parallel closed form over the
-//! terms. A [`crate::Sky`] built from an atmosphere with banded gases sums
+//! in the A band (760 nm on a 10 nm grid; Rayleigh air, single scattering,
+//! sun 60 degrees) keeps 0.782 of its gas-free radiance with one solve,
+//! 0.7123 with the five terms, against 0.7122 from the plane-parallel
+//! closed form over the terms. A [`crate::Sky`] built from an atmosphere with banded gases sums
 //! the terms itself (`sky/k_terms.rs`), so every command, Python and the
 //! explorer get the k-distribution; the effective coefficient is the
 //! sky's own optics ([`crate::Sky::optics`]).
 
+use super::o2_a_band;
 use super::ozone::{
     AbsorbingGas, AbsorptionCrossSection, GasAmount, MOLECULES_PER_M2_PER_DOBSON_UNIT,
 };
@@ -158,7 +171,7 @@ pub const MOLECULES_PER_M2_PER_CM_PRECIPITABLE_WATER: f64 = 3.3429e26;
 pub const AIR_MOLECULES_PER_M2_SEA_LEVEL_COLUMN: f64 = 2.1484e29;
 
 /// The air mass at which a single solve's effective coefficient matches
-/// the band model.
+/// the banded transmittance (the band model's, or the O2 A band's k-terms).
 pub const EFFECTIVE_AIR_MASS: f64 = 2.0;
 
 /// The default scale height of water vapour's profile, m (about the
@@ -254,6 +267,69 @@ impl BandAmounts {
             sampled_band_coefficients(gas, grid)
         }
     }
+}
+
+impl BandAmounts {
+    /// One sea-level air column of the mixed gases at the band model's CO2,
+    /// no water, no CH4.
+    pub fn one_air_column() -> BandAmounts {
+        BandAmounts {
+            water_cm: None,
+            mixed_columns: Some(1.0),
+            co2_ppm: CO2_REFERENCE_PPM,
+            methane_ppm: None,
+        }
+    }
+
+    /// Each sample's absorber of `gas` on `grid`: the band model's
+    /// coefficient ([`Self::sampled_coefficients`]), except the mixed gases'
+    /// samples in the O2 A band ([`o2_a_band::A_BAND_RANGE_NM`]), which take
+    /// the k-terms fitted to its lines over their band (the band model has
+    /// no CO2 there).
+    pub fn sampled_absorbers(
+        &self,
+        gas: BandGas,
+        grid: &WavelengthGrid,
+    ) -> Result<Vec<SampleAbsorber>> {
+        let a = self.sampled_coefficients(gas, grid)?;
+        let lines = if gas == BandGas::MixedGases {
+            o2_a_band::terms_on(grid)
+        } else {
+            vec![None; grid.len()]
+        };
+        Ok(a.values()
+            .iter()
+            .zip(lines)
+            .map(|(a, k)| k.map_or(SampleAbsorber::Band(*a), SampleAbsorber::Terms))
+            .collect())
+    }
+
+    /// The banded transmittance of `gas` at each sample of `grid` for
+    /// `air_mass` times this vertical amount (the band model's, or the sum
+    /// over the O2 A band's k-terms): what the k-distribution reproduces.
+    pub fn sampled_transmittance(
+        &self,
+        gas: BandGas,
+        grid: &WavelengthGrid,
+        air_mass: f64,
+    ) -> Result<Vec<f64>> {
+        let amount = air_mass * self.vertical(gas).unwrap_or(0.0);
+        Ok(self
+            .sampled_absorbers(gas, grid)?
+            .into_iter()
+            .map(|absorber| GasBand::absorber_transmittance(gas, absorber, amount))
+            .collect())
+    }
+}
+
+/// One sample's absorption by one banded gas.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SampleAbsorber {
+    /// The band model's coefficient (a_w, a_u or a_m).
+    Band(f64),
+    /// k-terms per unit amount, one per shared weight (the O2 A band's,
+    /// from its lines: [`o2_a_band`]).
+    Terms([f64; TERMS]),
 }
 
 /// A banded gas' absorption: the band model's coefficient, per molecule,
@@ -439,16 +515,35 @@ impl GasBand {
         self.amounts.vertical(self.gas).unwrap_or(0.0)
     }
 
+    /// The transmittance of `gas` as `absorber` describes it for slant
+    /// amount `amount`.
+    fn absorber_transmittance(gas: BandGas, absorber: SampleAbsorber, amount: f64) -> f64 {
+        match absorber {
+            SampleAbsorber::Band(a) => Self::band_transmittance(gas, a, amount),
+            SampleAbsorber::Terms(k) => o2_a_band::terms_transmittance(&k, amount),
+        }
+    }
+
+    /// The effective (single-solve) coefficient per unit amount of
+    /// `absorber`: Beer-Lambert matching it at [`EFFECTIVE_AIR_MASS`].
+    fn effective_coefficient_of(&self, absorber: SampleAbsorber) -> f64 {
+        let slant = EFFECTIVE_AIR_MASS * self.vertical_amount();
+        let absorbs = match absorber {
+            SampleAbsorber::Band(a) => a > 0.0,
+            SampleAbsorber::Terms(k) => k.iter().any(|k| *k > 0.0),
+        };
+        if !absorbs || slant <= 0.0 {
+            0.0
+        } else {
+            -Self::absorber_transmittance(self.gas, absorber, slant).ln() / slant
+        }
+    }
+
     /// The effective (single-solve) coefficient per unit amount at band
     /// coefficient `a`: Beer-Lambert matching the band model at
     /// [`EFFECTIVE_AIR_MASS`].
     pub fn effective_coefficient_per_unit_amount(&self, a: f64) -> f64 {
-        let slant = EFFECTIVE_AIR_MASS * self.vertical_amount();
-        if a <= 0.0 || slant <= 0.0 {
-            0.0
-        } else {
-            -Self::band_transmittance(self.gas, a, slant).ln() / slant
-        }
+        self.effective_coefficient_of(SampleAbsorber::Band(a))
     }
 
     /// Absorption coefficient per unit amount (per cm of precipitable water,
@@ -462,46 +557,66 @@ impl GasBand {
         a: f64,
         others: impl IntoIterator<Item = (BandGas, f64)>,
     ) -> f64 {
+        self.coefficient_of(
+            SampleAbsorber::Band(a),
+            others
+                .into_iter()
+                .map(|(gas, a)| (gas, SampleAbsorber::Band(a))),
+        )
+    }
+
+    /// [`Self::coefficient_per_unit_amount`] for any sample's absorber (the
+    /// band model's coefficient or the O2 A band's k-terms).
+    fn coefficient_of(
+        &self,
+        own: SampleAbsorber,
+        others: impl IntoIterator<Item = (BandGas, SampleAbsorber)>,
+    ) -> f64 {
         let Some(j) = self.term else {
-            return self.effective_coefficient_per_unit_amount(a);
+            return self.effective_coefficient_of(own);
         };
-        let own = 1.0
-            - Self::band_transmittance(self.gas, a, EFFECTIVE_AIR_MASS * self.vertical_amount());
-        for (gas, a_other) in others {
+        let absorption = |gas: BandGas, absorber: SampleAbsorber, vertical: f64| {
+            1.0 - Self::absorber_transmittance(gas, absorber, EFFECTIVE_AIR_MASS * vertical)
+        };
+        let mine = absorption(self.gas, own, self.vertical_amount());
+        for (gas, other) in others {
             let Some(amount) = self.amounts.vertical(gas).filter(|_| gas != self.gas) else {
                 continue;
             };
-            let other = 1.0 - Self::band_transmittance(gas, a_other, EFFECTIVE_AIR_MASS * amount);
-            if other > own {
-                return self.effective_coefficient_per_unit_amount(a);
+            if absorption(gas, other, amount) > mine {
+                return self.effective_coefficient_of(own);
             }
         }
-        let term = k_terms()[j];
-        let factor = match self.gas {
-            BandGas::WaterVapour => term.water_factor,
-            BandGas::MixedGases => term.mixed_factor,
-            BandGas::Methane => term.methane_factor,
-        };
-        factor * a
+        match own {
+            SampleAbsorber::Terms(k) => k[j],
+            SampleAbsorber::Band(a) => {
+                let term = k_terms()[j];
+                let factor = match self.gas {
+                    BandGas::WaterVapour => term.water_factor,
+                    BandGas::MixedGases => term.mixed_factor,
+                    BandGas::Methane => term.methane_factor,
+                };
+                factor * a
+            }
+        }
     }
 
     /// Cross-section per molecule on `grid`, m^2.
     pub(crate) fn sample(&self, grid: &WavelengthGrid) -> Result<SampledSpectrum> {
-        let own = self.amounts.sampled_coefficients(self.gas, grid)?;
+        let own = self.amounts.sampled_absorbers(self.gas, grid)?;
         let mut others = Vec::new();
         for gas in BandGas::ALL {
             if gas != self.gas && self.amounts.vertical(gas).is_some() {
-                others.push((gas, self.amounts.sampled_coefficients(gas, grid)?));
+                others.push((gas, self.amounts.sampled_absorbers(gas, grid)?));
             }
         }
         let per_molecule = 1.0 / self.molecules_per_unit();
         Ok(SampledSpectrum::from_values(
-            own.values()
-                .iter()
+            own.iter()
                 .enumerate()
-                .map(|(i, a)| {
+                .map(|(i, absorber)| {
                     let others = others.iter().map(|(gas, values)| (*gas, values[i]));
-                    self.coefficient_per_unit_amount(*a, others) * per_molecule
+                    self.coefficient_of(*absorber, others) * per_molecule
                 })
                 .collect(),
         ))
@@ -659,6 +774,15 @@ pub fn k_distribution_terms(atmosphere: &Atmosphere) -> Vec<(f64, Atmosphere)> {
 mod tests {
     use super::*;
 
+    /// The mixed gases' banded transmittance on `grid` for `columns` air
+    /// columns: T_u(a_u columns), or in the O2 A band the sum over its
+    /// line-derived k-terms.
+    fn mixed_transmittance(grid: &WavelengthGrid, columns: f64) -> Vec<f64> {
+        BandAmounts::one_air_column()
+            .sampled_transmittance(BandGas::MixedGases, grid, columns)
+            .unwrap()
+    }
+
     fn log_points(lo: f64, hi: f64, n: usize) -> impl Iterator<Item = f64> {
         (0..n).map(move |i| lo * (hi / lo).powf(i as f64 / (n - 1) as f64))
     }
@@ -768,9 +892,9 @@ mod tests {
                 // The atmosphere's top (100 km) cuts exp(-100/8) of the mixed
                 // gases' column and nothing measurable of water's.
                 let air_column = 1.0 - (-atmosphere.planet.top_above_sea_level_m() / 8000.0).exp();
+                let t_u = mixed_transmittance(&grid, air_column * air_mass);
                 for i in 0..3 {
-                    let want = mixed_band_transmittance(a_u[i] * air_column * air_mass)
-                        * water_band_transmittance(a_w[i] * water_cm * air_mass);
+                    let want = t_u[i] * water_band_transmittance(a_w[i] * water_cm * air_mass);
                     let error = (k[i] - want).abs() / (1.0 - want);
                     assert!(
                         error < 0.02,
@@ -794,10 +918,9 @@ mod tests {
         high.planet = high.planet.with_ground_altitude_m(10_000.0).unwrap();
         let t_sea = k_transmittance(&sea, &grid, 1.0)[0];
         let t_high = k_transmittance(&high, &grid, 1.0)[0];
-        let a_u = 2.0; // half way between 0 at 757.5 and 4.0 at 762.5 nm
         let fraction = (-10_000.0 / 8000.0f64).exp();
-        let want_sea = mixed_band_transmittance(a_u);
-        let want_high = mixed_band_transmittance(a_u * fraction);
+        let want_sea = mixed_transmittance(&grid, 1.0)[0];
+        let want_high = mixed_transmittance(&grid, fraction)[0];
         for (got, want) in [(t_sea, want_sea), (t_high, want_high)] {
             assert!((got - want).abs() / (1.0 - want) < 0.02, "{got} vs {want}");
         }
@@ -1159,7 +1282,6 @@ mod tests {
         use crate::sky::Sky;
         let grid = WavelengthGrid::new(700.0, 1100.0, 10.0).unwrap();
         let a_w = sampled_band_coefficients(BandGas::WaterVapour, &grid).unwrap();
-        let a_u = sampled_band_coefficients(BandGas::MixedGases, &grid).unwrap();
         let direct = |atmosphere: &Atmosphere, elevation: f64| {
             Sky::builder(atmosphere)
                 .sun_deg(elevation, 180.0)
@@ -1175,13 +1297,14 @@ mod tests {
             for elevation in [90.0, 30.0] {
                 let air_mass = 1.0 / f64::to_radians(elevation).sin();
                 let reference = direct(&clear, elevation);
+                let mixed = mixed_transmittance(&grid, air_mass);
                 let mut summed = SampledSpectrum::zeros(grid.len());
                 for (weight, at_term) in k_distribution_terms(&gases) {
                     summed.add_scaled(&direct(&at_term, elevation), weight);
                 }
                 for i in 0..grid.len() {
                     let t = summed[i] / reference[i];
-                    let t_u = mixed_band_transmittance(a_u[i] * air_mass);
+                    let t_u = mixed[i];
                     let t_w = water_band_transmittance(a_w[i] * water_cm * air_mass);
                     let want = t_u * t_w;
                     if want > 0.999 {
@@ -1263,12 +1386,19 @@ mod tests {
             .compute_optics(&grid)
             .unwrap()
             .total_optical_depth_extinction()[0];
-        let a_u = sampled_band_coefficients(BandGas::MixedGases, &grid).unwrap()[0];
+        // Term j's optical depth per air column: the A band's k-terms.
+        let SampleAbsorber::Terms(k) = BandAmounts::one_air_column()
+            .sampled_absorbers(BandGas::MixedGases, &grid)
+            .unwrap()[0]
+        else {
+            panic!("760 nm is in the A band's line-derived range")
+        };
         let column = 1.0 - (-100e3 / MIXED_GAS_SCALE_HEIGHT_M).exp();
         let f = |tau: f64| (tau_r / tau) * (-tau).exp() * (1.0 - (-tau * (m - 1.0)).exp());
         let want: f64 = k_terms()
             .iter()
-            .map(|t| t.weight * f(tau_r + t.mixed_factor * a_u * column) / f(tau_r))
+            .zip(k)
+            .map(|(t, k)| t.weight * f(tau_r + k * column) / f(tau_r))
             .sum();
         // One solve with the effective coefficient (matched to the band
         // model's direct beam at air mass 2) errs more.

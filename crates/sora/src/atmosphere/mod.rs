@@ -44,6 +44,7 @@ mod coverage;
 pub mod file;
 pub mod gas_bands;
 pub mod mie_species;
+pub mod o2_a_band;
 pub mod o2_o2;
 pub mod optical_depth;
 pub mod ozone;

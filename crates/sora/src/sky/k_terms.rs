@@ -308,7 +308,8 @@ mod tests {
         }
         // One effective solve (what images were before the sky summed its
         // terms) is far off in the A band with the sun low (its coefficient
-        // is matched to the band model at air mass 2; here the sun's is 5.6).
+        // is matched to the banded transmittance at air mass 2; here the
+        // sun's is 5.6).
         let effective = Sky::from_scene(
             sky.scene().clone(),
             sky.scattering(),
