@@ -3,7 +3,8 @@
 //! by the retrieval's Levenberg-Marquardt steps
 //! ([`crate::inversion`]) and by the fit of the streams' radiances to the
 //! first order's finely integrated moments
-//! (`transport::multiple_scattering::spherical_first_order`).
+//! (`transport::multiple_scattering::spherical_first_order`) and the O2 A
+//! band's k-term refit (`atmosphere::o2_a_band`).
 //!
 //! Why by hand: the systems are at most 20 x 20; a linear-algebra crate
 //! would be the largest dependency of the library for 60 lines.

@@ -26,6 +26,7 @@
 //! (`tests/gas_line_by_line.rs`).
 
 use super::gas_bands::{TERMS, k_terms};
+use crate::linear_algebra::{cholesky, cholesky_solve};
 use crate::spectrum::WavelengthGrid;
 use crate::table::NumericTable;
 
@@ -168,7 +169,11 @@ pub fn band_terms(lo_nm: f64, hi_nm: f64) -> [f64; TERMS] {
 }
 
 /// Levenberg-Marquardt in p_j = ln k_j of r_i = (T_k(M_i) - T_pieces(M_i)) /
-/// max(1 - T_pieces(M_i), 1e-3).
+/// max(1 - T_pieces(M_i), 1e-3), with the analytic Jacobian. Not the
+/// retrieval's (`inversion::fit`): that one carries an a priori, takes its
+/// Jacobian by finite differences and stops where a step is small against
+/// the measurements' noise; this one is a plain least squares run until no
+/// step lowers the cost.
 fn refit(pieces: &[(f64, f64)], start: [f64; TERMS]) -> [f64; TERMS] {
     // k beyond these absorbs nothing / everything at M = 1-20.
     const FLOOR: f64 = 1e-12;
@@ -248,31 +253,13 @@ fn refit(pieces: &[(f64, f64)], start: [f64; TERMS]) -> [f64; TERMS] {
     k
 }
 
-/// Gaussian elimination with partial pivoting; `None` if singular.
-fn solve(mut a: [[f64; TERMS]; TERMS], mut b: [f64; TERMS]) -> Option<[f64; TERMS]> {
-    for col in 0..TERMS {
-        let pivot = (col..TERMS).max_by(|x, y| a[*x][col].abs().total_cmp(&a[*y][col].abs()))?;
-        if a[pivot][col].abs() < 1e-300 {
-            return None;
-        }
-        a.swap(col, pivot);
-        b.swap(col, pivot);
-        let (pivot_row, below) = a.split_at_mut(col + 1);
-        let pivot_row = pivot_row[col];
-        for (offset, row) in below.iter_mut().enumerate() {
-            let f = row[col] / pivot_row[col];
-            for (x, p) in row[col..].iter_mut().zip(&pivot_row[col..]) {
-                *x -= f * p;
-            }
-            b[col + 1 + offset] -= f * b[col];
-        }
-    }
-    let mut x = [0.0; TERMS];
-    for row in (0..TERMS).rev() {
-        let s: f64 = (row + 1..TERMS).map(|c| a[row][c] * x[c]).sum();
-        x[row] = (b[row] - s) / a[row][row];
-    }
-    Some(x)
+/// Solves the damped normal equations `a x = b` (symmetric positive
+/// definite; [`crate::linear_algebra`], as the retrieval's steps are);
+/// `None` if `a` is not positive definite.
+fn solve(a: [[f64; TERMS]; TERMS], b: [f64; TERMS]) -> Option<[f64; TERMS]> {
+    let l = cholesky(a.as_flattened(), TERMS)?;
+    let x = cholesky_solve(&l, TERMS, &b);
+    Some(std::array::from_fn(|j| x[j]))
 }
 
 /// Each sample of `grid`: its band's k-terms per air column when the sample
