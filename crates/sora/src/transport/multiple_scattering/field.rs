@@ -337,13 +337,13 @@ impl MultipleScatteringField {
         let sun_free = sky.sun_free_field_parts();
         let (forward_peak, first_order_phases) =
             sun_free.for_streams(geometry.streams.count(), || StreamParts {
-                forward_peak: ForwardPeak::new(
+                forward_peak: Arc::new(ForwardPeak::new(
                     optics,
                     &scaled.phases,
                     geometry.streams.count(),
                     &geometry.profiles,
                     geometry.top_radius_m - geometry.ground_radius_m,
-                ),
+                )),
                 first_order_phases: Arc::new(tabulate_phases(&scaled.phases)),
             });
         let first_spherical = sun_axis
@@ -1085,7 +1085,7 @@ pub(crate) struct SunFreeParts {
 /// truncation).
 #[derive(Debug, Clone)]
 struct StreamParts {
-    forward_peak: ForwardPeak,
+    forward_peak: Arc<ForwardPeak>,
     /// The first order's phase functions ([`tabulate_phases`]).
     first_order_phases: Arc<Vec<f64>>,
 }
@@ -1099,7 +1099,7 @@ impl SunFreeParts {
         &self,
         streams: usize,
         compute: impl FnOnce() -> StreamParts,
-    ) -> (ForwardPeak, Arc<Vec<f64>>) {
+    ) -> (Arc<ForwardPeak>, Arc<Vec<f64>>) {
         // A poisoned lock only means that another thread panicked: the
         // entries in it are whole (each is pushed when complete).
         let lock = || {

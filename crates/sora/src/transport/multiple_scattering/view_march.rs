@@ -4,6 +4,7 @@
 //! synthesis and its source table.
 
 use std::ops::ControlFlow;
+use std::sync::Arc;
 
 use super::column_optics::{ColumnGeometry, SUN_RAY_PANELS, ScaledOptics};
 use super::field::SunZenithAxis;
@@ -56,7 +57,7 @@ pub(super) struct ViewRayOptics {
     /// Whether any phase function lost a forward peak to delta-M.
     pub(super) has_forward_peaks: bool,
     /// The forward-peak term's tables (`forward_peak.rs`).
-    pub(super) forward_peak: ForwardPeak,
+    pub(super) forward_peak: Arc<ForwardPeak>,
     /// Near a low sun, the beam of the peaks' light with the last
     /// scattering at its angle (`peak_beam.rs`), for that term.
     pub(super) peak_beam: Option<PeakBeam>,
