@@ -639,11 +639,11 @@ pub fn quality_settings(
         Quality::Refined => (
             WavelengthGrid::paper(),
             MultipleScatteringSettings {
-                streams_per_hemisphere: 7,
+                streams_per_hemisphere: 6,
                 sunset_sun_zenith_step_deg: 2.0,
-                layers: 30,
+                layers: 26,
                 view_ray_panels: 12,
-                polarisation_wavelength_stride: 3,
+                polarisation_wavelength_stride: 5,
                 first_order_panels: 1,
                 first_order_fine_nodes: 2,
                 ..MultipleScatteringSettings::default()
@@ -657,9 +657,9 @@ pub fn quality_settings(
             WavelengthGrid::new(380.0, 780.0, 40.0).expect("a valid grid"),
             MultipleScatteringSettings {
                 streams_per_hemisphere: 4,
-                layers: 16,
+                layers: 14,
                 sun_zenith_step_deg: 6.0,
-                sunset_sun_zenith_step_deg: 2.5,
+                sunset_sun_zenith_step_deg: 3.5,
                 view_ray_panels: 8,
                 table_view_zenith_nodes: 19,
                 table_azimuth_nodes: 10,
