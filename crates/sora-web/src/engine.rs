@@ -657,7 +657,7 @@ pub fn quality_settings(
             WavelengthGrid::new(380.0, 780.0, 40.0).expect("a valid grid"),
             MultipleScatteringSettings {
                 streams_per_hemisphere: 4,
-                layers: 14,
+                layers: 15,
                 sun_zenith_step_deg: 6.0,
                 sunset_sun_zenith_step_deg: 3.5,
                 view_ray_panels: 8,
