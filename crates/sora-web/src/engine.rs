@@ -494,11 +494,12 @@ pub struct RealtimeTables {
 }
 
 /// The real-time view's tables: a sky of the preview's wavelengths (every
-/// 40 nm) and image tables, with the field of 16 layers and 2.5-degree
-/// sunset steps ([`Quality::Realtime`]; the preview's own 15 layers and
-/// 3.5-degree steps put the tables 5.3 % and 10.6 % off their sky at suns
-/// 2 and -4: the bake's field is solved for every sun, its nodes not
-/// placed at the eye's, so the steps between them are its error) and 48 suns x 3 altitudes x (2 x 32) x 32 views (3.6 MB), against
+/// 40 nm) and image tables, with a field of 16 layers and 2.5-degree
+/// sunset steps ([`Quality::Realtime`]; with 14 layers and 3.5-degree
+/// steps, a preview tried in issue 38, the tables were 5.3 % and 10.6 %
+/// off their sky at suns 2 and -4: the bake's field is solved for every
+/// sun, its nodes not placed at the eye's, so the steps between them are
+/// its error), and 48 suns x 3 altitudes x (2 x 32) x 32 views (3.6 MB), against
 /// the library's default of the paper's 21 wavelengths and 48 suns x 6
 /// altitudes x (2 x 64) x 64 views (what `sora tables` bakes). The bake
 /// solves one multiple-scattering field for every layer; in headless
