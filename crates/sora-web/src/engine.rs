@@ -493,8 +493,13 @@ pub struct RealtimeTables {
     pub settings: EngineTableSettings,
 }
 
-/// The real-time view's tables: the preview's sky (every 40 nm, the coarse
-/// field) and 48 suns x 3 altitudes x (2 x 32) x 32 views (3.6 MB), against
+/// The real-time view's tables: a sky of the preview's wavelengths (every
+/// 40 nm) and image tables, with a field of 16 layers and 2.5-degree
+/// sunset steps ([`Quality::Realtime`]; with 14 layers and 3.5-degree
+/// steps, a preview tried in issue 38, the tables were 5.3 % and 10.6 %
+/// off their sky at suns 2 and -4: the bake's field is solved for every
+/// sun, its nodes not placed at the eye's, so the steps between them are
+/// its error), and 48 suns x 3 altitudes x (2 x 32) x 32 views (3.6 MB), against
 /// the library's default of the paper's 21 wavelengths and 48 suns x 6
 /// altitudes x (2 x 64) x 64 views (what `sora tables` bakes). The bake
 /// solves one multiple-scattering field for every layer; in headless
@@ -506,7 +511,7 @@ pub struct RealtimeTables {
 /// 16. 64 zenith nodes per half instead of 32 moved none of these by more
 /// than 0.15 points, so the low suns' error is not the zenith axis.
 pub const REALTIME_TABLES: RealtimeTables = RealtimeTables {
-    quality: Quality::Preview,
+    quality: Quality::Realtime,
     settings: EngineTableSettings {
         sun_nodes: 48,
         altitude_nodes: 3,
@@ -525,14 +530,16 @@ pub const REALTIME_TABLES: RealtimeTables = RealtimeTables {
 /// median in headless Chromium (the browser test's guard, 2-core machine)
 /// went from 249 / 237 / 280 ms to 323 / 267 / 355 ms at suns 5 / 2 / -4,
 /// where the guard fails at 300. The price: against the polarised image
-/// of the default resolution a scalar preview is 6.1 % off at sun 0 (99th
-/// percentile of the luminance, 48 x 48), against the preview's own
-/// resolution error of 1.2-10 % ([`quality_settings`]). The refinement, the
-/// image that stays on the page, and every spectrum are the spec's light.
+/// of the default resolution a scalar preview is 6.9 % off at sun 0 (99th
+/// percentile of the luminance, 128 x 128), against the preview's own
+/// resolution error of 1.0-5.9 % ([`quality_settings`]). The refinement,
+/// the image that stays on the page, and every spectrum are the spec's
+/// light; the real-time view's bake is scalar (its tables hold scalar
+/// light).
 pub fn build_sky(atmosphere: &Atmosphere, spec: &SkySpec, quality: Quality) -> Result<Sky, String> {
     let (grid, settings, tables) = quality_settings(quality);
     let polarisation = match quality {
-        Quality::Preview => sora::Polarisation::Scalar,
+        Quality::Preview | Quality::Realtime => sora::Polarisation::Scalar,
         Quality::Refined | Quality::Full => spec.polarisation.0,
     };
     let scattering = match spec.scattering {
@@ -554,79 +561,67 @@ pub fn build_sky(atmosphere: &Atmosphere, spec: &SkySpec, quality: Quality) -> R
 /// quality. Full is the library's (and `sora render`'s) default. Preview
 /// is what a slider drag can afford in a browser: every 40 nm (11
 /// wavelengths, enough for the colour, not for the spectrum), 4 streams
-/// per hemisphere on 16 layers, sun-zenith steps of 6 degrees (2.5 near
+/// per hemisphere on 15 layers, sun-zenith steps of 6 degrees (3.5 near
 /// sunset, from 85 degrees of zenith), and image tables a quarter as fine
-/// on each axis. Refined is Full with 7 streams per hemisphere instead of
-/// 8, a sky-view table of 64 x 24 nodes instead of 128 x 48, 30 layers
+/// on each axis. Refined is Full with 6 streams per hemisphere instead of
+/// 8, a sky-view table of 64 x 24 nodes instead of 128 x 48, 26 layers
 /// instead of 40, sun-zenith steps of 2 degrees instead of 0.75 near
-/// sunset (with the sun 2 degrees up 11 sun nodes instead of 19, 7 of them
-/// with the spherical first order instead of 15, whose cost is each node's
-/// layers), 12 Gauss panels along each view ray instead of 16, and the
-/// polarisation correction's columns solved at every third wavelength
-/// (`polarisation_wavelength_stride`, cubics between, as the library's
-/// default, and wherever the sky's absorption needs). Both march the twilight first order more
-/// coarsely than Full (4 panels along each path, 40 cosines in its fine
-/// moments after sunset): 1 panel and 2 nodes on each panel near the
-/// horizon (24 cosines; `first_order_panels`, `first_order_fine_nodes`).
-/// Measured (`quality_accuracy`, earth-clear, sun 10 / 5 / 2 / 0 / -2 /
-/// -4 / -6 / -12, 99th percentile against Full): the refinement 0.23 /
-/// 0.48 / 0.83 / 0.72 / 0.69 / 0.74 / 1.1 / 2.3 %, max xy 2.0e-3 (at sun
-/// 0; 1.2e-3 at -4); with 8 streams 0.19 / 0.28 / 0.81 / 0.99 / 1.12 /
-/// 0.75 / 0.83 / 2.0 %, and with 8 streams, 16 view-ray panels, every
-/// wavelength and 2 first-order panels (before) 0.19 / 0.38 / 0.89 / 1.04
-/// / 1.12 / 0.75 / 0.84 / 2.1 %, xy 2.1e-3 (at -2); the preview against a
-/// scalar Full 1.1 / 1.6 / 2.3 / 2.3 % at suns 10 / 5 / 2 / -4, against
-/// the polarised one 3.4 / 3.5 / 4.3 / 7.2 %. On one thread natively (CPU
-/// time, the settings interleaved in one process, best of 4, load 4-8 on
-/// 2 cores), sun 5 / 2 / -4, the refinement before took 0.84 / 0.92 /
-/// 0.92 s; with the view-ray panels, the stride and the single
-/// first-order panel 0.73 / 0.81 / 0.84 s, and with 7 streams too 0.65 /
-/// 0.73 / 0.74 s. The coarser first orders before them cut, on
-/// one thread natively (CPU time, `slider_timing`, best of 3, load 9-11
-/// on 2 cores), sun 10 / 5 / 2 / -4: the refinement 0.83 / 1.01 / 1.18 /
-/// 1.25 s to 0.71 / 0.84 / 0.93 / 0.96 s, the preview 0.089 / 0.129 /
-/// 0.130 / 0.126 s to 0.072 / 0.091 / 0.094 / 0.091 s (one node near the
-/// horizon would save 7 % more, but its moments were 12 % off in the
-/// library's test).
+/// sunset, 12 Gauss panels along each view ray instead of 16, and the
+/// polarisation correction's columns solved at every fifth wavelength
+/// instead of every third (`polarisation_wavelength_stride`, cubics
+/// between, and wherever the sky's absorption needs). Both march the
+/// twilight first order more coarsely than Full: 1 panel along each path
+/// instead of 4, and 2 nodes instead of 4 on each panel of its fine
+/// moments near the horizon, 24 cosines instead of 40
+/// (`first_order_panels`, `first_order_fine_nodes`; one node would save 7
+/// % more of a preview, but its moments were 12 % off in the library's
+/// test). Realtime is the preview with the field of 16 layers and
+/// 2.5-degree sunset steps: the real-time view's tables are baked from it
+/// ([`REALTIME_TABLES`]). A sky moved to a new sun keeps what does not
+/// depend on the sun (the library's `SunFreeParts`: the forward-peak and
+/// first-order phase tables, the tilted peak beam's rows computed so far,
+/// a polarised sky's phase-matrix harmonics).
 ///
 /// What they cost against Full (99th percentile of the pixels' luminance
 /// error, 128 x 128, earth-clear, the `quality_accuracy` example; the
-/// browser test's guard holds their time), sun 10 / 5 / 2 / 0 / -4 / -6 /
-/// -12 degrees, before the coarser first orders: the refinement 0.28 /
-/// 0.41 / 0.87 / 1.18 / 0.97 / 1.0 / 1.7 % (with 40 layers 0.28 / 0.40 / 0.84 / 1.13 / 0.96 / 1.0 / 1.5 %;
-/// a sunset step of 3 degrees would reach 1.6-2.1 % at suns 2 to -4, 24
-/// layers 4.1 % at -12); the preview 1.2 / 1.5 / 2.4 / 1.7 / 2.5 / 4.1 /
-/// 10 % (with 20 layers and a step of 1.5 degrees, 1.1 / 1.6 / 2.7 / 1.5 /
-/// 2.1 / 3.4 / 7.0 %). Their cost on one thread natively (CPU time, the
-/// `slider_timing` example, median of three on a shared machine), sun 10 /
-/// 2 / -4: the refinement 0.67 / 0.99 / 1.00 s (40 layers cost 1.1-1.25
-/// times as much), the preview 0.094 / 0.133 / 0.130 s (20 layers and 1.5
-/// degrees 1.2-1.4 times as much); the sun 45 degrees up 0.03 s. The first
-/// order's fine moments after sunset (`spherical_first_order.rs` in the
-/// library) were about half of a low-sun frame, the tilted peak beam
-/// (`peak_beam.rs`) a fifth of a low-sun preview, the forward-peak
-/// tables a fifteenth and the first order's phase table a thirtieth
-/// (`perf`, suns 5 / 2 / -4). None depends on the sun, and a sky moved to
-/// a new sun now keeps them (the library's `SunFreeParts`; of the peak
-/// beam the rows computed so far, so that a new sun computes only those no
-/// sun before it did; the same images bit for bit). Measured
-/// (`slider_timing`, the browser test's order 45 / 20 / 10 / 5 / 2 / -4
-/// three times, the old and new library alternately, medians of 3 runs,
-/// CPU time, load 6 on 2 cores), sun 10 / 5 / 2 / -4: the preview 0.074 /
-/// 0.096 / 0.099 / 0.094 s before; after, the first pass 0.064 / 0.075 /
-/// 0.071 / 0.077 s, the later passes 0.045 / 0.061 / 0.067 / 0.068 s (sun
-/// 45 and 20: 0.030 / 0.036 s to 0.024 / 0.023 s); the refinement 4-8 %
-/// faster (the same images). The preview's error is unchanged: against a
-/// scalar Full, sun 10 / 5 / 2 / 0 / -2 / -4 / -6 / -12, 1.1 / 1.6 / 2.3 /
-/// 1.5 / 1.5 / 2.3 / 3.5 / 7.9 %, against the polarised Full 3.4 / 3.5 /
-/// 4.3 / 5.9 / 6.9 / 7.2 / 8.0 / 12 % (the refinement's times here are
-/// its polarised light, the ones before scalar light). The polarised
-/// light of the default (the spec's `polarisation`) adds,
-/// sun 10 / 2 / -4, 0.19 / 0.21 / 0.22 s to the refinement (the same
-/// measurement, once a sky has drawn an image: a sky moved to a new sun
-/// keeps the phase-matrix harmonics from the streams, the polarisation
-/// table's and the columns'; the first image also computes them, 0.5 s);
-/// the preview stays scalar ([`build_sky`]).
+/// browser test's guard holds their time, and
+/// `preview_and_refinement_stay_close_to_the_default_resolution` their
+/// error at suns 30, 0 and -6), sun 45 / 20 / 10 / 5 / 2 / 0 / -2 / -4 /
+/// -6 / -9 / -12 degrees: the refinement (polarised) 0.12 / 0.19 / 0.26
+/// / 0.35 / 0.98 / 0.69 / 0.57 / 1.1 / 1.3 / 1.2 / 2.4 %, its
+/// chromaticity within 2.1e-3 down to -6 (2.7e-3 at -12); the preview
+/// against a scalar Full 0.98 / 1.0 / 1.0 / 1.5 / 2.0 / 2.1 / 2.2 / 2.6 /
+/// 2.8 / 4.3 / 5.9 %, against the polarised Full (the preview is scalar,
+/// [`build_sky`]) 2.2 / 2.7 / 3.1 / 3.6 / 5.0 / 6.9 / 7.5 / 7.7 / 8.8 /
+/// 11 / 11 %.
+///
+/// Why these: the explorer's low suns had no margin under the browser's
+/// bars (issue 38: in CI's Chromium, previews of 110-154 ms and
+/// refinements of 0.76-1.16 s at suns 10 to -4). The settings before, a
+/// refinement of 7 streams, 30 layers and the polarisation at every
+/// third wavelength and a preview of 16 layers and 2.5-degree sunset
+/// steps, were 0.23 / 0.48 / 0.84 / 0.73 / 0.73 / 1.1 / 1.3 / 2.3 % (the
+/// refinement at suns 10 / 5 / 2 / 0 / -4 / -6 / -9 / -12) and 1.1 / 1.6 /
+/// 2.3 / 1.5 / 2.3 / 3.5 / 5.5 / 7.9 % (the scalar preview). Measured
+/// one at a time (one thread natively, CPU time of a sky moved to suns
+/// 10 / 5 / 2 / -4 from one at 30, best of three passes, load 4-6 on 2
+/// cores): 6 streams took 20 % off the refinement (1.2 / 1.4 % at -4 /
+/// -6), 24 layers 13 % (1.5 % at -6), a sunset step of 2.5 degrees 3-10
+/// % (1.2 % at 2 and 0), the polarisation at every fifth wavelength 3-5
+/// % with the same errors to 0.01 %; 6 streams, 26 layers and every fifth
+/// wavelength together 29-30 %. For the preview, 3.5-degree sunset steps
+/// 15-20 %, 12 layers 7.1 % at -6, 3 streams 4.8 % at 2, and 14 layers
+/// 11.8 % at -12 where 15 give 5.9 % and 16 7.7 % (the layers' grid
+/// against the twilight's shadow height) at the same cost within the
+/// noise. The medians of `slider_timing` (the browser test's order three
+/// times, two processes each, old and new alternately, CPU time, load
+/// 9-10 on 2 cores), sun 45 / 20 / 10 / 5 / 2 / -4: the preview 27 / 24 /
+/// 44 / 64 / 66 / 70 ms before, 24 / 24 / 44 / 50 / 53 / 54 ms now; the
+/// refinement 0.39 / 0.31 / 0.51 / 0.61 / 0.68 / 0.71 s before, 0.27 /
+/// 0.25 / 0.38 / 0.44 / 0.49 / 0.51 s now. The polarised light of the
+/// default (the spec's `polarisation`) is in the refinement's times
+/// (measured before: it added 0.19-0.22 s at suns 10 to -4, once a sky
+/// had drawn an image); the preview stays scalar ([`build_sky`]).
 pub fn quality_settings(
     quality: Quality,
 ) -> (WavelengthGrid, MultipleScatteringSettings, FastTableSize) {
@@ -639,11 +634,11 @@ pub fn quality_settings(
         Quality::Refined => (
             WavelengthGrid::paper(),
             MultipleScatteringSettings {
-                streams_per_hemisphere: 7,
+                streams_per_hemisphere: 6,
                 sunset_sun_zenith_step_deg: 2.0,
-                layers: 30,
+                layers: 26,
                 view_ray_panels: 12,
-                polarisation_wavelength_stride: 3,
+                polarisation_wavelength_stride: 5,
                 first_order_panels: 1,
                 first_order_fine_nodes: 2,
                 ..MultipleScatteringSettings::default()
@@ -657,9 +652,9 @@ pub fn quality_settings(
             WavelengthGrid::new(380.0, 780.0, 40.0).expect("a valid grid"),
             MultipleScatteringSettings {
                 streams_per_hemisphere: 4,
-                layers: 16,
+                layers: 15,
                 sun_zenith_step_deg: 6.0,
-                sunset_sun_zenith_step_deg: 2.5,
+                sunset_sun_zenith_step_deg: 3.5,
                 view_ray_panels: 8,
                 table_view_zenith_nodes: 19,
                 table_azimuth_nodes: 10,
@@ -672,6 +667,18 @@ pub fn quality_settings(
                 sky_view_nodes: (32, 16),
             },
         ),
+        Quality::Realtime => {
+            let (grid, settings, tables) = quality_settings(Quality::Preview);
+            (
+                grid,
+                MultipleScatteringSettings {
+                    layers: 16,
+                    sunset_sun_zenith_step_deg: 2.5,
+                    ..settings
+                },
+                tables,
+            )
+        }
     }
 }
 
@@ -860,7 +867,7 @@ mod tests {
     /// ground with the sun at the zenith (the last sun node, the first
     /// altitude), the zenith's and the horizon's (the first and the last
     /// row above it) radiance within 3 % of the sky's own radiance there
-    /// (the preview's image tables against its exact view path), a layer
+    /// (the bake sky's image tables against its exact view path), a layer
     /// off being orders of magnitude off.
     #[test]
     fn the_tables_reply_holds_the_baked_tables_in_the_stated_layout() {

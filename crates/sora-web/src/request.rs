@@ -252,6 +252,10 @@ pub enum Quality {
     /// The library's defaults, as `sora render`.
     #[default]
     Full,
+    /// The sky the real-time view's engine tables are baked from: the
+    /// preview's wavelengths and image tables with a finer field near
+    /// sunset (see [`crate::engine::REALTIME_TABLES`]).
+    Realtime,
 }
 
 /// An image: camera, size, quality, exposure.
