@@ -208,9 +208,20 @@ pub fn shared_weight_terms(lo_nm: f64, hi_nm: f64) -> [f64; TERMS] {
 /// [`shared_weight_terms`], the weights and the coefficients fitted together
 /// to the pieces' T(M), M = 1-20 (see the module docs).
 pub fn band_terms(lo_nm: f64, hi_nm: f64) -> BandTerms {
+    // The fit takes milliseconds and a sky asks for each sample's terms
+    // once per gas and term: each band is fitted once per process.
+    static FITTED: std::sync::LazyLock<
+        std::sync::Mutex<std::collections::HashMap<(u64, u64), BandTerms>>,
+    > = std::sync::LazyLock::new(Default::default);
+    let key = (lo_nm.to_bits(), hi_nm.to_bits());
+    if let Some(terms) = FITTED.lock().expect("the fitted bands").get(&key) {
+        return *terms;
+    }
     let pieces = pieces(lo_nm, hi_nm);
     let shared = refit(&pieces, ranked_terms(&pieces));
-    refit_weights(&pieces, shared)
+    let terms = refit_weights(&pieces, shared);
+    FITTED.lock().expect("the fitted bands").insert(key, terms);
+    terms
 }
 
 /// The refits' target: the pieces' T(M) at [`refit_air_masses`] and the
