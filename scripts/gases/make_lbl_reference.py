@@ -2,16 +2,17 @@
 """Line-by-line reference for the gas bands' direct-beam transmittance.
 
 Writes crates/sora/tests/data/gas_line_by_line_reference.csv: the direct-beam
-(column) transmittance of the O2 A band, band-averaged over 10 nm, computed
-line by line from HITRAN line data through a layered U.S. Standard
+(column) transmittance of the O2 A band, band-averaged over 10 and 20 nm,
+computed line by line from HITRAN line data through a layered U.S. Standard
 Atmosphere 1976, for two sun elevations. crates/sora/tests/gas_line_by_line.rs
 compares sora's banded gases with it.
 
 Also writes crates/sora/src/data/o2_a_band_k_terms.csv, sora's O2 A band: for
-each 0.5 nm bin of 750-780 nm, the coefficients of sora's 5 shared k-term
-weights fitted (least squares, air masses 1-20) to the bin's line-by-line
-column transmittance T(M), per molecule of air (bin_k_terms, write_k_terms;
-about 50 s in all). sora re-sorts the bins into each grid sample's band
+each 0.5 nm bin of 749.5-780 nm, 5 weights and coefficients fitted together
+(least squares, air masses 1-20, from sora's 5 shared k-term weights) to the
+bin's line-by-line column transmittance T(M), per molecule of air
+(bin_k_terms, write_k_terms; part of the run). sora re-sorts the bins into
+each grid sample's band and fits the band's own five weights to them
 (crates/sora/src/atmosphere/o2_a_band.rs).
 
 What it covers, and what not
@@ -87,15 +88,17 @@ Model
   sub-Lorentzian).
 
 Bands: 755-765 and 765-775 nm (what samples at 760 and 770 nm on sora's
-10 nm grid stand for) and 760-770 nm (the band's core). Suns 60 and 15
-degrees. The reference is O2's alone: no H2O lines for 750-780 nm were at
-hand (sora's own water band model absorbs at most 0.16 % of the direct
-beam there with 4 cm of water at air mass 3.86), so the comparison leaves
-water out on both sides.
+10 nm grid stand for) and 760-770 nm (the band's core); 740-760, 750-770,
+760-780 and 770-790 nm (what one sample of a 20 nm grid stands for at 750,
+760, 770 and 780 nm; the paper's grid, 380:780:20, has those at 760 and 780
+nm). Suns 60 and 15 degrees. The reference is O2's alone: no H2O lines for
+750-780 nm were at hand (sora's own water band model absorbs at most 0.16 %
+of the direct beam there with 4 cm of water at air mass 3.86), so the
+comparison leaves water out on both sides.
 
 Run: target/python-venv/bin/python scripts/gases/make_lbl_reference.py
-(numpy, hitran-api; about 15 s). With --curve-of-growth it also prints,
-for 10 and 5 nm bands, the one band-model coefficient that fits the
+(numpy, scipy, hitran-api; about 40 s of CPU). With --curve-of-growth it also
+prints, for 10 and 5 nm bands, the one band-model coefficient that fits the
 line-by-line curve of growth best over air masses 1-8 and its largest
 error (what a refit of sora's table alone could reach), and the largest
 error of exponential sums fitted to each 10 nm band's T(m) (air mass
@@ -112,10 +115,10 @@ import numpy as np
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 OUT = ROOT / "crates" / "sora" / "tests" / "data" / "gas_line_by_line_reference.csv"
 K_TERMS_OUT = ROOT / "crates" / "sora" / "src" / "data" / "o2_a_band_k_terms.csv"
-# The O2 A band's k-terms: 0.5 nm bins over 750-780 nm (the lines span
+# The O2 A band's k-terms: 0.5 nm bins over 749.5-780 nm (the lines span
 # 749.7-778.4 nm; the band model's O2 is 0 from 740 to 757.5 nm and from 780
 # to 800 nm, so sora swaps the one for the other over this range only).
-K_BINS_NM = (750.0, 780.0, 0.5)
+K_BINS_NM = (749.5, 780.0, 0.5)
 # sora's unit of mixed-gas amount: one sea-level air column, cm^-2
 # (AIR_MOLECULES_PER_M2_SEA_LEVEL_COLUMN).
 SORA_AIR_COLUMN = 2.1484e25
@@ -134,6 +137,9 @@ WING = 25.0  # cm^-1
 O2_MASS = {1: 31.98983, 2: 33.994076, 3: 32.994045}
 
 BANDS_NM = [(755.0, 765.0), (760.0, 770.0), (765.0, 775.0)]
+# 20 nm bands: what one sample of a 20 nm grid stands for at 750, 760, 770
+# and 780 nm (the paper's grid, 380:780:20, has samples at 760 and 780 nm).
+WIDE_BANDS_NM = [(740.0, 760.0), (750.0, 770.0), (760.0, 780.0), (770.0, 790.0)]
 SUN_ELEVATIONS_DEG = [60.0, 15.0]
 
 
@@ -390,14 +396,17 @@ def exp_sum_fit(m, t, terms, weights):
 
 
 def bin_k_terms(tau_column, nu, lo_nm, hi_nm):
-    """sora's 5 shared weights' coefficients for one bin's line-by-line T(M).
+    """One bin's 5 weights and coefficients for its line-by-line T(M).
 
     T(M) is the bin's mean (uniform in wavelength) of exp(-M tau), tau the
     vertical column's optical depth, M = 1-20 (40 log-spaced points). The
-    start is the bin's own k-distribution ranked into the weights'
+    start is the bin's own k-distribution ranked into sora's shared weights'
     g-intervals (each interval's k matching its transmittance at M = 2);
-    then least squares in log k of the error in units of max(1 - T, 0.01).
-    Returns (k_j sorted, largest error in units of max(1 - T, 0.01)).
+    then least squares in log k of the error in units of max(1 - T, 0.001)
+    with those weights, and from there with the weights fitted too (their
+    logarithms relative to the first's). Returns (weights, k_j, both sorted
+    by k; largest error of the shared weights' fit and of the bin's own, in
+    units of max(1 - T, 0.001)).
     """
     from scipy.optimize import least_squares
 
@@ -419,14 +428,29 @@ def bin_k_terms(tau_column, nu, lo_nm, hi_nm):
         start.append(max(-(top + np.log(t)) / 2.0, 1e-12))
     m = np.logspace(0.0, np.log10(20.0), 40)
     t = np.array([(np.exp(-mm * tau_column[keep]) * weight).sum() for mm in m])
-    scale = np.maximum(1.0 - t, 1e-2)
+    scale = np.maximum(1.0 - t, 1e-3)
 
     def residual(p):
         k = np.exp(np.sort(p))
         return ((SORA_K_WEIGHTS[None, :] * np.exp(-np.outer(m, k))).sum(axis=1) - t) / scale
 
-    fit = least_squares(residual, np.log(start), max_nfev=4000)
-    return np.exp(np.sort(fit.x)), float(np.abs(residual(fit.x)).max())
+    shared = least_squares(residual, np.log(start), max_nfev=4000)
+    terms = len(SORA_K_WEIGHTS)
+
+    def unpack(p):
+        w = np.concatenate([[1.0], np.exp(p[: terms - 1])])
+        return w / w.sum(), np.exp(p[terms - 1 :])
+
+    def own_residual(p):
+        w, k = unpack(p)
+        return ((w[None, :] * np.exp(-np.outer(m, k))).sum(axis=1) - t) / scale
+
+    p0 = np.concatenate([np.log(SORA_K_WEIGHTS[1:] / SORA_K_WEIGHTS[0]), np.sort(shared.x)])
+    own = least_squares(own_residual, p0, max_nfev=8000)
+    w, k = unpack(own.x)
+    by_k = np.argsort(k)
+    return (w[by_k], k[by_k], float(np.abs(residual(shared.x)).max()),
+            float(np.abs(own_residual(own.x)).max()))
 
 
 def write_k_terms(lines, layer_list, air_column):
@@ -437,23 +461,27 @@ def write_k_terms(lines, layer_list, air_column):
     # Per molecule of air: sora's column holds SORA_AIR_COLUMN molecules.
     tau_sora = tau * SORA_AIR_COLUMN / air_column
     edges = np.arange(lo_nm, hi_nm + 0.5 * step, step)
-    rows, worst = [], 0.0
+    rows, worst_shared, worst = [], 0.0, 0.0
     for a, b in zip(edges[:-1], edges[1:]):
-        k, error = bin_k_terms(tau_sora, nu, a, b)
+        w, k, error_shared, error = bin_k_terms(tau_sora, nu, a, b)
+        worst_shared = max(worst_shared, error_shared)
         worst = max(worst, error)
-        rows.append((a, b, k))
-    print(f"k-terms: {len(rows)} bins of {step:g} nm, largest fit error {100 * worst:.2f} % of max(1 - T, 0.01)")
+        rows.append((a, b, w, k))
+    print(f"k-terms: {len(rows)} bins of {step:g} nm, largest fit error {100 * worst:.3f} % of "
+          f"max(1 - T, 0.001) (with sora's shared weights {100 * worst_shared:.2f} %)")
     header = (
-        "# The O2 A band's k-terms: for each 0.5 nm bin (uniform in wavelength), the coefficients k_j, per "
-        f"sora sea-level air column ({SORA_AIR_COLUMN:.4e} molecules cm^-2; the line-by-line optical depth per "
-        "molecule of air), of sora's 5 shared weights (data/gas_bands_k_terms.csv) fitted to the bin's "
-        "line-by-line T(M) = mean exp(-M tau) of the vertical U.S. Standard Atmosphere 1976 column scaled by "
-        "M = 1-20 (least squares in units of max(1 - T, 0.01); largest error "
-        f"{100 * worst:.2f} %). Lines, layers and line shapes as in tests/data/gas_line_by_line_reference.csv "
-        "(HITRAN 2016 O2, sha256 " + O2_SHA256 + "). Written by scripts/gases/make_lbl_reference.py.\n"
+        "# The O2 A band's k-terms: for each 0.5 nm bin (uniform in wavelength), 5 weights w_j (summing to 1) "
+        f"and coefficients k_j, per sora sea-level air column ({SORA_AIR_COLUMN:.4e} molecules cm^-2; the "
+        "line-by-line optical depth per molecule of air), fitted together to the bin's line-by-line T(M) = mean "
+        "exp(-M tau) of the vertical U.S. Standard Atmosphere 1976 column scaled by M = 1-20 (least squares in "
+        f"units of max(1 - T, 0.001); largest error {100 * worst:.3f} %; with sora's 5 shared weights "
+        f"(data/gas_bands_k_terms.csv) it would be {100 * worst_shared:.2f} %). Lines, layers and line shapes as in "
+        "tests/data/gas_line_by_line_reference.csv (HITRAN 2016 O2, sha256 " + O2_SHA256 + "). Written by "
+        "scripts/gases/make_lbl_reference.py.\n"
     )
-    body = "lo_nm,hi_nm,k1,k2,k3,k4,k5\n" + "".join(
-        f"{a:g},{b:g}," + ",".join(f"{v:.6e}" for v in k) + "\n" for a, b, k in rows
+    body = "lo_nm,hi_nm,w1,w2,w3,w4,w5,k1,k2,k3,k4,k5\n" + "".join(
+        f"{a:g},{b:g}," + ",".join(f"{v:.6e}" for v in np.concatenate([w, k])) + "\n"
+        for a, b, w, k in rows
     )
     K_TERMS_OUT.write_text(header + body)
     print(f"wrote {K_TERMS_OUT.relative_to(ROOT)}")
@@ -477,7 +505,7 @@ def main():
     print(f"{len(layer_list)} layers, air column {air_column:.5e} cm^-2")
     lines = read_hitran(args.o2_lines)
     rows = []
-    for lo_nm, hi_nm in BANDS_NM:
+    for lo_nm, hi_nm in BANDS_NM + WIDE_BANDS_NM:
         nu = np.arange(1e7 / hi_nm, 1e7 / lo_nm, GRID_STEP)
         print(f"{lo_nm:g}-{hi_nm:g} nm: {len(nu)} points")
         tau = optical_depths(lines, 7, O2_MASS, nu, layer_list, O2_VMR)
@@ -489,7 +517,7 @@ def main():
             rows.append((lo_nm, hi_nm, elevation, float(m[0]), t))
             print(f"  sun {elevation:g}: T = {t:.5f} (1 - T = {1 - t:.5f}); vertical T = {vertical:.5f}")
     header = (
-        "# Line-by-line direct-beam transmittance of the O2 A band, band-averaged over 10 nm (uniform in "
+        "# Line-by-line direct-beam transmittance of the O2 A band, band-averaged over 10 and 20 nm (uniform in "
         "wavelength), written by scripts/gases/make_lbl_reference.py from HITRAN 2016 O2 lines "
         "(Gordon et al. 2017, JQSRT 203, 3; 12847-13339 cm^-1, data/O2.data of github.com/cminsky/CrossSection "
         f"at 5f968bc39f537ac318f67e215689b205470f8c79, sha256 {O2_SHA256}) and HAPI 1.3.0.0's TIPS-2021 partition "

@@ -3,15 +3,15 @@
 //! `data/gas_line_by_line_reference.csv` (written by
 //! `scripts/gases/make_lbl_reference.py` from HITRAN 2016 lines through the
 //! U.S. Standard Atmosphere 1976, a spherical shell of radius 6360 km)
-//! holds the direct-beam transmittance T of the O2 A band averaged over 10 nm
-//! bands, for the sun at 60 and 15 degrees. Here sora's is computed for the
+//! holds the direct-beam transmittance T of the O2 A band averaged over 10
+//! and 20 nm bands, for the sun at 60 and 15 degrees. Here sora's is computed for the
 //! same cases: the direct normal irradiance of a Rayleigh atmosphere (the
 //! same U.S. standard air, radius 6360 km) with `[gases]` (the O2 and CO2
 //! bands, no water) over that of the atmosphere without, summed over the
 //! k-terms by the sky itself, averaged over the 1 nm samples whose bands
 //! tile the band, and also read at the band's centre on a grid of the
-//! band's width (what one sample of a 10 nm grid gives). The error is in units of the reference's
-//! absorption 1 - T.
+//! band's width (what one sample of a 10 or 20 nm grid gives). The error is
+//! in units of the reference's absorption 1 - T.
 
 use sora::spectrum::WavelengthGrid;
 use sora::{Atmosphere, Sky};
@@ -139,7 +139,7 @@ fn the_reference_is_a_curve_of_growth_and_sora_reads_it() {
     // transmittances are computed for every case and lie in (0, 1), lower
     // for the lower sun.
     let rows = comparison();
-    assert_eq!(rows.len(), 6);
+    assert_eq!(rows.len(), 14);
     let air_mass = |e: f64| 1.0 / e.to_radians().sin();
     for pair in rows.chunks(2) {
         let [(high, sora_high, _), (low, sora_low, _)] = pair else {
@@ -156,11 +156,12 @@ fn the_reference_is_a_curve_of_growth_and_sora_reads_it() {
         );
         assert!(0.0 < *sora_low && sora_low < sora_high && *sora_high < 1.0);
     }
-    let core = rows.iter().filter(|(c, ..)| c.lo_nm == 760.0);
+    let ten = |c: &Case| c.hi_nm - c.lo_nm == 10.0;
+    let core = rows.iter().filter(|(c, ..)| c.lo_nm == 760.0 && ten(c));
     for (case, ..) in core {
         let others = rows
             .iter()
-            .filter(|(c, ..)| c.lo_nm != 760.0 && c.elevation_deg == case.elevation_deg);
+            .filter(|(c, ..)| ten(c) && c.lo_nm != 760.0 && c.elevation_deg == case.elevation_deg);
         for (other, ..) in others {
             assert!(case.transmittance < other.transmittance);
         }
@@ -169,22 +170,32 @@ fn the_reference_is_a_curve_of_growth_and_sora_reads_it() {
 
 /// The first "Done when" of issue 36 for the O2 A band: sora's band-mean
 /// direct beam within 2 % of the line-by-line absorption. sora's O2 in
-/// 750-780 nm is k-terms fitted to the same lines (`atmosphere/o2_a_band.rs`,
-/// 0.5 nm bins re-sorted into each sample's band), so it does (measured;
-/// suns 60 and 15 degrees, error in % of the reference's 1 - T):
+/// 749.5-780 nm is k-terms fitted to the same lines (`atmosphere/o2_a_band.rs`:
+/// 0.5 nm bins, each with five weights and coefficients of its own,
+/// re-sorted into each sample's band and fitted there with the band's own
+/// five weights), so it does (measured; suns 60 and 15 degrees, error in %
+/// of the reference's 1 - T):
 ///
 /// ```text
-/// band nm   ref 1-T        sora band mean   error          10 nm grid sample
-/// 755-765   0.309 0.433    0.307 0.432      -0.8 -0.1 %    -4.4 +4.0 %
-/// 760-770   0.344 0.502    0.343 0.501      -0.4 -0.3 %    -2.2 +2.1 %
-/// 765-775   0.066 0.116    0.065 0.116      -0.8 +0.1 %    -0.7 +0.2 %
+/// band nm   ref 1-T          sora band mean   error          one sample of a grid of the band's width
+/// 755-765   0.309 0.433      0.309 0.432      -0.1 -0.1 %    -0.1 -0.1 %
+/// 760-770   0.344 0.502      0.344 0.501      -0.1 -0.2 %    -0.1 -0.2 %
+/// 765-775   0.066 0.116      0.065 0.115      -0.1 -0.4 %    -0.1 -0.4 %
+/// 740-760   0.015 0.021      0.015 0.021      -0.1 -0.3 %    -0.1 -0.3 %
+/// 750-770   0.187 0.272      0.187 0.272      -0.1 -0.2 %    -0.1 -0.2 %
+/// 760-780   0.173 0.253      0.173 0.253      -0.1 -0.2 %    -0.1 -0.2 %
+/// 770-790   0.0006 0.0019    0.0006 0.0019    -0.3 -1.0 %    -0.3 -1.0 %
 /// ```
 ///
-/// A 10 nm grid's one sample per band errs more, 4.4 % at most: five
-/// weights shared by every wavelength cannot hold a 10 nm band's curve of
-/// growth closer (the script's own least-squares fit with them, 1.5-4.8 %);
-/// that bar is the second assertion. Before (the SPECTRL2 band model, point
-/// samples, trapezoid mean): -43/-30 %, -41/-30 % and +57/+62 %.
+/// One sample of a 10 or 20 nm grid is within 0.4 % where 1 - T > 0.01 and
+/// 1.0 % for 770-790 nm (1 - T 0.002: the bins' fits err up to 0.67 % of
+/// max(1 - T, 0.001), absolute errors of a few 1e-6 there): its terms carry the
+/// band's own weights (with the five weights shared by every wavelength a
+/// 10 nm sample erred up to 4.4 % and a 20 nm one up to 19 % against its
+/// bins), and the bins their own (with shared weights the bin at the R
+/// branch's head, 759.5-760 nm, erred 5.6 %). That bar, 1.5 %, is the
+/// second assertion. Before the k-terms (the SPECTRL2 band model, point samples,
+/// trapezoid mean): -43/-30 %, -41/-30 % and +57/+62 % for the 10 nm bands.
 #[test]
 fn o2_a_band_within_two_percent_of_line_by_line() {
     let (mut worst, mut worst_centre): (f64, f64) = (0.0, 0.0);
@@ -192,10 +203,12 @@ fn o2_a_band_within_two_percent_of_line_by_line() {
         worst = worst.max(error_percent(mean, case.transmittance).abs());
         worst_centre = worst_centre.max(error_percent(centre, case.transmittance).abs());
     }
-    println!("worst band-mean error: {worst:.1} % of 1 - T; 10 nm grid: {worst_centre:.1} %");
+    println!(
+        "worst band-mean error: {worst:.1} % of 1 - T; one sample of a 10 or 20 nm grid: {worst_centre:.1} %"
+    );
     assert!(worst < 2.0, "{worst:.1} % of 1 - T");
     assert!(
-        worst_centre < 5.0,
-        "10 nm grid: {worst_centre:.1} % of 1 - T"
+        worst_centre < 1.5,
+        "one sample of a 10 or 20 nm grid: {worst_centre:.1} % of 1 - T"
     );
 }

@@ -148,6 +148,23 @@ impl SpectrumToXyz {
         }
     }
 
+    /// The conversion with each sample's colour-matching functions scaled
+    /// by `factors` (one per sample): the colour of a spectrum times the
+    /// factors (a k-distribution term's colour with its weight per sample).
+    pub(crate) fn scaled(&self, factors: &[f64]) -> SpectrumToXyz {
+        assert_eq!(factors.len(), self.weighted_cmfs.len(), "wrong grid");
+        SpectrumToXyz {
+            grid: self.grid,
+            observer: self.observer,
+            weighted_cmfs: self
+                .weighted_cmfs
+                .iter()
+                .zip(factors)
+                .map(|(cmf, f)| cmf.map(|v| v * f))
+                .collect(),
+        }
+    }
+
     /// The grid the spectra must be sampled on.
     pub(crate) fn grid(&self) -> &WavelengthGrid {
         &self.grid

@@ -278,10 +278,11 @@ impl Sky {
         }
         if !self.k_terms.is_empty() {
             let mut parts = Vec::with_capacity(self.k_terms.len());
-            for (w, term) in &self.k_terms {
+            for (weights, term) in &self.k_terms {
+                let (w, to_xyz) = super::k_terms::term_colour_conversion(to_xyz, weights);
                 parts.push((
-                    *w,
-                    term.render_aerial_perspective_xyz(image, depth_m, to_xyz)?,
+                    w,
+                    term.render_aerial_perspective_xyz(image, depth_m, &to_xyz)?,
                 ));
             }
             let (radiances, transmittances) = parts

@@ -82,14 +82,15 @@ impl Stokes {
 }
 
 impl SkyRadiance {
-    /// sum_j w_j times each part, field by field (the k-distribution's sum
-    /// over its terms, `atmosphere::gas_bands`; the parts of one view on
-    /// one grid). Standard errors add as sum_j w_j se_j, the bound for
-    /// errors that may be correlated (the terms are traced with one seed).
-    pub fn weighted_sum(parts: &[(f64, SkyRadiance)]) -> SkyRadiance {
+    /// sum_j w_j times each part, field by field and sample by sample (the
+    /// k-distribution's sum over its terms, `atmosphere::gas_bands`, w_j a
+    /// weight per sample; the parts of one view on one grid). Standard
+    /// errors add as sum_j w_j se_j, the bound for errors that may be
+    /// correlated (the terms are traced with one seed).
+    pub fn weighted_sum(parts: &[(SampledSpectrum, SkyRadiance)]) -> SkyRadiance {
         let stokes = parts
             .iter()
-            .map(|(w, p)| p.stokes.as_ref().map(|s| (*w, s)))
+            .map(|(w, p)| p.stokes.as_ref().map(|s| (w, s)))
             .collect::<Option<Vec<_>>>()
             .map(|stokes| {
                 let sum = |field: fn(&Stokes) -> &SampledSpectrum| {
@@ -114,11 +115,11 @@ impl SkyRadiance {
             });
         SkyRadiance {
             radiance_w_m2_sr_nm: SampledSpectrum::weighted_sum(
-                parts.iter().map(|(w, p)| (*w, &p.radiance_w_m2_sr_nm)),
+                parts.iter().map(|(w, p)| (w, &p.radiance_w_m2_sr_nm)),
             ),
             standard_error_w_m2_sr_nm: parts
                 .iter()
-                .map(|(w, p)| p.standard_error_w_m2_sr_nm.as_ref().map(|e| (*w, e)))
+                .map(|(w, p)| p.standard_error_w_m2_sr_nm.as_ref().map(|e| (w, e)))
                 .collect::<Option<Vec<_>>>()
                 .map(SampledSpectrum::weighted_sum),
             stokes,

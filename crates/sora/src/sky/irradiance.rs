@@ -149,13 +149,14 @@ pub struct Irradiance {
 }
 
 impl Irradiance {
-    /// sum_j w_j times each part, field by field (the k-distribution's sum
-    /// over its terms, `atmosphere::gas_bands`; the parts on one grid). A
-    /// standard error adds as sum_j w_j se_j, the bound for errors that may
-    /// be correlated (the terms are traced with one seed).
-    pub fn weighted_sum(parts: &[(f64, Irradiance)]) -> Irradiance {
+    /// sum_j w_j times each part, field by field and sample by sample (the
+    /// k-distribution's sum over its terms, `atmosphere::gas_bands`, w_j a
+    /// weight per sample; the parts on one grid). A standard error adds as
+    /// sum_j w_j se_j, the bound for errors that may be correlated (the
+    /// terms are traced with one seed).
+    pub fn weighted_sum(parts: &[(SampledSpectrum, Irradiance)]) -> Irradiance {
         let sum = |field: fn(&Irradiance) -> &SampledSpectrum| {
-            SampledSpectrum::weighted_sum(parts.iter().map(|(w, p)| (*w, field(p))))
+            SampledSpectrum::weighted_sum(parts.iter().map(|(w, p)| (w, field(p))))
         };
         Irradiance {
             direct_normal_w_m2_nm: sum(|p| &p.direct_normal_w_m2_nm),
@@ -164,7 +165,7 @@ impl Irradiance {
             diffuse_w_m2_nm: sum(|p| &p.diffuse_w_m2_nm),
             diffuse_standard_error_w_m2_nm: parts
                 .iter()
-                .map(|(w, p)| p.diffuse_standard_error_w_m2_nm.as_ref().map(|e| (*w, e)))
+                .map(|(w, p)| p.diffuse_standard_error_w_m2_nm.as_ref().map(|e| (w, e)))
                 .collect::<Option<Vec<_>>>()
                 .map(SampledSpectrum::weighted_sum),
             global_w_m2_nm: sum(|p| &p.global_w_m2_nm),

@@ -12,7 +12,11 @@
 //!     Q = sum_j w_j Q_j
 //! ```
 //!
-//! with w_j the terms' weights (they sum to 1). A [`Sky`] built from such
+//! with w_j the terms' weights (they sum to 1 at each wavelength; the
+//! shared weights of `gas_bands::k_terms` but in the O2 A band, whose
+//! samples have their own, `gas_bands::k_distribution_terms`), taken sample
+//! by sample: a colour (XYZ) of the terms is summed through colour-matching
+//! functions scaled by each term's weights. A [`Sky`] built from such
 //! an atmosphere keeps one sky per term ([`Sky::k_terms`]) and answers
 //! every question with that sum, so views, images, irradiance and aerial
 //! perspective are the k-distribution's whatever calls them (the command
@@ -32,25 +36,56 @@
 use super::{AerialPerspective, Irradiance, Sky, SkyRadiance};
 use crate::atmosphere::Atmosphere;
 use crate::atmosphere::gas_bands::{has_untermed_gas_bands, k_distribution_terms};
+use crate::colour::SpectrumToXyz;
 use crate::colour::Xyz;
 use crate::error::Result;
-use crate::spectrum::SampledSpectrum;
+use crate::spectrum::{SampledSpectrum, WavelengthGrid};
 
-/// The skies of `atmosphere`'s k-distribution terms, each built by
-/// `build` from the atmosphere of its term, with their weights; none
-/// without banded gases, or when they are already at a term (a term's own
-/// atmosphere is one solve).
+/// The skies of `atmosphere`'s k-distribution terms on `grid`, each built
+/// by `build` from the atmosphere of its term, with their weights per
+/// sample; none without banded gases, or when they are already at a term
+/// (a term's own atmosphere is one solve).
 pub(super) fn term_skies(
     atmosphere: &Atmosphere,
+    grid: &WavelengthGrid,
     build: impl Fn(&Atmosphere) -> Result<Sky>,
-) -> Result<Vec<(f64, Sky)>> {
+) -> Result<Vec<(SampledSpectrum, Sky)>> {
     if !has_untermed_gas_bands(atmosphere) {
         return Ok(Vec::new());
     }
-    k_distribution_terms(atmosphere)
-        .iter()
-        .map(|(weight, at_term)| Ok((*weight, build(at_term)?)))
+    k_distribution_terms(atmosphere, grid)?
+        .into_iter()
+        .map(|(weights, at_term)| Ok((weights, build(&at_term)?)))
         .collect()
+}
+
+/// The one weight of every sample, when the weights are all equal (the
+/// shared weights: the sum then scales whole colours, as it did before
+/// the A band had weights of its own).
+pub(super) fn uniform_weight(weights: &SampledSpectrum) -> Option<f64> {
+    let first = *weights.values().first()?;
+    weights
+        .values()
+        .iter()
+        .all(|w| *w == first)
+        .then_some(first)
+}
+
+/// A term's colour conversion: `to_xyz` itself (with the weight to scale
+/// its colours by) when the term's weights are uniform, else `to_xyz` with
+/// its colour-matching functions scaled sample by sample by the weights
+/// (weight 1).
+pub(super) fn term_colour_conversion<'a>(
+    to_xyz: &'a SpectrumToXyz,
+    weights: &SampledSpectrum,
+) -> (f64, std::borrow::Cow<'a, SpectrumToXyz>) {
+    match uniform_weight(weights) {
+        Some(weight) => (weight, std::borrow::Cow::Borrowed(to_xyz)),
+        None => (
+            1.0,
+            std::borrow::Cow::Owned(to_xyz.scaled(weights.values())),
+        ),
+    }
 }
 
 /// sum_j w_j x_j of colours.
@@ -78,11 +113,11 @@ pub(super) fn weighted_images<T: Clone>(
 }
 
 impl Sky {
-    /// The k-distribution's terms of a sky with banded gases: (w_j, the sky
-    /// with every banded gas at term j), whose weighted sum every radiance,
-    /// image, irradiance and aerial perspective of this sky is (see
-    /// `sky/k_terms.rs`); empty without banded gases.
-    pub fn k_terms(&self) -> &[(f64, Sky)] {
+    /// The k-distribution's terms of a sky with banded gases: (w_j per
+    /// sample, the sky with every banded gas at term j), whose weighted sum
+    /// every radiance, image, irradiance and aerial perspective of this sky
+    /// is (see `sky/k_terms.rs`); empty without banded gases.
+    pub fn k_terms(&self) -> &[(SampledSpectrum, Sky)] {
         &self.k_terms
     }
 
@@ -95,14 +130,14 @@ impl Sky {
             .k_terms
             .iter()
             .enumerate()
-            .map(|(k, (weight, sky))| Ok((*weight, compute(k, sky)?)))
+            .map(|(k, (weight, sky))| Ok((weight, compute(k, sky)?)))
             .collect::<Result<Vec<_>>>()?;
         let views = by_term.first().map_or(0, |(_, r)| r.len());
         Ok((0..views)
             .map(|v| {
-                let parts: Vec<(f64, SkyRadiance)> = by_term
+                let parts: Vec<(SampledSpectrum, SkyRadiance)> = by_term
                     .iter()
-                    .map(|(w, results)| (*w, results[v].clone()))
+                    .map(|(w, results)| ((*w).clone(), results[v].clone()))
                     .collect();
                 SkyRadiance::weighted_sum(&parts)
             })
@@ -111,8 +146,8 @@ impl Sky {
 
     /// sum_j w_j f(sky_j) of spectra.
     pub(super) fn sum_term_spectra(&self, f: impl Fn(&Sky) -> SampledSpectrum) -> SampledSpectrum {
-        let parts: Vec<(f64, SampledSpectrum)> =
-            self.k_terms.iter().map(|(w, sky)| (*w, f(sky))).collect();
+        let parts: Vec<(&SampledSpectrum, SampledSpectrum)> =
+            self.k_terms.iter().map(|(w, sky)| (w, f(sky))).collect();
         SampledSpectrum::weighted_sum(parts.iter().map(|(w, s)| (*w, s)))
     }
 
@@ -124,7 +159,7 @@ impl Sky {
         let parts = self
             .k_terms
             .iter()
-            .map(|(w, sky)| Ok((*w, f(sky)?)))
+            .map(|(w, sky)| Ok((w.clone(), f(sky)?)))
             .collect::<Result<Vec<_>>>()?;
         Ok(Irradiance::weighted_sum(&parts))
     }
@@ -138,7 +173,7 @@ impl Sky {
         let by_term = self
             .k_terms
             .iter()
-            .map(|(w, sky)| Ok((*w, f(sky)?)))
+            .map(|(w, sky)| Ok((w, f(sky)?)))
             .collect::<Result<Vec<_>>>()?;
         let segments = by_term.first().map_or(0, |(_, r)| r.len());
         Ok((0..segments)
@@ -146,9 +181,9 @@ impl Sky {
                 let sum = |field: fn(&AerialPerspective) -> &SampledSpectrum| {
                     SampledSpectrum::weighted_sum(by_term.iter().map(|(w, r)| (*w, field(&r[s]))))
                 };
-                let radiances: Vec<(f64, SkyRadiance)> = by_term
+                let radiances: Vec<(SampledSpectrum, SkyRadiance)> = by_term
                     .iter()
-                    .map(|(w, r)| (*w, r[s].radiance.clone()))
+                    .map(|(w, r)| ((*w).clone(), r[s].radiance.clone()))
                     .collect();
                 AerialPerspective {
                     distance_m: by_term[0].1[s].distance_m,
@@ -170,27 +205,30 @@ impl Sky {
 }
 
 impl Sky {
-    /// sum_j w_j of the terms' images, each rendered by `render(sky_j,
-    /// progress)`; `progress(rows)` sees the terms' rows as one pass.
+    /// sum_j w_j of the terms' images, each rendered by `render(w_j,
+    /// sky_j, progress)`, which returns (the weight to scale its values by,
+    /// the image): the weight where w_j is uniform, else 1 with the image
+    /// already weighted sample by sample; `progress(rows)` sees the terms'
+    /// rows as one pass.
     pub(super) fn sum_term_images<T: Clone>(
         &self,
         progress: &(dyn Fn(usize) + Sync),
         zero: T,
         add: impl Fn(&mut T, f64, &T),
-        render: impl Fn(&Sky, &(dyn Fn(usize) + Sync)) -> Result<Vec<T>>,
+        render: impl Fn(&SampledSpectrum, &Sky, &(dyn Fn(usize) + Sync)) -> Result<(f64, Vec<T>)>,
     ) -> Result<Vec<T>> {
         let terms = self.k_terms.len();
         let mut images = Vec::with_capacity(terms);
         let mut rows_before = 0;
-        for (weight, sky) in &self.k_terms {
+        for (weights, sky) in &self.k_terms {
             let before = rows_before;
             let most = std::sync::atomic::AtomicUsize::new(0);
-            let image = render(sky, &|rows| {
+            let image = render(weights, sky, &|rows| {
                 most.fetch_max(rows, std::sync::atomic::Ordering::Relaxed);
                 progress((before + rows) / terms);
             })?;
             rows_before += most.into_inner();
-            images.push((*weight, image));
+            images.push(image);
         }
         Ok(weighted_images(images, add, zero))
     }
@@ -233,18 +271,25 @@ mod tests {
         };
         let sky = build(&atmosphere);
         assert_eq!(sky.k_terms().len(), crate::atmosphere::gas_bands::TERMS);
-        let terms: Vec<(f64, Sky)> = k_distribution_terms(&atmosphere)
+        let terms: Vec<(SampledSpectrum, Sky)> = k_distribution_terms(&atmosphere, &grid)
+            .unwrap()
             .iter()
-            .map(|(w, a)| (*w, build(a)))
+            .map(|(w, a)| (w.clone(), build(a)))
             .collect();
+        // 760 nm (the A band, the mixed gases absorbing most) has weights of
+        // its own; 740 and 780 nm the shared ones.
+        let shared = crate::atmosphere::gas_bands::k_terms()[0].weight;
+        assert_eq!(terms[0].0[0], shared);
+        assert_ne!(terms[0].0[1], shared);
         assert!(terms.iter().all(|(_, t)| t.k_terms().is_empty()));
         let sum = |f: &dyn Fn(&Sky) -> Vec<f64>| -> Vec<f64> {
             let mut total = vec![0.0; 0];
             for (w, t) in &terms {
                 let v = f(t);
                 total.resize(v.len(), 0.0);
-                for (s, x) in total.iter_mut().zip(v) {
-                    *s += w * x;
+                // Each quantity is a run of spectra on the grid.
+                for (i, (s, x)) in total.iter_mut().zip(v).enumerate() {
+                    *s += w[i % w.len()] * x;
                 }
             }
             total
@@ -292,6 +337,21 @@ mod tests {
         let spectral = |s: &Sky| s.render_spectral(&image, &|_| {}).unwrap();
         let rendered = spectral(&sky);
         check("spectral image", rendered.clone(), sum(&spectral));
+        // The colour image is the colour of the summed spectra (the terms'
+        // colours taken through colour-matching functions scaled by their
+        // weights where the weights differ between samples).
+        let to_xyz =
+            crate::colour::SpectrumToXyz::new(&grid, crate::colour::Observer::Cie1931TwoDegree);
+        let colours = sky.render_xyz(&image, &to_xyz, &|_| {}).unwrap();
+        let from_spectra: Vec<f64> = rendered
+            .chunks(grid.len())
+            .flat_map(|pixel| {
+                let xyz = to_xyz.to_xyz_unchecked(pixel);
+                [xyz.x, xyz.y, xyz.z]
+            })
+            .collect();
+        let got: Vec<f64> = colours.iter().flat_map(|c| [c.x, c.y, c.z]).collect();
+        check("colour image", got, from_spectra);
         // The image's zenith pixel and the zenith view now agree in the A
         // band (both the k-sum; they differ by the image tables' error).
         let centre = 4 * 9 + 4;

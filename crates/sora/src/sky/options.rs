@@ -346,7 +346,9 @@ impl SkyBuilder<'_> {
     pub fn build(self) -> Result<Sky> {
         let mut sky = self.build_for(self.atmosphere)?;
         // Banded gases: one sky per k-distribution term (`sky/k_terms.rs`).
-        sky.k_terms = k_terms::term_skies(self.atmosphere, |at_term| self.build_for(at_term))?;
+        sky.k_terms = k_terms::term_skies(self.atmosphere, &self.wavelengths, |at_term| {
+            self.build_for(at_term)
+        })?;
         Ok(sky)
     }
 

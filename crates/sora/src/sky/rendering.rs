@@ -69,7 +69,10 @@ impl Sky {
                 progress,
                 Xyz::BLACK,
                 k_terms::add_scaled_xyz,
-                |term, p| term.render_xyz(image, to_xyz, p),
+                |weights, term, p| {
+                    let (weight, to_xyz) = k_terms::term_colour_conversion(to_xyz, weights);
+                    Ok((weight, term.render_xyz(image, &to_xyz, p)?))
+                },
             );
         }
         let n = self.wavelengths().len();
@@ -103,8 +106,9 @@ impl Sky {
                     k_terms::add_scaled_xyz(s, w, x);
                 }
             };
-            return self.sum_term_images(progress, [Xyz::BLACK; 4], add, |term, p| {
-                term.render_stokes_xyz(image, to_xyz, p)
+            return self.sum_term_images(progress, [Xyz::BLACK; 4], add, |weights, term, p| {
+                let (weight, to_xyz) = k_terms::term_colour_conversion(to_xyz, weights);
+                Ok((weight, term.render_stokes_xyz(image, &to_xyz, p)?))
             });
         }
         let n = self.wavelengths().len();
@@ -128,8 +132,19 @@ impl Sky {
     ) -> Result<Vec<f64>> {
         if !self.k_terms.is_empty() {
             let add = |sum: &mut f64, w: f64, x: &f64| *sum += w * x;
-            return self
-                .sum_term_images(progress, 0.0, add, |term, p| term.render_spectral(image, p));
+            return self.sum_term_images(progress, 0.0, add, |weights, term, p| {
+                let mut values = term.render_spectral(image, p)?;
+                if let Some(weight) = k_terms::uniform_weight(weights) {
+                    return Ok((weight, values));
+                }
+                // Pixel-major: each pixel's wavelengths together.
+                for pixel in values.chunks_mut(weights.len()) {
+                    for (v, w) in pixel.iter_mut().zip(weights.values()) {
+                        *v *= w;
+                    }
+                }
+                Ok((1.0, values))
+            });
         }
         let wavelengths = self.wavelengths().len();
         self.render_pixels(image, wavelengths, 0.0, progress, |radiance, pixel| {

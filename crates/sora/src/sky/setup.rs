@@ -53,7 +53,7 @@ pub struct Sky {
     pub(super) lowest_view_elevation_rad: Option<f64>,
     /// The k-distribution's terms, (w_j, the sky of term j), with banded
     /// gases; empty without them (`sky/k_terms.rs`).
-    pub(super) k_terms: Vec<(f64, Sky)>,
+    pub(super) k_terms: Vec<(SampledSpectrum, Sky)>,
 }
 
 #[derive(Debug)]
@@ -174,7 +174,7 @@ impl Sky {
         sky.k_terms = self
             .k_terms
             .iter()
-            .map(|(w, term)| Ok((*w, term.with_sun_deg(elevation_deg, azimuth_deg)?)))
+            .map(|(w, term)| Ok((w.clone(), term.with_sun_deg(elevation_deg, azimuth_deg)?)))
             .collect::<Result<_>>()?;
         Ok(sky)
     }

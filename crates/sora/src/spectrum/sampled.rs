@@ -84,16 +84,33 @@ impl SampledSpectrum {
         }
     }
 
-    /// sum_j w_j s_j over `parts` (w_j, s_j), all on one grid (no values
-    /// when there are no parts): a k-distribution's sum over its terms.
+    /// sum_j w_j s_j over `parts` (w_j, s_j), sample by sample (w_j has a
+    /// weight per sample), all on one grid (no values when there are no
+    /// parts): a k-distribution's sum over its terms.
     pub fn weighted_sum<'a>(
-        parts: impl IntoIterator<Item = (f64, &'a SampledSpectrum)>,
+        parts: impl IntoIterator<Item = (&'a SampledSpectrum, &'a SampledSpectrum)>,
     ) -> SampledSpectrum {
         let mut total: Option<SampledSpectrum> = None;
-        for (weight, spectrum) in parts {
-            total
-                .get_or_insert_with(|| SampledSpectrum::zeros(spectrum.len()))
-                .add_scaled(spectrum, weight);
+        for (weights, spectrum) in parts {
+            assert_eq!(
+                weights.len(),
+                spectrum.len(),
+                "weights and spectrum on different grids"
+            );
+            let total = total.get_or_insert_with(|| SampledSpectrum::zeros(spectrum.len()));
+            assert_eq!(
+                total.len(),
+                spectrum.len(),
+                "spectra sampled on different grids"
+            );
+            for ((t, w), s) in total
+                .values
+                .iter_mut()
+                .zip(&weights.values)
+                .zip(&spectrum.values)
+            {
+                *t += w * s;
+            }
         }
         total.unwrap_or_else(|| SampledSpectrum::zeros(0))
     }
