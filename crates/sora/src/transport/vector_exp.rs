@@ -98,6 +98,28 @@ pub(crate) fn exp_in_place(values: &mut [f64]) {
     exp_in_place_portable(values);
 }
 
+/// Whether the hot loops may run in AVX2's registers (x86-64 with AVX2;
+/// see [`wide`]): the view march's forward-peak integrals and the source
+/// table's reads take their AVX2 twins then, the same bits.
+#[inline(always)]
+pub(crate) fn avx2_available() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        wide::available()
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
+/// Tests only: every loop that has an AVX2 twin takes its portable form
+/// (the slow path; the numbers are the same bits, so tests running
+/// meanwhile are not disturbed).
+#[cfg(test)]
+pub(crate) static PORTABLE_ONLY: std::sync::atomic::AtomicBool =
+    std::sync::atomic::AtomicBool::new(false);
+
 /// [`exp_neg_in_place`] in the target's baseline instructions (SSE2's
 /// 2-lane registers on x86-64): the slow path the wide one is held to.
 #[inline(always)]
@@ -124,9 +146,14 @@ pub(crate) fn exp_in_place_portable(values: &mut [f64]) {
 /// the same bits (tested).
 #[cfg(target_arch = "x86_64")]
 mod wide {
-    /// Whether the CPU has AVX2 (the standard library caches the answer).
+    /// Whether the CPU has AVX2 (the standard library caches the answer)
+    /// and, in tests, [`super::PORTABLE_ONLY`] is not set.
     #[inline(always)]
-    pub(super) fn available() -> bool {
+    pub(crate) fn available() -> bool {
+        #[cfg(test)]
+        if super::PORTABLE_ONLY.load(std::sync::atomic::Ordering::Relaxed) {
+            return false;
+        }
         std::arch::is_x86_feature_detected!("avx2")
     }
 

@@ -13,7 +13,7 @@ use super::peak_beam::PeakBeam;
 use crate::geometry::{Vector3, segment_in_atmosphere};
 use crate::transport::optical_column::PanelMarch;
 use crate::transport::single_scattering::SunColumns;
-use crate::transport::vector_exp::{exp_in_place, exp_neg_in_place};
+use crate::transport::vector_exp::{avx2_available, exp_in_place, exp_neg_in_place};
 
 /// Values below this are treated as zero by the logarithmic
 /// interpolations (radiances are ~1e-6..1 W m^-2 sr^-1 nm^-1).
@@ -357,6 +357,40 @@ impl ViewRayOptics {
     /// T* T*_sun - T T_sun becomes T* S~ + T_sun (T* - T), the peak-only
     /// light's weight T T_sun is scaled by (T_sun + S~) / T*_sun.
     pub(super) fn add_tilted_forward_peak(
+        &self,
+        weight: f64,
+        lit: bool,
+        share: f64,
+        scratch: &mut MultipleScatteringScratch,
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        if avx2_available() {
+            // SAFETY: the CPU has AVX2 (checked just above).
+            unsafe { self.add_tilted_forward_peak_avx2(weight, lit, share, scratch) };
+            return;
+        }
+        self.add_tilted_forward_peak_portable(weight, lit, share, scratch);
+    }
+
+    /// [`Self::add_tilted_forward_peak`] compiled for AVX2 (4 lanes of
+    /// f64 across the wavelengths; the same operations per lane, so the
+    /// same bits as the portable form: `vector_exp.rs`).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn add_tilted_forward_peak_avx2(
+        &self,
+        weight: f64,
+        lit: bool,
+        share: f64,
+        scratch: &mut MultipleScatteringScratch,
+    ) {
+        self.add_tilted_forward_peak_portable(weight, lit, share, scratch);
+    }
+
+    /// [`Self::add_tilted_forward_peak`] in the target's baseline
+    /// instructions.
+    #[inline(always)]
+    fn add_tilted_forward_peak_portable(
         &self,
         weight: f64,
         lit: bool,
