@@ -102,6 +102,7 @@ pub(crate) fn exp_in_place(values: &mut [f64]) {
 /// see [`wide`]): the view march's forward-peak integrals and the source
 /// table's reads take their AVX2 twins then, the same bits.
 #[inline(always)]
+#[cfg_attr(not(any(target_arch = "x86_64", test)), allow(dead_code))]
 pub(crate) fn avx2_available() -> bool {
     #[cfg(target_arch = "x86_64")]
     {

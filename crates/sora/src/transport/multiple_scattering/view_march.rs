@@ -13,7 +13,7 @@ use super::peak_beam::PeakBeam;
 use crate::geometry::{Vector3, segment_in_atmosphere};
 use crate::transport::optical_column::PanelMarch;
 use crate::transport::single_scattering::SunColumns;
-use crate::transport::vector_exp::{avx2_available, exp_in_place, exp_neg_in_place};
+use crate::transport::vector_exp::{exp_in_place, exp_neg_in_place};
 
 /// Values below this are treated as zero by the logarithmic
 /// interpolations (radiances are ~1e-6..1 W m^-2 sr^-1 nm^-1).
@@ -364,7 +364,7 @@ impl ViewRayOptics {
         scratch: &mut MultipleScatteringScratch,
     ) {
         #[cfg(target_arch = "x86_64")]
-        if avx2_available() {
+        if crate::transport::vector_exp::avx2_available() {
             // SAFETY: the CPU has AVX2 (checked just above).
             unsafe { self.add_tilted_forward_peak_avx2(weight, lit, share, scratch) };
             return;
