@@ -71,7 +71,11 @@
 //! sun zenith angle, and aimed at each layer's eye and sun
 //! (`sky::shared_field`); the per-layer solve, the images' own sky-view
 //! tables, the field's panels and the multiply scattered light marched at
-//! every sun node are kept as the tests' oracles (`bake_with`).
+//! every sun node are kept as the tests' oracles (`bake_with`). The
+//! marches' exponentials, forward-peak integrals and source-table reads
+//! run in AVX2's registers where the CPU has them, chosen at run time
+//! (`transport/vector_exp.rs`): the same tables bit for bit, 12-15 % less
+//! CPU (`docs/engine-tables.md`, "Bake time").
 //!
 //! The lookup formulas (`lookup.rs`) are those the shaders run; the
 //! manifest (`files.rs`) states them for any other reader.

@@ -667,6 +667,41 @@ fn the_layers_blended_between_suns_are_the_marched_layers() {
     assert_eq!(fast.transmittance, slow.transmittance);
 }
 
+/// The bake with its hot loops in AVX2's registers (the exponentials, the
+/// forward-peak integrals, the source table's reads; where the CPU has
+/// AVX2) is the bake in the baseline instructions
+/// (`vector_exp::PORTABLE_ONLY`, the slow path) bit for bit: earth-hazy
+/// with the default multiple-scattering settings, suns from -12 to 90
+/// degrees (the planet's shadow, the tilted peak beam near the horizon,
+/// the day), the ground and the top of the atmosphere.
+#[test]
+fn the_wide_bake_is_the_portable_bake_bit_for_bit() {
+    use crate::transport::vector_exp::{PORTABLE_ONLY, avx2_available};
+    use std::sync::atomic::Ordering;
+    let sky = hazy_sky_with_default_field();
+    let settings = EngineTableSettings {
+        sun_nodes: 6,
+        altitude_nodes: 2,
+        zenith_nodes_per_half: 16,
+        azimuth_nodes: 12,
+        transmittance_nodes: (4, 8),
+        ..EngineTableSettings::default()
+    };
+    if !avx2_available() {
+        eprintln!("no AVX2 here: both bakes are portable");
+    }
+    let wide = EngineTables::bake(&sky, &settings, &|_| {}).unwrap();
+    PORTABLE_ONLY.store(true, Ordering::Relaxed);
+    assert!(!avx2_available());
+    let portable = EngineTables::bake(&sky, &settings, &|_| {});
+    PORTABLE_ONLY.store(false, Ordering::Relaxed);
+    let portable = portable.unwrap();
+    assert!(wide.sky.iter().any(|t| t[1] > 0.0));
+    assert_eq!(wide.sky, portable.sky);
+    assert_eq!(wide.irradiance, portable.irradiance);
+    assert_eq!(wide.transmittance, portable.transmittance);
+}
+
 /// At its nodes (a sun and an altitude node, the aerial table's views
 /// and distances) the aerial-perspective lookup returns the library's own
 /// light of the segment (`Sky::compute_segment_light`), to f32.

@@ -73,18 +73,114 @@ const INVERSE_FACTORIALS: [f64; 11] = [
     1.0 / 3_628_800.0,
 ];
 
-/// Replaces each optical depth by its transmittance exp(-x), in place.
+/// Replaces each optical depth by its transmittance exp(-x), in place:
+/// in AVX2's 4-lane registers where the CPU has them ([`wide`]), the same
+/// bits as [`exp_neg_in_place_portable`].
 pub(crate) fn exp_neg_in_place(values: &mut [f64]) {
+    #[cfg(target_arch = "x86_64")]
+    if wide::available() {
+        wide::exp_neg_in_place(values);
+        return;
+    }
+    exp_neg_in_place_portable(values);
+}
+
+/// Replaces each exponent y by e^y, in place (y clamped to [-708, 708]:
+/// a logarithm of a radiance minus an optical depth, of either sign); in
+/// AVX2's registers where the CPU has them, the same bits as
+/// [`exp_in_place_portable`].
+pub(crate) fn exp_in_place(values: &mut [f64]) {
+    #[cfg(target_arch = "x86_64")]
+    if wide::available() {
+        wide::exp_in_place(values);
+        return;
+    }
+    exp_in_place_portable(values);
+}
+
+/// Whether the hot loops may run in AVX2's registers (x86-64 with AVX2;
+/// see [`wide`]): the view march's forward-peak integrals and the source
+/// table's reads take their AVX2 twins then, the same bits.
+#[inline(always)]
+#[cfg_attr(not(any(target_arch = "x86_64", test)), allow(dead_code))]
+pub(crate) fn avx2_available() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        wide::available()
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
+/// Tests only: every loop that has an AVX2 twin takes its portable form
+/// (the slow path; the numbers are the same bits, so tests running
+/// meanwhile are not disturbed).
+#[cfg(test)]
+pub(crate) static PORTABLE_ONLY: std::sync::atomic::AtomicBool =
+    std::sync::atomic::AtomicBool::new(false);
+
+/// [`exp_neg_in_place`] in the target's baseline instructions (SSE2's
+/// 2-lane registers on x86-64): the slow path the wide one is held to.
+#[inline(always)]
+pub(crate) fn exp_neg_in_place_portable(values: &mut [f64]) {
     for v in values {
         *v = exp_neg(*v);
     }
 }
 
-/// Replaces each exponent y by e^y, in place (y clamped to [-708, 708]:
-/// a logarithm of a radiance minus an optical depth, of either sign).
-pub(crate) fn exp_in_place(values: &mut [f64]) {
+/// [`exp_in_place`] in the target's baseline instructions.
+#[inline(always)]
+pub(crate) fn exp_in_place_portable(values: &mut [f64]) {
     for v in values {
         *v = exp_clamped(*v);
+    }
+}
+
+/// The same loops compiled for AVX2 (4 lanes of f64 instead of SSE2's 2),
+/// chosen at run time: the default x86-64 target has SSE2 only, and the
+/// engine tables' bake spends about a fifth of its time in these
+/// exponentials (`docs/engine-tables.md`). AVX2 alone, not FMA: every lane
+/// does the same IEEE operations in the same order as the portable loop
+/// (Rust never fuses a multiply and an add on its own), so the results are
+/// the same bits (tested).
+#[cfg(target_arch = "x86_64")]
+mod wide {
+    /// Whether the CPU has AVX2 (the standard library caches the answer)
+    /// and, in tests, [`super::PORTABLE_ONLY`] is not set.
+    #[inline(always)]
+    pub(crate) fn available() -> bool {
+        #[cfg(test)]
+        if super::PORTABLE_ONLY.load(std::sync::atomic::Ordering::Relaxed) {
+            return false;
+        }
+        std::arch::is_x86_feature_detected!("avx2")
+    }
+
+    /// [`super::exp_neg_in_place_portable`] with AVX2; only where
+    /// [`available`].
+    pub(super) fn exp_neg_in_place(values: &mut [f64]) {
+        debug_assert!(available());
+        // SAFETY: the callers checked that the CPU has AVX2.
+        unsafe { exp_neg_in_place_avx2(values) }
+    }
+
+    /// [`super::exp_in_place_portable`] with AVX2; only where [`available`].
+    pub(super) fn exp_in_place(values: &mut [f64]) {
+        debug_assert!(available());
+        // SAFETY: the callers checked that the CPU has AVX2.
+        unsafe { exp_in_place_avx2(values) }
+    }
+
+    #[target_feature(enable = "avx2")]
+    fn exp_neg_in_place_avx2(values: &mut [f64]) {
+        super::exp_neg_in_place_portable(values);
+    }
+
+    #[target_feature(enable = "avx2")]
+    fn exp_in_place_avx2(values: &mut [f64]) {
+        super::exp_in_place_portable(values);
     }
 }
 
@@ -137,5 +233,44 @@ mod tests {
         let mut far = [1e4, -1e4];
         exp_in_place(&mut far);
         assert!(far[0].is_finite() && far[0] > 1e307 && far[1] < 1e-307);
+    }
+
+    /// The AVX2 loops (where the CPU has AVX2) give the portable loops'
+    /// bits, for every slice length's remainder and across the whole
+    /// range, beyond it, and for the clamped negative depths.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn the_wide_loops_are_the_portable_loops_bit_for_bit() {
+        if !wide::available() {
+            eprintln!("no AVX2 here: nothing to compare");
+            return;
+        }
+        let mut xs: Vec<f64> = (-300_000..=300_000).map(|i| i as f64 * 2.4e-3).collect();
+        xs.extend([
+            1e-300,
+            -1e-300,
+            1e4,
+            -1e4,
+            707.9,
+            708.1,
+            -708.1,
+            f64::MIN_POSITIVE,
+        ]);
+        for length in [xs.len(), 1, 2, 3, 5, 7, 21, 22, 23] {
+            for (wide_loop, portable) in [
+                (
+                    wide::exp_neg_in_place as fn(&mut [f64]),
+                    exp_neg_in_place_portable as fn(&mut [f64]),
+                ),
+                (wide::exp_in_place, exp_in_place_portable),
+            ] {
+                let (mut a, mut b) = (xs[..length].to_vec(), xs[..length].to_vec());
+                wide_loop(&mut a);
+                portable(&mut b);
+                for ((x, a), b) in xs.iter().zip(&a).zip(&b) {
+                    assert_eq!(a.to_bits(), b.to_bits(), "{x}");
+                }
+            }
+        }
     }
 }

@@ -399,6 +399,27 @@ impl MultipleScatteringTable {
     /// ln R(x, view) at one march node, into `log_source`: quadrilinear
     /// in ln R.
     fn lookup_log_source(&self, node: NodeGeometry, log_source: &mut [f64]) {
+        #[cfg(target_arch = "x86_64")]
+        if crate::transport::vector_exp::avx2_available() {
+            // SAFETY: the CPU has AVX2 (checked just above).
+            unsafe { self.lookup_log_source_avx2(node, log_source) };
+            return;
+        }
+        self.lookup_log_source_portable(node, log_source);
+    }
+
+    /// [`Self::lookup_log_source`] compiled for AVX2 (8 lanes of f32
+    /// across the wavelengths; the same operations per lane, so the same
+    /// bits as the portable form).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn lookup_log_source_avx2(&self, node: NodeGeometry, log_source: &mut [f64]) {
+        self.lookup_log_source_portable(node, log_source);
+    }
+
+    /// [`Self::lookup_log_source`] in the target's baseline instructions.
+    #[inline(always)]
+    fn lookup_log_source_portable(&self, node: NodeGeometry, log_source: &mut [f64]) {
         let optics = &self.field.optics;
         let w = optics.wavelengths;
         let suns = optics.sun_axis.count();

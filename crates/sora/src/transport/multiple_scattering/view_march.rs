@@ -363,6 +363,40 @@ impl ViewRayOptics {
         share: f64,
         scratch: &mut MultipleScatteringScratch,
     ) {
+        #[cfg(target_arch = "x86_64")]
+        if crate::transport::vector_exp::avx2_available() {
+            // SAFETY: the CPU has AVX2 (checked just above).
+            unsafe { self.add_tilted_forward_peak_avx2(weight, lit, share, scratch) };
+            return;
+        }
+        self.add_tilted_forward_peak_portable(weight, lit, share, scratch);
+    }
+
+    /// [`Self::add_tilted_forward_peak`] compiled for AVX2 (4 lanes of
+    /// f64 across the wavelengths; the same operations per lane, so the
+    /// same bits as the portable form: `vector_exp.rs`).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn add_tilted_forward_peak_avx2(
+        &self,
+        weight: f64,
+        lit: bool,
+        share: f64,
+        scratch: &mut MultipleScatteringScratch,
+    ) {
+        self.add_tilted_forward_peak_portable(weight, lit, share, scratch);
+    }
+
+    /// [`Self::add_tilted_forward_peak`] in the target's baseline
+    /// instructions.
+    #[inline(always)]
+    fn add_tilted_forward_peak_portable(
+        &self,
+        weight: f64,
+        lit: bool,
+        share: f64,
+        scratch: &mut MultipleScatteringScratch,
+    ) {
         let (w, s) = (self.wavelengths, self.species);
         // Optical depths, then (in place) transmittances: T* and T from the
         // eye, T*_sun and T_sun, per wavelength.
