@@ -79,6 +79,7 @@
 pub mod axes;
 mod files;
 mod lookup;
+mod march;
 
 pub use files::{MANIFEST_FILE, TABLE_FORMAT, check_output_directory};
 
@@ -207,6 +208,9 @@ pub struct EngineTables {
     aerial: Vec<[f32; 3]>,
     /// Diffuse horizontal irradiance, [a * S + s].
     irradiance: Vec<[f32; 3]>,
+    /// What the aerial-perspective march reads (`march.rs`; None for
+    /// single scattering, whose tables have no field).
+    march: Option<march::MarchTables>,
     /// What the tables were baked from (for the manifest).
     provenance: Provenance,
 }
@@ -430,6 +434,10 @@ impl EngineTables {
             transmittance,
             aerial: Vec::new(),
             irradiance: Vec::new(),
+            march: match &shared {
+                Some(shared) => Some(march::MarchTables::bake(sky, shared)?),
+                None => None,
+            },
             provenance: Provenance {
                 wavelengths_nm: sky.wavelengths().wavelengths_nm().collect(),
                 scattering: match sky.scattering() {
@@ -480,9 +488,11 @@ impl EngineTables {
         &self.aerial
     }
 
-    /// Bytes of the four tables as 32-bit XYZ (what a GPU holds).
+    /// Bytes of the tables as 32-bit floats (what a GPU holds): the four
+    /// XYZ tables and the aerial-perspective march's.
     pub fn size_bytes(&self) -> usize {
         12 * (self.sky.len() + self.aerial.len() + self.transmittance.len() + self.irradiance.len())
+            + self.march.as_ref().map_or(0, |m| m.size_bytes())
     }
 
     /// The aerial-perspective table from the segments' light `light`

@@ -1414,3 +1414,71 @@ fn aerial_march_prototype() {
         assert!(worst <= 0.02, "{worst}");
     }
 }
+
+/// The aerial-perspective march (`lookup.rs`, from the tables of
+/// `march.rs` baked from the field solved once for every sun) against the
+/// library's light of the air (`Sky::compute_segment_light`, the slow
+/// path: each sun's own sky and field, scalar light as the tables'), the
+/// issue's bar: suns 60, 10, 2 and -4 degrees, the views of
+/// [`aerial_test_segments`] (1-70 degrees up, 0-180 degrees from the
+/// sun), d = 1, 10 and 50 km, luminance within 2 % and xy within 0.005
+/// where the luminance is above 1e-3 of the largest. Presets by
+/// `SORA_MARCH_PRESETS` (comma-separated; earth-clear and earth-hazy by
+/// default); `--nocapture` prints the largest error per sun and distance.
+#[test]
+fn the_aerial_march_matches_the_library() {
+    let presets = std::env::var("SORA_MARCH_PRESETS").unwrap_or("earth-clear,earth-hazy".into());
+    let mut worst = (0.0f64, 0.0f64);
+    for preset in presets.split(',') {
+        let atmosphere = Atmosphere::preset(preset).unwrap();
+        let (any, _) = aerial_reference_sky(&atmosphere, 10.0);
+        let shared = any.solve_shared_field().unwrap().unwrap();
+        let tables = march::MarchTables::bake(&any, &shared).unwrap();
+        let (ground, _) = any.scene().radii_m();
+        let _ = ground;
+        let to_xyz = SpectrumToXyz::new(any.wavelengths(), Observer::default());
+        let xy = |c: [f64; 3]| {
+            let sum = c[0] + c[1] + c[2];
+            [c[0] / sum, c[1] / sum]
+        };
+        for sun_deg in [60.0, 10.0, 2.0, -4.0] {
+            let (sky, _) = aerial_reference_sky(&atmosphere, sun_deg);
+            let sun = crate::geometry::direction_from_elevation_azimuth(sun_deg, 180.0);
+            let sun = [sun.x, sun.y, sun.z];
+            for d in [1e3, 10e3, 50e3] {
+                let segments = aerial_test_segments(d);
+                let library = sky.compute_segment_light(&segments).unwrap();
+                let expected: Vec<[f64; 3]> = library
+                    .iter()
+                    .map(|(l, _)| {
+                        let c = to_xyz.to_xyz(&l.radiance_w_m2_sr_nm).unwrap();
+                        [c.x, c.y, c.z]
+                    })
+                    .collect();
+                let largest = expected.iter().map(|c| c[1]).fold(0.0, f64::max);
+                let (mut error, mut xy_error, mut at) = (0.0f64, 0.0f64, (0.0, 0.0));
+                for ((view, _), want) in segments.iter().zip(&expected) {
+                    if want[1] <= 1e-3 * largest {
+                        continue;
+                    }
+                    let v = view.to_vector();
+                    let (got, _) = tables.aerial_perspective_xyz(0.0, [v.x, v.y, v.z], sun, d);
+                    let e = (got[1] / want[1] - 1.0).abs();
+                    if e > error {
+                        error = e;
+                        at = (view.elevation_deg(), view.azimuth_deg() - 180.0);
+                    }
+                    let (a, b) = (xy(got), xy(*want));
+                    xy_error = xy_error.max((a[0] - b[0]).abs().max((a[1] - b[1]).abs()));
+                }
+                eprintln!(
+                    "{preset} sun {sun_deg} d {} km: largest luminance error {:.2} % at {at:?}, xy {xy_error:.4}",
+                    d / 1e3,
+                    100.0 * error
+                );
+                worst = (worst.0.max(error), worst.1.max(xy_error));
+            }
+        }
+    }
+    assert!(worst.0 <= 0.02 && worst.1 <= 0.005, "{worst:?}");
+}

@@ -591,6 +591,66 @@ impl MultipleScatteringTable {
         light
     }
 
+    /// What the engine tables' aerial-perspective march reads from this
+    /// table and its field (`engine_tables/march.rs`; a field solved for
+    /// every sun): the source ln R with its axes, the optics, the ground's
+    /// light, the peak beam and the forward-peak term's tables.
+    pub(crate) fn exported(&self) -> ExportedSource {
+        let optics = &self.field.optics;
+        let atmosphere = &self.field.atmosphere;
+        let (w, s) = (optics.wavelengths, optics.species);
+        let mut scattering = vec![0.0; w * s];
+        for (j, species) in atmosphere.species.iter().enumerate() {
+            for i in 0..w {
+                scattering[i * s + j] = species.scattering_per_m[i];
+            }
+        }
+        ExportedSource {
+            wavelengths: w,
+            species: s,
+            view_zenith_nodes: self.view_zenith_nodes,
+            azimuth_nodes: self.azimuth_nodes,
+            levels_m: optics.geometry.grid.altitudes_m().to_vec(),
+            sun_zenith_rad: optics.sun_axis.angles_rad.clone(),
+            log_source: self.values.as_ref().clone(),
+            extinction: optics.scaled.extinction.clone(),
+            scaled_extinction: optics.scaled.scaled_extinction.clone(),
+            scaled_scattering: optics.scaled.scaled_scattering.clone(),
+            scattering,
+            solar: atmosphere.solar_irradiance_w_m2_nm.values().to_vec(),
+            profiles: optics.geometry.profiles.clone(),
+            ground_diffuse: optics.ground_diffuse.clone(),
+            ground_direct: optics.ground_direct.clone(),
+            has_forward_peaks: optics.has_forward_peaks,
+            beam: optics
+                .peak_beam
+                .as_ref()
+                .filter(|_| optics.has_forward_peaks)
+                .map(|beam| beam.exported()),
+            kernel: optics.forward_peak.exported_kernel(),
+        }
+    }
+
+    /// The phase functions the march's single scattering (`exact`, p_j)
+    /// and its forward-peak term's first line (`smooth`, (1 - f) p*_j near
+    /// the sun, see `forward_peak.rs`) take at cos(theta) = `cos_theta`,
+    /// [j * wavelengths + i], sr^-1.
+    pub(crate) fn march_phases(&self, cos_theta: f64, exact: &mut [f64], smooth: &mut [f64]) {
+        let optics = &self.field.optics;
+        let w = optics.wavelengths;
+        for (j, species) in self.field.atmosphere.species.iter().enumerate() {
+            species
+                .phase_function
+                .eval_into(cos_theta, &mut exact[j * w..(j + 1) * w]);
+            optics.forward_peak.smooth_phase_into(
+                j,
+                &species.phase_function,
+                cos_theta,
+                &mut smooth[j * w..(j + 1) * w],
+            );
+        }
+    }
+
     /// ln R(x, view) at one march node, into `log_source`: quadrilinear
     /// in ln R.
     fn lookup_log_source(&self, node: NodeGeometry, log_source: &mut [f64]) {
@@ -639,4 +699,49 @@ pub(crate) struct SegmentMarch {
     pub(crate) scaled: Vec<f64>,
     pub(crate) scaled_sky: Vec<f64>,
     pub(crate) columns: Vec<f64>,
+}
+
+/// What the engine tables' march reads from a source table and its field
+/// ([`MultipleScatteringTable::exported`]), per wavelength i of the
+/// field's grid and species j.
+#[derive(Debug, Clone)]
+pub(crate) struct ExportedSource {
+    pub(crate) wavelengths: usize,
+    pub(crate) species: usize,
+    pub(crate) view_zenith_nodes: usize,
+    pub(crate) azimuth_nodes: usize,
+    /// The source's altitude levels, m, and sun zenith nodes, rad.
+    pub(crate) levels_m: Vec<f64>,
+    pub(crate) sun_zenith_rad: Vec<f64>,
+    /// ln R, [(((k * suns + s) * azimuth_nodes + f) * view_zenith_nodes +
+    /// v) * wavelengths + i] (views and azimuths uniform over 0..pi).
+    pub(crate) log_source: Vec<f32>,
+    /// Per unit relative density, m^-1, [i * species + j]: extinction,
+    /// delta-M scaled extinction and scattering, scattering.
+    pub(crate) extinction: Vec<f64>,
+    pub(crate) scaled_extinction: Vec<f64>,
+    pub(crate) scaled_scattering: Vec<f64>,
+    pub(crate) scattering: Vec<f64>,
+    /// Top-of-atmosphere solar irradiance, W m^-2 nm^-1.
+    pub(crate) solar: Vec<f64>,
+    pub(crate) profiles: Vec<crate::atmosphere::DensityProfile>,
+    /// The ground's light per sun node, [s * wavelengths + i], W m^-2
+    /// sr^-1 nm^-1 (`view_march.rs`).
+    pub(crate) ground_diffuse: Vec<f64>,
+    pub(crate) ground_direct: Vec<f64>,
+    pub(crate) has_forward_peaks: bool,
+    pub(crate) beam: Option<ExportedBeam>,
+    /// X nodes, angle nodes, (blend start, radius) rad, e^(-X) G.
+    pub(crate) kernel: (Vec<f64>, usize, (f64, f64), Vec<f64>),
+}
+
+/// The peak beam's table ([`super::peak_beam::PeakBeam::exported`]).
+#[derive(Debug, Clone)]
+pub(crate) struct ExportedBeam {
+    pub(crate) altitudes_m: Vec<f64>,
+    pub(crate) first_elevation_deg: f64,
+    pub(crate) step_deg: f64,
+    pub(crate) elevations: usize,
+    pub(crate) ln_beam: Vec<f64>,
+    pub(crate) range_deg: (f64, f64, f64),
 }
