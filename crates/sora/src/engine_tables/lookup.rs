@@ -447,14 +447,36 @@ impl EngineTables {
     /// Aerial perspective between an eye at `altitude_m` and the point at
     /// `distance_m` along the unit `view` (eye-local east-north-up), the
     /// sun toward the unit `sun`: (the light scattered into the segment,
-    /// XYZ radiance; the segment's transmittance, XYZ of the sun's
-    /// spectrum). The light is `S(x, v) R(x, v, d) w` per channel, S the
+    /// XYZ radiance; the segment's transmittance, XYZ of the transmitted
+    /// solar spectrum over XYZ of the solar spectrum per channel). Tables
+    /// of a multiply scattering sky march the segment
+    /// (`march.rs`, `MarchTables::aerial_perspective_xyz`: within 2 % of
+    /// the library at 1-50 km); others take
+    /// [`Self::aerial_perspective_by_ratio_xyz`].
+    pub fn aerial_perspective_xyz(
+        &self,
+        altitude_m: f64,
+        view: [f64; 3],
+        sun: [f64; 3],
+        distance_m: f64,
+    ) -> ([f64; 3], [f64; 3]) {
+        match &self.march {
+            Some(tables) => tables.aerial_perspective_xyz(altitude_m, view, sun, distance_m),
+            None => self.aerial_perspective_by_ratio_xyz(altitude_m, view, sun, distance_m),
+        }
+    }
+
+    /// Aerial perspective from the aerial-perspective ratio table (the
+    /// reference shaders' `soraAerialPerspective` reads it; the march is
+    /// not in them yet): (the light scattered into the segment, XYZ
+    /// radiance; the segment's transmittance, XYZ of the sun's spectrum)
+    /// as [`Self::aerial_perspective_xyz`] takes them. The light is `S(x, v) R(x, v, d) w` per channel, S the
     /// sky table's read at the eye, R the aerial-perspective table's and w
     /// the segment's share of the whole ray's extinction
     /// ((1 - T) / (1 - T_end), T_end to the ray's end; see the module docs of
     /// `engine_tables`); tables baked without an aerial-perspective table
     /// take [`Self::aerial_perspective_by_difference_xyz`].
-    pub fn aerial_perspective_xyz(
+    pub fn aerial_perspective_by_ratio_xyz(
         &self,
         altitude_m: f64,
         view: [f64; 3],

@@ -55,6 +55,35 @@ pub const SUN_COLUMN_NODES: (usize, usize) = (64, 512);
 /// Nodes of the phase tables in u = sqrt(theta / pi).
 pub const PHASE_NODES: usize = 1024;
 
+/// How the source is kept: every altitude level up to `dense_below_m`,
+/// every `level_stride`-th above (and the top), every `sun_stride`-th of
+/// the field's sun zenith nodes (and the last), ln R rounded to 16-bit
+/// floats where `half` (what `march.bin` holds).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SourceThinning {
+    pub level_stride: usize,
+    pub dense_below_m: f64,
+    pub sun_stride: usize,
+    pub half: bool,
+}
+
+/// The default [`SourceThinning`]: every level up to 6 km, every third
+/// above, every sun node, 16-bit floats. The field for every sun has 41
+/// levels (22-25 of them below 6 km on Earth) and 82 sun nodes; the
+/// source at all of them is 200 MB as 32-bit floats. Measured against the
+/// library (`docs/engine-tables.md`): every other level and sun node
+/// (27 MB) was 3.0 % off on earth-hazy at -4 degrees (the sun axis: 32-bit
+/// floats gave the same), every third level with every sun node 2.45 %
+/// (the levels near the ground: with all of them below 6 km the errors
+/// are those of every level), 16-bit floats changed no error by more than
+/// 0.02 points.
+pub const SOURCE_THINNING: SourceThinning = SourceThinning {
+    level_stride: 3,
+    dense_below_m: 6000.0,
+    sun_stride: 1,
+    half: true,
+};
+
 /// ln R at or below this is no light (as the library's march).
 pub const DARK_LOG_SOURCE: f64 = -46.0;
 
@@ -85,7 +114,17 @@ impl MarchTables {
     /// every sun (`shared`). An error when the field's wavelengths are not
     /// the sky's.
     pub(crate) fn bake(sky: &Sky, shared: &SharedField) -> Result<MarchTables> {
-        let source = shared.table().exported();
+        MarchTables::bake_with(sky, shared, SOURCE_THINNING)
+    }
+
+    /// [`MarchTables::bake`] with the source kept as `thinning` says (the
+    /// tests measure others than the default).
+    pub(crate) fn bake_with(
+        sky: &Sky,
+        shared: &SharedField,
+        thinning: SourceThinning,
+    ) -> Result<MarchTables> {
+        let source = thinned_source(shared.table().exported(), thinning);
         let n = sky.wavelengths().len();
         if source.wavelengths != n {
             return Err(Error::Unsupported(
@@ -111,8 +150,9 @@ impl MarchTables {
             }
         }
         let (a_count, m_count) = SUN_COLUMN_NODES;
+        // Altitude rows in parallel.
         let mut sun_columns = vec![0.0f32; a_count * m_count * species];
-        for a in 0..a_count {
+        crate::parallel::for_each_chunk_mut(&mut sun_columns, m_count * species, |a, row| {
             let r = ground + axes::altitude_of_node(a, a_count, thickness);
             for m in 0..m_count {
                 let mu = axes::transmittance_mu_of_node(m, m_count, r, ground)
@@ -120,10 +160,10 @@ impl MarchTables {
                 let direction = Vector3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
                 let columns = columns_to_top(&source, (ground, top), r, direction);
                 for (j, c) in columns.iter().enumerate() {
-                    sun_columns[(a * m_count + m) * species + j] = *c as f32;
+                    row[m * species + j] = *c as f32;
                 }
             }
-        }
+        });
         let mut phase = vec![0.0f32; species * PHASE_NODES * n];
         let mut smooth_phase = vec![0.0f32; species * PHASE_NODES * n];
         let (mut exact, mut smooth) = (vec![0.0; species * n], vec![0.0; species * n]);
@@ -155,17 +195,17 @@ impl MarchTables {
     pub fn size_bytes(&self) -> usize {
         let s = &self.source;
         let beam = s.beam.as_ref().map_or(0, |b| b.ln_beam.len());
-        4 * (s.log_source.len()
-            + self.density.len()
-            + self.sun_columns.len()
-            + self.phase.len()
-            + self.smooth_phase.len()
-            + s.kernel.3.len()
-            + beam
-            + s.ground_diffuse.len()
-            + s.ground_direct.len()
-            + 4 * s.extinction.len()
-            + 4 * s.wavelengths)
+        2 * s.log_source.len()
+            + 4 * (self.density.len()
+                + self.sun_columns.len()
+                + self.phase.len()
+                + self.smooth_phase.len()
+                + s.kernel.3.len()
+                + beam
+                + s.ground_diffuse.len()
+                + s.ground_direct.len()
+                + 4 * s.extinction.len()
+                + 4 * s.wavelengths)
     }
 
     /// The peak beam's table, if any.
@@ -205,4 +245,235 @@ fn columns_to_top(
         }
     }
     columns
+}
+
+/// One array of `march.bin`: its name, its values, its layout and unit.
+pub(crate) struct MarchArray {
+    pub(crate) name: &'static str,
+    pub(crate) values: Vec<f32>,
+    /// Stored as 16-bit floats (otherwise 32-bit).
+    pub(crate) half: bool,
+    pub(crate) layout: &'static str,
+    pub(crate) unit: &'static str,
+}
+
+impl MarchTables {
+    /// The arrays of `march.bin`, in file order (little-endian 32-bit
+    /// floats, one after another; the manifest gives each one's offset).
+    pub(crate) fn arrays(&self) -> Vec<MarchArray> {
+        let s = &self.source;
+        let f = |v: &[f64]| v.iter().map(|x| *x as f32).collect::<Vec<f32>>();
+        let beam = s.beam.as_ref();
+        let array = |name, values, layout, unit| MarchArray {
+            name,
+            values,
+            half: name == "log_source",
+            layout,
+            unit,
+        };
+        vec![
+            array("source_levels_m", f(&s.levels_m), "[k]", "m (altitude)"),
+            array("source_sun_zenith_rad", f(&s.sun_zenith_rad), "[s]", "rad"),
+            array(
+                "log_source",
+                s.log_source.clone(),
+                "[(((k * sun_nodes + s) * azimuth_nodes + f) * view_zenith_nodes + v) * wavelengths + i]; view zenith v uniform over 0..pi, azimuth from the sun f uniform over 0..pi",
+                "ln(W m^-2 sr^-1 nm^-1)",
+            ),
+            array(
+                "extinction",
+                f(&s.extinction),
+                "[i * species + j]",
+                "m^-1 per unit relative density",
+            ),
+            array(
+                "scaled_extinction",
+                f(&s.scaled_extinction),
+                "[i * species + j]",
+                "m^-1 per unit relative density (delta-M)",
+            ),
+            array(
+                "scaled_scattering",
+                f(&s.scaled_scattering),
+                "[i * species + j]",
+                "m^-1 per unit relative density (delta-M)",
+            ),
+            array(
+                "scattering",
+                f(&s.scattering),
+                "[i * species + j]",
+                "m^-1 per unit relative density",
+            ),
+            array("solar", f(&s.solar), "[i]", "W m^-2 nm^-1"),
+            array(
+                "xyz",
+                self.xyz.iter().flatten().map(|x| *x as f32).collect(),
+                "[i * 3 + c]",
+                "XYZ of a unit spike at wavelength i",
+            ),
+            array(
+                "density",
+                self.density.clone(),
+                "[n * species + j], altitude n H / (density_nodes - 1)",
+                "1 (relative density)",
+            ),
+            array(
+                "sun_columns",
+                self.sun_columns.clone(),
+                "[(a * M + m) * species + j] over the transmittance table's axes (a: axes.altitude with A nodes, m: axes.transmittance_mu with M nodes)",
+                "m",
+            ),
+            array(
+                "phase",
+                self.phase.clone(),
+                "[(j * phase_nodes + t) * wavelengths + i], theta = pi (t / (phase_nodes - 1))^2",
+                "sr^-1",
+            ),
+            array(
+                "smooth_phase",
+                self.smooth_phase.clone(),
+                "[(j * phase_nodes + t) * wavelengths + i], as phase",
+                "sr^-1",
+            ),
+            array("kernel_x", f(&s.kernel.0), "[x]", "1"),
+            array(
+                "kernel",
+                f(&s.kernel.3),
+                "[(x * kernel_angles + t) * wavelengths + i], theta = kernel_radius_rad (t / (kernel_angles - 1))^2 (empty: no peak)",
+                "sr^-1 (e^(-X) G)",
+            ),
+            array(
+                "beam_altitudes_m",
+                beam.map_or(Vec::new(), |b| f(&b.altitudes_m)),
+                "[a]",
+                "m",
+            ),
+            array(
+                "ln_beam",
+                beam.map_or(Vec::new(), |b| f(&b.ln_beam)),
+                "[(a * beam_elevations + e) * wavelengths + i], elevation beam_first_elevation_deg + e beam_step_deg",
+                "ln(1)",
+            ),
+            array(
+                "ground_diffuse",
+                f(&s.ground_diffuse),
+                "[s * wavelengths + i] on the source's sun nodes",
+                "W m^-2 sr^-1 nm^-1",
+            ),
+            array(
+                "ground_direct",
+                f(&s.ground_direct),
+                "[s * wavelengths + i] on the source's sun nodes",
+                "W m^-2 sr^-1 nm^-1",
+            ),
+        ]
+    }
+
+    /// The manifest's entry of `march.bin`: its counts, constants, arrays
+    /// (offset and length in floats, layout, unit).
+    pub(crate) fn manifest(&self) -> serde_json::Value {
+        let s = &self.source;
+        let mut offset = 0usize;
+        let mut arrays = serde_json::Map::new();
+        for a in self.arrays() {
+            arrays.insert(
+                a.name.into(),
+                serde_json::json!({
+                    "offset_bytes": offset,
+                    "length": a.values.len(),
+                    "type": if a.half { "f16" } else { "f32" },
+                    "layout": a.layout,
+                    "unit": a.unit,
+                }),
+            );
+            offset += a.values.len() * if a.half { 2 } else { 4 };
+        }
+        let beam = s.beam.as_ref();
+        serde_json::json!({
+            "file": "march.bin",
+            "format": "little-endian IEEE floats of each array's type (f16 or f32), the arrays one after another (offset in bytes, length in values)",
+            "wavelengths": s.wavelengths,
+            "species": s.species,
+            "sun_nodes": s.sun_zenith_rad.len(),
+            "view_zenith_nodes": s.view_zenith_nodes,
+            "azimuth_nodes": s.azimuth_nodes,
+            "density_nodes": DENSITY_NODES,
+            "sun_column_nodes": [SUN_COLUMN_NODES.0, SUN_COLUMN_NODES.1],
+            "phase_nodes": PHASE_NODES,
+            "kernel_angles": s.kernel.1,
+            "kernel_blend_start_rad": s.kernel.2.0,
+            "kernel_radius_rad": s.kernel.2.1,
+            "has_forward_peaks": s.has_forward_peaks,
+            "beam_first_elevation_deg": beam.map(|b| b.first_elevation_deg),
+            "beam_step_deg": beam.map(|b| b.step_deg),
+            "beam_elevations": beam.map(|b| b.elevations),
+            "beam_range_deg": beam.map(|b| [b.range_deg.0, b.range_deg.1, b.range_deg.2]),
+            "dark_log_source": DARK_LOG_SOURCE,
+            "march_steps": [MARCH_STEPS.0, MARCH_STEPS.1],
+            "arrays": arrays,
+        })
+    }
+}
+
+/// `source` kept as `thinning` says.
+fn thinned_source(source: ExportedSource, thinning: SourceThinning) -> ExportedSource {
+    let SourceThinning {
+        level_stride,
+        dense_below_m,
+        sun_stride,
+        half,
+    } = thinning;
+    let kept = |count: usize, stride: usize| -> Vec<usize> {
+        let mut nodes: Vec<usize> = (0..count).step_by(stride.max(1)).collect();
+        if nodes.last() != Some(&(count - 1)) {
+            nodes.push(count - 1);
+        }
+        nodes
+    };
+    // Every level up to the dense altitude, every level_stride-th above.
+    let count = source.levels_m.len();
+    let mut levels: Vec<usize> = Vec::new();
+    let mut since = level_stride;
+    for k in 0..count {
+        if source.levels_m[k] <= dense_below_m || since >= level_stride || k + 1 == count {
+            levels.push(k);
+            since = 1;
+        } else {
+            since += 1;
+        }
+    }
+    let suns_all = source.sun_zenith_rad.len();
+    let suns = kept(suns_all, sun_stride);
+    let block = source.azimuth_nodes * source.view_zenith_nodes * source.wavelengths;
+    let mut log_source = Vec::with_capacity(levels.len() * suns.len() * block);
+    for k in &levels {
+        for s in &suns {
+            let at = (k * suns_all + s) * block;
+            log_source.extend(source.log_source[at..at + block].iter().map(|v| {
+                if half {
+                    exr::prelude::f16::from_f32(*v).to_f32()
+                } else {
+                    *v
+                }
+            }));
+        }
+    }
+    ExportedSource {
+        levels_m: levels.iter().map(|k| source.levels_m[*k]).collect(),
+        sun_zenith_rad: suns.iter().map(|s| source.sun_zenith_rad[*s]).collect(),
+        ground_diffuse: suns
+            .iter()
+            .flat_map(|s| {
+                source.ground_diffuse[s * source.wavelengths..][..source.wavelengths].to_vec()
+            })
+            .collect(),
+        ground_direct: suns
+            .iter()
+            .flat_map(|s| {
+                source.ground_direct[s * source.wavelengths..][..source.wavelengths].to_vec()
+            })
+            .collect(),
+        log_source,
+        ..source
+    }
 }

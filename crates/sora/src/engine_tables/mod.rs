@@ -4,9 +4,10 @@
 //! atmosphere, by table reads only (`docs/engine-tables.md`, the reference
 //! shaders in `web/shaders/`).
 //!
-//! Four tables, all CIE XYZ (1.0 = the XYZ of a flat spectrum of 1 in the
+//! Four tables in CIE XYZ (1.0 = the XYZ of a flat spectrum of 1 in the
 //! quantity's unit, as `sora render --units radiance` writes; the shader
-//! converts to linear sRGB with the manifest's matrix):
+//! converts to linear sRGB with the manifest's matrix), and the
+//! aerial-perspective march's spectral tables:
 //! - **sky**: the sky radiance (W m^-2 sr^-1 nm^-1 XYZ) seen by an eye at
 //!   altitude h toward zenith angle z and azimuth phi from the sun's, with
 //!   the sun at elevation e: 4D, as layers (e, h) of 2D images (z, phi).
@@ -49,6 +50,17 @@
 //!   cancels for short segments (11-124 % off at 1 km against 9-11 % from
 //!   the table; `docs/engine-tables.md`); it is what tables baked without
 //!   the aerial table (`aerial_nodes` (0, 0, 0), the default) give.
+//! - **march** (multiple scattering, `march` in the settings; `march.rs`):
+//!   what a per-pixel march of
+//!   the segment reads to give the library's light of the air within 2 %
+//!   at 1-50 km: the field's source R per wavelength over its altitude
+//!   levels, sun zenith nodes and the view's zenith and azimuth, the
+//!   species' optics and densities, their columns toward the sun, the
+//!   phase functions, the forward-peak term's tables and the ground's
+//!   light, from the field solved once for every sun.
+//!   `EngineTables::aerial_perspective_xyz` marches them when present
+//!   (`lookup.rs`); the reference shaders read the aerial table or the
+//!   difference (the march is not in them yet).
 //!
 //! Why not Bruneton's parametrisation: his 4D scattering table is indexed
 //! by (r, mu, mu_s, nu) with a single mu axis over the ground and the sky
@@ -107,6 +119,10 @@ pub struct EngineTableSettings {
     /// sky table's); (0, 0, 0) for none (the aerial perspective is then
     /// the sky table's difference, see `lookup.rs`).
     pub aerial_nodes: (usize, usize, usize),
+    /// Whether to bake the aerial-perspective march's tables (`march.rs`;
+    /// multiple scattering only). Off by default: within 2 % of the
+    /// library, but 64-72 MB on their own (`docs/engine-tables.md`).
+    pub march: bool,
 }
 
 impl Default for EngineTableSettings {
@@ -121,6 +137,7 @@ impl Default for EngineTableSettings {
             // within 2 % of the library and triples the bake
             // (`docs/engine-tables.md`); `sora tables --aerial-*-nodes`.
             aerial_nodes: (0, 0, 0),
+            march: false,
         }
     }
 }
@@ -435,8 +452,8 @@ impl EngineTables {
             aerial: Vec::new(),
             irradiance: Vec::new(),
             march: match &shared {
-                Some(shared) => Some(march::MarchTables::bake(sky, shared)?),
-                None => None,
+                Some(shared) if settings.march => Some(march::MarchTables::bake(sky, shared)?),
+                _ => None,
             },
             provenance: Provenance {
                 wavelengths_nm: sky.wavelengths().wavelengths_nm().collect(),

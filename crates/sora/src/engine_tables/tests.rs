@@ -33,6 +33,7 @@ fn small_settings() -> EngineTableSettings {
         azimuth_nodes: 9,
         transmittance_nodes: (8, 32),
         aerial_nodes: (6, 5, 4),
+        march: false,
     }
 }
 
@@ -190,15 +191,15 @@ fn aerial_perspective_vanishes_near_the_eye_and_becomes_the_sky_far_away() {
         LocalView::from_vectors(view, [0.0, 0.0, 1.0], sun),
         10.0,
     );
-    let (zero, t_zero) = tables.aerial_perspective_xyz(0.0, view, sun, 0.0);
+    let (zero, t_zero) = tables.aerial_perspective_by_ratio_xyz(0.0, view, sun, 0.0);
     assert_eq!((zero, t_zero[1]), ([0.0; 3], 1.0));
     // At 1 m the difference of two table reads leaves what the
     // horizon-relative zenith axis moves between them (the docs' near
     // limit), well under a per cent of the sky.
-    let (near, t_near) = tables.aerial_perspective_xyz(0.0, view, sun, 1.0);
+    let (near, t_near) = tables.aerial_perspective_by_ratio_xyz(0.0, view, sun, 1.0);
     eprintln!("1 m: {:.3e} of the sky", near[1] / sky[1]);
     assert!(near[1] < 5e-3 * sky[1], "{near:?} {sky:?}");
-    let (far, t_far) = tables.aerial_perspective_xyz(0.0, view, sun, 1e6);
+    let (far, t_far) = tables.aerial_perspective_by_ratio_xyz(0.0, view, sun, 1e6);
     assert!((far[1] / sky[1] - 1.0).abs() < 1e-3, "{far:?} {sky:?}");
     // The ray leaves the atmosphere: the segment's transmittance is the
     // whole ray's.
@@ -207,7 +208,7 @@ fn aerial_perspective_vanishes_near_the_eye_and_becomes_the_sky_far_away() {
         (t_far[1] / whole[1] - 1.0).abs() < 1e-9,
         "{t_far:?} {whole:?}"
     );
-    let (mid, t_mid) = tables.aerial_perspective_xyz(0.0, view, sun, 20e3);
+    let (mid, t_mid) = tables.aerial_perspective_by_ratio_xyz(0.0, view, sun, 20e3);
     assert!(mid[1] > near[1] && mid[1] < far[1] && t_mid[1] < t_near[1]);
 }
 
@@ -318,6 +319,7 @@ fn the_shared_field_bake_is_the_per_layer_bake() {
         azimuth_nodes: 5,
         transmittance_nodes: (4, 8),
         aerial_nodes: (4, 4, 3),
+        march: false,
     };
     let fast = EngineTables::bake_with(
         &sky,
@@ -444,6 +446,7 @@ fn the_ground_layers_do_not_depend_on_the_altitude_nodes() {
             azimuth_nodes: 5,
             transmittance_nodes: (4, 8),
             aerial_nodes: (4, 4, 3),
+            march: false,
         };
         EngineTables::bake(&sky, &settings, &|_| {}).unwrap()
     };
@@ -706,7 +709,11 @@ fn at_the_nodes_the_aerial_perspective_is_the_library_s() {
                     for j in 0..distances - usize::from(row < half) {
                         let d = axes::distance_of_node(j, distances, range);
                         segments.push((view, d));
-                        lookups.push(tables.aerial_perspective_xyz(altitude, v, sun, d).0);
+                        lookups.push(
+                            tables
+                                .aerial_perspective_by_ratio_xyz(altitude, v, sun, d)
+                                .0,
+                        );
                     }
                 }
             }
@@ -795,7 +802,7 @@ fn the_aerial_perspective_matches_the_library() {
                         continue;
                     }
                     let got = if method == 0 {
-                        tables.aerial_perspective_xyz(0.0, *v, sun, d).0
+                        tables.aerial_perspective_by_ratio_xyz(0.0, *v, sun, d).0
                     } else {
                         tables
                             .aerial_perspective_by_difference_xyz(0.0, *v, sun, d)
@@ -1421,7 +1428,7 @@ fn aerial_march_prototype() {
 /// path: each sun's own sky and field, scalar light as the tables'), the
 /// issue's bar: suns 60, 10, 2 and -4 degrees, the views of
 /// [`aerial_test_segments`] (1-70 degrees up, 0-180 degrees from the
-/// sun), d = 1, 10 and 50 km, luminance within 2 % and xy within 0.005
+/// sun), d = 1, 10 and 50 km (and 1 m), luminance within 2 % and xy within 0.005
 /// where the luminance is above 1e-3 of the largest. Presets by
 /// `SORA_MARCH_PRESETS` (comma-separated; earth-clear and earth-hazy by
 /// default); `--nocapture` prints the largest error per sun and distance.
@@ -1433,9 +1440,37 @@ fn the_aerial_march_matches_the_library() {
         let atmosphere = Atmosphere::preset(preset).unwrap();
         let (any, _) = aerial_reference_sky(&atmosphere, 10.0);
         let shared = any.solve_shared_field().unwrap().unwrap();
-        let tables = march::MarchTables::bake(&any, &shared).unwrap();
-        let (ground, _) = any.scene().radii_m();
-        let _ = ground;
+        // SORA_MARCH_SOURCE=LEVEL_STRIDE,DENSE_KM,SUN_STRIDE,HALF (e.g.
+        // 2,0,2,0) measures other thinnings of the source than the
+        // default, in 32-bit floats where HALF is 0.
+        let thinning = std::env::var("SORA_MARCH_SOURCE").map_or(march::SOURCE_THINNING, |v| {
+            let n: Vec<f64> = v.split(',').map(|n| n.parse().unwrap()).collect();
+            march::SourceThinning {
+                level_stride: n[0] as usize,
+                dense_below_m: n[1] * 1e3,
+                sun_stride: n[2] as usize,
+                half: n[3] != 0.0,
+            }
+        });
+        let tables = march::MarchTables::bake_with(&any, &shared, thinning).unwrap();
+        eprintln!(
+            "levels (km): {:?}",
+            tables
+                .source
+                .levels_m
+                .iter()
+                .map(|z| (z / 100.0).round() / 10.0)
+                .collect::<Vec<_>>()
+        );
+        eprintln!(
+            "{preset}: the march's tables {:.1} MB (source: {} levels, {} suns, {} x {} views, {} wavelengths)",
+            tables.size_bytes() as f64 / 1e6,
+            tables.source.levels_m.len(),
+            tables.source.sun_zenith_rad.len(),
+            tables.source.view_zenith_nodes,
+            tables.source.azimuth_nodes,
+            tables.source.wavelengths
+        );
         let to_xyz = SpectrumToXyz::new(any.wavelengths(), Observer::default());
         let xy = |c: [f64; 3]| {
             let sum = c[0] + c[1] + c[2];
@@ -1445,7 +1480,7 @@ fn the_aerial_march_matches_the_library() {
             let (sky, _) = aerial_reference_sky(&atmosphere, sun_deg);
             let sun = crate::geometry::direction_from_elevation_azimuth(sun_deg, 180.0);
             let sun = [sun.x, sun.y, sun.z];
-            for d in [1e3, 10e3, 50e3] {
+            for d in [1.0, 1e3, 10e3, 50e3] {
                 let segments = aerial_test_segments(d);
                 let library = sky.compute_segment_light(&segments).unwrap();
                 let expected: Vec<[f64; 3]> = library
@@ -1463,6 +1498,11 @@ fn the_aerial_march_matches_the_library() {
                     }
                     let v = view.to_vector();
                     let (got, _) = tables.aerial_perspective_xyz(0.0, [v.x, v.y, v.z], sun, d);
+                    if d == 1.0 {
+                        let (zero, t_zero) =
+                            tables.aerial_perspective_xyz(0.0, [v.x, v.y, v.z], sun, 0.0);
+                        assert_eq!((zero, t_zero), ([0.0; 3], [1.0; 3]));
+                    }
                     let e = (got[1] / want[1] - 1.0).abs();
                     if e > error {
                         error = e;
