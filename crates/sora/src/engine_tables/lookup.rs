@@ -28,7 +28,11 @@
 //! - Sun disc: `E_sun T(h, mu_sun) (1 - u (1 - cos a)) / (pi alpha^2 (1 - u / 3))`
 //!   within the sun's angular radius alpha, with cos a = sqrt(1 - (gamma
 //!   / alpha)^2) (limb darkening u = 0.6, as `sky/sun_disc.rs`).
-//! - Aerial perspective: `S(x, v) R(x, v, d) w` per channel, S the sky
+//! - Aerial perspective, tables with the march's (`march.rs`): the
+//!   segment marched per wavelength from the field's source and the
+//!   optics, as the library composes a segment's light
+//!   (`MarchTables::aerial_perspective_xyz`; not in the shaders yet).
+//!   Otherwise (the shaders' lookup): `S(x, v) R(x, v, d) w` per channel, S the sky
 //!   read at the eye, R the aerial table read as the sky table (its own
 //!   view nodes) and linear in ln d between its two distance slices (d
 //!   from the thickness / 1000 to the ray's end), w = (1 - T) / (1 -
