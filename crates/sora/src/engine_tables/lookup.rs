@@ -778,9 +778,9 @@ impl MarchTables {
         let (mut rows_forward, mut rows_behind) = (vec![0.0; rows * w], vec![0.0; rows * w]);
         for i in 0..w {
             let (mut tau, mut tau_scaled) = (0.0, 0.0);
-            for j in 0..s {
-                tau += src.extinction[i * s + j] * columns_segment[j];
-                tau_scaled += src.scaled_extinction[i * s + j] * columns_segment[j];
+            for (j, column) in columns_segment.iter().enumerate() {
+                tau += src.extinction[i * s + j] * column;
+                tau_scaled += src.scaled_extinction[i * s + j] * column;
             }
             transmitted[i] = src.solar[i] * (-tau).exp();
             let (share, depth) = (1.0 - (tau_scaled - tau).exp(), tau - tau_scaled);

@@ -561,14 +561,14 @@ impl MultipleScatteringTable {
         let mut light = vec![0.0; w];
         let mut forward = vec![0.0; parts.forward.len()];
         let mut behind = vec![0.0; parts.forward.len()];
-        for i in 0..w {
+        for (i, l) in light.iter_mut().enumerate() {
             let (mut tau, mut tau_scaled) = (0.0, 0.0);
-            for j in 0..s {
-                tau += scaled.extinction[i * s + j] * parts.columns[j];
-                tau_scaled += scaled.scaled_extinction[i * s + j] * parts.columns[j];
+            for (j, column) in parts.columns.iter().enumerate() {
+                tau += scaled.extinction[i * s + j] * column;
+                tau_scaled += scaled.scaled_extinction[i * s + j] * column;
             }
             let (share, depth) = (1.0 - (tau_scaled - tau).exp(), tau - tau_scaled);
-            light[i] = parts.field[i] + share * parts.field_behind[i];
+            *l = parts.field[i] + share * parts.field_behind[i];
             for j in 0..s {
                 let k = j * w + i;
                 forward[k] = parts.forward[k] + share * (parts.scaled_sky[k] - parts.scaled[k]);
@@ -585,8 +585,8 @@ impl MultipleScatteringTable {
             .compute_forward_peak_radiance(cos_theta, &forward, &mut phase, &mut peak);
         self.field
             .compute_forward_peak_radiance(cos_theta, &behind, &mut phase, &mut hidden);
-        for i in 0..w {
-            light[i] += peak[i] - hidden[i];
+        for ((l, p), h) in light.iter_mut().zip(&peak).zip(&hidden) {
+            *l += p - h;
         }
         light
     }
