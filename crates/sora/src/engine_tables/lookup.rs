@@ -45,6 +45,7 @@ use super::march::{
     DARK_LOG_SOURCE, DENSITY_NODES, MARCH_STEPS, MarchTables, PHASE_NODES, SUN_COLUMN_NODES,
 };
 use crate::geometry::{Vector3, segment_in_atmosphere};
+use crate::transport::multiple_scattering::interpolate_log_source;
 
 /// Smallest value the sun axis's geometric interpolation takes the
 /// logarithm of (XYZ in W m^-2 sr^-1 nm^-1 units).
@@ -866,33 +867,20 @@ impl MarchTables {
         out: &mut [f64],
     ) {
         let src = &self.source;
-        let w = src.wavelengths;
-        let suns = src.sun_zenith_rad.len();
-        let (views, azimuths) = (src.view_zenith_nodes, src.azimuth_nodes);
-        let (k, tz) = locate(&src.levels_m, altitude_m);
-        let (s, ts) = self.locate_sun(sun_cosine);
-        let y = view_cosine.clamp(-1.0, 1.0).acos() / std::f64::consts::PI * (views - 1) as f64;
-        let v = (y as usize).min(views - 2);
-        let tv = y - v as f64;
-        let x = cos_azimuth.clamp(-1.0, 1.0).acos() / std::f64::consts::PI * (azimuths - 1) as f64;
-        let f = (x as usize).min(azimuths - 2);
-        let tf = x - f as f64;
-        out.fill(0.0);
-        for (kk, wk) in [(k, 1.0 - tz), (k + 1, tz)] {
-            for (ss, ws) in [(s, 1.0 - ts), (s + 1, ts)] {
-                for (ff, wf) in [(f, 1.0 - tf), (f + 1, tf)] {
-                    let node = ((kk * suns + ss) * azimuths + ff) * views + v;
-                    let (low, high) = src.log_source[node * w..(node + 2) * w].split_at(w);
-                    let (a, b) = (
-                        (wk * ws * wf * (1.0 - tv)) as f32,
-                        (wk * ws * wf * tv) as f32,
-                    );
-                    for ((o, l), h) in out.iter_mut().zip(low).zip(high) {
-                        *o += (a * l + b * h) as f64;
-                    }
-                }
-            }
-        }
+        interpolate_log_source(
+            &src.log_source,
+            (
+                src.sun_zenith_rad.len(),
+                src.azimuth_nodes,
+                src.view_zenith_nodes,
+            ),
+            (
+                locate(&src.levels_m, altitude_m),
+                self.locate_sun(sun_cosine),
+            ),
+            (view_cosine, cos_azimuth),
+            out,
+        );
     }
 
     /// The sun zenith cell of a sun cosine: (node, fraction), linear in

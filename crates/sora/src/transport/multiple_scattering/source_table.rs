@@ -655,33 +655,20 @@ impl MultipleScatteringTable {
     /// in ln R.
     fn lookup_log_source(&self, node: NodeGeometry, log_source: &mut [f64]) {
         let optics = &self.field.optics;
-        let w = optics.wavelengths;
-        let suns = optics.sun_axis.count();
-        let (views, azimuths) = (self.view_zenith_nodes, self.azimuth_nodes);
-        let (k, tz) = self.field.optics.geometry.grid.locate(node.altitude_m);
-        let (s, ts) = optics.sun_axis.locate(node.sun_cosine);
-        let y = node.view_cosine.acos() / PI * (views - 1) as f64;
-        let v = (y as usize).min(views - 2);
-        let tv = y - v as f64;
-        let x = node.cos_azimuth.acos() / PI * (azimuths - 1) as f64;
-        let f = (x as usize).min(azimuths - 2);
-        let tf = x - f as f64;
-        log_source.fill(0.0);
-        for (kk, wk) in [(k, 1.0 - tz), (k + 1, tz)] {
-            for (ss, ws) in [(s, 1.0 - ts), (s + 1, ts)] {
-                for (ff, wf) in [(f, 1.0 - tf), (f + 1, tf)] {
-                    let node = ((kk * suns + ss) * azimuths + ff) * views + v;
-                    let (low, high) = self.values[node * w..(node + 2) * w].split_at(w);
-                    let (a, b) = (
-                        (wk * ws * wf * (1.0 - tv)) as f32,
-                        (wk * ws * wf * tv) as f32,
-                    );
-                    for ((out, l), h) in log_source.iter_mut().zip(low).zip(high) {
-                        *out += (a * l + b * h) as f64;
-                    }
-                }
-            }
-        }
+        interpolate_log_source(
+            &self.values,
+            (
+                optics.sun_axis.count(),
+                self.azimuth_nodes,
+                self.view_zenith_nodes,
+            ),
+            (
+                optics.geometry.grid.locate(node.altitude_m),
+                optics.sun_axis.locate(node.sun_cosine),
+            ),
+            (node.view_cosine, node.cos_azimuth),
+            log_source,
+        );
     }
 }
 
@@ -699,6 +686,45 @@ pub(crate) struct SegmentMarch {
     pub(crate) scaled: Vec<f64>,
     pub(crate) scaled_sky: Vec<f64>,
     pub(crate) columns: Vec<f64>,
+}
+
+/// ln R at one node from a source table's values `values` (ln R,
+/// [(((k * suns + s) * azimuths + f) * views + v) * wavelengths + i],
+/// views and azimuths uniform over 0..pi), quadrilinear in ln R: the
+/// altitude and sun cells (node, fraction) given, the view's zenith
+/// cosine and the cosine of its azimuth from the sun located here; into
+/// `out` (one value per wavelength). The library's march and the engine
+/// tables' (`engine_tables/lookup.rs`) read the table by it.
+pub(crate) fn interpolate_log_source(
+    values: &[f32],
+    (suns, azimuths, views): (usize, usize, usize),
+    ((k, tz), (s, ts)): ((usize, f64), (usize, f64)),
+    (view_cosine, cos_azimuth): (f64, f64),
+    out: &mut [f64],
+) {
+    let w = out.len();
+    let y = view_cosine.clamp(-1.0, 1.0).acos() / PI * (views - 1) as f64;
+    let v = (y as usize).min(views - 2);
+    let tv = y - v as f64;
+    let x = cos_azimuth.clamp(-1.0, 1.0).acos() / PI * (azimuths - 1) as f64;
+    let f = (x as usize).min(azimuths - 2);
+    let tf = x - f as f64;
+    out.fill(0.0);
+    for (kk, wk) in [(k, 1.0 - tz), (k + 1, tz)] {
+        for (ss, ws) in [(s, 1.0 - ts), (s + 1, ts)] {
+            for (ff, wf) in [(f, 1.0 - tf), (f + 1, tf)] {
+                let node = ((kk * suns + ss) * azimuths + ff) * views + v;
+                let (low, high) = values[node * w..(node + 2) * w].split_at(w);
+                let (a, b) = (
+                    (wk * ws * wf * (1.0 - tv)) as f32,
+                    (wk * ws * wf * tv) as f32,
+                );
+                for ((o, l), h) in out.iter_mut().zip(low).zip(high) {
+                    *o += (a * l + b * h) as f64;
+                }
+            }
+        }
+    }
 }
 
 /// What the engine tables' march reads from a source table and its field
