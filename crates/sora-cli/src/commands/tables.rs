@@ -125,7 +125,7 @@ pub fn run(args: TablesArgs) -> anyhow::Result<()> {
     let baked = start.elapsed().as_secs_f64();
     tables.write(&args.output)?;
     eprintln!(
-        "baked the tables in {baked:.2} s ({:.1} MB as 32-bit XYZ), wrote {}",
+        "baked the tables in {baked:.2} s ({:.1} MB as a GPU holds them), wrote {}",
         tables.size_bytes() as f64 / 1e6,
         args.output.display()
     );
