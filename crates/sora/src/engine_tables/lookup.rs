@@ -867,6 +867,8 @@ impl MarchTables {
         out: &mut [f64],
     ) {
         let src = &self.source;
+        let kept = &self.source_wavelengths;
+        let mut channels = vec![0.0; kept.len()];
         interpolate_log_source(
             &src.log_source,
             (
@@ -879,8 +881,19 @@ impl MarchTables {
                 self.locate_sun(sun_cosine),
             ),
             (view_cosine, cos_azimuth),
-            out,
+            &mut channels,
         );
+        // Linear in the wavelength's index between the kept ones.
+        for pair in 0..kept.len().saturating_sub(1) {
+            let (a, b) = (kept[pair], kept[pair + 1]);
+            for (i, o) in out.iter_mut().enumerate().take(b + 1).skip(a) {
+                let t = (i - a) as f64 / (b - a) as f64;
+                *o = channels[pair] + t * (channels[pair + 1] - channels[pair]);
+            }
+        }
+        if kept.len() == 1 {
+            out.fill(channels[0]);
+        }
     }
 
     /// The sun zenith cell of a sun cosine: (node, fraction), linear in

@@ -121,7 +121,9 @@ pub struct EngineTableSettings {
     pub aerial_nodes: (usize, usize, usize),
     /// Whether to bake the aerial-perspective march's tables (`march.rs`;
     /// multiple scattering only). Off by default: within 2 % of the
-    /// library, but 64-72 MB on their own (`docs/engine-tables.md`).
+    /// library, 34-38 MB (with the sky table's 28 MB, earth-hazy's are
+    /// over 64 MB), and the shaders do not read them yet
+    /// (`docs/engine-tables.md`).
     pub march: bool,
 }
 

@@ -1440,8 +1440,8 @@ fn the_aerial_march_matches_the_library() {
         let atmosphere = Atmosphere::preset(preset).unwrap();
         let (any, _) = aerial_reference_sky(&atmosphere, 10.0);
         let shared = any.solve_shared_field().unwrap().unwrap();
-        // SORA_MARCH_SOURCE=LEVEL_STRIDE,DENSE_KM,SUN_STRIDE,HALF (e.g.
-        // 2,0,2,0) measures other thinnings of the source than the
+        // SORA_MARCH_SOURCE=LEVEL_STRIDE,DENSE_KM,SUN_STRIDE,HALF[,WAVELENGTH_STRIDE]
+        // (e.g. 2,0,2,0) measures other thinnings of the source than the
         // default, in 32-bit floats where HALF is 0.
         let thinning = std::env::var("SORA_MARCH_SOURCE").map_or(march::SOURCE_THINNING, |v| {
             let n: Vec<f64> = v.split(',').map(|n| n.parse().unwrap()).collect();
@@ -1450,6 +1450,7 @@ fn the_aerial_march_matches_the_library() {
                 dense_below_m: n[1] * 1e3,
                 sun_stride: n[2] as usize,
                 half: n[3] != 0.0,
+                wavelength_stride: n.get(4).map_or(1, |s| *s as usize),
             }
         });
         let tables = march::MarchTables::bake_with(&any, &shared, thinning).unwrap();
