@@ -522,6 +522,8 @@ pub const REALTIME_TABLES: RealtimeTables = RealtimeTables {
         // segments): the scene view takes the sky table's difference
         // (`soraAerialPerspectiveFromSky`).
         aerial_nodes: (0, 0, 0),
+        // Nor the march's tables (34-38 MB; the shaders do not march yet).
+        march: false,
     },
 };
 

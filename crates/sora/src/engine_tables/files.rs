@@ -137,6 +137,27 @@ impl EngineTables {
             &[],
             options,
         )?;
+        if let Some(march) = &self.march {
+            let path = directory.join("march.bin");
+            let shown = path.display().to_string();
+            files.stage(&path, |file| {
+                use std::io::Write;
+                let mut bytes = Vec::with_capacity(march.size_bytes());
+                for array in march.arrays() {
+                    for v in array.values {
+                        if array.half {
+                            bytes.extend_from_slice(&exr::prelude::f16::from_f32(v).to_le_bytes());
+                        } else {
+                            bytes.extend_from_slice(&v.to_le_bytes());
+                        }
+                    }
+                }
+                file.write_all(&bytes).map_err(|error| Error::Io {
+                    path: shown.clone(),
+                    message: format!("cannot write: {error}"),
+                })
+            })?;
+        }
         let manifest = serde_json::to_string_pretty(&self.manifest()).map_err(|error| {
             Error::Unsupported(format!("the manifest does not serialise: {error}"))
         })?;
@@ -225,6 +246,10 @@ impl EngineTables {
                 "aerial_perspective": "eye x (radius r), point p = x + d v; T(x,p) = T(r, mu) / T(r_p, mu_p), or T(r_p, -mu_p) / T(r, -mu) when v meets the ground (each channel, at most 1); T_end = T(x, x + l v) (l the ray's length, axes.distance); w = clamp((1 - T) / (1 - T_end), 0, 1), 1 where 1 - T_end <= 1e-9; in-scattered = S(x, v) R(x, v, d) w per channel, S the sky lookup at the eye and R the aerial table read as the sky table (the same cells, turned views and sun blend, its own zenith and azimuth node counts), linear in the distance coordinate j between the slices j and j+1 of each layer",
             },
         });
+        if let Some(march) = &self.march {
+            manifest["tables"]["march"] = march.manifest();
+            manifest["lookup"]["aerial_perspective_march"] = MARCH_LOOKUP.into();
+        }
         if self.aerial.is_empty() {
             manifest["tables"]
                 .as_object_mut()
@@ -234,3 +259,6 @@ impl EngineTables {
         manifest
     }
 }
+
+/// The march's lookup formula (`lookup.rs`, `MarchTables::aerial_perspective_xyz`), as the manifest states it.
+const MARCH_LOOKUP: &str = "tables.march (march.bin), per wavelength i, species j: eye at radius r on the z axis, view v, sun s (unit, cos theta = v.s); the ray inside the atmosphere from enter to exit, the segment's length l = min(d, exit) - enter, beyond it b = exit - enter - l. Nodes: march_steps[0] along the segment at s_k = u^2 l, weight 2 u l / N (u = (k + 0.5) / N), then march_steps[1] from the point at l + u^2 b, weight 2 u b / N'. At each node x (altitude h, local view cosine, sun cosine mu_s, azimuth from the sun): rho_j from density (linear), columns c_j from the eye by trapezoids (the segment's closed at s = l), C_j toward the sun from sun_columns (bilinear over the transmittance axes; none, unlit, when mu_s < mu_h(x)), ln R quadrilinear from log_source at its channels (levels and sun zenith nodes located linearly in altitude and angle), linear in the wavelength's index between the channels' wavelengths (source_wavelength_indices); R = 0 at or below dark_log_source. tau = sum extinction c, tau* = sum scaled_extinction c, tau_sun, tau*_sun likewise with C; T = e^-tau etc. Single (segment nodes, lit): S += w E sum_j scattering_j phase_j(theta) rho_j T T_sun. Field: F (segment) or F_b (beyond) += w sum_j scaled_scattering_j rho_j R T*. Peak integrals (has_forward_peaks): with the peak beam B (ln_beam bilinear in altitude and elevation e = asin(mu_s); share a = min((e3 - e) / (e3 - e2), 1) for e in [e1, e3) of beam_range_deg, else 0) and Sb = T*_sun - T_sun, Sc = Sb + a (B - Sb) (T*_sun = T_sun = 0 unlit): rows I_j += w rho_j (T* Sc + T_sun (T* - T)), scaled I*_j += w rho_j T* (Sc + T_sun), and where lit and T*_sun > 0: Q += q, QX += q X with q = w T T_sun (sum_j (extinction_j - scaled_extinction_j) rho_j) (T_sun + Sc) / T*_sun, X = (tau + tau_sun) - (tau* + tau*_sun). Gather the segment's (I, I*, Q, QX, c) at s = l and the whole ray's at the end. Then with the segment's T, T*: share = 1 - T / T*, depth = ln(T* / T); rows_j = I_j,seg + share (I*_j,ray - I*_j,seg), Q = Q_ray, QX = QX_ray; behind: Q_b = Q_ray - Q_seg, QX_b = QX_ray - QX_seg - depth Q_b; P(rows) = E sum_j scattering_j smooth_phase_j(theta) rows_j + (1 - wide) E Q K(theta, X) e^X within kernel_radius_rad (X = clamp(QX / Q, 0, last kernel_x), K bilinear in kernel_x and t = sqrt(theta / kernel_radius_rad) (kernel_angles - 1), wide = clamp((theta - kernel_blend_start_rad) / (kernel_radius_rad - kernel_blend_start_rad), 0, 1)). L_air = S + F + share (F_b + G) + P(rows) - P(behind), G = T*_ray (ground_diffuse + ground_direct) where the ray ends on the ground (geometric in the sun zenith node at the ground point); in-scattered XYZ = sum_i L_air xyz_i; transmittance XYZ = sum_i E_i T_i xyz_i / sum_i E_i xyz_i per channel.";

@@ -28,7 +28,11 @@
 //! - Sun disc: `E_sun T(h, mu_sun) (1 - u (1 - cos a)) / (pi alpha^2 (1 - u / 3))`
 //!   within the sun's angular radius alpha, with cos a = sqrt(1 - (gamma
 //!   / alpha)^2) (limb darkening u = 0.6, as `sky/sun_disc.rs`).
-//! - Aerial perspective: `S(x, v) R(x, v, d) w` per channel, S the sky
+//! - Aerial perspective, tables with the march's (`march.rs`): the
+//!   segment marched per wavelength from the field's source and the
+//!   optics, as the library composes a segment's light
+//!   (`MarchTables::aerial_perspective_xyz`; not in the shaders yet).
+//!   Otherwise (the shaders' lookup): `S(x, v) R(x, v, d) w` per channel, S the sky
 //!   read at the eye, R the aerial table read as the sky table (its own
 //!   view nodes) and linear in ln d between its two distance slices (d
 //!   from the thickness / 1000 to the ray's end), w = (1 - T) / (1 -
@@ -37,6 +41,11 @@
 
 use super::EngineTables;
 use super::axes;
+use super::march::{
+    DARK_LOG_SOURCE, DENSITY_NODES, MARCH_STEPS, MarchTables, PHASE_NODES, SUN_COLUMN_NODES,
+};
+use crate::geometry::{Vector3, segment_in_atmosphere};
+use crate::transport::multiple_scattering::interpolate_log_source;
 
 /// Smallest value the sun axis's geometric interpolation takes the
 /// logarithm of (XYZ in W m^-2 sr^-1 nm^-1 units).
@@ -443,13 +452,12 @@ impl EngineTables {
     /// Aerial perspective between an eye at `altitude_m` and the point at
     /// `distance_m` along the unit `view` (eye-local east-north-up), the
     /// sun toward the unit `sun`: (the light scattered into the segment,
-    /// XYZ radiance; the segment's transmittance, XYZ of the sun's
-    /// spectrum). The light is `S(x, v) R(x, v, d) w` per channel, S the
-    /// sky table's read at the eye, R the aerial-perspective table's and w
-    /// the segment's share of the whole ray's extinction
-    /// ((1 - T) / (1 - T_end), T_end to the ray's end; see the module docs of
-    /// `engine_tables`); tables baked without an aerial-perspective table
-    /// take [`Self::aerial_perspective_by_difference_xyz`].
+    /// XYZ radiance; the segment's transmittance, XYZ of the transmitted
+    /// solar spectrum over XYZ of the solar spectrum per channel). Tables
+    /// of a multiply scattering sky march the segment
+    /// (`march.rs`, `MarchTables::aerial_perspective_xyz`: within 2 % of
+    /// the library at 1-50 km); others take
+    /// [`Self::aerial_perspective_by_ratio_xyz`].
     pub fn aerial_perspective_xyz(
         &self,
         altitude_m: f64,
@@ -457,6 +465,32 @@ impl EngineTables {
         sun: [f64; 3],
         distance_m: f64,
     ) -> ([f64; 3], [f64; 3]) {
+        match &self.march {
+            Some(tables) => tables.aerial_perspective_xyz(altitude_m, view, sun, distance_m),
+            None => self.aerial_perspective_by_ratio_xyz(altitude_m, view, sun, distance_m),
+        }
+    }
+
+    /// Aerial perspective from the aerial-perspective ratio table (the
+    /// reference shaders' `soraAerialPerspective` reads it; the march is
+    /// not in them yet): (the light scattered into the segment, XYZ
+    /// radiance; the segment's transmittance, XYZ of the sun's spectrum)
+    /// as [`Self::aerial_perspective_xyz`] takes them. The light is `S(x, v) R(x, v, d) w` per channel, S the
+    /// sky table's read at the eye, R the aerial-perspective table's and w
+    /// the segment's share of the whole ray's extinction
+    /// ((1 - T) / (1 - T_end), T_end to the ray's end; see the module docs of
+    /// `engine_tables`); tables baked without an aerial-perspective table
+    /// take [`Self::aerial_perspective_by_difference_xyz`].
+    pub fn aerial_perspective_by_ratio_xyz(
+        &self,
+        altitude_m: f64,
+        view: [f64; 3],
+        sun: [f64; 3],
+        distance_m: f64,
+    ) -> ([f64; 3], [f64; 3]) {
+        if let Some(tables) = &self.march {
+            return tables.aerial_perspective_xyz(altitude_m, view, sun, distance_m);
+        }
         if self.aerial.is_empty() {
             return self.aerial_perspective_by_difference_xyz(altitude_m, view, sun, distance_m);
         }
@@ -525,4 +559,471 @@ impl EngineTables {
         let inscattered = std::array::from_fn(|i| (at_eye[i] - segment[i] * at_point[i]).max(0.0));
         (inscattered, segment)
     }
+}
+
+/// The aerial-perspective march (the reference shaders' `soraAerialPerspective`
+/// marches the same): the tables of [`super::march`], read at the nodes
+/// of one view ray.
+impl MarchTables {
+    /// Aerial perspective by the march (see the module docs of
+    /// [`super::march`]): an eye at `altitude_m`, the unit `view` and `sun`
+    /// (eye-local east-north-up), a point at `distance_m`: (the light
+    /// scattered into the segment, XYZ W m^-2 sr^-1 nm^-1; the segment's
+    /// transmittance, XYZ of the transmitted solar spectrum over XYZ of
+    /// the solar spectrum per channel).
+    ///
+    /// [`MARCH_STEPS`] nodes along the segment (u = sqrt(s / length)
+    /// uniform, the midpoint rule) and as many more from the point to the
+    /// ray's end; at each node the species' densities and columns from the
+    /// eye (trapezoids), the columns toward the sun, the source ln R and
+    /// the peak beam. Gathered per wavelength: single scattering S =
+    /// sum ds E sum_j beta_sca,j p_j rho_j T T_sun, the scaled field
+    /// F = sum ds beta*_sca R T* over the segment and the ray beyond it,
+    /// and the forward-peak integrals (per species rho_j (T* T*_sun -
+    /// T T_sun) and rho_j T* T*_sun, the peak-only Q = f beta_sca rho T T_sun
+    /// and Q X; near a low sun with the peak beam). Then, as
+    /// `sky/aerial_perspective.rs` composes a segment,
+    ///
+    /// ```text
+    /// L_air = S_seg + F_seg + (1 - T / T*) (F_beyond + G_sky) + P(forward) - P(behind)
+    /// ```
+    ///
+    /// with G_sky the ground's light where the ray meets the ground, P the
+    /// forward-peak term of the rows (species rows: the segment's plus
+    /// (1 - T / T*) times the scaled rows beyond it; the peak-only rows:
+    /// the whole ray's) and of the light behind the point (Q beyond it,
+    /// Q X beyond it less ln(T* / T) Q).
+    pub(crate) fn aerial_perspective_xyz(
+        &self,
+        altitude_m: f64,
+        view: [f64; 3],
+        sun: [f64; 3],
+        distance_m: f64,
+    ) -> ([f64; 3], [f64; 3]) {
+        let tables = self;
+        let src = &tables.source;
+        let (w, s) = (src.wavelengths, src.species);
+        let (ground, thickness) = (self.ground_radius_m, self.thickness_m);
+        let top = ground + thickness;
+        let eye = Vector3::new(0.0, 0.0, ground + altitude_m.clamp(0.0, thickness));
+        let v = Vector3::new(view[0], view[1], view[2]);
+        let sun = Vector3::new(sun[0], sun[1], sun[2]);
+        let to_xyz = |values: &[f64]| -> [f64; 3] {
+            std::array::from_fn(|c| values.iter().zip(&tables.xyz).map(|(x, k)| x * k[c]).sum())
+        };
+        let Some((enter, exit)) = segment_in_atmosphere(eye, v, ground, top) else {
+            return ([0.0; 3], [1.0; 3]);
+        };
+        let length = (exit.min(distance_m) - enter).max(0.0);
+        let beyond = exit - enter - length;
+        // The phase functions at the view's one scattering angle.
+        let cos_theta = v.dot(sun).clamp(-1.0, 1.0);
+        let theta = cos_theta.acos();
+        let (exact_phase, smooth_phase) = tables.phases(theta);
+        let rows = s + 2;
+        let mut single = vec![0.0; w];
+        let (mut field, mut field_beyond) = (vec![0.0; w], vec![0.0; w]);
+        let (mut forward, mut scaled) = (vec![0.0; rows * w], vec![0.0; s * w]);
+        let (mut forward_segment, mut scaled_segment) = (vec![0.0; rows * w], vec![0.0; s * w]);
+        let mut columns = vec![0.0; s];
+        let mut columns_segment = vec![0.0; s];
+        let (mut log_source, mut beam) = (vec![0.0; w], vec![0.0; w]);
+        let density =
+            |at: f64| tables.densities(((eye + v * (enter + at)).length() - ground).max(0.0));
+        let (mut previous, mut previous_rho) = (0.0, density(0.0));
+        let (steps, steps_beyond) = MARCH_STEPS;
+        let nodes = (0..steps)
+            .map(|k| (march_node(length, k, steps), true))
+            .chain((0..steps_beyond).map(|k| {
+                let (at, ds) = march_node(beyond, k, steps_beyond);
+                ((length + at, ds), false)
+            }));
+        let mut segment_done = false;
+        for ((at, ds), in_segment) in nodes {
+            if !in_segment && !segment_done {
+                let rho = density(length);
+                for j in 0..s {
+                    columns[j] += 0.5 * (previous_rho[j] + rho[j]) * (length - previous);
+                }
+                (previous, previous_rho) = (length, rho);
+                columns_segment.copy_from_slice(&columns);
+                forward_segment.copy_from_slice(&forward);
+                scaled_segment.copy_from_slice(&scaled);
+                segment_done = true;
+            }
+            if ds <= 0.0 {
+                continue;
+            }
+            let point = eye + v * (enter + at);
+            let r = point.length();
+            let zenith = point * (1.0 / r);
+            let view_cosine = v.dot(zenith).clamp(-1.0, 1.0);
+            let sun_cosine = sun.dot(zenith).clamp(-1.0, 1.0);
+            let sines =
+                ((1.0 - view_cosine * view_cosine) * (1.0 - sun_cosine * sun_cosine)).sqrt();
+            let cos_azimuth = if sines > 1e-12 {
+                ((cos_theta - view_cosine * sun_cosine) / sines).clamp(-1.0, 1.0)
+            } else {
+                1.0
+            };
+            let altitude = (r - ground).max(0.0);
+            tables.log_source(
+                altitude,
+                sun_cosine,
+                view_cosine,
+                cos_azimuth,
+                &mut log_source,
+            );
+            let rho = density(at);
+            for j in 0..s {
+                columns[j] += 0.5 * (previous_rho[j] + rho[j]) * (at - previous);
+            }
+            (previous, previous_rho) = (at, rho.clone());
+            let target = if in_segment {
+                &mut field
+            } else {
+                &mut field_beyond
+            };
+            for (i, o) in target.iter_mut().enumerate() {
+                let (mut tau, mut scattering) = (0.0, 0.0);
+                for j in 0..s {
+                    tau += src.scaled_extinction[i * s + j] * columns[j];
+                    scattering += src.scaled_scattering[i * s + j] * rho[j];
+                }
+                if log_source[i] > DARK_LOG_SOURCE {
+                    *o += ds * scattering * log_source[i].exp() * (-tau).exp();
+                }
+            }
+            let to_sun = tables.sun_columns(r, sun_cosine);
+            let share = if src.has_forward_peaks {
+                tables.peak_beam(ground, r, sun_cosine, &mut beam)
+            } else {
+                0.0
+            };
+            for i in 0..w {
+                let mut depths = [0.0; 4];
+                let (mut peak, mut source) = (0.0, 0.0);
+                for j in 0..s {
+                    let (scaled_ext, ext) =
+                        (src.scaled_extinction[i * s + j], src.extinction[i * s + j]);
+                    let to_sun = to_sun.as_ref().map_or(0.0, |c| c[j]);
+                    depths[0] += scaled_ext * columns[j];
+                    depths[1] += ext * columns[j];
+                    depths[2] += scaled_ext * to_sun;
+                    depths[3] += ext * to_sun;
+                    peak += (ext - scaled_ext) * rho[j];
+                    source += src.scattering[i * s + j] * exact_phase[j * w + i] * rho[j];
+                }
+                let lit = to_sun.is_some();
+                let [view_beam, view_direct, sun_beam, sun_direct] = if lit {
+                    depths.map(|d| (-d).exp())
+                } else {
+                    [(-depths[0]).exp(), (-depths[1]).exp(), 0.0, 0.0]
+                };
+                if in_segment && lit {
+                    single[i] += ds * src.solar[i] * source * view_direct * sun_direct;
+                }
+                if !src.has_forward_peaks {
+                    continue;
+                }
+                // As the library's march (`add_tilted_forward_peak`).
+                let through = sun_beam - sun_direct;
+                let scattered = through + share * (beam[i] - through);
+                let excess = ds * (view_beam * scattered + sun_direct * (view_beam - view_direct));
+                let beam_weight = ds * view_beam * (scattered + sun_direct);
+                for j in 0..s {
+                    forward[j * w + i] += excess * rho[j];
+                    scaled[j * w + i] += beam_weight * rho[j];
+                }
+                if lit && sun_beam > 0.0 {
+                    let only = ds
+                        * view_direct
+                        * sun_direct
+                        * peak
+                        * ((sun_direct + scattered) / sun_beam);
+                    let x = (depths[1] + depths[3]) - (depths[0] + depths[2]);
+                    forward[s * w + i] += only;
+                    forward[(s + 1) * w + i] += only * x;
+                }
+            }
+        }
+        if !segment_done {
+            columns_segment.copy_from_slice(&columns);
+            forward_segment.copy_from_slice(&forward);
+            scaled_segment.copy_from_slice(&scaled);
+        }
+        // The ground's light where the ray ends on it, through the whole
+        // ray's scaled transmittance.
+        let end = eye + v * exit;
+        let on_ground = end.length() <= ground * (1.0 + 1e-9);
+        let ground_light = |i: usize| -> f64 {
+            if !on_ground {
+                return 0.0;
+            }
+            let tau_scaled: f64 = (0..s)
+                .map(|j| src.scaled_extinction[i * s + j] * columns[j])
+                .sum();
+            let (node, t) = tables.locate_sun(sun.dot(end.normalized()));
+            let lerp = |table: &[f64]| {
+                let (a, b) = (table[node * w + i], table[(node + 1) * w + i]);
+                if a > 0.0 && b > 0.0 {
+                    ((1.0 - t) * a.ln() + t * b.ln()).exp()
+                } else {
+                    (1.0 - t) * a + t * b
+                }
+            };
+            (-tau_scaled).exp() * (lerp(&src.ground_diffuse) + lerp(&src.ground_direct))
+        };
+        let mut light = vec![0.0; w];
+        let mut transmitted = vec![0.0; w];
+        let (mut rows_forward, mut rows_behind) = (vec![0.0; rows * w], vec![0.0; rows * w]);
+        for i in 0..w {
+            let (mut tau, mut tau_scaled) = (0.0, 0.0);
+            for (j, column) in columns_segment.iter().enumerate() {
+                tau += src.extinction[i * s + j] * column;
+                tau_scaled += src.scaled_extinction[i * s + j] * column;
+            }
+            transmitted[i] = src.solar[i] * (-tau).exp();
+            let (share, depth) = (1.0 - (tau_scaled - tau).exp(), tau - tau_scaled);
+            light[i] = single[i] + field[i] + share * (field_beyond[i] + ground_light(i));
+            for j in 0..s {
+                let k = j * w + i;
+                rows_forward[k] = forward_segment[k] + share * (scaled[k] - scaled_segment[k]);
+            }
+            let (q, qx) = (s * w + i, (s + 1) * w + i);
+            rows_forward[q] = forward[q];
+            rows_forward[qx] = forward[qx];
+            rows_behind[q] = forward[q] - forward_segment[q];
+            rows_behind[qx] = (forward[qx] - forward_segment[qx]) - depth * rows_behind[q];
+        }
+        if src.has_forward_peaks {
+            let peak = tables.peak_radiance(theta, &smooth_phase, &rows_forward);
+            let hidden = tables.peak_radiance(theta, &smooth_phase, &rows_behind);
+            for i in 0..w {
+                light[i] += peak[i] - hidden[i];
+            }
+        }
+        let (through, solar) = (to_xyz(&transmitted), to_xyz(&src.solar));
+        (
+            to_xyz(&light),
+            std::array::from_fn(|c| (through[c] / solar[c].max(1e-300)).clamp(0.0, 1.0)),
+        )
+    }
+}
+
+/// The march's k-th of `steps` nodes along a stretch of `length` m: its
+/// distance from the stretch's start and its weight, m (the midpoint rule
+/// in u = sqrt(s / length): crowded toward the start).
+pub(crate) fn march_node(length: f64, k: usize, steps: usize) -> (f64, f64) {
+    let u = (k as f64 + 0.5) / steps as f64;
+    (u * u * length, 2.0 * u * length / steps as f64)
+}
+
+impl MarchTables {
+    /// The species' relative densities at `altitude_m` (linear).
+    fn densities(&self, altitude_m: f64) -> Vec<f64> {
+        let s = self.source.species;
+        let x = (altitude_m / self.thickness_m).clamp(0.0, 1.0) * (DENSITY_NODES - 1) as f64;
+        let (n, f) = axes::cell(x, 0, DENSITY_NODES - 2);
+        (0..s)
+            .map(|j| {
+                let (a, b) = (
+                    self.density[n * s + j] as f64,
+                    self.density[(n + 1) * s + j] as f64,
+                );
+                a + (b - a) * f
+            })
+            .collect()
+    }
+
+    /// p_j and the smooth phase at the scattering angle `theta` (rad),
+    /// [j * wavelengths + i] (linear in u = sqrt(theta / pi)).
+    fn phases(&self, theta: f64) -> (Vec<f64>, Vec<f64>) {
+        let (w, s) = (self.source.wavelengths, self.source.species);
+        let x = (theta / std::f64::consts::PI).clamp(0.0, 1.0).sqrt() * (PHASE_NODES - 1) as f64;
+        let (t, f) = axes::cell(x, 0, PHASE_NODES - 2);
+        let read = |table: &[f32]| -> Vec<f64> {
+            let mut out = vec![0.0; s * w];
+            for j in 0..s {
+                for i in 0..w {
+                    let a = table[(j * PHASE_NODES + t) * w + i] as f64;
+                    let b = table[(j * PHASE_NODES + t + 1) * w + i] as f64;
+                    out[j * w + i] = a + (b - a) * f;
+                }
+            }
+            out
+        };
+        (read(&self.phase), read(&self.smooth_phase))
+    }
+
+    /// ln R at a node (quadrilinear in ln R over altitude level, sun
+    /// zenith node, view zenith and azimuth), into `out`.
+    fn log_source(
+        &self,
+        altitude_m: f64,
+        sun_cosine: f64,
+        view_cosine: f64,
+        cos_azimuth: f64,
+        out: &mut [f64],
+    ) {
+        let src = &self.source;
+        let kept = &self.source_wavelengths;
+        let mut channels = vec![0.0; kept.len()];
+        interpolate_log_source(
+            &src.log_source,
+            (
+                src.sun_zenith_rad.len(),
+                src.azimuth_nodes,
+                src.view_zenith_nodes,
+            ),
+            (
+                locate(&src.levels_m, altitude_m),
+                self.locate_sun(sun_cosine),
+            ),
+            (view_cosine, cos_azimuth),
+            &mut channels,
+        );
+        // Linear in the wavelength's index between the kept ones.
+        for pair in 0..kept.len().saturating_sub(1) {
+            let (a, b) = (kept[pair], kept[pair + 1]);
+            for (i, o) in out.iter_mut().enumerate().take(b + 1).skip(a) {
+                let t = (i - a) as f64 / (b - a) as f64;
+                *o = channels[pair] + t * (channels[pair + 1] - channels[pair]);
+            }
+        }
+        if kept.len() == 1 {
+            out.fill(channels[0]);
+        }
+    }
+
+    /// The sun zenith cell of a sun cosine: (node, fraction), linear in
+    /// the angle.
+    fn locate_sun(&self, sun_cosine: f64) -> (usize, f64) {
+        locate(
+            &self.source.sun_zenith_rad,
+            sun_cosine.clamp(-1.0, 1.0).acos(),
+        )
+    }
+
+    /// The species' columns toward the sun from radius `r` with the sun's
+    /// zenith cosine `mu` there (bilinear over the transmittance table's
+    /// axes), None below the point's horizon (the planet's shadow).
+    fn sun_columns(&self, r: f64, mu: f64) -> Option<Vec<f64>> {
+        let (ground, thickness) = (self.ground_radius_m, self.thickness_m);
+        let s = self.source.species;
+        let (a_count, m_count) = SUN_COLUMN_NODES;
+        let h = (r - ground).clamp(0.0, thickness);
+        if mu < axes::horizon_cosine(ground + h, ground) {
+            return None;
+        }
+        let (a, fa) = axes::cell(
+            axes::altitude_coordinate(h, thickness, a_count),
+            0,
+            a_count - 2,
+        );
+        let row = |a: usize| -> Vec<f64> {
+            let r_a = ground + axes::altitude_of_node(a, a_count, thickness);
+            let (m, fm) = axes::cell(
+                axes::transmittance_mu_coordinate(mu, m_count, r_a, ground),
+                0,
+                m_count - 2,
+            );
+            (0..s)
+                .map(|j| {
+                    let (p, q) = (
+                        self.sun_columns[(a * m_count + m) * s + j] as f64,
+                        self.sun_columns[(a * m_count + m + 1) * s + j] as f64,
+                    );
+                    p + (q - p) * fm
+                })
+                .collect()
+        };
+        let (low, high) = (row(a), row(a + 1));
+        Some((0..s).map(|j| low[j] + (high[j] - low[j]) * fa).collect())
+    }
+
+    /// The peak beam B at radius `r` with the sun's zenith cosine `mu`
+    /// into `out`, and the share the scaled beam takes (0 beyond the
+    /// table's elevations; `peak_beam.rs`).
+    fn peak_beam(&self, ground: f64, r: f64, mu: f64, out: &mut [f64]) -> f64 {
+        let Some(beam) = self.beam() else {
+            return 0.0;
+        };
+        let elevation = mu.clamp(-1.0, 1.0).asin().to_degrees();
+        let (lowest, blend, highest) = beam.range_deg;
+        if !(lowest..highest).contains(&elevation) {
+            return 0.0;
+        }
+        let share = ((highest - elevation) / (highest - blend)).min(1.0);
+        let altitudes = &beam.altitudes_m;
+        let z = (r - ground).clamp(0.0, altitudes[altitudes.len() - 1]);
+        let (a, ta) = locate(altitudes, z);
+        let xe = ((elevation - beam.first_elevation_deg) / beam.step_deg)
+            .clamp(0.0, (beam.elevations - 1) as f64);
+        let e = (xe as usize).min(beam.elevations - 2);
+        let te = xe - e as f64;
+        let w = self.source.wavelengths;
+        let at = |a: usize, e: usize| &beam.ln_beam[(a * beam.elevations + e) * w..][..w];
+        let (c00, c01, c10, c11) = (at(a, e), at(a, e + 1), at(a + 1, e), at(a + 1, e + 1));
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = ((1.0 - ta) * ((1.0 - te) * c00[i] + te * c01[i])
+                + ta * ((1.0 - te) * c10[i] + te * c11[i]))
+                .exp();
+        }
+        share
+    }
+
+    /// The forward-peak term (W m^-2 sr^-1 nm^-1) at the scattering angle
+    /// `theta` from its integrals `rows` (species rows, then Q and Q X),
+    /// as `forward_peak.rs` evaluates it: E beta_sca,j q_j row_j summed
+    /// over species (q_j the smooth phase `smooth`), plus within the
+    /// kernel's radius (1 - wide) E Q e^(-X) G(theta; X) e^X at X = Q X /
+    /// Q (bilinear in sqrt(theta / R) and X).
+    fn peak_radiance(&self, theta: f64, smooth: &[f64], rows: &[f64]) -> Vec<f64> {
+        let src = &self.source;
+        let (w, s) = (src.wavelengths, src.species);
+        let mut out = vec![0.0; w];
+        for j in 0..s {
+            for i in 0..w {
+                out[i] +=
+                    src.solar[i] * src.scattering[i * s + j] * smooth[j * w + i] * rows[j * w + i];
+            }
+        }
+        let (x_nodes, angles, (start, radius), kernel) = &src.kernel;
+        if kernel.is_empty() || theta >= *radius {
+            return out;
+        }
+        let wide = ((theta - start) / (radius - start)).clamp(0.0, 1.0);
+        let position = (theta / radius).sqrt() * (angles - 1) as f64;
+        let t = (position as usize).min(angles - 2);
+        let ft = position - t as f64;
+        let last = x_nodes[x_nodes.len() - 1];
+        for i in 0..w {
+            let (q, qx) = (rows[s * w + i], rows[(s + 1) * w + i]);
+            if q <= 0.0 {
+                continue;
+            }
+            let x_mean = (qx / q).clamp(0.0, last);
+            let upper = x_nodes
+                .partition_point(|x| *x <= x_mean)
+                .clamp(1, x_nodes.len() - 1);
+            let fx = (x_mean - x_nodes[upper - 1]) / (x_nodes[upper] - x_nodes[upper - 1]);
+            let at = |x: usize, t: usize| kernel[(x * angles + t) * w + i];
+            let value = (1.0 - fx) * ((1.0 - ft) * at(upper - 1, t) + ft * at(upper - 1, t + 1))
+                + fx * ((1.0 - ft) * at(upper, t) + ft * at(upper, t + 1));
+            out[i] += (1.0 - wide) * src.solar[i] * q * value * x_mean.exp();
+        }
+        out
+    }
+}
+
+/// The cell of ascending `nodes` holding `x` and the fraction of the way
+/// across it (clamped to the nodes).
+fn locate(nodes: &[f64], x: f64) -> (usize, f64) {
+    let upper = nodes.partition_point(|z| *z <= x);
+    let k = upper.clamp(1, nodes.len() - 1) - 1;
+    (
+        k,
+        ((x - nodes[k]) / (nodes[k + 1] - nodes[k])).clamp(0.0, 1.0),
+    )
 }

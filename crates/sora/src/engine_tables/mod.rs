@@ -4,9 +4,10 @@
 //! atmosphere, by table reads only (`docs/engine-tables.md`, the reference
 //! shaders in `web/shaders/`).
 //!
-//! Four tables, all CIE XYZ (1.0 = the XYZ of a flat spectrum of 1 in the
+//! Four tables in CIE XYZ (1.0 = the XYZ of a flat spectrum of 1 in the
 //! quantity's unit, as `sora render --units radiance` writes; the shader
-//! converts to linear sRGB with the manifest's matrix):
+//! converts to linear sRGB with the manifest's matrix), and the
+//! aerial-perspective march's spectral tables:
 //! - **sky**: the sky radiance (W m^-2 sr^-1 nm^-1 XYZ) seen by an eye at
 //!   altitude h toward zenith angle z and azimuth phi from the sun's, with
 //!   the sun at elevation e: 4D, as layers (e, h) of 2D images (z, phi).
@@ -49,6 +50,17 @@
 //!   cancels for short segments (11-124 % off at 1 km against 9-11 % from
 //!   the table; `docs/engine-tables.md`); it is what tables baked without
 //!   the aerial table (`aerial_nodes` (0, 0, 0), the default) give.
+//! - **march** (multiple scattering, `march` in the settings; `march.rs`):
+//!   what a per-pixel march of
+//!   the segment reads to give the library's light of the air within 2 %
+//!   at 1-50 km: the field's source R per wavelength over its altitude
+//!   levels, sun zenith nodes and the view's zenith and azimuth, the
+//!   species' optics and densities, their columns toward the sun, the
+//!   phase functions, the forward-peak term's tables and the ground's
+//!   light, from the field solved once for every sun.
+//!   `EngineTables::aerial_perspective_xyz` marches them when present
+//!   (`lookup.rs`); the reference shaders read the aerial table or the
+//!   difference (the march is not in them yet).
 //!
 //! Why not Bruneton's parametrisation: his 4D scattering table is indexed
 //! by (r, mu, mu_s, nu) with a single mu axis over the ground and the sky
@@ -83,6 +95,7 @@
 pub mod axes;
 mod files;
 mod lookup;
+mod march;
 
 pub use files::{MANIFEST_FILE, TABLE_FORMAT, check_output_directory};
 
@@ -110,6 +123,12 @@ pub struct EngineTableSettings {
     /// sky table's); (0, 0, 0) for none (the aerial perspective is then
     /// the sky table's difference, see `lookup.rs`).
     pub aerial_nodes: (usize, usize, usize),
+    /// Whether to bake the aerial-perspective march's tables (`march.rs`;
+    /// multiple scattering only). Off by default: within 2 % of the
+    /// library, 34-38 MB (with the sky table's 28 MB, earth-hazy's are
+    /// over 64 MB), and the shaders do not read them yet
+    /// (`docs/engine-tables.md`).
+    pub march: bool,
 }
 
 impl Default for EngineTableSettings {
@@ -124,6 +143,7 @@ impl Default for EngineTableSettings {
             // within 2 % of the library and triples the bake
             // (`docs/engine-tables.md`); `sora tables --aerial-*-nodes`.
             aerial_nodes: (0, 0, 0),
+            march: false,
         }
     }
 }
@@ -211,6 +231,9 @@ pub struct EngineTables {
     aerial: Vec<[f32; 3]>,
     /// Diffuse horizontal irradiance, [a * S + s].
     irradiance: Vec<[f32; 3]>,
+    /// What the aerial-perspective march reads (`march.rs`; None for
+    /// single scattering, whose tables have no field).
+    march: Option<march::MarchTables>,
     /// What the tables were baked from (for the manifest).
     provenance: Provenance,
 }
@@ -434,6 +457,10 @@ impl EngineTables {
             transmittance,
             aerial: Vec::new(),
             irradiance: Vec::new(),
+            march: match &shared {
+                Some(shared) if settings.march => Some(march::MarchTables::bake(sky, shared)?),
+                _ => None,
+            },
             provenance: Provenance {
                 wavelengths_nm: sky.wavelengths().wavelengths_nm().collect(),
                 scattering: match sky.scattering() {
@@ -484,9 +511,11 @@ impl EngineTables {
         &self.aerial
     }
 
-    /// Bytes of the four tables as 32-bit XYZ (what a GPU holds).
+    /// Bytes of the tables as 32-bit floats (what a GPU holds): the four
+    /// XYZ tables and the aerial-perspective march's.
     pub fn size_bytes(&self) -> usize {
         12 * (self.sky.len() + self.aerial.len() + self.transmittance.len() + self.irradiance.len())
+            + self.march.as_ref().map_or(0, |m| m.size_bytes())
     }
 
     /// The aerial-perspective table from the segments' light `light`

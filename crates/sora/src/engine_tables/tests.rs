@@ -33,6 +33,7 @@ fn small_settings() -> EngineTableSettings {
         azimuth_nodes: 9,
         transmittance_nodes: (8, 32),
         aerial_nodes: (6, 5, 4),
+        march: false,
     }
 }
 
@@ -190,15 +191,15 @@ fn aerial_perspective_vanishes_near_the_eye_and_becomes_the_sky_far_away() {
         LocalView::from_vectors(view, [0.0, 0.0, 1.0], sun),
         10.0,
     );
-    let (zero, t_zero) = tables.aerial_perspective_xyz(0.0, view, sun, 0.0);
+    let (zero, t_zero) = tables.aerial_perspective_by_ratio_xyz(0.0, view, sun, 0.0);
     assert_eq!((zero, t_zero[1]), ([0.0; 3], 1.0));
     // At 1 m the difference of two table reads leaves what the
     // horizon-relative zenith axis moves between them (the docs' near
     // limit), well under a per cent of the sky.
-    let (near, t_near) = tables.aerial_perspective_xyz(0.0, view, sun, 1.0);
+    let (near, t_near) = tables.aerial_perspective_by_ratio_xyz(0.0, view, sun, 1.0);
     eprintln!("1 m: {:.3e} of the sky", near[1] / sky[1]);
     assert!(near[1] < 5e-3 * sky[1], "{near:?} {sky:?}");
-    let (far, t_far) = tables.aerial_perspective_xyz(0.0, view, sun, 1e6);
+    let (far, t_far) = tables.aerial_perspective_by_ratio_xyz(0.0, view, sun, 1e6);
     assert!((far[1] / sky[1] - 1.0).abs() < 1e-3, "{far:?} {sky:?}");
     // The ray leaves the atmosphere: the segment's transmittance is the
     // whole ray's.
@@ -207,7 +208,7 @@ fn aerial_perspective_vanishes_near_the_eye_and_becomes_the_sky_far_away() {
         (t_far[1] / whole[1] - 1.0).abs() < 1e-9,
         "{t_far:?} {whole:?}"
     );
-    let (mid, t_mid) = tables.aerial_perspective_xyz(0.0, view, sun, 20e3);
+    let (mid, t_mid) = tables.aerial_perspective_by_ratio_xyz(0.0, view, sun, 20e3);
     assert!(mid[1] > near[1] && mid[1] < far[1] && t_mid[1] < t_near[1]);
 }
 
@@ -318,6 +319,7 @@ fn the_shared_field_bake_is_the_per_layer_bake() {
         azimuth_nodes: 5,
         transmittance_nodes: (4, 8),
         aerial_nodes: (4, 4, 3),
+        march: false,
     };
     let fast = EngineTables::bake_with(
         &sky,
@@ -444,6 +446,7 @@ fn the_ground_layers_do_not_depend_on_the_altitude_nodes() {
             azimuth_nodes: 5,
             transmittance_nodes: (4, 8),
             aerial_nodes: (4, 4, 3),
+            march: false,
         };
         EngineTables::bake(&sky, &settings, &|_| {}).unwrap()
     };
@@ -741,7 +744,11 @@ fn at_the_nodes_the_aerial_perspective_is_the_library_s() {
                     for j in 0..distances - usize::from(row < half) {
                         let d = axes::distance_of_node(j, distances, range);
                         segments.push((view, d));
-                        lookups.push(tables.aerial_perspective_xyz(altitude, v, sun, d).0);
+                        lookups.push(
+                            tables
+                                .aerial_perspective_by_ratio_xyz(altitude, v, sun, d)
+                                .0,
+                        );
                     }
                 }
             }
@@ -830,7 +837,7 @@ fn the_aerial_perspective_matches_the_library() {
                         continue;
                     }
                     let got = if method == 0 {
-                        tables.aerial_perspective_xyz(0.0, *v, sun, d).0
+                        tables.aerial_perspective_by_ratio_xyz(0.0, *v, sun, d).0
                     } else {
                         tables
                             .aerial_perspective_by_difference_xyz(0.0, *v, sun, d)
@@ -954,15 +961,22 @@ fn columns_to_top(
 ///   M(d) = integral_0^d T beta_sca ds (library SS and L; no table);
 /// - the march a shader would do: single scattering plus the scaled
 ///   field from the library's source table, N steps crowded toward the
-///   eye ([`march_node`]), at every wavelength and in bands.
+///   eye ([`march_node`]), at every wavelength and in bands; and at every
+///   wavelength with the rest of the library's terms from the same march
+///   (`MultipleScatteringTable::march_segment_parts`, N / 2 more steps
+///   from the point to the ray's end): the field beyond the point that
+///   the segment's forward peaks scatter toward the eye and the
+///   forward-peak term from the march's own integrals.
 ///
 /// Scalar light (`SORA_AERIAL_VECTOR=1`: vector). Settings by environment:
 /// `SORA_PRESET` (earth-clear), `SORA_BANDS` (16), `SORA_STEPS` (32, a comma-separated list),
 /// `SORA_SPACING=even`, `SORA_TABLE_NODES=Z,K` (the source table's view
 /// nodes), `SORA_LEVEL_STRIDE=q` (the source at every q-th level),
-/// `SORA_SUN_TABLE=A,M` (sun columns from a table). With none set it
-/// asserts the issue's bar, 2 %, on the 32-step march in 16 bands (p99
-/// at most 0.59 % measured; docs/engine-tables.md, "A march of the
+/// `SORA_SUN_TABLE=A,M` (sun columns from a table). With none but
+/// `SORA_PRESET` set it asserts the issue's bar, 2 %, on the 32-step
+/// march with every term, at every wavelength (the largest of the 48
+/// views, the p99, at most 0.37 % on earth-clear, 1.41 % on earth-hazy,
+/// 1.74 % on mars-dust; docs/engine-tables.md, "A march of the
 /// segment").
 #[test]
 #[ignore]
@@ -981,7 +995,6 @@ fn aerial_march_prototype() {
         .unwrap_or(16);
     let defaults = [
         "SORA_AERIAL_VECTOR",
-        "SORA_PRESET",
         "SORA_BANDS",
         "SORA_STEPS",
         "SORA_SPACING",
@@ -1282,8 +1295,8 @@ fn aerial_march_prototype() {
             let mut xy_worst = [0.0f64; 4];
             // The march's whole light (single + field) per step count,
             // spectral and in bands.
-            let mut march_errors = vec![Vec::new(); 2 * march_steps.len()];
-            let mut march_xy = vec![0.0f64; 2 * march_steps.len()];
+            let mut march_errors = vec![Vec::new(); 3 * march_steps.len()];
+            let mut march_xy = vec![0.0f64; 3 * march_steps.len()];
             let mut ms_errors: [Vec<f64>; 2] = Default::default();
             let mut ms_at = (0.0, 0.0);
             let mut sum_worst = 0.0f64;
@@ -1355,14 +1368,26 @@ fn aerial_march_prototype() {
                     let (ms, ms_bands) = table.march_segment_coarse((v, d), *steps, &band_indices);
                     let spectral: Vec<f64> = ss.iter().zip(&ms).map(|(a, b)| a + b).collect();
                     let (a, b) = (band_xyz(&ss_bands), flat_band_xyz(&ms_bands));
-                    for (m, got) in [xyz(&spectral), std::array::from_fn(|c| a[c] + b[c])]
-                        .iter()
-                        .enumerate()
+                    // The whole march: the field beyond the point that the
+                    // segment's peaks scatter forward and the forward-peak
+                    // term, from the march's own integrals.
+                    let parts =
+                        table.march_segment_parts((v, d), (*steps, *steps / 2), &sun_columns);
+                    let rest = table.segment_light_from_parts(v, &parts);
+                    assert_eq!(rest.len(), n);
+                    let whole: Vec<f64> = ss.iter().zip(&rest).map(|(a, b)| a + b).collect();
+                    for (m, got) in [
+                        xyz(&spectral),
+                        std::array::from_fn(|c| a[c] + b[c]),
+                        xyz(&whole),
+                    ]
+                    .iter()
+                    .enumerate()
                     {
-                        march_errors[2 * q + m].push((got[1] / expected[1] - 1.0).abs());
+                        march_errors[3 * q + m].push((got[1] / expected[1] - 1.0).abs());
                         let (p, e) = (xy(*got), xy(expected));
-                        march_xy[2 * q + m] =
-                            march_xy[2 * q + m].max((p[0] - e[0]).abs().max((p[1] - e[1]).abs()));
+                        march_xy[3 * q + m] =
+                            march_xy[3 * q + m].max((p[0] - e[0]).abs().max((p[1] - e[1]).abs()));
                     }
                 }
                 let s = xyz(&spread);
@@ -1411,14 +1436,17 @@ fn aerial_march_prototype() {
                 );
             }
             for (q, steps) in march_steps.iter().enumerate() {
-                for (m, name) in ["spectral", "bands"].iter().enumerate() {
-                    let (p, med) = p99(&mut march_errors[2 * q + m]);
-                    if *steps == 32 && m == 1 {
+                for (m, name) in ["spectral", "bands", "spectral with peak and behind"]
+                    .iter()
+                    .enumerate()
+                {
+                    let (p, med) = p99(&mut march_errors[3 * q + m]);
+                    if *steps == 32 && m == 2 {
                         worst = worst.max(p / 100.0);
                     }
                     eprintln!(
                         "    march of {steps} steps, {name}, source table: p99 {p:.2} % (median {med:.2} %), xy {:.4}",
-                        march_xy[2 * q + m]
+                        march_xy[3 * q + m]
                     );
                 }
             }
@@ -1427,4 +1455,106 @@ fn aerial_march_prototype() {
     if defaults {
         assert!(worst <= 0.02, "{worst}");
     }
+}
+
+/// The aerial-perspective march (`lookup.rs`, from the tables of
+/// `march.rs` baked from the field solved once for every sun) against the
+/// library's light of the air (`Sky::compute_segment_light`, the slow
+/// path: each sun's own sky and field, scalar light as the tables'), the
+/// issue's bar: suns 60, 10, 2 and -4 degrees, the views of
+/// [`aerial_test_segments`] (1-70 degrees up, 0-180 degrees from the
+/// sun), d = 1, 10 and 50 km (and 1 m), luminance within 2 % and xy within 0.005
+/// where the luminance is above 1e-3 of the largest. Presets by
+/// `SORA_MARCH_PRESETS` (comma-separated; earth-clear and earth-hazy by
+/// default); `--nocapture` prints the largest error per sun and distance.
+#[test]
+fn the_aerial_march_matches_the_library() {
+    let presets = std::env::var("SORA_MARCH_PRESETS").unwrap_or("earth-clear,earth-hazy".into());
+    let mut worst = (0.0f64, 0.0f64);
+    for preset in presets.split(',') {
+        let atmosphere = Atmosphere::preset(preset).unwrap();
+        let (any, _) = aerial_reference_sky(&atmosphere, 10.0);
+        let shared = any.solve_shared_field().unwrap().unwrap();
+        // SORA_MARCH_SOURCE=LEVEL_STRIDE,DENSE_KM,SUN_STRIDE,HALF[,WAVELENGTH_STRIDE]
+        // (e.g. 2,0,2,0) measures other thinnings of the source than the
+        // default, in 32-bit floats where HALF is 0.
+        let thinning = std::env::var("SORA_MARCH_SOURCE").map_or(march::SOURCE_THINNING, |v| {
+            let n: Vec<f64> = v.split(',').map(|n| n.parse().unwrap()).collect();
+            march::SourceThinning {
+                level_stride: n[0] as usize,
+                dense_below_m: n[1] * 1e3,
+                sun_stride: n[2] as usize,
+                half: n[3] != 0.0,
+                wavelength_stride: n.get(4).map_or(1, |s| *s as usize),
+            }
+        });
+        let tables = march::MarchTables::bake_with(&any, &shared, thinning).unwrap();
+        eprintln!(
+            "levels (km): {:?}",
+            tables
+                .source
+                .levels_m
+                .iter()
+                .map(|z| (z / 100.0).round() / 10.0)
+                .collect::<Vec<_>>()
+        );
+        eprintln!(
+            "{preset}: the march's tables {:.1} MB (source: {} levels, {} suns, {} x {} views, {} wavelengths)",
+            tables.size_bytes() as f64 / 1e6,
+            tables.source.levels_m.len(),
+            tables.source.sun_zenith_rad.len(),
+            tables.source.view_zenith_nodes,
+            tables.source.azimuth_nodes,
+            tables.source.wavelengths
+        );
+        let to_xyz = SpectrumToXyz::new(any.wavelengths(), Observer::default());
+        let xy = |c: [f64; 3]| {
+            let sum = c[0] + c[1] + c[2];
+            [c[0] / sum, c[1] / sum]
+        };
+        for sun_deg in [60.0, 10.0, 2.0, -4.0] {
+            let (sky, _) = aerial_reference_sky(&atmosphere, sun_deg);
+            let sun = crate::geometry::direction_from_elevation_azimuth(sun_deg, 180.0);
+            let sun = [sun.x, sun.y, sun.z];
+            for d in [1.0, 1e3, 10e3, 50e3] {
+                let segments = aerial_test_segments(d);
+                let library = sky.compute_segment_light(&segments).unwrap();
+                let expected: Vec<[f64; 3]> = library
+                    .iter()
+                    .map(|(l, _)| {
+                        let c = to_xyz.to_xyz(&l.radiance_w_m2_sr_nm).unwrap();
+                        [c.x, c.y, c.z]
+                    })
+                    .collect();
+                let largest = expected.iter().map(|c| c[1]).fold(0.0, f64::max);
+                let (mut error, mut xy_error, mut at) = (0.0f64, 0.0f64, (0.0, 0.0));
+                for ((view, _), want) in segments.iter().zip(&expected) {
+                    if want[1] <= 1e-3 * largest {
+                        continue;
+                    }
+                    let v = view.to_vector();
+                    let (got, _) = tables.aerial_perspective_xyz(0.0, [v.x, v.y, v.z], sun, d);
+                    if d == 1.0 {
+                        let (zero, t_zero) =
+                            tables.aerial_perspective_xyz(0.0, [v.x, v.y, v.z], sun, 0.0);
+                        assert_eq!((zero, t_zero), ([0.0; 3], [1.0; 3]));
+                    }
+                    let e = (got[1] / want[1] - 1.0).abs();
+                    if e > error {
+                        error = e;
+                        at = (view.elevation_deg(), view.azimuth_deg() - 180.0);
+                    }
+                    let (a, b) = (xy(got), xy(*want));
+                    xy_error = xy_error.max((a[0] - b[0]).abs().max((a[1] - b[1]).abs()));
+                }
+                eprintln!(
+                    "{preset} sun {sun_deg} d {} km: largest luminance error {:.2} % at {at:?}, xy {xy_error:.4}",
+                    d / 1e3,
+                    100.0 * error
+                );
+                worst = (worst.0.max(error), worst.1.max(xy_error));
+            }
+        }
+    }
+    assert!(worst.0 <= 0.02 && worst.1 <= 0.005, "{worst:?}");
 }

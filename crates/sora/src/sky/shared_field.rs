@@ -42,6 +42,13 @@ pub(crate) struct SharedField {
     table: MultipleScatteringTable,
 }
 
+impl SharedField {
+    /// The source table of the field, for every sun.
+    pub(crate) fn table(&self) -> &MultipleScatteringTable {
+        &self.table
+    }
+}
+
 impl Sky {
     /// The field of this sky's atmosphere, physics and image tables' size
     /// for every sun and eye (None for single scattering).

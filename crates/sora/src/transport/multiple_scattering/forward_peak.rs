@@ -241,6 +241,20 @@ impl ForwardPeak {
         table
     }
 
+    /// The peak-only light's table as the engine tables' march reads it:
+    /// its X nodes, its angle node count (theta = R (t / (n - 1))^2, R =
+    /// [`PEAK_KERNEL_RADIUS_RAD`]), the angle from which the wide-angle form
+    /// takes over ([`PEAK_KERNEL_BLEND_START_RAD`]), and e^(-X) G
+    /// [(x * angles + t) * wavelengths + i], sr^-1 (empty: no peak).
+    pub(crate) fn exported_kernel(&self) -> (Vec<f64>, usize, (f64, f64), Vec<f64>) {
+        (
+            KERNEL_X.to_vec(),
+            KERNEL_ANGLES,
+            (PEAK_KERNEL_BLEND_START_RAD, PEAK_KERNEL_RADIUS_RAD),
+            self.kernel.clone(),
+        )
+    }
+
     /// Whether any species has a peak (otherwise the term is zero).
     pub(crate) fn any(&self) -> bool {
         self.peaked.iter().any(|p| *p)
@@ -354,7 +368,7 @@ impl ForwardPeak {
     /// `phase`, sr^-1: (1 - f) p* near the sun, passing to p from
     /// [`PEAK_KERNEL_BLEND_START_RAD`] to [`PEAK_KERNEL_RADIUS_RAD`] (see the module docs),
     /// p itself at wavelengths where the species has no peak.
-    fn smooth_phase_into(
+    pub(crate) fn smooth_phase_into(
         &self,
         j: usize,
         function: &crate::atmosphere::PhaseFunction,

@@ -240,6 +240,7 @@ mod vertical_grid;
 
 pub use settings::MultipleScatteringSettings;
 pub use source_table::MultipleScatteringTable;
+pub(crate) use source_table::{ExportedBeam, ExportedSource, interpolate_log_source};
 
 mod field;
 mod view_march;

@@ -438,6 +438,27 @@ impl PeakBeam {
         )
     }
 
+    /// The table as the engine tables' march reads it
+    /// (`engine_tables/march.rs`): its altitudes (m), the elevation of its
+    /// first node and the nodes' step (degrees), its elevation count, ln B
+    /// [(a * elevations + e) * wavelengths + i], and the elevations
+    /// (degrees) where it starts, where its share starts falling and where
+    /// it ends (see [`PeakBeam::lookup_beam`]).
+    pub(crate) fn exported(&self) -> super::source_table::ExportedBeam {
+        super::source_table::ExportedBeam {
+            altitudes_m: self.altitudes_m.clone(),
+            first_elevation_deg: elevation_rad(self.first).to_degrees(),
+            step_deg: ELEVATION_STEP_DEG,
+            elevations: self.elevations,
+            ln_beam: self.ln_beam.clone(),
+            range_deg: (
+                PEAK_BEAM_LOWEST_ELEVATION_DEG,
+                PEAK_BEAM_BLEND_START_DEG,
+                PEAK_BEAM_HIGHEST_ELEVATION_DEG,
+            ),
+        }
+    }
+
     /// B per wavelength into `out` at radius `r_m` with the sun's zenith
     /// cosine `mu_sun` there, and the share of it the scaled beam takes:
     /// 1 up to [`PEAK_BEAM_BLEND_START_DEG`], falling to 0 at the table's top, 0

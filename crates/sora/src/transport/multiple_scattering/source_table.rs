@@ -396,6 +396,261 @@ impl MultipleScatteringTable {
         (spectral, grouped)
     }
 
+    /// Prototype measurements (`engine_tables` tests): what a shader's
+    /// march of the segment to `distance_m` gathers, per wavelength, to
+    /// rebuild the library's light of the air
+    /// ([`crate::sky::Sky::compute_segment_light`]'s terms): `steps.0`
+    /// nodes along the segment crowded toward the eye and `steps.1` nodes
+    /// from the segment's end to the ray's end crowded toward the point;
+    /// the columns toward the sun from `sun_columns` (None: the planet's
+    /// shadow). At each node the source R from this table (scaled field),
+    /// and the forward-peak integrals as the library's march takes them
+    /// (the tilted peak beam near a low sun included).
+    #[cfg(test)]
+    pub(crate) fn march_segment_parts(
+        &self,
+        (view, distance_m): (Vector3, f64),
+        steps: (usize, usize),
+        sun_columns: &dyn Fn(Vector3) -> Option<Vec<f64>>,
+    ) -> SegmentMarch {
+        let optics = &self.field.optics;
+        let (w, s) = (optics.wavelengths, optics.species);
+        let (ground, top) = (
+            optics.geometry.ground_radius_m,
+            optics.geometry.top_radius_m,
+        );
+        let scaled = &optics.scaled;
+        let mut out = SegmentMarch {
+            field: vec![0.0; w],
+            field_behind: vec![0.0; w],
+            forward: vec![0.0; (s + super::forward_peak::EXTRA_ROWS) * w],
+            forward_sky: vec![0.0; (s + super::forward_peak::EXTRA_ROWS) * w],
+            scaled: vec![0.0; s * w],
+            scaled_sky: vec![0.0; s * w],
+            columns: vec![0.0; s],
+        };
+        let Some((enter, exit)) =
+            crate::geometry::segment_in_atmosphere(optics.observer, view, ground, top)
+        else {
+            return out;
+        };
+        let length = exit.min(distance_m) - enter;
+        let beyond = exit - enter - length;
+        let mut scratch = self.scratch();
+        scratch.forward_integrals.fill(0.0);
+        scratch.scaled_forward_integrals.fill(0.0);
+        let density = |at: f64| -> Vec<f64> {
+            let h = ((optics.observer + view * (enter + at)).length() - ground).max(0.0);
+            optics
+                .geometry
+                .profiles
+                .iter()
+                .map(|p| p.relative_density(h))
+                .collect()
+        };
+        let mut columns = vec![0.0; s];
+        let (mut previous, mut previous_rho) = (0.0, density(0.0));
+        let nodes = (0..steps.0)
+            .map(|k| {
+                (
+                    crate::engine_tables::tests::march_node(length, k, steps.0),
+                    true,
+                )
+            })
+            .chain((0..steps.1).map(|k| {
+                let (at, ds) = crate::engine_tables::tests::march_node(beyond, k, steps.1);
+                ((length + at, ds), false)
+            }));
+        let mut segment_done = false;
+        for ((at, ds), in_segment) in nodes {
+            if !in_segment && !segment_done {
+                // The segment's end: its columns and integrals.
+                let rho = density(length);
+                for j in 0..s {
+                    columns[j] += 0.5 * (previous_rho[j] + rho[j]) * (length - previous);
+                }
+                (previous, previous_rho) = (length, rho);
+                out.columns.copy_from_slice(&columns);
+                out.forward.copy_from_slice(&scratch.forward_integrals);
+                out.scaled
+                    .copy_from_slice(&scratch.scaled_forward_integrals);
+                segment_done = true;
+            }
+            if ds <= 0.0 {
+                continue;
+            }
+            let point = optics.observer + view * (enter + at);
+            let r = point.length();
+            let zenith = point * (1.0 / r);
+            let view_cosine = view.dot(zenith).clamp(-1.0, 1.0);
+            let sun_cosine = optics.sun.dot(zenith).clamp(-1.0, 1.0);
+            let sines =
+                ((1.0 - view_cosine * view_cosine) * (1.0 - sun_cosine * sun_cosine)).sqrt();
+            let cos_azimuth = if sines > 1e-12 {
+                ((view.dot(optics.sun) - view_cosine * sun_cosine) / sines).clamp(-1.0, 1.0)
+            } else {
+                1.0
+            };
+            let node = NodeGeometry {
+                altitude_m: (r - ground).max(0.0),
+                sun_cosine,
+                view_cosine,
+                cos_azimuth,
+            };
+            let mut log_source = vec![0.0; w];
+            self.lookup_log_source(node, &mut log_source);
+            let rho = density(at);
+            for j in 0..s {
+                columns[j] += 0.5 * (previous_rho[j] + rho[j]) * (at - previous);
+            }
+            (previous, previous_rho) = (at, rho.clone());
+            let target = if in_segment {
+                &mut out.field
+            } else {
+                &mut out.field_behind
+            };
+            for (i, o) in target.iter_mut().enumerate() {
+                let (mut tau, mut scattering) = (0.0, 0.0);
+                for j in 0..s {
+                    tau += scaled.scaled_extinction[i * s + j] * columns[j];
+                    scattering += scaled.scaled_scattering[i * s + j] * rho[j];
+                }
+                if log_source[i] > super::view_march::DARK_LOG_SOURCE {
+                    *o += ds * scattering * log_source[i].exp() * (-tau).exp();
+                }
+            }
+            if !optics.has_forward_peaks {
+                continue;
+            }
+            scratch.node_columns.copy_from_slice(&columns);
+            scratch.densities.copy_from_slice(&rho);
+            let to_sun = sun_columns(point);
+            let lit = to_sun.is_some();
+            match to_sun {
+                Some(c) => scratch.sun_columns.copy_from_slice(&c),
+                None => scratch.sun_columns.fill(0.0),
+            }
+            let share = match &optics.peak_beam {
+                Some(beam) => beam.lookup_beam(r, sun_cosine, &mut scratch.beam),
+                None => 0.0,
+            };
+            optics.add_tilted_forward_peak(ds, lit, share, &mut scratch);
+        }
+        if !segment_done {
+            out.columns.copy_from_slice(&columns);
+            out.forward.copy_from_slice(&scratch.forward_integrals);
+            out.scaled
+                .copy_from_slice(&scratch.scaled_forward_integrals);
+        }
+        out.forward_sky.copy_from_slice(&scratch.forward_integrals);
+        out.scaled_sky
+            .copy_from_slice(&scratch.scaled_forward_integrals);
+        out
+    }
+
+    /// The light of the air of a marched segment
+    /// ([`MultipleScatteringTable::march_segment_parts`]), per wavelength,
+    /// without single scattering and the ground: the library's
+    /// `L_air - S_seg` (`sky/aerial_perspective.rs`), F_seg + (1 - T / T*)
+    /// (F_sky - F_seg) + P_sky - T P_behind.
+    #[cfg(test)]
+    pub(crate) fn segment_light_from_parts(&self, view: Vector3, parts: &SegmentMarch) -> Vec<f64> {
+        let optics = &self.field.optics;
+        let (w, s) = (optics.wavelengths, optics.species);
+        let scaled = &optics.scaled;
+        let mut light = vec![0.0; w];
+        let mut forward = vec![0.0; parts.forward.len()];
+        let mut behind = vec![0.0; parts.forward.len()];
+        for (i, l) in light.iter_mut().enumerate() {
+            let (mut tau, mut tau_scaled) = (0.0, 0.0);
+            for (j, column) in parts.columns.iter().enumerate() {
+                tau += scaled.extinction[i * s + j] * column;
+                tau_scaled += scaled.scaled_extinction[i * s + j] * column;
+            }
+            let (share, depth) = (1.0 - (tau_scaled - tau).exp(), tau - tau_scaled);
+            *l = parts.field[i] + share * parts.field_behind[i];
+            for j in 0..s {
+                let k = j * w + i;
+                forward[k] = parts.forward[k] + share * (parts.scaled_sky[k] - parts.scaled[k]);
+            }
+            let (q, qx) = (s * w + i, (s + 1) * w + i);
+            forward[q] = parts.forward_sky[q];
+            forward[qx] = parts.forward_sky[qx];
+            behind[q] = parts.forward_sky[q] - parts.forward[q];
+            behind[qx] = (parts.forward_sky[qx] - parts.forward[qx]) - depth * behind[q];
+        }
+        let cos_theta = view.dot(optics.sun);
+        let (mut phase, mut peak, mut hidden) = (vec![0.0; w], vec![0.0; w], vec![0.0; w]);
+        self.field
+            .compute_forward_peak_radiance(cos_theta, &forward, &mut phase, &mut peak);
+        self.field
+            .compute_forward_peak_radiance(cos_theta, &behind, &mut phase, &mut hidden);
+        for ((l, p), h) in light.iter_mut().zip(&peak).zip(&hidden) {
+            *l += p - h;
+        }
+        light
+    }
+
+    /// What the engine tables' aerial-perspective march reads from this
+    /// table and its field (`engine_tables/march.rs`; a field solved for
+    /// every sun): the source ln R with its axes, the optics, the ground's
+    /// light, the peak beam and the forward-peak term's tables.
+    pub(crate) fn exported(&self) -> ExportedSource {
+        let optics = &self.field.optics;
+        let atmosphere = &self.field.atmosphere;
+        let (w, s) = (optics.wavelengths, optics.species);
+        let mut scattering = vec![0.0; w * s];
+        for (j, species) in atmosphere.species.iter().enumerate() {
+            for i in 0..w {
+                scattering[i * s + j] = species.scattering_per_m[i];
+            }
+        }
+        ExportedSource {
+            wavelengths: w,
+            species: s,
+            view_zenith_nodes: self.view_zenith_nodes,
+            azimuth_nodes: self.azimuth_nodes,
+            levels_m: optics.geometry.grid.altitudes_m().to_vec(),
+            sun_zenith_rad: optics.sun_axis.angles_rad.clone(),
+            log_source: self.values.as_ref().clone(),
+            extinction: optics.scaled.extinction.clone(),
+            scaled_extinction: optics.scaled.scaled_extinction.clone(),
+            scaled_scattering: optics.scaled.scaled_scattering.clone(),
+            scattering,
+            solar: atmosphere.solar_irradiance_w_m2_nm.values().to_vec(),
+            profiles: optics.geometry.profiles.clone(),
+            ground_diffuse: optics.ground_diffuse.clone(),
+            ground_direct: optics.ground_direct.clone(),
+            has_forward_peaks: optics.has_forward_peaks,
+            beam: optics
+                .peak_beam
+                .as_ref()
+                .filter(|_| optics.has_forward_peaks)
+                .map(|beam| beam.exported()),
+            kernel: optics.forward_peak.exported_kernel(),
+        }
+    }
+
+    /// The phase functions the march's single scattering (`exact`, p_j)
+    /// and its forward-peak term's first line (`smooth`, (1 - f) p*_j near
+    /// the sun, see `forward_peak.rs`) take at cos(theta) = `cos_theta`,
+    /// [j * wavelengths + i], sr^-1.
+    pub(crate) fn march_phases(&self, cos_theta: f64, exact: &mut [f64], smooth: &mut [f64]) {
+        let optics = &self.field.optics;
+        let w = optics.wavelengths;
+        for (j, species) in self.field.atmosphere.species.iter().enumerate() {
+            species
+                .phase_function
+                .eval_into(cos_theta, &mut exact[j * w..(j + 1) * w]);
+            optics.forward_peak.smooth_phase_into(
+                j,
+                &species.phase_function,
+                cos_theta,
+                &mut smooth[j * w..(j + 1) * w],
+            );
+        }
+    }
+
     /// ln R(x, view) at one march node, into `log_source`: quadrilinear
     /// in ln R.
     fn lookup_log_source(&self, node: NodeGeometry, log_source: &mut [f64]) {
@@ -421,32 +676,119 @@ impl MultipleScatteringTable {
     #[inline(always)]
     fn lookup_log_source_portable(&self, node: NodeGeometry, log_source: &mut [f64]) {
         let optics = &self.field.optics;
-        let w = optics.wavelengths;
-        let suns = optics.sun_axis.count();
-        let (views, azimuths) = (self.view_zenith_nodes, self.azimuth_nodes);
-        let (k, tz) = self.field.optics.geometry.grid.locate(node.altitude_m);
-        let (s, ts) = optics.sun_axis.locate(node.sun_cosine);
-        let y = node.view_cosine.acos() / PI * (views - 1) as f64;
-        let v = (y as usize).min(views - 2);
-        let tv = y - v as f64;
-        let x = node.cos_azimuth.acos() / PI * (azimuths - 1) as f64;
-        let f = (x as usize).min(azimuths - 2);
-        let tf = x - f as f64;
-        log_source.fill(0.0);
-        for (kk, wk) in [(k, 1.0 - tz), (k + 1, tz)] {
-            for (ss, ws) in [(s, 1.0 - ts), (s + 1, ts)] {
-                for (ff, wf) in [(f, 1.0 - tf), (f + 1, tf)] {
-                    let node = ((kk * suns + ss) * azimuths + ff) * views + v;
-                    let (low, high) = self.values[node * w..(node + 2) * w].split_at(w);
-                    let (a, b) = (
-                        (wk * ws * wf * (1.0 - tv)) as f32,
-                        (wk * ws * wf * tv) as f32,
-                    );
-                    for ((out, l), h) in log_source.iter_mut().zip(low).zip(high) {
-                        *out += (a * l + b * h) as f64;
-                    }
+        interpolate_log_source(
+            &self.values,
+            (
+                optics.sun_axis.count(),
+                self.azimuth_nodes,
+                self.view_zenith_nodes,
+            ),
+            (
+                optics.geometry.grid.locate(node.altitude_m),
+                optics.sun_axis.locate(node.sun_cosine),
+            ),
+            (node.view_cosine, node.cos_azimuth),
+            log_source,
+        );
+    }
+}
+
+/// What [`MultipleScatteringTable::march_segment_parts`] gathers (prototype
+/// measurements), per wavelength: the scaled field's light of the segment
+/// and of the ray beyond it (both seen from the eye, W m^-2 sr^-1 nm^-1),
+/// the forward-peak integrals of the segment and of the whole ray, their
+/// scaled parts, and the segment's columns (m).
+#[cfg(test)]
+pub(crate) struct SegmentMarch {
+    pub(crate) field: Vec<f64>,
+    pub(crate) field_behind: Vec<f64>,
+    pub(crate) forward: Vec<f64>,
+    pub(crate) forward_sky: Vec<f64>,
+    pub(crate) scaled: Vec<f64>,
+    pub(crate) scaled_sky: Vec<f64>,
+    pub(crate) columns: Vec<f64>,
+}
+
+/// ln R at one node from a source table's values `values` (ln R,
+/// [(((k * suns + s) * azimuths + f) * views + v) * wavelengths + i],
+/// views and azimuths uniform over 0..pi), quadrilinear in ln R: the
+/// altitude and sun cells (node, fraction) given, the view's zenith
+/// cosine and the cosine of its azimuth from the sun located here; into
+/// `out` (one value per wavelength). The library's march and the engine
+/// tables' (`engine_tables/lookup.rs`) read the table by it.
+pub(crate) fn interpolate_log_source(
+    values: &[f32],
+    (suns, azimuths, views): (usize, usize, usize),
+    ((k, tz), (s, ts)): ((usize, f64), (usize, f64)),
+    (view_cosine, cos_azimuth): (f64, f64),
+    out: &mut [f64],
+) {
+    let w = out.len();
+    let y = view_cosine.clamp(-1.0, 1.0).acos() / PI * (views - 1) as f64;
+    let v = (y as usize).min(views - 2);
+    let tv = y - v as f64;
+    let x = cos_azimuth.clamp(-1.0, 1.0).acos() / PI * (azimuths - 1) as f64;
+    let f = (x as usize).min(azimuths - 2);
+    let tf = x - f as f64;
+    out.fill(0.0);
+    for (kk, wk) in [(k, 1.0 - tz), (k + 1, tz)] {
+        for (ss, ws) in [(s, 1.0 - ts), (s + 1, ts)] {
+            for (ff, wf) in [(f, 1.0 - tf), (f + 1, tf)] {
+                let node = ((kk * suns + ss) * azimuths + ff) * views + v;
+                let (low, high) = values[node * w..(node + 2) * w].split_at(w);
+                let (a, b) = (
+                    (wk * ws * wf * (1.0 - tv)) as f32,
+                    (wk * ws * wf * tv) as f32,
+                );
+                for ((o, l), h) in out.iter_mut().zip(low).zip(high) {
+                    *o += (a * l + b * h) as f64;
                 }
             }
         }
     }
+}
+
+/// What the engine tables' march reads from a source table and its field
+/// ([`MultipleScatteringTable::exported`]), per wavelength i of the
+/// field's grid and species j.
+#[derive(Debug, Clone)]
+pub(crate) struct ExportedSource {
+    pub(crate) wavelengths: usize,
+    pub(crate) species: usize,
+    pub(crate) view_zenith_nodes: usize,
+    pub(crate) azimuth_nodes: usize,
+    /// The source's altitude levels, m, and sun zenith nodes, rad.
+    pub(crate) levels_m: Vec<f64>,
+    pub(crate) sun_zenith_rad: Vec<f64>,
+    /// ln R, [(((k * suns + s) * azimuth_nodes + f) * view_zenith_nodes +
+    /// v) * wavelengths + i] (views and azimuths uniform over 0..pi).
+    pub(crate) log_source: Vec<f32>,
+    /// Per unit relative density, m^-1, [i * species + j]: extinction,
+    /// delta-M scaled extinction and scattering, scattering.
+    pub(crate) extinction: Vec<f64>,
+    pub(crate) scaled_extinction: Vec<f64>,
+    pub(crate) scaled_scattering: Vec<f64>,
+    pub(crate) scattering: Vec<f64>,
+    /// Top-of-atmosphere solar irradiance, W m^-2 nm^-1.
+    pub(crate) solar: Vec<f64>,
+    pub(crate) profiles: Vec<crate::atmosphere::DensityProfile>,
+    /// The ground's light per sun node, [s * wavelengths + i], W m^-2
+    /// sr^-1 nm^-1 (`view_march.rs`).
+    pub(crate) ground_diffuse: Vec<f64>,
+    pub(crate) ground_direct: Vec<f64>,
+    pub(crate) has_forward_peaks: bool,
+    pub(crate) beam: Option<ExportedBeam>,
+    /// X nodes, angle nodes, (blend start, radius) rad, e^(-X) G.
+    pub(crate) kernel: (Vec<f64>, usize, (f64, f64), Vec<f64>),
+}
+
+/// The peak beam's table ([`super::peak_beam::PeakBeam::exported`]).
+#[derive(Debug, Clone)]
+pub(crate) struct ExportedBeam {
+    pub(crate) altitudes_m: Vec<f64>,
+    pub(crate) first_elevation_deg: f64,
+    pub(crate) step_deg: f64,
+    pub(crate) elevations: usize,
+    pub(crate) ln_beam: Vec<f64>,
+    pub(crate) range_deg: (f64, f64, f64),
 }
