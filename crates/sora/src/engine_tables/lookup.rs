@@ -488,9 +488,6 @@ impl EngineTables {
         sun: [f64; 3],
         distance_m: f64,
     ) -> ([f64; 3], [f64; 3]) {
-        if let Some(tables) = &self.march {
-            return tables.aerial_perspective_xyz(altitude_m, view, sun, distance_m);
-        }
         if self.aerial.is_empty() {
             return self.aerial_perspective_by_difference_xyz(altitude_m, view, sun, distance_m);
         }
@@ -561,9 +558,9 @@ impl EngineTables {
     }
 }
 
-/// The aerial-perspective march (the reference shaders' `soraAerialPerspective`
-/// marches the same): the tables of [`super::march`], read at the nodes
-/// of one view ray.
+/// The aerial-perspective march (the Rust lookup; the reference shaders'
+/// `soraAerialPerspective` does not march yet): the tables of
+/// [`super::march`], read at the nodes of one view ray.
 impl MarchTables {
     /// Aerial perspective by the march (see the module docs of
     /// [`super::march`]): an eye at `altitude_m`, the unit `view` and `sun`
@@ -678,7 +675,7 @@ impl MarchTables {
             for j in 0..s {
                 columns[j] += 0.5 * (previous_rho[j] + rho[j]) * (at - previous);
             }
-            (previous, previous_rho) = (at, rho.clone());
+            previous = at;
             let target = if in_segment {
                 &mut field
             } else {
@@ -746,6 +743,7 @@ impl MarchTables {
                     forward[(s + 1) * w + i] += only * x;
                 }
             }
+            previous_rho = rho;
         }
         if !segment_done {
             columns_segment.copy_from_slice(&columns);
