@@ -57,22 +57,34 @@ pub const PHASE_NODES: usize = 1024;
 
 /// How the source is kept: every altitude level up to `dense_below_m`,
 /// every `level_stride`-th above (and the top), every `sun_stride`-th of
-/// the field's sun zenith nodes (and the last), ln R rounded to 16-bit
+/// the field's sun zenith nodes below `sun_stride_below_zenith_deg` and
+/// every one from there on (and the last), every `wavelength_stride`-th
+/// wavelength, every `azimuth_stride`-th azimuth, ln R rounded to 16-bit
 /// floats where `half` (what `march.bin` holds).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SourceThinning {
     pub level_stride: usize,
     pub dense_below_m: f64,
     pub sun_stride: usize,
+    /// The sun stride applies to the sun zenith nodes below this angle
+    /// (degrees; where the light changes slowly with the sun); every node
+    /// from it on is kept.
+    pub sun_stride_below_zenith_deg: f64,
     /// Every `wavelength_stride`-th wavelength (and the last) kept, ln R
     /// read linearly in the wavelength's index between them.
     pub wavelength_stride: usize,
+    /// Every `azimuth_stride`-th of the field's azimuth nodes (uniform
+    /// over 0..pi; the stride must divide their intervals, so the kept
+    /// nodes stay uniform and keep 0 and pi).
+    pub azimuth_stride: usize,
     pub half: bool,
 }
 
 /// The default [`SourceThinning`]: every level up to 6 km, every third
-/// above, every sun node, every other wavelength (11 of the default 21,
-/// ln R linear between them), 16-bit floats: 34-38 MB. The field for every sun has 41
+/// above, every other sun node (6 degrees apart) for suns more than 15
+/// degrees up and every one below (0.75-3 degrees apart), every other
+/// wavelength (11 of the default 21, ln R linear between them), every
+/// azimuth, 16-bit floats: 29-33 MB. The field for every sun has 41
 /// levels (22-25 of them below 6 km on Earth) and 82 sun nodes; the
 /// source at all of them is 200 MB as 32-bit floats. Measured against the
 /// library (`docs/engine-tables.md`): every other level and sun node
@@ -81,12 +93,20 @@ pub struct SourceThinning {
 /// (the levels near the ground: with all of them below 6 km the errors
 /// are those of every level), 16-bit floats changed no error by more than
 /// 0.02 points; every other wavelength kept the march within 1.70 %
-/// (mars-dust at -4 degrees; earth-hazy 1.57 %, earth-clear 0.93 %).
+/// (mars-dust at -4 degrees; earth-hazy 1.57 %, earth-clear 0.93 %);
+/// every other sun node above 15 degrees moved the largest errors at
+/// suns between the kept nodes (58.5, 40.5 and 22.5 degrees) from
+/// 0.27-0.29 to 0.35-0.58 % on mars-dust and from 1.30-1.46 to
+/// 0.83-1.44 % on earth-hazy, where every other sun node at twilight
+/// moved earth-hazy at -4 degrees from 1.37 to 2.03 %; every other
+/// azimuth (10 of 19) put mars-dust's aureole 9.2 % off.
 pub const SOURCE_THINNING: SourceThinning = SourceThinning {
     level_stride: 3,
     dense_below_m: 6000.0,
-    sun_stride: 1,
+    sun_stride: 2,
+    sun_stride_below_zenith_deg: 75.0,
     wavelength_stride: 2,
+    azimuth_stride: 1,
     half: true,
 };
 
@@ -431,7 +451,9 @@ fn thinned_source(
         level_stride,
         dense_below_m,
         sun_stride,
+        sun_stride_below_zenith_deg,
         wavelength_stride,
+        azimuth_stride,
         half,
     } = thinning;
     let kept = |count: usize, stride: usize| -> Vec<usize> {
@@ -454,24 +476,42 @@ fn thinned_source(
         }
     }
     let suns_all = source.sun_zenith_rad.len();
-    let suns = kept(suns_all, sun_stride);
+    let sparse_below = sun_stride_below_zenith_deg.to_radians();
+    let suns: Vec<usize> = (0..suns_all)
+        .filter(|s| {
+            source.sun_zenith_rad[*s] >= sparse_below
+                || s % sun_stride.max(1) == 0
+                || s + 1 == suns_all
+        })
+        .collect();
     let w = source.wavelengths;
     let channels = kept(w, wavelength_stride);
-    let block = source.azimuth_nodes * source.view_zenith_nodes * w;
-    let mut log_source = Vec::with_capacity(levels.len() * suns.len() * block);
+    let views = source.view_zenith_nodes;
+    let azimuth_stride = azimuth_stride.max(1);
+    assert!(
+        (source.azimuth_nodes - 1) % azimuth_stride == 0,
+        "an azimuth stride of {azimuth_stride} leaves the field's {} azimuth nodes non-uniform",
+        source.azimuth_nodes
+    );
+    let azimuths = kept(source.azimuth_nodes, azimuth_stride);
+    let block = source.azimuth_nodes * views * w;
+    let mut log_source =
+        Vec::with_capacity(levels.len() * suns.len() * azimuths.len() * views * channels.len());
     for k in &levels {
         for s in &suns {
             let at = (k * suns_all + s) * block;
-            let values = &source.log_source[at..at + block];
-            log_source.extend(values.chunks_exact(w).flat_map(|node| {
-                channels.iter().map(|i| {
-                    if half {
-                        exr::prelude::f16::from_f32(node[*i]).to_f32()
-                    } else {
-                        node[*i]
-                    }
-                })
-            }));
+            for f in &azimuths {
+                let values = &source.log_source[at + f * views * w..][..views * w];
+                log_source.extend(values.chunks_exact(w).flat_map(|node| {
+                    channels.iter().map(|i| {
+                        if half {
+                            exr::prelude::f16::from_f32(node[*i]).to_f32()
+                        } else {
+                            node[*i]
+                        }
+                    })
+                }));
+            }
         }
     }
     let thinned = ExportedSource {
@@ -489,6 +529,7 @@ fn thinned_source(
                 source.ground_direct[s * source.wavelengths..][..source.wavelengths].to_vec()
             })
             .collect(),
+        azimuth_nodes: azimuths.len(),
         log_source,
         ..source
     };
