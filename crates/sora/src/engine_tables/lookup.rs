@@ -134,7 +134,8 @@ pub(crate) fn turn_share(view: LocalView, e_deg: f64, horizon: f64) -> f64 {
         40f64.to_radians().cos(),
         10f64.to_radians().cos(),
         cos_theta,
-    ) * (1.0 - smoothstep(horizon - 20f64.to_radians(), horizon - 5f64.to_radians(), z))
+    ) * (1.0
+        - smoothstep(horizon - 20f64.to_radians(), horizon - 5f64.to_radians(), z))
         * (1.0 - smoothstep(70.0, 85.0, e_deg));
     // The planet's shadow, which rises at the antisolar horizon as the sun
     // sets, turns with the antisolar point (horizon included).

@@ -431,9 +431,18 @@ fn the_turned_view_keeps_its_angle_to_the_sun() {
         zenith_rad: horizon - 1e-3,
         relative_azimuth_rad: std::f64::consts::PI,
     };
-    assert_eq!(super::lookup::turn_share(antisolar_horizon, 0.0, horizon), 1.0);
-    assert_eq!(super::lookup::turn_share(antisolar_horizon, -8.0, horizon), 1.0);
-    assert_eq!(super::lookup::turn_share(antisolar_horizon, 10.0, horizon), 0.0);
+    assert_eq!(
+        super::lookup::turn_share(antisolar_horizon, 0.0, horizon),
+        1.0
+    );
+    assert_eq!(
+        super::lookup::turn_share(antisolar_horizon, -8.0, horizon),
+        1.0
+    );
+    assert_eq!(
+        super::lookup::turn_share(antisolar_horizon, 10.0, horizon),
+        0.0
+    );
     let beside = LocalView {
         zenith_rad: horizon - 1e-3,
         relative_azimuth_rad: f64::to_radians(85.0),
@@ -477,7 +486,10 @@ fn the_sun_axis_read_follows_the_curvature_of_ln_l() {
     for x in [1.0, 1.4, 1.5, 2.25, 2.9] {
         let y = tables.sky_xyz(0.0, view, elevation(x))[1];
         let want = q(x).exp();
-        assert!((y / want - 1.0).abs() < 1e-5, "node {x}: {y} against {want}");
+        assert!(
+            (y / want - 1.0).abs() < 1e-5,
+            "node {x}: {y} against {want}"
+        );
     }
     // A black layer below: the read stays within e^(1/8) of the chord.
     let first_of_layer_1 = per_layer * a_count;
