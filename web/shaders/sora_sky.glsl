@@ -119,22 +119,30 @@ vec2 soraTurnedView(float zenith, float phi, float delta, float zh) {
 // to the sun between sun nodes), 0 beyond 40; 0 within 5 degrees of the
 // horizon (its band keeps its zenith angle), 1 from 20 up; 0 for suns
 // above 85 degrees (the zenith axis is coarser than the aureole there),
-// 1 below 70 (smoothstep ramps).
+// 1 below 70; or, for suns below 2 degrees (0 above 6), 1 within 40
+// degrees of the antisolar point, 0 beyond 80, horizon included
+// (smoothstep ramps).
 float soraTurnShare(float zenith, float phi, float eDeg, float zh) {
   float e = radians(eDeg);
   float cosTheta = cos(zenith) * sin(e) + sin(zenith) * cos(phi) * cos(e);
-  return smoothstep(cos(radians(40.0)), cos(radians(10.0)), cosTheta)
+  float sunSide = smoothstep(cos(radians(40.0)), cos(radians(10.0)), cosTheta)
     * (1.0 - smoothstep(zh - radians(20.0), zh - radians(5.0), zenith))
     * (1.0 - smoothstep(70.0, 85.0, eDeg));
+  // The planet's shadow, rising at the antisolar horizon as the sun sets,
+  // turns with the antisolar point (horizon included).
+  float shadow = smoothstep(cos(radians(80.0)), cos(radians(40.0)), -cosTheta)
+    * (1.0 - smoothstep(2.0, 6.0, eDeg));
+  return max(sunSide, shadow);
 }
 
 // A layer table (the sky, or the aerial-perspective table with Z zenith
 // nodes per half, K azimuth nodes, and its distance slices j and j + 1
 // blended by fj) at altitude h (m), toward zenith angle `zenith` (rad) and
 // azimuth `phi` (rad, 0..pi) from the sun's, with the sun at elevation
-// eDeg (degrees): bilinear in a layer, linear in altitude, geometric
-// between the two sun layers, each read at the view turned with the sun
-// to its node (soraTurnedView, by soraTurnShare of the step).
+// eDeg (degrees): bilinear in a layer, linear in altitude, in ln L between
+// the two sun layers (the chord less the curvature of the four nearest),
+// each read at the view turned with the sun to its node (soraTurnedView,
+// by soraTurnShare of the step).
 vec3 soraLayersXyz(highp sampler2DArray table, int Z, int K, int j, float fj, float h, float zenith, float phi, float eDeg) {
   h = clamp(h, 0.0, soraThickness());
   float r = uPlanetSun.x + h;
@@ -146,8 +154,10 @@ vec3 soraLayersXyz(highp sampler2DArray table, int Z, int K, int j, float fj, fl
   float share = soraTurnShare(zenith, phi, eDeg, zh);
   int row0 = 2 * Z * j;
   int row1 = fj > 0.0 ? row0 + 2 * Z : row0;
-  vec3 layers[2];
-  for (int n = 0; n < 2; n++) {
+  // ln L of sun layers s - 1 .. s + 2 (clamped to the axis).
+  vec3 layers[4];
+  for (int m = 0; m < 4; m++) {
+    int n = clamp(s + m - 1, 0, uSkyNodes.x - 1) - s;
     vec2 view = soraTurnedView(zenith, phi, radians(soraSunElevationOfNode(s + n) - eDeg) * share, zh);
     float y; int lowest; int highest;
     soraZenithCoordinate(view.x, r, Z, y, lowest, highest);
@@ -156,9 +166,13 @@ vec3 soraLayersXyz(highp sampler2DArray table, int Z, int K, int j, float fj, fl
     int low = (s + n) * A + a;
     vec3 ground = mix(soraLayer(table, low, row0, i, fy, k, fx), soraLayer(table, low, row1, i, fy, k, fx), fj);
     vec3 above = mix(soraLayer(table, low + 1, row0, i, fy, k, fx), soraLayer(table, low + 1, row1, i, fy, k, fx), fj);
-    layers[n] = mix(ground, above, fa);
+    layers[m] = log(max(mix(ground, above, fa), vec3(SORA_FLOOR)));
   }
-  return soraMixLog(layers[0], layers[1], fs);
+  // The chord in ln L less its curvature: the second differences at nodes
+  // s and s + 1 (zero at the axis's ends, each within +-1), blended.
+  vec3 d0 = s > 0 ? clamp(layers[0] - 2.0 * layers[1] + layers[2], -1.0, 1.0) : vec3(0.0);
+  vec3 d1 = s + 2 < uSkyNodes.x ? clamp(layers[1] - 2.0 * layers[2] + layers[3], -1.0, 1.0) : vec3(0.0);
+  return exp(mix(layers[1], layers[2], fs) - 0.5 * fs * (1.0 - fs) * mix(d0, d1, fs));
 }
 
 // Sky radiance (XYZ, W m^-2 sr^-1 nm^-1) seen at altitude h (m) toward

@@ -110,21 +110,27 @@ fn sora_turned_view(zenith: f32, phi: f32, delta: f32, zh: f32) -> vec2<f32> {
 
 // Share of the sun's step the view is turned by: 1 within 10 degrees of
 // the sun, 0 beyond 40; 0 within 5 degrees of the horizon, 1 from 20 up;
-// 0 for suns above 85 degrees, 1 below 70 (smoothstep ramps).
+// 0 for suns above 85 degrees, 1 below 70; or, for suns below 2 degrees
+// (0 above 6), 1 within 40 degrees of the antisolar point, 0 beyond 80,
+// horizon included (the planet's shadow turns with it; smoothstep ramps).
 fn sora_turn_share(zenith: f32, phi: f32, e_deg: f32, zh: f32) -> f32 {
   let e = radians(e_deg);
   let cos_theta = cos(zenith) * sin(e) + sin(zenith) * cos(phi) * cos(e);
-  return smoothstep(cos(radians(40.0)), cos(radians(10.0)), cos_theta)
+  let sun_side = smoothstep(cos(radians(40.0)), cos(radians(10.0)), cos_theta)
     * (1.0 - smoothstep(zh - radians(20.0), zh - radians(5.0), zenith))
     * (1.0 - smoothstep(70.0, 85.0, e_deg));
+  let shadow = smoothstep(cos(radians(80.0)), cos(radians(40.0)), -cos_theta)
+    * (1.0 - smoothstep(2.0, 6.0, e_deg));
+  return max(sun_side, shadow);
 }
 
 // A layer table (the sky, or the aerial-perspective table with zn zenith
 // nodes per half, kn azimuth nodes, its distance slices j and j + 1
 // blended by fj) at altitude h (m) toward zenith angle `zenith` and
 // azimuth `phi` from the sun's (rad), sun at e_deg: bilinear in a layer,
-// linear in altitude, geometric between the sun layers, each read at the
-// view turned with the sun to its node.
+// linear in altitude, in ln L between the sun layers (the chord less the
+// curvature of the four nearest), each read at the view turned with the
+// sun to its node.
 fn sora_layers_xyz(table: texture_2d_array<f32>, zn: i32, kn: i32, j: i32, fj: f32,
                    h_in: f32, zenith: f32, phi: f32, e_in: f32) -> vec3<f32> {
   let h = clamp(h_in, 0.0, sora_thickness());
@@ -138,17 +144,25 @@ fn sora_layers_xyz(table: texture_2d_array<f32>, zn: i32, kn: i32, j: i32, fj: f
   let row0 = 2 * zn * j;
   var row1 = row0;
   if (fj > 0.0) { row1 = row0 + 2 * zn; }
-  var layers: array<vec3<f32>, 2>;
-  for (var n = 0; n < 2; n++) {
+  // ln L of sun layers s - 1 .. s + 2 (clamped to the axis).
+  var layers: array<vec3<f32>, 4>;
+  for (var m = 0; m < 4; m++) {
+    let n = clamp(s.i + m - 1, 0, sora.sky_nodes.x - 1) - s.i;
     let view = sora_turned_view(zenith, phi, radians(sora_sun_elevation_of_node(s.i + n) - e_deg) * share, zh);
     let z = sora_zenith_cell(view.x, r, zn);
     let k = sora_cell(sqrt(clamp(view.y / SORA_PI, 0.0, 1.0)) * f32(kn - 1), 0, kn - 2);
     let low = (s.i + n) * an + a.i;
     let ground = mix(sora_layer(table, low, row0, z, k), sora_layer(table, low, row1, z, k), fj);
     let above = mix(sora_layer(table, low + 1, row0, z, k), sora_layer(table, low + 1, row1, z, k), fj);
-    layers[n] = mix(ground, above, a.f);
+    layers[m] = log(max(mix(ground, above, a.f), vec3<f32>(SORA_FLOOR)));
   }
-  return sora_mix_log(layers[0], layers[1], s.f);
+  // The chord in ln L less its curvature: the second differences at nodes
+  // s and s + 1 (zero at the axis's ends, each within +-1), blended.
+  var d0 = vec3<f32>(0.0);
+  var d1 = vec3<f32>(0.0);
+  if (s.i > 0) { d0 = clamp(layers[0] - 2.0 * layers[1] + layers[2], vec3<f32>(-1.0), vec3<f32>(1.0)); }
+  if (s.i + 2 < sora.sky_nodes.x) { d1 = clamp(layers[1] - 2.0 * layers[2] + layers[3], vec3<f32>(-1.0), vec3<f32>(1.0)); }
+  return exp(mix(layers[1], layers[2], s.f) - 0.5 * s.f * (1.0 - s.f) * mix(d0, d1, s.f));
 }
 
 // Sky radiance (XYZ, W m^-2 sr^-1 nm^-1) at altitude h (m) toward zenith

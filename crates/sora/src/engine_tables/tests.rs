@@ -424,11 +424,85 @@ fn the_turned_view_keeps_its_angle_to_the_sun() {
         relative_azimuth_rad: std::f64::consts::PI,
     };
     assert_eq!(super::lookup::turn_share(far, 60.0, horizon), 0.0);
+    // Near the antisolar point, horizon included, for a sun about the
+    // sunset the whole step (the planet's shadow turns with it), none for
+    // a high sun or far from it.
+    let antisolar_horizon = LocalView {
+        zenith_rad: horizon - 1e-3,
+        relative_azimuth_rad: std::f64::consts::PI,
+    };
+    assert_eq!(
+        super::lookup::turn_share(antisolar_horizon, 0.0, horizon),
+        1.0
+    );
+    assert_eq!(
+        super::lookup::turn_share(antisolar_horizon, -8.0, horizon),
+        1.0
+    );
+    assert_eq!(
+        super::lookup::turn_share(antisolar_horizon, 10.0, horizon),
+        0.0
+    );
+    let beside = LocalView {
+        zenith_rad: horizon - 1e-3,
+        relative_azimuth_rad: f64::to_radians(85.0),
+    };
+    assert_eq!(super::lookup::turn_share(beside, 0.0, horizon), 0.0);
     let zenith = LocalView {
         zenith_rad: 0.0,
         relative_azimuth_rad: 0.0,
     };
     assert_eq!(super::lookup::turn_share(zenith, 88.0, horizon), 0.0);
+}
+
+/// Between sun layers the read is the chord of ln L less its curvature
+/// (the second differences of the four nearest layers): exact where ln L
+/// is quadratic in the sun's node coordinate, and bounded where a layer is
+/// black (its logarithm the floor's).
+#[test]
+fn the_sun_axis_read_follows_the_curvature_of_ln_l() {
+    let (_, mut tables) = tables();
+    let (s_count, a_count) = (tables.settings.sun_nodes, tables.settings.altitude_nodes);
+    let per_layer = tables.sky.len() / (s_count * a_count);
+    let q = |x: f64| 0.3 * x - 0.05 * x * x - 2.0;
+    for (n, texel) in tables.sky.iter_mut().enumerate() {
+        let s = n / per_layer / a_count;
+        *texel = [q(s as f64).exp() as f32; 3];
+    }
+    // The elevation of fractional sun node x (the inverse of
+    // axes::sun_coordinate).
+    let elevation = |x: f64| {
+        let t = |e: f64| (e / axes::SUN_WIDTH_DEG).asinh();
+        let (t0, t1) = (
+            t(axes::SUN_ELEVATION_MIN_DEG),
+            t(axes::SUN_ELEVATION_MAX_DEG),
+        );
+        axes::SUN_WIDTH_DEG * (t0 + (t1 - t0) * x / (s_count - 1) as f64).sinh()
+    };
+    let view = LocalView {
+        zenith_rad: 1.0,
+        relative_azimuth_rad: 2.5,
+    };
+    for x in [1.0, 1.4, 1.5, 2.25, 2.9] {
+        let y = tables.sky_xyz(0.0, view, elevation(x))[1];
+        let want = q(x).exp();
+        assert!(
+            (y / want - 1.0).abs() < 1e-5,
+            "node {x}: {y} against {want}"
+        );
+    }
+    // A black layer below: the read stays within e^(1/8) of the chord.
+    let first_of_layer_1 = per_layer * a_count;
+    for texel in &mut tables.sky[..first_of_layer_1] {
+        *texel = [0.0; 3];
+    }
+    let x: f64 = 1.5;
+    let y = tables.sky_xyz(0.0, view, elevation(x))[1];
+    let chord = ((q(1.0) + q(2.0)) / 2.0).exp();
+    assert!(
+        y.is_finite() && (y / chord).ln().abs() <= 0.125 + 1e-9,
+        "{y} against the chord {chord}"
+    );
 }
 
 /// The layers of an eye on the ground (altitude node 0) and its irradiance
