@@ -621,7 +621,8 @@ mod tests {
                     .flat_map(|c| [c.x, c.y, c.z])
                     .collect()
             };
-            let checks: [(&str, &dyn Fn(&Sky) -> Vec<f64>); 6] = [
+            type Answer<'a> = &'a dyn Fn(&Sky) -> Vec<f64>;
+            let checks: [(&str, Answer); 6] = [
                 ("views", &views),
                 ("global irradiance", &global),
                 ("direct beam", &direct),
