@@ -40,7 +40,8 @@ use crate::json::Members;
 ///
 /// With banded gases (an atmosphere file's [gases]) every value is the
 /// library's sum of five solves, one per k-distribution term, weighted
-/// (five times the time).
+/// (five times the time at the samples from the first a band absorbs to
+/// the last; one solve elsewhere).
 ///
 /// --method reference marches each of the 4,608 directions of the diffuse
 /// integral: at its 1000 x 250 steps that is about 80 s a wavelength, past

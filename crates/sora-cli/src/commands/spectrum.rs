@@ -31,7 +31,8 @@ use crate::arguments::{
 ///
 /// With banded gases (an atmosphere file's [gases]) every radiance is the
 /// library's sum of five solves, one per k-distribution term, weighted
-/// (five times the time).
+/// (five times the time at the samples from the first a band absorbs to
+/// the last; one solve elsewhere).
 ///
 /// Methods: fast and reference compute single scattering (plus the sunlit
 /// ground) and, with --scattering multiple (the default), add all higher

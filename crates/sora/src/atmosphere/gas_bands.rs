@@ -773,6 +773,39 @@ pub fn has_untermed_gas_bands(atmosphere: &Atmosphere) -> bool {
         .any(|s| band_of(s).is_some_and(|band| band.term.is_none()))
 }
 
+/// The first and last sample of `grid` at which a banded gas of
+/// `atmosphere` absorbs differently in different k-distribution terms
+/// (its cross-sections at terms 0..[`TERMS`] not all equal); `None` where
+/// they are equal everywhere (no band on the grid). Outside that span every
+/// term's atmosphere is the same at each sample, so one solve there is
+/// the sum over the terms (their weights times the same value).
+pub fn term_span(atmosphere: &Atmosphere, grid: &WavelengthGrid) -> Result<Option<(usize, usize)>> {
+    let mut differs = vec![false; grid.len()];
+    for band in atmosphere.species.iter().filter_map(band_of) {
+        let first = GasBand {
+            term: Some(0),
+            ..band.clone()
+        }
+        .sample(grid)?;
+        for j in 1..TERMS {
+            let other = GasBand {
+                term: Some(j),
+                ..band.clone()
+            }
+            .sample(grid)?;
+            for (d, (a, b)) in differs
+                .iter_mut()
+                .zip(first.values().iter().zip(other.values()))
+            {
+                *d |= a != b;
+            }
+        }
+    }
+    let first = differs.iter().position(|d| *d);
+    let last = differs.iter().rposition(|d| *d);
+    Ok(first.zip(last))
+}
+
 fn band_of(species: &Species) -> Option<&GasBand> {
     match &species.model {
         SpeciesModel::AbsorbingGas(AbsorbingGas {

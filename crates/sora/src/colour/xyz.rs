@@ -165,6 +165,17 @@ impl SpectrumToXyz {
         }
     }
 
+    /// The conversion of the samples from `first` on, on `grid` (their
+    /// sub-grid, `WavelengthGrid::sub_grid`): the colour of a spectrum
+    /// that is zero at every other sample.
+    pub(crate) fn restricted(&self, first: usize, grid: &WavelengthGrid) -> SpectrumToXyz {
+        SpectrumToXyz {
+            grid: *grid,
+            observer: self.observer,
+            weighted_cmfs: self.weighted_cmfs[first..first + grid.len()].to_vec(),
+        }
+    }
+
     /// The grid the spectra must be sampled on.
     pub(crate) fn grid(&self) -> &WavelengthGrid {
         &self.grid

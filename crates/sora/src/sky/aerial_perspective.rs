@@ -279,7 +279,12 @@ impl Sky {
         if !self.k_terms.is_empty() {
             let mut parts = Vec::with_capacity(self.k_terms.len());
             for (weights, term) in &self.k_terms {
-                let (w, to_xyz) = super::k_terms::term_colour_conversion(to_xyz, weights);
+                let grid = (self.term_offset(term), term.wavelengths());
+                let Some((w, to_xyz)) =
+                    super::k_terms::term_colour_conversion(to_xyz, grid, weights)
+                else {
+                    continue;
+                };
                 parts.push((
                     w,
                     term.render_aerial_perspective_xyz(image, depth_m, &to_xyz)?,

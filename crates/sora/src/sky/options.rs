@@ -344,16 +344,26 @@ impl SkyBuilder<'_> {
     /// Checks every choice and puts the atmosphere on the grid (the
     /// expensive tables wait for their first use).
     pub fn build(self) -> Result<Sky> {
-        let mut sky = self.build_for(self.atmosphere)?;
+        self.build_with_terms(false)
+    }
+
+    /// [`SkyBuilder::build`]; `whole_grid`: every k-distribution term's sky
+    /// on the whole grid, also where the terms' atmospheres are the same
+    /// (the slow path, the oracle of the tests; `sky/k_terms.rs`).
+    pub(crate) fn build_with_terms(self, whole_grid: bool) -> Result<Sky> {
+        let mut sky = self.build_for(self.atmosphere, &self.wavelengths)?;
         // Banded gases: one sky per k-distribution term (`sky/k_terms.rs`).
-        sky.k_terms = k_terms::term_skies(self.atmosphere, &self.wavelengths, |at_term| {
-            self.build_for(at_term)
-        })?;
+        sky.k_terms = k_terms::term_skies(
+            self.atmosphere,
+            &self.wavelengths,
+            whole_grid,
+            |at_term, grid| self.build_for(at_term, grid),
+        )?;
         Ok(sky)
     }
 
-    /// [`SkyBuilder::build`] of `atmosphere` as one solve.
-    fn build_for(&self, atmosphere: &Atmosphere) -> Result<Sky> {
+    /// [`SkyBuilder::build`] of `atmosphere` on `grid` as one solve.
+    fn build_for(&self, atmosphere: &Atmosphere, grid: &WavelengthGrid) -> Result<Sky> {
         let polarisation = self
             .polarisation
             .unwrap_or(Polarisation::for_method(self.method));
@@ -367,7 +377,7 @@ impl SkyBuilder<'_> {
         };
         let scene = SingleScatteringScene::new_with_phase_matrices(
             atmosphere,
-            &self.wavelengths,
+            grid,
             self.observation,
             (polarisation == Polarisation::Vector).then_some(stride),
         )?;

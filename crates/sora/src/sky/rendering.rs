@@ -69,9 +69,14 @@ impl Sky {
                 progress,
                 Xyz::BLACK,
                 k_terms::add_scaled_xyz,
-                |weights, term, p| {
-                    let (weight, to_xyz) = k_terms::term_colour_conversion(to_xyz, weights);
-                    Ok((weight, term.render_xyz(image, &to_xyz, p)?))
+                |(offset, weights), term, p| {
+                    let grid = (offset, term.wavelengths());
+                    let Some((weight, to_xyz)) =
+                        k_terms::term_colour_conversion(to_xyz, grid, weights)
+                    else {
+                        return Ok(None);
+                    };
+                    Ok(Some((weight, term.render_xyz(image, &to_xyz, p)?)))
                 },
             );
         }
@@ -106,10 +111,20 @@ impl Sky {
                     k_terms::add_scaled_xyz(s, w, x);
                 }
             };
-            return self.sum_term_images(progress, [Xyz::BLACK; 4], add, |weights, term, p| {
-                let (weight, to_xyz) = k_terms::term_colour_conversion(to_xyz, weights);
-                Ok((weight, term.render_stokes_xyz(image, &to_xyz, p)?))
-            });
+            return self.sum_term_images(
+                progress,
+                [Xyz::BLACK; 4],
+                add,
+                |(offset, weights), term, p| {
+                    let grid = (offset, term.wavelengths());
+                    let Some((weight, to_xyz)) =
+                        k_terms::term_colour_conversion(to_xyz, grid, weights)
+                    else {
+                        return Ok(None);
+                    };
+                    Ok(Some((weight, term.render_stokes_xyz(image, &to_xyz, p)?)))
+                },
+            );
         }
         let n = self.wavelengths().len();
         self.render_pixels(image, 1, [Xyz::BLACK; 4], progress, |stokes, pixel| {
@@ -132,18 +147,22 @@ impl Sky {
     ) -> Result<Vec<f64>> {
         if !self.k_terms.is_empty() {
             let add = |sum: &mut f64, w: f64, x: &f64| *sum += w * x;
-            return self.sum_term_images(progress, 0.0, add, |weights, term, p| {
-                let mut values = term.render_spectral(image, p)?;
-                if let Some(weight) = k_terms::uniform_weight(weights) {
-                    return Ok((weight, values));
+            let n = self.wavelengths().len();
+            return self.sum_term_images(progress, 0.0, add, |(offset, weights), term, p| {
+                let values = term.render_spectral(image, p)?;
+                let uniform = k_terms::uniform_weight(weights);
+                if uniform.is_some() && weights.len() == n {
+                    return Ok(uniform.map(|weight| (weight, values)));
                 }
-                // Pixel-major: each pixel's wavelengths together.
-                for pixel in values.chunks_mut(weights.len()) {
-                    for (v, w) in pixel.iter_mut().zip(weights.values()) {
-                        *v *= w;
+                // Pixel-major: each pixel's wavelengths together, weighted
+                // and placed on this sky's grid.
+                let mut on_grid = vec![0.0; values.len() / weights.len() * n];
+                for (pixel, out) in values.chunks(weights.len()).zip(on_grid.chunks_mut(n)) {
+                    for ((o, v), w) in out[offset..].iter_mut().zip(pixel).zip(weights.values()) {
+                        *o = v * w;
                     }
                 }
-                Ok((1.0, values))
+                Ok(Some((1.0, on_grid)))
             });
         }
         let wavelengths = self.wavelengths().len();

@@ -154,6 +154,20 @@ impl WavelengthGrid {
         (0..self.len).map(|i| self.wavelength_nm(i))
     }
 
+    /// The `len` samples from index `first` on, as a grid of their own
+    /// (the same step; its wavelengths are this grid's to rounding).
+    pub(crate) fn sub_grid(&self, first: usize, len: usize) -> WavelengthGrid {
+        assert!(
+            len >= 1 && first + len <= self.len,
+            "sub-grid outside the grid"
+        );
+        WavelengthGrid {
+            start_nm: self.wavelength_nm(first),
+            step_nm: self.step_nm,
+            len,
+        }
+    }
+
     /// Quadrature weight of sample `index`, nm: the paper's rule, `step_nm`
     /// for every sample (see the module docs).
     pub(crate) fn quadrature_weight_nm(&self, index: usize) -> f64 {
