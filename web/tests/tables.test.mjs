@@ -32,7 +32,9 @@
 // SORA_TABLES_ARGS (more arguments of `sora tables`, space-separated),
 // SORA_TABLES_REUSE=1 (keep the tables and CPU images of an earlier run),
 // SORA_TABLES_SUNS (sun elevations in degrees, comma-separated; default
-// 60,20,5,0,-4,-8,-12).
+// 60,20,5,0,-4,-8,-12), SORA_TABLES_AERIAL_SUNS and
+// SORA_TABLES_AERIAL_DISTANCES (the aerial perspective's, degrees and m,
+// comma-separated; default 60,10,2,-4 and 1000,10000,50000).
 // Run: cd web/tests && npm ci && node tables.test.mjs
 
 import { createServer } from 'node:http';
@@ -59,7 +61,13 @@ const SIZE = 256;
 const AERIAL_PRESETS = (process.env.SORA_TABLES_AERIAL ?? '').split(',').filter((p) => p);
 const aerialArguments = (process.env.SORA_TABLES_AERIAL_ARGS ?? '--march').split(' ').filter((a) => a);
 // checkedSuns: the aerial table's; the march is checked at every sun.
-const AERIAL = { size: 48, suns: [60, 10, 2, -4], checkedSuns: [60, 10, 2], distances: [1000, 10000, 50000] };
+const listed = (value, fallback) => (value || fallback).split(',').map(Number);
+const AERIAL = {
+  size: 48,
+  suns: listed(process.env.SORA_TABLES_AERIAL_SUNS, '60,10,2,-4'),
+  checkedSuns: [60, 10, 2],
+  distances: listed(process.env.SORA_TABLES_AERIAL_DISTANCES, '1000,10000,50000'),
+};
 // The march's arrays as sora_sky.glsl's uMarchTables holds them (its
 // SORA_MARCH_* order; march.bin's order without log_source) and the
 // texture's width (SORA_MARCH_WIDTH).
@@ -112,6 +120,8 @@ async function marchBinary(file, march, preset) {
   }
   const source = arrays.log_source;
   assert.equal(source.type, 'f16');
+  // sora_sky.glsl's capacities (SORA_MARCH_MAX_WAVELENGTHS, _SPECIES).
+  assert.ok(march.wavelengths <= 32 && march.species <= 4, `${preset}: ${march.wavelengths} wavelengths, ${march.species} species`);
   const channels = arrays.source_wavelength_indices.length;
   const texels = Math.ceil(channels / 4);
   const nodes = source.length / channels;
