@@ -387,6 +387,9 @@ alias SoraMarchSpecies = array<f32, 4>;
 alias SoraMarchWavelengths = array<f32, 32>;
 alias SoraMarchRows = array<f32, 128>;
 
+// acos(c) as atan2, as the GLSL twin (SwiftShader's acos is coarse).
+fn sora_march_acos(c: f32) -> f32 { return atan2(sqrt(max((1.0 - c) * (1.0 + c), 0.0)), c); }
+
 fn sora_march_length(array_: i32) -> i32 { return sora_march.lengths[array_ / 4][array_ % 4]; }
 
 // Value n of march.bin's array `array_`.
@@ -467,7 +470,7 @@ fn sora_march_phase(table: i32, theta: f32) -> SoraMarchRows {
 
 // The sun zenith cell of a sun cosine (locate_sun: linear in the angle).
 fn sora_march_locate_sun(sun_cosine: f32) -> SoraCell {
-  return sora_march_locate(SORA_MARCH_SUN_ZENITH, acos(clamp(sun_cosine, -1.0, 1.0)));
+  return sora_march_locate(SORA_MARCH_SUN_ZENITH, sora_march_acos(clamp(sun_cosine, -1.0, 1.0)));
 }
 
 // ln R at a node at every wavelength, quadrilinear in ln R over altitude
@@ -482,10 +485,10 @@ fn sora_march_log_source(altitude: f32, sun_cosine: f32, view_cosine: f32, cos_a
   let views = sora_march.nodes.y;
   let k = sora_march_locate(SORA_MARCH_LEVELS, altitude);
   let s = sora_march_locate_sun(sun_cosine);
-  let y = acos(clamp(view_cosine, -1.0, 1.0)) / SORA_PI * f32(views - 1);
+  let y = sora_march_acos(clamp(view_cosine, -1.0, 1.0)) / SORA_PI * f32(views - 1);
   let v = min(i32(y), views - 2);
   let tv = y - f32(v);
-  let x = acos(clamp(cos_azimuth, -1.0, 1.0)) / SORA_PI * f32(azimuths - 1);
+  let x = sora_march_acos(clamp(cos_azimuth, -1.0, 1.0)) / SORA_PI * f32(azimuths - 1);
   let f = min(i32(x), azimuths - 2);
   let tf = x - f32(f);
   var channels: SoraMarchWavelengths;
@@ -556,7 +559,7 @@ fn sora_march_peak_beam(h: f32, mu: f32) -> SoraMarchBeam {
   var beam: SoraMarchWavelengths;
   let elevations = sora_march.columns_beam.z;
   if (elevations < 2) { return SoraMarchBeam(0.0, beam); }
-  let elevation = degrees(asin(clamp(mu, -1.0, 1.0)));
+  let elevation = degrees(atan2(clamp(mu, -1.0, 1.0), sqrt(max((1.0 - mu) * (1.0 + mu), 0.0))));
   let lowest = sora_march.beam_range_dark.x;
   let blend = sora_march.beam_range_dark.y;
   let highest = sora_march.beam_range_dark.z;
@@ -667,7 +670,7 @@ fn sora_aerial_perspective_march(h_in: f32, v: vec3<f32>, sun: vec3<f32>, d: f32
   let beyond = exit_ - enter - length_;
   // The phase functions at the view's one scattering angle.
   let cos_theta = clamp(dot(v, sun), -1.0, 1.0);
-  let theta = acos(cos_theta);
+  let theta = sora_march_acos(cos_theta);
   let exact_phase = sora_march_phase(SORA_MARCH_PHASE, theta);
   let smooth_phase = sora_march_phase(SORA_MARCH_SMOOTH_PHASE, theta);
   var extinction: SoraMarchRows;
