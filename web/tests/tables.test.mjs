@@ -503,6 +503,10 @@ async function main() {
           const cpu = readExr(await readFile(aerialReferences[k * AERIAL.distances.length + n]));
           const { all } = compare(drawn.aerialImages[k * AERIAL.distances.length + n], cpu, AERIAL.size, true);
           aerial[`${sun} ${d}`] = all;
+          if (process.env.SORA_TABLES_DUMP) {
+            const g = drawn.aerialImages[k * AERIAL.distances.length + n];
+            await writeFile(join(out, `${preset}-${sun}-${d}-dump.json`), JSON.stringify({ gpu: Array.from(g), cpu: Array.from(cpu.channels.Y) }));
+          }
           if ((march || AERIAL.checkedSuns.includes(sun)) && (all.luminanceP99 > LIMITS.luminance || all.chromaticityP99 > LIMITS.chromaticity)) {
             failures.push(`${preset} aerial perspective sun ${sun} d ${d} m: luminance p99 ${all.luminanceP99.toFixed(4)}, xy p99 ${all.chromaticityP99.toFixed(4)}`);
           }
