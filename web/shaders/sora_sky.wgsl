@@ -670,7 +670,9 @@ fn sora_aerial_perspective_march(h_in: f32, v: vec3<f32>, sun: vec3<f32>, d: f32
   let beyond = exit_ - enter - length_;
   // The phase functions at the view's one scattering angle.
   let cos_theta = clamp(dot(v, sun), -1.0, 1.0);
-  let theta = sora_march_acos(cos_theta);
+  // theta from the chord, not the cosine (as sora_sky.glsl: near the sun
+  // 1 - cos(theta) is lost to 32-bit rounding).
+  let theta = 2.0 * atan2(length(v - sun), length(v + sun));
   let exact_phase = sora_march_phase(SORA_MARCH_PHASE, theta);
   let smooth_phase = sora_march_phase(SORA_MARCH_SMOOTH_PHASE, theta);
   var extinction: SoraMarchRows;
