@@ -12,7 +12,8 @@
 //   0.25-degree steps, drawn by the shader): |second difference of ln L|
 //   below 0.05 per step.
 // - aerial perspective, for the presets in SORA_TABLES_AERIAL (default
-//   none; their tables are baked with SORA_TABLES_AERIAL_ARGS, default
+//   none; PRESET:SUN+SUN gives a preset its own suns; their tables are
+//   baked with SORA_TABLES_AERIAL_ARGS, default
 //   --march): a 48 x 48 fisheye of the light scattered into the segment to
 //   d = 1, 10 and 50 km, suns 60, 10, 2 and -4 degrees, against `sora
 //   render --distance-m D`'s. With march tables (march.bin) the shader's
@@ -58,7 +59,10 @@ const SUNS = (process.env.SORA_TABLES_SUNS || '60,20,5,0,-4,-8,-12').split(',').
 const SIZE = 256;
 // Aerial perspective: the presets, a smaller fisheye (the CPU's image costs
 // two view marches a pixel), its suns (the last reported only) and distances.
-const AERIAL_PRESETS = (process.env.SORA_TABLES_AERIAL ?? '').split(',').filter((p) => p);
+// An entry may name its own suns: PRESET:SUN+SUN (e.g. mars-dust:60+10).
+const AERIAL_ENTRIES = (process.env.SORA_TABLES_AERIAL ?? '').split(',').filter((p) => p).map((p) => p.split(':'));
+const AERIAL_PRESETS = AERIAL_ENTRIES.map(([preset]) => preset);
+const AERIAL_SUNS_OF = Object.fromEntries(AERIAL_ENTRIES.filter((e) => e[1]).map(([preset, suns]) => [preset, suns.split('+').map(Number)]));
 const aerialArguments = (process.env.SORA_TABLES_AERIAL_ARGS ?? '--march').split(' ').filter((a) => a);
 // checkedSuns: the aerial table's; the march is checked at every sun.
 const listed = (value, fallback) => (value || fallback).split(',').map(Number);
@@ -451,6 +455,7 @@ async function main() {
       const bakeStart = Date.now();
       const baked = reuse && (await stat(join(directory, 'manifest.json')).catch(() => null));
       const withAerial = AERIAL_PRESETS.includes(preset);
+      const aerialSet = { ...AERIAL, suns: AERIAL_SUNS_OF[preset] ?? AERIAL.suns };
       const bakeArguments = [...tableArguments, ...(withAerial ? aerialArguments : [])];
       const bakeLog = baked ? '(reused)' : execFileSync(cli, ['tables', '--preset', preset, ...bakeArguments, '-o', directory], { encoding: 'utf8', stdio: ['ignore', 'pipe', 'pipe'] });
       const bakeS = (Date.now() - bakeStart) / 1000;
@@ -474,18 +479,18 @@ async function main() {
         return file;
       });
       const aerialStart = Date.now();
-      const aerialReferences = withAerial ? AERIAL.suns.flatMap((sun) => AERIAL.distances.map((d) => {
+      const aerialReferences = withAerial ? aerialSet.suns.flatMap((sun) => aerialSet.distances.map((d) => {
         const file = join(out, `${preset}-${sun}-aerial-${d}.exr`);
         if (reuse && existsSync(file)) return file;
         execFileSync(cli, ['render', '--preset', preset, '--sun-elevation', String(sun), '--camera', 'fisheye',
-          '--width', String(AERIAL.size), '--height', String(AERIAL.size), '--polarisation', 'off', '--no-sun-disc',
+          '--width', String(aerialSet.size), '--height', String(aerialSet.size), '--polarisation', 'off', '--no-sun-disc',
           '--distance-m', String(d), '--exr-xyz', '--units', 'radiance', '-o', file], { stdio: ['ignore', 'ignore', 'pipe'] });
         return file;
       })) : [];
       const aerialReferenceS = (Date.now() - aerialStart) / 1000;
       await page.goto(base);
       const zenithSuns = (90 + 12) * 4 + 1;
-      const drawn = await page.evaluate(drawInPage, { shader, manifest, files, suns: SUNS, size: SIZE, zenithSuns, frames: 20, aerial: withAerial ? AERIAL : null, march });
+      const drawn = await page.evaluate(drawInPage, { shader, manifest, files, suns: SUNS, size: SIZE, zenithSuns, frames: 20, aerial: withAerial ? aerialSet : null, march });
       const suns = {};
       for (const [k, sun] of SUNS.entries()) {
         const cpu = readExr(await readFile(references[k]));
@@ -498,16 +503,16 @@ async function main() {
         }
       }
       const aerial = {};
-      for (const [k, sun] of (withAerial ? AERIAL.suns : []).entries()) {
-        for (const [n, d] of AERIAL.distances.entries()) {
-          const cpu = readExr(await readFile(aerialReferences[k * AERIAL.distances.length + n]));
-          const { all } = compare(drawn.aerialImages[k * AERIAL.distances.length + n], cpu, AERIAL.size, true);
+      for (const [k, sun] of (withAerial ? aerialSet.suns : []).entries()) {
+        for (const [n, d] of aerialSet.distances.entries()) {
+          const cpu = readExr(await readFile(aerialReferences[k * aerialSet.distances.length + n]));
+          const { all } = compare(drawn.aerialImages[k * aerialSet.distances.length + n], cpu, aerialSet.size, true);
           aerial[`${sun} ${d}`] = all;
           if (process.env.SORA_TABLES_DUMP) {
-            const g = drawn.aerialImages[k * AERIAL.distances.length + n];
+            const g = drawn.aerialImages[k * aerialSet.distances.length + n];
             await writeFile(join(out, `${preset}-${sun}-${d}-dump.json`), JSON.stringify({ gpu: Array.from(g), cpu: Array.from(cpu.channels.Y) }));
           }
-          if ((march || AERIAL.checkedSuns.includes(sun)) && (all.luminanceP99 > LIMITS.luminance || all.chromaticityP99 > LIMITS.chromaticity)) {
+          if ((march || aerialSet.checkedSuns.includes(sun)) && (all.luminanceP99 > LIMITS.luminance || all.chromaticityP99 > LIMITS.chromaticity)) {
             failures.push(`${preset} aerial perspective sun ${sun} d ${d} m: luminance p99 ${all.luminanceP99.toFixed(4)}, xy p99 ${all.chromaticityP99.toFixed(4)}`);
           }
         }
@@ -537,7 +542,7 @@ async function main() {
         aerial,
         aerialBy: withAerial ? (march ? 'march' : 'aerial table') : null,
         aerialFrameMs: drawn.aerialFrameMs,
-        aerialSize: AERIAL.size,
+        aerialSize: aerialSet.size,
         aerialReferenceS,
       };
       console.log(`${preset}: baked in ${bakeS.toFixed(1)} s, frame ${drawn.frameMs.toFixed(1)} ms, zenith |d2 ln L| ${worstSecond.toFixed(4)} at ${worstAt}`);
@@ -545,7 +550,7 @@ async function main() {
         const { all, horizon } = suns[sun];
         console.log(`  sun ${sun}: luminance p99 ${(100 * all.luminanceP99).toFixed(2)} % (max ${(100 * all.luminanceMax).toFixed(1)} %), xy p99 ${all.chromaticityP99.toFixed(4)} (max ${all.chromaticityMax.toFixed(4)}); horizon band p99 ${(100 * horizon.luminanceP99).toFixed(2)} %, xy ${horizon.chromaticityP99.toFixed(4)}`);
       }
-      if (withAerial) console.log(`  aerial perspective by the ${march ? 'march' : 'aerial table'} (CPU references ${aerialReferenceS.toFixed(1)} s; ${AERIAL.size} x ${AERIAL.size} frame ${drawn.aerialFrameMs.toFixed(0)} ms):`);
+      if (withAerial) console.log(`  aerial perspective by the ${march ? 'march' : 'aerial table'} (CPU references ${aerialReferenceS.toFixed(1)} s; ${aerialSet.size} x ${aerialSet.size} frame ${drawn.aerialFrameMs.toFixed(0)} ms):`);
       for (const [key, all] of Object.entries(aerial)) {
         const [sun, d] = key.split(' ');
         console.log(`    sun ${sun} d ${Number(d) / 1000} km: luminance p99 ${(100 * all.luminanceP99).toFixed(2)} % (max ${(100 * all.luminanceMax).toFixed(1)} %), xy p99 ${all.chromaticityP99.toFixed(4)}`);
