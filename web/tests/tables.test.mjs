@@ -35,7 +35,8 @@
 // SORA_TABLES_SUNS (sun elevations in degrees, comma-separated; default
 // 60,20,5,0,-4,-8,-12), SORA_TABLES_AERIAL_SUNS and
 // SORA_TABLES_AERIAL_DISTANCES (the aerial perspective's, degrees and m,
-// comma-separated; default 60,10,2,-4 and 1000,10000,50000).
+// comma-separated; default 60,10,2,-4 and 1000,10000,50000), SORA_TABLES_DUMP=1
+// (each aerial image's shader and CPU luminance to PRESET-SUN-D-dump.json).
 // Run: cd web/tests && npm ci && node tables.test.mjs
 
 import { createServer } from 'node:http';
