@@ -343,3 +343,509 @@ vec3 soraXyzToLinearSrgb(vec3 xyz) {
               -1.5372, 1.8758, -0.2040,
               -0.4986, 0.0415, 1.0570) * xyz;
 }
+
+// ---------------------------------------------------------------------------
+// The aerial-perspective march (march.bin; `sora tables --march`). The
+// functions below are crates/sora/src/engine_tables/lookup.rs's
+// MarchTables::aerial_perspective_xyz and its helpers, step by step, with
+// the same names (the Rust lookup is the oracle). Bind (docs/engine-tables.md,
+// "Binding the tables"):
+//   uMarchSource  sampler2DArray, RGBA16F: the array log_source (ln R) with
+//                 its channels four to a texel (the last texel padded), texel
+//                 (v * T + c / 4, s * azimuth_nodes + f, k), T = ceil(channels / 4):
+//                 view zenith v, sun node s, azimuth f, level k
+//   uMarchTables  sampler2D, R32F, SORA_MARCH_WIDTH texels wide: every other
+//                 (32-bit) array of march.bin in file order, one after another;
+//                 value n of the whole at texel (n % width, n / width)
+// Uniforms, from the manifest's tables.march: uMarchOffsets[a] and
+// uMarchLengths[a] the start (in values, within uMarchTables) and length of
+// array a (SORA_MARCH_* below), the rest as named.
+uniform highp sampler2DArray uMarchSource;
+uniform highp sampler2D uMarchTables;
+uniform int uMarchOffsets[19];
+uniform int uMarchLengths[19];
+// wavelengths, species, sun_nodes, density_nodes (zero: no march tables)
+uniform ivec4 uMarchCounts;
+// azimuth_nodes, view_zenith_nodes (of the source)
+uniform ivec2 uMarchSourceNodes;
+// sun_column_nodes (altitude A, view cosine M)
+uniform ivec2 uMarchColumnNodes;
+// phase_nodes, kernel_angles
+uniform ivec2 uMarchPhaseNodes;
+// kernel_blend_start_rad, kernel_radius_rad
+uniform vec2 uMarchKernel;
+// beam_first_elevation_deg, beam_step_deg (zero without a peak beam)
+uniform vec2 uMarchBeamAxis;
+// beam_elevations (zero without a peak beam)
+uniform int uMarchBeamElevations;
+// beam_range_deg: lowest, blend, highest
+uniform vec3 uMarchBeamRange;
+// has_forward_peaks (0 or 1)
+uniform int uMarchPeaks;
+// dark_log_source
+uniform float uMarchDarkLogSource;
+// march_steps: along the segment, beyond the point
+uniform ivec2 uMarchSteps;
+
+// The arrays of uMarchTables (march.bin's order, log_source left out).
+const int SORA_MARCH_LEVELS = 0;            // source_levels_m
+const int SORA_MARCH_SUN_ZENITH = 1;        // source_sun_zenith_rad
+const int SORA_MARCH_CHANNELS = 2;          // source_wavelength_indices
+const int SORA_MARCH_EXTINCTION = 3;
+const int SORA_MARCH_SCALED_EXTINCTION = 4;
+const int SORA_MARCH_SCALED_SCATTERING = 5;
+const int SORA_MARCH_SCATTERING = 6;
+const int SORA_MARCH_SOLAR = 7;
+const int SORA_MARCH_XYZ = 8;
+const int SORA_MARCH_DENSITY = 9;
+const int SORA_MARCH_SUN_COLUMNS = 10;
+const int SORA_MARCH_PHASE = 11;
+const int SORA_MARCH_SMOOTH_PHASE = 12;
+const int SORA_MARCH_KERNEL_X = 13;
+const int SORA_MARCH_KERNEL = 14;
+const int SORA_MARCH_BEAM_ALTITUDES = 15;   // beam_altitudes_m
+const int SORA_MARCH_LN_BEAM = 16;
+const int SORA_MARCH_GROUND_DIFFUSE = 17;
+const int SORA_MARCH_GROUND_DIRECT = 18;
+const int SORA_MARCH_WIDTH = 2048;
+// Capacities of the per-pixel arrays (not the tables' counts, which come
+// from the uniforms): wavelengths and species at most.
+const int SORA_MARCH_MAX_WAVELENGTHS = 32;
+const int SORA_MARCH_MAX_SPECIES = 4;
+const int SORA_MARCH_MAX_ROWS = SORA_MARCH_MAX_WAVELENGTHS * SORA_MARCH_MAX_SPECIES;
+
+// acos(c) as atan2 (SwiftShader's acos is coarser: the march at sun -4
+// degrees was 1.03 % off sora render at 10 km with it, 0.79 % with this).
+float soraMarchAcos(float c) { return atan(sqrt(max((1.0 - c) * (1.0 + c), 0.0)), c); }
+
+// Value n of march.bin's array `array`.
+float soraMarchValue(int array, int n) {
+  int at = uMarchOffsets[array] + n;
+  return texelFetch(uMarchTables, ivec2(at % SORA_MARCH_WIDTH, at / SORA_MARCH_WIDTH), 0).x;
+}
+
+// The cell of the ascending array `array` holding x and the fraction of
+// the way across it, clamped to the nodes (lookup.rs's locate; a binary
+// search for partition_point).
+void soraMarchLocate(int array, float x, out int k, out float f) {
+  int count = uMarchLengths[array];
+  int low = 0, high = count;
+  while (low < high) {
+    int middle = (low + high) / 2;
+    if (soraMarchValue(array, middle) <= x) low = middle + 1;
+    else high = middle;
+  }
+  k = clamp(low, 1, count - 1) - 1;
+  float a = soraMarchValue(array, k), b = soraMarchValue(array, k + 1);
+  f = clamp((x - a) / (b - a), 0.0, 1.0);
+}
+
+// Cosine of the horizon's zenith angle at altitude h (axes::horizon_cosine,
+// written for float precision: 1 - (R / r)^2 = h (2 R + h) / r^2).
+float soraMarchHorizonCosine(float h) {
+  float R = uPlanetSun.x;
+  h = max(h, 0.0);
+  return -sqrt(h * (2.0 * R + h)) / (R + h);
+}
+
+// Altitude (m) of node `index` of `nodes` (axes::altitude_of_node).
+float soraMarchAltitudeOfNode(int index, int nodes) {
+  float h0 = soraThickness() / 50.0;
+  return min(h0 * (exp(float(index) / float(nodes - 1) * log(51.0)) - 1.0), soraThickness());
+}
+
+// The march's k-th of `steps` nodes along a stretch of `length_` m: its
+// distance from the stretch's start and its weight, m (march_node).
+void soraMarchNode(float length_, int k, int steps, out float at, out float ds) {
+  float u = (float(k) + 0.5) / float(steps);
+  at = u * u * length_;
+  ds = 2.0 * u * length_ / float(steps);
+}
+
+// The species' relative densities at altitude h (densities).
+void soraMarchDensities(float h, out float rho[SORA_MARCH_MAX_SPECIES]) {
+  int s = uMarchCounts.y, nodes = uMarchCounts.w;
+  float x = clamp(h / soraThickness(), 0.0, 1.0) * float(nodes - 1);
+  int n; float f; soraCell(x, 0, nodes - 2, n, f);
+  for (int j = 0; j < s; j++) {
+    float a = soraMarchValue(SORA_MARCH_DENSITY, n * s + j);
+    float b = soraMarchValue(SORA_MARCH_DENSITY, (n + 1) * s + j);
+    rho[j] = a + (b - a) * f;
+  }
+}
+
+// p_j and the smooth phase at the scattering angle theta, [j * w + i]
+// (phases: linear in u = sqrt(theta / pi)).
+void soraMarchPhases(float theta, out float exactPhase[SORA_MARCH_MAX_ROWS], out float smoothPhase[SORA_MARCH_MAX_ROWS]) {
+  int w = uMarchCounts.x, s = uMarchCounts.y, P = uMarchPhaseNodes.x;
+  float x = sqrt(clamp(theta / SORA_PI, 0.0, 1.0)) * float(P - 1);
+  int t; float f; soraCell(x, 0, P - 2, t, f);
+  for (int j = 0; j < s; j++) {
+    for (int i = 0; i < w; i++) {
+      int n0 = (j * P + t) * w + i, n1 = (j * P + t + 1) * w + i;
+      float a = soraMarchValue(SORA_MARCH_PHASE, n0), b = soraMarchValue(SORA_MARCH_PHASE, n1);
+      exactPhase[j * w + i] = a + (b - a) * f;
+      a = soraMarchValue(SORA_MARCH_SMOOTH_PHASE, n0);
+      b = soraMarchValue(SORA_MARCH_SMOOTH_PHASE, n1);
+      smoothPhase[j * w + i] = a + (b - a) * f;
+    }
+  }
+}
+
+// The sun zenith cell of a sun cosine (locate_sun: linear in the angle).
+void soraMarchLocateSun(float sunCosine, out int node, out float t) {
+  soraMarchLocate(SORA_MARCH_SUN_ZENITH, soraMarchAcos(clamp(sunCosine, -1.0, 1.0)), node, t);
+}
+
+// ln R at a node, quadrilinear in ln R over altitude level, sun zenith
+// node, view zenith and azimuth, at every wavelength (log_source and
+// source_table.rs's interpolate_log_source): the source's channels, then
+// linear in the wavelength's index between them.
+void soraMarchLogSource(float altitude, float sunCosine, float viewCosine, float cosAzimuth, out float logSource[SORA_MARCH_MAX_WAVELENGTHS]) {
+  int w = uMarchCounts.x;
+  int channelCount = uMarchLengths[SORA_MARCH_CHANNELS];
+  int texels = (channelCount + 3) / 4;
+  int azimuths = uMarchSourceNodes.x, views = uMarchSourceNodes.y;
+  int k; float tz; soraMarchLocate(SORA_MARCH_LEVELS, altitude, k, tz);
+  int s; float ts; soraMarchLocateSun(sunCosine, s, ts);
+  float y = soraMarchAcos(clamp(viewCosine, -1.0, 1.0)) / SORA_PI * float(views - 1);
+  int v = min(int(y), views - 2);
+  float tv = y - float(v);
+  float x = soraMarchAcos(clamp(cosAzimuth, -1.0, 1.0)) / SORA_PI * float(azimuths - 1);
+  int f = min(int(x), azimuths - 2);
+  float tf = x - float(f);
+  float channels[SORA_MARCH_MAX_WAVELENGTHS];
+  for (int c4 = 0; c4 < texels; c4++) {
+    vec4 sum = vec4(0.0);
+    for (int n = 0; n < 8; n++) {
+      int kk = k + (n & 1), ss = s + ((n >> 1) & 1), ff = f + (n >> 2);
+      float weight = ((n & 1) == 1 ? tz : 1.0 - tz) * (((n >> 1) & 1) == 1 ? ts : 1.0 - ts) * ((n >> 2) == 1 ? tf : 1.0 - tf);
+      vec4 low = texelFetch(uMarchSource, ivec3(v * texels + c4, ss * azimuths + ff, kk), 0);
+      vec4 high = texelFetch(uMarchSource, ivec3((v + 1) * texels + c4, ss * azimuths + ff, kk), 0);
+      sum += weight * (1.0 - tv) * low + weight * tv * high;
+    }
+    for (int n = 0; n < 4; n++) {
+      if (4 * c4 + n < channelCount) channels[4 * c4 + n] = sum[n];
+    }
+  }
+  // Linear in the wavelength's index between the kept ones.
+  if (channelCount == 1) {
+    for (int i = 0; i < w; i++) logSource[i] = channels[0];
+    return;
+  }
+  for (int pair = 0; pair + 1 < channelCount; pair++) {
+    int a = int(soraMarchValue(SORA_MARCH_CHANNELS, pair) + 0.5);
+    int b = int(soraMarchValue(SORA_MARCH_CHANNELS, pair + 1) + 0.5);
+    for (int i = a; i <= b; i++) {
+      float t = float(i - a) / float(b - a);
+      logSource[i] = channels[pair] + t * (channels[pair + 1] - channels[pair]);
+    }
+  }
+}
+
+// The species' columns toward the sun from altitude h with the sun's
+// zenith cosine mu there (sun_columns: bilinear over the transmittance
+// table's axes); false below the point's horizon (the planet's shadow).
+bool soraMarchSunColumns(float h, float mu, out float toSun[SORA_MARCH_MAX_SPECIES]) {
+  float R = uPlanetSun.x;
+  int s = uMarchCounts.y;
+  int aCount = uMarchColumnNodes.x, mCount = uMarchColumnNodes.y;
+  h = clamp(h, 0.0, soraThickness());
+  for (int j = 0; j < s; j++) toSun[j] = 0.0;
+  if (mu < soraMarchHorizonCosine(h)) return false;
+  int a; float fa; soraCell(soraAltitudeCoordinate(h, aCount), 0, aCount - 2, a, fa);
+  for (int row = 0; row < 2; row++) {
+    float muH = soraMarchHorizonCosine(soraMarchAltitudeOfNode(a + row, aCount));
+    int m; float fm;
+    soraCell(sqrt(clamp((mu - muH) / (1.0 - muH), 0.0, 1.0)) * float(mCount - 1), 0, mCount - 2, m, fm);
+    float weight = row == 0 ? 1.0 - fa : fa;
+    for (int j = 0; j < s; j++) {
+      float p = soraMarchValue(SORA_MARCH_SUN_COLUMNS, ((a + row) * mCount + m) * s + j);
+      float q = soraMarchValue(SORA_MARCH_SUN_COLUMNS, ((a + row) * mCount + m + 1) * s + j);
+      toSun[j] += weight * (p + (q - p) * fm);
+    }
+  }
+  return true;
+}
+
+// The peak beam B at altitude h with the sun's zenith cosine mu into
+// `beam`, and the share the scaled beam takes (peak_beam: 0 beyond the
+// table's elevations).
+float soraMarchPeakBeam(float h, float mu, out float beam[SORA_MARCH_MAX_WAVELENGTHS]) {
+  // Defined where the share is 0 too (it multiplies B - through there).
+  for (int i = 0; i < uMarchCounts.x; i++) beam[i] = 0.0;
+  int elevations = uMarchBeamElevations;
+  if (elevations < 2) return 0.0;
+  float elevation = degrees(atan(clamp(mu, -1.0, 1.0), sqrt(max((1.0 - mu) * (1.0 + mu), 0.0))));
+  float lowest = uMarchBeamRange.x, blend = uMarchBeamRange.y, highest = uMarchBeamRange.z;
+  if (!(elevation >= lowest && elevation < highest)) return 0.0;
+  float share = min((highest - elevation) / (highest - blend), 1.0);
+  int last = uMarchLengths[SORA_MARCH_BEAM_ALTITUDES] - 1;
+  float z = clamp(h, 0.0, soraMarchValue(SORA_MARCH_BEAM_ALTITUDES, last));
+  int a; float ta; soraMarchLocate(SORA_MARCH_BEAM_ALTITUDES, z, a, ta);
+  float xe = clamp((elevation - uMarchBeamAxis.x) / uMarchBeamAxis.y, 0.0, float(elevations - 1));
+  int e = min(int(xe), elevations - 2);
+  float te = xe - float(e);
+  int w = uMarchCounts.x;
+  for (int i = 0; i < w; i++) {
+    float c00 = soraMarchValue(SORA_MARCH_LN_BEAM, (a * elevations + e) * w + i);
+    float c01 = soraMarchValue(SORA_MARCH_LN_BEAM, (a * elevations + e + 1) * w + i);
+    float c10 = soraMarchValue(SORA_MARCH_LN_BEAM, ((a + 1) * elevations + e) * w + i);
+    float c11 = soraMarchValue(SORA_MARCH_LN_BEAM, ((a + 1) * elevations + e + 1) * w + i);
+    beam[i] = exp((1.0 - ta) * ((1.0 - te) * c00 + te * c01) + ta * ((1.0 - te) * c10 + te * c11));
+  }
+  return share;
+}
+
+// The forward-peak term (W m^-2 sr^-1 nm^-1) at wavelength i and the
+// scattering angle theta (peak_radiance): `rows` is the species rows
+// already summed with their weights beta_sca,j q_j (the smooth phase), q
+// and qx the peak-only rows Q and Q X; E rows plus within the kernel's
+// radius (1 - wide) E Q e^(-X) G(theta; X) e^X at X = Q X / Q.
+float soraMarchPeakRadiance(float theta, int i, float rows, float q, float qx) {
+  int w = uMarchCounts.x;
+  float solar = soraMarchValue(SORA_MARCH_SOLAR, i);
+  float out_ = solar * rows;
+  float start = uMarchKernel.x, radius = uMarchKernel.y;
+  int angles = uMarchPhaseNodes.y;
+  int xCount = uMarchLengths[SORA_MARCH_KERNEL_X];
+  if (uMarchLengths[SORA_MARCH_KERNEL] == 0 || theta >= radius || q <= 0.0) return out_;
+  float wide = clamp((theta - start) / (radius - start), 0.0, 1.0);
+  float position = sqrt(theta / radius) * float(angles - 1);
+  int t = min(int(position), angles - 2);
+  float ft = position - float(t);
+  float last = soraMarchValue(SORA_MARCH_KERNEL_X, xCount - 1);
+  float xMean = clamp(qx / q, 0.0, last);
+  int x; float fx; soraMarchLocate(SORA_MARCH_KERNEL_X, xMean, x, fx);
+  float k00 = soraMarchValue(SORA_MARCH_KERNEL, (x * angles + t) * w + i);
+  float k01 = soraMarchValue(SORA_MARCH_KERNEL, (x * angles + t + 1) * w + i);
+  float k10 = soraMarchValue(SORA_MARCH_KERNEL, ((x + 1) * angles + t) * w + i);
+  float k11 = soraMarchValue(SORA_MARCH_KERNEL, ((x + 1) * angles + t + 1) * w + i);
+  float value = (1.0 - fx) * ((1.0 - ft) * k00 + ft * k01) + fx * ((1.0 - ft) * k10 + ft * k11);
+  return out_ + (1.0 - wide) * solar * q * value * exp(xMean);
+}
+
+// The ground's light (W m^-2 sr^-1 nm^-1) at wavelength i with the sun's
+// zenith cosine sunCosine at the ground point (ground_light's lerp: in
+// ln between sun nodes where both are positive).
+float soraMarchGroundLight(int i, float sunCosine) {
+  int w = uMarchCounts.x;
+  int node; float t; soraMarchLocateSun(sunCosine, node, t);
+  float light = 0.0;
+  for (int table = SORA_MARCH_GROUND_DIFFUSE; table <= SORA_MARCH_GROUND_DIRECT; table++) {
+    float a = soraMarchValue(table, node * w + i), b = soraMarchValue(table, (node + 1) * w + i);
+    light += (a > 0.0 && b > 0.0) ? exp((1.0 - t) * log(a) + t * log(b)) : (1.0 - t) * a + t * b;
+  }
+  return light;
+}
+
+// Altitude (m) of the point at distance t along unit v from the eye at
+// altitude h, and its radius: written for float precision (|p|^2 - R^2 =
+// t^2 + 2 r0 v.z t + h (2 R + h)).
+float soraMarchAltitudeAlong(float h, vec3 v, float t, out float r) {
+  float R = uPlanetSun.x;
+  float r0 = R + h;
+  vec3 p = vec3(v.xy * t, r0 + v.z * t);
+  r = length(p);
+  return max((t * t + 2.0 * r0 * v.z * t + h * (2.0 * R + h)) / (r + R), 0.0);
+}
+
+// Aerial perspective by the march (MarchTables::aerial_perspective_xyz):
+// an eye at altitude h (m), the unit view v and sun (east-north-up), a
+// point at distance d (m): the light scattered into the segment (XYZ, W
+// m^-2 sr^-1 nm^-1) and the segment's transmittance (XYZ of the
+// transmitted solar spectrum over XYZ of the solar spectrum per channel),
+// so that L = L_point * transmittance + inscattered.
+//
+// uMarchSteps.x nodes along the segment (u = sqrt(s / length) uniform, the
+// midpoint rule) and uMarchSteps.y from the point to the ray's end; at each
+// node the densities and columns from the eye (trapezoids), the columns
+// toward the sun, the source ln R and the peak beam. Gathered per
+// wavelength: single scattering, the scaled field over the segment and
+// beyond it, the forward-peak integrals; then
+//   L_air = S_seg + F_seg + (1 - T / T*) (F_beyond + G_sky) + P(forward) - P(behind).
+// As lookup.rs, except that the forward-peak rows are kept summed over
+// species with their weights beta_sca,j q_j (peak_radiance's first sum;
+// the same sum, taken per node), and each row only where it is read: the
+// species rows over the segment (forward_segment) and over the ray beyond
+// it (scaled - scaled_segment), Q and Q X over both (forward_segment and
+// forward - forward_segment).
+void soraAerialPerspectiveMarch(float h, vec3 v, vec3 sun, float d, out vec3 inscattered, out vec3 transmittance) {
+  int w = uMarchCounts.x, s = uMarchCounts.y;
+  float R = uPlanetSun.x;
+  float thickness = soraThickness();
+  h = clamp(h, 0.0, thickness);
+  float r0 = R + h;
+  // segment_in_atmosphere from inside the atmosphere (enter = 0), its
+  // roots in the forms without cancellation.
+  float b = r0 * v.z;
+  float cTop = (h - thickness) * (r0 + uPlanetSun.y);
+  float rootTop = sqrt(max(b * b - cTop, 0.0));
+  float topFar = b > 0.0 ? -cTop / (b + rootTop) : -b + rootTop;
+  inscattered = vec3(0.0);
+  transmittance = vec3(1.0);
+  if (topFar <= 0.0) return;
+  float enter = 0.0;
+  float exit_ = topFar;
+  float cGround = h * (2.0 * R + h);
+  float discGround = b * b - cGround;
+  bool onGround = false;
+  if (b < 0.0 && discGround >= 0.0) {
+    float groundNear = cGround / (-b + sqrt(discGround));
+    if (groundNear >= enter && groundNear < topFar) {
+      exit_ = groundNear;
+      onGround = true;
+    }
+  }
+  float length_ = max(min(exit_, d) - enter, 0.0);
+  float beyond = exit_ - enter - length_;
+  // The phase functions at the view's one scattering angle.
+  float cosTheta = clamp(dot(v, sun), -1.0, 1.0);
+  // theta from the chord, 2 atan(|v - sun|, |v + sun|), not from the
+  // cosine: near the sun 1 - cos(theta) is lost to 32-bit rounding
+  // (SwiftShader: 2.15 degrees for a view 1.46 degrees from the sun by
+  // acos as atan2, the forward peak's phase and kernel read there).
+  float theta = 2.0 * atan(length(v - sun), length(v + sun));
+  float exactPhase[SORA_MARCH_MAX_ROWS], smoothPhase[SORA_MARCH_MAX_ROWS];
+  soraMarchPhases(theta, exactPhase, smoothPhase);
+  float extinction[SORA_MARCH_MAX_ROWS], scaledExtinction[SORA_MARCH_MAX_ROWS];
+  float scaledScattering[SORA_MARCH_MAX_ROWS], scattering[SORA_MARCH_MAX_ROWS];
+  for (int n = 0; n < w * s; n++) {
+    extinction[n] = soraMarchValue(SORA_MARCH_EXTINCTION, n);
+    scaledExtinction[n] = soraMarchValue(SORA_MARCH_SCALED_EXTINCTION, n);
+    scaledScattering[n] = soraMarchValue(SORA_MARCH_SCALED_SCATTERING, n);
+    scattering[n] = soraMarchValue(SORA_MARCH_SCATTERING, n);
+  }
+  float single[SORA_MARCH_MAX_WAVELENGTHS], field[SORA_MARCH_MAX_WAVELENGTHS], fieldBeyond[SORA_MARCH_MAX_WAVELENGTHS];
+  // The species rows (summed, see above) and Q, Q X.
+  float forwardSegment[SORA_MARCH_MAX_WAVELENGTHS], scaledBeyond[SORA_MARCH_MAX_WAVELENGTHS];
+  float qSegment[SORA_MARCH_MAX_WAVELENGTHS], qxSegment[SORA_MARCH_MAX_WAVELENGTHS];
+  float qBeyond[SORA_MARCH_MAX_WAVELENGTHS], qxBeyond[SORA_MARCH_MAX_WAVELENGTHS];
+  for (int i = 0; i < w; i++) {
+    single[i] = 0.0; field[i] = 0.0; fieldBeyond[i] = 0.0;
+    forwardSegment[i] = 0.0; scaledBeyond[i] = 0.0;
+    qSegment[i] = 0.0; qxSegment[i] = 0.0; qBeyond[i] = 0.0; qxBeyond[i] = 0.0;
+  }
+  float columns[SORA_MARCH_MAX_SPECIES], columnsSegment[SORA_MARCH_MAX_SPECIES];
+  float rho[SORA_MARCH_MAX_SPECIES], previousRho[SORA_MARCH_MAX_SPECIES], toSun[SORA_MARCH_MAX_SPECIES];
+  float logSource[SORA_MARCH_MAX_WAVELENGTHS], beam[SORA_MARCH_MAX_WAVELENGTHS];
+  for (int j = 0; j < s; j++) { columns[j] = 0.0; columnsSegment[j] = 0.0; toSun[j] = 0.0; }
+  float unused;
+  soraMarchDensities(soraMarchAltitudeAlong(h, v, enter, unused), previousRho);
+  float previous = 0.0;
+  int steps = uMarchSteps.x, stepsBeyond = uMarchSteps.y;
+  bool segmentDone = false;
+  for (int node = 0; node < steps + stepsBeyond; node++) {
+    bool inSegment = node < steps;
+    float at, ds;
+    if (inSegment) {
+      soraMarchNode(length_, node, steps, at, ds);
+    } else {
+      soraMarchNode(beyond, node - steps, stepsBeyond, at, ds);
+      at += length_;
+    }
+    if (!inSegment && !segmentDone) {
+      soraMarchDensities(soraMarchAltitudeAlong(h, v, enter + length_, unused), rho);
+      for (int j = 0; j < s; j++) {
+        columns[j] += 0.5 * (previousRho[j] + rho[j]) * (length_ - previous);
+        previousRho[j] = rho[j];
+        columnsSegment[j] = columns[j];
+      }
+      previous = length_;
+      segmentDone = true;
+    }
+    if (ds <= 0.0) continue;
+    float r;
+    float altitude = soraMarchAltitudeAlong(h, v, enter + at, r);
+    // The cosines at the point: v.p / r and sun.p / r.
+    float viewCosine = clamp((enter + at + r0 * v.z) / r, -1.0, 1.0);
+    float sunCosine = clamp(((enter + at) * cosTheta + r0 * sun.z) / r, -1.0, 1.0);
+    float sines = sqrt(max((1.0 - viewCosine * viewCosine) * (1.0 - sunCosine * sunCosine), 0.0));
+    float cosAzimuth = sines > 1e-6 ? clamp((cosTheta - viewCosine * sunCosine) / sines, -1.0, 1.0) : 1.0;
+    soraMarchLogSource(altitude, sunCosine, viewCosine, cosAzimuth, logSource);
+    soraMarchDensities(altitude, rho);
+    for (int j = 0; j < s; j++) columns[j] += 0.5 * (previousRho[j] + rho[j]) * (at - previous);
+    previous = at;
+    for (int i = 0; i < w; i++) {
+      float tau = 0.0, scatteringSum = 0.0;
+      for (int j = 0; j < s; j++) {
+        tau += scaledExtinction[i * s + j] * columns[j];
+        scatteringSum += scaledScattering[i * s + j] * rho[j];
+      }
+      if (logSource[i] > uMarchDarkLogSource) {
+        float add = ds * scatteringSum * exp(logSource[i] - tau);
+        if (inSegment) field[i] += add;
+        else fieldBeyond[i] += add;
+      }
+    }
+    bool lit = soraMarchSunColumns(altitude, sunCosine, toSun);
+    float share = uMarchPeaks == 1 ? soraMarchPeakBeam(altitude, sunCosine, beam) : 0.0;
+    for (int i = 0; i < w; i++) {
+      vec4 depths = vec4(0.0);
+      float peak = 0.0, source = 0.0, rowWeight = 0.0;
+      for (int j = 0; j < s; j++) {
+        float scaledExt = scaledExtinction[i * s + j], ext = extinction[i * s + j];
+        float sunColumn = lit ? toSun[j] : 0.0;
+        depths += vec4(scaledExt * columns[j], ext * columns[j], scaledExt * sunColumn, ext * sunColumn);
+        peak += (ext - scaledExt) * rho[j];
+        source += scattering[i * s + j] * exactPhase[j * w + i] * rho[j];
+        rowWeight += scattering[i * s + j] * smoothPhase[j * w + i] * rho[j];
+      }
+      vec4 transmitted = exp(-depths);
+      float viewBeam = transmitted.x, viewDirect = transmitted.y;
+      float sunBeam = lit ? transmitted.z : 0.0, sunDirect = lit ? transmitted.w : 0.0;
+      if (inSegment && lit) {
+        single[i] += ds * soraMarchValue(SORA_MARCH_SOLAR, i) * source * viewDirect * sunDirect;
+      }
+      if (uMarchPeaks != 1) continue;
+      // As the library's march (add_tilted_forward_peak).
+      float through = sunBeam - sunDirect;
+      float scattered = through + share * (beam[i] - through);
+      float excess = ds * (viewBeam * scattered + sunDirect * (viewBeam - viewDirect));
+      float beamWeight = ds * viewBeam * (scattered + sunDirect);
+      if (inSegment) forwardSegment[i] += excess * rowWeight;
+      else scaledBeyond[i] += beamWeight * rowWeight;
+      if (lit && sunBeam > 0.0) {
+        float only = ds * viewDirect * sunDirect * peak * ((sunDirect + scattered) / sunBeam);
+        float x = (depths.y + depths.w) - (depths.x + depths.z);
+        if (inSegment) { qSegment[i] += only; qxSegment[i] += only * x; }
+        else { qBeyond[i] += only; qxBeyond[i] += only * x; }
+      }
+    }
+    for (int j = 0; j < s; j++) previousRho[j] = rho[j];
+  }
+  if (!segmentDone) {
+    for (int j = 0; j < s; j++) columnsSegment[j] = columns[j];
+  }
+  // The ground's light where the ray ends on it, through the whole ray's
+  // scaled transmittance (onGround: the ray's end is the ground's root).
+  float rEnd;
+  soraMarchAltitudeAlong(h, v, exit_, rEnd);
+  float groundSunCosine = clamp((exit_ * cosTheta + r0 * sun.z) / rEnd, -1.0, 1.0);
+  vec3 light = vec3(0.0), through = vec3(0.0), solarXyz = vec3(0.0);
+  for (int i = 0; i < w; i++) {
+    float tau = 0.0, tauScaled = 0.0, tauScaledWhole = 0.0;
+    for (int j = 0; j < s; j++) {
+      tau += extinction[i * s + j] * columnsSegment[j];
+      tauScaled += scaledExtinction[i * s + j] * columnsSegment[j];
+      tauScaledWhole += scaledExtinction[i * s + j] * columns[j];
+    }
+    float solar = soraMarchValue(SORA_MARCH_SOLAR, i);
+    float share = 1.0 - exp(tauScaled - tau);
+    float depth = tau - tauScaled;
+    float groundLight = onGround ? exp(-tauScaledWhole) * soraMarchGroundLight(i, groundSunCosine) : 0.0;
+    float value = single[i] + field[i] + share * (fieldBeyond[i] + groundLight);
+    if (uMarchPeaks == 1) {
+      float peakForward = soraMarchPeakRadiance(theta, i, forwardSegment[i] + share * scaledBeyond[i],
+                                                qSegment[i] + qBeyond[i], qxSegment[i] + qxBeyond[i]);
+      float hidden = soraMarchPeakRadiance(theta, i, 0.0, qBeyond[i], qxBeyond[i] - depth * qBeyond[i]);
+      value += peakForward - hidden;
+    }
+    vec3 spike = vec3(soraMarchValue(SORA_MARCH_XYZ, 3 * i), soraMarchValue(SORA_MARCH_XYZ, 3 * i + 1), soraMarchValue(SORA_MARCH_XYZ, 3 * i + 2));
+    light += value * spike;
+    through += solar * exp(-tau) * spike;
+    solarXyz += solar * spike;
+  }
+  inscattered = light;
+  transmittance = clamp(through / max(solarXyz, vec3(1e-30)), 0.0, 1.0);
+}

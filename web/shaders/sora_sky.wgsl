@@ -333,3 +333,517 @@ fn sora_xyz_to_linear_srgb(xyz: vec3<f32>) -> vec3<f32> {
     vec3<f32>(-1.5372, 1.8758, -0.2040),
     vec3<f32>(-0.4986, 0.0415, 1.0570)) * xyz;
 }
+
+// ---------------------------------------------------------------------------
+// The aerial-perspective march (march.bin; `sora tables --march`): the
+// GLSL twin's soraAerialPerspectiveMarch and its helpers, which are
+// crates/sora/src/engine_tables/lookup.rs's MarchTables::
+// aerial_perspective_xyz step by step (same names). Bind
+// (docs/engine-tables.md, "Binding the tables"):
+//   group(0) binding(5) march: SoraMarch (values from tables.march)
+//   group(0) binding(6) march_source: texture_2d_array<f32>, rgba16float:
+//                       log_source, its channels four to a texel (the last
+//                       padded), texel (v * T + c / 4, s * azimuth_nodes + f),
+//                       layer k; T = ceil(channels / 4)
+//   group(0) binding(7) march_tables: texture_2d<f32>, r32float,
+//                       SORA_MARCH_WIDTH wide: every other (32-bit) array of
+//                       march.bin in file order, value n at (n % width, n / width)
+
+struct SoraMarch {
+  // offsets[a / 4][a % 4], lengths[a / 4][a % 4]: the start (in values,
+  // within march_tables) and length of array a (SORA_MARCH_* below)
+  offsets: array<vec4<i32>, 5>,
+  lengths: array<vec4<i32>, 5>,
+  // wavelengths, species, sun_nodes, density_nodes (zero: no march tables)
+  counts: vec4<i32>,
+  // azimuth_nodes, view_zenith_nodes (of the source), phase_nodes, kernel_angles
+  nodes: vec4<i32>,
+  // sun_column_nodes (altitude A, view cosine M), beam_elevations, has_forward_peaks (0 or 1)
+  columns_beam: vec4<i32>,
+  // march_steps (along the segment, beyond the point), unused, unused
+  steps: vec4<i32>,
+  // kernel_blend_start_rad, kernel_radius_rad, beam_first_elevation_deg, beam_step_deg
+  kernel_beam: vec4<f32>,
+  // beam_range_deg (lowest, blend, highest), dark_log_source
+  beam_range_dark: vec4<f32>,
+};
+
+@group(0) @binding(5) var<uniform> sora_march: SoraMarch;
+@group(0) @binding(6) var sora_march_source: texture_2d_array<f32>;
+@group(0) @binding(7) var sora_march_tables: texture_2d<f32>;
+
+const SORA_MARCH_LEVELS: i32 = 0;            // source_levels_m
+const SORA_MARCH_SUN_ZENITH: i32 = 1;        // source_sun_zenith_rad
+const SORA_MARCH_CHANNELS: i32 = 2;          // source_wavelength_indices
+const SORA_MARCH_EXTINCTION: i32 = 3;
+const SORA_MARCH_SCALED_EXTINCTION: i32 = 4;
+const SORA_MARCH_SCALED_SCATTERING: i32 = 5;
+const SORA_MARCH_SCATTERING: i32 = 6;
+const SORA_MARCH_SOLAR: i32 = 7;
+const SORA_MARCH_XYZ: i32 = 8;
+const SORA_MARCH_DENSITY: i32 = 9;
+const SORA_MARCH_SUN_COLUMNS: i32 = 10;
+const SORA_MARCH_PHASE: i32 = 11;
+const SORA_MARCH_SMOOTH_PHASE: i32 = 12;
+const SORA_MARCH_KERNEL_X: i32 = 13;
+const SORA_MARCH_KERNEL: i32 = 14;
+const SORA_MARCH_BEAM_ALTITUDES: i32 = 15;   // beam_altitudes_m
+const SORA_MARCH_LN_BEAM: i32 = 16;
+const SORA_MARCH_GROUND_DIFFUSE: i32 = 17;
+const SORA_MARCH_GROUND_DIRECT: i32 = 18;
+const SORA_MARCH_WIDTH: i32 = 2048;
+// Capacities of the per-pixel arrays (the counts come from SoraMarch).
+const SORA_MARCH_MAX_WAVELENGTHS: i32 = 32;
+const SORA_MARCH_MAX_SPECIES: i32 = 4;
+const SORA_MARCH_MAX_ROWS: i32 = 128;
+
+alias SoraMarchSpecies = array<f32, 4>;
+alias SoraMarchWavelengths = array<f32, 32>;
+alias SoraMarchRows = array<f32, 128>;
+
+// acos(c) as atan2, as the GLSL twin (SwiftShader's acos is coarse).
+fn sora_march_acos(c: f32) -> f32 { return atan2(sqrt(max((1.0 - c) * (1.0 + c), 0.0)), c); }
+
+fn sora_march_length(array_: i32) -> i32 { return sora_march.lengths[array_ / 4][array_ % 4]; }
+
+// Value n of march.bin's array `array_`.
+fn sora_march_value(array_: i32, n: i32) -> f32 {
+  let at = sora_march.offsets[array_ / 4][array_ % 4] + n;
+  return textureLoad(sora_march_tables, vec2<i32>(at % SORA_MARCH_WIDTH, at / SORA_MARCH_WIDTH), 0).x;
+}
+
+// The cell of the ascending array `array_` holding x (locate: a binary
+// search for partition_point), clamped to the nodes.
+fn sora_march_locate(array_: i32, x: f32) -> SoraCell {
+  let count = sora_march_length(array_);
+  var low = 0;
+  var high = count;
+  while (low < high) {
+    let middle = (low + high) / 2;
+    if (sora_march_value(array_, middle) <= x) { low = middle + 1; } else { high = middle; }
+  }
+  let k = clamp(low, 1, count - 1) - 1;
+  let a = sora_march_value(array_, k);
+  let b = sora_march_value(array_, k + 1);
+  return SoraCell(k, clamp((x - a) / (b - a), 0.0, 1.0));
+}
+
+// Cosine of the horizon's zenith angle at altitude h (axes::horizon_cosine
+// in float precision: 1 - (R / r)^2 = h (2 R + h) / r^2).
+fn sora_march_horizon_cosine(h_in: f32) -> f32 {
+  let ground = sora.planet_sun.x;
+  let h = max(h_in, 0.0);
+  return -sqrt(h * (2.0 * ground + h)) / (ground + h);
+}
+
+// Altitude (m) of node `index` of `nodes` (axes::altitude_of_node).
+fn sora_march_altitude_of_node(index: i32, nodes: i32) -> f32 {
+  let h0 = sora_thickness() / 50.0;
+  return min(h0 * (exp(f32(index) / f32(nodes - 1) * log(51.0)) - 1.0), sora_thickness());
+}
+
+// The k-th of `steps` nodes along a stretch of length_ m: (distance from
+// its start, weight), m (march_node).
+fn sora_march_node(length_: f32, k: i32, steps: i32) -> vec2<f32> {
+  let u = (f32(k) + 0.5) / f32(steps);
+  return vec2<f32>(u * u * length_, 2.0 * u * length_ / f32(steps));
+}
+
+// The species' relative densities at altitude h (densities).
+fn sora_march_densities(h: f32) -> SoraMarchSpecies {
+  let s = sora_march.counts.y;
+  let nodes = sora_march.counts.w;
+  let c = sora_cell(clamp(h / sora_thickness(), 0.0, 1.0) * f32(nodes - 1), 0, nodes - 2);
+  var rho: SoraMarchSpecies;
+  for (var j = 0; j < s; j++) {
+    let a = sora_march_value(SORA_MARCH_DENSITY, c.i * s + j);
+    let b = sora_march_value(SORA_MARCH_DENSITY, (c.i + 1) * s + j);
+    rho[j] = a + (b - a) * c.f;
+  }
+  return rho;
+}
+
+// p_j (table SORA_MARCH_PHASE) or the smooth phase (SORA_MARCH_SMOOTH_PHASE)
+// at the scattering angle theta, [j * w + i] (phases: linear in u =
+// sqrt(theta / pi)).
+fn sora_march_phase(table: i32, theta: f32) -> SoraMarchRows {
+  let w = sora_march.counts.x;
+  let s = sora_march.counts.y;
+  let p = sora_march.nodes.z;
+  let c = sora_cell(sqrt(clamp(theta / SORA_PI, 0.0, 1.0)) * f32(p - 1), 0, p - 2);
+  var out_: SoraMarchRows;
+  for (var j = 0; j < s; j++) {
+    for (var i = 0; i < w; i++) {
+      let a = sora_march_value(table, (j * p + c.i) * w + i);
+      let b = sora_march_value(table, (j * p + c.i + 1) * w + i);
+      out_[j * w + i] = a + (b - a) * c.f;
+    }
+  }
+  return out_;
+}
+
+// The sun zenith cell of a sun cosine (locate_sun: linear in the angle).
+fn sora_march_locate_sun(sun_cosine: f32) -> SoraCell {
+  return sora_march_locate(SORA_MARCH_SUN_ZENITH, sora_march_acos(clamp(sun_cosine, -1.0, 1.0)));
+}
+
+// ln R at a node at every wavelength, quadrilinear in ln R over altitude
+// level, sun zenith node, view zenith and azimuth (log_source and
+// interpolate_log_source), linear in the wavelength's index between the
+// source's channels.
+fn sora_march_log_source(altitude: f32, sun_cosine: f32, view_cosine: f32, cos_azimuth: f32) -> SoraMarchWavelengths {
+  let w = sora_march.counts.x;
+  let channel_count = sora_march_length(SORA_MARCH_CHANNELS);
+  let texels = (channel_count + 3) / 4;
+  let azimuths = sora_march.nodes.x;
+  let views = sora_march.nodes.y;
+  let k = sora_march_locate(SORA_MARCH_LEVELS, altitude);
+  let s = sora_march_locate_sun(sun_cosine);
+  let y = sora_march_acos(clamp(view_cosine, -1.0, 1.0)) / SORA_PI * f32(views - 1);
+  let v = min(i32(y), views - 2);
+  let tv = y - f32(v);
+  let x = sora_march_acos(clamp(cos_azimuth, -1.0, 1.0)) / SORA_PI * f32(azimuths - 1);
+  let f = min(i32(x), azimuths - 2);
+  let tf = x - f32(f);
+  var channels: SoraMarchWavelengths;
+  for (var c4 = 0; c4 < texels; c4++) {
+    var sum = vec4<f32>(0.0);
+    for (var n = 0; n < 8; n++) {
+      let kk = k.i + (n & 1);
+      let ss = s.i + ((n >> 1u) & 1);
+      let ff = f + (n >> 2u);
+      let weight = select(1.0 - k.f, k.f, (n & 1) == 1) * select(1.0 - s.f, s.f, ((n >> 1u) & 1) == 1)
+        * select(1.0 - tf, tf, (n >> 2u) == 1);
+      let low = textureLoad(sora_march_source, vec2<i32>(v * texels + c4, ss * azimuths + ff), kk, 0);
+      let high = textureLoad(sora_march_source, vec2<i32>((v + 1) * texels + c4, ss * azimuths + ff), kk, 0);
+      sum += weight * (1.0 - tv) * low + weight * tv * high;
+    }
+    for (var n = 0; n < 4; n++) {
+      if (4 * c4 + n < channel_count) { channels[4 * c4 + n] = sum[n]; }
+    }
+  }
+  var log_source: SoraMarchWavelengths;
+  if (channel_count == 1) {
+    for (var i = 0; i < w; i++) { log_source[i] = channels[0]; }
+    return log_source;
+  }
+  // Linear in the wavelength's index between the kept ones.
+  for (var pair = 0; pair + 1 < channel_count; pair++) {
+    let a = i32(sora_march_value(SORA_MARCH_CHANNELS, pair) + 0.5);
+    let b = i32(sora_march_value(SORA_MARCH_CHANNELS, pair + 1) + 0.5);
+    for (var i = a; i <= b; i++) {
+      let t = f32(i - a) / f32(b - a);
+      log_source[i] = channels[pair] + t * (channels[pair + 1] - channels[pair]);
+    }
+  }
+  return log_source;
+}
+
+// The species' columns toward the sun from altitude h with the sun's
+// zenith cosine mu there (sun_columns: bilinear over the transmittance
+// table's axes); lit false below the point's horizon (the planet's shadow).
+struct SoraMarchSunColumns { lit: bool, columns: SoraMarchSpecies };
+
+fn sora_march_sun_columns(h_in: f32, mu: f32) -> SoraMarchSunColumns {
+  let s = sora_march.counts.y;
+  let a_count = sora_march.columns_beam.x;
+  let m_count = sora_march.columns_beam.y;
+  let h = clamp(h_in, 0.0, sora_thickness());
+  var to_sun: SoraMarchSpecies;
+  if (mu < sora_march_horizon_cosine(h)) { return SoraMarchSunColumns(false, to_sun); }
+  let a = sora_cell(sora_altitude_coordinate(h, a_count), 0, a_count - 2);
+  for (var row = 0; row < 2; row++) {
+    let mu_h = sora_march_horizon_cosine(sora_march_altitude_of_node(a.i + row, a_count));
+    let m = sora_cell(sqrt(clamp((mu - mu_h) / (1.0 - mu_h), 0.0, 1.0)) * f32(m_count - 1), 0, m_count - 2);
+    let weight = select(a.f, 1.0 - a.f, row == 0);
+    for (var j = 0; j < s; j++) {
+      let p = sora_march_value(SORA_MARCH_SUN_COLUMNS, ((a.i + row) * m_count + m.i) * s + j);
+      let q = sora_march_value(SORA_MARCH_SUN_COLUMNS, ((a.i + row) * m_count + m.i + 1) * s + j);
+      to_sun[j] += weight * (p + (q - p) * m.f);
+    }
+  }
+  return SoraMarchSunColumns(true, to_sun);
+}
+
+// The peak beam B at altitude h with the sun's zenith cosine mu, and the
+// share the scaled beam takes (peak_beam: 0 beyond the table's elevations).
+struct SoraMarchBeam { share: f32, beam: SoraMarchWavelengths };
+
+fn sora_march_peak_beam(h: f32, mu: f32) -> SoraMarchBeam {
+  var beam: SoraMarchWavelengths;
+  let elevations = sora_march.columns_beam.z;
+  if (elevations < 2) { return SoraMarchBeam(0.0, beam); }
+  let elevation = degrees(atan2(clamp(mu, -1.0, 1.0), sqrt(max((1.0 - mu) * (1.0 + mu), 0.0))));
+  let lowest = sora_march.beam_range_dark.x;
+  let blend = sora_march.beam_range_dark.y;
+  let highest = sora_march.beam_range_dark.z;
+  if (!(elevation >= lowest && elevation < highest)) { return SoraMarchBeam(0.0, beam); }
+  let share = min((highest - elevation) / (highest - blend), 1.0);
+  let last = sora_march_length(SORA_MARCH_BEAM_ALTITUDES) - 1;
+  let z = clamp(h, 0.0, sora_march_value(SORA_MARCH_BEAM_ALTITUDES, last));
+  let a = sora_march_locate(SORA_MARCH_BEAM_ALTITUDES, z);
+  let xe = clamp((elevation - sora_march.kernel_beam.z) / sora_march.kernel_beam.w, 0.0, f32(elevations - 1));
+  let e = min(i32(xe), elevations - 2);
+  let te = xe - f32(e);
+  let w = sora_march.counts.x;
+  for (var i = 0; i < w; i++) {
+    let c00 = sora_march_value(SORA_MARCH_LN_BEAM, (a.i * elevations + e) * w + i);
+    let c01 = sora_march_value(SORA_MARCH_LN_BEAM, (a.i * elevations + e + 1) * w + i);
+    let c10 = sora_march_value(SORA_MARCH_LN_BEAM, ((a.i + 1) * elevations + e) * w + i);
+    let c11 = sora_march_value(SORA_MARCH_LN_BEAM, ((a.i + 1) * elevations + e + 1) * w + i);
+    beam[i] = exp((1.0 - a.f) * ((1.0 - te) * c00 + te * c01) + a.f * ((1.0 - te) * c10 + te * c11));
+  }
+  return SoraMarchBeam(share, beam);
+}
+
+// The forward-peak term at wavelength i and the scattering angle theta
+// (peak_radiance): `rows` the species rows already summed with their
+// weights beta_sca,j q_j, q and qx the peak-only rows Q and Q X.
+fn sora_march_peak_radiance(theta: f32, i: i32, rows: f32, q: f32, qx: f32) -> f32 {
+  let w = sora_march.counts.x;
+  let solar = sora_march_value(SORA_MARCH_SOLAR, i);
+  let out_ = solar * rows;
+  let start = sora_march.kernel_beam.x;
+  let radius = sora_march.kernel_beam.y;
+  let angles = sora_march.nodes.w;
+  let x_count = sora_march_length(SORA_MARCH_KERNEL_X);
+  if (sora_march_length(SORA_MARCH_KERNEL) == 0 || theta >= radius || q <= 0.0) { return out_; }
+  let wide = clamp((theta - start) / (radius - start), 0.0, 1.0);
+  let position = sqrt(theta / radius) * f32(angles - 1);
+  let t = min(i32(position), angles - 2);
+  let ft = position - f32(t);
+  let last = sora_march_value(SORA_MARCH_KERNEL_X, x_count - 1);
+  let x_mean = clamp(qx / q, 0.0, last);
+  let x = sora_march_locate(SORA_MARCH_KERNEL_X, x_mean);
+  let k00 = sora_march_value(SORA_MARCH_KERNEL, (x.i * angles + t) * w + i);
+  let k01 = sora_march_value(SORA_MARCH_KERNEL, (x.i * angles + t + 1) * w + i);
+  let k10 = sora_march_value(SORA_MARCH_KERNEL, ((x.i + 1) * angles + t) * w + i);
+  let k11 = sora_march_value(SORA_MARCH_KERNEL, ((x.i + 1) * angles + t + 1) * w + i);
+  let value = (1.0 - x.f) * ((1.0 - ft) * k00 + ft * k01) + x.f * ((1.0 - ft) * k10 + ft * k11);
+  return out_ + (1.0 - wide) * solar * q * value * exp(x_mean);
+}
+
+// The ground's light at wavelength i with the sun's zenith cosine at the
+// ground point (ground_light's lerp: in ln where both nodes are positive).
+fn sora_march_ground_light(i: i32, sun_cosine: f32) -> f32 {
+  let w = sora_march.counts.x;
+  let c = sora_march_locate_sun(sun_cosine);
+  var light = 0.0;
+  for (var table = SORA_MARCH_GROUND_DIFFUSE; table <= SORA_MARCH_GROUND_DIRECT; table++) {
+    let a = sora_march_value(table, c.i * w + i);
+    let b = sora_march_value(table, (c.i + 1) * w + i);
+    light += select((1.0 - c.f) * a + c.f * b, exp((1.0 - c.f) * log(max(a, SORA_FLOOR)) + c.f * log(max(b, SORA_FLOOR))), a > 0.0 && b > 0.0);
+  }
+  return light;
+}
+
+// (altitude, radius) m of the point at distance t along unit v from the
+// eye at altitude h, in float precision (|p|^2 - R^2 = t^2 + 2 r0 v.z t
+// + h (2 R + h)).
+fn sora_march_altitude_along(h: f32, v: vec3<f32>, t: f32) -> vec2<f32> {
+  let ground = sora.planet_sun.x;
+  let r0 = ground + h;
+  let r = length(vec3<f32>(v.xy * t, r0 + v.z * t));
+  return vec2<f32>(max((t * t + 2.0 * r0 * v.z * t + h * (2.0 * ground + h)) / (r + ground), 0.0), r);
+}
+
+// Aerial perspective by the march (soraAerialPerspectiveMarch; lookup.rs's
+// MarchTables::aerial_perspective_xyz): an eye at altitude h, the unit view
+// v and sun (east-north-up), a point at distance d (m); L = L_point *
+// transmittance + inscattered, L_air = S_seg + F_seg + (1 - T / T*)
+// (F_beyond + G_sky) + P(forward) - P(behind). As the GLSL twin, the
+// forward-peak species rows are kept summed with their weights beta_sca,j
+// q_j, and each row only where it is read.
+fn sora_aerial_perspective_march(h_in: f32, v: vec3<f32>, sun: vec3<f32>, d: f32) -> SoraAerial {
+  let w = sora_march.counts.x;
+  let s = sora_march.counts.y;
+  let ground = sora.planet_sun.x;
+  let thickness = sora_thickness();
+  let h = clamp(h_in, 0.0, thickness);
+  let r0 = ground + h;
+  // segment_in_atmosphere from inside the atmosphere (enter = 0), its
+  // roots in the forms without cancellation.
+  let b = r0 * v.z;
+  let c_top = (h - thickness) * (r0 + sora.planet_sun.y);
+  let root_top = sqrt(max(b * b - c_top, 0.0));
+  let top_far = select(-b + root_top, -c_top / (b + root_top), b > 0.0);
+  if (top_far <= 0.0) { return SoraAerial(vec3<f32>(0.0), vec3<f32>(1.0)); }
+  let enter = 0.0;
+  var exit_ = top_far;
+  let c_ground = h * (2.0 * ground + h);
+  let disc_ground = b * b - c_ground;
+  var on_ground = false;
+  if (b < 0.0 && disc_ground >= 0.0) {
+    let ground_near = c_ground / (-b + sqrt(disc_ground));
+    if (ground_near >= enter && ground_near < top_far) {
+      exit_ = ground_near;
+      on_ground = true;
+    }
+  }
+  let length_ = max(min(exit_, d) - enter, 0.0);
+  let beyond = exit_ - enter - length_;
+  // The phase functions at the view's one scattering angle.
+  let cos_theta = clamp(dot(v, sun), -1.0, 1.0);
+  // theta from the chord, not the cosine (as sora_sky.glsl: near the sun
+  // 1 - cos(theta) is lost to 32-bit rounding).
+  let theta = 2.0 * atan2(length(v - sun), length(v + sun));
+  let exact_phase = sora_march_phase(SORA_MARCH_PHASE, theta);
+  let smooth_phase = sora_march_phase(SORA_MARCH_SMOOTH_PHASE, theta);
+  var extinction: SoraMarchRows;
+  var scaled_extinction: SoraMarchRows;
+  var scaled_scattering: SoraMarchRows;
+  var scattering: SoraMarchRows;
+  for (var n = 0; n < w * s; n++) {
+    extinction[n] = sora_march_value(SORA_MARCH_EXTINCTION, n);
+    scaled_extinction[n] = sora_march_value(SORA_MARCH_SCALED_EXTINCTION, n);
+    scaled_scattering[n] = sora_march_value(SORA_MARCH_SCALED_SCATTERING, n);
+    scattering[n] = sora_march_value(SORA_MARCH_SCATTERING, n);
+  }
+  var single: SoraMarchWavelengths;
+  var field: SoraMarchWavelengths;
+  var field_beyond: SoraMarchWavelengths;
+  // The species rows (summed) and Q, Q X, over the segment and beyond it.
+  var forward_segment: SoraMarchWavelengths;
+  var scaled_beyond: SoraMarchWavelengths;
+  var q_segment: SoraMarchWavelengths;
+  var qx_segment: SoraMarchWavelengths;
+  var q_beyond: SoraMarchWavelengths;
+  var qx_beyond: SoraMarchWavelengths;
+  var columns: SoraMarchSpecies;
+  var columns_segment: SoraMarchSpecies;
+  var previous_rho = sora_march_densities(sora_march_altitude_along(h, v, enter).x);
+  var previous = 0.0;
+  let steps = sora_march.steps.x;
+  let steps_beyond = sora_march.steps.y;
+  let peaks = sora_march.columns_beam.w == 1;
+  var segment_done = false;
+  for (var node = 0; node < steps + steps_beyond; node++) {
+    let in_segment = node < steps;
+    var at_ds: vec2<f32>;
+    if (in_segment) {
+      at_ds = sora_march_node(length_, node, steps);
+    } else {
+      at_ds = sora_march_node(beyond, node - steps, steps_beyond) + vec2<f32>(length_, 0.0);
+    }
+    let at = at_ds.x;
+    let ds = at_ds.y;
+    if (!in_segment && !segment_done) {
+      let rho_end = sora_march_densities(sora_march_altitude_along(h, v, enter + length_).x);
+      for (var j = 0; j < s; j++) {
+        columns[j] += 0.5 * (previous_rho[j] + rho_end[j]) * (length_ - previous);
+      }
+      previous_rho = rho_end;
+      columns_segment = columns;
+      previous = length_;
+      segment_done = true;
+    }
+    if (ds <= 0.0) { continue; }
+    let point = sora_march_altitude_along(h, v, enter + at);
+    let altitude = point.x;
+    let r = point.y;
+    // The cosines at the point: v.p / r and sun.p / r.
+    let view_cosine = clamp((enter + at + r0 * v.z) / r, -1.0, 1.0);
+    let sun_cosine = clamp(((enter + at) * cos_theta + r0 * sun.z) / r, -1.0, 1.0);
+    let sines = sqrt(max((1.0 - view_cosine * view_cosine) * (1.0 - sun_cosine * sun_cosine), 0.0));
+    let cos_azimuth = select(1.0, clamp((cos_theta - view_cosine * sun_cosine) / sines, -1.0, 1.0), sines > 1e-6);
+    let log_source = sora_march_log_source(altitude, sun_cosine, view_cosine, cos_azimuth);
+    let rho = sora_march_densities(altitude);
+    for (var j = 0; j < s; j++) { columns[j] += 0.5 * (previous_rho[j] + rho[j]) * (at - previous); }
+    previous = at;
+    for (var i = 0; i < w; i++) {
+      var tau = 0.0;
+      var scattering_sum = 0.0;
+      for (var j = 0; j < s; j++) {
+        tau += scaled_extinction[i * s + j] * columns[j];
+        scattering_sum += scaled_scattering[i * s + j] * rho[j];
+      }
+      if (log_source[i] > sora_march.beam_range_dark.w) {
+        let add = ds * scattering_sum * exp(log_source[i] - tau);
+        if (in_segment) { field[i] += add; } else { field_beyond[i] += add; }
+      }
+    }
+    let to_sun = sora_march_sun_columns(altitude, sun_cosine);
+    let lit = to_sun.lit;
+    var peak_beam: SoraMarchBeam;
+    if (peaks) { peak_beam = sora_march_peak_beam(altitude, sun_cosine); }
+    let share = peak_beam.share;
+    for (var i = 0; i < w; i++) {
+      var depths = vec4<f32>(0.0);
+      var peak = 0.0;
+      var source = 0.0;
+      var row_weight = 0.0;
+      for (var j = 0; j < s; j++) {
+        let scaled_ext = scaled_extinction[i * s + j];
+        let ext = extinction[i * s + j];
+        let sun_column = select(0.0, to_sun.columns[j], lit);
+        depths += vec4<f32>(scaled_ext * columns[j], ext * columns[j], scaled_ext * sun_column, ext * sun_column);
+        peak += (ext - scaled_ext) * rho[j];
+        source += scattering[i * s + j] * exact_phase[j * w + i] * rho[j];
+        row_weight += scattering[i * s + j] * smooth_phase[j * w + i] * rho[j];
+      }
+      let transmitted = exp(-depths);
+      let view_beam = transmitted.x;
+      let view_direct = transmitted.y;
+      let sun_beam = select(0.0, transmitted.z, lit);
+      let sun_direct = select(0.0, transmitted.w, lit);
+      if (in_segment && lit) {
+        single[i] += ds * sora_march_value(SORA_MARCH_SOLAR, i) * source * view_direct * sun_direct;
+      }
+      if (!peaks) { continue; }
+      // As the library's march (add_tilted_forward_peak).
+      let through = sun_beam - sun_direct;
+      let scattered = through + share * (peak_beam.beam[i] - through);
+      let excess = ds * (view_beam * scattered + sun_direct * (view_beam - view_direct));
+      let beam_weight = ds * view_beam * (scattered + sun_direct);
+      if (in_segment) { forward_segment[i] += excess * row_weight; } else { scaled_beyond[i] += beam_weight * row_weight; }
+      if (lit && sun_beam > 0.0) {
+        let only = ds * view_direct * sun_direct * peak * ((sun_direct + scattered) / sun_beam);
+        let x = (depths.y + depths.w) - (depths.x + depths.z);
+        if (in_segment) {
+          q_segment[i] += only;
+          qx_segment[i] += only * x;
+        } else {
+          q_beyond[i] += only;
+          qx_beyond[i] += only * x;
+        }
+      }
+    }
+    previous_rho = rho;
+  }
+  if (!segment_done) { columns_segment = columns; }
+  // The ground's light where the ray ends on it, through the whole ray's
+  // scaled transmittance.
+  let end = sora_march_altitude_along(h, v, exit_);
+  let ground_sun_cosine = clamp((exit_ * cos_theta + r0 * sun.z) / end.y, -1.0, 1.0);
+  var light = vec3<f32>(0.0);
+  var through_xyz = vec3<f32>(0.0);
+  var solar_xyz = vec3<f32>(0.0);
+  for (var i = 0; i < w; i++) {
+    var tau = 0.0;
+    var tau_scaled = 0.0;
+    var tau_scaled_whole = 0.0;
+    for (var j = 0; j < s; j++) {
+      tau += extinction[i * s + j] * columns_segment[j];
+      tau_scaled += scaled_extinction[i * s + j] * columns_segment[j];
+      tau_scaled_whole += scaled_extinction[i * s + j] * columns[j];
+    }
+    let solar = sora_march_value(SORA_MARCH_SOLAR, i);
+    let share = 1.0 - exp(tau_scaled - tau);
+    let depth = tau - tau_scaled;
+    var ground_light = 0.0;
+    if (on_ground) { ground_light = exp(-tau_scaled_whole) * sora_march_ground_light(i, ground_sun_cosine); }
+    var value = single[i] + field[i] + share * (field_beyond[i] + ground_light);
+    if (peaks) {
+      let peak_forward = sora_march_peak_radiance(theta, i, forward_segment[i] + share * scaled_beyond[i],
+                                                  q_segment[i] + q_beyond[i], qx_segment[i] + qx_beyond[i]);
+      let hidden = sora_march_peak_radiance(theta, i, 0.0, q_beyond[i], qx_beyond[i] - depth * q_beyond[i]);
+      value += peak_forward - hidden;
+    }
+    let spike = vec3<f32>(sora_march_value(SORA_MARCH_XYZ, 3 * i), sora_march_value(SORA_MARCH_XYZ, 3 * i + 1),
+                          sora_march_value(SORA_MARCH_XYZ, 3 * i + 2));
+    light += value * spike;
+    through_xyz += solar * exp(-tau) * spike;
+    solar_xyz += solar * spike;
+  }
+  return SoraAerial(light, clamp(through_xyz / max(solar_xyz, vec3<f32>(1e-30)), vec3<f32>(0.0), vec3<f32>(1.0)));
+}

@@ -605,9 +605,10 @@ impl EngineTables {
     }
 }
 
-/// The aerial-perspective march (the Rust lookup; the reference shaders'
-/// `soraAerialPerspective` does not march yet): the tables of
-/// [`super::march`], read at the nodes of one view ray.
+/// The aerial-perspective march (the Rust lookup, the oracle of the
+/// reference shaders' `soraAerialPerspectiveMarch`, which follows it step
+/// by step): the tables of [`super::march`], read at the nodes of one view
+/// ray.
 impl MarchTables {
     /// Aerial perspective by the march (see the module docs of
     /// [`super::march`]): an eye at `altitude_m`, the unit `view` and `sun`

@@ -126,8 +126,8 @@ pub struct EngineTableSettings {
     /// Whether to bake the aerial-perspective march's tables (`march.rs`;
     /// multiple scattering only). Off by default: within 2 % of the
     /// library, 34-38 MB (with the sky table's 28 MB, earth-hazy's are
-    /// over 64 MB), and the shaders do not read them yet
-    /// (`docs/engine-tables.md`).
+    /// over 64 MB); the reference shaders march them
+    /// (`soraAerialPerspectiveMarch`, `docs/engine-tables.md`).
     pub march: bool,
 }
 

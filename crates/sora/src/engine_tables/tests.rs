@@ -1728,3 +1728,50 @@ fn the_aerial_march_looking_down_matches_the_library() {
     }
     assert!(worst.0 <= 0.02 && worst.1 <= 0.005, "{worst:?}");
 }
+
+/// A probe, not a check: the Rust march (`aerial_perspective_xyz`) and the
+/// library's light of the air at the views of `SORA_PROBE_VIEWS`
+/// ("elevation,azimuth from the sun;..." in degrees) for `SORA_PROBE`
+/// ("preset,sun degrees,distance m"), printed as luminance, to hold a
+/// shader's pixels to (web/tests/tables.test.mjs with SORA_TABLES_DUMP).
+#[test]
+#[ignore]
+fn probe_the_aerial_march() {
+    let probe = std::env::var("SORA_PROBE").unwrap_or("mars-dust,10,1000".into());
+    let probe: Vec<&str> = probe.split(',').collect();
+    let (preset, sun_deg, d): (&str, f64, f64) = (
+        probe[0],
+        probe[1].parse().unwrap(),
+        probe[2].parse().unwrap(),
+    );
+    let atmosphere = Atmosphere::preset(preset).unwrap();
+    let (sky, _) = aerial_reference_sky(&atmosphere, sun_deg);
+    let shared = sky.solve_shared_field().unwrap().unwrap();
+    let tables = march::MarchTables::bake_with(&sky, &shared, march::SOURCE_THINNING).unwrap();
+    let to_xyz = SpectrumToXyz::new(sky.wavelengths(), Observer::default());
+    let sun = crate::geometry::direction_from_elevation_azimuth(sun_deg, 180.0);
+    let views = std::env::var("SORA_PROBE_VIEWS").unwrap_or("10,0;10,1.5;10,5;12,3".into());
+    let segments: Vec<(ViewDirection, f64)> = views
+        .split(';')
+        .map(|v| {
+            let n: Vec<f64> = v.split(',').map(|n| n.parse().unwrap()).collect();
+            (ViewDirection::new(n[0], 180.0 + n[1]).unwrap(), d)
+        })
+        .collect();
+    let library = sky.compute_segment_light(&segments).unwrap();
+    for ((view, _), (l, _)) in segments.iter().zip(&library) {
+        let v = view.to_vector();
+        let (got, _) =
+            tables.aerial_perspective_xyz(0.0, [v.x, v.y, v.z], [sun.x, sun.y, sun.z], d);
+        let want = to_xyz.to_xyz(&l.radiance_w_m2_sr_nm).unwrap().y;
+        eprintln!(
+            "probe {:.3} {:.3} theta {:.3}: march {:.6e} library {:.6e} ({:+.2} %)",
+            view.elevation_deg(),
+            view.azimuth_deg() - 180.0,
+            v.dot(sun).clamp(-1.0, 1.0).acos().to_degrees(),
+            got[1],
+            want,
+            100.0 * (got[1] / want - 1.0)
+        );
+    }
+}
