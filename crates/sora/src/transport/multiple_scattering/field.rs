@@ -707,6 +707,33 @@ impl MultipleScatteringField {
             });
     }
 
+    /// The forward-peak integrals of the view ray beyond `from_m` m (to
+    /// its end in the atmosphere) into `scratch` (read them with
+    /// [`MultipleScatteringScratch::forward_integrals`]), with the
+    /// transmittances and the peak optical depth X of the view leg counted
+    /// from that point, as an eye there sees the ray: the light from behind
+    /// a point of an aerial perspective, summed over the ray beyond it
+    /// itself (not the whole ray's less the segment's, two quadratures
+    /// whose difference is their error where little light comes from
+    /// behind). The field's light is not synthesised (zero).
+    pub(crate) fn compute_forward_integrals_beyond(
+        &self,
+        view: Vector3,
+        from_m: f64,
+        scratch: &mut MultipleScatteringScratch,
+    ) {
+        let w = self.optics.wavelengths;
+        let (mut field, mut ground) = (vec![0.0; w], vec![0.0; w]);
+        self.optics.march_from(
+            from_m,
+            (view, f64::INFINITY),
+            SunColumns::Exact,
+            scratch,
+            (&mut field, &mut ground),
+            |_, _, scratch| scratch.log_source.fill(super::view_march::DARK_LOG_SOURCE),
+        );
+    }
+
     /// ln R(x, view) at one march node into `scratch.log_source`: R synthesised
     /// exactly from the harmonics at the four surrounding (level, sun node)
     /// corners ([`MultipleScatteringField::source_moments`]), interpolated

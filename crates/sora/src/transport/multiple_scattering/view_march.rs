@@ -175,6 +175,24 @@ impl ViewRayOptics {
     /// the segment does not reach the ground). W m^-2 sr^-1 nm^-1.
     pub(super) fn march<F>(
         &self,
+        segment: (Vector3, f64),
+        sun_columns: SunColumns,
+        scratch: &mut MultipleScatteringScratch,
+        out: (&mut [f64], &mut [f64]),
+        source: F,
+    ) where
+        F: FnMut(NodeGeometry, &[f64], &mut MultipleScatteringScratch),
+    {
+        self.march_from(0.0, segment, sun_columns, scratch, out, source);
+    }
+
+    /// [`ViewRayOptics::march`] of the part of the view ray from `from_m`
+    /// m on (the start where the ray enters the atmosphere, if later): its
+    /// columns, transmittances and peak optical depths counted from there,
+    /// as if the eye were at that point.
+    pub(super) fn march_from<F>(
+        &self,
+        from_m: f64,
         (view, distance_m): (Vector3, f64),
         sun_columns: SunColumns,
         scratch: &mut MultipleScatteringScratch,
@@ -197,6 +215,7 @@ impl ViewRayOptics {
         let Some((enter, exit)) = segment_in_atmosphere(self.observer, view, ground, top) else {
             return;
         };
+        let enter = enter.max(from_m);
         let start = self.observer + view * enter;
         let length = exit.min(distance_m) - enter;
         scratch.view_columns.fill(0.0);
