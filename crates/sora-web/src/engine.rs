@@ -522,7 +522,7 @@ pub const REALTIME_TABLES: RealtimeTables = RealtimeTables {
         // segments): the scene view takes the sky table's difference
         // (`soraAerialPerspectiveFromSky`).
         aerial_nodes: (0, 0, 0),
-        // Nor the march's tables (34-38 MB, too many for the browser's
+        // Nor the march's tables (29-33 MB, too many for the browser's
         // bake; sora_sky.glsl's soraAerialPerspectiveMarch reads them).
         march: false,
     },

@@ -61,7 +61,7 @@ pub struct TablesArgs {
 
     /// Also bake the aerial-perspective march's tables (march.bin: the
     /// field's source per wavelength and what a per-pixel march of the
-    /// segment reads; within 2 % of the library at 1-50 km; 34-38 MB)
+    /// segment reads; within 2 % of the library at 1-50 km; 29-33 MB)
     #[arg(long)]
     march: bool,
 

@@ -125,9 +125,9 @@ pub struct EngineTableSettings {
     pub aerial_nodes: (usize, usize, usize),
     /// Whether to bake the aerial-perspective march's tables (`march.rs`;
     /// multiple scattering only). Off by default: within 2 % of the
-    /// library, 34-38 MB (with the sky table's 28 MB, earth-hazy's are
-    /// over 64 MB); the reference shaders march them
-    /// (`soraAerialPerspectiveMarch`, `docs/engine-tables.md`).
+    /// library, 29-33 MB (57-61 MB with the sky table's 28 MB); the
+    /// reference shaders march them (`soraAerialPerspectiveMarch`,
+    /// `docs/engine-tables.md`).
     pub march: bool,
 }
 
