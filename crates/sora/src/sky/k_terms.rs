@@ -377,6 +377,27 @@ impl Sky {
         }
         Ok(weighted_images(images, add, zero))
     }
+
+    /// [`Self::sum_term_images`] for a colour image: each term rendered by
+    /// `render(term, its colour conversion)` through
+    /// [`term_colour_conversion`] (a term with no sample in the
+    /// colour-matching functions' range adds nothing).
+    pub(super) fn sum_term_colour_images<T: Clone>(
+        &self,
+        to_xyz: &SpectrumToXyz,
+        progress: &(dyn Fn(usize) + Sync),
+        zero: T,
+        add: impl Fn(&mut T, f64, &T),
+        render: impl Fn(&Sky, &SpectrumToXyz, &(dyn Fn(usize) + Sync)) -> Result<Vec<T>>,
+    ) -> Result<Vec<T>> {
+        self.sum_term_images(progress, zero, add, |(offset, weights), term, p| {
+            let grid = (offset, term.wavelengths());
+            let Some((weight, to_xyz)) = term_colour_conversion(to_xyz, grid, weights) else {
+                return Ok(None);
+            };
+            Ok(Some((weight, render(term, &to_xyz, p)?)))
+        })
+    }
 }
 
 #[cfg(test)]

@@ -65,19 +65,12 @@ impl Sky {
     ) -> Result<Vec<Xyz>> {
         self.check_colour_conversion(to_xyz)?;
         if !self.k_terms.is_empty() {
-            return self.sum_term_images(
+            return self.sum_term_colour_images(
+                to_xyz,
                 progress,
                 Xyz::BLACK,
                 k_terms::add_scaled_xyz,
-                |(offset, weights), term, p| {
-                    let grid = (offset, term.wavelengths());
-                    let Some((weight, to_xyz)) =
-                        k_terms::term_colour_conversion(to_xyz, grid, weights)
-                    else {
-                        return Ok(None);
-                    };
-                    Ok(Some((weight, term.render_xyz(image, &to_xyz, p)?)))
-                },
+                |term, to_xyz, p| term.render_xyz(image, to_xyz, p),
             );
         }
         let n = self.wavelengths().len();
@@ -111,19 +104,12 @@ impl Sky {
                     k_terms::add_scaled_xyz(s, w, x);
                 }
             };
-            return self.sum_term_images(
+            return self.sum_term_colour_images(
+                to_xyz,
                 progress,
                 [Xyz::BLACK; 4],
                 add,
-                |(offset, weights), term, p| {
-                    let grid = (offset, term.wavelengths());
-                    let Some((weight, to_xyz)) =
-                        k_terms::term_colour_conversion(to_xyz, grid, weights)
-                    else {
-                        return Ok(None);
-                    };
-                    Ok(Some((weight, term.render_stokes_xyz(image, &to_xyz, p)?)))
-                },
+                |term, to_xyz, p| term.render_stokes_xyz(image, to_xyz, p),
             );
         }
         let n = self.wavelengths().len();
