@@ -667,6 +667,47 @@ mod tests {
     }
 
     #[test]
+    fn the_stokes_image_of_a_sky_with_gases_sums_its_terms_as_the_colour_image_does() {
+        // A polarised sky with gases (740-780 nm, the A band's own weights
+        // at 760 nm): S0 of its Stokes image is its colour image (both the
+        // terms' colours summed), and Q's colour is not nothing (the
+        // terms' Q images reach the sum).
+        let mut atmosphere = Atmosphere::preset("earth-clear").unwrap();
+        atmosphere
+            .species
+            .extend(banded_gas_species(&BandedGases::new(
+                Some((2.9, 2000.0)),
+                true,
+            )));
+        let grid = WavelengthGrid::new(740.0, 780.0, 20.0).unwrap();
+        let sky = Sky::builder(&atmosphere)
+            .sun_deg(30.0, 180.0)
+            .wavelengths(grid)
+            .polarisation(Polarisation::Vector)
+            .build()
+            .unwrap();
+        assert!(!sky.k_terms().is_empty());
+        let image = ImageSettings {
+            draw_sun_disc: false,
+            ..ImageSettings::new(Camera::Fisheye, 9, 9)
+        };
+        let to_xyz =
+            crate::colour::SpectrumToXyz::new(&grid, crate::colour::Observer::Cie1931TwoDegree);
+        let colour = sky.render_xyz(&image, &to_xyz, &|_| {}).unwrap();
+        let stokes = sky.render_stokes_xyz(&image, &to_xyz, &|_| {}).unwrap();
+        assert_eq!(colour.len(), stokes.len());
+        let mut q = 0.0f64;
+        for (c, s) in colour.iter().zip(&stokes) {
+            for (a, b) in [(c.x, s[0].x), (c.y, s[0].y), (c.z, s[0].z)] {
+                assert!(relative(b, a) < 1e-12, "S0 {b} vs XYZ {a}");
+            }
+            q = q.max(s[1].y.abs() / s[0].y.max(1e-300));
+        }
+        // Rayleigh air 60 degrees from a sun 30 up is strongly polarised.
+        assert!(q > 0.1, "largest |Q|/I in Y: {q}");
+    }
+
+    #[test]
     fn the_effective_sky_of_a_sky_with_gases_is_never_solved() {
         // Its optics are the sky's (Sky::optics); every radiance is the
         // terms' sum, so its own field stays unbuilt.
