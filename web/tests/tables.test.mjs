@@ -13,8 +13,8 @@
 //   below 0.05 per step.
 // - aerial perspective, for the presets in SORA_TABLES_AERIAL (default
 //   none; PRESET:SUN+SUN gives a preset its own suns; their tables are
-//   baked with SORA_TABLES_AERIAL_ARGS, default
-//   --march): a 48 x 48 fisheye of the light scattered into the segment to
+//   baked with SORA_TABLES_AERIAL_ARGS, default none: the default bake
+//   holds the march's tables): a 48 x 48 fisheye of the light scattered into the segment to
 //   d = 1, 10 and 50 km, suns 60, 10, 2 and -4 degrees, against `sora
 //   render --distance-m D`'s. With march tables (march.bin) the shader's
 //   march (soraAerialPerspectiveMarch) is held to the same luminance and
@@ -64,7 +64,7 @@ const SIZE = 256;
 const AERIAL_ENTRIES = (process.env.SORA_TABLES_AERIAL ?? '').split(',').filter((p) => p).map((p) => p.split(':'));
 const AERIAL_PRESETS = AERIAL_ENTRIES.map(([preset]) => preset);
 const AERIAL_SUNS_OF = Object.fromEntries(AERIAL_ENTRIES.filter((e) => e[1]).map(([preset, suns]) => [preset, suns.split('+').map(Number)]));
-const aerialArguments = (process.env.SORA_TABLES_AERIAL_ARGS ?? '--march').split(' ').filter((a) => a);
+const aerialArguments = (process.env.SORA_TABLES_AERIAL_ARGS ?? '').split(' ').filter((a) => a);
 // checkedSuns: the aerial table's; the march is checked at every sun.
 const listed = (value, fallback) => (value || fallback).split(',').map(Number);
 const AERIAL = {
@@ -465,6 +465,10 @@ async function main() {
       for (const name of ['sky', 'transmittance', 'irradiance', ...(manifest.tables.aerial ? ['aerial'] : [])]) {
         await tableBinary(join(directory, `${name}.exr`), `${preset}-${name}.bin`);
         files[name] = `${base}/${preset}-${name}.bin`;
+      }
+      // The default bake (multiple scattering) holds the march's tables.
+      if (!bakeArguments.includes('--no-march')) {
+        assert.ok(manifest.tables.march, `${preset}: the default bake wrote no march.bin`);
       }
       const march = withAerial && manifest.tables.march ? await marchBinary(join(directory, 'march.bin'), manifest.tables.march, preset) : null;
       if (march) {

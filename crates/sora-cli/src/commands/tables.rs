@@ -59,11 +59,17 @@ pub struct TablesArgs {
     #[arg(long, value_name = "N", default_value_t = EngineTableSettings::default().azimuth_nodes)]
     azimuth_nodes: usize,
 
-    /// Also bake the aerial-perspective march's tables (march.bin: the
-    /// field's source per wavelength and what a per-pixel march of the
-    /// segment reads; within 2 % of the library at 1-50 km; 29-33 MB)
-    #[arg(long)]
+    /// Bake the aerial-perspective march's tables (march.bin: the field's
+    /// source per wavelength and what a per-pixel march of the segment
+    /// reads; within 2 % of the library at 1-50 km; 29-33 MB; multiple
+    /// scattering only) [default]
+    #[arg(long, overrides_with = "no_march")]
     march: bool,
+
+    /// Leave out the march's tables (the shaders' aerial perspective then
+    /// comes from the sky table, not within 2 %; 28 MB in all)
+    #[arg(long, overrides_with = "march")]
+    no_march: bool,
 
     /// Aerial-perspective table: view zenith nodes per half (0, with the
     /// other two 0, for none: the default; e.g. 8 8 6)
@@ -104,7 +110,7 @@ pub fn run(args: TablesArgs) -> anyhow::Result<()> {
             args.aerial_azimuth_nodes,
             args.aerial_distance_nodes,
         ),
-        march: args.march,
+        march: !args.no_march,
         ..EngineTableSettings::default()
     };
     settings.validate()?;

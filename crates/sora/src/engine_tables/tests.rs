@@ -610,6 +610,7 @@ fn the_grid_layers_are_the_image_layers() {
         sun_nodes: 4,
         altitude_nodes: 2,
         transmittance_nodes: (4, 8),
+        march: false,
         ..EngineTableSettings::default()
     };
     let fast = EngineTables::bake(&sky, &settings, &|_| {}).unwrap();
@@ -660,6 +661,7 @@ fn the_layers_marched_in_fewer_panels_are_the_field_s() {
         zenith_nodes_per_half: 24,
         azimuth_nodes: 16,
         transmittance_nodes: (4, 8),
+        march: false,
         ..EngineTableSettings::default()
     };
     let fast = EngineTables::bake_with(
@@ -711,6 +713,7 @@ fn the_layers_blended_between_suns_are_the_marched_layers() {
         zenith_nodes_per_half: 24,
         azimuth_nodes: 16,
         transmittance_nodes: (4, 8),
+        march: false,
         ..EngineTableSettings::default()
     };
     let blended: Vec<usize> = (0..settings.sun_nodes)
@@ -762,6 +765,7 @@ fn the_wide_bake_is_the_portable_bake_bit_for_bit() {
         zenith_nodes_per_half: 16,
         azimuth_nodes: 12,
         transmittance_nodes: (4, 8),
+        march: false,
         ..EngineTableSettings::default()
     };
     if !avx2_available() {
