@@ -1654,10 +1654,13 @@ fn the_aerial_march_matches_the_library() {
 fn the_aerial_march_looking_down_matches_the_library() {
     let atmosphere = Atmosphere::preset("earth-hazy").unwrap();
     let eye_m = 3000.0;
+    // Scalar light, as the tables' (the builder's default for the fast
+    // method is vector light, 2-8 % brighter or darker here at low suns).
     let build = |sun_deg: f64| {
         Sky::builder(&atmosphere)
             .sun_deg(sun_deg, 180.0)
             .observer_altitude_m(eye_m)
+            .polarisation(Polarisation::Scalar)
             .build()
             .unwrap()
     };
@@ -1773,5 +1776,110 @@ fn probe_the_aerial_march() {
             want,
             100.0 * (got[1] / want - 1.0)
         );
+    }
+}
+
+/// TEMPORARY probe (eye altitude): own field vs shared field vs march.
+#[test]
+#[ignore]
+fn probe_eye_altitude() {
+    let atmosphere = Atmosphere::preset("earth-hazy").unwrap();
+    let eye_m: f64 = std::env::var("SORA_EYE_M").map_or(3000.0, |v| v.parse().unwrap());
+    let build = |sun_deg: f64| {
+        Sky::builder(&atmosphere)
+            .sun_deg(sun_deg, 180.0)
+            .observer_altitude_m(eye_m)
+            .polarisation(if std::env::var("SORA_VEC").is_ok() { Polarisation::Vector } else { Polarisation::Scalar })
+            .build()
+            .unwrap()
+    };
+    let any = build(10.0);
+    let shared = any.solve_shared_field().unwrap().unwrap();
+    let tables = march::MarchTables::bake(&any, &shared).unwrap();
+    let to_xyz = SpectrumToXyz::new(any.wavelengths(), Observer::default());
+    let suns: Vec<f64> = std::env::var("SORA_MARCH_SUNS").map_or(vec![5.0, -2.0], |v| {
+        v.split(',').map(|n| n.parse().unwrap()).collect()
+    });
+    eprintln!("shared sun nodes (zenith deg): {:?}", tables.source.sun_zenith_rad.iter().map(|z| (z.to_degrees()*1000.0).round()/1000.0).collect::<Vec<_>>());
+    for sun_deg in suns {
+        let sky = build(sun_deg);
+        let via_shared = any.with_shared_field(sky.scene().clone(), Some(&shared), None).unwrap();
+        let sun = crate::geometry::direction_from_elevation_azimuth(sun_deg, 180.0);
+        let sun = [sun.x, sun.y, sun.z];
+        let mut segments = Vec::new();
+        for elevation in [-10.0, 10.0] {
+            for relative in [0.0, 90.0, 180.0] {
+                let view = ViewDirection::new(elevation, 180.0 + relative).unwrap();
+                segments.push((view, 1e3));
+            }
+        }
+        let own = sky.compute_segment_light(&segments).unwrap();
+        let other = via_shared.compute_segment_light(&segments).unwrap();
+        for (((view, d), (a, _)), (b, _)) in segments.iter().zip(&own).zip(&other) {
+            let ya = to_xyz.to_xyz(&a.radiance_w_m2_sr_nm).unwrap().y;
+            let yb = to_xyz.to_xyz(&b.radiance_w_m2_sr_nm).unwrap().y;
+            let v = view.to_vector();
+            let (got, _) = tables.aerial_perspective_xyz(eye_m, [v.x, v.y, v.z], sun, *d);
+            eprintln!(
+                "sun {sun_deg} view ({:.0}, {:.0}) d {:.1} km: own {ya:.4e} shared-field {yb:.4e} ({:+.2} %) march {:.4e} ({:+.2} % of own, {:+.2} % of shared)",
+                view.elevation_deg(), view.azimuth_deg() - 180.0, d / 1e3,
+                100.0 * (yb / ya - 1.0), got[1], 100.0 * (got[1] / ya - 1.0), 100.0 * (got[1] / yb - 1.0)
+            );
+        }
+    }
+}
+
+/// TEMPORARY probe: fast vs path tracer, eye at 3 km, scalar and vector.
+#[test]
+#[ignore]
+fn probe_eye_altitude_path_tracer() {
+    let atmosphere = Atmosphere::preset("earth-hazy").unwrap();
+    let eye_m: f64 = std::env::var("SORA_EYE_M").map_or(3000.0, |v| v.parse().unwrap());
+    let samples: u64 = std::env::var("SORA_PT_SAMPLES").map_or(20_000, |v| v.parse().unwrap());
+    let grid = WavelengthGrid::new(440.0, 680.0, 120.0).unwrap();
+    let suns: Vec<f64> = std::env::var("SORA_MARCH_SUNS").map_or(vec![-2.0], |v| {
+        v.split(',').map(|n| n.parse().unwrap()).collect()
+    });
+    let views: Vec<(f64, f64)> = std::env::var("SORA_PROBE_VIEWS").map_or(vec![(-10.0, 180.0)], |v| {
+        v.split(';').map(|p| { let n: Vec<f64> = p.split(',').map(|x| x.parse().unwrap()).collect(); (n[0], n[1]) }).collect()
+    });
+    for sun_deg in suns {
+        let segments: Vec<(ViewDirection, f64)> = views
+            .iter()
+            .map(|(e, a)| (ViewDirection::new(*e, 180.0 + a).unwrap(), 1e3))
+            .collect();
+        for polarisation in [Polarisation::Scalar, Polarisation::Vector] {
+            let build = |method: Method| {
+                Sky::builder(&atmosphere)
+                    .sun_deg(sun_deg, 180.0)
+                    .observer_altitude_m(eye_m)
+                    .wavelengths(grid.clone())
+                    .polarisation(polarisation)
+                    .method(method)
+                    .build()
+                    .unwrap()
+            };
+            let fast = build(Method::Fast).compute_segment_light(&segments).unwrap();
+            let start = std::time::Instant::now();
+            let traced = build(Method::PathTracing { samples, seed: 1 })
+                .compute_segment_light(&segments)
+                .unwrap();
+            eprintln!("({:.1} s)", start.elapsed().as_secs_f64());
+            for (((view, _), (f, _)), (t, _)) in segments.iter().zip(&fast).zip(&traced) {
+                let errors = t.standard_error_w_m2_sr_nm.as_ref().unwrap();
+                let line: Vec<String> = (0..3)
+                    .map(|i| {
+                        let (x, y, e) = (f.radiance_w_m2_sr_nm[i], t.radiance_w_m2_sr_nm[i], errors[i]);
+                        format!("{:+.2} +- {:.2} %", 100.0 * (x / y - 1.0), 100.0 * e / y)
+                    })
+                    .collect();
+                eprintln!(
+                    "{polarisation:?} sun {sun_deg} view ({:.0}, {:.0}) fast/traced - 1 at 440/560/680: {}",
+                    view.elevation_deg(),
+                    view.azimuth_deg() - 180.0,
+                    line.join(", ")
+                );
+            }
+        }
     }
 }
