@@ -1653,9 +1653,8 @@ fn the_aerial_march_matches_the_library() {
 /// km (scalar light, as the tables'; `SORA_AERIAL_VECTOR=1` measures
 /// against vector light, the builder's default, which differs from it by
 /// the polarisation: -0.6 to +1.9 %, -0.8 to +2.8 % and -3.0 to +8.5 %
-/// at suns 30, 5 and -2 here)
-/// against the tables baked from the field solved for every sun and eye.
-/// Bounds: those of `the_aerial_march_matches_the_library` (measured: at
+/// at suns 30, 5 and -2 here) against the tables baked from the field
+/// solved for every sun and eye. Bounds: those of `the_aerial_march_matches_the_library` (measured: at
 /// most 0.45 %, 0.31 % and 1.08 % at suns 30, 5 and -2, xy 0.0022;
 /// docs/engine-tables.md).
 #[test]
