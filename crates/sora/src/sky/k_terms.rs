@@ -56,63 +56,142 @@
 
 use super::{AerialPerspective, Irradiance, Sky, SkyRadiance};
 use crate::atmosphere::Atmosphere;
-use crate::atmosphere::gas_bands::{has_untermed_gas_bands, k_distribution_terms, term_span};
+use crate::atmosphere::gas_bands::{
+    TERMS, banded_depths_above, has_untermed_gas_bands, k_distribution_terms, term_span,
+};
 use crate::colour::SpectrumToXyz;
 use crate::colour::Xyz;
 use crate::error::Result;
 use crate::spectrum::{SampledSpectrum, WavelengthGrid};
 
+/// The most a sample's radiance may change, relative, where terms leave
+/// out their higher orders of scattering (the bound of
+/// [`higher_orders_needed`], summed over the terms left out).
+pub(super) const HIGHER_ORDERS_BOUND: f64 = 1e-3;
+
 /// The skies of `atmosphere`'s k-distribution terms, each built by
-/// `build` from the atmosphere of its term on a grid, with their weights
-/// per sample of that grid; none without banded gases, or when they are
-/// already at a term (a term's own atmosphere is one solve).
+/// `build(atmosphere of the term, grid, higher orders)` (with the higher
+/// orders of scattering, or single scattering and the sunlit ground
+/// alone), with their weights per sample of that grid; none without banded
+/// gases, or when they are already at a term (a term's own atmosphere is
+/// one solve).
 ///
 /// Only the samples of `gas_bands::term_span` (from the first to the last
 /// at which the terms' atmospheres differ) need every term: term 0's sky
 /// covers the whole of `grid`, weighted there by the sum of all the terms'
 /// weights outside the span (every term is the same atmosphere at those
 /// samples), and the other terms' skies cover the span alone (`grid`'s
-/// sub-grid). With the span the whole grid, or `whole_grid`, every term is
-/// on `grid` (the oracle the tests compare with).
+/// sub-grids). With `eye_altitude_m` (m above the ground; `None`: every
+/// term keeps its higher orders everywhere), a term leaves out its higher
+/// orders at the samples where [`higher_orders_needed`] finds them
+/// negligible, so that its span is cut into runs of samples solved with
+/// and without them, one sky each. With `whole_grid` every term is on
+/// `grid` with its higher orders (the oracle the tests compare with).
 pub(super) fn term_skies(
     atmosphere: &Atmosphere,
     grid: &WavelengthGrid,
     whole_grid: bool,
-    build: impl Fn(&Atmosphere, &WavelengthGrid) -> Result<Sky>,
+    eye_altitude_m: Option<f64>,
+    build: impl Fn(&Atmosphere, &WavelengthGrid, bool) -> Result<Sky>,
 ) -> Result<Vec<(SampledSpectrum, Sky)>> {
     if !has_untermed_gas_bands(atmosphere) {
         return Ok(Vec::new());
     }
     let terms = k_distribution_terms(atmosphere, grid)?;
-    let span = if whole_grid {
-        Some((0, grid.len() - 1))
-    } else {
-        term_span(atmosphere, grid)?
-    };
-    if span == Some((0, grid.len() - 1)) {
+    if whole_grid {
         return terms
             .into_iter()
-            .map(|(weights, at_term)| Ok((weights, build(&at_term, grid)?)))
+            .map(|(weights, at_term)| Ok((weights, build(&at_term, grid, true)?)))
             .collect();
     }
+    let span = term_span(atmosphere, grid)?;
     let inside = |i: usize| span.is_some_and(|(first, last)| (first..=last).contains(&i));
-    let mut terms = terms.into_iter();
-    let (mut weights, at_first) = terms.next().expect("a k-distribution has terms");
-    let rest: Vec<(SampledSpectrum, Atmosphere)> = terms.collect();
+    let mut weights = terms[0].0.clone();
     for (i, w) in weights.values_mut().iter_mut().enumerate() {
         if !inside(i) {
-            *w += rest.iter().map(|(other, _)| other[i]).sum::<f64>();
+            *w += terms[1..].iter().map(|(other, _)| other[i]).sum::<f64>();
         }
     }
-    let mut skies = vec![(weights, build(&at_first, grid)?)];
-    if let Some((first, last)) = span {
-        let sub = grid.sub_grid(first, last - first + 1);
-        for (weights, at_term) in rest {
-            let on_sub = SampledSpectrum::from_values(weights.values()[first..=last].to_vec());
-            skies.push((on_sub, build(&at_term, &sub)?));
+    let mut skies = vec![(weights, build(&terms[0].1, grid, true)?)];
+    let Some((first, last)) = span else {
+        return Ok(skies);
+    };
+    let sub = grid.sub_grid(first, last - first + 1);
+    let needed = match eye_altitude_m {
+        Some(altitude_m) => higher_orders_needed(&terms, (first, &sub), altitude_m)?,
+        None => vec![[true; TERMS]; sub.len()],
+    };
+    for (j, (weights, at_term)) in terms.iter().enumerate().skip(1) {
+        let mut start = 0;
+        while start < sub.len() {
+            let higher = needed[start][j];
+            let end = (start..sub.len())
+                .find(|i| needed[*i][j] != higher)
+                .unwrap_or(sub.len());
+            let run = grid.sub_grid(first + start, end - start);
+            let on_run =
+                SampledSpectrum::from_values(weights.values()[first + start..first + end].to_vec());
+            skies.push((on_run, build(at_term, &run, higher)?));
+            start = end;
         }
     }
     Ok(skies)
+}
+
+/// Which terms need their higher orders of scattering (all orders but the
+/// first, and the skylight the ground reflects) at each sample of `sub`
+/// (the span, from sample `first` of the terms' grid), for an eye
+/// `altitude_m` above the ground: [sample][term].
+///
+/// Every path light takes from the top of the atmosphere to the eye
+/// crosses each shell above the eye, so its optical depth in a banded gas
+/// is at least the gas' vertical optical depth above the eye, tau_v. Term
+/// j's atmosphere is term 0's with more absorption by the banded gases
+/// (where every gas absorbs at least as much in j as in 0), the same
+/// profiles, so each path's light in term j is term 0's times
+/// exp(-(its optical depth in j less that in 0)), at most exp(-dtau_j)
+/// with dtau_j = tau_v,j - tau_v,0 summed over the gases: order by order,
+/// term j's higher orders M_j are at most exp(-dtau_j) M_0, in every
+/// direction and at every point the eye sees. Leaving them out of the sum
+/// L = sum_k w_k L_k >= w_0 L_0 >= w_0 M_0 changes it by less than
+///
+/// ```text
+///     sum_j w_j M_j / L <= sum_j (w_j / w_0) exp(-dtau_j)
+/// ```
+///
+/// of itself; the strongest terms leave theirs out while that sum stays
+/// within [`HIGHER_ORDERS_BOUND`]. Term 0 keeps them everywhere.
+pub(super) fn higher_orders_needed(
+    terms: &[(SampledSpectrum, Atmosphere)],
+    (first, sub): (usize, &WavelengthGrid),
+    altitude_m: f64,
+) -> Result<Vec<[bool; TERMS]>> {
+    // [term][gas][sample]
+    let depths = terms
+        .iter()
+        .map(|(_, at_term)| banded_depths_above(at_term, sub, altitude_m))
+        .collect::<Result<Vec<_>>>()?;
+    Ok((0..sub.len())
+        .map(|i| {
+            let mut needed = [true; TERMS];
+            let w0 = terms[0].0[first + i];
+            let mut bound = 0.0;
+            for j in (1..terms.len().min(TERMS)).rev() {
+                let gases = depths[j].iter().zip(&depths[0]);
+                if w0 <= 0.0 || gases.clone().any(|(dj, d0)| dj[i] < d0[i]) {
+                    break;
+                }
+                let extra: f64 = gases.map(|(dj, d0)| dj[i] - d0[i]).sum();
+                let term_bound = terms[j].0[first + i] / w0 * (-extra).exp();
+                if bound + term_bound > HIGHER_ORDERS_BOUND {
+                    break;
+                }
+                bound += term_bound;
+                needed[j] = false;
+            }
+            needed
+        })
+        .collect())
 }
 
 /// A term's values on its sub-grid, from sample `offset` of a grid of `n`,
