@@ -835,8 +835,14 @@ pub(crate) fn banded_depths_above(
         .species
         .iter()
         .map(|s| {
-            let column_m = s.profile.column_between_m(altitude_m.clamp(0.0, top_m), top_m);
-            s.extinction_per_m.values().iter().map(|b| b * column_m).collect()
+            let column_m = s
+                .profile
+                .column_between_m(altitude_m.clamp(0.0, top_m), top_m);
+            s.extinction_per_m
+                .values()
+                .iter()
+                .map(|b| b * column_m)
+                .collect()
         })
         .collect())
 }

@@ -357,7 +357,7 @@ impl SkyBuilder<'_> {
         // as an addition to single scattering (not the path tracer's).
         let leave_out = matches!(self.scattering, Scattering::Multiple(_))
             && !matches!(self.method, Method::PathTracing { .. });
-        sky.k_terms = k_terms::term_skies(
+        let terms = k_terms::term_skies(
             self.atmosphere,
             &self.wavelengths,
             whole_grid,
@@ -370,6 +370,9 @@ impl SkyBuilder<'_> {
                 builder.build_for(at_term, grid)
             },
         )?;
+        sky.k_terms = terms.all;
+        sky.k_terms_for_views = terms.for_views;
+        sky.view_terms = terms.view_runs;
         Ok(sky)
     }
 
