@@ -539,6 +539,19 @@ mod tests {
     use crate::sky::{ImageSettings, Method, Plane, Polarisation};
     use crate::spectrum::WavelengthGrid;
 
+    /// earth-clear with 2.9 cm of water (2 km scale height) and the mixed
+    /// gases.
+    fn earth_clear_with_gases() -> Atmosphere {
+        let mut atmosphere = Atmosphere::preset("earth-clear").unwrap();
+        atmosphere
+            .species
+            .extend(banded_gas_species(&BandedGases::new(
+                Some((2.9, 2000.0)),
+                true,
+            )));
+        atmosphere
+    }
+
     fn relative(a: f64, b: f64) -> f64 {
         (a - b).abs() / b.abs().max(1e-300)
     }
@@ -549,13 +562,7 @@ mod tests {
         // sky of the whole atmosphere must give their weighted sum for
         // views, irradiance, the direct beam, spectral images and aerial
         // perspective (740, 760 and 780 nm: the O2 A band in the middle).
-        let mut atmosphere = Atmosphere::preset("earth-clear").unwrap();
-        atmosphere
-            .species
-            .extend(banded_gas_species(&BandedGases::new(
-                Some((2.9, 2000.0)),
-                true,
-            )));
+        let atmosphere = earth_clear_with_gases();
         let grid = WavelengthGrid::new(740.0, 780.0, 20.0).unwrap();
         let build = |a: &Atmosphere| {
             Sky::builder(a)
@@ -710,13 +717,7 @@ mod tests {
         // terms 1-4 are solved on 580-780 nm only and term 0 carries 540
         // and 560 nm with the weights' sum. The oracle: every term on the
         // whole grid.
-        let mut atmosphere = Atmosphere::preset("earth-clear").unwrap();
-        atmosphere
-            .species
-            .extend(banded_gas_species(&BandedGases::new(
-                Some((2.9, 2000.0)),
-                true,
-            )));
+        let atmosphere = earth_clear_with_gases();
         let grid = WavelengthGrid::new(540.0, 780.0, 20.0).unwrap();
         assert_eq!(term_span(&atmosphere, &grid).unwrap(), Some((2, 12)));
         let zenith = ViewDirection::new(90.0, 0.0).unwrap();
@@ -811,13 +812,7 @@ mod tests {
         // above the eye is thick, their higher orders are left out, and
         // every answer stays within the bound of the sky whose terms all
         // keep theirs on the whole grid (the oracle).
-        let mut atmosphere = Atmosphere::preset("earth-clear").unwrap();
-        atmosphere
-            .species
-            .extend(banded_gas_species(&BandedGases::new(
-                Some((2.9, 2000.0)),
-                true,
-            )));
+        let atmosphere = earth_clear_with_gases();
         let grid = WavelengthGrid::new(900.0, 1000.0, 50.0).unwrap();
         let terms = k_distribution_terms(&atmosphere, &grid).unwrap();
         let needed =
@@ -932,13 +927,7 @@ mod tests {
     fn the_effective_sky_of_a_sky_with_gases_is_never_solved() {
         // Its optics are the sky's (Sky::optics); every radiance is the
         // terms' sum, so its own field stays unbuilt.
-        let mut atmosphere = Atmosphere::preset("earth-clear").unwrap();
-        atmosphere
-            .species
-            .extend(banded_gas_species(&BandedGases::new(
-                Some((2.9, 2000.0)),
-                true,
-            )));
+        let atmosphere = earth_clear_with_gases();
         let sky = Sky::builder(&atmosphere)
             .sun_deg(30.0, 180.0)
             .wavelengths(WavelengthGrid::new(900.0, 1000.0, 50.0).unwrap())
