@@ -806,6 +806,47 @@ pub fn term_span(atmosphere: &Atmosphere, grid: &WavelengthGrid) -> Result<Optio
     Ok(first.zip(last))
 }
 
+/// The vertical absorption optical depth of each banded gas of
+/// `atmosphere` from `altitude_m` above the ground to the top, at each
+/// sample of `grid`, [gas][sample] in the species' order: a lower bound on
+/// that gas' optical depth along any path from the top of the atmosphere
+/// to a point at that altitude (the path crosses every shell above it,
+/// along at least the shell's thickness).
+pub(crate) fn banded_depths_above(
+    atmosphere: &Atmosphere,
+    grid: &WavelengthGrid,
+    altitude_m: f64,
+) -> Result<Vec<Vec<f64>>> {
+    let banded = Atmosphere {
+        species: atmosphere
+            .species
+            .iter()
+            .filter(|s| band_of(s).is_some())
+            .cloned()
+            .collect(),
+        name: atmosphere.name.clone(),
+        description: String::new(),
+        planet: atmosphere.planet.clone(),
+        sun: atmosphere.sun.clone(),
+    };
+    let top_m = atmosphere.planet.top_above_sea_level_m() - atmosphere.planet.ground_altitude_m();
+    let optics = banded.compute_optics(grid)?;
+    Ok(optics
+        .species
+        .iter()
+        .map(|s| {
+            let column_m = s
+                .profile
+                .column_between_m(altitude_m.clamp(0.0, top_m), top_m);
+            s.extinction_per_m
+                .values()
+                .iter()
+                .map(|b| b * column_m)
+                .collect()
+        })
+        .collect())
+}
+
 fn band_of(species: &Species) -> Option<&GasBand> {
     match &species.model {
         SpeciesModel::AbsorbingGas(AbsorbingGas {

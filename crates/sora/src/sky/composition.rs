@@ -406,11 +406,18 @@ impl Sky {
         tables_allowed: bool,
     ) -> Result<Vec<SkyRadiance>> {
         if !self.k_terms.is_empty() {
-            return self.sum_term_radiances(|k, term| {
+            // Views read from tables take every term whole (a term's tables
+            // cost far more than its samples' higher orders); exact views
+            // the runs that leave out negligible higher orders.
+            let from_tables = tables_allowed
+                && self.method == Method::Fast
+                && self.lowest_view_elevation_rad.is_none()
+                && views.len() >= TABLE_VIEW_COUNT;
+            return self.sum_term_radiances(!from_tables, |k, terms, term| {
                 term.compute_radiances(
                     views,
                     &|done, total| {
-                        let (done, total) = self.term_progress(k, done, total);
+                        let (done, total) = self.term_progress((k, terms), done, total);
                         progress(done, total)
                     },
                     tables_allowed,
@@ -661,11 +668,11 @@ impl Sky {
         tables: Tables,
     ) -> Result<Vec<SkyRadiance>> {
         if !self.k_terms.is_empty() {
-            return self.sum_term_radiances(|k, term| {
+            return self.sum_term_radiances(false, |k, terms, term| {
                 term.radiances_from_tables(
                     views,
                     &|done, total| {
-                        let (done, total) = self.term_progress(k, done, total);
+                        let (done, total) = self.term_progress((k, terms), done, total);
                         progress(done, total)
                     },
                     tables,

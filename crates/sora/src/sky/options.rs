@@ -353,12 +353,26 @@ impl SkyBuilder<'_> {
     pub(crate) fn build_with_terms(self, whole_grid: bool) -> Result<Sky> {
         let mut sky = self.build_for(self.atmosphere, &self.wavelengths)?;
         // Banded gases: one sky per k-distribution term (`sky/k_terms.rs`).
-        sky.k_terms = k_terms::term_skies(
+        // Terms may leave out negligible higher orders where a sky has them
+        // as an addition to single scattering (not the path tracer's).
+        let leave_out = matches!(self.scattering, Scattering::Multiple(_))
+            && !matches!(self.method, Method::PathTracing { .. });
+        let terms = k_terms::term_skies(
             self.atmosphere,
             &self.wavelengths,
             whole_grid,
-            |at_term, grid| self.build_for(at_term, grid),
+            leave_out.then_some(self.observation.observer_altitude_m),
+            |at_term, grid, higher_orders| {
+                let mut builder = self.clone();
+                if !higher_orders {
+                    builder.scattering = Scattering::Single;
+                }
+                builder.build_for(at_term, grid)
+            },
         )?;
+        sky.k_terms = terms.all;
+        sky.k_terms_for_views = terms.for_views;
+        sky.view_terms = terms.view_runs;
         Ok(sky)
     }
 

@@ -54,6 +54,13 @@ pub struct Sky {
     /// The k-distribution's terms, (w_j, the sky of term j), with banded
     /// gases; empty without them (`sky/k_terms.rs`).
     pub(super) k_terms: Vec<(SampledSpectrum, Sky)>,
+    /// Per entry of `k_terms`: whether exact views take it as it is (a
+    /// term that leaves out its higher orders somewhere is taken from
+    /// `view_terms` instead; `sky/k_terms.rs`).
+    pub(super) k_terms_for_views: Vec<bool>,
+    /// The runs of samples, with and without their higher orders, of the
+    /// terms that exact views do not take from `k_terms`.
+    pub(super) view_terms: Vec<(SampledSpectrum, Sky)>,
 }
 
 #[derive(Debug)]
@@ -157,6 +164,8 @@ impl Sky {
             multiple_stride: IMAGE_MULTIPLE_STRIDE,
             lowest_view_elevation_rad: None,
             k_terms: Vec::new(),
+            k_terms_for_views: Vec::new(),
+            view_terms: Vec::new(),
         })
     }
 
@@ -171,11 +180,15 @@ impl Sky {
             crate::geometry::azimuth_in_one_turn_deg(azimuth_deg),
         );
         sky.set_polarisation(self.polarisation)?;
-        sky.k_terms = self
-            .k_terms
-            .iter()
-            .map(|(w, term)| Ok((w.clone(), term.with_sun_deg(elevation_deg, azimuth_deg)?)))
-            .collect::<Result<_>>()?;
+        let at_sun = |terms: &[(SampledSpectrum, Sky)]| {
+            terms
+                .iter()
+                .map(|(w, term)| Ok((w.clone(), term.with_sun_deg(elevation_deg, azimuth_deg)?)))
+                .collect::<Result<Vec<_>>>()
+        };
+        sky.k_terms = at_sun(&self.k_terms)?;
+        sky.k_terms_for_views = self.k_terms_for_views.clone();
+        sky.view_terms = at_sun(&self.view_terms)?;
         Ok(sky)
     }
 
@@ -192,10 +205,14 @@ impl Sky {
             .fold(90.0f64, f64::min)
             .max(0.0);
         self.lowest_view_elevation_rad = Some(lowest.to_radians());
-        self.k_terms = std::mem::take(&mut self.k_terms)
-            .into_iter()
-            .map(|(w, term)| (w, term.for_views_above(views)))
-            .collect();
+        let above = |terms: Vec<(SampledSpectrum, Sky)>| {
+            terms
+                .into_iter()
+                .map(|(w, term)| (w, term.for_views_above(views)))
+                .collect()
+        };
+        self.k_terms = above(std::mem::take(&mut self.k_terms));
+        self.view_terms = above(std::mem::take(&mut self.view_terms));
         self
     }
 

@@ -195,7 +195,9 @@ impl TruncatedPhase {
         (m..n).map(|l| self.coefficients[l] * a[l] * b[l]).sum()
     }
 
-    /// p*(cos Theta), sr^-1, summed from the Legendre series.
+    /// p*(cos Theta), sr^-1, summed from the Legendre series (the tests';
+    /// tables take [`Self::eval_with_legendre`]).
+    #[cfg(test)]
     pub(crate) fn eval(&self, cos_theta: f64) -> f64 {
         let mut legendre = [0.0; MAX_LEGENDRE_TERMS];
         let legendre = &mut legendre[..self.coefficients.len()];

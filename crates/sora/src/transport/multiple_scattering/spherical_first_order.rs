@@ -56,7 +56,8 @@ use std::ops::ControlFlow;
 
 use super::column_optics::{ColumnGeometry, ScaledOptics};
 use super::phase_fourier::{
-    TruncatedPhase, gauss_legendre_unit_interval, normalized_associated_legendre,
+    TruncatedPhase, gauss_legendre_unit_interval, legendre_polynomials,
+    normalized_associated_legendre,
 };
 use super::regimes::FINE_MOMENTS_SUN_ZENITH_RAD;
 use super::successive_orders::Streams;
@@ -592,13 +593,21 @@ impl StreamFit {
 /// p*_ij tabulated over cos theta on `PHASE_NODES` nodes in [-1, 1],
 /// [(i * species + j) * PHASE_NODES + n], sr^-1.
 pub(crate) fn tabulate_phases(phases: &[TruncatedPhase]) -> Vec<f64> {
-    phases
-        .iter()
-        .flat_map(|phase| {
-            (0..PHASE_NODES)
-                .map(move |n| phase.eval(2.0 * n as f64 / (PHASE_NODES - 1) as f64 - 1.0))
-        })
-        .collect()
+    // The Legendre polynomials of each node once for every phase function
+    // (`TruncatedPhase::eval` of each, the same sums).
+    let terms = phases.iter().map(TruncatedPhase::terms).max().unwrap_or(0);
+    let mut legendre = vec![0.0; terms];
+    let mut table = vec![0.0; phases.len() * PHASE_NODES];
+    for n in 0..PHASE_NODES {
+        legendre_polynomials(
+            2.0 * n as f64 / (PHASE_NODES - 1) as f64 - 1.0,
+            &mut legendre,
+        );
+        for (phase, row) in phases.iter().zip(table.chunks_exact_mut(PHASE_NODES)) {
+            row[n] = phase.eval_with_legendre(&legendre);
+        }
+    }
+    table
 }
 
 /// Every p*_ij at `cos_theta` into `phase`, linear between the table's

@@ -327,7 +327,12 @@ impl<'a> ColumnSystem<'a> {
         let mut scattering_matrices = vec![0.0; total * levels * total * total];
         let mut harmonic = vec![0.0; s * total * total];
         for m in (0..total).filter(|m| active_harmonics[*m]) {
+            // A species that does not scatter has omega = 0 at every level
+            // (its harmonic is never added).
             for (j, sp) in species.iter().enumerate() {
+                if sp.scattering_per_m == 0.0 {
+                    continue;
+                }
                 for b in 0..total {
                     for a in 0..total {
                         harmonic[(j * total + b) * total + a] = 2.0
