@@ -7,8 +7,9 @@
 //!
 //! - **source**: ln R, R = J* / beta*_sca the scaled field's source toward
 //!   the eye (W m^-2 sr^-1 nm^-1), over the field's altitude levels, its
-//!   sun zenith nodes, the view's zenith angle and its azimuth from the
-//!   sun (uniform over 0..pi); quadrilinear in ln R (a value at or below
+//!   sun zenith nodes, the view's zenith angle (uniform over 0..pi) and
+//!   its azimuth from the sun (at [`AZIMUTHS_DEG`], closer near the sun
+//!   and the antisolar point); quadrilinear in ln R (a value at or below
 //!   [`DARK_LOG_SOURCE`] is no light);
 //! - **optics**: per species and wavelength the extinction, the delta-M
 //!   scaled extinction and scattering and the scattering per unit
@@ -73,9 +74,11 @@ pub struct SourceThinning {
     /// Every `wavelength_stride`-th wavelength (and the last) kept, ln R
     /// read linearly in the wavelength's index between them.
     pub wavelength_stride: usize,
-    /// Every `azimuth_stride`-th of the field's azimuth nodes (uniform
-    /// over 0..pi; the stride must divide their intervals, so the kept
-    /// nodes stay uniform and keep 0 and pi).
+    /// The azimuths from the sun the source is computed at, degrees
+    /// (ascending from 0 to 180; empty: the field's table's own, uniform
+    /// over 0..pi).
+    pub azimuths_deg: &'static [f64],
+    /// Every `azimuth_stride`-th of those azimuths (and the last).
     pub azimuth_stride: usize,
     pub half: bool,
 }
@@ -106,9 +109,25 @@ pub const SOURCE_THINNING: SourceThinning = SourceThinning {
     sun_stride: 2,
     sun_stride_below_zenith_deg: 75.0,
     wavelength_stride: 2,
+    azimuths_deg: &AZIMUTHS_DEG,
     azimuth_stride: 1,
     half: true,
 };
+
+/// The source's azimuths from the sun, degrees: 19 nodes, as many as the
+/// field's table's (10 degrees apart), 4-7 degrees apart from 10 to 30
+/// degrees from the sun, where a low sun's ln R bends most in azimuth
+/// (its aureole), and 10-12 beyond; read linearly in the cosine of the
+/// azimuth within the first and the last cell (`lookup.rs`,
+/// `locate_azimuth`). Measured with the probe (mars-dust, suns 2 and -4,
+/// views 1-30 degrees up, 0-175 degrees from the sun): the field's 19
+/// uniform nodes read linearly put the march 2.9-4.2 % below the
+/// library 2.5-7.5 degrees from the sun; these within 1.43 %
+/// (`docs/engine-tables.md`).
+pub const AZIMUTHS_DEG: [f64; 19] = [
+    0.0, 10.0, 14.0, 18.0, 23.0, 30.0, 41.0, 53.0, 65.0, 77.0, 89.0, 101.0, 113.0, 125.0, 137.0,
+    149.0, 160.0, 170.0, 180.0,
+];
 
 /// ln R at or below this is no light (as the library's march).
 pub const DARK_LOG_SOURCE: f64 = -46.0;
@@ -153,7 +172,17 @@ impl MarchTables {
         shared: &SharedField,
         thinning: SourceThinning,
     ) -> Result<MarchTables> {
-        let (source, source_wavelengths) = thinned_source(shared.table().exported(), thinning);
+        let exported = if thinning.azimuths_deg.is_empty() {
+            shared.table().exported()
+        } else {
+            let azimuths: Vec<f64> = thinning
+                .azimuths_deg
+                .iter()
+                .map(|a| a.to_radians())
+                .collect();
+            shared.table().exported_at_azimuths(&azimuths)
+        };
+        let (source, source_wavelengths) = thinned_source(exported, thinning);
         let n = sky.wavelengths().len();
         if source.wavelengths != n {
             return Err(Error::Unsupported(
@@ -304,7 +333,7 @@ impl MarchTables {
             array(
                 "log_source",
                 s.log_source.clone(),
-                "[(((k * sun_nodes + s) * azimuth_nodes + f) * view_zenith_nodes + v) * channels + c], channels = source_wavelength_indices' length; view zenith v uniform over 0..pi, azimuth from the sun f uniform over 0..pi",
+                "[(((k * sun_nodes + s) * azimuth_nodes + f) * view_zenith_nodes + v) * channels + c], channels = source_wavelength_indices' length; view zenith v uniform over 0..pi, azimuth from the sun f at source_azimuth_rad[f]",
                 "ln(W m^-2 sr^-1 nm^-1)",
             ),
             array(
@@ -393,6 +422,12 @@ impl MarchTables {
                 "[s * wavelengths + i] on the source's sun nodes",
                 "W m^-2 sr^-1 nm^-1",
             ),
+            array(
+                "source_azimuth_rad",
+                f(&s.azimuths_rad),
+                "[f]: the source's azimuth from the sun of node f (ascending from 0 to pi); ln R is linear in the azimuth between two nodes",
+                "rad",
+            ),
         ]
     }
 
@@ -453,6 +488,7 @@ fn thinned_source(
         sun_stride,
         sun_stride_below_zenith_deg,
         wavelength_stride,
+        azimuths_deg: _,
         azimuth_stride,
         half,
     } = thinning;
@@ -487,12 +523,6 @@ fn thinned_source(
     let w = source.wavelengths;
     let channels = kept(w, wavelength_stride);
     let views = source.view_zenith_nodes;
-    let azimuth_stride = azimuth_stride.max(1);
-    assert!(
-        (source.azimuth_nodes - 1) % azimuth_stride == 0,
-        "an azimuth stride of {azimuth_stride} leaves the field's {} azimuth nodes non-uniform",
-        source.azimuth_nodes
-    );
     let azimuths = kept(source.azimuth_nodes, azimuth_stride);
     let block = source.azimuth_nodes * views * w;
     let mut log_source =
@@ -530,6 +560,7 @@ fn thinned_source(
             })
             .collect(),
         azimuth_nodes: azimuths.len(),
+        azimuths_rad: azimuths.iter().map(|f| source.azimuths_rad[*f]).collect(),
         log_source,
         ..source
     };
