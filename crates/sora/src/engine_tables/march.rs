@@ -86,8 +86,8 @@ pub struct SourceThinning {
 /// The default [`SourceThinning`]: every level up to 6 km, every third
 /// above, every other sun node (6 degrees apart) for suns more than 15
 /// degrees up and every one below (0.75-3 degrees apart), every other
-/// wavelength (11 of the default 21, ln R linear between them), every
-/// azimuth, 16-bit floats: 29-33 MB. The field for every sun has 41
+/// wavelength (11 of the default 21, ln R linear between them), the 19
+/// azimuths of [`AZIMUTHS_DEG`], 16-bit floats: 29-33 MB. The field for every sun has 41
 /// levels (22-25 of them below 6 km on Earth) and 82 sun nodes; the
 /// source at all of them is 200 MB as 32-bit floats. Measured against the
 /// library (`docs/engine-tables.md`): every other level and sun node
@@ -102,7 +102,8 @@ pub struct SourceThinning {
 /// 0.27-0.29 to 0.35-0.58 % on mars-dust and from 1.30-1.46 to
 /// 0.83-1.44 % on earth-hazy, where every other sun node at twilight
 /// moved earth-hazy at -4 degrees from 1.37 to 2.03 %; every other
-/// azimuth (10 of 19) put mars-dust's aureole 9.2 % off.
+/// azimuth (10 of the field's 19 uniform ones) put mars-dust's aureole
+/// 9.2 % off.
 pub const SOURCE_THINNING: SourceThinning = SourceThinning {
     level_stride: 3,
     dense_below_m: 6000.0,
