@@ -362,8 +362,8 @@ vec3 soraXyzToLinearSrgb(vec3 xyz) {
 // array a (SORA_MARCH_* below), the rest as named.
 uniform highp sampler2DArray uMarchSource;
 uniform highp sampler2D uMarchTables;
-uniform int uMarchOffsets[19];
-uniform int uMarchLengths[19];
+uniform int uMarchOffsets[20];
+uniform int uMarchLengths[20];
 // wavelengths, species, sun_nodes, density_nodes (zero: no march tables)
 uniform ivec4 uMarchCounts;
 // azimuth_nodes, view_zenith_nodes (of the source)
@@ -407,6 +407,7 @@ const int SORA_MARCH_BEAM_ALTITUDES = 15;   // beam_altitudes_m
 const int SORA_MARCH_LN_BEAM = 16;
 const int SORA_MARCH_GROUND_DIFFUSE = 17;
 const int SORA_MARCH_GROUND_DIRECT = 18;
+const int SORA_MARCH_AZIMUTHS = 19;         // source_azimuth_rad
 const int SORA_MARCH_WIDTH = 2048;
 // Capacities of the per-pixel arrays (not the tables' counts, which come
 // from the uniforms): wavelengths and species at most.
@@ -497,8 +498,21 @@ void soraMarchLocateSun(float sunCosine, out int node, out float t) {
   soraMarchLocate(SORA_MARCH_SUN_ZENITH, soraMarchAcos(clamp(sunCosine, -1.0, 1.0)), node, t);
 }
 
+// The azimuth cell of the cosine of an azimuth from the sun
+// (locate_azimuth): located by the angle among source_azimuth_rad, linear
+// in the angle, but in the cosine within the first and the last cell (ln
+// R is even in the azimuth about 0 and pi).
+void soraMarchLocateAzimuth(float cosAzimuth, out int f, out float t) {
+  float c = clamp(cosAzimuth, -1.0, 1.0);
+  soraMarchLocate(SORA_MARCH_AZIMUTHS, soraMarchAcos(c), f, t);
+  if (f == 0 || f + 2 == uMarchLengths[SORA_MARCH_AZIMUTHS]) {
+    float a = cos(soraMarchValue(SORA_MARCH_AZIMUTHS, f)), b = cos(soraMarchValue(SORA_MARCH_AZIMUTHS, f + 1));
+    t = clamp((a - c) / (a - b), 0.0, 1.0);
+  }
+}
+
 // ln R at a node, quadrilinear in ln R over altitude level, sun zenith
-// node, view zenith and azimuth, at every wavelength (log_source and
+// node, view zenith and azimuth (source_azimuth_rad's nodes), at every wavelength (log_source and
 // source_table.rs's interpolate_log_source): the source's channels, then
 // linear in the wavelength's index between them.
 void soraMarchLogSource(float altitude, float sunCosine, float viewCosine, float cosAzimuth, out float logSource[SORA_MARCH_MAX_WAVELENGTHS]) {
@@ -511,9 +525,7 @@ void soraMarchLogSource(float altitude, float sunCosine, float viewCosine, float
   float y = soraMarchAcos(clamp(viewCosine, -1.0, 1.0)) / SORA_PI * float(views - 1);
   int v = min(int(y), views - 2);
   float tv = y - float(v);
-  float x = soraMarchAcos(clamp(cosAzimuth, -1.0, 1.0)) / SORA_PI * float(azimuths - 1);
-  int f = min(int(x), azimuths - 2);
-  float tf = x - float(f);
+  int f; float tf; soraMarchLocateAzimuth(cosAzimuth, f, tf);
   float channels[SORA_MARCH_MAX_WAVELENGTHS];
   for (int c4 = 0; c4 < texels; c4++) {
     vec4 sum = vec4(0.0);

@@ -391,6 +391,7 @@ const SORA_MARCH_BEAM_ALTITUDES: i32 = 15;   // beam_altitudes_m
 const SORA_MARCH_LN_BEAM: i32 = 16;
 const SORA_MARCH_GROUND_DIFFUSE: i32 = 17;
 const SORA_MARCH_GROUND_DIRECT: i32 = 18;
+const SORA_MARCH_AZIMUTHS: i32 = 19;         // source_azimuth_rad
 const SORA_MARCH_WIDTH: i32 = 2048;
 // Capacities of the per-pixel arrays (the counts come from SoraMarch).
 const SORA_MARCH_MAX_WAVELENGTHS: i32 = 32;
@@ -487,8 +488,24 @@ fn sora_march_locate_sun(sun_cosine: f32) -> SoraCell {
   return sora_march_locate(SORA_MARCH_SUN_ZENITH, sora_march_acos(clamp(sun_cosine, -1.0, 1.0)));
 }
 
+// The azimuth cell of the cosine of an azimuth from the sun
+// (locate_azimuth): located by the angle among source_azimuth_rad, linear
+// in the angle, but in the cosine within the first and the last cell (ln
+// R is even in the azimuth about 0 and pi).
+fn sora_march_locate_azimuth(cos_azimuth: f32) -> SoraCell {
+  let c = clamp(cos_azimuth, -1.0, 1.0);
+  var cell = sora_march_locate(SORA_MARCH_AZIMUTHS, sora_march_acos(c));
+  if (cell.i == 0 || cell.i + 2 == sora_march_length(SORA_MARCH_AZIMUTHS)) {
+    let a = cos(sora_march_value(SORA_MARCH_AZIMUTHS, cell.i));
+    let b = cos(sora_march_value(SORA_MARCH_AZIMUTHS, cell.i + 1));
+    cell.f = clamp((a - c) / (a - b), 0.0, 1.0);
+  }
+  return cell;
+}
+
 // ln R at a node at every wavelength, quadrilinear in ln R over altitude
-// level, sun zenith node, view zenith and azimuth (log_source and
+// level, sun zenith node, view zenith and azimuth (source_azimuth_rad's
+// nodes; log_source and
 // interpolate_log_source), linear in the wavelength's index between the
 // source's channels.
 fn sora_march_log_source(altitude: f32, sun_cosine: f32, view_cosine: f32, cos_azimuth: f32) -> SoraMarchWavelengths {
@@ -502,18 +519,16 @@ fn sora_march_log_source(altitude: f32, sun_cosine: f32, view_cosine: f32, cos_a
   let y = sora_march_acos(clamp(view_cosine, -1.0, 1.0)) / SORA_PI * f32(views - 1);
   let v = min(i32(y), views - 2);
   let tv = y - f32(v);
-  let x = sora_march_acos(clamp(cos_azimuth, -1.0, 1.0)) / SORA_PI * f32(azimuths - 1);
-  let f = min(i32(x), azimuths - 2);
-  let tf = x - f32(f);
+  let f = sora_march_locate_azimuth(cos_azimuth);
   var channels: SoraMarchWavelengths;
   for (var c4 = 0; c4 < texels; c4++) {
     var sum = vec4<f32>(0.0);
     for (var n = 0; n < 8; n++) {
       let kk = k.i + (n & 1);
       let ss = s.i + ((n >> 1u) & 1);
-      let ff = f + (n >> 2u);
+      let ff = f.i + (n >> 2u);
       let weight = select(1.0 - k.f, k.f, (n & 1) == 1) * select(1.0 - s.f, s.f, ((n >> 1u) & 1) == 1)
-        * select(1.0 - tf, tf, (n >> 2u) == 1);
+        * select(1.0 - f.f, f.f, (n >> 2u) == 1);
       let low = textureLoad(sora_march_source, vec2<i32>(v * texels + c4, ss * azimuths + ff), kk, 0);
       let high = textureLoad(sora_march_source, vec2<i32>((v + 1) * texels + c4, ss * azimuths + ff), kk, 0);
       sum += weight * (1.0 - tv) * low + weight * tv * high;

@@ -78,7 +78,8 @@ const AERIAL = {
 // texture's width (SORA_MARCH_WIDTH).
 const MARCH_ARRAYS = ['source_levels_m', 'source_sun_zenith_rad', 'source_wavelength_indices', 'extinction',
   'scaled_extinction', 'scaled_scattering', 'scattering', 'solar', 'xyz', 'density', 'sun_columns', 'phase',
-  'smooth_phase', 'kernel_x', 'kernel', 'beam_altitudes_m', 'ln_beam', 'ground_diffuse', 'ground_direct'];
+  'smooth_phase', 'kernel_x', 'kernel', 'beam_altitudes_m', 'ln_beam', 'ground_diffuse', 'ground_direct',
+  'source_azimuth_rad'];
 const MARCH_WIDTH = 2048;
 const LIMITS = { luminance: 0.02, chromaticity: 0.005, secondDifference: 0.05 };
 

@@ -903,7 +903,8 @@ impl MarchTables {
     }
 
     /// ln R at a node (quadrilinear in ln R over altitude level, sun
-    /// zenith node, view zenith and azimuth), into `out`.
+    /// zenith node, view zenith and azimuth; the levels, sun nodes and
+    /// azimuths located in their arrays), into `out`.
     fn log_source(
         &self,
         altitude_m: f64,
@@ -925,8 +926,9 @@ impl MarchTables {
             (
                 locate(&src.levels_m, altitude_m),
                 self.locate_sun(sun_cosine),
+                self.locate_azimuth(cos_azimuth),
             ),
-            (view_cosine, cos_azimuth),
+            view_cosine,
             &mut channels,
         );
         // Linear in the wavelength's index between the kept ones.
@@ -939,6 +941,24 @@ impl MarchTables {
         }
         if kept.len() == 1 {
             out.fill(channels[0]);
+        }
+    }
+
+    /// The azimuth cell of the cosine of an azimuth from the sun: (node,
+    /// fraction), located by the angle among the source's azimuths,
+    /// linear in the angle, but in the cosine within the first and the
+    /// last cell (ln R is even in the azimuth about 0 and pi, so a read
+    /// linear in the angle cuts its bend there: 3-4 % too dark 5 degrees
+    /// from a low sun on mars-dust with cells of 10 degrees).
+    fn locate_azimuth(&self, cos_azimuth: f64) -> (usize, f64) {
+        let azimuths = &self.source.azimuths_rad;
+        let c = cos_azimuth.clamp(-1.0, 1.0);
+        let (f, t) = locate(azimuths, c.acos());
+        if f == 0 || f + 2 == azimuths.len() {
+            let (a, b) = (azimuths[f].cos(), azimuths[f + 1].cos());
+            (f, ((a - c) / (a - b)).clamp(0.0, 1.0))
+        } else {
+            (f, t)
         }
     }
 

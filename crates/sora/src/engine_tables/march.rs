@@ -7,8 +7,9 @@
 //!
 //! - **source**: ln R, R = J* / beta*_sca the scaled field's source toward
 //!   the eye (W m^-2 sr^-1 nm^-1), over the field's altitude levels, its
-//!   sun zenith nodes, the view's zenith angle and its azimuth from the
-//!   sun (uniform over 0..pi); quadrilinear in ln R (a value at or below
+//!   sun zenith nodes, the view's zenith angle (uniform over 0..pi) and
+//!   its azimuth from the sun (at [`AZIMUTHS_DEG`], closer near the sun
+//!   and the antisolar point); quadrilinear in ln R (a value at or below
 //!   [`DARK_LOG_SOURCE`] is no light);
 //! - **optics**: per species and wavelength the extinction, the delta-M
 //!   scaled extinction and scattering and the scattering per unit
@@ -73,9 +74,11 @@ pub struct SourceThinning {
     /// Every `wavelength_stride`-th wavelength (and the last) kept, ln R
     /// read linearly in the wavelength's index between them.
     pub wavelength_stride: usize,
-    /// Every `azimuth_stride`-th of the field's azimuth nodes (uniform
-    /// over 0..pi; the stride must divide their intervals, so the kept
-    /// nodes stay uniform and keep 0 and pi).
+    /// The azimuths from the sun the source is computed at, degrees
+    /// (ascending from 0 to 180; empty: the field's table's own, uniform
+    /// over 0..pi).
+    pub azimuths_deg: &'static [f64],
+    /// Every `azimuth_stride`-th of those azimuths (and the last).
     pub azimuth_stride: usize,
     pub half: bool,
 }
@@ -83,8 +86,8 @@ pub struct SourceThinning {
 /// The default [`SourceThinning`]: every level up to 6 km, every third
 /// above, every other sun node (6 degrees apart) for suns more than 15
 /// degrees up and every one below (0.75-3 degrees apart), every other
-/// wavelength (11 of the default 21, ln R linear between them), every
-/// azimuth, 16-bit floats: 29-33 MB. The field for every sun has 41
+/// wavelength (11 of the default 21, ln R linear between them), the 19
+/// azimuths of [`AZIMUTHS_DEG`], 16-bit floats: 29-33 MB. The field for every sun has 41
 /// levels (22-25 of them below 6 km on Earth) and 82 sun nodes; the
 /// source at all of them is 200 MB as 32-bit floats. Measured against the
 /// library (`docs/engine-tables.md`): every other level and sun node
@@ -99,16 +102,33 @@ pub struct SourceThinning {
 /// 0.27-0.29 to 0.35-0.58 % on mars-dust and from 1.30-1.46 to
 /// 0.83-1.44 % on earth-hazy, where every other sun node at twilight
 /// moved earth-hazy at -4 degrees from 1.37 to 2.03 %; every other
-/// azimuth (10 of 19) put mars-dust's aureole 9.2 % off.
+/// azimuth (10 of the field's 19 uniform ones) put mars-dust's aureole
+/// 9.2 % off.
 pub const SOURCE_THINNING: SourceThinning = SourceThinning {
     level_stride: 3,
     dense_below_m: 6000.0,
     sun_stride: 2,
     sun_stride_below_zenith_deg: 75.0,
     wavelength_stride: 2,
+    azimuths_deg: &AZIMUTHS_DEG,
     azimuth_stride: 1,
     half: true,
 };
+
+/// The source's azimuths from the sun, degrees: 19 nodes, as many as the
+/// field's table's (10 degrees apart), 4-7 degrees apart from 10 to 30
+/// degrees from the sun, where a low sun's ln R bends most in azimuth
+/// (its aureole), and 10-12 beyond; read linearly in the cosine of the
+/// azimuth within the first and the last cell (`lookup.rs`,
+/// `locate_azimuth`). Measured with the probe (mars-dust, suns 2 and -4,
+/// views 1-30 degrees up, 0-175 degrees from the sun): the field's 19
+/// uniform nodes read linearly put the march 2.9-4.2 % below the
+/// library 2.5-7.5 degrees from the sun; these within 1.43 %
+/// (`docs/engine-tables.md`).
+pub const AZIMUTHS_DEG: [f64; 19] = [
+    0.0, 10.0, 14.0, 18.0, 23.0, 30.0, 41.0, 53.0, 65.0, 77.0, 89.0, 101.0, 113.0, 125.0, 137.0,
+    149.0, 160.0, 170.0, 180.0,
+];
 
 /// ln R at or below this is no light (as the library's march).
 pub const DARK_LOG_SOURCE: f64 = -46.0;
@@ -153,7 +173,17 @@ impl MarchTables {
         shared: &SharedField,
         thinning: SourceThinning,
     ) -> Result<MarchTables> {
-        let (source, source_wavelengths) = thinned_source(shared.table().exported(), thinning);
+        let exported = if thinning.azimuths_deg.is_empty() {
+            shared.table().exported()
+        } else {
+            let azimuths: Vec<f64> = thinning
+                .azimuths_deg
+                .iter()
+                .map(|a| a.to_radians())
+                .collect();
+            shared.table().exported_at_azimuths(&azimuths)
+        };
+        let (source, source_wavelengths) = thinned_source(exported, thinning);
         let n = sky.wavelengths().len();
         if source.wavelengths != n {
             return Err(Error::Unsupported(
@@ -304,7 +334,7 @@ impl MarchTables {
             array(
                 "log_source",
                 s.log_source.clone(),
-                "[(((k * sun_nodes + s) * azimuth_nodes + f) * view_zenith_nodes + v) * channels + c], channels = source_wavelength_indices' length; view zenith v uniform over 0..pi, azimuth from the sun f uniform over 0..pi",
+                "[(((k * sun_nodes + s) * azimuth_nodes + f) * view_zenith_nodes + v) * channels + c], channels = source_wavelength_indices' length; view zenith v uniform over 0..pi, azimuth from the sun f at source_azimuth_rad[f]",
                 "ln(W m^-2 sr^-1 nm^-1)",
             ),
             array(
@@ -393,6 +423,12 @@ impl MarchTables {
                 "[s * wavelengths + i] on the source's sun nodes",
                 "W m^-2 sr^-1 nm^-1",
             ),
+            array(
+                "source_azimuth_rad",
+                f(&s.azimuths_rad),
+                "[f]: the source's azimuth from the sun of node f (ascending from 0 to pi); ln R is linear in the azimuth between two nodes",
+                "rad",
+            ),
         ]
     }
 
@@ -453,6 +489,7 @@ fn thinned_source(
         sun_stride,
         sun_stride_below_zenith_deg,
         wavelength_stride,
+        azimuths_deg: _,
         azimuth_stride,
         half,
     } = thinning;
@@ -487,12 +524,6 @@ fn thinned_source(
     let w = source.wavelengths;
     let channels = kept(w, wavelength_stride);
     let views = source.view_zenith_nodes;
-    let azimuth_stride = azimuth_stride.max(1);
-    assert!(
-        (source.azimuth_nodes - 1) % azimuth_stride == 0,
-        "an azimuth stride of {azimuth_stride} leaves the field's {} azimuth nodes non-uniform",
-        source.azimuth_nodes
-    );
     let azimuths = kept(source.azimuth_nodes, azimuth_stride);
     let block = source.azimuth_nodes * views * w;
     let mut log_source =
@@ -530,6 +561,7 @@ fn thinned_source(
             })
             .collect(),
         azimuth_nodes: azimuths.len(),
+        azimuths_rad: azimuths.iter().map(|f| source.azimuths_rad[*f]).collect(),
         log_source,
         ..source
     };

@@ -76,120 +76,10 @@ impl MultipleScatteringTable {
         (views, azimuths): (usize, usize),
     ) -> MultipleScatteringTable {
         let (views, azimuths) = (views.max(2), azimuths.max(2));
-        let degrees = field.optics.geometry.streams.count();
-        let levels = field.optics.geometry.grid.levels();
-        let suns = field.optics.sun_axis.count();
-        let (w, species) = (field.optics.wavelengths, field.optics.species);
-        let per_level = suns * azimuths * views * w;
-        let view_legendre: Vec<Vec<f64>> = (0..views)
-            .map(|v| {
-                let mut table = vec![0.0; degrees * degrees];
-                let zenith = PI * v as f64 / (views - 1) as f64;
-                normalized_associated_legendre(zenith.cos(), degrees, &mut table);
-                table
-            })
+        let angles: Vec<f64> = (0..azimuths)
+            .map(|f| PI * f as f64 / (azimuths - 1) as f64)
             .collect();
-        let azimuth_cosines: Vec<f64> = (0..azimuths)
-            .flat_map(|f| {
-                let phi = PI * f as f64 / (azimuths - 1) as f64;
-                (0..degrees).map(move |m| (m as f64 * phi).cos())
-            })
-            .collect();
-        let active: Vec<usize> = (0..degrees).filter(|m| field.harmonics[*m]).collect();
-        // 2 pi w_b p*_jm(mu_v, mu_b) by wavelength, species, harmonic and
-        // stream, a row over view nodes:
-        // [(((i * species + j) * degrees + m) * degrees + b) * views + v].
-        let block = degrees * degrees * views;
-        let mut kernel = vec![0.0; w * species * block];
-        crate::parallel::for_each_chunk_mut(&mut kernel, species * block, |i, out| {
-            for j in 0..species {
-                let phase = &field.optics.scaled.phases[i * species + j];
-                for &m in &active {
-                    for b in 0..degrees {
-                        let row = &mut out[j * block + (m * degrees + b) * views..][..views];
-                        for (value, legendre) in row.iter_mut().zip(&view_legendre) {
-                            *value = 2.0
-                                * PI
-                                * field.optics.geometry.streams.weights()[b]
-                                * phase.harmonic(
-                                    m,
-                                    legendre,
-                                    field.optics.geometry.streams.legendre(b),
-                                );
-                        }
-                    }
-                }
-            }
-        });
-        let sun_nodes = field.reachable_sun_nodes();
-        let mut values = vec![LOG_FLOOR.ln() as f32; levels * per_level];
-        // One level per task; within it one wavelength at a time into a
-        // wavelength-major buffer, transposed at the end (in cache). Only
-        // the sun nodes that view rays reach at the level are filled.
-        crate::parallel::for_each_chunk_mut(&mut values, per_level, |k, out| {
-            let densities = field.optics.geometry.grid.densities_at_level(k);
-            let mut combined = vec![0.0; block];
-            let mut harmonics = vec![0.0; degrees * views];
-            let mut sum = vec![0.0; views];
-            let cells = suns * azimuths * views;
-            let mut by_wavelength = vec![LOG_FLOOR.ln() as f32; per_level];
-            let (first_sun, last_sun) = sun_nodes[k];
-            for i in 0..w {
-                let plane = &mut by_wavelength[i * cells..(i + 1) * cells];
-                let total: f64 = (0..species)
-                    .map(|j| densities[j] * field.optics.scaled.scaled_scattering[i * species + j])
-                    .sum();
-                if total <= 0.0 {
-                    plane.fill(LOG_FLOOR.ln() as f32);
-                    continue;
-                }
-                combined.fill(0.0);
-                for j in 0..species {
-                    let fraction = densities[j]
-                        * field.optics.scaled.scaled_scattering[i * species + j]
-                        / total;
-                    if fraction != 0.0 {
-                        let q = &kernel[(i * species + j) * block..][..block];
-                        for (c, q) in combined.iter_mut().zip(q) {
-                            *c += fraction * q;
-                        }
-                    }
-                }
-                for s in first_sun..=last_sun {
-                    let solution = field.solution(s, i);
-                    for &m in &active {
-                        let row = &mut harmonics[m * views..(m + 1) * views];
-                        row.fill(0.0);
-                        let radiance = &solution[(m * levels + k) * degrees..][..degrees];
-                        let columns = &combined[m * degrees * views..(m + 1) * degrees * views];
-                        for (l, column) in radiance.iter().zip(columns.chunks_exact(views)) {
-                            for (r, q) in row.iter_mut().zip(column) {
-                                *r += l * q;
-                            }
-                        }
-                    }
-                    let cell = &mut plane[s * azimuths * views..(s + 1) * azimuths * views];
-                    for (f, row) in cell.chunks_exact_mut(views).enumerate() {
-                        let cosines = &azimuth_cosines[f * degrees..(f + 1) * degrees];
-                        sum.fill(0.0);
-                        for &m in &active {
-                            let c = cosines[m];
-                            for (acc, r) in sum.iter_mut().zip(&harmonics[m * views..][..views]) {
-                                *acc += c * r;
-                            }
-                        }
-                        for (o, v) in row.iter_mut().zip(&sum) {
-                            *o = floored_log(*v) as f32;
-                        }
-                    }
-                }
-            }
-            for i in 0..w {
-                for (cell, value) in by_wavelength[i * cells..(i + 1) * cells].iter().enumerate() {
-                    out[cell * w + i] = *value;
-                }
-            }
-        });
+        let values = source_values(&field, views, &angles);
         MultipleScatteringTable {
             field,
             view_zenith_nodes: views,
@@ -197,7 +87,129 @@ impl MultipleScatteringTable {
             values: Arc::new(values),
         }
     }
+}
 
+/// ln R of `field` over its levels and sun nodes, `views` view zenith
+/// angles uniform over 0..pi and the azimuths from the sun `azimuths_rad`
+/// (ascending), [(((k * suns + s) * azimuths + f) * views + v) *
+/// wavelengths + i] (see [`MultipleScatteringTable`]).
+fn source_values(field: &MultipleScatteringField, views: usize, azimuths_rad: &[f64]) -> Vec<f32> {
+    let azimuths = azimuths_rad.len();
+    let degrees = field.optics.geometry.streams.count();
+    let levels = field.optics.geometry.grid.levels();
+    let suns = field.optics.sun_axis.count();
+    let (w, species) = (field.optics.wavelengths, field.optics.species);
+    let per_level = suns * azimuths * views * w;
+    let view_legendre: Vec<Vec<f64>> = (0..views)
+        .map(|v| {
+            let mut table = vec![0.0; degrees * degrees];
+            let zenith = PI * v as f64 / (views - 1) as f64;
+            normalized_associated_legendre(zenith.cos(), degrees, &mut table);
+            table
+        })
+        .collect();
+    let azimuth_cosines: Vec<f64> = azimuths_rad
+        .iter()
+        .flat_map(|phi| (0..degrees).map(move |m| (m as f64 * phi).cos()))
+        .collect();
+    let active: Vec<usize> = (0..degrees).filter(|m| field.harmonics[*m]).collect();
+    // 2 pi w_b p*_jm(mu_v, mu_b) by wavelength, species, harmonic and
+    // stream, a row over view nodes:
+    // [(((i * species + j) * degrees + m) * degrees + b) * views + v].
+    let block = degrees * degrees * views;
+    let mut kernel = vec![0.0; w * species * block];
+    crate::parallel::for_each_chunk_mut(&mut kernel, species * block, |i, out| {
+        for j in 0..species {
+            let phase = &field.optics.scaled.phases[i * species + j];
+            for &m in &active {
+                for b in 0..degrees {
+                    let row = &mut out[j * block + (m * degrees + b) * views..][..views];
+                    for (value, legendre) in row.iter_mut().zip(&view_legendre) {
+                        *value = 2.0
+                            * PI
+                            * field.optics.geometry.streams.weights()[b]
+                            * phase.harmonic(
+                                m,
+                                legendre,
+                                field.optics.geometry.streams.legendre(b),
+                            );
+                    }
+                }
+            }
+        }
+    });
+    let sun_nodes = field.reachable_sun_nodes();
+    let mut values = vec![LOG_FLOOR.ln() as f32; levels * per_level];
+    // One level per task; within it one wavelength at a time into a
+    // wavelength-major buffer, transposed at the end (in cache). Only
+    // the sun nodes that view rays reach at the level are filled.
+    crate::parallel::for_each_chunk_mut(&mut values, per_level, |k, out| {
+        let densities = field.optics.geometry.grid.densities_at_level(k);
+        let mut combined = vec![0.0; block];
+        let mut harmonics = vec![0.0; degrees * views];
+        let mut sum = vec![0.0; views];
+        let cells = suns * azimuths * views;
+        let mut by_wavelength = vec![LOG_FLOOR.ln() as f32; per_level];
+        let (first_sun, last_sun) = sun_nodes[k];
+        for i in 0..w {
+            let plane = &mut by_wavelength[i * cells..(i + 1) * cells];
+            let total: f64 = (0..species)
+                .map(|j| densities[j] * field.optics.scaled.scaled_scattering[i * species + j])
+                .sum();
+            if total <= 0.0 {
+                plane.fill(LOG_FLOOR.ln() as f32);
+                continue;
+            }
+            combined.fill(0.0);
+            for j in 0..species {
+                let fraction =
+                    densities[j] * field.optics.scaled.scaled_scattering[i * species + j] / total;
+                if fraction != 0.0 {
+                    let q = &kernel[(i * species + j) * block..][..block];
+                    for (c, q) in combined.iter_mut().zip(q) {
+                        *c += fraction * q;
+                    }
+                }
+            }
+            for s in first_sun..=last_sun {
+                let solution = field.solution(s, i);
+                for &m in &active {
+                    let row = &mut harmonics[m * views..(m + 1) * views];
+                    row.fill(0.0);
+                    let radiance = &solution[(m * levels + k) * degrees..][..degrees];
+                    let columns = &combined[m * degrees * views..(m + 1) * degrees * views];
+                    for (l, column) in radiance.iter().zip(columns.chunks_exact(views)) {
+                        for (r, q) in row.iter_mut().zip(column) {
+                            *r += l * q;
+                        }
+                    }
+                }
+                let cell = &mut plane[s * azimuths * views..(s + 1) * azimuths * views];
+                for (f, row) in cell.chunks_exact_mut(views).enumerate() {
+                    let cosines = &azimuth_cosines[f * degrees..(f + 1) * degrees];
+                    sum.fill(0.0);
+                    for &m in &active {
+                        let c = cosines[m];
+                        for (acc, r) in sum.iter_mut().zip(&harmonics[m * views..][..views]) {
+                            *acc += c * r;
+                        }
+                    }
+                    for (o, v) in row.iter_mut().zip(&sum) {
+                        *o = floored_log(*v) as f32;
+                    }
+                }
+            }
+        }
+        for i in 0..w {
+            for (cell, value) in by_wavelength[i * cells..(i + 1) * cells].iter().enumerate() {
+                out[cell * w + i] = *value;
+            }
+        }
+    });
+    values
+}
+
+impl MultipleScatteringTable {
     /// This table (of a field solved for every sun) for `field`, the same
     /// field aimed at another eye and sun
     /// ([`MultipleScatteringField::aimed`]): the values are shared.
@@ -596,6 +608,23 @@ impl MultipleScatteringTable {
     /// every sun): the source ln R with its axes, the optics, the ground's
     /// light, the peak beam and the forward-peak term's tables.
     pub(crate) fn exported(&self) -> ExportedSource {
+        let azimuths_rad: Vec<f64> = (0..self.azimuth_nodes)
+            .map(|f| PI * f as f64 / (self.azimuth_nodes - 1) as f64)
+            .collect();
+        self.exported_with(self.values.as_ref().clone(), azimuths_rad)
+    }
+
+    /// [`Self::exported`] with the source at the azimuths from the sun
+    /// `azimuths_rad` (ascending, 0 and pi among them) instead of the
+    /// table's uniform ones: computed anew from the field, exactly.
+    pub(crate) fn exported_at_azimuths(&self, azimuths_rad: &[f64]) -> ExportedSource {
+        let values = source_values(&self.field, self.view_zenith_nodes, azimuths_rad);
+        self.exported_with(values, azimuths_rad.to_vec())
+    }
+
+    /// What [`Self::exported`] gives, with the source `log_source` at the
+    /// azimuths `azimuths_rad`.
+    fn exported_with(&self, log_source: Vec<f32>, azimuths_rad: Vec<f64>) -> ExportedSource {
         let optics = &self.field.optics;
         let atmosphere = &self.field.atmosphere;
         let (w, s) = (optics.wavelengths, optics.species);
@@ -609,10 +638,11 @@ impl MultipleScatteringTable {
             wavelengths: w,
             species: s,
             view_zenith_nodes: self.view_zenith_nodes,
-            azimuth_nodes: self.azimuth_nodes,
+            azimuth_nodes: azimuths_rad.len(),
+            azimuths_rad,
             levels_m: optics.geometry.grid.altitudes_m().to_vec(),
             sun_zenith_rad: optics.sun_axis.angles_rad.clone(),
-            log_source: self.values.as_ref().clone(),
+            log_source,
             extinction: optics.scaled.extinction.clone(),
             scaled_extinction: optics.scaled.scaled_extinction.clone(),
             scaled_scattering: optics.scaled.scaled_scattering.clone(),
@@ -686,8 +716,9 @@ impl MultipleScatteringTable {
             (
                 optics.geometry.grid.locate(node.altitude_m),
                 optics.sun_axis.locate(node.sun_cosine),
+                uniform_azimuth_cell(node.cos_azimuth, self.azimuth_nodes),
             ),
-            (node.view_cosine, node.cos_azimuth),
+            node.view_cosine,
             log_source,
         );
     }
@@ -709,27 +740,31 @@ pub(crate) struct SegmentMarch {
     pub(crate) columns: Vec<f64>,
 }
 
+/// The cell (node, fraction) of the azimuth whose cosine is `cos_azimuth`
+/// among `azimuths` nodes uniform over 0..pi.
+pub(crate) fn uniform_azimuth_cell(cos_azimuth: f64, azimuths: usize) -> (usize, f64) {
+    let x = cos_azimuth.clamp(-1.0, 1.0).acos() / PI * (azimuths - 1) as f64;
+    let f = (x as usize).min(azimuths - 2);
+    (f, x - f as f64)
+}
+
 /// ln R at one node from a source table's values `values` (ln R,
 /// [(((k * suns + s) * azimuths + f) * views + v) * wavelengths + i],
-/// views and azimuths uniform over 0..pi), quadrilinear in ln R: the
-/// altitude and sun cells (node, fraction) given, the view's zenith
-/// cosine and the cosine of its azimuth from the sun located here; into
-/// `out` (one value per wavelength). The library's march and the engine
-/// tables' (`engine_tables/lookup.rs`) read the table by it.
+/// views uniform over 0..pi), quadrilinear in ln R: the altitude, sun and
+/// azimuth cells (node, fraction) given, the view's zenith cosine located
+/// here; into `out` (one value per wavelength). The library's march and
+/// the engine tables' (`engine_tables/lookup.rs`) read the table by it.
 pub(crate) fn interpolate_log_source(
     values: &[f32],
     (suns, azimuths, views): (usize, usize, usize),
-    ((k, tz), (s, ts)): ((usize, f64), (usize, f64)),
-    (view_cosine, cos_azimuth): (f64, f64),
+    ((k, tz), (s, ts), (f, tf)): ((usize, f64), (usize, f64), (usize, f64)),
+    view_cosine: f64,
     out: &mut [f64],
 ) {
     let w = out.len();
     let y = view_cosine.clamp(-1.0, 1.0).acos() / PI * (views - 1) as f64;
     let v = (y as usize).min(views - 2);
     let tv = y - v as f64;
-    let x = cos_azimuth.clamp(-1.0, 1.0).acos() / PI * (azimuths - 1) as f64;
-    let f = (x as usize).min(azimuths - 2);
-    let tf = x - f as f64;
     out.fill(0.0);
     for (kk, wk) in [(k, 1.0 - tz), (k + 1, tz)] {
         for (ss, ws) in [(s, 1.0 - ts), (s + 1, ts)] {
@@ -757,11 +792,14 @@ pub(crate) struct ExportedSource {
     pub(crate) species: usize,
     pub(crate) view_zenith_nodes: usize,
     pub(crate) azimuth_nodes: usize,
+    /// The source's azimuths from the sun, rad, ascending from 0 to pi.
+    pub(crate) azimuths_rad: Vec<f64>,
     /// The source's altitude levels, m, and sun zenith nodes, rad.
     pub(crate) levels_m: Vec<f64>,
     pub(crate) sun_zenith_rad: Vec<f64>,
     /// ln R, [(((k * suns + s) * azimuth_nodes + f) * view_zenith_nodes +
-    /// v) * wavelengths + i] (views and azimuths uniform over 0..pi).
+    /// v) * wavelengths + i] (views uniform over 0..pi, azimuths at
+    /// `azimuths_rad`).
     pub(crate) log_source: Vec<f32>,
     /// Per unit relative density, m^-1, [i * species + j]: extinction,
     /// delta-M scaled extinction and scattering, scattering.
