@@ -690,7 +690,11 @@ impl SunColumnTable {
     /// The radius of the march node `node` and where it lies in the table:
     /// for a replayed node ([`MarchNode::repeated`]) what `cache` holds
     /// for its index, else computed and kept there.
-    pub(crate) fn locate_node(&self, node: &MarchNode, cache: &mut Vec<LocatedNode>) -> LocatedNode {
+    pub(crate) fn locate_node(
+        &self,
+        node: &MarchNode,
+        cache: &mut Vec<LocatedNode>,
+    ) -> LocatedNode {
         if node.repeated && node.index < cache.len() {
             return cache[node.index];
         }
