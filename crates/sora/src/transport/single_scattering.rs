@@ -247,7 +247,9 @@ impl SingleScatteringScratch {
     /// after it whose nodes lie at the same altitudes (the same zenith
     /// angle from the same eye, e.g. a sky-view table's row:
     /// [`PanelMarch`]'s `reuse_nodes`); the integrals differ from a march
-    /// of every ray by rounding (1e-16 relative).
+    /// of every ray by rounding (1e-16 relative). The nodes' located
+    /// sun-column cells are kept with them: a scratch that reuses nodes
+    /// serves one scene and one sun-column table.
     pub(crate) fn reuse_view_nodes(&mut self) {
         self.march.reuse_nodes();
     }

@@ -128,7 +128,10 @@ pub(super) type SourceCells = ((usize, f64), (usize, f64));
 impl MultipleScatteringScratch {
     /// As [`crate::transport::single_scattering::SingleScatteringScratch::reuse_view_nodes`]:
     /// the view rays' densities and columns marched once for the rays of
-    /// the same altitudes after them.
+    /// the same altitudes after them, with the nodes' located cells in
+    /// the sun-column and source tables: a scratch that reuses nodes
+    /// serves the marches of one source table and one sun-column table
+    /// (`MultipleScatteringTable::compute_radiance_parts`).
     pub(crate) fn reuse_view_nodes(&mut self) {
         self.march.reuse_nodes();
     }
