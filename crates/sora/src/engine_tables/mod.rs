@@ -87,7 +87,12 @@
 //! marches' exponentials, forward-peak integrals and source-table reads
 //! run in AVX2's registers where the CPU has them, chosen at run time
 //! (`transport/vector_exp.rs`): the same tables bit for bit, 12-15 % less
-//! CPU (`docs/engine-tables.md`, "Bake time").
+//! CPU (`docs/engine-tables.md`, "Bake time"). Each row of a layer's
+//! sky-view table (one zenith angle, every azimuth) marches its rays'
+//! densities and columns once and replays them, with the nodes' located
+//! table cells, for its other azimuths (`PanelMarch::reuse_nodes`): the
+//! sky values within one f32 rounding of every ray marched alone, which
+//! the tests keep as the oracle (`the_rows_marched_once_are_every_ray_marched`).
 //!
 //! The lookup formulas (`lookup.rs`) are those the shaders run; the
 //! manifest (`files.rs`) states them for any other reader.

@@ -227,6 +227,22 @@ pub(crate) struct MarchNode {
     /// The Gauss quadrature weight of the node, m (half the panel's length
     /// times the 4-point weight).
     pub(crate) weight: f64,
+    /// Which node of the ray it is (0 first).
+    pub(crate) index: usize,
+    /// Whether the node is replayed ([`PanelMarch::reuse_nodes`]): at the
+    /// altitude of node `index` of the ray that was marched last, so what
+    /// depends on its altitude alone (its radius located in a table) is
+    /// what it was there.
+    pub(crate) repeated: bool,
+}
+
+/// A march node's radius (m) and that radius located in a
+/// [`SunColumnTable`], kept per node index for the replayed nodes of
+/// [`PanelMarch::reuse_nodes`] ([`SunColumnTable::locate_node`]).
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct LocatedNode {
+    pub(crate) radius_m: f64,
+    pub(crate) located: SunColumnRadius,
 }
 
 /// The Gauss-panel march along a ray that every integral along a path of
@@ -239,6 +255,20 @@ pub(crate) struct MarchNode {
 /// running integral inside its own, [`running_integral_matrix`], exact for
 /// a density cubic across the panel). The march keeps its buffers between
 /// rays (allocation-free after the first).
+///
+/// With [`PanelMarch::reuse_nodes`] it keeps the last ray's nodes too
+/// (their distances, weights, columns and densities) and replays them for
+/// a ray whose nodes lie at the same altitudes: the same planet, profiles
+/// and panel ends, and the same |start|^2, start . direction and
+/// direction . direction (the altitude at s along the ray is
+/// sqrt(|start|^2 + 2 s start . d + s^2 d . d) - R), each within
+/// [`REUSE_TOLERANCE`] relative. The rays of one zenith angle from one eye
+/// (a row of a sky-view table, at every azimuth) are such rays: their
+/// densities and columns are marched once, not once per azimuth. Only the
+/// nodes' points are the new ray's own (start + s direction, as the march
+/// computes them); the rest differs from a march of the new ray by the
+/// rounding of its |point| (1e-16 relative; the test
+/// `replayed_nodes_are_the_march_s`).
 #[derive(Debug, Clone, Default)]
 pub(crate) struct PanelMarch {
     running_integral: [[f64; 4]; 4],
@@ -251,6 +281,69 @@ pub(crate) struct PanelMarch {
     /// and the relative density.
     node_columns: Vec<f64>,
     densities: Vec<f64>,
+    /// The last whole ray's nodes, when reused ([`PanelMarch::reuse_nodes`]).
+    recorded: Option<Box<RecordedNodes>>,
+    reuse: bool,
+}
+
+/// Relative tolerance within which a ray's altitudes are taken as a
+/// recorded ray's ([`PanelMarch::reuse_nodes`]): rays of one zenith angle
+/// computed at different azimuths differ by a few units of rounding
+/// (1e-16); 1e-12 is a micrometre in a thousand kilometres.
+const REUSE_TOLERANCE: f64 = 1e-12;
+
+/// A whole march's nodes, for [`PanelMarch::reuse_nodes`].
+#[derive(Debug, Clone, Default)]
+struct RecordedNodes {
+    /// |start|^2, start . direction, direction . direction, the ground's
+    /// radius: what, with the panel ends and the profiles, fixes every
+    /// node's altitude.
+    key: [f64; 4],
+    ends: Vec<f64>,
+    profiles: Vec<DensityProfile>,
+    /// Per node: the distance along the ray (m), the weight (m), the
+    /// panel it is in.
+    distances: Vec<f64>,
+    weights: Vec<f64>,
+    panels: Vec<usize>,
+    /// Per node, per species: the column from the start (m), the relative
+    /// density.
+    node_columns: Vec<f64>,
+    densities: Vec<f64>,
+    /// Per panel, per species: the columns from the start to the panel's
+    /// start, m; then the whole ray's.
+    panel_columns: Vec<f64>,
+}
+
+impl RecordedNodes {
+    fn key(start: Vector3, direction: Vector3, ground_radius_m: f64) -> [f64; 4] {
+        [
+            start.dot(start),
+            start.dot(direction),
+            direction.dot(direction),
+            ground_radius_m,
+        ]
+    }
+
+    /// Whether a ray with this key, these profiles and these panel ends
+    /// has the recorded nodes' altitudes.
+    fn matches<P: Borrow<DensityProfile>>(
+        &self,
+        key: &[f64; 4],
+        profiles: &[P],
+        ends: &[f64],
+    ) -> bool {
+        let close = |a: f64, b: f64| (a - b).abs() <= REUSE_TOLERANCE * a.abs().max(b.abs());
+        self.key.iter().zip(key).all(|(a, b)| close(*a, *b))
+            && self.ends.len() == ends.len()
+            && self.ends.iter().zip(ends).all(|(a, b)| close(*a, *b))
+            && self.profiles.len() == profiles.len()
+            && self
+                .profiles
+                .iter()
+                .zip(profiles)
+                .all(|(a, b)| a == b.borrow())
+    }
 }
 
 impl PanelMarch {
@@ -262,7 +355,16 @@ impl PanelMarch {
             columns: vec![0.0; species],
             node_columns: vec![0.0; species],
             densities: vec![0.0; species],
+            recorded: None,
+            reuse: false,
         }
+    }
+
+    /// Keeps each whole ray's nodes and replays them for the next rays
+    /// whose nodes lie at the same altitudes (see [`PanelMarch`]): for a
+    /// march of many rays of one zenith angle from one eye.
+    pub(crate) fn reuse_nodes(&mut self) {
+        self.reuse = true;
     }
 
     /// Marches the ray from `start` (planet-centred, m) along the unit
@@ -281,16 +383,54 @@ impl PanelMarch {
         mut visit: impl FnMut(MarchNode, &[f64], &[f64]) -> ControlFlow<()>,
     ) {
         let species = profiles.len();
+        let mut recording = None;
+        if self.reuse {
+            let key = RecordedNodes::key(start, direction, ground_radius_m);
+            match self.recorded.take() {
+                Some(recorded) if recorded.matches(&key, profiles, panel_ends) => {
+                    self.replay(&recorded, (start, direction), species, visit);
+                    self.recorded = Some(recorded);
+                    return;
+                }
+                old => {
+                    // Record this ray (in the old record's buffers).
+                    let mut record = old.unwrap_or_default();
+                    record.key = key;
+                    record.ends.clear();
+                    record.ends.extend_from_slice(panel_ends);
+                    record.profiles.clear();
+                    record
+                        .profiles
+                        .extend(profiles.iter().map(|p| p.borrow().clone()));
+                    for buffer in [
+                        &mut record.distances,
+                        &mut record.weights,
+                        &mut record.node_columns,
+                        &mut record.densities,
+                        &mut record.panel_columns,
+                    ] {
+                        buffer.clear();
+                    }
+                    record.panels.clear();
+                    recording = Some(record);
+                }
+            }
+        }
         self.columns.fill(0.0);
-        for ends in panel_ends.windows(2) {
+        for (panel, ends) in panel_ends.windows(2).enumerate() {
             let (centre, half) = (0.5 * (ends[0] + ends[1]), 0.5 * (ends[1] - ends[0]));
             let mut points = [Vector3::default(); 4];
+            let mut distances = [0.0; 4];
             for (n, x) in GAUSS_NODES.iter().enumerate() {
-                points[n] = start + direction * (centre + half * x);
+                distances[n] = centre + half * x;
+                points[n] = start + direction * distances[n];
                 let altitude_m = points[n].length() - ground_radius_m;
                 for (j, profile) in profiles.iter().enumerate() {
                     self.panel_densities[j][n] = profile.borrow().relative_density(altitude_m);
                 }
+            }
+            if let Some(record) = recording.as_mut() {
+                record.panel_columns.extend_from_slice(&self.columns);
             }
             for (n, point) in points.into_iter().enumerate() {
                 for j in 0..species {
@@ -303,8 +443,19 @@ impl PanelMarch {
                 let node = MarchNode {
                     point,
                     weight: half * GAUSS_WEIGHTS[n],
+                    index: 4 * panel + n,
+                    repeated: false,
                 };
+                if let Some(record) = recording.as_mut() {
+                    record.distances.push(distances[n]);
+                    record.weights.push(node.weight);
+                    record.panels.push(panel);
+                    record.node_columns.extend_from_slice(&self.node_columns);
+                    record.densities.extend_from_slice(&self.densities);
+                }
                 if visit(node, &self.node_columns, &self.densities).is_break() {
+                    // An unfinished record is not kept.
+                    self.recorded = None;
                     return;
                 }
             }
@@ -314,6 +465,44 @@ impl PanelMarch {
                     .sum();
                 self.columns[j] += half * panel;
             }
+        }
+        if let Some(mut record) = recording {
+            record.panel_columns.extend_from_slice(&self.columns);
+            self.recorded = Some(record);
+        }
+    }
+
+    /// [`PanelMarch::march`] of a ray from `start` along `direction` from
+    /// the nodes of `recorded` (which has the ray's altitudes).
+    fn replay(
+        &mut self,
+        recorded: &RecordedNodes,
+        (start, direction): (Vector3, Vector3),
+        species: usize,
+        mut visit: impl FnMut(MarchNode, &[f64], &[f64]) -> ControlFlow<()>,
+    ) {
+        for (n, (distance, weight)) in recorded.distances.iter().zip(&recorded.weights).enumerate()
+        {
+            let node = MarchNode {
+                point: start + direction * *distance,
+                weight: *weight,
+                index: n,
+                repeated: true,
+            };
+            let columns = &recorded.node_columns[n * species..][..species];
+            let densities = &recorded.densities[n * species..][..species];
+            if visit(node, columns, densities).is_break() {
+                // The columns of the panels before this node's.
+                let panel = recorded.panels[n];
+                self.columns
+                    .copy_from_slice(&recorded.panel_columns[panel * species..][..species]);
+                return;
+            }
+        }
+        let panels = recorded.panel_columns.len() / species.max(1);
+        if species > 0 {
+            self.columns
+                .copy_from_slice(&recorded.panel_columns[(panels - 1) * species..][..species]);
         }
     }
 
@@ -498,6 +687,29 @@ impl SunColumnTable {
         }
     }
 
+    /// The radius of the march node `node` and where it lies in the table:
+    /// for a replayed node ([`MarchNode::repeated`]) what `cache` holds
+    /// for its index, else computed and kept there.
+    pub(crate) fn locate_node(
+        &self,
+        node: &MarchNode,
+        cache: &mut Vec<LocatedNode>,
+    ) -> LocatedNode {
+        if node.repeated && node.index < cache.len() {
+            return cache[node.index];
+        }
+        let radius_m = node.point.length();
+        let located = LocatedNode {
+            radius_m,
+            located: self.locate_radius(radius_m),
+        };
+        if cache.len() <= node.index {
+            cache.resize(node.index + 1, LocatedNode::default());
+        }
+        cache[node.index] = located;
+        located
+    }
+
     /// [`SunColumnTable::lookup_columns_to_sun`] at a located radius: the
     /// same operations in the same order, so the same columns bit for bit.
     pub(crate) fn lookup_columns_at_radius(
@@ -669,6 +881,72 @@ mod tests {
             }
         });
         assert_eq!(visited, 5);
+    }
+
+    /// Nodes replayed for a ray of the same zenith angle from the same eye
+    /// ([`PanelMarch::reuse_nodes`]) against a march of that ray: the
+    /// points and weights within 1e-13, the columns, densities and
+    /// whole-ray columns within 1e-11 (rounding: the two rays' panel ends
+    /// and radii differ in their last bits, a nanometre, and the haze's
+    /// density changes by 1e-12 in a nanometre); a ray of another zenith
+    /// angle is marched anew, and so is one with other panel ends.
+    #[test]
+    fn replayed_nodes_are_the_march_s() {
+        let air = exponential(8000.0);
+        let haze = exponential(1200.0);
+        let profiles = [&air, &haze];
+        let eye = Vector3::new(0.0, 0.0, R + 2000.0);
+        let corners = ProfileCorners::new(&profiles, R, TOP);
+        let ray = |zenith_deg: f64, azimuth_deg: f64| {
+            let (z, a) = (zenith_deg.to_radians(), azimuth_deg.to_radians());
+            let d = Vector3::new(z.sin() * a.cos(), z.sin() * a.sin(), z.cos());
+            let length = crate::geometry::distance_to_top_of_atmosphere(eye, d, TOP);
+            let mut ends = Vec::new();
+            corners.fill_panel_ends(eye, d, length, 16, &mut ends);
+            (d, ends)
+        };
+        type Nodes = Vec<(MarchNode, Vec<f64>, Vec<f64>)>;
+        let run = |march: &mut PanelMarch, (d, ends): &(Vector3, Vec<f64>)| -> (Nodes, Vec<f64>) {
+            let mut nodes = Vec::new();
+            march.march(&profiles, R, (eye, *d), ends, |node, columns, densities| {
+                nodes.push((node, columns.to_vec(), densities.to_vec()));
+                ControlFlow::Continue(())
+            });
+            (nodes, march.columns().to_vec())
+        };
+        let mut reusing = PanelMarch::new(2);
+        reusing.reuse_nodes();
+        let (first, _) = run(&mut reusing, &ray(87.0, 0.0));
+        assert!(first.iter().all(|(node, _, _)| !node.repeated));
+        for azimuth_deg in [30.0, 97.0, 180.0] {
+            let other = ray(87.0, azimuth_deg);
+            let (replayed, replayed_columns) = run(&mut reusing, &other);
+            let (marched, marched_columns) = run(&mut PanelMarch::new(2), &other);
+            assert_eq!(replayed.len(), marched.len());
+            let close = |a: &[f64], b: &[f64]| {
+                a.iter()
+                    .zip(b)
+                    .all(|(a, b)| (a - b).abs() <= 1e-11 * a.abs().max(b.abs()))
+            };
+            for ((a, a_columns, a_densities), (b, b_columns, b_densities)) in
+                replayed.iter().zip(&marched)
+            {
+                assert!(a.repeated && !b.repeated);
+                assert_eq!(a.index, b.index);
+                assert!(close(&[a.weight], &[b.weight]));
+                assert!((a.point - b.point).length() <= 1e-13 * b.point.length());
+                assert!(close(a_columns, b_columns), "{a_columns:?} {b_columns:?}");
+                assert!(close(a_densities, b_densities));
+            }
+            assert!(close(&replayed_columns, &marched_columns));
+        }
+        // Another zenith angle, and the same one with a cut added.
+        let (other_zenith, _) = run(&mut reusing, &ray(60.0, 0.0));
+        assert!(other_zenith.iter().all(|(node, _, _)| !node.repeated));
+        let (d, mut ends) = ray(60.0, 45.0);
+        ends.insert(3, 0.5 * (ends[2] + ends[3]));
+        let (cut, _) = run(&mut reusing, &(d, ends));
+        assert!(cut.iter().all(|(node, _, _)| !node.repeated));
     }
 
     /// A tent layer 10-40 km peaking at 25 km: vertically its column is

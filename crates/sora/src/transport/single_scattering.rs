@@ -47,7 +47,7 @@ use std::sync::{Arc, Mutex};
 
 use super::multiple_scattering::{SunFreeParts, ViewHarmonicsCache};
 use super::optical_column::{
-    PanelMarch, ProfileCorners, SunColumnTable, compute_columns_along_ray,
+    LocatedNode, MarchNode, PanelMarch, ProfileCorners, SunColumnTable, compute_columns_along_ray,
 };
 use super::vector_exp::exp_neg_in_place;
 use crate::atmosphere::phase_matrix::PhaseMatrix;
@@ -155,6 +155,35 @@ impl SunColumns<'_> {
     }
 }
 
+impl SunColumns<'_> {
+    /// [`SunColumns::compute_columns_to_sun`] from the march node `node`:
+    /// with a table, its radius located once for the replayed nodes of
+    /// every ray that repeats it (`SunColumnTable::locate_node`, `located`
+    /// per node index; the same columns on the ray that is marched).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn compute_columns_to_sun_at_node<P: Borrow<DensityProfile>>(
+        self,
+        profiles: &[P],
+        corners: &ProfileCorners,
+        node: &MarchNode,
+        sun: Vector3,
+        located: &mut Vec<LocatedNode>,
+        ends: &mut Vec<f64>,
+        columns: &mut [f64],
+    ) -> bool {
+        match self {
+            SunColumns::Table(table) => {
+                let at = table.locate_node(node, located);
+                let mu = node.point.dot(sun) / at.radius_m;
+                table.lookup_columns_at_radius(&at.located, mu, columns)
+            }
+            SunColumns::Exact => {
+                self.compute_columns_to_sun(profiles, corners, node.point, sun, ends, columns)
+            }
+        }
+    }
+}
+
 /// An atmosphere on a wavelength grid, seen from one place with the sun in
 /// one place: everything single scattering needs, precomputed.
 #[derive(Debug, Clone)]
@@ -208,9 +237,23 @@ pub struct SingleScatteringScratch {
     /// sun, m along each.
     view_panel_ends: Vec<f64>,
     sun_panel_ends: Vec<f64>,
+    /// The view ray's nodes located in the sun-column table, per node
+    /// (`SunColumns::compute_columns_to_sun_at_node`).
+    located: Vec<LocatedNode>,
 }
 
 impl SingleScatteringScratch {
+    /// Marches each view ray's densities and columns once for the rays
+    /// after it whose nodes lie at the same altitudes (the same zenith
+    /// angle from the same eye, e.g. a sky-view table's row:
+    /// [`PanelMarch`]'s `reuse_nodes`); the integrals differ from a march
+    /// of every ray by rounding (1e-16 relative). The nodes' located
+    /// sun-column cells are kept with them: a scratch that reuses nodes
+    /// serves one scene and one sun-column table.
+    pub(crate) fn reuse_view_nodes(&mut self) {
+        self.march.reuse_nodes();
+    }
+
     /// The integrals I_j(lambda) of the last ray, species-major, m.
     pub(crate) fn inscattering_integrals(&self) -> &[f64] {
         &self.inscattering_integrals
@@ -504,6 +547,7 @@ impl SingleScatteringScene {
             view_transmittance: vec![0.0; wavelengths],
             view_panel_ends: Vec::with_capacity(self.corners.most_panel_ends(VIEW_RAY_PANELS) + 2),
             sun_panel_ends: Vec::with_capacity(self.corners.most_panel_ends(SUN_RAY_PANELS)),
+            located: Vec::new(),
         }
     }
 
@@ -568,11 +612,12 @@ impl SingleScatteringScene {
             (start, view),
             &view_ends,
             |node, node_columns, densities| {
-                if !sun_columns.compute_columns_to_sun(
+                if !sun_columns.compute_columns_to_sun_at_node(
                     &self.profiles,
                     &self.corners,
-                    node.point,
+                    &node,
                     self.sun_direction,
+                    &mut scratch.located,
                     &mut scratch.sun_panel_ends,
                     &mut scratch.sun_columns,
                 ) {

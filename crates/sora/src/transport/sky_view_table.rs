@@ -132,9 +132,16 @@ impl SkyViewTable {
         let marched_values = table.multiple_values;
         let row_length = azimuth_nodes * stride;
         let fill_row = |row: usize, out: &mut [f32]| {
+            // The row's rays are one zenith angle from one eye: their
+            // densities and columns are marched once for every azimuth
+            // (where the planet's shadow does not cut them apart).
             let mut scratch = sky.scratch();
-            let mut ms_work = multiple_scattering
-                .map(|ms| (ms.scratch(), vec![0.0; wavelengths], vec![0.0; wavelengths]));
+            scratch.reuse_view_nodes();
+            let mut ms_work = multiple_scattering.map(|ms| {
+                let mut ms_scratch = ms.scratch();
+                ms_scratch.reuse_view_nodes();
+                (ms_scratch, vec![0.0; wavelengths], vec![0.0; wavelengths])
+            });
             let index_in_half = row % half_zenith_nodes;
             let zenith = table.zenith_of_node(row);
             for k in 0..azimuth_nodes {

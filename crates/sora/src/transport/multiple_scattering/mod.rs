@@ -250,4 +250,4 @@ pub(crate) use self::polarisation_correction::{
     PolarisationRows, PolarisationTable, ViewHarmonicsCache,
 };
 pub use self::view_march::MultipleScatteringScratch;
-use self::view_march::{LOG_FLOOR, NodeGeometry, floored_log};
+use self::view_march::{LOG_FLOOR, NodeGeometry, SourceCells, floored_log};

@@ -24,7 +24,8 @@ use std::sync::Arc;
 
 use super::phase_fourier::normalized_associated_legendre;
 use super::{
-    LOG_FLOOR, MultipleScatteringField, MultipleScatteringScratch, NodeGeometry, floored_log,
+    LOG_FLOOR, MultipleScatteringField, MultipleScatteringScratch, NodeGeometry, SourceCells,
+    floored_log,
 };
 use crate::geometry::Vector3;
 use crate::transport::SunColumns;
@@ -272,7 +273,7 @@ impl MultipleScatteringTable {
         self.field
             .optics
             .march(segment, sun_columns, scratch, terms, |node, _, scratch| {
-                self.lookup_log_source(node, &mut scratch.log_source)
+                self.lookup_log_source(node, &mut scratch.source_cells, &mut scratch.log_source)
             });
     }
 
@@ -355,6 +356,7 @@ impl MultipleScatteringTable {
                 sun_cosine,
                 view_cosine,
                 cos_azimuth,
+                march_node: None,
             };
             // SORA_LEVEL_STRIDE=q: the source read at every q-th level
             // only (and the top), linear in ln R between them.
@@ -367,13 +369,13 @@ impl MultipleScatteringTable {
                     }
                     let (k, t) = super::vertical_grid::locate_among(&kept, altitude_m);
                     let mut upper = vec![0.0; w];
-                    self.lookup_log_source(node(kept[k]), &mut log_source);
-                    self.lookup_log_source(node(kept[k + 1]), &mut upper);
+                    self.lookup_log_source(node(kept[k]), &mut Vec::new(), &mut log_source);
+                    self.lookup_log_source(node(kept[k + 1]), &mut Vec::new(), &mut upper);
                     for (l, u) in log_source.iter_mut().zip(&upper) {
                         *l += t * (u - *l);
                     }
                 }
-                _ => self.lookup_log_source(node(altitude_m), &mut log_source),
+                _ => self.lookup_log_source(node(altitude_m), &mut Vec::new(), &mut log_source),
             }
             let rho = density(at);
             for j in 0..s {
@@ -508,9 +510,10 @@ impl MultipleScatteringTable {
                 sun_cosine,
                 view_cosine,
                 cos_azimuth,
+                march_node: None,
             };
             let mut log_source = vec![0.0; w];
-            self.lookup_log_source(node, &mut log_source);
+            self.lookup_log_source(node, &mut Vec::new(), &mut log_source);
             let rho = density(at);
             for j in 0..s {
                 columns[j] += 0.5 * (previous_rho[j] + rho[j]) * (at - previous);
@@ -682,15 +685,22 @@ impl MultipleScatteringTable {
     }
 
     /// ln R(x, view) at one march node, into `log_source`: quadrilinear
-    /// in ln R.
-    fn lookup_log_source(&self, node: NodeGeometry, log_source: &mut [f64]) {
+    /// in ln R. A view ray's replayed node (`NodeGeometry::march_node`)
+    /// takes its altitude's and view's cells from `cells` (per node
+    /// index), the others keep theirs there.
+    fn lookup_log_source(
+        &self,
+        node: NodeGeometry,
+        cells: &mut Vec<SourceCells>,
+        log_source: &mut [f64],
+    ) {
         #[cfg(target_arch = "x86_64")]
         if crate::transport::vector_exp::avx2_available() {
             // SAFETY: the CPU has AVX2 (checked just above).
-            unsafe { self.lookup_log_source_avx2(node, log_source) };
+            unsafe { self.lookup_log_source_avx2(node, cells, log_source) };
             return;
         }
-        self.lookup_log_source_portable(node, log_source);
+        self.lookup_log_source_portable(node, cells, log_source);
     }
 
     /// [`Self::lookup_log_source`] compiled for AVX2 (8 lanes of f32
@@ -698,15 +708,42 @@ impl MultipleScatteringTable {
     /// bits as the portable form).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn lookup_log_source_avx2(&self, node: NodeGeometry, log_source: &mut [f64]) {
-        self.lookup_log_source_portable(node, log_source);
+    fn lookup_log_source_avx2(
+        &self,
+        node: NodeGeometry,
+        cells: &mut Vec<SourceCells>,
+        log_source: &mut [f64],
+    ) {
+        self.lookup_log_source_portable(node, cells, log_source);
     }
 
     /// [`Self::lookup_log_source`] in the target's baseline instructions.
     #[inline(always)]
-    fn lookup_log_source_portable(&self, node: NodeGeometry, log_source: &mut [f64]) {
+    fn lookup_log_source_portable(
+        &self,
+        node: NodeGeometry,
+        cells: &mut Vec<SourceCells>,
+        log_source: &mut [f64],
+    ) {
         let optics = &self.field.optics;
-        interpolate_log_source(
+        let locate = || {
+            (
+                optics.geometry.grid.locate(node.altitude_m),
+                view_cell(node.view_cosine, self.view_zenith_nodes),
+            )
+        };
+        let (altitude, view) = match node.march_node {
+            Some((index, true)) if index < cells.len() => cells[index],
+            Some((index, false)) => {
+                if cells.len() <= index {
+                    cells.resize(index + 1, ((0, 0.0), (0, 0.0)));
+                }
+                cells[index] = locate();
+                cells[index]
+            }
+            _ => locate(),
+        };
+        interpolate_log_source_in_cells(
             &self.values,
             (
                 optics.sun_axis.count(),
@@ -714,11 +751,11 @@ impl MultipleScatteringTable {
                 self.view_zenith_nodes,
             ),
             (
-                optics.geometry.grid.locate(node.altitude_m),
+                altitude,
                 optics.sun_axis.locate(node.sun_cosine),
                 uniform_azimuth_cell(node.cos_azimuth, self.azimuth_nodes),
             ),
-            node.view_cosine,
+            view,
             log_source,
         );
     }
@@ -761,10 +798,33 @@ pub(crate) fn interpolate_log_source(
     view_cosine: f64,
     out: &mut [f64],
 ) {
-    let w = out.len();
+    interpolate_log_source_in_cells(
+        values,
+        (suns, azimuths, views),
+        ((k, tz), (s, ts), (f, tf)),
+        view_cell(view_cosine, views),
+        out,
+    );
+}
+
+/// The view zenith cell (node, fraction) of a view of zenith cosine
+/// `view_cosine` among `views` nodes uniform over 0..pi.
+fn view_cell(view_cosine: f64, views: usize) -> (usize, f64) {
     let y = view_cosine.clamp(-1.0, 1.0).acos() / PI * (views - 1) as f64;
     let v = (y as usize).min(views - 2);
-    let tv = y - v as f64;
+    (v, y - v as f64)
+}
+
+/// [`interpolate_log_source`] with the view's zenith cell located
+/// ([`view_cell`]).
+fn interpolate_log_source_in_cells(
+    values: &[f32],
+    (suns, azimuths, views): (usize, usize, usize),
+    ((k, tz), (s, ts), (f, tf)): ((usize, f64), (usize, f64), (usize, f64)),
+    (v, tv): (usize, f64),
+    out: &mut [f64],
+) {
+    let w = out.len();
     out.fill(0.0);
     for (kk, wk) in [(k, 1.0 - tz), (k + 1, tz)] {
         for (ss, ws) in [(s, 1.0 - ts), (s + 1, ts)] {

@@ -11,7 +11,7 @@ use super::field::SunZenithAxis;
 use super::forward_peak::{self, ForwardPeak};
 use super::peak_beam::PeakBeam;
 use crate::geometry::{Vector3, segment_in_atmosphere};
-use crate::transport::optical_column::PanelMarch;
+use crate::transport::optical_column::{LocatedNode, PanelMarch};
 use crate::transport::single_scattering::SunColumns;
 use crate::transport::vector_exp::{exp_in_place, exp_neg_in_place};
 
@@ -109,9 +109,33 @@ pub struct MultipleScatteringScratch {
     /// march's exponentials (`ViewRayOptics::march`).
     pub(super) node_terms: Vec<f64>,
     pub(super) tilted_peak: Vec<f64>,
+    /// The view ray's nodes located in the sun-column table, per node
+    /// (`SunColumns::compute_columns_to_sun_at_node`).
+    pub(super) located: Vec<LocatedNode>,
+    /// Per node of the view ray: its radius (m) and view cosine, kept for
+    /// the replayed nodes (`PanelMarch::reuse_nodes`).
+    pub(super) view_nodes: Vec<(f64, f64)>,
+    /// Per node of the view ray: its altitude's and view's cells in a
+    /// source table, kept for the replayed nodes
+    /// (`MultipleScatteringTable::compute_radiance_parts`).
+    pub(super) source_cells: Vec<SourceCells>,
 }
 
+/// A march node's altitude cell (level, fraction) and view zenith cell
+/// (node, fraction) in a source table.
+pub(super) type SourceCells = ((usize, f64), (usize, f64));
+
 impl MultipleScatteringScratch {
+    /// As [`crate::transport::single_scattering::SingleScatteringScratch::reuse_view_nodes`]:
+    /// the view rays' densities and columns marched once for the rays of
+    /// the same altitudes after them, with the nodes' located cells in
+    /// the sun-column and source tables: a scratch that reuses nodes
+    /// serves the marches of one source table and one sun-column table
+    /// (`MultipleScatteringTable::compute_radiance_parts`).
+    pub(crate) fn reuse_view_nodes(&mut self) {
+        self.march.reuse_nodes();
+    }
+
     /// The forward-peak integrals of the last ray: integral rho_j
     /// (T* T*_sun - T T_sun) ds, species-major [j * wavelengths + i], m,
     /// then the peak-only rows Q = integral (sum_j f_j beta_sca,j rho_j)
@@ -140,6 +164,10 @@ pub(super) struct NodeGeometry {
     pub(super) sun_cosine: f64,
     pub(super) view_cosine: f64,
     pub(super) cos_azimuth: f64,
+    /// Of a view ray's march: the node's index along the ray and whether
+    /// it is replayed (`MarchNode::repeated`: its altitude and view cosine
+    /// are those of that node of the ray marched last).
+    pub(super) march_node: Option<(usize, bool)>,
 }
 
 impl ViewRayOptics {
@@ -163,6 +191,9 @@ impl ViewRayOptics {
             tilted_depths: vec![0.0; 4 * w],
             node_terms: vec![0.0; 4 * w],
             tilted_peak: vec![0.0; 2 * w],
+            located: Vec::new(),
+            view_nodes: Vec::new(),
+            source_cells: Vec::new(),
         }
     }
 
@@ -231,9 +262,22 @@ impl ViewRayOptics {
                 |node, node_columns, densities| {
                     scratch.node_columns.copy_from_slice(node_columns);
                     scratch.densities.copy_from_slice(densities);
-                    let r = node.point.length();
+                    // A replayed node's radius and view cosine are those
+                    // of the node it repeats (the same to rounding).
+                    let cached = scratch.view_nodes.get(node.index).filter(|_| node.repeated);
+                    let (r, view_cosine) = match cached {
+                        Some(kept) => *kept,
+                        None => {
+                            let r = node.point.length();
+                            let view_cosine = view.dot(node.point * (1.0 / r)).clamp(-1.0, 1.0);
+                            if scratch.view_nodes.len() <= node.index {
+                                scratch.view_nodes.resize(node.index + 1, (0.0, 0.0));
+                            }
+                            scratch.view_nodes[node.index] = (r, view_cosine);
+                            (r, view_cosine)
+                        }
+                    };
                     let zenith = node.point * (1.0 / r);
-                    let view_cosine = view.dot(zenith).clamp(-1.0, 1.0);
                     let sun_cosine = self.sun.dot(zenith).clamp(-1.0, 1.0);
                     let sines = ((1.0 - view_cosine * view_cosine)
                         * (1.0 - sun_cosine * sun_cosine))
@@ -248,6 +292,7 @@ impl ViewRayOptics {
                         sun_cosine,
                         view_cosine,
                         cos_azimuth,
+                        march_node: Some((node.index, node.repeated)),
                     };
                     let densities = std::mem::take(&mut scratch.densities);
                     source(geometry, &densities, scratch);
@@ -281,11 +326,12 @@ impl ViewRayOptics {
                     // sun's beam and the view's transmittance (see the
                     // module docs, TMS).
                     let lit = self.has_forward_peaks
-                        && sun_columns.compute_columns_to_sun(
+                        && sun_columns.compute_columns_to_sun_at_node(
                             profiles,
                             corners,
-                            node.point,
+                            &node,
                             self.sun,
+                            &mut scratch.located,
                             &mut scratch.sun_panel_ends,
                             &mut scratch.sun_columns,
                         );
