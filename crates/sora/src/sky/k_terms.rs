@@ -78,7 +78,7 @@ use super::{AerialPerspective, Irradiance, Sky, SkyRadiance};
 use crate::atmosphere::gas_bands::{
     TERMS, banded_depths_above, has_untermed_gas_bands, k_distribution_terms, term_span,
 };
-use crate::atmosphere::{Atmosphere, Species, SpeciesModel};
+use crate::atmosphere::{Atmosphere, DensityProfile, Species, SpeciesModel};
 use crate::colour::SpectrumToXyz;
 use crate::colour::Xyz;
 use crate::error::Result;
@@ -202,12 +202,20 @@ pub(super) fn term_skies(
 /// and each part built per species (the columns toward the sun, the
 /// source's per-species terms) costs less. Only absorbing gases are
 /// looked at (their coefficients are cheap to sample; aerosols' are not,
-/// and air always scatters). The same atmosphere when none is zero.
+/// and air always scatters), and not those on a piecewise-linear profile
+/// (its corners cut every ray's quadrature panels). The same atmosphere
+/// when none is zero.
 pub(super) fn carried_species(
     atmosphere: &Atmosphere,
     grid: &WavelengthGrid,
 ) -> Result<Atmosphere> {
-    let is_gas = |s: &&Species| matches!(s.model, SpeciesModel::AbsorbingGas(_));
+    // A piecewise-linear profile's corners cut the rays' quadrature
+    // panels (`ProfileCorners`) whatever the species' coefficient: such a
+    // species stays, so that the sky is the same bit for bit.
+    let is_gas = |s: &&Species| {
+        matches!(s.model, SpeciesModel::AbsorbingGas(_))
+            && !matches!(s.profile, DensityProfile::PiecewiseLinear(_))
+    };
     let with = |species: Vec<Species>| Atmosphere {
         species,
         name: atmosphere.name.clone(),
