@@ -48,14 +48,18 @@
 //! and aerial perspective keep every term whole (a sky's image tables cost
 //! far more than its samples' fields). The single effective sky is never
 //! solved (its radiance is never asked for; only its optics are used).
+//! Each term's sky carries only the species that absorb or scatter on its
+//! grid ([`carried_species`]: the mixed gases are left out at 900-1000
+//! nm), bit for bit the same answers; measured 0.97 times the CPU of
+//! carrying them all (`farm-bench -n 12`, paired, the almucantar below).
 //! Measured (`scripts/bench/gases.sh`, release, whole process, median CPU
 //! seconds of 5, earth-clear-summer without aerosol with and without its
 //! `[gases]`, 2-core machine at load 10-13): one almucantar of 36 views at
 //! 900-1000 nm every 10 nm (2.92 cm of water; terms 3 and 4 leave out their
 //! higher orders at 900-980 nm, 4 at 990-1000 nm, term 2 at 930-960 nm: 31
 //! of the 55 samples' fields solved) 0.31 s, 3.9 times the gas-free
-//! 0.080 s (was 0.54 s, 6.0 times; `farm-bench -n 10`: 3.6 times, 3.2-3.8,
-//! against 5.7); the radiances (zenith, almucantar
+//! 0.080 s (was 0.54 s, 6.0 times; `farm-bench -n 12`: 3.4 times, 2.7-3.8,
+//! against 5.7 before the higher orders were left out); the radiances (zenith, almucantar
 //! and principal plane, suns 30 and 10 degrees, scalar and polarised)
 //! within 7e-6 of every term's higher orders, all but the sub-grids'
 //! rounding below them, against a bound of 1e-3 and the k-distribution's
