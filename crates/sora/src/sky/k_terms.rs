@@ -48,14 +48,18 @@
 //! and aerial perspective keep every term whole (a sky's image tables cost
 //! far more than its samples' fields). The single effective sky is never
 //! solved (its radiance is never asked for; only its optics are used).
+//! Each term's sky carries only the species that absorb or scatter on its
+//! grid ([`carried_species`]: the mixed gases are left out at 900-1000
+//! nm), bit for bit the same answers; measured 0.97 times the CPU of
+//! carrying them all (`farm-bench -n 12`, paired, the almucantar below).
 //! Measured (`scripts/bench/gases.sh`, release, whole process, median CPU
 //! seconds of 5, earth-clear-summer without aerosol with and without its
 //! `[gases]`, 2-core machine at load 10-13): one almucantar of 36 views at
 //! 900-1000 nm every 10 nm (2.92 cm of water; terms 3 and 4 leave out their
 //! higher orders at 900-980 nm, 4 at 990-1000 nm, term 2 at 930-960 nm: 31
 //! of the 55 samples' fields solved) 0.31 s, 3.9 times the gas-free
-//! 0.080 s (was 0.54 s, 6.0 times; `farm-bench -n 10`: 3.6 times, 3.2-3.8,
-//! against 5.7); the radiances (zenith, almucantar
+//! 0.080 s (was 0.54 s, 6.0 times; `farm-bench -n 12`: 3.4 times, 2.7-3.8,
+//! against 5.7 before the higher orders were left out); the radiances (zenith, almucantar
 //! and principal plane, suns 30 and 10 degrees, scalar and polarised)
 //! within 7e-6 of every term's higher orders, all but the sub-grids'
 //! rounding below them, against a bound of 1e-3 and the k-distribution's
@@ -75,10 +79,10 @@
 //! errors that may be correlated (the terms are traced with one seed).
 
 use super::{AerialPerspective, Irradiance, Sky, SkyRadiance};
-use crate::atmosphere::Atmosphere;
 use crate::atmosphere::gas_bands::{
     TERMS, banded_depths_above, has_untermed_gas_bands, k_distribution_terms, term_span,
 };
+use crate::atmosphere::{Atmosphere, DensityProfile, Species, SpeciesModel};
 use crate::colour::SpectrumToXyz;
 use crate::colour::Xyz;
 use crate::error::Result;
@@ -137,6 +141,11 @@ pub(super) fn term_skies(
     if !has_untermed_gas_bands(atmosphere) {
         return Ok(skies);
     }
+    // Each term's sky carries only the species that absorb or scatter on
+    // its grid ([`carried_species`]).
+    let build = |at_term: &Atmosphere, grid: &WavelengthGrid, higher_orders: bool| {
+        build(&carried_species(at_term, grid)?, grid, higher_orders)
+    };
     let terms = k_distribution_terms(atmosphere, grid)?;
     if whole_grid {
         for (weights, at_term) in &terms {
@@ -188,6 +197,53 @@ pub(super) fn term_skies(
         }
     }
     Ok(skies)
+}
+
+/// `atmosphere` without its absorbing gases whose coefficients are zero
+/// at every sample of `grid` (the mixed gases and NO2 at 900-1000 nm, say):
+/// a species with zero extinction and scattering adds exactly 0 to every
+/// optical depth and scattering sum, so the sky is the same without it,
+/// and each part built per species (the columns toward the sun, the
+/// source's per-species terms) costs less. Only absorbing gases are
+/// looked at (their coefficients are cheap to sample; aerosols' are not,
+/// and air always scatters), and not those on a piecewise-linear profile
+/// (its corners cut every ray's quadrature panels). The same atmosphere
+/// when none is zero.
+pub(super) fn carried_species(
+    atmosphere: &Atmosphere,
+    grid: &WavelengthGrid,
+) -> Result<Atmosphere> {
+    // A piecewise-linear profile's corners cut the rays' quadrature
+    // panels (`ProfileCorners`) whatever the species' coefficient: such a
+    // species stays, so that the sky is the same bit for bit.
+    let is_gas = |s: &&Species| {
+        matches!(s.model, SpeciesModel::AbsorbingGas(_))
+            && !matches!(s.profile, DensityProfile::PiecewiseLinear(_))
+    };
+    let with = |species: Vec<Species>| Atmosphere {
+        species,
+        name: atmosphere.name.clone(),
+        description: atmosphere.description.clone(),
+        planet: atmosphere.planet.clone(),
+        sun: atmosphere.sun.clone(),
+    };
+    let gases = with(atmosphere.species.iter().filter(is_gas).cloned().collect());
+    let optics = gases.compute_optics(grid)?;
+    let mut zero = optics.species.iter().map(|s| {
+        s.extinction_per_m
+            .values()
+            .iter()
+            .chain(s.scattering_per_m.values())
+            .all(|v| *v == 0.0)
+    });
+    Ok(with(
+        atmosphere
+            .species
+            .iter()
+            .filter(|s| !is_gas(s) || !zero.next().unwrap_or(false))
+            .cloned()
+            .collect(),
+    ))
 }
 
 /// Which terms need their higher orders of scattering (all orders but the
@@ -981,6 +1037,70 @@ mod tests {
                 .iter()
                 .all(|(_, t)| t.scattering() != crate::sky::Scattering::Single)
         );
+    }
+
+    #[test]
+    fn a_term_sky_without_the_species_that_are_zero_on_its_grid_is_the_same() {
+        // earth-clear with water, the mixed gases and O2-O2 at 900-1000 nm
+        // every 50 (the 940 nm water band): the mixed gases (O2 and CO2
+        // bands) have no coefficient there. Each term's sky built
+        // from the atmosphere that carries only the rest gives bit for bit
+        // the answers of the term's whole atmosphere: polarised views,
+        // irradiance, aerial perspective and a spectral image.
+        let mut atmosphere = earth_clear_with_gases();
+        atmosphere
+            .species
+            .push(crate::atmosphere::o2_o2::o2_o2_species(&atmosphere.species).unwrap());
+        let grid = WavelengthGrid::new(900.0, 1000.0, 50.0).unwrap();
+        let views: Vec<ViewDirection> = [0.0, 30.0, 90.0, 180.0]
+            .iter()
+            .map(|a| ViewDirection::new(30.0, 180.0 + a).unwrap())
+            .chain([ViewDirection::new(90.0, 0.0).unwrap()])
+            .collect();
+        let image = ImageSettings {
+            draw_sun_disc: false,
+            ..ImageSettings::new(Camera::Fisheye, 9, 9)
+        };
+        let answers = |a: &Atmosphere| -> Vec<f64> {
+            let sky = Sky::builder(a)
+                .sun_deg(30.0, 180.0)
+                .wavelengths(grid)
+                .polarisation(Polarisation::Vector)
+                .build()
+                .unwrap();
+            let mut out = Vec::new();
+            for r in sky.radiances(&views).unwrap() {
+                out.extend(r.radiance_w_m2_sr_nm.values());
+                let stokes = r.stokes.unwrap();
+                out.extend(stokes.q_w_m2_sr_nm.values());
+                out.extend(stokes.u_w_m2_sr_nm.values());
+            }
+            let e = sky.irradiance(Plane::HORIZONTAL).unwrap();
+            out.extend(e.global_w_m2_nm.values());
+            out.extend(e.diffuse_w_m2_nm.values());
+            let ap = sky.aerial_perspective(views[4], 20e3).unwrap();
+            out.extend(ap.radiance.radiance_w_m2_sr_nm.values());
+            out.extend(ap.transmittance.values());
+            out.extend(sky.render_spectral(&image, &|_| {}).unwrap());
+            out
+        };
+        let names = |a: &Atmosphere| -> Vec<String> {
+            a.species.iter().map(|s| s.name.clone()).collect::<Vec<_>>()
+        };
+        for (_, at_term) in k_distribution_terms(&atmosphere, &grid).unwrap() {
+            let carried = carried_species(&at_term, &grid).unwrap();
+            let dropped: Vec<String> = names(&at_term)
+                .into_iter()
+                .filter(|n| !names(&carried).contains(n))
+                .collect();
+            assert_eq!(dropped, ["mixed gases (O2, CO2)"]);
+            let (got, want) = (answers(&carried), answers(&at_term));
+            assert!(want.iter().all(|v| v.is_finite()) && want.iter().any(|v| *v > 0.0));
+            assert_eq!(got, want);
+        }
+        // On the visible grid every gas absorbs somewhere: none is dropped.
+        let visible = WavelengthGrid::new(380.0, 780.0, 20.0).unwrap();
+        assert_eq!(carried_species(&atmosphere, &visible).unwrap(), atmosphere);
     }
 
     #[test]
