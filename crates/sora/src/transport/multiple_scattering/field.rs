@@ -461,6 +461,22 @@ impl MultipleScatteringField {
             let suns = self.optics.sun_axis.count();
             let mut moments = vec![0.0; suns * w * levels * square];
             let mut mixed = vec![0.0; degrees];
+            // 2 pi w_b Lambda_l^m(mu_b), [(m * degrees + b) * degrees + l]
+            // for l >= m: the sums over b below run over l together (a
+            // loop the compiler vectorises), each in the order of b and
+            // with the same products as sum_b (2 pi w_b Lambda) L_b.
+            let streams = &self.optics.geometry.streams;
+            let mut kernel = vec![0.0; degrees * square];
+            for m in 0..degrees {
+                for b in 0..degrees {
+                    let legendre = &streams.legendre(b)[m * degrees..(m + 1) * degrees];
+                    let row = &mut kernel[(m * degrees + b) * degrees..][..degrees];
+                    for l in m..degrees {
+                        row[l] = 2.0 * PI * streams.weights()[b] * legendre[l];
+                    }
+                }
+            }
+            let mut sums = vec![0.0; degrees];
             for s in 0..suns {
                 for i in 0..w {
                     let solution = self.solution(s, i);
@@ -484,17 +500,17 @@ impl MultipleScatteringField {
                         let out = &mut moments[((s * w + i) * levels + k) * square..][..square];
                         for m in (0..degrees).filter(|m| self.harmonics[*m]) {
                             let radiance = &solution[(m * levels + k) * degrees..][..degrees];
-                            for l in m..degrees {
-                                let moment: f64 = (0..degrees)
-                                    .map(|b| {
-                                        2.0 * PI
-                                            * self.optics.geometry.streams.weights()[b]
-                                            * self.optics.geometry.streams.legendre(b)
-                                                [m * degrees + l]
-                                            * radiance[b]
-                                    })
-                                    .sum();
-                                out[m * degrees + l] = mixed[l] * moment;
+                            // From -0.0, as a float iterator's sum starts.
+                            let sums = &mut sums[m..];
+                            sums.fill(-0.0);
+                            for (b, r) in radiance.iter().enumerate() {
+                                let row = &kernel[(m * degrees + b) * degrees + m..][..degrees - m];
+                                for (sum, c) in sums.iter_mut().zip(row) {
+                                    *sum += c * r;
+                                }
+                            }
+                            for (l, sum) in (m..degrees).zip(sums.iter()) {
+                                out[m * degrees + l] = mixed[l] * sum;
                             }
                         }
                     }
