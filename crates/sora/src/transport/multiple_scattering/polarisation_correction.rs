@@ -547,7 +547,7 @@ impl<'a> AnchorSolves<'a> {
         );
         let solutions = interpolate_solutions(
             inputs.anchors,
-            &anchor_solutions,
+            anchor_solutions,
             optics.solar_irradiance_w_m2_nm.values(),
         );
         // The level albedos are the scalar system's (the same for both).
@@ -816,6 +816,33 @@ impl PolarisationCorrection {
 /// the same weights, so the ratio of the two, which the correction
 /// applies, is a weighted mean of the anchors' ratios.
 fn interpolate_solutions(
+    anchors: &WavelengthAnchors,
+    mut anchor_solutions: Vec<f64>,
+    solar: &[f64],
+) -> Vec<f64> {
+    let solution_len = anchor_solutions.len() / anchors.anchors().len();
+    if anchors.anchors().len() == solar.len() {
+        // Every wavelength is an anchor (each its own blend, weight 1):
+        // the same sums from zero, made in place.
+        for (i, out) in anchor_solutions.chunks_exact_mut(solution_len).enumerate() {
+            let &[(n, weight)] = anchors.blend(i) else {
+                unreachable!("an anchor's blend is itself alone")
+            };
+            debug_assert_eq!(n, i);
+            let e = solar[anchors.anchors()[n]];
+            let scale = if e > 0.0 { weight * solar[i] / e } else { 0.0 };
+            for o in out {
+                *o = 0.0 + scale * *o;
+            }
+        }
+        return anchor_solutions;
+    }
+    blend_solutions(anchors, &anchor_solutions, solar)
+}
+
+/// [`interpolate_solutions`] as sums over each wavelength's blend (also
+/// where every wavelength is an anchor: the tests compare the two).
+fn blend_solutions(
     anchors: &WavelengthAnchors,
     anchor_solutions: &[f64],
     solar: &[f64],
@@ -1102,6 +1129,30 @@ impl PolarisationTable {
         }
         if mirror {
             out[2 * w..4 * w].iter_mut().for_each(|v| *v = -*v);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Where every wavelength is an anchor, the solutions scaled in place
+    /// are the blends' sums, bit for bit (zeros' signs included).
+    #[test]
+    fn solutions_of_every_anchor_in_place_are_the_blends() {
+        let grid = crate::spectrum::WavelengthGrid::new(900.0, 940.0, 10.0).unwrap();
+        let anchors = WavelengthAnchors::new(&grid, 1);
+        assert_eq!(anchors.anchors().len(), grid.len());
+        let solar = [1.7, 0.0, 0.93, 1.1e-3, 2.0];
+        let solutions: Vec<f64> = (0..grid.len() * 3)
+            .map(|n| [-0.0, 0.0, 1.0 / 3.0, -2.5e-7, 7.1][n % 5] * (n + 1) as f64)
+            .collect();
+        let blended = blend_solutions(&anchors, &solutions, &solar);
+        let in_place = interpolate_solutions(&anchors, solutions, &solar);
+        assert_eq!(blended.len(), in_place.len());
+        for (a, b) in blended.iter().zip(&in_place) {
+            assert_eq!(a.to_bits(), b.to_bits(), "{a} {b}");
         }
     }
 }
