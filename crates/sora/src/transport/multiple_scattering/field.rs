@@ -1002,8 +1002,7 @@ fn solve_columns(
             (geometry, scaled),
             (sun_axis, sun_columns),
             (first_spherical, first_order),
-            sweeps,
-            polarisation,
+            (sweeps, polarisation),
         )
     });
     SolvedColumns {
@@ -1024,8 +1023,7 @@ fn solve_wavelength(
     (geometry, scaled_optics): (&ColumnGeometry, &ScaledOptics),
     (sun_axis, sun_columns): (&SunZenithAxis, &[Option<Vec<f64>>]),
     (first_spherical, first_order): (usize, &[f64]),
-    sweeps: usize,
-    polarisation: Option<SharedAnchors>,
+    (sweeps, polarisation): (usize, Option<SharedAnchors>),
 ) {
     let (wavelengths, species) = (optics.grid.len(), optics.species.len());
     let (streams, grid, paths) = (&geometry.streams, &geometry.grid, &geometry.paths);
