@@ -82,7 +82,12 @@
 //! 5e-4 and 1.2e-3 on 280-360, 680-800 and 880-1000 nm every 5 nm,
 //! 380-780 and 280-2500 nm every 20 nm (docs/polarisation.md); a grid of
 //! one or two wavelengths, or one coarser than 60 nm, is solved at every
-//! wavelength.
+//! wavelength. The scalar column at an anchor is the field's own column
+//! at that wavelength when the field has a sun node at the column's sun
+//! (below the spherical first order's nodes): the field's solve hands its
+//! system and its solution there to the vector solve
+//! ([`AnchorSolves::solve_anchor`]), the same values as a solve of its own
+//! (`field.rs`'s test), made once.
 //!
 //! **The truncated phase matrix**: delta-M truncates the phase function
 //! (`phase_fourier.rs`); the matrix's other elements are taken in the
