@@ -56,16 +56,16 @@
 //! the same profiles: each exact view's columns toward the sun are
 //! computed by the first term's sky and read by the others
 //! (`ExactSunColumns`, built with the term skies), bit for bit the same.
-//! Measured (`farm-bench -n 10`, paired, release, whole process, CPU
-//! seconds, earth-clear-summer without aerosol with and without its
-//! `[gases]`, 2-core machine at load 10-11): one almucantar of 36 views at
+//! Measured (`farm-bench -n 10` and `-n 12`, paired, release, whole
+//! process, CPU seconds, earth-clear-summer without aerosol with and
+//! without its `[gases]`, 2-core machine at load 8-11): one almucantar of 36 views at
 //! 900-1000 nm every 10 nm (2.92 cm of water; terms 3 and 4 leave out their
 //! higher orders at 900-980 nm, 4 at 990-1000 nm, term 2 at 930-960 nm: 31
-//! of the 55 samples' fields solved) 0.27 s, 3.06 times the gas-free
-//! 0.089 s (pairs 2.73-3.28; the build before the shared sun columns,
-//! the polarisation column's shared scalar solve and the faster source
-//! moments 3.43 in the same runs; 6.0 before the higher orders were left
-//! out). Above the fields' 31 / 11
+//! of the 55 samples' fields solved) 0.26-0.28 s, 3.06 and 3.12 times
+//! the gas-free 0.082-0.094 s (the two runs' medians; pairs 2.73-3.42;
+//! the build before the shared sun columns, the polarisation column's
+//! shared scalar solve and the faster source moments 3.43 and 3.48 in
+//! the same runs; 6.0 before the higher orders were left out). Above the fields' 31 / 11
 //! the cost is mostly the polarisation correction's columns: a term's
 //! anchors follow its absorption (`WavelengthAnchors::following_optics`),
 //! so every sample of a term is one, against 5 of the 11 gas-free
