@@ -52,21 +52,31 @@
 //! grid ([`carried_species`]: the mixed gases are left out at 900-1000
 //! nm), bit for bit the same answers; measured 0.97 times the CPU of
 //! carrying them all (`farm-bench -n 12`, paired, the almucantar below).
-//! Measured (`scripts/bench/gases.sh`, release, whole process, median CPU
-//! seconds of 5, earth-clear-summer without aerosol with and without its
-//! `[gases]`, 2-core machine at load 10-13): one almucantar of 36 views at
+//! The terms' skies march the same view rays toward the same sun through
+//! the same profiles: each exact view's columns toward the sun are
+//! computed by the first term's sky and read by the others
+//! (`ExactSunColumns`, built with the term skies), bit for bit the same.
+//! Measured (`farm-bench -n 10` and `-n 12`, paired, release, whole
+//! process, CPU seconds, earth-clear-summer without aerosol with and
+//! without its `[gases]`, 2-core machine at load 8-11): one almucantar of 36 views at
 //! 900-1000 nm every 10 nm (2.92 cm of water; terms 3 and 4 leave out their
 //! higher orders at 900-980 nm, 4 at 990-1000 nm, term 2 at 930-960 nm: 31
-//! of the 55 samples' fields solved) 0.31 s, 3.9 times the gas-free
-//! 0.080 s (was 0.54 s, 6.0 times; `farm-bench -n 12`: 3.4 times, 2.7-3.8,
-//! against 5.7 before the higher orders were left out); the radiances (zenith, almucantar
+//! of the 55 samples' fields solved) 0.26-0.28 s, 3.06 and 3.12 times
+//! the gas-free 0.082-0.094 s (the two runs' medians; pairs 2.73-3.42;
+//! the build before the shared sun columns, the polarisation column's
+//! shared scalar solve and the faster source moments 3.43 and 3.48 in
+//! the same runs; 6.0 before the higher orders were left out). Above the fields' 31 / 11
+//! the cost is mostly the polarisation correction's columns: a term's
+//! anchors follow its absorption (`WavelengthAnchors::following_optics`),
+//! so every sample of a term is one, against 5 of the 11 gas-free
+//! samples. The radiances (zenith, almucantar
 //! and principal plane, suns 30 and 10 degrees, scalar and polarised)
 //! within 7e-6 of every term's higher orders, all but the sub-grids'
 //! rounding below them, against a bound of 1e-3 and the k-distribution's
 //! own 1.6 % of the absorption from the band model (1.0 % from line by line
 //! in the O2 A band). A 256 x 256 fisheye over 380-780 nm every 20 nm
 //! (terms 1-4 on 580-780 nm, 11 of 21 samples; images keep every term
-//! whole) 2.4-2.7 s, 4.7-4.8 times the gas-free 0.50-0.57 s. The terms
+//! whole) 2.5-2.9 s, 4.3-4.4 times the gas-free 0.57-0.63 s. The terms
 //! on the span against every term on the whole grid
 //! (`SkyBuilder::build_with_terms`, the oracle; 540-780 nm, sun 10
 //! degrees): the direct beam within 5e-9, views, irradiance, aerial

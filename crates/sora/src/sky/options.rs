@@ -11,7 +11,9 @@ use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::spectrum::WavelengthGrid;
 use crate::transport::multiple_scattering::MultipleScatteringSettings;
+use crate::transport::single_scattering::ExactSunColumns;
 use crate::transport::{Observation, SingleScatteringScene};
+use std::sync::Arc;
 
 /// Which orders of scattering a sky has.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -357,6 +359,10 @@ impl SkyBuilder<'_> {
         // as an addition to single scattering (not the path tracer's).
         let leave_out = matches!(self.scattering, Scattering::Multiple(_))
             && !matches!(self.method, Method::PathTracing { .. });
+        // The terms' skies march the same view rays toward the same sun
+        // through the same profiles: each view's exact columns toward the
+        // sun are computed once for all of them (`ExactSunColumns`).
+        let sun_columns = Arc::new(ExactSunColumns::default());
         let terms = k_terms::term_skies(
             self.atmosphere,
             &self.wavelengths,
@@ -367,7 +373,9 @@ impl SkyBuilder<'_> {
                 if !higher_orders {
                     builder.scattering = Scattering::Single;
                 }
-                builder.build_for(at_term, grid)
+                let mut sky = builder.build_for(at_term, grid)?;
+                sky.scene = sky.scene.sharing_exact_sun_columns(&sun_columns);
+                Ok(sky)
             },
         )?;
         sky.k_terms = terms.all;

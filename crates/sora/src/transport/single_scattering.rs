@@ -184,6 +184,85 @@ impl SunColumns<'_> {
     }
 }
 
+/// The most view rays an [`ExactSunColumns`] keeps per scene geometry:
+/// beyond them a ray's columns are computed, not kept (a bound on the
+/// memory, some 3 kB a ray, for skies asked for many exact views).
+const MOST_KEPT_RAYS: usize = 4096;
+
+/// The exact columns toward the sun from the march nodes of the view rays
+/// marched so far ([`SunColumns::Exact`]), kept for skies whose march and
+/// sun paths are the same: the same species' profiles (in order), radii,
+/// eye and sun. The k-distribution's term skies (`sky/k_terms.rs`) are
+/// such skies: their atmospheres differ in the banded gases' amounts only,
+/// so each view's columns, the costliest part of its single scattering
+/// (the profiles' densities on every sun path), are computed by the first
+/// term's sky and read by the others, bit for bit the same.
+#[derive(Debug, Default)]
+pub(crate) struct ExactSunColumns {
+    /// Per scene geometry ([`ExactSunColumns::slot_for`]), the rays by
+    /// (view direction, segment length) bits.
+    slots: Mutex<Vec<(SceneGeometry, KeptRays)>>,
+}
+
+type KeptRays = std::collections::HashMap<[u64; 4], Arc<RayColumns>>;
+
+/// What a view ray's nodes and their paths to the sun depend on.
+#[derive(Debug, Clone, PartialEq)]
+struct SceneGeometry {
+    profiles: Vec<DensityProfile>,
+    radii_m: (f64, f64),
+    observer: Vector3,
+    sun: Vector3,
+}
+
+/// One view ray's columns toward the sun, per march node in march order:
+/// whether the node is sunlit and its columns, [node * species + j], m.
+#[derive(Debug, Default)]
+struct RayColumns {
+    lit: Vec<bool>,
+    columns: Vec<f64>,
+}
+
+impl ExactSunColumns {
+    /// The slot of `scene`'s geometry, added if new.
+    fn slot_for(&self, scene: &SingleScatteringScene) -> usize {
+        let geometry = SceneGeometry {
+            profiles: scene.profiles.clone(),
+            radii_m: (scene.ground_radius_m, scene.top_radius_m),
+            observer: scene.observer,
+            sun: scene.sun_direction,
+        };
+        let mut slots = self.lock();
+        match slots.iter().position(|(g, _)| *g == geometry) {
+            Some(slot) => slot,
+            None => {
+                slots.push((geometry, KeptRays::default()));
+                slots.len() - 1
+            }
+        }
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, Vec<(SceneGeometry, KeptRays)>> {
+        // A poisoned lock only means that another thread panicked: every
+        // ray in it is whole (each is inserted when complete).
+        self.slots
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+    }
+
+    fn get(&self, slot: usize, ray: &[u64; 4]) -> Option<Arc<RayColumns>> {
+        self.lock()[slot].1.get(ray).cloned()
+    }
+
+    fn keep(&self, slot: usize, ray: [u64; 4], columns: RayColumns) {
+        let mut slots = self.lock();
+        let rays = &mut slots[slot].1;
+        if rays.len() < MOST_KEPT_RAYS {
+            rays.entry(ray).or_insert_with(|| Arc::new(columns));
+        }
+    }
+}
+
 /// An atmosphere on a wavelength grid, seen from one place with the sun in
 /// one place: everything single scattering needs, precomputed.
 #[derive(Debug, Clone)]
@@ -214,6 +293,11 @@ pub struct SingleScatteringScene {
     /// optics and the eye but not on the sun (`SunFreeParts`): every sky
     /// moved to another sun shares it.
     sun_free_field_parts: Arc<SunFreeParts>,
+    /// The exact sun columns of view rays shared with skies of the same
+    /// geometry, and this scene's slot in them
+    /// ([`SingleScatteringScene::sharing_exact_sun_columns`]); none by
+    /// default.
+    exact_sun_columns: Option<(Arc<ExactSunColumns>, usize)>,
 }
 
 /// Per-thread work space of the fast path (no allocation per ray).
@@ -345,6 +429,7 @@ impl SingleScatteringScene {
             sun_column_tables: Arc::default(),
             view_harmonics: Arc::default(),
             sun_free_field_parts: Arc::default(),
+            exact_sun_columns: None,
         })
     }
 
@@ -534,6 +619,19 @@ impl SingleScatteringScene {
         self
     }
 
+    /// This sky keeping its view rays' exact columns toward the sun in
+    /// `shared`, and reading those that a sky of the same geometry (the
+    /// species' profiles, radii, eye and sun) kept there
+    /// ([`ExactSunColumns`]): the same columns bit for bit, computed once.
+    pub(crate) fn sharing_exact_sun_columns(
+        mut self,
+        shared: &Arc<ExactSunColumns>,
+    ) -> SingleScatteringScene {
+        let slot = shared.slot_for(&self);
+        self.exact_sun_columns = Some((Arc::clone(shared), slot));
+        self
+    }
+
     /// Work space for [`SingleScatteringScene::compute_radiance`].
     pub(crate) fn scratch(&self) -> SingleScatteringScratch {
         let (species, wavelengths) = (self.optics.species.len(), self.optics.grid.len());
@@ -606,21 +704,66 @@ impl SingleScatteringScene {
             &mut view_ends,
         );
         let mut march = std::mem::take(&mut scratch.march);
+        // The exact sun columns kept by a sky of the same geometry, or
+        // kept now for those that follow (`ExactSunColumns`).
+        let kept = match (sun_columns, &self.exact_sun_columns) {
+            (SunColumns::Exact, Some((shared, slot))) => {
+                let ray = [
+                    view.x.to_bits(),
+                    view.y.to_bits(),
+                    view.z.to_bits(),
+                    distance_m.to_bits(),
+                ];
+                Some((shared, *slot, ray, shared.get(*slot, &ray)))
+            }
+            _ => None,
+        };
+        let replay = kept.as_ref().and_then(|(.., ray)| ray.clone());
+        let mut record = match kept {
+            Some((.., None)) => Some(RayColumns::default()),
+            _ => None,
+        };
+        let mut node_index = 0;
         march.march(
             &self.profiles,
             self.ground_radius_m,
             (start, view),
             &view_ends,
             |node, node_columns, densities| {
-                if !sun_columns.compute_columns_to_sun_at_node(
-                    &self.profiles,
-                    &self.corners,
-                    &node,
-                    self.sun_direction,
-                    &mut scratch.located,
-                    &mut scratch.sun_panel_ends,
-                    &mut scratch.sun_columns,
-                ) {
+                let kept_node = replay
+                    .as_ref()
+                    .and_then(|ray| Some((ray, *ray.lit.get(node_index)?)));
+                let lit = match kept_node {
+                    Some((ray, lit)) => {
+                        if lit {
+                            let n = scratch.sun_columns.len();
+                            scratch
+                                .sun_columns
+                                .copy_from_slice(&ray.columns[node_index * n..][..n]);
+                        }
+                        lit
+                    }
+                    None => sun_columns.compute_columns_to_sun_at_node(
+                        &self.profiles,
+                        &self.corners,
+                        &node,
+                        self.sun_direction,
+                        &mut scratch.located,
+                        &mut scratch.sun_panel_ends,
+                        &mut scratch.sun_columns,
+                    ),
+                };
+                node_index += 1;
+                if let Some(record) = record.as_mut() {
+                    record.lit.push(lit);
+                    if lit {
+                        record.columns.extend_from_slice(&scratch.sun_columns);
+                    } else {
+                        let n = scratch.sun_columns.len();
+                        record.columns.resize(record.columns.len() + n, 0.0);
+                    }
+                }
+                if !lit {
                     return ControlFlow::Continue(());
                 }
                 scratch.optical_depth.fill(0.0);
@@ -655,6 +798,9 @@ impl SingleScatteringScene {
         scratch.view_columns.copy_from_slice(march.columns());
         scratch.march = march;
         scratch.view_panel_ends = view_ends;
+        if let (Some((shared, slot, ray, _)), Some(record)) = (kept, record) {
+            shared.keep(slot, ray, record);
+        }
         // Transmittance of the whole view ray.
         for (i, t) in scratch.view_transmittance.iter_mut().enumerate() {
             let tau: f64 = species

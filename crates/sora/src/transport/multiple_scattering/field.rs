@@ -11,7 +11,7 @@ use super::forward_peak::{self, ForwardPeak};
 use super::peak_beam::{NeededElevations, PeakBeam, PeakBeamCache, PeakBeamInputs};
 use super::phase_fourier::normalized_associated_legendre;
 use super::polarisation_correction::{
-    CorrectionInputs, PolarisationCorrection, PolarisationRows, PolarisationTable,
+    AnchorSolves, CorrectionInputs, PolarisationCorrection, PolarisationRows, PolarisationTable,
 };
 use super::regimes::{
     self, FIRST_ORDER_SUN_ZENITH_DEG, SUNSET_STEP_END_DEG, SUNSET_STEP_START_DEG,
@@ -327,13 +327,20 @@ impl MultipleScatteringField {
         for s in 0..sun_axis.count() {
             geometry.add_columns_toward_sun(sun_axis.angle(s), &mut sun_columns);
         }
-        let polarisation = request.polarised.then(|| {
-            let anchors = WavelengthAnchors::following_optics(
+        // The polarisation correction's column (`polarisation_correction.rs`),
+        // prepared; its anchors solved with the field where the two share
+        // their scalar column (see `solve_columns`), the others after it.
+        let anchors = request.polarised.then(|| {
+            WavelengthAnchors::following_optics(
                 sky.optics(),
                 settings.polarisation_wavelength_stride,
-            );
-            solve_polarisation_columns(sky, (&geometry, &scaled), &anchors)
+            )
         });
+        let column = anchors
+            .as_ref()
+            .map(|anchors| PolarisationColumn::new(sky, (&geometry, &scaled), anchors));
+        let inputs = column.as_ref().map(PolarisationColumn::inputs);
+        let solves = inputs.as_ref().map(AnchorSolves::new);
         let sun_free = sky.sun_free_field_parts();
         let (forward_peak, first_order_phases) =
             sun_free.for_streams(geometry.streams.count(), || StreamParts {
@@ -355,13 +362,33 @@ impl MultipleScatteringField {
             (&geometry, &scaled, &first_order_phases),
             &sun_axis.angles_rad[first_spherical..],
         );
+        // The field's sun node at the correction column's sun, where the
+        // field's scalar solve is the correction's (the same system, sun
+        // and transmittances, all its sweeps).
+        let shared_node = column.as_ref().and_then(|column| {
+            (request.sweeps == successive_orders::MAX_ITERATIONS)
+                .then(|| (0..first_spherical).find(|&s| sun_axis.angle(s) == column.sun_zenith))
+                .flatten()
+        });
+        let anchor_solutions = Mutex::new(Vec::new());
         let columns = solve_columns(
             optics,
             (&geometry, &scaled),
             (&sun_axis, &sun_columns),
             (first_spherical, &first_order),
             request.sweeps,
+            solves
+                .as_ref()
+                .zip(shared_node)
+                .map(|(solves, node)| (solves, node, &anchor_solutions)),
         );
+        let polarisation = solves.map(|solves| {
+            solves.finish(
+                anchor_solutions
+                    .into_inner()
+                    .unwrap_or_else(PoisonError::into_inner),
+            )
+        });
         let (ground_diffuse, ground_direct) = ground_tables(&columns, optics.grid.len(), &sun_axis);
         let peak_beam = compute_peak_beam(
             sky,
@@ -461,6 +488,22 @@ impl MultipleScatteringField {
             let suns = self.optics.sun_axis.count();
             let mut moments = vec![0.0; suns * w * levels * square];
             let mut mixed = vec![0.0; degrees];
+            // 2 pi w_b Lambda_l^m(mu_b), [(m * degrees + b) * degrees + l]
+            // for l >= m: the sums over b below run over l together (a
+            // loop the compiler vectorises), each in the order of b and
+            // with the same products as sum_b (2 pi w_b Lambda) L_b.
+            let streams = &self.optics.geometry.streams;
+            let mut kernel = vec![0.0; degrees * square];
+            for m in 0..degrees {
+                for b in 0..degrees {
+                    let legendre = &streams.legendre(b)[m * degrees..(m + 1) * degrees];
+                    let row = &mut kernel[(m * degrees + b) * degrees..][..degrees];
+                    for l in m..degrees {
+                        row[l] = 2.0 * PI * streams.weights()[b] * legendre[l];
+                    }
+                }
+            }
+            let mut sums = vec![0.0; degrees];
             for s in 0..suns {
                 for i in 0..w {
                     let solution = self.solution(s, i);
@@ -484,17 +527,17 @@ impl MultipleScatteringField {
                         let out = &mut moments[((s * w + i) * levels + k) * square..][..square];
                         for m in (0..degrees).filter(|m| self.harmonics[*m]) {
                             let radiance = &solution[(m * levels + k) * degrees..][..degrees];
-                            for l in m..degrees {
-                                let moment: f64 = (0..degrees)
-                                    .map(|b| {
-                                        2.0 * PI
-                                            * self.optics.geometry.streams.weights()[b]
-                                            * self.optics.geometry.streams.legendre(b)
-                                                [m * degrees + l]
-                                            * radiance[b]
-                                    })
-                                    .sum();
-                                out[m * degrees + l] = mixed[l] * moment;
+                            // From -0.0, as a float iterator's sum starts.
+                            let sums = &mut sums[m..];
+                            sums.fill(-0.0);
+                            for (b, r) in radiance.iter().enumerate() {
+                                let row = &kernel[(m * degrees + b) * degrees + m..][..degrees - m];
+                                for (sum, c) in sums.iter_mut().zip(row) {
+                                    *sum += c * r;
+                                }
+                            }
+                            for (l, sum) in (m..degrees).zip(sums.iter()) {
+                                out[m * degrees + l] = mixed[l] * sum;
                             }
                         }
                     }
@@ -767,22 +810,42 @@ impl MultipleScatteringField {
             }
         }
         let view = &scratch.view_legendre[..square];
+        let corners = [
+            (k, 1.0 - tz, sun_node, 1.0 - ts),
+            (k, 1.0 - tz, sun_node + 1, ts),
+            (k + 1, tz, sun_node, 1.0 - ts),
+            (k + 1, tz, sun_node + 1, ts),
+        ];
         for i in 0..w {
-            let mut log_value = 0.0;
-            for (kk, wk) in [(k, 1.0 - tz), (k + 1, tz)] {
-                for (ss, ws) in [(sun_node, 1.0 - ts), (sun_node + 1, ts)] {
-                    let source = &moments[((ss * w + i) * levels + kk) * square..][..square];
-                    let mut value = 0.0;
-                    for m in 0..degrees {
-                        let range = m * degrees + m..(m + 1) * degrees;
-                        value += view[range.clone()]
-                            .iter()
-                            .zip(&source[range])
-                            .map(|(a, b)| a * b)
-                            .sum::<f64>();
-                    }
-                    log_value += wk * ws * floored_log(value);
+            // The four corners' sums side by side (four independent
+            // chains of additions, each in the order of l and m as one
+            // corner's alone; the same values).
+            let source = corners
+                .map(|(kk, _, ss, _)| &moments[((ss * w + i) * levels + kk) * square..][..square]);
+            let mut values = [0.0; 4];
+            for m in 0..degrees {
+                let range = m * degrees + m..(m + 1) * degrees;
+                // From -0.0, as a float iterator's sum starts.
+                let mut sums = [-0.0; 4];
+                let products = view[range.clone()]
+                    .iter()
+                    .zip(&source[0][range.clone()])
+                    .zip(&source[1][range.clone()])
+                    .zip(&source[2][range.clone()])
+                    .zip(&source[3][range]);
+                for ((((a, b0), b1), b2), b3) in products {
+                    sums[0] += a * b0;
+                    sums[1] += a * b1;
+                    sums[2] += a * b2;
+                    sums[3] += a * b3;
                 }
+                for (value, sum) in values.iter_mut().zip(sums) {
+                    *value += sum;
+                }
+            }
+            let mut log_value = 0.0;
+            for ((_, wk, _, ws), value) in corners.iter().zip(values) {
+                log_value += wk * ws * floored_log(value);
             }
             scratch.log_source[i] = log_value;
         }
@@ -805,42 +868,69 @@ fn polarisation_column_sun(eye_sun_zenith: f64, (ground, top): (f64, f64)) -> (f
     (eye_sun_zenith.min(lowest), share)
 }
 
-/// The polarisation correction's columns (`polarisation_correction.rs`),
-/// with the eye's own sun, or the lowest that still lights the column
-/// ([`polarisation_column_sun`]), solved at the wavelengths `anchors`
-/// and interpolated between them.
-fn solve_polarisation_columns(
-    sky: &SingleScatteringScene,
-    (geometry, scaled): (&ColumnGeometry, &ScaledOptics),
-    anchors: &WavelengthAnchors,
-) -> PolarisationCorrection {
-    let optics = sky.optics();
-    let (eye_sun_zenith, polarised_share) = polarisation_column_sun(
-        sky.sun_direction().z.clamp(-1.0, 1.0).acos(),
-        (geometry.ground_radius_m, geometry.top_radius_m),
-    );
-    let mut eye_columns = Vec::with_capacity(geometry.grid.levels());
-    geometry.add_columns_toward_sun(eye_sun_zenith, &mut eye_columns);
-    let sun_optical_depths: Vec<Option<(f64, f64)>> = (0..optics.grid.len())
-        .flat_map(|i| {
-            eye_columns.iter().map(move |columns| {
-                columns
-                    .as_ref()
-                    .map(|columns| scaled.optical_depths(i, columns))
+/// The polarisation correction's column (`polarisation_correction.rs`):
+/// the eye's own sun, or the lowest that still lights the column
+/// ([`polarisation_column_sun`]), and its optical depths toward that sun,
+/// for the correction's inputs ([`PolarisationColumn::inputs`]), solved
+/// at the wavelengths `anchors` and interpolated between them.
+struct PolarisationColumn<'a> {
+    sky: &'a SingleScatteringScene,
+    geometry: &'a ColumnGeometry,
+    scaled: &'a ScaledOptics,
+    anchors: &'a WavelengthAnchors,
+    /// The column's sun zenith angle, rad.
+    sun_zenith: f64,
+    polarised_share: f64,
+    /// [i * levels + k] (`CorrectionInputs::sun_optical_depths`).
+    sun_optical_depths: Vec<Option<(f64, f64)>>,
+}
+
+impl<'a> PolarisationColumn<'a> {
+    fn new(
+        sky: &'a SingleScatteringScene,
+        (geometry, scaled): (&'a ColumnGeometry, &'a ScaledOptics),
+        anchors: &'a WavelengthAnchors,
+    ) -> PolarisationColumn<'a> {
+        let optics = sky.optics();
+        let (sun_zenith, polarised_share) = polarisation_column_sun(
+            sky.sun_direction().z.clamp(-1.0, 1.0).acos(),
+            (geometry.ground_radius_m, geometry.top_radius_m),
+        );
+        let mut eye_columns = Vec::with_capacity(geometry.grid.levels());
+        geometry.add_columns_toward_sun(sun_zenith, &mut eye_columns);
+        let sun_optical_depths: Vec<Option<(f64, f64)>> = (0..optics.grid.len())
+            .flat_map(|i| {
+                eye_columns.iter().map(move |columns| {
+                    columns
+                        .as_ref()
+                        .map(|columns| scaled.optical_depths(i, columns))
+                })
             })
-        })
-        .collect();
-    PolarisationCorrection::compute(&CorrectionInputs {
-        optics,
-        scaled,
-        geometry,
-        sun_cosine: eye_sun_zenith.cos(),
-        polarised_share,
-        sun_optical_depths: &sun_optical_depths,
-        eye_altitude_m: sky.observer_radius_m() - geometry.ground_radius_m,
-        view_harmonics: sky.view_harmonics_cache(),
-        anchors,
-    })
+            .collect();
+        PolarisationColumn {
+            sky,
+            geometry,
+            scaled,
+            anchors,
+            sun_zenith,
+            polarised_share,
+            sun_optical_depths,
+        }
+    }
+
+    fn inputs(&self) -> CorrectionInputs<'_> {
+        CorrectionInputs {
+            optics: self.sky.optics(),
+            scaled: self.scaled,
+            geometry: self.geometry,
+            sun_cosine: self.sun_zenith.cos(),
+            polarised_share: self.polarised_share,
+            sun_optical_depths: &self.sun_optical_depths,
+            eye_altitude_m: self.sky.observer_radius_m() - self.geometry.ground_radius_m,
+            view_harmonics: self.sky.view_harmonics_cache(),
+            anchors: self.anchors,
+        }
+    }
 }
 
 /// The first order in the spherical shell, with the planet's shadow, at
@@ -875,14 +965,28 @@ fn solve_spherical_first_order(
     )
 }
 
+/// The polarisation correction's anchors that the field's solve solves
+/// (`polarisation_correction.rs`): the prepared solves, the field's sun
+/// node at the correction column's sun, and the solutions per anchor.
+type SharedAnchors<'s, 'a> = (
+    &'s AnchorSolves<'a>,
+    usize,
+    &'s Mutex<Vec<Option<Vec<f64>>>>,
+);
+
 /// The successive orders of every wavelength's columns at every sun node
-/// (in parallel over wavelengths), with the twilight shift.
+/// (in parallel over wavelengths), with the twilight shift; with
+/// `polarisation`, each of its anchors' columns with the scalar system and
+/// the field's scalar solve at its sun node
+/// (`AnchorSolves::solve_anchor`: the same solve the correction would make
+/// on its own, made once).
 fn solve_columns(
     optics: &AtmosphereOptics,
     (geometry, scaled): (&ColumnGeometry, &ScaledOptics),
     (sun_axis, sun_columns): (&SunZenithAxis, &[Option<Vec<f64>>]),
     (first_spherical, first_order): (usize, &[f64]),
     sweeps: usize,
+    polarisation: Option<SharedAnchors>,
 ) -> SolvedColumns {
     let levels = geometry.grid.levels();
     let degrees = geometry.streams.count();
@@ -898,7 +1002,7 @@ fn solve_columns(
             (geometry, scaled),
             (sun_axis, sun_columns),
             (first_spherical, first_order),
-            sweeps,
+            (sweeps, polarisation),
         )
     });
     SolvedColumns {
@@ -919,7 +1023,7 @@ fn solve_wavelength(
     (geometry, scaled_optics): (&ColumnGeometry, &ScaledOptics),
     (sun_axis, sun_columns): (&SunZenithAxis, &[Option<Vec<f64>>]),
     (first_spherical, first_order): (usize, &[f64]),
-    sweeps: usize,
+    (sweeps, polarisation): (usize, Option<SharedAnchors>),
 ) {
     let (wavelengths, species) = (optics.grid.len(), optics.species.len());
     let (streams, grid, paths) = (&geometry.streams, &geometry.grid, &geometry.paths);
@@ -953,6 +1057,10 @@ fn solve_wavelength(
     // Per spherical node: the sunlit ground's radiance under the
     // scaled beam, and the sunlight delta-M moved into that beam
     // (W m^-2 nm^-1), for the ground values after the joint solve.
+    // The polarisation correction's anchor at this wavelength, if it
+    // shares the field's sun node, and the field's scalar solve there.
+    let anchor = polarisation.and_then(|(solves, node, _)| Some((solves.anchor_of(i)?, node)));
+    let mut anchor_field = None;
     let spherical_nodes = count - first_spherical.min(count);
     let mut ground_direct = vec![0.0; spherical_nodes];
     let mut moved_sunlight = vec![0.0; spherical_nodes];
@@ -986,6 +1094,10 @@ fn solve_wavelength(
         }
         let diffuse = system.solve(sun_cosine, &transmittance, field, &mut work);
         ground[0] = albedo / PI * (diffuse + moved);
+        if anchor.is_some_and(|(_, node)| node == s) {
+            // Before the twilight shift moves it.
+            anchor_field = Some((field.to_vec(), diffuse));
+        }
     }
     // The near-horizontal light comes from columns where the sun
     // stands higher or lower (see `twilight_shift.rs`).
@@ -1020,6 +1132,17 @@ fn solve_wavelength(
         for ((ground, diffuse), moved) in grounds.iter_mut().zip(diffuse).zip(&moved_sunlight) {
             ground[0] = albedo / PI * (diffuse + moved);
         }
+    }
+    if let (Some((solves, _, solutions)), Some((n, _)), Some((field, down))) =
+        (polarisation, anchor, anchor_field)
+    {
+        let mut solution = vec![0.0; solves.solution_len()];
+        solves.solve_anchor(n, system, Some((&field, down)), &mut work, &mut solution);
+        let mut solutions = solutions.lock().unwrap_or_else(PoisonError::into_inner);
+        if solutions.len() <= n {
+            solutions.resize(n + 1, None);
+        }
+        solutions[n] = Some(solution);
     }
 }
 
@@ -1158,5 +1281,61 @@ impl SunFreeParts {
             }
         };
         (parts.forward_peak, parts.first_order_phases)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::atmosphere::Atmosphere;
+    use crate::spectrum::WavelengthGrid;
+    use crate::transport::Observation;
+
+    /// A polarised field solves its correction's anchors with the scalar
+    /// system and solve of its own sun node at the correction column's sun
+    /// (`solve_columns`): the correction is the one solved on its own, bit
+    /// for bit, for a sun high enough for that node (30 degrees) and one
+    /// below the column's lowest sun (-5 degrees, every anchor solved on
+    /// its own).
+    #[test]
+    fn anchors_solved_with_the_field_are_the_correction_solved_alone() {
+        let atmosphere = Atmosphere::preset("earth-clear").unwrap();
+        let grid = WavelengthGrid::new(440.0, 680.0, 60.0).unwrap();
+        for (sun_elevation_deg, shared) in [(30.0, true), (-5.0, false)] {
+            let observation = Observation {
+                observer_altitude_m: 0.0,
+                sun_elevation_deg,
+                sun_azimuth_deg: 180.0,
+            };
+            let sky = SingleScatteringScene::new_with_phase_matrices(
+                &atmosphere,
+                &grid,
+                observation,
+                Some(3),
+            )
+            .unwrap();
+            let settings = MultipleScatteringSettings::default();
+            let field = MultipleScatteringField::compute(&sky, settings, true).unwrap();
+            let geometry = ColumnGeometry::new(&sky, &settings);
+            let scaled = ScaledOptics::delta_m(sky.optics(), geometry.streams.count());
+            let anchors = WavelengthAnchors::following_optics(
+                sky.optics(),
+                settings.polarisation_wavelength_stride,
+            );
+            let column = PolarisationColumn::new(&sky, (&geometry, &scaled), &anchors);
+            let axis = &field.optics.sun_axis.angles_rad;
+            // Shared where the axis has a node at the column's sun before
+            // the spherical first order's.
+            let node = axis.iter().position(|a| *a == column.sun_zenith);
+            let before_spherical =
+                |s: usize| axis[s] < regimes::FIRST_ORDER_SUN_ZENITH_DEG.to_radians();
+            assert_eq!(node.is_some_and(before_spherical), shared, "{axis:?}");
+            let alone = PolarisationCorrection::compute(&column.inputs());
+            let with_field = field.polarisation.as_ref().unwrap().solutions();
+            assert_eq!(with_field.len(), alone.solutions().len());
+            for (a, b) in with_field.iter().zip(alone.solutions()) {
+                assert_eq!(a.to_bits(), b.to_bits(), "{a} {b}");
+            }
+        }
     }
 }

@@ -82,7 +82,12 @@
 //! 5e-4 and 1.2e-3 on 280-360, 680-800 and 880-1000 nm every 5 nm,
 //! 380-780 and 280-2500 nm every 20 nm (docs/polarisation.md); a grid of
 //! one or two wavelengths, or one coarser than 60 nm, is solved at every
-//! wavelength.
+//! wavelength. The scalar column at an anchor is the field's own column
+//! at that wavelength when the field has a sun node at the column's sun
+//! (below the spherical first order's nodes): the field's solve hands its
+//! system and its solution there to the vector solve
+//! ([`AnchorSolves::solve_anchor`]), the same values as a solve of its own
+//! (`field.rs`'s test), made once.
 //!
 //! **The truncated phase matrix**: delta-M truncates the phase function
 //! (`phase_fourier.rs`); the matrix's other elements are taken in the
@@ -342,15 +347,41 @@ fn compute_species_harmonics_from_streams(
 }
 
 impl PolarisationCorrection {
-    /// Solves both columns at every wavelength.
+    /// Solves both columns at every anchor on their own (the field's solve
+    /// shares its scalar column with them where it can, the same solves:
+    /// the tests compare the two).
+    #[cfg(test)]
     pub(crate) fn compute(inputs: &CorrectionInputs) -> PolarisationCorrection {
+        AnchorSolves::new(inputs).finish(Vec::new())
+    }
+
+    /// Per wavelength, the columns' solutions (vector field, scalar field,
+    /// ground values), interpolated between the anchors.
+    #[cfg(test)]
+    pub(crate) fn solutions(&self) -> &[f64] {
+        &self.solutions
+    }
+}
+
+/// A correction's columns at its anchor wavelengths, prepared
+/// ([`AnchorSolves::new`]: each species' phase-matrix harmonics), solved
+/// one by one ([`AnchorSolves::solve_anchor`], by the field's solve for
+/// the anchors it shares its column with) and then all together into the
+/// correction ([`AnchorSolves::finish`]).
+pub(crate) struct AnchorSolves<'a> {
+    inputs: &'a CorrectionInputs<'a>,
+    /// Each species' harmonics at each anchor, [j][n].
+    harmonics: Vec<Vec<PhaseMatrixHarmonics>>,
+    vector_len: usize,
+    scalar_len: usize,
+}
+
+impl<'a> AnchorSolves<'a> {
+    pub(crate) fn new(inputs: &'a CorrectionInputs<'a>) -> AnchorSolves<'a> {
         let optics = inputs.optics;
-        let wavelengths = optics.grid.len();
-        let species = optics.species.len();
         let streams = &inputs.geometry.streams;
         let total = streams.count();
-        let grid = &inputs.geometry.grid;
-        let levels = grid.levels();
+        let levels = inputs.geometry.grid.levels();
         let cosines = streams.cosines();
         // The wavelengths the columns are solved at.
         let anchors = inputs.anchors.anchors();
@@ -388,9 +419,112 @@ impl PolarisationCorrection {
                     .collect()
             })
             .collect();
-        let vector_len = total * COMPONENTS * levels * total;
-        let scalar_len = total * levels * total;
-        let solution_len = vector_len + scalar_len + 2;
+        AnchorSolves {
+            inputs,
+            harmonics,
+            vector_len: total * COMPONENTS * levels * total,
+            scalar_len: total * levels * total,
+        }
+    }
+
+    /// The values of one anchor's solution: the vector field, the scalar
+    /// field and the ground's two values.
+    pub(crate) fn solution_len(&self) -> usize {
+        self.vector_len + self.scalar_len + 2
+    }
+
+    /// The index among the anchors of wavelength `i`, if it is one.
+    pub(crate) fn anchor_of(&self, i: usize) -> Option<usize> {
+        self.inputs.anchors.anchors().binary_search(&i).ok()
+    }
+
+    /// The scalar system of anchor `n`'s wavelength (the field's, which
+    /// [`AnchorSolves::solve_anchor`] may take from the field's solve).
+    fn column_system(&self, n: usize) -> ColumnSystem<'a> {
+        let inputs = self.inputs;
+        let optics = inputs.optics;
+        let species = optics.species.len();
+        let i = inputs.anchors.anchors()[n];
+        let scaled: Vec<ScaledSpecies> = (0..species)
+            .map(|j| ScaledSpecies {
+                extinction_per_m: inputs.scaled.scaled_extinction[i * species + j],
+                scattering_per_m: inputs.scaled.scaled_scattering[i * species + j],
+                phase: &inputs.scaled.phases[i * species + j],
+            })
+            .collect();
+        ColumnSystem::new(
+            &inputs.geometry.streams,
+            &inputs.geometry.grid,
+            Some(&inputs.geometry.paths),
+            scaled,
+            optics.solar_irradiance_w_m2_nm[i],
+            optics.ground_albedo[i],
+        )
+    }
+
+    /// Anchor `n`'s solution ([`AnchorSolves::solution_len`] values) into
+    /// `out`, with `work` space, from `scalar`, the scalar system of its
+    /// wavelength: with `solved`, the scalar field that `scalar` solved for
+    /// the column's sun and transmittances and its diffuse downward
+    /// irradiance at the ground (the field's solve at that sun node, the
+    /// same solve), else solved here.
+    pub(crate) fn solve_anchor(
+        &self,
+        n: usize,
+        scalar: ColumnSystem,
+        solved: Option<(&[f64], f64)>,
+        work: &mut Vec<f64>,
+        out: &mut [f64],
+    ) {
+        let inputs = self.inputs;
+        let optics = inputs.optics;
+        let levels = inputs.geometry.grid.levels();
+        let i = inputs.anchors.anchors()[n];
+        let solar = optics.solar_irradiance_w_m2_nm[i];
+        let albedo = optics.ground_albedo[i];
+        let lit = inputs.sun_cosine.max(0.0);
+        let optical_depths = &inputs.sun_optical_depths[i * levels..(i + 1) * levels];
+        let transmittance: Vec<f64> = optical_depths
+            .iter()
+            .map(|t| t.map_or(0.0, |(scaled, _)| (-scaled).exp()))
+            .collect();
+        let exact_ground = optical_depths[0].map_or(0.0, |(_, exact)| (-exact).exp());
+        let (vector_field, rest) = out.split_at_mut(self.vector_len);
+        let (scalar_field, ground) = rest.split_at_mut(self.scalar_len);
+        let sun_cosine = inputs.sun_cosine;
+        let down_scalar = match solved {
+            Some((field, down)) => {
+                scalar_field.copy_from_slice(field);
+                down
+            }
+            None => scalar.solve(sun_cosine, &transmittance, scalar_field, work),
+        };
+        let per_species: Vec<&PhaseMatrixHarmonics> =
+            self.harmonics.iter().map(|h| &h[n]).collect();
+        let vector = VectorColumnSystem::new(scalar, &per_species);
+        debug_assert_eq!(vector.field_len(), self.vector_len);
+        let down_vector = vector.solve(sun_cosine, &transmittance, vector_field, work);
+        // The ground's diffuse light as the scalar field's ground
+        // term takes it (the sunlit ground's single reflection is
+        // exact elsewhere; delta-M's share of the beam stays here).
+        let beam = solar * lit * (transmittance[0] - exact_ground);
+        ground[0] = albedo / PI * (down_vector + beam);
+        ground[1] = albedo / PI * (down_scalar + beam);
+    }
+
+    /// The correction, from `solved`: per anchor, its solution if the
+    /// field's solve gave it (empty: none did); the others are solved
+    /// here.
+    pub(crate) fn finish(self, solved: Vec<Option<Vec<f64>>>) -> PolarisationCorrection {
+        let inputs = self.inputs;
+        let optics = inputs.optics;
+        let wavelengths = optics.grid.len();
+        let species = optics.species.len();
+        let streams = &inputs.geometry.streams;
+        let grid = &inputs.geometry.grid;
+        let levels = grid.levels();
+        let anchors = inputs.anchors.anchors();
+        let solution_len = self.solution_len();
         let mut anchor_solutions = vec![0.0; anchors.len() * solution_len];
         let mut level_albedos = vec![0.0; wavelengths * levels * species];
         let mut layer_optical_depths = vec![0.0; wavelengths * (levels - 1)];
@@ -404,7 +538,6 @@ impl PolarisationCorrection {
                     .sum();
             }
         }
-        let lit = inputs.sun_cosine.max(0.0);
         // The solves' work space (1.4 MB at 8 streams per hemisphere and 40
         // layers) is kept from one wavelength to the next a thread takes.
         let init = Vec::new;
@@ -412,51 +545,14 @@ impl PolarisationCorrection {
             &mut anchor_solutions,
             solution_len,
             init,
-            |work, n, out| {
-                let i = anchors[n];
-                let scaled: Vec<ScaledSpecies> = (0..species)
-                    .map(|j| ScaledSpecies {
-                        extinction_per_m: inputs.scaled.scaled_extinction[i * species + j],
-                        scattering_per_m: inputs.scaled.scaled_scattering[i * species + j],
-                        phase: &inputs.scaled.phases[i * species + j],
-                    })
-                    .collect();
-                let solar = optics.solar_irradiance_w_m2_nm[i];
-                let albedo = optics.ground_albedo[i];
-                let scalar = ColumnSystem::new(
-                    streams,
-                    grid,
-                    Some(&inputs.geometry.paths),
-                    scaled,
-                    solar,
-                    albedo,
-                );
-                let optical_depths = &inputs.sun_optical_depths[i * levels..(i + 1) * levels];
-                let transmittance: Vec<f64> = optical_depths
-                    .iter()
-                    .map(|t| t.map_or(0.0, |(scaled, _)| (-scaled).exp()))
-                    .collect();
-                let exact_ground = optical_depths[0].map_or(0.0, |(_, exact)| (-exact).exp());
-                let (vector_field, rest) = out.split_at_mut(vector_len);
-                let (scalar_field, ground) = rest.split_at_mut(scalar_len);
-                let sun_cosine = inputs.sun_cosine;
-                let down_scalar = scalar.solve(sun_cosine, &transmittance, scalar_field, work);
-                let per_species: Vec<&PhaseMatrixHarmonics> =
-                    harmonics.iter().map(|h| &h[n]).collect();
-                let vector = VectorColumnSystem::new(scalar, &per_species);
-                debug_assert_eq!(vector.field_len(), vector_len);
-                let down_vector = vector.solve(sun_cosine, &transmittance, vector_field, work);
-                // The ground's diffuse light as the scalar field's ground
-                // term takes it (the sunlit ground's single reflection is
-                // exact elsewhere; delta-M's share of the beam stays here).
-                let beam = solar * lit * (transmittance[0] - exact_ground);
-                ground[0] = albedo / PI * (down_vector + beam);
-                ground[1] = albedo / PI * (down_scalar + beam);
+            |work, n, out| match solved.get(n).and_then(Option::as_ref) {
+                Some(solution) => out.copy_from_slice(solution),
+                None => self.solve_anchor(n, self.column_system(n), None, work, out),
             },
         );
         let solutions = interpolate_solutions(
             inputs.anchors,
-            &anchor_solutions,
+            anchor_solutions,
             optics.solar_irradiance_w_m2_nm.values(),
         );
         // The level albedos are the scalar system's (the same for both).
@@ -491,7 +587,9 @@ impl PolarisationCorrection {
             view_harmonics: Arc::clone(&inputs.view_harmonics),
         }
     }
+}
 
+impl PolarisationCorrection {
     /// The column's `ratios` blended by its polarised share ([`blend`]).
     fn blend(&self, ratios: [f64; COMPONENTS]) -> [f64; COMPONENTS] {
         blend(self.polarised_share, ratios)
@@ -723,6 +821,33 @@ impl PolarisationCorrection {
 /// the same weights, so the ratio of the two, which the correction
 /// applies, is a weighted mean of the anchors' ratios.
 fn interpolate_solutions(
+    anchors: &WavelengthAnchors,
+    mut anchor_solutions: Vec<f64>,
+    solar: &[f64],
+) -> Vec<f64> {
+    let solution_len = anchor_solutions.len() / anchors.anchors().len();
+    if anchors.anchors().len() == solar.len() {
+        // Every wavelength is an anchor (each its own blend, weight 1):
+        // the same sums from zero, made in place.
+        for (i, out) in anchor_solutions.chunks_exact_mut(solution_len).enumerate() {
+            let &[(n, weight)] = anchors.blend(i) else {
+                unreachable!("an anchor's blend is itself alone")
+            };
+            debug_assert_eq!(n, i);
+            let e = solar[anchors.anchors()[n]];
+            let scale = if e > 0.0 { weight * solar[i] / e } else { 0.0 };
+            for o in out {
+                *o = 0.0 + scale * *o;
+            }
+        }
+        return anchor_solutions;
+    }
+    blend_solutions(anchors, &anchor_solutions, solar)
+}
+
+/// [`interpolate_solutions`] as sums over each wavelength's blend (also
+/// where every wavelength is an anchor: the tests compare the two).
+fn blend_solutions(
     anchors: &WavelengthAnchors,
     anchor_solutions: &[f64],
     solar: &[f64],
@@ -1009,6 +1134,30 @@ impl PolarisationTable {
         }
         if mirror {
             out[2 * w..4 * w].iter_mut().for_each(|v| *v = -*v);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Where every wavelength is an anchor, the solutions scaled in place
+    /// are the blends' sums, bit for bit (zeros' signs included).
+    #[test]
+    fn solutions_of_every_anchor_in_place_are_the_blends() {
+        let grid = crate::spectrum::WavelengthGrid::new(900.0, 940.0, 10.0).unwrap();
+        let anchors = WavelengthAnchors::new(&grid, 1);
+        assert_eq!(anchors.anchors().len(), grid.len());
+        let solar = [1.7, 0.0, 0.93, 1.1e-3, 2.0];
+        let solutions: Vec<f64> = (0..grid.len() * 3)
+            .map(|n| [-0.0, 0.0, 1.0 / 3.0, -2.5e-7, 7.1][n % 5] * (n + 1) as f64)
+            .collect();
+        let blended = blend_solutions(&anchors, &solutions, &solar);
+        let in_place = interpolate_solutions(&anchors, solutions, &solar);
+        assert_eq!(blended.len(), in_place.len());
+        for (a, b) in blended.iter().zip(&in_place) {
+            assert_eq!(a.to_bits(), b.to_bits(), "{a} {b}");
         }
     }
 }
