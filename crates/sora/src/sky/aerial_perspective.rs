@@ -1304,24 +1304,24 @@ mod tests {
         let nm = list("SORA_SET_NM", "440,680,120");
         let grid = WavelengthGrid::new(nm[0], nm[1], nm[2]).unwrap();
         let polarisation: Polarisation = env("SORA_SET_POLARISATION", "scalar").parse().unwrap();
-        let mut settings = MultipleScatteringSettings::default();
-        settings.streams_per_hemisphere = env("SORA_SET_STREAMS", "8").parse().unwrap();
-        settings.layers = env("SORA_SET_LAYERS", "40").parse().unwrap();
-        settings.sunset_sun_zenith_step_deg = env("SORA_SET_SUN_STEP", "0.75").parse().unwrap();
+        // Each setting from its variable, the default's where it is unset.
         let default = MultipleScatteringSettings::default();
-        settings.first_order_fine_nodes = env(
-            "SORA_SET_FINE_NODES",
-            &default.first_order_fine_nodes.to_string(),
-        )
-        .parse()
-        .unwrap();
-        settings.first_order_panels = env(
-            "SORA_SET_FIRST_PANELS",
-            &default.first_order_panels.to_string(),
-        )
-        .parse()
-        .unwrap();
-        settings.view_ray_panels = env("SORA_SET_VIEW_PANELS", "16").parse().unwrap();
+        let setting =
+            |name: &str, value: usize| -> usize { env(name, &value.to_string()).parse().unwrap() };
+        let settings = MultipleScatteringSettings {
+            streams_per_hemisphere: setting("SORA_SET_STREAMS", default.streams_per_hemisphere),
+            layers: setting("SORA_SET_LAYERS", default.layers),
+            sunset_sun_zenith_step_deg: env(
+                "SORA_SET_SUN_STEP",
+                &default.sunset_sun_zenith_step_deg.to_string(),
+            )
+            .parse()
+            .unwrap(),
+            first_order_fine_nodes: setting("SORA_SET_FINE_NODES", default.first_order_fine_nodes),
+            first_order_panels: setting("SORA_SET_FIRST_PANELS", default.first_order_panels),
+            view_ray_panels: setting("SORA_SET_VIEW_PANELS", default.view_ray_panels),
+            ..default
+        };
         let paths: u64 = env("SORA_SET_PATHS", "200000").parse().unwrap();
         let orders: u32 = env("SORA_SET_ORDERS", "0").parse().unwrap();
         let seed: u64 = env("SORA_SET_SEED", "1").parse().unwrap();
