@@ -1257,4 +1257,159 @@ mod tests {
         }
         assert!(worst < 100.0, "largest ratio {worst}");
     }
+
+    /// A probe, not a check: the parts of the fast method's light of the
+    /// air along segments against the path tracer's (a black target at the
+    /// segment's end), with the tracer's standard errors. Environment:
+    /// `SORA_SET_PRESET` (earth-hazy; or an atmosphere file, `.toml`),
+    /// `SORA_SET_ALBEDO` (the ground's albedo, 1, instead of the preset's), `SORA_SET_EYES` (m, "3000"),
+    /// `SORA_SET_SUNS` (deg, "-2"), `SORA_SET_VIEWS` ("elevation,azimuth
+    /// from the sun;...", "-10,0"), `SORA_SET_DISTANCES` (m, "1000"; inf
+    /// for the whole ray), `SORA_SET_NM` ("440,680,120": start, stop,
+    /// step), `SORA_SET_POLARISATION` (scalar), `SORA_SET_STREAMS` (8),
+    /// `SORA_SET_LAYERS` (40), `SORA_SET_SUN_STEP` (sunset sun-node step,
+    /// deg, 0.75), `SORA_SET_FINE_NODES`, `SORA_SET_FIRST_PANELS`,
+    /// `SORA_SET_VIEW_PANELS` (the first order's fine nodes and panels, the
+    /// view ray's panels; the defaults), `SORA_SET_PATHS` (200000; 0: the library alone),
+    /// `SORA_SET_ORDERS` (the tracer's largest number of interactions, 0:
+    /// all), `SORA_SET_LIB_ORDERS` (the library's field stopped after
+    /// this many orders less one, 0: all), `SORA_SET_SEED` (1).
+    #[test]
+    #[ignore]
+    fn probe_segment_parts_against_the_tracer() {
+        use crate::transport::multiple_scattering::MultipleScatteringSettings;
+        let env = |name: &str, default: &str| std::env::var(name).unwrap_or(default.into());
+        let list = |name: &str, default: &str| -> Vec<f64> {
+            env(name, default)
+                .split(',')
+                .map(|v| {
+                    if v == "inf" {
+                        f64::INFINITY
+                    } else {
+                        v.parse().unwrap()
+                    }
+                })
+                .collect()
+        };
+        let preset = env("SORA_SET_PRESET", "earth-hazy");
+        let mut atmosphere = if preset.ends_with(".toml") {
+            Atmosphere::from_toml_str(&std::fs::read_to_string(&preset).unwrap()).unwrap()
+        } else {
+            Atmosphere::preset(&preset).unwrap()
+        };
+        if let Ok(albedo) = std::env::var("SORA_SET_ALBEDO") {
+            let albedo = crate::spectrum::Spectrum::Constant(albedo.parse().unwrap());
+            atmosphere.planet = atmosphere.planet.with_ground_albedo(albedo).unwrap();
+        }
+        let nm = list("SORA_SET_NM", "440,680,120");
+        let grid = WavelengthGrid::new(nm[0], nm[1], nm[2]).unwrap();
+        let polarisation: Polarisation = env("SORA_SET_POLARISATION", "scalar").parse().unwrap();
+        // Each setting from its variable, the default's where it is unset.
+        let default = MultipleScatteringSettings::default();
+        let setting =
+            |name: &str, value: usize| -> usize { env(name, &value.to_string()).parse().unwrap() };
+        let settings = MultipleScatteringSettings {
+            streams_per_hemisphere: setting("SORA_SET_STREAMS", default.streams_per_hemisphere),
+            layers: setting("SORA_SET_LAYERS", default.layers),
+            sunset_sun_zenith_step_deg: env(
+                "SORA_SET_SUN_STEP",
+                &default.sunset_sun_zenith_step_deg.to_string(),
+            )
+            .parse()
+            .unwrap(),
+            first_order_fine_nodes: setting("SORA_SET_FINE_NODES", default.first_order_fine_nodes),
+            first_order_panels: setting("SORA_SET_FIRST_PANELS", default.first_order_panels),
+            view_ray_panels: setting("SORA_SET_VIEW_PANELS", default.view_ray_panels),
+            ..default
+        };
+        let paths: u64 = env("SORA_SET_PATHS", "200000").parse().unwrap();
+        let orders: u32 = env("SORA_SET_ORDERS", "0").parse().unwrap();
+        let seed: u64 = env("SORA_SET_SEED", "1").parse().unwrap();
+        let lib_orders: usize = env("SORA_SET_LIB_ORDERS", "0").parse().unwrap();
+        let views: Vec<(f64, f64)> = env("SORA_SET_VIEWS", "-10,0")
+            .split(';')
+            .map(|p| {
+                let n: Vec<f64> = p.split(',').map(|x| x.parse().unwrap()).collect();
+                (n[0], n[1])
+            })
+            .collect();
+        for eye in list("SORA_SET_EYES", "3000") {
+            for sun in list("SORA_SET_SUNS", "-2") {
+                let sky = Sky::builder(&atmosphere)
+                    .sun_deg(sun, 180.0)
+                    .observer_altitude_m(eye)
+                    .wavelengths(grid)
+                    .polarisation(polarisation)
+                    .scattering(Scattering::Multiple(settings))
+                    .build()
+                    .unwrap();
+                if lib_orders >= 2 {
+                    use crate::transport::multiple_scattering::{
+                        FieldRequest, MultipleScatteringField,
+                    };
+                    let request = FieldRequest {
+                        sweeps: lib_orders - 1,
+                        polarised: polarisation == Polarisation::Vector,
+                        ..FieldRequest::new(settings, sky.table_size.sun_column_nodes)
+                    };
+                    let field = MultipleScatteringField::solve(&sky.scene, &request).unwrap();
+                    let _ = sky.field.set(std::sync::Arc::new(field));
+                }
+                for (elevation, azimuth) in &views {
+                    let view = ViewDirection::new(*elevation, 180.0 + azimuth).unwrap();
+                    for d in list("SORA_SET_DISTANCES", "1000") {
+                        let (fast, _) = air(&sky, view, d);
+                        let [single, own, field, peak, _] =
+                            sky.segment_term_parts(view.to_vector(), d);
+                        let traced = (paths > 0).then(|| {
+                            let tracer = match polarisation {
+                                Polarisation::Scalar => PathTracer::new(&sky.scene),
+                                Polarisation::Vector => {
+                                    PathTracer::new_polarised(&sky.scene).unwrap()
+                                }
+                            }
+                            .with_target_distance(d);
+                            let tracer = if orders > 0 {
+                                tracer.with_max_interactions(orders)
+                            } else {
+                                tracer
+                            };
+                            tracer
+                                .compute_stokes_with_progress(
+                                    view.to_vector(),
+                                    meridian_reference(view.elevation_deg(), view.azimuth_deg()),
+                                    paths,
+                                    seed,
+                                    &|_| {},
+                                )
+                                .unwrap()
+                        });
+                        for (i, lambda) in sky.wavelengths().wavelengths_nm().enumerate() {
+                            let f = fast.radiance_w_m2_sr_nm[i];
+                            let mut line = format!(
+                                "eye {eye} sun {sun} view ({elevation},{azimuth}) d {d} {lambda:.0} nm: fast {f:.4e} [single {:.3e} own {:.3e} field {:.3e} peak {:.3e}]",
+                                single[i], own[i], field[i], peak[i]
+                            );
+                            if let Some(t) = &traced {
+                                let (total, error) = match &t.stokes {
+                                    Some([s, ..]) => (s.mean[i], s.standard_error[i]),
+                                    None => (t.total.mean[i], t.total.standard_error[i]),
+                                };
+                                line += &format!(
+                                    " traced {total:.4e} +- {:.2} % [single {:.3e} +- {:.3e} multiple {:.3e} +- {:.3e}] fast/traced - 1 {:+.2} %",
+                                    100.0 * error / total,
+                                    t.single_scattering.mean[i],
+                                    t.single_scattering.standard_error[i],
+                                    t.multiple_scattering.mean[i],
+                                    t.multiple_scattering.standard_error[i],
+                                    100.0 * (f / total - 1.0)
+                                );
+                            }
+                            eprintln!("{line}");
+                        }
+                    }
+                }
+            }
+        }
+    }
 }
