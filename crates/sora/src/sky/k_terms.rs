@@ -1104,6 +1104,47 @@ mod tests {
     }
 
     #[test]
+    fn the_terms_skies_share_one_store_of_sun_column_tables() {
+        // The sun-column table holds the species' profile columns alone (no
+        // coefficient), the same for every term: the terms' skies (and the
+        // views' runs, and the terms of the sky moved to another sun) read
+        // the one table the first of them built, where they carry the
+        // sky's species (580-780 nm: every gas absorbs somewhere). The
+        // answers are those of terms built on their own (the first test,
+        // within 1e-12).
+        let atmosphere = earth_clear_with_gases();
+        let grid = WavelengthGrid::new(580.0, 780.0, 40.0).unwrap();
+        let sky = Sky::builder(&atmosphere)
+            .sun_deg(30.0, 180.0)
+            .wavelengths(grid)
+            .polarisation(Polarisation::Scalar)
+            .build()
+            .unwrap();
+        let (a, m) = sky.table_size().sun_column_nodes;
+        let table = |s: &Sky| s.scene().sun_column_table(a, m);
+        let first = table(&sky.k_terms()[0].1);
+        let moved = sky.with_sun_deg(10.0, 180.0).unwrap();
+        assert_eq!(sky.k_terms().len(), TERMS);
+        assert!(!sky.view_terms.is_empty());
+        for (_, term) in sky.k_terms().iter().chain(moved.k_terms()) {
+            assert!(std::sync::Arc::ptr_eq(&first, &table(term)));
+        }
+        // The views' runs too, but those that leave out a gas (580-660 nm:
+        // the mixed gases have no coefficient there), which build their own.
+        let species = sky.optics().species.len();
+        for (_, run) in &sky.view_terms {
+            let carries_all = run.optics().species.len() == species;
+            assert_eq!(std::sync::Arc::ptr_eq(&first, &table(run)), carries_all);
+        }
+        // A sky of another atmosphere keeps its own.
+        let clear = Sky::builder(&Atmosphere::preset("earth-clear").unwrap())
+            .wavelengths(grid)
+            .build()
+            .unwrap();
+        assert!(!std::sync::Arc::ptr_eq(&first, &table(&clear)));
+    }
+
+    #[test]
     fn the_effective_sky_of_a_sky_with_gases_is_never_solved() {
         // Its optics are the sky's (Sky::optics); every radiance is the
         // terms' sum, so its own field stays unbuilt.
