@@ -52,6 +52,20 @@
 //! grid ([`carried_species`]: the mixed gases are left out at 900-1000
 //! nm), bit for bit the same answers; measured 0.97 times the CPU of
 //! carrying them all (`farm-bench -n 12`, paired, the almucantar below).
+//! The terms' skies share one store of sun-column tables (the builder,
+//! `SingleScatteringScene::sharing_sun_column_tables_of`): a table holds
+//! the species' profile columns alone, no coefficient, so every term that
+//! carries the sky's species reads the one the first built (five tables
+//! took 17 % of a gas image's CPU; perf, the fisheye below).
+//! One solve per sample at the weights' mean coefficient, where the terms
+//! hardly differ, does not pay in the visible: the terms' coefficients
+//! span a factor of about 1e4, so at even the weakest band sample the
+//! strongest term absorbs (water at 580 nm: term 4's vertical optical
+//! depth 2.3 with 2.92 cm), and sum_j w_j exp(-tau_j) - exp(-sum_j w_j
+//! tau_j), relative, at two air masses is 2.3e-2 at 580 nm, 3.4e-2 at 600,
+//! 0.16-0.19 at 680-700, 5.2e-2 at 740, above 1 at 720 and 760, and 1.4e-4
+//! at 780 nm alone (1.7e-3 at ten air masses; a horizontal view crosses
+//! tens): every sample of the span keeps its five terms.
 //! Measured (`scripts/bench/gases.sh`, release, whole process, median CPU
 //! seconds of 5, earth-clear-summer without aerosol with and without its
 //! `[gases]`, 2-core machine at load 10-13): one almucantar of 36 views at
@@ -66,7 +80,9 @@
 //! own 1.6 % of the absorption from the band model (1.0 % from line by line
 //! in the O2 A band). A 256 x 256 fisheye over 380-780 nm every 20 nm
 //! (terms 1-4 on 580-780 nm, 11 of 21 samples; images keep every term
-//! whole) 2.4-2.7 s, 4.7-4.8 times the gas-free 0.50-0.57 s. The terms
+//! whole, the sun-column tables shared) 2.00 s, 3.8 times the gas-free
+//! 0.52 s (`farm-bench -n 8`, paired: 3.6-4.1; 0.85 times the CPU of each
+//! term building its own tables, 0.78-0.96; 4.7-4.8 times before). The terms
 //! on the span against every term on the whole grid
 //! (`SkyBuilder::build_with_terms`, the oracle; 540-780 nm, sun 10
 //! degrees): the direct beam within 5e-9, views, irradiance, aerial
