@@ -80,9 +80,10 @@
 //! own 1.6 % of the absorption from the band model (1.0 % from line by line
 //! in the O2 A band). A 256 x 256 fisheye over 380-780 nm every 20 nm
 //! (terms 1-4 on 580-780 nm, 11 of 21 samples; images keep every term
-//! whole, the sun-column tables shared) 2.00 s, 3.8 times the gas-free
-//! 0.52 s (`farm-bench -n 8`, paired: 3.6-4.1; 0.85 times the CPU of each
-//! term building its own tables, 0.78-0.96; 4.7-4.8 times before). The terms
+//! whole, the sun-column tables shared) 1.75-2.00 s, 3.8 times the
+//! gas-free 0.46-0.52 s (`farm-bench -n 8`, paired: 3.6-4.1; gases.sh:
+//! 3.80), against 4.6 times (4.3-4.8) with a table per term the same hour;
+//! 0.85 times that CPU, paired (0.78-0.96). The terms
 //! on the span against every term on the whole grid
 //! (`SkyBuilder::build_with_terms`, the oracle; 540-780 nm, sun 10
 //! degrees): the direct beam within 5e-9, views, irradiance, aerial
