@@ -56,6 +56,20 @@
 //! the same profiles: each exact view's columns toward the sun are
 //! computed by the first term's sky and read by the others
 //! (`ExactSunColumns`, built with the term skies), bit for bit the same.
+//! The terms' skies share one store of sun-column tables (the builder,
+//! `SingleScatteringScene::sharing_sun_column_tables_of`): a table holds
+//! the species' profile columns alone, no coefficient, so every term that
+//! carries the sky's species reads the one the first built (five tables
+//! took 17 % of a gas image's CPU; perf, the fisheye below).
+//! One solve per sample at the weights' mean coefficient, where the terms
+//! hardly differ, does not pay in the visible: the terms' coefficients
+//! span a factor of about 1e4, so at even the weakest band sample the
+//! strongest term absorbs (water at 580 nm: term 4's vertical optical
+//! depth 2.3 with 2.92 cm), and sum_j w_j exp(-tau_j) - exp(-sum_j w_j
+//! tau_j), relative, at two air masses is 2.3e-2 at 580 nm, 3.4e-2 at 600,
+//! 0.16-0.19 at 680-700, 5.2e-2 at 740, above 1 at 720 and 760, and 1.4e-4
+//! at 780 nm alone (1.7e-3 at ten air masses; a horizontal view crosses
+//! tens): every sample of the span keeps its five terms.
 //! Measured (`farm-bench -n 10` and `-n 12`, paired, release, whole
 //! process, CPU seconds, earth-clear-summer without aerosol with and
 //! without its `[gases]`, 2-core machine at load 8-11): one almucantar of 36 views at
@@ -76,7 +90,10 @@
 //! own 1.6 % of the absorption from the band model (1.0 % from line by line
 //! in the O2 A band). A 256 x 256 fisheye over 380-780 nm every 20 nm
 //! (terms 1-4 on 580-780 nm, 11 of 21 samples; images keep every term
-//! whole) 2.5-2.9 s, 4.3-4.4 times the gas-free 0.57-0.63 s. The terms
+//! whole, the sun-column tables shared) 1.75-2.00 s, 3.8 times the
+//! gas-free 0.46-0.52 s (`farm-bench -n 8`, paired: 3.6-4.1; gases.sh:
+//! 3.80), against 4.6 times (4.3-4.8) with a table per term the same hour;
+//! 0.85 times that CPU, paired (0.78-0.96). The terms
 //! on the span against every term on the whole grid
 //! (`SkyBuilder::build_with_terms`, the oracle; 540-780 nm, sun 10
 //! degrees): the direct beam within 5e-9, views, irradiance, aerial
@@ -1111,6 +1128,47 @@ mod tests {
         // On the visible grid every gas absorbs somewhere: none is dropped.
         let visible = WavelengthGrid::new(380.0, 780.0, 20.0).unwrap();
         assert_eq!(carried_species(&atmosphere, &visible).unwrap(), atmosphere);
+    }
+
+    #[test]
+    fn the_terms_skies_share_one_store_of_sun_column_tables() {
+        // The sun-column table holds the species' profile columns alone (no
+        // coefficient), the same for every term: the terms' skies (and the
+        // views' runs, and the terms of the sky moved to another sun) read
+        // the one table the first of them built, where they carry the
+        // sky's species (580-780 nm: every gas absorbs somewhere). The
+        // answers are those of terms built on their own (the first test,
+        // within 1e-12).
+        let atmosphere = earth_clear_with_gases();
+        let grid = WavelengthGrid::new(580.0, 780.0, 40.0).unwrap();
+        let sky = Sky::builder(&atmosphere)
+            .sun_deg(30.0, 180.0)
+            .wavelengths(grid)
+            .polarisation(Polarisation::Scalar)
+            .build()
+            .unwrap();
+        let (a, m) = sky.table_size().sun_column_nodes;
+        let table = |s: &Sky| s.scene().sun_column_table(a, m);
+        let first = table(&sky.k_terms()[0].1);
+        let moved = sky.with_sun_deg(10.0, 180.0).unwrap();
+        assert_eq!(sky.k_terms().len(), TERMS);
+        assert!(!sky.view_terms.is_empty());
+        for (_, term) in sky.k_terms().iter().chain(moved.k_terms()) {
+            assert!(std::sync::Arc::ptr_eq(&first, &table(term)));
+        }
+        // The views' runs too, but those that leave out a gas (580-660 nm:
+        // the mixed gases have no coefficient there), which build their own.
+        let species = sky.optics().species.len();
+        for (_, run) in &sky.view_terms {
+            let carries_all = run.optics().species.len() == species;
+            assert_eq!(std::sync::Arc::ptr_eq(&first, &table(run)), carries_all);
+        }
+        // A sky of another atmosphere keeps its own.
+        let clear = Sky::builder(&Atmosphere::preset("earth-clear").unwrap())
+            .wavelengths(grid)
+            .build()
+            .unwrap();
+        assert!(!std::sync::Arc::ptr_eq(&first, &table(&clear)));
     }
 
     #[test]

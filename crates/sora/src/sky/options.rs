@@ -353,10 +353,14 @@ impl SkyBuilder<'_> {
     /// on the whole grid, also where the terms' atmospheres are the same
     /// (the slow path, the oracle of the tests; `sky/k_terms.rs`).
     pub(crate) fn build_with_terms(self, whole_grid: bool) -> Result<Sky> {
-        let mut sky = self.build_for(self.atmosphere, &self.wavelengths)?;
+        let mut sky = self.build_for(self.atmosphere, &self.wavelengths, None)?;
         // Banded gases: one sky per k-distribution term (`sky/k_terms.rs`).
         // Terms may leave out negligible higher orders where a sky has them
         // as an addition to single scattering (not the path tracer's).
+        // The terms' skies share one store of sun-column tables: the
+        // tables hold the species' profile columns alone (no coefficient),
+        // the same for every term, so the first term's is every term's
+        // (bit for bit; a term that carries fewer species builds its own).
         let leave_out = matches!(self.scattering, Scattering::Multiple(_))
             && !matches!(self.method, Method::PathTracing { .. });
         // The terms' skies march the same view rays toward the same sun
@@ -373,9 +377,9 @@ impl SkyBuilder<'_> {
                 if !higher_orders {
                     builder.scattering = Scattering::Single;
                 }
-                let mut sky = builder.build_for(at_term, grid)?;
-                sky.scene = sky.scene.sharing_exact_sun_columns(&sun_columns);
-                Ok(sky)
+                let mut term_sky = builder.build_for(at_term, grid, Some(&sky.scene))?;
+                term_sky.scene = term_sky.scene.sharing_exact_sun_columns(&sun_columns);
+                Ok(term_sky)
             },
         )?;
         sky.k_terms = terms.all;
@@ -384,8 +388,15 @@ impl SkyBuilder<'_> {
         Ok(sky)
     }
 
-    /// [`SkyBuilder::build`] of `atmosphere` on `grid` as one solve.
-    fn build_for(&self, atmosphere: &Atmosphere, grid: &WavelengthGrid) -> Result<Sky> {
+    /// [`SkyBuilder::build`] of `atmosphere` on `grid` as one solve; with
+    /// `tables_of`, sharing that scene's sun-column tables where they are
+    /// the same (`SingleScatteringScene::sharing_sun_column_tables_of`).
+    fn build_for(
+        &self,
+        atmosphere: &Atmosphere,
+        grid: &WavelengthGrid,
+        tables_of: Option<&SingleScatteringScene>,
+    ) -> Result<Sky> {
         let polarisation = self
             .polarisation
             .unwrap_or(Polarisation::for_method(self.method));
@@ -403,6 +414,10 @@ impl SkyBuilder<'_> {
             self.observation,
             (polarisation == Polarisation::Vector).then_some(stride),
         )?;
+        let scene = match tables_of {
+            Some(other) => scene.sharing_sun_column_tables_of(other),
+            None => scene,
+        };
         let mut sky = Sky::from_scene(scene, self.scattering, self.method, self.table_size)?;
         // The angles as given (the azimuth in one turn), not as recovered
         // from the unit vector.
