@@ -474,6 +474,20 @@ impl ViewRayOptics {
         }
     }
 
+    /// A node's view terms whole ([`VIEW_TERMS`] blocks, the
+    /// transmittances from the eye included), for a march of its own
+    /// (prototype measurements).
+    #[cfg(test)]
+    pub(super) fn view_terms(&self, columns: &[f64], densities: &[f64]) -> Vec<f64> {
+        let w = self.wavelengths;
+        let mut terms = vec![0.0; VIEW_TERMS * w];
+        self.fill_view_terms(columns, densities, &mut terms);
+        let (depths, transmittances) = terms.split_at_mut(4 * w);
+        transmittances.copy_from_slice(&depths[..2 * w]);
+        exp_neg_in_place(transmittances);
+        terms
+    }
+
     /// The forward-peak integrals of one view node (the march's weight
     /// `weight`, m; its view terms, transmittances included, in
     /// `view_terms`; its densities and, where `lit`, its columns toward
