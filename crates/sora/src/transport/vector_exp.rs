@@ -299,7 +299,19 @@ mod tests {
             -708.1,
             f64::MIN_POSITIVE,
         ]);
-        for length in [xs.len(), 1, 2, 3, 5, 7, 21, 22, 23] {
+        // Whole slices and short ones, and (the wide loops take a slice's
+        // last one to three values in one register padded with zeros)
+        // slices of every remainder from across the range.
+        let mut slices: Vec<(usize, usize)> = [xs.len(), 1, 2, 3, 5, 7, 21, 22, 23]
+            .into_iter()
+            .map(|length| (0, length))
+            .collect();
+        for start in (0..xs.len() - 64).step_by(997) {
+            slices.extend((1..=9).chain([21, 42]).map(|length| (start, length)));
+        }
+        slices.push((xs.len() - 3, 3));
+        for (start, length) in slices {
+            let xs = &xs[start..start + length];
             for (wide_loop, portable) in [
                 (
                     wide::exp_neg_in_place as fn(&mut [f64]),
@@ -307,7 +319,7 @@ mod tests {
                 ),
                 (wide::exp_in_place, exp_in_place_portable),
             ] {
-                let (mut a, mut b) = (xs[..length].to_vec(), xs[..length].to_vec());
+                let (mut a, mut b) = (xs.to_vec(), xs.to_vec());
                 wide_loop(&mut a);
                 portable(&mut b);
                 for ((x, a), b) in xs.iter().zip(&a).zip(&b) {
