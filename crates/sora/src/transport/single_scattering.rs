@@ -324,6 +324,9 @@ pub struct SingleScatteringScratch {
     /// The view ray's nodes located in the sun-column table, per node
     /// (`SunColumns::compute_columns_to_sun_at_node`).
     located: Vec<LocatedNode>,
+    /// Per species: whether it scatters at any wavelength (an absorbing
+    /// gas adds nothing to the integrals).
+    scattering_species: Vec<bool>,
 }
 
 impl SingleScatteringScratch {
@@ -646,6 +649,12 @@ impl SingleScatteringScene {
             view_panel_ends: Vec::with_capacity(self.corners.most_panel_ends(VIEW_RAY_PANELS) + 2),
             sun_panel_ends: Vec::with_capacity(self.corners.most_panel_ends(SUN_RAY_PANELS)),
             located: Vec::new(),
+            scattering_species: self
+                .optics
+                .species
+                .iter()
+                .map(|s| s.scattering_per_m.values().iter().any(|b| *b != 0.0))
+                .collect(),
         }
     }
 
@@ -781,9 +790,9 @@ impl SingleScatteringScene {
                 // wavelength for every species, all together (a loop the
                 // compiler vectorises, `vector_exp.rs`).
                 exp_neg_in_place(&mut scratch.optical_depth);
-                for (j, s) in species.iter().enumerate() {
-                    let density = densities[j];
-                    if density <= 0.0 || s.scattering_per_m.values().iter().all(|b| *b == 0.0) {
+                for (j, density) in densities.iter().enumerate() {
+                    let density = *density;
+                    if density <= 0.0 || !scratch.scattering_species[j] {
                         continue;
                     }
                     let row =

@@ -175,12 +175,55 @@ mod wide {
 
     #[target_feature(enable = "avx2")]
     fn exp_neg_in_place_avx2(values: &mut [f64]) {
-        super::exp_neg_in_place_portable(values);
+        in_lanes(values, exp_neg_lanes);
     }
 
     #[target_feature(enable = "avx2")]
     fn exp_in_place_avx2(values: &mut [f64]) {
-        super::exp_in_place_portable(values);
+        in_lanes(values, exp_lanes);
+    }
+
+    /// `each` (one function applied to each of four values) over `values`
+    /// four at a time, the last one to three values padded with zeros to
+    /// a whole register: a loop over a slice of unknown length takes its
+    /// tail one value at a time, and a tail (one of the wavelength grid's
+    /// 21 values, two of 42) costs as much as a register of four. Every
+    /// lane does the same operations whatever its neighbours, so the
+    /// values are the same bits as the portable loop's.
+    #[inline(always)]
+    fn in_lanes(values: &mut [f64], each: fn(&mut [f64; 4])) {
+        let mut chunks = values.chunks_exact_mut(4);
+        for chunk in &mut chunks {
+            let lanes: &mut [f64; 4] = chunk.try_into().expect("four values");
+            each(lanes);
+        }
+        let tail = chunks.into_remainder();
+        let n = tail.len();
+        if n > 0 {
+            let at = |k: usize| if k < n { tail[k] } else { 0.0 };
+            let mut lanes = [at(0), at(1), at(2), 0.0];
+            each(&mut lanes);
+            // Lane by lane (a copy of unknown length is a call).
+            for (k, lane) in lanes.into_iter().enumerate().take(3) {
+                if k < n {
+                    tail[k] = lane;
+                }
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn exp_neg_lanes(lanes: &mut [f64; 4]) {
+        for v in lanes {
+            *v = super::exp_neg(*v);
+        }
+    }
+
+    #[inline(always)]
+    fn exp_lanes(lanes: &mut [f64; 4]) {
+        for v in lanes {
+            *v = super::exp_clamped(*v);
+        }
     }
 }
 
@@ -256,7 +299,19 @@ mod tests {
             -708.1,
             f64::MIN_POSITIVE,
         ]);
-        for length in [xs.len(), 1, 2, 3, 5, 7, 21, 22, 23] {
+        // Whole slices and short ones, and (the wide loops take a slice's
+        // last one to three values in one register padded with zeros)
+        // slices of every remainder from across the range.
+        let mut slices: Vec<(usize, usize)> = [xs.len(), 1, 2, 3, 5, 7, 21, 22, 23]
+            .into_iter()
+            .map(|length| (0, length))
+            .collect();
+        for start in (0..xs.len() - 64).step_by(997) {
+            slices.extend((1..=9).chain([21, 42]).map(|length| (start, length)));
+        }
+        slices.push((xs.len() - 3, 3));
+        for (start, length) in slices {
+            let xs = &xs[start..start + length];
             for (wide_loop, portable) in [
                 (
                     wide::exp_neg_in_place as fn(&mut [f64]),
@@ -264,7 +319,7 @@ mod tests {
                 ),
                 (wide::exp_in_place, exp_in_place_portable),
             ] {
-                let (mut a, mut b) = (xs[..length].to_vec(), xs[..length].to_vec());
+                let (mut a, mut b) = (xs.to_vec(), xs.to_vec());
                 wide_loop(&mut a);
                 portable(&mut b);
                 for ((x, a), b) in xs.iter().zip(&a).zip(&b) {

@@ -549,7 +549,8 @@ impl MultipleScatteringTable {
                 Some(beam) => beam.lookup_beam(r, sun_cosine, &mut scratch.beam),
                 None => 0.0,
             };
-            optics.add_tilted_forward_peak(ds, lit, share, &mut scratch);
+            let view_terms = optics.view_terms(&columns, &rho);
+            optics.add_tilted_forward_peak(ds, lit, share, &view_terms, &mut scratch);
         }
         if !segment_done {
             out.columns.copy_from_slice(&columns);

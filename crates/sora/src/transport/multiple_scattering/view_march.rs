@@ -115,11 +115,26 @@ pub struct MultipleScatteringScratch {
     /// Per node of the view ray: its radius (m) and view cosine, kept for
     /// the replayed nodes (`PanelMarch::reuse_nodes`).
     pub(super) view_nodes: Vec<(f64, f64)>,
+    /// Per node of the view ray, what depends on the view alone
+    /// ([`ViewTerms`]), [node * VIEW_TERMS * wavelengths ..]: kept for the
+    /// replayed nodes, whose columns and densities are the same bits.
+    pub(super) view_terms: Vec<f64>,
+    /// Per node: whether its view terms hold their transmittances.
+    pub(super) view_exps_filled: Vec<bool>,
     /// Per node of the view ray: its altitude's and view's cells in a
     /// source table, kept for the replayed nodes
     /// (`MultipleScatteringTable::compute_radiance_parts`).
     pub(super) source_cells: Vec<SourceCells>,
 }
+
+/// The blocks of a view node's terms that depend on the view alone, one
+/// value per wavelength i each: the scaled and exact optical depths from
+/// the eye, sum_j beta*_ext,ij c_j and sum_j beta_ext,ij c_j (c_j the
+/// columns from the eye), the scaled scattering sum_j beta*_sca,ij rho_j,
+/// the peaks' scattering sum_j (beta_ext,ij - beta*_ext,ij) rho_j, and
+/// (filled where a tilted peak needs them, [`ViewRayOptics::add_tilted_forward_peak`])
+/// the transmittances e^-tau* and e^-tau from the eye.
+pub(super) const VIEW_TERMS: usize = 6;
 
 /// A march node's altitude cell (level, fraction) and view zenith cell
 /// (node, fraction) in a source table.
@@ -193,6 +208,8 @@ impl ViewRayOptics {
             tilted_peak: vec![0.0; 2 * w],
             located: Vec::new(),
             view_nodes: Vec::new(),
+            view_terms: Vec::new(),
+            view_exps_filled: Vec::new(),
             source_cells: Vec::new(),
         }
     }
@@ -242,7 +259,6 @@ impl ViewRayOptics {
         let (profiles, corners) = (&self.geometry.profiles, &self.geometry.corners);
         let (extinction, scaled_extinction) =
             (&self.scaled.extinction, &self.scaled.scaled_extinction);
-        let scaled_scattering = &self.scaled.scaled_scattering;
         let Some((enter, exit)) = segment_in_atmosphere(self.observer, view, ground, top) else {
             return;
         };
@@ -252,6 +268,11 @@ impl ViewRayOptics {
         scratch.view_columns.fill(0.0);
         if length > 0.0 {
             let mut view_ends = std::mem::take(&mut scratch.view_panel_ends);
+            // Per node, the terms of the view alone: a replayed node's are
+            // the node's it repeats (the same columns and densities, bit
+            // for bit), so they are computed once per row of rays.
+            let mut view_terms = std::mem::take(&mut scratch.view_terms);
+            let mut view_exps_filled = std::mem::take(&mut scratch.view_exps_filled);
             corners.fill_panel_ends(start, view, length, self.panels, &mut view_ends);
             let mut march = std::mem::take(&mut scratch.march);
             march.march(
@@ -297,22 +318,32 @@ impl ViewRayOptics {
                     let densities = std::mem::take(&mut scratch.densities);
                     source(geometry, &densities, scratch);
                     scratch.densities = densities;
+                    let terms_length = VIEW_TERMS * w;
+                    let terms_end = (node.index + 1) * terms_length;
+                    if !(node.repeated && view_terms.len() >= terms_end) {
+                        if view_terms.len() < terms_end {
+                            view_terms.resize(terms_end, 0.0);
+                            view_exps_filled.resize(node.index + 1, false);
+                        }
+                        self.fill_view_terms(
+                            &scratch.node_columns,
+                            &scratch.densities,
+                            &mut view_terms[terms_end - terms_length..terms_end],
+                        );
+                        view_exps_filled[node.index] = false;
+                    }
+                    let terms = &mut view_terms[terms_end - terms_length..terms_end];
                     // T*(eye, x) beta*_sca(x) R(x): one exponential per
                     // wavelength for the transmittance and the source.
                     let weight = node.weight;
-                    let (exponents, scatterings) = scratch.node_terms.split_at_mut(w);
+                    let exponents = &mut scratch.node_terms[..w];
                     for i in 0..w {
-                        let (mut tau, mut scattering) = (0.0, 0.0);
-                        for j in 0..s {
-                            tau += scaled_extinction[i * s + j] * scratch.node_columns[j];
-                            scattering += scaled_scattering[i * s + j] * scratch.densities[j];
-                        }
-                        exponents[i] = scratch.log_source[i] - tau;
-                        scatterings[i] = scattering;
+                        exponents[i] = scratch.log_source[i] - terms[i];
                     }
                     // The exponentials together (a loop the compiler
                     // vectorises, `vector_exp.rs`).
                     exp_in_place(exponents);
+                    let scatterings = &terms[2 * w..3 * w];
                     for (i, out) in radiance.iter_mut().enumerate() {
                         // A source at the logarithms' floor is no light
                         // (the interpolation between a dark node, 1e-30,
@@ -342,7 +373,13 @@ impl ViewRayOptics {
                         _ => 0.0,
                     };
                     if share > 0.0 {
-                        self.add_tilted_forward_peak(weight, lit, share, scratch);
+                        if !view_exps_filled[node.index] {
+                            let (depths, transmittances) = terms.split_at_mut(4 * w);
+                            transmittances.copy_from_slice(&depths[..2 * w]);
+                            exp_neg_in_place(transmittances);
+                            view_exps_filled[node.index] = true;
+                        }
+                        self.add_tilted_forward_peak(weight, lit, share, terms, scratch);
                     } else if lit {
                         // Optical depths (exact, scaled), then in place
                         // their transmittances, all together.
@@ -363,12 +400,8 @@ impl ViewRayOptics {
                         transmittances.copy_from_slice(depths);
                         exp_neg_in_place(transmittances);
                         for i in 0..w {
-                            let mut peak = 0.0;
-                            for j in 0..s {
-                                // f_j beta_sca,j rho_j: what the peaks scatter here.
-                                peak += (extinction[i * s + j] - scaled_extinction[i * s + j])
-                                    * scratch.densities[j];
-                            }
+                            // f_j beta_sca,j rho_j: what the peaks scatter here.
+                            let peak = terms[3 * w + i];
                             let (exact, scaled) = (depths[i], depths[w + i]);
                             let (direct, through) = (transmittances[i], transmittances[w + i]);
                             let excess = weight * (through - direct);
@@ -392,6 +425,8 @@ impl ViewRayOptics {
             scratch.view_columns.copy_from_slice(march.columns());
             scratch.march = march;
             scratch.view_panel_ends = view_ends;
+            scratch.view_terms = view_terms;
+            scratch.view_exps_filled = view_exps_filled;
         }
         let end = start + view * length;
         if distance_m >= exit && end.length() <= ground * (1.0 + 1e-12) {
@@ -414,9 +449,49 @@ impl ViewRayOptics {
         }
     }
 
+    /// The view terms of a node ([`VIEW_TERMS`] blocks) from its columns
+    /// from the eye and its relative densities, into `terms` (all but the
+    /// transmittances).
+    fn fill_view_terms(&self, columns: &[f64], densities: &[f64], terms: &mut [f64]) {
+        let (w, s) = (self.wavelengths, self.species);
+        let (extinction, scaled_extinction) =
+            (&self.scaled.extinction, &self.scaled.scaled_extinction);
+        let scaled_scattering = &self.scaled.scaled_scattering;
+        for i in 0..w {
+            let (mut scaled, mut exact, mut scattering, mut peak) = (0.0, 0.0, 0.0, 0.0);
+            for j in 0..s {
+                let (beta_scaled, beta) = (scaled_extinction[i * s + j], extinction[i * s + j]);
+                scaled += beta_scaled * columns[j];
+                exact += beta * columns[j];
+                scattering += scaled_scattering[i * s + j] * densities[j];
+                // f_j beta_sca,j rho_j: what the peaks scatter here.
+                peak += (beta - beta_scaled) * densities[j];
+            }
+            terms[i] = scaled;
+            terms[w + i] = exact;
+            terms[2 * w + i] = scattering;
+            terms[3 * w + i] = peak;
+        }
+    }
+
+    /// A node's view terms whole ([`VIEW_TERMS`] blocks, the
+    /// transmittances from the eye included), for a march of its own
+    /// (prototype measurements).
+    #[cfg(test)]
+    pub(super) fn view_terms(&self, columns: &[f64], densities: &[f64]) -> Vec<f64> {
+        let w = self.wavelengths;
+        let mut terms = vec![0.0; VIEW_TERMS * w];
+        self.fill_view_terms(columns, densities, &mut terms);
+        let (depths, transmittances) = terms.split_at_mut(4 * w);
+        transmittances.copy_from_slice(&depths[..2 * w]);
+        exp_neg_in_place(transmittances);
+        terms
+    }
+
     /// The forward-peak integrals of one view node (the march's weight
-    /// `weight`, m; its columns, densities and, where `lit`, its columns
-    /// toward the sun in `scratch`) with the peaks' light reaching the
+    /// `weight`, m; its view terms, transmittances included, in
+    /// `view_terms`; its densities and, where `lit`, its columns toward
+    /// the sun in `scratch`) with the peaks' light reaching the
     /// node S = T*_sun - T_sun moved toward the tilted beam B of
     /// `scratch.beam` by `share` (`peak_beam.rs`): the first line's
     /// T* T*_sun - T T_sun becomes T* S~ + T_sun (T* - T), the peak-only
@@ -426,15 +501,16 @@ impl ViewRayOptics {
         weight: f64,
         lit: bool,
         share: f64,
+        view_terms: &[f64],
         scratch: &mut MultipleScatteringScratch,
     ) {
         #[cfg(target_arch = "x86_64")]
         if crate::transport::vector_exp::avx2_available() {
             // SAFETY: the CPU has AVX2 (checked just above).
-            unsafe { self.add_tilted_forward_peak_avx2(weight, lit, share, scratch) };
+            unsafe { self.add_tilted_forward_peak_avx2(weight, lit, share, view_terms, scratch) };
             return;
         }
-        self.add_tilted_forward_peak_portable(weight, lit, share, scratch);
+        self.add_tilted_forward_peak_portable(weight, lit, share, view_terms, scratch);
     }
 
     /// [`Self::add_tilted_forward_peak`] compiled for AVX2 (4 lanes of
@@ -447,9 +523,10 @@ impl ViewRayOptics {
         weight: f64,
         lit: bool,
         share: f64,
+        view_terms: &[f64],
         scratch: &mut MultipleScatteringScratch,
     ) {
-        self.add_tilted_forward_peak_portable(weight, lit, share, scratch);
+        self.add_tilted_forward_peak_portable(weight, lit, share, view_terms, scratch);
     }
 
     /// [`Self::add_tilted_forward_peak`] in the target's baseline
@@ -460,37 +537,36 @@ impl ViewRayOptics {
         weight: f64,
         lit: bool,
         share: f64,
+        view_terms: &[f64],
         scratch: &mut MultipleScatteringScratch,
     ) {
         let (w, s) = (self.wavelengths, self.species);
-        // Optical depths, then (in place) transmittances: T* and T from the
-        // eye, T*_sun and T_sun, per wavelength.
-        let (view, sun) = scratch.tilted_depths.split_at_mut(2 * w);
-        let (view_beam, view_direct) = view.split_at_mut(w);
-        let (sun_beam, sun_direct) = sun.split_at_mut(w);
-        for i in 0..w {
-            let (mut depths, mut peak) = ([0.0; 4], 0.0);
-            for j in 0..s {
-                let (scaled, exact) = (
-                    self.scaled.scaled_extinction[i * s + j],
-                    self.scaled.extinction[i * s + j],
-                );
-                depths[0] += scaled * scratch.node_columns[j];
-                depths[1] += exact * scratch.node_columns[j];
-                depths[2] += scaled * scratch.sun_columns[j];
-                depths[3] += exact * scratch.sun_columns[j];
-                // f_j beta_sca,j rho_j: what the peaks scatter here.
-                peak += (exact - scaled) * scratch.densities[j];
+        // T* and T from the eye, and the view's parts of the optical depths.
+        let (view_scaled_depths, view_depths) = (&view_terms[..w], &view_terms[w..2 * w]);
+        let peaks = &view_terms[3 * w..4 * w];
+        let (view_beam, view_direct) = (&view_terms[4 * w..5 * w], &view_terms[5 * w..6 * w]);
+        // Optical depths toward the sun, then (in place) T*_sun and
+        // T_sun, per wavelength; the sun's columns are there where lit.
+        let (sun_beam, rest) = scratch.tilted_depths.split_at_mut(w);
+        let sun_direct = &mut rest[..w];
+        if lit {
+            for i in 0..w {
+                let (mut scaled_depth, mut depth) = (0.0, 0.0);
+                for j in 0..s {
+                    scaled_depth +=
+                        self.scaled.scaled_extinction[i * s + j] * scratch.sun_columns[j];
+                    depth += self.scaled.extinction[i * s + j] * scratch.sun_columns[j];
+                }
+                sun_beam[i] = scaled_depth;
+                sun_direct[i] = depth;
+                // X, the peaks' optical depth of both legs.
+                scratch.tilted_peak[w + i] =
+                    (view_depths[i] + depth) - (view_scaled_depths[i] + scaled_depth);
             }
-            [view_beam[i], view_direct[i], sun_beam[i], sun_direct[i]] = depths;
-            scratch.tilted_peak[i] = peak;
-            // X, the peaks' optical depth of both legs.
-            scratch.tilted_peak[w + i] = (depths[1] + depths[3]) - (depths[0] + depths[2]);
+            exp_neg_in_place(&mut scratch.tilted_depths[..2 * w]);
         }
-        exp_neg_in_place(&mut scratch.tilted_depths);
-        let (view, sun) = scratch.tilted_depths.split_at(2 * w);
-        let (view_beam, view_direct) = view.split_at(w);
-        let (sun_beam, sun_direct) = sun.split_at(w);
+        let (sun_beam, rest) = scratch.tilted_depths.split_at(w);
+        let sun_direct = &rest[..w];
         for i in 0..w {
             let (sun_beam, sun_direct) = if lit {
                 (sun_beam[i], sun_direct[i])
@@ -510,7 +586,7 @@ impl ViewRayOptics {
                 let only = weight
                     * view_direct[i]
                     * sun_direct
-                    * scratch.tilted_peak[i]
+                    * peaks[i]
                     * ((sun_direct + scattered) / sun_beam);
                 let x = scratch.tilted_peak[w + i];
                 scratch.forward_integrals[s * w + i] += only;
