@@ -1218,4 +1218,77 @@ mod tests {
             assert_eq!(a.to_bits(), b.to_bits(), "{a} {b}");
         }
     }
+
+    /// The k-distribution's term atmospheres (the banded gases at each
+    /// term: what absorbs differs, what scatters does not) share one
+    /// entry of the harmonics from the streams: computed for the first
+    /// term, read by the others, and bit for bit what each term's optics
+    /// give alone; truncated phases that differ get their own.
+    #[test]
+    fn harmonics_shared_between_term_skies_are_those_computed_alone() {
+        use crate::atmosphere::Atmosphere;
+        use crate::atmosphere::gas_bands::{BandedGases, banded_gas_species, k_distribution_terms};
+        use crate::spectrum::WavelengthGrid;
+        use crate::transport::multiple_scattering::phase_fourier::compute_truncated_phases;
+        let mut atmosphere = Atmosphere::preset("earth-clear").unwrap();
+        atmosphere
+            .species
+            .extend(banded_gas_species(&BandedGases::new(
+                Some((2.9, 2000.0)),
+                true,
+            )));
+        let grid = WavelengthGrid::new(900.0, 1000.0, 20.0).unwrap();
+        let terms = k_distribution_terms(&atmosphere, &grid).unwrap();
+        assert!(terms.len() > 1);
+        let streams = Streams::new(4);
+        let every: Vec<usize> = (0..grid.len()).collect();
+        let cosines = streams.cosines();
+        let bits = |h: &[Vec<PhaseMatrixHarmonics>]| -> Vec<Vec<u64>> {
+            h.iter().flatten().map(PhaseMatrixHarmonics::bits).collect()
+        };
+        let cache = ViewHarmonicsCache::default();
+        let mut shared = Vec::new();
+        let mut optics_of_terms = Vec::new();
+        for (term, (_, at_term)) in terms.iter().enumerate() {
+            let optics = at_term.compute_optics(&grid).unwrap();
+            let phases = compute_truncated_phases(&optics, streams.count());
+            let alone = compute_species_harmonics_from_streams(
+                &optics,
+                (&phases, &every),
+                &streams,
+                cosines,
+                None,
+            );
+            // The terms' absorption differs.
+            if let Some(first) = optics_of_terms.first() {
+                assert_ne!(&optics, first, "term {term}");
+            }
+            let mut computed = false;
+            let got = cache.get_or_compute((&optics, &phases), (&streams, cosines, &every), || {
+                computed = true;
+                alone.clone()
+            });
+            assert_eq!(computed, term == 0, "term {term}");
+            assert_eq!(bits(&got), bits(&alone), "term {term}");
+            shared.push(got);
+            optics_of_terms.push(optics);
+        }
+        assert!(shared.iter().all(|h| Arc::ptr_eq(h, &shared[0])));
+        // Other truncated phases (more degrees): their own harmonics.
+        let optics = &optics_of_terms[1];
+        let phases = compute_truncated_phases(optics, 2 * streams.count());
+        let mut computed = false;
+        let other = cache.get_or_compute((optics, &phases), (&streams, cosines, &every), || {
+            computed = true;
+            compute_species_harmonics_from_streams(
+                optics,
+                (&phases, &every),
+                &streams,
+                cosines,
+                None,
+            )
+        });
+        assert!(computed);
+        assert_ne!(bits(&other), bits(&shared[0]));
+    }
 }
