@@ -64,10 +64,11 @@
 //! without its `[gases]`, 2-core machine at load 4): one almucantar of 36 views at
 //! 900-1000 nm every 10 nm (2.92 cm of water; terms 3 and 4 leave out their
 //! higher orders at 900-980 nm, 4 at 990-1000 nm, term 2 at 930-960 nm: 31
-//! of the 55 samples' fields solved) 0.24-0.26 s, 2.90 and 2.77 times
-//! the gas-free 0.083-0.091 s (two runs' medians; pairs 2.16-3.46;
-//! the build before the shared harmonics and the kept Legendre tables of
-//! the field synthesis 2.90 and 3.05 in the same runs, within the noise;
+//! of the 55 samples' fields solved) 0.24-0.27 s, 2.90, 2.77 and 2.57
+//! times the gas-free 0.083-0.108 s (three runs' medians; pairs
+//! 2.16-3.46; the build before the shared harmonics and the kept Legendre
+//! tables of the field synthesis 2.90, 3.05 and 2.63 in the same runs,
+//! its gas runs 1.01-1.04 times the new's CPU, near the noise;
 //! 3.43 and 3.48 before the shared sun columns, the polarisation column's
 //! shared scalar solve and the faster source moments; 6.0 before the
 //! higher orders were left out). Above the fields' 31 / 11
