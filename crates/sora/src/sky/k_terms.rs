@@ -55,7 +55,10 @@
 //! The terms' skies march the same view rays toward the same sun through
 //! the same profiles: each exact view's columns toward the sun are
 //! computed by the first term's sky and read by the others
-//! (`ExactSunColumns`, built with the term skies), bit for bit the same.
+//! (`ExactSunColumns`, built with the term skies), bit for bit the same,
+//! and so are the polarisation correction's phase-matrix harmonics from
+//! the streams (`ViewHarmonicsCache`, keyed by the scattering species'
+//! phase functions and truncated phases, which the gases do not change).
 //! The terms' skies share one store of sun-column tables (the builder,
 //! `SingleScatteringScene::sharing_sun_column_tables_of`): a table holds
 //! the species' profile columns alone, no coefficient, so every term that
@@ -70,16 +73,19 @@
 //! 0.16-0.19 at 680-700, 5.2e-2 at 740, above 1 at 720 and 760, and 1.4e-4
 //! at 780 nm alone (1.7e-3 at ten air masses; a horizontal view crosses
 //! tens): every sample of the span keeps its five terms.
-//! Measured (`farm-bench -n 10` and `-n 12`, paired, release, whole
+//! Measured (`farm-bench -n 40`, paired, release, whole
 //! process, CPU seconds, earth-clear-summer without aerosol with and
-//! without its `[gases]`, 2-core machine at load 8-11): one almucantar of 36 views at
+//! without its `[gases]`, 2-core machine at load 4): one almucantar of 36 views at
 //! 900-1000 nm every 10 nm (2.92 cm of water; terms 3 and 4 leave out their
 //! higher orders at 900-980 nm, 4 at 990-1000 nm, term 2 at 930-960 nm: 31
-//! of the 55 samples' fields solved) 0.26-0.28 s, 3.06 and 3.12 times
-//! the gas-free 0.082-0.094 s (the two runs' medians; pairs 2.73-3.42;
-//! the build before the shared sun columns, the polarisation column's
-//! shared scalar solve and the faster source moments 3.43 and 3.48 in
-//! the same runs; 6.0 before the higher orders were left out). Above the fields' 31 / 11
+//! of the 55 samples' fields solved) 0.24-0.27 s, 2.90, 2.77 and 2.57
+//! times the gas-free 0.083-0.108 s (three runs' medians; pairs
+//! 2.16-3.46; the build before the shared harmonics and the kept Legendre
+//! tables of the field synthesis 2.90, 3.05 and 2.63 in the same runs,
+//! its gas runs 1.01-1.04 times the new's CPU, near the noise;
+//! 3.43 and 3.48 before the shared sun columns, the polarisation column's
+//! shared scalar solve and the faster source moments; 6.0 before the
+//! higher orders were left out). Above the fields' 31 / 11
 //! the cost is mostly the polarisation correction's columns: a term's
 //! anchors follow its absorption (`WavelengthAnchors::following_optics`),
 //! so every sample of a term is one, against 5 of the 11 gas-free

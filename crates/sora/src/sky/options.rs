@@ -11,6 +11,7 @@ use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::spectrum::WavelengthGrid;
 use crate::transport::multiple_scattering::MultipleScatteringSettings;
+use crate::transport::multiple_scattering::ViewHarmonicsCache;
 use crate::transport::single_scattering::ExactSunColumns;
 use crate::transport::{Observation, SingleScatteringScene};
 use std::sync::Arc;
@@ -367,6 +368,11 @@ impl SkyBuilder<'_> {
         // through the same profiles: each view's exact columns toward the
         // sun are computed once for all of them (`ExactSunColumns`).
         let sun_columns = Arc::new(ExactSunColumns::default());
+        // Their scattering species are the same (the banded gases only
+        // absorb): the polarisation correction's phase-matrix harmonics
+        // from the streams are computed once for all of them
+        // (`ViewHarmonicsCache`, keyed by the scattering species' optics).
+        let view_harmonics = Arc::new(ViewHarmonicsCache::default());
         let terms = k_terms::term_skies(
             self.atmosphere,
             &self.wavelengths,
@@ -378,7 +384,10 @@ impl SkyBuilder<'_> {
                     builder.scattering = Scattering::Single;
                 }
                 let mut term_sky = builder.build_for(at_term, grid, Some(&sky.scene))?;
-                term_sky.scene = term_sky.scene.sharing_exact_sun_columns(&sun_columns);
+                term_sky.scene = term_sky
+                    .scene
+                    .sharing_exact_sun_columns(&sun_columns)
+                    .sharing_view_harmonics(&view_harmonics);
                 Ok(term_sky)
             },
         )?;

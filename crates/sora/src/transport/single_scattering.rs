@@ -285,9 +285,11 @@ pub struct SingleScatteringScene {
     /// profiles and radii only, so every sky moved to another sun
     /// ([`SingleScatteringScene::with_sun`]) shares them.
     sun_column_tables: Arc<Mutex<Vec<Arc<SunColumnTable>>>>,
-    /// The polarisation correction's image-table harmonics computed so far
-    /// (`ViewHarmonicsCache`): they depend on the optics and not on the
-    /// sun or the eye, so every sky moved to another sun shares them.
+    /// The polarisation correction's harmonics from the streams computed
+    /// so far (`ViewHarmonicsCache`): they depend on the scattering
+    /// species and not on the sun, the eye or what absorbs, so every sky
+    /// moved to another sun shares them, and so do the k-distribution's
+    /// term skies ([`SingleScatteringScene::sharing_view_harmonics`]).
     view_harmonics: Arc<ViewHarmonicsCache>,
     /// What the multiple-scattering field computes that depends on the
     /// optics and the eye but not on the sun (`SunFreeParts`): every sky
@@ -632,6 +634,19 @@ impl SingleScatteringScene {
     ) -> SingleScatteringScene {
         let slot = shared.slot_for(&self);
         self.exact_sun_columns = Some((Arc::clone(shared), slot));
+        self
+    }
+
+    /// This sky keeping the polarisation correction's harmonics from the
+    /// streams in `shared` and reading those that a sky of the same
+    /// scattering species kept there ([`ViewHarmonicsCache`]: the term
+    /// skies of `sky/k_terms.rs`, whose atmospheres differ in what absorbs
+    /// only): the same harmonics bit for bit, computed once.
+    pub(crate) fn sharing_view_harmonics(
+        mut self,
+        shared: &Arc<ViewHarmonicsCache>,
+    ) -> SingleScatteringScene {
+        self.view_harmonics = Arc::clone(shared);
         self
     }
 

@@ -793,7 +793,36 @@ impl MultipleScatteringField {
         let moments = self.source_moments();
         let (k, tz) = self.optics.geometry.grid.locate(node.altitude_m);
         let (sun_node, ts) = self.optics.sun_axis.locate(node.sun_cosine);
-        normalized_associated_legendre(node.view_cosine, degrees, &mut scratch.view_legendre);
+        // Lambda_l^m(mu_v), kept per march node: the replayed nodes of an
+        // almucantar's rays have the view cosine of the ray marched first
+        // (a pure function of the cosine: the kept table where the cosine's
+        // bits are the same).
+        let cosine_bits = node.view_cosine.to_bits();
+        match node.march_node {
+            Some((index, _)) => {
+                if scratch.node_legendre.len() <= index {
+                    scratch.node_legendre.resize(index + 1, (0, Vec::new()));
+                }
+                let (bits, kept) = &mut scratch.node_legendre[index];
+                if *bits == cosine_bits && kept.len() == square {
+                    scratch.view_legendre[..square].copy_from_slice(kept);
+                } else {
+                    normalized_associated_legendre(
+                        node.view_cosine,
+                        degrees,
+                        &mut scratch.view_legendre,
+                    );
+                    *bits = cosine_bits;
+                    kept.clear();
+                    kept.extend_from_slice(&scratch.view_legendre[..square]);
+                }
+            }
+            None => normalized_associated_legendre(
+                node.view_cosine,
+                degrees,
+                &mut scratch.view_legendre,
+            ),
+        }
         // cos(m phi) Lambda_l^m(mu_v) by the Chebyshev recurrence for cos(m phi).
         let mut cosine = 0.0;
         let mut previous = 0.0;

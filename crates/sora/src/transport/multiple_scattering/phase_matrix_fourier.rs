@@ -110,6 +110,16 @@ pub struct PhaseMatrixHarmonics {
 }
 
 impl PhaseMatrixHarmonics {
+    /// Every number of these harmonics, bits (the tests' bit equality).
+    #[cfg(test)]
+    pub(crate) fn bits(&self) -> Vec<u64> {
+        [self.harmonics, self.stored, self.outputs, self.inputs]
+            .iter()
+            .map(|n| *n as u64)
+            .chain(self.scattering.iter().chain(&self.sun).map(|v| v.to_bits()))
+            .collect()
+    }
+
     /// Harmonics 0..`harmonics` at each of `wavelengths` wavelengths of
     /// `phase` (which writes the phase matrix in the scattering plane at a
     /// scattering-angle cosine for every wavelength, sr^-1) from the look

@@ -143,45 +143,105 @@ pub(crate) struct CorrectionInputs<'a> {
 /// zenith cosines of the image table's nodes ([`PolarisationTable`]) and
 /// into the streams themselves (the columns' own; what
 /// `compute_species_harmonics` gives without the sun), kept once computed:
-/// they depend on the optics, the streams and those fixed cosines, not on
-/// the sun, so a sky moved to another sun (`SingleScatteringScene::with_sun`,
-/// a slider drag) reads them instead of computing them again, the same
-/// numbers bit for bit; only the columns' harmonics from the sun are
-/// computed per sun ([`PhaseMatrixHarmonics::with_sun_of`]). The table's
-/// were three quarters of the phase-matrix work of a polarised image's
-/// field, the columns' the rest. Size: the harmonics stored (all 2N of a
-/// Mie or Henyey-Greenstein species, 3 of Rayleigh's, none of an
-/// absorber's) x 16 x streams x cosines x wavelengths doubles (39 MB at 8
-/// streams per hemisphere, 21 wavelengths, Rayleigh and one aerosol, for
-/// the table's 48 cosines, and a third of that for the streams' 16; the
-/// explorer's preview is scalar); only the table's nodes and the streams
-/// are kept, not a list of directions' cosines.
+/// they depend on the scattering species' phase functions and truncated
+/// phases (the key: [`HarmonicsKey`]), the streams and those fixed
+/// cosines, not on the sun or on what absorbs, so a sky moved to another
+/// sun (`SingleScatteringScene::with_sun`, a slider drag) and the
+/// k-distribution's term skies (`sky/k_terms.rs`: their atmospheres differ
+/// in the banded gases' absorption only;
+/// `SingleScatteringScene::sharing_view_harmonics`) read them instead of
+/// computing them again, the same numbers bit for bit; only the columns'
+/// harmonics from the sun are computed per sun
+/// ([`PhaseMatrixHarmonics::with_sun_of`]). The table's were three
+/// quarters of the phase-matrix work of a polarised image's field, the
+/// columns' the rest. Size: the harmonics stored (all 2N of a Mie or
+/// Henyey-Greenstein species, 3 of Rayleigh's, none of an absorber's) x 16
+/// x streams x cosines x wavelengths doubles (39 MB at 8 streams per
+/// hemisphere, 21 wavelengths, Rayleigh and one aerosol, for the table's
+/// 48 cosines, and a third of that for the streams' 16; the explorer's
+/// preview is scalar); only the table's nodes and the streams are kept,
+/// not a list of directions' cosines.
 #[derive(Debug, Default)]
 pub(crate) struct ViewHarmonicsCache(Mutex<Vec<ViewHarmonics>>);
 
-/// One entry of [`ViewHarmonicsCache`]: its key (the streams' and the
-/// views' cosines, bit for bit, and the wavelengths' indices) and the
-/// harmonics.
+/// One entry of [`ViewHarmonicsCache`]: its key and the harmonics.
 #[derive(Debug)]
 struct ViewHarmonics {
-    stream_cosines: Vec<u64>,
-    view_cosines: Vec<u64>,
-    wavelengths: Vec<usize>,
+    key: HarmonicsKey,
     harmonics: Arc<Vec<Vec<PhaseMatrixHarmonics>>>,
 }
 
+/// Everything [`compute_species_harmonics`] without the sun reads: the
+/// streams' and the views' cosines (bits), the wavelengths' indices and
+/// their wavelengths (bits, nm), and per species `None` for one that
+/// scatters nothing (its harmonics are zero) or its phase function and
+/// its truncated phases at those wavelengths (forward fraction and
+/// coefficients, bits). What absorbs, and how much, is not in it.
+#[derive(Debug, PartialEq)]
+struct HarmonicsKey {
+    stream_cosines: Vec<u64>,
+    view_cosines: Vec<u64>,
+    wavelengths: Vec<usize>,
+    wavelengths_nm: Vec<u64>,
+    species: Vec<Option<(PhaseFunction, Vec<u64>)>>,
+}
+
+impl HarmonicsKey {
+    fn new(
+        (optics, phases): (&AtmosphereOptics, &[TruncatedPhase]),
+        (streams, view_cosines, wavelengths): (&Streams, &[f64], &[usize]),
+    ) -> HarmonicsKey {
+        let bits = |values: &[f64]| values.iter().map(|v| v.to_bits()).collect::<Vec<u64>>();
+        let count = optics.species.len();
+        let species = optics
+            .species
+            .iter()
+            .enumerate()
+            .map(|(j, s)| {
+                (!scatters_nothing(s)).then(|| {
+                    let truncated = wavelengths
+                        .iter()
+                        .map(|i| &phases[i * count + j])
+                        .flat_map(|p| std::iter::once(&p.forward_fraction).chain(&p.coefficients))
+                        .map(|v| v.to_bits())
+                        .collect();
+                    (s.phase_function.clone(), truncated)
+                })
+            })
+            .collect();
+        HarmonicsKey {
+            stream_cosines: bits(streams.cosines()),
+            view_cosines: bits(view_cosines),
+            wavelengths: wavelengths.to_vec(),
+            wavelengths_nm: wavelengths
+                .iter()
+                .map(|i| optics.grid.wavelength_nm(*i).to_bits())
+                .collect(),
+            species,
+        }
+    }
+}
+
+/// Whether species `s` scatters at no wavelength (an absorber: ozone, a
+/// banded gas).
+fn scatters_nothing(s: &crate::atmosphere::SpeciesOptics) -> bool {
+    s.scattering_per_m.values().iter().all(|b| *b == 0.0)
+}
+
 impl ViewHarmonicsCache {
-    /// The harmonics for these streams, view cosines and wavelengths: the
-    /// kept ones, or `compute()`'s (computed without the lock, which the
-    /// thread pool's other tasks may want; of two threads that race, the
-    /// first one's are kept).
+    /// The harmonics of `optics` (truncated phases `phases`) for these
+    /// streams, view cosines and wavelengths: the kept ones (of these
+    /// optics or of optics that scatter the same, [`HarmonicsKey`]), or
+    /// `compute()`'s (computed without the lock, which the thread pool's
+    /// other tasks may want; of two threads that race, the first one's are
+    /// kept).
     fn get_or_compute(
         &self,
-        (streams, view_cosines, wavelengths): (&Streams, &[f64], &[usize]),
+        optics: (&AtmosphereOptics, &[TruncatedPhase]),
+        views: (&Streams, &[f64], &[usize]),
         compute: impl FnOnce() -> Vec<Vec<PhaseMatrixHarmonics>>,
     ) -> Arc<Vec<Vec<PhaseMatrixHarmonics>>> {
-        let bits = |values: &[f64]| values.iter().map(|v| v.to_bits()).collect::<Vec<u64>>();
-        let (stream_cosines, view_cosines) = (bits(streams.cosines()), bits(view_cosines));
+        let key = HarmonicsKey::new(optics, views);
         // A poisoned lock only means that another thread panicked: the
         // entries in it are whole (each is pushed when complete).
         let lock = || {
@@ -192,11 +252,7 @@ impl ViewHarmonicsCache {
         let find = |entries: &[ViewHarmonics]| {
             entries
                 .iter()
-                .find(|e| {
-                    e.stream_cosines == stream_cosines
-                        && e.view_cosines == view_cosines
-                        && e.wavelengths == wavelengths
-                })
+                .find(|e| e.key == key)
                 .map(|e| Arc::clone(&e.harmonics))
         };
         if let Some(harmonics) = find(&lock()) {
@@ -208,9 +264,7 @@ impl ViewHarmonicsCache {
             return first;
         }
         entries.push(ViewHarmonics {
-            stream_cosines,
-            view_cosines,
-            wavelengths: wavelengths.to_vec(),
+            key,
             harmonics: Arc::clone(&harmonics),
         });
         harmonics
@@ -297,7 +351,7 @@ fn compute_species_harmonics(
         let s = &optics.species[j];
         // An absorber (ozone) scatters nothing: its harmonics are zero, and
         // none are stored.
-        slot[0] = if s.scattering_per_m.values().iter().all(|b| *b == 0.0) {
+        slot[0] = if scatters_nothing(s) {
             PhaseMatrixHarmonics::none(wavelengths.len(), harmonics)
         } else {
             // Rayleigh's harmonics end at m = 2 (its phase matrix is
@@ -389,18 +443,19 @@ impl<'a> AnchorSolves<'a> {
         // every anchor: [j][n].
         // (The streams' kept, the sun's computed now.)
         let phases = &inputs.scaled.phases;
-        let from_streams =
-            inputs
-                .view_harmonics
-                .get_or_compute((streams, cosines, anchors), || {
-                    compute_species_harmonics_from_streams(
-                        optics,
-                        (phases, anchors),
-                        streams,
-                        cosines,
-                        None,
-                    )
-                });
+        let from_streams = inputs.view_harmonics.get_or_compute(
+            (optics, phases),
+            (streams, cosines, anchors),
+            || {
+                compute_species_harmonics_from_streams(
+                    optics,
+                    (phases, anchors),
+                    streams,
+                    cosines,
+                    None,
+                )
+            },
+        );
         let from_sun = compute_species_harmonics(
             optics,
             (phases, anchors),
@@ -644,8 +699,11 @@ impl PolarisationCorrection {
             )
         };
         let harmonics = if keep_harmonics {
-            self.view_harmonics
-                .get_or_compute((&self.streams, &cosines, &every), compute)
+            self.view_harmonics.get_or_compute(
+                (optics, phases),
+                (&self.streams, &cosines, &every),
+                compute,
+            )
         } else {
             Arc::new(compute())
         };
@@ -1159,5 +1217,78 @@ mod tests {
         for (a, b) in blended.iter().zip(&in_place) {
             assert_eq!(a.to_bits(), b.to_bits(), "{a} {b}");
         }
+    }
+
+    /// The k-distribution's term atmospheres (the banded gases at each
+    /// term: what absorbs differs, what scatters does not) share one
+    /// entry of the harmonics from the streams: computed for the first
+    /// term, read by the others, and bit for bit what each term's optics
+    /// give alone; truncated phases that differ get their own.
+    #[test]
+    fn harmonics_shared_between_term_skies_are_those_computed_alone() {
+        use crate::atmosphere::Atmosphere;
+        use crate::atmosphere::gas_bands::{BandedGases, banded_gas_species, k_distribution_terms};
+        use crate::spectrum::WavelengthGrid;
+        use crate::transport::multiple_scattering::phase_fourier::compute_truncated_phases;
+        let mut atmosphere = Atmosphere::preset("earth-clear").unwrap();
+        atmosphere
+            .species
+            .extend(banded_gas_species(&BandedGases::new(
+                Some((2.9, 2000.0)),
+                true,
+            )));
+        let grid = WavelengthGrid::new(900.0, 1000.0, 20.0).unwrap();
+        let terms = k_distribution_terms(&atmosphere, &grid).unwrap();
+        assert!(terms.len() > 1);
+        let streams = Streams::new(4);
+        let every: Vec<usize> = (0..grid.len()).collect();
+        let cosines = streams.cosines();
+        let bits = |h: &[Vec<PhaseMatrixHarmonics>]| -> Vec<Vec<u64>> {
+            h.iter().flatten().map(PhaseMatrixHarmonics::bits).collect()
+        };
+        let cache = ViewHarmonicsCache::default();
+        let mut shared = Vec::new();
+        let mut optics_of_terms = Vec::new();
+        for (term, (_, at_term)) in terms.iter().enumerate() {
+            let optics = at_term.compute_optics(&grid).unwrap();
+            let phases = compute_truncated_phases(&optics, streams.count());
+            let alone = compute_species_harmonics_from_streams(
+                &optics,
+                (&phases, &every),
+                &streams,
+                cosines,
+                None,
+            );
+            // The terms' absorption differs.
+            if let Some(first) = optics_of_terms.first() {
+                assert_ne!(&optics, first, "term {term}");
+            }
+            let mut computed = false;
+            let got = cache.get_or_compute((&optics, &phases), (&streams, cosines, &every), || {
+                computed = true;
+                alone.clone()
+            });
+            assert_eq!(computed, term == 0, "term {term}");
+            assert_eq!(bits(&got), bits(&alone), "term {term}");
+            shared.push(got);
+            optics_of_terms.push(optics);
+        }
+        assert!(shared.iter().all(|h| Arc::ptr_eq(h, &shared[0])));
+        // Other truncated phases (more degrees): their own harmonics.
+        let optics = &optics_of_terms[1];
+        let phases = compute_truncated_phases(optics, 2 * streams.count());
+        let mut computed = false;
+        let other = cache.get_or_compute((optics, &phases), (&streams, cosines, &every), || {
+            computed = true;
+            compute_species_harmonics_from_streams(
+                optics,
+                (&phases, &every),
+                &streams,
+                cosines,
+                None,
+            )
+        });
+        assert!(computed);
+        assert_ne!(bits(&other), bits(&shared[0]));
     }
 }

@@ -84,6 +84,11 @@ pub struct MultipleScatteringScratch {
     /// Lambda table of the view direction times cos(m phi) (exact
     /// synthesis), [m * streams + l].
     pub(super) view_legendre: Vec<f64>,
+    /// Per march node index, the Lambda table of the view cosine last
+    /// synthesised there (before the cos(m phi) weights) and that cosine's
+    /// bits: a replayed node (the same view cosine) reads it instead of
+    /// computing it again, bit for bit the same table.
+    pub(super) node_legendre: Vec<(u64, Vec<f64>)>,
     /// Columns from the current node toward the sun, m.
     pub(super) sun_columns: Vec<f64>,
     /// Ends of the Gauss panels of the view ray and of a path toward the
@@ -195,6 +200,7 @@ impl ViewRayOptics {
             node_columns: vec![0.0; s],
             log_source: vec![0.0; w],
             view_legendre: vec![0.0; streams * streams],
+            node_legendre: Vec::new(),
             sun_columns: vec![0.0; s],
             view_panel_ends: Vec::with_capacity(self.geometry.corners.most_panel_ends(self.panels)),
             sun_panel_ends: Vec::with_capacity(
