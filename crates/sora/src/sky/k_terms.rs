@@ -644,7 +644,7 @@ impl Sky {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::atmosphere::gas_bands::{BandedGases, banded_gas_species};
     use crate::camera::Camera;
@@ -653,8 +653,8 @@ mod tests {
     use crate::spectrum::WavelengthGrid;
 
     /// earth-clear with 2.9 cm of water (2 km scale height) and the mixed
-    /// gases.
-    fn earth_clear_with_gases() -> Atmosphere {
+    /// gases (also the polarisation correction's tests' atmosphere).
+    pub(crate) fn earth_clear_with_gases() -> Atmosphere {
         let mut atmosphere = Atmosphere::preset("earth-clear").unwrap();
         atmosphere
             .species

@@ -70,7 +70,7 @@
 mod aerial_perspective;
 mod composition;
 mod irradiance;
-mod k_terms;
+pub(crate) mod k_terms;
 mod names;
 mod options;
 mod rendering;

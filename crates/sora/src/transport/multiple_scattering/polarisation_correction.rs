@@ -1226,17 +1226,11 @@ mod tests {
     /// give alone; truncated phases that differ get their own.
     #[test]
     fn harmonics_shared_between_term_skies_are_those_computed_alone() {
-        use crate::atmosphere::Atmosphere;
-        use crate::atmosphere::gas_bands::{BandedGases, banded_gas_species, k_distribution_terms};
+        use crate::atmosphere::gas_bands::k_distribution_terms;
+        use crate::sky::k_terms::tests::earth_clear_with_gases;
         use crate::spectrum::WavelengthGrid;
         use crate::transport::multiple_scattering::phase_fourier::compute_truncated_phases;
-        let mut atmosphere = Atmosphere::preset("earth-clear").unwrap();
-        atmosphere
-            .species
-            .extend(banded_gas_species(&BandedGases::new(
-                Some((2.9, 2000.0)),
-                true,
-            )));
+        let atmosphere = earth_clear_with_gases();
         let grid = WavelengthGrid::new(900.0, 1000.0, 20.0).unwrap();
         let terms = k_distribution_terms(&atmosphere, &grid).unwrap();
         assert!(terms.len() > 1);

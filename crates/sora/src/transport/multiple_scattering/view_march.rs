@@ -135,8 +135,9 @@ pub struct MultipleScatteringScratch {
 /// The blocks of a view node's terms that depend on the view alone, one
 /// value per wavelength i each: the scaled and exact optical depths from
 /// the eye, sum_j beta*_ext,ij c_j and sum_j beta_ext,ij c_j (c_j the
-/// columns from the eye), the scaled scattering sum_j beta*_sca,ij rho_j,
-/// the peaks' scattering sum_j (beta_ext,ij - beta*_ext,ij) rho_j, and
+/// columns from the eye, m; the depths without unit), the scaled
+/// scattering sum_j beta*_sca,ij rho_j (m^-1), the peaks' scattering
+/// sum_j (beta_ext,ij - beta*_ext,ij) rho_j (m^-1), and
 /// (filled where a tilted peak needs them, [`ViewRayOptics::add_tilted_forward_peak`])
 /// the transmittances e^-tau* and e^-tau from the eye.
 pub(super) const VIEW_TERMS: usize = 6;
