@@ -115,6 +115,12 @@ impl Engine {
                 scattering,
             } => self.tables(atmosphere, *scattering),
             Request::RenderXyz { sky, image } => self.render_linear_xyz(sky, image),
+            Request::AerialPerspective {
+                sky,
+                views,
+                distances_m,
+                quality,
+            } => self.aerial_perspective(sky, views, distances_m, *quality),
             Request::AtmosphereToml { atmosphere } => {
                 let mut text = apply_controls(&atmosphere_text(atmosphere)?, atmosphere)?;
                 if let Some(albedo) = atmosphere.ground_albedo {
@@ -359,6 +365,15 @@ impl Engine {
                 extend_f32_le(&mut bytes, [texel[0], texel[1], texel[2], 0.0]);
             }
         }
+        // The march's tables (`march.bin`) after the three, at a multiple
+        // of 4 bytes (every table above is whole 16-byte texels).
+        if let Some(march) = tables.march_bin() {
+            layout.insert(
+                "march".into(),
+                json!({"offset_bytes": bytes.len(), "length_bytes": march.len()}),
+            );
+            bytes.extend_from_slice(&march);
+        }
         Ok((
             json!({
                 "manifest": tables.manifest(),
@@ -375,6 +390,67 @@ impl Engine {
                 "size_bytes": tables.size_bytes(),
             }),
             bytes,
+        ))
+    }
+
+    /// The library's aerial perspective of points at each distance along
+    /// each view, as XYZ (see [`Request::AerialPerspective`]): one call,
+    /// every (distance, view) segment in it.
+    fn aerial_perspective(
+        &mut self,
+        spec: &SkySpec,
+        views: &[[f64; 2]],
+        distances_m: &[f64],
+        quality: Quality,
+    ) -> Outcome {
+        let mut segments = Vec::with_capacity(views.len() * distances_m.len());
+        for distance in distances_m {
+            for [e, a] in views {
+                segments.push((
+                    ViewDirection::new(*e, *a).map_err(|e| e.to_string())?,
+                    *distance,
+                ));
+            }
+        }
+        let sky = self.sky(spec, quality)?;
+        let to_xyz = SpectrumToXyz::new(sky.wavelengths(), Default::default());
+        let solar = &sky.optics().solar_irradiance_w_m2_nm;
+        let solar_xyz = to_xyz.to_xyz(solar).map_err(|e| e.to_string())?;
+        let mut inscattered = vec![Vec::with_capacity(views.len()); distances_m.len()];
+        let mut transmittance = inscattered.clone();
+        let mut segment = vec![Vec::with_capacity(views.len()); distances_m.len()];
+        let all = sky
+            .aerial_perspectives(&segments)
+            .map_err(|e| e.to_string())?;
+        for (n, air) in all.into_iter().enumerate() {
+            let l = to_xyz
+                .to_xyz(&air.radiance.radiance_w_m2_sr_nm)
+                .map_err(|e| e.to_string())?;
+            let through = sora::spectrum::SampledSpectrum::from_values(
+                solar
+                    .values()
+                    .iter()
+                    .zip(air.transmittance.values())
+                    .map(|(e, t)| e * t)
+                    .collect(),
+            );
+            let t = to_xyz.to_xyz(&through).map_err(|e| e.to_string())?;
+            segment[n / views.len()].push(air.distance_m);
+            inscattered[n / views.len()].push([l.x, l.y, l.z]);
+            transmittance[n / views.len()].push([
+                t.x / solar_xyz.x,
+                t.y / solar_xyz.y,
+                t.z / solar_xyz.z,
+            ]);
+        }
+        Ok((
+            json!({
+                "wavelengths": sky.wavelengths().len(),
+                "inscattered_xyz": inscattered,
+                "transmittance_xyz": transmittance,
+                "segment_m": segment,
+            }),
+            Vec::new(),
         ))
     }
 
@@ -519,12 +595,12 @@ pub const REALTIME_TABLES: RealtimeTables = RealtimeTables {
         azimuth_nodes: 32,
         transmittance_nodes: (32, 128),
         // No aerial-perspective table (its bake marches every node's
-        // segments): the scene view takes the sky table's difference
-        // (`soraAerialPerspectiveFromSky`).
+        // segments).
         aerial_nodes: (0, 0, 0),
-        // Nor the march's tables (29-33 MB, too many for the browser's
-        // bake; sora_sky.glsl's soraAerialPerspectiveMarch reads them).
-        march: false,
+        // The march's tables: the scene view's aerial-perspective volume
+        // is filled by sora_sky.glsl's soraAerialPerspectiveMarch from
+        // them (`web/realtime.js`).
+        march: true,
     },
 };
 
@@ -886,8 +962,21 @@ mod tests {
         let texels = sky_texels
             + settings.transmittance_nodes.0 * settings.transmittance_nodes.1
             + settings.sun_nodes * settings.altitude_nodes;
-        assert_eq!(bytes.len(), 16 * texels);
-        assert_eq!(reply["size_bytes"], 12 * texels);
+        // The march's tables after the three (`march.bin`'s bytes, the
+        // manifest's arrays in them).
+        let march = &reply["tables"]["march"];
+        assert_eq!(march["offset_bytes"], 16 * texels);
+        let march_bytes = march["length_bytes"].as_u64().unwrap() as usize;
+        assert_eq!(bytes.len(), 16 * texels + march_bytes);
+        let arrays = reply["manifest"]["tables"]["march"]["arrays"]
+            .as_object()
+            .unwrap();
+        let array_bytes: u64 = arrays
+            .values()
+            .map(|a| a["length"].as_u64().unwrap() * if a["type"] == "f16" { 2 } else { 4 })
+            .sum();
+        assert_eq!(array_bytes as usize, march_bytes);
+        assert_eq!(reply["size_bytes"], 12 * texels + march_bytes);
         assert!((0..texels).all(|t| float(4 * t + 3) == 0.0));
         let tables = &reply["tables"];
         assert_eq!(tables["sky"]["offset_bytes"], 0);

@@ -86,6 +86,28 @@ pub enum Request {
         #[serde(default)]
         scattering: ScatteringChoice,
     },
+    /// The library's aerial perspective of points at each of
+    /// `distances_m` (m) along each of `views` ([elevation, azimuth],
+    /// degrees) from the eye, on the sky of `quality` (what the real-time
+    /// scene's volume is checked against): JSON `{"wavelengths",
+    /// "inscattered_xyz": [[[X, Y, Z]]], "transmittance_xyz": [[[X, Y,
+    /// Z]]], "segment_m": [[m]]}` indexed [distance][view], the segment's
+    /// length (shorter than the distance where the view meets the ground
+    /// or leaves the atmosphere first), the light scattered into each
+    /// segment as XYZ (radiance units) and its transmittance as the engine
+    /// tables give it (the XYZ of the sun's spectrum through the segment
+    /// over the sun's, per channel).
+    AerialPerspective {
+        /// The sky.
+        sky: SkySpec,
+        /// The views, [elevation, azimuth] in degrees.
+        views: Vec<[f64; 2]>,
+        /// Metres from the eye (each > 0).
+        distances_m: Vec<f64>,
+        /// The sky's resolution.
+        #[serde(default)]
+        quality: Quality,
+    },
     /// A sky image as CIE XYZ (radiance units, as `sora render --exr-xyz
     /// --units radiance`): JSON `{"width", "height", "wavelengths"}`, bytes
     /// three 32-bit little-endian floats per pixel (row-major, top row
