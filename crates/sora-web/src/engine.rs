@@ -575,11 +575,14 @@ pub struct RealtimeTables {
 /// steps, a preview tried in issue 38, the tables were 5.3 % and 10.6 %
 /// off their sky at suns 2 and -4: the bake's field is solved for every
 /// sun, its nodes not placed at the eye's, so the steps between them are
-/// its error), and 48 suns x 3 altitudes x (2 x 32) x 32 views (3.6 MB), against
+/// its error), and 48 suns x 3 altitudes x (2 x 32) x 32 views (3.6 MB;
+/// with the march's tables, which the scene's aerial-perspective volume is
+/// filled from, 5.6 MB), against
 /// the library's default of the paper's 21 wavelengths and 48 suns x 6
 /// altitudes x (2 x 64) x 64 views (what `sora tables` bakes). The bake
 /// solves one multiple-scattering field for every layer; in headless
-/// Chromium on the 2-core machine it takes 4.8-5.7 s (2.2 s with 20 suns).
+/// Chromium on the 2-core machine it took 4.8-5.7 s without the march's
+/// tables (2.2 s with 20 suns); BAKE_NOTE.
 /// Measured by the browser test (`web/tests/realtime.test.mjs`; 99th
 /// percentile of the fisheye's luminance error against the sky the tables
 /// were baked from, suns 45 / 10 / 2 / -4): 0.54 / 0.54 / 3.4 / 2.5 % with

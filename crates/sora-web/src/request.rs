@@ -74,11 +74,13 @@ pub enum Request {
     /// The engine tables of an atmosphere for the page's real-time
     /// (WebGL2) view, baked at [`crate::engine::REALTIME_TABLES`]: JSON
     /// `{"manifest", "settings", "tables": {"sky" | "transmittance" |
-    /// "irradiance": {"offset_bytes", "width", "height"}}, "size_bytes"}`,
-    /// bytes the three tables one after the other as 32-bit little-endian
-    /// floats, four per texel (X, Y, Z, 0: an RGBA32F texture), in the
-    /// manifest's layout. Progress is reported while the sky table's
-    /// layers bake (see [`crate::report_progress`]).
+    /// "irradiance": {"offset_bytes", "width", "height"}, "march":
+    /// {"offset_bytes", "length_bytes"}}, "size_bytes"}`, bytes the three
+    /// tables one after the other as 32-bit little-endian floats, four per
+    /// texel (X, Y, Z, 0: an RGBA32F texture), in the manifest's layout,
+    /// then (multiple scattering) the march's tables as `march.bin` holds
+    /// them (the manifest's `tables.march`). Progress is reported while the
+    /// sky table's layers bake (see [`crate::report_progress`]).
     Tables {
         /// The atmosphere.
         atmosphere: AtmosphereSpec,
