@@ -61,8 +61,8 @@ const SUNS = [45, 10, 2, -4];
 // km with the default bake's 21 wavelengths, tables.test.mjs); at the
 // real-time bake's sky (11 wavelengths, a field with 2.5-degree sunset
 // steps, the source read between those sun nodes) the march per pixel
-// measured 0.58-0.78 % off at sun 10, 3.1-3.9 % at 2 and 2.4-3.1 % at -4
-// (12 x 6 views), the sky table's own error there against the same sky
+// measured 0.61-0.78 % off at sun 10, 2.8-4.0 % at 2 and 2.2-2.6 % at -4
+// (these views), the sky table's own error there against the same sky
 // (LIMITS.againstBakedSky: 3.4 % at sun 2); the volume adds its
 // interpolation, held apart to AERIAL.interpolation against the march per
 // pixel (measured up to 1.24 % at sun 10 and 10 km, 1.08 % at 2, and 3.17
@@ -71,8 +71,8 @@ const SUNS = [45, 10, 2, -4];
 // lower it; not understood yet). So 2 % at sun 10 and 5 % at 2 and -4
 // against the library, 4 % against the march. The
 // transmittance: within AERIAL.transmittance absolute (what multiplies the
-// point's own light; the largest measured 0.0033, at the horizon at 10
-// km where T is 0.40, and 0.0024 at 50 km where it is 0.016).
+// point's own light; the largest measured 0.0035, near the horizon at
+// 50 km, 0.0030 at 10 km, where T is 0.40).
 const AERIAL = {
   distances: [1000, 10000, 50000],
   columns: 6,

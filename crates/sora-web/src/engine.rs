@@ -582,7 +582,9 @@ pub struct RealtimeTables {
 /// altitudes x (2 x 64) x 64 views (what `sora tables` bakes). The bake
 /// solves one multiple-scattering field for every layer; in headless
 /// Chromium on the 2-core machine it took 4.8-5.7 s without the march's
-/// tables (2.2 s with 20 suns); BAKE_NOTE.
+/// tables (2.2 s with 20 suns); with them 6.4-10.3 s at a load of 12-14
+/// (in node's WebAssembly at that load 12.4-12.8 s against 10.1-10.9 s
+/// without them).
 /// Measured by the browser test (`web/tests/realtime.test.mjs`; 99th
 /// percentile of the fisheye's luminance error against the sky the tables
 /// were baked from, suns 45 / 10 / 2 / -4): 0.54 / 0.54 / 3.4 / 2.5 % with
