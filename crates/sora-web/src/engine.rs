@@ -788,6 +788,57 @@ mod tests {
         (serde_json::from_str(&reply.json).unwrap(), reply.bytes)
     }
 
+    /// The aerial-perspective reply is the library's segment, as XYZ: the
+    /// in-scattered light's XYZ and the transmittance's (the sun's XYZ
+    /// through the segment over the sun's) of a view at 10 km, indexed
+    /// [distance][view]; a view below the horizon from the ground ends on
+    /// it at once (its segment shorter than the distance).
+    #[test]
+    fn the_aerial_perspective_reply_is_the_librarys_segment() {
+        let mut engine = Engine::default();
+        let (reply, _) = request(
+            &mut engine,
+            r#"{"op": "aerial_perspective", "sky": {"atmosphere": {"preset": "earth-clear"}, "sun_elevation_deg": 10, "sun_azimuth_deg": 180},
+                "views": [[5, 150], [-5, 150]], "distances_m": [1000, 10000], "quality": "preview"}"#,
+        );
+        let atmosphere = Atmosphere::preset("earth-clear").unwrap();
+        let spec = SkySpec {
+            atmosphere: AtmosphereSpec::default(),
+            sun_elevation_deg: 10.0,
+            sun_azimuth_deg: 180.0,
+            observer_altitude_m: 0.0,
+            scattering: ScatteringChoice::Multiple,
+            polarisation: PolarisationChoice(sora::Polarisation::Scalar),
+        };
+        let sky = build_sky(&atmosphere, &spec, Quality::Preview).unwrap();
+        let air = sky
+            .aerial_perspective(ViewDirection::new(5.0, 150.0).unwrap(), 10_000.0)
+            .unwrap();
+        let to_xyz = SpectrumToXyz::new(sky.wavelengths(), Default::default());
+        let l = to_xyz.to_xyz(&air.radiance.radiance_w_m2_sr_nm).unwrap();
+        let got = &reply["inscattered_xyz"][1][0];
+        for (c, expected) in [l.x, l.y, l.z].into_iter().enumerate() {
+            let value = got[c].as_f64().unwrap();
+            assert!((value / expected - 1.0).abs() < 1e-12, "{value} {expected}");
+        }
+        let solar = &sky.optics().solar_irradiance_w_m2_nm;
+        let weighted: Vec<f64> = solar
+            .values()
+            .iter()
+            .zip(air.transmittance.values())
+            .map(|(e, t)| e * t)
+            .collect();
+        let t = to_xyz
+            .to_xyz(&sora::spectrum::SampledSpectrum::from_values(weighted))
+            .unwrap();
+        let e = to_xyz.to_xyz(solar).unwrap();
+        let t_y = reply["transmittance_xyz"][1][0][1].as_f64().unwrap();
+        assert!((t_y / (t.y / e.y) - 1.0).abs() < 1e-12);
+        assert!(t_y > 0.3 && t_y < 0.9, "{t_y}");
+        assert_eq!(reply["segment_m"][1][0], 10_000.0);
+        assert!(reply["segment_m"][0][1].as_f64().unwrap() < 1.0);
+    }
+
     #[test]
     fn a_spectrum_is_the_librarys_default_radiance_bit_for_bit() {
         let mut engine = Engine::default();
