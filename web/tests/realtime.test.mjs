@@ -66,10 +66,11 @@ const SUNS = [45, 10, 2, -4];
 // (LIMITS.againstBakedSky: 3.4 % at sun 2); the volume adds its
 // interpolation, held apart to AERIAL.interpolation against the march per
 // pixel (measured up to 1.24 % at sun 10 and 10 km, 1.08 % at 2, and 3.17
-// % at -4 and 50 km, toward the picture's top, away from the sun: 24 or
-// more slices, 12 columns or rows more uniform in elevation did not
-// lower it; not understood yet). So 2 % at sun 10 and 5 % at 2 and -4
-// against the library, 4 % against the march. The
+// % at -4 and 50 km, toward the picture's top, away from the sun: 24
+// slices, 12 columns or rows more uniform in elevation did not lower it;
+// probably the Earth's shadow's edge along those views, a kink in L_air(d)
+// between two slices, docs/engine-tables.md). So 2 % at sun 10 and 5 % at
+// 2 and -4 against the library, 4 % against the march. The
 // transmittance: within AERIAL.transmittance absolute (what multiplies the
 // point's own light; the largest measured 0.0035, near the horizon at
 // 50 km, 0.0030 at 10 km, where T is 0.40).
