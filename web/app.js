@@ -22,7 +22,7 @@
 // window.soraExplorer exposes the state the browser tests read (timings,
 // the last spectrum, counts); it is not an API.
 
-import { RealtimeView, RIDGES, DIFFERENCE_SCALE } from './realtime.js';
+import { RealtimeView, RIDGES, DIFFERENCE_SCALE, SCENE, VOLUME, sceneView } from './realtime.js';
 
 const $ = (id) => document.getElementById(id);
 
@@ -360,7 +360,7 @@ function drawRealtime() {
   const canvas = $('realtime-canvas');
   // As many pixels as the exact image: a software renderer (SwiftShader)
   // takes about 0.2 s a frame at this size; CSS scales them to 512 across.
-  const [width, height] = mode === 'scene' ? [512, 256] : [256, 256];
+  const [width, height] = mode === 'scene' ? [SCENE.width, SCENE.height] : [256, 256];
   if (canvas.width !== width || canvas.height !== height) Object.assign(canvas, { width, height });
   canvas.style.height = `${(512 * height) / width}px`;
   let note = '';
@@ -375,7 +375,10 @@ function drawRealtime() {
     state = realtimeState(realtime.exact.sky);
     note = ` — luminance (real-time − exact) / exact: red brighter, blue dimmer, full colour at ±${100 * DIFFERENCE_SCALE} %; sun ${state.sunElevationDeg}°`;
   } else if (mode === 'scene') {
-    note = ` — ridges at ${RIDGES.map(([d]) => d / 1000).join(', ')} km, looking toward azimuth ${state.lookAzimuthDeg}°`;
+    const air = view.volumeUsed
+      ? `aerial perspective from a ${VOLUME.columns}×${VOLUME.rows}×${VOLUME.slices} volume marched from the tables`
+      : 'aerial perspective from the sky table (no march tables)';
+    note = ` — ridges at ${RIDGES.map(([d]) => d / 1000).join(', ')} km, looking toward azimuth ${state.lookAzimuthDeg}°; ${air}`;
   }
   const started = performance.now();
   view.draw(state);
@@ -394,10 +397,68 @@ realtime.compare = async (quality, size) => {
   if (!reply.ok) throw new Error(reply.json.error);
   return { sky, gpu: Array.from(gpu), cpu: Array.from(new Float32Array(reply.bytes)), cpuMs: reply.ms };
 };
-realtime.timeFrames = (mode, frames) => {
+realtime.timeFrames = (mode, frames, still = false) => {
   $('realtime-mode').value = mode;
   drawRealtime();
-  return realtime.view.timeFrames(realtimeState(), frames);
+  return realtime.view.timeFrames(realtimeState(), frames, still);
+};
+// For the browser test: the scene camera's aerial perspective of a point
+// at each of `distances` (m) along the views through the centres of a
+// columns x rows grid over its picture (rows bottom first), read from the
+// volume, marched per pixel and from the sky table's difference (the
+// scene's before the volume) (XYZ, RGBA floats), and the library's (the
+// engine's aerial_perspective at `quality`, XYZ triples).
+realtime.compareAerial = async ({ distances, columns, rows, quality }) => {
+  const sky = { ...skySpec(), polarisation: 'scalar' };
+  const state = realtimeState(sky);
+  const views = [];
+  for (let row = 0; row < rows; row++) {
+    for (let column = 0; column < columns; column++) {
+      const v = sceneView(state.lookAzimuthDeg, (2 * (column + 0.5) - columns) / columns, (2 * (row + 0.5) - rows) / rows);
+      views.push([v.elevationDeg, v.azimuthDeg]);
+    }
+  }
+  const read = (mode, distanceM, fromSky = false) => Array.from(realtime.view.readFloats({ ...state, mode, distanceM, fromSky }, columns, rows));
+  // The library only for the views above the eye's horizon (the others
+  // meet the ground at once from an eye on it): segment 0 for them.
+  const R = realtime.view.tables.manifest.planet.ground_radius_m;
+  const dipDeg = (Math.acos(R / (R + Math.max(state.altitudeM, 0))) * 180) / Math.PI;
+  const kept = views.flatMap(([elevation], i) => (elevation > -dipDeg + 0.05 ? [i] : []));
+  const reply = await engine({ op: 'aerial_perspective', sky, views: kept.map((i) => views[i]), distances_m: distances, quality });
+  if (!reply.ok) throw new Error(reply.json.error);
+  const spread = (values, fill) => {
+    const all = views.map(() => fill);
+    kept.forEach((i, n) => { all[i] = values[n]; });
+    return all;
+  };
+  const results = distances.map((distanceM, n) => ({
+    distanceM,
+    volume: { inscattered: read('aerial-inscattered', distanceM), transmittance: read('aerial-transmittance', distanceM) },
+    march: { inscattered: read('march-inscattered', distanceM), transmittance: read('march-transmittance', distanceM) },
+    fromSky: { inscattered: read('aerial-inscattered', distanceM, true), transmittance: read('aerial-transmittance', distanceM, true) },
+    library: {
+      inscattered: spread(reply.json.inscattered_xyz[n], [0, 0, 0]),
+      transmittance: spread(reply.json.transmittance_xyz[n], [1, 1, 1]),
+      segmentM: spread(reply.json.segment_m[n], 0),
+    },
+  }));
+  return { sky, views, volumeUsed: realtime.view.volumeUsed, libraryMs: reply.ms, results };
+};
+// For the browser test: the time to fill the volume and draw the scene
+// once (a pixel read back), and to fill it alone, in ms, averaged.
+realtime.timeVolume = (frames) => {
+  const view = realtime.view;
+  const gl = view.gl;
+  const pixel = new Uint8Array(4);
+  const state = { ...realtimeState(), mode: 'scene' };
+  view.draw(state);
+  gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);
+  const start = performance.now();
+  for (let i = 0; i < frames; i++) {
+    view.draw({ ...state, sunElevationDeg: state.sunElevationDeg + 0.01 * (i + 1) }, 1, 1);
+    gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);
+  }
+  return (performance.now() - start) / frames;
 };
 
 // ---- spectrum -------------------------------------------------------------

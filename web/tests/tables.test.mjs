@@ -48,6 +48,7 @@ import { fileURLToPath } from 'node:url';
 import assert from 'node:assert/strict';
 import { chromium } from 'playwright-core';
 import { readExr } from './exr.mjs';
+import { marchTextures } from '../march.js';
 
 const here = dirname(fileURLToPath(import.meta.url));
 const root = resolve(here, '../..');
@@ -73,14 +74,6 @@ const AERIAL = {
   checkedSuns: [60, 10, 2],
   distances: listed(process.env.SORA_TABLES_AERIAL_DISTANCES, '1000,10000,50000'),
 };
-// The march's arrays as sora_sky.glsl's uMarchTables holds them (its
-// SORA_MARCH_* order; march.bin's order without log_source) and the
-// texture's width (SORA_MARCH_WIDTH).
-const MARCH_ARRAYS = ['source_levels_m', 'source_sun_zenith_rad', 'source_wavelength_indices', 'extinction',
-  'scaled_extinction', 'scaled_scattering', 'scattering', 'solar', 'xyz', 'density', 'sun_columns', 'phase',
-  'smooth_phase', 'kernel_x', 'kernel', 'beam_altitudes_m', 'ln_beam', 'ground_diffuse', 'ground_direct',
-  'source_azimuth_rad'];
-const MARCH_WIDTH = 2048;
 const LIMITS = { luminance: 0.02, chromaticity: 0.005, secondDifference: 0.05 };
 
 // Tables as RGBA float arrays (X, Y, Z, 0) for texture upload, from EXR.
@@ -97,55 +90,15 @@ async function tableBinary(file, name) {
   return { width: exr.width, height: exr.height };
 }
 
-// march.bin as the shader binds it (docs/engine-tables.md, "Binding the
-// tables"): log_source with its channels padded to whole RGBA16F texels,
-// the other arrays one after another in MARCH_ARRAYS' order as R32F rows
-// of MARCH_WIDTH; their offsets and lengths, the textures' sizes.
+// march.bin as the shader binds it (web/march.js' marchTextures: the
+// textures' contents, written for the page to fetch, their offsets,
+// lengths and sizes).
 async function marchBinary(file, march, preset) {
-  const bytes = await readFile(file);
-  const arrays = march.arrays;
-  const names = Object.keys(arrays);
-  for (const name of names) {
-    assert.ok(name === 'log_source' || MARCH_ARRAYS.includes(name), `march.bin's array ${name} is not bound`);
-  }
-  const offsets = [];
-  const lengths = [];
-  let total = 0;
-  for (const name of MARCH_ARRAYS) {
-    offsets.push(total);
-    lengths.push(arrays[name].length);
-    total += arrays[name].length;
-  }
-  const rows = Math.ceil(total / MARCH_WIDTH);
-  const tables = new Float32Array(rows * MARCH_WIDTH);
-  for (const [n, name] of MARCH_ARRAYS.entries()) {
-    const a = arrays[name];
-    assert.equal(a.type, 'f32', name);
-    const values = new Float32Array(bytes.buffer.slice(bytes.byteOffset + a.offset_bytes, bytes.byteOffset + a.offset_bytes + 4 * a.length));
-    tables.set(values, offsets[n]);
-  }
-  const source = arrays.log_source;
-  assert.equal(source.type, 'f16');
-  // sora_sky.glsl's capacities (SORA_MARCH_MAX_WAVELENGTHS, _SPECIES).
-  assert.ok(march.wavelengths <= 32 && march.species <= 4, `${preset}: ${march.wavelengths} wavelengths, ${march.species} species`);
-  const channels = arrays.source_wavelength_indices.length;
-  const texels = Math.ceil(channels / 4);
-  const nodes = source.length / channels;
-  const half = new Uint16Array(bytes.buffer.slice(bytes.byteOffset + source.offset_bytes, bytes.byteOffset + source.offset_bytes + 2 * source.length));
-  const padded = new Uint16Array(nodes * texels * 4);
-  for (let node = 0; node < nodes; node++) {
-    padded.set(half.subarray(node * channels, (node + 1) * channels), node * texels * 4);
-  }
-  await writeFile(join(out, `${preset}-march-tables.bin`), Buffer.from(tables.buffer));
-  await writeFile(join(out, `${preset}-march-source.bin`), Buffer.from(padded.buffer));
-  const levels = arrays.source_levels_m.length;
-  return {
-    offsets,
-    lengths,
-    tablesHeight: rows,
-    // width: view zeniths x texels, height: sun nodes x azimuths, depth: levels.
-    sourceSize: [march.view_zenith_nodes * texels, march.sun_nodes * march.azimuth_nodes, levels],
-  };
+  const textures = marchTextures(march, await readFile(file));
+  await writeFile(join(out, `${preset}-march-tables.bin`), Buffer.from(textures.tables.buffer));
+  await writeFile(join(out, `${preset}-march-source.bin`), Buffer.from(textures.source.buffer));
+  const { offsets, lengths, tablesHeight, sourceSize } = textures;
+  return { offsets, lengths, tablesHeight, sourceSize };
 }
 
 function serve() {

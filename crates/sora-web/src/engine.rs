@@ -115,6 +115,12 @@ impl Engine {
                 scattering,
             } => self.tables(atmosphere, *scattering),
             Request::RenderXyz { sky, image } => self.render_linear_xyz(sky, image),
+            Request::AerialPerspective {
+                sky,
+                views,
+                distances_m,
+                quality,
+            } => self.aerial_perspective(sky, views, distances_m, *quality),
             Request::AtmosphereToml { atmosphere } => {
                 let mut text = apply_controls(&atmosphere_text(atmosphere)?, atmosphere)?;
                 if let Some(albedo) = atmosphere.ground_albedo {
@@ -359,6 +365,15 @@ impl Engine {
                 extend_f32_le(&mut bytes, [texel[0], texel[1], texel[2], 0.0]);
             }
         }
+        // The march's tables (`march.bin`) after the three, at a multiple
+        // of 4 bytes (every table above is whole 16-byte texels).
+        if let Some(march) = tables.march_bin() {
+            layout.insert(
+                "march".into(),
+                json!({"offset_bytes": bytes.len(), "length_bytes": march.len()}),
+            );
+            bytes.extend_from_slice(&march);
+        }
         Ok((
             json!({
                 "manifest": tables.manifest(),
@@ -375,6 +390,67 @@ impl Engine {
                 "size_bytes": tables.size_bytes(),
             }),
             bytes,
+        ))
+    }
+
+    /// The library's aerial perspective of points at each distance along
+    /// each view, as XYZ (see [`Request::AerialPerspective`]): one call,
+    /// every (distance, view) segment in it.
+    fn aerial_perspective(
+        &mut self,
+        spec: &SkySpec,
+        views: &[[f64; 2]],
+        distances_m: &[f64],
+        quality: Quality,
+    ) -> Outcome {
+        let mut segments = Vec::with_capacity(views.len() * distances_m.len());
+        for distance in distances_m {
+            for [e, a] in views {
+                segments.push((
+                    ViewDirection::new(*e, *a).map_err(|e| e.to_string())?,
+                    *distance,
+                ));
+            }
+        }
+        let sky = self.sky(spec, quality)?;
+        let to_xyz = SpectrumToXyz::new(sky.wavelengths(), Default::default());
+        let solar = &sky.optics().solar_irradiance_w_m2_nm;
+        let solar_xyz = to_xyz.to_xyz(solar).map_err(|e| e.to_string())?;
+        let mut inscattered = vec![Vec::with_capacity(views.len()); distances_m.len()];
+        let mut transmittance = inscattered.clone();
+        let mut segment = vec![Vec::with_capacity(views.len()); distances_m.len()];
+        let all = sky
+            .aerial_perspectives(&segments)
+            .map_err(|e| e.to_string())?;
+        for (n, air) in all.into_iter().enumerate() {
+            let l = to_xyz
+                .to_xyz(&air.radiance.radiance_w_m2_sr_nm)
+                .map_err(|e| e.to_string())?;
+            let through = sora::spectrum::SampledSpectrum::from_values(
+                solar
+                    .values()
+                    .iter()
+                    .zip(air.transmittance.values())
+                    .map(|(e, t)| e * t)
+                    .collect(),
+            );
+            let t = to_xyz.to_xyz(&through).map_err(|e| e.to_string())?;
+            segment[n / views.len()].push(air.distance_m);
+            inscattered[n / views.len()].push([l.x, l.y, l.z]);
+            transmittance[n / views.len()].push([
+                t.x / solar_xyz.x,
+                t.y / solar_xyz.y,
+                t.z / solar_xyz.z,
+            ]);
+        }
+        Ok((
+            json!({
+                "wavelengths": sky.wavelengths().len(),
+                "inscattered_xyz": inscattered,
+                "transmittance_xyz": transmittance,
+                "segment_m": segment,
+            }),
+            Vec::new(),
         ))
     }
 
@@ -499,11 +575,16 @@ pub struct RealtimeTables {
 /// steps, a preview tried in issue 38, the tables were 5.3 % and 10.6 %
 /// off their sky at suns 2 and -4: the bake's field is solved for every
 /// sun, its nodes not placed at the eye's, so the steps between them are
-/// its error), and 48 suns x 3 altitudes x (2 x 32) x 32 views (3.6 MB), against
+/// its error), and 48 suns x 3 altitudes x (2 x 32) x 32 views (3.6 MB;
+/// with the march's tables, which the scene's aerial-perspective volume is
+/// filled from, 5.6 MB), against
 /// the library's default of the paper's 21 wavelengths and 48 suns x 6
 /// altitudes x (2 x 64) x 64 views (what `sora tables` bakes). The bake
 /// solves one multiple-scattering field for every layer; in headless
-/// Chromium on the 2-core machine it takes 4.8-5.7 s (2.2 s with 20 suns).
+/// Chromium on the 2-core machine it took 4.8-5.7 s without the march's
+/// tables (2.2 s with 20 suns); with them 6.4-10.3 s at a load of 12-14
+/// (in node's WebAssembly at that load 12.4-12.8 s against 10.1-10.9 s
+/// without them).
 /// Measured by the browser test (`web/tests/realtime.test.mjs`; 99th
 /// percentile of the fisheye's luminance error against the sky the tables
 /// were baked from, suns 45 / 10 / 2 / -4): 0.54 / 0.54 / 3.4 / 2.5 % with
@@ -519,12 +600,12 @@ pub const REALTIME_TABLES: RealtimeTables = RealtimeTables {
         azimuth_nodes: 32,
         transmittance_nodes: (32, 128),
         // No aerial-perspective table (its bake marches every node's
-        // segments): the scene view takes the sky table's difference
-        // (`soraAerialPerspectiveFromSky`).
+        // segments).
         aerial_nodes: (0, 0, 0),
-        // Nor the march's tables (29-33 MB, too many for the browser's
-        // bake; sora_sky.glsl's soraAerialPerspectiveMarch reads them).
-        march: false,
+        // The march's tables: the scene view's aerial-perspective volume
+        // is filled by sora_sky.glsl's soraAerialPerspectiveMarch from
+        // them (`web/realtime.js`).
+        march: true,
     },
 };
 
@@ -707,6 +788,57 @@ mod tests {
         (serde_json::from_str(&reply.json).unwrap(), reply.bytes)
     }
 
+    /// The aerial-perspective reply is the library's segment, as XYZ: the
+    /// in-scattered light's XYZ and the transmittance's (the sun's XYZ
+    /// through the segment over the sun's) of a view at 10 km, indexed
+    /// [distance][view]; a view below the horizon from the ground ends on
+    /// it at once (its segment shorter than the distance).
+    #[test]
+    fn the_aerial_perspective_reply_is_the_librarys_segment() {
+        let mut engine = Engine::default();
+        let (reply, _) = request(
+            &mut engine,
+            r#"{"op": "aerial_perspective", "sky": {"atmosphere": {"preset": "earth-clear"}, "sun_elevation_deg": 10, "sun_azimuth_deg": 180},
+                "views": [[5, 150], [-5, 150]], "distances_m": [1000, 10000], "quality": "preview"}"#,
+        );
+        let atmosphere = Atmosphere::preset("earth-clear").unwrap();
+        let spec = SkySpec {
+            atmosphere: AtmosphereSpec::default(),
+            sun_elevation_deg: 10.0,
+            sun_azimuth_deg: 180.0,
+            observer_altitude_m: 0.0,
+            scattering: ScatteringChoice::Multiple,
+            polarisation: PolarisationChoice(sora::Polarisation::Scalar),
+        };
+        let sky = build_sky(&atmosphere, &spec, Quality::Preview).unwrap();
+        let air = sky
+            .aerial_perspective(ViewDirection::new(5.0, 150.0).unwrap(), 10_000.0)
+            .unwrap();
+        let to_xyz = SpectrumToXyz::new(sky.wavelengths(), Default::default());
+        let l = to_xyz.to_xyz(&air.radiance.radiance_w_m2_sr_nm).unwrap();
+        let got = &reply["inscattered_xyz"][1][0];
+        for (c, expected) in [l.x, l.y, l.z].into_iter().enumerate() {
+            let value = got[c].as_f64().unwrap();
+            assert!((value / expected - 1.0).abs() < 1e-12, "{value} {expected}");
+        }
+        let solar = &sky.optics().solar_irradiance_w_m2_nm;
+        let weighted: Vec<f64> = solar
+            .values()
+            .iter()
+            .zip(air.transmittance.values())
+            .map(|(e, t)| e * t)
+            .collect();
+        let t = to_xyz
+            .to_xyz(&sora::spectrum::SampledSpectrum::from_values(weighted))
+            .unwrap();
+        let e = to_xyz.to_xyz(solar).unwrap();
+        let t_y = reply["transmittance_xyz"][1][0][1].as_f64().unwrap();
+        assert!((t_y / (t.y / e.y) - 1.0).abs() < 1e-12);
+        assert!(t_y > 0.3 && t_y < 0.9, "{t_y}");
+        assert_eq!(reply["segment_m"][1][0], 10_000.0);
+        assert!(reply["segment_m"][0][1].as_f64().unwrap() < 1.0);
+    }
+
     #[test]
     fn a_spectrum_is_the_librarys_default_radiance_bit_for_bit() {
         let mut engine = Engine::default();
@@ -886,8 +1018,21 @@ mod tests {
         let texels = sky_texels
             + settings.transmittance_nodes.0 * settings.transmittance_nodes.1
             + settings.sun_nodes * settings.altitude_nodes;
-        assert_eq!(bytes.len(), 16 * texels);
-        assert_eq!(reply["size_bytes"], 12 * texels);
+        // The march's tables after the three (`march.bin`'s bytes, the
+        // manifest's arrays in them).
+        let march = &reply["tables"]["march"];
+        assert_eq!(march["offset_bytes"], 16 * texels);
+        let march_bytes = march["length_bytes"].as_u64().unwrap() as usize;
+        assert_eq!(bytes.len(), 16 * texels + march_bytes);
+        let arrays = reply["manifest"]["tables"]["march"]["arrays"]
+            .as_object()
+            .unwrap();
+        let array_bytes: u64 = arrays
+            .values()
+            .map(|a| a["length"].as_u64().unwrap() * if a["type"] == "f16" { 2 } else { 4 })
+            .sum();
+        assert_eq!(array_bytes as usize, march_bytes);
+        assert_eq!(reply["size_bytes"], 12 * texels + march_bytes);
         assert!((0..texels).all(|t| float(4 * t + 3) == 0.0));
         let tables = &reply["tables"];
         assert_eq!(tables["sky"]["offset_bytes"], 0);

@@ -74,17 +74,41 @@ pub enum Request {
     /// The engine tables of an atmosphere for the page's real-time
     /// (WebGL2) view, baked at [`crate::engine::REALTIME_TABLES`]: JSON
     /// `{"manifest", "settings", "tables": {"sky" | "transmittance" |
-    /// "irradiance": {"offset_bytes", "width", "height"}}, "size_bytes"}`,
-    /// bytes the three tables one after the other as 32-bit little-endian
-    /// floats, four per texel (X, Y, Z, 0: an RGBA32F texture), in the
-    /// manifest's layout. Progress is reported while the sky table's
-    /// layers bake (see [`crate::report_progress`]).
+    /// "irradiance": {"offset_bytes", "width", "height"}, "march":
+    /// {"offset_bytes", "length_bytes"}}, "size_bytes"}`, bytes the three
+    /// tables one after the other as 32-bit little-endian floats, four per
+    /// texel (X, Y, Z, 0: an RGBA32F texture), in the manifest's layout,
+    /// then (multiple scattering) the march's tables as `march.bin` holds
+    /// them (the manifest's `tables.march`). Progress is reported while the
+    /// sky table's layers bake (see [`crate::report_progress`]).
     Tables {
         /// The atmosphere.
         atmosphere: AtmosphereSpec,
         /// Single or multiple scattering.
         #[serde(default)]
         scattering: ScatteringChoice,
+    },
+    /// The library's aerial perspective of points at each of
+    /// `distances_m` (m) along each of `views` ([elevation, azimuth],
+    /// degrees) from the eye, on the sky of `quality` (what the real-time
+    /// scene's volume is checked against): JSON `{"wavelengths",
+    /// "inscattered_xyz": [[[X, Y, Z]]], "transmittance_xyz": [[[X, Y,
+    /// Z]]], "segment_m": [[m]]}` indexed [distance][view], the segment's
+    /// length (shorter than the distance where the view meets the ground
+    /// or leaves the atmosphere first), the light scattered into each
+    /// segment as XYZ (radiance units) and its transmittance as the engine
+    /// tables give it (the XYZ of the sun's spectrum through the segment
+    /// over the sun's, per channel).
+    AerialPerspective {
+        /// The sky.
+        sky: SkySpec,
+        /// The views, [elevation, azimuth] in degrees.
+        views: Vec<[f64; 2]>,
+        /// Metres from the eye (each > 0).
+        distances_m: Vec<f64>,
+        /// The sky's resolution.
+        #[serde(default)]
+        quality: Quality,
     },
     /// A sky image as CIE XYZ (radiance units, as `sora render --exr-xyz
     /// --units radiance`): JSON `{"width", "height", "wavelengths"}`, bytes

@@ -137,21 +137,11 @@ impl EngineTables {
             &[],
             options,
         )?;
-        if let Some(march) = &self.march {
+        if let Some(bytes) = self.march_bin() {
             let path = directory.join("march.bin");
             let shown = path.display().to_string();
             files.stage(&path, |file| {
                 use std::io::Write;
-                let mut bytes = Vec::with_capacity(march.size_bytes());
-                for array in march.arrays() {
-                    for v in array.values {
-                        if array.half {
-                            bytes.extend_from_slice(&exr::prelude::f16::from_f32(v).to_le_bytes());
-                        } else {
-                            bytes.extend_from_slice(&v.to_le_bytes());
-                        }
-                    }
-                }
                 file.write_all(&bytes).map_err(|error| Error::Io {
                     path: shown.clone(),
                     message: format!("cannot write: {error}"),
@@ -163,6 +153,25 @@ impl EngineTables {
         })?;
         files.text(directory.join(MANIFEST_FILE), &(manifest + "\n"))?;
         files.commit()
+    }
+
+    /// `march.bin`'s bytes (the manifest's `tables.march` gives each
+    /// array's offset, length and type): the march's arrays one after
+    /// another as little-endian 32-bit floats, `log_source` as 16-bit
+    /// floats; None without the march's tables.
+    pub fn march_bin(&self) -> Option<Vec<u8>> {
+        let march = self.march.as_ref()?;
+        let mut bytes = Vec::with_capacity(march.size_bytes());
+        for array in march.arrays() {
+            for v in array.values {
+                if array.half {
+                    bytes.extend_from_slice(&exr::prelude::f16::from_f32(v).to_le_bytes());
+                } else {
+                    bytes.extend_from_slice(&v.to_le_bytes());
+                }
+            }
+        }
+        Some(bytes)
     }
 
     /// The manifest: format, units, axes, layout and lookup formulas.
