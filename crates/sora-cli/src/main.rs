@@ -17,6 +17,7 @@ mod estimate;
 mod fit_plot;
 mod json;
 mod polarisation_maps;
+mod progress;
 
 use clap::{Parser, Subcommand};
 

@@ -624,10 +624,13 @@ fn render_frame(
     let frame_started = Instant::now();
     // Two phases, each shown for what it is: the tables (an estimate of
     // the time left would be a guess), then the rows.
-    let spinner = tables_spinner();
+    let spinner = crate::progress::spinner("{spinner} building tables ({elapsed})");
     sky.prepare_images()?;
     spinner.finish_and_clear();
-    let bar = progress_bar(height as u64);
+    let bar = crate::progress::bar(
+        height as u64,
+        "{spinner} rendering [{bar:40}] {pos}/{len} rows, {eta} left",
+    );
     let progress = |rows: usize| bar.set_position(rows as u64);
     // The Stokes images when asked for (S0 is the image), else the image.
     let (mut xyz, mut stokes) = if args.stokes || dolp.is_some() || aop.is_some() {
@@ -778,31 +781,4 @@ fn stage_exr(
         .exr_with_layers(output, main, layers, options)
         .with_context(|| format!("writing {}{half_hint}", output.display()))?;
     Ok(())
-}
-
-/// A progress bar on stderr when it is a terminal, hidden otherwise.
-fn progress_bar(rows: u64) -> indicatif::ProgressBar {
-    let bar = indicatif::ProgressBar::with_draw_target(
-        Some(rows),
-        indicatif::ProgressDrawTarget::stderr(),
-    );
-    if let Ok(style) = indicatif::ProgressStyle::with_template(
-        "{spinner} rendering [{bar:40}] {pos}/{len} rows, {eta} left",
-    ) {
-        bar.set_style(style.progress_chars("=> "));
-    }
-    bar
-}
-
-/// A spinner on stderr (when it is a terminal) while the tables are built.
-fn tables_spinner() -> indicatif::ProgressBar {
-    let spinner =
-        indicatif::ProgressBar::with_draw_target(None, indicatif::ProgressDrawTarget::stderr());
-    if let Ok(style) =
-        indicatif::ProgressStyle::with_template("{spinner} building tables ({elapsed})")
-    {
-        spinner.set_style(style);
-    }
-    spinner.enable_steady_tick(std::time::Duration::from_millis(100));
-    spinner
 }

@@ -396,8 +396,15 @@ pub fn run(args: RetrieveArgs) -> anyhow::Result<()> {
         }
     }
 
-    // The retrievals, one after another (each uses every core).
-    let bar = progress_bar(scans.len() as u64);
+    // The retrievals, one after another (each uses every core); the bar
+    // gives scans done of all and the time left from the mean time per
+    // scan so far (nothing claimed before the first is done).
+    let bar = crate::progress::bar(
+        scans.len() as u64,
+        "{spinner} retrieving [{bar:30}] {pos}/{len} scans, {elapsed} elapsed, {msg}",
+    );
+    bar.set_message("time left known after the first scan");
+    bar.enable_steady_tick(std::time::Duration::from_millis(200));
     let started = Instant::now();
     let mut retrievals: Vec<(usize, Retrieval)> = Vec::with_capacity(scans.len());
     for (done, (scan, settings)) in scans.iter().zip(&scan_settings).enumerate() {
@@ -539,24 +546,6 @@ fn read_scans(args: &RetrieveArgs) -> anyhow::Result<Vec<Scan>> {
         scan.measurements.validate()?;
     }
     Ok(scans)
-}
-
-/// A progress bar on stderr when it is a terminal, hidden otherwise: scans
-/// done of all, and the time left from the mean time per scan so far
-/// (nothing claimed before the first is done).
-fn progress_bar(scans: u64) -> indicatif::ProgressBar {
-    let bar = indicatif::ProgressBar::with_draw_target(
-        Some(scans),
-        indicatif::ProgressDrawTarget::stderr(),
-    );
-    if let Ok(style) = indicatif::ProgressStyle::with_template(
-        "{spinner} retrieving [{bar:30}] {pos}/{len} scans, {elapsed} elapsed, {msg}",
-    ) {
-        bar.set_style(style.progress_chars("=> "));
-    }
-    bar.set_message("time left known after the first scan");
-    bar.enable_steady_tick(std::time::Duration::from_millis(200));
-    bar
 }
 
 /// `440, 675 nm`.

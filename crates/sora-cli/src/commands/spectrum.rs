@@ -343,7 +343,10 @@ pub fn run(args: SpectrumArgs) -> anyhow::Result<()> {
         (radiances, Some(transmittances))
     } else if path_tracing {
         let results = radiances(&|sky: &sora::Sky| {
-            let bar = progress_bar(samples * views.len() as u64);
+            let bar = crate::progress::bar(
+                samples * views.len() as u64,
+                "{spinner} path tracing [{bar:40}] {pos}/{len} paths, {eta} left",
+            );
             let results = sky.radiances_with_progress(&views, &|done, _| bar.set_position(done))?;
             bar.finish_and_clear();
             Ok(results)
@@ -783,18 +786,4 @@ fn run_filtered(
         started.elapsed().as_secs_f64()
     );
     Ok(())
-}
-
-/// A progress bar on stderr when it is a terminal, hidden otherwise.
-fn progress_bar(paths: u64) -> indicatif::ProgressBar {
-    let bar = indicatif::ProgressBar::with_draw_target(
-        Some(paths),
-        indicatif::ProgressDrawTarget::stderr(),
-    );
-    if let Ok(style) = indicatif::ProgressStyle::with_template(
-        "{spinner} path tracing [{bar:40}] {pos}/{len} paths, {eta} left",
-    ) {
-        bar.set_style(style.progress_chars("=> "));
-    }
-    bar
 }

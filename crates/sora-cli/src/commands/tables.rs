@@ -127,7 +127,14 @@ pub fn run(args: TablesArgs) -> anyhow::Result<()> {
         .scattering(args.scattering)
         .build()?;
     let start = std::time::Instant::now();
-    let tables = EngineTables::bake(&sky, &settings, &|_| {})?;
+    let bar = crate::progress::bar(
+        1000,
+        "{spinner} baking tables [{bar:40}] {percent}%, {eta} left",
+    );
+    let tables = EngineTables::bake(&sky, &settings, &|fraction| {
+        bar.set_position((1000.0 * fraction).round() as u64)
+    })?;
+    bar.finish_and_clear();
     let baked = start.elapsed().as_secs_f64();
     tables.write(&args.output)?;
     eprintln!(
