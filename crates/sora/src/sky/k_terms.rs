@@ -63,7 +63,14 @@
 //! `SingleScatteringScene::sharing_sun_column_tables_of`): a table holds
 //! the species' profile columns alone, no coefficient, so every term that
 //! carries the sky's species reads the one the first built (five tables
-//! took 17 % of a gas image's CPU; perf, the fisheye below).
+//! took 17 % of a gas image's CPU; perf, the fisheye below). Their
+//! sky-view tables (images, and views read from tables) are built
+//! together, row by row, term after term (`Sky::prepare_term_tables`,
+//! `SkyViewTable::compute_sharing_geometry`): every term marches the same
+//! view rays through that one table, so the first term's march keeps each
+//! node's columns toward the sun and the others read them
+//! (`ShareRayColumns`), bit for bit the tables each builds alone (a test);
+//! those lookups were some 14 % of a gas image's CPU.
 //! One solve per sample at the weights' mean coefficient, where the terms
 //! hardly differ, does not pay in the visible: the terms' coefficients
 //! span a factor of about 1e4, so at even the weakest band sample the

@@ -130,47 +130,45 @@ impl SkyViewTable {
             // The row's rays are one zenith angle from one eye: their
             // densities and columns are marched once for every azimuth
             // (where the planet's shadow does not cut them apart).
-            let mut work: Vec<_> = skies
-                .iter()
-                .zip(&tables)
-                .map(|((sky, _, multiple_scattering), table)| {
-                    let mut scratch = sky.scratch();
-                    scratch.reuse_view_nodes();
-                    let ms_work = multiple_scattering.map(|ms| {
-                        let mut ms_scratch = ms.scratch();
-                        ms_scratch.reuse_view_nodes();
-                        let wavelengths = table.wavelengths;
-                        (ms_scratch, vec![0.0; wavelengths], vec![0.0; wavelengths])
-                    });
-                    (scratch, ms_work)
-                })
-                .collect();
-            let mut ray_columns = RayColumns::default();
+            // Sky by sky (each sky's source table stays in cache through
+            // the row), the first recording each ray's columns toward the
+            // sun for those that share them.
+            let mut ray_columns: Vec<RayColumns> = Vec::new();
+            if recording {
+                ray_columns.resize_with(azimuth_nodes, RayColumns::default);
+            }
             let index_in_half = row % half_zenith_nodes;
-            let geometry = &tables[0];
-            let zenith = geometry.zenith_of_node(row);
-            for k in 0..azimuth_nodes {
-                let relative_azimuth = std::f64::consts::PI * k as f64 / (azimuth_nodes - 1) as f64;
-                let view = geometry.direction(zenith, relative_azimuth);
-                for (t, ((sky, sun_columns, multiple_scattering), table)) in
-                    skies.iter().zip(&tables).enumerate()
-                {
-                    let (scratch, ms_work) = &mut work[t];
+            for (t, ((sky, sun_columns, multiple_scattering), table)) in
+                skies.iter().zip(&tables).enumerate()
+            {
+                let mut scratch = sky.scratch();
+                scratch.reuse_view_nodes();
+                let mut ms_work = multiple_scattering.map(|ms| {
+                    let mut ms_scratch = ms.scratch();
+                    ms_scratch.reuse_view_nodes();
+                    let wavelengths = table.wavelengths;
+                    (ms_scratch, vec![0.0; wavelengths], vec![0.0; wavelengths])
+                });
+                let zenith = table.zenith_of_node(row);
+                for k in 0..azimuth_nodes {
+                    let relative_azimuth =
+                        std::f64::consts::PI * k as f64 / (azimuth_nodes - 1) as f64;
+                    let view = table.direction(zenith, relative_azimuth);
                     let columns = SunColumns::Table(sun_columns);
                     match (t, shares[t]) {
                         (0, _) if recording => sky.compute_inscattering_integrals_sharing(
                             view,
                             columns,
-                            scratch,
-                            ShareRayColumns::Record(&mut ray_columns),
+                            &mut scratch,
+                            ShareRayColumns::Record(&mut ray_columns[k]),
                         ),
                         (_, true) => sky.compute_inscattering_integrals_sharing(
                             view,
                             columns,
-                            scratch,
-                            ShareRayColumns::Replay(&ray_columns),
+                            &mut scratch,
+                            ShareRayColumns::Replay(&ray_columns[k]),
                         ),
-                        _ => sky.compute_inscattering_integrals(view, columns, scratch),
+                        _ => sky.compute_inscattering_integrals(view, columns, &mut scratch),
                     }
                     let (wavelengths, stride) = (table.wavelengths, table.values_per_node);
                     let species = sky.optics().species.len();
