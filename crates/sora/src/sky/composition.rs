@@ -413,6 +413,11 @@ impl Sky {
                 && self.method == Method::Fast
                 && self.lowest_view_elevation_rad.is_none()
                 && views.len() >= TABLE_VIEW_COUNT;
+            if from_tables {
+                // The terms' tables together (`Sky::prepare_term_tables`).
+                check_view_count("the views", views.len() as f64, self.wavelengths().len())?;
+                self.prepare_term_tables(true)?;
+            }
             return self.sum_term_radiances(!from_tables, |k, terms, term| {
                 term.compute_radiances(
                     views,
@@ -668,6 +673,7 @@ impl Sky {
         tables: Tables,
     ) -> Result<Vec<SkyRadiance>> {
         if !self.k_terms.is_empty() {
+            self.prepare_term_tables(matches!(tables, Tables::Views))?;
             return self.sum_term_radiances(false, |k, terms, term| {
                 term.radiances_from_tables(
                     views,

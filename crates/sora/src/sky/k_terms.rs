@@ -63,7 +63,18 @@
 //! `SingleScatteringScene::sharing_sun_column_tables_of`): a table holds
 //! the species' profile columns alone, no coefficient, so every term that
 //! carries the sky's species reads the one the first built (five tables
-//! took 17 % of a gas image's CPU; perf, the fisheye below).
+//! took 17 % of a gas image's CPU; perf, the fisheye below). Their
+//! sky-view tables (images, and views read from tables) are built
+//! together, row by row, term after term (`Sky::prepare_term_tables`,
+//! `SkyViewTable::compute_sharing_geometry`): every term marches the same
+//! view rays through that one table, so the first term's march keeps each
+//! node's columns toward the sun and the others read them
+//! (`ShareRayColumns`), bit for bit the tables each builds alone (a test);
+//! those lookups were some 14 % of a gas image's CPU. With the source
+//! table's buffers kept per thread (`source_table.rs`), the fisheye below
+//! takes 0.93 times the CPU of before (`farm-bench -n 16`, paired,
+//! 0.88-1.02, load 10-13), 3.27 times the gas-free image (3.17-3.49),
+//! byte-identical.
 //! One solve per sample at the weights' mean coefficient, where the terms
 //! hardly differ, does not pay in the visible: the terms' coefficients
 //! span a factor of about 1e4, so at even the weakest band sample the
@@ -651,6 +662,7 @@ pub(crate) mod tests {
     use crate::geometry::ViewDirection;
     use crate::sky::{ImageSettings, Method, Plane, Polarisation};
     use crate::spectrum::WavelengthGrid;
+    use crate::transport::multiple_scattering::MultipleScatteringTable;
 
     /// earth-clear with 2.9 cm of water (2 km scale height) and the mixed
     /// gases (also the polarisation correction's tests' atmosphere).
@@ -1175,6 +1187,50 @@ pub(crate) mod tests {
             .build()
             .unwrap();
         assert!(!std::sync::Arc::ptr_eq(&first, &table(&clear)));
+    }
+
+    #[test]
+    fn the_terms_image_tables_built_together_are_each_terms_own() {
+        // The terms' skies march the same view rays through the same
+        // sun-column table: built together (`Sky::prepare_images`), the
+        // second and later terms read the first's columns toward the sun
+        // at every node; each term's sky-view table must be bit for bit
+        // the one it builds alone (`Sky::compute_tables`), polarised and
+        // scalar.
+        let atmosphere = earth_clear_with_gases();
+        // 500-540 nm without a band: term 0 on the whole grid, the others
+        // on the span's sub-grid.
+        let grid = WavelengthGrid::new(500.0, 780.0, 40.0).unwrap();
+        for polarisation in [Polarisation::Scalar, Polarisation::Vector] {
+            let sky = Sky::builder(&atmosphere)
+                .sun_deg(20.0, 180.0)
+                .wavelengths(grid)
+                .polarisation(polarisation)
+                .build()
+                .unwrap();
+            sky.prepare_images().unwrap();
+            let first = &sky.k_terms()[0].1;
+            assert_eq!(sky.k_terms().len(), TERMS);
+            assert!(sky.k_terms()[1].1.wavelengths().len() < grid.len());
+            for (_, term) in sky.k_terms() {
+                // Every term takes the sharing path.
+                assert!(term.scene().has_view_geometry_of(first.scene()));
+                let together = term.image_tables.get().expect("built together");
+                let alone = term.compute_tables(term.source_table(), true);
+                assert!(together.sky_view == alone.sky_view, "{polarisation:?}");
+            }
+            // The tables of many views (their own source tables, at half
+            // the steps) too.
+            sky.prepare_term_tables(true).unwrap();
+            for (_, term) in sky.k_terms() {
+                let together = term.view_tables.get().expect("built together");
+                let half_steps = term.field.get().map(|field| {
+                    MultipleScatteringTable::compute_at_half_steps(std::sync::Arc::clone(field))
+                });
+                let alone = term.compute_tables(half_steps.as_ref(), true);
+                assert!(together.sky_view == alone.sky_view, "{polarisation:?}");
+            }
+        }
     }
 
     #[test]

@@ -11,6 +11,8 @@ use super::{k_terms, sun_disc};
 
 use crate::colour::{SpectrumToXyz, Xyz};
 use crate::error::{Error, Result};
+use crate::transport::multiple_scattering::MultipleScatteringTable;
+use std::sync::Arc;
 
 impl Sky {
     /// Builds everything images of this sky need (the multiple-scattering
@@ -19,15 +21,80 @@ impl Sky {
     /// own phase; rendering does it on first use otherwise.
     pub fn prepare_images(&self) -> Result<()> {
         if !self.k_terms.is_empty() {
-            for (_, term) in &self.k_terms {
-                term.prepare_images()?;
-            }
-            return Ok(());
+            return self.prepare_term_tables(false);
         }
         self.prepare_field_for_images()?;
         self.source_table();
         if self.method == Method::Fast {
             self.image_tables();
+        }
+        Ok(())
+    }
+
+    /// The fast method's tables of the k-distribution's term skies, for
+    /// images (`Sky::image_tables`) or, `for_views`, for many views
+    /// (`Sky::view_tables`): each term's field and source table, then the
+    /// tables of the terms that have none yet, together
+    /// (`Sky::compute_tables_together`: the terms' view rays are the
+    /// same, so each march node's columns toward the sun are looked up
+    /// once), bit for bit each term's own.
+    pub(super) fn prepare_term_tables(&self, for_views: bool) -> Result<()> {
+        let mut together: Vec<&Sky> = Vec::new();
+        for (_, term) in &self.k_terms {
+            term.prepare_field_for_images()?;
+            if !for_views {
+                term.source_table();
+            }
+            let slot = if for_views {
+                &term.view_tables
+            } else {
+                &term.image_tables
+            };
+            let same_sizes = together.first().is_none_or(|first| {
+                (first.table_size, first.multiple_stride) == (term.table_size, term.multiple_stride)
+            });
+            if term.method == Method::Fast && slot.get().is_none() && same_sizes {
+                together.push(term);
+            } else if for_views {
+                term.view_tables();
+            } else {
+                term.prepare_images()?;
+            }
+        }
+        // The views' tables march through a source table at half the
+        // steps (`Sky::view_tables`), made for them alone.
+        let half_steps: Vec<_> = together
+            .iter()
+            .map(|term| {
+                term.field
+                    .get()
+                    .filter(|_| for_views)
+                    .map(|field| MultipleScatteringTable::compute_at_half_steps(Arc::clone(field)))
+            })
+            .collect();
+        let skies: Vec<_> = together
+            .iter()
+            .zip(&half_steps)
+            .map(|(term, half_steps)| {
+                let source = if for_views {
+                    half_steps.as_ref()
+                } else {
+                    term.source_table()
+                };
+                (*term, source)
+            })
+            .collect();
+        for (term, tables) in together
+            .iter()
+            .zip(Sky::compute_tables_together(&skies, true))
+        {
+            let slot = if for_views {
+                &term.view_tables
+            } else {
+                &term.image_tables
+            };
+            // Another thread may have been first: the tables are the same.
+            let _ = slot.set(tables);
         }
         Ok(())
     }
@@ -65,6 +132,8 @@ impl Sky {
     ) -> Result<Vec<Xyz>> {
         self.check_colour_conversion(to_xyz)?;
         if !self.k_terms.is_empty() {
+            self.check_image::<Xyz>(image, 1)?;
+            self.prepare_images()?;
             return self.sum_term_colour_images(
                 to_xyz,
                 progress,
@@ -99,6 +168,8 @@ impl Sky {
         }
         self.check_colour_conversion(to_xyz)?;
         if !self.k_terms.is_empty() {
+            self.check_image::<[Xyz; 4]>(image, 1)?;
+            self.prepare_images()?;
             let add = |sum: &mut [Xyz; 4], w: f64, x: &[Xyz; 4]| {
                 for (s, x) in sum.iter_mut().zip(x) {
                     k_terms::add_scaled_xyz(s, w, x);
@@ -132,8 +203,10 @@ impl Sky {
         progress: &(dyn Fn(usize) + Sync),
     ) -> Result<Vec<f64>> {
         if !self.k_terms.is_empty() {
-            let add = |sum: &mut f64, w: f64, x: &f64| *sum += w * x;
             let n = self.wavelengths().len();
+            self.check_image::<f64>(image, n)?;
+            self.prepare_images()?;
+            let add = |sum: &mut f64, w: f64, x: &f64| *sum += w * x;
             return self.sum_term_images(progress, 0.0, add, |(offset, weights), term, p| {
                 let values = term.render_spectral(image, p)?;
                 let uniform = k_terms::uniform_weight(weights);
@@ -157,18 +230,10 @@ impl Sky {
         })
     }
 
-    /// Renders every pixel's radiance and stores it through `store` into
-    /// `per_pixel` values of type T: `store` gets the pixel's spectral
-    /// radiance (the polarised intensity I of a polarised sky), followed
-    /// for a polarised sky by its Q, U and V.
-    fn render_pixels<T: Copy + Send>(
-        &self,
-        image: &ImageSettings,
-        per_pixel: usize,
-        black: T,
-        progress: &(dyn Fn(usize) + Sync),
-        store: impl Fn(&[f64], &mut [T]) + Sync,
-    ) -> Result<Vec<T>> {
+    /// An error for an image this sky cannot render: too many pixels, a
+    /// buffer of `per_pixel` values of type T per pixel over the limit,
+    /// or the path-tracing method (it computes views).
+    fn check_image<T>(&self, image: &ImageSettings, per_pixel: usize) -> Result<()> {
         let (width, height) = (image.width, image.height);
         check_image_size(width, height)?;
         let buffer_bytes = u64::from(width)
@@ -195,6 +260,23 @@ impl Sky {
                     .into(),
             ));
         }
+        Ok(())
+    }
+
+    /// Renders every pixel's radiance and stores it through `store` into
+    /// `per_pixel` values of type T: `store` gets the pixel's spectral
+    /// radiance (the polarised intensity I of a polarised sky), followed
+    /// for a polarised sky by its Q, U and V.
+    fn render_pixels<T: Copy + Send>(
+        &self,
+        image: &ImageSettings,
+        per_pixel: usize,
+        black: T,
+        progress: &(dyn Fn(usize) + Sync),
+        store: impl Fn(&[f64], &mut [T]) + Sync,
+    ) -> Result<Vec<T>> {
+        let (width, height) = (image.width, image.height);
+        self.check_image::<T>(image, per_pixel)?;
         // Tables first, outside the parallel loop (see `prepare_field`).
         self.prepare_field_for_images()?;
         let source_table = self.source_table();

@@ -437,21 +437,53 @@ impl Sky {
         source: Option<&MultipleScatteringTable>,
         march_multiple: bool,
     ) -> ImageTables {
-        let (altitude_nodes, mu_nodes) = self.table_size.sun_column_nodes;
-        let sun_columns = self.scene.sun_column_table(altitude_nodes, mu_nodes);
-        let (half_zenith, azimuth) = self.table_size.sky_view_nodes;
-        let sky_view = SkyViewTable::compute_with_multiple_scattering(
-            &self.scene,
-            &sun_columns,
-            source,
-            (half_zenith, azimuth),
-            self.multiple_stride,
-            march_multiple,
+        let mut tables = Sky::compute_tables_together(&[(self, source)], march_multiple);
+        tables.pop().expect("one sky's tables")
+    }
+
+    /// [`Sky::compute_tables`] of each of `skies` (a sky and its source
+    /// table), which have the same table sizes: their sky-view tables
+    /// built node by node together, the skies whose view rays and
+    /// sun-column table are the first's reading its columns toward the sun
+    /// (`SkyViewTable::compute_sharing_geometry`), bit for bit the tables
+    /// each builds alone.
+    pub(super) fn compute_tables_together(
+        skies: &[(&Sky, Option<&MultipleScatteringTable>)],
+        march_multiple: bool,
+    ) -> Vec<ImageTables> {
+        let Some((first, _)) = skies.first() else {
+            return Vec::new();
+        };
+        let sizes = (first.table_size, first.multiple_stride);
+        assert!(
+            skies
+                .iter()
+                .all(|(sky, _)| (sky.table_size, sky.multiple_stride) == sizes),
+            "skies built together share their table sizes"
         );
-        ImageTables {
+        let (altitude_nodes, mu_nodes) = first.table_size.sun_column_nodes;
+        let sun_columns: Vec<_> = skies
+            .iter()
+            .map(|(sky, _)| sky.scene.sun_column_table(altitude_nodes, mu_nodes))
+            .collect();
+        let entries: Vec<_> = skies
+            .iter()
+            .zip(&sun_columns)
+            .map(|((sky, source), columns)| (&sky.scene, columns.as_ref(), *source))
+            .collect();
+        SkyViewTable::compute_sharing_geometry(
+            &entries,
+            first.table_size.sky_view_nodes,
+            first.multiple_stride,
+            march_multiple,
+        )
+        .into_iter()
+        .zip(skies)
+        .map(|(sky_view, (sky, _))| ImageTables {
             sky_view,
-            polarisation: self.polarisation_table(),
-        }
+            polarisation: sky.polarisation_table(),
+        })
+        .collect()
     }
 
     /// The polarisation correction's ratios over view directions (polarised

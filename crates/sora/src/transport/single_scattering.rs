@@ -218,9 +218,19 @@ struct SceneGeometry {
 /// One view ray's columns toward the sun, per march node in march order:
 /// whether the node is sunlit and its columns, [node * species + j], m.
 #[derive(Debug, Default)]
-struct RayColumns {
+pub(crate) struct RayColumns {
     lit: Vec<bool>,
     columns: Vec<f64>,
+}
+
+/// How [`SingleScatteringScene::compute_inscattering_integrals_sharing`]
+/// shares a view ray's columns toward the sun with a scene of the same
+/// view geometry.
+pub(crate) enum ShareRayColumns<'a> {
+    /// Computes them and keeps them here (what was here is cleared).
+    Record(&'a mut RayColumns),
+    /// Reads them from here (kept by `Record` for the same ray).
+    Replay(&'a RayColumns),
 }
 
 impl ExactSunColumns {
@@ -697,6 +707,55 @@ impl SingleScatteringScene {
         sun_columns: SunColumns,
         scratch: &mut SingleScatteringScratch,
     ) {
+        self.compute_segment_integrals_sharing((view, distance_m), sun_columns, scratch, None);
+    }
+
+    /// [`Self::compute_inscattering_integrals`], the ray's columns toward
+    /// the sun shared with a scene of the same view geometry
+    /// ([`Self::has_view_geometry_of`]) that marches the same ray with the
+    /// same `sun_columns`: [`ShareRayColumns::Record`] keeps them (every
+    /// march node's, in march order), [`ShareRayColumns::Replay`] reads
+    /// those kept instead of computing them, bit for bit the same (the
+    /// k-distribution's term skies' sky-view tables,
+    /// `SkyViewTable::compute_sharing_geometry`).
+    pub(crate) fn compute_inscattering_integrals_sharing(
+        &self,
+        view: Vector3,
+        sun_columns: SunColumns,
+        scratch: &mut SingleScatteringScratch,
+        share: ShareRayColumns,
+    ) {
+        self.compute_segment_integrals_sharing(
+            (view, f64::INFINITY),
+            sun_columns,
+            scratch,
+            Some(share),
+        );
+    }
+
+    /// Whether `other`'s view rays march the same nodes as this scene's
+    /// and their paths toward the sun are the same: the same species'
+    /// profiles (in order), radii, eye and sun (what [`ExactSunColumns`]
+    /// keys its rays by); their optics may differ.
+    pub(crate) fn has_view_geometry_of(&self, other: &SingleScatteringScene) -> bool {
+        self.profiles == other.profiles
+            && (self.ground_radius_m, self.top_radius_m)
+                == (other.ground_radius_m, other.top_radius_m)
+            && self.observer == other.observer
+            && self.sun_direction == other.sun_direction
+    }
+
+    fn compute_segment_integrals_sharing(
+        &self,
+        (view, distance_m): (Vector3, f64),
+        sun_columns: SunColumns,
+        scratch: &mut SingleScatteringScratch,
+        mut share: Option<ShareRayColumns>,
+    ) {
+        if let Some(ShareRayColumns::Record(ray)) = &mut share {
+            ray.lit.clear();
+            ray.columns.clear();
+        }
         let species = &self.optics.species;
         let wavelengths = self.optics.grid.len();
         scratch.inscattering_integrals.fill(0.0);
@@ -730,8 +789,10 @@ impl SingleScatteringScene {
         let mut march = std::mem::take(&mut scratch.march);
         // The exact sun columns kept by a sky of the same geometry, or
         // kept now for those that follow (`ExactSunColumns`).
-        let kept = match (sun_columns, &self.exact_sun_columns) {
-            (SunColumns::Exact, Some((shared, slot))) => {
+        // (Not for a ray shared by the caller: it says where its columns
+        // come from.)
+        let kept = match (sun_columns, &self.exact_sun_columns, &share) {
+            (SunColumns::Exact, Some((shared, slot)), None) => {
                 let ray = [
                     view.x.to_bits(),
                     view.y.to_bits(),
@@ -742,10 +803,15 @@ impl SingleScatteringScene {
             }
             _ => None,
         };
-        let replay = kept.as_ref().and_then(|(.., ray)| ray.clone());
-        let mut record = match kept {
+        let kept_replay = kept.as_ref().and_then(|(.., ray)| ray.clone());
+        let mut kept_record = match kept {
             Some((.., None)) => Some(RayColumns::default()),
             _ => None,
+        };
+        let (replay, mut record) = match share {
+            Some(ShareRayColumns::Replay(ray)) => (Some(ray), None),
+            Some(ShareRayColumns::Record(ray)) => (None, Some(ray)),
+            None => (kept_replay.as_deref(), kept_record.as_mut()),
         };
         let mut node_index = 0;
         march.march(
@@ -822,7 +888,7 @@ impl SingleScatteringScene {
         scratch.view_columns.copy_from_slice(march.columns());
         scratch.march = march;
         scratch.view_panel_ends = view_ends;
-        if let (Some((shared, slot, ray, _)), Some(record)) = (kept, record) {
+        if let (Some((shared, slot, ray, _)), Some(record)) = (kept, kept_record) {
             shared.keep(slot, ray, record);
         }
         // Transmittance of the whole view ray.

@@ -39,11 +39,11 @@
 
 use super::multiple_scattering::MultipleScatteringTable;
 use super::optical_column::SunColumnTable;
-use super::single_scattering::{SingleScatteringScene, SunColumns};
+use super::single_scattering::{RayColumns, ShareRayColumns, SingleScatteringScene, SunColumns};
 use crate::geometry::Vector3;
 
 /// In-scattering integrals over view directions (see the module docs).
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct SkyViewTable {
     /// Nodes per half of the zenith axis (sky half, ground half).
     half_zenith_nodes: usize,
@@ -70,27 +70,212 @@ pub struct SkyViewTable {
 }
 
 impl SkyViewTable {
-    /// Fills the table with `half_zenith_nodes` nodes above and below the
-    /// horizon and `azimuth_nodes` over 0..180 degrees, with sun columns
-    /// from `sun_columns`, and with `multiple_scattering` the multiply
-    /// scattered radiance at every node too, marched at every
-    /// `multiple_stride.0`-th node of the zenith axis's halves and
-    /// `multiple_stride.1`-th of the azimuth axis (and the last of each)
-    /// and filled in between (`fill_unmarched`; see the module docs); with
-    /// `march_multiple` false its blocks are laid out but left zero, for
-    /// [`SkyViewTable::blend_multiple_from`] to fill. Rows run
-    /// in parallel with the `parallel` feature; the result does not depend
-    /// on the thread count.
-    pub(crate) fn compute_with_multiple_scattering(
-        sky: &SingleScatteringScene,
-        sun_columns: &SunColumnTable,
-        multiple_scattering: Option<&MultipleScatteringTable>,
+    /// The table of each of `skies` (a scene, its sun-column table, its
+    /// multiply scattered light or none), filled with `half_zenith_nodes`
+    /// nodes above and below the horizon and `azimuth_nodes` over 0..180
+    /// degrees, with sun columns from the sun-column table, and with
+    /// multiple scattering the multiply scattered radiance at every node
+    /// too, marched at every `multiple_stride.0`-th node of the zenith
+    /// axis's halves and `multiple_stride.1`-th of the azimuth axis (and
+    /// the last of each) and filled in between (`fill_unmarched`; see the
+    /// module docs); with `march_multiple` false its blocks are laid out
+    /// but left zero, for [`SkyViewTable::blend_multiple_from`] to fill.
+    /// Rows run in parallel with the `parallel` feature; the result does
+    /// not depend on the thread count.
+    ///
+    /// The skies' tables are filled node by node together: a sky whose
+    /// view rays are the first sky's
+    /// (`SingleScatteringScene::has_view_geometry_of`) and whose
+    /// sun-column table is the first's (the same table) reads each march
+    /// node's columns toward the sun that the first sky's march looked up
+    /// instead of looking them up again (`ShareRayColumns`), bit for bit
+    /// the table it builds alone (the k-distribution's term skies, which
+    /// differ in what absorbs only; the lookups were some 14 % of a gas
+    /// image's CPU).
+    pub(crate) fn compute_sharing_geometry(
+        skies: &[(
+            &SingleScatteringScene,
+            &SunColumnTable,
+            Option<&MultipleScatteringTable>,
+        )],
         (half_zenith_nodes, azimuth_nodes): (usize, usize),
         multiple_stride: (usize, usize),
         march_multiple: bool,
-    ) -> SkyViewTable {
+    ) -> Vec<SkyViewTable> {
         assert!(half_zenith_nodes >= 2 && azimuth_nodes >= 2);
         assert!(multiple_stride.0 >= 1 && multiple_stride.1 >= 1);
+        let mut tables: Vec<SkyViewTable> = skies
+            .iter()
+            .map(|(sky, _, multiple_scattering)| {
+                SkyViewTable::laid_out(
+                    sky,
+                    *multiple_scattering,
+                    (half_zenith_nodes, azimuth_nodes),
+                )
+            })
+            .collect();
+        // Per sky: whether it reads the first sky's columns toward the sun.
+        let shares: Vec<bool> = skies
+            .iter()
+            .enumerate()
+            .map(|(t, (sky, sun_columns, _))| {
+                let (first, first_columns, _) = skies[0];
+                t > 0
+                    && sky.has_view_geometry_of(first)
+                    && std::ptr::eq(*sun_columns, first_columns)
+            })
+            .collect();
+        let recording = shares.iter().any(|s| *s);
+        let fill_row = |row: usize, outs: &mut [&mut [f32]]| {
+            // The row's rays are one zenith angle from one eye: their
+            // densities and columns are marched once for every azimuth
+            // (where the planet's shadow does not cut them apart).
+            // Sky by sky (each sky's source table stays in cache through
+            // the row), the first recording each ray's columns toward the
+            // sun for those that share them.
+            let mut ray_columns: Vec<RayColumns> = Vec::new();
+            if recording {
+                ray_columns.resize_with(azimuth_nodes, RayColumns::default);
+            }
+            let index_in_half = row % half_zenith_nodes;
+            for (t, ((sky, sun_columns, multiple_scattering), table)) in
+                skies.iter().zip(&tables).enumerate()
+            {
+                let mut scratch = sky.scratch();
+                scratch.reuse_view_nodes();
+                let mut ms_work = multiple_scattering.map(|ms| {
+                    let mut ms_scratch = ms.scratch();
+                    ms_scratch.reuse_view_nodes();
+                    let wavelengths = table.wavelengths;
+                    (ms_scratch, vec![0.0; wavelengths], vec![0.0; wavelengths])
+                });
+                let zenith = table.zenith_of_node(row);
+                for k in 0..azimuth_nodes {
+                    let relative_azimuth =
+                        std::f64::consts::PI * k as f64 / (azimuth_nodes - 1) as f64;
+                    let view = table.direction(zenith, relative_azimuth);
+                    let columns = SunColumns::Table(sun_columns);
+                    match (t, shares[t]) {
+                        (0, _) if recording => sky.compute_inscattering_integrals_sharing(
+                            view,
+                            columns,
+                            &mut scratch,
+                            ShareRayColumns::Record(&mut ray_columns[k]),
+                        ),
+                        (_, true) => sky.compute_inscattering_integrals_sharing(
+                            view,
+                            columns,
+                            &mut scratch,
+                            ShareRayColumns::Replay(&ray_columns[k]),
+                        ),
+                        _ => sky.compute_inscattering_integrals(view, columns, &mut scratch),
+                    }
+                    let (wavelengths, stride) = (table.wavelengths, table.values_per_node);
+                    let species = sky.optics().species.len();
+                    let node = &mut outs[t][k * stride..(k + 1) * stride];
+                    let (integrals, rest) = node.split_at_mut(species * wavelengths);
+                    let (ground, rest) = rest.split_at_mut(wavelengths);
+                    for (o, v) in integrals.iter_mut().zip(scratch.inscattering_integrals()) {
+                        *o = *v as f32;
+                    }
+                    for (o, v) in ground.iter_mut().zip(scratch.ground_radiance()) {
+                        *o = *v as f32;
+                    }
+                    let marched_here = march_multiple
+                        && marched(index_in_half, half_zenith_nodes, multiple_stride.0)
+                        && marched(k, azimuth_nodes, multiple_stride.1);
+                    if let (Some(ms), Some((ms_scratch, air, skylit)), true) =
+                        (multiple_scattering, ms_work.as_mut(), marched_here)
+                    {
+                        ms.compute_radiance_parts(
+                            (view, f64::INFINITY),
+                            columns,
+                            ms_scratch,
+                            (air, skylit),
+                        );
+                        let (multiple, rest) = rest.split_at_mut(wavelengths);
+                        let (ground_skylight, forward) = rest.split_at_mut(wavelengths);
+                        for (o, v) in multiple.iter_mut().zip(air.iter()) {
+                            *o = *v as f32;
+                        }
+                        for (o, v) in ground_skylight.iter_mut().zip(skylit.iter()) {
+                            *o = *v as f32;
+                        }
+                        for (o, v) in forward.iter_mut().zip(ms_scratch.forward_integrals()) {
+                            *o = *v as f32;
+                        }
+                    }
+                }
+            }
+            for (table, out) in tables.iter().zip(outs.iter_mut()) {
+                if table.has_multiple_scattering && march_multiple {
+                    // Fill the azimuths between marched ones.
+                    let stride = table.values_per_node;
+                    fill_unmarched(
+                        out,
+                        azimuth_nodes,
+                        stride,
+                        (stride - table.multiple_values, table.multiple_values),
+                        multiple_stride.1,
+                    );
+                }
+            }
+        };
+        let mut values: Vec<Vec<f32>> = tables
+            .iter()
+            .map(|table| {
+                vec![0.0f32; 2 * half_zenith_nodes * azimuth_nodes * table.values_per_node]
+            })
+            .collect();
+        {
+            // Row by row, every sky's row together.
+            let mut rows: Vec<Vec<&mut [f32]>> =
+                (0..2 * half_zenith_nodes).map(|_| Vec::new()).collect();
+            for (table, values) in tables.iter().zip(values.iter_mut()) {
+                let row_length = azimuth_nodes * table.values_per_node;
+                for (row, chunk) in rows.iter_mut().zip(values.chunks_mut(row_length)) {
+                    row.push(chunk);
+                }
+            }
+            crate::parallel::for_each_chunk_mut(&mut rows, 1, |row, outs| {
+                fill_row(row, &mut outs[0])
+            });
+        }
+        for (table, mut values) in tables.iter_mut().zip(values) {
+            let stride = table.values_per_node;
+            let marched_values = table.multiple_values;
+            let row_length = azimuth_nodes * stride;
+            if table.has_multiple_scattering && march_multiple {
+                // Fill the rows between marched ones, within each half.
+                for half in [0, 1] {
+                    let rows = &mut values[half * half_zenith_nodes * row_length..]
+                        [..half_zenith_nodes * row_length];
+                    for k in 0..azimuth_nodes {
+                        let offset = k * stride + stride - marched_values;
+                        fill_unmarched(
+                            rows,
+                            half_zenith_nodes,
+                            row_length,
+                            (offset, marched_values),
+                            multiple_stride.0,
+                        );
+                    }
+                }
+            }
+            table.values = values;
+        }
+        tables
+    }
+
+    /// An empty table of `sky` (its values not yet filled) with
+    /// `half_zenith_nodes` nodes above and below the horizon and
+    /// `azimuth_nodes` over 0..180 degrees, with the blocks of
+    /// `multiple_scattering`'s light when it has some.
+    fn laid_out(
+        sky: &SingleScatteringScene,
+        multiple_scattering: Option<&MultipleScatteringTable>,
+        (half_zenith_nodes, azimuth_nodes): (usize, usize),
+    ) -> SkyViewTable {
         let optics = sky.optics();
         let wavelengths = optics.grid.len();
         let has_multiple_scattering = multiple_scattering.is_some();
@@ -103,7 +288,6 @@ impl SkyViewTable {
         } else {
             species + 1
         };
-        let values_per_node = blocks * wavelengths;
         let (ground_radius, _) = sky.radii_m();
         let observer_radius = sky.observer_radius_m();
         let horizon_zenith_rad =
@@ -111,11 +295,11 @@ impl SkyViewTable {
         let sun = sky.sun_direction();
         let horizontal = (sun.x.hypot(sun.y) > 1e-12)
             .then(|| (sun.x / sun.x.hypot(sun.y), sun.y / sun.x.hypot(sun.y)));
-        let mut table = SkyViewTable {
+        SkyViewTable {
             half_zenith_nodes,
             azimuth_nodes,
             horizon_zenith_rad,
-            values_per_node,
+            values_per_node: blocks * wavelengths,
             wavelengths,
             has_multiple_scattering,
             // Marched at every other node: multiple scattering's radiance
@@ -127,97 +311,7 @@ impl SkyViewTable {
             },
             values: Vec::new(),
             sun_horizontal: horizontal.unwrap_or((0.0, 1.0)),
-        };
-        let stride = values_per_node;
-        let marched_values = table.multiple_values;
-        let row_length = azimuth_nodes * stride;
-        let fill_row = |row: usize, out: &mut [f32]| {
-            // The row's rays are one zenith angle from one eye: their
-            // densities and columns are marched once for every azimuth
-            // (where the planet's shadow does not cut them apart).
-            let mut scratch = sky.scratch();
-            scratch.reuse_view_nodes();
-            let mut ms_work = multiple_scattering.map(|ms| {
-                let mut ms_scratch = ms.scratch();
-                ms_scratch.reuse_view_nodes();
-                (ms_scratch, vec![0.0; wavelengths], vec![0.0; wavelengths])
-            });
-            let index_in_half = row % half_zenith_nodes;
-            let zenith = table.zenith_of_node(row);
-            for k in 0..azimuth_nodes {
-                let relative_azimuth = std::f64::consts::PI * k as f64 / (azimuth_nodes - 1) as f64;
-                let view = table.direction(zenith, relative_azimuth);
-                sky.compute_inscattering_integrals(
-                    view,
-                    SunColumns::Table(sun_columns),
-                    &mut scratch,
-                );
-                let node = &mut out[k * stride..(k + 1) * stride];
-                let (integrals, rest) = node.split_at_mut(species * wavelengths);
-                let (ground, rest) = rest.split_at_mut(wavelengths);
-                for (o, v) in integrals.iter_mut().zip(scratch.inscattering_integrals()) {
-                    *o = *v as f32;
-                }
-                for (o, v) in ground.iter_mut().zip(scratch.ground_radiance()) {
-                    *o = *v as f32;
-                }
-                let marched_here = march_multiple
-                    && marched(index_in_half, half_zenith_nodes, multiple_stride.0)
-                    && marched(k, azimuth_nodes, multiple_stride.1);
-                if let (Some(ms), Some((ms_scratch, air, skylit)), true) =
-                    (multiple_scattering, ms_work.as_mut(), marched_here)
-                {
-                    ms.compute_radiance_parts(
-                        (view, f64::INFINITY),
-                        SunColumns::Table(sun_columns),
-                        ms_scratch,
-                        (air, skylit),
-                    );
-                    let (multiple, rest) = rest.split_at_mut(wavelengths);
-                    let (ground_skylight, forward) = rest.split_at_mut(wavelengths);
-                    for (o, v) in multiple.iter_mut().zip(air.iter()) {
-                        *o = *v as f32;
-                    }
-                    for (o, v) in ground_skylight.iter_mut().zip(skylit.iter()) {
-                        *o = *v as f32;
-                    }
-                    for (o, v) in forward.iter_mut().zip(ms_scratch.forward_integrals()) {
-                        *o = *v as f32;
-                    }
-                }
-            }
-            if has_multiple_scattering && march_multiple {
-                // Fill the azimuths between marched ones.
-                fill_unmarched(
-                    out,
-                    azimuth_nodes,
-                    stride,
-                    (stride - marched_values, marched_values),
-                    multiple_stride.1,
-                );
-            }
-        };
-        let mut values = vec![0.0f32; 2 * half_zenith_nodes * row_length];
-        crate::parallel::for_each_chunk_mut(&mut values, row_length, fill_row);
-        if has_multiple_scattering && march_multiple {
-            // Fill the rows between marched ones, within each half.
-            for half in [0, 1] {
-                let rows = &mut values[half * half_zenith_nodes * row_length..]
-                    [..half_zenith_nodes * row_length];
-                for k in 0..azimuth_nodes {
-                    let offset = k * stride + stride - marched_values;
-                    fill_unmarched(
-                        rows,
-                        half_zenith_nodes,
-                        row_length,
-                        (offset, marched_values),
-                        multiple_stride.0,
-                    );
-                }
-            }
         }
-        table.values = values;
-        table
     }
 
     /// Fills the multiply scattered light's blocks of every node (left

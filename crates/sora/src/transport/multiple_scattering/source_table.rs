@@ -140,73 +140,86 @@ fn source_values(field: &MultipleScatteringField, views: usize, azimuths_rad: &[
         }
     });
     let sun_nodes = field.reachable_sun_nodes();
-    let mut values = vec![LOG_FLOOR.ln() as f32; levels * per_level];
+    // Every value is written by its level's transpose below: zeros (pages
+    // the system maps on first write) rather than a fill of their own.
+    let mut values = vec![0.0f32; levels * per_level];
     // One level per task; within it one wavelength at a time into a
     // wavelength-major buffer, transposed at the end (in cache). Only
-    // the sun nodes that view rays reach at the level are filled.
-    crate::parallel::for_each_chunk_mut(&mut values, per_level, |k, out| {
-        let densities = field.optics.geometry.grid.densities_at_level(k);
-        let mut combined = vec![0.0; block];
-        let mut harmonics = vec![0.0; degrees * views];
-        let mut sum = vec![0.0; views];
-        let cells = suns * azimuths * views;
-        let mut by_wavelength = vec![LOG_FLOOR.ln() as f32; per_level];
-        let (first_sun, last_sun) = sun_nodes[k];
-        for i in 0..w {
-            let plane = &mut by_wavelength[i * cells..(i + 1) * cells];
-            let total: f64 = (0..species)
-                .map(|j| densities[j] * field.optics.scaled.scaled_scattering[i * species + j])
-                .sum();
-            if total <= 0.0 {
-                plane.fill(LOG_FLOOR.ln() as f32);
-                continue;
-            }
-            combined.fill(0.0);
-            for j in 0..species {
-                let fraction =
-                    densities[j] * field.optics.scaled.scaled_scattering[i * species + j] / total;
-                if fraction != 0.0 {
-                    let q = &kernel[(i * species + j) * block..][..block];
-                    for (c, q) in combined.iter_mut().zip(q) {
-                        *c += fraction * q;
-                    }
+    // the sun nodes that view rays reach at the level are filled, the
+    // others left at the floor. The buffer is one per thread's run of
+    // levels, refilled at each (a fresh one per level had its pages
+    // mapped and cleared by the system each time: with the k-distribution's
+    // five term skies, a tenth of a gas image's CPU).
+    let new_buffer = || vec![0.0f32; per_level];
+    crate::parallel::for_each_chunk_mut_with(
+        &mut values,
+        per_level,
+        new_buffer,
+        |by_wavelength, k, out| {
+            by_wavelength.fill(LOG_FLOOR.ln() as f32);
+            let densities = field.optics.geometry.grid.densities_at_level(k);
+            let mut combined = vec![0.0; block];
+            let mut harmonics = vec![0.0; degrees * views];
+            let mut sum = vec![0.0; views];
+            let cells = suns * azimuths * views;
+            let (first_sun, last_sun) = sun_nodes[k];
+            for i in 0..w {
+                let plane = &mut by_wavelength[i * cells..(i + 1) * cells];
+                let total: f64 = (0..species)
+                    .map(|j| densities[j] * field.optics.scaled.scaled_scattering[i * species + j])
+                    .sum();
+                if total <= 0.0 {
+                    plane.fill(LOG_FLOOR.ln() as f32);
+                    continue;
                 }
-            }
-            for s in first_sun..=last_sun {
-                let solution = field.solution(s, i);
-                for &m in &active {
-                    let row = &mut harmonics[m * views..(m + 1) * views];
-                    row.fill(0.0);
-                    let radiance = &solution[(m * levels + k) * degrees..][..degrees];
-                    let columns = &combined[m * degrees * views..(m + 1) * degrees * views];
-                    for (l, column) in radiance.iter().zip(columns.chunks_exact(views)) {
-                        for (r, q) in row.iter_mut().zip(column) {
-                            *r += l * q;
+                combined.fill(0.0);
+                for j in 0..species {
+                    let fraction = densities[j]
+                        * field.optics.scaled.scaled_scattering[i * species + j]
+                        / total;
+                    if fraction != 0.0 {
+                        let q = &kernel[(i * species + j) * block..][..block];
+                        for (c, q) in combined.iter_mut().zip(q) {
+                            *c += fraction * q;
                         }
                     }
                 }
-                let cell = &mut plane[s * azimuths * views..(s + 1) * azimuths * views];
-                for (f, row) in cell.chunks_exact_mut(views).enumerate() {
-                    let cosines = &azimuth_cosines[f * degrees..(f + 1) * degrees];
-                    sum.fill(0.0);
+                for s in first_sun..=last_sun {
+                    let solution = field.solution(s, i);
                     for &m in &active {
-                        let c = cosines[m];
-                        for (acc, r) in sum.iter_mut().zip(&harmonics[m * views..][..views]) {
-                            *acc += c * r;
+                        let row = &mut harmonics[m * views..(m + 1) * views];
+                        row.fill(0.0);
+                        let radiance = &solution[(m * levels + k) * degrees..][..degrees];
+                        let columns = &combined[m * degrees * views..(m + 1) * degrees * views];
+                        for (l, column) in radiance.iter().zip(columns.chunks_exact(views)) {
+                            for (r, q) in row.iter_mut().zip(column) {
+                                *r += l * q;
+                            }
                         }
                     }
-                    for (o, v) in row.iter_mut().zip(&sum) {
-                        *o = floored_log(*v) as f32;
+                    let cell = &mut plane[s * azimuths * views..(s + 1) * azimuths * views];
+                    for (f, row) in cell.chunks_exact_mut(views).enumerate() {
+                        let cosines = &azimuth_cosines[f * degrees..(f + 1) * degrees];
+                        sum.fill(0.0);
+                        for &m in &active {
+                            let c = cosines[m];
+                            for (acc, r) in sum.iter_mut().zip(&harmonics[m * views..][..views]) {
+                                *acc += c * r;
+                            }
+                        }
+                        for (o, v) in row.iter_mut().zip(&sum) {
+                            *o = floored_log(*v) as f32;
+                        }
                     }
                 }
             }
-        }
-        for i in 0..w {
-            for (cell, value) in by_wavelength[i * cells..(i + 1) * cells].iter().enumerate() {
-                out[cell * w + i] = *value;
+            for i in 0..w {
+                for (cell, value) in by_wavelength[i * cells..(i + 1) * cells].iter().enumerate() {
+                    out[cell * w + i] = *value;
+                }
             }
-        }
-    });
+        },
+    );
     values
 }
 
