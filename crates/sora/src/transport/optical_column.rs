@@ -778,13 +778,8 @@ impl SunColumnTable {
             fx * (1.0 - fy),
             fx * fy,
         ];
-        let blend = |corners: [f64; 4]| {
-            corners
-                .iter()
-                .zip(weights)
-                .map(|(c, w)| c * w)
-                .sum::<f64>()
-        };
+        let blend =
+            |corners: [f64; 4]| corners.iter().zip(weights).map(|(c, w)| c * w).sum::<f64>();
         for (k, column) in columns_m.iter_mut().enumerate().take(s) {
             let corners = cell_nodes.map(|n| self.cell_corners[n + k]);
             let mean_density = if !self.logarithmic[k] {
@@ -973,6 +968,33 @@ mod tests {
         ends.insert(3, 0.5 * (ends[2] + ends[3]));
         let (cut, _) = run(&mut reusing, &(d, ends));
         assert!(cut.iter().all(|(node, _, _)| !node.repeated));
+    }
+
+    /// The lookup's cells hold their corners' values: for every cell and
+    /// species, the node table's mean density (a layer profile) or its
+    /// logarithm (a smooth profile, whose exp() is the node table's bits).
+    #[test]
+    fn the_cells_hold_their_corners() {
+        use crate::atmosphere::ProfileTable;
+        let tent =
+            ProfileTable::new(vec![10e3, 25e3, 40e3], vec![0.0, 1.0, 0.0], false, "tent").unwrap();
+        let profiles = [exponential(8000.0), DensityProfile::PiecewiseLinear(tent)];
+        let (altitudes, mus) = (7, 11);
+        let table = SunColumnTable::compute(&profiles, R, TOP, altitudes, mus);
+        assert_eq!(table.logarithmic, [true, false]);
+        assert_eq!(table.cell_corners.len(), (altitudes - 1) * mus * 2 * 2);
+        for i in 0..altitudes - 1 {
+            for j in 0..mus {
+                for a in 0..2 {
+                    for k in 0..2 {
+                        let cell = table.cell_corners[((i * mus + j) * 2 + a) * 2 + k];
+                        let node = table.mean_densities[((i + a) * mus + j) * 2 + k];
+                        let value = if k == 0 { cell.exp() } else { cell };
+                        assert_eq!(value.to_bits(), node.to_bits(), "{i} {j} {a} {k}");
+                    }
+                }
+            }
+        }
     }
 
     /// A tent layer 10-40 km peaking at 25 km: vertically its column is
