@@ -532,14 +532,20 @@ pub struct SunColumnTable {
     /// leave a layer near its top the column falls to zero quadratically,
     /// and its logarithm to -inf, which no linear blend follows).
     logarithmic: Vec<bool>,
-    /// ln of the mean relative density along the path to the top
-    /// (column_m / d), -inf where it is zero, index
-    /// [(altitude * mu_nodes + mu) * species + s].
-    log_mean_densities: Vec<f64>,
-    /// Their exponentials, the mean densities themselves (the same bits
-    /// as exp() of the logarithms at a lookup): what the layers' lookups
-    /// blend, four per lookup that would each take an exp.
+    /// The mean relative density along the path to the top (column_m /
+    /// d), index [(altitude * mu_nodes + mu) * species + s]: exp() of the
+    /// logarithms the table is computed as, what the layers' lookups
+    /// blend (four per lookup that would each take an exp) and what a
+    /// smooth profile's lookup blends where a corner's is zero.
     mean_densities: Vec<f64>,
+    /// What a lookup blends, laid out so that a cell's four corners lie
+    /// together (one or two cache lines, where a table by node puts them
+    /// in two places): per species ln(mean density), -inf where it is
+    /// zero (`logarithmic`), or the mean density (the same bits as
+    /// `mean_densities`), index [((altitude * mu_nodes + mu) * 2 + a) *
+    /// species + s] for the altitude node `altitude` + a, a in {0, 1},
+    /// `altitude` below `altitude_nodes` - 1.
+    cell_corners: Vec<f64>,
 }
 
 impl SunColumnTable {
@@ -565,8 +571,8 @@ impl SunColumnTable {
                 .iter()
                 .map(|p| !matches!(p.borrow(), DensityProfile::PiecewiseLinear(_)))
                 .collect(),
-            log_mean_densities: Vec::new(),
             mean_densities: Vec::new(),
+            cell_corners: Vec::new(),
         };
         let mut log_mean_densities = vec![0.0; altitude_nodes * mu_nodes * species];
         // One altitude row per task; each row is the same computation
@@ -611,9 +617,25 @@ impl SunColumnTable {
                 }
             },
         );
+        let mean_densities: Vec<f64> = log_mean_densities.iter().map(|v| v.exp()).collect();
+        let mut cell_corners = Vec::with_capacity(2 * log_mean_densities.len());
+        for altitude in 0..altitude_nodes - 1 {
+            for mu in 0..mu_nodes {
+                for a in 0..2 {
+                    let node = ((altitude + a) * mu_nodes + mu) * species;
+                    cell_corners.extend((0..species).map(|k| {
+                        if table.logarithmic[k] {
+                            log_mean_densities[node + k]
+                        } else {
+                            mean_densities[node + k]
+                        }
+                    }));
+                }
+            }
+        }
         SunColumnTable {
-            mean_densities: log_mean_densities.iter().map(|v| v.exp()).collect(),
-            log_mean_densities,
+            mean_densities,
+            cell_corners,
             ..table
         }
     }
@@ -747,29 +769,28 @@ impl SunColumnTable {
             corner(i + 1, j),
             corner(i + 1, j + 1),
         ];
+        // The same corners in `cell_corners`, in the same order.
+        let cell = (i * self.mu_nodes + j) * 2 * s;
+        let cell_nodes = [cell, cell + 2 * s, cell + s, cell + 3 * s];
         let weights = [
             (1.0 - fx) * (1.0 - fy),
             (1.0 - fx) * fy,
             fx * (1.0 - fy),
             fx * fy,
         ];
+        let blend =
+            |corners: [f64; 4]| corners.iter().zip(weights).map(|(c, w)| c * w).sum::<f64>();
         for (k, column) in columns_m.iter_mut().enumerate().take(s) {
-            let corners = nodes.map(|n| self.log_mean_densities[n + k]);
-            let mean_density = if self.logarithmic[k] && corners.iter().all(|v| v.is_finite()) {
-                corners
-                    .iter()
-                    .zip(weights)
-                    .map(|(c, w)| c * w)
-                    .sum::<f64>()
-                    .exp()
-            } else {
+            let corners = cell_nodes.map(|n| self.cell_corners[n + k]);
+            let mean_density = if !self.logarithmic[k] {
                 // A layer profile: interpolate the density itself (the
                 // corners' exp() kept in the table).
-                nodes
-                    .iter()
-                    .zip(weights)
-                    .map(|(n, w)| self.mean_densities[n + k] * w)
-                    .sum::<f64>()
+                blend(corners)
+            } else if corners.iter().all(|v| v.is_finite()) {
+                blend(corners).exp()
+            } else {
+                // A path with no density at a corner: the densities.
+                blend(nodes.map(|n| self.mean_densities[n + k]))
             };
             *column = mean_density * length;
         }
@@ -947,6 +968,33 @@ mod tests {
         ends.insert(3, 0.5 * (ends[2] + ends[3]));
         let (cut, _) = run(&mut reusing, &(d, ends));
         assert!(cut.iter().all(|(node, _, _)| !node.repeated));
+    }
+
+    /// The lookup's cells hold their corners' values: for every cell and
+    /// species, the node table's mean density (a layer profile) or its
+    /// logarithm (a smooth profile, whose exp() is the node table's bits).
+    #[test]
+    fn the_cells_hold_their_corners() {
+        use crate::atmosphere::ProfileTable;
+        let tent =
+            ProfileTable::new(vec![10e3, 25e3, 40e3], vec![0.0, 1.0, 0.0], false, "tent").unwrap();
+        let profiles = [exponential(8000.0), DensityProfile::PiecewiseLinear(tent)];
+        let (altitudes, mus) = (7, 11);
+        let table = SunColumnTable::compute(&profiles, R, TOP, altitudes, mus);
+        assert_eq!(table.logarithmic, [true, false]);
+        assert_eq!(table.cell_corners.len(), (altitudes - 1) * mus * 2 * 2);
+        for i in 0..altitudes - 1 {
+            for j in 0..mus {
+                for a in 0..2 {
+                    for k in 0..2 {
+                        let cell = table.cell_corners[((i * mus + j) * 2 + a) * 2 + k];
+                        let node = table.mean_densities[((i + a) * mus + j) * 2 + k];
+                        let value = if k == 0 { cell.exp() } else { cell };
+                        assert_eq!(value.to_bits(), node.to_bits(), "{i} {j} {a} {k}");
+                    }
+                }
+            }
+        }
     }
 
     /// A tent layer 10-40 km peaking at 25 km: vertically its column is

@@ -830,7 +830,10 @@ fn view_cell(view_cosine: f64, views: usize) -> (usize, f64) {
 }
 
 /// [`interpolate_log_source`] with the view's zenith cell located
-/// ([`view_cell`]).
+/// ([`view_cell`]). Inlined, so that the march's AVX2 form
+/// ([`MultipleScatteringTable::lookup_log_source`]) compiles its loops
+/// for AVX2 (as a function of its own they took two lanes, SSE2's).
+#[inline(always)]
 fn interpolate_log_source_in_cells(
     values: &[f32],
     (suns, azimuths, views): (usize, usize, usize),
