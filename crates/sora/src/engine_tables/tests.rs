@@ -2155,3 +2155,20 @@ fn the_sky_between_the_sun_nodes_about_the_sunset_matches_the_library() {
     }
     assert!(failures.is_empty(), "{failures:?}");
 }
+
+#[test]
+fn the_bake_reports_progress_that_rises_to_one_at_its_end() {
+    let sky = small_sky();
+    let settings = small_settings();
+    let told = std::sync::Mutex::new(Vec::new());
+    EngineTables::bake(&sky, &settings, &|fraction| {
+        told.lock().unwrap().push(fraction)
+    })
+    .unwrap();
+    let told = told.into_inner().unwrap();
+    // One report a layer, then 1 when every table is done.
+    assert_eq!(told.len(), settings.sky_layers() + 1, "{told:?}");
+    assert!(told.windows(2).all(|w| w[0] < w[1]), "{told:?}");
+    assert!(told[..told.len() - 1].iter().all(|f| *f > 0.0 && *f < 1.0));
+    assert_eq!(told.last(), Some(&1.0));
+}
