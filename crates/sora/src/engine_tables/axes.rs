@@ -91,17 +91,43 @@ pub fn horizon_zenith(r_m: f64, ground_m: f64) -> f64 {
 /// `transport/sky_view_table.rs` does, for the same reason).
 const HORIZON_MARGIN_RAD: f64 = 1e-6;
 
+/// The zenith axis's fine grid: with `half` nodes per half and `fine`
+/// fine cells next to the horizon, the half's nodes lie on a grid of
+/// `2 (half - 1) - fine` cells evenly spaced in v = 1 - sqrt(1 - u): every
+/// other grid node away from the horizon, every one in the last `fine`
+/// cells. With `fine` 0 the nodes are evenly spaced in v.
+fn fine_grid_cells(half: usize, fine: usize) -> usize {
+    2 * (half - 1) - fine.min(half - 1)
+}
+
+/// The fine-grid node of zenith node `k` of a half (0 the zenith or the
+/// nadir, `half - 1` next to the horizon): `k + min(k, coarse)`, coarse =
+/// half - 1 - fine.
+fn fine_grid_node(k: usize, half: usize, fine: usize) -> usize {
+    let coarse = half - 1 - fine.min(half - 1);
+    k + k.min(coarse)
+}
+
+/// The zenith node coordinate (0..half - 1) of fine-grid coordinate `j`:
+/// `j / 2` up to the coarse part's end, then one node per grid cell.
+fn node_of_fine_grid(j: f64, half: usize, fine: usize) -> f64 {
+    let coarse = (half - 1 - fine.min(half - 1)) as f64;
+    if j <= 2.0 * coarse { 0.5 * j } else { j - coarse }
+}
+
 /// Zenith angle (rad) of zenith-axis node `row` of `2 half` rows (0 the
 /// zenith, half - 1 just above the horizon, half just below, 2 half - 1
-/// the nadir) for a horizon at `horizon` rad.
-pub fn zenith_of_node(row: usize, half: usize, horizon: f64) -> f64 {
+/// the nadir) for a horizon at `horizon` rad, with `fine` fine cells next
+/// to the horizon in each half ([`fine_grid_cells`]).
+pub fn zenith_of_node(row: usize, half: usize, fine: usize, horizon: f64) -> f64 {
     let pi = std::f64::consts::PI;
+    let cells = fine_grid_cells(half, fine) as f64;
     if row < half {
-        let v = row as f64 / (half - 1) as f64;
+        let v = fine_grid_node(row, half, fine) as f64 / cells;
         let u = 1.0 - (1.0 - v) * (1.0 - v);
         u * (horizon - HORIZON_MARGIN_RAD)
     } else {
-        let v = (2 * half - 1 - row) as f64 / (half - 1) as f64;
+        let v = fine_grid_node(2 * half - 1 - row, half, fine) as f64 / cells;
         let u = 1.0 - (1.0 - v) * (1.0 - v);
         pi - u * (pi - horizon - HORIZON_MARGIN_RAD)
     }
@@ -111,16 +137,21 @@ pub fn zenith_of_node(row: usize, half: usize, horizon: f64) -> f64 {
 /// `horizon`, and the rows the interpolation may use: (y, lowest cell,
 /// highest cell) so that no cell straddles the horizon. The exact inverse
 /// of [`zenith_of_node`], margin included.
-pub fn zenith_coordinate(zenith: f64, half: usize, horizon: f64) -> (f64, usize, usize) {
+pub fn zenith_coordinate(zenith: f64, half: usize, fine: usize, horizon: f64) -> (f64, usize, usize) {
     let pi = std::f64::consts::PI;
-    let last = (half - 1) as f64;
+    let cells = fine_grid_cells(half, fine) as f64;
     if zenith < horizon {
         let u = (zenith / (horizon - HORIZON_MARGIN_RAD)).clamp(0.0, 1.0);
-        ((1.0 - (1.0 - u).sqrt()) * last, 0, half - 2)
+        (
+            node_of_fine_grid((1.0 - (1.0 - u).sqrt()) * cells, half, fine),
+            0,
+            half - 2,
+        )
     } else {
         let u = ((pi - zenith) / (pi - horizon - HORIZON_MARGIN_RAD)).clamp(0.0, 1.0);
         (
-            (2 * half - 1) as f64 - (1.0 - (1.0 - u).sqrt()) * last,
+            (2 * half - 1) as f64
+                - node_of_fine_grid((1.0 - (1.0 - u).sqrt()) * cells, half, fine),
             half,
             2 * half - 2,
         )
@@ -230,12 +261,14 @@ mod tests {
         assert!((sun_elevation_of_node(0, 48) + 12.0).abs() < 1e-12);
         assert!((sun_elevation_of_node(47, 48) - 90.0).abs() < 1e-12);
         let horizon = horizon_zenith(6.371e6 + 1e3, 6.371e6);
-        for row in 0..64 {
-            let z = zenith_of_node(row, 32, horizon);
-            let (y, lowest, highest) = zenith_coordinate(z, 32, horizon);
-            assert!((y - row as f64).abs() < 1e-3, "{row}: {y}");
-            assert_eq!(lowest, if row < 32 { 0 } else { 32 });
-            assert!(highest + 1 < 64);
+        for fine in [0, 7, 31] {
+            for row in 0..64 {
+                let z = zenith_of_node(row, 32, fine, horizon);
+                let (y, lowest, highest) = zenith_coordinate(z, 32, fine, horizon);
+                assert!((y - row as f64).abs() < 1e-3, "{fine} {row}: {y}");
+                assert_eq!(lowest, if row < 32 { 0 } else { 32 });
+                assert!(highest + 1 < 64);
+            }
         }
     }
 

@@ -208,6 +208,8 @@ fn smoothstep(a: f64, b: f64, x: f64) -> f64 {
 pub(crate) struct LayerTable<'a> {
     pub texels: &'a [[f32; 3]],
     pub half: usize,
+    /// Fine zenith cells next to the horizon per half (`axes::zenith_of_node`).
+    pub fine: usize,
     pub azimuth: usize,
     pub slices: usize,
 }
@@ -217,6 +219,7 @@ impl EngineTables {
         LayerTable {
             texels: &self.sky,
             half: self.settings.zenith_nodes_per_half,
+            fine: self.settings.zenith_fine_cells_per_half,
             azimuth: self.settings.azimuth_nodes,
             slices: 1,
         }
@@ -227,6 +230,7 @@ impl EngineTables {
         LayerTable {
             texels: &self.aerial,
             half,
+            fine: 0,
             azimuth,
             slices,
         }
@@ -242,7 +246,7 @@ impl EngineTables {
         phi: f64,
     ) -> [f64; 3] {
         let table = self.sky_layers_table();
-        let coordinate = axes::zenith_coordinate(zenith, table.half, horizon);
+        let coordinate = axes::zenith_coordinate(zenith, table.half, table.fine, horizon);
         layer_value_at(table, layer, coordinate, phi)
     }
 
@@ -304,7 +308,7 @@ impl EngineTables {
         let layer = |s: usize| {
             let node_deg = axes::sun_elevation_of_node(s, self.settings.sun_nodes);
             let turned = turned_view(view, (node_deg - e_deg).to_radians() * share, horizon);
-            let coordinate = axes::zenith_coordinate(turned.zenith_rad, table.half, horizon);
+            let coordinate = axes::zenith_coordinate(turned.zenith_rad, table.half, table.fine, horizon);
             let at = |a: usize| {
                 let first = (s * a_count + a) * table.slices + j;
                 let value = |slice: usize| {

@@ -30,6 +30,7 @@ fn small_settings() -> EngineTableSettings {
         sun_nodes: 5,
         altitude_nodes: 2,
         zenith_nodes_per_half: 12,
+        zenith_fine_cells_per_half: 3,
         azimuth_nodes: 9,
         transmittance_nodes: (8, 32),
         aerial_nodes: (6, 5, 4),
@@ -88,7 +89,7 @@ fn at_the_nodes_the_tables_are_the_library_image() {
             let altitude = axes::altitude_of_node(a, settings.altitude_nodes, thickness);
             let (node_sky, horizon) = node_sky(&sky, &tables, altitude, elevation);
             for row in [0, 5, 11, 12, 20, 23] {
-                let zenith = axes::zenith_of_node(row, settings.zenith_nodes_per_half, horizon);
+                let zenith = axes::zenith_of_node(row, settings.zenith_nodes_per_half, settings.zenith_fine_cells_per_half, horizon);
                 for k in [0, 4, 8] {
                     let phi = axes::azimuth_of_node(k, settings.azimuth_nodes);
                     let view =
@@ -316,6 +317,7 @@ fn the_shared_field_bake_is_the_per_layer_bake() {
         sun_nodes: 6,
         altitude_nodes: 2,
         zenith_nodes_per_half: 6,
+        zenith_fine_cells_per_half: 0,
         azimuth_nodes: 5,
         transmittance_nodes: (4, 8),
         aerial_nodes: (4, 4, 3),
@@ -517,6 +519,7 @@ fn the_ground_layers_do_not_depend_on_the_altitude_nodes() {
             sun_nodes: 5,
             altitude_nodes,
             zenith_nodes_per_half: 6,
+            zenith_fine_cells_per_half: 0,
             azimuth_nodes: 5,
             transmittance_nodes: (4, 8),
             aerial_nodes: (4, 4, 3),
@@ -805,7 +808,7 @@ fn at_the_nodes_the_aerial_perspective_is_the_library_s() {
             let mut segments = Vec::new();
             let mut lookups = Vec::new();
             for row in [0, 3, 5, 6, 9, 11] {
-                let zenith = axes::zenith_of_node(row, half, horizon);
+                let zenith = axes::zenith_of_node(row, half, 0, horizon);
                 let range = tables.aerial_distance_range(altitude, zenith.cos());
                 for k in [0, 2, azimuth - 1] {
                     let phi = axes::azimuth_of_node(k, azimuth);
@@ -2121,6 +2124,10 @@ fn the_sky_between_the_sun_nodes_about_the_sunset_matches_the_library() {
         .map_or(EngineTableSettings::default().zenith_nodes_per_half, |s| {
             s.parse().unwrap()
         });
+    let zenith_fine_cells_per_half = std::env::var("SORA_TWILIGHT_FINE_CELLS")
+        .map_or(EngineTableSettings::default().zenith_fine_cells_per_half, |s| {
+            s.parse().unwrap()
+        });
     let mut failures = Vec::new();
     for preset in presets.split(',') {
         let sky = Sky::builder(&Atmosphere::preset(preset).unwrap())
@@ -2132,6 +2139,7 @@ fn the_sky_between_the_sun_nodes_about_the_sunset_matches_the_library() {
             sun_nodes,
             azimuth_nodes,
             zenith_nodes_per_half,
+            zenith_fine_cells_per_half,
             altitude_nodes: 2,
             march: false,
             ..EngineTableSettings::default()
