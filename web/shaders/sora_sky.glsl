@@ -147,6 +147,20 @@ float soraTurnShare(float zenith, float phi, float eDeg, float zh) {
   return max(sunSide, shadow);
 }
 
+// The share of the read near the antisolar point with the sun below the
+// horizon that takes the sun layers below the horizon only: the planet's
+// shadow's share of soraTurnShare where the view's elevation is within
+// the sun's depression |e| (below the shadow's edge), ramping to none at
+// SORA_SHADOW_RAMP |e|; none with the sun up (lookup.rs shadow_read_share).
+const float SORA_SHADOW_RAMP = 2.5;
+float soraShadowReadShare(float zenith, float phi, float eDeg, float zh) {
+  if (eDeg >= 0.0) return 0.0;
+  float e = radians(eDeg);
+  float cosTheta = cos(zenith) * sin(e) + sin(zenith) * cos(phi) * cos(e);
+  return smoothstep(cos(radians(80.0)), cos(radians(40.0)), -cosTheta)
+    * (1.0 - smoothstep(-e, -SORA_SHADOW_RAMP * e, zh - zenith));
+}
+
 // A layer table (the sky, or the aerial-perspective table with Z zenith
 // nodes per half, K azimuth nodes, and its distance slices j and j + 1
 // blended by fj) at altitude h (m), toward zenith angle `zenith` (rad) and
@@ -184,7 +198,19 @@ vec3 soraLayersXyz(highp sampler2DArray table, int Z, int F, int K, int j, float
   // s and s + 1 (zero at the axis's ends, each within +-1), blended.
   vec3 d0 = s > 0 ? clamp(layers[0] - 2.0 * layers[1] + layers[2], -1.0, 1.0) : vec3(0.0);
   vec3 d1 = s + 2 < uSkyNodes.x ? clamp(layers[1] - 2.0 * layers[2] + layers[3], -1.0, 1.0) : vec3(0.0);
-  return exp(mix(layers[1], layers[2], fs) - 0.5 * fs * (1.0 - fs) * mix(d0, d1, fs));
+  vec3 whole = mix(layers[1], layers[2], fs) - 0.5 * fs * (1.0 - fs) * mix(d0, d1, fs);
+  // Below the planet's shadow's edge, the layers with the sun below the
+  // horizon alone (the axis cut at the last of them, `top`; beyond it the
+  // chord of the last two extended), blended in by soraShadowReadShare.
+  int top = int(ceil(soraSunCoordinate(0.0))) - 1;
+  float below = soraShadowReadShare(zenith, phi, eDeg, zh);
+  if (below > 0.0 && top >= 1 && top + 1 < uSkyNodes.x && s + 2 > top && s <= top) {
+    vec3 shadow = s == top
+      ? mix(layers[0], layers[1], 1.0 + fs)
+      : mix(layers[1], layers[2], fs) - 0.5 * fs * (1.0 - fs) * (1.0 - fs) * d0;
+    whole = mix(whole, shadow, below);
+  }
+  return exp(whole);
 }
 
 // Sky radiance (XYZ, W m^-2 sr^-1 nm^-1) seen at altitude h (m) toward

@@ -133,6 +133,18 @@ fn sora_turn_share(zenith: f32, phi: f32, e_deg: f32, zh: f32) -> f32 {
   return max(sun_side, shadow);
 }
 
+// The share of the read near the antisolar point with the sun below the
+// horizon that takes the sun layers below the horizon only (as
+// soraShadowReadShare in sora_sky.glsl; lookup.rs shadow_read_share).
+const SORA_SHADOW_RAMP: f32 = 2.5;
+fn sora_shadow_read_share(zenith: f32, phi: f32, e_deg: f32, zh: f32) -> f32 {
+  if (e_deg >= 0.0) { return 0.0; }
+  let e = radians(e_deg);
+  let cos_theta = cos(zenith) * sin(e) + sin(zenith) * cos(phi) * cos(e);
+  return smoothstep(cos(radians(80.0)), cos(radians(40.0)), -cos_theta)
+    * (1.0 - smoothstep(-e, -SORA_SHADOW_RAMP * e, zh - zenith));
+}
+
 // A layer table (the sky, or the aerial-perspective table with zn zenith
 // nodes per half, kn azimuth nodes, its distance slices j and j + 1
 // blended by fj) at altitude h (m) toward zenith angle `zenith` and
@@ -171,7 +183,18 @@ fn sora_layers_xyz(table: texture_2d_array<f32>, zn: i32, zf: i32, kn: i32, j: i
   var d1 = vec3<f32>(0.0);
   if (s.i > 0) { d0 = clamp(layers[0] - 2.0 * layers[1] + layers[2], vec3<f32>(-1.0), vec3<f32>(1.0)); }
   if (s.i + 2 < sora.sky_nodes.x) { d1 = clamp(layers[1] - 2.0 * layers[2] + layers[3], vec3<f32>(-1.0), vec3<f32>(1.0)); }
-  return exp(mix(layers[1], layers[2], s.f) - 0.5 * s.f * (1.0 - s.f) * mix(d0, d1, s.f));
+  var whole = mix(layers[1], layers[2], s.f) - 0.5 * s.f * (1.0 - s.f) * mix(d0, d1, s.f);
+  // Below the planet's shadow's edge, the layers with the sun below the
+  // horizon alone (the axis cut at the last of them, `top`; beyond it the
+  // chord of the last two extended), blended in by sora_shadow_read_share.
+  let top = i32(ceil(sora_sun_coordinate(0.0))) - 1;
+  let below = sora_shadow_read_share(zenith, phi, e_deg, zh);
+  if (below > 0.0 && top >= 1 && top + 1 < sora.sky_nodes.x && s.i + 2 > top && s.i <= top) {
+    var shadow = mix(layers[1], layers[2], s.f) - 0.5 * s.f * (1.0 - s.f) * (1.0 - s.f) * d0;
+    if (s.i == top) { shadow = mix(layers[0], layers[1], 1.0 + s.f); }
+    whole = mix(whole, shadow, below);
+  }
+  return exp(whole);
 }
 
 // Sky radiance (XYZ, W m^-2 sr^-1 nm^-1) at altitude h (m) toward zenith

@@ -273,6 +273,34 @@ mod tests {
     }
 
     #[test]
+    fn the_fine_cells_are_the_rows_of_a_grid_twice_as_fine() {
+        // 78 nodes per half with 27 fine cells: the nodes are rows of a
+        // 128-row half (the images' sky-view table's), every other row
+        // from the zenith to row 100 and every row in the last 27 cells.
+        let horizon = horizon_zenith(3.3895e6 + 10.0, 3.3895e6);
+        let grid = |j: usize| zenith_of_node(j, 128, 0, horizon);
+        for row in 0..78 {
+            let j = if row <= 50 { 2 * row } else { row + 50 };
+            let z = zenith_of_node(row, 78, 27, horizon);
+            assert!((z - grid(j)).abs() < 1e-12, "{row}: {z} {}", grid(j));
+            let below = zenith_of_node(2 * 78 - 1 - row, 78, 27, horizon);
+            assert!((below - zenith_of_node(255 - j, 128, 0, horizon)).abs() < 1e-12);
+        }
+        // With no fine cells, the mapping is the plain one.
+        for row in 0..128 {
+            let v = (row.min(127 - row)) as f64 / 63.0;
+            let u = 1.0 - (1.0 - v) * (1.0 - v);
+            let z = zenith_of_node(row, 64, 0, horizon);
+            let plain = if row < 64 {
+                u * (horizon - HORIZON_MARGIN_RAD)
+            } else {
+                std::f64::consts::PI - u * (std::f64::consts::PI - horizon - HORIZON_MARGIN_RAD)
+            };
+            assert!((z - plain).abs() < 1e-12, "{row}");
+        }
+    }
+
+    #[test]
     fn sun_nodes_are_finest_in_twilight() {
         let n = 48;
         let step = |e: f64| {
