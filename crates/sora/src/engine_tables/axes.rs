@@ -112,7 +112,11 @@ fn fine_grid_node(k: usize, half: usize, fine: usize) -> usize {
 /// `j / 2` up to the coarse part's end, then one node per grid cell.
 fn node_of_fine_grid(j: f64, half: usize, fine: usize) -> f64 {
     let coarse = (half - 1 - fine.min(half - 1)) as f64;
-    if j <= 2.0 * coarse { 0.5 * j } else { j - coarse }
+    if j <= 2.0 * coarse {
+        0.5 * j
+    } else {
+        j - coarse
+    }
 }
 
 /// Zenith angle (rad) of zenith-axis node `row` of `2 half` rows (0 the
@@ -137,7 +141,12 @@ pub fn zenith_of_node(row: usize, half: usize, fine: usize, horizon: f64) -> f64
 /// `horizon`, and the rows the interpolation may use: (y, lowest cell,
 /// highest cell) so that no cell straddles the horizon. The exact inverse
 /// of [`zenith_of_node`], margin included.
-pub fn zenith_coordinate(zenith: f64, half: usize, fine: usize, horizon: f64) -> (f64, usize, usize) {
+pub fn zenith_coordinate(
+    zenith: f64,
+    half: usize,
+    fine: usize,
+    horizon: f64,
+) -> (f64, usize, usize) {
     let pi = std::f64::consts::PI;
     let cells = fine_grid_cells(half, fine) as f64;
     if zenith < horizon {
@@ -150,8 +159,7 @@ pub fn zenith_coordinate(zenith: f64, half: usize, fine: usize, horizon: f64) ->
     } else {
         let u = ((pi - zenith) / (pi - horizon - HORIZON_MARGIN_RAD)).clamp(0.0, 1.0);
         (
-            (2 * half - 1) as f64
-                - node_of_fine_grid((1.0 - (1.0 - u).sqrt()) * cells, half, fine),
+            (2 * half - 1) as f64 - node_of_fine_grid((1.0 - (1.0 - u).sqrt()) * cells, half, fine),
             half,
             2 * half - 2,
         )

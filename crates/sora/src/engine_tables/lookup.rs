@@ -337,7 +337,8 @@ impl EngineTables {
         let layer = |s: usize| {
             let node_deg = axes::sun_elevation_of_node(s, self.settings.sun_nodes);
             let turned = turned_view(view, (node_deg - e_deg).to_radians() * share, horizon);
-            let coordinate = axes::zenith_coordinate(turned.zenith_rad, table.half, table.fine, horizon);
+            let coordinate =
+                axes::zenith_coordinate(turned.zenith_rad, table.half, table.fine, horizon);
             let at = |a: usize| {
                 let first = (s * a_count + a) * table.slices + j;
                 let value = |slice: usize| {
@@ -366,8 +367,7 @@ impl EngineTables {
             let (l0, l1) = (layer(s), layer(s + 1));
             let second = |lower: [f64; 3], middle: [f64; 3], upper: [f64; 3]| -> [f64; 3] {
                 std::array::from_fn(|i| {
-                    (lower[i] - 2.0 * middle[i] + upper[i])
-                        .clamp(-CURVATURE_LIMIT, CURVATURE_LIMIT)
+                    (lower[i] - 2.0 * middle[i] + upper[i]).clamp(-CURVATURE_LIMIT, CURVATURE_LIMIT)
                 })
             };
             let inside = fs <= 1.0;
