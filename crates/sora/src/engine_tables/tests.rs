@@ -2108,7 +2108,8 @@ fn print_worst_band_pixels(tables: &EngineTables, pixels: &[(LocalView, f64, boo
 /// SORA_TWILIGHT_FINE_CELLS and SORA_TWILIGHT_AZIMUTH_NODES (other
 /// tables), and
 /// SORA_TWILIGHT_WORST (print the worst pixels of the horizon band).
-/// Ignored: a bake (about 20 CPU-s) and an image per sun; run with
+/// Ignored: a bake (its layers' 128-row sky-view tables about 1.5 times
+/// the default's CPU) and an image per sun; run with
 /// `--ignored --nocapture` to see the numbers.
 #[test]
 #[ignore]
@@ -2129,7 +2130,7 @@ fn the_sky_between_the_sun_nodes_about_the_sunset_matches_the_library() {
             s.parse().unwrap()
         });
     // The zenith axis with the images' own rows next to the horizon
-    // (`--zenith-nodes 78 --zenith-fine-cells 27`, 63.3 MB for paper-mars
+    // (`--zenith-nodes 78 --zenith-fine-cells 27`, 63.2 MB for paper-mars
     // with the march's tables).
     let zenith_nodes_per_half =
         std::env::var("SORA_TWILIGHT_ZENITH_NODES").map_or(78, |s| s.parse().unwrap());
