@@ -30,7 +30,12 @@
 //!   sets, turns with the antisolar point, and a view along its edge read
 //!   unturned from the layer below the sunset is several times too dark
 //!   (smoothstep ramps between; the larger of the two shares). At a sun
-//!   node the read is the layer's own.
+//!   node the read is the layer's own. With the sun below the horizon,
+//!   near the antisolar point and below the shadow's edge
+//!   ([`shadow_read_share`]), the read is blended toward that of the sun
+//!   axis cut at its last node below the horizon (the chord of the last
+//!   two such layers, extended beyond the last; the curvature at the cut
+//!   dropped): a layer with the sun up has no shadow to give.
 //! - Transmittance: linear in altitude between two rows, each read
 //!   linearly at the mu coordinate of its own altitude's horizon; zero
 //!   for a view below the eye's horizon.
