@@ -23,6 +23,8 @@ uniform highp sampler2DArray uAerial;
 uniform ivec3 uAerialNodes;
 // sun_nodes, altitude_nodes, zenith_nodes_per_half, azimuth_nodes
 uniform ivec4 uSkyNodes;
+// sky zenith_fine_cells_per_half (0 where the manifest has none)
+uniform int uSkyZenithFineCells;
 // transmittance altitude nodes, mu nodes
 uniform ivec2 uTransmittanceNodes;
 // ground_radius_m, top_radius_m, sun angular radius (rad), limb darkening
@@ -59,19 +61,29 @@ void soraCell(float x, int lowest, int highest, out int i, out float f) {
   f = clamp(x - float(i), 0.0, 1.0);
 }
 
+// Zenith node coordinate (0..half_ - 1, from the zenith or the nadir) of
+// v = 1 - sqrt(1 - u) on an axis of half_ nodes per half with `fine` fine
+// cells next to the horizon (axes::zenith_coordinate): v on a grid of
+// 2 (half_ - 1) - fine cells, every other grid node a node, every one in
+// the last `fine` cells.
+float soraZenithNode(float v, int half_, int fine) {
+  float coarse = float(half_ - 1 - min(fine, half_ - 1));
+  float j = v * float(2 * (half_ - 1) - min(fine, half_ - 1));
+  return j <= 2.0 * coarse ? 0.5 * j : j - coarse;
+}
+
 // Zenith coordinate (y, lowest cell, highest cell) for an eye at radius r
-// on an axis of half_ nodes per half.
-void soraZenithCoordinate(float zenith, float r, int half_, out float y, out int lowest, out int highest) {
+// on an axis of half_ nodes per half with `fine` fine cells.
+void soraZenithCoordinate(float zenith, float r, int half_, int fine, out float y, out int lowest, out int highest) {
   float zh = SORA_PI - asin(min(uPlanetSun.x / r, 1.0));
-  float last = float(half_ - 1);
   if (zenith < zh) {
     float u = clamp(zenith / (zh - 1e-6), 0.0, 1.0);
-    y = (1.0 - sqrt(1.0 - u)) * last;
+    y = soraZenithNode(1.0 - sqrt(1.0 - u), half_, fine);
     lowest = 0;
     highest = half_ - 2;
   } else {
     float u = clamp((SORA_PI - zenith) / (SORA_PI - zh - 1e-6), 0.0, 1.0);
-    y = float(2 * half_ - 1) - (1.0 - sqrt(1.0 - u)) * last;
+    y = float(2 * half_ - 1) - soraZenithNode(1.0 - sqrt(1.0 - u), half_, fine);
     lowest = half_;
     highest = 2 * half_ - 2;
   }
@@ -135,6 +147,20 @@ float soraTurnShare(float zenith, float phi, float eDeg, float zh) {
   return max(sunSide, shadow);
 }
 
+// The share of the read near the antisolar point with the sun below the
+// horizon that takes the sun layers below the horizon only: the planet's
+// shadow's share of soraTurnShare where the view's elevation is within
+// the sun's depression |e| (below the shadow's edge), ramping to none at
+// SORA_SHADOW_RAMP |e|; none with the sun up (lookup.rs shadow_read_share).
+const float SORA_SHADOW_RAMP = 2.5;
+float soraShadowReadShare(float zenith, float phi, float eDeg, float zh) {
+  if (eDeg >= 0.0) return 0.0;
+  float e = radians(eDeg);
+  float cosTheta = cos(zenith) * sin(e) + sin(zenith) * cos(phi) * cos(e);
+  return smoothstep(cos(radians(80.0)), cos(radians(40.0)), -cosTheta)
+    * (1.0 - smoothstep(-e, -SORA_SHADOW_RAMP * e, zh - zenith));
+}
+
 // A layer table (the sky, or the aerial-perspective table with Z zenith
 // nodes per half, K azimuth nodes, and its distance slices j and j + 1
 // blended by fj) at altitude h (m), toward zenith angle `zenith` (rad) and
@@ -143,7 +169,7 @@ float soraTurnShare(float zenith, float phi, float eDeg, float zh) {
 // the two sun layers (the chord less the curvature of the four nearest),
 // each read at the view turned with the sun to its node (soraTurnedView,
 // by soraTurnShare of the step).
-vec3 soraLayersXyz(highp sampler2DArray table, int Z, int K, int j, float fj, float h, float zenith, float phi, float eDeg) {
+vec3 soraLayersXyz(highp sampler2DArray table, int Z, int F, int K, int j, float fj, float h, float zenith, float phi, float eDeg) {
   h = clamp(h, 0.0, soraThickness());
   float r = uPlanetSun.x + h;
   float zh = SORA_PI - asin(min(uPlanetSun.x / r, 1.0));
@@ -160,7 +186,7 @@ vec3 soraLayersXyz(highp sampler2DArray table, int Z, int K, int j, float fj, fl
     int n = clamp(s + m - 1, 0, uSkyNodes.x - 1) - s;
     vec2 view = soraTurnedView(zenith, phi, radians(soraSunElevationOfNode(s + n) - eDeg) * share, zh);
     float y; int lowest; int highest;
-    soraZenithCoordinate(view.x, r, Z, y, lowest, highest);
+    soraZenithCoordinate(view.x, r, Z, F, y, lowest, highest);
     int i; float fy; soraCell(y, lowest, highest, i, fy);
     int k; float fx; soraCell(sqrt(clamp(view.y / SORA_PI, 0.0, 1.0)) * float(K - 1), 0, K - 2, k, fx);
     int low = (s + n) * A + a;
@@ -172,14 +198,26 @@ vec3 soraLayersXyz(highp sampler2DArray table, int Z, int K, int j, float fj, fl
   // s and s + 1 (zero at the axis's ends, each within +-1), blended.
   vec3 d0 = s > 0 ? clamp(layers[0] - 2.0 * layers[1] + layers[2], -1.0, 1.0) : vec3(0.0);
   vec3 d1 = s + 2 < uSkyNodes.x ? clamp(layers[1] - 2.0 * layers[2] + layers[3], -1.0, 1.0) : vec3(0.0);
-  return exp(mix(layers[1], layers[2], fs) - 0.5 * fs * (1.0 - fs) * mix(d0, d1, fs));
+  vec3 whole = mix(layers[1], layers[2], fs) - 0.5 * fs * (1.0 - fs) * mix(d0, d1, fs);
+  // Below the planet's shadow's edge, the layers with the sun below the
+  // horizon alone (the axis cut at the last of them, `top`; beyond it the
+  // chord of the last two extended), blended in by soraShadowReadShare.
+  int top = int(ceil(soraSunCoordinate(0.0))) - 1;
+  float below = soraShadowReadShare(zenith, phi, eDeg, zh);
+  if (below > 0.0 && top >= 1 && top + 1 < uSkyNodes.x && s + 2 > top && s <= top) {
+    vec3 shadow = s == top
+      ? mix(layers[0], layers[1], 1.0 + fs)
+      : mix(layers[1], layers[2], fs) - 0.5 * fs * (1.0 - fs) * (1.0 - fs) * d0;
+    whole = mix(whole, shadow, below);
+  }
+  return exp(whole);
 }
 
 // Sky radiance (XYZ, W m^-2 sr^-1 nm^-1) seen at altitude h (m) toward
 // zenith angle `zenith` (rad) and azimuth `phi` (rad, 0..pi) from the
 // sun's, with the sun at elevation eDeg (degrees). No sun disc.
 vec3 soraSkyXyz(float h, float zenith, float phi, float eDeg) {
-  return soraLayersXyz(uSky, uSkyNodes.z, uSkyNodes.w, 0, 0.0, h, zenith, phi, eDeg);
+  return soraLayersXyz(uSky, uSkyNodes.z, uSkyZenithFineCells, uSkyNodes.w, 0, 0.0, h, zenith, phi, eDeg);
 }
 
 float soraHorizonCosine(float r) {
@@ -314,7 +352,7 @@ void soraAerialPerspective(float h, vec3 v, vec3 sun, float d, out vec3 inscatte
   vec2 zp = soraLocalView(v, vec3(0.0, 0.0, 1.0), sun);
   float eDeg = degrees(asin(clamp(sun.z, -1.0, 1.0)));
   vec3 sky = soraSkyXyz(h, zp.x, zp.y, eDeg);
-  vec3 ratio = soraLayersXyz(uAerial, uAerialNodes.x, uAerialNodes.y, j, fj, h, zp.x, zp.y, eDeg);
+  vec3 ratio = soraLayersXyz(uAerial, uAerialNodes.x, 0, uAerialNodes.y, j, fj, h, zp.x, zp.y, eDeg);
   inscattered = sky * ratio * share;
 }
 

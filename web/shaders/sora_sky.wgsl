@@ -13,7 +13,8 @@
 struct SoraTables {
   // sun_nodes, altitude_nodes, zenith_nodes_per_half, azimuth_nodes
   sky_nodes: vec4<i32>,
-  // transmittance altitude nodes, mu nodes, unused, unused
+  // transmittance altitude nodes, mu nodes, the sky's
+  // zenith_fine_cells_per_half (0 where the manifest has none), unused
   transmittance_nodes: vec4<i32>,
   // ground_radius_m, top_radius_m, sun angular radius (rad), limb darkening
   planet_sun: vec4<f32>,
@@ -58,17 +59,25 @@ fn sora_cell(x: f32, lowest: i32, highest: i32) -> SoraCell {
   return SoraCell(i, clamp(x - f32(i), 0.0, 1.0));
 }
 
+// Zenith node coordinate (0..half_nodes - 1, from the zenith or the
+// nadir) of v = 1 - sqrt(1 - u) on an axis of half_nodes nodes per half
+// with `fine` fine cells next to the horizon (axes::zenith_coordinate).
+fn sora_zenith_node(v: f32, half_nodes: i32, fine: i32) -> f32 {
+  let coarse = f32(half_nodes - 1 - min(fine, half_nodes - 1));
+  let j = v * f32(2 * (half_nodes - 1) - min(fine, half_nodes - 1));
+  return select(j - coarse, 0.5 * j, j <= 2.0 * coarse);
+}
+
 // The zenith axis's cell for an eye at radius r on an axis of half_nodes
-// nodes per half (never across the horizon).
-fn sora_zenith_cell(zenith: f32, r: f32, half_nodes: i32) -> SoraCell {
+// nodes per half with `fine` fine cells (never across the horizon).
+fn sora_zenith_cell(zenith: f32, r: f32, half_nodes: i32, fine: i32) -> SoraCell {
   let zh = SORA_PI - asin(min(sora.planet_sun.x / r, 1.0));
-  let last = f32(half_nodes - 1);
   if (zenith < zh) {
     let u = clamp(zenith / (zh - 1e-6), 0.0, 1.0);
-    return sora_cell((1.0 - sqrt(1.0 - u)) * last, 0, half_nodes - 2);
+    return sora_cell(sora_zenith_node(1.0 - sqrt(1.0 - u), half_nodes, fine), 0, half_nodes - 2);
   }
   let u = clamp((SORA_PI - zenith) / (SORA_PI - zh - 1e-6), 0.0, 1.0);
-  return sora_cell(f32(2 * half_nodes - 1) - (1.0 - sqrt(1.0 - u)) * last, half_nodes, 2 * half_nodes - 2);
+  return sora_cell(f32(2 * half_nodes - 1) - sora_zenith_node(1.0 - sqrt(1.0 - u), half_nodes, fine), half_nodes, 2 * half_nodes - 2);
 }
 
 // Bilinear read of the slice whose first row is row0 of a layer of `table`.
@@ -124,6 +133,18 @@ fn sora_turn_share(zenith: f32, phi: f32, e_deg: f32, zh: f32) -> f32 {
   return max(sun_side, shadow);
 }
 
+// The share of the read near the antisolar point with the sun below the
+// horizon that takes the sun layers below the horizon only (as
+// soraShadowReadShare in sora_sky.glsl; lookup.rs shadow_read_share).
+const SORA_SHADOW_RAMP: f32 = 2.5;
+fn sora_shadow_read_share(zenith: f32, phi: f32, e_deg: f32, zh: f32) -> f32 {
+  if (e_deg >= 0.0) { return 0.0; }
+  let e = radians(e_deg);
+  let cos_theta = cos(zenith) * sin(e) + sin(zenith) * cos(phi) * cos(e);
+  return smoothstep(cos(radians(80.0)), cos(radians(40.0)), -cos_theta)
+    * (1.0 - smoothstep(-e, -SORA_SHADOW_RAMP * e, zh - zenith));
+}
+
 // A layer table (the sky, or the aerial-perspective table with zn zenith
 // nodes per half, kn azimuth nodes, its distance slices j and j + 1
 // blended by fj) at altitude h (m) toward zenith angle `zenith` and
@@ -131,7 +152,7 @@ fn sora_turn_share(zenith: f32, phi: f32, e_deg: f32, zh: f32) -> f32 {
 // linear in altitude, in ln L between the sun layers (the chord less the
 // curvature of the four nearest), each read at the view turned with the
 // sun to its node.
-fn sora_layers_xyz(table: texture_2d_array<f32>, zn: i32, kn: i32, j: i32, fj: f32,
+fn sora_layers_xyz(table: texture_2d_array<f32>, zn: i32, zf: i32, kn: i32, j: i32, fj: f32,
                    h_in: f32, zenith: f32, phi: f32, e_in: f32) -> vec3<f32> {
   let h = clamp(h_in, 0.0, sora_thickness());
   let r = sora.planet_sun.x + h;
@@ -149,7 +170,7 @@ fn sora_layers_xyz(table: texture_2d_array<f32>, zn: i32, kn: i32, j: i32, fj: f
   for (var m = 0; m < 4; m++) {
     let n = clamp(s.i + m - 1, 0, sora.sky_nodes.x - 1) - s.i;
     let view = sora_turned_view(zenith, phi, radians(sora_sun_elevation_of_node(s.i + n) - e_deg) * share, zh);
-    let z = sora_zenith_cell(view.x, r, zn);
+    let z = sora_zenith_cell(view.x, r, zn, zf);
     let k = sora_cell(sqrt(clamp(view.y / SORA_PI, 0.0, 1.0)) * f32(kn - 1), 0, kn - 2);
     let low = (s.i + n) * an + a.i;
     let ground = mix(sora_layer(table, low, row0, z, k), sora_layer(table, low, row1, z, k), fj);
@@ -162,13 +183,24 @@ fn sora_layers_xyz(table: texture_2d_array<f32>, zn: i32, kn: i32, j: i32, fj: f
   var d1 = vec3<f32>(0.0);
   if (s.i > 0) { d0 = clamp(layers[0] - 2.0 * layers[1] + layers[2], vec3<f32>(-1.0), vec3<f32>(1.0)); }
   if (s.i + 2 < sora.sky_nodes.x) { d1 = clamp(layers[1] - 2.0 * layers[2] + layers[3], vec3<f32>(-1.0), vec3<f32>(1.0)); }
-  return exp(mix(layers[1], layers[2], s.f) - 0.5 * s.f * (1.0 - s.f) * mix(d0, d1, s.f));
+  var whole = mix(layers[1], layers[2], s.f) - 0.5 * s.f * (1.0 - s.f) * mix(d0, d1, s.f);
+  // Below the planet's shadow's edge, the layers with the sun below the
+  // horizon alone (the axis cut at the last of them, `top`; beyond it the
+  // chord of the last two extended), blended in by sora_shadow_read_share.
+  let top = i32(ceil(sora_sun_coordinate(0.0))) - 1;
+  let below = sora_shadow_read_share(zenith, phi, e_deg, zh);
+  if (below > 0.0 && top >= 1 && top + 1 < sora.sky_nodes.x && s.i + 2 > top && s.i <= top) {
+    var shadow = mix(layers[1], layers[2], s.f) - 0.5 * s.f * (1.0 - s.f) * (1.0 - s.f) * d0;
+    if (s.i == top) { shadow = mix(layers[0], layers[1], 1.0 + s.f); }
+    whole = mix(whole, shadow, below);
+  }
+  return exp(whole);
 }
 
 // Sky radiance (XYZ, W m^-2 sr^-1 nm^-1) at altitude h (m) toward zenith
 // angle `zenith` and azimuth `phi` from the sun's (rad), sun at e_deg.
 fn sora_sky_xyz(h_in: f32, zenith: f32, phi: f32, e_in: f32) -> vec3<f32> {
-  return sora_layers_xyz(sora_sky, sora.sky_nodes.z, sora.sky_nodes.w, 0, 0.0, h_in, zenith, phi, e_in);
+  return sora_layers_xyz(sora_sky, sora.sky_nodes.z, sora.transmittance_nodes.z, sora.sky_nodes.w, 0, 0.0, h_in, zenith, phi, e_in);
 }
 
 fn sora_horizon_cosine(r: f32) -> f32 {
@@ -306,7 +338,7 @@ fn sora_aerial_perspective(h_in: f32, v: vec3<f32>, sun: vec3<f32>, d: f32) -> S
   let zp = sora_local_view(v, vec3<f32>(0.0, 0.0, 1.0), sun);
   let e_deg = degrees(asin(clamp(sun.z, -1.0, 1.0)));
   let sky = sora_sky_xyz(h, zp.x, zp.y, e_deg);
-  let ratio = sora_layers_xyz(sora_aerial, sora.aerial_nodes.x, sora.aerial_nodes.y, j.i, j.f, h, zp.x, zp.y, e_deg);
+  let ratio = sora_layers_xyz(sora_aerial, sora.aerial_nodes.x, 0, sora.aerial_nodes.y, j.i, j.f, h, zp.x, zp.y, e_deg);
   return SoraAerial(sky * ratio * share, t);
 }
 

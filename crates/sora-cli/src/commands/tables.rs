@@ -55,6 +55,12 @@ pub struct TablesArgs {
     #[arg(long, value_name = "N", default_value_t = EngineTableSettings::default().zenith_nodes_per_half)]
     zenith_nodes: usize,
 
+    /// Fine cells of the zenith axis next to the horizon, per half: the
+    /// nodes there on the library's own rows where 2 (N - 1) - F + 1 is
+    /// the images' 128 (e.g. --zenith-nodes 78 --zenith-fine-cells 27)
+    #[arg(long, value_name = "F", default_value_t = EngineTableSettings::default().zenith_fine_cells_per_half)]
+    zenith_fine_cells: usize,
+
     /// View azimuth nodes over 0..180 degrees from the sun
     #[arg(long, value_name = "N", default_value_t = EngineTableSettings::default().azimuth_nodes)]
     azimuth_nodes: usize,
@@ -104,6 +110,7 @@ pub fn run(args: TablesArgs) -> anyhow::Result<()> {
         sun_nodes: args.sun_nodes,
         altitude_nodes: args.altitude_nodes,
         zenith_nodes_per_half: args.zenith_nodes,
+        zenith_fine_cells_per_half: args.zenith_fine_cells,
         azimuth_nodes: args.azimuth_nodes,
         aerial_nodes: (
             args.aerial_zenith_nodes,

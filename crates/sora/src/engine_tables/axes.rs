@@ -91,17 +91,47 @@ pub fn horizon_zenith(r_m: f64, ground_m: f64) -> f64 {
 /// `transport/sky_view_table.rs` does, for the same reason).
 const HORIZON_MARGIN_RAD: f64 = 1e-6;
 
+/// The zenith axis's fine grid: with `half` nodes per half and `fine`
+/// fine cells next to the horizon, the half's nodes lie on a grid of
+/// `2 (half - 1) - fine` cells evenly spaced in v = 1 - sqrt(1 - u): every
+/// other grid node away from the horizon, every one in the last `fine`
+/// cells. With `fine` 0 the nodes are evenly spaced in v.
+fn fine_grid_cells(half: usize, fine: usize) -> usize {
+    2 * (half - 1) - fine.min(half - 1)
+}
+
+/// The fine-grid node of zenith node `k` of a half (0 the zenith or the
+/// nadir, `half - 1` next to the horizon): `k + min(k, coarse)`, coarse =
+/// half - 1 - fine.
+fn fine_grid_node(k: usize, half: usize, fine: usize) -> usize {
+    let coarse = half - 1 - fine.min(half - 1);
+    k + k.min(coarse)
+}
+
+/// The zenith node coordinate (0..half - 1) of fine-grid coordinate `j`:
+/// `j / 2` up to the coarse part's end, then one node per grid cell.
+fn node_of_fine_grid(j: f64, half: usize, fine: usize) -> f64 {
+    let coarse = (half - 1 - fine.min(half - 1)) as f64;
+    if j <= 2.0 * coarse {
+        0.5 * j
+    } else {
+        j - coarse
+    }
+}
+
 /// Zenith angle (rad) of zenith-axis node `row` of `2 half` rows (0 the
 /// zenith, half - 1 just above the horizon, half just below, 2 half - 1
-/// the nadir) for a horizon at `horizon` rad.
-pub fn zenith_of_node(row: usize, half: usize, horizon: f64) -> f64 {
+/// the nadir) for a horizon at `horizon` rad, with `fine` fine cells next
+/// to the horizon in each half ([`fine_grid_cells`]).
+pub fn zenith_of_node(row: usize, half: usize, fine: usize, horizon: f64) -> f64 {
     let pi = std::f64::consts::PI;
+    let cells = fine_grid_cells(half, fine) as f64;
     if row < half {
-        let v = row as f64 / (half - 1) as f64;
+        let v = fine_grid_node(row, half, fine) as f64 / cells;
         let u = 1.0 - (1.0 - v) * (1.0 - v);
         u * (horizon - HORIZON_MARGIN_RAD)
     } else {
-        let v = (2 * half - 1 - row) as f64 / (half - 1) as f64;
+        let v = fine_grid_node(2 * half - 1 - row, half, fine) as f64 / cells;
         let u = 1.0 - (1.0 - v) * (1.0 - v);
         pi - u * (pi - horizon - HORIZON_MARGIN_RAD)
     }
@@ -111,16 +141,25 @@ pub fn zenith_of_node(row: usize, half: usize, horizon: f64) -> f64 {
 /// `horizon`, and the rows the interpolation may use: (y, lowest cell,
 /// highest cell) so that no cell straddles the horizon. The exact inverse
 /// of [`zenith_of_node`], margin included.
-pub fn zenith_coordinate(zenith: f64, half: usize, horizon: f64) -> (f64, usize, usize) {
+pub fn zenith_coordinate(
+    zenith: f64,
+    half: usize,
+    fine: usize,
+    horizon: f64,
+) -> (f64, usize, usize) {
     let pi = std::f64::consts::PI;
-    let last = (half - 1) as f64;
+    let cells = fine_grid_cells(half, fine) as f64;
     if zenith < horizon {
         let u = (zenith / (horizon - HORIZON_MARGIN_RAD)).clamp(0.0, 1.0);
-        ((1.0 - (1.0 - u).sqrt()) * last, 0, half - 2)
+        (
+            node_of_fine_grid((1.0 - (1.0 - u).sqrt()) * cells, half, fine),
+            0,
+            half - 2,
+        )
     } else {
         let u = ((pi - zenith) / (pi - horizon - HORIZON_MARGIN_RAD)).clamp(0.0, 1.0);
         (
-            (2 * half - 1) as f64 - (1.0 - (1.0 - u).sqrt()) * last,
+            (2 * half - 1) as f64 - node_of_fine_grid((1.0 - (1.0 - u).sqrt()) * cells, half, fine),
             half,
             2 * half - 2,
         )
@@ -230,12 +269,42 @@ mod tests {
         assert!((sun_elevation_of_node(0, 48) + 12.0).abs() < 1e-12);
         assert!((sun_elevation_of_node(47, 48) - 90.0).abs() < 1e-12);
         let horizon = horizon_zenith(6.371e6 + 1e3, 6.371e6);
-        for row in 0..64 {
-            let z = zenith_of_node(row, 32, horizon);
-            let (y, lowest, highest) = zenith_coordinate(z, 32, horizon);
-            assert!((y - row as f64).abs() < 1e-3, "{row}: {y}");
-            assert_eq!(lowest, if row < 32 { 0 } else { 32 });
-            assert!(highest + 1 < 64);
+        for fine in [0, 7, 31] {
+            for row in 0..64 {
+                let z = zenith_of_node(row, 32, fine, horizon);
+                let (y, lowest, highest) = zenith_coordinate(z, 32, fine, horizon);
+                assert!((y - row as f64).abs() < 1e-3, "{fine} {row}: {y}");
+                assert_eq!(lowest, if row < 32 { 0 } else { 32 });
+                assert!(highest + 1 < 64);
+            }
+        }
+    }
+
+    #[test]
+    fn the_fine_cells_are_the_rows_of_a_grid_twice_as_fine() {
+        // 78 nodes per half with 27 fine cells: the nodes are rows of a
+        // 128-row half (the images' sky-view table's), every other row
+        // from the zenith to row 100 and every row in the last 27 cells.
+        let horizon = horizon_zenith(3.3895e6 + 10.0, 3.3895e6);
+        let grid = |j: usize| zenith_of_node(j, 128, 0, horizon);
+        for row in 0..78 {
+            let j = if row <= 50 { 2 * row } else { row + 50 };
+            let z = zenith_of_node(row, 78, 27, horizon);
+            assert!((z - grid(j)).abs() < 1e-12, "{row}: {z} {}", grid(j));
+            let below = zenith_of_node(2 * 78 - 1 - row, 78, 27, horizon);
+            assert!((below - zenith_of_node(255 - j, 128, 0, horizon)).abs() < 1e-12);
+        }
+        // With no fine cells, the mapping is the plain one.
+        for row in 0..128 {
+            let v = (row.min(127 - row)) as f64 / 63.0;
+            let u = 1.0 - (1.0 - v) * (1.0 - v);
+            let z = zenith_of_node(row, 64, 0, horizon);
+            let plain = if row < 64 {
+                u * (horizon - HORIZON_MARGIN_RAD)
+            } else {
+                std::f64::consts::PI - u * (std::f64::consts::PI - horizon - HORIZON_MARGIN_RAD)
+            };
+            assert!((z - plain).abs() < 1e-12, "{row}");
         }
     }
 

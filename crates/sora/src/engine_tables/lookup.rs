@@ -30,7 +30,12 @@
 //!   sets, turns with the antisolar point, and a view along its edge read
 //!   unturned from the layer below the sunset is several times too dark
 //!   (smoothstep ramps between; the larger of the two shares). At a sun
-//!   node the read is the layer's own.
+//!   node the read is the layer's own. With the sun below the horizon,
+//!   near the antisolar point and below the shadow's edge
+//!   ([`shadow_read_share`]), the read is blended toward that of the sun
+//!   axis cut at its last node below the horizon (the chord of the last
+//!   two such layers, extended beyond the last; the curvature at the cut
+//!   dropped): a layer with the sun up has no shadow to give.
 //! - Transmittance: linear in altitude between two rows, each read
 //!   linearly at the mu coordinate of its own altitude's horizon; zero
 //!   for a view below the eye's horizon.
@@ -147,6 +152,35 @@ pub(crate) fn turn_share(view: LocalView, e_deg: f64, horizon: f64) -> f64 {
     sun_side.max(shadow)
 }
 
+/// Where the read below the planet's shadow's edge ([`shadow_read_share`])
+/// ends: at this many times the sun's depression in view elevation. At 2
+/// paper-mars's horizon band (p99) at suns -0.1 and -0.19 degrees was
+/// 2.61 % and 2.00 %, at 3 1.47 % and 2.27 %, ending at the edge itself
+/// (1.1) 2.74 % and 2.71 %, at 2.5 1.47 % and 1.70 % (`docs/engine-tables.md`).
+pub(crate) const SHADOW_READ_RAMP: f64 = 2.5;
+
+/// The share of the read of a view near the antisolar point with the sun
+/// below the horizon that takes the sun layers below the horizon only
+/// (`layers_xyz`): the planet's shadow's share of `turn_share`, where the
+/// view is below the shadow's edge (its elevation within the sun's
+/// depression |e|), ramping to none at [`SHADOW_READ_RAMP`] |e|; none with
+/// the sun up.
+pub(crate) fn shadow_read_share(view: LocalView, e_deg: f64, horizon: f64) -> f64 {
+    if e_deg >= 0.0 {
+        return 0.0;
+    }
+    let e = e_deg.to_radians();
+    let (z, phi) = (view.zenith_rad, view.relative_azimuth_rad);
+    let cos_theta = z.cos() * e.sin() + z.sin() * phi.cos() * e.cos();
+    let shadow = smoothstep(
+        80f64.to_radians().cos(),
+        40f64.to_radians().cos(),
+        -cos_theta,
+    );
+    let elevation = horizon - z;
+    shadow * (1.0 - smoothstep(-e, -SHADOW_READ_RAMP * e, elevation))
+}
+
 /// `view` turned by `delta` (rad) about the horizontal axis across the
 /// sun's azimuth, as the sun is turned from its elevation to a node's
 /// (keeping its angle to the sun), on the same side of the eye's horizon
@@ -208,6 +242,8 @@ fn smoothstep(a: f64, b: f64, x: f64) -> f64 {
 pub(crate) struct LayerTable<'a> {
     pub texels: &'a [[f32; 3]],
     pub half: usize,
+    /// Fine zenith cells next to the horizon per half (`axes::zenith_of_node`).
+    pub fine: usize,
     pub azimuth: usize,
     pub slices: usize,
 }
@@ -217,6 +253,7 @@ impl EngineTables {
         LayerTable {
             texels: &self.sky,
             half: self.settings.zenith_nodes_per_half,
+            fine: self.settings.zenith_fine_cells_per_half,
             azimuth: self.settings.azimuth_nodes,
             slices: 1,
         }
@@ -227,6 +264,7 @@ impl EngineTables {
         LayerTable {
             texels: &self.aerial,
             half,
+            fine: 0,
             azimuth,
             slices,
         }
@@ -242,7 +280,7 @@ impl EngineTables {
         phi: f64,
     ) -> [f64; 3] {
         let table = self.sky_layers_table();
-        let coordinate = axes::zenith_coordinate(zenith, table.half, horizon);
+        let coordinate = axes::zenith_coordinate(zenith, table.half, table.fine, horizon);
         layer_value_at(table, layer, coordinate, phi)
     }
 
@@ -304,7 +342,8 @@ impl EngineTables {
         let layer = |s: usize| {
             let node_deg = axes::sun_elevation_of_node(s, self.settings.sun_nodes);
             let turned = turned_view(view, (node_deg - e_deg).to_radians() * share, horizon);
-            let coordinate = axes::zenith_coordinate(turned.zenith_rad, table.half, horizon);
+            let coordinate =
+                axes::zenith_coordinate(turned.zenith_rad, table.half, table.fine, horizon);
             let at = |a: usize| {
                 let first = (s * a_count + a) * table.slices + j;
                 let value = |slice: usize| {
@@ -318,29 +357,50 @@ impl EngineTables {
             };
             mix(at(a), at(a + 1), fa).map(|v| v.max(FLOOR).ln())
         };
-        let (l0, l1) = (layer(s), layer(s + 1));
-        // The second differences of ln L at nodes s and s + 1 (zero at the
-        // axis's ends), each within +-CURVATURE_LIMIT.
-        let second = |lower: [f64; 3], middle: [f64; 3], upper: [f64; 3]| -> [f64; 3] {
+        let s_count = self.settings.sun_nodes;
+        // ln L on the sun axis cut at node `top`: the chord between the
+        // two layers about the sun less its curvature (the second
+        // differences at nodes s and s + 1, zero at the axis's ends, each
+        // within +-CURVATURE_LIMIT); beyond `top`, the chord of the last
+        // two layers extended.
+        let read = |top: usize| -> [f64; 3] {
+            let (s, fs) = if s + 1 > top {
+                (top - 1, fs + (s + 1 - top) as f64)
+            } else {
+                (s, fs)
+            };
+            let (l0, l1) = (layer(s), layer(s + 1));
+            let second = |lower: [f64; 3], middle: [f64; 3], upper: [f64; 3]| -> [f64; 3] {
+                std::array::from_fn(|i| {
+                    (lower[i] - 2.0 * middle[i] + upper[i]).clamp(-CURVATURE_LIMIT, CURVATURE_LIMIT)
+                })
+            };
+            let inside = fs <= 1.0;
+            let d0 = if s > 0 && inside {
+                second(layer(s - 1), l0, l1)
+            } else {
+                [0.0; 3]
+            };
+            let d1 = if s + 2 <= top && inside {
+                second(l0, l1, layer(s + 2))
+            } else {
+                [0.0; 3]
+            };
             std::array::from_fn(|i| {
-                (lower[i] - 2.0 * middle[i] + upper[i]).clamp(-CURVATURE_LIMIT, CURVATURE_LIMIT)
+                let chord = l0[i] + (l1[i] - l0[i]) * fs;
+                let curvature = d0[i] + (d1[i] - d0[i]) * fs;
+                chord - 0.5 * fs * (1.0 - fs) * curvature
             })
         };
-        let d0 = if s > 0 {
-            second(layer(s - 1), l0, l1)
-        } else {
-            [0.0; 3]
-        };
-        let d1 = if s + 2 < self.settings.sun_nodes {
-            second(l0, l1, layer(s + 2))
-        } else {
-            [0.0; 3]
-        };
-        std::array::from_fn(|i| {
-            let chord = l0[i] + (l1[i] - l0[i]) * fs;
-            let curvature = d0[i] + (d1[i] - d0[i]) * fs;
-            (chord - 0.5 * fs * (1.0 - fs) * curvature).exp()
-        })
+        let whole = read(s_count - 1);
+        let below = shadow_read_share(view, e_deg, horizon);
+        // The last sun node below the horizon.
+        let top = (axes::sun_coordinate(0.0, s_count).ceil() as usize).saturating_sub(1);
+        if below == 0.0 || top < 1 || top + 1 >= s_count || s + 2 <= top || s > top {
+            return whole.map(f64::exp);
+        }
+        let shadow = read(top);
+        std::array::from_fn(|i| (whole[i] + (shadow[i] - whole[i]) * below).exp())
     }
 
     /// Transmittance (XYZ of the transmitted sunlight over XYZ of the

@@ -119,6 +119,13 @@ pub struct EngineTableSettings {
     pub altitude_nodes: usize,
     /// View zenith nodes per half (above and below the horizon).
     pub zenith_nodes_per_half: usize,
+    /// Fine cells of the zenith axis next to the horizon, per half
+    /// (`axes::zenith_of_node`; 0..=zenith_nodes_per_half - 1): the half's
+    /// nodes lie on a grid of 2 (zenith_nodes_per_half - 1) - fine cells,
+    /// at every other grid node away from the horizon and every one in the
+    /// last `fine` cells. With 128 grid nodes per half (the images'
+    /// sky-view table's) the nodes there are the library's own rows.
+    pub zenith_fine_cells_per_half: usize,
     /// Relative azimuth nodes over 0..180 degrees.
     pub azimuth_nodes: usize,
     /// Transmittance table: altitude nodes, view cosine nodes.
@@ -143,6 +150,7 @@ impl Default for EngineTableSettings {
             sun_nodes: 48,
             altitude_nodes: 6,
             zenith_nodes_per_half: 64,
+            zenith_fine_cells_per_half: 0,
             azimuth_nodes: 64,
             transmittance_nodes: (32, 128),
             // No aerial table by default: at (8, 8, 6) it is not yet
@@ -182,6 +190,14 @@ impl EngineTableSettings {
                     format!("{least}..=4096"),
                 ));
             }
+        }
+        if self.zenith_fine_cells_per_half >= self.zenith_nodes_per_half {
+            return Err(Error::out_of_range(
+                "zenith fine cells per half",
+                self.zenith_fine_cells_per_half as f64,
+                "1",
+                format!("0..={}", self.zenith_nodes_per_half - 1),
+            ));
         }
         let texels = (self.sky_texels() + self.aerial_texels()) as f64;
         if texels > MAX_SKY_TEXELS as f64 {
@@ -297,6 +313,7 @@ impl EngineTables {
             sun_nodes,
             altitude_nodes,
             zenith_nodes_per_half: half,
+            zenith_fine_cells_per_half: fine,
             azimuth_nodes,
             transmittance_nodes,
             ..
@@ -336,7 +353,7 @@ impl EngineTables {
             let horizon = axes::horizon_zenith(ground_radius_m + altitude, ground_radius_m);
             let mut views = Vec::with_capacity(layer_texels);
             for row in 0..2 * half {
-                let zenith = axes::zenith_of_node(row, half, horizon);
+                let zenith = axes::zenith_of_node(row, half, fine, horizon);
                 for k in 0..azimuth_nodes {
                     let phi = axes::azimuth_of_node(k, azimuth_nodes);
                     views.push(ViewDirection::new(
@@ -351,7 +368,7 @@ impl EngineTables {
             let mut segments = Vec::with_capacity(aerial_distances * aerial_slice);
             let mut places = Vec::with_capacity(aerial_distances * aerial_slice);
             for row in 0..2 * aerial_half {
-                let zenith = axes::zenith_of_node(row, aerial_half, horizon);
+                let zenith = axes::zenith_of_node(row, aerial_half, 0, horizon);
                 let range = axes::distance_range(
                     thickness,
                     axes::ray_length(
@@ -556,7 +573,7 @@ impl EngineTables {
                 let layer = s * self.settings.altitude_nodes + a;
                 for j in 0..distances {
                     for row in 0..2 * half {
-                        let zenith = axes::zenith_of_node(row, half, horizon);
+                        let zenith = axes::zenith_of_node(row, half, 0, horizon);
                         let range = self.aerial_distance_range(altitude, zenith.cos());
                         let d = axes::distance_of_node(j, distances, range);
                         let view = [zenith.sin(), 0.0, zenith.cos()];
@@ -716,14 +733,29 @@ const MULTIPLE_FROM_NEIGHBOURS_DEG: (f64, f64) = (0.0, 12.5);
 /// scattered light marched at as many rows as the images'
 /// ([`LAYER_MULTIPLE_STRIDE`]) in fewer view-ray panels than the field's
 /// (`field_panels` false; [`layer_multiple_panels`]).
+///
+/// With fine cells next to the horizon (`zenith_fine_cells_per_half`) the
+/// rows are the zenith axis's fine grid (`axes::zenith_of_node`; 128 per
+/// half, the images' own, at 80 nodes and 31 fine cells), marched for
+/// multiply scattered light at every other row as the images' table is:
+/// twice the single-scattering marches, as many of the other.
 fn layer_sky_view(sky: &Sky, settings: &EngineTableSettings, field_panels: bool) -> SkyViewGrid {
     let (image_half, image_azimuth) = sky.table_size().sky_view_nodes;
+    let (half, fine) = (
+        settings.zenith_nodes_per_half,
+        settings.zenith_fine_cells_per_half,
+    );
+    let (rows, multiple_stride) = if fine > 0 {
+        (
+            2 * (half - 1) - fine + 1,
+            (2 * LAYER_MULTIPLE_STRIDE.0, LAYER_MULTIPLE_STRIDE.1),
+        )
+    } else {
+        (image_half.min(half), LAYER_MULTIPLE_STRIDE)
+    };
     SkyViewGrid {
-        nodes: (
-            image_half.min(settings.zenith_nodes_per_half),
-            image_azimuth.min(settings.azimuth_nodes),
-        ),
-        multiple_stride: LAYER_MULTIPLE_STRIDE,
+        nodes: (rows, image_azimuth.min(settings.azimuth_nodes)),
+        multiple_stride,
         multiple_panels: if field_panels {
             None
         } else {
