@@ -41,6 +41,9 @@ pub(crate) struct ShiftPlan {
     /// [(((s * levels + k) * nodes + node) * streams + q) * 2 + i]: the
     /// node below and the fraction of its segment.
     brackets: Vec<(u32, f64)>,
+    /// [s * levels + k]: whether the path gathers light away from its
+    /// start (a mean angle above zero), so that it is shifted.
+    shifted: Vec<bool>,
     /// The harmonics that are not zero.
     active: Vec<usize>,
     /// cos(m phi_q) of the active harmonics at the midpoint azimuths,
@@ -109,6 +112,13 @@ impl ColumnSystem<'_> {
     /// stream, level, node, azimuth and each of the two angles, the node
     /// below and the fraction of its segment, the same at every order.
     pub(crate) fn shift_plan(&self, sun_zenith_rad: &[f64]) -> ShiftPlan {
+        self.shift_plan_at(sun_zenith_rad, &self.spherical_mean_angles)
+    }
+
+    /// [`ColumnSystem::shift_plan`] for the mean angles and spreads
+    /// `mean_angles` ([s * levels + k], rad): those of the whole paths or
+    /// of one of their pieces.
+    fn shift_plan_at(&self, sun_zenith_rad: &[f64], mean_angles: &[(f64, f64)]) -> ShiftPlan {
         let nodes = sun_zenith_rad.len();
         let azimuths = self.streams.count();
         let mut brackets = Vec::new();
@@ -120,7 +130,7 @@ impl ColumnSystem<'_> {
                     // Two angles with the mean and spread of the path's: the
                     // source changes exponentially along the path, and its
                     // mean is brighter than its value at the mean angle.
-                    let (mean, spread) = self.spherical_mean_angles[s * levels + k];
+                    let (mean, spread) = mean_angles[s * levels + k];
                     let angles = [mean + spread, (mean - spread).max(0.0)];
                     for &sun in sun_zenith_rad {
                         for q in 0..azimuths {
@@ -156,6 +166,7 @@ impl ColumnSystem<'_> {
         ShiftPlan {
             nodes,
             brackets,
+            shifted: mean_angles.iter().map(|(mean, _)| *mean != 0.0).collect(),
             active,
             cosines,
             synthesis,
@@ -207,7 +218,7 @@ impl ColumnSystem<'_> {
         // Level by level: a level's streams share the nodes' cache lines.
         for k in 0..levels {
             for (s, &a) in paths.spherical_streams().iter().enumerate() {
-                if self.spherical_mean_angles[s * levels + k].0 == 0.0 {
+                if !plan.shifted[s * levels + k] {
                     continue;
                 }
                 let brackets = &plan.brackets[(s * levels + k) * nodes * azimuths * 2..]
@@ -281,6 +292,49 @@ impl ColumnSystem<'_> {
         }
     }
 
+    /// The shift in pieces: each piece's light of one order
+    /// (`piece_orders`, per piece and node) shifted by its own plan, and
+    /// their sum put in place of the spherical streams' light in `orders`
+    /// (per node); the harmonics not `carried` (per node and harmonic)
+    /// stay zero.
+    fn shift_pieces_toward_sources(
+        &self,
+        plans: &[ShiftPlan],
+        piece_orders: &mut [Vec<Vec<f64>>],
+        carried: &[bool],
+        orders: &mut [Vec<f64>],
+    ) {
+        let Some(paths) = self.paths else {
+            return;
+        };
+        let levels = self.grid.levels();
+        let total = self.streams.count();
+        let size = levels * total;
+        for order in orders.iter_mut() {
+            for m in 0..total {
+                for k in 0..levels {
+                    for &a in paths.spherical_streams() {
+                        order[m * size + k * total + a] = 0.0;
+                    }
+                }
+            }
+        }
+        for (plan, pieces) in plans.iter().zip(piece_orders.iter_mut()) {
+            let mut views: Vec<&mut [f64]> = pieces.iter_mut().map(|v| &mut v[..]).collect();
+            self.shift_order_toward_sources(plan, &mut views);
+            for (node, (order, piece)) in orders.iter_mut().zip(pieces.iter()).enumerate() {
+                for m in (0..total).filter(|m| carried[node * total + m]) {
+                    for k in 0..levels {
+                        for &a in paths.spherical_streams() {
+                            let at = m * size + k * total + a;
+                            order[at] += piece[at];
+                        }
+                    }
+                }
+            }
+        }
+    }
+
     /// After sunset: solves the columns of every sun node of
     /// `sun_zenith_rad` together, order by order, shifting each order of
     /// the spherical streams toward the columns where its light was
@@ -337,6 +391,19 @@ impl ColumnSystem<'_> {
             current[node].copy_from_slice(fields[node]);
         }
         let plan = self.shift_plan(sun_zenith_rad);
+        // With the shift in pieces: each piece's plan, and per piece and
+        // node the spherical streams' light of the order from that piece.
+        let (piece_plans, mut piece_orders) = match &self.shift_pieces {
+            Some((pieces, _, angles)) => {
+                let per_piece = angles.len() / pieces;
+                let plans: Vec<ShiftPlan> = angles
+                    .chunks_exact(per_piece)
+                    .map(|angles| self.shift_plan_at(sun_zenith_rad, angles))
+                    .collect();
+                (plans, vec![vec![vec![0.0; total * size]; nodes]; *pieces])
+            }
+            None => (Vec::new(), Vec::new()),
+        };
         // Each node stops by the rule of `solve` on its whole field; a
         // harmonic is no longer carried once its order is negligible there
         // (the high harmonics within a few orders: the light of the higher
@@ -356,6 +423,9 @@ impl ColumnSystem<'_> {
                     let out = &mut out[m * size..(m + 1) * size];
                     if !carried[node * total + m] {
                         out.fill(0.0);
+                        for orders in piece_orders.iter_mut() {
+                            orders[node][m * size..(m + 1) * size].fill(0.0);
+                        }
                         continue;
                     }
                     source.fill(0.0);
@@ -365,11 +435,17 @@ impl ColumnSystem<'_> {
                         _ => 0.0,
                     };
                     self.transport(&source, ground, out, &mut columns);
+                    for (piece, orders) in piece_orders.iter_mut().enumerate() {
+                        let out = &mut orders[node][m * size..(m + 1) * size];
+                        self.transport_piece(piece, &source, ground, out);
+                    }
                 }
             }
-            {
+            if piece_plans.is_empty() {
                 let mut orders: Vec<&mut [f64]> = next.iter_mut().map(|v| &mut v[..]).collect();
                 self.shift_order_toward_sources(&plan, &mut orders);
+            } else {
+                self.shift_pieces_toward_sources(&piece_plans, &mut piece_orders, &carried, &mut next);
             }
             for node in 0..nodes {
                 if done[node] {
