@@ -1273,7 +1273,9 @@ mod tests {
     /// view ray's panels; the defaults), `SORA_SET_PATHS` (200000; 0: the library alone),
     /// `SORA_SET_ORDERS` (the tracer's largest number of interactions, 0:
     /// all), `SORA_SET_LIB_ORDERS` (the library's field stopped after
-    /// this many orders less one, 0: all), `SORA_SET_SEED` (1).
+    /// this many orders less one, 0: all), `SORA_SET_SHIFT_PIECES` (the
+    /// pieces of each path the field's after-sunset shift is taken in, 1;
+    /// `FieldRequest::shift_pieces`), `SORA_SET_SEED` (1).
     #[test]
     #[ignore]
     fn probe_segment_parts_against_the_tracer() {

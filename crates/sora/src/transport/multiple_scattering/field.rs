@@ -1086,10 +1086,9 @@ fn solve_wavelength(
         .collect();
     let solar = optics.solar_irradiance_w_m2_nm[i];
     let albedo = optics.ground_albedo[i];
-    let system =
-        ColumnSystem::new(streams, grid, Some(paths), scaled, solar, albedo)
-            .with_sweeps(sweeps)
-            .with_shift_pieces(shift_pieces);
+    let system = ColumnSystem::new(streams, grid, Some(paths), scaled, solar, albedo)
+        .with_sweeps(sweeps)
+        .with_shift_pieces(shift_pieces);
     let mut work = Vec::new();
     let mut transmittance = vec![0.0; levels];
     // Per spherical node: the sunlit ground's radiance under the

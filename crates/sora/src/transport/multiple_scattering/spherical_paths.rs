@@ -226,7 +226,10 @@ impl StreamPaths {
                 for (b, &(angle_sum, square_sum, weight_sum)) in sums.iter().enumerate() {
                     angles[(b * count + s) * levels + k] = if weight_sum > 0.0 {
                         let mean = angle_sum / weight_sum;
-                        (mean, (square_sum / weight_sum - mean * mean).max(0.0).sqrt())
+                        (
+                            mean,
+                            (square_sum / weight_sum - mean * mean).max(0.0).sqrt(),
+                        )
                     } else {
                         (0.0, 0.0)
                     };
@@ -424,7 +427,10 @@ mod tests {
                         .map(|b| split[(b * count + s) * block + j * levels + k])
                         .sum();
                     let w = whole[s * block + j * levels + k];
-                    assert!((sum - w).abs() <= 1e-12 * w.abs().max(1e-300), "{s} {k} {j}");
+                    assert!(
+                        (sum - w).abs() <= 1e-12 * w.abs().max(1e-300),
+                        "{s} {k} {j}"
+                    );
                 }
                 // Each piece gathers a quarter of a uniform source's light
                 // to within one step's share, farther pieces at larger
@@ -444,8 +450,7 @@ mod tests {
                 let mut transmittance = 1.0f64;
                 let mut largest = 0.0f64;
                 for step in &paths.steps[first..last] {
-                    let (one_minus_e, _) =
-                        linear_source_weights(depths[step.layer] * step.stretch);
+                    let (one_minus_e, _) = linear_source_weights(depths[step.layer] * step.stretch);
                     largest = largest.max(transmittance * one_minus_e);
                     transmittance *= 1.0 - one_minus_e;
                 }
@@ -454,7 +459,10 @@ mod tests {
                     .sum::<f64>()
                     / total;
                 let whole_mean = angles[s * levels + k].0;
-                assert!((mean / whole_mean - 1.0).abs() < 1e-9, "{mean} vs {whole_mean}");
+                assert!(
+                    (mean / whole_mean - 1.0).abs() < 1e-9,
+                    "{mean} vs {whole_mean}"
+                );
                 for b in 0..pieces {
                     let off = (shares[b] - 0.25 * total).abs();
                     assert!(off <= largest * (1.0 + 1e-9), "{s} {k} {shares:?}");
