@@ -236,10 +236,8 @@ pub struct ColumnSystem<'a> {
     /// (`StreamPaths::compute_transport_matrices`).
     pub(super) spherical_mean_angles: Vec<(f64, f64)>,
     /// With the every-order shift in pieces
-    /// ([`ColumnSystem::with_shift_pieces`]): the number of pieces, and
-    /// per piece the spherical streams' transport matrices and mean angles
-    /// (`StreamPaths::compute_piece_matrices`).
-    pub(super) shift_pieces: Option<(usize, Vec<f64>, Vec<(f64, f64)>)>,
+    /// ([`ColumnSystem::with_shift_pieces`]).
+    pub(super) shift_pieces: Option<ShiftPieces>,
     /// Per harmonic and level the matrix 2 pi w_b sum_j omega_j p*_jm(mu_a, mu_b),
     /// stored by columns, [((m * levels + k) * streams + b) * streams + a],
     /// so that scattering is a sum of whole columns (vectorisable) rather
@@ -267,8 +265,12 @@ impl<'a> ColumnSystem<'a> {
         self.shift_pieces = match (self.paths, pieces) {
             (Some(paths), 2..) => {
                 let depths = layer_optical_depths(self.grid, &self.species);
-                let (matrices, angles) = paths.compute_piece_matrices(&depths, pieces);
-                Some((pieces, matrices, angles))
+                let (matrices, mean_angles) = paths.compute_piece_matrices(&depths, pieces);
+                Some(ShiftPieces {
+                    count: pieces,
+                    matrices,
+                    mean_angles,
+                })
             }
             _ => None,
         };
@@ -516,7 +518,8 @@ impl<'a> ColumnSystem<'a> {
         ground_radiance: f64,
         field: &mut [f64],
     ) {
-        let (Some(paths), Some((_, matrices, _))) = (self.paths, &self.shift_pieces) else {
+        let (Some(paths), Some(ShiftPieces { matrices, .. })) = (self.paths, &self.shift_pieces)
+        else {
             return;
         };
         let total = self.streams.count();
@@ -607,6 +610,19 @@ impl<'a> ColumnSystem<'a> {
             }
         }
     }
+}
+
+/// The every-order shift's pieces of the spherical streams' paths
+/// (`StreamPaths::compute_piece_matrices`).
+#[derive(Debug, Clone)]
+pub(super) struct ShiftPieces {
+    pub(super) count: usize,
+    /// Per piece and spherical stream, the transport matrix and ground
+    /// weights (the layout of the whole path's).
+    matrices: Vec<f64>,
+    /// Per piece, spherical stream and level, the mean angle at the
+    /// planet's centre and its spread, rad.
+    pub(super) mean_angles: Vec<(f64, f64)>,
 }
 
 /// Each layer's optical depth (scaled extinction) of the column `grid`

@@ -408,13 +408,17 @@ impl ColumnSystem<'_> {
         // With the shift in pieces: each piece's plan, and per piece and
         // node the spherical streams' light of the order from that piece.
         let (piece_plans, mut piece_orders) = match &self.shift_pieces {
-            Some((pieces, _, angles)) => {
-                let per_piece = angles.len() / pieces;
-                let plans: Vec<ShiftPlan> = angles
+            Some(pieces) => {
+                let per_piece = pieces.mean_angles.len() / pieces.count;
+                let plans: Vec<ShiftPlan> = pieces
+                    .mean_angles
                     .chunks_exact(per_piece)
                     .map(|angles| self.shift_plan_at(sun_zenith_rad, angles))
                     .collect();
-                (plans, vec![vec![vec![0.0; total * size]; nodes]; *pieces])
+                (
+                    plans,
+                    vec![vec![vec![0.0; total * size]; nodes]; pieces.count],
+                )
             }
             None => (Vec::new(), Vec::new()),
         };
