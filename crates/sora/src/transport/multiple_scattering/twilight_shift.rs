@@ -519,6 +519,20 @@ mod tests {
         sum
     }
 
+    /// The tests' column: 20 layers of exponential air, 8 streams per
+    /// hemisphere, a phase function of Legendre moments 0.6^l.
+    fn column() -> (VerticalGrid, Streams, TruncatedPhase) {
+        let air = DensityProfile::Exponential {
+            scale_height_m: 8000.0,
+        };
+        let grid = VerticalGrid::compute(&[&air], &[1.2e-5], 100e3, 20);
+        let streams = Streams::new(8);
+        let total = streams.count();
+        let moments: Vec<f64> = (0..=total).map(|l| 0.6f64.powi(l as i32)).collect();
+        let phase = TruncatedPhase::from_moments(&moments, total);
+        (grid, streams, phase)
+    }
+
     /// The twilight shift of the orders >= 2 against its definition,
     /// evaluated directly: for orders >= 2 of ln H linear in the sun
     /// zenith angle and uniform in azimuth, H = A_k,a e^(-kappa theta) (the
@@ -529,14 +543,8 @@ mod tests {
     /// spherical and the harmonics the phase functions lack are untouched.
     #[test]
     fn twilight_shift_matches_its_definition() {
-        let air = DensityProfile::Exponential {
-            scale_height_m: 8000.0,
-        };
-        let grid = VerticalGrid::compute(&[&air], &[1.2e-5], 100e3, 20);
-        let streams = Streams::new(8);
+        let (grid, streams, phase) = column();
         let total = streams.count();
-        let moments: Vec<f64> = (0..=total).map(|l| 0.6f64.powi(l as i32)).collect();
-        let phase = TruncatedPhase::from_moments(&moments, total);
         let species = vec![ScaledSpecies {
             extinction_per_m: 1.2e-5,
             scattering_per_m: 1.2e-5,
@@ -610,5 +618,68 @@ mod tests {
         assert!(checked > 100, "{checked}");
         // Measured 6e-14.
         assert!(worst < 1e-9, "{worst}");
+    }
+
+    /// The shift in pieces against the one-piece shift where both are the
+    /// identity: with the same first order and sunlit ground at every sun
+    /// node nothing changes across the sun axis, so shifting moves no
+    /// light and the pieces' transports must add up to the whole path's,
+    /// order by order, every harmonic.
+    #[test]
+    fn pieces_add_up_to_the_whole_path_where_the_shift_moves_nothing() {
+        let (grid, streams, phase) = column();
+        let total = streams.count();
+        let species = || {
+            vec![ScaledSpecies {
+                extinction_per_m: 1.2e-5,
+                scattering_per_m: 1.1e-5,
+                phase: &phase,
+            }]
+        };
+        let radii: Vec<f64> = grid.altitudes_m().iter().map(|z| 6.36e6 + z).collect();
+        let paths = StreamPaths::compute(&radii, streams.cosines());
+        let levels = grid.levels();
+        let size = levels * total;
+        let nodes = 6;
+        let suns: Vec<f64> = (0..nodes)
+            .map(|n| (FIRST_ORDER_SUN_ZENITH_DEG + 0.75 * n as f64).to_radians())
+            .collect();
+        // A first order with harmonics 0 and 1, the same at every node.
+        let mut first = vec![0.0; total * size];
+        for k in 0..levels {
+            for a in 0..total {
+                first[k * total + a] = 1.0 + 0.1 * k as f64 + 0.02 * a as f64;
+                first[size + k * total + a] = 0.3 + 0.01 * a as f64;
+            }
+        }
+        let firsts: Vec<&[f64]> = (0..nodes).map(|_| first.as_slice()).collect();
+        let ground = vec![0.05; nodes];
+        let solve = |pieces: usize| {
+            let system = ColumnSystem::new(&streams, &grid, Some(&paths), species(), 1.7, 0.2)
+                .with_sweeps(6)
+                .with_shift_pieces(pieces);
+            let mut fields = vec![vec![0.0; total * size]; nodes];
+            let mut views: Vec<&mut [f64]> = fields.iter_mut().map(|f| f.as_mut_slice()).collect();
+            let down = system.solve_shifted_orders(&suns, &ground, &firsts, &mut views);
+            (fields, down)
+        };
+        let (whole, whole_down) = solve(1);
+        let (pieced, pieced_down) = solve(4);
+        // Against the field's largest value: the small harmonics are
+        // differences of the azimuths' values.
+        let largest = whole.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+        let mut worst = 0.0f64;
+        for (a, b) in whole.iter().flatten().zip(pieced.iter().flatten()) {
+            worst = worst.max((a - b).abs() / largest);
+        }
+        for (a, b) in whole_down.iter().zip(&pieced_down) {
+            worst = worst.max((a / b - 1.0).abs());
+        }
+        // Rounding only (the logarithm and the vectorised exponential of
+        // the shift, 1e-11 relative).
+        eprintln!("worst {worst:e} of the largest value {largest:e}");
+        assert!(worst < 1e-10, "{worst}");
+        // And the pieces do carry light (the test is not of zeros).
+        assert!(whole[0].iter().map(|v| v.abs()).sum::<f64>() > 1.0);
     }
 }
