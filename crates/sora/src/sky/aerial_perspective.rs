@@ -1273,7 +1273,9 @@ mod tests {
     /// view ray's panels; the defaults), `SORA_SET_PATHS` (200000; 0: the library alone),
     /// `SORA_SET_ORDERS` (the tracer's largest number of interactions, 0:
     /// all), `SORA_SET_LIB_ORDERS` (the library's field stopped after
-    /// this many orders less one, 0: all), `SORA_SET_SEED` (1).
+    /// this many orders less one, 0: all), `SORA_SET_SHIFT_PIECES` (the
+    /// pieces of each path the field's after-sunset shift is taken in, 1;
+    /// `FieldRequest::shift_pieces`), `SORA_SET_SEED` (1).
     #[test]
     #[ignore]
     fn probe_segment_parts_against_the_tracer() {
@@ -1326,6 +1328,7 @@ mod tests {
         let orders: u32 = env("SORA_SET_ORDERS", "0").parse().unwrap();
         let seed: u64 = env("SORA_SET_SEED", "1").parse().unwrap();
         let lib_orders: usize = env("SORA_SET_LIB_ORDERS", "0").parse().unwrap();
+        let shift_pieces: usize = env("SORA_SET_SHIFT_PIECES", "1").parse().unwrap();
         let views: Vec<(f64, f64)> = env("SORA_SET_VIEWS", "-10,0")
             .split(';')
             .map(|p| {
@@ -1343,14 +1346,19 @@ mod tests {
                     .scattering(Scattering::Multiple(settings))
                     .build()
                     .unwrap();
-                if lib_orders >= 2 {
+                if lib_orders >= 2 || shift_pieces != 1 {
                     use crate::transport::multiple_scattering::{
                         FieldRequest, MultipleScatteringField,
                     };
+                    let default = FieldRequest::new(settings, sky.table_size.sun_column_nodes);
                     let request = FieldRequest {
-                        sweeps: lib_orders - 1,
+                        sweeps: match lib_orders {
+                            0 => default.sweeps,
+                            n => n - 1,
+                        },
+                        shift_pieces,
                         polarised: polarisation == Polarisation::Vector,
-                        ..FieldRequest::new(settings, sky.table_size.sun_column_nodes)
+                        ..default
                     };
                     let field = MultipleScatteringField::solve(&sky.scene, &request).unwrap();
                     let _ = sky.field.set(std::sync::Arc::new(field));

@@ -213,6 +213,12 @@ pub(crate) struct FieldRequest {
     /// is the second order alone (the twilight survey compares it with the
     /// path tracer's).
     pub(crate) sweeps: usize,
+    /// After sunset, each order of the near-horizontal streams is shifted
+    /// in this many pieces of its path, each at its own mean angle
+    /// (`ColumnSystem::with_shift_pieces`): 1 (the default) shifts the
+    /// whole path at its mean angle +- spread; more is the slow
+    /// reference (docs/aerial_perspective.md measures what it moves).
+    pub(crate) shift_pieces: usize,
     /// For views no lower than this elevation (rad, >= 0) only: the sun
     /// zenith angles the field is solved for are those at the points of
     /// such views' rays, within acos(r cos e / R_top) - e of the eye's
@@ -246,6 +252,7 @@ impl FieldRequest {
             sun_column_nodes,
             polarised: false,
             sweeps: successive_orders::MAX_ITERATIONS,
+            shift_pieces: 1,
             lowest_view_elevation_rad: None,
             every_sun: false,
         }
@@ -376,7 +383,7 @@ impl MultipleScatteringField {
             (&geometry, &scaled),
             (&sun_axis, &sun_columns),
             (first_spherical, &first_order),
-            request.sweeps,
+            (request.sweeps, request.shift_pieces),
             solves
                 .as_ref()
                 .zip(shared_node)
@@ -1014,7 +1021,7 @@ fn solve_columns(
     (geometry, scaled): (&ColumnGeometry, &ScaledOptics),
     (sun_axis, sun_columns): (&SunZenithAxis, &[Option<Vec<f64>>]),
     (first_spherical, first_order): (usize, &[f64]),
-    sweeps: usize,
+    (sweeps, shift_pieces): (usize, usize),
     polarisation: Option<SharedAnchors>,
 ) -> SolvedColumns {
     let levels = geometry.grid.levels();
@@ -1031,7 +1038,7 @@ fn solve_columns(
             (geometry, scaled),
             (sun_axis, sun_columns),
             (first_spherical, first_order),
-            (sweeps, polarisation),
+            (sweeps, shift_pieces, polarisation),
         )
     });
     SolvedColumns {
@@ -1052,7 +1059,7 @@ fn solve_wavelength(
     (geometry, scaled_optics): (&ColumnGeometry, &ScaledOptics),
     (sun_axis, sun_columns): (&SunZenithAxis, &[Option<Vec<f64>>]),
     (first_spherical, first_order): (usize, &[f64]),
-    (sweeps, polarisation): (usize, Option<SharedAnchors>),
+    (sweeps, shift_pieces, polarisation): (usize, usize, Option<SharedAnchors>),
 ) {
     let (wavelengths, species) = (optics.grid.len(), optics.species.len());
     let (streams, grid, paths) = (&geometry.streams, &geometry.grid, &geometry.paths);
@@ -1079,8 +1086,9 @@ fn solve_wavelength(
         .collect();
     let solar = optics.solar_irradiance_w_m2_nm[i];
     let albedo = optics.ground_albedo[i];
-    let system =
-        ColumnSystem::new(streams, grid, Some(paths), scaled, solar, albedo).with_sweeps(sweeps);
+    let system = ColumnSystem::new(streams, grid, Some(paths), scaled, solar, albedo)
+        .with_sweeps(sweeps)
+        .with_shift_pieces(shift_pieces);
     let mut work = Vec::new();
     let mut transmittance = vec![0.0; levels];
     // Per spherical node: the sunlit ground's radiance under the

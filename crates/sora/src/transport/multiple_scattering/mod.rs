@@ -202,7 +202,11 @@
 //!   plane-parallel limit, good for a sun above 5 degrees, within a few
 //!   per cent in civil twilight. The steeper streams' orders >= 2 still
 //!   take their sources from their own column's sun angle (shifting them
-//!   too moved no mars-dust twilight view by more than 1.4 %).
+//!   too moved no mars-dust twilight view by more than 1.4 %). The
+//!   near-horizontal streams' shift reads each path's light at one mean
+//!   angle: after sunset it brightens the light gathered in the shadow
+//!   near the point, in a thin red haze by about 2 % of the segment's
+//!   light (`twilight_shift.rs`, its slow reference in pieces).
 //! - Delta-M: orders >= 2 within the phase functions' forward peak of the
 //!   sun are smoothed (the aureole itself is single scattering, exact);
 //!   the peak-only light of the forward-peak term takes its k-fold

@@ -156,6 +156,88 @@ impl StreamPaths {
             }
         }
     }
+
+    /// The transport matrices of [`StreamPaths::compute_transport_matrices`]
+    /// with each path cut into `pieces` consecutive pieces that gather equal
+    /// shares of a uniform source's light (the weights of the mean angle):
+    /// per piece b and spherical stream s the matrix and ground weights at
+    /// [(b * count + s) * levels * (levels + 1)] (same layout; the pieces'
+    /// matrices sum to the whole path's), and each piece's mean angle at
+    /// the planet's centre and its spread at [(b * count + s) * levels + k]
+    /// (rad; (0, 0) for a piece that gathers nothing). The ground's weight
+    /// goes to the last piece.
+    pub(crate) fn compute_piece_matrices(
+        &self,
+        layer_optical_depth: &[f64],
+        pieces: usize,
+    ) -> (Vec<f64>, Vec<(f64, f64)>) {
+        let levels = self.levels;
+        let block = levels * (levels + 1);
+        let count = self.spherical_streams.len();
+        let pieces = pieces.max(1);
+        let mut out = vec![0.0; pieces * count * block];
+        let mut angles = vec![(0.0, 0.0); pieces * count * levels];
+        let mut sums = vec![(0.0, 0.0, 0.0); pieces];
+        for s in 0..count {
+            for k in 0..levels {
+                let (first, last, ends_on_ground) = self.paths[s * levels + k];
+                let steps = &self.steps[first..last];
+                // The whole path's weight, then each step's piece by the
+                // weight gathered up to its middle.
+                let mut transmittance = 1.0;
+                let mut total = 0.0;
+                for step in steps {
+                    let (one_minus_e, _) =
+                        linear_source_weights(layer_optical_depth[step.layer] * step.stretch);
+                    total += transmittance * one_minus_e;
+                    transmittance *= 1.0 - one_minus_e;
+                }
+                sums.fill((0.0, 0.0, 0.0));
+                let (mut transmittance, mut gathered) = (1.0, 0.0);
+                for step in steps {
+                    let (one_minus_e, c) =
+                        linear_source_weights(layer_optical_depth[step.layer] * step.stretch);
+                    let weight = transmittance * one_minus_e;
+                    let b = if total > 0.0 {
+                        ((gathered + 0.5 * weight) / total * pieces as f64) as usize
+                    } else {
+                        0
+                    }
+                    .min(pieces - 1);
+                    gathered += weight;
+                    let sum = &mut sums[b];
+                    sum.0 += weight * step.centre_angle;
+                    sum.1 += weight * step.centre_angle.powi(2);
+                    sum.2 += weight;
+                    let matrix = &mut out[(b * count + s) * block..][..levels * levels];
+                    let near = transmittance * (one_minus_e - c);
+                    let far = transmittance * c;
+                    for ((level, w), weight) in [(step.near, near), (step.far, far)] {
+                        matrix[level * levels + k] += (1.0 - w) * weight;
+                        if w > 0.0 {
+                            matrix[(level + 1) * levels + k] += w * weight;
+                        }
+                    }
+                    transmittance *= 1.0 - one_minus_e;
+                }
+                if ends_on_ground {
+                    out[((pieces - 1) * count + s) * block + levels * levels + k] = transmittance;
+                }
+                for (b, &(angle_sum, square_sum, weight_sum)) in sums.iter().enumerate() {
+                    angles[(b * count + s) * levels + k] = if weight_sum > 0.0 {
+                        let mean = angle_sum / weight_sum;
+                        (
+                            mean,
+                            (square_sum / weight_sum - mean * mean).max(0.0).sqrt(),
+                        )
+                    } else {
+                        (0.0, 0.0)
+                    };
+                }
+            }
+        }
+        (out, angles)
+    }
 }
 
 /// (1 - e^{-x}, c) with c = (1 - e^{-x} - x e^{-x}) / x: the weights of a
@@ -313,6 +395,84 @@ mod tests {
                 );
                 if cosines[a] < 0.0 && k > 0 {
                     assert!(ground == 0.0 || (ground - (-tau).exp()).abs() < 1e-12);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn pieces_split_the_paths_light_in_equal_shares() {
+        let r = radii(6.36e6);
+        let cosines = [0.05, -0.05, 0.2, -0.2];
+        let paths = StreamPaths::compute(&r, &cosines);
+        let depths: Vec<f64> = (0..20).map(|k| 0.05 * (-(k as f64) / 4.0).exp()).collect();
+        let levels = r.len();
+        let count = paths.spherical_streams().len();
+        let block = levels * (levels + 1);
+        let mut whole = vec![0.0; count * block];
+        let mut rows = vec![(0, 0); count * levels];
+        let mut angles = vec![(0.0, 0.0); count * levels];
+        paths.compute_transport_matrices(&depths, &mut whole, &mut rows, &mut angles);
+        // One piece is the whole path.
+        let (one, one_angles) = paths.compute_piece_matrices(&depths, 1);
+        assert_eq!(one, whole);
+        assert_eq!(one_angles, angles);
+        let pieces = 4;
+        let (split, split_angles) = paths.compute_piece_matrices(&depths, pieces);
+        for s in 0..count {
+            for k in 0..levels {
+                // The pieces' weights add up to the whole's.
+                for j in 0..=levels {
+                    let sum: f64 = (0..pieces)
+                        .map(|b| split[(b * count + s) * block + j * levels + k])
+                        .sum();
+                    let w = whole[s * block + j * levels + k];
+                    assert!(
+                        (sum - w).abs() <= 1e-12 * w.abs().max(1e-300),
+                        "{s} {k} {j}"
+                    );
+                }
+                // Each piece gathers a quarter of a uniform source's light
+                // to within one step's share, farther pieces at larger
+                // angles, and their mean is the whole path's mean.
+                let shares: Vec<f64> = (0..pieces)
+                    .map(|b| {
+                        (0..levels)
+                            .map(|j| split[(b * count + s) * block + j * levels + k])
+                            .sum()
+                    })
+                    .collect();
+                let total: f64 = shares.iter().sum();
+                let (first, last, _) = paths.paths[s * levels + k];
+                if total == 0.0 {
+                    continue;
+                }
+                let mut transmittance = 1.0f64;
+                let mut largest = 0.0f64;
+                for step in &paths.steps[first..last] {
+                    let (one_minus_e, _) = linear_source_weights(depths[step.layer] * step.stretch);
+                    largest = largest.max(transmittance * one_minus_e);
+                    transmittance *= 1.0 - one_minus_e;
+                }
+                let mean: f64 = (0..pieces)
+                    .map(|b| shares[b] * split_angles[(b * count + s) * levels + k].0)
+                    .sum::<f64>()
+                    / total;
+                let whole_mean = angles[s * levels + k].0;
+                assert!(
+                    (mean / whole_mean - 1.0).abs() < 1e-9,
+                    "{mean} vs {whole_mean}"
+                );
+                for b in 0..pieces {
+                    let off = (shares[b] - 0.25 * total).abs();
+                    assert!(off <= largest * (1.0 + 1e-9), "{s} {k} {shares:?}");
+                    if b > 0 && shares[b] > 0.0 && shares[b - 1] > 0.0 {
+                        let (this, before) = (
+                            split_angles[(b * count + s) * levels + k].0,
+                            split_angles[((b - 1) * count + s) * levels + k].0,
+                        );
+                        assert!(this > before, "{s} {k}: {this} <= {before}");
+                    }
                 }
             }
         }

@@ -235,6 +235,9 @@ pub struct ColumnSystem<'a> {
     /// centre to where its light is gathered and that angle's spread, rad
     /// (`StreamPaths::compute_transport_matrices`).
     pub(super) spherical_mean_angles: Vec<(f64, f64)>,
+    /// With the every-order shift in pieces
+    /// ([`ColumnSystem::with_shift_pieces`]).
+    pub(super) shift_pieces: Option<ShiftPieces>,
     /// Per harmonic and level the matrix 2 pi w_b sum_j omega_j p*_jm(mu_a, mu_b),
     /// stored by columns, [((m * levels + k) * streams + b) * streams + a],
     /// so that scattering is a sum of whole columns (vectorisable) rather
@@ -250,6 +253,27 @@ impl<'a> ColumnSystem<'a> {
     /// returns the first order only (the tests that compare orders).
     pub(crate) fn with_sweeps(mut self, sweeps: usize) -> ColumnSystem<'a> {
         self.sweeps = sweeps.clamp(1, MAX_ITERATIONS);
+        self
+    }
+
+    /// This system shifting each spherical stream's orders after sunset
+    /// in `pieces` pieces of its path (each gathering an equal share of a
+    /// uniform source's light, each read at its own mean angle +- spread),
+    /// instead of the whole path at the path's: the slow reference of the
+    /// one-piece shift (`twilight_shift.rs`). One piece is the default.
+    pub(crate) fn with_shift_pieces(mut self, pieces: usize) -> ColumnSystem<'a> {
+        self.shift_pieces = match (self.paths, pieces) {
+            (Some(paths), 2..) => {
+                let depths = layer_optical_depths(self.grid, &self.species);
+                let (matrices, mean_angles) = paths.compute_piece_matrices(&depths, pieces);
+                Some(ShiftPieces {
+                    count: pieces,
+                    matrices,
+                    mean_angles,
+                })
+            }
+            _ => None,
+        };
         self
     }
 
@@ -284,15 +308,7 @@ impl<'a> ColumnSystem<'a> {
         let mut transmission = vec![0.0; layers * n];
         let mut near_weight = vec![0.0; layers * n];
         let mut far_weight = vec![0.0; layers * n];
-        let layer_optical_depth: Vec<f64> = (0..layers)
-            .map(|k| {
-                species
-                    .iter()
-                    .zip(grid.layer_columns_m(k))
-                    .map(|(sp, c)| sp.extinction_per_m * c)
-                    .sum()
-            })
-            .collect();
+        let layer_optical_depth = layer_optical_depths(grid, &species);
         for (k, dtau) in layer_optical_depth.iter().enumerate() {
             for a in 0..n {
                 let (one_minus_e, c) = linear_source_weights(dtau / streams.cosines()[a]);
@@ -373,6 +389,7 @@ impl<'a> ColumnSystem<'a> {
             spherical_transport,
             spherical_rows,
             spherical_mean_angles,
+            shift_pieces: None,
             scattering_matrices,
             sweeps: MAX_ITERATIONS,
         }
@@ -491,6 +508,36 @@ impl<'a> ColumnSystem<'a> {
                 .sum::<f64>()
     }
 
+    /// The spherical streams of `field` carried from `source` along piece
+    /// `piece` of their paths only ([`ColumnSystem::with_shift_pieces`]);
+    /// the other streams are left as they are.
+    pub(super) fn transport_piece(
+        &self,
+        piece: usize,
+        source: &[f64],
+        ground_radiance: f64,
+        field: &mut [f64],
+    ) {
+        let (Some(paths), Some(ShiftPieces { matrices, .. })) = (self.paths, &self.shift_pieces)
+        else {
+            return;
+        };
+        let total = self.streams.count();
+        let levels = self.grid.levels();
+        let block = levels * (levels + 1);
+        let count = paths.spherical_streams().len();
+        for (s, &a) in paths.spherical_streams().iter().enumerate() {
+            let (matrix, ground) =
+                matrices[(piece * count + s) * block..][..block].split_at(levels * levels);
+            for k in 0..levels {
+                field[k * total + a] = ground[k] * ground_radiance
+                    + (0..levels)
+                        .map(|j| matrix[j * levels + k] * source[j * total + a])
+                        .sum::<f64>();
+            }
+        }
+    }
+
     /// Carries the source function `source` (levels x streams) into the
     /// radiance `field`: up-looking streams from the top down, down-looking
     /// streams from the ground (radiance `ground_radiance`) up; the
@@ -563,6 +610,33 @@ impl<'a> ColumnSystem<'a> {
             }
         }
     }
+}
+
+/// The every-order shift's pieces of the spherical streams' paths
+/// (`StreamPaths::compute_piece_matrices`).
+#[derive(Debug, Clone)]
+pub(super) struct ShiftPieces {
+    pub(super) count: usize,
+    /// Per piece and spherical stream, the transport matrix and ground
+    /// weights (the layout of the whole path's).
+    matrices: Vec<f64>,
+    /// Per piece, spherical stream and level, the mean angle at the
+    /// planet's centre and its spread, rad.
+    pub(super) mean_angles: Vec<(f64, f64)>,
+}
+
+/// Each layer's optical depth (scaled extinction) of the column `grid`
+/// with `species`.
+fn layer_optical_depths(grid: &VerticalGrid, species: &[ScaledSpecies]) -> Vec<f64> {
+    (0..grid.levels() - 1)
+        .map(|k| {
+            species
+                .iter()
+                .zip(grid.layer_columns_m(k))
+                .map(|(sp, c)| sp.extinction_per_m * c)
+                .sum()
+        })
+        .collect()
 }
 
 #[cfg(test)]
