@@ -122,7 +122,7 @@ fn node_of_fine_grid(j: f64, half: usize, fine: usize) -> f64 {
 /// Zenith angle (rad) of zenith-axis node `row` of `2 half` rows (0 the
 /// zenith, half - 1 just above the horizon, half just below, 2 half - 1
 /// the nadir) for a horizon at `horizon` rad, with `fine` fine cells next
-/// to the horizon in each half ([`fine_grid_cells`]).
+/// to the horizon in each half (`fine_grid_cells`).
 pub fn zenith_of_node(row: usize, half: usize, fine: usize, horizon: f64) -> f64 {
     let pi = std::f64::consts::PI;
     let cells = fine_grid_cells(half, fine) as f64;
