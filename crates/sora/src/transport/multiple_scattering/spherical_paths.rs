@@ -50,6 +50,33 @@ struct PathStep {
     centre_angle: f64,
 }
 
+impl PathStep {
+    /// Adds this step's share of path k's light to `matrix` (levels x
+    /// levels, row = source level, column = k): the linear source's
+    /// weights at its near and far ends (`linear_source_weights`: the
+    /// step's 1 - e^-x and c) times the transmittance to the step, each
+    /// split between the two levels about it.
+    #[inline]
+    fn add_source_weights(
+        &self,
+        matrix: &mut [f64],
+        levels: usize,
+        k: usize,
+        transmittance: f64,
+        one_minus_e: f64,
+        c: f64,
+    ) {
+        let near = transmittance * (one_minus_e - c);
+        let far = transmittance * c;
+        for ((level, w), weight) in [(self.near, near), (self.far, far)] {
+            matrix[level * levels + k] += (1.0 - w) * weight;
+            if w > 0.0 {
+                matrix[(level + 1) * levels + k] += w * weight;
+            }
+        }
+    }
+}
+
 /// The paths of every (level, stream) whose stream is spherical.
 #[derive(Debug, Clone)]
 pub struct StreamPaths {
@@ -126,14 +153,7 @@ impl StreamPaths {
                     angle_sum += transmittance * one_minus_e * step.centre_angle;
                     square_sum += transmittance * one_minus_e * step.centre_angle.powi(2);
                     weight_sum += transmittance * one_minus_e;
-                    let near = transmittance * (one_minus_e - c);
-                    let far = transmittance * c;
-                    for ((level, w), weight) in [(step.near, near), (step.far, far)] {
-                        matrix[level * levels + k] += (1.0 - w) * weight;
-                        if w > 0.0 {
-                            matrix[(level + 1) * levels + k] += w * weight;
-                        }
-                    }
+                    step.add_source_weights(matrix, levels, k, transmittance, one_minus_e, c);
                     transmittance *= 1.0 - one_minus_e;
                 }
                 if ends_on_ground {
@@ -210,14 +230,7 @@ impl StreamPaths {
                     sum.1 += weight * step.centre_angle.powi(2);
                     sum.2 += weight;
                     let matrix = &mut out[(b * count + s) * block..][..levels * levels];
-                    let near = transmittance * (one_minus_e - c);
-                    let far = transmittance * c;
-                    for ((level, w), weight) in [(step.near, near), (step.far, far)] {
-                        matrix[level * levels + k] += (1.0 - w) * weight;
-                        if w > 0.0 {
-                            matrix[(level + 1) * levels + k] += w * weight;
-                        }
-                    }
+                    step.add_source_weights(matrix, levels, k, transmittance, one_minus_e, c);
                     transmittance *= 1.0 - one_minus_e;
                 }
                 if ends_on_ground {
