@@ -109,6 +109,11 @@ function serve() {
       response.writeHead(200, { 'content-type': 'text/html' }).end('<!doctype html><canvas id="c"></canvas>');
       return;
     }
+    if (path === '/march.js') {
+      // The real-time view's binding code, imported by the page (drawInPage).
+      response.writeHead(200, { 'content-type': 'text/javascript' }).end(await readFile(join(here, '../march.js')));
+      return;
+    }
     if (!file.startsWith(out)) {
       response.writeHead(404).end();
       return;
@@ -248,20 +253,8 @@ async function drawInPage({ shader, manifest, files, suns, size, zenithSuns, fra
   gl.uniform1i(u('uMarchSource'), 4);
   gl.uniform1i(u('uMarchTables'), 5);
   if (march) {
-    const m = t.march;
-    gl.uniform1iv(u('uMarchOffsets'), march.offsets);
-    gl.uniform1iv(u('uMarchLengths'), march.lengths);
-    gl.uniform4i(u('uMarchCounts'), m.wavelengths, m.species, m.sun_nodes, m.density_nodes);
-    gl.uniform2i(u('uMarchSourceNodes'), m.azimuth_nodes, m.view_zenith_nodes);
-    gl.uniform2i(u('uMarchColumnNodes'), m.sun_column_nodes[0], m.sun_column_nodes[1]);
-    gl.uniform2i(u('uMarchPhaseNodes'), m.phase_nodes, m.kernel_angles);
-    gl.uniform2f(u('uMarchKernel'), m.kernel_blend_start_rad, m.kernel_radius_rad);
-    gl.uniform2f(u('uMarchBeamAxis'), m.beam_first_elevation_deg ?? 0, m.beam_step_deg ?? 0);
-    gl.uniform1i(u('uMarchBeamElevations'), m.beam_elevations ?? 0);
-    gl.uniform3fv(u('uMarchBeamRange'), m.beam_range_deg ?? [0, 0, 0]);
-    gl.uniform1i(u('uMarchPeaks'), m.has_forward_peaks ? 1 : 0);
-    gl.uniform1f(u('uMarchDarkLogSource'), m.dark_log_source);
-    gl.uniform2i(u('uMarchSteps'), m.march_steps[0], m.march_steps[1]);
+    const { setMarchUniforms } = await import('/march.js');
+    setMarchUniforms(gl, program, t.march, march);
   }
   // The render target on a unit of its own (not a table's).
   gl.activeTexture(gl.TEXTURE0 + 7);
