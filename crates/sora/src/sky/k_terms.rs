@@ -137,11 +137,13 @@
 //! aerosol, 3.2e-4 and 1.6e-4 with earth-clear-summer's; the effective
 //! solve at every sample errs 1.3e-2 to 0.14 in luminance and 2.8e-3 to
 //! 2.1e-2 in xy. Its spectral images are refused.
-//! It saves little: the fisheye below 2.75 times the gas-free CPU against
-//! 2.85 (`farm-bench -n 8`, paired), since a term's sky costs mostly per
-//! sky, not per sample, and the effective solve alone (every sample
-//! folded) costs 1.27 times the gas-free image (its three more species
-//! in every march); see docs/atmosphere-file.md.
+//! It saves 14 %: the fisheye below 0.86 times the CPU of every term's
+//! (`farm-bench -n 8`, paired, 0.83-0.87), 2.78 times the gas-free image
+//! (`-n 10`, 2.58-2.95, load 10), since a term's sky costs some 0.2 of
+//! the gas-free image whatever its samples (0.025 each), and the
+//! effective solve alone (every sample folded) costs 1.27 times the
+//! gas-free image (its three more species in every march); see
+//! docs/atmosphere-file.md.
 //!
 //! Standard errors (path tracing) add as sum_j w_j se_j, the bound for
 //! errors that may be correlated (the terms are traced with one seed).
