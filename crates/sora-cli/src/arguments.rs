@@ -516,6 +516,19 @@ impl SunAndObserver {
         scattering: sora::Scattering,
         method: sora::Method,
     ) -> anyhow::Result<(sora::Sky, SunUsed)> {
+        self.sky_for(atmosphere, (scattering, method), None)
+    }
+
+    /// [`SunAndObserver::sky`]; with `colour_images`, a sky for colour
+    /// images alone, seen by that observer
+    /// (`sora::SkyBuilder::for_colour_images`: banded gases' terms folded
+    /// where colour allows).
+    pub fn sky_for(
+        &self,
+        atmosphere: &mut sora::Atmosphere,
+        (scattering, method): (sora::Scattering, sora::Method),
+        colour_images: Option<sora::colour::Observer>,
+    ) -> anyhow::Result<(sora::Sky, SunUsed)> {
         let polarisation = self.polarisation(method);
         if let Some(albedo) = self.ground_albedo {
             atmosphere.planet = atmosphere
@@ -543,14 +556,17 @@ impl SunAndObserver {
                 )
             })?;
         }
-        let sky = sora::Sky::builder(atmosphere)
+        let mut builder = sora::Sky::builder(atmosphere)
             .sun_deg(sun.elevation_deg, sun.azimuth_deg)
             .observer_altitude_m(self.observer_altitude_m)
             .wavelengths(self.wavelengths)
             .scattering(scattering)
             .method(method)
-            .polarisation(polarisation)
-            .build()?;
+            .polarisation(polarisation);
+        if let Some(observer) = colour_images {
+            builder = builder.for_colour_images(observer);
+        }
+        let sky = builder.build()?;
         Ok((sky, sun))
     }
 }

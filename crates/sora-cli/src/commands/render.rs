@@ -347,7 +347,12 @@ pub fn run(args: RenderArgs) -> anyhow::Result<()> {
     let scattering = args.resolution.apply(args.scattering, method)?;
     let mut atmosphere = args.source.load()?;
     let started = Instant::now();
-    let (sky, sun) = args.sun.sky(&mut atmosphere, scattering, method)?;
+    // Colour alone: the gas terms are folded where colour allows.
+    let (sky, sun) = args.sun.sky_for(
+        &mut atmosphere,
+        (scattering, method),
+        Some(args.colour.observer),
+    )?;
     if polarisation_outputs {
         crate::arguments::warn_non_polarising_species(&sky);
     }

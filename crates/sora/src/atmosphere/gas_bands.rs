@@ -386,6 +386,11 @@ pub struct GasBand {
     /// the effective coefficient is fitted for) and the others', for the
     /// overlaps.
     pub amounts: BandAmounts,
+    /// With a term: the wavelengths (nm, inclusive) at which it applies;
+    /// samples outside take the effective coefficient, as a single solve
+    /// does (a colour image's terms, `sky/k_terms.rs`). `None`: every
+    /// sample.
+    pub terms_within_nm: Option<(f64, f64)>,
 }
 
 /// One term: its weight and the factors of x (water), y (mixed gases) and
@@ -657,7 +662,16 @@ impl GasBand {
                 .enumerate()
                 .map(|(i, absorber)| {
                     let others = others.iter().map(|(gas, values)| (*gas, values[i]));
-                    self.coefficient_of(*absorber, others) * per_molecule
+                    let wavelength_nm = grid.wavelength_nm(i);
+                    let outside = self
+                        .terms_within_nm
+                        .is_some_and(|(lo, hi)| !(lo..=hi).contains(&wavelength_nm));
+                    let coefficient = if outside {
+                        self.effective_coefficient_of(*absorber)
+                    } else {
+                        self.coefficient_of(*absorber, others)
+                    };
+                    coefficient * per_molecule
                 })
                 .collect(),
         ))
@@ -718,6 +732,7 @@ pub fn banded_gas_species(gases: &BandedGases) -> Vec<Species> {
                 gas,
                 term: None,
                 amounts,
+                terms_within_nm: None,
             }),
             amount: GasAmount::ColumnDobsonUnits(
                 molecules_per_m2 / MOLECULES_PER_M2_PER_DOBSON_UNIT,
@@ -847,6 +862,17 @@ pub(crate) fn banded_depths_above(
         .collect())
 }
 
+/// The banded gas of a species, to change.
+pub(crate) fn band_of_mut(species: &mut Species) -> Option<&mut GasBand> {
+    match &mut species.model {
+        SpeciesModel::AbsorbingGas(AbsorbingGas {
+            cross_section: AbsorptionCrossSection::Band(band),
+            ..
+        }) => Some(band),
+        _ => None,
+    }
+}
+
 fn band_of(species: &Species) -> Option<&GasBand> {
     match &species.model {
         SpeciesModel::AbsorbingGas(AbsorbingGas {
@@ -884,14 +910,8 @@ pub fn k_distribution_terms(
     Ok((0..TERMS)
         .map(|j| {
             let mut at_term = atmosphere.clone();
-            for species in &mut at_term.species {
-                if let SpeciesModel::AbsorbingGas(AbsorbingGas {
-                    cross_section: AbsorptionCrossSection::Band(band),
-                    ..
-                }) = &mut species.model
-                {
-                    band.term = Some(j);
-                }
+            for band in at_term.species.iter_mut().filter_map(band_of_mut) {
+                band.term = Some(j);
             }
             (
                 SampledSpectrum::from_values(weights.iter().map(|w| w[j]).collect()),
@@ -1074,6 +1094,7 @@ mod tests {
                 co2_ppm: CO2_REFERENCE_PPM,
                 methane_ppm: None,
             },
+            terms_within_nm: None,
         };
         let a = 27.0; // 930 nm
         let k = band.coefficient_per_unit_amount(a, [(BandGas::MixedGases, 0.0)]);

@@ -176,6 +176,12 @@ impl SpectrumToXyz {
         }
     }
 
+    /// Per sample, the colour-matching functions times its quadrature
+    /// weight, `[w x̄, w ȳ, w z̄]`, nm.
+    pub(crate) fn weighted_cmfs(&self) -> &[[f64; 3]] {
+        &self.weighted_cmfs
+    }
+
     /// The grid the spectra must be sampled on.
     pub(crate) fn grid(&self) -> &WavelengthGrid {
         &self.grid

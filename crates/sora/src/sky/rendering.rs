@@ -202,6 +202,11 @@ impl Sky {
         image: &ImageSettings,
         progress: &(dyn Fn(usize) + Sync),
     ) -> Result<Vec<f64>> {
+        if self.colour_only {
+            return Err(Error::Unsupported(
+                "spectral images: this sky was built for colour images alone (SkyBuilder::for_colour_images folds its gas terms where colour allows); build it without that".into(),
+            ));
+        }
         if !self.k_terms.is_empty() {
             let n = self.wavelengths().len();
             self.check_image::<f64>(image, n)?;

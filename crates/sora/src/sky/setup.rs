@@ -61,6 +61,10 @@ pub struct Sky {
     /// The runs of samples, with and without their higher orders, of the
     /// terms that exact views do not take from `k_terms`.
     pub(super) view_terms: Vec<(SampledSpectrum, Sky)>,
+    /// Built for colour images alone (`SkyBuilder::for_colour_images`):
+    /// its terms are folded where colour allows, so spectral images are
+    /// refused.
+    pub(super) colour_only: bool,
 }
 
 #[derive(Debug)]
@@ -166,6 +170,7 @@ impl Sky {
             k_terms: Vec::new(),
             k_terms_for_views: Vec::new(),
             view_terms: Vec::new(),
+            colour_only: false,
         })
     }
 
@@ -189,6 +194,7 @@ impl Sky {
         sky.k_terms = at_sun(&self.k_terms)?;
         sky.k_terms_for_views = self.k_terms_for_views.clone();
         sky.view_terms = at_sun(&self.view_terms)?;
+        sky.colour_only = self.colour_only;
         Ok(sky)
     }
 
