@@ -758,7 +758,7 @@ pub fn quality_settings(
                 grid,
                 MultipleScatteringSettings {
                     layers: 16,
-                    sunset_sun_zenith_step_deg: 2.5,
+                    sunset_sun_zenith_step_deg: 1.0,
                     ..settings
                 },
                 tables,

@@ -1,0 +1,161 @@
+//! How far the real-time view's march (the engine tables of
+//! [`REALTIME_TABLES`], `EngineTables::aerial_perspective_xyz`, which
+//! `soraAerialPerspectiveMarch` follows step by step) is from the
+//! library's aerial perspective on the sky the tables are baked from, at
+//! the browser test's views (`web/tests/realtime.test.mjs`, `AERIAL`: the
+//! scene camera's 6 x 4 cell centres above the horizon, suns 10 / 2 / -4,
+//! 1 / 10 / 50 km): the largest relative error of the in-scattered
+//! luminance per case and distance, and the bake's time on one thread.
+//! `SUNSET_STEP` (degrees) bakes from a field with other sunset steps than
+//! [`Quality::Realtime`]'s (the library's reference keeps them); `CASES`
+//! ("sun,sun azimuth,look azimuth;..." in degrees) other cases.
+//!
+//! ```text
+//! cargo run --release --manifest-path crates/sora-web/Cargo.toml --example realtime_aerial_accuracy
+//! ```
+
+use std::time::Instant;
+
+use sora::colour::SpectrumToXyz;
+use sora::engine_tables::EngineTables;
+use sora::geometry::ViewDirection;
+use sora::{Atmosphere, Scattering, Sky};
+use sora_web::engine::{REALTIME_TABLES, quality_settings};
+use sora_web::request::Quality;
+
+/// The browser test's cases: sun elevation, sun azimuth, look azimuth.
+const CASES: [(f64, f64, f64); 3] = [
+    (10.0, 180.0, 180.0),
+    (2.0, 240.0, 150.0),
+    (-4.0, 180.0, 0.0),
+];
+const DISTANCES_M: [f64; 3] = [1000.0, 10000.0, 50000.0];
+/// The scene camera (`web/realtime.js`, `SCENE`) and the test's grid.
+const HALF_ANGLE_X_DEG: f64 = 40.0;
+const PITCH_DEG: f64 = 12.0;
+const ASPECT: f64 = 0.5;
+const GRID: (usize, usize) = (6, 4);
+
+/// `sceneView` of `web/realtime.js`: elevation and azimuth (degrees) of
+/// the view through screen point (sx, sy).
+fn scene_view(look_deg: f64, sx: f64, sy: f64) -> (f64, f64) {
+    let (yaw, pitch) = (look_deg.to_radians(), PITCH_DEG.to_radians());
+    let f = [
+        yaw.sin() * pitch.cos(),
+        yaw.cos() * pitch.cos(),
+        pitch.sin(),
+    ];
+    let r = [yaw.cos(), -yaw.sin(), 0.0];
+    let u = [
+        r[1] * f[2] - r[2] * f[1],
+        r[2] * f[0] - r[0] * f[2],
+        r[0] * f[1] - r[1] * f[0],
+    ];
+    let tan_x = HALF_ANGLE_X_DEG.to_radians().tan();
+    let tan_y = tan_x * ASPECT;
+    let v: Vec<f64> = (0..3)
+        .map(|i| f[i] + sx * tan_x * r[i] + sy * tan_y * u[i])
+        .collect();
+    let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    let (x, y, z) = (v[0] / n, v[1] / n, v[2] / n);
+    (
+        z.asin().to_degrees(),
+        (x.atan2(y).to_degrees() + 360.0) % 360.0,
+    )
+}
+
+/// The unit vector (east-north-up) of an elevation and an azimuth
+/// clockwise from north, degrees.
+fn unit(elevation_deg: f64, azimuth_deg: f64) -> [f64; 3] {
+    let (e, a) = (elevation_deg.to_radians(), azimuth_deg.to_radians());
+    [a.sin() * e.cos(), a.cos() * e.cos(), e.sin()]
+}
+
+fn sky(atmosphere: &Atmosphere, sun_deg: f64, sun_azimuth_deg: f64, step: Option<f64>) -> Sky {
+    let (grid, mut settings, tables) = quality_settings(Quality::Realtime);
+    if let Some(step) = step {
+        settings.sunset_sun_zenith_step_deg = step;
+    }
+    Sky::builder(atmosphere)
+        .sun_deg(sun_deg, sun_azimuth_deg)
+        .wavelengths(grid)
+        .scattering(Scattering::Multiple(settings))
+        .table_size(tables)
+        .polarisation(sora::Polarisation::Scalar)
+        .build()
+        .expect("a sky")
+}
+
+fn main() {
+    let preset = std::env::args()
+        .nth(1)
+        .unwrap_or_else(|| "earth-clear".into());
+    let atmosphere = Atmosphere::preset(&preset).expect("a preset");
+    let step: Option<f64> = std::env::var("SUNSET_STEP")
+        .ok()
+        .map(|s| s.parse().expect("degrees"));
+    let started = Instant::now();
+    let baked = sky(&atmosphere, 45.0, 180.0, step);
+    let tables = EngineTables::bake(&baked, &REALTIME_TABLES.settings, &|_| {}).expect("tables");
+    println!(
+        "{preset}, sunset step {:?}: bake {:.2} s, {:.2} MB",
+        step,
+        started.elapsed().as_secs_f64(),
+        tables.size_bytes() as f64 / 1e6
+    );
+    let cases: Vec<(f64, f64, f64)> = std::env::var("CASES").map_or(CASES.to_vec(), |v| {
+        v.split(';')
+            .map(|c| {
+                let n: Vec<f64> = c.split(',').map(|n| n.parse().expect("degrees")).collect();
+                (n[0], n[1], n[2])
+            })
+            .collect()
+    });
+    for (sun_deg, sun_azimuth_deg, look_deg) in cases {
+        let reference = sky(&atmosphere, sun_deg, sun_azimuth_deg, None);
+        let to_xyz = SpectrumToXyz::new(reference.wavelengths(), Default::default());
+        let sun = unit(sun_deg, sun_azimuth_deg);
+        let mut views = Vec::new();
+        for row in 0..GRID.1 {
+            for column in 0..GRID.0 {
+                let sx = (2.0 * (column as f64 + 0.5) - GRID.0 as f64) / GRID.0 as f64;
+                let sy = (2.0 * (row as f64 + 0.5) - GRID.1 as f64) / GRID.1 as f64;
+                let (e, a) = scene_view(look_deg, sx, sy);
+                if e > 0.05 {
+                    views.push(ViewDirection::new(e, a).unwrap());
+                }
+            }
+        }
+        let segments: Vec<(ViewDirection, f64)> = DISTANCES_M
+            .iter()
+            .flat_map(|d| views.iter().map(move |v| (*v, *d)))
+            .collect();
+        let library = reference.aerial_perspectives(&segments).expect("segments");
+        let mut line = Vec::new();
+        for (n, d) in DISTANCES_M.iter().enumerate() {
+            let (mut worst, mut at) = (0.0f64, (0.0, 0.0));
+            for (i, view) in views.iter().enumerate() {
+                let air = &library[n * views.len() + i];
+                let want = to_xyz.to_xyz(&air.radiance.radiance_w_m2_sr_nm).unwrap().y;
+                let v = unit(view.elevation_deg(), view.azimuth_deg());
+                let (got, _) = tables.aerial_perspective_xyz(0.0, v, sun, *d);
+                let e = (got[1] / want - 1.0).abs();
+                if e > worst {
+                    (worst, at) = (e, (view.elevation_deg(), view.azimuth_deg()));
+                }
+            }
+            line.push(format!(
+                "{} km {:.2} % (at {:.1}, {:.0})",
+                d / 1e3,
+                100.0 * worst,
+                at.0,
+                at.1
+            ));
+        }
+        println!(
+            "sun {sun_deg} (azimuth {sun_azimuth_deg}), looking {look_deg}, {} views: {}",
+            views.len(),
+            line.join("; ")
+        );
+    }
+}
