@@ -152,10 +152,104 @@ fn main() {
                 at.1
             ));
         }
+        if std::env::var("SLICES").is_ok() {
+            slices(&reference, &tables, &views, sun);
+        }
         println!(
             "sun {sun_deg} (azimuth {sun_azimuth_deg}), looking {look_deg}, {} views: {}",
             views.len(),
             line.join("; ")
         );
     }
+}
+
+/// The volume's distance axis alone (`web/realtime.js`: 16 slices
+/// geometric from 250 m to 200 km, S = L / (1 - T) and tau linear in d
+/// between them) at each view and distance: the march at the two slices
+/// around d, interpolated, against the march at d and the library's.
+fn slices(reference: &Sky, tables: &EngineTables, views: &[ViewDirection], sun: [f64; 3]) {
+    let spec: Vec<f64> = std::env::var("SLICES")
+        .unwrap()
+        .split(',')
+        .map(|n| n.parse().unwrap())
+        .collect();
+    let (n, near, far) = (spec[0] as usize, spec[1], spec[2]);
+    let slice = |k: usize| near * (far / near).powf(k as f64 / (n - 1) as f64);
+    let mut worst = [0.0f64; 3];
+    let to_xyz = SpectrumToXyz::new(reference.wavelengths(), Default::default());
+    if let Ok(e) = std::env::var("PROFILE") {
+        let v = unit(e.parse().unwrap(), 351.0);
+        for i in 0..=40 {
+            let d = 20000.0 + 1000.0 * i as f64;
+            let (l, t) = tables.aerial_perspective_xyz(0.0, v, sun, d);
+            println!("  profile {e} deg, {:.0} km: L {:.5e}, T {:.4}, S {:.5e}", d / 1e3, l[1], t[1], l[1] / (1.0 - t[1]));
+        }
+    }
+    for view in views {
+        let v = unit(view.elevation_deg(), view.azimuth_deg());
+        let march = |d: f64| tables.aerial_perspective_xyz(0.0, v, sun, d);
+        for (j, d) in [1000.0, 10000.0, 50000.0].into_iter().enumerate() {
+            let x = (d / near).ln() / (far / near).ln() * (n - 1) as f64;
+            let k = (x.floor() as usize).min(n - 2);
+            let (d0, d1) = (slice(k), slice(k + 1));
+            let t = (d - d0) / (d1 - d0);
+            let (l0, t0) = march(d0);
+            let (l1, t1) = march(d1);
+            let s = [l0[1] / (1.0 - t0[1]), l1[1] / (1.0 - t1[1])];
+            let tau = [-t0[1].ln(), -t1[1].ln()];
+            let tau_d = tau[0] + t * (tau[1] - tau[0]);
+            let volume = (s[0] + t * (s[1] - s[0])) * (1.0 - (-tau_d).exp());
+            // L itself linear in ln d, for comparison.
+            let tl = (d / d0).ln() / (d1 / d0).ln();
+            let log_linear = l0[1] + tl * (l1[1] - l0[1]);
+            // Catmull-Rom in x through slices k - 1..k + 2 of S and tau / d.
+            let node = |i: isize| {
+                let i = i.clamp(0, n as isize - 1) as usize;
+                let di = slice(i);
+                let (l, t) = march(di);
+                (l[1] / (1.0 - t[1]), -t[1].ln() / di)
+            };
+            let u = x - k as f64;
+            let p: Vec<(f64, f64)> = (-1..=2).map(|i| node(k as isize + i)).collect();
+            let cr = |a: f64, b: f64, c: f64, e: f64| {
+                0.5 * (2.0 * b
+                    + (c - a) * u
+                    + (2.0 * a - 5.0 * b + 4.0 * c - e) * u * u
+                    + (3.0 * b - a - 3.0 * c + e) * u * u * u)
+            };
+            let s_c = cr(p[0].0, p[1].0, p[2].0, p[3].0);
+            let b_c = cr(p[0].1, p[1].1, p[2].1, p[3].1);
+            let cubic = s_c * (1.0 - (-b_c * d).exp());
+            let (m, _) = march(d);
+            let mode = std::env::var("MODE").unwrap_or_default();
+            let value = if mode == "cubic" { cubic } else { volume };
+            worst[j] = worst[j].max((value / m[1] - 1.0).abs());
+            if std::env::var("SLICES_QUIET").is_ok() {
+                continue;
+            }
+            let lib = reference
+                .aerial_perspectives(&[(*view, d0), (*view, d1), (*view, d)])
+                .unwrap();
+            let y = |i: usize| to_xyz.to_xyz(&lib[i].radiance.radiance_w_m2_sr_nm).unwrap().y;
+            println!(
+                "  view ({:.1}, {:.0}) d {:.0} km between {:.1} and {:.1}: volume/march {:+.2} %, L lin-in-ln-d/march {:+.2} %, march/library at d0 {:+.2} %, d1 {:+.2} %, d {:+.2} %",
+                view.elevation_deg(),
+                view.azimuth_deg(),
+                d / 1e3,
+                d0 / 1e3,
+                d1 / 1e3,
+                100.0 * (volume / m[1] - 1.0),
+                100.0 * (log_linear / m[1] - 1.0),
+                100.0 * (l0[1] / y(0) - 1.0),
+                100.0 * (l1[1] / y(1) - 1.0),
+                100.0 * (m[1] / y(2) - 1.0),
+            );
+        }
+    }
+    println!(
+        "  slices {n} from {near} to {far} m: distance axis alone against the march at 1 / 10 / 50 km {:.2} / {:.2} / {:.2} %",
+        100.0 * worst[0],
+        100.0 * worst[1],
+        100.0 * worst[2]
+    );
 }

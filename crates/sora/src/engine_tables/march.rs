@@ -65,6 +65,9 @@ pub const PHASE_NODES: usize = 1024;
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SourceThinning {
     pub level_stride: usize,
+    /// Levels are thinned only in a field of at least this many (a
+    /// coarser field keeps every one).
+    pub thin_from_levels: usize,
     pub dense_below_m: f64,
     pub sun_stride: usize,
     /// The sun stride applies to the sun zenith nodes below this angle
@@ -98,7 +101,7 @@ impl SourceThinning {
 }
 
 /// The default [`SourceThinning`]: every level up to 6 km, every third
-/// above, every other sun node (6 degrees apart) for suns more than 15
+/// above (in a field of 30 levels or more), every other sun node (6 degrees apart) for suns more than 15
 /// degrees up and every one below (0.75-3 degrees apart), every other
 /// wavelength (11 of the default 21, ln R linear between them; at most
 /// 40 nm apart, so a 40 nm grid keeps every one), the 19
@@ -121,9 +124,12 @@ impl SourceThinning {
 /// 9.2 % off. On the explorer's real-time grid (11 wavelengths 40 nm
 /// apart) every other wavelength put its march 2.3-2.9 % off at sun -4
 /// (earth-clear, 1-50 km; ln R read linearly over 80 nm),
-/// every one 0.3-1.2 %.
+/// every one 0.3-1.2 % (with every third level above 6 km of its field's
+/// 17, 1.2-1.3 % at 50 km, where the view leaves the Earth's shadow; every
+/// level, below 30 levels: 0.3 %).
 pub const SOURCE_THINNING: SourceThinning = SourceThinning {
     level_stride: 3,
+    thin_from_levels: 30,
     dense_below_m: 6000.0,
     sun_stride: 2,
     sun_stride_below_zenith_deg: 75.0,
@@ -509,6 +515,7 @@ fn thinned_source(
 ) -> (ExportedSource, Vec<usize>) {
     let SourceThinning {
         level_stride,
+        thin_from_levels,
         dense_below_m,
         sun_stride,
         sun_stride_below_zenith_deg,
@@ -527,6 +534,11 @@ fn thinned_source(
     };
     // Every level up to the dense altitude, every level_stride-th above.
     let count = source.levels_m.len();
+    let level_stride = if count < thin_from_levels {
+        1
+    } else {
+        level_stride
+    };
     let mut levels: Vec<usize> = Vec::new();
     let mut since = level_stride;
     for k in 0..count {

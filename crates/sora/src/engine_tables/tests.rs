@@ -1732,6 +1732,7 @@ fn the_aerial_march_looking_down_matches_the_library() {
             &shared,
             march::SourceThinning {
                 level_stride: 1,
+                thin_from_levels: 0,
                 dense_below_m: 0.0,
                 sun_stride: 1,
                 sun_stride_below_zenith_deg: 0.0,
