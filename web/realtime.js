@@ -58,7 +58,7 @@ export const RIDGES = [
 ];
 export const DIFFERENCE_SCALE = 0.05;
 // The aerial-perspective volume's nodes (see above).
-export const VOLUME = { columns: 16, rows: 24, slices: 16, nearM: 250, farM: 200000 };
+export const VOLUME = { columns: 16, rows: 24, slices: 20, nearM: 250, farM: 200000 };
 
 // The scene camera: its picture's size (pixels) and half-angle across.
 export const SCENE = { width: 512, height: 256, halfAngleXDeg: 40, pitchDeg: 12 };

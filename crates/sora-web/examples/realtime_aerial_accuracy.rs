@@ -8,7 +8,10 @@
 //! luminance per case and distance, and the bake's time on one thread.
 //! `SUNSET_STEP` (degrees) bakes from a field with other sunset steps than
 //! [`Quality::Realtime`]'s (the library's reference keeps them); `CASES`
-//! ("sun,sun azimuth,look azimuth;..." in degrees) other cases.
+//! ("sun,sun azimuth,look azimuth;..." in degrees) other cases; `SLICES`
+//! ("count,nearest m,farthest m") adds the volume's distance axis alone
+//! (linear in d, or `MODE=cubic`: `web/realtime.js`'s Catmull-Rom) against
+//! the march; `BAKE_ONLY` stops after the bake (to time it).
 //!
 //! ```text
 //! cargo run --release --manifest-path crates/sora-web/Cargo.toml --example realtime_aerial_accuracy
@@ -103,6 +106,9 @@ fn main() {
         started.elapsed().as_secs_f64(),
         tables.size_bytes() as f64 / 1e6
     );
+    if std::env::var("BAKE_ONLY").is_ok() {
+        return;
+    }
     let cases: Vec<(f64, f64, f64)> = std::env::var("CASES").map_or(CASES.to_vec(), |v| {
         v.split(';')
             .map(|c| {
@@ -182,7 +188,13 @@ fn slices(reference: &Sky, tables: &EngineTables, views: &[ViewDirection], sun: 
         for i in 0..=40 {
             let d = 20000.0 + 1000.0 * i as f64;
             let (l, t) = tables.aerial_perspective_xyz(0.0, v, sun, d);
-            println!("  profile {e} deg, {:.0} km: L {:.5e}, T {:.4}, S {:.5e}", d / 1e3, l[1], t[1], l[1] / (1.0 - t[1]));
+            println!(
+                "  profile {e} deg, {:.0} km: L {:.5e}, T {:.4}, S {:.5e}",
+                d / 1e3,
+                l[1],
+                t[1],
+                l[1] / (1.0 - t[1])
+            );
         }
     }
     for view in views {
@@ -230,7 +242,12 @@ fn slices(reference: &Sky, tables: &EngineTables, views: &[ViewDirection], sun: 
             let lib = reference
                 .aerial_perspectives(&[(*view, d0), (*view, d1), (*view, d)])
                 .unwrap();
-            let y = |i: usize| to_xyz.to_xyz(&lib[i].radiance.radiance_w_m2_sr_nm).unwrap().y;
+            let y = |i: usize| {
+                to_xyz
+                    .to_xyz(&lib[i].radiance.radiance_w_m2_sr_nm)
+                    .unwrap()
+                    .y
+            };
             println!(
                 "  view ({:.1}, {:.0}) d {:.0} km between {:.1} and {:.1}: volume/march {:+.2} %, L lin-in-ln-d/march {:+.2} %, march/library at d0 {:+.2} %, d1 {:+.2} %, d {:+.2} %",
                 view.elevation_deg(),
