@@ -183,20 +183,6 @@ fn slices(reference: &Sky, tables: &EngineTables, views: &[ViewDirection], sun: 
     let slice = |k: usize| near * (far / near).powf(k as f64 / (n - 1) as f64);
     let mut worst = [0.0f64; 3];
     let to_xyz = SpectrumToXyz::new(reference.wavelengths(), Default::default());
-    if let Ok(e) = std::env::var("PROFILE") {
-        let v = unit(e.parse().unwrap(), 351.0);
-        for i in 0..=40 {
-            let d = 20000.0 + 1000.0 * i as f64;
-            let (l, t) = tables.aerial_perspective_xyz(0.0, v, sun, d);
-            println!(
-                "  profile {e} deg, {:.0} km: L {:.5e}, T {:.4}, S {:.5e}",
-                d / 1e3,
-                l[1],
-                t[1],
-                l[1] / (1.0 - t[1])
-            );
-        }
-    }
     for view in views {
         let v = unit(view.elevation_deg(), view.azimuth_deg());
         let march = |d: f64| tables.aerial_perspective_xyz(0.0, v, sun, d);
