@@ -34,13 +34,17 @@
 // to edge of the picture by VOLUME.slices distances geometric from
 // VOLUME.nearM to VOLUME.farM, into two float textures (an atlas of the
 // slices side by side) each time the sun, the eye or the camera moves; a
-// pixel reads it trilinearly. What is interpolated is not L_air and T but
-// the segment's optical depth tau = -ln T and its mean source S = L_air /
-// (1 - T), per XYZ channel, linear in the distance between two slices
-// (below the first, tau in proportion to d and S the first slice's): for
-// a uniform path both are exact (tau = beta d, S = the source), so the
-// interpolation's error is only how far the path is from uniform between
-// nodes (measured by the browser test against the march per pixel).
+// pixel reads it bilinearly across views and by a cubic across slices.
+// What is interpolated is not L_air and T but the segment's mean
+// extinction tau / d (tau = -ln T) and its mean source S = L_air / (1 -
+// T), per XYZ channel, Catmull-Rom in the slice coordinate through four
+// slices (below the first, the first slice's): for a uniform path both
+// are exact (tau / d = beta, S = the source), so the interpolation's
+// error is only how far the path is from uniform between nodes (measured
+// by the browser test against the march per pixel). The cubic follows
+// the curve of L_air(d) where a view leaves the Earth's shadow (sun -4,
+// 29 degrees up, looking away: at 43-60 km S grows 30 %), which linear
+// interpolation between slices overshot by 2.7 % at 50 km.
 
 import { marchTextures, setMarchUniforms, MARCH_WIDTH } from './march.js';
 
@@ -54,7 +58,7 @@ export const RIDGES = [
 ];
 export const DIFFERENCE_SCALE = 0.05;
 // The aerial-perspective volume's nodes (see above).
-export const VOLUME = { columns: 16, rows: 24, slices: 16, nearM: 250, farM: 200000 };
+export const VOLUME = { columns: 16, rows: 24, slices: 20, nearM: 250, farM: 200000 };
 
 // The scene camera: its picture's size (pixels) and half-angle across.
 export const SCENE = { width: 512, height: 256, halfAngleXDeg: 40, pitchDeg: 12 };
@@ -275,23 +279,31 @@ void volumeSlice(int k, ivec2 n, vec2 t, out vec3 source, out vec3 depth) {
   depth = mix(mix(d00, d10, t.x), mix(d01, d11, t.x), t.y);
 }
 
-// L_air and T of a point d (m) along v from the volume (trilinear in the
-// views' node coordinates and the distance; see the file's comment).
+// L_air and T of a point d (m) along v from the volume: bilinear in the
+// views' node coordinates, and across the slices a Catmull-Rom cubic in
+// x = the slice coordinate (uniform in ln d) through slices k - 1..k + 2
+// (the end slices repeated) of S and of tau / d (the mean extinction):
+// both constant along a uniform path, so exact there as before; below the
+// first slice x is 0 (S and tau / d the first slice's, tau in proportion
+// to d). See the file's comment.
 void volumeAerialPerspective(vec3 v, float d, out vec3 inscattered, out vec3 transmittance) {
   vec2 xy = clamp(volumeNodeOf(v), vec2(0.0), vec2(VOLUME_NODES.xy - 1));
   ivec2 n = min(ivec2(xy), VOLUME_NODES.xy - 2);
   vec2 t = xy - vec2(n);
-  float slice = log(max(d, VOLUME_RANGE_M.x) / VOLUME_RANGE_M.x) / log(VOLUME_RANGE_M.y / VOLUME_RANGE_M.x) * float(VOLUME_NODES.z - 1);
-  int k = clamp(int(slice), 0, VOLUME_NODES.z - 2);
-  float d0 = volumeDistance(k), d1 = volumeDistance(k + 1);
-  float tz = clamp((d - d0) / (d1 - d0), 0.0, 1.0);
-  vec3 s0, t0, s1, t1;
-  volumeSlice(k, n, t, s0, t0);
-  volumeSlice(k + 1, n, t, s1, t1);
-  vec3 source = mix(s0, s1, tz);
-  vec3 depth = mix(t0, t1, tz) * min(d / VOLUME_RANGE_M.x, 1.0);
-  transmittance = exp(-depth);
-  inscattered = source * (1.0 - transmittance);
+  float x = clamp(log(max(d, VOLUME_RANGE_M.x) / VOLUME_RANGE_M.x) / log(VOLUME_RANGE_M.y / VOLUME_RANGE_M.x) * float(VOLUME_NODES.z - 1), 0.0, float(VOLUME_NODES.z - 1));
+  int k = min(int(x), VOLUME_NODES.z - 2);
+  float u = x - float(k);
+  vec4 w = 0.5 * vec4(((2.0 - u) * u - 1.0) * u, (3.0 * u - 5.0) * u * u + 2.0, ((4.0 - 3.0 * u) * u + 1.0) * u, (u - 1.0) * u * u);
+  vec3 source = vec3(0.0), extinction = vec3(0.0);
+  for (int i = 0; i < 4; i++) {
+    int ki = clamp(k - 1 + i, 0, VOLUME_NODES.z - 1);
+    vec3 s, tau;
+    volumeSlice(ki, n, t, s, tau);
+    source += w[i] * s;
+    extinction += w[i] * tau / volumeDistance(ki);
+  }
+  transmittance = exp(-max(extinction, vec3(0.0)) * d);
+  inscattered = max(source, vec3(0.0)) * (1.0 - transmittance);
 }
 
 // The scene's aerial perspective: the volume's, or the sky table's

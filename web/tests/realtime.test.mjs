@@ -53,33 +53,30 @@ const SUNS = [45, 10, 2, -4];
 // the grid of views over the scene camera's picture (columns x rows, at
 // the cells' centres, between the volume's nodes; those below the
 // horizon, whose segment meets the ground first, left out: 18 views), and
-// the cases: sun elevation and
-// azimuth, look azimuth (toward the sun, across it, away from it), and
-// the largest relative error of the in-scattered luminance allowed
-// against the library. The limits: the volume is the march per node
-// (soraAerialPerspectiveMarch, within 2 % of the library at 1, 10 and 50
-// km with the default bake's 21 wavelengths, tables.test.mjs); at the
-// real-time bake's sky (11 wavelengths, a field with 2.5-degree sunset
-// steps, the source read between those sun nodes) the march per pixel
-// measured 0.61-0.78 % off at sun 10, 2.8-4.0 % at 2 and 2.2-2.6 % at -4
-// (these views), the sky table's own error there against the same sky
-// (LIMITS.againstBakedSky: 3.4 % at sun 2); the volume adds its
-// interpolation, held apart to AERIAL.interpolation against the march per
-// pixel (measured up to 1.24 % at sun 10 and 10 km, 1.08 % at 2, and 3.17
-// % at -4 and 50 km, toward the picture's top, away from the sun: 24
-// slices, 12 columns or rows more uniform in elevation did not lower it;
-// probably the Earth's shadow's edge along those views, a kink in L_air(d)
-// between two slices, docs/engine-tables.md). So 2 % at sun 10 and 5 % at
-// 2 and -4 against the library, 4 % against the march. The
-// transmittance: within AERIAL.transmittance absolute (what multiplies the
-// point's own light; the largest measured 0.0035, near the horizon at
-// 50 km, 0.0030 at 10 km, where T is 0.40).
+// the cases: sun elevation and azimuth, look azimuth (toward the sun,
+// across it, away from it), and the largest relative error of the
+// in-scattered luminance allowed against the library. The volume is the
+// march per node (soraAerialPerspectiveMarch); at the real-time bake
+// (11 wavelengths, every one kept by the march, a field with 1-degree
+// sunset steps) the march per pixel measured 0.35-0.47 % off at sun 10,
+// 0.74-1.04 % at 2 and 0.39-0.58 % at -4 (these views; with 2.5-degree
+// steps and every other wavelength 2.2-4.0 % at 2 and -4); the volume
+// adds its interpolation, held apart to AERIAL.interpolation against the
+// march per pixel (measured up to 0.89 %, sun 10 at 50 km; the
+// Catmull-Rom across its 20 slices follows L_air(d) where a view leaves
+// the Earth's shadow, which linear interpolation between 16 slices
+// overshot by 3.2 % at sun -4, 50 km, docs/engine-tables.md). So 2 % at
+// every sun against the library and against the march. The
+// transmittance: within AERIAL.transmittance absolute (what multiplies
+// the point's own light; the largest measured 0.0049, near the horizon at
+// 50 km, where T is 0.40: the views' interpolation there, the same at
+// every sun).
 const AERIAL = {
   distances: [1000, 10000, 50000],
   columns: 6,
   rows: 4,
-  cases: [[10, 180, 180, 0.02], [2, 240, 150, 0.05], [-4, 180, 0, 0.05]],
-  interpolation: 0.04,
+  cases: [[10, 180, 180, 0.02], [2, 240, 150, 0.02], [-4, 180, 0, 0.02]],
+  interpolation: 0.02,
   transmittance: 0.005,
 };
 

@@ -570,27 +570,35 @@ pub struct RealtimeTables {
 }
 
 /// The real-time view's tables: a sky of the preview's wavelengths (every
-/// 40 nm) and image tables, with a field of 16 layers and 2.5-degree
+/// 40 nm) and image tables, with a field of 16 layers and 1-degree
 /// sunset steps ([`Quality::Realtime`]; with 14 layers and 3.5-degree
 /// steps, a preview tried in issue 38, the tables were 5.3 % and 10.6 %
 /// off their sky at suns 2 and -4: the bake's field is solved for every
 /// sun, its nodes not placed at the eye's, so the steps between them are
 /// its error), and 48 suns x 3 altitudes x (2 x 32) x 32 views (3.6 MB;
 /// with the march's tables, which the scene's aerial-perspective volume is
-/// filled from, 5.6 MB), against
+/// filled from, 11.0 MB: every wavelength and every level of the field
+/// kept, `sora::engine_tables`' source thinning), against
 /// the library's default of the paper's 21 wavelengths and 48 suns x 6
 /// altitudes x (2 x 64) x 64 views (what `sora tables` bakes). The bake
 /// solves one multiple-scattering field for every layer; in headless
 /// Chromium on the 2-core machine it took 4.8-5.7 s without the march's
 /// tables (2.2 s with 20 suns); with them 6.4-10.3 s at a load of 12-14
 /// (in node's WebAssembly at that load 12.4-12.8 s against 10.1-10.9 s
-/// without them).
+/// without them); 1-degree sunset steps instead of 2.5 cost 1.03x its CPU
+/// time natively (`realtime_aerial_accuracy`, `BAKE_ONLY`, farm-bench).
 /// Measured by the browser test (`web/tests/realtime.test.mjs`; 99th
 /// percentile of the fisheye's luminance error against the sky the tables
-/// were baked from, suns 45 / 10 / 2 / -4): 0.54 / 0.54 / 3.4 / 2.5 % with
-/// 48 suns, 1.1 / 1.4 / 3.2 / 2.7 % with 20, 9 % at 45 and 16 % at -4 with
-/// 16. 64 zenith nodes per half instead of 32 moved none of these by more
-/// than 0.15 points, so the low suns' error is not the zenith axis.
+/// were baked from, suns 45 / 10 / 2 / -4): 0.46 / 0.55 / 1.03 / 0.95 %
+/// (with 2.5-degree sunset steps 0.46 / 0.37 / 3.48 / 1.24 %, 1.1 / 1.4 /
+/// 3.2 / 2.7 % with 20 suns, 9 % at 45 and 16 % at -4 with 16). 64 zenith
+/// nodes per half instead of 32 moved none of these by more than 0.15
+/// points, so the low suns' error is not the zenith axis. The march per
+/// pixel against the library at suns 10 / 2 / -4 (the test's views, 1-50
+/// km; the `realtime_aerial_accuracy` example natively): 0.35-0.47 /
+/// 0.74-1.04 / 0.39-0.58 %, where 2.5-degree steps gave 0.6-0.8 / 2.8-3.9 /
+/// 2.1-2.5 % (its source read between sun nodes 2.5 degrees apart), and
+/// with 1-degree steps every other wavelength 2.4-2.8 % at -4.
 pub const REALTIME_TABLES: RealtimeTables = RealtimeTables {
     quality: Quality::Realtime,
     settings: EngineTableSettings {
@@ -661,7 +669,7 @@ pub fn build_sky(atmosphere: &Atmosphere, spec: &SkySpec, quality: Quality) -> R
 /// (`first_order_panels`, `first_order_fine_nodes`; one node would save 7
 /// % more of a preview, but its moments were 12 % off in the library's
 /// test). Realtime is the preview with the field of 16 layers and
-/// 2.5-degree sunset steps: the real-time view's tables are baked from it
+/// 1-degree sunset steps: the real-time view's tables are baked from it
 /// ([`REALTIME_TABLES`]). A sky moved to a new sun keeps what does not
 /// depend on the sun (the library's `SunFreeParts`: the forward-peak and
 /// first-order phase tables, the tilted peak beam's rows computed so far,
@@ -758,7 +766,7 @@ pub fn quality_settings(
                 grid,
                 MultipleScatteringSettings {
                     layers: 16,
-                    sunset_sun_zenith_step_deg: 2.5,
+                    sunset_sun_zenith_step_deg: 1.0,
                     ..settings
                 },
                 tables,

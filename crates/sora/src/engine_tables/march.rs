@@ -65,6 +65,9 @@ pub const PHASE_NODES: usize = 1024;
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SourceThinning {
     pub level_stride: usize,
+    /// Levels are thinned only in a field of at least this many (a
+    /// coarser field keeps every one).
+    pub thin_from_levels: usize,
     pub dense_below_m: f64,
     pub sun_stride: usize,
     /// The sun stride applies to the sun zenith nodes below this angle
@@ -74,6 +77,10 @@ pub struct SourceThinning {
     /// Every `wavelength_stride`-th wavelength (and the last) kept, ln R
     /// read linearly in the wavelength's index between them.
     pub wavelength_stride: usize,
+    /// The stride is lowered (to 1 at the least) so that the kept
+    /// wavelengths are at most this far apart, nm: a sky on a coarser grid
+    /// than the paper's 20 nm keeps more of its wavelengths.
+    pub max_wavelength_gap_nm: f64,
     /// The azimuths from the sun the source is computed at, degrees
     /// (ascending from 0 to 180; empty: the field's table's own, uniform
     /// over 0..pi).
@@ -83,10 +90,21 @@ pub struct SourceThinning {
     pub half: bool,
 }
 
+impl SourceThinning {
+    /// The wavelength stride on a grid of `step_nm`: `wavelength_stride`,
+    /// lowered so that the kept wavelengths are at most
+    /// `max_wavelength_gap_nm` apart (1 at the least).
+    pub fn wavelength_stride_for(&self, step_nm: f64) -> usize {
+        let widest = (self.max_wavelength_gap_nm / step_nm + 1e-9).floor();
+        self.wavelength_stride.min(widest as usize).max(1)
+    }
+}
+
 /// The default [`SourceThinning`]: every level up to 6 km, every third
-/// above, every other sun node (6 degrees apart) for suns more than 15
+/// above (in a field of 30 levels or more), every other sun node (6 degrees apart) for suns more than 15
 /// degrees up and every one below (0.75-3 degrees apart), every other
-/// wavelength (11 of the default 21, ln R linear between them), the 19
+/// wavelength (11 of the default 21, ln R linear between them; at most
+/// 40 nm apart, so a 40 nm grid keeps every one), the 19
 /// azimuths of [`AZIMUTHS_DEG`], 16-bit floats: 29-33 MB. The field for every sun has 41
 /// levels (22-25 of them below 6 km on Earth) and 82 sun nodes; the
 /// source at all of them is 200 MB as 32-bit floats. Measured against the
@@ -103,13 +121,20 @@ pub struct SourceThinning {
 /// 0.83-1.44 % on earth-hazy, where every other sun node at twilight
 /// moved earth-hazy at -4 degrees from 1.37 to 2.03 %; every other
 /// azimuth (10 of the field's 19 uniform ones) put mars-dust's aureole
-/// 9.2 % off.
+/// 9.2 % off. On the explorer's real-time grid (11 wavelengths 40 nm
+/// apart) every other wavelength put its march 2.3-2.9 % off at sun -4
+/// (earth-clear, 1-50 km; ln R read linearly over 80 nm),
+/// every one 0.3-1.2 % (with every third level above 6 km of its field's
+/// 17, 1.2-1.3 % at 50 km, where the view leaves the Earth's shadow; every
+/// level, below 30 levels: 0.3 %).
 pub const SOURCE_THINNING: SourceThinning = SourceThinning {
     level_stride: 3,
+    thin_from_levels: 30,
     dense_below_m: 6000.0,
     sun_stride: 2,
     sun_stride_below_zenith_deg: 75.0,
     wavelength_stride: 2,
+    max_wavelength_gap_nm: 40.0,
     azimuths_deg: &AZIMUTHS_DEG,
     azimuth_stride: 1,
     half: true,
@@ -183,8 +208,13 @@ impl MarchTables {
                 .collect();
             shared.table().exported_at_azimuths(&azimuths)
         };
+        let grid = sky.wavelengths();
+        let thinning = SourceThinning {
+            wavelength_stride: thinning.wavelength_stride_for(grid.step_nm()),
+            ..thinning
+        };
         let (source, source_wavelengths) = thinned_source(exported, thinning);
-        let n = sky.wavelengths().len();
+        let n = grid.len();
         if source.wavelengths != n {
             return Err(Error::Unsupported(
                 "the aerial-perspective march: the field's wavelengths are not the sky's".into(),
@@ -485,10 +515,12 @@ fn thinned_source(
 ) -> (ExportedSource, Vec<usize>) {
     let SourceThinning {
         level_stride,
+        thin_from_levels,
         dense_below_m,
         sun_stride,
         sun_stride_below_zenith_deg,
         wavelength_stride,
+        max_wavelength_gap_nm: _,
         azimuths_deg: _,
         azimuth_stride,
         half,
@@ -502,6 +534,11 @@ fn thinned_source(
     };
     // Every level up to the dense altitude, every level_stride-th above.
     let count = source.levels_m.len();
+    let level_stride = if count < thin_from_levels {
+        1
+    } else {
+        level_stride
+    };
     let mut levels: Vec<usize> = Vec::new();
     let mut since = level_stride;
     for k in 0..count {

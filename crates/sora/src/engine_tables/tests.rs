@@ -1732,10 +1732,12 @@ fn the_aerial_march_looking_down_matches_the_library() {
             &shared,
             march::SourceThinning {
                 level_stride: 1,
+                thin_from_levels: 0,
                 dense_below_m: 0.0,
                 sun_stride: 1,
                 sun_stride_below_zenith_deg: 0.0,
                 wavelength_stride: 1,
+                max_wavelength_gap_nm: 40.0,
                 azimuths_deg: &march::AZIMUTHS_DEG,
                 azimuth_stride: 1,
                 half: false,
@@ -1791,6 +1793,23 @@ fn the_aerial_march_looking_down_matches_the_library() {
         }
     }
     assert!(worst.0 <= 0.02 && worst.1 <= 0.005, "{worst:?}");
+}
+
+/// The march keeps every other wavelength of the paper's 20 nm grid and
+/// every one of a 40 nm grid (the explorer's real-time bake), at most 40 nm
+/// apart; a stride of 1 stays 1.
+#[test]
+fn the_march_keeps_wavelengths_at_most_40_nm_apart() {
+    let default = march::SOURCE_THINNING;
+    assert_eq!(default.wavelength_stride_for(20.0), 2);
+    assert_eq!(default.wavelength_stride_for(40.0), 1);
+    assert_eq!(default.wavelength_stride_for(30.0), 1);
+    assert_eq!(default.wavelength_stride_for(10.0), 2);
+    let every = march::SourceThinning {
+        wavelength_stride: 1,
+        ..default
+    };
+    assert_eq!(every.wavelength_stride_for(5.0), 1);
 }
 
 /// A probe, not a check: the Rust march (`aerial_perspective_xyz`) and the
