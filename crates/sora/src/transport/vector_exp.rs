@@ -31,6 +31,13 @@ pub(crate) fn exp_neg(x: f64) -> f64 {
     exp_clamped(-x.clamp(0.0, 708.0))
 }
 
+/// e^y for y clamped to [-708, 708], one value (see the module docs): the
+/// sun-column lookup's one per species, inlined where libm's is a call.
+#[inline(always)]
+pub(crate) fn exp(y: f64) -> f64 {
+    exp_clamped(y)
+}
+
 /// e^y for y clamped to [-708, 708] (the same steps as [`exp_neg`], which
 /// is e^-x with x clamped to [0, 708]; e^708 ~ 3e307 is finite).
 #[inline(always)]
