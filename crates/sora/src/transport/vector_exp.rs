@@ -93,7 +93,7 @@ const TWO_TO_STEP: [f64; TABLE_STEPS as usize] = [
     1.3252366431597413,
     1.3542555469368927,
     1.383909881963832,
-    1.4142135623730951,
+    std::f64::consts::SQRT_2,
     1.4451808069770467,
     1.4768261459394993,
     1.5091644275934228,
@@ -293,6 +293,22 @@ mod tests {
         for (x, v) in depths.iter().zip(&slice) {
             assert_eq!(v.to_bits(), exp_neg(*x).to_bits());
         }
+    }
+
+    /// The table holds 2^(j / 32) (within one rounding of the standard
+    /// library's exp2, which is not always correctly rounded), and 2^0
+    /// and 2^(1/2) exactly.
+    #[test]
+    fn the_table_holds_the_powers_of_two() {
+        for (j, value) in TWO_TO_STEP.iter().enumerate() {
+            let want = (j as f64 / TABLE_STEPS as f64).exp2();
+            assert!(
+                ((value - want) / want).abs() <= 2.3e-16,
+                "{j}: {value} vs {want}"
+            );
+        }
+        assert_eq!(TWO_TO_STEP[0], 1.0);
+        assert_eq!(TWO_TO_STEP[16], std::f64::consts::SQRT_2);
     }
 
     /// The signed form: within 2e-12 of the standard library's exp over
