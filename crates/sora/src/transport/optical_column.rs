@@ -787,7 +787,9 @@ impl SunColumnTable {
                 // corners' exp() kept in the table).
                 blend(corners)
             } else if corners.iter().all(|v| v.is_finite()) {
-                blend(corners).exp()
+                // (Below e^-708 ~ 3e-308 the table's own exponential
+                // clamps: a column of zero either way.)
+                super::vector_exp::exp(blend(corners))
             } else {
                 // A path with no density at a corner: the densities.
                 blend(nodes.map(|n| self.mean_densities[n + k]))

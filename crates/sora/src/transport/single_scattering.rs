@@ -891,15 +891,16 @@ impl SingleScatteringScene {
         if let (Some((shared, slot, ray, _)), Some(record)) = (kept, kept_record) {
             shared.keep(slot, ray, record);
         }
-        // Transmittance of the whole view ray.
+        // Transmittance of the whole view ray: the optical depths, then
+        // their exponentials together.
         for (i, t) in scratch.view_transmittance.iter_mut().enumerate() {
-            let tau: f64 = species
+            *t = species
                 .iter()
                 .zip(&scratch.view_columns)
                 .map(|(s, c)| s.extinction_per_m[i] * c)
                 .sum();
-            *t = (-tau).exp();
         }
+        exp_neg_in_place(&mut scratch.view_transmittance);
         let end = start + view * length;
         if distance_m >= exit && end.length() <= self.ground_radius_m * (1.0 + 1e-12) {
             self.add_ground_term(end, view, sun_columns, scratch);
