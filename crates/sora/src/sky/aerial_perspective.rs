@@ -1274,8 +1274,10 @@ mod tests {
     /// `SORA_SET_ORDERS` (the tracer's largest number of interactions, 0:
     /// all), `SORA_SET_LIB_ORDERS` (the library's field stopped after
     /// this many orders less one, 0: all), `SORA_SET_SHIFT_PIECES` (the
-    /// pieces of each path the field's after-sunset shift is taken in, 1;
-    /// `FieldRequest::shift_pieces`), `SORA_SET_SEED` (1).
+    /// most pieces of each path the field's after-sunset shift is taken
+    /// in, 1) and `SORA_SET_SHIFT_SPREAD` (deg of the path's angle's
+    /// spread per piece, `SHIFT_PIECE_SPREAD_DEG`; 0: every path in the
+    /// most; `FieldRequest::shift_pieces`), `SORA_SET_SEED` (1).
     #[test]
     #[ignore]
     fn probe_segment_parts_against_the_tracer() {
@@ -1328,7 +1330,16 @@ mod tests {
         let orders: u32 = env("SORA_SET_ORDERS", "0").parse().unwrap();
         let seed: u64 = env("SORA_SET_SEED", "1").parse().unwrap();
         let lib_orders: usize = env("SORA_SET_LIB_ORDERS", "0").parse().unwrap();
-        let shift_pieces: usize = env("SORA_SET_SHIFT_PIECES", "1").parse().unwrap();
+        // The pieces' most and spread per piece (deg), as the settings'
+        // `twilight_shift_pieces` takes them.
+        let spread = crate::transport::multiple_scattering::SHIFT_PIECE_SPREAD_DEG;
+        let default_pieces = (1, spread);
+        let shift_pieces: (usize, f64) = (
+            env("SORA_SET_SHIFT_PIECES", "1").parse().unwrap(),
+            env("SORA_SET_SHIFT_SPREAD", &spread.to_string())
+                .parse()
+                .unwrap(),
+        );
         let views: Vec<(f64, f64)> = env("SORA_SET_VIEWS", "-10,0")
             .split(';')
             .map(|p| {
@@ -1346,7 +1357,7 @@ mod tests {
                     .scattering(Scattering::Multiple(settings))
                     .build()
                     .unwrap();
-                if lib_orders >= 2 || shift_pieces != 1 {
+                if lib_orders >= 2 || shift_pieces != default_pieces {
                     use crate::transport::multiple_scattering::{
                         FieldRequest, MultipleScatteringField,
                     };

@@ -253,5 +253,6 @@ pub(crate) use self::field::{FieldRequest, MultipleScatteringField, SunFreeParts
 pub(crate) use self::polarisation_correction::{
     PolarisationRows, PolarisationTable, ViewHarmonicsCache,
 };
+pub(crate) use self::twilight_shift::SHIFT_PIECE_SPREAD_DEG;
 pub use self::view_march::MultipleScatteringScratch;
 use self::view_march::{LOG_FLOOR, NodeGeometry, SourceCells, floored_log};
