@@ -57,7 +57,7 @@ pub struct MultipleScatteringSettings {
     /// path at its mean angle, which after sunset in a coarse haze is too
     /// bright in the red (earth-hazy, an eye 3 km up, a 1 km segment toward
     /// the sun at suns -1 to -4 degrees: 2-3 % at 560 and 680 nm); 3 moves
-    /// such views 86-91 % of the way to 32 pieces of every path, at 1.16
+    /// such views 86-91 % of the way to 32 pieces of every path, at 1.19
     /// times the CPU of an after-sunset almucantar
     /// (docs/aerial_perspective.md). It changes nothing while the sun is
     /// more than 6 degrees up.

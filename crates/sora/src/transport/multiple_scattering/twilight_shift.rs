@@ -25,21 +25,23 @@
 //!   of the spherical streams is shifted exactly, per azimuth, with the
 //!   mean angle and its spread, before it is scattered into the next
 //!   ([`ColumnSystem::shift_order_toward_sources`]).
-//! - **The every-order shift in pieces**, a slow reference
-//!   ([`ColumnSystem::with_shift_pieces`], `FieldRequest::shift_pieces`,
-//!   not the default): each path cut into pieces that gather equal shares
-//!   of a uniform source's light, each piece's light carried by its part
-//!   of the transport matrix and shifted by its own mean angle and spread.
-//!   The one-piece shift moves the light gathered near the point (in the
-//!   planet's shadow after sunset) to the whole path's mean angle, where
-//!   the column's air at that altitude may already be sunlit: measured
-//!   for earth-hazy, an eye 3 km up, the sun 2 degrees down, a 1 km
-//!   segment 10 degrees down toward the sun, 32 pieces move the segment
-//!   by -0.12 / -2.04 / -2.67 % at 440 / 560 / 680 nm, from +1.99 / +4.87
-//!   % to -0.09 / +2.06 % of the path tracer at 560 / 680 nm
-//!   (`docs/aerial_perspective.md`); each piece costs one more transport
-//!   and shift of the spherical streams per order.
-//!
+//! - **The every-order shift in pieces**
+//!   ([`ColumnSystem::with_shift_pieces`], the settings'
+//!   `twilight_shift_pieces`, default 1 = whole paths): each path cut
+//!   into consecutive pieces, each piece's light carried by its part of
+//!   the transport matrix and shifted by its own mean angle and spread,
+//!   the pieces summed over the azimuths (`ColumnSystem::shift_sums`).
+//!   A path takes one piece per `SHIFT_PIECE_SPREAD_DEG` of its angle's
+//!   spread, at most the settings' number; the pieces gather equal shares
+//!   of w^(1/3) d^(2/3) (`StreamPaths::compute_piece_matrices`). Whole
+//!   paths move the light gathered near the point (in the planet's shadow
+//!   after sunset) to the path's mean angle, where the column's air at
+//!   that altitude may already be sunlit: measured for earth-hazy, an eye
+//!   3 km up, a 1 km segment 10 degrees down toward the sun, suns -1 to
+//!   -4 degrees, 2-3 % too bright at 560 and 680 nm; at most 3 pieces
+//!   take 86-91 % of that away (32 pieces of every path the rest),
+//!   at 1.19 times the CPU of an almucantar (`docs/aerial_perspective.md`).
+
 //! The plane-parallel solver ([`super::successive_orders`]) carries the
 //! spherical streams along their paths within one column; this file adds
 //! what the columns of neighbouring sun nodes do to one another.
@@ -54,7 +56,7 @@ use super::successive_orders::{CONVERGENCE_TOLERANCE, ColumnSystem, StoppingRule
 /// at most 3 pieces, measured for earth-hazy (eye 3 km up, a 1 km segment
 /// 10 degrees down toward the sun, suns -1 to -4 degrees, 560 and 680 nm),
 /// it moves the segment by 86-91 % of what 32 pieces of every path move
-/// it, at 1.16 times the CPU of the whole-path shift for an almucantar
+/// it, at 1.19 times the CPU of the whole-path shift for an almucantar
 /// (docs/aerial_perspective.md).
 pub(crate) const SHIFT_PIECE_SPREAD_DEG: f64 = 0.2;
 use crate::transport::vector_exp::exp_neg;
