@@ -203,8 +203,8 @@ impl StreamPaths {
 
     /// The transport matrices of [`StreamPaths::compute_transport_matrices`]
     /// with each path cut into consecutive pieces: per piece b and
-    /// spherical stream s the matrix and ground weights at [(b * count + s)
-    /// * levels * (levels + 1)] (same layout; the pieces' matrices sum to
+    /// spherical stream s the matrix and ground weights at
+    /// [(b * count + s) * levels * (levels + 1)] (same layout; the pieces' matrices sum to
     /// the whole path's), and each piece's mean angle at the planet's
     /// centre and its spread at [(b * count + s) * levels + k] (rad; (0, 0)
     /// for a piece that gathers nothing). A path whose angle's spread is

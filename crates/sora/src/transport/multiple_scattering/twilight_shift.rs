@@ -37,11 +37,11 @@
 //!   paths move the light gathered near the point (in the planet's shadow
 //!   after sunset) to the path's mean angle, where the column's air at
 //!   that altitude may already be sunlit: measured for earth-hazy, an eye
-//!   3 km up, a 1 km segment 10 degrees down toward the sun, suns -1 to
-//!   -4 degrees, 2-3 % too bright at 560 and 680 nm; at most 3 pieces
-//!   take 86-91 % of that away (32 pieces of every path the rest),
+//!   3 km up, a 1 km segment 10 degrees down toward the sun, suns from
+//!   -1 to -4 degrees, 2-3 % too bright at 560 and 680 nm; at most 3
+//!   pieces take 86-91 % of that away (32 pieces of every path the rest),
 //!   at 1.19 times the CPU of an almucantar (`docs/aerial_perspective.md`).
-
+//!
 //! The plane-parallel solver ([`super::successive_orders`]) carries the
 //! spherical streams along their paths within one column; this file adds
 //! what the columns of neighbouring sun nodes do to one another.
