@@ -290,25 +290,11 @@ impl Resolution {
         scattering: sora::Scattering,
         method: sora::Method,
     ) -> anyhow::Result<sora::Scattering> {
-        let scattering = scattering
+        scattering
             .with_resolution(method, self.streams, self.layers)
-            .map_err(|e| anyhow::anyhow!("--streams/--layers: {e}"))?;
-        match (self.twilight_shift_pieces, scattering) {
-            (None, scattering) => Ok(scattering),
-            (Some(pieces), sora::Scattering::Multiple(settings))
-                if !matches!(method, sora::Method::PathTracing { .. }) =>
-            {
-                Ok(sora::Scattering::Multiple(
-                    sora::MultipleScatteringSettings {
-                        twilight_shift_pieces: pieces,
-                        ..settings
-                    },
-                ))
-            }
-            (Some(_), _) => Err(anyhow::anyhow!(
-                "--twilight-shift-pieces: applies to the fast and reference methods' multiple scattering"
-            )),
-        }
+            .map_err(|e| anyhow::anyhow!("--streams/--layers: {e}"))?
+            .with_twilight_shift_pieces(method, self.twilight_shift_pieces)
+            .map_err(|e| anyhow::anyhow!("--twilight-shift-pieces: {e}"))
     }
 }
 
