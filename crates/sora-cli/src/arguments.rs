@@ -270,6 +270,16 @@ pub struct Resolution {
     /// (2..10000) [default: 40]
     #[arg(long, value_name = "N")]
     pub layers: Option<usize>,
+
+    /// Multiple scattering after sunset: the most pieces each
+    /// near-horizontal stream's path is cut into when its light is read at
+    /// the sun angle of where it was gathered (1..64; one piece per 0.2
+    /// degree of the path's spread). The default 1 reads whole paths, 2-3
+    /// % too bright at 560 and 680 nm in earth-hazy's red twilight; 3 takes
+    /// most of that away at 1.1-1.2 times the CPU (docs/aerial_perspective.md)
+    /// [default: 1]
+    #[arg(long, value_name = "N")]
+    pub twilight_shift_pieces: Option<usize>,
 }
 
 impl Resolution {
@@ -282,7 +292,9 @@ impl Resolution {
     ) -> anyhow::Result<sora::Scattering> {
         scattering
             .with_resolution(method, self.streams, self.layers)
-            .map_err(|e| anyhow::anyhow!("--streams/--layers: {e}"))
+            .map_err(|e| anyhow::anyhow!("--streams/--layers: {e}"))?
+            .with_twilight_shift_pieces(method, self.twilight_shift_pieces)
+            .map_err(|e| anyhow::anyhow!("--twilight-shift-pieces: {e}"))
     }
 }
 

@@ -135,7 +135,7 @@ impl Sky {
         refraction=true, pressure_hpa=None, temperature_c=None, sun_distance_au=None,
         observer_altitude_m=0.0, wavelengths_nm=None, scattering="multiple",
         method="fast", samples=None, seed=None, reference_steps=None, polarisation=None,
-        streams=None, layers=None
+        streams=None, layers=None, twilight_shift_pieces=None
     ))]
     fn new(
         py: Python<'_>,
@@ -158,6 +158,7 @@ impl Sky {
         polarisation: Option<&str>,
         streams: Option<usize>,
         layers: Option<usize>,
+        twilight_shift_pieces: Option<usize>,
     ) -> PyResult<Sky> {
         // The library's names; None: its default for the method
         // (`sora::Polarisation::for_method`: vector, scalar for reference).
@@ -214,6 +215,7 @@ impl Sky {
             scattering_and_method(scattering, method, samples, seed, reference_steps)?;
         let scattering = scattering
             .with_resolution(method, streams, layers)
+            .and_then(|s| s.with_twilight_shift_pieces(method, twilight_shift_pieces))
             .map_err(to_py_err)?;
         // The sun's distance as `sora spectrum` takes it: given, or the
         // date's for a sun at 1 AU (sora::atmosphere::Sun::date_distance_au).

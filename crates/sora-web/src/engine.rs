@@ -754,6 +754,7 @@ pub fn quality_settings(
                 polarisation_wavelength_stride: 2,
                 first_order_panels: 1,
                 first_order_fine_nodes: 2,
+                twilight_shift_pieces: 1,
             },
             FastTableSize {
                 sun_column_nodes: (32, 64),

@@ -69,6 +69,7 @@ class Sky:
         polarisation: Optional[str] = None,
         streams: Optional[int] = None,
         layers: Optional[int] = None,
+        twilight_shift_pieces: Optional[int] = None,
     ) -> None: ...
     @property
     def wavelengths_nm(self) -> _F64: ...

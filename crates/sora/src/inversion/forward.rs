@@ -52,6 +52,7 @@ const RETRIEVAL_SOLVER: MultipleScatteringSettings = MultipleScatteringSettings 
     polarisation_wavelength_stride: 2,
     first_order_panels: 4,
     first_order_fine_nodes: 4,
+    twilight_shift_pieces: 1,
 };
 
 /// Mie kernels kept per wavelength (the fit's current point, its index

@@ -66,6 +66,34 @@ impl Scattering {
             }
         }
     }
+
+    /// This scattering with the field's
+    /// [`MultipleScatteringSettings::twilight_shift_pieces`] where given
+    /// (the CLI's `--twilight-shift-pieces`, Python's
+    /// `twilight_shift_pieces=`); validated as the sky's builder does, and
+    /// an error for single scattering or the path tracer.
+    pub fn with_twilight_shift_pieces(
+        self,
+        method: Method,
+        pieces: Option<usize>,
+    ) -> Result<Scattering> {
+        let Some(pieces) = pieces else {
+            return Ok(self);
+        };
+        match (self, method) {
+            (Scattering::Multiple(settings), Method::Fast | Method::Reference { .. }) => {
+                let settings = MultipleScatteringSettings {
+                    twilight_shift_pieces: pieces,
+                    ..settings
+                };
+                settings.validate()?;
+                Ok(Scattering::Multiple(settings))
+            }
+            _ => Err(Error::Unsupported(
+                "twilight shift pieces apply to the fast and reference methods' multiple scattering".into(),
+            )),
+        }
+    }
 }
 
 /// How the radiance is computed (see the module docs).

@@ -20,6 +20,7 @@ use super::spherical_first_order::{
     FirstOrderInputs, MomentQuadrature, compute_spherical_first_order_with_phases, tabulate_phases,
 };
 use super::successive_orders::{self, ColumnSystem, ScaledSpecies};
+use super::twilight_shift::SHIFT_PIECE_SPREAD_DEG;
 use super::view_march::{MultipleScatteringScratch, NodeGeometry, ViewRayOptics, floored_log};
 use crate::atmosphere::AtmosphereOptics;
 use crate::atmosphere::phase_matrix::PhaseMatrix;
@@ -214,11 +215,14 @@ pub(crate) struct FieldRequest {
     /// path tracer's).
     pub(crate) sweeps: usize,
     /// After sunset, each order of the near-horizontal streams is shifted
-    /// in this many pieces of its path, each at its own mean angle
-    /// (`ColumnSystem::with_shift_pieces`): 1 (the default) shifts the
-    /// whole path at its mean angle +- spread; more is the slow
-    /// reference (docs/aerial_perspective.md measures what it moves).
-    pub(crate) shift_pieces: usize,
+    /// in pieces of its path, each at its own mean angle +- spread: at
+    /// most the first, one per the second (degrees) of the path's angle's
+    /// spread, 0: every path in the most (`ColumnSystem::with_shift_pieces`;
+    /// by default the settings' `twilight_shift_pieces` and
+    /// `SHIFT_PIECE_SPREAD_DEG`). (1, _) shifts each whole path at its
+    /// mean angle; (32, 0) is the slow reference (docs/aerial_perspective.md
+    /// measures what they move).
+    pub(crate) shift_pieces: (usize, f64),
     /// For views no lower than this elevation (rad, >= 0) only: the sun
     /// zenith angles the field is solved for are those at the points of
     /// such views' rays, within acos(r cos e / R_top) - e of the eye's
@@ -252,7 +256,7 @@ impl FieldRequest {
             sun_column_nodes,
             polarised: false,
             sweeps: successive_orders::MAX_ITERATIONS,
-            shift_pieces: 1,
+            shift_pieces: (settings.twilight_shift_pieces, SHIFT_PIECE_SPREAD_DEG),
             lowest_view_elevation_rad: None,
             every_sun: false,
         }
@@ -1021,7 +1025,7 @@ fn solve_columns(
     (geometry, scaled): (&ColumnGeometry, &ScaledOptics),
     (sun_axis, sun_columns): (&SunZenithAxis, &[Option<Vec<f64>>]),
     (first_spherical, first_order): (usize, &[f64]),
-    (sweeps, shift_pieces): (usize, usize),
+    (sweeps, shift_pieces): (usize, (usize, f64)),
     polarisation: Option<SharedAnchors>,
 ) -> SolvedColumns {
     let levels = geometry.grid.levels();
@@ -1059,7 +1063,7 @@ fn solve_wavelength(
     (geometry, scaled_optics): (&ColumnGeometry, &ScaledOptics),
     (sun_axis, sun_columns): (&SunZenithAxis, &[Option<Vec<f64>>]),
     (first_spherical, first_order): (usize, &[f64]),
-    (sweeps, shift_pieces, polarisation): (usize, usize, Option<SharedAnchors>),
+    (sweeps, shift_pieces, polarisation): (usize, (usize, f64), Option<SharedAnchors>),
 ) {
     let (wavelengths, species) = (optics.grid.len(), optics.species.len());
     let (streams, grid, paths) = (&geometry.streams, &geometry.grid, &geometry.paths);

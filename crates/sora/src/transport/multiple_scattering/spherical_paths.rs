@@ -169,27 +169,60 @@ impl StreamPaths {
                     (0.0, 0.0)
                 };
             }
-            for (j, column) in matrix.chunks_exact(levels).enumerate() {
-                let first = column.iter().position(|w| *w != 0.0).unwrap_or(0);
-                let last = column.iter().rposition(|w| *w != 0.0).map_or(0, |k| k + 1);
-                rows[s * levels + j] = (first, last.max(first));
-            }
+            nonzero_rows(matrix, levels, &mut rows[s * levels..(s + 1) * levels]);
+        }
+    }
+
+    /// Per step of `steps` (one path's) under the layer optical depths
+    /// `layer_optical_depth`: its weight w (what a uniform source along it
+    /// contributes: the transmittance to it times 1 - e^-x, as the mean
+    /// angles') and its measure w^(1/3) d^(2/3), d the angle it spans at
+    /// the planet's centre (half the distance between its neighbours'
+    /// centres), into `out`.
+    fn step_measures(
+        &self,
+        steps: &[PathStep],
+        layer_optical_depth: &[f64],
+        out: &mut Vec<(f64, f64)>,
+    ) {
+        out.clear();
+        let mut transmittance = 1.0;
+        for (i, step) in steps.iter().enumerate() {
+            let (one_minus_e, _) =
+                linear_source_weights(layer_optical_depth[step.layer] * step.stretch);
+            let w = transmittance * one_minus_e;
+            let before = i.checked_sub(1).map_or(0.0, |i| steps[i].centre_angle);
+            let after = steps
+                .get(i + 1)
+                .map_or(step.centre_angle, |s| s.centre_angle);
+            let span = 0.5 * (after - before).abs();
+            out.push((w, w.cbrt() * span.powf(2.0 / 3.0)));
+            transmittance *= 1.0 - one_minus_e;
         }
     }
 
     /// The transport matrices of [`StreamPaths::compute_transport_matrices`]
-    /// with each path cut into `pieces` consecutive pieces that gather equal
-    /// shares of a uniform source's light (the weights of the mean angle):
-    /// per piece b and spherical stream s the matrix and ground weights at
-    /// [(b * count + s) * levels * (levels + 1)] (same layout; the pieces'
-    /// matrices sum to the whole path's), and each piece's mean angle at
-    /// the planet's centre and its spread at [(b * count + s) * levels + k]
-    /// (rad; (0, 0) for a piece that gathers nothing). The ground's weight
-    /// goes to the last piece.
+    /// with each path cut into consecutive pieces: per piece b and
+    /// spherical stream s the matrix and ground weights at
+    /// [(b * count + s) * levels * (levels + 1)] (same layout; the pieces' matrices sum to
+    /// the whole path's), and each piece's mean angle at the planet's
+    /// centre and its spread at [(b * count + s) * levels + k] (rad; (0, 0)
+    /// for a piece that gathers nothing). A path whose angle's spread is
+    /// sigma (the whole path's, as the mean angles') takes ceil(sigma /
+    /// `spread_step_rad`) pieces, at least 1 and at most `pieces` (all
+    /// `pieces` where the step is 0), the first ones; they gather equal
+    /// shares of the measure w^(1/3) d^(2/3) summed over the path's steps
+    /// ([`StreamPaths::step_measures`]): the spacing that minimises the
+    /// sum over pieces of their light times their angle's variance, for
+    /// a piece's error grows as the square of the angle it spans (the
+    /// density of light per angle to the power 1/3, as for a piecewise
+    /// constant approximation's optimal mesh). The ground's weight goes to
+    /// the path's last piece.
     pub(crate) fn compute_piece_matrices(
         &self,
         layer_optical_depth: &[f64],
         pieces: usize,
+        spread_step_rad: f64,
     ) -> (Vec<f64>, Vec<(f64, f64)>) {
         let levels = self.levels;
         let block = levels * (levels + 1);
@@ -198,33 +231,40 @@ impl StreamPaths {
         let mut out = vec![0.0; pieces * count * block];
         let mut angles = vec![(0.0, 0.0); pieces * count * levels];
         let mut sums = vec![(0.0, 0.0, 0.0); pieces];
+        let mut measures = Vec::new();
         for s in 0..count {
             for k in 0..levels {
                 let (first, last, ends_on_ground) = self.paths[s * levels + k];
                 let steps = &self.steps[first..last];
-                // The whole path's weight, then each step's piece by the
-                // weight gathered up to its middle.
-                let mut transmittance = 1.0;
-                let mut total = 0.0;
-                for step in steps {
-                    let (one_minus_e, _) =
-                        linear_source_weights(layer_optical_depth[step.layer] * step.stretch);
-                    total += transmittance * one_minus_e;
-                    transmittance *= 1.0 - one_minus_e;
+                self.step_measures(steps, layer_optical_depth, &mut measures);
+                let (mut angle_sum, mut square_sum, mut weight_sum) = (0.0, 0.0, 0.0);
+                for (step, (w, _)) in steps.iter().zip(&measures) {
+                    angle_sum += w * step.centre_angle;
+                    square_sum += w * step.centre_angle.powi(2);
+                    weight_sum += w;
                 }
+                let total: f64 = measures.iter().map(|(_, m)| m).sum();
+                // As many pieces as the whole path's spread asks for.
+                let here = if weight_sum > 0.0 && spread_step_rad > 0.0 {
+                    let mean = angle_sum / weight_sum;
+                    let spread = (square_sum / weight_sum - mean * mean).max(0.0).sqrt();
+                    ((spread / spread_step_rad).ceil() as usize).clamp(1, pieces)
+                } else {
+                    pieces
+                };
                 sums.fill((0.0, 0.0, 0.0));
                 let (mut transmittance, mut gathered) = (1.0, 0.0);
-                for step in steps {
+                for (step, (_, measure)) in steps.iter().zip(&measures) {
                     let (one_minus_e, c) =
                         linear_source_weights(layer_optical_depth[step.layer] * step.stretch);
                     let weight = transmittance * one_minus_e;
                     let b = if total > 0.0 {
-                        ((gathered + 0.5 * weight) / total * pieces as f64) as usize
+                        ((gathered + 0.5 * measure) / total * here as f64) as usize
                     } else {
                         0
                     }
-                    .min(pieces - 1);
-                    gathered += weight;
+                    .min(here - 1);
+                    gathered += measure;
                     let sum = &mut sums[b];
                     sum.0 += weight * step.centre_angle;
                     sum.1 += weight * step.centre_angle.powi(2);
@@ -234,7 +274,7 @@ impl StreamPaths {
                     transmittance *= 1.0 - one_minus_e;
                 }
                 if ends_on_ground {
-                    out[((pieces - 1) * count + s) * block + levels * levels + k] = transmittance;
+                    out[((here - 1) * count + s) * block + levels * levels + k] = transmittance;
                 }
                 for (b, &(angle_sum, square_sum, weight_sum)) in sums.iter().enumerate() {
                     angles[(b * count + s) * levels + k] = if weight_sum > 0.0 {
@@ -250,6 +290,16 @@ impl StreamPaths {
             }
         }
         (out, angles)
+    }
+}
+
+/// The rows where each column of the transport matrix `matrix` (levels x
+/// levels, [j * levels + k]) is non-zero, half-open, into `rows` ([j]).
+pub(crate) fn nonzero_rows(matrix: &[f64], levels: usize, rows: &mut [(usize, usize)]) {
+    for (column, row) in matrix.chunks_exact(levels).zip(rows) {
+        let first = column.iter().position(|w| *w != 0.0).unwrap_or(0);
+        let last = column.iter().rposition(|w| *w != 0.0).map_or(0, |k| k + 1);
+        *row = (first, last.max(first));
     }
 }
 
@@ -414,7 +464,7 @@ mod tests {
     }
 
     #[test]
-    fn pieces_split_the_paths_light_in_equal_shares() {
+    fn pieces_split_the_paths_measure_in_equal_shares() {
         let r = radii(6.36e6);
         let cosines = [0.05, -0.05, 0.2, -0.2];
         let paths = StreamPaths::compute(&r, &cosines);
@@ -427,67 +477,106 @@ mod tests {
         let mut angles = vec![(0.0, 0.0); count * levels];
         paths.compute_transport_matrices(&depths, &mut whole, &mut rows, &mut angles);
         // One piece is the whole path.
-        let (one, one_angles) = paths.compute_piece_matrices(&depths, 1);
+        let (one, one_angles) = paths.compute_piece_matrices(&depths, 1, 0.0);
         assert_eq!(one, whole);
         assert_eq!(one_angles, angles);
         let pieces = 4;
-        let (split, split_angles) = paths.compute_piece_matrices(&depths, pieces);
-        for s in 0..count {
-            for k in 0..levels {
-                // The pieces' weights add up to the whole's.
-                for j in 0..=levels {
-                    let sum: f64 = (0..pieces)
-                        .map(|b| split[(b * count + s) * block + j * levels + k])
-                        .sum();
-                    let w = whole[s * block + j * levels + k];
-                    assert!(
-                        (sum - w).abs() <= 1e-12 * w.abs().max(1e-300),
-                        "{s} {k} {j}"
-                    );
-                }
-                // Each piece gathers a quarter of a uniform source's light
-                // to within one step's share, farther pieces at larger
-                // angles, and their mean is the whole path's mean.
-                let shares: Vec<f64> = (0..pieces)
-                    .map(|b| {
-                        (0..levels)
-                            .map(|j| split[(b * count + s) * block + j * levels + k])
-                            .sum()
-                    })
-                    .collect();
-                let total: f64 = shares.iter().sum();
-                let (first, last, _) = paths.paths[s * levels + k];
-                if total == 0.0 {
-                    continue;
-                }
-                let mut transmittance = 1.0f64;
-                let mut largest = 0.0f64;
-                for step in &paths.steps[first..last] {
-                    let (one_minus_e, _) = linear_source_weights(depths[step.layer] * step.stretch);
-                    largest = largest.max(transmittance * one_minus_e);
-                    transmittance *= 1.0 - one_minus_e;
-                }
-                let mean: f64 = (0..pieces)
-                    .map(|b| shares[b] * split_angles[(b * count + s) * levels + k].0)
-                    .sum::<f64>()
-                    / total;
-                let whole_mean = angles[s * levels + k].0;
-                assert!(
-                    (mean / whole_mean - 1.0).abs() < 1e-9,
-                    "{mean} vs {whole_mean}"
-                );
-                for b in 0..pieces {
-                    let off = (shares[b] - 0.25 * total).abs();
-                    assert!(off <= largest * (1.0 + 1e-9), "{s} {k} {shares:?}");
-                    if b > 0 && shares[b] > 0.0 && shares[b - 1] > 0.0 {
-                        let (this, before) = (
-                            split_angles[(b * count + s) * levels + k].0,
-                            split_angles[((b - 1) * count + s) * levels + k].0,
+        // Every path in 4 pieces, then one piece per 0.2 degree of spread.
+        let step = 0.2f64.to_radians();
+        let (mut split_paths, mut fewer) = (0, 0);
+        for spread_step in [0.0, step] {
+            let (split, split_angles) = paths.compute_piece_matrices(&depths, pieces, spread_step);
+            for s in 0..count {
+                for k in 0..levels {
+                    // The pieces' weights add up to the whole's.
+                    for j in 0..=levels {
+                        let sum: f64 = (0..pieces)
+                            .map(|b| split[(b * count + s) * block + j * levels + k])
+                            .sum();
+                        let w = whole[s * block + j * levels + k];
+                        assert!(
+                            (sum - w).abs() <= 1e-12 * w.abs().max(1e-300),
+                            "{s} {k} {j}"
                         );
-                        assert!(this > before, "{s} {k}: {this} <= {before}");
+                    }
+                    let (first, last, _) = paths.paths[s * levels + k];
+                    let mut measures = Vec::new();
+                    paths.step_measures(&paths.steps[first..last], &depths, &mut measures);
+                    let weight: f64 = measures.iter().map(|(w, _)| w).sum();
+                    if weight == 0.0 {
+                        continue;
+                    }
+                    // The path's share of pieces: all of them, or one per
+                    // step of its angle's spread.
+                    let (mean, spread) = angles[s * levels + k];
+                    let expected = if spread_step > 0.0 {
+                        ((spread / spread_step).ceil() as usize).clamp(1, pieces)
+                    } else {
+                        pieces
+                    };
+                    if spread_step > 0.0 {
+                        fewer += usize::from(expected < pieces);
+                        split_paths += usize::from(expected > 1);
+                    }
+                    // Each piece's light, and its measure: the pieces in
+                    // order along the path, each step in the piece its
+                    // middle falls in.
+                    let shares: Vec<f64> = (0..pieces)
+                        .map(|b| {
+                            (0..levels)
+                                .map(|j| split[(b * count + s) * block + j * levels + k])
+                                .sum()
+                        })
+                        .collect();
+                    let total: f64 = measures.iter().map(|(_, m)| m).sum();
+                    let largest = measures.iter().fold(0.0f64, |l, (_, m)| l.max(*m));
+                    let (mut next_step, mut piece_measures) = (0usize, vec![0.0; pieces]);
+                    for (b, &share) in shares.iter().enumerate() {
+                        // Steps are taken whole: a piece's light is the
+                        // weight of the next steps of the path.
+                        let mut light = 0.0;
+                        while next_step < measures.len() && light < share * (1.0 - 1e-9) {
+                            light += measures[next_step].0;
+                            piece_measures[b] += measures[next_step].1;
+                            next_step += 1;
+                        }
+                        assert!((light - share).abs() <= 1e-9 * weight, "{s} {k} {b}");
+                    }
+                    for (b, m) in piece_measures.iter().enumerate() {
+                        let target = if b < expected {
+                            total / expected as f64
+                        } else {
+                            0.0
+                        };
+                        assert!(
+                            (m - target).abs() <= largest * (1.0 + 1e-9),
+                            "{s} {k} {b}: {piece_measures:?} of {total}, {expected} pieces"
+                        );
+                    }
+                    // Farther pieces at larger angles, and their mean is
+                    // the whole path's.
+                    let piece_mean: f64 = (0..pieces)
+                        .map(|b| shares[b] * split_angles[(b * count + s) * levels + k].0)
+                        .sum::<f64>()
+                        / shares.iter().sum::<f64>();
+                    assert!(
+                        (piece_mean / mean - 1.0).abs() < 1e-9,
+                        "{piece_mean} vs {mean}"
+                    );
+                    for b in 1..pieces {
+                        if shares[b] > 0.0 && shares[b - 1] > 0.0 {
+                            let (this, before) = (
+                                split_angles[(b * count + s) * levels + k].0,
+                                split_angles[((b - 1) * count + s) * levels + k].0,
+                            );
+                            assert!(this > before, "{s} {k}: {this} <= {before}");
+                        }
                     }
                 }
             }
         }
+        // Paths cut in fewer pieces than the most, and paths cut.
+        eprintln!("{split_paths} paths cut, {fewer} in fewer than {pieces} pieces");
+        assert!(split_paths > 0 && fewer > 0, "{split_paths} {fewer}");
     }
 }

@@ -47,7 +47,7 @@ use std::f64::consts::PI;
 use super::phase_fourier::{
     TruncatedPhase, gauss_legendre_unit_interval, normalized_associated_legendre,
 };
-use super::spherical_paths::{StreamPaths, linear_source_weights};
+use super::spherical_paths::{StreamPaths, linear_source_weights, nonzero_rows};
 use super::vertical_grid::VerticalGrid;
 
 /// Relative size of the remaining orders at which the iteration stops.
@@ -257,18 +257,33 @@ impl<'a> ColumnSystem<'a> {
     }
 
     /// This system shifting each spherical stream's orders after sunset
-    /// in `pieces` pieces of its path (each gathering an equal share of a
-    /// uniform source's light, each read at its own mean angle +- spread),
-    /// instead of the whole path at the path's: the slow reference of the
-    /// one-piece shift (`twilight_shift.rs`). One piece is the default.
-    pub(crate) fn with_shift_pieces(mut self, pieces: usize) -> ColumnSystem<'a> {
+    /// in pieces of its path, each read at its own mean angle +- spread,
+    /// instead of the whole path at the path's (`twilight_shift.rs`): at
+    /// most `pieces`, one per `spread_step_deg` of the path's angle's
+    /// spread (0: every path in `pieces`; `StreamPaths::compute_piece_matrices`).
+    /// Without it (or with one piece) each path is shifted whole.
+    pub(crate) fn with_shift_pieces(
+        mut self,
+        (pieces, spread_step_deg): (usize, f64),
+    ) -> ColumnSystem<'a> {
         self.shift_pieces = match (self.paths, pieces) {
             (Some(paths), 2..) => {
                 let depths = layer_optical_depths(self.grid, &self.species);
-                let (matrices, mean_angles) = paths.compute_piece_matrices(&depths, pieces);
+                let (matrices, mean_angles) =
+                    paths.compute_piece_matrices(&depths, pieces, spread_step_deg.to_radians());
+                let levels = self.grid.levels();
+                let block = levels * (levels + 1);
+                let mut rows = vec![(0, 0); matrices.len() / block * levels];
+                for (matrix, rows) in matrices
+                    .chunks_exact(block)
+                    .zip(rows.chunks_exact_mut(levels))
+                {
+                    nonzero_rows(&matrix[..levels * levels], levels, rows);
+                }
                 Some(ShiftPieces {
                     count: pieces,
                     matrices,
+                    rows,
                     mean_angles,
                 })
             }
@@ -510,32 +525,31 @@ impl<'a> ColumnSystem<'a> {
 
     /// The spherical streams of `field` carried from `source` along piece
     /// `piece` of their paths only ([`ColumnSystem::with_shift_pieces`]);
-    /// the other streams are left as they are.
+    /// the other streams are left as they are (`columns`: work space of 2
+    /// levels).
     pub(super) fn transport_piece(
         &self,
         piece: usize,
         source: &[f64],
         ground_radiance: f64,
         field: &mut [f64],
+        columns: &mut [f64],
     ) {
-        let (Some(paths), Some(ShiftPieces { matrices, .. })) = (self.paths, &self.shift_pieces)
-        else {
+        let (Some(paths), Some(pieces)) = (self.paths, &self.shift_pieces) else {
             return;
         };
-        let total = self.streams.count();
         let levels = self.grid.levels();
-        let block = levels * (levels + 1);
         let count = paths.spherical_streams().len();
-        for (s, &a) in paths.spherical_streams().iter().enumerate() {
-            let (matrix, ground) =
-                matrices[(piece * count + s) * block..][..block].split_at(levels * levels);
-            for k in 0..levels {
-                field[k * total + a] = ground[k] * ground_radiance
-                    + (0..levels)
-                        .map(|j| matrix[j * levels + k] * source[j * total + a])
-                        .sum::<f64>();
-            }
-        }
+        let block = levels * (levels + 1);
+        let at = piece * count;
+        spherical_transport(
+            self,
+            &pieces.matrices[at * block..(at + count) * block],
+            &pieces.rows[at * levels..(at + count) * levels],
+            (source, ground_radiance),
+            field,
+            columns,
+        );
     }
 
     /// Carries the source function `source` (levels x streams) into the
@@ -549,6 +563,27 @@ impl<'a> ColumnSystem<'a> {
         ground_radiance: f64,
         field: &mut [f64],
         columns: &mut [f64],
+    ) {
+        self.transport_slab_paths(source, ground_radiance, field);
+        // The near-horizontal streams along their spherical paths
+        // (overwriting the slab's values).
+        spherical_transport(
+            self,
+            &self.spherical_transport,
+            &self.spherical_rows,
+            (source, ground_radiance),
+            field,
+            columns,
+        );
+    }
+
+    /// [`ColumnSystem::transport`] of every stream along its slab path
+    /// (the spherical streams' values to be overwritten).
+    pub(super) fn transport_slab_paths(
+        &self,
+        source: &[f64],
+        ground_radiance: f64,
+        field: &mut [f64],
     ) {
         let n = self.streams.per_hemisphere();
         let total = self.streams.count();
@@ -584,30 +619,44 @@ impl<'a> ColumnSystem<'a> {
                 next[a] = t[a] * here[a] + wn[a] * near[a] + wf[a] * far[a];
             }
         }
-        if let Some(paths) = self.paths {
-            // The near-horizontal streams along their spherical paths
-            // (overwriting the slab's values), column by column.
-            let block = levels * (levels + 1);
-            let (column, result) = columns[..2 * levels].split_at_mut(levels);
-            for (s, &a) in paths.spherical_streams().iter().enumerate() {
-                let (matrix, ground) =
-                    self.spherical_transport[s * block..(s + 1) * block].split_at(levels * levels);
-                for (k, value) in column.iter_mut().enumerate() {
-                    *value = source[k * total + a];
-                }
-                result.fill(0.0);
-                let rows = &self.spherical_rows[s * levels..(s + 1) * levels];
-                for ((value, weights), &(first, last)) in
-                    column.iter().zip(matrix.chunks_exact(levels)).zip(rows)
-                {
-                    for (r, w) in result[first..last].iter_mut().zip(&weights[first..last]) {
-                        *r += value * w;
-                    }
-                }
-                for (k, r) in result.iter().enumerate() {
-                    field[k * total + a] = r + ground[k] * ground_radiance;
-                }
+    }
+}
+
+/// The spherical streams of `field` carried from `source` (and the ground's
+/// radiance) by the transport matrices `matrices` (per spherical stream,
+/// the layout of `StreamPaths::compute_transport_matrices`, with their
+/// non-zero `rows`), column by column; nothing in a slab.
+fn spherical_transport(
+    system: &ColumnSystem,
+    matrices: &[f64],
+    rows: &[(usize, usize)],
+    (source, ground_radiance): (&[f64], f64),
+    field: &mut [f64],
+    columns: &mut [f64],
+) {
+    let Some(paths) = system.paths else {
+        return;
+    };
+    let total = system.streams.count();
+    let levels = system.grid.levels();
+    let block = levels * (levels + 1);
+    let (column, result) = columns[..2 * levels].split_at_mut(levels);
+    for (s, &a) in paths.spherical_streams().iter().enumerate() {
+        let (matrix, ground) = matrices[s * block..(s + 1) * block].split_at(levels * levels);
+        for (k, value) in column.iter_mut().enumerate() {
+            *value = source[k * total + a];
+        }
+        result.fill(0.0);
+        let rows = &rows[s * levels..(s + 1) * levels];
+        for ((value, weights), &(first, last)) in
+            column.iter().zip(matrix.chunks_exact(levels)).zip(rows)
+        {
+            for (r, w) in result[first..last].iter_mut().zip(&weights[first..last]) {
+                *r += value * w;
             }
+        }
+        for (k, r) in result.iter().enumerate() {
+            field[k * total + a] = r + ground[k] * ground_radiance;
         }
     }
 }
@@ -620,6 +669,9 @@ pub(super) struct ShiftPieces {
     /// Per piece and spherical stream, the transport matrix and ground
     /// weights (the layout of the whole path's).
     matrices: Vec<f64>,
+    /// Per piece, spherical stream and source level, the rows where the
+    /// matrix is non-zero (half-open).
+    rows: Vec<(usize, usize)>,
     /// Per piece, spherical stream and level, the mean angle at the
     /// planet's centre and its spread, rad.
     pub(super) mean_angles: Vec<(f64, f64)>,

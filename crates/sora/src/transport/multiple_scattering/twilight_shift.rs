@@ -25,20 +25,22 @@
 //!   of the spherical streams is shifted exactly, per azimuth, with the
 //!   mean angle and its spread, before it is scattered into the next
 //!   ([`ColumnSystem::shift_order_toward_sources`]).
-//! - **The every-order shift in pieces**, a slow reference
-//!   ([`ColumnSystem::with_shift_pieces`], `FieldRequest::shift_pieces`,
-//!   not the default): each path cut into pieces that gather equal shares
-//!   of a uniform source's light, each piece's light carried by its part
-//!   of the transport matrix and shifted by its own mean angle and spread.
-//!   The one-piece shift moves the light gathered near the point (in the
-//!   planet's shadow after sunset) to the whole path's mean angle, where
-//!   the column's air at that altitude may already be sunlit: measured
-//!   for earth-hazy, an eye 3 km up, the sun 2 degrees down, a 1 km
-//!   segment 10 degrees down toward the sun, 32 pieces move the segment
-//!   by -0.12 / -2.04 / -2.67 % at 440 / 560 / 680 nm, from +1.99 / +4.87
-//!   % to -0.09 / +2.06 % of the path tracer at 560 / 680 nm
-//!   (`docs/aerial_perspective.md`); each piece costs one more transport
-//!   and shift of the spherical streams per order.
+//! - **The every-order shift in pieces**
+//!   ([`ColumnSystem::with_shift_pieces`], the settings'
+//!   `twilight_shift_pieces`, default 1 = whole paths): each path cut
+//!   into consecutive pieces, each piece's light carried by its part of
+//!   the transport matrix and shifted by its own mean angle and spread,
+//!   the pieces summed over the azimuths (`ColumnSystem::shift_sums`).
+//!   A path takes one piece per `SHIFT_PIECE_SPREAD_DEG` of its angle's
+//!   spread, at most the settings' number; the pieces gather equal shares
+//!   of w^(1/3) d^(2/3) (`StreamPaths::compute_piece_matrices`). Whole
+//!   paths move the light gathered near the point (in the planet's shadow
+//!   after sunset) to the path's mean angle, where the column's air at
+//!   that altitude may already be sunlit: measured for earth-hazy, an eye
+//!   3 km up, a 1 km segment 10 degrees down toward the sun, suns from
+//!   -1 to -4 degrees, 2-3 % too bright at 560 and 680 nm; at most 3
+//!   pieces take 86-91 % of that away (32 pieces of every path the rest),
+//!   at 1.19 times the CPU of an almucantar (`docs/aerial_perspective.md`).
 //!
 //! The plane-parallel solver ([`super::successive_orders`]) carries the
 //! spherical streams along their paths within one column; this file adds
@@ -47,6 +49,16 @@
 use std::f64::consts::PI;
 
 use super::successive_orders::{CONVERGENCE_TOLERANCE, ColumnSystem, StoppingRule};
+
+/// With the shift in pieces (`MultipleScatteringSettings::twilight_shift_pieces`
+/// above 1): a path takes one piece per this many degrees of its angle's
+/// spread (at most that many; [`ColumnSystem::with_shift_pieces`]). With
+/// at most 3 pieces, measured for earth-hazy (eye 3 km up, a 1 km segment
+/// 10 degrees down toward the sun, suns -1 to -4 degrees, 560 and 680 nm),
+/// it moves the segment by 86-91 % of what 32 pieces of every path move
+/// it, at 1.19 times the CPU of the whole-path shift for an almucantar
+/// (docs/aerial_perspective.md).
+pub(crate) const SHIFT_PIECE_SPREAD_DEG: f64 = 0.2;
 use crate::transport::vector_exp::exp_neg;
 
 /// The interpolation brackets of a twilight shift ([`ColumnSystem::shift_plan`]).
@@ -145,6 +157,12 @@ impl ColumnSystem<'_> {
                     // source changes exponentially along the path, and its
                     // mean is brighter than its value at the mean angle.
                     let (mean, spread) = mean_angles[s * levels + k];
+                    if mean == 0.0 {
+                        // Not shifted.
+                        let len = brackets.len();
+                        brackets.resize(len + nodes * azimuths * 2, (0, 0.0));
+                        continue;
+                    }
                     let angles = [mean + spread, (mean - spread).max(0.0)];
                     for &sun in sun_zenith_rad {
                         for q in 0..azimuths {
@@ -210,138 +228,212 @@ impl ColumnSystem<'_> {
     /// segment, extrapolated by at most half a segment; where H is not
     /// positive at both nodes, H is kept.
     pub(crate) fn shift_order_toward_sources(&self, plan: &ShiftPlan, orders: &mut [&mut [f64]]) {
-        let Some(paths) = self.paths else {
-            return;
-        };
-        let nodes = plan.nodes;
-        if nodes < 2 {
+        if self.paths.is_none() || plan.nodes < 2 {
             return;
         }
-        let levels = self.grid.levels();
         let total = self.streams.count();
-        let size = levels * total;
-        let azimuths = total;
-        let (active, cosines, synthesis) = (&plan.active, &plan.cosines, &plan.synthesis);
-        let h = active.len();
-        let mut harmonics = vec![0.0; nodes * h];
-        let mut higher = vec![0.0; nodes * azimuths];
-        let mut logs = vec![0.0; nodes * azimuths];
-        let (mut exponents, mut powers) = (vec![0.0; 2 * azimuths], vec![0.0; 2 * azimuths]);
-        let mut shifted = vec![0.0; azimuths];
-        let mut transformed = vec![0.0; h];
-        // Level by level: a level's streams share the nodes' cache lines.
-        for k in 0..levels {
-            for (s, &a) in paths.spherical_streams().iter().enumerate() {
-                if !plan.shifted[s * levels + k] {
-                    continue;
-                }
-                let brackets = &plan.brackets[(s * levels + k) * nodes * azimuths * 2..]
-                    [..nodes * azimuths * 2];
-                for (node, order) in orders.iter().enumerate() {
-                    for (i, &m) in active.iter().enumerate() {
-                        harmonics[node * h + i] = order[m * size + k * total + a];
-                    }
-                }
-                // The azimuths' values, harmonic by harmonic (the loops
-                // over azimuths vectorise).
-                for (row, values) in higher
-                    .chunks_exact_mut(azimuths)
-                    .zip(harmonics.chunks_exact(h))
-                {
-                    row.fill(0.0);
-                    for (v, c) in values.iter().zip(synthesis.chunks_exact(azimuths)) {
-                        for (r, c) in row.iter_mut().zip(c) {
-                            *r += v * c;
-                        }
-                    }
-                }
-                for (l, v) in logs.iter_mut().zip(&higher) {
-                    *l = if *v > 0.0 { v.ln() } else { f64::NEG_INFINITY };
-                }
-                for (node, order) in orders.iter_mut().enumerate() {
-                    let brackets = &brackets[node * azimuths * 2..(node + 1) * azimuths * 2];
-                    for (j, (&(lo, t), y)) in brackets.iter().zip(&mut exponents).enumerate() {
-                        let (lo, q) = (lo as usize, j / 2);
-                        // Not finite where either node's value is not
-                        // positive.
-                        *y =
-                            (1.0 - t) * logs[lo * azimuths + q] + t * logs[(lo + 1) * azimuths + q];
-                    }
-                    // e^y by the vectorisable e^-|y|, then inverted where y
-                    // is positive (only in a rare extrapolation: a
-                    // predictable branch, no division in the vector loop).
-                    for (e, y) in powers.iter_mut().zip(&exponents) {
-                        *e = exp_neg(y.abs());
-                    }
-                    for (e, y) in powers.iter_mut().zip(&exponents) {
-                        if *y > 0.0 {
-                            *e = 1.0 / *e;
-                        }
-                    }
-                    for (q, out) in shifted.iter_mut().enumerate() {
-                        let kept = higher[node * azimuths + q];
-                        *out = (2 * q..2 * q + 2)
-                            .map(|j| {
-                                if exponents[j].is_finite() {
-                                    powers[j]
-                                } else {
-                                    kept
-                                }
-                            })
-                            .sum::<f64>()
-                            * 0.5;
-                    }
-                    transformed.fill(0.0);
-                    for (v, c) in shifted.iter().zip(cosines.chunks_exact(h)) {
-                        for (t, c) in transformed.iter_mut().zip(c) {
-                            *t += v * c;
-                        }
-                    }
-                    for (&m, t) in active.iter().zip(&transformed) {
-                        let factor = if m == 0 { 1.0 } else { 2.0 } / azimuths as f64;
-                        order[m * size + k * total + a] = factor * t;
-                    }
-                }
-            }
-        }
+        let carried = vec![true; orders.len() * total];
+        let pieces: Vec<&[f64]> = orders.iter().map(|o| &o[..]).collect();
+        let mut shifted = vec![0.0; self.shift_sums_len(orders.len())];
+        self.shift_sums(
+            std::slice::from_ref(plan),
+            &[pieces],
+            &carried,
+            &mut shifted,
+        );
+        self.put_spherical(&shifted, &carried, orders);
     }
 
     /// The shift in pieces: each piece's light of one order
     /// (`piece_orders`, per piece and node) shifted by its own plan, and
     /// their sum put in place of the spherical streams' light in `orders`
     /// (per node); the harmonics not `carried` (per node and harmonic)
-    /// stay zero.
+    /// are zero.
     fn shift_pieces_toward_sources(
         &self,
         plans: &[ShiftPlan],
-        piece_orders: &mut [Vec<Vec<f64>>],
+        piece_orders: &[Vec<Vec<f64>>],
         carried: &[bool],
         orders: &mut [Vec<f64>],
     ) {
+        let pieces: Vec<Vec<&[f64]>> = piece_orders
+            .iter()
+            .map(|nodes| nodes.iter().map(|o| &o[..]).collect())
+            .collect();
+        let mut shifted = vec![0.0; self.shift_sums_len(orders.len())];
+        self.shift_sums(plans, &pieces, carried, &mut shifted);
+        let mut views: Vec<&mut [f64]> = orders.iter_mut().map(|o| &mut o[..]).collect();
+        self.put_spherical(&shifted, carried, &mut views);
+    }
+
+    /// The length of [`ColumnSystem::shift_sums`]'s `out` for `nodes` sun
+    /// nodes.
+    fn shift_sums_len(&self, nodes: usize) -> usize {
+        let count = self.paths.map_or(0, |p| p.spherical_streams().len());
+        nodes * self.grid.levels() * count * self.streams.count()
+    }
+
+    /// Writes the spherical streams' shifted active harmonics `shifted`
+    /// (the layout of [`ColumnSystem::shift_sums`]'s `out`) into `orders`
+    /// (per node), zero where a harmonic is not `carried` (per node and
+    /// harmonic); the other harmonics are left as they are.
+    fn put_spherical(&self, shifted: &[f64], carried: &[bool], orders: &mut [&mut [f64]]) {
         let Some(paths) = self.paths else {
             return;
         };
         let levels = self.grid.levels();
         let total = self.streams.count();
         let size = levels * total;
-        for order in orders.iter_mut() {
-            for m in 0..total {
-                for k in 0..levels {
-                    for &a in paths.spherical_streams() {
-                        order[m * size + k * total + a] = 0.0;
+        let count = paths.spherical_streams().len();
+        for (node, order) in orders.iter_mut().enumerate() {
+            for k in 0..levels {
+                for (s, &a) in paths.spherical_streams().iter().enumerate() {
+                    let values = &shifted[((node * levels + k) * count + s) * total..][..total];
+                    for m in (0..total).filter(|m| self.active_harmonics[*m]) {
+                        order[m * size + k * total + a] = if carried[node * total + m] {
+                            values[m]
+                        } else {
+                            0.0
+                        };
                     }
                 }
             }
         }
-        for (plan, pieces) in plans.iter().zip(piece_orders.iter_mut()) {
-            let mut views: Vec<&mut [f64]> = pieces.iter_mut().map(|v| &mut v[..]).collect();
-            self.shift_order_toward_sources(plan, &mut views);
-            for (node, (order, piece)) in orders.iter_mut().zip(pieces.iter()).enumerate() {
-                for m in (0..total).filter(|m| carried[node * total + m]) {
-                    for k in 0..levels {
-                        for &a in paths.spherical_streams() {
-                            let at = m * size + k * total + a;
-                            order[at] += piece[at];
+    }
+
+    /// The heart of the shift: per node, level and spherical stream, the
+    /// harmonics of the sum over `pieces` (per piece and node, the layout
+    /// of [`ColumnSystem::solve`]'s radiance) of each piece's light read
+    /// at its plan's angles, into `out` ([((node * levels + k) * spherical
+    /// streams + s) * streams + m], the harmonics the phase functions lack
+    /// zero; a
+    /// piece's path that is not shifted adds its light as it is). The
+    /// pieces are summed over the azimuths, so the harmonics are taken
+    /// once.
+    fn shift_sums(
+        &self,
+        plans: &[ShiftPlan],
+        pieces: &[Vec<&[f64]>],
+        carried: &[bool],
+        out: &mut [f64],
+    ) {
+        let Some(paths) = self.paths else {
+            return;
+        };
+        let nodes = plans[0].nodes;
+        let levels = self.grid.levels();
+        let total = self.streams.count();
+        let size = levels * total;
+        let count = paths.spherical_streams().len();
+        let azimuths = total;
+        let (active, cosines, synthesis) =
+            (&plans[0].active, &plans[0].cosines, &plans[0].synthesis);
+        let h = active.len();
+        let mut harmonics = vec![0.0; nodes * h];
+        let mut higher = vec![0.0; nodes * azimuths];
+        let mut logs = vec![0.0; nodes * azimuths];
+        let (mut exponents, mut powers) = (vec![0.0; 2 * azimuths], vec![0.0; 2 * azimuths]);
+        let mut summed = vec![0.0; nodes * azimuths];
+        let mut kept = vec![0.0; nodes * h];
+        let mut transformed = vec![0.0; h];
+        out.fill(0.0);
+        // Level by level: a level's streams share the nodes' cache lines.
+        for k in 0..levels {
+            for (s, &a) in paths.spherical_streams().iter().enumerate() {
+                summed.fill(0.0);
+                kept.fill(0.0);
+                let (mut any_shifted, mut any_kept) = (false, false);
+                for (plan, orders) in plans.iter().zip(pieces) {
+                    if !plan.shifted[s * levels + k] {
+                        any_kept = true;
+                        for (node, order) in orders.iter().enumerate() {
+                            for (i, &m) in active.iter().enumerate() {
+                                if carried[node * total + m] {
+                                    kept[node * h + i] += order[m * size + k * total + a];
+                                }
+                            }
+                        }
+                        continue;
+                    }
+                    any_shifted = true;
+                    let brackets = &plan.brackets[(s * levels + k) * nodes * azimuths * 2..]
+                        [..nodes * azimuths * 2];
+                    for (node, order) in orders.iter().enumerate() {
+                        for (i, &m) in active.iter().enumerate() {
+                            harmonics[node * h + i] = order[m * size + k * total + a];
+                        }
+                    }
+                    // The azimuths' values, harmonic by harmonic (the loops
+                    // over azimuths vectorise).
+                    for (row, values) in higher
+                        .chunks_exact_mut(azimuths)
+                        .zip(harmonics.chunks_exact(h))
+                    {
+                        row.fill(0.0);
+                        for (v, c) in values.iter().zip(synthesis.chunks_exact(azimuths)) {
+                            for (r, c) in row.iter_mut().zip(c) {
+                                *r += v * c;
+                            }
+                        }
+                    }
+                    for (l, v) in logs.iter_mut().zip(&higher) {
+                        *l = if *v > 0.0 { v.ln() } else { f64::NEG_INFINITY };
+                    }
+                    for node in 0..nodes {
+                        let brackets = &brackets[node * azimuths * 2..(node + 1) * azimuths * 2];
+                        for (j, (&(lo, t), y)) in brackets.iter().zip(&mut exponents).enumerate() {
+                            let (lo, q) = (lo as usize, j / 2);
+                            // Not finite where either node's value is not
+                            // positive.
+                            *y = (1.0 - t) * logs[lo * azimuths + q]
+                                + t * logs[(lo + 1) * azimuths + q];
+                        }
+                        // e^y by the vectorisable e^-|y|, then inverted where
+                        // y is positive (only in a rare extrapolation: a
+                        // predictable branch, no division in the vector loop).
+                        for (e, y) in powers.iter_mut().zip(&exponents) {
+                            *e = exp_neg(y.abs());
+                        }
+                        for (e, y) in powers.iter_mut().zip(&exponents) {
+                            if *y > 0.0 {
+                                *e = 1.0 / *e;
+                            }
+                        }
+                        let row = &mut summed[node * azimuths..(node + 1) * azimuths];
+                        for (q, out) in row.iter_mut().enumerate() {
+                            let kept = higher[node * azimuths + q];
+                            *out += (2 * q..2 * q + 2)
+                                .map(|j| {
+                                    if exponents[j].is_finite() {
+                                        powers[j]
+                                    } else {
+                                        kept
+                                    }
+                                })
+                                .sum::<f64>()
+                                * 0.5;
+                        }
+                    }
+                }
+                for node in 0..nodes {
+                    let at = ((node * levels + k) * count + s) * total;
+                    let out = &mut out[at..at + total];
+                    if any_shifted {
+                        transformed.fill(0.0);
+                        let row = &summed[node * azimuths..(node + 1) * azimuths];
+                        for (v, c) in row.iter().zip(cosines.chunks_exact(h)) {
+                            for (t, c) in transformed.iter_mut().zip(c) {
+                                *t += v * c;
+                            }
+                        }
+                        for (&m, t) in active.iter().zip(&transformed) {
+                            let factor = if m == 0 { 1.0 } else { 2.0 } / azimuths as f64;
+                            out[m] = factor * t;
+                        }
+                    }
+                    if any_kept {
+                        for (&m, v) in active.iter().zip(&kept[node * h..(node + 1) * h]) {
+                            out[m] += v;
                         }
                     }
                 }
@@ -404,10 +496,10 @@ impl ColumnSystem<'_> {
             }
             current[node].copy_from_slice(fields[node]);
         }
-        let plan = self.shift_plan(sun_zenith_rad);
-        // With the shift in pieces: each piece's plan, and per piece and
-        // node the spherical streams' light of the order from that piece.
-        let (piece_plans, mut piece_orders) = match &self.shift_pieces {
+        // The whole paths' plan, or with the shift in pieces each piece's
+        // plan and per piece and node the spherical streams' light of the
+        // order from that piece.
+        let (plans, mut piece_orders) = match &self.shift_pieces {
             Some(pieces) => {
                 let per_piece = pieces.mean_angles.len() / pieces.count;
                 let plans: Vec<ShiftPlan> = pieces
@@ -420,7 +512,7 @@ impl ColumnSystem<'_> {
                     vec![vec![vec![0.0; total * size]; nodes]; pieces.count],
                 )
             }
-            None => (Vec::new(), Vec::new()),
+            None => (vec![self.shift_plan(sun_zenith_rad)], Vec::new()),
         };
         // Each node stops by the rule of `solve` on its whole field; a
         // harmonic is no longer carried once its order is negligible there
@@ -452,23 +544,23 @@ impl ColumnSystem<'_> {
                         0 => self.ground_albedo / PI * self.downward_flux(&l[..size]),
                         _ => 0.0,
                     };
-                    self.transport(&source, ground, out, &mut columns);
+                    if piece_orders.is_empty() {
+                        self.transport(&source, ground, out, &mut columns);
+                    } else {
+                        // The spherical streams' light is the pieces' sum.
+                        self.transport_slab_paths(&source, ground, out);
+                    }
                     for (piece, orders) in piece_orders.iter_mut().enumerate() {
                         let out = &mut orders[node][m * size..(m + 1) * size];
-                        self.transport_piece(piece, &source, ground, out);
+                        self.transport_piece(piece, &source, ground, out, &mut columns);
                     }
                 }
             }
-            if piece_plans.is_empty() {
+            if piece_orders.is_empty() {
                 let mut orders: Vec<&mut [f64]> = next.iter_mut().map(|v| &mut v[..]).collect();
-                self.shift_order_toward_sources(&plan, &mut orders);
+                self.shift_order_toward_sources(&plans[0], &mut orders);
             } else {
-                self.shift_pieces_toward_sources(
-                    &piece_plans,
-                    &mut piece_orders,
-                    &carried,
-                    &mut next,
-                );
+                self.shift_pieces_toward_sources(&plans, &piece_orders, &carried, &mut next);
             }
             for node in 0..nodes {
                 if done[node] {
@@ -657,7 +749,7 @@ mod tests {
         let solve = |pieces: usize| {
             let system = ColumnSystem::new(&streams, &grid, Some(&paths), species(), 1.7, 0.2)
                 .with_sweeps(6)
-                .with_shift_pieces(pieces);
+                .with_shift_pieces((pieces, 0.0));
             let mut fields = vec![vec![0.0; total * size]; nodes];
             let mut views: Vec<&mut [f64]> = fields.iter_mut().map(|f| f.as_mut_slice()).collect();
             let down = system.solve_shifted_orders(&suns, &ground, &firsts, &mut views);

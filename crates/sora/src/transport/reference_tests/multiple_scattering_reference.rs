@@ -268,6 +268,7 @@ fn default_resolution_is_converged_on_the_spherical_sky() {
         polarisation_wavelength_stride: 1,
         first_order_panels: 4,
         first_order_fine_nodes: 4,
+        twilight_shift_pieces: 1,
     };
     for sun_elevation in [90.0, 30.0, 5.0] {
         let sky = sky(&atmosphere, sun_elevation, 0.0);
