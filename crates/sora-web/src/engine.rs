@@ -598,6 +598,7 @@ pub const REALTIME_TABLES: RealtimeTables = RealtimeTables {
         altitude_nodes: 3,
         zenith_nodes_per_half: 32,
         zenith_fine_cells_per_half: 0,
+        zenith_wide_cells_per_half: 0,
         azimuth_nodes: 32,
         transmittance_nodes: (32, 128),
         // No aerial-perspective table (its bake marches every node's
