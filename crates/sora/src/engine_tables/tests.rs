@@ -670,6 +670,8 @@ fn the_layers_marched_in_fewer_panels_are_the_field_s() {
         sun_nodes: 4,
         altitude_nodes: 2,
         zenith_nodes_per_half: 24,
+        zenith_fine_cells_per_half: 0,
+        zenith_wide_cells_per_half: 0,
         azimuth_nodes: 16,
         transmittance_nodes: (4, 8),
         march: false,
@@ -722,6 +724,8 @@ fn the_layers_blended_between_suns_are_the_marched_layers() {
     let settings = EngineTableSettings {
         altitude_nodes: 2,
         zenith_nodes_per_half: 24,
+        zenith_fine_cells_per_half: 0,
+        zenith_wide_cells_per_half: 0,
         azimuth_nodes: 16,
         transmittance_nodes: (4, 8),
         march: false,
@@ -774,6 +778,9 @@ fn the_wide_bake_is_the_portable_bake_bit_for_bit() {
         sun_nodes: 6,
         altitude_nodes: 2,
         zenith_nodes_per_half: 16,
+        // Fine and wide cells: the layers' sky-view tables march some rows.
+        zenith_fine_cells_per_half: 5,
+        zenith_wide_cells_per_half: 4,
         azimuth_nodes: 12,
         transmittance_nodes: (4, 8),
         march: false,
