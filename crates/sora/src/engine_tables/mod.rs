@@ -335,6 +335,21 @@ impl EngineTables {
             let c = to_xyz.to_xyz(&SampledSpectrum::from_values(values.to_vec()))?;
             Ok([c.x, c.y, c.z])
         };
+        // XYZ of a view's or a segment's light. A grazing ray from the
+        // very top of the atmosphere (earth-hazy, the sun at the horizon)
+        // once gave a segment's light a negative value at one wavelength,
+        // and a sky layer's view next to the horizon -0.039 W m^-2 sr^-1
+        // nm^-1 at 420 nm (earth-hazy, the default fine zenith cells): it
+        // counts as none.
+        let light_xyz = |light: &SampledSpectrum| -> Result<[f64; 3]> {
+            // (A NaN stays, and is refused.)
+            let clean: Vec<f64> = light
+                .values()
+                .iter()
+                .map(|v| if *v < 0.0 { 0.0 } else { *v })
+                .collect();
+            xyz(&clean)
+        };
         let solar = scene.optics().solar_irradiance_w_m2_nm.values().to_vec();
         let solar_xyz = xyz(&solar)?;
         let EngineTableSettings {
@@ -449,8 +464,7 @@ impl EngineTables {
                 let layer = s * altitude_nodes + a;
                 let out = &mut sky_values[layer * layer_texels..][..layer_texels];
                 for (o, radiance) in out.iter_mut().zip(&radiances) {
-                    let c = to_xyz.to_xyz(&radiance.radiance_w_m2_sr_nm)?;
-                    *o = [c.x, c.y, c.z].map(|v| v.max(0.0) as f32);
+                    *o = light_xyz(&radiance.radiance_w_m2_sr_nm)?.map(|v| v.max(0.0) as f32);
                 }
                 if segments.is_empty() {
                     done += 1;
@@ -463,13 +477,7 @@ impl EngineTables {
                     .iter()
                     .zip(layer_sky.compute_segment_light(&segments)?)
                 {
-                    // A grazing ray from the very top of the atmosphere
-                    // (earth-hazy, the sun at the horizon) once gave a
-                    // negative value at one wavelength; it counts as none.
-                    let values = light.radiance_w_m2_sr_nm.values().iter();
-                    let clean = values.map(|v| if *v >= 0.0 { *v } else { 0.0 }).collect();
-                    let c = to_xyz.to_xyz(&SampledSpectrum::from_values(clean))?;
-                    out[*place] = [c.x, c.y, c.z];
+                    out[*place] = light_xyz(&light.radiance_w_m2_sr_nm)?;
                 }
                 done += 1;
                 progress(layers_done(done));
