@@ -458,11 +458,7 @@ impl Sky {
         let Some((first, _)) = skies.first() else {
             return Vec::new();
         };
-        let sizes = (
-            first.table_size,
-            first.multiple_stride,
-            first.sky_view_rows,
-        );
+        let sizes = (first.table_size, first.multiple_stride, first.sky_view_rows);
         assert!(
             skies
                 .iter()

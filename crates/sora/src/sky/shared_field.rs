@@ -15,12 +15,12 @@
 use std::sync::Arc;
 
 use super::{Scattering, Sky};
-use crate::transport::sky_view_table::MarchedRows;
 use crate::error::Result;
 use crate::transport::multiple_scattering::{
     FieldRequest, MultipleScatteringField, MultipleScatteringTable,
 };
 use crate::transport::single_scattering::SingleScatteringScene;
+use crate::transport::sky_view_table::MarchedRows;
 
 /// The layout of a sky's sky-view table (`transport/sky_view_table.rs`)
 /// when it is not the images' own.
