@@ -1062,7 +1062,7 @@ mod tests {
         // The eye on the ground: its horizon at 90 degrees.
         let horizon = std::f64::consts::FRAC_PI_2;
         for row in [0, half - 1] {
-            let zenith = sora::engine_tables::axes::zenith_of_node(row, half, 0, horizon);
+            let zenith = sora::engine_tables::axes::zenith_of_node(row, half, (0, 0), horizon);
             let view = ViewDirection::new(90.0 - zenith.to_degrees(), 0.0).unwrap();
             let expected = to_xyz
                 .to_xyz(&sky.radiance(view).unwrap().radiance_w_m2_sr_nm)
