@@ -59,16 +59,15 @@ pub struct TablesArgs {
     /// cell of a finer grid each; the coarse cells from the zenith span
     /// two, the wide cells three): the nodes there are the library's own
     /// rows where the grid, 2 (N - 1) - F + W cells, has the images' 127
-    /// (e.g. N 64, F 21, W 22, or N 78, F 27, W 0) [default: 21 with the
-    /// default 64 zenith nodes, else 0]
-    #[arg(long, value_name = "F")]
-    zenith_fine_cells: Option<usize>,
+    /// (e.g. N 64, F 21, W 22: paper-mars within 2 % after sunset at the
+    /// default's size and bake; or N 78, F 27, W 0)
+    #[arg(long, value_name = "F", default_value_t = EngineTableSettings::default().zenith_fine_cells_per_half)]
+    zenith_fine_cells: usize,
 
     /// Wide cells of the zenith axis per half, between the coarse cells
-    /// from the zenith and the fine cells (F + W at most N - 1) [default:
-    /// 22 with the default 64 zenith nodes, else 0]
-    #[arg(long, value_name = "W")]
-    zenith_wide_cells: Option<usize>,
+    /// from the zenith and the fine cells (F + W at most N - 1)
+    #[arg(long, value_name = "W", default_value_t = EngineTableSettings::default().zenith_wide_cells_per_half)]
+    zenith_wide_cells: usize,
 
     /// View azimuth nodes over 0..180 degrees from the sun
     #[arg(long, value_name = "N", default_value_t = EngineTableSettings::default().azimuth_nodes)]
@@ -115,19 +114,12 @@ pub fn run(args: TablesArgs) -> anyhow::Result<()> {
             args.format
         );
     }
-    // The default axis's fine and wide cells fit its node count alone.
-    let defaults = EngineTableSettings::default();
-    let default_cells = if args.zenith_nodes == defaults.zenith_nodes_per_half {
-        defaults.zenith_cells()
-    } else {
-        (0, 0)
-    };
     let settings = EngineTableSettings {
         sun_nodes: args.sun_nodes,
         altitude_nodes: args.altitude_nodes,
         zenith_nodes_per_half: args.zenith_nodes,
-        zenith_fine_cells_per_half: args.zenith_fine_cells.unwrap_or(default_cells.0),
-        zenith_wide_cells_per_half: args.zenith_wide_cells.unwrap_or(default_cells.1),
+        zenith_fine_cells_per_half: args.zenith_fine_cells,
+        zenith_wide_cells_per_half: args.zenith_wide_cells,
         azimuth_nodes: args.azimuth_nodes,
         aerial_nodes: (
             args.aerial_zenith_nodes,
