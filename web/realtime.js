@@ -560,6 +560,7 @@ export class RealtimeView {
     this.forEachProgram((program) => {
       gl.uniform4i(this.uniform('uSkyNodes'), sky.sun_nodes, sky.altitude_nodes, sky.zenith_nodes_per_half, sky.azimuth_nodes);
       gl.uniform1i(this.uniform('uSkyZenithFineCells'), sky.zenith_fine_cells_per_half ?? 0);
+      gl.uniform1i(this.uniform('uSkyZenithWideCells'), sky.zenith_wide_cells_per_half ?? 0);
       gl.uniform2i(this.uniform('uTransmittanceNodes'), t.height, t.width);
       gl.uniform4f(this.uniform('uPlanetSun'), m.planet.ground_radius_m, m.planet.top_radius_m, m.sun.angular_radius_rad, m.sun.limb_darkening);
       gl.uniform3fv(this.uniform('uSunIrradianceXyz'), m.sun.irradiance_xyz_w_m2_nm);

@@ -23,8 +23,10 @@ uniform highp sampler2DArray uAerial;
 uniform ivec3 uAerialNodes;
 // sun_nodes, altitude_nodes, zenith_nodes_per_half, azimuth_nodes
 uniform ivec4 uSkyNodes;
-// sky zenith_fine_cells_per_half (0 where the manifest has none)
+// sky zenith_fine_cells_per_half, zenith_wide_cells_per_half (each 0
+// where the manifest has none)
 uniform int uSkyZenithFineCells;
+uniform int uSkyZenithWideCells;
 // transmittance altitude nodes, mu nodes
 uniform ivec2 uTransmittanceNodes;
 // ground_radius_m, top_radius_m, sun angular radius (rad), limb darkening
@@ -62,28 +64,33 @@ void soraCell(float x, int lowest, int highest, out int i, out float f) {
 }
 
 // Zenith node coordinate (0..half_ - 1, from the zenith or the nadir) of
-// v = 1 - sqrt(1 - u) on an axis of half_ nodes per half with `fine` fine
-// cells next to the horizon (axes::zenith_coordinate): v on a grid of
-// 2 (half_ - 1) - fine cells, every other grid node a node, every one in
-// the last `fine` cells.
-float soraZenithNode(float v, int half_, int fine) {
-  float coarse = float(half_ - 1 - min(fine, half_ - 1));
-  float j = v * float(2 * (half_ - 1) - min(fine, half_ - 1));
-  return j <= 2.0 * coarse ? 0.5 * j : j - coarse;
+// v = 1 - sqrt(1 - u) on an axis of half_ nodes per half with cells.x fine
+// and cells.y wide cells next to the horizon (axes::zenith_coordinate): v
+// on a grid of 2 (half_ - 1) - fine + wide cells, from the zenith every
+// other grid node a node, then every third over the wide cells, every one
+// in the last `fine` cells.
+float soraZenithNode(float v, int half_, ivec2 cells) {
+  int fine = min(cells.x, half_ - 1);
+  int wide = min(cells.y, half_ - 1 - fine);
+  float c = float(half_ - 1 - fine - wide);
+  float w = float(wide);
+  float j = v * float(2 * (half_ - 1) - fine + wide);
+  return j <= 2.0 * c ? 0.5 * j : (j <= 2.0 * c + 3.0 * w ? c + (j - 2.0 * c) / 3.0 : j - c - 2.0 * w);
 }
 
 // Zenith coordinate (y, lowest cell, highest cell) for an eye at radius r
-// on an axis of half_ nodes per half with `fine` fine cells.
-void soraZenithCoordinate(float zenith, float r, int half_, int fine, out float y, out int lowest, out int highest) {
+// on an axis of half_ nodes per half with cells.x fine and cells.y wide
+// cells.
+void soraZenithCoordinate(float zenith, float r, int half_, ivec2 cells, out float y, out int lowest, out int highest) {
   float zh = SORA_PI - asin(min(uPlanetSun.x / r, 1.0));
   if (zenith < zh) {
     float u = clamp(zenith / (zh - 1e-6), 0.0, 1.0);
-    y = soraZenithNode(1.0 - sqrt(1.0 - u), half_, fine);
+    y = soraZenithNode(1.0 - sqrt(1.0 - u), half_, cells);
     lowest = 0;
     highest = half_ - 2;
   } else {
     float u = clamp((SORA_PI - zenith) / (SORA_PI - zh - 1e-6), 0.0, 1.0);
-    y = float(2 * half_ - 1) - soraZenithNode(1.0 - sqrt(1.0 - u), half_, fine);
+    y = float(2 * half_ - 1) - soraZenithNode(1.0 - sqrt(1.0 - u), half_, cells);
     lowest = half_;
     highest = 2 * half_ - 2;
   }
@@ -169,7 +176,7 @@ float soraShadowReadShare(float zenith, float phi, float eDeg, float zh) {
 // the two sun layers (the chord less the curvature of the four nearest),
 // each read at the view turned with the sun to its node (soraTurnedView,
 // by soraTurnShare of the step).
-vec3 soraLayersXyz(highp sampler2DArray table, int Z, int F, int K, int j, float fj, float h, float zenith, float phi, float eDeg) {
+vec3 soraLayersXyz(highp sampler2DArray table, int Z, ivec2 F, int K, int j, float fj, float h, float zenith, float phi, float eDeg) {
   h = clamp(h, 0.0, soraThickness());
   float r = uPlanetSun.x + h;
   float zh = SORA_PI - asin(min(uPlanetSun.x / r, 1.0));
@@ -217,7 +224,7 @@ vec3 soraLayersXyz(highp sampler2DArray table, int Z, int F, int K, int j, float
 // zenith angle `zenith` (rad) and azimuth `phi` (rad, 0..pi) from the
 // sun's, with the sun at elevation eDeg (degrees). No sun disc.
 vec3 soraSkyXyz(float h, float zenith, float phi, float eDeg) {
-  return soraLayersXyz(uSky, uSkyNodes.z, uSkyZenithFineCells, uSkyNodes.w, 0, 0.0, h, zenith, phi, eDeg);
+  return soraLayersXyz(uSky, uSkyNodes.z, ivec2(uSkyZenithFineCells, uSkyZenithWideCells), uSkyNodes.w, 0, 0.0, h, zenith, phi, eDeg);
 }
 
 float soraHorizonCosine(float r) {
@@ -352,7 +359,7 @@ void soraAerialPerspective(float h, vec3 v, vec3 sun, float d, out vec3 inscatte
   vec2 zp = soraLocalView(v, vec3(0.0, 0.0, 1.0), sun);
   float eDeg = degrees(asin(clamp(sun.z, -1.0, 1.0)));
   vec3 sky = soraSkyXyz(h, zp.x, zp.y, eDeg);
-  vec3 ratio = soraLayersXyz(uAerial, uAerialNodes.x, 0, uAerialNodes.y, j, fj, h, zp.x, zp.y, eDeg);
+  vec3 ratio = soraLayersXyz(uAerial, uAerialNodes.x, ivec2(0), uAerialNodes.y, j, fj, h, zp.x, zp.y, eDeg);
   inscattered = sky * ratio * share;
 }
 

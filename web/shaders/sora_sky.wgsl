@@ -14,7 +14,8 @@ struct SoraTables {
   // sun_nodes, altitude_nodes, zenith_nodes_per_half, azimuth_nodes
   sky_nodes: vec4<i32>,
   // transmittance altitude nodes, mu nodes, the sky's
-  // zenith_fine_cells_per_half (0 where the manifest has none), unused
+  // zenith_fine_cells_per_half and zenith_wide_cells_per_half (each 0
+  // where the manifest has none)
   transmittance_nodes: vec4<i32>,
   // ground_radius_m, top_radius_m, sun angular radius (rad), limb darkening
   planet_sun: vec4<f32>,
@@ -61,23 +62,30 @@ fn sora_cell(x: f32, lowest: i32, highest: i32) -> SoraCell {
 
 // Zenith node coordinate (0..half_nodes - 1, from the zenith or the
 // nadir) of v = 1 - sqrt(1 - u) on an axis of half_nodes nodes per half
-// with `fine` fine cells next to the horizon (axes::zenith_coordinate).
-fn sora_zenith_node(v: f32, half_nodes: i32, fine: i32) -> f32 {
-  let coarse = f32(half_nodes - 1 - min(fine, half_nodes - 1));
-  let j = v * f32(2 * (half_nodes - 1) - min(fine, half_nodes - 1));
-  return select(j - coarse, 0.5 * j, j <= 2.0 * coarse);
+// with cells.x fine and cells.y wide cells next to the horizon
+// (axes::zenith_coordinate): 2, 3 and 1 grid cells a coarse, wide and fine
+// cell.
+fn sora_zenith_node(v: f32, half_nodes: i32, cells: vec2<i32>) -> f32 {
+  let fine = min(cells.x, half_nodes - 1);
+  let wide = min(cells.y, half_nodes - 1 - fine);
+  let c = f32(half_nodes - 1 - fine - wide);
+  let w = f32(wide);
+  let j = v * f32(2 * (half_nodes - 1) - fine + wide);
+  let outer = select(j - c - 2.0 * w, c + (j - 2.0 * c) / 3.0, j <= 2.0 * c + 3.0 * w);
+  return select(outer, 0.5 * j, j <= 2.0 * c);
 }
 
 // The zenith axis's cell for an eye at radius r on an axis of half_nodes
-// nodes per half with `fine` fine cells (never across the horizon).
-fn sora_zenith_cell(zenith: f32, r: f32, half_nodes: i32, fine: i32) -> SoraCell {
+// nodes per half with cells.x fine and cells.y wide cells (never across
+// the horizon).
+fn sora_zenith_cell(zenith: f32, r: f32, half_nodes: i32, cells: vec2<i32>) -> SoraCell {
   let zh = SORA_PI - asin(min(sora.planet_sun.x / r, 1.0));
   if (zenith < zh) {
     let u = clamp(zenith / (zh - 1e-6), 0.0, 1.0);
-    return sora_cell(sora_zenith_node(1.0 - sqrt(1.0 - u), half_nodes, fine), 0, half_nodes - 2);
+    return sora_cell(sora_zenith_node(1.0 - sqrt(1.0 - u), half_nodes, cells), 0, half_nodes - 2);
   }
   let u = clamp((SORA_PI - zenith) / (SORA_PI - zh - 1e-6), 0.0, 1.0);
-  return sora_cell(f32(2 * half_nodes - 1) - sora_zenith_node(1.0 - sqrt(1.0 - u), half_nodes, fine), half_nodes, 2 * half_nodes - 2);
+  return sora_cell(f32(2 * half_nodes - 1) - sora_zenith_node(1.0 - sqrt(1.0 - u), half_nodes, cells), half_nodes, 2 * half_nodes - 2);
 }
 
 // Bilinear read of the slice whose first row is row0 of a layer of `table`.
@@ -152,7 +160,7 @@ fn sora_shadow_read_share(zenith: f32, phi: f32, e_deg: f32, zh: f32) -> f32 {
 // linear in altitude, in ln L between the sun layers (the chord less the
 // curvature of the four nearest), each read at the view turned with the
 // sun to its node.
-fn sora_layers_xyz(table: texture_2d_array<f32>, zn: i32, zf: i32, kn: i32, j: i32, fj: f32,
+fn sora_layers_xyz(table: texture_2d_array<f32>, zn: i32, zf: vec2<i32>, kn: i32, j: i32, fj: f32,
                    h_in: f32, zenith: f32, phi: f32, e_in: f32) -> vec3<f32> {
   let h = clamp(h_in, 0.0, sora_thickness());
   let r = sora.planet_sun.x + h;
@@ -200,7 +208,7 @@ fn sora_layers_xyz(table: texture_2d_array<f32>, zn: i32, zf: i32, kn: i32, j: i
 // Sky radiance (XYZ, W m^-2 sr^-1 nm^-1) at altitude h (m) toward zenith
 // angle `zenith` and azimuth `phi` from the sun's (rad), sun at e_deg.
 fn sora_sky_xyz(h_in: f32, zenith: f32, phi: f32, e_in: f32) -> vec3<f32> {
-  return sora_layers_xyz(sora_sky, sora.sky_nodes.z, sora.transmittance_nodes.z, sora.sky_nodes.w, 0, 0.0, h_in, zenith, phi, e_in);
+  return sora_layers_xyz(sora_sky, sora.sky_nodes.z, sora.transmittance_nodes.zw, sora.sky_nodes.w, 0, 0.0, h_in, zenith, phi, e_in);
 }
 
 fn sora_horizon_cosine(r: f32) -> f32 {
@@ -338,7 +346,7 @@ fn sora_aerial_perspective(h_in: f32, v: vec3<f32>, sun: vec3<f32>, d: f32) -> S
   let zp = sora_local_view(v, vec3<f32>(0.0, 0.0, 1.0), sun);
   let e_deg = degrees(asin(clamp(sun.z, -1.0, 1.0)));
   let sky = sora_sky_xyz(h, zp.x, zp.y, e_deg);
-  let ratio = sora_layers_xyz(sora_aerial, sora.aerial_nodes.x, 0, sora.aerial_nodes.y, j.i, j.f, h, zp.x, zp.y, e_deg);
+  let ratio = sora_layers_xyz(sora_aerial, sora.aerial_nodes.x, vec2<i32>(0, 0), sora.aerial_nodes.y, j.i, j.f, h, zp.x, zp.y, e_deg);
   return SoraAerial(sky * ratio * share, t);
 }
 

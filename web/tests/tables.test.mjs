@@ -246,6 +246,7 @@ async function drawInPage({ shader, manifest, files, suns, size, zenithSuns, fra
   else gl.uniform3i(u('uAerialNodes'), 0, 0, 0);
   gl.uniform4i(u('uSkyNodes'), t.sky.sun_nodes, t.sky.altitude_nodes, t.sky.zenith_nodes_per_half, t.sky.azimuth_nodes);
   gl.uniform1i(u('uSkyZenithFineCells'), t.sky.zenith_fine_cells_per_half ?? 0);
+  gl.uniform1i(u('uSkyZenithWideCells'), t.sky.zenith_wide_cells_per_half ?? 0);
   gl.uniform2i(u('uTransmittanceNodes'), t.transmittance.height, t.transmittance.width);
   gl.uniform4f(u('uPlanetSun'), manifest.planet.ground_radius_m, manifest.planet.top_radius_m, manifest.sun.angular_radius_rad, manifest.sun.limb_darkening);
   gl.uniform3fv(u('uSunIrradianceXyz'), manifest.sun.irradiance_xyz_w_m2_nm);

@@ -606,6 +606,7 @@ pub const REALTIME_TABLES: RealtimeTables = RealtimeTables {
         altitude_nodes: 3,
         zenith_nodes_per_half: 32,
         zenith_fine_cells_per_half: 0,
+        zenith_wide_cells_per_half: 0,
         azimuth_nodes: 32,
         transmittance_nodes: (32, 128),
         // No aerial-perspective table (its bake marches every node's
@@ -1070,7 +1071,7 @@ mod tests {
         // The eye on the ground: its horizon at 90 degrees.
         let horizon = std::f64::consts::FRAC_PI_2;
         for row in [0, half - 1] {
-            let zenith = sora::engine_tables::axes::zenith_of_node(row, half, 0, horizon);
+            let zenith = sora::engine_tables::axes::zenith_of_node(row, half, (0, 0), horizon);
             let view = ViewDirection::new(90.0 - zenith.to_degrees(), 0.0).unwrap();
             let expected = to_xyz
                 .to_xyz(&sky.radiance(view).unwrap().radiance_w_m2_sr_nm)

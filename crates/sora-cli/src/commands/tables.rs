@@ -55,11 +55,19 @@ pub struct TablesArgs {
     #[arg(long, value_name = "N", default_value_t = EngineTableSettings::default().zenith_nodes_per_half)]
     zenith_nodes: usize,
 
-    /// Fine cells of the zenith axis next to the horizon, per half: the
-    /// nodes there on the library's own rows where 2 (N - 1) - F + 1 is
-    /// the images' 128 (e.g. --zenith-nodes 78 --zenith-fine-cells 27)
+    /// Fine cells of the zenith axis next to the horizon, per half (one
+    /// cell of a finer grid each; the coarse cells from the zenith span
+    /// two, the wide cells three): the nodes there are the library's own
+    /// rows where the grid, 2 (N - 1) - F + W cells, has the images' 127
+    /// (e.g. N 64, F 21, W 22: paper-mars within 2 % after sunset at the
+    /// default's size and bake; or N 78, F 27, W 0)
     #[arg(long, value_name = "F", default_value_t = EngineTableSettings::default().zenith_fine_cells_per_half)]
     zenith_fine_cells: usize,
+
+    /// Wide cells of the zenith axis per half, between the coarse cells
+    /// from the zenith and the fine cells (F + W at most N - 1)
+    #[arg(long, value_name = "W", default_value_t = EngineTableSettings::default().zenith_wide_cells_per_half)]
+    zenith_wide_cells: usize,
 
     /// View azimuth nodes over 0..180 degrees from the sun
     #[arg(long, value_name = "N", default_value_t = EngineTableSettings::default().azimuth_nodes)]
@@ -111,6 +119,7 @@ pub fn run(args: TablesArgs) -> anyhow::Result<()> {
         altitude_nodes: args.altitude_nodes,
         zenith_nodes_per_half: args.zenith_nodes,
         zenith_fine_cells_per_half: args.zenith_fine_cells,
+        zenith_wide_cells_per_half: args.zenith_wide_cells,
         azimuth_nodes: args.azimuth_nodes,
         aerial_nodes: (
             args.aerial_zenith_nodes,

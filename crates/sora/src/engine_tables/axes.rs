@@ -91,47 +91,72 @@ pub fn horizon_zenith(r_m: f64, ground_m: f64) -> f64 {
 /// `transport/sky_view_table.rs` does, for the same reason).
 const HORIZON_MARGIN_RAD: f64 = 1e-6;
 
-/// The zenith axis's fine grid: with `half` nodes per half and `fine`
-/// fine cells next to the horizon, the half's nodes lie on a grid of
-/// `2 (half - 1) - fine` cells evenly spaced in v = 1 - sqrt(1 - u): every
-/// other grid node away from the horizon, every one in the last `fine`
-/// cells. With `fine` 0 the nodes are evenly spaced in v.
-fn fine_grid_cells(half: usize, fine: usize) -> usize {
-    2 * (half - 1) - fine.min(half - 1)
+/// The zenith axis's grid: with `half` nodes per half, `fine` fine cells
+/// next to the horizon and `wide` wide cells before them, the half's
+/// nodes lie on a grid of `2 (half - 1) - fine + wide` cells evenly
+/// spaced in v = 1 - sqrt(1 - u): from the zenith (or the nadir) every
+/// other grid node for the `half - 1 - fine - wide` coarse cells, every
+/// third for the `wide` cells, every one in the last `fine` cells. With
+/// `fine` and `wide` 0 the nodes are evenly spaced in v. (`fine + wide`
+/// at most `half - 1`, `EngineTableSettings::validate`.)
+fn fine_grid_cells(half: usize, fine: usize, wide: usize) -> usize {
+    let fine = fine.min(half - 1);
+    2 * (half - 1) - fine + wide.min(half - 1 - fine)
+}
+
+/// The coarse and wide cells of a half (the fine ones are the rest).
+pub fn coarse_and_wide(half: usize, fine: usize, wide: usize) -> (usize, usize) {
+    let fine = fine.min(half - 1);
+    let wide = wide.min(half - 1 - fine);
+    (half - 1 - fine - wide, wide)
 }
 
 /// The fine-grid node of zenith node `k` of a half (0 the zenith or the
-/// nadir, `half - 1` next to the horizon): `k + min(k, coarse)`, coarse =
-/// half - 1 - fine.
-fn fine_grid_node(k: usize, half: usize, fine: usize) -> usize {
-    let coarse = half - 1 - fine.min(half - 1);
-    k + k.min(coarse)
+/// nadir, `half - 1` next to the horizon): 2 grid cells a coarse cell, 3 a
+/// wide one, 1 a fine one.
+fn fine_grid_node(k: usize, half: usize, fine: usize, wide: usize) -> usize {
+    let (coarse, wide) = coarse_and_wide(half, fine, wide);
+    2 * k.min(coarse) + 3 * k.saturating_sub(coarse).min(wide) + k.saturating_sub(coarse + wide)
 }
 
 /// The zenith node coordinate (0..half - 1) of fine-grid coordinate `j`:
-/// `j / 2` up to the coarse part's end, then one node per grid cell.
-fn node_of_fine_grid(j: f64, half: usize, fine: usize) -> f64 {
-    let coarse = (half - 1 - fine.min(half - 1)) as f64;
-    if j <= 2.0 * coarse {
+/// `j / 2` over the coarse cells, a third of a node a grid cell over the
+/// wide ones, then one node a grid cell.
+fn node_of_fine_grid(j: f64, half: usize, fine: usize, wide: usize) -> f64 {
+    let (coarse, wide) = coarse_and_wide(half, fine, wide);
+    let (c, w) = (coarse as f64, wide as f64);
+    if j <= 2.0 * c {
         0.5 * j
+    } else if j <= 2.0 * c + 3.0 * w {
+        c + (j - 2.0 * c) / 3.0
     } else {
-        j - coarse
+        j - c - 2.0 * w
+    }
+}
+
+/// The fine grid's nodes per half (its cells plus one; the axis's own
+/// nodes where it has no fine or wide cells).
+pub fn fine_grid_rows(half: usize, fine: usize, wide: usize) -> usize {
+    if fine == 0 && wide == 0 {
+        half
+    } else {
+        fine_grid_cells(half, fine, wide) + 1
     }
 }
 
 /// Zenith angle (rad) of zenith-axis node `row` of `2 half` rows (0 the
 /// zenith, half - 1 just above the horizon, half just below, 2 half - 1
-/// the nadir) for a horizon at `horizon` rad, with `fine` fine cells next
-/// to the horizon in each half (`fine_grid_cells`).
-pub fn zenith_of_node(row: usize, half: usize, fine: usize, horizon: f64) -> f64 {
+/// the nadir) for a horizon at `horizon` rad, with `fine` fine and `wide`
+/// wide cells next to the horizon in each half (`fine_grid_cells`).
+pub fn zenith_of_node(row: usize, half: usize, (fine, wide): (usize, usize), horizon: f64) -> f64 {
     let pi = std::f64::consts::PI;
-    let cells = fine_grid_cells(half, fine) as f64;
+    let cells = fine_grid_cells(half, fine, wide) as f64;
     if row < half {
-        let v = fine_grid_node(row, half, fine) as f64 / cells;
+        let v = fine_grid_node(row, half, fine, wide) as f64 / cells;
         let u = 1.0 - (1.0 - v) * (1.0 - v);
         u * (horizon - HORIZON_MARGIN_RAD)
     } else {
-        let v = fine_grid_node(2 * half - 1 - row, half, fine) as f64 / cells;
+        let v = fine_grid_node(2 * half - 1 - row, half, fine, wide) as f64 / cells;
         let u = 1.0 - (1.0 - v) * (1.0 - v);
         pi - u * (pi - horizon - HORIZON_MARGIN_RAD)
     }
@@ -144,25 +169,18 @@ pub fn zenith_of_node(row: usize, half: usize, fine: usize, horizon: f64) -> f64
 pub fn zenith_coordinate(
     zenith: f64,
     half: usize,
-    fine: usize,
+    (fine, wide): (usize, usize),
     horizon: f64,
 ) -> (f64, usize, usize) {
     let pi = std::f64::consts::PI;
-    let cells = fine_grid_cells(half, fine) as f64;
+    let cells = fine_grid_cells(half, fine, wide) as f64;
+    let node = |u: f64| node_of_fine_grid((1.0 - (1.0 - u).sqrt()) * cells, half, fine, wide);
     if zenith < horizon {
         let u = (zenith / (horizon - HORIZON_MARGIN_RAD)).clamp(0.0, 1.0);
-        (
-            node_of_fine_grid((1.0 - (1.0 - u).sqrt()) * cells, half, fine),
-            0,
-            half - 2,
-        )
+        (node(u), 0, half - 2)
     } else {
         let u = ((pi - zenith) / (pi - horizon - HORIZON_MARGIN_RAD)).clamp(0.0, 1.0);
-        (
-            (2 * half - 1) as f64 - node_of_fine_grid((1.0 - (1.0 - u).sqrt()) * cells, half, fine),
-            half,
-            2 * half - 2,
-        )
+        ((2 * half - 1) as f64 - node(u), half, 2 * half - 2)
     }
 }
 
@@ -269,11 +287,11 @@ mod tests {
         assert!((sun_elevation_of_node(0, 48) + 12.0).abs() < 1e-12);
         assert!((sun_elevation_of_node(47, 48) - 90.0).abs() < 1e-12);
         let horizon = horizon_zenith(6.371e6 + 1e3, 6.371e6);
-        for fine in [0, 7, 31] {
+        for cells in [(0, 0), (7, 0), (31, 0), (0, 9), (7, 9), (10, 21)] {
             for row in 0..64 {
-                let z = zenith_of_node(row, 32, fine, horizon);
-                let (y, lowest, highest) = zenith_coordinate(z, 32, fine, horizon);
-                assert!((y - row as f64).abs() < 1e-3, "{fine} {row}: {y}");
+                let z = zenith_of_node(row, 32, cells, horizon);
+                let (y, lowest, highest) = zenith_coordinate(z, 32, cells, horizon);
+                assert!((y - row as f64).abs() < 1e-3, "{cells:?} {row}: {y}");
                 assert_eq!(lowest, if row < 32 { 0 } else { 32 });
                 assert!(highest + 1 < 64);
             }
@@ -286,19 +304,42 @@ mod tests {
         // 128-row half (the images' sky-view table's), every other row
         // from the zenith to row 100 and every row in the last 27 cells.
         let horizon = horizon_zenith(3.3895e6 + 10.0, 3.3895e6);
-        let grid = |j: usize| zenith_of_node(j, 128, 0, horizon);
+        let grid = |j: usize| zenith_of_node(j, 128, (0, 0), horizon);
         for row in 0..78 {
             let j = if row <= 50 { 2 * row } else { row + 50 };
-            let z = zenith_of_node(row, 78, 27, horizon);
+            let z = zenith_of_node(row, 78, (27, 0), horizon);
             assert!((z - grid(j)).abs() < 1e-12, "{row}: {z} {}", grid(j));
-            let below = zenith_of_node(2 * 78 - 1 - row, 78, 27, horizon);
-            assert!((below - zenith_of_node(255 - j, 128, 0, horizon)).abs() < 1e-12);
+            let below = zenith_of_node(2 * 78 - 1 - row, 78, (27, 0), horizon);
+            assert!((below - zenith_of_node(255 - j, 128, (0, 0), horizon)).abs() < 1e-12);
         }
+        // 64 nodes per half with 21 fine and 22 wide cells: every other
+        // row to row 40, every third to row 106, every row from there.
+        let mut rows = Vec::new();
+        for row in 0..64 {
+            let j = match row {
+                0..=20 => 2 * row,
+                21..=42 => 40 + 3 * (row - 20),
+                _ => 106 + (row - 42),
+            };
+            let z = zenith_of_node(row, 64, (21, 22), horizon);
+            assert!((z - grid(j)).abs() < 1e-12, "{row}: {z} {}", grid(j));
+            let below = zenith_of_node(127 - row, 64, (21, 22), horizon);
+            assert!((below - zenith_of_node(255 - j, 128, (0, 0), horizon)).abs() < 1e-12);
+            rows.push(j);
+        }
+        assert_eq!(*rows.last().unwrap(), 127);
+        // The rows a layer's sky-view table marches are these.
+        let marched = crate::transport::sky_view_table::MarchedRows {
+            by_two: 20,
+            by_three: 22,
+        };
+        let marched: Vec<usize> = (0..128).filter(|j| marched.marches(*j)).collect();
+        assert_eq!(marched, rows);
         // With no fine cells, the mapping is the plain one.
         for row in 0..128 {
             let v = (row.min(127 - row)) as f64 / 63.0;
             let u = 1.0 - (1.0 - v) * (1.0 - v);
-            let z = zenith_of_node(row, 64, 0, horizon);
+            let z = zenith_of_node(row, 64, (0, 0), horizon);
             let plain = if row < 64 {
                 u * (horizon - HORIZON_MARGIN_RAD)
             } else {

@@ -21,8 +21,9 @@ pub const MANIFEST_FILE: &str = "manifest.json";
 pub const TABLE_FORMAT: &str = "sora-engine-tables";
 
 /// The table format's version (changes with the axes or the layout; 3: the
-/// sky table's `zenith_fine_cells_per_half`).
-pub const FORMAT_VERSION: u32 = 3;
+/// sky table's `zenith_fine_cells_per_half`; 4: its
+/// `zenith_wide_cells_per_half`).
+pub const FORMAT_VERSION: u32 = 4;
 
 /// An error unless `directory` may receive tables: it does not exist (its
 /// parent does), or it is an empty directory, or it holds a manifest of
@@ -210,6 +211,7 @@ impl EngineTables {
                     "altitude_nodes": s.altitude_nodes,
                     "zenith_nodes_per_half": s.zenith_nodes_per_half,
                     "zenith_fine_cells_per_half": s.zenith_fine_cells_per_half,
+                    "zenith_wide_cells_per_half": s.zenith_wide_cells_per_half,
                     "azimuth_nodes": s.azimuth_nodes,
                     "layout": "texel (k, row) of layer L = s * altitude_nodes + a is at x = k, y = L * 2 * zenith_nodes_per_half + row (y = 0 is the file's top scan line); a 2D array texture of sun_nodes * altitude_nodes layers of azimuth_nodes x 2 zenith_nodes_per_half",
                 },
@@ -242,7 +244,7 @@ impl EngineTables {
                 "sun": "s = (asinh(e / W) - asinh(-12 / W)) / (asinh(90 / W) - asinh(-12 / W)) * (S - 1), e the sun elevation in degrees clamped to -12..90, W = sun.axis_width_deg",
                 "altitude": "a = ln(1 + clamp(h, 0, H) / h0) / ln(1 + D) * (N - 1), h the altitude above the ground in m, H = top_radius_m - ground_radius_m, h0 = H / D, D = altitude_scale_divisor, N the axis's node count",
                 "altitude_scale_divisor": axes::ALTITUDE_SCALE_DIVISOR,
-                "zenith": "r = ground_radius_m + h, z_h = pi - asin(ground_radius_m / r), m = 1e-6; F = zenith_fine_cells_per_half (0 where absent; the aerial table's is 0), c = Z - 1 - F, n(v) = j / 2 if j <= 2 c else j - c, with j = v (2 (Z - 1) - F); above the horizon (z < z_h): y = n(1 - sqrt(1 - clamp(z / (z_h - m), 0, 1))), cells 0..Z-2; below: y = 2Z - 1 - n(1 - sqrt(1 - clamp((pi - z) / (pi - z_h - m), 0, 1))), cells Z..2Z-2 (with F = 0, n(v) = v (Z - 1))",
+                "zenith": "r = ground_radius_m + h, z_h = pi - asin(ground_radius_m / r), m = 1e-6; F = zenith_fine_cells_per_half, W = zenith_wide_cells_per_half (each 0 where absent; the aerial table's are 0), c = Z - 1 - F - W, n(v) = j / 2 if j <= 2 c, c + (j - 2 c) / 3 if j <= 2 c + 3 W, else j - c - 2 W, with j = v (2 (Z - 1) - F + W); above the horizon (z < z_h): y = n(1 - sqrt(1 - clamp(z / (z_h - m), 0, 1))), cells 0..Z-2; below: y = 2Z - 1 - n(1 - sqrt(1 - clamp((pi - z) / (pi - z_h - m), 0, 1))), cells Z..2Z-2 (with F = 0, n(v) = v (Z - 1))",
                 "azimuth": "k = sqrt(phi / pi) * (K - 1), phi the view's azimuth from the sun's, 0..pi",
         "distance": "the ray's length l from the eye (radius r) along view cosine mu to the ground (mu < mu_h) or the top: l = -r mu - sqrt(r^2 mu^2 - r^2 + ground_radius_m^2) or -r mu + sqrt(r^2 mu^2 - r^2 + top_radius_m^2); d0 = H / nearest_divisor, l' = max(l, 2 d0); j = clamp(ln(max(d, d0) / d0) / ln(l' / d0), 0, 1) * (D - 1)",
                 "distance_nearest_divisor": axes::AERIAL_NEAREST_DIVISOR,

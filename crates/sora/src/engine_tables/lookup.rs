@@ -242,8 +242,9 @@ fn smoothstep(a: f64, b: f64, x: f64) -> f64 {
 pub(crate) struct LayerTable<'a> {
     pub texels: &'a [[f32; 3]],
     pub half: usize,
-    /// Fine zenith cells next to the horizon per half (`axes::zenith_of_node`).
-    pub fine: usize,
+    /// Fine and wide zenith cells next to the horizon per half
+    /// (`axes::zenith_of_node`).
+    pub cells: (usize, usize),
     pub azimuth: usize,
     pub slices: usize,
 }
@@ -253,7 +254,7 @@ impl EngineTables {
         LayerTable {
             texels: &self.sky,
             half: self.settings.zenith_nodes_per_half,
-            fine: self.settings.zenith_fine_cells_per_half,
+            cells: self.settings.zenith_cells(),
             azimuth: self.settings.azimuth_nodes,
             slices: 1,
         }
@@ -264,7 +265,7 @@ impl EngineTables {
         LayerTable {
             texels: &self.aerial,
             half,
-            fine: 0,
+            cells: (0, 0),
             azimuth,
             slices,
         }
@@ -280,7 +281,7 @@ impl EngineTables {
         phi: f64,
     ) -> [f64; 3] {
         let table = self.sky_layers_table();
-        let coordinate = axes::zenith_coordinate(zenith, table.half, table.fine, horizon);
+        let coordinate = axes::zenith_coordinate(zenith, table.half, table.cells, horizon);
         layer_value_at(table, layer, coordinate, phi)
     }
 
@@ -343,7 +344,7 @@ impl EngineTables {
             let node_deg = axes::sun_elevation_of_node(s, self.settings.sun_nodes);
             let turned = turned_view(view, (node_deg - e_deg).to_radians() * share, horizon);
             let coordinate =
-                axes::zenith_coordinate(turned.zenith_rad, table.half, table.fine, horizon);
+                axes::zenith_coordinate(turned.zenith_rad, table.half, table.cells, horizon);
             let at = |a: usize| {
                 let first = (s * a_count + a) * table.slices + j;
                 let value = |slice: usize| {

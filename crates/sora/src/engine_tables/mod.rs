@@ -109,6 +109,7 @@ use crate::error::{Error, Result};
 use crate::geometry::{Vector3, ViewDirection};
 use crate::sky::{Method, SharedField, Sky, SkyViewGrid};
 use crate::spectrum::SampledSpectrum;
+use crate::transport::sky_view_table::MarchedRows;
 
 /// Resolution of the engine tables.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -120,12 +121,17 @@ pub struct EngineTableSettings {
     /// View zenith nodes per half (above and below the horizon).
     pub zenith_nodes_per_half: usize,
     /// Fine cells of the zenith axis next to the horizon, per half
-    /// (`axes::zenith_of_node`; 0..=zenith_nodes_per_half - 1): the half's
-    /// nodes lie on a grid of 2 (zenith_nodes_per_half - 1) - fine cells,
-    /// at every other grid node away from the horizon and every one in the
-    /// last `fine` cells. With 128 grid nodes per half (the images'
+    /// (`axes::zenith_of_node`): the half's nodes lie on a grid of
+    /// 2 (zenith_nodes_per_half - 1) - fine + wide cells, at every other
+    /// grid node from the zenith (and the nadir), every third over the
+    /// `zenith_wide_cells_per_half` wide cells after those, and every one
+    /// in the last `fine` cells. With 128 grid nodes per half (the images'
     /// sky-view table's) the nodes there are the library's own rows.
     pub zenith_fine_cells_per_half: usize,
+    /// Wide cells of the zenith axis (3 grid cells each) between the
+    /// coarse cells from the zenith and the fine cells next to the
+    /// horizon, per half; fine + wide at most zenith_nodes_per_half - 1.
+    pub zenith_wide_cells_per_half: usize,
     /// Relative azimuth nodes over 0..180 degrees.
     pub azimuth_nodes: usize,
     /// Transmittance table: altitude nodes, view cosine nodes.
@@ -150,7 +156,11 @@ impl Default for EngineTableSettings {
             sun_nodes: 48,
             altitude_nodes: 6,
             zenith_nodes_per_half: 64,
+            // The plain axis: with 21 fine and 22 wide cells paper-mars
+            // passes after sunset, but earth-hazy's zenith against the sun
+            // is not smooth enough at 80 degrees (docs/engine-tables.md).
             zenith_fine_cells_per_half: 0,
+            zenith_wide_cells_per_half: 0,
             azimuth_nodes: 64,
             transmittance_nodes: (32, 128),
             // No aerial table by default: at (8, 8, 6) it is not yet
@@ -191,12 +201,24 @@ impl EngineTableSettings {
                 ));
             }
         }
-        if self.zenith_fine_cells_per_half >= self.zenith_nodes_per_half {
+        let (fine, wide) = self.zenith_cells();
+        if fine >= self.zenith_nodes_per_half {
             return Err(Error::out_of_range(
                 "zenith fine cells per half",
-                self.zenith_fine_cells_per_half as f64,
+                fine as f64,
                 "1",
                 format!("0..={}", self.zenith_nodes_per_half - 1),
+            ));
+        }
+        if fine + wide >= self.zenith_nodes_per_half {
+            return Err(Error::out_of_range(
+                "zenith wide cells per half",
+                wide as f64,
+                "1",
+                format!(
+                    "0..={} (zenith nodes per half - 1 - fine cells)",
+                    self.zenith_nodes_per_half - 1 - fine
+                ),
             ));
         }
         let texels = (self.sky_texels() + self.aerial_texels()) as f64;
@@ -209,6 +231,15 @@ impl EngineTableSettings {
             ));
         }
         Ok(())
+    }
+
+    /// The zenith axis's fine and wide cells per half
+    /// (`axes::zenith_of_node`).
+    pub fn zenith_cells(&self) -> (usize, usize) {
+        (
+            self.zenith_fine_cells_per_half,
+            self.zenith_wide_cells_per_half,
+        )
     }
 
     /// Layers of the sky table (sun nodes x altitude nodes).
@@ -307,13 +338,27 @@ impl EngineTables {
             let c = to_xyz.to_xyz(&SampledSpectrum::from_values(values.to_vec()))?;
             Ok([c.x, c.y, c.z])
         };
+        // XYZ of a view's or a segment's light. A grazing ray from the
+        // very top of the atmosphere (earth-hazy, the sun at the horizon)
+        // once gave a segment's light a negative value at one wavelength,
+        // and a sky layer's view next to the horizon -0.039 W m^-2 sr^-1
+        // nm^-1 at 420 nm (earth-hazy, the default fine zenith cells): it
+        // counts as none.
+        let light_xyz = |light: &SampledSpectrum| -> Result<[f64; 3]> {
+            // (A NaN stays, and is refused.)
+            let clean: Vec<f64> = light
+                .values()
+                .iter()
+                .map(|v| if *v < 0.0 { 0.0 } else { *v })
+                .collect();
+            xyz(&clean)
+        };
         let solar = scene.optics().solar_irradiance_w_m2_nm.values().to_vec();
         let solar_xyz = xyz(&solar)?;
         let EngineTableSettings {
             sun_nodes,
             altitude_nodes,
             zenith_nodes_per_half: half,
-            zenith_fine_cells_per_half: fine,
             azimuth_nodes,
             transmittance_nodes,
             ..
@@ -353,7 +398,7 @@ impl EngineTables {
             let horizon = axes::horizon_zenith(ground_radius_m + altitude, ground_radius_m);
             let mut views = Vec::with_capacity(layer_texels);
             for row in 0..2 * half {
-                let zenith = axes::zenith_of_node(row, half, fine, horizon);
+                let zenith = axes::zenith_of_node(row, half, settings.zenith_cells(), horizon);
                 for k in 0..azimuth_nodes {
                     let phi = axes::azimuth_of_node(k, azimuth_nodes);
                     views.push(ViewDirection::new(
@@ -368,7 +413,7 @@ impl EngineTables {
             let mut segments = Vec::with_capacity(aerial_distances * aerial_slice);
             let mut places = Vec::with_capacity(aerial_distances * aerial_slice);
             for row in 0..2 * aerial_half {
-                let zenith = axes::zenith_of_node(row, aerial_half, 0, horizon);
+                let zenith = axes::zenith_of_node(row, aerial_half, (0, 0), horizon);
                 let range = axes::distance_range(
                     thickness,
                     axes::ray_length(
@@ -422,8 +467,7 @@ impl EngineTables {
                 let layer = s * altitude_nodes + a;
                 let out = &mut sky_values[layer * layer_texels..][..layer_texels];
                 for (o, radiance) in out.iter_mut().zip(&radiances) {
-                    let c = to_xyz.to_xyz(&radiance.radiance_w_m2_sr_nm)?;
-                    *o = [c.x, c.y, c.z].map(|v| v.max(0.0) as f32);
+                    *o = light_xyz(&radiance.radiance_w_m2_sr_nm)?.map(|v| v.max(0.0) as f32);
                 }
                 if segments.is_empty() {
                     done += 1;
@@ -436,13 +480,7 @@ impl EngineTables {
                     .iter()
                     .zip(layer_sky.compute_segment_light(&segments)?)
                 {
-                    // A grazing ray from the very top of the atmosphere
-                    // (earth-hazy, the sun at the horizon) once gave a
-                    // negative value at one wavelength; it counts as none.
-                    let values = light.radiance_w_m2_sr_nm.values().iter();
-                    let clean = values.map(|v| if *v >= 0.0 { *v } else { 0.0 }).collect();
-                    let c = to_xyz.to_xyz(&SampledSpectrum::from_values(clean))?;
-                    out[*place] = [c.x, c.y, c.z];
+                    out[*place] = light_xyz(&light.radiance_w_m2_sr_nm)?;
                 }
                 done += 1;
                 progress(layers_done(done));
@@ -573,7 +611,7 @@ impl EngineTables {
                 let layer = s * self.settings.altitude_nodes + a;
                 for j in 0..distances {
                     for row in 0..2 * half {
-                        let zenith = axes::zenith_of_node(row, half, 0, horizon);
+                        let zenith = axes::zenith_of_node(row, half, (0, 0), horizon);
                         let range = self.aerial_distance_range(altitude, zenith.cos());
                         let d = axes::distance_of_node(j, distances, range);
                         let view = [zenith.sin(), 0.0, zenith.cos()];
@@ -734,28 +772,30 @@ const MULTIPLE_FROM_NEIGHBOURS_DEG: (f64, f64) = (0.0, 12.5);
 /// ([`LAYER_MULTIPLE_STRIDE`]) in fewer view-ray panels than the field's
 /// (`field_panels` false; [`layer_multiple_panels`]).
 ///
-/// With fine cells next to the horizon (`zenith_fine_cells_per_half`) the
-/// rows are the zenith axis's fine grid (`axes::zenith_of_node`; 128 per
-/// half, the images' own, at 80 nodes and 31 fine cells), marched for
-/// multiply scattered light at every other row as the images' table is:
-/// twice the single-scattering marches, as many of the other.
+/// With fine or wide cells (`zenith_fine_cells_per_half`,
+/// `zenith_wide_cells_per_half`) the table's rows are the zenith axis's
+/// grid (`axes::zenith_of_node`; 128 per half, the images' own, at 64
+/// nodes with 21 fine and 22 wide cells, or 78 nodes and 27 fine cells),
+/// and only the rows that are the layer's nodes are marched (single and
+/// multiply scattered light, [`MarchedRows`]): as many marches as the
+/// layer has rows.
 fn layer_sky_view(sky: &Sky, settings: &EngineTableSettings, field_panels: bool) -> SkyViewGrid {
     let (image_half, image_azimuth) = sky.table_size().sky_view_nodes;
-    let (half, fine) = (
-        settings.zenith_nodes_per_half,
-        settings.zenith_fine_cells_per_half,
-    );
-    let (rows, multiple_stride) = if fine > 0 {
-        (
-            2 * (half - 1) - fine + 1,
-            (2 * LAYER_MULTIPLE_STRIDE.0, LAYER_MULTIPLE_STRIDE.1),
-        )
+    let half = settings.zenith_nodes_per_half;
+    let (fine, wide) = settings.zenith_cells();
+    let (rows, marched) = if (fine, wide) == (0, 0) {
+        (image_half.min(half), MarchedRows::EVERY)
     } else {
-        (image_half.min(half), LAYER_MULTIPLE_STRIDE)
+        let (by_two, by_three) = axes::coarse_and_wide(half, fine, wide);
+        (
+            axes::fine_grid_rows(half, fine, wide),
+            MarchedRows { by_two, by_three },
+        )
     };
     SkyViewGrid {
         nodes: (rows, image_azimuth.min(settings.azimuth_nodes)),
-        multiple_stride,
+        multiple_stride: LAYER_MULTIPLE_STRIDE,
+        rows: marched,
         multiple_panels: if field_panels {
             None
         } else {

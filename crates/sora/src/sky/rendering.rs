@@ -51,7 +51,8 @@ impl Sky {
                 &term.image_tables
             };
             let same_sizes = together.first().is_none_or(|first| {
-                (first.table_size, first.multiple_stride) == (term.table_size, term.multiple_stride)
+                (first.table_size, first.multiple_stride, first.sky_view_rows)
+                    == (term.table_size, term.multiple_stride, term.sky_view_rows)
             });
             if term.method == Method::Fast && slot.get().is_none() && same_sizes {
                 together.push(term);

@@ -16,6 +16,7 @@ use crate::spectrum::{SampledSpectrum, WavelengthGrid};
 use crate::transport::multiple_scattering::{
     FieldRequest, MultipleScatteringField, MultipleScatteringTable, PolarisationTable,
 };
+use crate::transport::sky_view_table::MarchedRows;
 use crate::transport::{PathTracer, SingleScatteringScene, SkyViewTable, SunColumns};
 
 /// A sky: an atmosphere on a wavelength grid, the sun, the eye, and the
@@ -47,6 +48,8 @@ pub struct Sky {
     /// many nodes of its zenith and azimuth axes ([`IMAGE_MULTIPLE_STRIDE`]
     /// for images).
     pub(super) multiple_stride: (usize, usize),
+    /// The zenith rows its sky-view table marches (every one for images).
+    pub(super) sky_view_rows: MarchedRows,
     /// Views no lower than this (rad) only: the field is solved for the
     /// sun angles their rays meet (`Sky::for_views_above`), and other
     /// views and images are refused.
@@ -166,6 +169,7 @@ impl Sky {
             view_tables: OnceLock::new(),
             polarisation_table: OnceLock::new(),
             multiple_stride: IMAGE_MULTIPLE_STRIDE,
+            sky_view_rows: MarchedRows::EVERY,
             lowest_view_elevation_rad: None,
             k_terms: Vec::new(),
             k_terms_for_views: Vec::new(),
@@ -460,11 +464,11 @@ impl Sky {
         let Some((first, _)) = skies.first() else {
             return Vec::new();
         };
-        let sizes = (first.table_size, first.multiple_stride);
+        let sizes = (first.table_size, first.multiple_stride, first.sky_view_rows);
         assert!(
             skies
                 .iter()
-                .all(|(sky, _)| (sky.table_size, sky.multiple_stride) == sizes),
+                .all(|(sky, _)| (sky.table_size, sky.multiple_stride, sky.sky_view_rows) == sizes),
             "skies built together share their table sizes"
         );
         let (altitude_nodes, mu_nodes) = first.table_size.sun_column_nodes;
@@ -480,7 +484,7 @@ impl Sky {
         SkyViewTable::compute_sharing_geometry(
             &entries,
             first.table_size.sky_view_nodes,
-            first.multiple_stride,
+            (first.multiple_stride, first.sky_view_rows),
             march_multiple,
         )
         .into_iter()

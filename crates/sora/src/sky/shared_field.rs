@@ -20,6 +20,7 @@ use crate::transport::multiple_scattering::{
     FieldRequest, MultipleScatteringField, MultipleScatteringTable,
 };
 use crate::transport::single_scattering::SingleScatteringScene;
+use crate::transport::sky_view_table::MarchedRows;
 
 /// The layout of a sky's sky-view table (`transport/sky_view_table.rs`)
 /// when it is not the images' own.
@@ -30,6 +31,8 @@ pub(crate) struct SkyViewGrid {
     /// The multiply scattered light is marched at every this many nodes of
     /// the zenith and azimuth axes, and filled in between.
     pub(crate) multiple_stride: (usize, usize),
+    /// The zenith rows it marches (the others left zero and never read).
+    pub(crate) rows: MarchedRows,
     /// Gauss panels of those marches along each view ray (None: the
     /// field's settings', `view_ray_panels`).
     pub(crate) multiple_panels: Option<usize>,
@@ -83,6 +86,7 @@ impl Sky {
         let mut sky = Sky::from_scene(scene, self.scattering, self.method, table_size)?;
         if let Some(grid) = sky_view {
             sky.multiple_stride = grid.multiple_stride;
+            sky.sky_view_rows = grid.rows;
         }
         if let Some(shared) = shared {
             let aimed = shared

@@ -42,6 +42,40 @@ use super::optical_column::SunColumnTable;
 use super::single_scattering::{RayColumns, ShareRayColumns, SingleScatteringScene, SunColumns};
 use crate::geometry::Vector3;
 
+/// Which zenith rows of each half a sky-view table marches, counted from
+/// the zenith (or the nadir): every row ([`MarchedRows::EVERY`]), or every
+/// other row over the first `by_two` pairs of rows, every third over the
+/// next `by_three` triples and every one after (the engine tables' zenith
+/// axis on a finer grid, `engine_tables::axes`, whose views lie on those
+/// rows alone). The rows between are left zero: a table read must fall on
+/// the marched rows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct MarchedRows {
+    pub(crate) by_two: usize,
+    pub(crate) by_three: usize,
+}
+
+impl MarchedRows {
+    /// Every row marched.
+    pub(crate) const EVERY: MarchedRows = MarchedRows {
+        by_two: 0,
+        by_three: 0,
+    };
+
+    /// Whether row `index` of a half, counted from the zenith (or the
+    /// nadir), is marched.
+    pub(crate) fn marches(&self, index: usize) -> bool {
+        let (two, three) = (2 * self.by_two, 2 * self.by_two + 3 * self.by_three);
+        if index <= two {
+            index % 2 == 0
+        } else if index <= three {
+            (index - two) % 3 == 0
+        } else {
+            true
+        }
+    }
+}
+
 /// In-scattering integrals over view directions (see the module docs).
 #[derive(Debug, Clone, PartialEq)]
 pub struct SkyViewTable {
@@ -75,7 +109,8 @@ impl SkyViewTable {
     /// nodes above and below the horizon and `azimuth_nodes` over 0..180
     /// degrees, with sun columns from the sun-column table, and with
     /// multiple scattering the multiply scattered radiance at every node
-    /// too, marched at every `multiple_stride.0`-th node of the zenith
+    /// too, only at the rows `rows` marches (the others left zero), marched
+    /// at every `multiple_stride.0`-th node of the zenith
     /// axis's halves and `multiple_stride.1`-th of the azimuth axis (and
     /// the last of each) and filled in between (`fill_unmarched`; see the
     /// module docs); with `march_multiple` false its blocks are laid out
@@ -99,7 +134,7 @@ impl SkyViewTable {
             Option<&MultipleScatteringTable>,
         )],
         (half_zenith_nodes, azimuth_nodes): (usize, usize),
-        multiple_stride: (usize, usize),
+        (multiple_stride, rows): ((usize, usize), MarchedRows),
         march_multiple: bool,
     ) -> Vec<SkyViewTable> {
         assert!(half_zenith_nodes >= 2 && azimuth_nodes >= 2);
@@ -127,6 +162,9 @@ impl SkyViewTable {
             .collect();
         let recording = shares.iter().any(|s| *s);
         let fill_row = |row: usize, outs: &mut [&mut [f32]]| {
+            if !rows.marches(row.min(2 * half_zenith_nodes - 1 - row)) {
+                return;
+            }
             // The row's rays are one zenith angle from one eye: their
             // densities and columns are marched once for every azimuth
             // (where the planet's shadow does not cut them apart).
