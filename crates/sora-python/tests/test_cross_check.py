@@ -121,3 +121,29 @@ def test_streams_and_layers_equal_the_cli(sora_cli):
     ]:
         with pytest.raises(ValueError, match=message):
             sora.Sky(atmosphere, sun_elevation_deg=30, **keywords)
+
+
+def test_twilight_shift_pieces_equal_the_cli(sora_cli):
+    """The after-sunset shift in pieces has one spelling: Python's
+    twilight_shift_pieces= gives what ``sora spectrum --twilight-shift-pieces``
+    gives; after sunset it moves the red by a fraction of a percent, by day
+    it changes nothing, and 0 pieces is refused."""
+    view = ["--view-elevation", "5", "--view-azimuth", "0", "--wavelengths", "560:680:120", "--format", "json"]
+    atmosphere = sora.Atmosphere.preset("earth-hazy")
+    for sun, moves in [(-2, True), (30, False)]:
+        command = [str(sora_cli), "spectrum", "--preset", "earth-hazy", "--sun-elevation", str(sun),
+                   *view, "--twilight-shift-pieces", "3"]
+        cli = json.loads(subprocess.run(command, check=True, capture_output=True, text=True).stdout)
+        wavelengths = dict(wavelengths_nm="560:680:120")
+        pieces = sora.Sky(atmosphere, sun_elevation_deg=sun, twilight_shift_pieces=3, **wavelengths)
+        whole = sora.Sky(atmosphere, sun_elevation_deg=sun, **wavelengths)
+        got = pieces.radiance(5, 0).values[0]
+        np.testing.assert_allclose(got, cli["radiance_w_m2_sr_nm"], rtol=1e-12, atol=0)
+        baseline = whole.radiance(5, 0).values[0]
+        if moves:
+            assert np.all(got != baseline)
+            np.testing.assert_allclose(got, baseline, rtol=2e-2, atol=0)
+        else:
+            np.testing.assert_array_equal(got, baseline)
+    with pytest.raises(ValueError, match="twilight shift pieces = 0 is out of range"):
+        sora.Sky(atmosphere, sun_elevation_deg=-2, twilight_shift_pieces=0)

@@ -96,7 +96,7 @@ impl fmt::Display for Error {
                 unit,
                 allowed,
             } => {
-                let unit = if *unit == "1" {
+                let unit = if unit.is_empty() || *unit == "1" {
                     String::new()
                 } else {
                     format!(" {unit}")
@@ -164,6 +164,12 @@ mod tests {
         assert_eq!(
             e.to_string(),
             "asymmetry_g = 1.5 is out of range: allowed -1 < g < 1"
+        );
+        // A count has no unit: no space where the unit would be.
+        let e = Error::out_of_range("twilight shift pieces", 0.0, "", "1..=64");
+        assert_eq!(
+            e.to_string(),
+            "twilight shift pieces = 0 is out of range: allowed 1..=64"
         );
     }
 }
