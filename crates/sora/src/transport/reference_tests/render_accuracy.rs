@@ -236,10 +236,11 @@ fn fast_path_matches_the_reference_path_in_random_directions() {
 /// long grazing ray; the forward peak's weight Q falls by one to two
 /// orders of magnitude per sky-view node in azimuth there, and the image
 /// tables once filled Q and Q X-bar apart, so that the peak-only light
-/// (E Q e^X-bar G, G negative 20 degrees from the sun) took e^31: this
-/// pixel read -3.7e-3 W m^-2 sr^-1 nm^-1 at 420 nm where the view's own
-/// radiance is 1.24e-3 (-0.044 against 1.065e-3 with the default
-/// wavelengths). The image's radiance is positive and within the image
+/// (E Q e^X-bar G, G negative 20 degrees from the sun) took an X-bar far
+/// above its neighbours' (30.7 where the view's own march gives 2.9, with
+/// the default wavelengths: -0.044 W m^-2 sr^-1 nm^-1 at 420 nm against
+/// the view's 1.065e-3); here the pixel read -3.7e-3 at 420 nm where the
+/// view's own radiance is 1.24e-3. The image's radiance is positive and within the image
 /// tables' 1 % of the view's in twilight
 /// (`Sky::radiance_from_image_tables`; measured 0.19 %).
 #[test]
