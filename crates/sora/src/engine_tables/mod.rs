@@ -338,12 +338,18 @@ impl EngineTables {
             let c = to_xyz.to_xyz(&SampledSpectrum::from_values(values.to_vec()))?;
             Ok([c.x, c.y, c.z])
         };
-        // XYZ of a view's or a segment's light. A grazing ray from the
-        // very top of the atmosphere (earth-hazy, the sun at the horizon)
-        // once gave a segment's light a negative value at one wavelength,
-        // and a sky layer's view next to the horizon -0.039 W m^-2 sr^-1
-        // nm^-1 at 420 nm (earth-hazy, the default fine zenith cells): it
-        // counts as none.
+        // XYZ of a view's or a segment's light, negative light counted as
+        // none. A grazing ray from the very top of the atmosphere
+        // (earth-hazy, the sun at the horizon) once gave a segment's light
+        // a negative value at one wavelength (not traced to its term). A
+        // sky layer's view 0.32 degrees below the horizon at 100 km
+        // (earth-hazy, the sun at -9.1 degrees, 420 nm) read -0.039 W m^-2
+        // sr^-1 nm^-1 from the sky-view table's forward-peak X-bar filled
+        // apart from its Q (`transport/sky_view_table.rs`, fill_unmarched;
+        // the same fill put 3.6e11 in a texel of the plain axis's table):
+        // since that fix no layer of earth-hazy's (fine cells, 6
+        // altitudes), paper-mars', mars-dust's, earth-clear's or
+        // paper-earth's bake (2 altitudes) has negative light.
         let light_xyz = |light: &SampledSpectrum| -> Result<[f64; 3]> {
             // (A NaN stays, and is refused.)
             let clean: Vec<f64> = light
