@@ -67,10 +67,16 @@
 //! sky-view tables (images, and views read from tables) are built
 //! together, row by row, term after term (`Sky::prepare_term_tables`,
 //! `SkyViewTable::compute_sharing_geometry`): every term marches the same
-//! view rays through that one table, so the first term's march keeps each
-//! node's columns toward the sun and the others read them
-//! (`ShareRayColumns`), bit for bit the tables each builds alone (a test);
-//! those lookups were some 14 % of a gas image's CPU. With the source
+//! view rays through that one table, so the first term's march computes
+//! the other terms' single-scattering integrals with its own, node by
+//! node, their optical depths and exponentials one loop over every term's
+//! samples (`single_scattering::Together`): the columns toward the sun are
+//! looked up once, and a term's 7 samples no longer pay a march of their
+//! own (the per-node cost of a short run of samples was most of a term's
+//! integrals), bit for bit the tables each builds alone (a test). The
+//! fisheye below takes 0.92 times the CPU of the replay of the first
+//! term's sun columns before it (`farm-bench -n 8`, paired, 0.86-0.95).
+//! With the source
 //! table's buffers kept per thread (`source_table.rs`), the fisheye below
 //! takes 0.93 times the CPU of before (`farm-bench -n 16`, paired,
 //! 0.88-1.02, load 10-13), 3.27 times the gas-free image (3.17-3.49),

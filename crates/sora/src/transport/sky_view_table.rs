@@ -120,15 +120,14 @@ impl SkyViewTable {
     /// Rows run in parallel with the `parallel` feature; the result does
     /// not depend on the thread count.
     ///
-    /// The skies' tables are filled node by node together: a sky whose
-    /// view rays are the first sky's
+    /// The skies' tables are filled row by row together: the integrals of
+    /// a sky whose view rays are the first sky's
     /// (`SingleScatteringScene::has_view_geometry_of`) and whose
-    /// sun-column table is the first's (the same table) reads each march
-    /// node's columns toward the sun that the first sky's march looked up
-    /// instead of looking them up again (`ShareRayColumns`), bit for bit
+    /// sun-column table is the first's (the same table) are computed in
+    /// the first sky's march, each node's optical depths and
+    /// transmittances of every such sky one loop (`Together`), bit for bit
     /// the table it builds alone (the k-distribution's term skies, which
-    /// differ in what absorbs only; the lookups were some 14 % of a gas
-    /// image's CPU).
+    /// differ in what absorbs only).
     pub(crate) fn compute_sharing_geometry(
         skies: &[(
             &SingleScatteringScene,
