@@ -1338,8 +1338,8 @@ pub(crate) mod tests {
     fn the_terms_image_tables_built_together_are_each_terms_own() {
         // The terms' skies march the same view rays through the same
         // sun-column table: built together (`Sky::prepare_images`), the
-        // second and later terms read the first's columns toward the sun
-        // at every node; each term's sky-view table must be bit for bit
+        // second and later terms' integrals are computed in the first's
+        // march (`Together`); each term's sky-view table must be bit for bit
         // the one it builds alone (`Sky::compute_tables`), polarised and
         // scalar.
         let atmosphere = earth_clear_with_gases();
