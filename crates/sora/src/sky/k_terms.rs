@@ -67,10 +67,16 @@
 //! sky-view tables (images, and views read from tables) are built
 //! together, row by row, term after term (`Sky::prepare_term_tables`,
 //! `SkyViewTable::compute_sharing_geometry`): every term marches the same
-//! view rays through that one table, so the first term's march keeps each
-//! node's columns toward the sun and the others read them
-//! (`ShareRayColumns`), bit for bit the tables each builds alone (a test);
-//! those lookups were some 14 % of a gas image's CPU. With the source
+//! view rays through that one table, so the first term's march computes
+//! the other terms' single-scattering integrals with its own, node by
+//! node, their optical depths and exponentials one loop over every term's
+//! samples (`single_scattering::Together`): the columns toward the sun are
+//! looked up once, and a term's 7 samples no longer pay a march of their
+//! own (the per-node cost of a short run of samples was most of a term's
+//! integrals), bit for bit the tables each builds alone (a test). The
+//! fisheye below takes 0.92 times the CPU of the replay of the first
+//! term's sun columns before it (`farm-bench -n 8`, paired, 0.86-0.95).
+//! With the source
 //! table's buffers kept per thread (`source_table.rs`), the fisheye below
 //! takes 0.93 times the CPU of before (`farm-bench -n 16`, paired,
 //! 0.88-1.02, load 10-13), 3.27 times the gas-free image (3.17-3.49),
@@ -1332,8 +1338,8 @@ pub(crate) mod tests {
     fn the_terms_image_tables_built_together_are_each_terms_own() {
         // The terms' skies march the same view rays through the same
         // sun-column table: built together (`Sky::prepare_images`), the
-        // second and later terms read the first's columns toward the sun
-        // at every node; each term's sky-view table must be bit for bit
+        // second and later terms' integrals are computed in the first's
+        // march (`Together`); each term's sky-view table must be bit for bit
         // the one it builds alone (`Sky::compute_tables`), polarised and
         // scalar.
         let atmosphere = earth_clear_with_gases();

@@ -223,14 +223,89 @@ pub(crate) struct RayColumns {
     columns: Vec<f64>,
 }
 
-/// How [`SingleScatteringScene::compute_inscattering_integrals_sharing`]
-/// shares a view ray's columns toward the sun with a scene of the same
-/// view geometry.
-pub(crate) enum ShareRayColumns<'a> {
-    /// Computes them and keeps them here (what was here is cleared).
-    Record(&'a mut RayColumns),
-    /// Reads them from here (kept by `Record` for the same ray).
-    Replay(&'a RayColumns),
+/// Scenes whose in-scattering integrals one march computes together with
+/// its own ([`SingleScatteringScene::compute_inscattering_integrals_together`]):
+/// scenes of the march's view geometry ([`SingleScatteringScene::has_view_geometry_of`]:
+/// the same nodes, weights, columns and densities, and the same columns
+/// toward the sun) whose optics differ (the k-distribution's terms, which
+/// differ in what absorbs), their scratches, and their extinction
+/// coefficients one scene after another, per species: at each node the
+/// optical depths and transmittances of every scene are one loop and one
+/// run of exponentials, bit for bit each scene's own (the same sums in
+/// the same order; the exponentials' lanes do not depend on their
+/// neighbours).
+pub(crate) struct Together<'a> {
+    skies: Vec<(&'a SingleScatteringScene, &'a mut SingleScatteringScratch)>,
+    /// [species][offset of the scene + i], m^-1.
+    extinction: Vec<Vec<f64>>,
+    /// Where each scene's wavelengths start in a row of `extinction`.
+    offsets: Vec<usize>,
+    /// The optical depths, then the transmittances, of one node.
+    depths: Vec<f64>,
+}
+
+impl<'a> Together<'a> {
+    /// `skies`, each with its scratch, to march with a scene of their view
+    /// geometry (checked by the march).
+    pub(crate) fn new(
+        skies: Vec<(&'a SingleScatteringScene, &'a mut SingleScatteringScratch)>,
+    ) -> Together<'a> {
+        let species = skies.first().map_or(0, |(sky, _)| sky.optics.species.len());
+        let mut offsets = Vec::with_capacity(skies.len());
+        let mut extinction = vec![Vec::new(); species];
+        for (sky, _) in &skies {
+            offsets.push(extinction.first().map_or(0, Vec::len));
+            for (row, s) in extinction.iter_mut().zip(&sky.optics.species) {
+                row.extend_from_slice(s.extinction_per_m.values());
+            }
+        }
+        let channels = extinction.first().map_or(0, Vec::len);
+        Together {
+            skies,
+            extinction,
+            offsets,
+            depths: vec![0.0; channels],
+        }
+    }
+
+    /// The scenes' scratches, in the order given.
+    pub(crate) fn scratches(&self) -> impl Iterator<Item = &SingleScatteringScratch> {
+        self.skies.iter().map(|(_, scratch)| &**scratch)
+    }
+
+    /// A sunlit node's share of every scene's integrals (as
+    /// [`SingleScatteringScene::compute_segment_integrals`] adds it).
+    fn add_node(
+        &mut self,
+        weight: f64,
+        node_columns: &[f64],
+        sun_columns: &[f64],
+        densities: &[f64],
+    ) {
+        self.depths.fill(0.0);
+        for (j, betas) in self.extinction.iter().enumerate() {
+            let column = node_columns[j] + sun_columns[j];
+            for (tau, beta) in self.depths.iter_mut().zip(betas) {
+                *tau += beta * column;
+            }
+        }
+        exp_neg_in_place(&mut self.depths);
+        for ((sky, scratch), offset) in self.skies.iter_mut().zip(&self.offsets) {
+            let wavelengths = sky.optics.grid.len();
+            let transmittances = &self.depths[*offset..*offset + wavelengths];
+            for (j, density) in densities.iter().enumerate() {
+                let density = *density;
+                if density <= 0.0 || !scratch.scattering_species[j] {
+                    continue;
+                }
+                let row =
+                    &mut scratch.inscattering_integrals[j * wavelengths..(j + 1) * wavelengths];
+                for (acc, transmittance) in row.iter_mut().zip(transmittances) {
+                    *acc += weight * density * transmittance;
+                }
+            }
+        }
+    }
 }
 
 impl ExactSunColumns {
@@ -710,26 +785,30 @@ impl SingleScatteringScene {
         self.compute_segment_integrals_sharing((view, distance_m), sun_columns, scratch, None);
     }
 
-    /// [`Self::compute_inscattering_integrals`], the ray's columns toward
-    /// the sun shared with a scene of the same view geometry
-    /// ([`Self::has_view_geometry_of`]) that marches the same ray with the
-    /// same `sun_columns`: [`ShareRayColumns::Record`] keeps them (every
-    /// march node's, in march order), [`ShareRayColumns::Replay`] reads
-    /// those kept instead of computing them, bit for bit the same (the
-    /// k-distribution's term skies' sky-view tables,
-    /// `SkyViewTable::compute_sharing_geometry`).
-    pub(crate) fn compute_inscattering_integrals_sharing(
+    /// [`Self::compute_inscattering_integrals`], and those of the scenes of
+    /// `together` along the same ray, from this march (each scene's
+    /// integrals, transmittance, columns and ground term in its scratch,
+    /// bit for bit what it computes alone). Every scene of `together` must
+    /// have this scene's view geometry ([`Self::has_view_geometry_of`]) and
+    /// read the same `sun_columns` (the same sun-column table).
+    pub(crate) fn compute_inscattering_integrals_together(
         &self,
         view: Vector3,
         sun_columns: SunColumns,
         scratch: &mut SingleScatteringScratch,
-        share: ShareRayColumns,
+        together: &mut Together,
     ) {
+        debug_assert!(
+            together
+                .skies
+                .iter()
+                .all(|(sky, _)| sky.has_view_geometry_of(self))
+        );
         self.compute_segment_integrals_sharing(
             (view, f64::INFINITY),
             sun_columns,
             scratch,
-            Some(share),
+            Some(together),
         );
     }
 
@@ -750,18 +829,20 @@ impl SingleScatteringScene {
         (view, distance_m): (Vector3, f64),
         sun_columns: SunColumns,
         scratch: &mut SingleScatteringScratch,
-        mut share: Option<ShareRayColumns>,
+        mut together: Option<&mut Together>,
     ) {
-        if let Some(ShareRayColumns::Record(ray)) = &mut share {
-            ray.lit.clear();
-            ray.columns.clear();
-        }
         let species = &self.optics.species;
         let wavelengths = self.optics.grid.len();
-        scratch.inscattering_integrals.fill(0.0);
-        scratch.ground_radiance.fill(0.0);
-        scratch.view_transmittance.fill(1.0);
-        scratch.view_columns.fill(0.0);
+        let reset = |scratch: &mut SingleScatteringScratch| {
+            scratch.inscattering_integrals.fill(0.0);
+            scratch.ground_radiance.fill(0.0);
+            scratch.view_transmittance.fill(1.0);
+            scratch.view_columns.fill(0.0);
+        };
+        reset(scratch);
+        for (_, other) in together.iter_mut().flat_map(|t| t.skies.iter_mut()) {
+            reset(other);
+        }
         let Some((enter, exit)) =
             segment_in_atmosphere(self.observer, view, self.ground_radius_m, self.top_radius_m)
         else {
@@ -772,6 +853,9 @@ impl SingleScatteringScene {
         if length <= 0.0 {
             if distance_m >= exit {
                 self.add_ground_term(start, view, sun_columns, scratch);
+                for (sky, other) in together.iter_mut().flat_map(|t| t.skies.iter_mut()) {
+                    sky.add_ground_term(start, view, sun_columns, other);
+                }
             }
             return;
         }
@@ -791,8 +875,8 @@ impl SingleScatteringScene {
         // kept now for those that follow (`ExactSunColumns`).
         // (Not for a ray shared by the caller: it says where its columns
         // come from.)
-        let kept = match (sun_columns, &self.exact_sun_columns, &share) {
-            (SunColumns::Exact, Some((shared, slot)), None) => {
+        let kept = match (sun_columns, &self.exact_sun_columns) {
+            (SunColumns::Exact, Some((shared, slot))) => {
                 let ray = [
                     view.x.to_bits(),
                     view.y.to_bits(),
@@ -808,11 +892,7 @@ impl SingleScatteringScene {
             Some((.., None)) => Some(RayColumns::default()),
             _ => None,
         };
-        let (replay, mut record) = match share {
-            Some(ShareRayColumns::Replay(ray)) => (Some(ray), None),
-            Some(ShareRayColumns::Record(ray)) => (None, Some(ray)),
-            None => (kept_replay.as_deref(), kept_record.as_mut()),
-        };
+        let (replay, mut record) = (kept_replay.as_deref(), kept_record.as_mut());
         let mut node_index = 0;
         march.march(
             &self.profiles,
@@ -882,15 +962,46 @@ impl SingleScatteringScene {
                         *acc += node.weight * density * transmittance;
                     }
                 }
+                if let Some(together) = together.as_deref_mut() {
+                    together.add_node(node.weight, node_columns, &scratch.sun_columns, densities);
+                }
                 ControlFlow::Continue(())
             },
         );
         scratch.view_columns.copy_from_slice(march.columns());
+        for (sky, other) in together.iter_mut().flat_map(|t| t.skies.iter_mut()) {
+            other.view_columns.copy_from_slice(march.columns());
+            sky.finish_segment(
+                (start, view, length),
+                (distance_m, exit),
+                sun_columns,
+                other,
+            );
+        }
         scratch.march = march;
         scratch.view_panel_ends = view_ends;
         if let (Some((shared, slot, ray, _)), Some(record)) = (kept, kept_record) {
             shared.keep(slot, ray, record);
         }
+        self.finish_segment(
+            (start, view, length),
+            (distance_m, exit),
+            sun_columns,
+            scratch,
+        );
+    }
+
+    /// The end of a segment's integrals, its columns from the eye in
+    /// `scratch.view_columns`: the transmittance of the whole segment and,
+    /// where it reaches the ground, the sunlit ground's term.
+    fn finish_segment(
+        &self,
+        (start, view, length): (Vector3, Vector3, f64),
+        (distance_m, exit): (f64, f64),
+        sun_columns: SunColumns,
+        scratch: &mut SingleScatteringScratch,
+    ) {
+        let species = &self.optics.species;
         // Transmittance of the whole view ray: the optical depths, then
         // their exponentials together.
         for (i, t) in scratch.view_transmittance.iter_mut().enumerate() {

@@ -39,7 +39,9 @@
 
 use super::multiple_scattering::MultipleScatteringTable;
 use super::optical_column::SunColumnTable;
-use super::single_scattering::{RayColumns, ShareRayColumns, SingleScatteringScene, SunColumns};
+use super::single_scattering::{
+    SingleScatteringScene, SingleScatteringScratch, SunColumns, Together,
+};
 use crate::geometry::Vector3;
 
 /// Which zenith rows of each half a sky-view table marches, counted from
@@ -118,15 +120,14 @@ impl SkyViewTable {
     /// Rows run in parallel with the `parallel` feature; the result does
     /// not depend on the thread count.
     ///
-    /// The skies' tables are filled node by node together: a sky whose
-    /// view rays are the first sky's
+    /// The skies' tables are filled row by row together: the integrals of
+    /// a sky whose view rays are the first sky's
     /// (`SingleScatteringScene::has_view_geometry_of`) and whose
-    /// sun-column table is the first's (the same table) reads each march
-    /// node's columns toward the sun that the first sky's march looked up
-    /// instead of looking them up again (`ShareRayColumns`), bit for bit
+    /// sun-column table is the first's (the same table) are computed in
+    /// the first sky's march, each node's optical depths and
+    /// transmittances of every such sky one loop (`Together`), bit for bit
     /// the table it builds alone (the k-distribution's term skies, which
-    /// differ in what absorbs only; the lookups were some 14 % of a gas
-    /// image's CPU).
+    /// differ in what absorbs only).
     pub(crate) fn compute_sharing_geometry(
         skies: &[(
             &SingleScatteringScene,
@@ -160,7 +161,22 @@ impl SkyViewTable {
                     && std::ptr::eq(*sun_columns, first_columns)
             })
             .collect();
-        let recording = shares.iter().any(|s| *s);
+        let together = shares.iter().any(|s| *s);
+        // One node's integrals and sunlit ground from a scene's scratch.
+        let store = |sky: &SingleScatteringScene,
+                     scratch: &SingleScatteringScratch,
+                     table: &SkyViewTable,
+                     node: &mut [f32]| {
+            let species = sky.optics().species.len();
+            let (integrals, rest) = node.split_at_mut(species * table.wavelengths);
+            let ground = &mut rest[..table.wavelengths];
+            for (o, v) in integrals.iter_mut().zip(scratch.inscattering_integrals()) {
+                *o = *v as f32;
+            }
+            for (o, v) in ground.iter_mut().zip(scratch.ground_radiance()) {
+                *o = *v as f32;
+            }
+        };
         let fill_row = |row: usize, outs: &mut [&mut [f32]]| {
             if !rows.marches(row.min(2 * half_zenith_nodes - 1 - row)) {
                 return;
@@ -168,57 +184,82 @@ impl SkyViewTable {
             // The row's rays are one zenith angle from one eye: their
             // densities and columns are marched once for every azimuth
             // (where the planet's shadow does not cut them apart).
-            // Sky by sky (each sky's source table stays in cache through
-            // the row), the first recording each ray's columns toward the
-            // sun for those that share them.
-            let mut ray_columns: Vec<RayColumns> = Vec::new();
-            if recording {
-                ray_columns.resize_with(azimuth_nodes, RayColumns::default);
-            }
             let index_in_half = row % half_zenith_nodes;
-            for (t, ((sky, sun_columns, multiple_scattering), table)) in
-                skies.iter().zip(&tables).enumerate()
+            let zenith = tables[0].zenith_of_node(row);
+            let view_of = |k: usize| {
+                let relative_azimuth = std::f64::consts::PI * k as f64 / (azimuth_nodes - 1) as f64;
+                tables[0].direction(zenith, relative_azimuth)
+            };
+            let mut scratches: Vec<SingleScatteringScratch> = skies
+                .iter()
+                .map(|(sky, ..)| {
+                    let mut scratch = sky.scratch();
+                    scratch.reuse_view_nodes();
+                    scratch
+                })
+                .collect();
+            if together {
+                // The first sky marches each ray once for those that
+                // share its geometry, their integrals computed with its
+                // own at each node.
+                let (first, rest) = scratches.split_first_mut().expect("a sky");
+                let mut with: Vec<usize> = Vec::new();
+                let mut others = Vec::new();
+                for (t, scratch) in rest.iter_mut().enumerate() {
+                    if shares[t + 1] {
+                        with.push(t + 1);
+                        others.push((skies[t + 1].0, scratch));
+                    }
+                }
+                let mut others = Together::new(others);
+                let (sky, sun_columns, _) = skies[0];
+                for k in 0..azimuth_nodes {
+                    sky.compute_inscattering_integrals_together(
+                        view_of(k),
+                        SunColumns::Table(sun_columns),
+                        first,
+                        &mut others,
+                    );
+                    let stride = tables[0].values_per_node;
+                    store(sky, first, &tables[0], &mut outs[0][k * stride..][..stride]);
+                    for (t, scratch) in with.iter().zip(others.scratches()) {
+                        let stride = tables[*t].values_per_node;
+                        store(
+                            skies[*t].0,
+                            scratch,
+                            &tables[*t],
+                            &mut outs[*t][k * stride..][..stride],
+                        );
+                    }
+                }
+            }
+            // Sky by sky (each sky's source table stays in cache through
+            // the row): the integrals of those not marched together, and
+            // the multiply scattered light.
+            for (t, (((sky, sun_columns, multiple_scattering), table), scratch)) in skies
+                .iter()
+                .zip(&tables)
+                .zip(scratches.iter_mut())
+                .enumerate()
             {
-                let mut scratch = sky.scratch();
-                scratch.reuse_view_nodes();
                 let mut ms_work = multiple_scattering.map(|ms| {
                     let mut ms_scratch = ms.scratch();
                     ms_scratch.reuse_view_nodes();
                     let wavelengths = table.wavelengths;
                     (ms_scratch, vec![0.0; wavelengths], vec![0.0; wavelengths])
                 });
-                let zenith = table.zenith_of_node(row);
+                let marched_together = together && (t == 0 || shares[t]);
                 for k in 0..azimuth_nodes {
-                    let relative_azimuth =
-                        std::f64::consts::PI * k as f64 / (azimuth_nodes - 1) as f64;
-                    let view = table.direction(zenith, relative_azimuth);
+                    let view = view_of(k);
                     let columns = SunColumns::Table(sun_columns);
-                    match (t, shares[t]) {
-                        (0, _) if recording => sky.compute_inscattering_integrals_sharing(
-                            view,
-                            columns,
-                            &mut scratch,
-                            ShareRayColumns::Record(&mut ray_columns[k]),
-                        ),
-                        (_, true) => sky.compute_inscattering_integrals_sharing(
-                            view,
-                            columns,
-                            &mut scratch,
-                            ShareRayColumns::Replay(&ray_columns[k]),
-                        ),
-                        _ => sky.compute_inscattering_integrals(view, columns, &mut scratch),
-                    }
                     let (wavelengths, stride) = (table.wavelengths, table.values_per_node);
-                    let species = sky.optics().species.len();
                     let node = &mut outs[t][k * stride..(k + 1) * stride];
-                    let (integrals, rest) = node.split_at_mut(species * wavelengths);
-                    let (ground, rest) = rest.split_at_mut(wavelengths);
-                    for (o, v) in integrals.iter_mut().zip(scratch.inscattering_integrals()) {
-                        *o = *v as f32;
+                    if !marched_together {
+                        sky.compute_inscattering_integrals(view, columns, scratch);
+                        store(sky, scratch, table, node);
                     }
-                    for (o, v) in ground.iter_mut().zip(scratch.ground_radiance()) {
-                        *o = *v as f32;
-                    }
+                    let species = sky.optics().species.len();
+                    let rest = &mut node[(species + 1) * wavelengths..];
                     let marched_here = march_multiple
                         && marched(index_in_half, half_zenith_nodes, multiple_stride.0)
                         && marched(k, azimuth_nodes, multiple_stride.1);
