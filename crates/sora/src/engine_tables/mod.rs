@@ -19,9 +19,7 @@
 //!   the layer's own grid: its zenith rows are the layer's (half the
 //!   images' at the defaults, and the layer's views on them), and its
 //!   multiply scattered light marched in 8 view-ray panels, not the
-//!   field's 16 (`LAYER_MULTIPLE_PANELS`), at every 4th azimuth node and
-//!   filled between in its logarithm (`LAYER_MULTIPLE_STRIDE`), and at
-//!   every other sun node
+//!   field's 16 (`LAYER_MULTIPLE_PANELS`), and at every other sun node
 //!   above the horizon (0.4 to 10.7 degrees, 8 of the default 48 nodes)
 //!   not marched but blended in its logarithm from the nodes either side
 //!   (`multiple_from_neighbours`; `docs/engine-tables.md` gives the bake's
@@ -864,22 +862,19 @@ const LAYER_MULTIPLE_PANELS_ABOVE_DEG: f64 = -6.0;
 
 /// A layer's sky-view table marches multiply scattered light at every
 /// zenith row (the images' table, with twice the rows, at every other one)
-/// and every 4th azimuth node (and the last), filled between by the cubic
-/// in the logarithm through the two marched nodes either side (mirrored
-/// about the solar meridian at the axis's ends; `fill_logarithmic` in
-/// `transport/sky_view_table.rs`). Against every other azimuth node
-/// (linear fill) at `--altitude-nodes 2`, luminance p99 (largest):
-/// earth-clear 0.10 % (1.7 %), earth-hazy 0.13 %, paper-mars 0.10 %
-/// (0.85 %), mars-dust 0.87 % (2.3 %: its multiply scattered light has
-/// structure of about 15 degrees in azimuth, which every other node
-/// marched misses too: 0.46 % p99 from every node, every 4th 1.0 %).
-/// Every 8th: 0.42 % p99 for earth-clear, 3.2 % for mars-dust. At every
-/// other row the bake took 68 CPU-s instead of 97 but moved the browser
-/// test's horizon band (earth-clear at -12 degrees: 1.97 % against the
-/// bound of 2 %); every 2nd or 3rd row with every 3rd azimuth, 0.76 % and
-/// 1.0 % p99 (earth-clear), 16 % and 35 % at most just above the horizon
-/// (`docs/engine-tables.md`).
-const LAYER_MULTIPLE_STRIDE: (usize, usize) = (1, 4);
+/// and every other azimuth node. At every other row the bake took 68 CPU-s
+/// instead of 97 but moved the browser test's horizon band (earth-clear
+/// at -12 degrees: 1.97 % against the bound of 2 %). Every 4th azimuth
+/// node, filled between by the cubic in the logarithm (mirrored about
+/// the solar meridian at the axis's ends; `fill_logarithmic` in
+/// `transport/sky_view_table.rs`), saved about 9 % of the CPU at
+/// `--altitude-nodes 2` and moved earth-clear, earth-hazy and paper-mars
+/// by 0.10-0.13 % (p99), but mars-dust by 0.87 % (2.3 % at most): its
+/// multiply scattered light has a wave of about 15 degrees in azimuth
+/// (every other node is 0.46 % p99 from every node marched, every 4th
+/// 1.0 %), and the browser test's mars-dust went to 1.99 % p99 at -12
+/// degrees (from 0.65 %; bound 2 %); set aside (`docs/engine-tables.md`).
+const LAYER_MULTIPLE_STRIDE: (usize, usize) = (1, 2);
 
 /// The transmittance table: for each altitude node and view cosine node
 /// above the horizon, XYZ(E_sun T) / XYZ(E_sun) per channel.

@@ -28,8 +28,7 @@
 //! a diffuse field): it is marched at every other node of each axis
 //! (and the last node of each half) and filled in between them by cubics
 //! (`fill_unmarched`), which quarters its cost (images; the engine tables'
-//! layers march it at every row of their coarser zenith axis and every
-//! 4th azimuth, filled between by cubics in the logarithm, or blend it
+//! layers march it at every row of their coarser zenith axis, or blend it
 //! from the tables of the sun nodes either side,
 //! [`SkyViewTable::blend_multiple_from`]). The same march gives the forward-peak
 //! integrals of delta-M (light that the multiple-scattering solver counts
