@@ -83,7 +83,8 @@
 //! sun zenith angle, and aimed at each layer's eye and sun
 //! (`sky::shared_field`); the per-layer solve, the images' own sky-view
 //! tables, the field's panels and the multiply scattered light marched at
-//! every sun node are kept as the tests' oracles (`bake_with`). The
+//! every sun node and every azimuth node are kept as the tests' oracles
+//! (`bake_with`). The
 //! marches' exponentials, forward-peak integrals and source-table reads
 //! run in AVX2's registers where the CPU has them, chosen at run time
 //! (`transport/vector_exp.rs`): the same tables bit for bit, 12-15 % less
@@ -391,8 +392,11 @@ impl EngineTables {
             Field::PerLayer => None,
         };
         let sky_view = match layers {
-            Layers::Grid | Layers::GridEverySun => Some(layer_sky_view(sky, settings, false)),
-            Layers::GridFieldPanels => Some(layer_sky_view(sky, settings, true)),
+            Layers::Grid | Layers::GridEverySun => {
+                Some(layer_sky_view(sky, settings, (false, false)))
+            }
+            Layers::GridEveryAzimuth => Some(layer_sky_view(sky, settings, (false, true))),
+            Layers::GridFieldPanels => Some(layer_sky_view(sky, settings, (true, false))),
             Layers::Image => None,
         };
         let mut done = 0usize;
@@ -723,6 +727,12 @@ enum Layers {
     /// path the tests hold `GridEverySun` to).
     #[cfg_attr(not(test), allow(dead_code))]
     GridFieldPanels,
+    /// As `GridEverySun`, with the multiply scattered light marched at
+    /// every azimuth node of the layer's sky-view table, not every
+    /// [`LAYER_MULTIPLE_STRIDE`]-th (the slow path the tests hold
+    /// `GridEverySun`'s azimuth fill to).
+    #[cfg_attr(not(test), allow(dead_code))]
+    GridEveryAzimuth,
     /// From the library's image tables, as `sora render` draws (the slow
     /// path).
     #[cfg_attr(not(test), allow(dead_code))]
@@ -785,7 +795,11 @@ const MULTIPLE_FROM_NEIGHBOURS_DEG: (f64, f64) = (0.0, 12.5);
 /// and only the rows that are the layer's nodes are marched (single and
 /// multiply scattered light, [`MarchedRows`]): as many marches as the
 /// layer has rows.
-fn layer_sky_view(sky: &Sky, settings: &EngineTableSettings, field_panels: bool) -> SkyViewGrid {
+fn layer_sky_view(
+    sky: &Sky,
+    settings: &EngineTableSettings,
+    (field_panels, every_azimuth): (bool, bool),
+) -> SkyViewGrid {
     let (image_half, image_azimuth) = sky.table_size().sky_view_nodes;
     let half = settings.zenith_nodes_per_half;
     let (fine, wide) = settings.zenith_cells();
@@ -800,7 +814,11 @@ fn layer_sky_view(sky: &Sky, settings: &EngineTableSettings, field_panels: bool)
     };
     SkyViewGrid {
         nodes: (rows, image_azimuth.min(settings.azimuth_nodes)),
-        multiple_stride: LAYER_MULTIPLE_STRIDE,
+        multiple_stride: if every_azimuth {
+            (LAYER_MULTIPLE_STRIDE.0, 1)
+        } else {
+            LAYER_MULTIPLE_STRIDE
+        },
         rows: marched,
         multiple_panels: if field_panels {
             None
@@ -852,7 +870,16 @@ const LAYER_MULTIPLE_PANELS_ABOVE_DEG: f64 = -6.0;
 /// zenith row (the images' table, with twice the rows, at every other one)
 /// and every other azimuth node. At every other row the bake took 68 CPU-s
 /// instead of 97 but moved the browser test's horizon band (earth-clear
-/// at -12 degrees: 1.97 % against the bound of 2 %; `docs/engine-tables.md`).
+/// at -12 degrees: 1.97 % against the bound of 2 %). Every 4th azimuth
+/// node, filled between by the cubic in the logarithm (mirrored about
+/// the solar meridian at the axis's ends; `fill_logarithmic` in
+/// `transport/sky_view_table.rs`), saved about 9 % of the CPU at
+/// `--altitude-nodes 2` and moved earth-clear, earth-hazy and paper-mars
+/// by 0.10-0.13 % (p99), but mars-dust by 0.87 % (2.3 % at most): its
+/// multiply scattered light has a wave of about 15 degrees in azimuth
+/// (every other node is 0.46 % p99 from every node marched, every 4th
+/// 1.0 %), and the browser test's mars-dust went to 1.99 % p99 at -12
+/// degrees (from 0.65 %; bound 2 %); set aside (`docs/engine-tables.md`).
 const LAYER_MULTIPLE_STRIDE: (usize, usize) = (1, 2);
 
 /// The transmittance table: for each altitude node and view cosine node

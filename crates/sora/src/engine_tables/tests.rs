@@ -650,6 +650,23 @@ fn hazy_sky_with_default_field() -> Sky {
         .unwrap()
 }
 
+/// A small bake's settings: 4 sun nodes, the ground and the top of the
+/// atmosphere, 24 zenith nodes per half, `azimuth_nodes` azimuths, no
+/// march tables.
+fn four_suns_two_altitudes(azimuth_nodes: usize) -> EngineTableSettings {
+    EngineTableSettings {
+        sun_nodes: 4,
+        altitude_nodes: 2,
+        zenith_nodes_per_half: 24,
+        zenith_fine_cells_per_half: 0,
+        zenith_wide_cells_per_half: 0,
+        azimuth_nodes,
+        transmittance_nodes: (4, 8),
+        march: false,
+        ..EngineTableSettings::default()
+    }
+}
+
 /// The bake's layers with their multiply scattered light marched in
 /// `LAYER_MULTIPLE_PANELS` (8) view-ray panels against the same layers
 /// marched in the field's own 16 (`Layers::GridFieldPanels`, the slow
@@ -666,17 +683,7 @@ fn hazy_sky_with_default_field() -> Sky {
 fn the_layers_marched_in_fewer_panels_are_the_field_s() {
     let sky = hazy_sky_with_default_field();
     assert_eq!(MultipleScatteringSettings::default().view_ray_panels, 16);
-    let settings = EngineTableSettings {
-        sun_nodes: 4,
-        altitude_nodes: 2,
-        zenith_nodes_per_half: 24,
-        zenith_fine_cells_per_half: 0,
-        zenith_wide_cells_per_half: 0,
-        azimuth_nodes: 16,
-        transmittance_nodes: (4, 8),
-        march: false,
-        ..EngineTableSettings::default()
-    };
+    let settings = four_suns_two_altitudes(16);
     let fast = EngineTables::bake_with(
         &sky,
         &settings,
@@ -700,6 +707,39 @@ fn the_layers_marched_in_fewer_panels_are_the_field_s() {
     assert!(axes::sun_elevation_of_node(1, 4) >= LAYER_MULTIPLE_PANELS_ABOVE_DEG);
     let twilight = 2 * 2 * 24 * 16;
     assert_eq!(fast.sky[..twilight], slow.sky[..twilight]);
+    assert_eq!(fast.transmittance, slow.transmittance);
+    for (f, s) in fast.irradiance.iter().zip(&slow.irradiance) {
+        assert!(((f[1] - s[1]) / s[1]).abs() < 1e-3, "{f:?} {s:?}");
+    }
+}
+
+/// The layers' multiply scattered light marched at every other azimuth
+/// node of their sky-view tables ([`LAYER_MULTIPLE_STRIDE`]) and filled
+/// between (`fill_unmarched` in `transport/sky_view_table.rs`) against
+/// the same light marched at every azimuth node
+/// (`Layers::GridEveryAzimuth`, the slow path): earth-hazy with the
+/// default multiple-scattering settings, 4 sun nodes, the default 48
+/// azimuth nodes (the fill's step the bake's), a coarse zenith axis, the
+/// ground and the top of the atmosphere. The luminance's relative
+/// difference wherever it is above 1e-3 of its layer's maximum, held to
+/// what was measured (on the ground 0.10 % p99 and 0.18 % at worst, at
+/// the top 0.24 % and 1.2 %) with a margin: 0.2 %, 0.4 %, 0.4 % and 2 %.
+/// The transmittance is the same table, the irradiance within 0.1 %.
+#[test]
+fn the_layers_filled_between_azimuths_are_every_azimuth_marched() {
+    let sky = hazy_sky_with_default_field();
+    assert_eq!(LAYER_MULTIPLE_STRIDE, (1, 2));
+    let settings = four_suns_two_altitudes(48);
+    let [fast, slow] = [Layers::GridEverySun, Layers::GridEveryAzimuth].map(|layers| {
+        EngineTables::bake_with(&sky, &settings, (Field::Shared, layers), &|_| {}).unwrap()
+    });
+    let [ground, top] = layer_luminance_differences(&fast, &slow, 2 * 24 * 48);
+    eprintln!(
+        "every other azimuth vs every one (median, p99, worst): ground {ground:?}, top {top:?}"
+    );
+    assert!(ground.1 > 0.0, "the fill changed nothing: {ground:?}");
+    assert!(ground.1 < 2e-3 && ground.2 < 4e-3, "ground {ground:?}");
+    assert!(top.1 < 4e-3 && top.2 < 2e-2, "top {top:?}");
     assert_eq!(fast.transmittance, slow.transmittance);
     for (f, s) in fast.irradiance.iter().zip(&slow.irradiance) {
         assert!(((f[1] - s[1]) / s[1]).abs() < 1e-3, "{f:?} {s:?}");
