@@ -872,8 +872,8 @@ const LAYER_MULTIPLE_PANELS_ABOVE_DEG: f64 = -6.0;
 /// instead of 97 but moved the browser test's horizon band (earth-clear
 /// at -12 degrees: 1.97 % against the bound of 2 %). Every 4th azimuth
 /// node, filled between by the cubic in the logarithm (mirrored about
-/// the solar meridian at the axis's ends; `fill_logarithmic` in
-/// `transport/sky_view_table.rs`), saved about 9 % of the CPU at
+/// the solar meridian at the axis's ends; measured on a branch, not
+/// kept), saved about 9 % of the CPU at
 /// `--altitude-nodes 2` and moved earth-clear, earth-hazy and paper-mars
 /// by 0.10-0.13 % (p99), but mars-dust by 0.87 % (2.3 % at most): its
 /// multiply scattered light has a wave of about 15 degrees in azimuth
