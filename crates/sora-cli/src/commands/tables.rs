@@ -59,8 +59,9 @@ pub struct TablesArgs {
     /// cell of a finer grid each; the coarse cells from the zenith span
     /// two, the wide cells three): the nodes there are the library's own
     /// rows where the grid, 2 (N - 1) - F + W cells, has the images' 127
-    /// (e.g. N 64, F 21, W 22: paper-mars within 2 % after sunset at the
-    /// default's size and bake; or N 78, F 27, W 0)
+    /// (the default N 64, F 21, W 22: paper-mars within 2 % after sunset;
+    /// or N 78, F 27, W 0; F 0 and W 0 for the plain axis, which another
+    /// N needs unless F + W < N)
     #[arg(long, value_name = "F", default_value_t = EngineTableSettings::default().zenith_fine_cells_per_half)]
     zenith_fine_cells: usize,
 
