@@ -299,11 +299,18 @@ fn sora_local_view(v: vec3<f32>, up: vec3<f32>, sun: vec3<f32>) -> vec2<f32> {
   return vec2<f32>(acos(mu), acos(cos_phi));
 }
 
+// The sun's elevation (degrees) from its direction in the eye's
+// east-north-up frame: atan2(z, |xy|), not asin(z), which loses
+// precision near the zenith (as soraSunElevationDeg in sora_sky.glsl).
+fn sora_sun_elevation_deg(sun: vec3<f32>) -> f32 {
+  return degrees(atan2(sun.z, length(sun.xy)));
+}
+
 // Sky radiance for an eye at altitude h along unit v, sun toward unit sun
 // (east-north-up, z up).
 fn sora_sky_view(h: f32, v: vec3<f32>, sun: vec3<f32>) -> vec3<f32> {
   let zp = sora_local_view(v, vec3<f32>(0.0, 0.0, 1.0), sun);
-  return sora_sky_xyz(h, zp.x, zp.y, degrees(asin(clamp(sun.z, -1.0, 1.0))));
+  return sora_sky_xyz(h, zp.x, zp.y, sora_sun_elevation_deg(sun));
 }
 
 // Transmittance of the segment from the eye at altitude h to the point at
@@ -364,7 +371,7 @@ fn sora_aerial_perspective(h_in: f32, v: vec3<f32>, sun: vec3<f32>, d: f32) -> S
   let x = clamp(log(max(d, nearest) / nearest) / log(last / nearest), 0.0, 1.0) * f32(dn - 1);
   let j = sora_cell(x, 0, dn - 2);
   let zp = sora_local_view(v, vec3<f32>(0.0, 0.0, 1.0), sun);
-  let e_deg = degrees(asin(clamp(sun.z, -1.0, 1.0)));
+  let e_deg = sora_sun_elevation_deg(sun);
   let sky = sora_sky_xyz(h, zp.x, zp.y, e_deg);
   let ratio = sora_layers_xyz(sora_aerial, sora.aerial_nodes.x, vec2<i32>(0, 0), sora.aerial_nodes.y, j.i, j.f, h, zp.x, zp.y, e_deg);
   return SoraAerial(sky * ratio * share, t);

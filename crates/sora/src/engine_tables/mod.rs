@@ -769,19 +769,20 @@ const MULTIPLE_FROM_NEIGHBOURS_DEG: (f64, f64) = (0.0, 12.5);
 /// layer's views lies on a row and its single scattering is marched there,
 /// not interpolated between rows), with no more of them than the layer
 /// has, and no more azimuth nodes than the layer's or the sky's images'.
-/// At the default settings this is 64 x 48 nodes instead of the images'
-/// 128 x 48: half the single-scattering marches, and the multiply
-/// scattered light marched at as many rows as the images'
-/// ([`LAYER_MULTIPLE_STRIDE`]) in fewer view-ray panels than the field's
-/// (`field_panels` false; [`layer_multiple_panels`]).
+/// With the plain axis (no fine or wide cells) at 64 nodes per half this
+/// is 64 x 48 nodes instead of the images' 128 x 48: half the
+/// single-scattering marches, and the multiply scattered light marched at
+/// as many rows as the images' ([`LAYER_MULTIPLE_STRIDE`]) in fewer
+/// view-ray panels than the field's (`field_panels` false;
+/// [`layer_multiple_panels`]).
 ///
 /// With fine or wide cells (`zenith_fine_cells_per_half`,
-/// `zenith_wide_cells_per_half`) the table's rows are the zenith axis's
-/// grid (`axes::zenith_of_node`; 128 per half, the images' own, at 64
-/// nodes with 21 fine and 22 wide cells, or 78 nodes and 27 fine cells),
-/// and only the rows that are the layer's nodes are marched (single and
-/// multiply scattered light, [`MarchedRows`]): as many marches as the
-/// layer has rows.
+/// `zenith_wide_cells_per_half`; the defaults' 21 and 22) the table's
+/// rows are the zenith axis's grid (`axes::zenith_of_node`; 128 per half,
+/// the images' own, at 64 nodes with 21 fine and 22 wide cells, or 78
+/// nodes and 27 fine cells), and only the rows that are the layer's nodes
+/// are marched (single and multiply scattered light, [`MarchedRows`]): as
+/// many marches as the layer has rows.
 fn layer_sky_view(sky: &Sky, settings: &EngineTableSettings, field_panels: bool) -> SkyViewGrid {
     let (image_half, image_azimuth) = sky.table_size().sky_view_nodes;
     let half = settings.zenith_nodes_per_half;
