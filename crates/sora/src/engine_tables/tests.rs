@@ -2125,6 +2125,16 @@ fn print_worst_band_pixels(tables: &EngineTables, pixels: &[(LocalView, f64, boo
     }
 }
 
+/// The sky `sora tables --preset PRESET` bakes its tables from (380-780
+/// nm every 20 nm, multiple scattering).
+fn cli_sky(preset: &str) -> Sky {
+    Sky::builder(&Atmosphere::preset(preset).unwrap())
+        .wavelengths(WavelengthGrid::new(380.0, 780.0, 20.0).unwrap())
+        .scattering(Scattering::Multiple(MultipleScatteringSettings::default()))
+        .build()
+        .unwrap()
+}
+
 /// The sky lookup of the tables `sora tables --altitude-nodes 2` bakes
 /// (CI's; no march tables) against the library's image (the same sky's
 /// image tables) between the browser test's suns, about the sunset, where
@@ -2174,11 +2184,7 @@ fn the_sky_between_the_sun_nodes_about_the_sunset_matches_the_library() {
         .collect();
     let mut failures = Vec::new();
     for preset in presets.split(',') {
-        let sky = Sky::builder(&Atmosphere::preset(preset).unwrap())
-            .wavelengths(WavelengthGrid::new(380.0, 780.0, 20.0).unwrap())
-            .scattering(Scattering::Multiple(MultipleScatteringSettings::default()))
-            .build()
-            .unwrap();
+        let sky = cli_sky(preset);
         let baked: Vec<EngineTables> = zenith_axes
             .iter()
             .map(|&(half, fine, wide)| {
@@ -2306,11 +2312,7 @@ fn the_zenith_against_the_sun_is_smooth() {
     };
     let mut failures = Vec::new();
     for preset in presets.split(',') {
-        let sky = Sky::builder(&Atmosphere::preset(preset).unwrap())
-            .wavelengths(WavelengthGrid::new(380.0, 780.0, 20.0).unwrap())
-            .scattering(Scattering::Multiple(MultipleScatteringSettings::default()))
-            .build()
-            .unwrap();
+        let sky = cli_sky(preset);
         let settings = EngineTableSettings {
             altitude_nodes: 2,
             march: false,
