@@ -34,9 +34,9 @@
 //!   coarser than its core: a view turned part of the way would cross the
 //!   first zenith row of the layer at 90 degrees, where its radiance falls
 //!   ninefold, and bend the zenith's brightness against the sun's
-//!   elevation. At a sun node the read is the layer's own. With the sun below the horizon,
-//!   near the antisolar point and below the shadow's edge
-//!   ([`shadow_read_share`]), the read is blended toward that of the sun
+//!   elevation. At a sun node the read is the layer's own. With the sun
+//!   below the horizon, near the antisolar point and below the shadow's
+//!   edge ([`shadow_read_share`]), the read is blended toward that of the sun
 //!   axis cut at its last node below the horizon (the chord of the last
 //!   two such layers, extended beyond the last; the curvature at the cut
 //!   dropped): a layer with the sun up has no shadow to give.
