@@ -136,17 +136,14 @@ vec2 soraTurnedView(float zenith, float phi, float delta, float zh) {
 // Share of the sun's step that the view is turned by (lookup.rs's
 // turn_share): 1 within 10 degrees of the sun (the aureole keeps its angle
 // to the sun between sun nodes), 0 beyond 40; 0 within 5 degrees of the
-// horizon (its band keeps its zenith angle), 1 from 20 up; 0 for suns
-// above 85 degrees (the zenith axis is coarser than the aureole there),
-// 1 below 70; or, for suns below 2 degrees (0 above 6), 1 within 40
-// degrees of the antisolar point, 0 beyond 80, horizon included
-// (smoothstep ramps).
+// horizon (its band keeps its zenith angle), 1 from 20 up; or, for suns
+// below 2 degrees (0 above 6), 1 within 40 degrees of the antisolar
+// point, 0 beyond 80, horizon included (smoothstep ramps).
 float soraTurnShare(float zenith, float phi, float eDeg, float zh) {
   float e = radians(eDeg);
   float cosTheta = cos(zenith) * sin(e) + sin(zenith) * cos(phi) * cos(e);
   float sunSide = smoothstep(cos(radians(40.0)), cos(radians(10.0)), cosTheta)
-    * (1.0 - smoothstep(zh - radians(20.0), zh - radians(5.0), zenith))
-    * (1.0 - smoothstep(70.0, 85.0, eDeg));
+    * (1.0 - smoothstep(zh - radians(20.0), zh - radians(5.0), zenith));
   // The planet's shadow, rising at the antisolar horizon as the sun sets,
   // turns with the antisolar point (horizon included).
   float shadow = smoothstep(cos(radians(80.0)), cos(radians(40.0)), -cosTheta)
@@ -168,6 +165,27 @@ float soraShadowReadShare(float zenith, float phi, float eDeg, float zh) {
     * (1.0 - smoothstep(-e, -SORA_SHADOW_RAMP * e, zh - zenith));
 }
 
+// The weight of a sun layer's turned read against its unturned read, in
+// ln L (lookup.rs's turned_read_weight): 1 for suns below 70 degrees, 0
+// above 85, where the aureole reaches the zenith and the zenith axis's
+// rows are coarser than its core (a view turned part of the way crossed
+// them, and the zenith's brightness bent against the sun's elevation).
+float soraTurnedReadWeight(float eDeg) {
+  return 1.0 - smoothstep(70.0, 85.0, eDeg);
+}
+
+// ln L of layer `low` (and low + 1, the altitude node above, by fa) of a
+// layer table toward `view` (zenith, phi), slices row0 and row1 by fj.
+vec3 soraLayerLog(highp sampler2DArray table, int Z, ivec2 F, int K, int low, float fa, int row0, int row1, float fj, vec2 view, float r) {
+  float y; int lowest; int highest;
+  soraZenithCoordinate(view.x, r, Z, F, y, lowest, highest);
+  int i; float fy; soraCell(y, lowest, highest, i, fy);
+  int k; float fx; soraCell(sqrt(clamp(view.y / SORA_PI, 0.0, 1.0)) * float(K - 1), 0, K - 2, k, fx);
+  vec3 ground = mix(soraLayer(table, low, row0, i, fy, k, fx), soraLayer(table, low, row1, i, fy, k, fx), fj);
+  vec3 above = mix(soraLayer(table, low + 1, row0, i, fy, k, fx), soraLayer(table, low + 1, row1, i, fy, k, fx), fj);
+  return log(max(mix(ground, above, fa), vec3(SORA_FLOOR)));
+}
+
 // A layer table (the sky, or the aerial-perspective table with Z zenith
 // nodes per half, K azimuth nodes, and its distance slices j and j + 1
 // blended by fj) at altitude h (m), toward zenith angle `zenith` (rad) and
@@ -175,7 +193,8 @@ float soraShadowReadShare(float zenith, float phi, float eDeg, float zh) {
 // eDeg (degrees): bilinear in a layer, linear in altitude, in ln L between
 // the two sun layers (the chord less the curvature of the four nearest),
 // each read at the view turned with the sun to its node (soraTurnedView,
-// by soraTurnShare of the step).
+// by soraTurnShare of the step), blended in ln L with the unturned read
+// by soraTurnedReadWeight.
 vec3 soraLayersXyz(highp sampler2DArray table, int Z, ivec2 F, int K, int j, float fj, float h, float zenith, float phi, float eDeg) {
   h = clamp(h, 0.0, soraThickness());
   float r = uPlanetSun.x + h;
@@ -184,7 +203,8 @@ vec3 soraLayersXyz(highp sampler2DArray table, int Z, ivec2 F, int K, int j, flo
   int a; float fa; soraCell(soraAltitudeCoordinate(h, A), 0, A - 2, a, fa);
   eDeg = clamp(eDeg, -12.0, 90.0);
   int s; float fs; soraCell(soraSunCoordinate(eDeg), 0, uSkyNodes.x - 2, s, fs);
-  float share = soraTurnShare(zenith, phi, eDeg, zh);
+  float weight = soraTurnedReadWeight(eDeg);
+  float share = weight > 0.0 ? soraTurnShare(zenith, phi, eDeg, zh) : 0.0;
   int row0 = 2 * Z * j;
   int row1 = fj > 0.0 ? row0 + 2 * Z : row0;
   // ln L of sun layers s - 1 .. s + 2 (clamped to the axis).
@@ -192,14 +212,11 @@ vec3 soraLayersXyz(highp sampler2DArray table, int Z, ivec2 F, int K, int j, flo
   for (int m = 0; m < 4; m++) {
     int n = clamp(s + m - 1, 0, uSkyNodes.x - 1) - s;
     vec2 view = soraTurnedView(zenith, phi, radians(soraSunElevationOfNode(s + n) - eDeg) * share, zh);
-    float y; int lowest; int highest;
-    soraZenithCoordinate(view.x, r, Z, F, y, lowest, highest);
-    int i; float fy; soraCell(y, lowest, highest, i, fy);
-    int k; float fx; soraCell(sqrt(clamp(view.y / SORA_PI, 0.0, 1.0)) * float(K - 1), 0, K - 2, k, fx);
     int low = (s + n) * A + a;
-    vec3 ground = mix(soraLayer(table, low, row0, i, fy, k, fx), soraLayer(table, low, row1, i, fy, k, fx), fj);
-    vec3 above = mix(soraLayer(table, low + 1, row0, i, fy, k, fx), soraLayer(table, low + 1, row1, i, fy, k, fx), fj);
-    layers[m] = log(max(mix(ground, above, fa), vec3(SORA_FLOOR)));
+    layers[m] = soraLayerLog(table, Z, F, K, low, fa, row0, row1, fj, view, r);
+    if (share > 0.0 && weight < 1.0) {
+      layers[m] = mix(soraLayerLog(table, Z, F, K, low, fa, row0, row1, fj, vec2(zenith, phi), r), layers[m], weight);
+    }
   }
   // The chord in ln L less its curvature: the second differences at nodes
   // s and s + 1 (zero at the axis's ends, each within +-1), blended.
@@ -288,11 +305,19 @@ vec2 soraLocalView(vec3 v, vec3 up, vec3 sun) {
   return vec2(acos(mu), acos(cosPhi));
 }
 
+// The sun's elevation (degrees) from its direction in the eye's
+// east-north-up frame: atan(z, |xy|), not asin(z), whose float32 value
+// near the zenith (SwiftShader's) was 0.12 degrees low a quarter of a
+// degree below it, a step in the zenith's brightness against the sun.
+float soraSunElevationDeg(vec3 sun) {
+  return degrees(atan(sun.z, length(sun.xy)));
+}
+
 // Sky radiance for an eye at altitude h looking along unit v, the sun
 // toward unit sun; v and sun in the eye's east-north-up frame (z up).
 vec3 soraSkyView(float h, vec3 v, vec3 sun) {
   vec2 zp = soraLocalView(v, vec3(0.0, 0.0, 1.0), sun);
-  return soraSkyXyz(h, zp.x, zp.y, degrees(asin(clamp(sun.z, -1.0, 1.0))));
+  return soraSkyXyz(h, zp.x, zp.y, soraSunElevationDeg(sun));
 }
 
 // Transmittance of the segment from the eye at altitude h to the point at
@@ -357,7 +382,7 @@ void soraAerialPerspective(float h, vec3 v, vec3 sun, float d, out vec3 inscatte
   float x = clamp(log(max(d, nearest) / nearest) / log(last / nearest), 0.0, 1.0) * float(D - 1);
   int j; float fj; soraCell(x, 0, D - 2, j, fj);
   vec2 zp = soraLocalView(v, vec3(0.0, 0.0, 1.0), sun);
-  float eDeg = degrees(asin(clamp(sun.z, -1.0, 1.0)));
+  float eDeg = soraSunElevationDeg(sun);
   vec3 sky = soraSkyXyz(h, zp.x, zp.y, eDeg);
   vec3 ratio = soraLayersXyz(uAerial, uAerialNodes.x, ivec2(0), uAerialNodes.y, j, fj, h, zp.x, zp.y, eDeg);
   inscattered = sky * ratio * share;

@@ -127,15 +127,14 @@ fn sora_turned_view(zenith: f32, phi: f32, delta: f32, zh: f32) -> vec2<f32> {
 
 // Share of the sun's step the view is turned by: 1 within 10 degrees of
 // the sun, 0 beyond 40; 0 within 5 degrees of the horizon, 1 from 20 up;
-// 0 for suns above 85 degrees, 1 below 70; or, for suns below 2 degrees
-// (0 above 6), 1 within 40 degrees of the antisolar point, 0 beyond 80,
-// horizon included (the planet's shadow turns with it; smoothstep ramps).
+// or, for suns below 2 degrees (0 above 6), 1 within 40 degrees of the
+// antisolar point, 0 beyond 80, horizon included (the planet's shadow
+// turns with it; smoothstep ramps).
 fn sora_turn_share(zenith: f32, phi: f32, e_deg: f32, zh: f32) -> f32 {
   let e = radians(e_deg);
   let cos_theta = cos(zenith) * sin(e) + sin(zenith) * cos(phi) * cos(e);
   let sun_side = smoothstep(cos(radians(40.0)), cos(radians(10.0)), cos_theta)
-    * (1.0 - smoothstep(zh - radians(20.0), zh - radians(5.0), zenith))
-    * (1.0 - smoothstep(70.0, 85.0, e_deg));
+    * (1.0 - smoothstep(zh - radians(20.0), zh - radians(5.0), zenith));
   let shadow = smoothstep(cos(radians(80.0)), cos(radians(40.0)), -cos_theta)
     * (1.0 - smoothstep(2.0, 6.0, e_deg));
   return max(sun_side, shadow);
@@ -153,13 +152,33 @@ fn sora_shadow_read_share(zenith: f32, phi: f32, e_deg: f32, zh: f32) -> f32 {
     * (1.0 - smoothstep(-e, -SORA_SHADOW_RAMP * e, zh - zenith));
 }
 
+// The weight of a sun layer's turned read against its unturned read, in
+// ln L (as soraTurnedReadWeight in sora_sky.glsl): 1 for suns below 70
+// degrees, 0 above 85, where the aureole reaches the zenith and the
+// zenith axis's rows are coarser than its core.
+fn sora_turned_read_weight(e_deg: f32) -> f32 {
+  return 1.0 - smoothstep(70.0, 85.0, e_deg);
+}
+
+// ln L of layer `low` (and low + 1, the altitude node above, by a_f) of a
+// layer table toward `view` (zenith, phi), slices row0 and row1 by fj.
+fn sora_layer_log(table: texture_2d_array<f32>, zn: i32, zf: vec2<i32>, kn: i32, low: i32, a_f: f32,
+                  row0: i32, row1: i32, fj: f32, view: vec2<f32>, r: f32) -> vec3<f32> {
+  let z = sora_zenith_cell(view.x, r, zn, zf);
+  let k = sora_cell(sqrt(clamp(view.y / SORA_PI, 0.0, 1.0)) * f32(kn - 1), 0, kn - 2);
+  let ground = mix(sora_layer(table, low, row0, z, k), sora_layer(table, low, row1, z, k), fj);
+  let above = mix(sora_layer(table, low + 1, row0, z, k), sora_layer(table, low + 1, row1, z, k), fj);
+  return log(max(mix(ground, above, a_f), vec3<f32>(SORA_FLOOR)));
+}
+
 // A layer table (the sky, or the aerial-perspective table with zn zenith
 // nodes per half, kn azimuth nodes, its distance slices j and j + 1
 // blended by fj) at altitude h (m) toward zenith angle `zenith` and
 // azimuth `phi` from the sun's (rad), sun at e_deg: bilinear in a layer,
 // linear in altitude, in ln L between the sun layers (the chord less the
 // curvature of the four nearest), each read at the view turned with the
-// sun to its node.
+// sun to its node, blended in ln L with the unturned read by
+// sora_turned_read_weight.
 fn sora_layers_xyz(table: texture_2d_array<f32>, zn: i32, zf: vec2<i32>, kn: i32, j: i32, fj: f32,
                    h_in: f32, zenith: f32, phi: f32, e_in: f32) -> vec3<f32> {
   let h = clamp(h_in, 0.0, sora_thickness());
@@ -169,7 +188,9 @@ fn sora_layers_xyz(table: texture_2d_array<f32>, zn: i32, zf: vec2<i32>, kn: i32
   let an = sora.sky_nodes.y;
   let a = sora_cell(sora_altitude_coordinate(h, an), 0, an - 2);
   let s = sora_cell(sora_sun_coordinate(e_deg), 0, sora.sky_nodes.x - 2);
-  let share = sora_turn_share(zenith, phi, e_deg, zh);
+  let weight = sora_turned_read_weight(e_deg);
+  var share = 0.0;
+  if (weight > 0.0) { share = sora_turn_share(zenith, phi, e_deg, zh); }
   let row0 = 2 * zn * j;
   var row1 = row0;
   if (fj > 0.0) { row1 = row0 + 2 * zn; }
@@ -178,12 +199,11 @@ fn sora_layers_xyz(table: texture_2d_array<f32>, zn: i32, zf: vec2<i32>, kn: i32
   for (var m = 0; m < 4; m++) {
     let n = clamp(s.i + m - 1, 0, sora.sky_nodes.x - 1) - s.i;
     let view = sora_turned_view(zenith, phi, radians(sora_sun_elevation_of_node(s.i + n) - e_deg) * share, zh);
-    let z = sora_zenith_cell(view.x, r, zn, zf);
-    let k = sora_cell(sqrt(clamp(view.y / SORA_PI, 0.0, 1.0)) * f32(kn - 1), 0, kn - 2);
     let low = (s.i + n) * an + a.i;
-    let ground = mix(sora_layer(table, low, row0, z, k), sora_layer(table, low, row1, z, k), fj);
-    let above = mix(sora_layer(table, low + 1, row0, z, k), sora_layer(table, low + 1, row1, z, k), fj);
-    layers[m] = log(max(mix(ground, above, a.f), vec3<f32>(SORA_FLOOR)));
+    layers[m] = sora_layer_log(table, zn, zf, kn, low, a.f, row0, row1, fj, view, r);
+    if (share > 0.0 && weight < 1.0) {
+      layers[m] = mix(sora_layer_log(table, zn, zf, kn, low, a.f, row0, row1, fj, vec2<f32>(zenith, phi), r), layers[m], weight);
+    }
   }
   // The chord in ln L less its curvature: the second differences at nodes
   // s and s + 1 (zero at the axis's ends, each within +-1), blended.
@@ -279,11 +299,18 @@ fn sora_local_view(v: vec3<f32>, up: vec3<f32>, sun: vec3<f32>) -> vec2<f32> {
   return vec2<f32>(acos(mu), acos(cos_phi));
 }
 
+// The sun's elevation (degrees) from its direction in the eye's
+// east-north-up frame: atan2(z, |xy|), not asin(z), which loses
+// precision near the zenith (as soraSunElevationDeg in sora_sky.glsl).
+fn sora_sun_elevation_deg(sun: vec3<f32>) -> f32 {
+  return degrees(atan2(sun.z, length(sun.xy)));
+}
+
 // Sky radiance for an eye at altitude h along unit v, sun toward unit sun
 // (east-north-up, z up).
 fn sora_sky_view(h: f32, v: vec3<f32>, sun: vec3<f32>) -> vec3<f32> {
   let zp = sora_local_view(v, vec3<f32>(0.0, 0.0, 1.0), sun);
-  return sora_sky_xyz(h, zp.x, zp.y, degrees(asin(clamp(sun.z, -1.0, 1.0))));
+  return sora_sky_xyz(h, zp.x, zp.y, sora_sun_elevation_deg(sun));
 }
 
 // Transmittance of the segment from the eye at altitude h to the point at
@@ -344,7 +371,7 @@ fn sora_aerial_perspective(h_in: f32, v: vec3<f32>, sun: vec3<f32>, d: f32) -> S
   let x = clamp(log(max(d, nearest) / nearest) / log(last / nearest), 0.0, 1.0) * f32(dn - 1);
   let j = sora_cell(x, 0, dn - 2);
   let zp = sora_local_view(v, vec3<f32>(0.0, 0.0, 1.0), sun);
-  let e_deg = degrees(asin(clamp(sun.z, -1.0, 1.0)));
+  let e_deg = sora_sun_elevation_deg(sun);
   let sky = sora_sky_xyz(h, zp.x, zp.y, e_deg);
   let ratio = sora_layers_xyz(sora_aerial, sora.aerial_nodes.x, vec2<i32>(0, 0), sora.aerial_nodes.y, j.i, j.f, h, zp.x, zp.y, e_deg);
   return SoraAerial(sky * ratio * share, t);

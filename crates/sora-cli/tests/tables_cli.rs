@@ -47,6 +47,9 @@ fn the_readme_command_writes_the_tables_and_their_manifest() {
     assert_eq!(manifest["format"], "sora-engine-tables");
     let sky = &manifest["tables"]["sky"];
     assert_eq!(sky["height"], 2 * 4 * 3 * 2);
+    // Another count of zenith nodes than the default's: the plain axis.
+    assert_eq!(sky["zenith_fine_cells_per_half"], 0);
+    assert_eq!(sky["zenith_wide_cells_per_half"], 0);
     let texels = exr_channel(&output.join("sky.exr"), "Y");
     assert_eq!(texels.len(), 3 * 2 * 4 * 3 * 2);
     // The zenith at the highest sun (layer s * 2 + a = 4: s = 2, a = 0,
@@ -90,6 +93,22 @@ fn bad_input_is_one_line_and_writes_nothing() {
         &fresh_path,
     ]));
     assert!(message.contains("sun nodes"), "{message}");
+    // Fine cells that do not fit the zenith nodes asked for.
+    let message = one_line_error(&sora(&[
+        "tables",
+        "--preset",
+        "earth-clear",
+        "--zenith-nodes",
+        "8",
+        "--zenith-fine-cells",
+        "21",
+        "-o",
+        &fresh_path,
+    ]));
+    assert!(
+        message.contains("zenith fine cells per half = 21"),
+        "{message}"
+    );
     assert!(!fresh.exists());
     let foreign = directory.path().join("photos");
     std::fs::create_dir(&foreign).unwrap();

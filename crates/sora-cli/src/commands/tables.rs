@@ -59,15 +59,17 @@ pub struct TablesArgs {
     /// cell of a finer grid each; the coarse cells from the zenith span
     /// two, the wide cells three): the nodes there are the library's own
     /// rows where the grid, 2 (N - 1) - F + W cells, has the images' 127
-    /// (e.g. N 64, F 21, W 22: paper-mars within 2 % after sunset at the
-    /// default's size and bake; or N 78, F 27, W 0)
-    #[arg(long, value_name = "F", default_value_t = EngineTableSettings::default().zenith_fine_cells_per_half)]
-    zenith_fine_cells: usize,
+    /// (N 64, F 21, W 22: paper-mars within 2 % after sunset; or N 78,
+    /// F 27, W 0) [default: 21 at the default 64 zenith nodes, 0 (the
+    /// plain axis) with another --zenith-nodes]
+    #[arg(long, value_name = "F")]
+    zenith_fine_cells: Option<usize>,
 
     /// Wide cells of the zenith axis per half, between the coarse cells
-    /// from the zenith and the fine cells (F + W at most N - 1)
-    #[arg(long, value_name = "W", default_value_t = EngineTableSettings::default().zenith_wide_cells_per_half)]
-    zenith_wide_cells: usize,
+    /// from the zenith and the fine cells (F + W at most N - 1) [default:
+    /// 22 at the default 64 zenith nodes, 0 with another --zenith-nodes]
+    #[arg(long, value_name = "W")]
+    zenith_wide_cells: Option<usize>,
 
     /// View azimuth nodes over 0..180 degrees from the sun
     #[arg(long, value_name = "N", default_value_t = EngineTableSettings::default().azimuth_nodes)]
@@ -114,12 +116,21 @@ pub fn run(args: TablesArgs) -> anyhow::Result<()> {
             args.format
         );
     }
+    // The default fine and wide cells are those of the default zenith
+    // nodes (their grid is the images' 127 cells); another count of
+    // nodes gets the plain axis unless told.
+    let defaults = EngineTableSettings::default();
+    let (fine, wide) = if args.zenith_nodes == defaults.zenith_nodes_per_half {
+        defaults.zenith_cells()
+    } else {
+        (0, 0)
+    };
     let settings = EngineTableSettings {
         sun_nodes: args.sun_nodes,
         altitude_nodes: args.altitude_nodes,
         zenith_nodes_per_half: args.zenith_nodes,
-        zenith_fine_cells_per_half: args.zenith_fine_cells,
-        zenith_wide_cells_per_half: args.zenith_wide_cells,
+        zenith_fine_cells_per_half: args.zenith_fine_cells.unwrap_or(fine),
+        zenith_wide_cells_per_half: args.zenith_wide_cells.unwrap_or(wide),
         azimuth_nodes: args.azimuth_nodes,
         aerial_nodes: (
             args.aerial_zenith_nodes,

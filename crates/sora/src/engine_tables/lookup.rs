@@ -21,18 +21,22 @@
 //!   would otherwise interpolate between two places, stays where it is;
 //!   at w = 0 the view keeps its zenith angle, which the horizon's band
 //!   needs. w = 1 within 10 degrees of the sun and 0 beyond 40, 0 within
-//!   5 degrees of the horizon (1 from 20 up), and 0 for suns above 85
-//!   degrees (1 below 70), where the aureole reaches the zenith and the
-//!   zenith axis's nodes (3 degrees apart there) are coarser than it; or,
-//!   for suns below 2 degrees (none above 6), w = 1 within 40 degrees of
-//!   the antisolar point and 0 beyond 80, the horizon included: the
-//!   planet's shadow, which rises at the antisolar horizon as the sun
-//!   sets, turns with the antisolar point, and a view along its edge read
-//!   unturned from the layer below the sunset is several times too dark
-//!   (smoothstep ramps between; the larger of the two shares). At a sun
-//!   node the read is the layer's own. With the sun below the horizon,
-//!   near the antisolar point and below the shadow's edge
-//!   ([`shadow_read_share`]), the read is blended toward that of the sun
+//!   5 degrees of the horizon (1 from 20 up); or, for suns below 2
+//!   degrees (none above 6), w = 1 within 40 degrees of the antisolar
+//!   point and 0 beyond 80, the horizon included: the planet's shadow,
+//!   which rises at the antisolar horizon as the sun sets, turns with the
+//!   antisolar point, and a view along its edge read unturned from the
+//!   layer below the sunset is several times too dark (smoothstep ramps
+//!   between; the larger of the two shares). For suns above 70 degrees
+//!   the turned read is blended in ln L with the unturned one, by a
+//!   weight that falls to 0 at 85 ([`turned_read_weight`]): there the
+//!   aureole reaches the zenith, whose rows (3 degrees apart) are
+//!   coarser than its core: a view turned part of the way would cross the
+//!   first zenith row of the layer at 90 degrees, where its radiance falls
+//!   ninefold, and bend the zenith's brightness against the sun's
+//!   elevation. At a sun node the read is the layer's own. With the sun
+//!   below the horizon, near the antisolar point and below the shadow's
+//!   edge ([`shadow_read_share`]), the read is blended toward that of the sun
 //!   axis cut at its last node below the horizon (the chord of the last
 //!   two such layers, extended beyond the last; the curvature at the cut
 //!   dropped): a layer with the sun up has no shadow to give.
@@ -140,8 +144,7 @@ pub(crate) fn turn_share(view: LocalView, e_deg: f64, horizon: f64) -> f64 {
         10f64.to_radians().cos(),
         cos_theta,
     ) * (1.0
-        - smoothstep(horizon - 20f64.to_radians(), horizon - 5f64.to_radians(), z))
-        * (1.0 - smoothstep(70.0, 85.0, e_deg));
+        - smoothstep(horizon - 20f64.to_radians(), horizon - 5f64.to_radians(), z));
     // The planet's shadow, which rises at the antisolar horizon as the sun
     // sets, turns with the antisolar point (horizon included).
     let shadow = smoothstep(
@@ -150,6 +153,14 @@ pub(crate) fn turn_share(view: LocalView, e_deg: f64, horizon: f64) -> f64 {
         -cos_theta,
     ) * (1.0 - smoothstep(2.0, 6.0, e_deg));
     sun_side.max(shadow)
+}
+
+/// The weight of the turned read of a sun layer against its unturned
+/// read, in ln L: 1 for suns below 70 degrees, 0 above 85 (smoothstep
+/// between), where the aureole reaches the zenith and the zenith axis's
+/// rows (3 degrees apart there) are coarser than its core.
+pub(crate) fn turned_read_weight(e_deg: f64) -> f64 {
+    1.0 - smoothstep(70.0, 85.0, e_deg)
 }
 
 /// Where the read below the planet's shadow's edge ([`shadow_read_share`])
@@ -339,8 +350,15 @@ impl EngineTables {
             sun_elevation_deg.clamp(axes::SUN_ELEVATION_MIN_DEG, axes::SUN_ELEVATION_MAX_DEG);
         let a_count = self.settings.altitude_nodes;
         let ((a, fa), (s, fs)) = self.altitude_and_sun_cells(h, e_deg);
-        let share = turn_share(view, e_deg, horizon);
-        let layer = |s: usize| {
+        let weight = turned_read_weight(e_deg);
+        let share = if weight > 0.0 {
+            turn_share(view, e_deg, horizon)
+        } else {
+            0.0
+        };
+        // ln L of sun layer `s` read at `view` turned by `share` of the
+        // step to its node.
+        let read_at = |s: usize, share: f64| {
             let node_deg = axes::sun_elevation_of_node(s, self.settings.sun_nodes);
             let turned = turned_view(view, (node_deg - e_deg).to_radians() * share, horizon);
             let coordinate =
@@ -357,6 +375,17 @@ impl EngineTables {
                 }
             };
             mix(at(a), at(a + 1), fa).map(|v| v.max(FLOOR).ln())
+        };
+        // Blended with the unturned read by `weight` (a view turned part
+        // of the way toward a layer whose sun is near the zenith crossed
+        // that layer's zenith rows, coarser than the aureole's core).
+        let layer = |s: usize| -> [f64; 3] {
+            let turned = read_at(s, share);
+            if share == 0.0 || weight == 1.0 {
+                return turned;
+            }
+            let unturned = read_at(s, 0.0);
+            std::array::from_fn(|i| unturned[i] + (turned[i] - unturned[i]) * weight)
         };
         let s_count = self.settings.sun_nodes;
         // ln L on the sun axis cut at node `top`: the chord between the

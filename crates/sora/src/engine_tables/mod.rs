@@ -157,11 +157,14 @@ impl Default for EngineTableSettings {
             sun_nodes: 48,
             altitude_nodes: 6,
             zenith_nodes_per_half: 64,
-            // The plain axis: with 21 fine and 22 wide cells paper-mars
-            // passes after sunset, but earth-hazy's zenith against the sun
-            // is not smooth enough at 80 degrees (docs/engine-tables.md).
-            zenith_fine_cells_per_half: 0,
-            zenith_wide_cells_per_half: 0,
+            // 21 fine and 22 wide cells: the nodes of the last 21 cells
+            // next to the horizon are the images' sky-view rows (up to 2.5
+            // degrees above it for an eye on the ground), which puts
+            // paper-mars' horizon band after sunset within 2 % (1.06-1.70
+            // % from 2.33-5.63 % with the plain axis) at the same size and
+            // bake (docs/engine-tables.md).
+            zenith_fine_cells_per_half: 21,
+            zenith_wide_cells_per_half: 22,
             azimuth_nodes: 64,
             transmittance_nodes: (32, 128),
             // No aerial table by default: at (8, 8, 6) it is not yet
@@ -782,19 +785,20 @@ const MULTIPLE_FROM_NEIGHBOURS_DEG: (f64, f64) = (0.0, 12.5);
 /// layer's views lies on a row and its single scattering is marched there,
 /// not interpolated between rows), with no more of them than the layer
 /// has, and no more azimuth nodes than the layer's or the sky's images'.
-/// At the default settings this is 64 x 48 nodes instead of the images'
-/// 128 x 48: half the single-scattering marches, and the multiply
-/// scattered light marched at as many rows as the images'
-/// ([`LAYER_MULTIPLE_STRIDE`]) in fewer view-ray panels than the field's
-/// (`field_panels` false; [`layer_multiple_panels`]).
+/// With the plain axis (no fine or wide cells) at 64 nodes per half this
+/// is 64 x 48 nodes instead of the images' 128 x 48: half the
+/// single-scattering marches, and the multiply scattered light marched at
+/// as many rows as the images' ([`LAYER_MULTIPLE_STRIDE`]) in fewer
+/// view-ray panels than the field's (`field_panels` false;
+/// [`layer_multiple_panels`]).
 ///
 /// With fine or wide cells (`zenith_fine_cells_per_half`,
-/// `zenith_wide_cells_per_half`) the table's rows are the zenith axis's
-/// grid (`axes::zenith_of_node`; 128 per half, the images' own, at 64
-/// nodes with 21 fine and 22 wide cells, or 78 nodes and 27 fine cells),
-/// and only the rows that are the layer's nodes are marched (single and
-/// multiply scattered light, [`MarchedRows`]): as many marches as the
-/// layer has rows.
+/// `zenith_wide_cells_per_half`; the defaults' 21 and 22) the table's
+/// rows are the zenith axis's grid (`axes::zenith_of_node`; 128 per half,
+/// the images' own, at 64 nodes with 21 fine and 22 wide cells, or 78
+/// nodes and 27 fine cells), and only the rows that are the layer's nodes
+/// are marched (single and multiply scattered light, [`MarchedRows`]): as
+/// many marches as the layer has rows.
 fn layer_sky_view(
     sky: &Sky,
     settings: &EngineTableSettings,
