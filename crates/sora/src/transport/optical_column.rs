@@ -700,6 +700,7 @@ impl SunColumnTable {
     /// The part of a lookup that depends on the radius alone: a point
     /// that is looked up toward many suns (the spherical first order's
     /// samples) locates its radius once.
+    ///
     /// The node radii and H are kept in the table, and rho = sqrt(r^2 -
     /// R^2) taken once: the same values as computed here each time
     /// ([`SunColumnTable::unit_from_radius`], `radius_from_unit`; the
@@ -715,14 +716,7 @@ impl SunColumnTable {
         // is linear in altitude: ln(mean density) of an exponential profile
         // is linear in altitude, and quadratic in rho.
         let (r0, r1) = (self.node_radii_m[i], self.node_radii_m[i + 1]);
-        SunColumnRadius {
-            r,
-            r_squared: r * r,
-            altitude_node: i,
-            altitude_weight: ((r - r0) / (r1 - r0)).clamp(0.0, 1.0),
-            d_min: top - r,
-            d_max: rho + h,
-        }
+        SunColumnRadius::new(r, (i, r0, r1), (top, rho, h))
     }
 
     /// The radius of the march node `node` and where it lies in the table:
@@ -831,6 +825,15 @@ impl SunColumnTable {
         let top = self.top_radius_m;
         let h = ((top - ground) * (top + ground)).sqrt();
         let rho = ((r - ground) * (r + ground)).max(0.0).sqrt();
+        SunColumnRadius::new(r, (i, r0, r1), (top, rho, h))
+    }
+}
+
+impl SunColumnRadius {
+    /// The radius `r` (m) in the cell above altitude node `i`, between the
+    /// node radii `r0` and `r1`, in an atmosphere of top radius `top` (m),
+    /// with rho = sqrt(r^2 - R^2) and H (m).
+    fn new(r: f64, (i, r0, r1): (usize, f64, f64), (top, rho, h): (f64, f64, f64)) -> Self {
         SunColumnRadius {
             r,
             r_squared: r * r,
