@@ -292,18 +292,15 @@ impl<'a> Together<'a> {
         exp_neg_in_place(&mut self.depths);
         for ((sky, scratch), offset) in self.skies.iter_mut().zip(&self.offsets) {
             let wavelengths = sky.optics.grid.len();
-            let transmittances = &self.depths[*offset..*offset + wavelengths];
-            for (j, density) in densities.iter().enumerate() {
-                let density = *density;
-                if density <= 0.0 || !scratch.scattering_species[j] {
-                    continue;
-                }
-                let row =
-                    &mut scratch.inscattering_integrals[j * wavelengths..(j + 1) * wavelengths];
-                for (acc, transmittance) in row.iter_mut().zip(transmittances) {
-                    *acc += weight * density * transmittance;
-                }
-            }
+            add_to_integrals(
+                (
+                    weight,
+                    densities,
+                    &self.depths[*offset..*offset + wavelengths],
+                ),
+                &scratch.scattering_species,
+                &mut scratch.inscattering_integrals,
+            );
         }
     }
 }
