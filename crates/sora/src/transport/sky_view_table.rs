@@ -86,13 +86,22 @@ pub struct SkyViewTable {
     azimuth_nodes: usize,
     /// Zenith angle of the horizon seen by the eye, rad.
     horizon_zenith_rad: f64,
-    /// Values per node: species * wavelengths integrals (m), then
-    /// wavelengths sunlit ground radiances, then (with multiple scattering)
-    /// wavelengths multiply scattered radiances of the air, wavelengths
-    /// radiances of the ground's skylight (W m^-2 sr^-1 nm^-1) and the
-    /// forward-peak integrals ((species + 2) * wavelengths, see
-    /// `MultipleScatteringScratch::forward_integrals`).
+    /// Values per node: the integrals (m) of the species that scatter
+    /// ([`SkyViewTable::kept`]), kept * wavelengths, then wavelengths sunlit
+    /// ground radiances, then (with multiple scattering) wavelengths
+    /// multiply scattered radiances of the air, wavelengths radiances of
+    /// the ground's skylight (W m^-2 sr^-1 nm^-1) and the forward-peak
+    /// integrals of the kept species and the peak-only rows ((kept + 2) *
+    /// wavelengths, see `MultipleScatteringScratch::forward_integrals`).
     values_per_node: usize,
+    /// The species that scatter at some wavelength, in order: an absorber's
+    /// integrals and forward-peak rows take its scattering coefficient, 0,
+    /// wherever they are used (`radiance_from_integrals` and the forward
+    /// peak's radiances add E beta_sca p I_j), so the table holds none of
+    /// them and a read gives zeros in their rows (whose terms those sums
+    /// skip: the same values, bit for bit). Of the sky's `species`.
+    kept: Vec<usize>,
+    species: usize,
     wavelengths: usize,
     has_multiple_scattering: bool,
     /// Values per node of the multiply scattered light's blocks (the
@@ -163,16 +172,11 @@ impl SkyViewTable {
             .collect();
         let together = shares.iter().any(|s| *s);
         // One node's integrals and sunlit ground from a scene's scratch.
-        let store = |sky: &SingleScatteringScene,
-                     scratch: &SingleScatteringScratch,
-                     table: &SkyViewTable,
-                     node: &mut [f32]| {
-            let species = sky.optics().species.len();
-            let (integrals, rest) = node.split_at_mut(species * table.wavelengths);
-            let ground = &mut rest[..table.wavelengths];
-            for (o, v) in integrals.iter_mut().zip(scratch.inscattering_integrals()) {
-                *o = *v as f32;
-            }
+        let store = |scratch: &SingleScatteringScratch, table: &SkyViewTable, node: &mut [f32]| {
+            let w = table.wavelengths;
+            let (integrals, rest) = node.split_at_mut(table.kept.len() * w);
+            let ground = &mut rest[..w];
+            table.store_kept_rows(scratch.inscattering_integrals(), integrals);
             for (o, v) in ground.iter_mut().zip(scratch.ground_radiance()) {
                 *o = *v as f32;
             }
@@ -221,15 +225,10 @@ impl SkyViewTable {
                         &mut others,
                     );
                     let stride = tables[0].values_per_node;
-                    store(sky, first, &tables[0], &mut outs[0][k * stride..][..stride]);
+                    store(first, &tables[0], &mut outs[0][k * stride..][..stride]);
                     for (t, scratch) in with.iter().zip(others.scratches()) {
                         let stride = tables[*t].values_per_node;
-                        store(
-                            skies[*t].0,
-                            scratch,
-                            &tables[*t],
-                            &mut outs[*t][k * stride..][..stride],
-                        );
+                        store(scratch, &tables[*t], &mut outs[*t][k * stride..][..stride]);
                     }
                 }
             }
@@ -256,10 +255,9 @@ impl SkyViewTable {
                     let node = &mut outs[t][k * stride..(k + 1) * stride];
                     if !marched_together {
                         sky.compute_inscattering_integrals(view, columns, scratch);
-                        store(sky, scratch, table, node);
+                        store(scratch, table, node);
                     }
-                    let species = sky.optics().species.len();
-                    let rest = &mut node[(species + 1) * wavelengths..];
+                    let rest = &mut node[(table.kept.len() + 1) * wavelengths..];
                     let marched_here = march_multiple
                         && marched(index_in_half, half_zenith_nodes, multiple_stride.0)
                         && marched(k, azimuth_nodes, multiple_stride.1);
@@ -280,7 +278,13 @@ impl SkyViewTable {
                         for (o, v) in ground_skylight.iter_mut().zip(skylit.iter()) {
                             *o = *v as f32;
                         }
-                        for (o, v) in forward.iter_mut().zip(ms_scratch.forward_integrals()) {
+                        // The kept species' rows, then the peak-only rows.
+                        let all = ms_scratch.forward_integrals();
+                        let (rows, peak_only) =
+                            forward.split_at_mut(table.kept.len() * wavelengths);
+                        table.store_kept_rows(all, rows);
+                        let extra = &all[table.species * wavelengths..];
+                        for (o, v) in peak_only.iter_mut().zip(extra) {
                             *o = *v as f32;
                         }
                     }
@@ -361,13 +365,25 @@ impl SkyViewTable {
         let wavelengths = optics.grid.len();
         let has_multiple_scattering = multiple_scattering.is_some();
         let species = optics.species.len();
+        let kept: Vec<usize> = (0..species)
+            .filter(|j| {
+                optics.species[*j]
+                    .scattering_per_m
+                    .values()
+                    .iter()
+                    .any(|v| *v != 0.0)
+            })
+            .collect();
         // Integrals, ground; with multiple scattering its radiance and its
-        // forward-peak integrals.
-        let forward_rows = multiple_scattering.map_or(0, |ms| ms.field().forward_integral_rows());
+        // forward-peak integrals (the kept species' rows and the peak-only
+        // rows).
+        let forward_rows = multiple_scattering.map_or(0, |ms| {
+            ms.field().forward_integral_rows() - species + kept.len()
+        });
         let blocks = if has_multiple_scattering {
-            species + 3 + forward_rows
+            kept.len() + 3 + forward_rows
         } else {
-            species + 1
+            kept.len() + 1
         };
         let (ground_radius, _) = sky.radii_m();
         let observer_radius = sky.observer_radius_m();
@@ -381,6 +397,8 @@ impl SkyViewTable {
             azimuth_nodes,
             horizon_zenith_rad,
             values_per_node: blocks * wavelengths,
+            kept,
+            species,
             wavelengths,
             has_multiple_scattering,
             // Marched at every other node: multiple scattering's radiance
@@ -567,22 +585,43 @@ impl SkyViewTable {
             (fx * fy) as f32,
         ];
         let interpolate = |m: usize| (a[m] * w[0] + b[m] * w[1] + c[m] * w[2] + d[m] * w[3]) as f64;
-        let split = integrals.len();
-        for (m, out) in integrals.iter_mut().enumerate() {
-            *out = interpolate(m);
-        }
+        let wavelengths = self.wavelengths;
+        // The species' rows from the kept ones' at `from` (zeros for the
+        // others); returns where the table's values go on.
+        let rows = |out: &mut [f64], from: usize| {
+            out[..self.species * wavelengths].fill(0.0);
+            for (k, j) in self.kept.iter().enumerate() {
+                for (i, o) in out[j * wavelengths..][..wavelengths].iter_mut().enumerate() {
+                    *o = interpolate(from + k * wavelengths + i);
+                }
+            }
+            from + self.kept.len() * wavelengths
+        };
+        let split = rows(integrals, 0);
         for (m, out) in ground.iter_mut().enumerate() {
             *out = interpolate(split + m);
         }
         if let Some((multiple, ground_skylight, forward)) = multiple {
             for (m, out) in multiple.iter_mut().enumerate() {
-                *out = interpolate(split + self.wavelengths + m);
+                *out = interpolate(split + wavelengths + m);
             }
             for (m, out) in ground_skylight.iter_mut().enumerate() {
-                *out = interpolate(split + 2 * self.wavelengths + m);
+                *out = interpolate(split + 2 * wavelengths + m);
             }
-            for (m, out) in forward.iter_mut().enumerate() {
-                *out = interpolate(split + 3 * self.wavelengths + m);
+            let peak_only = rows(forward, split + 3 * wavelengths);
+            for (m, out) in forward[self.species * wavelengths..].iter_mut().enumerate() {
+                *out = interpolate(peak_only + m);
+            }
+        }
+    }
+
+    /// The kept species' rows of `all` (species-major, [j * wavelengths +
+    /// i], every species of the sky) into `out`, kept-major.
+    fn store_kept_rows(&self, all: &[f64], out: &mut [f32]) {
+        let w = self.wavelengths;
+        for (row, j) in out.chunks_exact_mut(w).zip(&self.kept) {
+            for (o, v) in row.iter_mut().zip(&all[j * w..][..w]) {
+                *o = *v as f32;
             }
         }
     }
