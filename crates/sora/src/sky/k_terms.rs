@@ -777,25 +777,24 @@ impl Sky {
         Ok(weighted_images(images, add, zero))
     }
 
-    /// [`Self::sum_term_images`] for a colour image: each term rendered by
-    /// `render(term, its colour conversion)` through
-    /// [`term_colour_conversion`] (a term with no sample in the
-    /// colour-matching functions' range adds nothing).
-    pub(super) fn sum_term_colour_images<T: Clone>(
-        &self,
-        to_xyz: &SpectrumToXyz,
-        progress: &(dyn Fn(usize) + Sync),
-        zero: T,
-        add: impl Fn(&mut T, f64, &T),
-        render: impl Fn(&Sky, &SpectrumToXyz, &(dyn Fn(usize) + Sync)) -> Result<Vec<T>>,
-    ) -> Result<Vec<T>> {
-        self.sum_term_images(progress, zero, add, |(offset, weights), term, p| {
-            let grid = (offset, term.wavelengths());
-            let Some((weight, to_xyz)) = term_colour_conversion(to_xyz, grid, weights) else {
-                return Ok(None);
-            };
-            Ok(Some((weight, render(term, &to_xyz, p)?)))
-        })
+    /// The term skies that add colour, each with its colour conversion
+    /// through [`term_colour_conversion`] (the weight to scale its colours
+    /// by, and the conversion on its grid): what a colour image of the
+    /// terms sums, pixel by pixel (`Sky::render_pixels_of`).
+    pub(super) fn term_colour_conversions<'a>(
+        &'a self,
+        to_xyz: &'a SpectrumToXyz,
+    ) -> (
+        Vec<&'a Sky>,
+        Vec<(f64, std::borrow::Cow<'a, SpectrumToXyz>)>,
+    ) {
+        self.k_terms
+            .iter()
+            .filter_map(|(weights, term)| {
+                let grid = (self.term_offset(term), term.wavelengths());
+                term_colour_conversion(to_xyz, grid, weights).map(|c| (term, c))
+            })
+            .unzip()
     }
 }
 

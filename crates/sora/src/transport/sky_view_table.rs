@@ -584,34 +584,38 @@ impl SkyViewTable {
             (fx * (1.0 - fy)) as f32,
             (fx * fy) as f32,
         ];
-        let interpolate = |m: usize| (a[m] * w[0] + b[m] * w[1] + c[m] * w[2] + d[m] * w[3]) as f64;
+        // The values from `from` on into `out`, one loop over the four
+        // nodes' slices (the same operations value by value).
+        let interpolate = |out: &mut [f64], from: usize| {
+            let n = out.len();
+            let (a, b, c, d) = (
+                &a[from..from + n],
+                &b[from..from + n],
+                &c[from..from + n],
+                &d[from..from + n],
+            );
+            for (m, o) in out.iter_mut().enumerate() {
+                *o = (a[m] * w[0] + b[m] * w[1] + c[m] * w[2] + d[m] * w[3]) as f64;
+            }
+            from + n
+        };
         let wavelengths = self.wavelengths;
         // The species' rows from the kept ones' at `from` (zeros for the
         // others); returns where the table's values go on.
-        let rows = |out: &mut [f64], from: usize| {
+        let rows = |out: &mut [f64], mut from: usize| {
             out[..self.species * wavelengths].fill(0.0);
-            for (k, j) in self.kept.iter().enumerate() {
-                for (i, o) in out[j * wavelengths..][..wavelengths].iter_mut().enumerate() {
-                    *o = interpolate(from + k * wavelengths + i);
-                }
+            for j in &self.kept {
+                from = interpolate(&mut out[j * wavelengths..][..wavelengths], from);
             }
-            from + self.kept.len() * wavelengths
+            from
         };
         let split = rows(integrals, 0);
-        for (m, out) in ground.iter_mut().enumerate() {
-            *out = interpolate(split + m);
-        }
+        let next = interpolate(ground, split);
         if let Some((multiple, ground_skylight, forward)) = multiple {
-            for (m, out) in multiple.iter_mut().enumerate() {
-                *out = interpolate(split + wavelengths + m);
-            }
-            for (m, out) in ground_skylight.iter_mut().enumerate() {
-                *out = interpolate(split + 2 * wavelengths + m);
-            }
-            let peak_only = rows(forward, split + 3 * wavelengths);
-            for (m, out) in forward[self.species * wavelengths..].iter_mut().enumerate() {
-                *out = interpolate(peak_only + m);
-            }
+            let next = interpolate(multiple, next);
+            let next = interpolate(ground_skylight, next);
+            let peak_only = rows(forward, next);
+            interpolate(&mut forward[self.species * wavelengths..], peak_only);
         }
     }
 
