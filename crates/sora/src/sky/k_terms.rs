@@ -1378,6 +1378,61 @@ pub(crate) mod tests {
     }
 
     #[test]
+    fn the_terms_colour_images_in_one_pass_are_each_terms_images_summed() {
+        // A colour image of a sky with gases renders its terms in one pixel
+        // pass (`Sky::render_pixels_of`); it must be bit for bit the sum,
+        // in term order, of each term's own image (`weighted_images`, what
+        // the images were before), colour and Stokes, the sun's disc in
+        // view (5 degrees up, fisheye) and the terms on their sub-grids.
+        let atmosphere = earth_clear_with_gases();
+        let grid = WavelengthGrid::new(500.0, 780.0, 40.0).unwrap();
+        let observer = crate::colour::Observer::Cie1931TwoDegree;
+        let sky = Sky::builder(&atmosphere)
+            .sun_deg(5.0, 180.0)
+            .wavelengths(grid)
+            .polarisation(Polarisation::Vector)
+            .for_colour_images(observer)
+            .build()
+            .unwrap();
+        let image = ImageSettings::new(Camera::Fisheye, 16, 16);
+        assert!(image.draw_sun_disc);
+        let to_xyz = SpectrumToXyz::new(&grid, observer);
+        let (skies, conversions) = sky.term_colour_conversions(&to_xyz);
+        assert_eq!(skies.len(), TERMS);
+        assert!(skies[1].wavelengths().len() < grid.len());
+        let bits = |x: &Xyz| [x.x.to_bits(), x.y.to_bits(), x.z.to_bits()];
+        let together = sky.render_xyz(&image, &to_xyz, &|_| {}).unwrap();
+        let own: Vec<(f64, Vec<Xyz>)> = skies
+            .iter()
+            .zip(&conversions)
+            .map(|(term, (w, c))| (*w, term.render_xyz(&image, c, &|_| {}).unwrap()))
+            .collect();
+        let summed = weighted_images(own, add_scaled_xyz, Xyz::BLACK);
+        assert!(together.iter().any(|x| x.y > 0.0));
+        assert!(
+            together
+                .iter()
+                .zip(&summed)
+                .all(|(a, b)| bits(a) == bits(b))
+        );
+        let together = sky.render_stokes_xyz(&image, &to_xyz, &|_| {}).unwrap();
+        let own: Vec<(f64, Vec<[Xyz; 4]>)> = skies
+            .iter()
+            .zip(&conversions)
+            .map(|(term, (w, c))| (*w, term.render_stokes_xyz(&image, c, &|_| {}).unwrap()))
+            .collect();
+        let add = |sum: &mut [Xyz; 4], w: f64, x: &[Xyz; 4]| {
+            for (s, x) in sum.iter_mut().zip(x) {
+                add_scaled_xyz(s, w, x);
+            }
+        };
+        let summed = weighted_images(own, add, [Xyz::BLACK; 4]);
+        for (a, b) in together.iter().zip(&summed) {
+            assert!(a.iter().zip(b).all(|(a, b)| bits(a) == bits(b)));
+        }
+    }
+
+    #[test]
     fn a_colour_sky_folds_its_terms_only_where_colour_stays_within_the_bound() {
         // earth-clear with 2.9 cm of water and the mixed gases on the
         // default grid (380-780 nm every 20; the terms differ at 580-780

@@ -350,6 +350,17 @@ impl Sky {
                 disc,
             });
         }
+        // Per sky: whether it reads the first's pixel geometry (the terms'
+        // skies: the same sun and table axes), bit for bit its own.
+        let shares_geometry: Vec<bool> = reads
+            .iter()
+            .map(|r| match (reads[0].tables, r.tables) {
+                (Some(first), Some(tables)) => {
+                    reads[0].sky.has_pixel_geometry_of(first, (r.sky, tables))
+                }
+                _ => false,
+            })
+            .collect();
         let rows_done = std::sync::atomic::AtomicUsize::new(0);
         let row_length = width as usize * per_pixel;
         let mut pixels = vec![black; row_length * height as usize];
@@ -375,6 +386,7 @@ impl Sky {
                     continue;
                 };
                 let index = row * width as usize + column;
+                let mut first_geometry = None;
                 for (k, (r, (work, spectra))) in reads.iter().zip(works.iter_mut()).enumerate() {
                     let sky = r.sky;
                     let (radiance, stokes) = spectra.split_at_mut(sky.wavelengths().len());
@@ -382,9 +394,16 @@ impl Sky {
                     // reference march is scalar: `Sky::set_polarisation`).
                     match r.tables {
                         Some(tables) => {
-                            sky.compute_pixel_radiance(view, tables, work, radiance);
+                            let pixel = match first_geometry {
+                                Some(pixel) if shares_geometry[k] => pixel,
+                                _ => sky.pixel_geometry(view, tables),
+                            };
+                            if k == 0 {
+                                first_geometry = Some(pixel);
+                            }
+                            sky.compute_pixel_radiance(&pixel, tables, work, radiance);
                             if sky.polarisation == Polarisation::Vector {
-                                sky.add_pixel_stokes(view, tables, work, radiance, stokes);
+                                sky.add_pixel_stokes(&pixel, tables, work, radiance, stokes);
                             }
                         }
                         None => sky.compute_view_radiance(view, r.source_table, work, radiance),

@@ -516,40 +516,8 @@ impl SkyViewTable {
         Vector3::new(sin_z * east, sin_z * north, cos_z)
     }
 
-    /// The view's integrals and sunlit ground's radiance into `integrals`
-    /// and `ground`, and the air's multiply
-    /// scattered radiance into `multiple`, the ground's skylight into
-    /// `ground_skylight` and the forward-peak integrals ((species + 2) *
-    /// wavelengths, see [`crate::transport::multiple_scattering::MultipleScatteringScratch::forward_integrals`])
-    /// into `forward` (zeros when the table has none).
-    pub(crate) fn lookup_with_multiple_scattering(
-        &self,
-        view: Vector3,
-        (integrals, ground): (&mut [f64], &mut [f64]),
-        (multiple, ground_skylight, forward): (&mut [f64], &mut [f64], &mut [f64]),
-    ) {
-        if self.has_multiple_scattering {
-            self.interpolate(
-                view,
-                integrals,
-                ground,
-                Some((multiple, ground_skylight, forward)),
-            );
-        } else {
-            self.interpolate(view, integrals, ground, None);
-            multiple.fill(0.0);
-            ground_skylight.fill(0.0);
-            forward.fill(0.0);
-        }
-    }
-
-    fn interpolate(
-        &self,
-        view: Vector3,
-        integrals: &mut [f64],
-        ground: &mut [f64],
-        multiple: Option<(&mut [f64], &mut [f64], &mut [f64])>,
-    ) {
+    /// Where `view` falls among the table's nodes ([`SkyViewCell`]).
+    pub(crate) fn cell(&self, view: Vector3) -> SkyViewCell {
         let zenith = view.z.clamp(-1.0, 1.0).acos();
         let (sx, sy) = self.sun_horizontal;
         let along = view.x * sx + view.y * sy;
@@ -568,6 +536,67 @@ impl SkyViewTable {
         let y = relative_azimuth / std::f64::consts::PI * (self.azimuth_nodes - 1) as f64;
         let k = (y.floor() as usize).min(self.azimuth_nodes - 2);
         let fy = y - k as f64;
+        SkyViewCell {
+            row: i,
+            column: k,
+            weights: [
+                ((1.0 - fx) * (1.0 - fy)) as f32,
+                ((1.0 - fx) * fy) as f32,
+                (fx * (1.0 - fy)) as f32,
+                (fx * fy) as f32,
+            ],
+        }
+    }
+
+    /// Whether a view falls in the same [`SkyViewCell`] of `other` as of
+    /// this table: the same axes, horizon and sun's azimuth (the
+    /// k-distribution's term skies' tables).
+    pub(crate) fn has_cells_of(&self, other: &SkyViewTable) -> bool {
+        (self.half_zenith_nodes, self.azimuth_nodes)
+            == (other.half_zenith_nodes, other.azimuth_nodes)
+            && self.horizon_zenith_rad.to_bits() == other.horizon_zenith_rad.to_bits()
+            && self.sun_horizontal.0.to_bits() == other.sun_horizontal.0.to_bits()
+            && self.sun_horizontal.1.to_bits() == other.sun_horizontal.1.to_bits()
+    }
+
+    /// The view's integrals and sunlit ground's radiance into `integrals`
+    /// and `ground`, and the air's multiply
+    /// scattered radiance into `multiple`, the ground's skylight into
+    /// `ground_skylight` and the forward-peak integrals ((species + 2) *
+    /// wavelengths, see [`crate::transport::multiple_scattering::MultipleScatteringScratch::forward_integrals`])
+    /// into `forward` (zeros when the table has none).
+    pub(crate) fn lookup_with_multiple_scattering(
+        &self,
+        cell: SkyViewCell,
+        (integrals, ground): (&mut [f64], &mut [f64]),
+        (multiple, ground_skylight, forward): (&mut [f64], &mut [f64], &mut [f64]),
+    ) {
+        if self.has_multiple_scattering {
+            self.interpolate(
+                cell,
+                integrals,
+                ground,
+                Some((multiple, ground_skylight, forward)),
+            );
+        } else {
+            self.interpolate(cell, integrals, ground, None);
+            multiple.fill(0.0);
+            ground_skylight.fill(0.0);
+            forward.fill(0.0);
+        }
+    }
+
+    fn interpolate(
+        &self,
+        SkyViewCell {
+            row: i,
+            column: k,
+            weights: w,
+        }: SkyViewCell,
+        integrals: &mut [f64],
+        ground: &mut [f64],
+        multiple: Option<(&mut [f64], &mut [f64], &mut [f64])>,
+    ) {
         let n = self.values_per_node;
         let node = |row: usize, column: usize| {
             &self.values[(row * self.azimuth_nodes + column) * n..][..n]
@@ -578,12 +607,6 @@ impl SkyViewTable {
             node(i + 1, k),
             node(i + 1, k + 1),
         );
-        let w = [
-            ((1.0 - fx) * (1.0 - fy)) as f32,
-            ((1.0 - fx) * fy) as f32,
-            (fx * (1.0 - fy)) as f32,
-            (fx * fy) as f32,
-        ];
         // The values from `from` on into `out`, one loop over the four
         // nodes' slices (the same operations value by value).
         let interpolate = |out: &mut [f64], from: usize| {
@@ -629,6 +652,17 @@ impl SkyViewTable {
             }
         }
     }
+}
+
+/// Where a view falls among a sky-view table's nodes
+/// ([`SkyViewTable::cell`]): the first zenith row and azimuth column of its
+/// cell and the bilinear weights of the cell's four nodes (row, column),
+/// (row, column + 1), (row + 1, column), (row + 1, column + 1).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct SkyViewCell {
+    row: usize,
+    column: usize,
+    weights: [f32; 4],
 }
 
 /// Whether node `index` of an axis of `count` nodes gets its multiply
