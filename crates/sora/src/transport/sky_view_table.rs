@@ -4,8 +4,10 @@
 //! and without the phase function).
 //!
 //! What is tabulated, per view direction and wavelength: the integrals
-//! I_j(lambda) of [`super::single_scattering`] (one per species, m) and the
-//! sunlit ground's radiance. Neither contains the phase function: with a
+//! I_j(lambda) of [`super::single_scattering`] (one per species that
+//! scatters at some wavelength, m: an absorber's integral is multiplied by
+//! its scattering coefficient, 0, wherever it is used, so a read gives it
+//! as zeros) and the sunlit ground's radiance. Neither contains the phase function: with a
 //! point sun the scattering angle is fixed along each view ray, so the
 //! phase functions, which carry all the sharp structure (the aerosol's
 //! forward peak, the Mie glory), are applied exactly per pixel by
