@@ -160,9 +160,14 @@
 //! tables hold only the species that scatter (an absorber's integrals
 //! take its scattering coefficient, 0: the banded gases, ozone and NO2
 //! add no rows), so the gas image's tables are some 60 % smaller. With
-//! both, the gas fisheye below takes 0.94 times the CPU of the build
-//! before, byte-identical, its peak memory 158 MiB against 186; see
-//! docs/atmosphere-file.md for the numbers and for what is left.
+//! both, the gas fisheye below takes 0.935 times the CPU of the build
+//! before (`farm-bench -n 12`, paired, 0.90-0.98, 2-core machine at load
+//! 16-19), byte-identical, its peak memory 158 MiB against 187, and 2.50
+//! times the gas-free image (2.41-2.58; the build before 2.61 the same
+//! hour). What is left is the terms' samples themselves: their fields,
+//! tables and pixels cost about what the same number of gas-free samples
+//! cost, so one sky carrying the terms as channels would still take
+//! about 2 times the gas-free image (docs/atmosphere-file.md).
 //!
 //! Standard errors (path tracing) add as sum_j w_j se_j, the bound for
 //! errors that may be correlated (the terms are traced with one seed).
