@@ -17,6 +17,19 @@ use crate::transport::path_tracing::worst_relative_error;
 use crate::transport::stokes::{meridian_reference, rotation_cos_sin_2eta, scattering_plane};
 use crate::transport::{PathTracer, SingleScatteringScratch, SunColumns};
 
+/// What a pixel's read of a sky's image tables takes from its direction
+/// alone: the direction (unit, east-north-up), its cell in the sky-view
+/// table, and for a polarised sky the rotation (cos 2 eta, sin 2 eta) from
+/// the scattering plane to its meridian frame and its azimuth from the
+/// sun's, rad (`Sky::pixel_geometry`). The k-distribution's term skies
+/// share one per pixel (`Sky::has_pixel_geometry_of`).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct PixelGeometry {
+    pub(super) view: Vector3,
+    cell: crate::transport::SkyViewCell,
+    stokes: Option<((f64, f64), f64)>,
+}
+
 /// The radiance of one view, W m^-2 sr^-1 nm^-1 on the sky's grid.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SkyRadiance {
@@ -590,9 +603,28 @@ impl Sky {
         work: &mut ViewWork,
         stokes: &mut [f64],
     ) {
+        let rotation = self.scattering_plane_rotation(w, meridian);
+        self.compute_single_scattering_stokes_rotated((w, rotation), single, work, stokes);
+    }
+
+    /// (cos 2 eta, sin 2 eta) of the rotation from the scattering plane of
+    /// sunlight scattered into the view `w` to the view's meridian frame
+    /// (`meridian`, its reference).
+    fn scattering_plane_rotation(&self, w: Vector3, meridian: Vector3) -> (f64, f64) {
         let (k_in, k_out) = (-self.sun_direction(), -w);
         let normal = scattering_plane(k_in, k_out, meridian);
-        let (c, s) = rotation_cos_sin_2eta(k_out, normal.cross(k_out), meridian);
+        rotation_cos_sin_2eta(k_out, normal.cross(k_out), meridian)
+    }
+
+    /// [`Sky::compute_single_scattering_stokes`] with the rotation to the
+    /// meridian frame, (c, s), found already.
+    fn compute_single_scattering_stokes_rotated(
+        &self,
+        (w, (c, s)): (Vector3, (f64, f64)),
+        single: SingleIntegrals,
+        work: &mut ViewWork,
+        stokes: &mut [f64],
+    ) {
         let cos_theta = w.dot(self.sun_direction());
         let (q, u) = stokes.split_at_mut(self.wavelengths().len());
         let integrals = match single {
@@ -696,10 +728,10 @@ impl Sky {
             PIXEL_VIEWS_PER_TASK,
             progress,
             |view, work, radiance, stokes| {
-                let view = view.to_vector();
-                self.compute_pixel_radiance(view, tables, work, radiance);
+                let pixel = self.pixel_geometry(view.to_vector(), tables);
+                self.compute_pixel_radiance(&pixel, tables, work, radiance);
                 if polarised {
-                    self.add_pixel_stokes(view, tables, work, radiance, stokes);
+                    self.add_pixel_stokes(&pixel, tables, work, radiance, stokes);
                 }
             },
         ))
@@ -785,21 +817,56 @@ impl Sky {
         }
     }
 
+    /// What reading `tables` toward `view` takes from the direction alone
+    /// ([`PixelGeometry`]).
+    pub(super) fn pixel_geometry(&self, view: Vector3, tables: &ImageTables) -> PixelGeometry {
+        let stokes = (self.polarisation == Polarisation::Vector).then(|| {
+            let (elevation_deg, azimuth_deg) =
+                crate::geometry::elevation_azimuth_from_direction(view);
+            let meridian = meridian_reference(elevation_deg, azimuth_deg);
+            (
+                self.scattering_plane_rotation(view, meridian),
+                (azimuth_deg - self.sun_position_deg.1).to_radians(),
+            )
+        });
+        PixelGeometry {
+            view,
+            cell: tables.sky_view.cell(view),
+            stokes,
+        }
+    }
+
+    /// Whether `other` (with its `other_tables`) reads the same
+    /// [`PixelGeometry`] from a direction as this sky with `tables`: the
+    /// same sun, polarisation and sky-view table axes (the
+    /// k-distribution's term skies).
+    pub(super) fn has_pixel_geometry_of(
+        &self,
+        tables: &ImageTables,
+        (other, other_tables): (&Sky, &ImageTables),
+    ) -> bool {
+        let bits = |v: Vector3| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()];
+        self.polarisation == other.polarisation
+            && bits(self.sun_direction()) == bits(other.sun_direction())
+            && self.sun_position_deg.1.to_bits() == other.sun_position_deg.1.to_bits()
+            && tables.sky_view.has_cells_of(&other_tables.sky_view)
+    }
+
     /// One pixel's radiance from the image tables (fast method), into
     /// `radiance`: the sky-view table's integrals, ground and multiply
     /// scattered light with the exact phase functions (the sun's disc is
     /// added per image, see [`sun_disc`]).
     pub(super) fn compute_pixel_radiance(
         &self,
-        view: Vector3,
+        pixel: &PixelGeometry,
         tables: &ImageTables,
         work: &mut ViewWork,
         radiance: &mut [f64],
     ) {
-        let cos_theta = view.dot(self.sun_direction());
+        let cos_theta = pixel.view.dot(self.sun_direction());
         let terms = &mut work.terms;
         tables.sky_view.lookup_with_multiple_scattering(
-            view,
+            pixel.cell,
             (&mut work.integrals, &mut terms.ground_sunlit),
             (
                 &mut terms.field,
@@ -835,16 +902,16 @@ impl Sky {
     /// (the per-view correction's, tabulated).
     pub(super) fn add_pixel_stokes(
         &self,
-        view: Vector3,
+        pixel: &PixelGeometry,
         tables: &ImageTables,
         work: &mut ViewWork,
         radiance: &mut [f64],
         stokes: &mut [f64],
     ) {
-        let (elevation_deg, azimuth_deg) = crate::geometry::elevation_azimuth_from_direction(view);
+        let (rotation, azimuth_rad) = pixel.stokes.expect("a polarised sky's pixel geometry");
         stokes.fill(0.0);
-        self.compute_single_scattering_stokes(
-            (view, meridian_reference(elevation_deg, azimuth_deg)),
+        self.compute_single_scattering_stokes_rotated(
+            (pixel.view, rotation),
             SingleIntegrals::Pixel,
             work,
             stokes,
@@ -852,9 +919,8 @@ impl Sky {
         let Some(table) = &tables.polarisation else {
             return;
         };
-        let azimuth_rad = (azimuth_deg - self.sun_position_deg.1).to_radians();
         let ratios = &mut work.multiple_stokes;
-        table.lookup_ratios((view.z, azimuth_rad), ratios);
+        table.lookup_ratios((pixel.view.z, azimuth_rad), ratios);
         work.terms.polarisation_corrected(&mut work.corrected);
         add_corrected_multiple_stokes(ratios, &work.corrected, radiance, stokes);
     }

@@ -135,12 +135,18 @@ impl Sky {
         if !self.k_terms.is_empty() {
             self.check_image::<Xyz>(image, 1)?;
             self.prepare_images()?;
-            return self.sum_term_colour_images(
-                to_xyz,
+            let (skies, conversions) = self.term_colour_conversions(to_xyz);
+            return Sky::render_pixels_of(
+                &skies,
+                image,
+                (1, Xyz::BLACK),
                 progress,
-                Xyz::BLACK,
-                k_terms::add_scaled_xyz,
-                |term, to_xyz, p| term.render_xyz(image, to_xyz, p),
+                |k, radiance, pixel| {
+                    let (weight, to_xyz) = &conversions[k];
+                    let n = skies[k].wavelengths().len();
+                    let xyz = to_xyz.to_xyz_unchecked(&radiance[..n]);
+                    k_terms::add_scaled_xyz(&mut pixel[0], *weight, &xyz);
+                },
             );
         }
         let n = self.wavelengths().len();
@@ -168,30 +174,35 @@ impl Sky {
             ));
         }
         self.check_colour_conversion(to_xyz)?;
-        if !self.k_terms.is_empty() {
-            self.check_image::<[Xyz; 4]>(image, 1)?;
-            self.prepare_images()?;
-            let add = |sum: &mut [Xyz; 4], w: f64, x: &[Xyz; 4]| {
-                for (s, x) in sum.iter_mut().zip(x) {
-                    k_terms::add_scaled_xyz(s, w, x);
-                }
-            };
-            return self.sum_term_colour_images(
-                to_xyz,
-                progress,
-                [Xyz::BLACK; 4],
-                add,
-                |term, to_xyz, p| term.render_stokes_xyz(image, to_xyz, p),
-            );
-        }
-        let n = self.wavelengths().len();
-        self.render_pixels(image, 1, [Xyz::BLACK; 4], progress, |stokes, pixel| {
-            pixel[0] = [
+        let stokes_xyz = |to_xyz: &SpectrumToXyz, stokes: &[f64], n: usize| {
+            [
                 to_xyz.to_xyz_unchecked(&stokes[..n]),
                 to_xyz.weighted_sum(&stokes[n..2 * n]),
                 to_xyz.weighted_sum(&stokes[2 * n..3 * n]),
                 to_xyz.weighted_sum(&stokes[3 * n..]),
             ]
+        };
+        if !self.k_terms.is_empty() {
+            self.check_image::<[Xyz; 4]>(image, 1)?;
+            self.prepare_images()?;
+            let (skies, conversions) = self.term_colour_conversions(to_xyz);
+            return Sky::render_pixels_of(
+                &skies,
+                image,
+                (1, [Xyz::BLACK; 4]),
+                progress,
+                |k, stokes, pixel| {
+                    let (weight, to_xyz) = &conversions[k];
+                    let xyz = stokes_xyz(to_xyz, stokes, skies[k].wavelengths().len());
+                    for (s, x) in pixel[0].iter_mut().zip(&xyz) {
+                        k_terms::add_scaled_xyz(s, *weight, x);
+                    }
+                },
+            );
+        }
+        let n = self.wavelengths().len();
+        self.render_pixels(image, 1, [Xyz::BLACK; 4], progress, |stokes, pixel| {
+            pixel[0] = stokes_xyz(to_xyz, stokes, n)
         })
     }
 
@@ -281,35 +292,91 @@ impl Sky {
         progress: &(dyn Fn(usize) + Sync),
         store: impl Fn(&[f64], &mut [T]) + Sync,
     ) -> Result<Vec<T>> {
+        Sky::render_pixels_of(
+            &[self],
+            image,
+            (per_pixel, black),
+            progress,
+            |_, spectra, pixel| store(spectra, pixel),
+        )
+    }
+
+    /// [`Sky::render_pixels`] of several skies in one pass (the
+    /// k-distribution's terms: `sky/k_terms.rs`): each pixel's direction
+    /// found once, then each sky's spectra in turn stored through
+    /// `store(k, spectra of skies[k], pixel)` (the pixel starts `black`;
+    /// a store that adds w_k times the sky's colour sums the terms in the
+    /// order and with the operations of [`k_terms::weighted_images`], bit
+    /// for bit, without an image per term).
+    fn render_pixels_of<T: Copy + Send>(
+        skies: &[&Sky],
+        image: &ImageSettings,
+        (per_pixel, black): (usize, T),
+        progress: &(dyn Fn(usize) + Sync),
+        store: impl Fn(usize, &[f64], &mut [T]) + Sync,
+    ) -> Result<Vec<T>> {
         let (width, height) = (image.width, image.height);
-        self.check_image::<T>(image, per_pixel)?;
-        // Tables first, outside the parallel loop (see `prepare_field`).
-        self.prepare_field_for_images()?;
-        let source_table = self.source_table();
-        let tables = (self.method == Method::Fast).then(|| self.image_tables());
-        let wavelengths = self.wavelengths().len();
-        let polarised = self.polarisation == Polarisation::Vector;
-        let components = if polarised { 4 } else { 1 };
-        // The sun's disc: its share of each pixel it touches, per sr.
-        let direct_normal = self.direct_normal_irradiance();
-        let disc = if image.draw_sun_disc {
-            sun_disc::compute_disc_pixels(
-                &image.camera,
-                width,
-                height,
-                self.sun_direction(),
-                self.scene.sun_angular_radius_rad(),
-                |direction| self.scene.sees_sky(direction),
-            )
-        } else {
-            Vec::new()
-        };
+        // What each sky reads: its tables (built first, outside the
+        // parallel loop, see `prepare_field`), its direct beam and its
+        // sun's disc (its share of each pixel it touches, per sr).
+        struct Reads<'a> {
+            sky: &'a Sky,
+            source_table: Option<&'a MultipleScatteringTable>,
+            tables: Option<&'a super::setup::ImageTables>,
+            direct_normal: crate::spectrum::SampledSpectrum,
+            disc: Vec<(usize, f64)>,
+        }
+        let mut reads = Vec::with_capacity(skies.len());
+        for sky in skies {
+            sky.check_image::<T>(image, per_pixel)?;
+            sky.prepare_field_for_images()?;
+            let disc = if image.draw_sun_disc {
+                sun_disc::compute_disc_pixels(
+                    &image.camera,
+                    width,
+                    height,
+                    sky.sun_direction(),
+                    sky.scene.sun_angular_radius_rad(),
+                    |direction| sky.scene.sees_sky(direction),
+                )
+            } else {
+                Vec::new()
+            };
+            reads.push(Reads {
+                sky,
+                source_table: sky.source_table(),
+                tables: (sky.method == Method::Fast).then(|| sky.image_tables()),
+                direct_normal: sky.direct_normal_irradiance(),
+                disc,
+            });
+        }
+        // Per sky: whether it reads the first's pixel geometry (the terms'
+        // skies: the same sun and table axes), bit for bit its own.
+        let shares_geometry: Vec<bool> = reads
+            .iter()
+            .map(|r| match (reads[0].tables, r.tables) {
+                (Some(first), Some(tables)) => {
+                    reads[0].sky.has_pixel_geometry_of(first, (r.sky, tables))
+                }
+                _ => false,
+            })
+            .collect();
         let rows_done = std::sync::atomic::AtomicUsize::new(0);
         let row_length = width as usize * per_pixel;
         let mut pixels = vec![black; row_length * height as usize];
         crate::parallel::for_each_chunk_mut(&mut pixels, row_length, |row, values| {
-            let mut work = self.view_work();
-            let mut spectra = vec![0.0; components * wavelengths];
+            let mut works: Vec<_> = reads
+                .iter()
+                .map(|r| {
+                    let wavelengths = r.sky.wavelengths().len();
+                    let components = if r.sky.polarisation == Polarisation::Vector {
+                        4
+                    } else {
+                        1
+                    };
+                    (r.sky.view_work(), vec![0.0; components * wavelengths])
+                })
+                .collect();
             for (column, pixel) in values.chunks_mut(per_pixel).enumerate() {
                 let Some(view) =
                     image
@@ -318,26 +385,37 @@ impl Sky {
                 else {
                     continue;
                 };
-                let (radiance, stokes) = spectra.split_at_mut(wavelengths);
-                // A polarised sky has the fast method's tables (the
-                // reference march is scalar: `Sky::set_polarisation`).
-                match tables {
-                    Some(tables) => {
-                        self.compute_pixel_radiance(view, tables, &mut work, radiance);
-                        if polarised {
-                            self.add_pixel_stokes(view, tables, &mut work, radiance, stokes);
+                let index = row * width as usize + column;
+                let mut first_geometry = None;
+                for (k, (r, (work, spectra))) in reads.iter().zip(works.iter_mut()).enumerate() {
+                    let sky = r.sky;
+                    let (radiance, stokes) = spectra.split_at_mut(sky.wavelengths().len());
+                    // A polarised sky has the fast method's tables (the
+                    // reference march is scalar: `Sky::set_polarisation`).
+                    match r.tables {
+                        Some(tables) => {
+                            let pixel = match first_geometry {
+                                Some(pixel) if shares_geometry[k] => pixel,
+                                _ => sky.pixel_geometry(view, tables),
+                            };
+                            if k == 0 {
+                                first_geometry = Some(pixel);
+                            }
+                            sky.compute_pixel_radiance(&pixel, tables, work, radiance);
+                            if sky.polarisation == Polarisation::Vector {
+                                sky.add_pixel_stokes(&pixel, tables, work, radiance, stokes);
+                            }
+                        }
+                        None => sky.compute_view_radiance(view, r.source_table, work, radiance),
+                    }
+                    if let Ok(d) = r.disc.binary_search_by_key(&index, |(pixel, _)| *pixel) {
+                        let per_sr = r.disc[d].1;
+                        for (v, e) in radiance.iter_mut().zip(r.direct_normal.values()) {
+                            *v += e * per_sr;
                         }
                     }
-                    None => self.compute_view_radiance(view, source_table, &mut work, radiance),
+                    store(k, spectra, pixel);
                 }
-                let index = row * width as usize + column;
-                if let Ok(k) = disc.binary_search_by_key(&index, |(pixel, _)| *pixel) {
-                    let per_sr = disc[k].1;
-                    for (r, e) in radiance.iter_mut().zip(direct_normal.values()) {
-                        *r += e * per_sr;
-                    }
-                }
-                store(&spectra, pixel);
             }
             progress(rows_done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
         });

@@ -42,4 +42,5 @@ pub use path_tracing::PathTracer;
 pub use single_scattering::{
     Observation, SingleScatteringScene, SingleScatteringScratch, SunColumns,
 };
+pub(crate) use sky_view_table::SkyViewCell;
 pub use sky_view_table::SkyViewTable;

@@ -4,8 +4,10 @@
 //! and without the phase function).
 //!
 //! What is tabulated, per view direction and wavelength: the integrals
-//! I_j(lambda) of [`super::single_scattering`] (one per species, m) and the
-//! sunlit ground's radiance. Neither contains the phase function: with a
+//! I_j(lambda) of [`super::single_scattering`] (one per species that
+//! scatters at some wavelength, m: an absorber's integral is multiplied by
+//! its scattering coefficient, 0, wherever it is used, so a read gives it
+//! as zeros) and the sunlit ground's radiance. Neither contains the phase function: with a
 //! point sun the scattering angle is fixed along each view ray, so the
 //! phase functions, which carry all the sharp structure (the aerosol's
 //! forward peak, the Mie glory), are applied exactly per pixel by
@@ -86,13 +88,22 @@ pub struct SkyViewTable {
     azimuth_nodes: usize,
     /// Zenith angle of the horizon seen by the eye, rad.
     horizon_zenith_rad: f64,
-    /// Values per node: species * wavelengths integrals (m), then
-    /// wavelengths sunlit ground radiances, then (with multiple scattering)
-    /// wavelengths multiply scattered radiances of the air, wavelengths
-    /// radiances of the ground's skylight (W m^-2 sr^-1 nm^-1) and the
-    /// forward-peak integrals ((species + 2) * wavelengths, see
-    /// `MultipleScatteringScratch::forward_integrals`).
+    /// Values per node: the integrals (m) of the species that scatter
+    /// ([`SkyViewTable::kept`]), kept * wavelengths, then wavelengths sunlit
+    /// ground radiances, then (with multiple scattering) wavelengths
+    /// multiply scattered radiances of the air, wavelengths radiances of
+    /// the ground's skylight (W m^-2 sr^-1 nm^-1) and the forward-peak
+    /// integrals of the kept species and the peak-only rows ((kept + 2) *
+    /// wavelengths, see `MultipleScatteringScratch::forward_integrals`).
     values_per_node: usize,
+    /// The species that scatter at some wavelength, in order: an absorber's
+    /// integrals and forward-peak rows take its scattering coefficient, 0,
+    /// wherever they are used (`radiance_from_integrals` and the forward
+    /// peak's radiances add E beta_sca p I_j), so the table holds none of
+    /// them and a read gives zeros in their rows (whose terms those sums
+    /// skip: the same values, bit for bit). Of the sky's `species`.
+    kept: Vec<usize>,
+    species: usize,
     wavelengths: usize,
     has_multiple_scattering: bool,
     /// Values per node of the multiply scattered light's blocks (the
@@ -163,16 +174,11 @@ impl SkyViewTable {
             .collect();
         let together = shares.iter().any(|s| *s);
         // One node's integrals and sunlit ground from a scene's scratch.
-        let store = |sky: &SingleScatteringScene,
-                     scratch: &SingleScatteringScratch,
-                     table: &SkyViewTable,
-                     node: &mut [f32]| {
-            let species = sky.optics().species.len();
-            let (integrals, rest) = node.split_at_mut(species * table.wavelengths);
-            let ground = &mut rest[..table.wavelengths];
-            for (o, v) in integrals.iter_mut().zip(scratch.inscattering_integrals()) {
-                *o = *v as f32;
-            }
+        let store = |scratch: &SingleScatteringScratch, table: &SkyViewTable, node: &mut [f32]| {
+            let w = table.wavelengths;
+            let (integrals, rest) = node.split_at_mut(table.kept.len() * w);
+            let ground = &mut rest[..w];
+            table.store_kept_rows(scratch.inscattering_integrals(), integrals);
             for (o, v) in ground.iter_mut().zip(scratch.ground_radiance()) {
                 *o = *v as f32;
             }
@@ -221,15 +227,10 @@ impl SkyViewTable {
                         &mut others,
                     );
                     let stride = tables[0].values_per_node;
-                    store(sky, first, &tables[0], &mut outs[0][k * stride..][..stride]);
+                    store(first, &tables[0], &mut outs[0][k * stride..][..stride]);
                     for (t, scratch) in with.iter().zip(others.scratches()) {
                         let stride = tables[*t].values_per_node;
-                        store(
-                            skies[*t].0,
-                            scratch,
-                            &tables[*t],
-                            &mut outs[*t][k * stride..][..stride],
-                        );
+                        store(scratch, &tables[*t], &mut outs[*t][k * stride..][..stride]);
                     }
                 }
             }
@@ -256,10 +257,9 @@ impl SkyViewTable {
                     let node = &mut outs[t][k * stride..(k + 1) * stride];
                     if !marched_together {
                         sky.compute_inscattering_integrals(view, columns, scratch);
-                        store(sky, scratch, table, node);
+                        store(scratch, table, node);
                     }
-                    let species = sky.optics().species.len();
-                    let rest = &mut node[(species + 1) * wavelengths..];
+                    let rest = &mut node[(table.kept.len() + 1) * wavelengths..];
                     let marched_here = march_multiple
                         && marched(index_in_half, half_zenith_nodes, multiple_stride.0)
                         && marched(k, azimuth_nodes, multiple_stride.1);
@@ -280,7 +280,13 @@ impl SkyViewTable {
                         for (o, v) in ground_skylight.iter_mut().zip(skylit.iter()) {
                             *o = *v as f32;
                         }
-                        for (o, v) in forward.iter_mut().zip(ms_scratch.forward_integrals()) {
+                        // The kept species' rows, then the peak-only rows.
+                        let all = ms_scratch.forward_integrals();
+                        let (rows, peak_only) =
+                            forward.split_at_mut(table.kept.len() * wavelengths);
+                        table.store_kept_rows(all, rows);
+                        let extra = &all[table.species * wavelengths..];
+                        for (o, v) in peak_only.iter_mut().zip(extra) {
                             *o = *v as f32;
                         }
                     }
@@ -361,13 +367,25 @@ impl SkyViewTable {
         let wavelengths = optics.grid.len();
         let has_multiple_scattering = multiple_scattering.is_some();
         let species = optics.species.len();
+        let kept: Vec<usize> = (0..species)
+            .filter(|j| {
+                optics.species[*j]
+                    .scattering_per_m
+                    .values()
+                    .iter()
+                    .any(|v| *v != 0.0)
+            })
+            .collect();
         // Integrals, ground; with multiple scattering its radiance and its
-        // forward-peak integrals.
-        let forward_rows = multiple_scattering.map_or(0, |ms| ms.field().forward_integral_rows());
+        // forward-peak integrals (the kept species' rows and the peak-only
+        // rows).
+        let forward_rows = multiple_scattering.map_or(0, |ms| {
+            ms.field().forward_integral_rows() - species + kept.len()
+        });
         let blocks = if has_multiple_scattering {
-            species + 3 + forward_rows
+            kept.len() + 3 + forward_rows
         } else {
-            species + 1
+            kept.len() + 1
         };
         let (ground_radius, _) = sky.radii_m();
         let observer_radius = sky.observer_radius_m();
@@ -381,6 +399,8 @@ impl SkyViewTable {
             azimuth_nodes,
             horizon_zenith_rad,
             values_per_node: blocks * wavelengths,
+            kept,
+            species,
             wavelengths,
             has_multiple_scattering,
             // Marched at every other node: multiple scattering's radiance
@@ -498,40 +518,8 @@ impl SkyViewTable {
         Vector3::new(sin_z * east, sin_z * north, cos_z)
     }
 
-    /// The view's integrals and sunlit ground's radiance into `integrals`
-    /// and `ground`, and the air's multiply
-    /// scattered radiance into `multiple`, the ground's skylight into
-    /// `ground_skylight` and the forward-peak integrals ((species + 2) *
-    /// wavelengths, see [`crate::transport::multiple_scattering::MultipleScatteringScratch::forward_integrals`])
-    /// into `forward` (zeros when the table has none).
-    pub(crate) fn lookup_with_multiple_scattering(
-        &self,
-        view: Vector3,
-        (integrals, ground): (&mut [f64], &mut [f64]),
-        (multiple, ground_skylight, forward): (&mut [f64], &mut [f64], &mut [f64]),
-    ) {
-        if self.has_multiple_scattering {
-            self.interpolate(
-                view,
-                integrals,
-                ground,
-                Some((multiple, ground_skylight, forward)),
-            );
-        } else {
-            self.interpolate(view, integrals, ground, None);
-            multiple.fill(0.0);
-            ground_skylight.fill(0.0);
-            forward.fill(0.0);
-        }
-    }
-
-    fn interpolate(
-        &self,
-        view: Vector3,
-        integrals: &mut [f64],
-        ground: &mut [f64],
-        multiple: Option<(&mut [f64], &mut [f64], &mut [f64])>,
-    ) {
+    /// Where `view` falls among the table's nodes ([`SkyViewCell`]).
+    pub(crate) fn cell(&self, view: Vector3) -> SkyViewCell {
         let zenith = view.z.clamp(-1.0, 1.0).acos();
         let (sx, sy) = self.sun_horizontal;
         let along = view.x * sx + view.y * sy;
@@ -550,6 +538,67 @@ impl SkyViewTable {
         let y = relative_azimuth / std::f64::consts::PI * (self.azimuth_nodes - 1) as f64;
         let k = (y.floor() as usize).min(self.azimuth_nodes - 2);
         let fy = y - k as f64;
+        SkyViewCell {
+            row: i,
+            column: k,
+            weights: [
+                ((1.0 - fx) * (1.0 - fy)) as f32,
+                ((1.0 - fx) * fy) as f32,
+                (fx * (1.0 - fy)) as f32,
+                (fx * fy) as f32,
+            ],
+        }
+    }
+
+    /// Whether a view falls in the same [`SkyViewCell`] of `other` as of
+    /// this table: the same axes, horizon and sun's azimuth (the
+    /// k-distribution's term skies' tables).
+    pub(crate) fn has_cells_of(&self, other: &SkyViewTable) -> bool {
+        (self.half_zenith_nodes, self.azimuth_nodes)
+            == (other.half_zenith_nodes, other.azimuth_nodes)
+            && self.horizon_zenith_rad.to_bits() == other.horizon_zenith_rad.to_bits()
+            && self.sun_horizontal.0.to_bits() == other.sun_horizontal.0.to_bits()
+            && self.sun_horizontal.1.to_bits() == other.sun_horizontal.1.to_bits()
+    }
+
+    /// The view's integrals and sunlit ground's radiance into `integrals`
+    /// and `ground`, and the air's multiply
+    /// scattered radiance into `multiple`, the ground's skylight into
+    /// `ground_skylight` and the forward-peak integrals ((species + 2) *
+    /// wavelengths, see [`crate::transport::multiple_scattering::MultipleScatteringScratch::forward_integrals`])
+    /// into `forward` (zeros when the table has none).
+    pub(crate) fn lookup_with_multiple_scattering(
+        &self,
+        cell: SkyViewCell,
+        (integrals, ground): (&mut [f64], &mut [f64]),
+        (multiple, ground_skylight, forward): (&mut [f64], &mut [f64], &mut [f64]),
+    ) {
+        if self.has_multiple_scattering {
+            self.interpolate(
+                cell,
+                integrals,
+                ground,
+                Some((multiple, ground_skylight, forward)),
+            );
+        } else {
+            self.interpolate(cell, integrals, ground, None);
+            multiple.fill(0.0);
+            ground_skylight.fill(0.0);
+            forward.fill(0.0);
+        }
+    }
+
+    fn interpolate(
+        &self,
+        SkyViewCell {
+            row: i,
+            column: k,
+            weights: w,
+        }: SkyViewCell,
+        integrals: &mut [f64],
+        ground: &mut [f64],
+        multiple: Option<(&mut [f64], &mut [f64], &mut [f64])>,
+    ) {
         let n = self.values_per_node;
         let node = |row: usize, column: usize| {
             &self.values[(row * self.azimuth_nodes + column) * n..][..n]
@@ -560,32 +609,62 @@ impl SkyViewTable {
             node(i + 1, k),
             node(i + 1, k + 1),
         );
-        let w = [
-            ((1.0 - fx) * (1.0 - fy)) as f32,
-            ((1.0 - fx) * fy) as f32,
-            (fx * (1.0 - fy)) as f32,
-            (fx * fy) as f32,
-        ];
-        let interpolate = |m: usize| (a[m] * w[0] + b[m] * w[1] + c[m] * w[2] + d[m] * w[3]) as f64;
-        let split = integrals.len();
-        for (m, out) in integrals.iter_mut().enumerate() {
-            *out = interpolate(m);
-        }
-        for (m, out) in ground.iter_mut().enumerate() {
-            *out = interpolate(split + m);
-        }
+        // The values from `from` on into `out`, one loop over the four
+        // nodes' slices (the same operations value by value).
+        let interpolate = |out: &mut [f64], from: usize| {
+            let n = out.len();
+            let (a, b, c, d) = (
+                &a[from..from + n],
+                &b[from..from + n],
+                &c[from..from + n],
+                &d[from..from + n],
+            );
+            for (m, o) in out.iter_mut().enumerate() {
+                *o = (a[m] * w[0] + b[m] * w[1] + c[m] * w[2] + d[m] * w[3]) as f64;
+            }
+            from + n
+        };
+        let wavelengths = self.wavelengths;
+        // The species' rows from the kept ones' at `from` (zeros for the
+        // others); returns where the table's values go on.
+        let rows = |out: &mut [f64], mut from: usize| {
+            out[..self.species * wavelengths].fill(0.0);
+            for j in &self.kept {
+                from = interpolate(&mut out[j * wavelengths..][..wavelengths], from);
+            }
+            from
+        };
+        let split = rows(integrals, 0);
+        let next = interpolate(ground, split);
         if let Some((multiple, ground_skylight, forward)) = multiple {
-            for (m, out) in multiple.iter_mut().enumerate() {
-                *out = interpolate(split + self.wavelengths + m);
-            }
-            for (m, out) in ground_skylight.iter_mut().enumerate() {
-                *out = interpolate(split + 2 * self.wavelengths + m);
-            }
-            for (m, out) in forward.iter_mut().enumerate() {
-                *out = interpolate(split + 3 * self.wavelengths + m);
+            let next = interpolate(multiple, next);
+            let next = interpolate(ground_skylight, next);
+            let peak_only = rows(forward, next);
+            interpolate(&mut forward[self.species * wavelengths..], peak_only);
+        }
+    }
+
+    /// The kept species' rows of `all` (species-major, [j * wavelengths +
+    /// i], every species of the sky) into `out`, kept-major.
+    fn store_kept_rows(&self, all: &[f64], out: &mut [f32]) {
+        let w = self.wavelengths;
+        for (row, j) in out.chunks_exact_mut(w).zip(&self.kept) {
+            for (o, v) in row.iter_mut().zip(&all[j * w..][..w]) {
+                *o = *v as f32;
             }
         }
     }
+}
+
+/// Where a view falls among a sky-view table's nodes
+/// ([`SkyViewTable::cell`]): the first zenith row and azimuth column of its
+/// cell and the bilinear weights of the cell's four nodes (row, column),
+/// (row, column + 1), (row + 1, column), (row + 1, column + 1).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct SkyViewCell {
+    row: usize,
+    column: usize,
+    weights: [f32; 4],
 }
 
 /// Whether node `index` of an axis of `count` nodes gets its multiply

@@ -1178,17 +1178,26 @@ impl PolarisationTable {
             let start = ((half * self.half_nodes + z) * self.azimuth_nodes + k) * COMPONENTS * w;
             &self.values[start..start + COMPONENTS * w]
         };
-        let corners = [
-            (node(z, k), (1.0 - tz) * (1.0 - tk)),
-            (node(z, k + 1), (1.0 - tz) * tk),
-            (node(z + 1, k), tz * (1.0 - tk)),
-            (node(z + 1, k + 1), tz * tk),
+        let (a, b, c, d) = (
+            node(z, k),
+            node(z, k + 1),
+            node(z + 1, k),
+            node(z + 1, k + 1),
+        );
+        let weights = [
+            (1.0 - tz) * (1.0 - tk),
+            (1.0 - tz) * tk,
+            tz * (1.0 - tk),
+            tz * tk,
         ];
+        // One loop over the four corners' slices; the sum from -0.0 in
+        // corner order, as `Iterator::sum` of f64 takes it.
         for (n, value) in out[..COMPONENTS * w].iter_mut().enumerate() {
-            *value = corners
-                .iter()
-                .map(|(values, weight)| weight * f64::from(values[n]))
-                .sum();
+            *value = -0.0
+                + weights[0] * f64::from(a[n])
+                + weights[1] * f64::from(b[n])
+                + weights[2] * f64::from(c[n])
+                + weights[3] * f64::from(d[n]);
         }
         if mirror {
             out[2 * w..4 * w].iter_mut().for_each(|v| *v = -*v);
