@@ -762,12 +762,13 @@ fn the_layers_filled_between_azimuths_are_every_azimuth_marched() {
 /// with a margin: the nodes from 0.43 to 10.7 degrees on the ground 0.11
 /// % median, 0.43 % p99 and at worst, at the top 0.02 %, 0.17 % and 0.34
 /// % (bounds 0.8 %, 0.8 %, 0.3 % and 0.6 %); the nodes from 14.1 to 53.1
-/// degrees on the ground 0.01 %, 0.29 % and 0.45 %, at the top 0.01 %,
-/// 0.21 % and 0.27 % (bounds 0.5 %, 0.8 %, 0.4 % and 0.5 %). The cubic
-/// through the four marching nodes around a blended one is closer to the
-/// marched layers than the logarithm's halfway between the two either
-/// side (`Layers::GridLinearBlend`: on the ground 1.21 % and 0.58 % p99,
-/// at the top 0.38 % and 0.35 %). The transmittance is the same table.
+/// degrees (53.1 halfway: its node s + 3 is above 70 degrees) on the
+/// ground 0.02 %, 0.47 % and 0.52 %, at the top 0.01 %, 0.21 % and 0.27 %
+/// (bounds 0.8 %, 0.8 %, 0.4 % and 0.5 %). The cubic through the four
+/// marching nodes around a blended one is closer to the marched layers
+/// than the logarithm's halfway between the two either side
+/// (`Layers::GridLinearBlend`: on the ground 1.21 % and 0.58 % p99, at
+/// the top 0.38 % and 0.35 %). The transmittance is the same table.
 #[test]
 fn the_layers_blended_between_suns_are_the_marched_layers() {
     let sky = hazy_sky_with_default_field();
@@ -837,7 +838,7 @@ fn the_layers_blended_between_suns_are_the_marched_layers() {
         "the blending changed nothing: {high_ground:?}"
     );
     assert!(
-        high_ground.1 < 0.005 && high_ground.2 < 0.008,
+        high_ground.1 < 0.008 && high_ground.2 < 0.008,
         "14-53 degrees, ground {high_ground:?}"
     );
     assert!(
