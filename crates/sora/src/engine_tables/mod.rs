@@ -20,8 +20,9 @@
 //!   images' at the defaults, and the layer's views on them), and its
 //!   multiply scattered light marched in 8 view-ray panels, not the
 //!   field's 16 (`LAYER_MULTIPLE_PANELS`), and at every other sun node
-//!   above the horizon (0.4 to 10.7 degrees, 8 of the default 48 nodes)
-//!   not marched but blended in its logarithm from the nodes either side
+//!   from the horizon to 70 degrees (0.4 to 53 degrees, 14 of the default
+//!   48 nodes) not marched but blended in its logarithm from the nodes
+//!   either side (the cubic through them and the nodes beyond)
 //!   (`multiple_from_neighbours`; `docs/engine-tables.md` gives the bake's
 //!   time and what each of these changes).
 //! - **transmittance**: the transmittance of sunlight from altitude h to
@@ -403,7 +404,7 @@ impl EngineTables {
             Field::PerLayer => None,
         };
         let sky_view = match layers {
-            Layers::Grid | Layers::GridEverySun => {
+            Layers::Grid | Layers::GridLinearBlend | Layers::GridEverySun => {
                 Some(layer_sky_view(sky, settings, (false, false)))
             }
             Layers::GridEveryAzimuth => Some(layer_sky_view(sky, settings, (false, true))),
@@ -460,8 +461,10 @@ impl EngineTables {
             }
             // The sky of sun node `s` at this altitude, its multiply
             // scattered light marched or (`neighbours`) blended halfway
-            // between the skies of the nodes either side.
-            let layer_at = |s: usize, neighbours: Option<(&Sky, &Sky)>| -> Result<Sky> {
+            // between the skies of the nodes either side (by the cubic
+            // through them and the nodes beyond, where given).
+            type Neighbours<'a> = ((&'a Sky, &'a Sky), Option<(&'a Sky, &'a Sky)>);
+            let layer_at = |s: usize, neighbours: Option<Neighbours>| -> Result<Sky> {
                 let elevation = axes::sun_elevation_of_node(s, sun_nodes);
                 // In deep twilight the field's own panels
                 // (`LAYER_MULTIPLE_PANELS_ABOVE_DEG`).
@@ -476,10 +479,10 @@ impl EngineTables {
                     shared.as_ref(),
                     layer_view,
                 )?;
-                if let Some(neighbours) = neighbours {
+                if let Some((neighbours, outer)) = neighbours {
                     // The nodes are evenly spaced in the sun axis's
                     // parameter: halfway.
-                    layer_sky.blend_multiple_scattering_from(neighbours, 0.5)?;
+                    layer_sky.blend_multiple_scattering_from(neighbours, outer, 0.5)?;
                 }
                 Ok(layer_sky)
             };
@@ -509,26 +512,60 @@ impl EngineTables {
             };
             // The sun nodes in the order their layers are drawn: a node
             // whose multiply scattered light is blended from its
-            // neighbours' (`multiple_from_neighbours`) right after the
-            // node above it, the last sky kept for the next.
+            // neighbours' (`multiple_from_neighbours`) once the node three
+            // above it is drawn (the cubic through the marching nodes s -
+            // 3, s - 1, s + 1 and s + 3; with `Layers::GridLinearBlend`,
+            // or where there is no node s - 3 or s + 3 below 70 degrees,
+            // the nodes either side alone, right after the node above
+            // it), the last marched skies kept for the next.
             let blended =
                 |s: usize| layers.blends_multiple() && multiple_from_neighbours(s, sun_nodes);
-            let mut below: Option<Sky> = None;
-            let mut pending: Option<usize> = None;
+            let cubic = layers != Layers::GridLinearBlend;
+            let mut marched: Vec<(usize, Sky)> = Vec::new();
+            let mut pending: Vec<usize> = Vec::new();
             for s in 0..sun_nodes {
                 if blended(s) {
-                    pending = Some(s);
+                    pending.push(s);
                     continue;
                 }
                 let layer_sky = layer_at(s, None)?;
                 draw_layer(s, &layer_sky)?;
-                if let Some(p) = pending.take() {
-                    let before = below.as_ref().expect("a blended node has a node below");
-                    let between = layer_at(p, Some((before, &layer_sky)))?;
-                    draw_layer(p, &between)?;
+                marched.push((s, layer_sky));
+                if marched.len() > 6 {
+                    marched.remove(0);
                 }
-                below = Some(layer_sky);
+                let sky_of = |n: Option<usize>| {
+                    marched
+                        .iter()
+                        .find(|(m, _)| Some(*m) == n)
+                        .map(|(_, sky)| sky)
+                };
+                let mut waiting = Vec::new();
+                for p in pending.drain(..) {
+                    let (below, above) = (sky_of(Some(p - 1)), sky_of(Some(p + 1)));
+                    let outer = sky_of(p.checked_sub(3)).zip(sky_of(Some(p + 3)));
+                    // The nodes beyond stay below 70 degrees: through the
+                    // node at 78.9 degrees, mars-dust's node at 53.1 went
+                    // from 1.78 % to 1.92 % in the browser test (bound 2
+                    // %), the nodes either side alone.
+                    let beyond = cubic
+                        && p >= 3
+                        && p + 3 < sun_nodes
+                        && axes::sun_elevation_of_node(p + 3, sun_nodes)
+                            <= MULTIPLE_FROM_NEIGHBOURS_DEG.1;
+                    match (below.zip(above), outer) {
+                        (Some(either), Some(outer)) if beyond => {
+                            draw_layer(p, &layer_at(p, Some((either, Some(outer))))?)?;
+                        }
+                        (Some(either), _) if !beyond => {
+                            draw_layer(p, &layer_at(p, Some((either, None)))?)?;
+                        }
+                        _ => waiting.push(p),
+                    }
+                }
+                pending = waiting;
             }
+            assert!(pending.is_empty(), "every blended node is drawn");
         }
         let transmittance = bake_transmittance(
             sky,
@@ -726,9 +763,15 @@ enum Field {
 enum Layers {
     /// From a sky-view table on the layer's own grid
     /// ([`layer_sky_view`]), the multiply scattered light of every other
-    /// sun node just above the horizon blended from its neighbours'
+    /// sun node from the horizon to 70 degrees blended from its neighbours'
     /// ([`multiple_from_neighbours`]).
     Grid,
+    /// As `Grid`, with the blended nodes' multiply scattered light
+    /// halfway between the nodes either side in the logarithm (not the
+    /// cubic through them and the nodes beyond; what the tests hold the
+    /// cubic against).
+    #[cfg_attr(not(test), allow(dead_code))]
+    GridLinearBlend,
     /// As `Grid`, with the multiply scattered light marched at every sun
     /// node (the slow path the tests hold `Grid` to).
     #[cfg_attr(not(test), allow(dead_code))]
@@ -754,13 +797,16 @@ impl Layers {
     /// Whether some layers take their multiply scattered light from their
     /// neighbours' ([`multiple_from_neighbours`]).
     fn blends_multiple(self) -> bool {
-        self == Layers::Grid
+        matches!(self, Layers::Grid | Layers::GridLinearBlend)
     }
 }
 
 /// Whether sun node `s` of `nodes` takes its layers' multiply scattered
 /// light blended from the nodes either side (in the logarithm, halfway:
-/// the nodes are evenly spaced in the sun axis's parameter) instead of
+/// the nodes are evenly spaced in the sun axis's parameter; by the cubic
+/// through s - 3, s - 1, s + 1 and s + 3 where that lies between the two
+/// either side and s + 3 lies below 70 degrees,
+/// `SkyViewTable::blend_multiple_from`) instead of
 /// marching it: every other node whose two neighbours lie within
 /// [`MULTIPLE_FROM_NEIGHBOURS_DEG`]. The neighbours are never blended
 /// themselves.
@@ -775,17 +821,23 @@ fn multiple_from_neighbours(s: usize, nodes: usize) -> bool {
 }
 
 /// The sun elevations (degrees) within which every other sun node's
-/// multiply scattered light is blended from its neighbours': above the
-/// horizon, where the default 48 nodes are 0.4-1.5 degrees apart (0.04
-/// to 12.3 degrees; the odd nodes 0.43 to 10.7 degrees, 8 of the 48, are
-/// blended). Below the horizon the light is not linear enough in its
-/// logarithm as the planet's shadow rises: blended from -6 degrees up,
-/// earth-clear's browser test at a sun of -4 degrees rose from 1.82 % to
-/// 3.40 % (p99; the bound is 2 %), from -2.7 degrees up its horizon band
-/// at -1 degree from 0.73 % to 2.14 % (`docs/engine-tables.md`). Higher,
-/// the nodes are 2-10 degrees apart and the light near the sun moves
-/// with it.
-const MULTIPLE_FROM_NEIGHBOURS_DEG: (f64, f64) = (0.0, 12.5);
+/// multiply scattered light is blended from its neighbours': from the
+/// horizon to 70 degrees, where the default 48 nodes are 0.4-8.5 degrees
+/// apart (0.04 to 60.6 degrees; the odd nodes 0.43 to 53.1 degrees, 14 of
+/// the 48, are blended). Above 12.5 degrees (the odd nodes 14.1 to 53.1,
+/// 1.8-8.5 degrees from their neighbours) the multiply scattered light
+/// is smooth in the sun's elevation: the browser test's luminance p99
+/// on the blended nodes rose by at most 0.5 points (earth-hazy at 14.1
+/// degrees 0.37 % to 0.88 %, its horizon band 0.38 % to 0.91 %; mars-dust
+/// 0.95 % to 1.25 %, horizon band 0.57 % to 1.27 %; the bound is 2 %).
+/// The nodes from 70 degrees up (69.2, 78.9, 90) all march: the read near
+/// a high sun is the tables' tightest there. Below the horizon the light
+/// is not linear enough in its logarithm as the planet's shadow rises:
+/// blended from -6 degrees up, earth-clear's browser test at a sun of -4
+/// degrees rose from 1.82 % to 3.40 % (p99; the bound is 2 %), from -2.7
+/// degrees up its horizon band at -1 degree from 0.73 % to 2.14 %
+/// (`docs/engine-tables.md`).
+const MULTIPLE_FROM_NEIGHBOURS_DEG: (f64, f64) = (0.0, 70.0);
 
 /// The sky-view table a layer needs: its nodes (per half of the zenith
 /// axis, azimuth) and multiple-scattering strides. Its zenith rows are the

@@ -108,21 +108,28 @@ impl Sky {
     /// with the multiply scattered light of its sky-view table not marched
     /// but blended from two skies of the same atmosphere, eye and table
     /// layout with the sun at neighbouring elevations, `t` of the way from
-    /// `neighbours.0` to `neighbours.1` (in the logarithm; its single
+    /// `neighbours.0` to `neighbours.1` (in the logarithm, or with
+    /// `outer`, the skies one sun step beyond them, by the cubic through
+    /// the four: `SkyViewTable::blend_multiple_from`; its single
     /// scattering and sunlit ground are its own). What the engine tables
-    /// do at every other sun node just above the horizon (`engine_tables`).
+    /// do at every other sun node from the horizon to 70 degrees
+    /// (`engine_tables`).
     pub(crate) fn blend_multiple_scattering_from(
         &self,
         neighbours: (&Sky, &Sky),
+        outer: Option<(&Sky, &Sky)>,
         t: f64,
     ) -> Result<()> {
         debug_assert!(self.polarisation == super::Polarisation::Scalar);
         self.prepare_field_for_images()?;
         let (below, above) = (neighbours.0.image_tables(), neighbours.1.image_tables());
+        let outer = outer.map(|(lowest, highest)| (lowest.image_tables(), highest.image_tables()));
         let mut tables = self.compute_tables(self.source_table(), false);
-        tables
-            .sky_view
-            .blend_multiple_from((&below.sky_view, &above.sky_view), t);
+        tables.sky_view.blend_multiple_from(
+            (&below.sky_view, &above.sky_view),
+            outer.map(|(lowest, highest)| (&lowest.sky_view, &highest.sky_view)),
+            t,
+        );
         let fresh = self.image_tables.set(tables).is_ok();
         assert!(fresh, "the sky's image tables were built already");
         Ok(())

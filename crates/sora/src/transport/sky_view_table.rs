@@ -422,12 +422,23 @@ impl SkyViewTable {
     /// tables' sun axis is read) where both are positive, linearly
     /// otherwise. Node for node, at the same zenith angle and azimuth from
     /// the sun (engine tables: `engine_tables::layer_sky_view`).
+    ///
+    /// With `outer` (the tables one step beyond `below` and `above`, the
+    /// four evenly spaced in the sun's parameter, and `t` one half), the
+    /// logarithm is the cubic through the four, (9 (b + c) - (a + d)) / 16,
+    /// where that lies between b and c and all four are positive (as
+    /// `fill_unmarched` fills between azimuths), otherwise as above.
     pub(crate) fn blend_multiple_from(
         &mut self,
         (below, above): (&SkyViewTable, &SkyViewTable),
+        outer: Option<(&SkyViewTable, &SkyViewTable)>,
         t: f64,
     ) {
-        for other in [below, above] {
+        let others: Vec<&SkyViewTable> = match outer {
+            Some((lowest, highest)) => vec![below, above, lowest, highest],
+            None => vec![below, above],
+        };
+        for other in &others {
             assert_eq!(
                 (
                     other.half_zenith_nodes,
@@ -443,20 +454,27 @@ impl SkyViewTable {
                 )
             );
         }
+        debug_assert!(outer.is_none() || t == 0.5);
         let (n, m) = (self.values_per_node, self.multiple_values);
         if m == 0 {
             return;
         }
         let t32 = t as f32;
-        for ((node, a), b) in self
-            .values
-            .chunks_exact_mut(n)
-            .zip(below.values.chunks_exact(n))
-            .zip(above.values.chunks_exact(n))
-        {
-            for ((o, a), b) in node[n - m..].iter_mut().zip(&a[n - m..]).zip(&b[n - m..]) {
-                *o = if *a > 0.0 && *b > 0.0 {
-                    ((1.0 - t) * f64::from(*a).ln() + t * f64::from(*b).ln()).exp() as f32
+        for (index, node) in self.values.chunks_exact_mut(n).enumerate() {
+            let at = |table: &SkyViewTable, j: usize| table.values[index * n + n - m + j];
+            for (j, o) in node[n - m..].iter_mut().enumerate() {
+                let (a, b) = (at(below, j), at(above, j));
+                *o = if a > 0.0 && b > 0.0 {
+                    let (ln_a, ln_b) = (f64::from(a).ln(), f64::from(b).ln());
+                    let linear = (1.0 - t) * ln_a + t * ln_b;
+                    let cubic = outer
+                        .map(|(lowest, highest)| (at(lowest, j), at(highest, j)))
+                        .filter(|(l, h)| *l > 0.0 && *h > 0.0)
+                        .map(|(l, h)| {
+                            (9.0 * (ln_a + ln_b) - f64::from(l).ln() - f64::from(h).ln()) / 16.0
+                        })
+                        .filter(|c| ln_a.min(ln_b) <= *c && *c <= ln_a.max(ln_b));
+                    cubic.unwrap_or(linear).exp() as f32
                 } else {
                     (1.0 - t32) * a + t32 * b
                 };
