@@ -136,13 +136,17 @@ vec2 soraTurnedView(float zenith, float phi, float delta, float zh) {
 // Share of the sun's step that the view is turned by (lookup.rs's
 // turn_share): 1 within 10 degrees of the sun (the aureole keeps its angle
 // to the sun between sun nodes), 0 beyond 40; 0 within 5 degrees of the
-// horizon (its band keeps its zenith angle), 1 from 20 up; or, for suns
+// horizon (its band keeps its zenith angle), 1 from 20 up (for suns above
+// 68 degrees 1 away from the sun too, none below 55); or, for suns
 // below 2 degrees (0 above 6), 1 within 40 degrees of the antisolar
 // point, 0 beyond 80, horizon included (smoothstep ramps).
 float soraTurnShare(float zenith, float phi, float eDeg, float zh) {
   float e = radians(eDeg);
   float cosTheta = cos(zenith) * sin(e) + sin(zenith) * cos(phi) * cos(e);
-  float sunSide = smoothstep(cos(radians(40.0)), cos(radians(10.0)), cosTheta)
+  // For a high sun the whole sky (lookup.rs's HIGH_SUN_DEG, 55 to 68):
+  // its aureole reaches the zenith, which read unturned in the layer at 90
+  // degrees would be the sun's own place.
+  float sunSide = max(smoothstep(cos(radians(40.0)), cos(radians(10.0)), cosTheta), smoothstep(55.0, 68.0, eDeg))
     * (1.0 - smoothstep(zh - radians(20.0), zh - radians(5.0), zenith));
   // The planet's shadow, rising at the antisolar horizon as the sun sets,
   // turns with the antisolar point (horizon included).
@@ -165,15 +169,6 @@ float soraShadowReadShare(float zenith, float phi, float eDeg, float zh) {
     * (1.0 - smoothstep(-e, -SORA_SHADOW_RAMP * e, zh - zenith));
 }
 
-// The weight of a sun layer's turned read against its unturned read, in
-// ln L (lookup.rs's turned_read_weight): 1 for suns below 70 degrees, 0
-// above 85, where the aureole reaches the zenith and the zenith axis's
-// rows are coarser than its core (a view turned part of the way crossed
-// them, and the zenith's brightness bent against the sun's elevation).
-float soraTurnedReadWeight(float eDeg) {
-  return 1.0 - smoothstep(70.0, 85.0, eDeg);
-}
-
 // ln L of layer `low` (and low + 1, the altitude node above, by fa) of a
 // layer table toward `view` (zenith, phi), slices row0 and row1 by fj.
 vec3 soraLayerLog(highp sampler2DArray table, int Z, ivec2 F, int K, int low, float fa, int row0, int row1, float fj, vec2 view, float r) {
@@ -193,8 +188,7 @@ vec3 soraLayerLog(highp sampler2DArray table, int Z, ivec2 F, int K, int low, fl
 // eDeg (degrees): bilinear in a layer, linear in altitude, in ln L between
 // the two sun layers (the chord less the curvature of the four nearest),
 // each read at the view turned with the sun to its node (soraTurnedView,
-// by soraTurnShare of the step), blended in ln L with the unturned read
-// by soraTurnedReadWeight.
+// by soraTurnShare of the step).
 vec3 soraLayersXyz(highp sampler2DArray table, int Z, ivec2 F, int K, int j, float fj, float h, float zenith, float phi, float eDeg) {
   h = clamp(h, 0.0, soraThickness());
   float r = uPlanetSun.x + h;
@@ -203,8 +197,7 @@ vec3 soraLayersXyz(highp sampler2DArray table, int Z, ivec2 F, int K, int j, flo
   int a; float fa; soraCell(soraAltitudeCoordinate(h, A), 0, A - 2, a, fa);
   eDeg = clamp(eDeg, -12.0, 90.0);
   int s; float fs; soraCell(soraSunCoordinate(eDeg), 0, uSkyNodes.x - 2, s, fs);
-  float weight = soraTurnedReadWeight(eDeg);
-  float share = weight > 0.0 ? soraTurnShare(zenith, phi, eDeg, zh) : 0.0;
+  float share = soraTurnShare(zenith, phi, eDeg, zh);
   int row0 = 2 * Z * j;
   int row1 = fj > 0.0 ? row0 + 2 * Z : row0;
   // ln L of sun layers s - 1 .. s + 2 (clamped to the axis).
@@ -214,9 +207,6 @@ vec3 soraLayersXyz(highp sampler2DArray table, int Z, ivec2 F, int K, int j, flo
     vec2 view = soraTurnedView(zenith, phi, radians(soraSunElevationOfNode(s + n) - eDeg) * share, zh);
     int low = (s + n) * A + a;
     layers[m] = soraLayerLog(table, Z, F, K, low, fa, row0, row1, fj, view, r);
-    if (share > 0.0 && weight < 1.0) {
-      layers[m] = mix(soraLayerLog(table, Z, F, K, low, fa, row0, row1, fj, vec2(zenith, phi), r), layers[m], weight);
-    }
   }
   // The chord in ln L less its curvature: the second differences at nodes
   // s and s + 1 (zero at the axis's ends, each within +-1), blended.

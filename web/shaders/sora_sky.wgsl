@@ -126,14 +126,16 @@ fn sora_turned_view(zenith: f32, phi: f32, delta: f32, zh: f32) -> vec2<f32> {
 }
 
 // Share of the sun's step the view is turned by: 1 within 10 degrees of
-// the sun, 0 beyond 40; 0 within 5 degrees of the horizon, 1 from 20 up;
-// or, for suns below 2 degrees (0 above 6), 1 within 40 degrees of the
-// antisolar point, 0 beyond 80, horizon included (the planet's shadow
-// turns with it; smoothstep ramps).
+// the sun, 0 beyond 40 (1 everywhere for suns above 68 degrees, ramping
+// from 55); 0 within 5 degrees of the horizon, 1 from 20 up; or, for
+// suns below 2 degrees (0 above 6), 1 within 40 degrees of the antisolar
+// point, 0 beyond 80, horizon included (the planet's shadow turns with
+// it; smoothstep ramps).
 fn sora_turn_share(zenith: f32, phi: f32, e_deg: f32, zh: f32) -> f32 {
   let e = radians(e_deg);
   let cos_theta = cos(zenith) * sin(e) + sin(zenith) * cos(phi) * cos(e);
-  let sun_side = smoothstep(cos(radians(40.0)), cos(radians(10.0)), cos_theta)
+  // For a high sun the whole sky (lookup.rs's HIGH_SUN_DEG, 55 to 68).
+  let sun_side = max(smoothstep(cos(radians(40.0)), cos(radians(10.0)), cos_theta), smoothstep(55.0, 68.0, e_deg))
     * (1.0 - smoothstep(zh - radians(20.0), zh - radians(5.0), zenith));
   let shadow = smoothstep(cos(radians(80.0)), cos(radians(40.0)), -cos_theta)
     * (1.0 - smoothstep(2.0, 6.0, e_deg));
@@ -150,14 +152,6 @@ fn sora_shadow_read_share(zenith: f32, phi: f32, e_deg: f32, zh: f32) -> f32 {
   let cos_theta = cos(zenith) * sin(e) + sin(zenith) * cos(phi) * cos(e);
   return smoothstep(cos(radians(80.0)), cos(radians(40.0)), -cos_theta)
     * (1.0 - smoothstep(-e, -SORA_SHADOW_RAMP * e, zh - zenith));
-}
-
-// The weight of a sun layer's turned read against its unturned read, in
-// ln L (as soraTurnedReadWeight in sora_sky.glsl): 1 for suns below 70
-// degrees, 0 above 85, where the aureole reaches the zenith and the
-// zenith axis's rows are coarser than its core.
-fn sora_turned_read_weight(e_deg: f32) -> f32 {
-  return 1.0 - smoothstep(70.0, 85.0, e_deg);
 }
 
 // ln L of layer `low` (and low + 1, the altitude node above, by a_f) of a
@@ -177,8 +171,7 @@ fn sora_layer_log(table: texture_2d_array<f32>, zn: i32, zf: vec2<i32>, kn: i32,
 // azimuth `phi` from the sun's (rad), sun at e_deg: bilinear in a layer,
 // linear in altitude, in ln L between the sun layers (the chord less the
 // curvature of the four nearest), each read at the view turned with the
-// sun to its node, blended in ln L with the unturned read by
-// sora_turned_read_weight.
+// sun to its node.
 fn sora_layers_xyz(table: texture_2d_array<f32>, zn: i32, zf: vec2<i32>, kn: i32, j: i32, fj: f32,
                    h_in: f32, zenith: f32, phi: f32, e_in: f32) -> vec3<f32> {
   let h = clamp(h_in, 0.0, sora_thickness());
@@ -188,9 +181,7 @@ fn sora_layers_xyz(table: texture_2d_array<f32>, zn: i32, zf: vec2<i32>, kn: i32
   let an = sora.sky_nodes.y;
   let a = sora_cell(sora_altitude_coordinate(h, an), 0, an - 2);
   let s = sora_cell(sora_sun_coordinate(e_deg), 0, sora.sky_nodes.x - 2);
-  let weight = sora_turned_read_weight(e_deg);
-  var share = 0.0;
-  if (weight > 0.0) { share = sora_turn_share(zenith, phi, e_deg, zh); }
+  let share = sora_turn_share(zenith, phi, e_deg, zh);
   let row0 = 2 * zn * j;
   var row1 = row0;
   if (fj > 0.0) { row1 = row0 + 2 * zn; }
@@ -201,9 +192,6 @@ fn sora_layers_xyz(table: texture_2d_array<f32>, zn: i32, zf: vec2<i32>, kn: i32
     let view = sora_turned_view(zenith, phi, radians(sora_sun_elevation_of_node(s.i + n) - e_deg) * share, zh);
     let low = (s.i + n) * an + a.i;
     layers[m] = sora_layer_log(table, zn, zf, kn, low, a.f, row0, row1, fj, view, r);
-    if (share > 0.0 && weight < 1.0) {
-      layers[m] = mix(sora_layer_log(table, zn, zf, kn, low, a.f, row0, row1, fj, vec2<f32>(zenith, phi), r), layers[m], weight);
-    }
   }
   // The chord in ln L less its curvature: the second differences at nodes
   // s and s + 1 (zero at the axis's ends, each within +-1), blended.

@@ -139,12 +139,15 @@ pub(crate) fn turn_share(view: LocalView, e_deg: f64, horizon: f64) -> f64 {
     let e = e_deg.to_radians();
     let (z, phi) = (view.zenith_rad, view.relative_azimuth_rad);
     let cos_theta = z.cos() * e.sin() + z.sin() * phi.cos() * e.cos();
+    // Near the sun, and for a high sun the whole sky (its aureole reaches
+    // the zenith, where the zenith angle alone would read the layer's sun).
     let sun_side = smoothstep(
         40f64.to_radians().cos(),
         10f64.to_radians().cos(),
         cos_theta,
-    ) * (1.0
-        - smoothstep(horizon - 20f64.to_radians(), horizon - 5f64.to_radians(), z));
+    )
+    .max(smoothstep(HIGH_SUN_DEG.0, HIGH_SUN_DEG.1, e_deg))
+        * (1.0 - smoothstep(horizon - 20f64.to_radians(), horizon - 5f64.to_radians(), z));
     // The planet's shadow, which rises at the antisolar horizon as the sun
     // sets, turns with the antisolar point (horizon included).
     let shadow = smoothstep(
@@ -155,13 +158,12 @@ pub(crate) fn turn_share(view: LocalView, e_deg: f64, horizon: f64) -> f64 {
     sun_side.max(shadow)
 }
 
-/// The weight of the turned read of a sun layer against its unturned
-/// read, in ln L: 1 for suns below 70 degrees, 0 above 85 (smoothstep
-/// between), where the aureole reaches the zenith and the zenith axis's
-/// rows (3 degrees apart there) are coarser than its core.
-pub(crate) fn turned_read_weight(e_deg: f64) -> f64 {
-    1.0 - smoothstep(70.0, 85.0, e_deg)
-}
+/// Sun elevations (degrees) over which the whole sky above the horizon's
+/// band comes to be read turned (`turn_share`): none below the first, all
+/// above the second (below the sun node at 69.15 degrees of the default
+/// 48 nodes, so that no cell or curvature term about the layers at 78.89
+/// and 90 degrees reads a view turned part of the way).
+pub(crate) const HIGH_SUN_DEG: (f64, f64) = (55.0, 68.0);
 
 /// Where the read below the planet's shadow's edge ([`shadow_read_share`])
 /// ends: at this many times the sun's depression in view elevation. At 2
@@ -350,12 +352,7 @@ impl EngineTables {
             sun_elevation_deg.clamp(axes::SUN_ELEVATION_MIN_DEG, axes::SUN_ELEVATION_MAX_DEG);
         let a_count = self.settings.altitude_nodes;
         let ((a, fa), (s, fs)) = self.altitude_and_sun_cells(h, e_deg);
-        let weight = turned_read_weight(e_deg);
-        let share = if weight > 0.0 {
-            turn_share(view, e_deg, horizon)
-        } else {
-            0.0
-        };
+        let share = turn_share(view, e_deg, horizon);
         // ln L of sun layer `s` read at `view` turned by `share` of the
         // step to its node.
         let read_at = |s: usize, share: f64| {
@@ -376,17 +373,7 @@ impl EngineTables {
             };
             mix(at(a), at(a + 1), fa).map(|v| v.max(FLOOR).ln())
         };
-        // Blended with the unturned read by `weight` (a view turned part
-        // of the way toward a layer whose sun is near the zenith crossed
-        // that layer's zenith rows, coarser than the aureole's core).
-        let layer = |s: usize| -> [f64; 3] {
-            let turned = read_at(s, share);
-            if share == 0.0 || weight == 1.0 {
-                return turned;
-            }
-            let unturned = read_at(s, 0.0);
-            std::array::from_fn(|i| unturned[i] + (turned[i] - unturned[i]) * weight)
-        };
+        let layer = |s: usize| read_at(s, share);
         let s_count = self.settings.sun_nodes;
         // ln L on the sun axis cut at node `top`: the chord between the
         // two layers about the sun less its curvature (the second

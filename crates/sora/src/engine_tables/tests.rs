@@ -461,11 +461,12 @@ fn the_turned_view_keeps_its_angle_to_the_sun() {
         zenith_rad: 0.0,
         relative_azimuth_rad: 0.0,
     };
-    // For a sun near the zenith the unturned read alone: the aureole's
-    // core is finer than the zenith axis's rows there.
+    // For a high sun the whole sky above the horizon's band, far from the
+    // sun too (the zenith read unturned in the layer at 90 degrees would be
+    // the sun's own place).
     assert_eq!(super::lookup::turn_share(zenith, 88.0, horizon), 1.0);
-    assert_eq!(super::lookup::turned_read_weight(88.0), 0.0);
-    assert_eq!(super::lookup::turned_read_weight(60.0), 1.0);
+    assert_eq!(super::lookup::turn_share(far, 70.0, horizon), 1.0);
+    assert_eq!(super::lookup::turn_share(low, 80.0, horizon), 0.0);
 }
 
 /// Between sun layers the read is the chord of ln L less its curvature
@@ -2372,4 +2373,79 @@ fn the_zenith_against_the_sun_is_smooth() {
         }
     }
     assert!(failures.is_empty(), "{failures:?}");
+}
+
+/// Views near the sun and the zenith: (label, view) at `sun_deg`: the
+/// zenith, and views `d` degrees from the sun on its vertical (toward the
+/// zenith, clamped there, and toward the horizon) and across it.
+fn near_sun_views(sun_deg: f64) -> Vec<(String, LocalView)> {
+    let mut views = vec![(
+        "zenith".to_string(),
+        LocalView {
+            zenith_rad: 0.0,
+            relative_azimuth_rad: 0.0,
+        },
+    )];
+    let sz = 90.0 - sun_deg;
+    for d in [1.0, 2.0, 3.0, 5.0, 8.0, 12.0, 15.0] {
+        // Toward the zenith along the sun's vertical (past it: the far side).
+        let (z, phi) = if d <= sz { (sz - d, 0.0) } else { (d - sz, 180.0) };
+        views.push((format!("up{d}"), LocalView {
+            zenith_rad: z.to_radians(),
+            relative_azimuth_rad: f64::to_radians(phi),
+        }));
+        views.push((format!("down{d}"), LocalView {
+            zenith_rad: (sz + d).to_radians(),
+            relative_azimuth_rad: 0.0,
+        }));
+        // Across: the view at angle d from the sun at the sun's zenith angle
+        // (cos d = cos^2 z + sin^2 z cos phi).
+        let zr = sz.to_radians();
+        if d <= 2.0 * sz {
+            let c = ((d.to_radians().cos() - zr.cos().powi(2)) / zr.sin().powi(2)).clamp(-1.0, 1.0);
+            views.push((format!("side{d}"), LocalView {
+                zenith_rad: zr,
+                relative_azimuth_rad: c.acos(),
+            }));
+        }
+    }
+    views
+}
+
+/// Probe: the tables' radiance (Y) at the zenith and near the sun against
+/// the library's image, suns SORA_HIGHSUN_FROM..90 in SORA_HIGHSUN_STEP.
+#[test]
+#[ignore]
+fn probe_high_suns() {
+    let presets = std::env::var("SORA_HIGHSUN_PRESETS").unwrap_or_else(|_| "earth-hazy".into());
+    let from: f64 = std::env::var("SORA_HIGHSUN_FROM").map_or(60.0, |s| s.parse().unwrap());
+    let step: f64 = std::env::var("SORA_HIGHSUN_STEP").map_or(0.5, |s| s.parse().unwrap());
+    for preset in presets.split(',') {
+        let sky = cli_sky(preset);
+        let settings = EngineTableSettings {
+            altitude_nodes: 2,
+            march: false,
+            ..EngineTableSettings::default()
+        };
+        let t = std::time::Instant::now();
+        let tables = EngineTables::bake(&sky, &settings, &|_| {}).unwrap();
+        eprintln!("{preset}: bake {:.1} s", t.elapsed().as_secs_f64());
+        let mut sun = from;
+        while sun <= 90.0 + 1e-9 {
+            let (sun_sky, _) = node_sky(&sky, &tables, 0.0, sun);
+            let mut line = format!("{preset} {sun:5.1}");
+            for (label, view) in near_sun_views(sun) {
+                let direction = ViewDirection::new(
+                    (90.0 - view.zenith_rad.to_degrees()).min(90.0),
+                    180.0 + view.relative_azimuth_rad.to_degrees(),
+                )
+                .unwrap();
+                let want = xyz_of(&sun_sky, direction)[1];
+                let got = tables.sky_xyz(0.0, view, sun)[1];
+                line += &format!(" {label}:{:+.1}", 100.0 * (got / want - 1.0));
+            }
+            eprintln!("{line}");
+            sun += step;
+        }
+    }
 }
