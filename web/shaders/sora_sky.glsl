@@ -96,15 +96,17 @@ void soraZenithCoordinate(float zenith, float r, int half_, ivec2 cells, out flo
   }
 }
 
+vec3 soraMixLog(vec3 a, vec3 b, float f) {
+  return exp(mix(log(max(a, vec3(SORA_FLOOR))), log(max(b, vec3(SORA_FLOOR))), f));
+}
+
 // Bilinear read of slice row0 (its first row) of a layer of `table`.
 vec3 soraLayer(highp sampler2DArray table, int layer, int row0, int i, float fy, int k, float fx) {
   vec3 a = mix(texelFetch(table, ivec3(k, row0 + i, layer), 0).xyz, texelFetch(table, ivec3(k + 1, row0 + i, layer), 0).xyz, fx);
   vec3 b = mix(texelFetch(table, ivec3(k, row0 + i + 1, layer), 0).xyz, texelFetch(table, ivec3(k + 1, row0 + i + 1, layer), 0).xyz, fx);
-  return mix(a, b, fy);
-}
-
-vec3 soraMixLog(vec3 a, vec3 b, float f) {
-  return exp(mix(log(max(a, vec3(SORA_FLOOR))), log(max(b, vec3(SORA_FLOOR))), f));
+  // The zenith's cell geometric in the zenith (a sun near the zenith
+  // sits in it, its aureole's core steeper than linear between its rows).
+  return i == 0 ? soraMixLog(a, b, fy) : mix(a, b, fy);
 }
 
 // Elevation (degrees) of sun node s: the inverse of soraSunCoordinate.

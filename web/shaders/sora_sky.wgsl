@@ -94,6 +94,9 @@ fn sora_layer(table: texture_2d_array<f32>, layer: i32, row0: i32, z: SoraCell, 
               textureLoad(table, vec2<i32>(k.i + 1, row0 + z.i), layer, 0).xyz, k.f);
   let b = mix(textureLoad(table, vec2<i32>(k.i, row0 + z.i + 1), layer, 0).xyz,
               textureLoad(table, vec2<i32>(k.i + 1, row0 + z.i + 1), layer, 0).xyz, k.f);
+  // The zenith's cell geometric in the zenith (a sun near the zenith
+  // sits in it, its aureole's core steeper than linear between its rows).
+  if (z.i == 0) { return sora_mix_log(a, b, z.f); }
   return mix(a, b, z.f);
 }
 

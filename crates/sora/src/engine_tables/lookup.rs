@@ -4,7 +4,9 @@
 //!
 //! - Sky: at the eye's altitude h, the view's zenith coordinate is taken
 //!   with the eye's own horizon (`axes::zenith_coordinate`) and used on
-//!   every altitude layer; bilinear in (zenith, azimuth) within a layer,
+//!   every altitude layer; bilinear in (zenith, azimuth) within a layer
+//!   (geometric in the zenith within the zenith's cell, where a sun near
+//!   the zenith sits: its aureole's core falls faster than linearly),
 //!   linear between the two altitude layers, and in the logarithm (each
 //!   value floored at [`FLOOR`]) between the two sun layers s and s + 1:
 //!   the chord of ln L less `f (1 - f) / 2` times the second difference of
@@ -27,14 +29,12 @@
 //!   which rises at the antisolar horizon as the sun sets, turns with the
 //!   antisolar point, and a view along its edge read unturned from the
 //!   layer below the sunset is several times too dark (smoothstep ramps
-//!   between; the larger of the two shares). For suns above 70 degrees
-//!   the turned read is blended in ln L with the unturned one, by a
-//!   weight that falls to 0 at 85 ([`turned_read_weight`]): there the
-//!   aureole reaches the zenith, whose rows (3 degrees apart) are
-//!   coarser than its core: a view turned part of the way would cross the
-//!   first zenith row of the layer at 90 degrees, where its radiance falls
-//!   ninefold, and bend the zenith's brightness against the sun's
-//!   elevation. At a sun node the read is the layer's own. With the sun
+//!   between; the larger of the two shares). For suns above 68 degrees
+//!   (ramping from 55, [`HIGH_SUN_DEG`]) w = 1 far from the sun too, the
+//!   horizon's band excepted: the aureole reaches the zenith, and the
+//!   zenith read unturned in the layer at 90 degrees would be that
+//!   layer's sun (earth-hazy's zenith 3.8 times too bright at 86).
+//!   At a sun node the read is the layer's own. With the sun
 //!   below the horizon, near the antisolar point and below the shadow's
 //!   edge ([`shadow_read_share`]), the read is blended toward that of the sun
 //!   axis cut at its last node below the horizon (the chord of the last
@@ -219,7 +219,8 @@ pub(crate) fn turned_view(view: LocalView, delta: f64, horizon: f64) -> LocalVie
 }
 
 /// Slice `slice` (of all layers' slices) of `table` at zenith coordinate
-/// `(y, lowest, highest)` and relative azimuth `phi`: bilinear.
+/// `(y, lowest, highest)` and relative azimuth `phi`: bilinear, but
+/// geometric in the zenith within the zenith's cell (cell 0).
 fn layer_value_at(
     table: LayerTable<'_>,
     slice: usize,
@@ -233,11 +234,17 @@ fn layer_value_at(
         let t = table.texels[(slice * 2 * table.half + row) * k_count + column];
         [t[0] as f64, t[1] as f64, t[2] as f64]
     };
-    mix(
+    let (upper, lower) = (
         mix(texel(i, k), texel(i, k + 1), fx),
         mix(texel(i + 1, k), texel(i + 1, k + 1), fx),
-        fy,
-    )
+    );
+    // The zenith's cell geometric in the zenith: a sun near the zenith
+    // sits in it, its aureole's core steeper than linear between its rows.
+    if i == 0 {
+        mix_log(upper, lower, fy)
+    } else {
+        mix(upper, lower, fy)
+    }
 }
 
 /// GLSL's smoothstep: 0 at `a`, 1 at `b`, 3 t^2 - 2 t^3 between.

@@ -432,7 +432,7 @@ fn the_turned_view_keeps_its_angle_to_the_sun() {
         zenith_rad: f64::to_radians(30.0),
         relative_azimuth_rad: std::f64::consts::PI,
     };
-    assert_eq!(super::lookup::turn_share(far, 60.0, horizon), 0.0);
+    assert_eq!(super::lookup::turn_share(far, 50.0, horizon), 0.0);
     // Near the antisolar point, horizon included, for a sun about the
     // sunset the whole step (the planet's shadow turns with it), none for
     // a high sun or far from it.
@@ -2368,6 +2368,12 @@ fn the_zenith_against_the_sun_is_smooth() {
             .map(|i| ((ln[i + 1] - 2.0 * ln[i] + ln[i - 1]).abs(), sun(i)))
             .fold((0.0, 0.0), |a, b| if b.0 > a.0 { b } else { a });
         eprintln!("{preset}: zenith |d2 ln L| {worst:.4} at {at} degrees");
+        for i in 1..ln.len() - 1 {
+            let d2 = ln[i + 1] - 2.0 * ln[i] + ln[i - 1];
+            if d2.abs() > 0.02 {
+                eprintln!("  {:.2}: {d2:+.4}", sun(i));
+            }
+        }
         if worst >= 0.05 || !ln.iter().all(|v| v.is_finite()) {
             failures.push(format!("{preset}: {worst:.4} at {at}"));
         }
@@ -2389,24 +2395,37 @@ fn near_sun_views(sun_deg: f64) -> Vec<(String, LocalView)> {
     let sz = 90.0 - sun_deg;
     for d in [1.0, 2.0, 3.0, 5.0, 8.0, 12.0, 15.0] {
         // Toward the zenith along the sun's vertical (past it: the far side).
-        let (z, phi) = if d <= sz { (sz - d, 0.0) } else { (d - sz, 180.0) };
-        views.push((format!("up{d}"), LocalView {
-            zenith_rad: z.to_radians(),
-            relative_azimuth_rad: f64::to_radians(phi),
-        }));
-        views.push((format!("down{d}"), LocalView {
-            zenith_rad: (sz + d).to_radians(),
-            relative_azimuth_rad: 0.0,
-        }));
+        let (z, phi) = if d <= sz {
+            (sz - d, 0.0)
+        } else {
+            (d - sz, 180.0)
+        };
+        views.push((
+            format!("up{d}"),
+            LocalView {
+                zenith_rad: z.to_radians(),
+                relative_azimuth_rad: f64::to_radians(phi),
+            },
+        ));
+        views.push((
+            format!("down{d}"),
+            LocalView {
+                zenith_rad: (sz + d).to_radians(),
+                relative_azimuth_rad: 0.0,
+            },
+        ));
         // Across: the view at angle d from the sun at the sun's zenith angle
         // (cos d = cos^2 z + sin^2 z cos phi).
         let zr = sz.to_radians();
         if d <= 2.0 * sz {
             let c = ((d.to_radians().cos() - zr.cos().powi(2)) / zr.sin().powi(2)).clamp(-1.0, 1.0);
-            views.push((format!("side{d}"), LocalView {
-                zenith_rad: zr,
-                relative_azimuth_rad: c.acos(),
-            }));
+            views.push((
+                format!("side{d}"),
+                LocalView {
+                    zenith_rad: zr,
+                    relative_azimuth_rad: c.acos(),
+                },
+            ));
         }
     }
     views
@@ -2448,4 +2467,80 @@ fn probe_high_suns() {
             sun += step;
         }
     }
+}
+
+/// The sky lookup of the tables CI bakes (`sora tables --altitude-nodes
+/// 2`) against the library's image at suns 80 to 90 degrees (every 0.5),
+/// at the zenith and 1 to 15 degrees from the sun ([`near_sun_views`]):
+/// every view above the horizon's band is read turned with the sun there
+/// (`lookup::HIGH_SUN_DEG`), so a view keeps its angle to the sun in each
+/// sun layer. Views 5 to 15 degrees from the sun, and the zenith with the
+/// sun 5 or more degrees from it, within 20 % (measured: earth-hazy 17.4
+/// %, mars-dust 7.0 %, earth-clear 0.4 %; the zenith read unturned, as
+/// before, was +221 to +284 % for earth-hazy at suns 84 to 86); views
+/// within 3 degrees of the sun within -50 to +110 % (earth-hazy +107 %):
+/// the zenith axis's rows are 2.8 degrees apart next to the zenith,
+/// coarser than the aureole's core, and the layer at 90 degrees itself
+/// reads +96 % 2 degrees from its sun (docs/engine-tables.md, "High
+/// suns"). SORA_HIGHSUN_PRESETS (default earth-hazy,earth-clear,
+/// mars-dust). Ignored: a bake each (about 30 s on the shared 2-core
+/// machine) and 21 reference images; `--ignored --nocapture` prints the
+/// worst of each.
+#[test]
+#[ignore]
+fn the_sky_near_a_high_sun_matches_the_library() {
+    let presets = std::env::var("SORA_HIGHSUN_PRESETS")
+        .unwrap_or_else(|_| "earth-hazy,earth-clear,mars-dust".into());
+    let mut failures = Vec::new();
+    for preset in presets.split(',') {
+        let sky = cli_sky(preset);
+        let settings = EngineTableSettings {
+            altitude_nodes: 2,
+            march: false,
+            ..EngineTableSettings::default()
+        };
+        let tables = EngineTables::bake(&sky, &settings, &|_| {}).unwrap();
+        // The worst relative error (and where) away from the core and in it.
+        let (mut away, mut core) = ((0.0f64, String::new()), (0.0f64, String::new()));
+        for step in 0..=20 {
+            let sun = 80.0 + 0.5 * step as f64;
+            let (sun_sky, _) = node_sky(&sky, &tables, 0.0, sun);
+            for (label, view) in near_sun_views(sun) {
+                let direction = ViewDirection::new(
+                    90.0 - view.zenith_rad.to_degrees(),
+                    180.0 + view.relative_azimuth_rad.to_degrees(),
+                )
+                .unwrap();
+                let want = xyz_of(&sun_sky, direction)[1];
+                let error = tables.sky_xyz(0.0, view, sun)[1] / want - 1.0;
+                let from_sun = if label == "zenith" {
+                    90.0 - sun
+                } else {
+                    label
+                        .trim_start_matches(char::is_alphabetic)
+                        .parse()
+                        .unwrap()
+                };
+                let worst = if from_sun >= 5.0 {
+                    &mut away
+                } else {
+                    &mut core
+                };
+                if error.abs() > worst.0.abs() {
+                    *worst = (error, format!("{label} at sun {sun}"));
+                }
+            }
+        }
+        eprintln!(
+            "{preset}: 5-15 degrees from the sun {:+.1} % ({}), within 5 {:+.1} % ({})",
+            100.0 * away.0,
+            away.1,
+            100.0 * core.0,
+            core.1
+        );
+        if away.0.abs() > 0.2 || !(-0.5..=1.1).contains(&core.0) {
+            failures.push(format!("{preset}: {away:?} {core:?}"));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:?}");
 }
