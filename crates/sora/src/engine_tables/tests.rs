@@ -2339,7 +2339,11 @@ fn the_read_below_the_shadow_s_edge_is_continuous_in_the_sun() {
 /// at 90 degrees part of the way bent the curve at 79.75 degrees (0.0512
 /// with the plain axis, 0.0475 with the fine and wide cells; 0.0208 at
 /// 79 degrees with the turned and unturned reads blended,
-/// `lookup::turned_read_weight`). SORA_ZENITH_PRESETS (comma-separated,
+/// a blend of turned and unturned reads, since replaced). Fails now:
+/// every view is read turned above 68 degrees (the zenith 3.8 times too
+/// bright before at 86), and the turned zenith crosses the rows of the
+/// layer at 90 degrees: earth-hazy 0.1416 at 87.25 degrees
+/// (docs/engine-tables.md, "High suns"). SORA_ZENITH_PRESETS (comma-separated,
 /// default earth-hazy) names the atmospheres. Ignored: a bake each (40 s
 /// on the shared 2-core machine); `--ignored --nocapture` prints the
 /// numbers.
@@ -2474,14 +2478,15 @@ fn probe_high_suns() {
 /// at the zenith and 1 to 15 degrees from the sun ([`near_sun_views`]):
 /// every view above the horizon's band is read turned with the sun there
 /// (`lookup::HIGH_SUN_DEG`), so a view keeps its angle to the sun in each
-/// sun layer. Views 5 to 15 degrees from the sun, and the zenith with the
-/// sun 5 or more degrees from it, within 20 % (measured: earth-hazy 17.4
-/// %, mars-dust 7.0 %, earth-clear 0.4 %; the zenith read unturned, as
-/// before, was +221 to +284 % for earth-hazy at suns 84 to 86); views
-/// within 3 degrees of the sun within -50 to +110 % (earth-hazy +107 %):
-/// the zenith axis's rows are 2.8 degrees apart next to the zenith,
-/// coarser than the aureole's core, and the layer at 90 degrees itself
-/// reads +96 % 2 degrees from its sun (docs/engine-tables.md, "High
+/// sun layer, and the zenith's cell is read geometrically in the zenith.
+/// Views 5 to 15 degrees from the sun, and the zenith with the sun 5 or
+/// more degrees from it, within 20 % (measured: earth-hazy +17.4 %,
+/// mars-dust +10.6 %, earth-clear +0.4 %; read as before, unturned above
+/// 85 degrees, earth-hazy's were up to +302 %, its zenith +284 % at 86);
+/// views 1 to 3 degrees from the sun and the zenith of suns above 85
+/// within -50 to +110 % (earth-hazy +95.1 %, 2 degrees from a sun at 80;
+/// before, +265 %): the zenith axis's rows are 2.8 degrees apart near the
+/// zenith, coarser than the aureole's core (docs/engine-tables.md, "High
 /// suns"). SORA_HIGHSUN_PRESETS (default earth-hazy,earth-clear,
 /// mars-dust). Ignored: a bake each (about 30 s on the shared 2-core
 /// machine) and 21 reference images; `--ignored --nocapture` prints the
