@@ -344,8 +344,16 @@ impl EngineTables {
         };
         // XYZ of a view's or a segment's light, negative light counted as
         // none. A grazing ray from the very top of the atmosphere
-        // (earth-hazy, the sun at the horizon) once gave a segment's light
-        // a negative value at one wavelength (not traced to its term). A
+        // (earth-hazy, the sun at the horizon) gave a segment's light
+        // negative values (-4.5e-9 W m^-2 sr^-1 nm^-1 at 1755 m, 700 nm,
+        // single scattering 8.5e-9): its peak-only term P_sky - T
+        // P_behind with the sky's Q from the whole ray's own march, the
+        // two marches' quadrature error where the segment adds nothing
+        // to Q; the sky's Q is now composed from the segment's and the
+        // light from behind's (`sky/aerial_perspective.rs`), and no
+        // segment of that layer (16 x 16 views, 8 distances, 380-780 nm)
+        // is negative. The clamp stays: a difference of terms, it is not
+        // shown non-negative everywhere. A
         // sky layer's view 0.32 degrees below the horizon at 100 km
         // (earth-hazy, the sun at -9.1 degrees, 420 nm) read -0.039 W m^-2
         // sr^-1 nm^-1 from the sky-view table's forward-peak X-bar filled

@@ -420,11 +420,18 @@ impl Sky {
     /// [`crate::transport::multiple_scattering::MultipleScatteringScratch::scaled_forward_integrals`]);
     /// its peak-only line's T Q_behind and T Q_behind X-bar_behind are
     /// summed along the ray beyond the point itself
-    /// ([`crate::transport::multiple_scattering::MultipleScatteringField::compute_forward_integrals_beyond`]):
-    /// Q_sky - Q_seg is the difference of two marches with their own
-    /// nodes on the segment, their quadrature error where little light
-    /// comes from behind (a view through haze near the horizon), and X-bar
-    /// of that error over that error is anything (e^X-bar up to e^64).
+    /// ([`crate::transport::multiple_scattering::MultipleScatteringField::compute_forward_integrals_beyond`]),
+    /// and the sky's Q_sky and Q_sky X-bar_sky are composed from them and
+    /// the segment's (Q_seg + T Q_behind, Q_seg X-bar_seg + T Q_behind
+    /// (X-bar_behind + X_seg), X_seg the segment's peak depth tau - tau*),
+    /// not taken from the whole ray's own march. Either difference of two
+    /// marches is their quadrature error where the segment adds little
+    /// to Q: Q_sky - Q_seg as the light from behind (a view through haze
+    /// near the horizon, X-bar of that error over that error anything,
+    /// e^X-bar up to e^64), and P_sky - T P_behind as the air's peak-only
+    /// light (earth-hazy, the eye at 100 km, sun 0 degrees, a view 10.09
+    /// degrees down 20 degrees from the sun's azimuth, 1755 m, 700 nm:
+    /// 4.1315e-4 - 4.1317e-4, -1.3e-8 against single scattering's 8.4e-9).
     fn compute_segment_terms(&self, view: Vector3, distance_m: f64, work: &mut ViewWork) {
         let wavelengths = self.wavelengths().len();
         // The whole ray's field, ground and forward-peak integrals, kept
@@ -441,12 +448,10 @@ impl Sky {
                         work.terms.ground_sunlit.clone(),
                         work.terms.ground_skylit.clone(),
                     ),
-                    integrals: work.multiple.as_ref().map(|scratch| {
-                        (
-                            scratch.forward_integrals().to_vec(),
-                            scratch.scaled_forward_integrals().to_vec(),
-                        )
-                    }),
+                    integrals: work
+                        .multiple
+                        .as_ref()
+                        .map(|scratch| scratch.scaled_forward_integrals().to_vec()),
                 }
             }
         };
@@ -454,7 +459,7 @@ impl Sky {
         self.compute_view_terms((view, distance_m), None, work);
         work.terms.ground_sunlit.fill(0.0);
         work.terms.ground_skylit.fill(0.0);
-        let (Some(field), Some(scratch), Some((sky_forward, sky_scaled))) =
+        let (Some(field), Some(scratch), Some(sky_scaled)) =
             (self.field(), work.multiple.as_ref(), sky.integrals.as_ref())
         else {
             work.segment_sky = Some(sky);
@@ -464,6 +469,9 @@ impl Sky {
         // 1 - T / T* per wavelength.
         let mut scaled = vec![0.0; wavelengths];
         field.scaled_transmittance_of_last_ray(scratch, &mut scaled);
+        // The segment's X_seg (its view leg's peak depth).
+        let mut peak_depth = vec![0.0; wavelengths];
+        field.peak_depth_of_last_ray(scratch, &mut peak_depth);
         let through = work.single.view_transmittance();
         let share: Vec<f64> = through
             .iter()
@@ -481,9 +489,9 @@ impl Sky {
             scratch.forward_integrals(),
             scratch.scaled_forward_integrals(),
         );
-        // The air's forward-peak integrals (first line; the sky's
-        // peak-only rows), and T times those of the light from behind
-        // (peak-only rows only).
+        // The air's forward-peak integrals (first line; the segment's
+        // peak-only rows, the light from behind's added below), and T
+        // times those of the light from behind (peak-only rows only).
         let mut behind = vec![0.0; forward.len()];
         for (row, out) in work.forward.chunks_mut(wavelengths).enumerate() {
             for (i, o) in out.iter_mut().enumerate() {
@@ -491,13 +499,16 @@ impl Sky {
                 *o = if row < species {
                     forward[k] + share[i] * (sky_scaled[k] - segment_scaled[k])
                 } else {
-                    sky_forward[k]
+                    forward[k]
                 };
             }
         }
         // The light from behind's peak-only rows from the ray beyond the
         // point marched on its own (T and X counted from the point), times
-        // T: T Q_behind and T Q_behind X-bar_behind.
+        // T: T Q_behind and T Q_behind X-bar_behind. The sky's are the
+        // segment's and these, X counted from the eye (X_seg more):
+        // Q_sky = Q_seg + T Q_behind, Q_sky X-bar_sky = Q_seg X-bar_seg +
+        // T Q_behind (X-bar_behind + X_seg).
         let beyond = work.multiple.as_mut().map(|scratch| {
             field.compute_forward_integrals_beyond(view, distance_m, scratch);
             scratch.forward_integrals().to_vec()
@@ -505,10 +516,11 @@ impl Sky {
         let through = work.single.view_transmittance();
         if let Some(beyond) = beyond {
             for (i, t) in through.iter().enumerate() {
-                for row in [species, species + 1] {
-                    let k = row * wavelengths + i;
-                    behind[k] = t * beyond[k];
-                }
+                let (q, qx) = (species * wavelengths + i, (species + 1) * wavelengths + i);
+                behind[q] = t * beyond[q];
+                behind[qx] = t * beyond[qx];
+                work.forward[q] += behind[q];
+                work.forward[qx] += behind[qx] + peak_depth[i] * behind[q];
             }
         }
         let terms = &mut work.terms;
@@ -769,6 +781,72 @@ mod tests {
                 assert!(
                     l.is_finite() && *l > 0.0 && *l <= 1.001 * s,
                     "d {d} m, wavelength {i}: the air's light {l:e}, the sky's {s:e}"
+                );
+            }
+        }
+    }
+
+    /// A grazing view from the top of the atmosphere (earth-hazy, the eye
+    /// at 100 km, the sun on the horizon; the engine tables' aerial
+    /// table's view next to the horizon, 20 degrees from the sun's
+    /// azimuth, 22.3 from the sun; 700-780 nm) crosses air of almost no
+    /// aerosol in its first 18 km: the segment adds nothing to the
+    /// forward peaks' Q (2.6e-38 at 1755 m against the whole ray's
+    /// 3.1e-2), so its peak-only light is the difference of the sky's and
+    /// T times the light from behind's, both 4.13e-4 at 700 nm. With the
+    /// sky's Q from the whole ray's own march that difference was the
+    /// two marches' quadrature error (-1.3e-8), and the air's light
+    /// -4.5e-9 against single scattering's 8.5e-9 (negative from 670 to
+    /// 780 nm, 0.1 to 18 km). Now it is the segment's own light, single
+    /// scattering and the scaled field's (the light from behind that its
+    /// peaks spread is nil), within 0.1 %, and its single scattering is
+    /// the path tracer's (which finds no multiply scattered light there in
+    /// 20000 paths) within 1 % + 3 standard errors.
+    #[test]
+    fn a_grazing_segment_from_the_top_of_the_atmosphere_is_its_own_light() {
+        use crate::engine_tables::axes;
+        let build = |method: Method| {
+            Sky::builder(&Atmosphere::preset("earth-hazy").unwrap())
+                .sun_deg(0.0, 180.0)
+                .observer_altitude_m(100e3)
+                .wavelengths(WavelengthGrid::new(700.0, 780.0, 40.0).unwrap())
+                .polarisation(Polarisation::Scalar)
+                .method(method)
+                .build()
+                .unwrap()
+        };
+        let fast = build(Method::Fast);
+        let (ground, top) = fast.scene.radii_m();
+        // The last node above the horizon of a half of 16 nodes.
+        let horizon = axes::horizon_zenith(top, ground);
+        let zenith = axes::zenith_of_node(15, 16, (0, 0), horizon);
+        let view = ViewDirection::new(90.0 - zenith.to_degrees(), 200.0).unwrap();
+        let segments: Vec<_> = [100.0, 1755.0, 17834.0].map(|d| (view, d)).to_vec();
+        let lights = fast.compute_segment_light(&segments).unwrap();
+        let traced = build(Method::PathTracing {
+            samples: 20_000,
+            seed: 3,
+        })
+        .compute_segment_light(&segments)
+        .unwrap();
+        for (((_, d), (light, _)), (reference, _)) in segments.iter().zip(&lights).zip(&traced) {
+            let [single, own, ..] = fast.segment_term_parts(view.to_vector(), *d);
+            let errors = reference.standard_error_w_m2_sr_nm.as_ref().unwrap();
+            for i in 0..fast.wavelengths().len() {
+                let (x, y) = (
+                    light.radiance_w_m2_sr_nm[i],
+                    reference.radiance_w_m2_sr_nm[i],
+                );
+                let alone = single[i] + own[i];
+                assert!(
+                    x > 0.0 && (x - alone).abs() <= 1e-3 * alone,
+                    "d {d} m, #{i}: the air's light {x:e}, the segment's own {alone:e}"
+                );
+                assert!(
+                    (single[i] - y).abs() <= 0.01 * y + 3.0 * errors[i],
+                    "d {d} m, #{i}: single scattering {:e}, traced {y:e} +- {:e}",
+                    single[i],
+                    errors[i]
                 );
             }
         }

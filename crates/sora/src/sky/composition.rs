@@ -184,13 +184,13 @@ pub(super) struct ViewWork {
 
 /// The whole ray's terms a segment's light is taken from (see
 /// [`ViewWork::segment_sky`]): its view's bits, the scaled field's light,
-/// the ground's sunlit and skylit light, and the forward-peak integrals
-/// (all and scaled) when there is a field.
+/// the ground's sunlit and skylit light, and the scaled forward-peak
+/// integrals when there is a field.
 pub(super) struct SegmentSky {
     pub(super) view: [u64; 3],
     pub(super) field: Vec<f64>,
     pub(super) ground: (Vec<f64>, Vec<f64>),
-    pub(super) integrals: Option<(Vec<f64>, Vec<f64>)>,
+    pub(super) integrals: Option<Vec<f64>>,
 }
 
 /// The fast method's terms of one view or pixel, each computed on its own

@@ -546,6 +546,13 @@ pub struct SunColumnTable {
     /// species + s] for the altitude node `altitude` + a, a in {0, 1},
     /// `altitude` below `altitude_nodes` - 1.
     cell_corners: Vec<f64>,
+    /// H = sqrt(R_top^2 - R^2), m ([`SunColumnTable::horizon_distance_m`]),
+    /// and the altitude nodes' radii, m
+    /// ([`SunColumnTable::radius_from_unit`] at each node): what every
+    /// [`SunColumnTable::locate_radius`] would compute again, the same
+    /// bits.
+    horizon_distance_m: f64,
+    node_radii_m: Vec<f64>,
 }
 
 impl SunColumnTable {
@@ -573,6 +580,10 @@ impl SunColumnTable {
                 .collect(),
             mean_densities: Vec::new(),
             cell_corners: Vec::new(),
+            horizon_distance_m: ((top_radius_m - ground_radius_m)
+                * (top_radius_m + ground_radius_m))
+                .sqrt(),
+            node_radii_m: Vec::new(),
         };
         let mut log_mean_densities = vec![0.0; altitude_nodes * mu_nodes * species];
         // One altitude row per task; each row is the same computation
@@ -633,9 +644,13 @@ impl SunColumnTable {
                 }
             }
         }
+        let node_radii_m = (0..altitude_nodes)
+            .map(|i| table.radius_from_unit(i as f64 / (altitude_nodes - 1) as f64))
+            .collect();
         SunColumnTable {
             mean_densities,
             cell_corners,
+            node_radii_m,
             ..table
         }
     }
@@ -647,6 +662,7 @@ impl SunColumnTable {
 
     /// Bruneton's altitude coordinate: rho / H in [0, 1], rho = sqrt(r^2 - R^2),
     /// H = sqrt(R_top^2 - R^2).
+    #[cfg(test)]
     fn unit_from_radius(&self, r: f64) -> f64 {
         let (ground, top) = (self.ground_radius_m, self.top_radius_m);
         let h = ((top - ground) * (top + ground)).sqrt();
@@ -684,29 +700,23 @@ impl SunColumnTable {
     /// The part of a lookup that depends on the radius alone: a point
     /// that is looked up toward many suns (the spherical first order's
     /// samples) locates its radius once.
+    ///
+    /// The node radii and H are kept in the table, and rho = sqrt(r^2 -
+    /// R^2) taken once: the same values as computed here each time
+    /// ([`SunColumnTable::unit_from_radius`], `radius_from_unit`; the
+    /// test `the_located_radius_is_the_one_computed_anew`).
     pub(crate) fn locate_radius(&self, r_m: f64) -> SunColumnRadius {
         let ground = self.ground_radius_m;
         let r = r_m.clamp(ground, self.top_radius_m);
-        let x = self.unit_from_radius(r) * (self.altitude_nodes - 1) as f64;
+        let (top, h) = (self.top_radius_m, self.horizon_distance_m);
+        let rho = ((r - ground) * (r + ground)).max(0.0).sqrt();
+        let x = (rho / h).clamp(0.0, 1.0) * (self.altitude_nodes - 1) as f64;
         let i = (x as usize).min(self.altitude_nodes - 2);
         // Nodes are spaced in rho, but the weight between two altitude nodes
         // is linear in altitude: ln(mean density) of an exponential profile
         // is linear in altitude, and quadratic in rho.
-        let denominator = (self.altitude_nodes - 1) as f64;
-        let (r0, r1) = (
-            self.radius_from_unit(i as f64 / denominator),
-            self.radius_from_unit((i + 1) as f64 / denominator),
-        );
-        let (top, h) = (self.top_radius_m, self.horizon_distance_m());
-        let rho = ((r - ground) * (r + ground)).max(0.0).sqrt();
-        SunColumnRadius {
-            r,
-            r_squared: r * r,
-            altitude_node: i,
-            altitude_weight: ((r - r0) / (r1 - r0)).clamp(0.0, 1.0),
-            d_min: top - r,
-            d_max: rho + h,
-        }
+        let (r0, r1) = (self.node_radii_m[i], self.node_radii_m[i + 1]);
+        SunColumnRadius::new(r, (i, r0, r1), (top, rho, h))
     }
 
     /// The radius of the march node `node` and where it lies in the table:
@@ -799,11 +809,39 @@ impl SunColumnTable {
         true
     }
 
-    /// H = sqrt(R_top^2 - R^2), the distance from the ground's horizon to
-    /// the top of the atmosphere, m.
-    fn horizon_distance_m(&self) -> f64 {
-        let (ground, top) = (self.ground_radius_m, self.top_radius_m);
-        ((top - ground) * (top + ground)).sqrt()
+    /// [`SunColumnTable::locate_radius`] computed from the table's axes
+    /// alone, nothing kept (the slow path it is held to).
+    #[cfg(test)]
+    fn locate_radius_anew(&self, r_m: f64) -> SunColumnRadius {
+        let ground = self.ground_radius_m;
+        let r = r_m.clamp(ground, self.top_radius_m);
+        let x = self.unit_from_radius(r) * (self.altitude_nodes - 1) as f64;
+        let i = (x as usize).min(self.altitude_nodes - 2);
+        let denominator = (self.altitude_nodes - 1) as f64;
+        let (r0, r1) = (
+            self.radius_from_unit(i as f64 / denominator),
+            self.radius_from_unit((i + 1) as f64 / denominator),
+        );
+        let top = self.top_radius_m;
+        let h = ((top - ground) * (top + ground)).sqrt();
+        let rho = ((r - ground) * (r + ground)).max(0.0).sqrt();
+        SunColumnRadius::new(r, (i, r0, r1), (top, rho, h))
+    }
+}
+
+impl SunColumnRadius {
+    /// The radius `r` (m) in the cell above altitude node `i`, between the
+    /// node radii `r0` and `r1`, in an atmosphere of top radius `top` (m),
+    /// with rho = sqrt(r^2 - R^2) and H (m).
+    fn new(r: f64, (i, r0, r1): (usize, f64, f64), (top, rho, h): (f64, f64, f64)) -> Self {
+        SunColumnRadius {
+            r,
+            r_squared: r * r,
+            altitude_node: i,
+            altitude_weight: ((r - r0) / (r1 - r0)).clamp(0.0, 1.0),
+            d_min: top - r,
+            d_max: rho + h,
+        }
     }
 }
 
@@ -996,6 +1034,35 @@ mod tests {
                     }
                 }
             }
+        }
+    }
+
+    /// The radius located with the table's kept node radii and H is the
+    /// one located from the axes anew, field for field and bit for bit, at
+    /// radii across the atmosphere, on its nodes, and beyond its bounds.
+    #[test]
+    fn the_located_radius_is_the_one_computed_anew() {
+        let profiles = [exponential(8000.0), exponential(1200.0)];
+        let table = SunColumnTable::compute(&profiles, R, TOP, 64, 32);
+        let mut radii: Vec<f64> = (0..=20_000)
+            .map(|i| R + (TOP - R) * (i as f64 / 20_000.0).powi(2))
+            .collect();
+        radii.extend(table.node_radii_m.iter().copied());
+        radii.extend([R - 1.0, R, TOP, TOP + 1e3, R + 1e-9, TOP - 1e-9]);
+        for r in radii {
+            let (kept, anew) = (table.locate_radius(r), table.locate_radius_anew(r));
+            let bits = |a: &SunColumnRadius| {
+                [
+                    a.r,
+                    a.r_squared,
+                    a.altitude_weight,
+                    a.d_min,
+                    a.d_max,
+                    a.altitude_node as f64,
+                ]
+                .map(f64::to_bits)
+            };
+            assert_eq!(bits(&kept), bits(&anew), "{r}");
         }
     }
 

@@ -292,18 +292,15 @@ impl<'a> Together<'a> {
         exp_neg_in_place(&mut self.depths);
         for ((sky, scratch), offset) in self.skies.iter_mut().zip(&self.offsets) {
             let wavelengths = sky.optics.grid.len();
-            let transmittances = &self.depths[*offset..*offset + wavelengths];
-            for (j, density) in densities.iter().enumerate() {
-                let density = *density;
-                if density <= 0.0 || !scratch.scattering_species[j] {
-                    continue;
-                }
-                let row =
-                    &mut scratch.inscattering_integrals[j * wavelengths..(j + 1) * wavelengths];
-                for (acc, transmittance) in row.iter_mut().zip(transmittances) {
-                    *acc += weight * density * transmittance;
-                }
-            }
+            add_to_integrals(
+                (
+                    weight,
+                    densities,
+                    &self.depths[*offset..*offset + wavelengths],
+                ),
+                &scratch.scattering_species,
+                &mut scratch.inscattering_integrals,
+            );
         }
     }
 }
@@ -414,6 +411,77 @@ pub struct SingleScatteringScratch {
     /// Per species: whether it scatters at any wavelength (an absorbing
     /// gas adds nothing to the integrals).
     scattering_species: Vec<bool>,
+    /// The sunlit nodes of the ray being marched, for the sums after the
+    /// march ([`SingleScatteringScratch::add_lit_nodes_to_integrals`]).
+    lit_nodes: LitNodes,
+    /// Whether each node's exponentials and sums are taken at the node
+    /// (the slow path the sums after the march are held to, bit for bit)
+    /// instead of after the march.
+    node_by_node: bool,
+}
+
+/// The sunlit nodes of one view ray in march order: per node its weight
+/// (m), and per node and species [node * species + j] its relative
+/// density and its columns (m) from the eye and toward the sun; then, per
+/// node and wavelength, the optical depths eye-node-sun and in place their
+/// transmittances.
+#[derive(Debug, Clone, Default)]
+struct LitNodes {
+    weights: Vec<f64>,
+    densities: Vec<f64>,
+    view_columns: Vec<f64>,
+    sun_columns: Vec<f64>,
+    transmittances: Vec<f64>,
+}
+
+impl LitNodes {
+    fn clear(&mut self) {
+        self.weights.clear();
+        self.densities.clear();
+        self.view_columns.clear();
+        self.sun_columns.clear();
+    }
+}
+
+/// Adds to `depths` (per wavelength) the optical depths of the path eye
+/// -> node -> sun of columns `view_columns` and `sun_columns` (m, per
+/// species), species by species: the sum of each species' two columns
+/// times its extinction.
+#[inline(always)]
+fn add_optical_depths(
+    species: &[crate::atmosphere::SpeciesOptics],
+    view_columns: &[f64],
+    sun_columns: &[f64],
+    depths: &mut [f64],
+) {
+    for (j, s) in species.iter().enumerate() {
+        let column = view_columns[j] + sun_columns[j];
+        for (tau, beta) in depths.iter_mut().zip(s.extinction_per_m.values()) {
+            *tau += beta * column;
+        }
+    }
+}
+
+/// Adds one node's light to the integrals I_j(lambda) ([j * wavelengths +
+/// i], m): its weight (m) times each scattering species' relative density
+/// times the transmittance eye-node-sun (per wavelength).
+#[inline(always)]
+fn add_to_integrals(
+    (weight, densities, transmittances): (f64, &[f64], &[f64]),
+    scattering_species: &[bool],
+    integrals: &mut [f64],
+) {
+    let wavelengths = transmittances.len();
+    for (j, density) in densities.iter().enumerate() {
+        let density = *density;
+        if density <= 0.0 || !scattering_species[j] {
+            continue;
+        }
+        let row = &mut integrals[j * wavelengths..(j + 1) * wavelengths];
+        for (acc, transmittance) in row.iter_mut().zip(transmittances) {
+            *acc += weight * density * transmittance;
+        }
+    }
 }
 
 impl SingleScatteringScratch {
@@ -426,6 +494,43 @@ impl SingleScatteringScratch {
     /// serves one scene and one sun-column table.
     pub(crate) fn reuse_view_nodes(&mut self) {
         self.march.reuse_nodes();
+    }
+
+    /// The sunlit nodes kept by the march ([`LitNodes`]) added to the
+    /// integrals: every node's optical depths, then their exponentials
+    /// all together (whole registers, one call per ray), then the sums in
+    /// march order. The same operations on each value as node by node
+    /// (`node_by_node`), so the same bits; what changes is that the
+    /// march's sun-column lookups, independent of one another, follow
+    /// each other without the exponentials between them.
+    fn add_lit_nodes_to_integrals(&mut self, species: &[crate::atmosphere::SpeciesOptics]) {
+        let lit = &mut self.lit_nodes;
+        let (count, s) = (lit.weights.len(), species.len());
+        let wavelengths = self.optical_depth.len();
+        lit.transmittances.clear();
+        lit.transmittances.resize(count * wavelengths, 0.0);
+        for (n, depths) in lit.transmittances.chunks_exact_mut(wavelengths).enumerate() {
+            let (view, sun) = (
+                &lit.view_columns[n * s..][..s],
+                &lit.sun_columns[n * s..][..s],
+            );
+            add_optical_depths(species, view, sun, depths);
+        }
+        exp_neg_in_place(&mut lit.transmittances);
+        for (n, transmittances) in lit.transmittances.chunks_exact(wavelengths).enumerate() {
+            add_to_integrals(
+                (lit.weights[n], &lit.densities[n * s..][..s], transmittances),
+                &self.scattering_species,
+                &mut self.inscattering_integrals,
+            );
+        }
+    }
+
+    /// Tests: each node's exponentials and sums taken at the node (the
+    /// slow path), or after the march (the default).
+    #[cfg(test)]
+    pub(crate) fn sum_node_by_node(&mut self, node_by_node: bool) {
+        self.node_by_node = node_by_node;
     }
 
     /// The integrals I_j(lambda) of the last ray, species-major, m.
@@ -755,6 +860,8 @@ impl SingleScatteringScene {
                 .iter()
                 .map(|s| s.scattering_per_m.values().iter().any(|b| *b != 0.0))
                 .collect(),
+            lit_nodes: LitNodes::default(),
+            node_by_node: false,
         }
     }
 
@@ -832,7 +939,6 @@ impl SingleScatteringScene {
         mut together: Option<&mut Together>,
     ) {
         let species = &self.optics.species;
-        let wavelengths = self.optics.grid.len();
         let reset = |scratch: &mut SingleScatteringScratch| {
             scratch.inscattering_integrals.fill(0.0);
             scratch.ground_radiance.fill(0.0);
@@ -894,6 +1000,7 @@ impl SingleScatteringScene {
         };
         let (replay, mut record) = (kept_replay.as_deref(), kept_record.as_mut());
         let mut node_index = 0;
+        scratch.lit_nodes.clear();
         march.march(
             &self.profiles,
             self.ground_radius_m,
@@ -936,31 +1043,28 @@ impl SingleScatteringScene {
                 if !lit {
                     return ControlFlow::Continue(());
                 }
-                scratch.optical_depth.fill(0.0);
-                for (j, s) in species.iter().enumerate() {
-                    let column = node_columns[j] + scratch.sun_columns[j];
-                    for (tau, beta) in scratch
-                        .optical_depth
-                        .iter_mut()
-                        .zip(s.extinction_per_m.values())
-                    {
-                        *tau += beta * column;
-                    }
-                }
-                // The transmittance eye-node-sun, one exponential per
-                // wavelength for every species, all together (a loop the
-                // compiler vectorises, `vector_exp.rs`).
-                exp_neg_in_place(&mut scratch.optical_depth);
-                for (j, density) in densities.iter().enumerate() {
-                    let density = *density;
-                    if density <= 0.0 || !scratch.scattering_species[j] {
-                        continue;
-                    }
-                    let row =
-                        &mut scratch.inscattering_integrals[j * wavelengths..(j + 1) * wavelengths];
-                    for (acc, transmittance) in row.iter_mut().zip(&scratch.optical_depth) {
-                        *acc += node.weight * density * transmittance;
-                    }
+                if scratch.node_by_node {
+                    let (depths, columns) = (&mut scratch.optical_depth, &scratch.sun_columns);
+                    depths.fill(0.0);
+                    add_optical_depths(species, node_columns, columns, depths);
+                    // The transmittance eye-node-sun, one exponential per
+                    // wavelength for every species, all together (a loop
+                    // the compiler vectorises, `vector_exp.rs`).
+                    exp_neg_in_place(depths);
+                    add_to_integrals(
+                        (node.weight, densities, depths),
+                        &scratch.scattering_species,
+                        &mut scratch.inscattering_integrals,
+                    );
+                } else {
+                    // Kept for after the march (`lit_nodes`).
+                    let lit_nodes = &mut scratch.lit_nodes;
+                    lit_nodes.weights.push(node.weight);
+                    lit_nodes.densities.extend_from_slice(densities);
+                    lit_nodes.view_columns.extend_from_slice(node_columns);
+                    lit_nodes
+                        .sun_columns
+                        .extend_from_slice(&scratch.sun_columns);
                 }
                 if let Some(together) = together.as_deref_mut() {
                     together.add_node(node.weight, node_columns, &scratch.sun_columns, densities);
@@ -968,6 +1072,9 @@ impl SingleScatteringScene {
                 ControlFlow::Continue(())
             },
         );
+        if !scratch.node_by_node {
+            scratch.add_lit_nodes_to_integrals(species);
+        }
         scratch.view_columns.copy_from_slice(march.columns());
         for (sky, other) in together.iter_mut().flat_map(|t| t.skies.iter_mut()) {
             other.view_columns.copy_from_slice(march.columns());
@@ -1296,6 +1403,68 @@ impl SingleScatteringScene {
 mod tests {
     use super::*;
     use crate::atmosphere::DensityProfile;
+
+    /// The integrals summed after the march (every sunlit node's
+    /// exponentials together) are those summed node by node, bit for bit:
+    /// earth-hazy's and paper-mars's air, aerosols and absorbing gases, on
+    /// the ground and at 30 km, the sun high, low, and below the horizon
+    /// (rays cut where they enter the planet's shadow), views up, grazing
+    /// and down to the ground, each row marched once for its azimuths
+    /// (replayed nodes) and with the sun-column table and the exact columns.
+    #[test]
+    fn the_sums_after_the_march_are_the_sums_node_by_node() {
+        let grid = WavelengthGrid::new(380.0, 780.0, 20.0).unwrap();
+        let (mut compared, mut lit) = (0, 0);
+        for preset in ["earth-hazy", "paper-mars"] {
+            let atmosphere = Atmosphere::preset(preset).unwrap();
+            for (altitude_m, sun_elevation_deg) in [(0.0, 40.0), (0.0, 2.0), (30e3, -5.0)] {
+                let sky = SingleScatteringScene::new(
+                    &atmosphere,
+                    &grid,
+                    Observation {
+                        observer_altitude_m: altitude_m,
+                        sun_elevation_deg,
+                        sun_azimuth_deg: 0.0,
+                    },
+                )
+                .unwrap();
+                let table = sky.sun_column_table(32, 64);
+                for columns in [SunColumns::Table(&table), SunColumns::Exact] {
+                    let (mut after, mut by_node) = (sky.scratch(), sky.scratch());
+                    after.reuse_view_nodes();
+                    by_node.reuse_view_nodes();
+                    by_node.sum_node_by_node(true);
+                    for zenith_deg in [10.0, 70.0, 89.5, 92.0, 120.0] {
+                        for azimuth_deg in [0.0, 45.0, 90.0, 170.0] {
+                            let view =
+                                direction_from_elevation_azimuth(90.0 - zenith_deg, azimuth_deg);
+                            sky.compute_inscattering_integrals(view, columns, &mut after);
+                            sky.compute_inscattering_integrals(view, columns, &mut by_node);
+                            let bits = |s: &SingleScatteringScratch| {
+                                s.inscattering_integrals()
+                                    .iter()
+                                    .chain(s.ground_radiance())
+                                    .chain(s.view_transmittance())
+                                    .map(|v| v.to_bits())
+                                    .collect::<Vec<_>>()
+                            };
+                            assert_eq!(bits(&after), bits(&by_node), "{preset} {zenith_deg}");
+                            compared += 1;
+                            // (From the ground a view down meets it at
+                            // once: no air, the ground's light only.)
+                            if after.inscattering_integrals().iter().any(|v| *v > 0.0) {
+                                lit += 1;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        assert_eq!(compared, 2 * 3 * 2 * 5 * 4);
+        // Every view but those down from the ground (2 zenith angles at 4
+        // azimuths, 2 suns, 2 column sources, 2 presets) sees lit air.
+        assert_eq!(lit, compared - 2 * 4 * 2 * 2 * 2);
+    }
 
     /// Skies of one atmosphere's profiles, radii and eye share one
     /// sun-column table whatever their amounts and sun; a sky of other

@@ -630,6 +630,26 @@ impl MultipleScatteringField {
         }
     }
 
+    /// The peaks' optical depth of the last ray or segment the march of
+    /// `scratch` went along, X = sum_j f_j beta_sca,j c_j = tau - tau*
+    /// (the view leg's part of the forward-peak term's X), into `out`.
+    pub(crate) fn peak_depth_of_last_ray(
+        &self,
+        scratch: &MultipleScatteringScratch,
+        out: &mut [f64],
+    ) {
+        let s = self.optics.species;
+        let scaled = &self.optics.scaled;
+        for (i, x) in out.iter_mut().enumerate() {
+            *x = (0..s)
+                .map(|j| {
+                    (scaled.extinction[i * s + j] - scaled.scaled_extinction[i * s + j])
+                        * scratch.view_columns[j]
+                })
+                .sum();
+        }
+    }
+
     /// Rows of the forward-peak integrals per wavelength.
     pub(crate) fn forward_integral_rows(&self) -> usize {
         self.optics.species + forward_peak::EXTRA_ROWS
