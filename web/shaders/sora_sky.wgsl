@@ -88,15 +88,43 @@ fn sora_zenith_cell(zenith: f32, r: f32, half_nodes: i32, cells: vec2<i32>) -> S
   return sora_cell(f32(2 * half_nodes - 1) - sora_zenith_node(1.0 - sqrt(1.0 - u), half_nodes, cells), half_nodes, 2 * half_nodes - 2);
 }
 
-// Bilinear read of the slice whose first row is row0 of a layer of `table`.
-fn sora_layer(table: texture_2d_array<f32>, layer: i32, row0: i32, z: SoraCell, k: SoraCell) -> vec3<f32> {
-  let a = mix(textureLoad(table, vec2<i32>(k.i, row0 + z.i), layer, 0).xyz,
-              textureLoad(table, vec2<i32>(k.i + 1, row0 + z.i), layer, 0).xyz, k.f);
-  let b = mix(textureLoad(table, vec2<i32>(k.i, row0 + z.i + 1), layer, 0).xyz,
-              textureLoad(table, vec2<i32>(k.i + 1, row0 + z.i + 1), layer, 0).xyz, k.f);
-  // The zenith's cell geometric in the zenith (a sun near the zenith
-  // sits in it, its aureole's core steeper than linear between its rows).
-  if (z.i == 0) { return sora_mix_log(a, b, z.f); }
+// Zenith cells of the sky table, from the zenith, read by the cubic in
+// ln L (lookup.rs ZENITH_CAP_CELLS).
+const SORA_ZENITH_CAP_CELLS: i32 = 16;
+
+// The uniform Catmull-Rom cubic in ln L (each value floored at SORA_FLOOR)
+// between p0 (t = 0) and p1 (t = 1), m and n the nodes before and after
+// (as soraCatmullRomLog in sora_sky.glsl; lookup.rs catmull_rom_log).
+fn sora_catmull_rom_log(m: vec3<f32>, p0: vec3<f32>, p1: vec3<f32>, n: vec3<f32>, t: f32) -> vec3<f32> {
+  let lm = log(max(m, vec3<f32>(SORA_FLOOR)));
+  let a = log(max(p0, vec3<f32>(SORA_FLOOR)));
+  let b = log(max(p1, vec3<f32>(SORA_FLOOR)));
+  let ln = log(max(n, vec3<f32>(SORA_FLOOR)));
+  let cubic = -lm + 3.0 * a - 3.0 * b + ln;
+  let square = 2.0 * lm - 5.0 * a + 4.0 * b - ln;
+  return exp(a + 0.5 * t * ((b - lm) + t * (square + t * cubic)));
+}
+
+// Row `row` of a layer of `table`, linear between azimuth nodes k.i and k.i + 1.
+fn sora_row(table: texture_2d_array<f32>, layer: i32, row: i32, k: SoraCell) -> vec3<f32> {
+  return mix(textureLoad(table, vec2<i32>(k.i, row), layer, 0).xyz,
+             textureLoad(table, vec2<i32>(k.i + 1, row), layer, 0).xyz, k.f);
+}
+
+// Read of the slice whose first row is row0 of a layer of `table` in zenith
+// cell z and azimuth cell k: bilinear, but in the cells of the zenith cap
+// (z.i < cap, of the upper half's zn nodes, and z.i + 2 < zn) the cubic in
+// ln L through rows z.i - 1 .. z.i + 2, row -1 being row 1 at the opposite
+// azimuth (its cell km) (as soraLayer in sora_sky.glsl).
+fn sora_layer(table: texture_2d_array<f32>, layer: i32, row0: i32, z: SoraCell, k: SoraCell, km: SoraCell,
+              cap: i32, zn: i32) -> vec3<f32> {
+  let a = sora_row(table, layer, row0 + z.i, k);
+  let b = sora_row(table, layer, row0 + z.i + 1, k);
+  if (z.i < cap && z.i + 2 < zn) {
+    var before = sora_row(table, layer, row0 + z.i - 1, k);
+    if (z.i == 0) { before = sora_row(table, layer, row0 + 1, km); }
+    return sora_catmull_rom_log(before, a, b, sora_row(table, layer, row0 + z.i + 2, k), z.f);
+  }
   return mix(a, b, z.f);
 }
 
@@ -158,13 +186,15 @@ fn sora_shadow_read_share(zenith: f32, phi: f32, e_deg: f32, zh: f32) -> f32 {
 }
 
 // ln L of layer `low` (and low + 1, the altitude node above, by a_f) of a
-// layer table toward `view` (zenith, phi), slices row0 and row1 by fj.
-fn sora_layer_log(table: texture_2d_array<f32>, zn: i32, zf: vec2<i32>, kn: i32, low: i32, a_f: f32,
+// layer table toward `view` (zenith, phi), slices row0 and row1 by fj; its
+// first `cap` zenith cells read by the cubic (sora_layer).
+fn sora_layer_log(table: texture_2d_array<f32>, zn: i32, zf: vec2<i32>, kn: i32, cap: i32, low: i32, a_f: f32,
                   row0: i32, row1: i32, fj: f32, view: vec2<f32>, r: f32) -> vec3<f32> {
   let z = sora_zenith_cell(view.x, r, zn, zf);
   let k = sora_cell(sqrt(clamp(view.y / SORA_PI, 0.0, 1.0)) * f32(kn - 1), 0, kn - 2);
-  let ground = mix(sora_layer(table, low, row0, z, k), sora_layer(table, low, row1, z, k), fj);
-  let above = mix(sora_layer(table, low + 1, row0, z, k), sora_layer(table, low + 1, row1, z, k), fj);
+  let km = sora_cell(sqrt(clamp(1.0 - view.y / SORA_PI, 0.0, 1.0)) * f32(kn - 1), 0, kn - 2);
+  let ground = mix(sora_layer(table, low, row0, z, k, km, cap, zn), sora_layer(table, low, row1, z, k, km, cap, zn), fj);
+  let above = mix(sora_layer(table, low + 1, row0, z, k, km, cap, zn), sora_layer(table, low + 1, row1, z, k, km, cap, zn), fj);
   return log(max(mix(ground, above, a_f), vec3<f32>(SORA_FLOOR)));
 }
 
@@ -175,7 +205,7 @@ fn sora_layer_log(table: texture_2d_array<f32>, zn: i32, zf: vec2<i32>, kn: i32,
 // linear in altitude, in ln L between the sun layers (the chord less the
 // curvature of the four nearest), each read at the view turned with the
 // sun to its node.
-fn sora_layers_xyz(table: texture_2d_array<f32>, zn: i32, zf: vec2<i32>, kn: i32, j: i32, fj: f32,
+fn sora_layers_xyz(table: texture_2d_array<f32>, zn: i32, zf: vec2<i32>, kn: i32, cap: i32, j: i32, fj: f32,
                    h_in: f32, zenith: f32, phi: f32, e_in: f32) -> vec3<f32> {
   let h = clamp(h_in, 0.0, sora_thickness());
   let r = sora.planet_sun.x + h;
@@ -194,7 +224,7 @@ fn sora_layers_xyz(table: texture_2d_array<f32>, zn: i32, zf: vec2<i32>, kn: i32
     let n = clamp(s.i + m - 1, 0, sora.sky_nodes.x - 1) - s.i;
     let view = sora_turned_view(zenith, phi, radians(sora_sun_elevation_of_node(s.i + n) - e_deg) * share, zh);
     let low = (s.i + n) * an + a.i;
-    layers[m] = sora_layer_log(table, zn, zf, kn, low, a.f, row0, row1, fj, view, r);
+    layers[m] = sora_layer_log(table, zn, zf, kn, cap, low, a.f, row0, row1, fj, view, r);
   }
   // The chord in ln L less its curvature: the second differences at nodes
   // s and s + 1 (zero at the axis's ends, each within +-1), blended.
@@ -219,7 +249,7 @@ fn sora_layers_xyz(table: texture_2d_array<f32>, zn: i32, zf: vec2<i32>, kn: i32
 // Sky radiance (XYZ, W m^-2 sr^-1 nm^-1) at altitude h (m) toward zenith
 // angle `zenith` and azimuth `phi` from the sun's (rad), sun at e_deg.
 fn sora_sky_xyz(h_in: f32, zenith: f32, phi: f32, e_in: f32) -> vec3<f32> {
-  return sora_layers_xyz(sora_sky, sora.sky_nodes.z, sora.transmittance_nodes.zw, sora.sky_nodes.w, 0, 0.0, h_in, zenith, phi, e_in);
+  return sora_layers_xyz(sora_sky, sora.sky_nodes.z, sora.transmittance_nodes.zw, sora.sky_nodes.w, SORA_ZENITH_CAP_CELLS, 0, 0.0, h_in, zenith, phi, e_in);
 }
 
 fn sora_horizon_cosine(r: f32) -> f32 {
@@ -364,7 +394,7 @@ fn sora_aerial_perspective(h_in: f32, v: vec3<f32>, sun: vec3<f32>, d: f32) -> S
   let zp = sora_local_view(v, vec3<f32>(0.0, 0.0, 1.0), sun);
   let e_deg = sora_sun_elevation_deg(sun);
   let sky = sora_sky_xyz(h, zp.x, zp.y, e_deg);
-  let ratio = sora_layers_xyz(sora_aerial, sora.aerial_nodes.x, vec2<i32>(0, 0), sora.aerial_nodes.y, j.i, j.f, h, zp.x, zp.y, e_deg);
+  let ratio = sora_layers_xyz(sora_aerial, sora.aerial_nodes.x, vec2<i32>(0, 0), sora.aerial_nodes.y, 0, j.i, j.f, h, zp.x, zp.y, e_deg);
   return SoraAerial(sky * ratio * share, t);
 }
 

@@ -219,8 +219,13 @@ pub(crate) fn turned_view(view: LocalView, delta: f64, horizon: f64) -> LocalVie
 }
 
 /// Slice `slice` (of all layers' slices) of `table` at zenith coordinate
-/// `(y, lowest, highest)` and relative azimuth `phi`: bilinear, but
-/// geometric in the zenith within the zenith's cell (cell 0).
+/// `(y, lowest, highest)` and relative azimuth `phi`: bilinear, but within
+/// the table's zenith cap (its first `cap` cells from the zenith,
+/// [`LayerTable::cap`]) a cubic in ln L along the zenith axis
+/// ([`catmull_rom_log`]) through the rows on both sides of the cell, the
+/// row before the zenith being row 1 at the opposite azimuth (pi - phi):
+/// the read is smooth in the zenith across the rows and through the
+/// zenith itself.
 fn layer_value_at(
     table: LayerTable<'_>,
     slice: usize,
@@ -229,22 +234,63 @@ fn layer_value_at(
 ) -> [f64; 3] {
     let k_count = table.azimuth;
     let (i, fy) = axes::cell(y, lowest, highest);
-    let (k, fx) = axes::cell(axes::azimuth_coordinate(phi, k_count), 0, k_count - 2);
+    // The cap's cells: the upper half's first `cap` (a cell of the lower
+    // half is at least `half`), rows i + 2 still above the horizon.
+    let column = |phi: f64| axes::cell(axes::azimuth_coordinate(phi, k_count), 0, k_count - 2);
     let texel = |row: usize, column: usize| {
         let t = table.texels[(slice * 2 * table.half + row) * k_count + column];
         [t[0] as f64, t[1] as f64, t[2] as f64]
     };
-    let (upper, lower) = (
-        mix(texel(i, k), texel(i, k + 1), fx),
-        mix(texel(i + 1, k), texel(i + 1, k + 1), fx),
-    );
-    // The zenith's cell geometric in the zenith: a sun near the zenith
-    // sits in it, its aureole's core steeper than linear between its rows.
-    if i == 0 {
-        mix_log(upper, lower, fy)
-    } else {
-        mix(upper, lower, fy)
+    let row = |row: usize, (k, fx): (usize, f64)| mix(texel(row, k), texel(row, k + 1), fx);
+    let at = column(phi);
+    if i < table.cap && i + 2 < table.half {
+        let before = if i == 0 {
+            row(1, column(std::f64::consts::PI - phi))
+        } else {
+            row(i - 1, at)
+        };
+        return catmull_rom_log(before, row(i, at), row(i + 1, at), row(i + 2, at), fy);
     }
+    mix(row(i, at), row(i + 1, at), fy)
+}
+
+/// The uniform Catmull-Rom cubic in ln L (each value floored at
+/// [`FLOOR`]) between `p0` (t = 0) and `p1` (t = 1), with `before` and
+/// `after` the nodes on either side: it passes through the nodes, and its
+/// slope at each is the centred difference of the nodes about it, so that
+/// consecutive cells join with a continuous slope.
+fn catmull_rom_log(
+    before: [f64; 3],
+    p0: [f64; 3],
+    p1: [f64; 3],
+    after: [f64; 3],
+    t: f64,
+) -> [f64; 3] {
+    std::array::from_fn(|c| {
+        let [m, a, b, n] = [before[c], p0[c], p1[c], after[c]].map(|v| v.max(FLOOR).ln());
+        let cubic = -m + 3.0 * a - 3.0 * b + n;
+        let square = 2.0 * m - 5.0 * a + 4.0 * b - n;
+        (a + 0.5 * t * ((b - m) + t * (square + t * cubic))).exp()
+    })
+}
+
+/// Zenith cells of the sky table, from the zenith, read by the cubic in
+/// ln L (`layer_value_at`).
+pub(crate) const ZENITH_CAP_CELLS: usize = 16;
+
+/// A test's override of [`ZENITH_CAP_CELLS`] (`usize::MAX`: none), so
+/// that one bake can be read with caps of several sizes
+/// (`tests::probe_zenith_cap`).
+#[cfg(test)]
+pub(crate) static CAP_OVERRIDE: std::sync::atomic::AtomicUsize =
+    std::sync::atomic::AtomicUsize::new(usize::MAX);
+
+fn zenith_cap_cells() -> usize {
+    #[cfg(test)]
+    if let n @ 0..usize::MAX = CAP_OVERRIDE.load(std::sync::atomic::Ordering::Relaxed) {
+        return n;
+    }
+    ZENITH_CAP_CELLS
 }
 
 /// GLSL's smoothstep: 0 at `a`, 1 at `b`, 3 t^2 - 2 t^3 between.
@@ -267,6 +313,10 @@ pub(crate) struct LayerTable<'a> {
     pub cells: (usize, usize),
     pub azimuth: usize,
     pub slices: usize,
+    /// Zenith cells (from the zenith) read by the cubic in ln L
+    /// (`layer_value_at`): [`ZENITH_CAP_CELLS`] for the sky table, none for
+    /// the aerial-perspective table.
+    pub cap: usize,
 }
 
 impl EngineTables {
@@ -277,6 +327,7 @@ impl EngineTables {
             cells: self.settings.zenith_cells(),
             azimuth: self.settings.azimuth_nodes,
             slices: 1,
+            cap: zenith_cap_cells(),
         }
     }
 
@@ -288,6 +339,7 @@ impl EngineTables {
             cells: (0, 0),
             azimuth,
             slices,
+            cap: 0,
         }
     }
 

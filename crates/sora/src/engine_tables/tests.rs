@@ -2385,6 +2385,78 @@ fn the_zenith_against_the_sun_is_smooth() {
     assert!(failures.is_empty(), "{failures:?}");
 }
 
+/// The sky table's zenith cap (`lookup::ZENITH_CAP_CELLS`) read along
+/// the sun's vertical through the zenith, in each sun layer: it passes
+/// through the rows (the texels, at azimuths 0 and pi, which are nodes),
+/// and its slope in ln L is continuous at every row it crosses and at the
+/// zenith itself (the row before the zenith being row 1 at the opposite
+/// azimuth): the one-sided slopes about each node differ by O(h) (here
+/// under 1e-6 per rad at h = 1e-7 rad), where a read linear between rows
+/// breaks by the change of the rows' slope (its own measure printed: of
+/// order 0.1-10 per rad).
+#[test]
+fn the_zenith_cap_passes_through_its_rows_with_a_continuous_slope() {
+    let (_, tables) = tables();
+    let settings = small_settings();
+    let (half, k_count) = (settings.zenith_nodes_per_half, settings.azimuth_nodes);
+    let cap = super::lookup::ZENITH_CAP_CELLS.min(half - 2);
+    let (coarse, _) = axes::coarse_and_wide(
+        half,
+        settings.zenith_fine_cells_per_half,
+        settings.zenith_wide_cells_per_half,
+    );
+    let horizon = axes::horizon_zenith(tables.ground_radius_m, tables.ground_radius_m);
+    // ln Y along the vertical at signed zenith angle x (phi pi for x < 0).
+    let ln = |layer: usize, x: f64| {
+        let phi = if x < 0.0 { std::f64::consts::PI } else { 0.0 };
+        tables.layer_value(layer, x.abs(), horizon, phi)[1].ln()
+    };
+    let h = 1e-7;
+    let mut kink_of_linear = 0.0f64;
+    // The layers with the sun up (the night's are dark, at the floor).
+    for s in 0..settings.sun_nodes {
+        if axes::sun_elevation_of_node(s, settings.sun_nodes) <= 0.0 {
+            continue;
+        }
+        let layer = s * settings.altitude_nodes;
+        let texel =
+            |row: usize, k: usize| tables.sky[(layer * 2 * half + row) * k_count + k][1] as f64;
+        // The rows crossed inside the cap (row `cap` is the cap's edge:
+        // linear beyond it) and among the coarse cells (where the zenith
+        // axis's nodes turn wide, the node coordinate's slope in the angle
+        // changes, whatever the read), on both sides of the zenith.
+        for row in 0..cap.min(coarse) {
+            let z = axes::zenith_of_node(row, half, settings.zenith_cells(), horizon);
+            for (sign, k) in [(1.0, 0), (-1.0, k_count - 1)] {
+                let x = sign * z;
+                let at = ln(layer, x);
+                assert!(
+                    (at - texel(row, k).ln()).abs() < 1e-9,
+                    "layer {layer} row {row} side {sign}: {at} {}",
+                    texel(row, k).ln()
+                );
+                let (left, right) = ((at - ln(layer, x - h)) / h, (ln(layer, x + h) - at) / h);
+                assert!(
+                    (right - left).abs() < 1e-4 * left.abs().max(1.0),
+                    "layer {layer} row {row} side {sign}: slopes {left} {right}"
+                );
+                if row > 0 {
+                    let zs: Vec<f64> = (row - 1..=row + 1)
+                        .map(|r| axes::zenith_of_node(r, half, settings.zenith_cells(), horizon))
+                        .collect();
+                    let l: Vec<f64> = (row - 1..=row + 1).map(|r| texel(r, k).ln()).collect();
+                    let kink = (l[2] - l[1]) / (zs[2] - zs[1]) - (l[1] - l[0]) / (zs[1] - zs[0]);
+                    kink_of_linear = kink_of_linear.max(kink.abs());
+                }
+            }
+        }
+    }
+    eprintln!(
+        "a read linear in ln L between the rows would break its slope by up to {kink_of_linear:.3} per rad"
+    );
+    assert!(kink_of_linear > 1e-3, "{kink_of_linear}");
+}
+
 /// Views near the sun and the zenith: (label, view) at `sun_deg`: the
 /// zenith, and views `d` degrees from the sun on its vertical (toward the
 /// zenith, clamped there, and toward the horizon) and across it.
@@ -2548,4 +2620,151 @@ fn the_sky_near_a_high_sun_matches_the_library() {
         }
     }
     assert!(failures.is_empty(), "{failures:?}");
+}
+
+#[test]
+#[ignore]
+fn probe_zenith_cap() {
+    use super::lookup::CAP_OVERRIDE;
+    use std::sync::atomic::Ordering;
+    let presets = std::env::var("SORA_HIGHSUN_PRESETS").unwrap_or_else(|_| "earth-hazy".into());
+    let caps: Vec<usize> = std::env::var("SORA_CAPS")
+        .unwrap_or_else(|_| "0,1,2,4,8,12,16".into())
+        .split(',')
+        .map(|s| s.parse().unwrap())
+        .collect();
+    let from: f64 = std::env::var("SORA_HIGHSUN_FROM").map_or(60.0, |s| s.parse().unwrap());
+    let zenith = LocalView {
+        zenith_rad: 0.0,
+        relative_azimuth_rad: 0.0,
+    };
+    for preset in presets.split(',') {
+        let sky = cli_sky(preset);
+        let settings = EngineTableSettings {
+            altitude_nodes: 2,
+            march: false,
+            ..EngineTableSettings::default()
+        };
+        let tables = EngineTables::bake(&sky, &settings, &|_| {}).unwrap();
+        let mut refs = Vec::new();
+        let mut sun = from;
+        while sun <= 90.0 + 1e-9 {
+            let (sun_sky, _) = node_sky(&sky, &tables, 0.0, sun);
+            for (label, view) in near_sun_views(sun) {
+                let direction = ViewDirection::new(
+                    (90.0 - view.zenith_rad.to_degrees()).min(90.0),
+                    180.0 + view.relative_azimuth_rad.to_degrees(),
+                )
+                .unwrap();
+                refs.push((sun, label, view, xyz_of(&sun_sky, direction)[1]));
+            }
+            sun += 0.5;
+        }
+        for cap in &caps {
+            CAP_OVERRIDE.store(*cap, Ordering::Relaxed);
+            let e = |i: usize| 90.0 - 0.25 * i as f64;
+            let ln: Vec<f64> = (0..=408)
+                .map(|i| tables.sky_xyz(0.0, zenith, e(i))[1].ln())
+                .collect();
+            let (worst, at) = (1..ln.len() - 1)
+                .map(|i| ((ln[i + 1] - 2.0 * ln[i] + ln[i - 1]).abs(), e(i)))
+                .fold((0.0, 0.0), |a, b| if b.0 > a.0 { b } else { a });
+            let mut line = format!("{preset} cap {cap}: d2 {worst:.4} at {at}");
+            // worst per class: zenith, 1-3, 5-15, for suns <80 and >=80
+            for (lo, hi) in [(from, 80.0), (80.0, 90.1)] {
+                let mut w: [(f64, String); 3] = Default::default();
+                for (sun, label, view, want) in &refs {
+                    if *sun < lo || *sun >= hi {
+                        continue;
+                    }
+                    let err = tables.sky_xyz(0.0, *view, *sun)[1] / want - 1.0;
+                    let class = if label == "zenith" {
+                        0
+                    } else {
+                        let d: f64 = label
+                            .trim_start_matches(char::is_alphabetic)
+                            .parse()
+                            .unwrap();
+                        if d >= 5.0 { 2 } else { 1 }
+                    };
+                    if err.abs() > w[class].0.abs() {
+                        w[class] = (err, format!("{label}@{sun}"));
+                    }
+                }
+                line += &format!(
+                    " | {lo}-{hi}: zen {:+.1}% ({}) 1-3 {:+.1}% ({}) 5-15 {:+.1}% ({})",
+                    100.0 * w[0].0,
+                    w[0].1,
+                    100.0 * w[1].0,
+                    w[1].1,
+                    100.0 * w[2].0,
+                    w[2].1
+                );
+            }
+            let irradiance = tables.integrate_diffuse_irradiance();
+            let moved = irradiance
+                .iter()
+                .zip(tables.irradiance_table())
+                .flat_map(|(a, b)| (0..3).map(move |c| (a[c] as f64 / b[c] as f64 - 1.0).abs()))
+                .fold(0.0f64, f64::max);
+            line += &format!(" | irradiance vs baked max {:.2e}", moved);
+            eprintln!("{line}");
+            if std::env::var("SORA_ZEN").is_ok() {
+                let mut z = String::new();
+                for (sun, label, view, want) in &refs {
+                    if label == "zenith" && (sun * 2.0).round() % 2.0 == 0.0 {
+                        let err = tables.sky_xyz(0.0, *view, *sun)[1] / want - 1.0;
+                        z += &format!(" {sun}:{:+.1}", 100.0 * err);
+                    }
+                }
+                eprintln!("  zenith{z}");
+            }
+        }
+        CAP_OVERRIDE.store(usize::MAX, Ordering::Relaxed);
+    }
+}
+
+#[test]
+#[ignore]
+fn probe_truth() {
+    let presets = std::env::var("SORA_HIGHSUN_PRESETS").unwrap_or_else(|_| "earth-hazy".into());
+    for preset in presets.split(',') {
+        let sky = cli_sky(preset);
+        let settings = EngineTableSettings {
+            altitude_nodes: 2,
+            zenith_nodes_per_half: 4,
+            zenith_fine_cells_per_half: 0,
+            zenith_wide_cells_per_half: 0,
+            azimuth_nodes: 4,
+            sun_nodes: 2,
+            march: false,
+            ..EngineTableSettings::default()
+        };
+        let tables = EngineTables::bake(&sky, &settings, &|_| {}).unwrap();
+        let zen = ViewDirection::new(90.0, 180.0).unwrap();
+        let mut ln = Vec::new();
+        for i in 0..=16 {
+            let e = 90.0 - 0.25 * i as f64;
+            let (s, _) = node_sky(&sky, &tables, 0.0, e);
+            ln.push((e, xyz_of(&s, zen)[1].ln()));
+        }
+        let mut line = format!("{preset} zenith d2:");
+        for i in 1..ln.len() - 1 {
+            line += &format!(
+                " {}:{:+.4}",
+                ln[i].0,
+                ln[i + 1].1 - 2.0 * ln[i].1 + ln[i - 1].1
+            );
+        }
+        eprintln!("{line}");
+        let (s, _) = node_sky(&sky, &tables, 0.0, 90.0);
+        let mut line = format!("{preset} sun 90 ln(L/L0) at theta:");
+        let l0 = xyz_of(&s, zen)[1];
+        for i in 0..=24 {
+            let t = 0.25 * i as f64;
+            let l = xyz_of(&s, ViewDirection::new(90.0 - t, 180.0).unwrap())[1];
+            line += &format!(" {t}:{:.3}", (l / l0).ln());
+        }
+        eprintln!("{line}");
+    }
 }
