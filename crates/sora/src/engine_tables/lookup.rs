@@ -4,9 +4,16 @@
 //!
 //! - Sky: at the eye's altitude h, the view's zenith coordinate is taken
 //!   with the eye's own horizon (`axes::zenith_coordinate`) and used on
-//!   every altitude layer; bilinear in (zenith, azimuth) within a layer
-//!   (geometric in the zenith within the zenith's cell, where a sun near
-//!   the zenith sits: its aureole's core falls faster than linearly),
+//!   every altitude layer; bilinear in (zenith, azimuth) within a layer,
+//!   but in the sky table's zenith cap (its first [`ZENITH_CAP_CELLS`]
+//!   zenith cells, to about 40 degrees from the zenith by default) a
+//!   Catmull-Rom cubic in ln L along the zenith axis through the rows on
+//!   both sides of the cell, the row before the zenith being row 1 at the
+//!   opposite azimuth: a high sun's aureole, tens of times brighter within
+//!   a few degrees of the sun than the rows 2.8 degrees apart resolve, is
+//!   read with a continuous slope across the rows and through the zenith
+//!   (a read linear between them bent the zenith's brightness against the
+//!   sun's elevation where a turned view crossed a row),
 //!   linear between the two altitude layers, and in the logarithm (each
 //!   value floored at [`FLOOR`]) between the two sun layers s and s + 1:
 //!   the chord of ln L less `f (1 - f) / 2` times the second difference of
