@@ -2551,12 +2551,12 @@ fn probe_high_suns() {
 /// sun layer, and the zenith cap's cells by a cubic in ln L
 /// (`lookup::ZENITH_CAP_CELLS`). Views 5 to 15 degrees from the sun, and
 /// the zenith with the sun 5 or more degrees from it, within 3 %
-/// (measured: earth-hazy +1.2 %, mars-dust +1.8 %, earth-clear +0.3 %;
+/// (measured: earth-hazy +1.2 %, mars-dust +1.4 %, earth-clear +0.3 %;
 /// read linearly between the zenith's rows, earth-hazy's were +17.4 %,
 /// unturned above 85 degrees +302 %); views 1 to 3 degrees from the sun
 /// and the zenith of suns above 85 within 50 % (earth-hazy +45.2 %, 1
 /// degree from a sun at 81.5, and its zenith +37.4 % at 89; linearly
-/// +107 %): the zenith axis's rows are 2.8 degrees apart near the
+/// +107 %; mars-dust +1.8 %, earth-clear +0.3 %): the zenith axis's rows are 2.8 degrees apart near the
 /// zenith, coarser than the aureole's core (docs/engine-tables.md, "What
 /// is left: the aureole's core"). SORA_HIGHSUN_PRESETS (default
 /// earth-hazy,earth-clear,mars-dust). Ignored: a bake each (about 30 s
