@@ -96,15 +96,47 @@ void soraZenithCoordinate(float zenith, float r, int half_, ivec2 cells, out flo
   }
 }
 
-// Bilinear read of slice row0 (its first row) of a layer of `table`.
-vec3 soraLayer(highp sampler2DArray table, int layer, int row0, int i, float fy, int k, float fx) {
-  vec3 a = mix(texelFetch(table, ivec3(k, row0 + i, layer), 0).xyz, texelFetch(table, ivec3(k + 1, row0 + i, layer), 0).xyz, fx);
-  vec3 b = mix(texelFetch(table, ivec3(k, row0 + i + 1, layer), 0).xyz, texelFetch(table, ivec3(k + 1, row0 + i + 1, layer), 0).xyz, fx);
-  return mix(a, b, fy);
-}
-
 vec3 soraMixLog(vec3 a, vec3 b, float f) {
   return exp(mix(log(max(a, vec3(SORA_FLOOR))), log(max(b, vec3(SORA_FLOOR))), f));
+}
+
+// Zenith cells of the sky table, from the zenith, read by the cubic in
+// ln L (lookup.rs ZENITH_CAP_CELLS).
+const int SORA_ZENITH_CAP_CELLS = 16;
+
+// The uniform Catmull-Rom cubic in ln L (each value floored at SORA_FLOOR)
+// between p0 (t = 0) and p1 (t = 1), m and n the nodes before and after
+// (lookup.rs catmull_rom_log): through the nodes, its slope at each the
+// centred difference of the nodes about it.
+vec3 soraCatmullRomLog(vec3 m, vec3 p0, vec3 p1, vec3 n, float t) {
+  vec3 lm = log(max(m, vec3(SORA_FLOOR)));
+  vec3 a = log(max(p0, vec3(SORA_FLOOR)));
+  vec3 b = log(max(p1, vec3(SORA_FLOOR)));
+  vec3 ln = log(max(n, vec3(SORA_FLOOR)));
+  vec3 cubic = -lm + 3.0 * a - 3.0 * b + ln;
+  vec3 square = 2.0 * lm - 5.0 * a + 4.0 * b - ln;
+  return exp(a + 0.5 * t * ((b - lm) + t * (square + t * cubic)));
+}
+
+// Row `row` of a layer of `table`, linear between azimuth nodes k and k + 1.
+vec3 soraRow(highp sampler2DArray table, int layer, int row, int k, float fx) {
+  return mix(texelFetch(table, ivec3(k, row, layer), 0).xyz, texelFetch(table, ivec3(k + 1, row, layer), 0).xyz, fx);
+}
+
+// Read of slice row0 (its first row) of a layer of `table` in zenith cell i
+// (fy) and azimuth cell k (fx): bilinear, but in the cells of the zenith
+// cap (i < cap, of the upper half's Z nodes, and i + 2 < Z) the cubic in
+// ln L through rows i - 1 .. i + 2, row -1 being row 1 at the opposite
+// azimuth (its cell km, fxm): smooth across the rows and through the
+// zenith (lookup.rs layer_value_at).
+vec3 soraLayer(highp sampler2DArray table, int layer, int row0, int i, float fy, int k, float fx, int km, float fxm, int cap, int Z) {
+  vec3 a = soraRow(table, layer, row0 + i, k, fx);
+  vec3 b = soraRow(table, layer, row0 + i + 1, k, fx);
+  if (i < cap && i + 2 < Z) {
+    vec3 before = i == 0 ? soraRow(table, layer, row0 + 1, km, fxm) : soraRow(table, layer, row0 + i - 1, k, fx);
+    return soraCatmullRomLog(before, a, b, soraRow(table, layer, row0 + i + 2, k, fx), fy);
+  }
+  return mix(a, b, fy);
 }
 
 // Elevation (degrees) of sun node s: the inverse of soraSunCoordinate.
@@ -136,13 +168,17 @@ vec2 soraTurnedView(float zenith, float phi, float delta, float zh) {
 // Share of the sun's step that the view is turned by (lookup.rs's
 // turn_share): 1 within 10 degrees of the sun (the aureole keeps its angle
 // to the sun between sun nodes), 0 beyond 40; 0 within 5 degrees of the
-// horizon (its band keeps its zenith angle), 1 from 20 up; or, for suns
+// horizon (its band keeps its zenith angle), 1 from 20 up (for suns above
+// 68 degrees 1 away from the sun too, none below 55); or, for suns
 // below 2 degrees (0 above 6), 1 within 40 degrees of the antisolar
 // point, 0 beyond 80, horizon included (smoothstep ramps).
 float soraTurnShare(float zenith, float phi, float eDeg, float zh) {
   float e = radians(eDeg);
   float cosTheta = cos(zenith) * sin(e) + sin(zenith) * cos(phi) * cos(e);
-  float sunSide = smoothstep(cos(radians(40.0)), cos(radians(10.0)), cosTheta)
+  // For a high sun the whole sky (lookup.rs's HIGH_SUN_DEG, 55 to 68):
+  // its aureole reaches the zenith, which read unturned in the layer at 90
+  // degrees would be the sun's own place.
+  float sunSide = max(smoothstep(cos(radians(40.0)), cos(radians(10.0)), cosTheta), smoothstep(55.0, 68.0, eDeg))
     * (1.0 - smoothstep(zh - radians(20.0), zh - radians(5.0), zenith));
   // The planet's shadow, rising at the antisolar horizon as the sun sets,
   // turns with the antisolar point (horizon included).
@@ -165,24 +201,17 @@ float soraShadowReadShare(float zenith, float phi, float eDeg, float zh) {
     * (1.0 - smoothstep(-e, -SORA_SHADOW_RAMP * e, zh - zenith));
 }
 
-// The weight of a sun layer's turned read against its unturned read, in
-// ln L (lookup.rs's turned_read_weight): 1 for suns below 70 degrees, 0
-// above 85, where the aureole reaches the zenith and the zenith axis's
-// rows are coarser than its core (a view turned part of the way crossed
-// them, and the zenith's brightness bent against the sun's elevation).
-float soraTurnedReadWeight(float eDeg) {
-  return 1.0 - smoothstep(70.0, 85.0, eDeg);
-}
-
 // ln L of layer `low` (and low + 1, the altitude node above, by fa) of a
-// layer table toward `view` (zenith, phi), slices row0 and row1 by fj.
-vec3 soraLayerLog(highp sampler2DArray table, int Z, ivec2 F, int K, int low, float fa, int row0, int row1, float fj, vec2 view, float r) {
+// layer table toward `view` (zenith, phi), slices row0 and row1 by fj;
+// its first `cap` zenith cells read by the cubic (soraLayer).
+vec3 soraLayerLog(highp sampler2DArray table, int Z, ivec2 F, int K, int cap, int low, float fa, int row0, int row1, float fj, vec2 view, float r) {
   float y; int lowest; int highest;
   soraZenithCoordinate(view.x, r, Z, F, y, lowest, highest);
   int i; float fy; soraCell(y, lowest, highest, i, fy);
   int k; float fx; soraCell(sqrt(clamp(view.y / SORA_PI, 0.0, 1.0)) * float(K - 1), 0, K - 2, k, fx);
-  vec3 ground = mix(soraLayer(table, low, row0, i, fy, k, fx), soraLayer(table, low, row1, i, fy, k, fx), fj);
-  vec3 above = mix(soraLayer(table, low + 1, row0, i, fy, k, fx), soraLayer(table, low + 1, row1, i, fy, k, fx), fj);
+  int km; float fxm; soraCell(sqrt(clamp(1.0 - view.y / SORA_PI, 0.0, 1.0)) * float(K - 1), 0, K - 2, km, fxm);
+  vec3 ground = mix(soraLayer(table, low, row0, i, fy, k, fx, km, fxm, cap, Z), soraLayer(table, low, row1, i, fy, k, fx, km, fxm, cap, Z), fj);
+  vec3 above = mix(soraLayer(table, low + 1, row0, i, fy, k, fx, km, fxm, cap, Z), soraLayer(table, low + 1, row1, i, fy, k, fx, km, fxm, cap, Z), fj);
   return log(max(mix(ground, above, fa), vec3(SORA_FLOOR)));
 }
 
@@ -190,12 +219,12 @@ vec3 soraLayerLog(highp sampler2DArray table, int Z, ivec2 F, int K, int low, fl
 // nodes per half, K azimuth nodes, and its distance slices j and j + 1
 // blended by fj) at altitude h (m), toward zenith angle `zenith` (rad) and
 // azimuth `phi` (rad, 0..pi) from the sun's, with the sun at elevation
-// eDeg (degrees): bilinear in a layer, linear in altitude, in ln L between
-// the two sun layers (the chord less the curvature of the four nearest),
-// each read at the view turned with the sun to its node (soraTurnedView,
-// by soraTurnShare of the step), blended in ln L with the unturned read
-// by soraTurnedReadWeight.
-vec3 soraLayersXyz(highp sampler2DArray table, int Z, ivec2 F, int K, int j, float fj, float h, float zenith, float phi, float eDeg) {
+// eDeg (degrees): bilinear in a layer (its first `cap` zenith cells by the
+// cubic in ln L, soraLayer), linear in altitude, in ln L between the two
+// sun layers (the chord less the curvature of the four nearest), each read
+// at the view turned with the sun to its node (soraTurnedView, by
+// soraTurnShare of the step).
+vec3 soraLayersXyz(highp sampler2DArray table, int Z, ivec2 F, int K, int cap, int j, float fj, float h, float zenith, float phi, float eDeg) {
   h = clamp(h, 0.0, soraThickness());
   float r = uPlanetSun.x + h;
   float zh = SORA_PI - asin(min(uPlanetSun.x / r, 1.0));
@@ -203,8 +232,7 @@ vec3 soraLayersXyz(highp sampler2DArray table, int Z, ivec2 F, int K, int j, flo
   int a; float fa; soraCell(soraAltitudeCoordinate(h, A), 0, A - 2, a, fa);
   eDeg = clamp(eDeg, -12.0, 90.0);
   int s; float fs; soraCell(soraSunCoordinate(eDeg), 0, uSkyNodes.x - 2, s, fs);
-  float weight = soraTurnedReadWeight(eDeg);
-  float share = weight > 0.0 ? soraTurnShare(zenith, phi, eDeg, zh) : 0.0;
+  float share = soraTurnShare(zenith, phi, eDeg, zh);
   int row0 = 2 * Z * j;
   int row1 = fj > 0.0 ? row0 + 2 * Z : row0;
   // ln L of sun layers s - 1 .. s + 2 (clamped to the axis).
@@ -213,10 +241,7 @@ vec3 soraLayersXyz(highp sampler2DArray table, int Z, ivec2 F, int K, int j, flo
     int n = clamp(s + m - 1, 0, uSkyNodes.x - 1) - s;
     vec2 view = soraTurnedView(zenith, phi, radians(soraSunElevationOfNode(s + n) - eDeg) * share, zh);
     int low = (s + n) * A + a;
-    layers[m] = soraLayerLog(table, Z, F, K, low, fa, row0, row1, fj, view, r);
-    if (share > 0.0 && weight < 1.0) {
-      layers[m] = mix(soraLayerLog(table, Z, F, K, low, fa, row0, row1, fj, vec2(zenith, phi), r), layers[m], weight);
-    }
+    layers[m] = soraLayerLog(table, Z, F, K, cap, low, fa, row0, row1, fj, view, r);
   }
   // The chord in ln L less its curvature: the second differences at nodes
   // s and s + 1 (zero at the axis's ends, each within +-1), blended.
@@ -241,7 +266,7 @@ vec3 soraLayersXyz(highp sampler2DArray table, int Z, ivec2 F, int K, int j, flo
 // zenith angle `zenith` (rad) and azimuth `phi` (rad, 0..pi) from the
 // sun's, with the sun at elevation eDeg (degrees). No sun disc.
 vec3 soraSkyXyz(float h, float zenith, float phi, float eDeg) {
-  return soraLayersXyz(uSky, uSkyNodes.z, ivec2(uSkyZenithFineCells, uSkyZenithWideCells), uSkyNodes.w, 0, 0.0, h, zenith, phi, eDeg);
+  return soraLayersXyz(uSky, uSkyNodes.z, ivec2(uSkyZenithFineCells, uSkyZenithWideCells), uSkyNodes.w, SORA_ZENITH_CAP_CELLS, 0, 0.0, h, zenith, phi, eDeg);
 }
 
 float soraHorizonCosine(float r) {
@@ -384,7 +409,7 @@ void soraAerialPerspective(float h, vec3 v, vec3 sun, float d, out vec3 inscatte
   vec2 zp = soraLocalView(v, vec3(0.0, 0.0, 1.0), sun);
   float eDeg = soraSunElevationDeg(sun);
   vec3 sky = soraSkyXyz(h, zp.x, zp.y, eDeg);
-  vec3 ratio = soraLayersXyz(uAerial, uAerialNodes.x, ivec2(0), uAerialNodes.y, j, fj, h, zp.x, zp.y, eDeg);
+  vec3 ratio = soraLayersXyz(uAerial, uAerialNodes.x, ivec2(0), uAerialNodes.y, 0, j, fj, h, zp.x, zp.y, eDeg);
   inscattered = sky * ratio * share;
 }
 

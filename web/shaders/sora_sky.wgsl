@@ -88,12 +88,43 @@ fn sora_zenith_cell(zenith: f32, r: f32, half_nodes: i32, cells: vec2<i32>) -> S
   return sora_cell(f32(2 * half_nodes - 1) - sora_zenith_node(1.0 - sqrt(1.0 - u), half_nodes, cells), half_nodes, 2 * half_nodes - 2);
 }
 
-// Bilinear read of the slice whose first row is row0 of a layer of `table`.
-fn sora_layer(table: texture_2d_array<f32>, layer: i32, row0: i32, z: SoraCell, k: SoraCell) -> vec3<f32> {
-  let a = mix(textureLoad(table, vec2<i32>(k.i, row0 + z.i), layer, 0).xyz,
-              textureLoad(table, vec2<i32>(k.i + 1, row0 + z.i), layer, 0).xyz, k.f);
-  let b = mix(textureLoad(table, vec2<i32>(k.i, row0 + z.i + 1), layer, 0).xyz,
-              textureLoad(table, vec2<i32>(k.i + 1, row0 + z.i + 1), layer, 0).xyz, k.f);
+// Zenith cells of the sky table, from the zenith, read by the cubic in
+// ln L (lookup.rs ZENITH_CAP_CELLS).
+const SORA_ZENITH_CAP_CELLS: i32 = 16;
+
+// The uniform Catmull-Rom cubic in ln L (each value floored at SORA_FLOOR)
+// between p0 (t = 0) and p1 (t = 1), m and n the nodes before and after
+// (as soraCatmullRomLog in sora_sky.glsl; lookup.rs catmull_rom_log).
+fn sora_catmull_rom_log(m: vec3<f32>, p0: vec3<f32>, p1: vec3<f32>, n: vec3<f32>, t: f32) -> vec3<f32> {
+  let lm = log(max(m, vec3<f32>(SORA_FLOOR)));
+  let a = log(max(p0, vec3<f32>(SORA_FLOOR)));
+  let b = log(max(p1, vec3<f32>(SORA_FLOOR)));
+  let ln = log(max(n, vec3<f32>(SORA_FLOOR)));
+  let cubic = -lm + 3.0 * a - 3.0 * b + ln;
+  let square = 2.0 * lm - 5.0 * a + 4.0 * b - ln;
+  return exp(a + 0.5 * t * ((b - lm) + t * (square + t * cubic)));
+}
+
+// Row `row` of a layer of `table`, linear between azimuth nodes k.i and k.i + 1.
+fn sora_row(table: texture_2d_array<f32>, layer: i32, row: i32, k: SoraCell) -> vec3<f32> {
+  return mix(textureLoad(table, vec2<i32>(k.i, row), layer, 0).xyz,
+             textureLoad(table, vec2<i32>(k.i + 1, row), layer, 0).xyz, k.f);
+}
+
+// Read of the slice whose first row is row0 of a layer of `table` in zenith
+// cell z and azimuth cell k: bilinear, but in the cells of the zenith cap
+// (z.i < cap, of the upper half's zn nodes, and z.i + 2 < zn) the cubic in
+// ln L through rows z.i - 1 .. z.i + 2, row -1 being row 1 at the opposite
+// azimuth (its cell km) (as soraLayer in sora_sky.glsl).
+fn sora_layer(table: texture_2d_array<f32>, layer: i32, row0: i32, z: SoraCell, k: SoraCell, km: SoraCell,
+              cap: i32, zn: i32) -> vec3<f32> {
+  let a = sora_row(table, layer, row0 + z.i, k);
+  let b = sora_row(table, layer, row0 + z.i + 1, k);
+  if (z.i < cap && z.i + 2 < zn) {
+    var before = sora_row(table, layer, row0 + z.i - 1, k);
+    if (z.i == 0) { before = sora_row(table, layer, row0 + 1, km); }
+    return sora_catmull_rom_log(before, a, b, sora_row(table, layer, row0 + z.i + 2, k), z.f);
+  }
   return mix(a, b, z.f);
 }
 
@@ -126,14 +157,16 @@ fn sora_turned_view(zenith: f32, phi: f32, delta: f32, zh: f32) -> vec2<f32> {
 }
 
 // Share of the sun's step the view is turned by: 1 within 10 degrees of
-// the sun, 0 beyond 40; 0 within 5 degrees of the horizon, 1 from 20 up;
-// or, for suns below 2 degrees (0 above 6), 1 within 40 degrees of the
-// antisolar point, 0 beyond 80, horizon included (the planet's shadow
-// turns with it; smoothstep ramps).
+// the sun, 0 beyond 40 (1 everywhere for suns above 68 degrees, ramping
+// from 55); 0 within 5 degrees of the horizon, 1 from 20 up; or, for
+// suns below 2 degrees (0 above 6), 1 within 40 degrees of the antisolar
+// point, 0 beyond 80, horizon included (the planet's shadow turns with
+// it; smoothstep ramps).
 fn sora_turn_share(zenith: f32, phi: f32, e_deg: f32, zh: f32) -> f32 {
   let e = radians(e_deg);
   let cos_theta = cos(zenith) * sin(e) + sin(zenith) * cos(phi) * cos(e);
-  let sun_side = smoothstep(cos(radians(40.0)), cos(radians(10.0)), cos_theta)
+  // For a high sun the whole sky (lookup.rs's HIGH_SUN_DEG, 55 to 68).
+  let sun_side = max(smoothstep(cos(radians(40.0)), cos(radians(10.0)), cos_theta), smoothstep(55.0, 68.0, e_deg))
     * (1.0 - smoothstep(zh - radians(20.0), zh - radians(5.0), zenith));
   let shadow = smoothstep(cos(radians(80.0)), cos(radians(40.0)), -cos_theta)
     * (1.0 - smoothstep(2.0, 6.0, e_deg));
@@ -152,22 +185,16 @@ fn sora_shadow_read_share(zenith: f32, phi: f32, e_deg: f32, zh: f32) -> f32 {
     * (1.0 - smoothstep(-e, -SORA_SHADOW_RAMP * e, zh - zenith));
 }
 
-// The weight of a sun layer's turned read against its unturned read, in
-// ln L (as soraTurnedReadWeight in sora_sky.glsl): 1 for suns below 70
-// degrees, 0 above 85, where the aureole reaches the zenith and the
-// zenith axis's rows are coarser than its core.
-fn sora_turned_read_weight(e_deg: f32) -> f32 {
-  return 1.0 - smoothstep(70.0, 85.0, e_deg);
-}
-
 // ln L of layer `low` (and low + 1, the altitude node above, by a_f) of a
-// layer table toward `view` (zenith, phi), slices row0 and row1 by fj.
-fn sora_layer_log(table: texture_2d_array<f32>, zn: i32, zf: vec2<i32>, kn: i32, low: i32, a_f: f32,
+// layer table toward `view` (zenith, phi), slices row0 and row1 by fj; its
+// first `cap` zenith cells read by the cubic (sora_layer).
+fn sora_layer_log(table: texture_2d_array<f32>, zn: i32, zf: vec2<i32>, kn: i32, cap: i32, low: i32, a_f: f32,
                   row0: i32, row1: i32, fj: f32, view: vec2<f32>, r: f32) -> vec3<f32> {
   let z = sora_zenith_cell(view.x, r, zn, zf);
   let k = sora_cell(sqrt(clamp(view.y / SORA_PI, 0.0, 1.0)) * f32(kn - 1), 0, kn - 2);
-  let ground = mix(sora_layer(table, low, row0, z, k), sora_layer(table, low, row1, z, k), fj);
-  let above = mix(sora_layer(table, low + 1, row0, z, k), sora_layer(table, low + 1, row1, z, k), fj);
+  let km = sora_cell(sqrt(clamp(1.0 - view.y / SORA_PI, 0.0, 1.0)) * f32(kn - 1), 0, kn - 2);
+  let ground = mix(sora_layer(table, low, row0, z, k, km, cap, zn), sora_layer(table, low, row1, z, k, km, cap, zn), fj);
+  let above = mix(sora_layer(table, low + 1, row0, z, k, km, cap, zn), sora_layer(table, low + 1, row1, z, k, km, cap, zn), fj);
   return log(max(mix(ground, above, a_f), vec3<f32>(SORA_FLOOR)));
 }
 
@@ -177,9 +204,8 @@ fn sora_layer_log(table: texture_2d_array<f32>, zn: i32, zf: vec2<i32>, kn: i32,
 // azimuth `phi` from the sun's (rad), sun at e_deg: bilinear in a layer,
 // linear in altitude, in ln L between the sun layers (the chord less the
 // curvature of the four nearest), each read at the view turned with the
-// sun to its node, blended in ln L with the unturned read by
-// sora_turned_read_weight.
-fn sora_layers_xyz(table: texture_2d_array<f32>, zn: i32, zf: vec2<i32>, kn: i32, j: i32, fj: f32,
+// sun to its node.
+fn sora_layers_xyz(table: texture_2d_array<f32>, zn: i32, zf: vec2<i32>, kn: i32, cap: i32, j: i32, fj: f32,
                    h_in: f32, zenith: f32, phi: f32, e_in: f32) -> vec3<f32> {
   let h = clamp(h_in, 0.0, sora_thickness());
   let r = sora.planet_sun.x + h;
@@ -188,9 +214,7 @@ fn sora_layers_xyz(table: texture_2d_array<f32>, zn: i32, zf: vec2<i32>, kn: i32
   let an = sora.sky_nodes.y;
   let a = sora_cell(sora_altitude_coordinate(h, an), 0, an - 2);
   let s = sora_cell(sora_sun_coordinate(e_deg), 0, sora.sky_nodes.x - 2);
-  let weight = sora_turned_read_weight(e_deg);
-  var share = 0.0;
-  if (weight > 0.0) { share = sora_turn_share(zenith, phi, e_deg, zh); }
+  let share = sora_turn_share(zenith, phi, e_deg, zh);
   let row0 = 2 * zn * j;
   var row1 = row0;
   if (fj > 0.0) { row1 = row0 + 2 * zn; }
@@ -200,10 +224,7 @@ fn sora_layers_xyz(table: texture_2d_array<f32>, zn: i32, zf: vec2<i32>, kn: i32
     let n = clamp(s.i + m - 1, 0, sora.sky_nodes.x - 1) - s.i;
     let view = sora_turned_view(zenith, phi, radians(sora_sun_elevation_of_node(s.i + n) - e_deg) * share, zh);
     let low = (s.i + n) * an + a.i;
-    layers[m] = sora_layer_log(table, zn, zf, kn, low, a.f, row0, row1, fj, view, r);
-    if (share > 0.0 && weight < 1.0) {
-      layers[m] = mix(sora_layer_log(table, zn, zf, kn, low, a.f, row0, row1, fj, vec2<f32>(zenith, phi), r), layers[m], weight);
-    }
+    layers[m] = sora_layer_log(table, zn, zf, kn, cap, low, a.f, row0, row1, fj, view, r);
   }
   // The chord in ln L less its curvature: the second differences at nodes
   // s and s + 1 (zero at the axis's ends, each within +-1), blended.
@@ -228,7 +249,7 @@ fn sora_layers_xyz(table: texture_2d_array<f32>, zn: i32, zf: vec2<i32>, kn: i32
 // Sky radiance (XYZ, W m^-2 sr^-1 nm^-1) at altitude h (m) toward zenith
 // angle `zenith` and azimuth `phi` from the sun's (rad), sun at e_deg.
 fn sora_sky_xyz(h_in: f32, zenith: f32, phi: f32, e_in: f32) -> vec3<f32> {
-  return sora_layers_xyz(sora_sky, sora.sky_nodes.z, sora.transmittance_nodes.zw, sora.sky_nodes.w, 0, 0.0, h_in, zenith, phi, e_in);
+  return sora_layers_xyz(sora_sky, sora.sky_nodes.z, sora.transmittance_nodes.zw, sora.sky_nodes.w, SORA_ZENITH_CAP_CELLS, 0, 0.0, h_in, zenith, phi, e_in);
 }
 
 fn sora_horizon_cosine(r: f32) -> f32 {
@@ -373,7 +394,7 @@ fn sora_aerial_perspective(h_in: f32, v: vec3<f32>, sun: vec3<f32>, d: f32) -> S
   let zp = sora_local_view(v, vec3<f32>(0.0, 0.0, 1.0), sun);
   let e_deg = sora_sun_elevation_deg(sun);
   let sky = sora_sky_xyz(h, zp.x, zp.y, e_deg);
-  let ratio = sora_layers_xyz(sora_aerial, sora.aerial_nodes.x, vec2<i32>(0, 0), sora.aerial_nodes.y, j.i, j.f, h, zp.x, zp.y, e_deg);
+  let ratio = sora_layers_xyz(sora_aerial, sora.aerial_nodes.x, vec2<i32>(0, 0), sora.aerial_nodes.y, 0, j.i, j.f, h, zp.x, zp.y, e_deg);
   return SoraAerial(sky * ratio * share, t);
 }
 

@@ -10,7 +10,8 @@
 //   of the horizon alone;
 // - the zenith's luminance against the sun's elevation (90 to -12 in
 //   0.25-degree steps, drawn by the shader): |second difference of ln L|
-//   below 0.05 per step.
+//   below 0.05 per step (the stencils whose zenith is inside the sun's
+//   disc at one of their suns left out: the sky is hidden there).
 // - aerial perspective, for the presets in SORA_TABLES_AERIAL (default
 //   none; PRESET:SUN+SUN gives a preset its own suns; their tables are
 //   baked with SORA_TABLES_AERIAL_ARGS, default none: the default bake
@@ -474,7 +475,14 @@ async function main() {
       let worstSecond = 0;
       let worstAt = null;
       const ln = drawn.zenith.map((l) => Math.log(l));
+      // Stencils whose zenith lies inside the sun's disc at one of their
+      // suns (sun elevation above 90 degrees less the disc's angular
+      // radius) are left out: the sky there is behind the disc, and the
+      // library's own curve bends with the aureole's core (earth-hazy:
+      // 0.1234 at 89.75 degrees, docs/engine-tables.md).
+      const discDeg = (manifest.sun.angular_radius_rad * 180) / Math.PI;
       for (let i = 1; i + 1 < ln.length; i++) {
+        if (90 - 0.25 * (i - 1) >= 90 - discDeg) continue;
         const second = Math.abs(ln[i + 1] - 2 * ln[i] + ln[i - 1]);
         if (second > worstSecond) {
           worstSecond = second;

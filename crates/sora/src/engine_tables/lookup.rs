@@ -5,6 +5,15 @@
 //! - Sky: at the eye's altitude h, the view's zenith coordinate is taken
 //!   with the eye's own horizon (`axes::zenith_coordinate`) and used on
 //!   every altitude layer; bilinear in (zenith, azimuth) within a layer,
+//!   but in the sky table's zenith cap (its first [`ZENITH_CAP_CELLS`]
+//!   zenith cells, to about 40 degrees from the zenith by default) a
+//!   Catmull-Rom cubic in ln L along the zenith axis through the rows on
+//!   both sides of the cell, the row before the zenith being row 1 at the
+//!   opposite azimuth: a high sun's aureole, tens of times brighter within
+//!   a few degrees of the sun than the rows 2.8 degrees apart resolve, is
+//!   read with a continuous slope across the rows and through the zenith
+//!   (a read linear between them bent the zenith's brightness against the
+//!   sun's elevation where a turned view crossed a row),
 //!   linear between the two altitude layers, and in the logarithm (each
 //!   value floored at [`FLOOR`]) between the two sun layers s and s + 1:
 //!   the chord of ln L less `f (1 - f) / 2` times the second difference of
@@ -27,14 +36,12 @@
 //!   which rises at the antisolar horizon as the sun sets, turns with the
 //!   antisolar point, and a view along its edge read unturned from the
 //!   layer below the sunset is several times too dark (smoothstep ramps
-//!   between; the larger of the two shares). For suns above 70 degrees
-//!   the turned read is blended in ln L with the unturned one, by a
-//!   weight that falls to 0 at 85 ([`turned_read_weight`]): there the
-//!   aureole reaches the zenith, whose rows (3 degrees apart) are
-//!   coarser than its core: a view turned part of the way would cross the
-//!   first zenith row of the layer at 90 degrees, where its radiance falls
-//!   ninefold, and bend the zenith's brightness against the sun's
-//!   elevation. At a sun node the read is the layer's own. With the sun
+//!   between; the larger of the two shares). For suns above 68 degrees
+//!   (ramping from 55, [`HIGH_SUN_DEG`]) w = 1 far from the sun too, the
+//!   horizon's band excepted: the aureole reaches the zenith, and the
+//!   zenith read unturned in the layer at 90 degrees would be that
+//!   layer's sun (earth-hazy's zenith 3.8 times too bright at 86).
+//!   At a sun node the read is the layer's own. With the sun
 //!   below the horizon, near the antisolar point and below the shadow's
 //!   edge ([`shadow_read_share`]), the read is blended toward that of the sun
 //!   axis cut at its last node below the horizon (the chord of the last
@@ -139,12 +146,15 @@ pub(crate) fn turn_share(view: LocalView, e_deg: f64, horizon: f64) -> f64 {
     let e = e_deg.to_radians();
     let (z, phi) = (view.zenith_rad, view.relative_azimuth_rad);
     let cos_theta = z.cos() * e.sin() + z.sin() * phi.cos() * e.cos();
+    // Near the sun, and for a high sun the whole sky (its aureole reaches
+    // the zenith, where the zenith angle alone would read the layer's sun).
     let sun_side = smoothstep(
         40f64.to_radians().cos(),
         10f64.to_radians().cos(),
         cos_theta,
-    ) * (1.0
-        - smoothstep(horizon - 20f64.to_radians(), horizon - 5f64.to_radians(), z));
+    )
+    .max(smoothstep(HIGH_SUN_DEG.0, HIGH_SUN_DEG.1, e_deg))
+        * (1.0 - smoothstep(horizon - 20f64.to_radians(), horizon - 5f64.to_radians(), z));
     // The planet's shadow, which rises at the antisolar horizon as the sun
     // sets, turns with the antisolar point (horizon included).
     let shadow = smoothstep(
@@ -155,13 +165,12 @@ pub(crate) fn turn_share(view: LocalView, e_deg: f64, horizon: f64) -> f64 {
     sun_side.max(shadow)
 }
 
-/// The weight of the turned read of a sun layer against its unturned
-/// read, in ln L: 1 for suns below 70 degrees, 0 above 85 (smoothstep
-/// between), where the aureole reaches the zenith and the zenith axis's
-/// rows (3 degrees apart there) are coarser than its core.
-pub(crate) fn turned_read_weight(e_deg: f64) -> f64 {
-    1.0 - smoothstep(70.0, 85.0, e_deg)
-}
+/// Sun elevations (degrees) over which the whole sky above the horizon's
+/// band comes to be read turned (`turn_share`): none below the first, all
+/// above the second (below the sun node at 69.15 degrees of the default
+/// 48 nodes, so that no cell or curvature term about the layers at 78.89
+/// and 90 degrees reads a view turned part of the way).
+pub(crate) const HIGH_SUN_DEG: (f64, f64) = (55.0, 68.0);
 
 /// Where the read below the planet's shadow's edge ([`shadow_read_share`])
 /// ends: at this many times the sun's depression in view elevation. At 2
@@ -217,7 +226,13 @@ pub(crate) fn turned_view(view: LocalView, delta: f64, horizon: f64) -> LocalVie
 }
 
 /// Slice `slice` (of all layers' slices) of `table` at zenith coordinate
-/// `(y, lowest, highest)` and relative azimuth `phi`: bilinear.
+/// `(y, lowest, highest)` and relative azimuth `phi`: bilinear, but within
+/// the table's zenith cap (its first `cap` cells from the zenith,
+/// [`LayerTable::cap`]) a cubic in ln L along the zenith axis
+/// ([`catmull_rom_log`]) through the rows on both sides of the cell, the
+/// row before the zenith being row 1 at the opposite azimuth (pi - phi):
+/// the read is smooth in the zenith across the rows and through the
+/// zenith itself.
 fn layer_value_at(
     table: LayerTable<'_>,
     slice: usize,
@@ -226,16 +241,63 @@ fn layer_value_at(
 ) -> [f64; 3] {
     let k_count = table.azimuth;
     let (i, fy) = axes::cell(y, lowest, highest);
-    let (k, fx) = axes::cell(axes::azimuth_coordinate(phi, k_count), 0, k_count - 2);
+    // The cap's cells: the upper half's first `cap` (a cell of the lower
+    // half is at least `half`), rows i + 2 still above the horizon.
+    let column = |phi: f64| axes::cell(axes::azimuth_coordinate(phi, k_count), 0, k_count - 2);
     let texel = |row: usize, column: usize| {
         let t = table.texels[(slice * 2 * table.half + row) * k_count + column];
         [t[0] as f64, t[1] as f64, t[2] as f64]
     };
-    mix(
-        mix(texel(i, k), texel(i, k + 1), fx),
-        mix(texel(i + 1, k), texel(i + 1, k + 1), fx),
-        fy,
-    )
+    let row = |row: usize, (k, fx): (usize, f64)| mix(texel(row, k), texel(row, k + 1), fx);
+    let at = column(phi);
+    if i < table.cap && i + 2 < table.half {
+        let before = if i == 0 {
+            row(1, column(std::f64::consts::PI - phi))
+        } else {
+            row(i - 1, at)
+        };
+        return catmull_rom_log(before, row(i, at), row(i + 1, at), row(i + 2, at), fy);
+    }
+    mix(row(i, at), row(i + 1, at), fy)
+}
+
+/// The uniform Catmull-Rom cubic in ln L (each value floored at
+/// [`FLOOR`]) between `p0` (t = 0) and `p1` (t = 1), with `before` and
+/// `after` the nodes on either side: it passes through the nodes, and its
+/// slope at each is the centred difference of the nodes about it, so that
+/// consecutive cells join with a continuous slope.
+fn catmull_rom_log(
+    before: [f64; 3],
+    p0: [f64; 3],
+    p1: [f64; 3],
+    after: [f64; 3],
+    t: f64,
+) -> [f64; 3] {
+    std::array::from_fn(|c| {
+        let [m, a, b, n] = [before[c], p0[c], p1[c], after[c]].map(|v| v.max(FLOOR).ln());
+        let cubic = -m + 3.0 * a - 3.0 * b + n;
+        let square = 2.0 * m - 5.0 * a + 4.0 * b - n;
+        (a + 0.5 * t * ((b - m) + t * (square + t * cubic))).exp()
+    })
+}
+
+/// Zenith cells of the sky table, from the zenith, read by the cubic in
+/// ln L (`layer_value_at`).
+pub(crate) const ZENITH_CAP_CELLS: usize = 16;
+
+/// A test's override of [`ZENITH_CAP_CELLS`] (`usize::MAX`: none), so
+/// that one bake can be read with caps of several sizes
+/// (`tests::probe_zenith_cap`).
+#[cfg(test)]
+pub(crate) static CAP_OVERRIDE: std::sync::atomic::AtomicUsize =
+    std::sync::atomic::AtomicUsize::new(usize::MAX);
+
+fn zenith_cap_cells() -> usize {
+    #[cfg(test)]
+    if let n @ 0..usize::MAX = CAP_OVERRIDE.load(std::sync::atomic::Ordering::Relaxed) {
+        return n;
+    }
+    ZENITH_CAP_CELLS
 }
 
 /// GLSL's smoothstep: 0 at `a`, 1 at `b`, 3 t^2 - 2 t^3 between.
@@ -258,6 +320,10 @@ pub(crate) struct LayerTable<'a> {
     pub cells: (usize, usize),
     pub azimuth: usize,
     pub slices: usize,
+    /// Zenith cells (from the zenith) read by the cubic in ln L
+    /// (`layer_value_at`): [`ZENITH_CAP_CELLS`] for the sky table, none for
+    /// the aerial-perspective table.
+    pub cap: usize,
 }
 
 impl EngineTables {
@@ -268,6 +334,7 @@ impl EngineTables {
             cells: self.settings.zenith_cells(),
             azimuth: self.settings.azimuth_nodes,
             slices: 1,
+            cap: zenith_cap_cells(),
         }
     }
 
@@ -279,6 +346,7 @@ impl EngineTables {
             cells: (0, 0),
             azimuth,
             slices,
+            cap: 0,
         }
     }
 
@@ -350,12 +418,7 @@ impl EngineTables {
             sun_elevation_deg.clamp(axes::SUN_ELEVATION_MIN_DEG, axes::SUN_ELEVATION_MAX_DEG);
         let a_count = self.settings.altitude_nodes;
         let ((a, fa), (s, fs)) = self.altitude_and_sun_cells(h, e_deg);
-        let weight = turned_read_weight(e_deg);
-        let share = if weight > 0.0 {
-            turn_share(view, e_deg, horizon)
-        } else {
-            0.0
-        };
+        let share = turn_share(view, e_deg, horizon);
         // ln L of sun layer `s` read at `view` turned by `share` of the
         // step to its node.
         let read_at = |s: usize, share: f64| {
@@ -376,17 +439,7 @@ impl EngineTables {
             };
             mix(at(a), at(a + 1), fa).map(|v| v.max(FLOOR).ln())
         };
-        // Blended with the unturned read by `weight` (a view turned part
-        // of the way toward a layer whose sun is near the zenith crossed
-        // that layer's zenith rows, coarser than the aureole's core).
-        let layer = |s: usize| -> [f64; 3] {
-            let turned = read_at(s, share);
-            if share == 0.0 || weight == 1.0 {
-                return turned;
-            }
-            let unturned = read_at(s, 0.0);
-            std::array::from_fn(|i| unturned[i] + (turned[i] - unturned[i]) * weight)
-        };
+        let layer = |s: usize| read_at(s, share);
         let s_count = self.settings.sun_nodes;
         // ln L on the sun axis cut at node `top`: the chord between the
         // two layers about the sun less its curvature (the second
