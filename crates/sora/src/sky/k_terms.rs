@@ -168,6 +168,28 @@
 //! tables and pixels cost about what the same number of gas-free samples
 //! cost, so one sky carrying the terms as channels would still take
 //! about 2 times the gas-free image (docs/atmosphere-file.md).
+//! Fewer terms per sample, each with a weight and coefficient of its own
+//! fitted to the sample's five-term transmittance over the fold's air
+//! masses (1e-2 to 1e3, minimax; `scripts/gases/colour_term_refit.py`,
+//! which reproduces the fold's s D above), bounded as the fold is (s_i
+//! D_i, D_i the refit's largest error in transmittance): at 580 and 600
+//! nm (water, s 0.171 and 0.199) two terms err s D 2.0e-3 and 2.9e-3,
+//! three 8.4e-4 and 1.1e-3, four 2.0e-4 and 2.1e-4, so the bound holds
+//! there with four terms alone (with the fold's 2.8e-4 and two terms at
+//! 680-700 nm, 1.2e-4: 8.1e-4); a four-term colour sky saves 7 of the 28
+//! term samples (about 0.10 CPU-s of the fisheye's 1.04 at the measured
+//! 0.012 + 0.0027 a sample: some 2.3 times the gas-free image, not
+//! measured). One term with a free weight (v exp(-kappa u), v < 1: the
+//! weak terms' light absorbed at every air mass) in place of the fold's
+//! air-mass-2 coefficient errs s D 4.6e-4, 9.6e-5, 5.5e-5, 1.1e-5, 3e-6
+//! at 680, 700, 720, 740, 760 nm against 3.4e-3, 7.4e-4, 1.8e-4, 7.9e-5,
+//! 8.4e-6: folded so, 680-780 nm sum to 6.3e-4 and the terms stay at
+//! 580-600 nm alone (8 term samples, some 0.29 CPU-s saved, about 1.8
+//! times the gas-free image, not measured; 620-660 nm, inside the span,
+//! have no band at all and pay the terms today only because a term's
+//! sky is one contiguous sub-grid). Neither is built: a term count or
+//! weight per sample needs `GasBand` to take a fitted coefficient per
+//! sample and the run's weights to leave the terms' shared ones.
 //!
 //! Standard errors (path tracing) add as sum_j w_j se_j, the bound for
 //! errors that may be correlated (the terms are traced with one seed).
