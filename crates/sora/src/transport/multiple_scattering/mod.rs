@@ -245,7 +245,9 @@ mod vertical_grid;
 
 pub use settings::MultipleScatteringSettings;
 pub use source_table::MultipleScatteringTable;
-pub(crate) use source_table::{ExportedBeam, ExportedSource, interpolate_log_source};
+pub(crate) use source_table::{
+    ExportedBeam, ExportedSource, TABLE_AZIMUTHS_DEG, azimuth_cell, interpolate_log_source,
+};
 
 mod field;
 mod view_march;
