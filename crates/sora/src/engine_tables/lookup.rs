@@ -72,7 +72,7 @@ use super::march::{
     DARK_LOG_SOURCE, DENSITY_NODES, MARCH_STEPS, MarchTables, PHASE_NODES, SUN_COLUMN_NODES,
 };
 use crate::geometry::{Vector3, segment_in_atmosphere};
-use crate::transport::multiple_scattering::interpolate_log_source;
+use crate::transport::multiple_scattering::{azimuth_cell, interpolate_log_source};
 
 /// Smallest value the sun axis's geometric interpolation takes the
 /// logarithm of (XYZ in W m^-2 sr^-1 nm^-1 units).
@@ -1088,21 +1088,10 @@ impl MarchTables {
     }
 
     /// The azimuth cell of the cosine of an azimuth from the sun: (node,
-    /// fraction), located by the angle among the source's azimuths,
-    /// linear in the angle, but in the cosine within the first and the
-    /// last cell (ln R is even in the azimuth about 0 and pi, so a read
-    /// linear in the angle cuts its bend there: 3-4 % too dark 5 degrees
-    /// from a low sun on mars-dust with cells of 10 degrees).
+    /// fraction) among the source's azimuths, as the library's march reads
+    /// its table ([`azimuth_cell`]).
     fn locate_azimuth(&self, cos_azimuth: f64) -> (usize, f64) {
-        let azimuths = &self.source.azimuths_rad;
-        let c = cos_azimuth.clamp(-1.0, 1.0);
-        let (f, t) = locate(azimuths, c.acos());
-        if f == 0 || f + 2 == azimuths.len() {
-            let (a, b) = (azimuths[f].cos(), azimuths[f + 1].cos());
-            (f, ((a - c) / (a - b)).clamp(0.0, 1.0))
-        } else {
-            (f, t)
-        }
+        azimuth_cell(&self.source.azimuths_rad, cos_azimuth)
     }
 
     /// The sun zenith cell of a sun cosine: (node, fraction), linear in

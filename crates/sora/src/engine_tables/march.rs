@@ -42,7 +42,7 @@ use crate::error::{Error, Result};
 use crate::geometry::Vector3;
 use crate::sky::{SharedField, Sky};
 use crate::spectrum::SampledSpectrum;
-use crate::transport::multiple_scattering::{ExportedBeam, ExportedSource};
+use crate::transport::multiple_scattering::{ExportedBeam, ExportedSource, TABLE_AZIMUTHS_DEG};
 
 /// Nodes of the density table over 0..the atmosphere's thickness.
 pub const DENSITY_NODES: usize = 1024;
@@ -140,20 +140,17 @@ pub const SOURCE_THINNING: SourceThinning = SourceThinning {
     half: true,
 };
 
-/// The source's azimuths from the sun, degrees: 19 nodes, as many as the
-/// field's table's (10 degrees apart), 4-7 degrees apart from 10 to 30
-/// degrees from the sun, where a low sun's ln R bends most in azimuth
-/// (its aureole), and 10-12 beyond; read linearly in the cosine of the
-/// azimuth within the first and the last cell (`lookup.rs`,
-/// `locate_azimuth`). Measured with the probe (mars-dust, suns 2 and -4,
-/// views 1-30 degrees up, 0-175 degrees from the sun): the field's 19
+/// The source's azimuths from the sun, degrees: the field's source
+/// table's own (`TABLE_AZIMUTHS_DEG`, 19 nodes 4-7 degrees apart from 10
+/// to 30 degrees from the sun, where a low sun's ln R bends most in
+/// azimuth, and 10-12 beyond; read linearly in the cosine of the azimuth
+/// within the first and the last cell, as the library does), so the march
+/// takes the table as it is. Measured with the probe (mars-dust, suns 2
+/// and -4, views 1-30 degrees up, 0-175 degrees from the sun): 19
 /// uniform nodes read linearly put the march 2.9-4.2 % below the
 /// library 2.5-7.5 degrees from the sun; these within 1.43 %
 /// (`docs/engine-tables.md`).
-pub const AZIMUTHS_DEG: [f64; 19] = [
-    0.0, 10.0, 14.0, 18.0, 23.0, 30.0, 41.0, 53.0, 65.0, 77.0, 89.0, 101.0, 113.0, 125.0, 137.0,
-    149.0, 160.0, 170.0, 180.0,
-];
+pub const AZIMUTHS_DEG: [f64; 19] = TABLE_AZIMUTHS_DEG;
 
 /// ln R at or below this is no light (as the library's march).
 pub const DARK_LOG_SOURCE: f64 = -46.0;

@@ -25,7 +25,9 @@ pub struct MultipleScatteringSettings {
     pub view_ray_panels: usize,
     /// Source table: view zenith nodes (0..180 degrees).
     pub table_view_zenith_nodes: usize,
-    /// Source table: relative azimuth nodes (0..180 degrees).
+    /// Source table: relative azimuth nodes (0..180 degrees): 19 at the
+    /// table's own azimuths (0, 10, 14, 18, 23, 30, then 10-12 degrees
+    /// apart), other counts spread the same way (37 halves each cell).
     pub table_azimuth_nodes: usize,
     /// Polarised light (the fast method): the polarisation correction's
     /// columns and the Mie phase-matrix ratios computed at every this many
