@@ -2230,6 +2230,17 @@ fn cli_sky(preset: &str) -> Sky {
         .unwrap()
 }
 
+/// The tables of `sky` that CI's browser test bakes (`sora tables
+/// --altitude-nodes 2`), without the march's tables.
+fn ci_tables(sky: &Sky) -> EngineTables {
+    let settings = EngineTableSettings {
+        altitude_nodes: 2,
+        march: false,
+        ..EngineTableSettings::default()
+    };
+    EngineTables::bake(sky, &settings, &|_| {}).unwrap()
+}
+
 /// The sky lookup of the tables `sora tables --altitude-nodes 2` bakes
 /// (CI's; no march tables) against the library's image (the same sky's
 /// image tables) between the browser test's suns, about the sunset, where
@@ -2412,12 +2423,7 @@ fn the_zenith_against_the_sun_is_smooth() {
     let mut failures = Vec::new();
     for preset in presets.split(',') {
         let sky = cli_sky(preset);
-        let settings = EngineTableSettings {
-            altitude_nodes: 2,
-            march: false,
-            ..EngineTableSettings::default()
-        };
-        let tables = EngineTables::bake(&sky, &settings, &|_| {}).unwrap();
+        let tables = ci_tables(&sky);
         let sun = |i: usize| 90.0 - 0.25 * i as f64;
         let ln: Vec<f64> = (0..=408)
             .map(|i| tables.sky_xyz(0.0, zenith, sun(i))[1].ln())
@@ -2577,13 +2583,8 @@ fn probe_high_suns() {
     let step: f64 = std::env::var("SORA_HIGHSUN_STEP").map_or(0.5, |s| s.parse().unwrap());
     for preset in presets.split(',') {
         let sky = cli_sky(preset);
-        let settings = EngineTableSettings {
-            altitude_nodes: 2,
-            march: false,
-            ..EngineTableSettings::default()
-        };
         let t = std::time::Instant::now();
-        let tables = EngineTables::bake(&sky, &settings, &|_| {}).unwrap();
+        let tables = ci_tables(&sky);
         eprintln!("{preset}: bake {:.1} s", t.elapsed().as_secs_f64());
         let mut sun = from;
         while sun <= 90.0 + 1e-9 {
@@ -2632,12 +2633,7 @@ fn the_sky_near_a_high_sun_matches_the_library() {
     let mut failures = Vec::new();
     for preset in presets.split(',') {
         let sky = cli_sky(preset);
-        let settings = EngineTableSettings {
-            altitude_nodes: 2,
-            march: false,
-            ..EngineTableSettings::default()
-        };
-        let tables = EngineTables::bake(&sky, &settings, &|_| {}).unwrap();
+        let tables = ci_tables(&sky);
         // The worst relative error (and where) away from the core and in it.
         let (mut away, mut core) = ((0.0f64, String::new()), (0.0f64, String::new()));
         for step in 0..=20 {
@@ -2711,12 +2707,7 @@ fn probe_zenith_cap() {
     };
     for preset in presets.split(',') {
         let sky = cli_sky(preset);
-        let settings = EngineTableSettings {
-            altitude_nodes: 2,
-            march: false,
-            ..EngineTableSettings::default()
-        };
-        let tables = EngineTables::bake(&sky, &settings, &|_| {}).unwrap();
+        let tables = ci_tables(&sky);
         let mut refs = Vec::new();
         let mut sun = from;
         while sun <= 90.0 + 1e-9 {

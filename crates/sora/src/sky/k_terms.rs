@@ -187,9 +187,19 @@
 //! 580-600 nm alone (8 term samples, some 0.29 CPU-s saved, about 1.8
 //! times the gas-free image, not measured; 620-660 nm, inside the span,
 //! have no band at all and pay the terms today only because a term's
-//! sky is one contiguous sub-grid). Neither is built: a term count or
-//! weight per sample needs `GasBand` to take a fitted coefficient per
-//! sample and the run's weights to leave the terms' shared ones.
+//! sky is one contiguous sub-grid). The four-term refit is not built.
+//! The one-term fold was built and measured (the branch `fold1`, not
+//! merged): fitted to the dominant gas alone, as `GasBand::coefficient_of`
+//! gives the terms (the script's 680 nm figure multiplies in water at the
+//! O2 band's air mass, which holds only where the gases share a profile;
+//! water's scale height is 2 km, the mixed gases' 8 km), 680 nm keeps its
+//! terms (s D 7.8e-4 against the 2.4e-4 of 700-780 nm), so the terms stay
+//! at 580-680 nm (24 term samples, not 8): the fisheye 0.959 times the
+//! CPU (`farm-bench -n 8`, paired, 0.90-1.01), 2.29 times the gas-free
+//! image (`gases.sh`, 7 runs; 2.47 the same hour), its luminance against
+//! every term's image p99 up to 8.6e-4 at a sun of -4 degrees (6.0e-4
+//! with the air-mass-2 fold): set aside, 4 % of the CPU for an error
+//! nearer the bound.
 //!
 //! Standard errors (path tracing) add as sum_j w_j se_j, the bound for
 //! errors that may be correlated (the terms are traced with one seed).
