@@ -2230,6 +2230,19 @@ fn cli_sky(preset: &str) -> Sky {
         .unwrap()
 }
 
+/// The comma-separated values of the environment variable `name` (an
+/// ignored test's knob), or of `default` where it is not set.
+fn env_list<T: std::str::FromStr>(name: &str, default: &str) -> Vec<T>
+where
+    T::Err: std::fmt::Debug,
+{
+    std::env::var(name)
+        .unwrap_or_else(|_| default.into())
+        .split(',')
+        .map(|s| s.trim().parse().unwrap())
+        .collect()
+}
+
 /// The tables of `sky` that CI's browser test bakes (`sora tables
 /// --altitude-nodes 2`), without the march's tables.
 fn ci_tables(sky: &Sky) -> EngineTables {
@@ -2263,11 +2276,7 @@ fn ci_tables(sky: &Sky) -> EngineTables {
 #[ignore]
 fn the_sky_between_the_sun_nodes_about_the_sunset_matches_the_library() {
     let presets = std::env::var("SORA_TWILIGHT_PRESETS").unwrap_or_else(|_| "paper-mars".into());
-    let suns: Vec<f64> = std::env::var("SORA_TWILIGHT_SUNS")
-        .unwrap_or_else(|_| "1,0.19,-0.1,-0.19,-0.5,-1,-2,-3".into())
-        .split(',')
-        .map(|s| s.trim().parse().unwrap())
-        .collect();
+    let suns: Vec<f64> = env_list("SORA_TWILIGHT_SUNS", "1,0.19,-0.1,-0.19,-0.5,-1,-2,-3");
     let size = std::env::var("SORA_TWILIGHT_SIZE").map_or(256, |s| s.parse().unwrap());
     let sun_nodes = std::env::var("SORA_TWILIGHT_SUN_NODES")
         .map_or(EngineTableSettings::default().sun_nodes, |s| {
@@ -2695,11 +2704,7 @@ fn probe_zenith_cap() {
     use super::lookup::CAP_OVERRIDE;
     use std::sync::atomic::Ordering;
     let presets = std::env::var("SORA_HIGHSUN_PRESETS").unwrap_or_else(|_| "earth-hazy".into());
-    let caps: Vec<usize> = std::env::var("SORA_CAPS")
-        .unwrap_or_else(|_| "0,1,2,4,8,12,16".into())
-        .split(',')
-        .map(|s| s.parse().unwrap())
-        .collect();
+    let caps: Vec<usize> = env_list("SORA_CAPS", "0,1,2,4,8,12,16");
     let from: f64 = std::env::var("SORA_HIGHSUN_FROM").map_or(60.0, |s| s.parse().unwrap());
     let zenith = LocalView {
         zenith_rad: 0.0,
