@@ -344,9 +344,10 @@ function percentile(values, p) {
 // GPU image (RGBA = XYZ, rows bottom first) against the CPU's (rows top
 // first), both SIZE x SIZE unless `SIZE` is given; the pixels compared are
 // those brighter than 1e-3 of the CPU image's maximum, or with `robust` of
-// its 99th percentile (the aerial images: `sora render --distance-m
-// 50000` on earth-hazy at sun 10 has two pixels near the horizon at
-// 9.3e17, which would leave only themselves to compare).
+// its 99th percentile (the aerial images; a lower threshold, so more
+// pixels compared: it was chosen when `sora render --distance-m 50000` on
+// earth-hazy at sun 10 had two pixels near the horizon at 9.3e17, which
+// no longer occur; docs/engine-tables.md).
 function compare(gpu, cpu, SIZE = 256, robust = false) {
   const { X, Y, Z } = cpu.channels;
   let max = 0;

@@ -662,8 +662,8 @@ impl EngineTables {
     }
 
     /// Aerial perspective from the aerial-perspective ratio table (the
-    /// reference shaders' `soraAerialPerspective` reads it; the march is
-    /// not in them yet): (the light scattered into the segment, XYZ
+    /// reference shaders' `soraAerialPerspective` reads it when the tables
+    /// have no march): (the light scattered into the segment, XYZ
     /// radiance; the segment's transmittance, XYZ of the sun's spectrum)
     /// as [`Self::aerial_perspective_xyz`] takes them. The light is `S(x, v) R(x, v, d) w` per channel, S the
     /// sky table's read at the eye, R the aerial-perspective table's and w

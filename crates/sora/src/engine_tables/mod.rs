@@ -60,8 +60,9 @@
 //!   phase functions, the forward-peak term's tables and the ground's
 //!   light, from the field solved once for every sun.
 //!   `EngineTables::aerial_perspective_xyz` marches them when present
-//!   (`lookup.rs`); the reference shaders read the aerial table or the
-//!   difference (the march is not in them yet).
+//!   (`lookup.rs`), and so do the reference shaders
+//!   (`soraAerialPerspectiveMarch`, `sora_aerial_perspective_march`);
+//!   without them the shaders read the aerial table or the difference.
 //!
 //! Why not Bruneton's parametrisation: his 4D scattering table is indexed
 //! by (r, mu, mu_s, nu) with a single mu axis over the ground and the sky
