@@ -201,6 +201,23 @@
 //! with the air-mass-2 fold): set aside, 4 % of the CPU for an error
 //! nearer the bound.
 //!
+//! Where the gas fisheye's extra CPU goes (perf, call graphs, 1632
+//! samples against the gas-free image's 623): the sky-view tables +357
+//! (their multiply scattered march +216, of it the source-table reads
+//! +124: memory-bound loads of a node's eight corners, per node and per
+//! term sky whatever its samples), fields +189, source tables +169 (per
+//! sample), pixels +112, polarisation tables +75. The source table's
+//! phase kernel and the field's sun phase rows now skip the species that
+//! do not scatter (the banded gases, ozone, NO2: their rows were never
+//! read), byte-identical: 0.98 times the CPU (`farm-bench -n 6`,
+//! paired, 0.94-1.00), 2.42 times the gas-free image (`gases.sh`, 5
+//! runs; main's 2.55 just after). The terms 1-4's image tables marching their
+//! multiply scattered light at every 4th node (branch `gimg-stride`, set
+//! aside): (4, 4) 0.91 times the CPU but luminance up to 1.2e-3 from
+//! every other node's image (earth-clear with aerosol, sun -4, cubic
+//! fill); (4, 2) 5.8e-4 there (p99 1.7e-4), 8.9e-5 without aerosol: not
+//! far enough inside the colour bound (docs/atmosphere-file.md).
+//!
 //! Standard errors (path tracing) add as sum_j w_j se_j, the bound for
 //! errors that may be correlated (the terms are traced with one seed).
 

@@ -183,6 +183,12 @@ fn source_values(field: &MultipleScatteringField, views: usize, azimuths_rad: &[
     let mut kernel = vec![0.0; w * species * block];
     crate::parallel::for_each_chunk_mut(&mut kernel, species * block, |i, out| {
         for j in 0..species {
+            // A species that does not scatter here (an absorber: the
+            // banded gases, ozone) has no share of the source below: its
+            // rows are never read, and left zero.
+            if field.optics.scaled.scaled_scattering[i * species + j] == 0.0 {
+                continue;
+            }
             let phase = &field.optics.scaled.phases[i * species + j];
             for &m in &active {
                 for b in 0..degrees {

@@ -445,8 +445,13 @@ impl<'a> ColumnSystem<'a> {
         let mut ground_diffuse_irradiance = 0.0;
         for m in (0..total).filter(|m| self.active_harmonics[*m]) {
             let factor = if m == 0 { 1.0 } else { 2.0 };
-            // p*_jm(mu_a, mu_s), the same at every level.
+            // p*_jm(mu_a, mu_s), the same at every level; none for a
+            // species that does not scatter (its omega is 0 at every level
+            // below, so its row is never read).
             for j in 0..s {
+                if self.species[j].scattering_per_m == 0.0 {
+                    continue;
+                }
                 for a in 0..total {
                     sun_phase[j * total + a] =
                         self.species[j]
