@@ -30,7 +30,15 @@
 //!   (piecewise-linear) profile, whose column falls to zero quadratically
 //!   where paths leave the layer (measured: a 2-4 km tent aerosol layer's
 //!   image 2.3e-3 from the reference march in the logarithm, 8.2e-4
-//!   linearly).
+//!   linearly). `SunColumnTable::lookup_columns_at_radius` looks up one
+//!   point (the slow path); `SunColumnTable::lookup_lit_columns` looks up
+//!   a ray's sunlit points together, four at a time (AVX2's registers
+//!   where the CPU has them), each lane the single lookup's operations,
+//!   so the same bits: single scattering's march and the spherical first
+//!   order's paths take their columns so, after the march, where the
+//!   lookups of one node after another each waited on its own chain (a
+//!   square root, two divisions, the corners' loads, an exponential per
+//!   smooth profile).
 
 use std::borrow::Borrow;
 use std::ops::ControlFlow;

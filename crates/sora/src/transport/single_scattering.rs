@@ -39,7 +39,9 @@
 //!   the eye at each node comes from the same density samples
 //!   (`super::quadrature::running_integral_matrix`). Columns toward the
 //!   sun are exact integrals ([`SunColumns::Exact`]) or a table
-//!   ([`SunColumns::Table`]) for images.
+//!   ([`SunColumns::Table`]) for images; from the table, a ray's sunlit
+//!   nodes are looked up together after the march
+//!   (`SunColumnTable::lookup_lit_columns`, the same bits as one by one).
 
 use std::borrow::Borrow;
 use std::ops::ControlFlow;
@@ -506,9 +508,12 @@ impl SingleScatteringScratch {
     /// integrals: every node's optical depths, then their exponentials
     /// all together (whole registers, one call per ray), then the sums in
     /// march order. The same operations on each value as node by node
-    /// (`node_by_node`), so the same bits; what changes is that the
-    /// march's sun-column lookups, independent of one another, follow
-    /// each other without the exponentials between them.
+    /// (`node_by_node`), so the same bits. With a sun-column table the
+    /// march keeps each sunlit node's located radius and sun cosine, and
+    /// their columns are looked up after it, before these sums, all
+    /// together, four at a time (`SunColumnTable::lookup_lit_columns`;
+    /// the scenes marched together then take their nodes in march
+    /// order).
     fn add_lit_nodes_to_integrals(&mut self, species: &[crate::atmosphere::SpeciesOptics]) {
         let lit = &mut self.lit_nodes;
         let (count, s) = (lit.weights.len(), species.len());
