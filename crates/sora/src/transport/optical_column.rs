@@ -30,7 +30,15 @@
 //!   (piecewise-linear) profile, whose column falls to zero quadratically
 //!   where paths leave the layer (measured: a 2-4 km tent aerosol layer's
 //!   image 2.3e-3 from the reference march in the logarithm, 8.2e-4
-//!   linearly).
+//!   linearly). `SunColumnTable::lookup_columns_at_radius` looks up one
+//!   point (the slow path); `SunColumnTable::lookup_lit_columns` looks up
+//!   a ray's sunlit points together, four at a time (AVX2's registers
+//!   where the CPU has them), each lane the single lookup's operations,
+//!   so the same bits: single scattering's march and the spherical first
+//!   order's paths take their columns so, after the march, where the
+//!   lookups of one node after another each waited on its own chain (a
+//!   square root, two divisions, the corners' loads, an exponential per
+//!   smooth profile).
 
 use std::borrow::Borrow;
 use std::ops::ControlFlow;
@@ -742,20 +750,30 @@ impl SunColumnTable {
         located
     }
 
+    /// Whether the path from a located radius with zenith cosine `mu`
+    /// hits the ground (the point is in the planet's shadow): the test
+    /// that opens [`SunColumnTable::lookup_columns_at_radius`]
+    /// (`ray_intersects_ground`, with r^2 from the located radius).
+    #[inline(always)]
+    pub(crate) fn is_shadowed(&self, at_radius: &SunColumnRadius, mu: f64) -> bool {
+        let ground = self.ground_radius_m;
+        mu < 0.0 && at_radius.r_squared * (1.0 - mu * mu) <= ground * ground
+    }
+
     /// [`SunColumnTable::lookup_columns_to_sun`] at a located radius: the
     /// same operations in the same order, so the same columns bit for bit.
+    /// The obviously correct form, one point at a time, that
+    /// [`SunColumnTable::lookup_lit_columns`] is held to.
     pub(crate) fn lookup_columns_at_radius(
         &self,
         at_radius: &SunColumnRadius,
         mu: f64,
         columns_m: &mut [f64],
     ) -> bool {
-        let ground = self.ground_radius_m;
-        let r = at_radius.r;
-        // `ray_intersects_ground`, with r^2 from the located radius.
-        if mu < 0.0 && at_radius.r_squared * (1.0 - mu * mu) <= ground * ground {
+        if self.is_shadowed(at_radius, mu) {
             return false;
         }
+        let r = at_radius.r;
         // Bruneton's horizon-adapted coordinate: the distance d to the top
         // along mu (the path's length), mapped to [0, 1] between its
         // smallest (straight up) and largest (the ground's horizon) values.
@@ -771,42 +789,162 @@ impl SunColumnTable {
         let fx = at_radius.altitude_weight;
         let fy = y - j as f64;
         let s = self.species;
-        // The four corners' first species, [(ii * mu_nodes + jj) * s].
-        let corner = |ii: usize, jj: usize| (ii * self.mu_nodes + jj) * s;
-        let nodes = [
-            corner(i, j),
-            corner(i, j + 1),
-            corner(i + 1, j),
-            corner(i + 1, j + 1),
-        ];
+        let nodes = self.corner_nodes(i, j);
         // The same corners in `cell_corners`, in the same order.
         let cell = (i * self.mu_nodes + j) * 2 * s;
         let cell_nodes = [cell, cell + 2 * s, cell + s, cell + 3 * s];
-        let weights = [
-            (1.0 - fx) * (1.0 - fy),
-            (1.0 - fx) * fy,
-            fx * (1.0 - fy),
-            fx * fy,
-        ];
-        let blend =
-            |corners: [f64; 4]| corners.iter().zip(weights).map(|(c, w)| c * w).sum::<f64>();
+        let weights = corner_weights(fx, fy);
         for (k, column) in columns_m.iter_mut().enumerate().take(s) {
             let corners = cell_nodes.map(|n| self.cell_corners[n + k]);
             let mean_density = if !self.logarithmic[k] {
                 // A layer profile: interpolate the density itself (the
                 // corners' exp() kept in the table).
-                blend(corners)
+                blend(corners, weights)
             } else if corners.iter().all(|v| v.is_finite()) {
                 // (Below e^-708 ~ 3e-308 the table's own exponential
                 // clamps: a column of zero either way.)
-                super::vector_exp::exp(blend(corners))
+                super::vector_exp::exp(blend(corners, weights))
             } else {
                 // A path with no density at a corner: the densities.
-                blend(nodes.map(|n| self.mean_densities[n + k]))
+                blend(nodes.map(|n| self.mean_densities[n + k]), weights)
             };
             *column = mean_density * length;
         }
         true
+    }
+
+    /// The four corners of the cell (altitude node `i`, mu node `j`) in
+    /// `mean_densities`, their first species, in the blend's order:
+    /// (i, j), (i, j + 1), (i + 1, j), (i + 1, j + 1).
+    #[inline(always)]
+    fn corner_nodes(&self, i: usize, j: usize) -> [usize; 4] {
+        let corner = |ii: usize, jj: usize| (ii * self.mu_nodes + jj) * self.species;
+        [
+            corner(i, j),
+            corner(i, j + 1),
+            corner(i + 1, j),
+            corner(i + 1, j + 1),
+        ]
+    }
+
+    /// [`SunColumnTable::lookup_columns_at_radius`] of many sunlit points
+    /// (none [`SunColumnTable::is_shadowed`]) at once: point `n`'s located
+    /// radius and zenith cosine in `points[n]`, its columns (m) into
+    /// `columns_m[n * species..][..species]`. The lookups of a ray's nodes
+    /// are independent of one another; taken four at a time, each step
+    /// of the four (the path's length, its cell and weights, each
+    /// species' blend and exponential) is one operation on four lanes, in
+    /// AVX2's registers where the CPU has them. Every lane does the
+    /// single lookup's operations in its order, so the columns are the
+    /// same bits (the test `the_lookups_four_at_a_time_are_the_single_lookups`).
+    pub(crate) fn lookup_lit_columns(
+        &self,
+        points: &[(SunColumnRadius, f64)],
+        columns_m: &mut [f64],
+    ) {
+        assert_eq!(columns_m.len(), points.len() * self.species);
+        #[cfg(target_arch = "x86_64")]
+        if super::vector_exp::avx2_available() {
+            // SAFETY: the CPU has AVX2 (checked just above).
+            unsafe { self.lookup_lit_columns_avx2(points, columns_m) };
+            return;
+        }
+        self.lookup_lit_columns_portable(points, columns_m);
+    }
+
+    /// [`SunColumnTable::lookup_lit_columns`] compiled for AVX2 (4 lanes
+    /// of f64; the same operations per lane, so the same bits).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn lookup_lit_columns_avx2(&self, points: &[(SunColumnRadius, f64)], columns_m: &mut [f64]) {
+        self.lookup_lit_columns_portable(points, columns_m);
+    }
+
+    /// [`SunColumnTable::lookup_lit_columns`] in the target's baseline
+    /// instructions: four points at a time, the last one to three one by
+    /// one ([`SunColumnTable::lookup_columns_at_radius`]).
+    #[inline(always)]
+    fn lookup_lit_columns_portable(
+        &self,
+        points: &[(SunColumnRadius, f64)],
+        columns_m: &mut [f64],
+    ) {
+        let s = self.species;
+        if s == 0 {
+            return;
+        }
+        let mut groups = points.chunks_exact(4);
+        let mut outs = columns_m.chunks_exact_mut(4 * s);
+        for (group, out) in (&mut groups).zip(&mut outs) {
+            self.lookup_four(group.try_into().expect("four points"), out);
+        }
+        let tail = groups.remainder().iter();
+        for ((at_radius, mu), out) in tail.zip(outs.into_remainder().chunks_exact_mut(s)) {
+            let lit = self.lookup_columns_at_radius(at_radius, *mu, out);
+            debug_assert!(lit, "a shadowed point among the lit ones");
+        }
+    }
+
+    /// Four lit points' columns into `columns_m` ([lane * species + k]):
+    /// [`SunColumnTable::lookup_columns_at_radius`] lane by lane, step by
+    /// step.
+    #[inline(always)]
+    fn lookup_four(&self, points: &[(SunColumnRadius, f64); 4], columns_m: &mut [f64]) {
+        let s = self.species;
+        let last_cell = self.mu_nodes - 2;
+        let scale = (self.mu_nodes - 1) as f64;
+        let mut length = [0.0; 4];
+        let mut weights = [[0.0; 4]; 4];
+        let mut cells = [0usize; 4];
+        let mut cell_indices = [(0usize, 0usize); 4];
+        for l in 0..4 {
+            let (at_radius, mu) = (&points[l].0, points[l].1);
+            length[l] =
+                crate::geometry::distance_to_top_boundary(at_radius.r, mu, self.top_radius_m);
+            let (d_min, d_max) = (at_radius.d_min, at_radius.d_max);
+            let unit = if d_max > d_min {
+                ((length[l] - d_min) / (d_max - d_min)).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let y = unit * scale;
+            let j = (y as usize).min(last_cell);
+            let i = at_radius.altitude_node;
+            weights[l] = corner_weights(at_radius.altitude_weight, y - j as f64);
+            cells[l] = (i * self.mu_nodes + j) * 2 * s;
+            cell_indices[l] = (i, j);
+        }
+        for k in 0..s {
+            let mut blended = [0.0; 4];
+            let mut finite = [true; 4];
+            for l in 0..4 {
+                let cell = cells[l];
+                let corners =
+                    [cell, cell + 2 * s, cell + s, cell + 3 * s].map(|n| self.cell_corners[n + k]);
+                blended[l] = blend(corners, weights[l]);
+                finite[l] = corners.iter().all(|v| v.is_finite());
+            }
+            if self.logarithmic[k] {
+                let mut exps = blended;
+                for v in &mut exps {
+                    *v = super::vector_exp::exp(*v);
+                }
+                for l in 0..4 {
+                    let mean_density = if finite[l] {
+                        exps[l]
+                    } else {
+                        let (i, j) = cell_indices[l];
+                        let nodes = self.corner_nodes(i, j);
+                        blend(nodes.map(|n| self.mean_densities[n + k]), weights[l])
+                    };
+                    columns_m[l * s + k] = mean_density * length[l];
+                }
+            } else {
+                for l in 0..4 {
+                    columns_m[l * s + k] = blended[l] * length[l];
+                }
+            }
+        }
     }
 
     /// [`SunColumnTable::locate_radius`] computed from the table's axes
@@ -843,6 +981,25 @@ impl SunColumnRadius {
             d_max: rho + h,
         }
     }
+}
+
+/// The bilinear weights of a cell's corners (i, j), (i, j + 1), (i + 1,
+/// j), (i + 1, j + 1) at (fx, fy) in it.
+#[inline(always)]
+fn corner_weights(fx: f64, fy: f64) -> [f64; 4] {
+    [
+        (1.0 - fx) * (1.0 - fy),
+        (1.0 - fx) * fy,
+        fx * (1.0 - fy),
+        fx * fy,
+    ]
+}
+
+/// The corners' values blended with their weights (the sum in corner
+/// order).
+#[inline(always)]
+fn blend(corners: [f64; 4], weights: [f64; 4]) -> f64 {
+    corners.iter().zip(weights).map(|(c, w)| c * w).sum::<f64>()
 }
 
 /// A radius located in a [`SunColumnTable`]
@@ -1034,6 +1191,102 @@ mod tests {
                     }
                 }
             }
+        }
+    }
+
+    /// The lookups of many lit points four at a time
+    /// ([`SunColumnTable::lookup_lit_columns`], in AVX2's registers where
+    /// the CPU has them, and in the baseline instructions) are the single
+    /// lookups bit for bit: for an exponential profile (the logarithms'
+    /// blend and its exponential), a tent layer (the densities' blend), and
+    /// cells with a corner of no density (the densities' fallback, a
+    /// corner's logarithm set to -inf), at points across the atmosphere
+    /// and every sun cosine that is lit, on the nodes, the ground and the
+    /// top, in counts that leave one to three points after the fours.
+    #[test]
+    fn the_lookups_four_at_a_time_are_the_single_lookups() {
+        use crate::atmosphere::ProfileTable;
+        let tent =
+            ProfileTable::new(vec![10e3, 25e3, 40e3], vec![0.0, 1.0, 0.0], false, "tent").unwrap();
+        let profiles = [
+            exponential(8000.0),
+            DensityProfile::PiecewiseLinear(tent),
+            exponential(1200.0),
+        ];
+        let (altitudes, mus) = (16, 32);
+        let mut table = SunColumnTable::compute(&profiles, R, TOP, altitudes, mus);
+        let unmodified = table.clone();
+        // Cells with a corner of no density (species 2).
+        for (i, j) in [(0, 0), (3, 7), (9, 31)] {
+            let node = (i * mus + j) * 3 + 2;
+            table.mean_densities[node] = 0.0;
+            if i < altitudes - 1 {
+                table.cell_corners[((i * mus + j) * 2) * 3 + 2] = f64::NEG_INFINITY;
+            }
+            if i > 0 {
+                table.cell_corners[(((i - 1) * mus + j) * 2 + 1) * 3 + 2] = f64::NEG_INFINITY;
+            }
+        }
+        let mut points = Vec::new();
+        let mut radii: Vec<f64> = (0..=60)
+            .map(|i| R + (TOP - R) * (i as f64 / 60.0).powi(2))
+            .collect();
+        radii.extend(table.node_radii_m.iter().copied());
+        radii.extend([R - 1.0, TOP + 1.0, R + 1e-9]);
+        for r in radii {
+            let located = table.locate_radius(r);
+            for k in 0..=80 {
+                let mu = -1.0 + 2.0 * (k as f64 / 80.0).powf(0.7);
+                if !table.is_shadowed(&located, mu) {
+                    points.push((located, mu));
+                }
+            }
+            let horizon = -((r - R).max(0.0) * (r + R)).sqrt() / r;
+            for mu in [horizon, horizon + 1e-9, 0.0, 1.0] {
+                if !table.is_shadowed(&located, mu) {
+                    points.push((located, mu));
+                }
+            }
+        }
+        let first_fallback = points.len();
+        for (i, j) in [(0, 0), (3, 7)] {
+            let r = table.node_radii_m[i] + 1.0;
+            let located = table.locate_radius(r);
+            let (d_min, d_max) = (located.d_min, located.d_max);
+            let d = d_min + (d_max - d_min) * (j as f64 + 0.5) / (mus - 1) as f64;
+            let h = table.horizon_distance_m;
+            let rho = ((r - R) * (r + R)).sqrt();
+            let mu = (h * h - rho * rho - d * d) / (2.0 * r * d);
+            points.push((located, mu));
+        }
+        assert!(points.len() > 4000, "{}", points.len());
+        let s = profiles.len();
+        let mut single = vec![0.0; points.len() * s];
+        for ((located, mu), out) in points.iter().zip(single.chunks_exact_mut(s)) {
+            assert!(table.lookup_columns_at_radius(located, *mu, out));
+        }
+        assert!(single.iter().all(|c| c.is_finite() && *c >= 0.0));
+        // The points put in the cells with a corner of no density take
+        // the densities' blend: a column a fraction of the unmodified
+        // table's (not the exponential of -inf, 1e-308 m).
+        for (n, (located, mu)) in points.iter().enumerate().skip(first_fallback) {
+            let mut columns = [0.0; 3];
+            assert!(unmodified.lookup_columns_at_radius(located, *mu, &mut columns));
+            let fallback = single[n * s + 2];
+            assert!(
+                fallback != columns[2] && fallback > 0.1 * columns[2],
+                "{fallback} {}",
+                columns[2]
+            );
+        }
+        for count in [points.len(), points.len() - 1, points.len() - 2, 3, 1, 0] {
+            let bits = |v: &[f64]| v.iter().map(|c| c.to_bits()).collect::<Vec<_>>();
+            let mut wide = vec![0.0; count * s];
+            table.lookup_lit_columns(&points[..count], &mut wide);
+            assert_eq!(bits(&wide), bits(&single[..count * s]), "{count}");
+            let mut portable = vec![0.0; count * s];
+            table.lookup_lit_columns_portable(&points[..count], &mut portable);
+            assert_eq!(bits(&portable), bits(&single[..count * s]), "{count}");
         }
     }
 

@@ -39,7 +39,9 @@
 //!   the eye at each node comes from the same density samples
 //!   (`super::quadrature::running_integral_matrix`). Columns toward the
 //!   sun are exact integrals ([`SunColumns::Exact`]) or a table
-//!   ([`SunColumns::Table`]) for images.
+//!   ([`SunColumns::Table`]) for images; from the table, a ray's sunlit
+//!   nodes are looked up together after the march
+//!   (`SunColumnTable::lookup_lit_columns`, the same bits as one by one).
 
 use std::borrow::Borrow;
 use std::ops::ControlFlow;
@@ -47,7 +49,8 @@ use std::sync::{Arc, Mutex};
 
 use super::multiple_scattering::{SunFreeParts, ViewHarmonicsCache};
 use super::optical_column::{
-    LocatedNode, MarchNode, PanelMarch, ProfileCorners, SunColumnTable, compute_columns_along_ray,
+    LocatedNode, MarchNode, PanelMarch, ProfileCorners, SunColumnRadius, SunColumnTable,
+    compute_columns_along_ray,
 };
 use super::vector_exp::exp_neg_in_place;
 use crate::atmosphere::phase_matrix::PhaseMatrix;
@@ -424,12 +427,16 @@ pub struct SingleScatteringScratch {
 /// (m), and per node and species [node * species + j] its relative
 /// density and its columns (m) from the eye and toward the sun; then, per
 /// node and wavelength, the optical depths eye-node-sun and in place their
-/// transmittances.
+/// transmittances. With a sun-column table the columns toward the sun are
+/// looked up after the march, all the ray's together
+/// (`SunColumnTable::lookup_lit_columns`), from each node's located radius
+/// and sun cosine kept in `sun_points`.
 #[derive(Debug, Clone, Default)]
 struct LitNodes {
     weights: Vec<f64>,
     densities: Vec<f64>,
     view_columns: Vec<f64>,
+    sun_points: Vec<(SunColumnRadius, f64)>,
     sun_columns: Vec<f64>,
     transmittances: Vec<f64>,
 }
@@ -439,6 +446,7 @@ impl LitNodes {
         self.weights.clear();
         self.densities.clear();
         self.view_columns.clear();
+        self.sun_points.clear();
         self.sun_columns.clear();
     }
 }
@@ -500,9 +508,12 @@ impl SingleScatteringScratch {
     /// integrals: every node's optical depths, then their exponentials
     /// all together (whole registers, one call per ray), then the sums in
     /// march order. The same operations on each value as node by node
-    /// (`node_by_node`), so the same bits; what changes is that the
-    /// march's sun-column lookups, independent of one another, follow
-    /// each other without the exponentials between them.
+    /// (`node_by_node`), so the same bits. With a sun-column table the
+    /// march keeps each sunlit node's located radius and sun cosine, and
+    /// their columns are looked up after it, before these sums, all
+    /// together, four at a time (`SunColumnTable::lookup_lit_columns`;
+    /// the scenes marched together then take their nodes in march
+    /// order).
     fn add_lit_nodes_to_integrals(&mut self, species: &[crate::atmosphere::SpeciesOptics]) {
         let lit = &mut self.lit_nodes;
         let (count, s) = (lit.weights.len(), species.len());
@@ -999,6 +1010,13 @@ impl SingleScatteringScene {
             _ => None,
         };
         let (replay, mut record) = (kept_replay.as_deref(), kept_record.as_mut());
+        // With a table and the sums after the march, the columns toward
+        // the sun are looked up after it too, all the ray's lit nodes
+        // together (`LitNodes`); the same columns as node by node.
+        let after_march = match sun_columns {
+            SunColumns::Table(table) if !scratch.node_by_node => Some(table),
+            _ => None,
+        };
         let mut node_index = 0;
         scratch.lit_nodes.clear();
         march.march(
@@ -1017,6 +1035,18 @@ impl SingleScatteringScene {
                             scratch
                                 .sun_columns
                                 .copy_from_slice(&ray.columns[node_index * n..][..n]);
+                        }
+                        lit
+                    }
+                    None if after_march.is_some() => {
+                        let table = after_march.expect("a table");
+                        // `compute_columns_to_sun_at_node`'s located radius
+                        // and sun cosine, and its shadow test.
+                        let at = table.locate_node(&node, &mut scratch.located);
+                        let mu = node.point.dot(self.sun_direction) / at.radius_m;
+                        let lit = !table.is_shadowed(&at.located, mu);
+                        if lit {
+                            scratch.lit_nodes.sun_points.push((at.located, mu));
                         }
                         lit
                     }
@@ -1062,16 +1092,37 @@ impl SingleScatteringScene {
                     lit_nodes.weights.push(node.weight);
                     lit_nodes.densities.extend_from_slice(densities);
                     lit_nodes.view_columns.extend_from_slice(node_columns);
-                    lit_nodes
-                        .sun_columns
-                        .extend_from_slice(&scratch.sun_columns);
+                    if after_march.is_none() {
+                        lit_nodes
+                            .sun_columns
+                            .extend_from_slice(&scratch.sun_columns);
+                    }
                 }
-                if let Some(together) = together.as_deref_mut() {
+                if let (Some(together), None) = (together.as_deref_mut(), after_march) {
                     together.add_node(node.weight, node_columns, &scratch.sun_columns, densities);
                 }
                 ControlFlow::Continue(())
             },
         );
+        if let Some(table) = after_march {
+            let lit = &mut scratch.lit_nodes;
+            let s = species.len();
+            lit.sun_columns.resize(lit.sun_points.len() * s, 0.0);
+            table.lookup_lit_columns(&lit.sun_points, &mut lit.sun_columns);
+            // The scenes marched together, node by node in march order
+            // (what each adds at a node is its own).
+            if let Some(together) = together.as_deref_mut() {
+                for (n, weight) in lit.weights.iter().enumerate() {
+                    let range = n * s..(n + 1) * s;
+                    together.add_node(
+                        *weight,
+                        &lit.view_columns[range.clone()],
+                        &lit.sun_columns[range.clone()],
+                        &lit.densities[range],
+                    );
+                }
+            }
+        }
         if !scratch.node_by_node {
             scratch.add_lit_nodes_to_integrals(species);
         }

@@ -188,7 +188,9 @@ pub(crate) fn compute_spherical_first_order_with_phases(
         };
         let mut sun_work = SunWork {
             phase: vec![0.0; species * wavelengths],
-            columns: vec![0.0; species],
+            lit: Vec::new(),
+            lit_points: Vec::new(),
+            columns: Vec::new(),
             optical_depths: vec![0.0; wavelengths],
             sources: vec![0.0; wavelengths],
         };
@@ -699,7 +701,9 @@ fn march_path(
 /// the compiler vectorises), each wavelength's sum still starting from zero
 /// and adding the species in the same order: the same numbers bit for bit.
 /// The radius of each sample was located in the sun-column table by the
-/// march, once for every sun.
+/// march, once for every sun; the sunlit samples' columns toward the sun
+/// are looked up all together before the sums (the same columns as one
+/// by one, `SunColumnTable::lookup_lit_columns`).
 fn compute_first_order_on_path(
     inputs: &Tables,
     by_species: &BySpecies,
@@ -719,22 +723,29 @@ fn compute_first_order_on_path(
         }
     }
     work.radiance.fill(0.0);
+    sun_work.lit.clear();
+    sun_work.lit_points.clear();
     for (n, point) in path.points.iter().enumerate() {
-        let r = path.radii[n];
-        if !inputs.sun_columns.lookup_columns_at_radius(
-            &path.located[n],
-            point.dot(sun) / r,
-            &mut sun_work.columns,
-        ) {
-            continue;
+        let (located, mu) = (path.located[n], point.dot(sun) / path.radii[n]);
+        if !inputs.sun_columns.is_shadowed(&located, mu) {
+            sun_work.lit.push(n);
+            sun_work.lit_points.push((located, mu));
         }
+    }
+    sun_work.columns.clear();
+    sun_work.columns.resize(sun_work.lit.len() * species, 0.0);
+    inputs
+        .sun_columns
+        .lookup_lit_columns(&sun_work.lit_points, &mut sun_work.columns);
+    for (lit, &n) in sun_work.lit.iter().enumerate() {
+        let sun_columns = &sun_work.columns[lit * species..(lit + 1) * species];
         let weight = path.weights[n];
         let node_columns = &path.node_columns[n * species..(n + 1) * species];
         let densities = &path.densities[n * species..(n + 1) * species];
         sun_work.optical_depths.fill(0.0);
         sun_work.sources.fill(0.0);
         for j in 0..species {
-            let column = node_columns[j] + sun_work.columns[j];
+            let column = node_columns[j] + sun_columns[j];
             let density = densities[j];
             let rows = (j * wavelengths)..((j + 1) * wavelengths);
             for (((tau, source), (extinction, scattering)), phase) in sun_work
@@ -795,6 +806,11 @@ impl BySpecies {
 /// sample.
 struct SunWork {
     phase: Vec<f64>,
+    /// The path's sunlit samples: their indices, located radii and sun
+    /// cosines, and their columns toward the sun [lit * species + j]
+    /// (looked up together, `SunColumnTable::lookup_lit_columns`).
+    lit: Vec<usize>,
+    lit_points: Vec<(SunColumnRadius, f64)>,
     columns: Vec<f64>,
     optical_depths: Vec<f64>,
     sources: Vec<f64>,
