@@ -21,7 +21,9 @@ use super::spherical_first_order::{
 };
 use super::successive_orders::{self, ColumnSystem, ScaledSpecies};
 use super::twilight_shift::SHIFT_PIECE_SPREAD_DEG;
-use super::view_march::{MultipleScatteringScratch, NodeGeometry, ViewRayOptics, floored_log};
+use super::view_march::{
+    MultipleScatteringScratch, NodeGeometry, SpeciesMajorOptics, ViewRayOptics, floored_log,
+};
 use crate::atmosphere::AtmosphereOptics;
 use crate::atmosphere::phase_matrix::PhaseMatrix;
 use crate::error::Result;
@@ -425,6 +427,11 @@ impl MultipleScatteringField {
                 panels: settings.view_ray_panels,
                 observer: Vector3::new(0.0, 0.0, sky.observer_radius_m()),
                 sun: sky.sun_direction(),
+                by_species: SpeciesMajorOptics::new(
+                    &scaled,
+                    optics.grid.len(),
+                    optics.species.len(),
+                ),
                 scaled,
                 geometry,
                 has_forward_peaks: forward_peak.any(),

@@ -2,6 +2,25 @@
 //! the forward-peak integrals and the ground's diffuse light along one
 //! view ray ([`ViewRayOptics::march`]), shared by the field's exact
 //! synthesis and its source table.
+//!
+//! At each node the march takes per wavelength: the scaled field's light
+//! T* beta*_sca R (one exponential of ln R - tau*), and where the node is
+//! sunlit the forward-peak integrals (`forward_peak.rs`: two
+//! exponentials, T_sun and T*_sun, or through the view and the sun
+//! together where the peaks are not tilted toward a low sun's beam).
+//! What depends on the view ray alone is kept per node index for the
+//! replayed nodes of a row ([`VIEW_TERMS`]). The node's sums run species
+//! by species over the wavelengths (the coefficients species-major,
+//! [`SpeciesMajorOptics`]), so that their loops take whole registers (and
+//! AVX2's four lanes where the CPU has it, chosen at run time); each
+//! value is the same operations in the same order as the sums wavelength
+//! by wavelength with the species inside, which are kept as the slow
+//! path (`MultipleScatteringScratch::sum_by_wavelength`, held to the fast
+//! one bit for bit by the test
+//! `the_species_major_sums_are_the_wavelength_major_sums`). Where a
+//! wavelength adds nothing (a dark source, a sun beam of zero) the fast
+//! sums add +0 instead of skipping it: the sums start at +0, which adding
+//! +0 leaves as they are.
 
 use std::ops::ControlFlow;
 use std::sync::Arc;
@@ -51,6 +70,9 @@ pub(super) struct ViewRayOptics {
     pub(super) sun: Vector3,
     /// The delta-M scaled optics.
     pub(super) scaled: ScaledOptics,
+    /// The same coefficients species-major, for the march's loops over
+    /// the wavelengths ([`SpeciesMajorOptics`]).
+    pub(super) by_species: SpeciesMajorOptics,
     /// The columns' geometry (the profiles' corners cut the rays).
     pub(super) geometry: ColumnGeometry,
     pub(super) sun_axis: SunZenithAxis,
@@ -114,6 +136,14 @@ pub struct MultipleScatteringScratch {
     /// march's exponentials (`ViewRayOptics::march`).
     pub(super) node_terms: Vec<f64>,
     pub(super) tilted_peak: Vec<f64>,
+    /// Per wavelength at the current node, the forward-peak integrands'
+    /// two species factors (the first line's, T* T*_sun - T T_sun or its
+    /// tilted form, and its scaled part), each times the node's weight,
+    /// and the tilted peak's light reaching the node.
+    pub(super) peak_factors: Vec<f64>,
+    /// Tests: the node's sums wavelength by wavelength (species inside,
+    /// the slow path) instead of species by species over the wavelengths.
+    pub(super) by_wavelength: bool,
     /// The view ray's nodes located in the sun-column table, per node
     /// (`SunColumns::compute_columns_to_sun_at_node`).
     pub(super) located: Vec<LocatedNode>,
@@ -155,6 +185,15 @@ impl MultipleScatteringScratch {
     /// (`MultipleScatteringTable::compute_radiance_parts`).
     pub(crate) fn reuse_view_nodes(&mut self) {
         self.march.reuse_nodes();
+    }
+
+    /// Tests: each node's sums wavelength by wavelength with the species
+    /// inside (the slow path, the sums as written in the module's
+    /// formulas), or species by species over the wavelengths (the
+    /// default: the same operations on each value, so the same bits).
+    #[cfg(test)]
+    pub(crate) fn sum_by_wavelength(&mut self, by_wavelength: bool) {
+        self.by_wavelength = by_wavelength;
     }
 
     /// The forward-peak integrals of the last ray: integral rho_j
@@ -213,6 +252,8 @@ impl ViewRayOptics {
             tilted_depths: vec![0.0; 4 * w],
             node_terms: vec![0.0; 4 * w],
             tilted_peak: vec![0.0; 2 * w],
+            peak_factors: vec![0.0; 3 * w],
+            by_wavelength: false,
             located: Vec::new(),
             view_nodes: Vec::new(),
             view_terms: Vec::new(),
@@ -332,33 +373,30 @@ impl ViewRayOptics {
                             view_terms.resize(terms_end, 0.0);
                             view_exps_filled.resize(node.index + 1, false);
                         }
-                        self.fill_view_terms(
-                            &scratch.node_columns,
-                            &scratch.densities,
-                            &mut view_terms[terms_end - terms_length..terms_end],
-                        );
+                        let node_terms = &mut view_terms[terms_end - terms_length..terms_end];
+                        if scratch.by_wavelength {
+                            self.fill_view_terms_by_wavelength(
+                                &scratch.node_columns,
+                                &scratch.densities,
+                                node_terms,
+                            );
+                        } else {
+                            self.fill_view_terms(
+                                &scratch.node_columns,
+                                &scratch.densities,
+                                node_terms,
+                            );
+                        }
                         view_exps_filled[node.index] = false;
                     }
                     let terms = &mut view_terms[terms_end - terms_length..terms_end];
                     // T*(eye, x) beta*_sca(x) R(x): one exponential per
                     // wavelength for the transmittance and the source.
                     let weight = node.weight;
-                    let exponents = &mut scratch.node_terms[..w];
-                    for i in 0..w {
-                        exponents[i] = scratch.log_source[i] - terms[i];
-                    }
-                    // The exponentials together (a loop the compiler
-                    // vectorises, `vector_exp.rs`).
-                    exp_in_place(exponents);
-                    let scatterings = &terms[2 * w..3 * w];
-                    for (i, out) in radiance.iter_mut().enumerate() {
-                        // A source at the logarithms' floor is no light
-                        // (the interpolation between a dark node, 1e-30,
-                        // and a lit one would otherwise leave numerical
-                        // noise in the night sky).
-                        if scatterings[i] > 0.0 && scratch.log_source[i] > DARK_LOG_SOURCE {
-                            *out += weight * scatterings[i] * exponents[i];
-                        }
+                    if scratch.by_wavelength {
+                        self.add_source_light_by_wavelength(weight, terms, scratch, radiance);
+                    } else {
+                        self.add_source_light(weight, terms, scratch, radiance);
                     }
                     // What delta-M moved from single scattering into the
                     // sun's beam and the view's transmittance (see the
@@ -386,44 +424,18 @@ impl ViewRayOptics {
                             exp_neg_in_place(transmittances);
                             view_exps_filled[node.index] = true;
                         }
-                        self.add_tilted_forward_peak(weight, lit, share, terms, scratch);
-                    } else if lit {
-                        // Optical depths (exact, scaled), then in place
-                        // their transmittances, all together.
-                        let (exact_depths, rest) = scratch.node_terms.split_at_mut(w);
-                        let scaled_depths = &mut rest[..w];
-                        for i in 0..w {
-                            let (mut scaled, mut exact) = (0.0, 0.0);
-                            for j in 0..s {
-                                let column = scratch.node_columns[j] + scratch.sun_columns[j];
-                                scaled += scaled_extinction[i * s + j] * column;
-                                exact += extinction[i * s + j] * column;
-                            }
-                            exact_depths[i] = exact;
-                            scaled_depths[i] = scaled;
+                        if scratch.by_wavelength {
+                            self.add_tilted_forward_peak_by_wavelength(
+                                weight, lit, share, terms, scratch,
+                            );
+                        } else {
+                            self.add_tilted_forward_peak(weight, lit, share, terms, scratch);
                         }
-                        // [exact depths, scaled depths, direct, through].
-                        let (depths, transmittances) = scratch.node_terms.split_at_mut(2 * w);
-                        transmittances.copy_from_slice(depths);
-                        exp_neg_in_place(transmittances);
-                        for i in 0..w {
-                            // f_j beta_sca,j rho_j: what the peaks scatter here.
-                            let peak = terms[3 * w + i];
-                            let (exact, scaled) = (depths[i], depths[w + i]);
-                            let (direct, through) = (transmittances[i], transmittances[w + i]);
-                            let excess = weight * (through - direct);
-                            let beam = weight * through;
-                            for j in 0..s {
-                                scratch.forward_integrals[j * w + i] +=
-                                    excess * scratch.densities[j];
-                                scratch.scaled_forward_integrals[j * w + i] +=
-                                    beam * scratch.densities[j];
-                            }
-                            // The peak-only light: its weight and the
-                            // peak optical depth X of its two legs.
-                            let only = weight * direct * peak;
-                            scratch.forward_integrals[s * w + i] += only;
-                            scratch.forward_integrals[(s + 1) * w + i] += only * (exact - scaled);
+                    } else if lit {
+                        if scratch.by_wavelength {
+                            self.add_forward_peak_by_wavelength(weight, terms, scratch);
+                        } else {
+                            self.add_forward_peak(weight, terms, scratch);
                         }
                     }
                     ControlFlow::Continue(())
@@ -458,8 +470,36 @@ impl ViewRayOptics {
 
     /// The view terms of a node ([`VIEW_TERMS`] blocks) from its columns
     /// from the eye and its relative densities, into `terms` (all but the
-    /// transmittances).
+    /// transmittances): species by species over the wavelengths, each
+    /// value the sum over the species in their order, as
+    /// [`Self::fill_view_terms_by_wavelength`] (the slow path) takes it.
     fn fill_view_terms(&self, columns: &[f64], densities: &[f64], terms: &mut [f64]) {
+        let (w, s) = (self.wavelengths, self.species);
+        let by = &self.by_species;
+        let (scaled, rest) = terms.split_at_mut(w);
+        let (exact, rest) = rest.split_at_mut(w);
+        let (scattering, rest) = rest.split_at_mut(w);
+        let peak = &mut rest[..w];
+        for row in [&mut *scaled, &mut *exact, &mut *scattering, &mut *peak] {
+            row.fill(0.0);
+        }
+        for j in 0..s {
+            let (column, density) = (columns[j], densities[j]);
+            let (beta_scaled, beta) = (by.scaled_extinction(j), by.extinction(j));
+            let (scaled_scattering, peaks) = (by.scaled_scattering(j), by.peak_scattering(j));
+            for i in 0..w {
+                scaled[i] += beta_scaled[i] * column;
+                exact[i] += beta[i] * column;
+                scattering[i] += scaled_scattering[i] * density;
+                // f_j beta_sca,j rho_j: what the peaks scatter here.
+                peak[i] += peaks[i] * density;
+            }
+        }
+    }
+
+    /// [`Self::fill_view_terms`] wavelength by wavelength, the species
+    /// inside (the slow path, `sum_by_wavelength`).
+    fn fill_view_terms_by_wavelength(&self, columns: &[f64], densities: &[f64], terms: &mut [f64]) {
         let (w, s) = (self.wavelengths, self.species);
         let (extinction, scaled_extinction) =
             (&self.scaled.extinction, &self.scaled.scaled_extinction);
@@ -536,10 +576,10 @@ impl ViewRayOptics {
         self.add_tilted_forward_peak_portable(weight, lit, share, view_terms, scratch);
     }
 
-    /// [`Self::add_tilted_forward_peak`] in the target's baseline
-    /// instructions.
-    #[inline(always)]
-    fn add_tilted_forward_peak_portable(
+    /// [`Self::add_tilted_forward_peak`] wavelength by wavelength, the
+    /// species inside (the slow path, `sum_by_wavelength`): the sums as
+    /// the module's formulas write them.
+    fn add_tilted_forward_peak_by_wavelength(
         &self,
         weight: f64,
         lit: bool,
@@ -600,5 +640,415 @@ impl ViewRayOptics {
                 scratch.forward_integrals[(s + 1) * w + i] += only * x;
             }
         }
+    }
+
+    /// [`Self::add_tilted_forward_peak`] in the target's baseline
+    /// instructions: species by species over the wavelengths (each value
+    /// the same operations in the same order as
+    /// [`Self::add_tilted_forward_peak_by_wavelength`], so the same bits;
+    /// the loops run across the wavelengths, in whole registers).
+    #[inline(always)]
+    fn add_tilted_forward_peak_portable(
+        &self,
+        weight: f64,
+        lit: bool,
+        share: f64,
+        view_terms: &[f64],
+        scratch: &mut MultipleScatteringScratch,
+    ) {
+        let (w, s) = (self.wavelengths, self.species);
+        let by = &self.by_species;
+        let MultipleScatteringScratch {
+            tilted_depths,
+            tilted_peak,
+            sun_columns,
+            beam,
+            densities,
+            forward_integrals,
+            scaled_forward_integrals,
+            peak_factors,
+            ..
+        } = scratch;
+        // T* and T from the eye, and the view's parts of the optical depths.
+        let (view_scaled_depths, view_depths) = (&view_terms[..w], &view_terms[w..2 * w]);
+        let peaks = &view_terms[3 * w..4 * w];
+        let (view_beam, view_direct) = (&view_terms[4 * w..5 * w], &view_terms[5 * w..6 * w]);
+        if lit {
+            // Optical depths toward the sun, then (in place) T*_sun and
+            // T_sun, per wavelength.
+            let (sun_beam, rest) = tilted_depths.split_at_mut(w);
+            let sun_direct = &mut rest[..w];
+            sun_beam.fill(0.0);
+            sun_direct.fill(0.0);
+            for (j, column) in sun_columns.iter().enumerate() {
+                let (beta_scaled, beta) = (by.scaled_extinction(j), by.extinction(j));
+                for i in 0..w {
+                    sun_beam[i] += beta_scaled[i] * column;
+                    sun_direct[i] += beta[i] * column;
+                }
+            }
+            // X, the peaks' optical depth of both legs.
+            for i in 0..w {
+                tilted_peak[w + i] =
+                    (view_depths[i] + sun_direct[i]) - (view_scaled_depths[i] + sun_beam[i]);
+            }
+            exp_neg_in_place(&mut tilted_depths[..2 * w]);
+        }
+        let (sun_beam, rest) = tilted_depths.split_at(w);
+        let sun_direct = &rest[..w];
+        let (excess, rest) = peak_factors.split_at_mut(w);
+        let (beam_factor, scattered) = rest.split_at_mut(w);
+        for i in 0..w {
+            let (sun_beam, sun_direct) = if lit {
+                (sun_beam[i], sun_direct[i])
+            } else {
+                (0.0, 0.0)
+            };
+            let forward = sun_beam - sun_direct;
+            scattered[i] = forward + share * (beam[i] - forward);
+            excess[i] = weight
+                * (view_beam[i] * scattered[i] + sun_direct * (view_beam[i] - view_direct[i]));
+            beam_factor[i] = weight * view_beam[i] * (scattered[i] + sun_direct);
+        }
+        add_species_rows(
+            densities,
+            (&*excess, &*beam_factor),
+            (
+                &mut forward_integrals[..],
+                &mut scaled_forward_integrals[..],
+            ),
+        );
+        if lit {
+            let (only_row, rest) = forward_integrals[s * w..].split_at_mut(w);
+            let x_row = &mut rest[..w];
+            for i in 0..w {
+                let (sun_beam, sun_direct) = (sun_beam[i], sun_direct[i]);
+                let only = weight
+                    * view_direct[i]
+                    * sun_direct
+                    * peaks[i]
+                    * ((sun_direct + scattered[i]) / sun_beam);
+                let x = tilted_peak[w + i];
+                // Adding zero leaves a sum that starts at +0 as it is.
+                let kept = sun_beam > 0.0;
+                only_row[i] += if kept { only } else { 0.0 };
+                x_row[i] += if kept { only * x } else { 0.0 };
+            }
+        }
+    }
+
+    /// The node's light from the scaled field's source, T*(eye, x)
+    /// beta*_sca(x) R(x) times the march's weight `weight`, added to
+    /// `radiance` (ln R in `scratch.log_source`, the node's view terms in
+    /// `view_terms`): one exponential per wavelength.
+    fn add_source_light(
+        &self,
+        weight: f64,
+        view_terms: &[f64],
+        scratch: &mut MultipleScatteringScratch,
+        radiance: &mut [f64],
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        if crate::transport::vector_exp::avx2_available() {
+            // SAFETY: the CPU has AVX2 (checked just above).
+            unsafe { self.add_source_light_avx2(weight, view_terms, scratch, radiance) };
+            return;
+        }
+        self.add_source_light_portable(weight, view_terms, scratch, radiance);
+    }
+
+    /// [`Self::add_source_light`] compiled for AVX2 (the same operations
+    /// per lane, so the same bits).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn add_source_light_avx2(
+        &self,
+        weight: f64,
+        view_terms: &[f64],
+        scratch: &mut MultipleScatteringScratch,
+        radiance: &mut [f64],
+    ) {
+        self.add_source_light_portable(weight, view_terms, scratch, radiance);
+    }
+
+    /// [`Self::add_source_light`] in the target's baseline instructions:
+    /// the dark or non-scattering wavelengths add zero instead of being
+    /// skipped (the sums start at +0, which adding +0 leaves as they
+    /// are), so the loop runs in whole registers.
+    #[inline(always)]
+    fn add_source_light_portable(
+        &self,
+        weight: f64,
+        view_terms: &[f64],
+        scratch: &mut MultipleScatteringScratch,
+        radiance: &mut [f64],
+    ) {
+        let w = self.wavelengths;
+        let exponents = &mut scratch.node_terms[..w];
+        let log_source = &scratch.log_source[..w];
+        for ((exponent, log), depth) in exponents.iter_mut().zip(log_source).zip(view_terms) {
+            *exponent = log - depth;
+        }
+        exp_in_place(exponents);
+        let scatterings = &view_terms[2 * w..3 * w];
+        for (((out, scattering), light), log) in radiance[..w]
+            .iter_mut()
+            .zip(scatterings)
+            .zip(exponents.iter())
+            .zip(log_source)
+        {
+            // A source at the logarithms' floor is no light (the
+            // interpolation between a dark node, 1e-30, and a lit one
+            // would otherwise leave numerical noise in the night sky).
+            let lit = *scattering > 0.0 && *log > DARK_LOG_SOURCE;
+            let term = weight * scattering * light;
+            *out += if lit { term } else { 0.0 };
+        }
+    }
+
+    /// [`Self::add_source_light`] wavelength by wavelength, skipping the
+    /// dark ones (the slow path, `sum_by_wavelength`).
+    fn add_source_light_by_wavelength(
+        &self,
+        weight: f64,
+        terms: &[f64],
+        scratch: &mut MultipleScatteringScratch,
+        radiance: &mut [f64],
+    ) {
+        let w = self.wavelengths;
+        let exponents = &mut scratch.node_terms[..w];
+        for i in 0..w {
+            exponents[i] = scratch.log_source[i] - terms[i];
+        }
+        exp_in_place(exponents);
+        let scatterings = &terms[2 * w..3 * w];
+        for (i, out) in radiance.iter_mut().enumerate() {
+            if scatterings[i] > 0.0 && scratch.log_source[i] > DARK_LOG_SOURCE {
+                *out += weight * scatterings[i] * exponents[i];
+            }
+        }
+    }
+
+    /// The forward-peak integrals of one sunlit view node away from a
+    /// low sun (no tilted beam: the march's weight `weight`, m; its view
+    /// terms in `view_terms`; its densities and its columns from the eye
+    /// and toward the sun in `scratch`): the first line's T* T*_sun - T
+    /// T_sun and its scaled part T* T*_sun per species, the peak-only
+    /// light's weight T T_sun and X.
+    fn add_forward_peak(
+        &self,
+        weight: f64,
+        view_terms: &[f64],
+        scratch: &mut MultipleScatteringScratch,
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        if crate::transport::vector_exp::avx2_available() {
+            // SAFETY: the CPU has AVX2 (checked just above).
+            unsafe { self.add_forward_peak_avx2(weight, view_terms, scratch) };
+            return;
+        }
+        self.add_forward_peak_portable(weight, view_terms, scratch);
+    }
+
+    /// [`Self::add_forward_peak`] compiled for AVX2 (the same operations
+    /// per lane, so the same bits).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn add_forward_peak_avx2(
+        &self,
+        weight: f64,
+        view_terms: &[f64],
+        scratch: &mut MultipleScatteringScratch,
+    ) {
+        self.add_forward_peak_portable(weight, view_terms, scratch);
+    }
+
+    /// [`Self::add_forward_peak`] in the target's baseline instructions,
+    /// species by species over the wavelengths (the same operations on
+    /// each value as [`Self::add_forward_peak_by_wavelength`]).
+    #[inline(always)]
+    fn add_forward_peak_portable(
+        &self,
+        weight: f64,
+        view_terms: &[f64],
+        scratch: &mut MultipleScatteringScratch,
+    ) {
+        let (w, s) = (self.wavelengths, self.species);
+        let by = &self.by_species;
+        let MultipleScatteringScratch {
+            node_terms,
+            node_columns,
+            sun_columns,
+            densities,
+            forward_integrals,
+            scaled_forward_integrals,
+            peak_factors,
+            ..
+        } = scratch;
+        // Optical depths (exact, scaled), then in place their
+        // transmittances, all together: [exact depths, scaled depths,
+        // direct, through].
+        let (exact_depths, rest) = node_terms.split_at_mut(w);
+        let scaled_depths = &mut rest[..w];
+        exact_depths.fill(0.0);
+        scaled_depths.fill(0.0);
+        for j in 0..s {
+            let column = node_columns[j] + sun_columns[j];
+            let (beta_scaled, beta) = (by.scaled_extinction(j), by.extinction(j));
+            for i in 0..w {
+                scaled_depths[i] += beta_scaled[i] * column;
+                exact_depths[i] += beta[i] * column;
+            }
+        }
+        let (depths, transmittances) = node_terms.split_at_mut(2 * w);
+        transmittances.copy_from_slice(depths);
+        exp_neg_in_place(transmittances);
+        let (excess, rest) = peak_factors.split_at_mut(w);
+        let beam = &mut rest[..w];
+        for i in 0..w {
+            let (direct, through) = (transmittances[i], transmittances[w + i]);
+            excess[i] = weight * (through - direct);
+            beam[i] = weight * through;
+        }
+        add_species_rows(
+            densities,
+            (&*excess, &*beam),
+            (
+                &mut forward_integrals[..],
+                &mut scaled_forward_integrals[..],
+            ),
+        );
+        // The peak-only light: its weight and the peak optical depth X
+        // of its two legs.
+        let peaks = &view_terms[3 * w..4 * w];
+        let (only_row, rest) = forward_integrals[s * w..].split_at_mut(w);
+        let x_row = &mut rest[..w];
+        for i in 0..w {
+            let only = weight * transmittances[i] * peaks[i];
+            only_row[i] += only;
+            x_row[i] += only * (depths[i] - depths[w + i]);
+        }
+    }
+
+    /// [`Self::add_forward_peak`] wavelength by wavelength, the species
+    /// inside (the slow path, `sum_by_wavelength`).
+    fn add_forward_peak_by_wavelength(
+        &self,
+        weight: f64,
+        terms: &[f64],
+        scratch: &mut MultipleScatteringScratch,
+    ) {
+        let (w, s) = (self.wavelengths, self.species);
+        let (extinction, scaled_extinction) =
+            (&self.scaled.extinction, &self.scaled.scaled_extinction);
+        let (exact_depths, rest) = scratch.node_terms.split_at_mut(w);
+        let scaled_depths = &mut rest[..w];
+        for i in 0..w {
+            let (mut scaled, mut exact) = (0.0, 0.0);
+            for j in 0..s {
+                let column = scratch.node_columns[j] + scratch.sun_columns[j];
+                scaled += scaled_extinction[i * s + j] * column;
+                exact += extinction[i * s + j] * column;
+            }
+            exact_depths[i] = exact;
+            scaled_depths[i] = scaled;
+        }
+        let (depths, transmittances) = scratch.node_terms.split_at_mut(2 * w);
+        transmittances.copy_from_slice(depths);
+        exp_neg_in_place(transmittances);
+        for i in 0..w {
+            let peak = terms[3 * w + i];
+            let (exact, scaled) = (depths[i], depths[w + i]);
+            let (direct, through) = (transmittances[i], transmittances[w + i]);
+            let excess = weight * (through - direct);
+            let beam = weight * through;
+            for j in 0..s {
+                scratch.forward_integrals[j * w + i] += excess * scratch.densities[j];
+                scratch.scaled_forward_integrals[j * w + i] += beam * scratch.densities[j];
+            }
+            let only = weight * direct * peak;
+            scratch.forward_integrals[s * w + i] += only;
+            scratch.forward_integrals[(s + 1) * w + i] += only * (exact - scaled);
+        }
+    }
+}
+
+/// Adds to the forward-peak integrals' species rows (`rows.0`, and the
+/// scaled part's, `rows.1`, [j * wavelengths + i]) a node's factors
+/// (`factors`, per wavelength) times each species' relative density.
+#[inline(always)]
+fn add_species_rows(
+    densities: &[f64],
+    (excess, beam): (&[f64], &[f64]),
+    (forward, scaled): (&mut [f64], &mut [f64]),
+) {
+    let w = excess.len();
+    for (j, density) in densities.iter().enumerate() {
+        let (forward, scaled) = (&mut forward[j * w..][..w], &mut scaled[j * w..][..w]);
+        for i in 0..w {
+            forward[i] += excess[i] * density;
+            scaled[i] += beam[i] * density;
+        }
+    }
+}
+
+/// The view march's coefficients per unit relative density, m^-1,
+/// species-major ([j * wavelengths + i], where [`ScaledOptics`] holds
+/// them [i * species + j]), so that the march's loops run across the
+/// wavelengths: the extinction, the delta-M scaled extinction and
+/// scattering, and the peaks' scattering beta_ext - beta*_ext = f
+/// beta_sca (the same subtraction the sums took per node).
+#[derive(Debug, Clone)]
+pub(super) struct SpeciesMajorOptics {
+    wavelengths: usize,
+    extinction: Vec<f64>,
+    scaled_extinction: Vec<f64>,
+    scaled_scattering: Vec<f64>,
+    peak_scattering: Vec<f64>,
+}
+
+impl SpeciesMajorOptics {
+    /// `scaled`'s coefficients for `wavelengths` wavelengths and `species`
+    /// species, species-major.
+    pub(super) fn new(scaled: &ScaledOptics, wavelengths: usize, species: usize) -> Self {
+        let transposed = |values: &[f64]| -> Vec<f64> {
+            (0..species)
+                .flat_map(|j| (0..wavelengths).map(move |i| values[i * species + j]))
+                .collect()
+        };
+        let extinction = transposed(&scaled.extinction);
+        let scaled_extinction = transposed(&scaled.scaled_extinction);
+        let peak_scattering = extinction
+            .iter()
+            .zip(&scaled_extinction)
+            .map(|(beta, beta_scaled)| beta - beta_scaled)
+            .collect();
+        SpeciesMajorOptics {
+            wavelengths,
+            scaled_scattering: transposed(&scaled.scaled_scattering),
+            extinction,
+            scaled_extinction,
+            peak_scattering,
+        }
+    }
+
+    fn row<'a>(&self, values: &'a [f64], j: usize) -> &'a [f64] {
+        &values[j * self.wavelengths..(j + 1) * self.wavelengths]
+    }
+
+    fn extinction(&self, j: usize) -> &[f64] {
+        self.row(&self.extinction, j)
+    }
+
+    fn scaled_extinction(&self, j: usize) -> &[f64] {
+        self.row(&self.scaled_extinction, j)
+    }
+
+    fn scaled_scattering(&self, j: usize) -> &[f64] {
+        self.row(&self.scaled_scattering, j)
+    }
+
+    fn peak_scattering(&self, j: usize) -> &[f64] {
+        self.row(&self.peak_scattering, j)
     }
 }
