@@ -2436,8 +2436,10 @@ fn the_sky_between_the_sun_nodes_about_the_sunset_matches_the_library() {
 /// between the nodes by 10 % (1 km, sun 60) to several times (1 km, sun
 /// -12: 219 %, the horizon band 409 %; 70 km: 175-478 %), at the nodes
 /// from 19 km up by up to 7 % (19.2 km), 15 % (44.5 km) and 25 % (100 km,
-/// the limb); ln L blended in the node coordinate or in h leaves 6-76 %
-/// (docs/engine-tables.md, "An eye between the altitude nodes").
+/// the limb); earth-clear (96 x 96) between the nodes 7.4-469 %; ln L
+/// blended in the node coordinate or in h leaves 6-76 % (earth-hazy) and
+/// 5-100 % (earth-clear) (docs/engine-tables.md, "An eye between the
+/// altitude nodes").
 /// Ignored: a bake per preset and axis (about 25 s each idle, minutes on
 /// the shared 2-core machine) and two images per eye and sun (earth-hazy's
 /// 77 at 128 x 128: about 20 minutes at a load of 10); run with
