@@ -292,6 +292,14 @@ pub(crate) const ZENITH_CAP_CELLS: usize = 16;
 pub(crate) static CAP_OVERRIDE: std::sync::atomic::AtomicUsize =
     std::sync::atomic::AtomicUsize::new(usize::MAX);
 
+/// A test's choice of the read between the altitude layers (0: linear,
+/// the read; others [`EngineTables::probe_altitude_read`]'s probes), so
+/// that one bake can be read several ways
+/// (`tests::the_sky_between_the_altitude_nodes_matches_the_library`).
+#[cfg(test)]
+pub(crate) static ALTITUDE_READ_OVERRIDE: std::sync::atomic::AtomicUsize =
+    std::sync::atomic::AtomicUsize::new(0);
+
 fn zenith_cap_cells() -> usize {
     #[cfg(test)]
     if let n @ 0..usize::MAX = CAP_OVERRIDE.load(std::sync::atomic::Ordering::Relaxed) {
@@ -437,6 +445,10 @@ impl EngineTables {
                     value(first)
                 }
             };
+            #[cfg(test)]
+            if let mode @ 1.. = ALTITUDE_READ_OVERRIDE.load(std::sync::atomic::Ordering::Relaxed) {
+                return self.probe_altitude_read(mode, (a, fa), h, turned, horizon, at);
+            }
             mix(at(a), at(a + 1), fa).map(|v| v.max(FLOOR).ln())
         };
         let layer = |s: usize| read_at(s, share);
@@ -484,6 +496,72 @@ impl EngineTables {
         }
         let shadow = read(top);
         std::array::from_fn(|i| (whole[i] + (shadow[i] - whole[i]) * below).exp())
+    }
+
+    /// Probe ([`ALTITUDE_READ_OVERRIDE`], measured and set aside,
+    /// docs/engine-tables.md "An eye between the altitude nodes"): ln L of the two altitude layers
+    /// `a`, `a + 1` (values `at(a)`) blended for an eye at `h` toward
+    /// `view` (the eye's horizon at `horizon`) by mode 1: ln L linear in
+    /// the altitude coordinate; 2: ln L linear in the altitude itself; 3:
+    /// L / (1 - T) linear in the coordinate, T the transmittance to the top
+    /// along the view at each layer's own zenith angle for the view's
+    /// coordinate, times the eye's 1 - T.
+    #[cfg(test)]
+    fn probe_altitude_read(
+        &self,
+        mode: usize,
+        (a, fa): (usize, f64),
+        h: f64,
+        view: LocalView,
+        horizon: f64,
+        at: impl Fn(usize) -> [f64; 3],
+    ) -> [f64; 3] {
+        let a_count = self.settings.altitude_nodes;
+        let node = |a: usize| axes::altitude_of_node(a, a_count, self.thickness_m());
+        let (l0, l1) = (at(a), at(a + 1));
+        match mode {
+            1 => mix_log(l0, l1, fa),
+            2 => mix_log(
+                l0,
+                l1,
+                ((h - node(a)) / (node(a + 1) - node(a))).clamp(0.0, 1.0),
+            ),
+            _ => {
+                let pi = std::f64::consts::PI;
+                let z = view.zenith_rad;
+                let depth = |h_a: f64| {
+                    let horizon_a =
+                        axes::horizon_zenith(self.ground_radius_m + h_a, self.ground_radius_m);
+                    let z_a = if z < horizon {
+                        z * horizon_a / horizon
+                    } else {
+                        pi - (pi - z) * (pi - horizon_a) / (pi - horizon)
+                    };
+                    self.transmittance_xyz(h_a, z_a.cos()).map(|t| 1.0 - t)
+                };
+                let (d0, d1, d) = (depth(node(a)), depth(node(a + 1)), depth(h));
+                std::array::from_fn(|i| {
+                    let r0 = if d0[i] > 1e-9 {
+                        l0[i] / d0[i]
+                    } else {
+                        f64::NAN
+                    };
+                    let r1 = if d1[i] > 1e-9 {
+                        l1[i] / d1[i]
+                    } else {
+                        f64::NAN
+                    };
+                    let (r0, r1) = match (r0.is_nan(), r1.is_nan()) {
+                        (false, false) => (r0, r1),
+                        (true, false) => (r1, r1),
+                        (false, true) => (r0, r0),
+                        (true, true) => (0.0, 0.0),
+                    };
+                    d[i] * (r0 + (r1 - r0) * fa)
+                })
+            }
+        }
+        .map(|v| v.max(FLOOR).ln())
     }
 
     /// Transmittance (XYZ of the transmitted sunlight over XYZ of the
