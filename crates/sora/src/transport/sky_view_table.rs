@@ -481,8 +481,7 @@ impl SkyViewTable {
                             .map(|(lowest, highest)| (at(lowest, j), at(highest, j)))
                             .filter(|(l, h)| *l > 0.0 && *h > 0.0)
                             .map(|(l, h)| {
-                                (9.0 * (ln_a + ln_b) - f64::from(l).ln() - f64::from(h).ln())
-                                    / 16.0
+                                (9.0 * (ln_a + ln_b) - f64::from(l).ln() - f64::from(h).ln()) / 16.0
                             })
                             .filter(|c| ln_a.min(ln_b) <= *c && *c <= ln_a.max(ln_b));
                         cubic.unwrap_or(linear).exp() as f32
