@@ -61,3 +61,40 @@ pub(crate) fn for_each_chunk_mut_with<T: Send, S>(
             .for_each(|(i, chunk)| work(&mut state, i, chunk));
     }
 }
+
+/// A vector of `len` copies of `value`, written in parallel when enabled
+/// (a large buffer's pages are then touched by every thread, not one).
+pub(crate) fn filled<T: Copy + Send + Sync>(len: usize, value: T) -> Vec<T> {
+    #[cfg(feature = "parallel")]
+    {
+        use rayon::prelude::*;
+        let mut out = Vec::new();
+        (0..len)
+            .into_par_iter()
+            .map(|_| value)
+            .collect_into_vec(&mut out);
+        out
+    }
+    #[cfg(not(feature = "parallel"))]
+    {
+        vec![value; len]
+    }
+}
+
+/// `work(chunk)` for every `chunk_length` chunk of `data` (the last may
+/// be shorter), in order, computed in parallel when enabled.
+pub(crate) fn map_chunks<T: Sync, R: Send>(
+    data: &[T],
+    chunk_length: usize,
+    work: impl Fn(&[T]) -> R + Sync + Send,
+) -> Vec<R> {
+    #[cfg(feature = "parallel")]
+    {
+        use rayon::prelude::*;
+        data.par_chunks(chunk_length).map(work).collect()
+    }
+    #[cfg(not(feature = "parallel"))]
+    {
+        data.chunks(chunk_length).map(work).collect()
+    }
+}

@@ -163,11 +163,16 @@ impl EngineTables {
     /// floats; None without the march's tables.
     pub fn march_bin(&self) -> Option<Vec<u8>> {
         let march = self.march.as_ref()?;
-        let mut bytes = Vec::with_capacity(march.size_bytes());
-        for array in march.arrays() {
-            for v in array.values {
+        let arrays = march.arrays();
+        let size = arrays
+            .iter()
+            .map(|a| a.values.len() * if a.half { 2 } else { 4 })
+            .sum();
+        let mut bytes = Vec::with_capacity(size);
+        for array in arrays {
+            for v in array.values.iter() {
                 if array.half {
-                    bytes.extend_from_slice(&exr::prelude::f16::from_f32(v).to_le_bytes());
+                    bytes.extend_from_slice(&exr::prelude::f16::from_f32(*v).to_le_bytes());
                 } else {
                     bytes.extend_from_slice(&v.to_le_bytes());
                 }

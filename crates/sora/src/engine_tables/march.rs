@@ -36,6 +36,8 @@
 //! that the segment's forward peaks scatter toward the eye, and the
 //! forward-peak term, all from integrals along the one view ray.
 
+use std::borrow::Cow;
+
 use super::axes;
 use crate::colour::{Observer, SpectrumToXyz};
 use crate::error::{Error, Result};
@@ -195,22 +197,21 @@ impl MarchTables {
         shared: &SharedField,
         thinning: SourceThinning,
     ) -> Result<MarchTables> {
-        let exported = if thinning.azimuths_deg.is_empty() {
-            shared.table().exported()
-        } else {
-            let azimuths: Vec<f64> = thinning
-                .azimuths_deg
-                .iter()
-                .map(|a| a.to_radians())
-                .collect();
-            shared.table().exported_at_azimuths(&azimuths)
-        };
+        let azimuths: Vec<f64> = thinning
+            .azimuths_deg
+            .iter()
+            .map(|a| a.to_radians())
+            .collect();
+        // The source beside the rest, not copied where it is the table's.
+        let (exported, log_source) = shared
+            .table()
+            .exported_parts(Some(&azimuths[..]).filter(|a| !a.is_empty()));
         let grid = sky.wavelengths();
         let thinning = SourceThinning {
             wavelength_stride: thinning.wavelength_stride_for(grid.step_nm()),
             ..thinning
         };
-        let (source, source_wavelengths) = thinned_source(exported, thinning);
+        let (source, source_wavelengths) = thinned_source(exported, &log_source, thinning);
         let n = grid.len();
         if source.wavelengths != n {
             return Err(Error::Unsupported(
@@ -326,9 +327,12 @@ fn columns_to_top(
 }
 
 /// One array of `march.bin`: its name, its values, its layout and unit.
-pub(crate) struct MarchArray {
+pub(crate) struct MarchArray<'a> {
     pub(crate) name: &'static str,
-    pub(crate) values: Vec<f32>,
+    /// Borrowed where the tables hold the array as stored (the source's
+    /// tens of megabytes are not copied for the file, its size and the
+    /// manifest).
+    pub(crate) values: Cow<'a, [f32]>,
     /// Stored as 16-bit floats (otherwise 32-bit).
     pub(crate) half: bool,
     pub(crate) layout: &'static str,
@@ -338,9 +342,9 @@ pub(crate) struct MarchArray {
 impl MarchTables {
     /// The arrays of `march.bin`, in file order (little-endian 32-bit
     /// floats, one after another; the manifest gives each one's offset).
-    pub(crate) fn arrays(&self) -> Vec<MarchArray> {
+    pub(crate) fn arrays(&self) -> Vec<MarchArray<'_>> {
         let s = &self.source;
-        let f = |v: &[f64]| v.iter().map(|x| *x as f32).collect::<Vec<f32>>();
+        let f = |v: &[f64]| Cow::Owned(v.iter().map(|x| *x as f32).collect::<Vec<f32>>());
         let beam = s.beam.as_ref();
         let array = |name, values, layout, unit| MarchArray {
             name,
@@ -354,13 +358,13 @@ impl MarchTables {
             array("source_sun_zenith_rad", f(&s.sun_zenith_rad), "[s]", "rad"),
             array(
                 "source_wavelength_indices",
-                self.source_wavelengths.iter().map(|i| *i as f32).collect(),
+                Cow::Owned(self.source_wavelengths.iter().map(|i| *i as f32).collect()),
                 "[c]: the wavelength index of the source's channel c (ascending, the first and last wavelengths among them); ln R at the wavelengths between two channels is linear in the index",
                 "1",
             ),
             array(
                 "log_source",
-                s.log_source.clone(),
+                Cow::Borrowed(&s.log_source[..]),
                 "[(((k * sun_nodes + s) * azimuth_nodes + f) * view_zenith_nodes + v) * channels + c], channels = source_wavelength_indices' length; view zenith v uniform over 0..pi, azimuth from the sun f at source_azimuth_rad[f]",
                 "ln(W m^-2 sr^-1 nm^-1)",
             ),
@@ -391,31 +395,31 @@ impl MarchTables {
             array("solar", f(&s.solar), "[i]", "W m^-2 nm^-1"),
             array(
                 "xyz",
-                self.xyz.iter().flatten().map(|x| *x as f32).collect(),
+                Cow::Owned(self.xyz.iter().flatten().map(|x| *x as f32).collect()),
                 "[i * 3 + c]",
                 "XYZ of a unit spike at wavelength i",
             ),
             array(
                 "density",
-                self.density.clone(),
+                Cow::Borrowed(&self.density[..]),
                 "[n * species + j], altitude n H / (density_nodes - 1)",
                 "1 (relative density)",
             ),
             array(
                 "sun_columns",
-                self.sun_columns.clone(),
+                Cow::Borrowed(&self.sun_columns[..]),
                 "[(a * M + m) * species + j] over the transmittance table's axes (a: axes.altitude with A nodes, m: axes.transmittance_mu with M nodes)",
                 "m",
             ),
             array(
                 "phase",
-                self.phase.clone(),
+                Cow::Borrowed(&self.phase[..]),
                 "[(j * phase_nodes + t) * wavelengths + i], theta = pi (t / (phase_nodes - 1))^2",
                 "sr^-1",
             ),
             array(
                 "smooth_phase",
-                self.smooth_phase.clone(),
+                Cow::Borrowed(&self.smooth_phase[..]),
                 "[(j * phase_nodes + t) * wavelengths + i], as phase",
                 "sr^-1",
             ),
@@ -428,13 +432,13 @@ impl MarchTables {
             ),
             array(
                 "beam_altitudes_m",
-                beam.map_or(Vec::new(), |b| f(&b.altitudes_m)),
+                beam.map_or(Cow::Borrowed(&[][..]), |b| f(&b.altitudes_m)),
                 "[a]",
                 "m",
             ),
             array(
                 "ln_beam",
-                beam.map_or(Vec::new(), |b| f(&b.ln_beam)),
+                beam.map_or(Cow::Borrowed(&[][..]), |b| f(&b.ln_beam)),
                 "[(a * beam_elevations + e) * wavelengths + i], elevation beam_first_elevation_deg + e beam_step_deg",
                 "ln(1)",
             ),
@@ -508,6 +512,7 @@ impl MarchTables {
 /// `source` kept as `thinning` says.
 fn thinned_source(
     source: ExportedSource,
+    log_source: &[f32],
     thinning: SourceThinning,
 ) -> (ExportedSource, Vec<usize>) {
     let SourceThinning {
@@ -560,25 +565,29 @@ fn thinned_source(
     let views = source.view_zenith_nodes;
     let azimuths = kept(source.azimuth_nodes, azimuth_stride);
     let block = source.azimuth_nodes * views * w;
-    let mut log_source =
-        Vec::with_capacity(levels.len() * suns.len() * azimuths.len() * views * channels.len());
-    for k in &levels {
+    // One kept level per task.
+    let per_level = suns.len() * azimuths.len() * views * channels.len();
+    let mut kept_source = vec![0.0f32; levels.len() * per_level];
+    crate::parallel::for_each_chunk_mut(&mut kept_source, per_level, |level, out| {
+        let k = levels[level];
+        let mut out = out.iter_mut();
         for s in &suns {
             let at = (k * suns_all + s) * block;
             for f in &azimuths {
-                let values = &source.log_source[at + f * views * w..][..views * w];
-                log_source.extend(values.chunks_exact(w).flat_map(|node| {
-                    channels.iter().map(|i| {
-                        if half {
+                let values = &log_source[at + f * views * w..][..views * w];
+                for node in values.chunks_exact(w) {
+                    for (i, o) in channels.iter().zip(out.by_ref()) {
+                        *o = if half {
                             exr::prelude::f16::from_f32(node[*i]).to_f32()
                         } else {
                             node[*i]
-                        }
-                    })
-                }));
+                        };
+                    }
+                }
             }
         }
-    }
+    });
+    let log_source = kept_source;
     let thinned = ExportedSource {
         levels_m: levels.iter().map(|k| source.levels_m[*k]).collect(),
         sun_zenith_rad: suns.iter().map(|s| source.sun_zenith_rad[*s]).collect(),

@@ -491,8 +491,27 @@ impl EngineTables {
                 let radiances = layer_sky.radiances_from_image_tables(&views, &|_, _| {})?;
                 let layer = s * altitude_nodes + a;
                 let out = &mut sky_values[layer * layer_texels..][..layer_texels];
-                for (o, radiance) in out.iter_mut().zip(&radiances) {
-                    *o = light_xyz(&radiance.radiance_w_m2_sr_nm)?.map(|v| v.max(0.0) as f32);
+                // The texels' XYZ in parallel (on one thread it left the
+                // other idle); the first failing texel's error.
+                let failed = std::sync::Mutex::new(None);
+                crate::parallel::for_each_chunk_mut(out, XYZ_TEXELS_PER_TASK, |task, chunk| {
+                    let first = task * XYZ_TEXELS_PER_TASK;
+                    for (i, (o, radiance)) in chunk.iter_mut().zip(&radiances[first..]).enumerate()
+                    {
+                        match light_xyz(&radiance.radiance_w_m2_sr_nm) {
+                            Ok(c) => *o = c.map(|v| v.max(0.0) as f32),
+                            Err(error) => {
+                                let mut failed = failed.lock().expect("no thread panicked");
+                                if failed.as_ref().is_none_or(|(at, _)| first + i < *at) {
+                                    *failed = Some((first + i, error));
+                                }
+                                return;
+                            }
+                        }
+                    }
+                });
+                if let Some((_, error)) = failed.into_inner().expect("no thread panicked") {
+                    return Err(error);
                 }
                 if segments.is_empty() {
                     done += 1;
@@ -719,11 +738,13 @@ impl EngineTables {
         let a_count = self.settings.altitude_nodes;
         let mut out = vec![[0.0f32; 3]; s_count * a_count];
         let weight = 2.0 * (1.0 / N as f64) * (std::f64::consts::PI / N as f64);
-        for a in 0..a_count {
+        // One (altitude, sun) node per task.
+        crate::parallel::for_each_chunk_mut(&mut out, 1, |node, out| {
+            let (a, s) = (node / s_count, node % s_count);
             let altitude = axes::altitude_of_node(a, a_count, self.thickness_m());
             let horizon =
                 axes::horizon_zenith(self.ground_radius_m + altitude, self.ground_radius_m);
-            for s in 0..s_count {
+            {
                 let layer = s * a_count + a;
                 let mut sum = [0.0; 3];
                 for i in 0..N {
@@ -737,12 +758,15 @@ impl EngineTables {
                         }
                     }
                 }
-                out[a * s_count + s] = sum.map(|v| v as f32);
+                out[0] = sum.map(|v| v as f32);
             }
-        }
+        });
         out
     }
 }
+
+/// Texels of a sky layer converted to XYZ per parallel task.
+const XYZ_TEXELS_PER_TASK: usize = 256;
 
 /// The aerial-perspective table's ratios are at most this (a segment's
 /// light is of the order of S (1 - T); the bound keeps a near-zero

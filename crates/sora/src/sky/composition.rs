@@ -547,10 +547,11 @@ impl Sky {
                 }
             },
         );
-        values
-            .chunks(per_view)
-            .map(|values| sky_radiance_from_values(values, wavelengths))
-            .collect()
+        // The spectra built in parallel too (thousands of small
+        // allocations per image of the engine tables' layers).
+        crate::parallel::map_chunks(&values, per_view, |values| {
+            sky_radiance_from_values(values, wavelengths)
+        })
     }
 
     /// A polarised view's Stokes Q, U and V into `stokes` and its polarised

@@ -310,7 +310,12 @@ impl SkyViewTable {
         let mut values: Vec<Vec<f32>> = tables
             .iter()
             .map(|table| {
-                vec![0.0f32; 2 * half_zenith_nodes * azimuth_nodes * table.values_per_node]
+                // Zeroed by the threads (megabytes per table: zeroed on
+                // one thread, it left the others idle).
+                crate::parallel::filled(
+                    2 * half_zenith_nodes * azimuth_nodes * table.values_per_node,
+                    0.0f32,
+                )
             })
             .collect();
         {
@@ -460,26 +465,32 @@ impl SkyViewTable {
             return;
         }
         let t32 = t as f32;
-        for (index, node) in self.values.chunks_exact_mut(n).enumerate() {
-            let at = |table: &SkyViewTable, j: usize| table.values[index * n + n - m + j];
-            for (j, o) in node[n - m..].iter_mut().enumerate() {
-                let (a, b) = (at(below, j), at(above, j));
-                *o = if a > 0.0 && b > 0.0 {
-                    let (ln_a, ln_b) = (f64::from(a).ln(), f64::from(b).ln());
-                    let linear = (1.0 - t) * ln_a + t * ln_b;
-                    let cubic = outer
-                        .map(|(lowest, highest)| (at(lowest, j), at(highest, j)))
-                        .filter(|(l, h)| *l > 0.0 && *h > 0.0)
-                        .map(|(l, h)| {
-                            (9.0 * (ln_a + ln_b) - f64::from(l).ln() - f64::from(h).ln()) / 16.0
-                        })
-                        .filter(|c| ln_a.min(ln_b) <= *c && *c <= ln_a.max(ln_b));
-                    cubic.unwrap_or(linear).exp() as f32
-                } else {
-                    (1.0 - t32) * a + t32 * b
-                };
+        // Row by row in parallel (each node's blend is its own: the same
+        // values whatever the threads).
+        let azimuth_nodes = self.azimuth_nodes;
+        crate::parallel::for_each_chunk_mut(&mut self.values, azimuth_nodes * n, |row, values| {
+            for (k, node) in values.chunks_exact_mut(n).enumerate() {
+                let index = row * azimuth_nodes + k;
+                let at = |table: &SkyViewTable, j: usize| table.values[index * n + n - m + j];
+                for (j, o) in node[n - m..].iter_mut().enumerate() {
+                    let (a, b) = (at(below, j), at(above, j));
+                    *o = if a > 0.0 && b > 0.0 {
+                        let (ln_a, ln_b) = (f64::from(a).ln(), f64::from(b).ln());
+                        let linear = (1.0 - t) * ln_a + t * ln_b;
+                        let cubic = outer
+                            .map(|(lowest, highest)| (at(lowest, j), at(highest, j)))
+                            .filter(|(l, h)| *l > 0.0 && *h > 0.0)
+                            .map(|(l, h)| {
+                                (9.0 * (ln_a + ln_b) - f64::from(l).ln() - f64::from(h).ln()) / 16.0
+                            })
+                            .filter(|c| ln_a.min(ln_b) <= *c && *c <= ln_a.max(ln_b));
+                        cubic.unwrap_or(linear).exp() as f32
+                    } else {
+                        (1.0 - t32) * a + t32 * b
+                    };
+                }
             }
-        }
+        });
     }
 
     /// Zenith angle (rad) of zenith-axis node `row` (0 = the zenith,

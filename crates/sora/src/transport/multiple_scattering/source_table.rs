@@ -691,27 +691,34 @@ impl MultipleScatteringTable {
     /// What the engine tables' aerial-perspective march reads from this
     /// table and its field (`engine_tables/march.rs`; a field solved for
     /// every sun): the source ln R with its axes, the optics, the ground's
-    /// light, the peak beam and the forward-peak term's tables.
-    pub(crate) fn exported(&self) -> ExportedSource {
-        self.exported_with(
-            self.values.as_ref().clone(),
-            self.azimuths_rad.as_ref().clone(),
-        )
-    }
-
-    /// [`Self::exported`] with the source at the azimuths from the sun
-    /// `azimuths_rad` (ascending, 0 and pi among them) instead of the
-    /// table's: computed anew from the field, exactly (the table's own
-    /// values where the azimuths are the table's).
-    pub(crate) fn exported_at_azimuths(&self, azimuths_rad: &[f64]) -> ExportedSource {
-        if azimuths_rad == self.azimuths_rad.as_slice() {
-            return self.exported();
+    /// light, the peak beam and the forward-peak term's tables. The source
+    /// is at the azimuths from the sun `azimuths_rad` (ascending, 0 and pi
+    /// among them; None: the table's own): computed anew from the field,
+    /// exactly, or the table's own values where the azimuths are the
+    /// table's. Its `log_source` is left empty and returned beside it,
+    /// borrowed where it is the table's own: the march keeps a part of it,
+    /// and a copy of the whole (written on one thread) was a serial
+    /// stretch of the engine tables' bake.
+    pub(crate) fn exported_parts(
+        &self,
+        azimuths_rad: Option<&[f64]>,
+    ) -> (ExportedSource, std::borrow::Cow<'_, [f32]>) {
+        match azimuths_rad.filter(|a| *a != self.azimuths_rad.as_slice()) {
+            None => (
+                self.exported_with(Vec::new(), self.azimuths_rad.as_ref().clone()),
+                std::borrow::Cow::Borrowed(&self.values[..]),
+            ),
+            Some(azimuths_rad) => {
+                let values = source_values(&self.field, self.view_zenith_nodes, azimuths_rad);
+                (
+                    self.exported_with(Vec::new(), azimuths_rad.to_vec()),
+                    std::borrow::Cow::Owned(values),
+                )
+            }
         }
-        let values = source_values(&self.field, self.view_zenith_nodes, azimuths_rad);
-        self.exported_with(values, azimuths_rad.to_vec())
     }
 
-    /// What [`Self::exported`] gives, with the source `log_source` at the
+    /// What [`Self::exported_parts`] gives, with the source `log_source` at the
     /// azimuths `azimuths_rad`.
     fn exported_with(&self, log_source: Vec<f32>, azimuths_rad: Vec<f64>) -> ExportedSource {
         let optics = &self.field.optics;

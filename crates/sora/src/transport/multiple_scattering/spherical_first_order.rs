@@ -272,22 +272,20 @@ pub(crate) fn compute_spherical_first_order_with_phases(
             );
         }
     });
+    // Transposed to [(s * wavelengths + i) * solution + (m * levels + k) *
+    // streams + b], one (sun, wavelength) block per task.
     let mut out = vec![0.0; suns * wavelengths * solution];
-    for k in 0..levels {
-        for s in 0..suns {
+    crate::parallel::for_each_chunk_mut(&mut out, solution, |block, out| {
+        let (s, i) = (block / wavelengths, block % wavelengths);
+        for k in 0..levels {
             for b in 0..streams {
                 for m in 0..streams {
-                    let row = &by_level
-                        [k * per_level + ((s * streams + b) * streams + m) * wavelengths..]
-                        [..wavelengths];
-                    let at = (m * levels + k) * streams + b;
-                    for (i, h) in row.iter().enumerate() {
-                        out[(s * wavelengths + i) * solution + at] = *h;
-                    }
+                    out[(m * levels + k) * streams + b] = by_level
+                        [k * per_level + ((s * streams + b) * streams + m) * wavelengths + i];
                 }
             }
         }
-    }
+    });
     out
 }
 
