@@ -57,6 +57,18 @@ float soraAltitudeCoordinate(float h, int nodes) {
   return clamp(log(1.0 + x) / log(51.0), 0.0, 1.0) * float(nodes - 1);
 }
 
+// Altitude (m) of node a of an axis of `nodes` nodes (axes::altitude_of_node).
+float soraAltitudeOfNode(int a, int nodes) {
+  float h0 = soraThickness() / 50.0;
+  return min(h0 * (pow(51.0, float(a) / float(nodes - 1)) - 1.0), soraThickness());
+}
+
+// Share (0..1) of altitude h between nodes a and a + 1, linear in h.
+float soraAltitudeShare(float h, int a, int nodes) {
+  float h0 = soraAltitudeOfNode(a, nodes), h1 = soraAltitudeOfNode(a + 1, nodes);
+  return clamp((h - h0) / (h1 - h0), 0.0, 1.0);
+}
+
 // Cell index and weight of fractional index x within lowest..highest.
 void soraCell(float x, int lowest, int highest, out int i, out float f) {
   i = clamp(int(floor(max(x, 0.0))), lowest, highest);
@@ -201,10 +213,12 @@ float soraShadowReadShare(float zenith, float phi, float eDeg, float zh) {
     * (1.0 - smoothstep(-e, -SORA_SHADOW_RAMP * e, zh - zenith));
 }
 
-// ln L of layer `low` (and low + 1, the altitude node above, by fa) of a
+// ln L of layer `low` (and low + 1, the altitude node above: above the
+// eye's horizon ln L blended by fh, the share linear in the altitude;
+// below it L by fa, the altitude coordinate's) of a
 // layer table toward `view` (zenith, phi), slices row0 and row1 by fj;
 // its first `cap` zenith cells read by the cubic (soraLayer).
-vec3 soraLayerLog(highp sampler2DArray table, int Z, ivec2 F, int K, int cap, int low, float fa, int row0, int row1, float fj, vec2 view, float r) {
+vec3 soraLayerLog(highp sampler2DArray table, int Z, ivec2 F, int K, int cap, int low, float fa, float fh, int row0, int row1, float fj, vec2 view, float r) {
   float y; int lowest; int highest;
   soraZenithCoordinate(view.x, r, Z, F, y, lowest, highest);
   int i; float fy; soraCell(y, lowest, highest, i, fy);
@@ -212,7 +226,10 @@ vec3 soraLayerLog(highp sampler2DArray table, int Z, ivec2 F, int K, int cap, in
   int km; float fxm; soraCell(sqrt(clamp(1.0 - view.y / SORA_PI, 0.0, 1.0)) * float(K - 1), 0, K - 2, km, fxm);
   vec3 ground = mix(soraLayer(table, low, row0, i, fy, k, fx, km, fxm, cap, Z), soraLayer(table, low, row1, i, fy, k, fx, km, fxm, cap, Z), fj);
   vec3 above = mix(soraLayer(table, low + 1, row0, i, fy, k, fx, km, fxm, cap, Z), soraLayer(table, low + 1, row1, i, fy, k, fx, km, fxm, cap, Z), fj);
-  return log(max(mix(ground, above, fa), vec3(SORA_FLOOR)));
+  float zh = SORA_PI - asin(min(uPlanetSun.x / r, 1.0));
+  return view.x < zh
+    ? mix(log(max(ground, vec3(SORA_FLOOR))), log(max(above, vec3(SORA_FLOOR))), fh)
+    : log(max(mix(ground, above, fa), vec3(SORA_FLOOR)));
 }
 
 // A layer table (the sky, or the aerial-perspective table with Z zenith
@@ -220,7 +237,7 @@ vec3 soraLayerLog(highp sampler2DArray table, int Z, ivec2 F, int K, int cap, in
 // blended by fj) at altitude h (m), toward zenith angle `zenith` (rad) and
 // azimuth `phi` (rad, 0..pi) from the sun's, with the sun at elevation
 // eDeg (degrees): bilinear in a layer (its first `cap` zenith cells by the
-// cubic in ln L, soraLayer), linear in altitude, in ln L between the two
+// cubic in ln L, soraLayer), between the altitude layers as soraLayerLog, in ln L between the two
 // sun layers (the chord less the curvature of the four nearest), each read
 // at the view turned with the sun to its node (soraTurnedView, by
 // soraTurnShare of the step).
@@ -230,6 +247,7 @@ vec3 soraLayersXyz(highp sampler2DArray table, int Z, ivec2 F, int K, int cap, i
   float zh = SORA_PI - asin(min(uPlanetSun.x / r, 1.0));
   int A = uSkyNodes.y;
   int a; float fa; soraCell(soraAltitudeCoordinate(h, A), 0, A - 2, a, fa);
+  float fh = soraAltitudeShare(h, a, A);
   eDeg = clamp(eDeg, -12.0, 90.0);
   int s; float fs; soraCell(soraSunCoordinate(eDeg), 0, uSkyNodes.x - 2, s, fs);
   float share = soraTurnShare(zenith, phi, eDeg, zh);
@@ -241,7 +259,7 @@ vec3 soraLayersXyz(highp sampler2DArray table, int Z, ivec2 F, int K, int cap, i
     int n = clamp(s + m - 1, 0, uSkyNodes.x - 1) - s;
     vec2 view = soraTurnedView(zenith, phi, radians(soraSunElevationOfNode(s + n) - eDeg) * share, zh);
     int low = (s + n) * A + a;
-    layers[m] = soraLayerLog(table, Z, F, K, cap, low, fa, row0, row1, fj, view, r);
+    layers[m] = soraLayerLog(table, Z, F, K, cap, low, fa, fh, row0, row1, fj, view, r);
   }
   // The chord in ln L less its curvature: the second differences at nodes
   // s and s + 1 (zero at the axis's ends, each within +-1), blended.

@@ -52,6 +52,19 @@ fn sora_altitude_coordinate(h: f32, nodes: i32) -> f32 {
   return clamp(log(1.0 + x) / log(51.0), 0.0, 1.0) * f32(nodes - 1);
 }
 
+// Altitude (m) of node a of an axis of `nodes` nodes (axes::altitude_of_node).
+fn sora_altitude_of_node(a: i32, nodes: i32) -> f32 {
+  let h0 = sora_thickness() / 50.0;
+  return min(h0 * (pow(51.0, f32(a) / f32(nodes - 1)) - 1.0), sora_thickness());
+}
+
+// Share (0..1) of altitude h between nodes a and a + 1, linear in h.
+fn sora_altitude_share(h: f32, a: i32, nodes: i32) -> f32 {
+  let h0 = sora_altitude_of_node(a, nodes);
+  let h1 = sora_altitude_of_node(a + 1, nodes);
+  return clamp((h - h0) / (h1 - h0), 0.0, 1.0);
+}
+
 // Cell index and the upper node's weight of fractional index x.
 struct SoraCell { i: i32, f: f32 };
 
@@ -185,16 +198,22 @@ fn sora_shadow_read_share(zenith: f32, phi: f32, e_deg: f32, zh: f32) -> f32 {
     * (1.0 - smoothstep(-e, -SORA_SHADOW_RAMP * e, zh - zenith));
 }
 
-// ln L of layer `low` (and low + 1, the altitude node above, by a_f) of a
+// ln L of layer `low` (and low + 1, the altitude node above: above the
+// eye's horizon ln L blended by a_h, the share linear in the altitude;
+// below it L by a_f, the altitude coordinate's) of a
 // layer table toward `view` (zenith, phi), slices row0 and row1 by fj; its
 // first `cap` zenith cells read by the cubic (sora_layer).
-fn sora_layer_log(table: texture_2d_array<f32>, zn: i32, zf: vec2<i32>, kn: i32, cap: i32, low: i32, a_f: f32,
+fn sora_layer_log(table: texture_2d_array<f32>, zn: i32, zf: vec2<i32>, kn: i32, cap: i32, low: i32, a_f: f32, a_h: f32,
                   row0: i32, row1: i32, fj: f32, view: vec2<f32>, r: f32) -> vec3<f32> {
   let z = sora_zenith_cell(view.x, r, zn, zf);
   let k = sora_cell(sqrt(clamp(view.y / SORA_PI, 0.0, 1.0)) * f32(kn - 1), 0, kn - 2);
   let km = sora_cell(sqrt(clamp(1.0 - view.y / SORA_PI, 0.0, 1.0)) * f32(kn - 1), 0, kn - 2);
   let ground = mix(sora_layer(table, low, row0, z, k, km, cap, zn), sora_layer(table, low, row1, z, k, km, cap, zn), fj);
   let above = mix(sora_layer(table, low + 1, row0, z, k, km, cap, zn), sora_layer(table, low + 1, row1, z, k, km, cap, zn), fj);
+  let zh = SORA_PI - asin(min(sora.planet_sun.x / r, 1.0));
+  if (view.x < zh) {
+    return mix(log(max(ground, vec3<f32>(SORA_FLOOR))), log(max(above, vec3<f32>(SORA_FLOOR))), a_h);
+  }
   return log(max(mix(ground, above, a_f), vec3<f32>(SORA_FLOOR)));
 }
 
@@ -202,7 +221,7 @@ fn sora_layer_log(table: texture_2d_array<f32>, zn: i32, zf: vec2<i32>, kn: i32,
 // nodes per half, kn azimuth nodes, its distance slices j and j + 1
 // blended by fj) at altitude h (m) toward zenith angle `zenith` and
 // azimuth `phi` from the sun's (rad), sun at e_deg: bilinear in a layer,
-// linear in altitude, in ln L between the sun layers (the chord less the
+// between the altitude layers as sora_layer_log, in ln L between the sun layers (the chord less the
 // curvature of the four nearest), each read at the view turned with the
 // sun to its node.
 fn sora_layers_xyz(table: texture_2d_array<f32>, zn: i32, zf: vec2<i32>, kn: i32, cap: i32, j: i32, fj: f32,
@@ -213,6 +232,7 @@ fn sora_layers_xyz(table: texture_2d_array<f32>, zn: i32, zf: vec2<i32>, kn: i32
   let e_deg = clamp(e_in, -12.0, 90.0);
   let an = sora.sky_nodes.y;
   let a = sora_cell(sora_altitude_coordinate(h, an), 0, an - 2);
+  let a_h = sora_altitude_share(h, a.i, an);
   let s = sora_cell(sora_sun_coordinate(e_deg), 0, sora.sky_nodes.x - 2);
   let share = sora_turn_share(zenith, phi, e_deg, zh);
   let row0 = 2 * zn * j;
@@ -224,7 +244,7 @@ fn sora_layers_xyz(table: texture_2d_array<f32>, zn: i32, zf: vec2<i32>, kn: i32
     let n = clamp(s.i + m - 1, 0, sora.sky_nodes.x - 1) - s.i;
     let view = sora_turned_view(zenith, phi, radians(sora_sun_elevation_of_node(s.i + n) - e_deg) * share, zh);
     let low = (s.i + n) * an + a.i;
-    layers[m] = sora_layer_log(table, zn, zf, kn, cap, low, a.f, row0, row1, fj, view, r);
+    layers[m] = sora_layer_log(table, zn, zf, kn, cap, low, a.f, a_h, row0, row1, fj, view, r);
   }
   // The chord in ln L less its curvature: the second differences at nodes
   // s and s + 1 (zero at the axis's ends, each within +-1), blended.

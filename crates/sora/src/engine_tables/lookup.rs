@@ -14,7 +14,13 @@
 //!   read with a continuous slope across the rows and through the zenith
 //!   (a read linear between them bent the zenith's brightness against the
 //!   sun's elevation where a turned view crossed a row),
-//!   linear between the two altitude layers, and in the logarithm (each
+//!   between the two altitude layers in ln L linear in the altitude h
+//!   itself above the eye's horizon (the sky falls about exponentially
+//!   with the air above the eye), and linear in L and in the altitude
+//!   coordinate below it (the ground's views); neither is within the 2 %
+//!   asked between the nodes (docs/engine-tables.md, "An eye between the
+//!   altitude nodes": the nodes are too far apart in the haze and a
+//!   raised eye's limb needs its own zenith axis), and in the logarithm (each
 //!   value floored at [`FLOOR`]) between the two sun layers s and s + 1:
 //!   the chord of ln L less `f (1 - f) / 2` times the second difference of
 //!   ln L over the sun nodes (that at s - 1, s, s + 1 and that at s, s + 1,
@@ -130,6 +136,16 @@ fn scale(a: [f64; 3], k: f64) -> [f64; 3] {
 
 fn mix(a: [f64; 3], b: [f64; 3], f: f64) -> [f64; 3] {
     std::array::from_fn(|i| a[i] + (b[i] - a[i]) * f)
+}
+
+/// The share (0..1) of altitude `h` (m) between altitude nodes `a` and
+/// `a + 1` of `nodes` over `thickness_m`, linear in the altitude itself.
+fn altitude_share(h: f64, a: usize, nodes: usize, thickness_m: f64) -> f64 {
+    let (h0, h1) = (
+        axes::altitude_of_node(a, nodes, thickness_m),
+        axes::altitude_of_node(a + 1, nodes, thickness_m),
+    );
+    ((h - h0) / (h1 - h0)).clamp(0.0, 1.0)
 }
 
 fn mix_log(a: [f64; 3], b: [f64; 3], f: f64) -> [f64; 3] {
@@ -292,8 +308,8 @@ pub(crate) const ZENITH_CAP_CELLS: usize = 16;
 pub(crate) static CAP_OVERRIDE: std::sync::atomic::AtomicUsize =
     std::sync::atomic::AtomicUsize::new(usize::MAX);
 
-/// A test's choice of the read between the altitude layers (0: linear,
-/// the read; others [`EngineTables::probe_altitude_read`]'s probes), so
+/// A test's choice of the read between the altitude layers (0: the read,
+/// ln L linear in h; others [`EngineTables::probe_altitude_read`]'s probes), so
 /// that one bake can be read several ways
 /// (`tests::the_sky_between_the_altitude_nodes_matches_the_library`).
 #[cfg(test)]
@@ -410,7 +426,7 @@ impl EngineTables {
     /// A layer table's value at `altitude_m` toward `view` with the sun at
     /// `sun_elevation_deg`, linear between slices `slice.0` and
     /// `slice.0 + 1` by `slice.1` (see the module docs: bilinear in the
-    /// layer, linear in altitude, in ln L with its curvature between the
+    /// layer, in ln L linear in altitude, in ln L with its curvature between the
     /// sun layers, each sun layer read at the view turned with the sun).
     pub(crate) fn layers_xyz(
         &self,
@@ -426,6 +442,12 @@ impl EngineTables {
             sun_elevation_deg.clamp(axes::SUN_ELEVATION_MIN_DEG, axes::SUN_ELEVATION_MAX_DEG);
         let a_count = self.settings.altitude_nodes;
         let ((a, fa), (s, fs)) = self.altitude_and_sun_cells(h, e_deg);
+        // Between the two altitude layers: above the eye's horizon ln L
+        // linear in the altitude itself (the sky falls with the air above
+        // the eye, about exponentially in h); below it, toward the ground,
+        // L linear in the altitude coordinate (the air's light there grows
+        // with the path, not exponentially).
+        let fh = altitude_share(h, a, a_count, self.thickness_m());
         let share = turn_share(view, e_deg, horizon);
         // ln L of sun layer `s` read at `view` turned by `share` of the
         // step to its node.
@@ -449,7 +471,15 @@ impl EngineTables {
             if let mode @ 1.. = ALTITUDE_READ_OVERRIDE.load(std::sync::atomic::Ordering::Relaxed) {
                 return self.probe_altitude_read(mode, (a, fa), h, turned, horizon, at);
             }
-            mix(at(a), at(a + 1), fa).map(|v| v.max(FLOOR).ln())
+            let (lower, upper) = (at(a), at(a + 1));
+            if turned.zenith_rad < horizon {
+                std::array::from_fn(|i| {
+                    let (l0, l1) = (lower[i].max(FLOOR).ln(), upper[i].max(FLOOR).ln());
+                    l0 + (l1 - l0) * fh
+                })
+            } else {
+                mix(lower, upper, fa).map(|v| v.max(FLOOR).ln())
+            }
         };
         let layer = |s: usize| read_at(s, share);
         let s_count = self.settings.sun_nodes;
@@ -502,7 +532,8 @@ impl EngineTables {
     /// docs/engine-tables.md "An eye between the altitude nodes"): ln L of the two altitude layers
     /// `a`, `a + 1` (values `at(a)`) blended for an eye at `h` toward
     /// `view` (the eye's horizon at `horizon`) by mode 1: ln L linear in
-    /// the altitude coordinate; 2: ln L linear in the altitude itself; 3:
+    /// the altitude coordinate; 2: L linear in the altitude coordinate (the
+    /// read before ln L linear in h); 3:
     /// L / (1 - T) linear in the coordinate, T the transmittance to the top
     /// along the view at each layer's own zenith angle for the view's
     /// coordinate, times the eye's 1 - T.
@@ -521,11 +552,7 @@ impl EngineTables {
         let (l0, l1) = (at(a), at(a + 1));
         match mode {
             1 => mix_log(l0, l1, fa),
-            2 => mix_log(
-                l0,
-                l1,
-                ((h - node(a)) / (node(a + 1) - node(a))).clamp(0.0, 1.0),
-            ),
+            2 => mix(l0, l1, fa),
             _ => {
                 let pi = std::f64::consts::PI;
                 let z = view.zenith_rad;

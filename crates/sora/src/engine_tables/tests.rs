@@ -2515,7 +2515,11 @@ fn the_sky_between_the_sun_nodes_about_the_sunset_matches_the_library() {
 /// the limb); earth-clear (96 x 96) between the nodes 7.4-469 %; ln L
 /// blended in the node coordinate or in h leaves 6-76 % (earth-hazy) and
 /// 5-100 % (earth-clear) (docs/engine-tables.md, "An eye between the
-/// altitude nodes").
+/// altitude nodes"). Those numbers are the read before; the read is now
+/// ln L linear in h above the eye's horizon (and as before below it):
+/// earth-hazy (96 x 96, suns 60, 5, -4, -12, eyes 1, 5, 12, 30, 70 km)
+/// 6.1-65 % in the sky half (before 10-480 %), horizon band 5.2-55 %
+/// (before 5.2-436 %), below the horizon unchanged (1.3-59 %).
 /// Ignored: a bake per preset and axis (about 25 s each idle, minutes on
 /// the shared 2-core machine) and two images per eye and sun (earth-hazy's
 /// 77 at 128 x 128: about 20 minutes at a load of 10); run with
