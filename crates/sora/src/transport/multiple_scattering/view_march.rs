@@ -677,16 +677,8 @@ impl ViewRayOptics {
             // Optical depths toward the sun, then (in place) T*_sun and
             // T_sun, per wavelength.
             let (sun_beam, rest) = tilted_depths.split_at_mut(w);
-            let sun_direct = &mut rest[..w];
-            sun_beam.fill(0.0);
-            sun_direct.fill(0.0);
-            for (j, column) in sun_columns.iter().enumerate() {
-                let (beta_scaled, beta) = (by.scaled_extinction(j), by.extinction(j));
-                for i in 0..w {
-                    sun_beam[i] += beta_scaled[i] * column;
-                    sun_direct[i] += beta[i] * column;
-                }
-            }
+            by.optical_depths(|j| sun_columns[j], sun_beam, &mut rest[..w]);
+            let sun_direct = &rest[..w];
             // X, the peaks' optical depth of both legs.
             for i in 0..w {
                 tilted_peak[w + i] =
@@ -889,17 +881,11 @@ impl ViewRayOptics {
         // transmittances, all together: [exact depths, scaled depths,
         // direct, through].
         let (exact_depths, rest) = node_terms.split_at_mut(w);
-        let scaled_depths = &mut rest[..w];
-        exact_depths.fill(0.0);
-        scaled_depths.fill(0.0);
-        for j in 0..s {
-            let column = node_columns[j] + sun_columns[j];
-            let (beta_scaled, beta) = (by.scaled_extinction(j), by.extinction(j));
-            for i in 0..w {
-                scaled_depths[i] += beta_scaled[i] * column;
-                exact_depths[i] += beta[i] * column;
-            }
-        }
+        by.optical_depths(
+            |j| node_columns[j] + sun_columns[j],
+            &mut rest[..w],
+            exact_depths,
+        );
         let (depths, transmittances) = node_terms.split_at_mut(2 * w);
         transmittances.copy_from_slice(depths);
         exp_neg_in_place(transmittances);
@@ -1008,6 +994,23 @@ pub(super) struct SpeciesMajorOptics {
 }
 
 impl SpeciesMajorOptics {
+    /// The optical depths (1) of columns `column(j)` (m) of every species
+    /// j, delta-M scaled into `scaled` and exact into `exact`, per
+    /// wavelength: each the sum over the species in their order.
+    #[inline(always)]
+    fn optical_depths(&self, column: impl Fn(usize) -> f64, scaled: &mut [f64], exact: &mut [f64]) {
+        scaled.fill(0.0);
+        exact.fill(0.0);
+        for j in 0..self.extinction.len() / self.wavelengths {
+            let column = column(j);
+            let (beta_scaled, beta) = (self.scaled_extinction(j), self.extinction(j));
+            for i in 0..scaled.len() {
+                scaled[i] += beta_scaled[i] * column;
+                exact[i] += beta[i] * column;
+            }
+        }
+    }
+
     /// `scaled`'s coefficients for `wavelengths` wavelengths and `species`
     /// species, species-major.
     pub(super) fn new(scaled: &ScaledOptics, wavelengths: usize, species: usize) -> Self {
