@@ -32,8 +32,10 @@
 //!   image 2.3e-3 from the reference march in the logarithm, 8.2e-4
 //!   linearly). `SunColumnTable::lookup_columns_at_radius` looks up one
 //!   point (the slow path); `SunColumnTable::lookup_lit_columns` looks up
-//!   a ray's sunlit points together, four at a time (AVX2's registers
-//!   where the CPU has them), each lane the single lookup's operations,
+//!   a ray's sunlit points together, four at a time (compiled for AVX2
+//!   where the CPU has it; the compiler keeps most steps scalar, so the
+//!   gain is four independent chains overlapping, not vector
+//!   instructions), each lane the single lookup's operations,
 //!   so the same bits: single scattering's march and the spherical first
 //!   order's paths take their columns so, after the march, where the
 //!   lookups of one node after another each waited on its own chain (a
@@ -833,8 +835,9 @@ impl SunColumnTable {
     /// `columns_m[n * species..][..species]`. The lookups of a ray's nodes
     /// are independent of one another; taken four at a time, each step
     /// of the four (the path's length, its cell and weights, each
-    /// species' blend and exponential) is one operation on four lanes, in
-    /// AVX2's registers where the CPU has them. Every lane does the
+    /// species' blend and exponential) is written on four lanes, compiled
+    /// for AVX2 where the CPU has it (perf annotate shows most of it
+    /// scalar: the four lanes' independent chains overlap). Every lane does the
     /// single lookup's operations in its order, so the columns are the
     /// same bits (the test `the_lookups_four_at_a_time_are_the_single_lookups`).
     pub(crate) fn lookup_lit_columns(
