@@ -1405,7 +1405,10 @@ pub(crate) mod tests {
         // The terms' skies march the same view rays through the same
         // sun-column table: built together (`Sky::prepare_images`), the
         // second and later terms' integrals are computed in the first's
-        // march (`Together`); each term's sky-view table must be bit for bit
+        // march (`Together`), and their multiply scattered light in the
+        // first's multiple-scattering march
+        // (`MultipleScatteringTable::compute_radiance_parts_together`);
+        // each term's sky-view table must be bit for bit
         // the one it builds alone (`Sky::compute_tables`), polarised and
         // scalar.
         let atmosphere = earth_clear_with_gases();
@@ -1424,8 +1427,11 @@ pub(crate) mod tests {
             assert_eq!(sky.k_terms().len(), TERMS);
             assert!(sky.k_terms()[1].1.wavelengths().len() < grid.len());
             for (_, term) in sky.k_terms() {
-                // Every term takes the sharing path.
+                // Every term takes the sharing path, its multiply
+                // scattered light marched in the first term's march too.
                 assert!(term.scene().has_view_geometry_of(first.scene()));
+                let sources = (first.source_table(), term.source_table());
+                assert!(matches!(sources, (Some(a), Some(b)) if a.marches_with(b)));
                 let together = term.image_tables.get().expect("built together");
                 let alone = term.compute_tables(term.source_table(), true);
                 assert!(together.sky_view == alone.sky_view, "{polarisation:?}");
