@@ -457,12 +457,9 @@ impl ViewRayOptics {
                             &mut scratch.sun_panel_ends,
                             &mut scratch.sun_columns,
                         );
-                    self.add_node_light(
-                        (&node, r, sun_cosine, sunlit),
-                        scratch,
-                        (&mut view_terms, &mut view_exps_filled),
-                        radiance,
-                    );
+                    // Every sky's source first (the reads of tables
+                    // apart, independent of each other, can overlap),
+                    // then every sky's light.
                     for (t, other) in others.iter_mut().enumerate() {
                         let own = &mut *other.scratch;
                         own.node_columns.copy_from_slice(node_columns);
@@ -471,6 +468,15 @@ impl ViewRayOptics {
                         if sunlit && other.optics.has_forward_peaks {
                             own.sun_columns.copy_from_slice(&scratch.sun_columns);
                         }
+                    }
+                    self.add_node_light(
+                        (&node, r, sun_cosine, sunlit),
+                        scratch,
+                        (&mut view_terms, &mut view_exps_filled),
+                        radiance,
+                    );
+                    for other in others.iter_mut() {
+                        let own = &mut *other.scratch;
                         let mut terms = std::mem::take(&mut own.view_terms);
                         let mut filled = std::mem::take(&mut own.view_exps_filled);
                         other.optics.add_node_light(
