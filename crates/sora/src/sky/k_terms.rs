@@ -76,6 +76,27 @@
 //! integrals), bit for bit the tables each builds alone (a test). The
 //! fisheye below takes 0.92 times the CPU of the replay of the first
 //! term's sun columns before it (`farm-bench -n 8`, paired, 0.86-0.95).
+//! Their multiply scattered light is marched the same way: the first
+//! term's multiple-scattering march takes every term's light node by
+//! node (`MultipleScatteringTable::compute_radiance_parts_together`,
+//! `ViewRayOptics::march_alongside`): the nodes, their densities and
+//! columns, their geometry and their columns toward the sun are found
+//! once, and so are the source tables' sun and azimuth cells (the terms'
+//! altitude levels follow their absorption, so each term locates its own
+//! altitude cell, kept per node index as its own march keeps it); each
+//! term's source is read from its own table, every term's before any
+//! term's light (the reads of five tables overlap), bit for bit each
+//! term's own march (`compute_radiance_parts`, the slow path; the test
+//! of the tables built together asserts the shared path is taken). The fisheye below 0.969
+//! times the CPU of the march per term (`farm-bench -n 16`, paired,
+//! 0.92-1.05, 2-core machine at load 9-10), byte-identical (and a
+//! gas-free fisheye, and a gas one with the sun 4 degrees down), 2.49
+//! times the gas-free image (`gases.sh`, 7 runs; the march per term 2.68
+//! the same hour). What stays per term is the reads themselves: 60 % of
+//! the shared march's samples (perf: 97 of 162; memory-bound loads of a
+//! node's eight corners, each term's table its own); a software prefetch
+//! of the other terms' corners measured 1.01 times the CPU (0.95-1.03)
+//! and was left out.
 //! With the source
 //! table's buffers kept per thread (`source_table.rs`), the fisheye below
 //! takes 0.93 times the CPU of before (`farm-bench -n 16`, paired,
@@ -201,12 +222,17 @@
 //! with the air-mass-2 fold): set aside, 4 % of the CPU for an error
 //! nearer the bound.
 //!
-//! Where the gas fisheye's extra CPU goes (perf, call graphs, 1632
-//! samples against the gas-free image's 623): the sky-view tables +357
-//! (their multiply scattered march +216, of it the source-table reads
-//! +124: memory-bound loads of a node's eight corners, per node and per
-//! term sky whatever its samples), fields +189, source tables +169 (per
-//! sample), pixels +112, polarisation tables +75. The source table's
+//! Where the gas fisheye's extra CPU went before the shared
+//! multiple-scattering march (perf, call graphs, 1632 samples against
+//! the gas-free image's 623): the sky-view tables +357 (their multiply
+//! scattered march +216, of it the source-table reads +124: memory-bound
+//! loads of a node's eight corners, per node and per term sky whatever
+//! its samples), fields +189, source tables +169 (per sample), pixels
+//! +112, polarisation tables +75. With it (perf, dwarf call graphs, 1177
+//! samples of the gas fisheye alone): the sky-view tables' rows 28 %, of
+//! them the shared multiple-scattering march 14 % and single scattering
+//! 13 %; the source tables 17 %, the fields' solves 18 %, the pixels
+//! 10 %. The source table's
 //! phase kernel and the field's sun phase rows now skip the species that
 //! do not scatter (the banded gases, ozone, NO2: their rows were never
 //! read), byte-identical: 0.98 times the CPU (`farm-bench -n 6`,
@@ -1405,7 +1431,10 @@ pub(crate) mod tests {
         // The terms' skies march the same view rays through the same
         // sun-column table: built together (`Sky::prepare_images`), the
         // second and later terms' integrals are computed in the first's
-        // march (`Together`); each term's sky-view table must be bit for bit
+        // march (`Together`), and their multiply scattered light in the
+        // first's multiple-scattering march
+        // (`MultipleScatteringTable::compute_radiance_parts_together`);
+        // each term's sky-view table must be bit for bit
         // the one it builds alone (`Sky::compute_tables`), polarised and
         // scalar.
         let atmosphere = earth_clear_with_gases();
@@ -1424,8 +1453,11 @@ pub(crate) mod tests {
             assert_eq!(sky.k_terms().len(), TERMS);
             assert!(sky.k_terms()[1].1.wavelengths().len() < grid.len());
             for (_, term) in sky.k_terms() {
-                // Every term takes the sharing path.
+                // Every term takes the sharing path, its multiply
+                // scattered light marched in the first term's march too.
                 assert!(term.scene().has_view_geometry_of(first.scene()));
+                let sources = (first.source_table(), term.source_table());
+                assert!(matches!(sources, (Some(a), Some(b)) if a.marches_with(b)));
                 let together = term.image_tables.get().expect("built together");
                 let alone = term.compute_tables(term.source_table(), true);
                 assert!(together.sky_view == alone.sky_view, "{polarisation:?}");

@@ -39,7 +39,7 @@
 //! the phase functions per pixel (`MultipleScatteringField::compute_forward_peak_radiance`,
 //! with the peak-only rows of `forward_peak.rs`).
 
-use super::multiple_scattering::MultipleScatteringTable;
+use super::multiple_scattering::{MultipleScatteringScratch, MultipleScatteringTable};
 use super::optical_column::SunColumnTable;
 use super::single_scattering::{
     SingleScatteringScene, SingleScatteringScratch, SunColumns, Together,
@@ -138,7 +138,14 @@ impl SkyViewTable {
     /// the first sky's march, each node's optical depths and
     /// transmittances of every such sky one loop (`Together`), bit for bit
     /// the table it builds alone (the k-distribution's term skies, which
-    /// differ in what absorbs only).
+    /// differ in what absorbs only). So is the multiply scattered light of
+    /// such a sky whose source table's view rays are the first's
+    /// (`MultipleScatteringTable::marches_with`): the first sky's
+    /// multiple-scattering march takes it node by node with its own
+    /// (`MultipleScatteringTable::compute_radiance_parts_together`: the
+    /// nodes, their densities, geometry and columns toward the sun found
+    /// once, each sky's source read from its own table), bit for bit what
+    /// its own march (`compute_radiance_parts`, the slow path) gives.
     pub(crate) fn compute_sharing_geometry(
         skies: &[(
             &SingleScatteringScene,
@@ -180,6 +187,44 @@ impl SkyViewTable {
             let ground = &mut rest[..w];
             table.store_kept_rows(scratch.inscattering_integrals(), integrals);
             for (o, v) in ground.iter_mut().zip(scratch.ground_radiance()) {
+                *o = *v as f32;
+            }
+        };
+        // Per sky: whether its multiply scattered light is marched in the
+        // first sky's march (`compute_radiance_parts_together`): it shares
+        // the first's view rays and sun-column table, and both have a
+        // source table whose view rays are the same.
+        let multiple_together: Vec<bool> = skies
+            .iter()
+            .enumerate()
+            .map(|(t, (_, _, multiple_scattering))| {
+                let first = skies[0].2;
+                shares[t]
+                    && matches!((first, multiple_scattering), (Some(a), Some(b)) if a.marches_with(b))
+            })
+            .collect();
+        // One node's multiply scattered light (the air's, the ground's
+        // skylight, the forward-peak integrals of the scratch's last ray).
+        let store_multiple = |table: &SkyViewTable,
+                              node: &mut [f32],
+                              (air, skylit): (&[f64], &[f64]),
+                              ms_scratch: &MultipleScatteringScratch| {
+            let wavelengths = table.wavelengths;
+            let rest = &mut node[(table.kept.len() + 1) * wavelengths..];
+            let (multiple, rest) = rest.split_at_mut(wavelengths);
+            let (ground_skylight, forward) = rest.split_at_mut(wavelengths);
+            for (o, v) in multiple.iter_mut().zip(air.iter()) {
+                *o = *v as f32;
+            }
+            for (o, v) in ground_skylight.iter_mut().zip(skylit.iter()) {
+                *o = *v as f32;
+            }
+            // The kept species' rows, then the peak-only rows.
+            let all = ms_scratch.forward_integrals();
+            let (rows, peak_only) = forward.split_at_mut(table.kept.len() * wavelengths);
+            table.store_kept_rows(all, rows);
+            let extra = &all[table.species * wavelengths..];
+            for (o, v) in peak_only.iter_mut().zip(extra) {
                 *o = *v as f32;
             }
         };
@@ -234,61 +279,96 @@ impl SkyViewTable {
                     }
                 }
             }
+            // Per sky: the multiple scattering's scratch and the air's and
+            // the ground's skylight of a ray.
+            let mut ms_work: Vec<_> = skies
+                .iter()
+                .zip(&tables)
+                .map(|((_, _, multiple_scattering), table)| {
+                    multiple_scattering.map(|ms| {
+                        let mut ms_scratch = ms.scratch();
+                        ms_scratch.reuse_view_nodes();
+                        let wavelengths = table.wavelengths;
+                        (ms_scratch, vec![0.0; wavelengths], vec![0.0; wavelengths])
+                    })
+                })
+                .collect();
             // Sky by sky (each sky's source table stays in cache through
             // the row): the integrals of those not marched together, and
-            // the multiply scattered light.
+            // the multiply scattered light (the first sky's march takes
+            // that of those marched with it).
             for (t, (((sky, sun_columns, multiple_scattering), table), scratch)) in skies
                 .iter()
                 .zip(&tables)
                 .zip(scratches.iter_mut())
                 .enumerate()
             {
-                let mut ms_work = multiple_scattering.map(|ms| {
-                    let mut ms_scratch = ms.scratch();
-                    ms_scratch.reuse_view_nodes();
-                    let wavelengths = table.wavelengths;
-                    (ms_scratch, vec![0.0; wavelengths], vec![0.0; wavelengths])
-                });
                 let marched_together = together && (t == 0 || shares[t]);
+                if multiple_together[t] {
+                    // Marched in the first sky's march.
+                    debug_assert!(marched_together);
+                    continue;
+                }
+                let (own_work, rest_work) = ms_work[t..].split_first_mut().expect("a sky");
                 for k in 0..azimuth_nodes {
                     let view = view_of(k);
                     let columns = SunColumns::Table(sun_columns);
-                    let (wavelengths, stride) = (table.wavelengths, table.values_per_node);
+                    let stride = table.values_per_node;
                     let node = &mut outs[t][k * stride..(k + 1) * stride];
                     if !marched_together {
                         sky.compute_inscattering_integrals(view, columns, scratch);
                         store(scratch, table, node);
                     }
-                    let rest = &mut node[(table.kept.len() + 1) * wavelengths..];
                     let marched_here = march_multiple
                         && marched(index_in_half, half_zenith_nodes, multiple_stride.0)
                         && marched(k, azimuth_nodes, multiple_stride.1);
-                    if let (Some(ms), Some((ms_scratch, air, skylit)), true) =
-                        (multiple_scattering, ms_work.as_mut(), marched_here)
-                    {
+                    let (Some(ms), Some((ms_scratch, air, skylit)), true) =
+                        (multiple_scattering, own_work.as_mut(), marched_here)
+                    else {
+                        continue;
+                    };
+                    if t == 0 && multiple_together.iter().any(|m| *m) {
+                        // The others' light with this sky's, node by node.
+                        let mut others = Vec::new();
+                        let mut sources = Vec::new();
+                        let mut with = Vec::new();
+                        for (u, work) in rest_work.iter_mut().enumerate() {
+                            if let (true, Some((other_scratch, other_air, other_skylit))) =
+                                (multiple_together[u + 1], work.as_mut())
+                            {
+                                let other = skies[u + 1].2.expect("a source table");
+                                let (alongside, source) =
+                                    ms.alongside(other, other_scratch, (other_air, other_skylit));
+                                others.push(alongside);
+                                sources.push(source);
+                                with.push(u + 1);
+                            }
+                        }
+                        ms.compute_radiance_parts_together(
+                            (view, f64::INFINITY),
+                            columns,
+                            ms_scratch,
+                            (air, skylit),
+                            (&mut others, &sources),
+                        );
+                        drop(others);
+                        store_multiple(table, node, (air, skylit), ms_scratch);
+                        for u in with {
+                            let (other_scratch, other_air, other_skylit) =
+                                rest_work[u - 1].as_ref().expect("marched");
+                            let other = &tables[u];
+                            let stride = other.values_per_node;
+                            let node = &mut outs[u][k * stride..(k + 1) * stride];
+                            store_multiple(other, node, (other_air, other_skylit), other_scratch);
+                        }
+                    } else {
                         ms.compute_radiance_parts(
                             (view, f64::INFINITY),
                             columns,
                             ms_scratch,
                             (air, skylit),
                         );
-                        let (multiple, rest) = rest.split_at_mut(wavelengths);
-                        let (ground_skylight, forward) = rest.split_at_mut(wavelengths);
-                        for (o, v) in multiple.iter_mut().zip(air.iter()) {
-                            *o = *v as f32;
-                        }
-                        for (o, v) in ground_skylight.iter_mut().zip(skylit.iter()) {
-                            *o = *v as f32;
-                        }
-                        // The kept species' rows, then the peak-only rows.
-                        let all = ms_scratch.forward_integrals();
-                        let (rows, peak_only) =
-                            forward.split_at_mut(table.kept.len() * wavelengths);
-                        table.store_kept_rows(all, rows);
-                        let extra = &all[table.species * wavelengths..];
-                        for (o, v) in peak_only.iter_mut().zip(extra) {
-                            *o = *v as f32;
-                        }
+                        store_multiple(table, node, (air, skylit), ms_scratch);
                     }
                 }
             }

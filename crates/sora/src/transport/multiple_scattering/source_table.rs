@@ -34,6 +34,7 @@ use std::f64::consts::PI;
 use std::sync::Arc;
 
 use super::phase_fourier::normalized_associated_legendre;
+use super::view_march::{Alongside, NodeCells};
 use super::{
     LOG_FLOOR, MultipleScatteringField, MultipleScatteringScratch, NodeGeometry, SourceCells,
     floored_log,
@@ -354,7 +355,7 @@ impl MultipleScatteringTable {
         self.field
             .optics
             .march(segment, sun_columns, scratch, terms, |node, _, scratch| {
-                self.lookup_log_source(node, &mut scratch.source_cells, &mut scratch.log_source)
+                self.lookup_log_source(node, &mut scratch.source_cells, &mut scratch.log_source);
             });
     }
 
@@ -456,7 +457,9 @@ impl MultipleScatteringTable {
                         *l += t * (u - *l);
                     }
                 }
-                _ => self.lookup_log_source(node(altitude_m), &mut Vec::new(), &mut log_source),
+                _ => {
+                    self.lookup_log_source(node(altitude_m), &mut Vec::new(), &mut log_source);
+                }
             }
             let rho = density(at);
             for j in 0..s {
@@ -780,52 +783,90 @@ impl MultipleScatteringTable {
     /// ln R(x, view) at one march node, into `log_source`: quadrilinear
     /// in ln R. A view ray's replayed node (`NodeGeometry::march_node`)
     /// takes its altitude's and view's cells from `cells` (per node
-    /// index), the others keep theirs there.
+    /// index), the others keep theirs there. Returns the node's cells
+    /// (what [`Self::read_log_source`] reads at).
     fn lookup_log_source(
         &self,
         node: NodeGeometry,
         cells: &mut Vec<SourceCells>,
         log_source: &mut [f64],
-    ) {
+    ) -> NodeCells {
+        let at = self.node_cells(node, cells);
+        self.read_log_source(at, log_source);
+        at
+    }
+
+    /// ln R at one march node whose cells in this table are `at`
+    /// ([`Self::node_cells`]), into `log_source`.
+    fn read_log_source(&self, at: NodeCells, log_source: &mut [f64]) {
         #[cfg(target_arch = "x86_64")]
         if crate::transport::vector_exp::avx2_available() {
             // SAFETY: the CPU has AVX2 (checked just above).
-            unsafe { self.lookup_log_source_avx2(node, cells, log_source) };
+            unsafe { self.read_log_source_avx2(at, log_source) };
             return;
         }
-        self.lookup_log_source_portable(node, cells, log_source);
+        self.read_log_source_portable(at, log_source);
     }
 
-    /// [`Self::lookup_log_source`] compiled for AVX2 (8 lanes of f32
-    /// across the wavelengths; the same operations per lane, so the same
-    /// bits as the portable form).
+    /// [`Self::read_log_source`] compiled for AVX2 (8 lanes of f32 across
+    /// the wavelengths; the same operations per lane, so the same bits as
+    /// the portable form).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn lookup_log_source_avx2(
-        &self,
-        node: NodeGeometry,
-        cells: &mut Vec<SourceCells>,
-        log_source: &mut [f64],
-    ) {
-        self.lookup_log_source_portable(node, cells, log_source);
+    fn read_log_source_avx2(&self, at: NodeCells, log_source: &mut [f64]) {
+        self.read_log_source_portable(at, log_source);
     }
 
-    /// [`Self::lookup_log_source`] in the target's baseline instructions.
+    /// [`Self::read_log_source`] in the target's baseline instructions.
     #[inline(always)]
-    fn lookup_log_source_portable(
+    fn read_log_source_portable(
+        &self,
+        (altitude, sun, azimuth, view): NodeCells,
+        log_source: &mut [f64],
+    ) {
+        interpolate_log_source_in_cells(
+            &self.values,
+            (
+                self.field.optics.sun_axis.count(),
+                self.azimuths_rad.len(),
+                self.view_zenith_nodes,
+            ),
+            (altitude, sun, azimuth),
+            view,
+            log_source,
+        );
+    }
+
+    /// The cells of one march node in this table: its altitude's, its
+    /// sun's, its azimuth's from the sun and its view's zenith (node,
+    /// fraction). A view ray's replayed node (`NodeGeometry::march_node`)
+    /// takes its altitude's and view's cells from `cells` (per node
+    /// index), the others keep theirs there.
+    fn node_cells(&self, node: NodeGeometry, cells: &mut Vec<SourceCells>) -> NodeCells {
+        let optics = &self.field.optics;
+        let (altitude, view) = self.altitude_and_view_cells(node, cells);
+        (
+            altitude,
+            optics.sun_axis.locate(node.sun_cosine),
+            azimuth_cell(&self.azimuths_rad, node.cos_azimuth),
+            view,
+        )
+    }
+
+    /// The altitude's and the view's zenith cells of one march node
+    /// (as [`Self::node_cells`] finds them).
+    fn altitude_and_view_cells(
         &self,
         node: NodeGeometry,
         cells: &mut Vec<SourceCells>,
-        log_source: &mut [f64],
-    ) {
-        let optics = &self.field.optics;
+    ) -> SourceCells {
         let locate = || {
             (
-                optics.geometry.grid.locate(node.altitude_m),
+                self.field.optics.geometry.grid.locate(node.altitude_m),
                 view_cell(node.view_cosine, self.view_zenith_nodes),
             )
         };
-        let (altitude, view) = match node.march_node {
+        match node.march_node {
             Some((index, true)) if index < cells.len() => cells[index],
             Some((index, false)) => {
                 if cells.len() <= index {
@@ -835,23 +876,126 @@ impl MultipleScatteringTable {
                 cells[index]
             }
             _ => locate(),
-        };
-        interpolate_log_source_in_cells(
-            &self.values,
-            (
-                optics.sun_axis.count(),
-                self.azimuths_rad.len(),
-                self.view_zenith_nodes,
-            ),
-            (
-                altitude,
-                optics.sun_axis.locate(node.sun_cosine),
-                azimuth_cell(&self.azimuths_rad, node.cos_azimuth),
-            ),
-            view,
-            log_source,
+        }
+    }
+
+    /// Which of a node's cells in `other` are its cells in this table:
+    /// all of them (the same altitude levels, sun nodes, azimuths and
+    /// view zenith nodes), the sun's and the azimuth's alone (the same
+    /// sun nodes and azimuths: the k-distribution's term skies, whose
+    /// levels follow their absorption), or none.
+    fn cells_shared_with(&self, other: &MultipleScatteringTable) -> SharedCells {
+        let (a, b) = (&self.field.optics, &other.field.optics);
+        let angles = a.sun_axis.angles_rad == b.sun_axis.angles_rad
+            && self.azimuths_rad == other.azimuths_rad;
+        let levels = a.geometry.grid.altitudes_m() == b.geometry.grid.altitudes_m()
+            && self.view_zenith_nodes == other.view_zenith_nodes;
+        match (angles, levels) {
+            (true, true) => SharedCells::All,
+            (true, false) => SharedCells::SunAndAzimuth,
+            _ => SharedCells::None,
+        }
+    }
+
+    /// Whether a march of this table can take `other`'s with it
+    /// ([`Self::compute_radiance_parts_together`]): the same view rays
+    /// (the same species' profiles, radii, eye, sun and panels;
+    /// their optics may differ).
+    pub(crate) fn marches_with(&self, other: &MultipleScatteringTable) -> bool {
+        self.field.optics.has_view_geometry_of(&other.field.optics)
+    }
+
+    /// `other`'s march taken with this table's
+    /// ([`Self::compute_radiance_parts_together`]; [`Self::marches_with`]
+    /// holds): its scratch and its outputs, the air's light and the
+    /// ground's skylight.
+    pub(crate) fn alongside<'a>(
+        &'a self,
+        other: &'a MultipleScatteringTable,
+        scratch: &'a mut MultipleScatteringScratch,
+        (air, skylit): (&'a mut [f64], &'a mut [f64]),
+    ) -> (Alongside<'a>, AlongsideSource<'a>) {
+        assert!(self.marches_with(other));
+        (
+            Alongside {
+                optics: &other.field.optics,
+                scratch,
+                field: air,
+                ground: skylit,
+            },
+            AlongsideSource {
+                table: other,
+                shared: self.cells_shared_with(other),
+            },
+        )
+    }
+
+    /// [`Self::compute_radiance_parts`], and with it each of `others`'
+    /// (their tables in `sources`, in order; made by [`Self::alongside`],
+    /// their columns toward the sun `sun_columns`' too): one march of the
+    /// view ray ([`ViewRayOptics::march_alongside`]), each node's cells
+    /// in the tables located once where their axes are the same (the
+    /// sun's and the azimuth's of the term skies, whose altitude levels
+    /// differ; each table keeps its altitude's and view's cells per node
+    /// index, as its own march does). Each
+    /// one's outputs and forward-peak integrals (in its scratch) are bit
+    /// for bit what its own `compute_radiance_parts` gives.
+    pub(crate) fn compute_radiance_parts_together(
+        &self,
+        segment: (Vector3, f64),
+        sun_columns: SunColumns,
+        scratch: &mut MultipleScatteringScratch,
+        terms: (&mut [f64], &mut [f64]),
+        (others, sources): (&mut [Alongside], &[AlongsideSource]),
+    ) {
+        assert_eq!(others.len(), sources.len());
+        self.field.optics.march_alongside(
+            0.0,
+            segment,
+            sun_columns,
+            (scratch, terms),
+            |node, _, scratch| {
+                scratch.node_cells = self.lookup_log_source(
+                    node,
+                    &mut scratch.source_cells,
+                    &mut scratch.log_source,
+                );
+            },
+            others,
+            |t, node, first, own| {
+                let source = &sources[t];
+                let at = match source.shared {
+                    SharedCells::All => first.node_cells,
+                    SharedCells::SunAndAzimuth => {
+                        let (_, sun, azimuth, _) = first.node_cells;
+                        let (altitude, view) = source
+                            .table
+                            .altitude_and_view_cells(node, &mut own.source_cells);
+                        (altitude, sun, azimuth, view)
+                    }
+                    SharedCells::None => source.table.node_cells(node, &mut own.source_cells),
+                };
+                source.table.read_log_source(at, &mut own.log_source);
+            },
         );
     }
+}
+
+/// The source table of a march taken with another's
+/// ([`MultipleScatteringTable::alongside`]), and which of a node's cells
+/// in it are the other's.
+pub(crate) struct AlongsideSource<'a> {
+    table: &'a MultipleScatteringTable,
+    shared: SharedCells,
+}
+
+/// Which of a march node's cells in a source table are its cells in
+/// another ([`MultipleScatteringTable::cells_shared_with`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum SharedCells {
+    All,
+    SunAndAzimuth,
+    None,
 }
 
 /// What [`MultipleScatteringTable::march_segment_parts`] gathers (prototype

@@ -21,6 +21,17 @@
 //! wavelength adds nothing (a dark source, a sun beam of zero) the fast
 //! sums add +0 instead of skipping it: the sums start at +0, which adding
 //! +0 leaves as they are.
+//!
+//! Skies whose view rays are the same (the same species' profiles, radii,
+//! eye, sun and panels: the k-distribution's term skies, which differ in
+//! what absorbs only) march a ray once ([`ViewRayOptics::march_alongside`]):
+//! the nodes, their densities and columns, their geometry and their
+//! columns toward the sun are found by the first sky's march, and every
+//! sky's light is taken at each node with its own optics and source, the
+//! same operations on the same values as its own march (which stays, the
+//! slow path; the sky-view table's test
+//! `the_terms_image_tables_built_together_are_each_terms_own` holds them
+//! together bit for bit).
 
 use std::ops::ControlFlow;
 use std::sync::Arc;
@@ -30,7 +41,7 @@ use super::field::SunZenithAxis;
 use super::forward_peak::{self, ForwardPeak};
 use super::peak_beam::PeakBeam;
 use crate::geometry::{Vector3, segment_in_atmosphere};
-use crate::transport::optical_column::{LocatedNode, PanelMarch};
+use crate::transport::optical_column::{LocatedNode, MarchNode, PanelMarch};
 use crate::transport::single_scattering::SunColumns;
 use crate::transport::vector_exp::{exp_in_place, exp_neg_in_place};
 
@@ -160,6 +171,9 @@ pub struct MultipleScatteringScratch {
     /// source table, kept for the replayed nodes
     /// (`MultipleScatteringTable::compute_radiance_parts`).
     pub(super) source_cells: Vec<SourceCells>,
+    /// The current node's cells in the source table that the march reads
+    /// (`MultipleScatteringTable::compute_radiance_parts_together`).
+    pub(super) node_cells: NodeCells,
 }
 
 /// The blocks of a view node's terms that depend on the view alone, one
@@ -172,9 +186,23 @@ pub struct MultipleScatteringScratch {
 /// the transmittances e^-tau* and e^-tau from the eye.
 pub(super) const VIEW_TERMS: usize = 6;
 
+/// Another optics marched with a view ray's march
+/// ([`ViewRayOptics::march_alongside`]): its scratch, and its outputs (the
+/// air's light and the ground's skylight, as `march_from` takes them).
+pub(crate) struct Alongside<'a> {
+    pub(super) optics: &'a ViewRayOptics,
+    pub(super) scratch: &'a mut MultipleScatteringScratch,
+    pub(super) field: &'a mut [f64],
+    pub(super) ground: &'a mut [f64],
+}
+
 /// A march node's altitude cell (level, fraction) and view zenith cell
 /// (node, fraction) in a source table.
 pub(super) type SourceCells = ((usize, f64), (usize, f64));
+
+/// A march node's cells in a source table: its altitude's, its sun's, its
+/// azimuth's from the sun and its view's zenith (node, fraction).
+pub(super) type NodeCells = ((usize, f64), (usize, f64), (usize, f64), (usize, f64));
 
 impl MultipleScatteringScratch {
     /// As [`crate::transport::single_scattering::SingleScatteringScratch::reuse_view_nodes`]:
@@ -259,6 +287,7 @@ impl ViewRayOptics {
             view_terms: Vec::new(),
             view_exps_filled: Vec::new(),
             source_cells: Vec::new(),
+            node_cells: ((0, 0.0), (0, 0.0), (0, 0.0), (0, 0.0)),
         }
     }
 
@@ -289,24 +318,72 @@ impl ViewRayOptics {
     pub(super) fn march_from<F>(
         &self,
         from_m: f64,
-        (view, distance_m): (Vector3, f64),
+        segment: (Vector3, f64),
         sun_columns: SunColumns,
         scratch: &mut MultipleScatteringScratch,
-        (field, ground_out): (&mut [f64], &mut [f64]),
-        mut source: F,
+        out: (&mut [f64], &mut [f64]),
+        source: F,
     ) where
         F: FnMut(NodeGeometry, &[f64], &mut MultipleScatteringScratch),
     {
+        self.march_alongside(
+            from_m,
+            segment,
+            sun_columns,
+            (scratch, out),
+            source,
+            &mut [],
+            |_, _, _, _| {},
+        );
+    }
+
+    /// [`ViewRayOptics::march_from`], and with it the same march of every
+    /// optics of `others` (each with its scratch and its two outputs, as
+    /// `march_from` takes them) whose view rays are this one's
+    /// ([`ViewRayOptics::has_view_geometry_of`]) and whose columns toward
+    /// the sun are `sun_columns`' (the k-distribution's term skies, which
+    /// differ in what absorbs only): the ray's nodes, their densities and
+    /// columns, their geometry and their columns toward the sun are found
+    /// once, and each of the others' light is taken at each node with this
+    /// one's, `other_source(index in others, node, this one's scratch, its
+    /// scratch)`
+    /// writing its ln R into its scratch's `log_source` (this one's
+    /// `source` has run at the node). Each of the others' outputs are bit
+    /// for bit what its own `march_from` gives: the same operations on the
+    /// same values, its view terms kept per node index in its own scratch
+    /// as its own march keeps them.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn march_alongside<F, G>(
+        &self,
+        from_m: f64,
+        (view, distance_m): (Vector3, f64),
+        sun_columns: SunColumns,
+        (scratch, (field, ground_out)): (&mut MultipleScatteringScratch, (&mut [f64], &mut [f64])),
+        mut source: F,
+        others: &mut [Alongside],
+        mut other_source: G,
+    ) where
+        F: FnMut(NodeGeometry, &[f64], &mut MultipleScatteringScratch),
+        G: FnMut(usize, NodeGeometry, &MultipleScatteringScratch, &mut MultipleScatteringScratch),
+    {
+        debug_assert!(others.iter().all(|o| o.optics.has_view_geometry_of(self)));
         let radiance = field;
         radiance.fill(0.0);
         ground_out.fill(0.0);
         scratch.forward_integrals.fill(0.0);
         scratch.scaled_forward_integrals.fill(0.0);
-        let (w, s) = (self.wavelengths, self.species);
+        for other in others.iter_mut() {
+            other.field.fill(0.0);
+            other.ground.fill(0.0);
+            other.scratch.forward_integrals.fill(0.0);
+            other.scratch.scaled_forward_integrals.fill(0.0);
+            other.scratch.view_columns.fill(0.0);
+        }
+        // Whether a node's columns toward the sun are asked for.
+        let needs_sun_columns =
+            self.has_forward_peaks || others.iter().any(|o| o.optics.has_forward_peaks);
         let (ground, top) = (self.geometry.ground_radius_m, self.geometry.top_radius_m);
         let (profiles, corners) = (&self.geometry.profiles, &self.geometry.corners);
-        let (extinction, scaled_extinction) =
-            (&self.scaled.extinction, &self.scaled.scaled_extinction);
         let Some((enter, exit)) = segment_in_atmosphere(self.observer, view, ground, top) else {
             return;
         };
@@ -366,42 +443,11 @@ impl ViewRayOptics {
                     let densities = std::mem::take(&mut scratch.densities);
                     source(geometry, &densities, scratch);
                     scratch.densities = densities;
-                    let terms_length = VIEW_TERMS * w;
-                    let terms_end = (node.index + 1) * terms_length;
-                    if !(node.repeated && view_terms.len() >= terms_end) {
-                        if view_terms.len() < terms_end {
-                            view_terms.resize(terms_end, 0.0);
-                            view_exps_filled.resize(node.index + 1, false);
-                        }
-                        let node_terms = &mut view_terms[terms_end - terms_length..terms_end];
-                        if scratch.by_wavelength {
-                            self.fill_view_terms_by_wavelength(
-                                &scratch.node_columns,
-                                &scratch.densities,
-                                node_terms,
-                            );
-                        } else {
-                            self.fill_view_terms(
-                                &scratch.node_columns,
-                                &scratch.densities,
-                                node_terms,
-                            );
-                        }
-                        view_exps_filled[node.index] = false;
-                    }
-                    let terms = &mut view_terms[terms_end - terms_length..terms_end];
-                    // T*(eye, x) beta*_sca(x) R(x): one exponential per
-                    // wavelength for the transmittance and the source.
-                    let weight = node.weight;
-                    if scratch.by_wavelength {
-                        self.add_source_light_by_wavelength(weight, terms, scratch, radiance);
-                    } else {
-                        self.add_source_light(weight, terms, scratch, radiance);
-                    }
                     // What delta-M moved from single scattering into the
                     // sun's beam and the view's transmittance (see the
-                    // module docs, TMS).
-                    let lit = self.has_forward_peaks
+                    // module docs, TMS) needs the node's columns toward
+                    // the sun: found once for every optics.
+                    let sunlit = needs_sun_columns
                         && sun_columns.compute_columns_to_sun_at_node(
                             profiles,
                             corners,
@@ -411,37 +457,44 @@ impl ViewRayOptics {
                             &mut scratch.sun_panel_ends,
                             &mut scratch.sun_columns,
                         );
-                    let share = match &self.peak_beam {
-                        Some(beam) if self.has_forward_peaks => {
-                            beam.lookup_beam(r, sun_cosine, &mut scratch.beam)
+                    // Every sky's source first (the reads of tables
+                    // apart, independent of each other, can overlap),
+                    // then every sky's light.
+                    for (t, other) in others.iter_mut().enumerate() {
+                        let own = &mut *other.scratch;
+                        own.node_columns.copy_from_slice(node_columns);
+                        own.densities.copy_from_slice(&scratch.densities);
+                        other_source(t, geometry, scratch, own);
+                        if sunlit && other.optics.has_forward_peaks {
+                            own.sun_columns.copy_from_slice(&scratch.sun_columns);
                         }
-                        _ => 0.0,
-                    };
-                    if share > 0.0 {
-                        if !view_exps_filled[node.index] {
-                            let (depths, transmittances) = terms.split_at_mut(4 * w);
-                            transmittances.copy_from_slice(&depths[..2 * w]);
-                            exp_neg_in_place(transmittances);
-                            view_exps_filled[node.index] = true;
-                        }
-                        if scratch.by_wavelength {
-                            self.add_tilted_forward_peak_by_wavelength(
-                                weight, lit, share, terms, scratch,
-                            );
-                        } else {
-                            self.add_tilted_forward_peak(weight, lit, share, terms, scratch);
-                        }
-                    } else if lit {
-                        if scratch.by_wavelength {
-                            self.add_forward_peak_by_wavelength(weight, terms, scratch);
-                        } else {
-                            self.add_forward_peak(weight, terms, scratch);
-                        }
+                    }
+                    self.add_node_light(
+                        (&node, r, sun_cosine, sunlit),
+                        scratch,
+                        (&mut view_terms, &mut view_exps_filled),
+                        radiance,
+                    );
+                    for other in others.iter_mut() {
+                        let own = &mut *other.scratch;
+                        let mut terms = std::mem::take(&mut own.view_terms);
+                        let mut filled = std::mem::take(&mut own.view_exps_filled);
+                        other.optics.add_node_light(
+                            (&node, r, sun_cosine, sunlit),
+                            own,
+                            (&mut terms, &mut filled),
+                            other.field,
+                        );
+                        own.view_terms = terms;
+                        own.view_exps_filled = filled;
                     }
                     ControlFlow::Continue(())
                 },
             );
             scratch.view_columns.copy_from_slice(march.columns());
+            for other in others.iter_mut() {
+                other.scratch.view_columns.copy_from_slice(march.columns());
+            }
             scratch.march = march;
             scratch.view_panel_ends = view_ends;
             scratch.view_terms = view_terms;
@@ -450,22 +503,127 @@ impl ViewRayOptics {
         let end = start + view * length;
         if distance_m >= exit && end.length() <= ground * (1.0 + 1e-12) {
             let sun_cosine = self.sun.dot(end.normalized());
-            let (node, t) = self.sun_axis.locate(sun_cosine);
-            let next = node + 1;
-            for i in 0..w {
-                let (mut tau_scaled, mut tau) = (0.0, 0.0);
-                for j in 0..s {
-                    tau_scaled += scaled_extinction[i * s + j] * scratch.view_columns[j];
-                    tau += extinction[i * s + j] * scratch.view_columns[j];
-                }
-                let lerp = |table: &[f64]| {
-                    interpolate_geometrically(table[node * w + i], table[next * w + i], t)
-                };
-                let (scaled, exact) = ((-tau_scaled).exp(), (-tau).exp());
-                ground_out[i] = scaled * lerp(&self.ground_diffuse)
-                    + (scaled - exact) * lerp(&self.ground_direct);
+            self.add_ground_skylight(sun_cosine, &scratch.view_columns, ground_out);
+            for other in others.iter_mut() {
+                other.optics.add_ground_skylight(
+                    sun_cosine,
+                    &other.scratch.view_columns,
+                    other.ground,
+                );
             }
         }
+    }
+
+    /// The ground's skylight (its diffuse term) seen through the view's
+    /// columns `view_columns` from the eye to the ground, where the sun's
+    /// zenith cosine is `sun_cosine`, into `ground_out`.
+    fn add_ground_skylight(&self, sun_cosine: f64, view_columns: &[f64], ground_out: &mut [f64]) {
+        let (w, s) = (self.wavelengths, self.species);
+        let (extinction, scaled_extinction) =
+            (&self.scaled.extinction, &self.scaled.scaled_extinction);
+        let (node, t) = self.sun_axis.locate(sun_cosine);
+        let next = node + 1;
+        for i in 0..w {
+            let (mut tau_scaled, mut tau) = (0.0, 0.0);
+            for j in 0..s {
+                tau_scaled += scaled_extinction[i * s + j] * view_columns[j];
+                tau += extinction[i * s + j] * view_columns[j];
+            }
+            let lerp = |table: &[f64]| {
+                interpolate_geometrically(table[node * w + i], table[next * w + i], t)
+            };
+            let (scaled, exact) = ((-tau_scaled).exp(), (-tau).exp());
+            ground_out[i] =
+                scaled * lerp(&self.ground_diffuse) + (scaled - exact) * lerp(&self.ground_direct);
+        }
+    }
+
+    /// One node's light of the march ([`ViewRayOptics::march_alongside`]):
+    /// the node `node` at radius `r` (m) with the sun at zenith cosine
+    /// `sun_cosine`, its columns toward the sun in `scratch.sun_columns`
+    /// where `sunlit`, its densities, columns from the eye and ln R in
+    /// `scratch`; the scaled field's light added to `radiance`, the
+    /// forward-peak integrals to the scratch's. `view_terms` holds the
+    /// view terms per node index (and whether their transmittances are
+    /// filled), computed here where the node is not a replayed one.
+    fn add_node_light(
+        &self,
+        (node, r, sun_cosine, sunlit): (&MarchNode, f64, f64, bool),
+        scratch: &mut MultipleScatteringScratch,
+        (view_terms, view_exps_filled): (&mut Vec<f64>, &mut Vec<bool>),
+        radiance: &mut [f64],
+    ) {
+        let w = self.wavelengths;
+        let terms_length = VIEW_TERMS * w;
+        let terms_end = (node.index + 1) * terms_length;
+        if !(node.repeated && view_terms.len() >= terms_end) {
+            if view_terms.len() < terms_end {
+                view_terms.resize(terms_end, 0.0);
+                view_exps_filled.resize(node.index + 1, false);
+            }
+            let node_terms = &mut view_terms[terms_end - terms_length..terms_end];
+            if scratch.by_wavelength {
+                self.fill_view_terms_by_wavelength(
+                    &scratch.node_columns,
+                    &scratch.densities,
+                    node_terms,
+                );
+            } else {
+                self.fill_view_terms(&scratch.node_columns, &scratch.densities, node_terms);
+            }
+            view_exps_filled[node.index] = false;
+        }
+        let terms = &mut view_terms[terms_end - terms_length..terms_end];
+        // T*(eye, x) beta*_sca(x) R(x): one exponential per
+        // wavelength for the transmittance and the source.
+        let weight = node.weight;
+        if scratch.by_wavelength {
+            self.add_source_light_by_wavelength(weight, terms, scratch, radiance);
+        } else {
+            self.add_source_light(weight, terms, scratch, radiance);
+        }
+        // What delta-M moved from single scattering into the sun's beam
+        // and the view's transmittance (see the module docs, TMS).
+        let lit = self.has_forward_peaks && sunlit;
+        let share = match &self.peak_beam {
+            Some(beam) if self.has_forward_peaks => {
+                beam.lookup_beam(r, sun_cosine, &mut scratch.beam)
+            }
+            _ => 0.0,
+        };
+        if share > 0.0 {
+            if !view_exps_filled[node.index] {
+                let (depths, transmittances) = terms.split_at_mut(4 * w);
+                transmittances.copy_from_slice(&depths[..2 * w]);
+                exp_neg_in_place(transmittances);
+                view_exps_filled[node.index] = true;
+            }
+            if scratch.by_wavelength {
+                self.add_tilted_forward_peak_by_wavelength(weight, lit, share, terms, scratch);
+            } else {
+                self.add_tilted_forward_peak(weight, lit, share, terms, scratch);
+            }
+        } else if lit {
+            if scratch.by_wavelength {
+                self.add_forward_peak_by_wavelength(weight, terms, scratch);
+            } else {
+                self.add_forward_peak(weight, terms, scratch);
+            }
+        }
+    }
+
+    /// Whether `other`'s view rays march the same nodes as this one's
+    /// and their paths toward the sun are the same: the same species'
+    /// profiles (in order), radii, eye, sun and panels (what
+    /// [`ViewRayOptics::march_alongside`] shares); their optics may differ.
+    pub(super) fn has_view_geometry_of(&self, other: &ViewRayOptics) -> bool {
+        self.geometry.profiles == other.geometry.profiles
+            && (self.geometry.ground_radius_m, self.geometry.top_radius_m)
+                == (other.geometry.ground_radius_m, other.geometry.top_radius_m)
+            && self.observer == other.observer
+            && self.sun == other.sun
+            && self.panels == other.panels
+            && self.species == other.species
     }
 
     /// The view terms of a node ([`VIEW_TERMS`] blocks) from its columns
