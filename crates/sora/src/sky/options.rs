@@ -421,7 +421,9 @@ impl SkyBuilder<'_> {
             &self.wavelengths,
             whole_grid,
             leave_out.then_some(self.observation.observer_altitude_m),
-            self.colour_images.filter(|_| !whole_grid),
+            self.colour_images
+                .filter(|_| !whole_grid)
+                .map(|observer| (observer, self.observation.observer_altitude_m)),
             |at_term, grid, higher_orders| {
                 let mut builder = self.clone();
                 if !higher_orders {
