@@ -126,30 +126,53 @@
 //! degrees) views within 6.7e-5, the rest equal.
 //!
 //! A sky for colour images alone ([`SkyBuilder::for_colour_images`], what
-//! `sora render` builds) folds the terms into the effective solve where
-//! colour allows ([`colour_run`]): at a span sample the k-sum's and the
-//! effective solve's transmittances differ by at most D_i over air masses
-//! 1e-2 to 1e3, so folding it moves X, Y or Z by at most s_i D_i of
-//! itself, s_i the sample's largest share of the colour-matching sums (a
-//! pixel whose gas-free radiance there is at most its mean); the span is
-//! cut from its ends while those bounds sum to at most [`COLOUR_BOUND`]
-//! (1e-3), and term 0's atmosphere takes the effective coefficient
-//! outside what is left (`GasBand::terms_within_nm`). With 2.9 cm of
-//! water on the default grid the terms stay at 580-700 nm (s D 0.11 and
-//! 0.13 at 580 and 600 nm: water along the horizon, D about 0.65; 3.4e-3
-//! at 680 nm) and fold at 720-780 nm (2.8e-4 together). Measured against
-//! every term's image (64 x 64 fisheye, suns 60 to -4 degrees, polarised):
-//! luminance within 6.0e-4 (p99 5.3e-4) and xy within 1.6e-4 without
-//! aerosol, 3.2e-4 and 1.6e-4 with earth-clear-summer's; the effective
-//! solve at every sample errs 1.3e-2 to 0.14 in luminance and 2.8e-3 to
-//! 2.1e-2 in xy. Its spectral images are refused.
-//! It saves 14 %: the fisheye below 0.86 times the CPU of every term's
-//! (`farm-bench -n 8`, paired, 0.83-0.87), 2.78 times the gas-free image
-//! (`-n 10`, 2.58-2.95, load 10), since a term's sky costs some 0.2 of
-//! the gas-free image whatever its samples (0.025 each), and the
-//! effective solve alone (every sample folded) costs 1.27 times the
-//! gas-free image (its three more species in every march); see
-//! docs/atmosphere-file.md.
+//! `sora render` builds) merges the terms ([`colour_plan`]): at each
+//! sample the terms, sorted by the vertical optical depth tau_j of the one
+//! banded gas that differs between them, are cut into runs, each carried
+//! by one sky with the run's weights summed (W_G) at one depth tau_G. A
+//! path with m vertical columns of that gas has depth m tau_j in term j
+//! (the correlated-k scaling), and every path from the top of the
+//! atmosphere to the eye crosses each shell above it, so m >= m_min (the
+//! gas' column above the eye over the ground's; 1 on the ground) whatever
+//! the sun and the orders of scattering; a run then moves each path's
+//! light by at most D_G = sup_{m >= m_min} |sum_{j in G} w_j exp(-m
+//! tau_j) - W_G exp(-m tau_G)| of its gas-free light (second order in the spread
+//! of the exp(-m tau_j), tau_G chosen to make it least), and a colour's X,
+//! Y or Z, relative, by at most sum_i s_i D_i (D_i the sum over the
+//! sample's runs, s_i its largest share of the colour-matching sums, for a
+//! pixel whose gas-free radiance there is at most its mean). Each sample
+//! takes as few runs as keep that sum within [`COLOUR_BOUND`] (1e-3) with
+//! the fewest skies: sky g carries each sample's g-th run (the weakest
+//! first), term 0's slot on the whole grid, the others on the samples from
+//! the first to the last with more runs (weight 0 between). The sup also
+//! covers m -> infinity, where the weakest term is the only light left, so
+//! one run (the whole fold) errs D about 0.14 wherever a band absorbs and
+//! weak terms merge only where their colour share is small. With the
+//! measured summer file (2.92 cm of water, O2-O2) on the default grid:
+//! four skies, terms {0}, {1}, {2}, {3, 4} at 580 and 600 nm (s D 3.1e-4
+//! each), {0}, {1}, {2-4} at 680 nm (1.3e-4), {0}, {1-4} at 700 nm
+//! (1.2e-4), one run at 720-780 nm (1.1e-4 together), 9.7e-4 in all; the
+//! extra skies cover 580-700, 580-680 and 580-600 nm (15 term samples,
+//! against four skies of 7 with the air-mass-2 fold before). The strong
+//! bands keep the terms whose light differs (760 nm: any merge errs D >
+//! 6e-3; 940 nm: only the terms dark along every path, 2-4, merge, D
+//! 1e-6; the default grid merges 760 nm only for its colour share of some
+//! 1e-4; a test). Measured against every term's image (the slow path,
+//! the default sky): the benchmark's 256 x 256 fisheye (summer file,
+//! polarised) luminance max 5.4e-4 (p99 5.2e-4) and xy 6.3e-5 (p99
+//! 6.2e-5) at a sun of 30 degrees, 4.8e-4 (4.7e-4) and 6.5e-5 (6.3e-5) at
+//! 5 degrees; 16 x 16 fisheyes of the summer file, 5 cm and earth-clear
+//! with 2.9 cm of water, suns 30 and 5: X, Y, Z within 5.7e-4, luminance
+//! p99 5.1e-4 at most (a test; the effective solve at every sample errs
+//! 2.1e-2 to 7.8e-2). The plan
+//! costs some 20 ms (the sup sampled 100 times a decade of m, widened by
+//! the most the difference can bend between samples). The fisheye takes
+//! 0.91 times the CPU of the air-mass-2 fold (`farm-bench -n 8`, paired,
+//! 0.86-0.98, 2-core machine at load 8-10), peak memory 130 MiB against
+//! 158, 2.37 times the gas-free image (`gases.sh`, 5 runs; the fold's 2.56
+//! the same hour). Exact views, spectra, irradiance and aerial
+//! perspective of a default sky keep every term. Its spectral images
+//! are refused; see docs/atmosphere-file.md.
 //! A colour image of the terms is one pixel pass (`Sky::render_pixels_of`,
 //! colour and Stokes): each pixel's direction, its cell in the sky-view
 //! table, its scattering plane's rotation to the meridian frame and its
@@ -168,7 +191,10 @@
 //! tables and pixels cost about what the same number of gas-free samples
 //! cost, so one sky carrying the terms as channels would still take
 //! about 2 times the gas-free image (docs/atmosphere-file.md).
-//! Fewer terms per sample, each with a weight and coefficient of its own
+//! Before the merge (the history, docs/atmosphere-file.md), colour skies
+//! folded the span's ends into the effective solve (the air-mass-2
+//! coefficient, air masses 1e-2 to 1e3). Measured then:
+//! fewer terms per sample, each with a weight and coefficient of its own
 //! fitted to the sample's five-term transmittance over the fold's air
 //! masses (1e-2 to 1e3, minimax; `scripts/gases/colour_term_refit.py`,
 //! which reproduces the fold's s D above), bounded as the fold is (s_i
@@ -1905,6 +1931,42 @@ pub(crate) mod tests {
                 // k-distribution's).
                 assert!(colour.render_spectral(&image, &|_| {}).is_err());
             }
+        }
+    }
+
+    #[test]
+    #[ignore = "a measurement: the benchmark's image (scripts/bench/gases.sh), some 30 s"]
+    fn the_benchmark_fisheye_of_a_colour_sky_against_every_terms() {
+        // gases.sh's render case (the measured summer file, a 256 x 256
+        // fisheye over 380-780 nm every 20, the default polarisation) and
+        // a sun of 5 degrees: the merged colour sky's luminance and xy
+        // against every term's (the default sky).
+        let grid = WavelengthGrid::new(380.0, 780.0, 20.0).unwrap();
+        let observer = crate::colour::Observer::Cie1931TwoDegree;
+        let atmosphere = summer_file();
+        let image = ImageSettings::new(Camera::Fisheye, 256, 256);
+        let to_xyz = SpectrumToXyz::new(&grid, observer);
+        for sun in [30.0, 5.0] {
+            let build = |colour: bool| {
+                let builder = Sky::builder(&atmosphere)
+                    .sun_deg(sun, 180.0)
+                    .wavelengths(grid);
+                if colour {
+                    builder.for_colour_images(observer)
+                } else {
+                    builder
+                }
+                .build()
+                .unwrap()
+            };
+            let render = |s: &Sky| s.render_xyz(&image, &to_xyz, &|_| {}).unwrap();
+            let (luminance, chroma, worst) =
+                colour_errors(&render(&build(true)), &render(&build(false)));
+            println!(
+                "sun {sun}: luminance max {:.2e} p99 {:.2e}, xy max {:.2e} p99 {:.2e}, XYZ {worst:.2e}",
+                luminance.0, luminance.1, chroma.0, chroma.1
+            );
+            assert!(worst < COLOUR_BOUND, "{worst:e}");
         }
     }
 
