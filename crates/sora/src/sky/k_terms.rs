@@ -666,6 +666,8 @@ struct AirMasses {
     light: Vec<Vec<f64>>,
     /// The step in ln m.
     step: f64,
+    /// Whether m_min lies below the first air mass (see [`AirMasses::new`]).
+    below: bool,
 }
 
 impl AirMasses {
@@ -675,6 +677,14 @@ impl AirMasses {
             .copied()
             .filter(|d| *d > 0.0)
             .fold(f64::INFINITY, f64::min);
+        // An eye high above the gas (m_min near 0): the air masses start
+        // where the deepest term's depth is 1e-6, below which every
+        // difference is within 2e-6 W (|df/dm| <= 2 W tau_max), added to
+        // the bound ([`merged_depth`]).
+        let deepest = depths.iter().copied().fold(0.0, f64::max);
+        let floor = if deepest > 0.0 { 1e-6 / deepest } else { 1.0 };
+        let below = m_min < floor;
+        let m_min = m_min.max(floor);
         let m_max = if positive.is_finite() {
             (40.0 / positive).max(m_min)
         } else {
@@ -692,6 +702,7 @@ impl AirMasses {
             .map(|(w, d)| m.iter().map(|m| w * (-m * d).exp()).collect())
             .collect();
         AirMasses {
+            below,
             step: (m_max / m_min).ln() / steps as f64,
             m,
             light,
@@ -776,7 +787,11 @@ fn merged_depth(members: &[usize], weights: &[f64], depths: &[f64], air: &AirMas
     } else {
         (d.exp(), fd)
     };
-    (tau, bound + 0.62 * total_weight * air.step * air.step / 8.0)
+    let below = if air.below { 2e-6 * total_weight } else { 0.0 };
+    (
+        tau,
+        bound + 0.62 * total_weight * air.step * air.step / 8.0 + below,
+    )
 }
 
 /// Air masses a decade for the sup of [`merged_depth`].
@@ -2011,6 +2026,16 @@ pub(crate) mod tests {
         assert_eq!(members, vec![vec![0], vec![1], vec![2, 3, 4]]);
         // Merging the transmitting terms 0 and 1 instead errs far more.
         assert!(water[1].0 > 50.0 * three.0, "{:e}", water[1].0);
+        // An eye above the gas (m_min 0): paths with little of it, so the
+        // dark terms too are told apart, and the plan still ends.
+        let colour = WavelengthGrid::new(380.0, 780.0, 20.0).unwrap();
+        let terms = k_distribution_terms(&atmosphere, &colour).unwrap();
+        let observer = crate::colour::Observer::Cie1931TwoDegree;
+        let ground = colour_plan(&terms, &colour, observer, 0.0).unwrap();
+        let aloft = colour_plan(&terms, &colour, observer, 100e3).unwrap();
+        let skies = |plan: &ColourPlan| plan.groups.iter().map(Vec::len).max().unwrap();
+        assert!(aloft.bounds.iter().sum::<f64>() <= COLOUR_BOUND);
+        assert!(skies(&aloft) >= skies(&ground), "{}", skies(&aloft));
     }
 
     #[test]
