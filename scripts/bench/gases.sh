@@ -11,7 +11,7 @@
 #             sora spectrum --atmosphere A --sun-elevation 30 --wavelengths 900:1000:10 --almucantar 10
 #   render:   a 256 x 256 fisheye image, 380-780 nm every 20 (the default grid), sun 30 degrees
 #             sora render --atmosphere A --sun-elevation 30 --camera fisheye --width 256 --height 256 -o x.exr
-#             (a sky for colour images: the terms folded where colour allows, sky/k_terms.rs)
+#             (a sky for colour images: the terms merged where colour allows, sky/k_terms.rs)
 # The atmospheres: earth-clear-summer-no-aerosol (crates/sora-cli/tests/data/measured/), with its
 # [gases] (precipitable_water_cm = 2.92, o2_o2 = true) and with that table removed.
 # Prints the median user + system CPU seconds (GNU time) of each and their ratio.

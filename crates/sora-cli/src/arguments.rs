@@ -533,7 +533,7 @@ impl SunAndObserver {
 
     /// [`SunAndObserver::sky`]; with `colour_images`, a sky for colour
     /// images alone, seen by that observer
-    /// (`sora::SkyBuilder::for_colour_images`: banded gases' terms folded
+    /// (`sora::SkyBuilder::for_colour_images`: banded gases' terms merged
     /// where colour allows).
     pub fn sky_for(
         &self,

@@ -386,11 +386,23 @@ pub struct GasBand {
     /// the effective coefficient is fitted for) and the others', for the
     /// overlaps.
     pub amounts: BandAmounts,
-    /// With a term: the wavelengths (nm, inclusive) at which it applies;
-    /// samples outside take the effective coefficient, as a single solve
-    /// does (a colour image's terms, `sky/k_terms.rs`). `None`: every
-    /// sample.
-    pub terms_within_nm: Option<(f64, f64)>,
+    /// With a term: per sample (nm), the term this gas takes there in
+    /// place of `term` and a factor on its coefficient (a colour image's
+    /// merged terms, `sky/k_terms.rs`: one sky carrying a group of terms
+    /// at one coefficient); samples not listed take `term`. Empty: every
+    /// sample at `term`.
+    pub merged: Vec<MergedSample>,
+}
+
+/// One sample of [`GasBand::merged`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MergedSample {
+    /// The sample's wavelength, nm.
+    pub wavelength_nm: f64,
+    /// The k-distribution term taken there.
+    pub term: usize,
+    /// The factor on that term's coefficient.
+    pub factor: f64,
 }
 
 /// One term: its weight and the factors of x (water), y (mixed gases) and
@@ -663,13 +675,21 @@ impl GasBand {
                 .map(|(i, absorber)| {
                     let others = others.iter().map(|(gas, values)| (*gas, values[i]));
                     let wavelength_nm = grid.wavelength_nm(i);
-                    let outside = self
-                        .terms_within_nm
-                        .is_some_and(|(lo, hi)| !(lo..=hi).contains(&wavelength_nm));
-                    let coefficient = if outside {
-                        self.effective_coefficient_of(*absorber)
-                    } else {
-                        self.coefficient_of(*absorber, others)
+                    let merged = self
+                        .merged
+                        .iter()
+                        .find(|m| (m.wavelength_nm - wavelength_nm).abs() < 1e-6);
+                    let coefficient = match merged {
+                        Some(m) => {
+                            let at = GasBand {
+                                gas: self.gas,
+                                term: Some(m.term),
+                                amounts: self.amounts,
+                                merged: Vec::new(),
+                            };
+                            m.factor * at.coefficient_of(*absorber, others)
+                        }
+                        None => self.coefficient_of(*absorber, others),
                     };
                     coefficient * per_molecule
                 })
@@ -732,7 +752,7 @@ pub fn banded_gas_species(gases: &BandedGases) -> Vec<Species> {
                 gas,
                 term: None,
                 amounts,
-                terms_within_nm: None,
+                merged: Vec::new(),
             }),
             amount: GasAmount::ColumnDobsonUnits(
                 molecules_per_m2 / MOLECULES_PER_M2_PER_DOBSON_UNIT,
@@ -873,7 +893,7 @@ pub(crate) fn band_of_mut(species: &mut Species) -> Option<&mut GasBand> {
     }
 }
 
-fn band_of(species: &Species) -> Option<&GasBand> {
+pub(crate) fn band_of(species: &Species) -> Option<&GasBand> {
     match &species.model {
         SpeciesModel::AbsorbingGas(AbsorbingGas {
             cross_section: AbsorptionCrossSection::Band(band),
@@ -1094,7 +1114,7 @@ mod tests {
                 co2_ppm: CO2_REFERENCE_PPM,
                 methane_ppm: None,
             },
-            terms_within_nm: None,
+            merged: Vec::new(),
         };
         let a = 27.0; // 930 nm
         let k = band.coefficient_per_unit_amount(a, [(BandGas::MixedGases, 0.0)]);
