@@ -24,7 +24,7 @@
 //!   images' at the defaults, and the layer's views on them), and its
 //!   multiply scattered light marched in 8 view-ray panels, not the
 //!   field's 16 (`LAYER_MULTIPLE_PANELS`), and at every other sun node
-//!   from the horizon to 70 degrees (0.4 to 53 degrees, 14 of the default
+//!   from -6 to 70 degrees (-4.4 to 53 degrees, 19 of the default
 //!   48 nodes) not marched but blended in its logarithm from the nodes
 //!   either side (the cubic through them and the nodes beyond)
 //!   (`multiple_from_neighbours`; `docs/engine-tables.md` gives the bake's
@@ -792,7 +792,7 @@ enum Field {
 enum Layers {
     /// From a sky-view table on the layer's own grid
     /// ([`layer_sky_view`]), the multiply scattered light of every other
-    /// sun node from the horizon to 70 degrees blended from its neighbours'
+    /// sun node from -6 to 70 degrees blended from its neighbours'
     /// ([`multiple_from_neighbours`]).
     Grid,
     /// As `Grid`, with the blended nodes' multiply scattered light
@@ -850,23 +850,30 @@ fn multiple_from_neighbours(s: usize, nodes: usize) -> bool {
 }
 
 /// The sun elevations (degrees) within which every other sun node's
-/// multiply scattered light is blended from its neighbours': from the
-/// horizon to 70 degrees, where the default 48 nodes are 0.4-8.5 degrees
-/// apart (0.04 to 60.6 degrees; the odd nodes 0.43 to 53.1 degrees, 14 of
-/// the 48, are blended). Above 12.5 degrees (the odd nodes 14.1 to 53.1,
+/// multiply scattered light is blended from its neighbours': from -6
+/// degrees to 70, where the default 48 nodes are 0.4-8.5 degrees
+/// apart (-5.12 to 60.6 degrees; the odd nodes -4.38 to 53.1 degrees, 19
+/// of the 48, are blended). Above 12.5 degrees (the odd nodes 14.1 to 53.1,
 /// 1.8-8.5 degrees from their neighbours) the multiply scattered light
 /// is smooth in the sun's elevation: the browser test's luminance p99
 /// on the blended nodes rose by at most 0.5 points (earth-hazy at 14.1
 /// degrees 0.37 % to 0.88 %, its horizon band 0.38 % to 0.91 %; mars-dust
 /// 0.95 % to 1.25 %, horizon band 0.57 % to 1.27 %; the bound is 2 %).
 /// The nodes from 70 degrees up (69.2, 78.9, 90) all march: the read near
-/// a high sun is the tables' tightest there. Below the horizon the light
-/// is not linear enough in its logarithm as the planet's shadow rises:
-/// blended from -6 degrees up, earth-clear's browser test at a sun of -4
-/// degrees rose from 1.82 % to 3.40 % (p99; the bound is 2 %), from -2.7
-/// degrees up its horizon band at -1 degree from 0.73 % to 2.14 %
-/// (`docs/engine-tables.md`).
-const MULTIPLE_FROM_NEIGHBOURS_DEG: (f64, f64) = (0.0, 70.0);
+/// a high sun is the tables' tightest there. From -6 degrees to the
+/// horizon (the odd nodes -4.38 to -0.36 degrees, 0.4-0.7 degrees from
+/// their neighbours, 5 more of the 48) the cubic through the four marching
+/// nodes around each follows the planet's shadow closely enough: the
+/// browser test's measure (`the_sky_between_the_sun_nodes_about_the_sunset_matches_the_library`)
+/// on the blended nodes rose by at most 0.63 points (earth-hazy at -2.08
+/// degrees 0.30 % to 0.93 %, its horizon band 0.32 % to 0.96 %;
+/// earth-clear at most 0.62 %, horizon band 0.79 %; the tightest,
+/// paper-mars' horizon band at -3.12 degrees, 1.33 % to 1.52 %; the bound
+/// is 2 %), and the bake took 4.5 % less CPU. The halfway blend there (before the
+/// cubic and the four-layer read) took earth-clear at -4 degrees from
+/// 1.82 % to 3.40 %. Below -6 degrees (the nodes 0.9-1.5 degrees apart,
+/// the field's 16 panels) every node marches (`docs/engine-tables.md`).
+const MULTIPLE_FROM_NEIGHBOURS_DEG: (f64, f64) = (-6.0, 70.0);
 
 /// The sky-view table a layer needs: its nodes (per half of the zenith
 /// axis, azimuth) and multiple-scattering strides. Its zenith rows are the

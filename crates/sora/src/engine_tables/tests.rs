@@ -755,7 +755,7 @@ fn the_layers_filled_between_azimuths_are_every_azimuth_marched() {
 }
 
 /// The bake's layers with the multiply scattered light of every other sun
-/// node from the horizon to 70 degrees blended from its neighbours'
+/// node from -6 to 70 degrees blended from its neighbours'
 /// (`multiple_from_neighbours`) against the same layers marched at every
 /// sun node (`Layers::GridEverySun`, the slow path): earth-hazy with the
 /// default multiple-scattering settings, the default 48 sun nodes, few
@@ -763,7 +763,11 @@ fn the_layers_filled_between_azimuths_are_every_azimuth_marched() {
 /// atmosphere. The layers of the nodes that march are the slow path's
 /// bit for bit; the blended ones' luminance (relative difference wherever
 /// it is above 1e-3 of its layer's maximum) is held to what was measured
-/// with a margin: the nodes from 0.43 to 10.7 degrees on the ground 0.11
+/// with a margin: the nodes from -4.38 to -0.36 degrees (below the
+/// horizon, as the planet's shadow rises) on the ground 0.16 % median,
+/// 0.94 % p99 and at worst, at the top 0.04 %, 0.53 % and 4.99 % (bounds
+/// 1.5 %, 1.5 %, 1 % and 7 %: a dim texel of the top's layers, near the
+/// horizon); the nodes from 0.43 to 10.7 degrees on the ground 0.11
 /// % median, 0.43 % p99 and at worst, at the top 0.02 %, 0.17 % and 0.34
 /// % (bounds 0.8 %, 0.8 %, 0.3 % and 0.6 %); the nodes from 14.1 to 53.1
 /// degrees (53.1 halfway: its node s + 3 is above 70 degrees) on the
@@ -771,8 +775,9 @@ fn the_layers_filled_between_azimuths_are_every_azimuth_marched() {
 /// (bounds 0.8 %, 0.8 %, 0.4 % and 0.5 %). The cubic through the four
 /// marching nodes around a blended one is closer to the marched layers
 /// than the logarithm's halfway between the two either side
-/// (`Layers::GridLinearBlend`: on the ground 1.21 % and 0.58 % p99, at
-/// the top 0.38 % and 0.35 %). The transmittance is the same table.
+/// (`Layers::GridLinearBlend`: below the horizon on the ground 5.7 %
+/// p99, at the top 1.5 %; above it on the ground 1.21 % and 0.58 % p99,
+/// at the top 0.38 % and 0.35 %). The transmittance is the same table.
 #[test]
 fn the_layers_blended_between_suns_are_the_marched_layers() {
     let sky = hazy_sky_with_default_field();
@@ -789,7 +794,7 @@ fn the_layers_blended_between_suns_are_the_marched_layers() {
     let blended: Vec<usize> = (0..settings.sun_nodes)
         .filter(|s| multiple_from_neighbours(*s, settings.sun_nodes))
         .collect();
-    assert_eq!(blended, (17..=43).step_by(2).collect::<Vec<_>>());
+    assert_eq!(blended, (7..=43).step_by(2).collect::<Vec<_>>());
     let fast = EngineTables::bake(&sky, &settings, &|_| {}).unwrap();
     let slow = EngineTables::bake_with(
         &sky,
@@ -809,15 +814,21 @@ fn the_layers_blended_between_suns_are_the_marched_layers() {
     {
         assert_eq!(f, s, "layer {layer} marches: the slow path's layer");
     }
-    // Below 12.5 degrees (the nodes 0.4-1.5 degrees apart) and above
-    // (1.8-8.5 degrees apart), each on its own.
-    let low = |layer: usize| is_blended(layer) && layer / settings.altitude_nodes <= 31;
+    // Below the horizon (the nodes -4.4 to -0.36 degrees, 0.4-0.8
+    // degrees apart), from it to 12.5 degrees (0.4-1.5 degrees apart) and
+    // above (1.8-8.5 degrees apart), each on its own.
+    let twilight = |layer: usize| is_blended(layer) && layer / settings.altitude_nodes <= 15;
+    let low =
+        |layer: usize| is_blended(layer) && (17..=31).contains(&(layer / settings.altitude_nodes));
     let high = |layer: usize| is_blended(layer) && layer / settings.altitude_nodes >= 33;
+    let [twilight_ground, twilight_top] =
+        layer_luminance_differences_of(&fast, &slow, layer_texels, twilight);
     let [ground, top] = layer_luminance_differences_of(&fast, &slow, layer_texels, low);
     let [high_ground, high_top] = layer_luminance_differences_of(&fast, &slow, layer_texels, high);
     eprintln!(
-        "blended vs marched (median, p99, worst): 0.4-10.7 degrees ground {ground:?}, top {top:?}; \
-         14-53 degrees ground {high_ground:?}, top {high_top:?}"
+        "blended vs marched (median, p99, worst): -4.4 to -0.36 degrees ground \
+         {twilight_ground:?}, top {twilight_top:?}; 0.4-10.7 degrees ground {ground:?}, \
+         top {top:?}; 14-53 degrees ground {high_ground:?}, top {high_top:?}"
     );
     let linear = EngineTables::bake_with(
         &sky,
@@ -826,13 +837,28 @@ fn the_layers_blended_between_suns_are_the_marched_layers() {
         &|_| {},
     )
     .unwrap();
+    let [linear_twilight_ground, linear_twilight_top] =
+        layer_luminance_differences_of(&linear, &slow, layer_texels, twilight);
     let [linear_ground, linear_top] =
         layer_luminance_differences_of(&linear, &slow, layer_texels, low);
     let [linear_high_ground, linear_high_top] =
         layer_luminance_differences_of(&linear, &slow, layer_texels, high);
     eprintln!(
-        "linear blend vs marched: 0.4-10.7 degrees ground {linear_ground:?}, top {linear_top:?}; \
-         14-53 degrees ground {linear_high_ground:?}, top {linear_high_top:?}"
+        "linear blend vs marched: -4.4 to -0.36 degrees ground {linear_twilight_ground:?}, \
+         top {linear_twilight_top:?}; 0.4-10.7 degrees ground {linear_ground:?}, \
+         top {linear_top:?}; 14-53 degrees ground {linear_high_ground:?}, top {linear_high_top:?}"
+    );
+    assert!(
+        twilight_ground.1 > 0.0,
+        "the blending changed nothing: {twilight_ground:?}"
+    );
+    assert!(
+        twilight_ground.1 < 0.015 && twilight_ground.2 < 0.015,
+        "-4.4 to -0.36 degrees, ground {twilight_ground:?}"
+    );
+    assert!(
+        twilight_top.1 < 0.01 && twilight_top.2 < 0.07,
+        "-4.4 to -0.36 degrees, top {twilight_top:?}"
     );
     assert!(ground.1 > 0.0, "the blending changed nothing: {ground:?}");
     assert!(ground.1 < 0.008 && ground.2 < 0.008, "ground {ground:?}");
@@ -849,8 +875,10 @@ fn the_layers_blended_between_suns_are_the_marched_layers() {
         high_top.1 < 0.004 && high_top.2 < 0.005,
         "14-53 degrees, top {high_top:?}"
     );
-    // The cubic is the closer to the nodes marched, in both ranges.
+    // The cubic is the closer to the nodes marched, in every range.
     for (cubic, linear) in [
+        (twilight_ground, linear_twilight_ground),
+        (twilight_top, linear_twilight_top),
         (ground, linear_ground),
         (top, linear_top),
         (high_ground, linear_high_ground),

@@ -112,7 +112,7 @@ impl Sky {
     /// `outer`, the skies one sun step beyond them, by the cubic through
     /// the four: `SkyViewTable::blend_multiple_from`; its single
     /// scattering and sunlit ground are its own). What the engine tables
-    /// do at every other sun node from the horizon to 70 degrees
+    /// do at every other sun node from -6 to 70 degrees
     /// (`engine_tables`).
     pub(crate) fn blend_multiple_scattering_from(
         &self,
