@@ -2513,12 +2513,14 @@ fn the_sky_between_the_sun_nodes_about_the_sunset_matches_the_library() {
 /// eyes 1, 5, 12, 30, 70 km and the nodes) earth-hazy's sky half between
 /// the nodes is 0.34-3.28 % (horizon band 0.49-3.95 %, xy up to 0.0052),
 /// earth-clear's 0.21-3.43 % (band 0.20-3.44 %), both within 2 % up to
-/// 30 km but for the sun at -4 at 5 and 12 km (2.0-2.7 %); at the nodes
+/// 30 km with the sun at 60 and 5 (at -4 up to 2.7 %, the band too); at
+/// the nodes
 /// 2.39 and 7.64 km 0.3-2.4 % (the table alone 0.2-1.6 %), 19.2 km
 /// 0.3-6.4 % (the table 0.9-52 %; the sun at -4 fails both), 44.5 km
 /// 0.5-1.5 % (band up to 3.6 %; the table 2.4-4.0 %), 100 km 2.1-5.2 %
-/// (the table 22 %); below the horizon 0.04-1.8 % but earth-clear at
-/// 19.2 km with the sun at -4 (7.7 %, the table's own). The table's read
+/// (the table 22 %); below the horizon 0.04-1.8 % but earth-clear with
+/// the sun at -4 at 12 km (4.0 %) and 19.2 km (7.7 %, the table's own
+/// read at that node). The table's read
 /// alone (read 4), as the shaders still read it: the numbers that follow.
 /// Before the march, earth-hazy (128 x 128) was within them on the ground and at the nodes
 /// 2.39 and 7.64 km (but 3.6 % at 7.64 km with the sun at -12), and off
