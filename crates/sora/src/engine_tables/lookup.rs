@@ -53,6 +53,19 @@
 //!   axis cut at its last node below the horizon (the chord of the last
 //!   two such layers, extended beyond the last; the curvature at the cut
 //!   dropped): a layer with the sun up has no shadow to give.
+//! - Sky for an eye above the ground, tables with the march's
+//!   (`EngineTables::raised_sky_xyz`; the shaders do not have it yet and
+//!   read the table as above): above the eye's horizon the march's light
+//!   of the whole ray (`MarchTables::whole_ray_xyz`, split at the
+//!   perigee for a view going down from well above it), in the first
+//!   altitude cell times the table's ratio to the march on the ground
+//!   (fading to none at the first node); below it the march to the lower
+//!   altitude node's sphere plus the segment's transmittance times the
+//!   table's read there, times the table's ratio to that composition at
+//!   the upper node (ln linear in h). The table's own read on the
+//!   ground, continuous in the altitude; within 0.2-3.4 % of the library
+//!   between the nodes where the table's read was 6-65 % off
+//!   (docs/engine-tables.md, "An eye between the altitude nodes").
 //! - Transmittance: linear in altitude between two rows, each read
 //!   linearly at the mu coordinate of its own altitude's horizon; zero
 //!   for a view below the eye's horizon.
@@ -181,6 +194,12 @@ pub(crate) fn turn_share(view: LocalView, e_deg: f64, horizon: f64) -> f64 {
     sun_side.max(shadow)
 }
 
+/// The eye's height above a view's perigee (a share of the atmosphere's
+/// thickness) from which the march of a raised eye's sky splits the ray
+/// at the perigee (`EngineTables::whole_ray_sky_xyz`; a smoothstep from
+/// none at the perigee's altitude).
+pub(crate) const PERIGEE_SPLIT_RAMP: f64 = 0.05;
+
 /// Sun elevations (degrees) over which the whole sky above the horizon's
 /// band comes to be read turned (`turn_share`): none below the first, all
 /// above the second (below the sun node at 69.15 degrees of the default
@@ -308,8 +327,10 @@ pub(crate) const ZENITH_CAP_CELLS: usize = 16;
 pub(crate) static CAP_OVERRIDE: std::sync::atomic::AtomicUsize =
     std::sync::atomic::AtomicUsize::new(usize::MAX);
 
-/// A test's choice of the read between the altitude layers (0: the read,
-/// ln L linear in h; others [`EngineTables::probe_altitude_read`]'s probes), so
+/// A test's choice of the sky's read for a raised eye (0: the lookup's;
+/// 1-3 [`EngineTables::probe_altitude_read`]'s blends of the table's
+/// layers; 4 the table's read, ln L linear in h, as without march
+/// tables; 5-7 [`EngineTables::probe_march_read`]'s marches), so
 /// that one bake can be read several ways
 /// (`tests::the_sky_between_the_altitude_nodes_matches_the_library`).
 #[cfg(test)]
@@ -414,6 +435,35 @@ impl EngineTables {
     /// Sky radiance (XYZ, W m^-2 sr^-1 nm^-1 units) seen at `altitude_m`
     /// toward `view` with the sun at `sun_elevation_deg` (no sun disc).
     pub fn sky_xyz(&self, altitude_m: f64, view: LocalView, sun_elevation_deg: f64) -> [f64; 3] {
+        #[cfg(test)]
+        match ALTITUDE_READ_OVERRIDE.load(std::sync::atomic::Ordering::Relaxed) {
+            1..=4 => return self.table_sky_xyz(altitude_m, view, sun_elevation_deg),
+            mode @ 5.. => {
+                if let Some(value) =
+                    self.probe_march_read(mode, altitude_m, view, sun_elevation_deg)
+                {
+                    return value;
+                }
+            }
+            _ => {}
+        }
+        match &self.march {
+            Some(march) if altitude_m > 0.0 => {
+                self.raised_sky_xyz(march, altitude_m, view, sun_elevation_deg)
+            }
+            _ => self.table_sky_xyz(altitude_m, view, sun_elevation_deg),
+        }
+    }
+
+    /// The sky table's read (see the module docs) at `altitude_m` toward
+    /// `view` with the sun at `sun_elevation_deg`: [`Self::sky_xyz`]
+    /// without march tables and on the ground.
+    pub(crate) fn table_sky_xyz(
+        &self,
+        altitude_m: f64,
+        view: LocalView,
+        sun_elevation_deg: f64,
+    ) -> [f64; 3] {
         self.layers_xyz(
             self.sky_layers_table(),
             altitude_m,
@@ -468,7 +518,8 @@ impl EngineTables {
                 }
             };
             #[cfg(test)]
-            if let mode @ 1.. = ALTITUDE_READ_OVERRIDE.load(std::sync::atomic::Ordering::Relaxed) {
+            if let mode @ 1..=3 = ALTITUDE_READ_OVERRIDE.load(std::sync::atomic::Ordering::Relaxed)
+            {
                 return self.probe_altitude_read(mode, (a, fa), h, turned, horizon, at);
             }
             let (lower, upper) = (at(a), at(a + 1));
@@ -591,6 +642,219 @@ impl EngineTables {
         .map(|v| v.max(FLOOR).ln())
     }
 
+    /// The sky for an eye above the ground, from the march's tables
+    /// (`sky_xyz` with march tables; see the module docs): above the
+    /// eye's horizon the march's light of the whole ray
+    /// ([`Self::whole_ray_sky_xyz`]), in the first altitude cell times the
+    /// ratio of the table's read on the ground to the march's there (the
+    /// view at the same place relative to the ground's horizon), that
+    /// ratio's logarithm fading linearly in h to none at the first node;
+    /// below it the march to where the ray crosses the lower altitude
+    /// node's sphere plus the segment's transmittance times the table's
+    /// read there ([`Self::composed_below_xyz`]), times the ratio of the
+    /// table's read at the upper node to the same composition from there
+    /// (the view at the same place relative to that node's horizon), that
+    /// ratio's logarithm linear in h. The table's own read on the ground
+    /// and, below the horizon, at every node; continuous in the altitude.
+    pub(crate) fn raised_sky_xyz(
+        &self,
+        march: &MarchTables,
+        altitude_m: f64,
+        view: LocalView,
+        sun_elevation_deg: f64,
+    ) -> [f64; 3] {
+        let pi = std::f64::consts::PI;
+        let h = altitude_m.clamp(0.0, self.thickness_m());
+        let (z, phi) = (view.zenith_rad, view.relative_azimuth_rad);
+        let towards = |z: f64| [z.sin() * phi.cos(), z.sin() * phi.sin(), z.cos()];
+        let e = sun_elevation_deg.to_radians();
+        let sun = [e.cos(), 0.0, e.sin()];
+        let a_count = self.settings.altitude_nodes;
+        let node = |a: usize| axes::altitude_of_node(a, a_count, self.thickness_m());
+        let ((a, _), _) = self.altitude_and_sun_cells(h, sun_elevation_deg);
+        let fh = altitude_share(h, a, a_count, self.thickness_m());
+        let horizon_at =
+            |h: f64| axes::horizon_zenith(self.ground_radius_m + h, self.ground_radius_m);
+        let horizon = horizon_at(h);
+        let table = |h: f64, z: f64| {
+            let local = LocalView {
+                zenith_rad: z,
+                relative_azimuth_rad: phi,
+            };
+            self.table_sky_xyz(h, local, sun_elevation_deg)
+        };
+        let scaled = |value: [f64; 3], want: [f64; 3], got: [f64; 3], share: f64| {
+            std::array::from_fn(|i| {
+                let k = want[i].max(FLOOR).ln() - got[i].max(FLOOR).ln();
+                value[i] * (k * share).exp()
+            })
+        };
+        if z < horizon {
+            let whole = self.whole_ray_sky_xyz(march, h, towards(z), sun);
+            if a > 0 || fh >= 1.0 {
+                return whole;
+            }
+            let z_0 = z * horizon_at(0.0) / horizon;
+            let on_ground = self.whole_ray_sky_xyz(march, 0.0, towards(z_0), sun);
+            return scaled(whole, table(0.0, z_0), on_ground, 1.0 - fh);
+        }
+        let below = self.composed_below_xyz(march, h, towards(z), sun, node(a));
+        if fh <= 0.0 {
+            return below;
+        }
+        let h_b = node(a + 1);
+        let z_b = pi - (pi - z) * (pi - horizon_at(h_b)) / (pi - horizon);
+        let from_b = self.composed_below_xyz(march, h_b, towards(z_b), sun, node(a));
+        scaled(below, table(h_b, z_b), from_b, fh)
+    }
+
+    /// The march's light of the whole ray from an eye at `h` toward the
+    /// unit `v` (the sun toward the unit `sun`, eye-local), a view above
+    /// the eye's horizon: [`MarchTables::whole_ray_xyz`] split, for a view
+    /// going down, between the perigee (where the eye is at least
+    /// [`PERIGEE_SPLIT_RAMP`] times the thickness above it) and the ray's
+    /// end (no split, where the eye is at the perigee's altitude),
+    /// smoothstep in the eye's height above the perigee.
+    pub(crate) fn whole_ray_sky_xyz(
+        &self,
+        march: &MarchTables,
+        h: f64,
+        v: [f64; 3],
+        sun: [f64; 3],
+    ) -> [f64; 3] {
+        let r = self.ground_radius_m + h;
+        let length = axes::ray_length(r, v[2], self.ground_radius_m, self.top_radius_m);
+        let split = if v[2] < 0.0 {
+            let perigee = -r * v[2];
+            let above = r - (r * r - perigee * perigee).max(0.0).sqrt();
+            let w = smoothstep(0.0, PERIGEE_SPLIT_RAMP * self.thickness_m(), above);
+            length + (perigee.min(length) - length) * w
+        } else {
+            length
+        };
+        march.whole_ray_xyz(h, v, sun, split).0
+    }
+
+    /// The sky below the horizon of an eye at `h` toward the unit `v` (the
+    /// sun toward the unit `sun`, eye-local) composed at the sphere of
+    /// altitude `h_node` (at or below the eye; the ray meets it, as it
+    /// meets the ground): the march's light of the segment to the
+    /// crossing plus the segment's transmittance times the sky table's
+    /// read there (`table_sky_xyz` at `h_node`, in the point's own frame),
+    /// the table's read itself where the eye is on the sphere.
+    pub(crate) fn composed_below_xyz(
+        &self,
+        march: &MarchTables,
+        h: f64,
+        v: [f64; 3],
+        sun: [f64; 3],
+        h_node: f64,
+    ) -> [f64; 3] {
+        let r = self.ground_radius_m + h;
+        let r_node = self.ground_radius_m + h_node;
+        let mu = v[2];
+        let disc = (r * r * mu * mu - (r - r_node) * (r + r_node)).max(0.0);
+        let t = if h > h_node {
+            (-r * mu - disc.sqrt()).max(0.0)
+        } else {
+            0.0
+        };
+        let p = [v[0] * t, v[1] * t, r + v[2] * t];
+        let up = scale(p, 1.0 / dot(p, p).sqrt());
+        let local = LocalView::from_vectors(v, up, sun);
+        let e = dot(sun, up).clamp(-1.0, 1.0).asin().to_degrees();
+        let far = self.table_sky_xyz(h_node, local, e);
+        if t <= 0.0 {
+            return far;
+        }
+        let (light, segment) = march.aerial_perspective_xyz(h, v, sun, t);
+        std::array::from_fn(|i| light[i] + segment[i] * far[i])
+    }
+
+    /// Probe ([`ALTITUDE_READ_OVERRIDE`] 5 to 7, measured and set aside,
+    /// docs/engine-tables.md "An eye between the altitude nodes"): the
+    /// sky for a raised eye from the march (None without march tables,
+    /// or on the ground). 5: the march's light of the whole ray (no
+    /// split, no ratio to the table); 6: the march to where the ray first
+    /// crosses the sphere of the nearer altitude node (the lower node's
+    /// going down, if it reaches it, else the upper's) plus the segment's
+    /// transmittance times the table's read there; 7: the whole ray's
+    /// march (no split) times the table's ratio to the march at the two
+    /// nodes about the eye (the view at the same place relative to each
+    /// node's horizon), that ratio's logarithm linear in h.
+    #[cfg(test)]
+    fn probe_march_read(
+        &self,
+        mode: usize,
+        altitude_m: f64,
+        view: LocalView,
+        e_deg: f64,
+    ) -> Option<[f64; 3]> {
+        let march = self.march.as_ref()?;
+        let h = altitude_m.clamp(0.0, self.thickness_m());
+        if h <= 0.0 {
+            return None;
+        }
+        let (z, phi) = (view.zenith_rad, view.relative_azimuth_rad);
+        let v = [z.sin() * phi.cos(), z.sin() * phi.sin(), z.cos()];
+        let e = e_deg.to_radians();
+        let sun = [e.cos(), 0.0, e.sin()];
+        let a_count = self.settings.altitude_nodes;
+        let node = |a: usize| axes::altitude_of_node(a, a_count, self.thickness_m());
+        let ((a, fa), _) = self.altitude_and_sun_cells(h, e_deg);
+        let whole = |h: f64, v: [f64; 3]| march.aerial_perspective_xyz(h, v, sun, f64::MAX).0;
+        match mode {
+            5 => Some(whole(h, v)),
+            6 => {
+                let r = self.ground_radius_m + h;
+                let mu = v[2];
+                let r_a = self.ground_radius_m + node(a);
+                let lower = r * r * mu * mu - r * r + r_a * r_a;
+                if mu < 0.0 && (fa <= 0.0 || lower >= 0.0) {
+                    return Some(self.composed_below_xyz(march, h, v, sun, node(a)));
+                }
+                let h_b = node(a + 1);
+                let r_b = self.ground_radius_m + h_b;
+                let t = (-r * mu + (r * r * mu * mu - r * r + r_b * r_b).max(0.0).sqrt()).max(0.0);
+                let p = [v[0] * t, v[1] * t, r + v[2] * t];
+                let up = scale(p, 1.0 / dot(p, p).sqrt());
+                let local = LocalView::from_vectors(v, up, sun);
+                let e_p = dot(sun, up).clamp(-1.0, 1.0).asin().to_degrees();
+                let far = self.table_sky_xyz(h_b, local, e_p);
+                let (light, segment) = march.aerial_perspective_xyz(h, v, sun, t);
+                Some(std::array::from_fn(|i| light[i] + segment[i] * far[i]))
+            }
+            _ => {
+                let pi = std::f64::consts::PI;
+                let horizon_at =
+                    |h: f64| axes::horizon_zenith(self.ground_radius_m + h, self.ground_radius_m);
+                let horizon = horizon_at(h);
+                let ratio = |h_n: f64| {
+                    let z_n = if z < horizon {
+                        z * horizon_at(h_n) / horizon
+                    } else {
+                        pi - (pi - z) * (pi - horizon_at(h_n)) / (pi - horizon)
+                    };
+                    let local = LocalView {
+                        zenith_rad: z_n,
+                        relative_azimuth_rad: phi,
+                    };
+                    let v_n = [z_n.sin() * phi.cos(), z_n.sin() * phi.sin(), z_n.cos()];
+                    let table = self.table_sky_xyz(h_n, local, e_deg);
+                    let marched = whole(h_n, v_n);
+                    std::array::from_fn::<f64, 3, _>(|i| {
+                        table[i].max(FLOOR).ln() - marched[i].max(FLOOR).ln()
+                    })
+                };
+                let fh = altitude_share(h, a, a_count, self.thickness_m());
+                let (k_a, k_b) = (ratio(node(a)), ratio(node(a + 1)));
+                let whole = whole(h, v);
+                Some(std::array::from_fn(|i| {
+                    whole[i] * (k_a[i] + (k_b[i] - k_a[i]) * fh).exp()
+                }))
+            }
+        }
+    }
     /// Transmittance (XYZ of the transmitted sunlight over XYZ of the
     /// sunlight) from `altitude_m` to the top of the atmosphere along view
     /// cosine `mu`; zero below the horizon.
@@ -790,7 +1054,7 @@ impl EngineTables {
         let up = [0.0, 0.0, 1.0];
         let local = LocalView::from_vectors(view, up, sun);
         let e = dot(sun, up).clamp(-1.0, 1.0).asin().to_degrees();
-        let sky = self.sky_xyz(altitude_m, local, e);
+        let sky = self.table_sky_xyz(altitude_m, local, e);
         let ratio = self.aerial_ratio_xyz(altitude_m, local, e, distance_m);
         let inscattered = std::array::from_fn(|i| sky[i] * ratio[i] * share[i]);
         (inscattered, segment)
@@ -893,6 +1157,36 @@ impl MarchTables {
         sun: [f64; 3],
         distance_m: f64,
     ) -> ([f64; 3], [f64; 3]) {
+        self.march_xyz(altitude_m, view, sun, distance_m, false)
+    }
+
+    /// The march's light of the whole ray from an eye at `altitude_m`
+    /// along the unit `view` (the sun toward the unit `sun`, eye-local
+    /// east-north-up) to its end (the top of the atmosphere or the
+    /// ground), and the whole ray's transmittance: the march of
+    /// [`Self::aerial_perspective_xyz`] with its two stretches of nodes
+    /// (crowded toward each stretch's start) split at `split_m` and both
+    /// counted as the segment, so that a view going down, split at its
+    /// perigee, has nodes crowded at the eye and where the ray runs
+    /// lowest.
+    pub(crate) fn whole_ray_xyz(
+        &self,
+        altitude_m: f64,
+        view: [f64; 3],
+        sun: [f64; 3],
+        split_m: f64,
+    ) -> ([f64; 3], [f64; 3]) {
+        self.march_xyz(altitude_m, view, sun, split_m, true)
+    }
+
+    fn march_xyz(
+        &self,
+        altitude_m: f64,
+        view: [f64; 3],
+        sun: [f64; 3],
+        distance_m: f64,
+        whole: bool,
+    ) -> ([f64; 3], [f64; 3]) {
         let tables = self;
         let src = &tables.source;
         let (w, s) = (src.wavelengths, src.species);
@@ -929,7 +1223,7 @@ impl MarchTables {
             .map(|k| (march_node(length, k, steps), true))
             .chain((0..steps_beyond).map(|k| {
                 let (at, ds) = march_node(beyond, k, steps_beyond);
-                ((length + at, ds), false)
+                ((length + at, ds), whole)
             }));
         let mut segment_done = false;
         for ((at, ds), in_segment) in nodes {

@@ -703,7 +703,7 @@ impl EngineTables {
                                 zenith_rad: zenith,
                                 relative_azimuth_rad: axes::azimuth_of_node(k, azimuth),
                             };
-                            let sky = self.sky_xyz(altitude, local, elevation);
+                            let sky = self.table_sky_xyz(altitude, local, elevation);
                             let index = ((layer * distances + j) * slice) + row * azimuth + k;
                             // A view out through the top ends as the sky
                             // table draws it.
