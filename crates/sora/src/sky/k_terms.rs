@@ -1902,6 +1902,22 @@ pub(crate) mod tests {
         (stats(luminance), stats(chroma), worst)
     }
 
+    /// The sky `builder` makes for colour images (its terms merged,
+    /// `colour_plan`) or with every term (the slow path).
+    fn colour_or_every_term(
+        builder: crate::sky::SkyBuilder<'_>,
+        colour: bool,
+        observer: crate::colour::Observer,
+    ) -> Sky {
+        if colour {
+            builder.for_colour_images(observer)
+        } else {
+            builder
+        }
+        .build()
+        .unwrap()
+    }
+
     fn summer_file() -> Atmosphere {
         Atmosphere::from_toml_str(include_str!(
             "../../../sora-cli/tests/data/measured/earth-clear-summer-no-aerosol.toml"
@@ -1949,13 +1965,7 @@ pub(crate) mod tests {
                         .sun_deg(sun, 180.0)
                         .wavelengths(grid)
                         .polarisation(Polarisation::Scalar);
-                    if colour {
-                        builder.for_colour_images(observer)
-                    } else {
-                        builder
-                    }
-                    .build()
-                    .unwrap()
+                    colour_or_every_term(builder, colour, observer)
                 };
                 let (exact, colour, mut folded) = (build(false), build(true), build(false));
                 assert!(colour.k_terms().len() < exact.k_terms().len(), "{name}");
@@ -1998,13 +2008,7 @@ pub(crate) mod tests {
                 let builder = Sky::builder(&atmosphere)
                     .sun_deg(sun, 180.0)
                     .wavelengths(grid);
-                if colour {
-                    builder.for_colour_images(observer)
-                } else {
-                    builder
-                }
-                .build()
-                .unwrap()
+                colour_or_every_term(builder, colour, observer)
             };
             let render = |s: &Sky| s.render_xyz(&image, &to_xyz, &|_| {}).unwrap();
             let (luminance, chroma, worst) =
