@@ -1067,8 +1067,8 @@ fn sora_scaled_xyz(value: vec3<f32>, want: vec3<f32>, got: vec3<f32>, share: f32
 // the lower altitude node's sphere times the table's ratio to the same
 // composition at the upper node, that ratio's logarithm linear in h.
 // Without march tables or on the ground, the table's read. NOT YET what
-// sora_sky_xyz and sora_sky_view read, and not yet checked against the
-// Rust lookup (see the GLSL twin).
+// sora_sky_xyz and sora_sky_view read (see the GLSL twin, which is
+// checked against the Rust lookup; this one is validated only).
 fn sora_raised_sky_xyz(h_in: f32, zenith: f32, phi: f32, e_deg: f32) -> vec3<f32> {
   var reads: array<vec4<f32>, 3>;   // the table's reads: altitude, zenith, azimuth, sun elevation
   var marches: array<vec4<f32>, 2>; // the marches: the eye's altitude, the distance (split), whole (1) or segment (0)
