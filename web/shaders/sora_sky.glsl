@@ -282,7 +282,9 @@ vec3 soraLayersXyz(highp sampler2DArray table, int Z, ivec2 F, int K, int cap, i
 
 // Sky radiance (XYZ, W m^-2 sr^-1 nm^-1) seen at altitude h (m) toward
 // zenith angle `zenith` (rad) and azimuth `phi` (rad, 0..pi) from the
-// sun's, with the sun at elevation eDeg (degrees). No sun disc.
+// sun's, with the sun at elevation eDeg (degrees). No sun disc. The sky
+// table's read (lookup.rs's table_sky_xyz; for a raised eye with march
+// tables the Rust lookup's sky_xyz is soraRaisedSkyXyz, below).
 vec3 soraSkyXyz(float h, float zenith, float phi, float eDeg) {
   return soraLayersXyz(uSky, uSkyNodes.z, ivec2(uSkyZenithFineCells, uSkyZenithWideCells), uSkyNodes.w, SORA_ZENITH_CAP_CELLS, 0, 0.0, h, zenith, phi, eDeg);
 }
@@ -795,7 +797,26 @@ float soraMarchAltitudeAlong(float h, vec3 v, float t, out float r) {
 // species rows over the segment (forward_segment) and over the ray beyond
 // it (scaled - scaled_segment), Q and Q X over both (forward_segment and
 // forward - forward_segment).
+//
+// soraMarchXyz is lookup.rs's MarchTables::march_xyz: with `whole` false
+// the above; with `whole` true (MarchTables::whole_ray_xyz, d the split)
+// the nodes beyond d are counted as the segment's too, so that the light
+// and the transmittance are the whole ray's, its nodes crowded toward the
+// eye and toward d.
+void soraMarchXyz(float h, vec3 v, vec3 sun, float d, bool whole, out vec3 inscattered, out vec3 transmittance);
+
 void soraAerialPerspectiveMarch(float h, vec3 v, vec3 sun, float d, out vec3 inscattered, out vec3 transmittance) {
+  soraMarchXyz(h, v, sun, d, false, inscattered, transmittance);
+}
+
+// The march's light of the whole ray from the eye at altitude h along v to
+// its end (the top or the ground) and the whole ray's transmittance, its
+// two stretches of nodes split at splitM (MarchTables::whole_ray_xyz).
+void soraWholeRayMarch(float h, vec3 v, vec3 sun, float splitM, out vec3 light, out vec3 transmittance) {
+  soraMarchXyz(h, v, sun, splitM, true, light, transmittance);
+}
+
+void soraMarchXyz(float h, vec3 v, vec3 sun, float d, bool whole, out vec3 inscattered, out vec3 transmittance) {
   int w = uMarchCounts.x, s = uMarchCounts.y;
   float R = uPlanetSun.x;
   float thickness = soraThickness();
@@ -861,9 +882,10 @@ void soraAerialPerspectiveMarch(float h, vec3 v, vec3 sun, float d, out vec3 ins
   int steps = uMarchSteps.x, stepsBeyond = uMarchSteps.y;
   bool segmentDone = false;
   for (int node = 0; node < steps + stepsBeyond; node++) {
-    bool inSegment = node < steps;
+    // Beyond the first stretch, the whole ray's nodes are the segment's.
+    bool inSegment = node < steps || whole;
     float at, ds;
-    if (inSegment) {
+    if (node < steps) {
       soraMarchNode(length_, node, steps, at, ds);
     } else {
       soraMarchNode(beyond, node - steps, stepsBeyond, at, ds);
@@ -973,4 +995,181 @@ void soraAerialPerspectiveMarch(float h, vec3 v, vec3 sun, float d, out vec3 ins
   }
   inscattered = light;
   transmittance = clamp(through / max(solarXyz, vec3(1e-30)), 0.0, 1.0);
+}
+
+// ---------------------------------------------------------------------------
+// The sky for an eye above the ground from the march's tables (lookup.rs's
+// EngineTables::raised_sky_xyz, whole_ray_sky_xyz, composed_below_xyz; the
+// Rust lookup is the oracle; docs/engine-tables.md, "An eye between the
+// altitude nodes").
+
+// The eye's height above a view's perigee (a share of the thickness) from
+// which the whole ray's march splits at the perigee (PERIGEE_SPLIT_RAMP).
+const float SORA_PERIGEE_SPLIT_RAMP = 0.05;
+
+// Zenith angle of the horizon (rad) at altitude h (axes::horizon_zenith,
+// pi - asin(R / r), written for float precision as pi / 2 + atan(sqrt(h (2
+// R + h)), R)).
+float soraHorizonZenith(float h) {
+  float R = uPlanetSun.x;
+  h = max(h, 0.0);
+  return 0.5 * SORA_PI + atan(sqrt(h * (2.0 * R + h)), R);
+}
+
+// The split of the whole ray's march from an eye at h toward the unit v,
+// a view above the eye's horizon (whole_ray_sky_xyz): for a view going
+// down, between the perigee (where the eye is at least
+// SORA_PERIGEE_SPLIT_RAMP times the thickness above it) and the ray's end
+// (the eye at the perigee's altitude), smoothstep in the eye's height
+// above the perigee; the ray's end otherwise.
+float soraWholeRaySplit(float h, vec3 v) {
+  float r = uPlanetSun.x + h;
+  float length_ = soraRayLength(h, v.z);
+  if (v.z >= 0.0) return length_;
+  float perigee = -r * v.z;
+  // r - sqrt(r^2 - perigee^2) = r v.z^2 / (1 + sin z), without cancellation.
+  float above = r * v.z * v.z / (1.0 + sqrt(max((1.0 - v.z) * (1.0 + v.z), 0.0)));
+  float w = smoothstep(0.0, SORA_PERIGEE_SPLIT_RAMP * soraThickness(), above);
+  return length_ + (min(perigee, length_) - length_) * w;
+}
+
+// Where the ray from an eye at h toward the unit v first meets the sphere
+// of altitude hNode (at or below the eye; composed_below_xyz's t: 0 where
+// the eye is on it), the near root -b - sqrt(b^2 - c) written as c / (-b +
+// sqrt(b^2 - c)), without cancellation; and the table's read there
+// (zenith angle, azimuth from the sun, sun elevation in the point's own
+// frame) into `read` (x = altitude hNode).
+float soraComposedBelowGeometry(float h, vec3 v, vec3 sun, float hNode, out vec4 read) {
+  float R = uPlanetSun.x;
+  float r = R + h;
+  float b = r * v.z;
+  float c = (h - hNode) * (2.0 * R + h + hNode);
+  float disc = max(b * b - c, 0.0);
+  float t = 0.0;
+  if (h > hNode) {
+    float q = -b + sqrt(disc);
+    t = q > 0.0 ? max(c / q, 0.0) : 0.0;
+  }
+  vec3 p = vec3(v.xy * t, r + v.z * t);
+  vec3 up = p / length(p);
+  vec2 zp = soraLocalView(v, up, sun);
+  read = vec4(hNode, zp.x, zp.y, degrees(asin(clamp(dot(sun, up), -1.0, 1.0))));
+  return t;
+}
+
+// value times (want / got)^share per channel, each floored at SORA_FLOOR
+// (raised_sky_xyz's `scaled`).
+vec3 soraScaledXyz(vec3 value, vec3 want, vec3 got, float share) {
+  vec3 k = log(max(want, vec3(SORA_FLOOR))) - log(max(got, vec3(SORA_FLOOR)));
+  return value * exp(k * share);
+}
+
+// The sky for an eye above the ground, from the march's tables
+// (raised_sky_xyz): above the eye's horizon the march's light of the whole
+// ray (soraWholeRayMarch split at soraWholeRaySplit), in the first
+// altitude cell times the ratio of the table's read on the ground to the
+// march's there (the view at the same place relative to the ground's
+// horizon), that ratio's logarithm fading linearly in h to none at the
+// first node; below it the composition at the lower altitude node's
+// sphere (composed_below_xyz: the march of the segment to where the ray
+// meets it plus the segment's transmittance times the table's read there,
+// the table's read itself where the eye is on it) times the ratio of the
+// table's read at the upper node to the same composition from there (the
+// view at the same place relative to that node's horizon), that ratio's
+// logarithm linear in h. Without march tables or on the ground, the
+// table's read (soraSkyXyz): so this is the Rust lookup's sky_xyz.
+//
+// Within 0.061 % of EngineTables::sky_xyz per channel over 96 reads
+// (web/tests/raised-eye.mjs: earth-clear, 2 altitude nodes, eyes at 5 and
+// 50 km, suns 30, 3 and -4, views on both sides of the horizon; the first
+// altitude cell's branches only). NOT YET what soraSkyXyz and soraSkyView
+// read (docs/engine-tables.md, "An eye between the altitude nodes"): with
+// soraSkyXyz calling it, the browser test's shader
+// (four uses of the sky) lost its WebGL context on SwiftShader, and in
+// this form (at most three table reads and two marches, each from one
+// call in a loop, so that a compiler that inlines every call holds one
+// copy of each) the ground eye's fisheye took 2.9 s a frame there (0.26-
+// 0.41 s without it), though it never runs the march there.
+vec3 soraRaisedSkyXyz(float h, float zenith, float phi, float eDeg) {
+  vec4 reads[3];        // the table's reads: altitude, zenith, azimuth, sun elevation
+  vec4 marches[2];      // the marches: the eye's altitude, the distance (split), whole (1) or segment (0)
+  vec3 views[2];
+  int readCount = 1, marchCount = 0;
+  reads[0] = vec4(h, zenith, phi, eDeg);
+  bool raised = uMarchCounts.w > 0 && h > 0.0;
+  bool above = true, scaled = false;
+  float share = 0.0;
+  vec3 sun = vec3(1.0, 0.0, 0.0);
+  if (raised) {
+    h = clamp(h, 0.0, soraThickness());
+    float z = zenith;
+    float e = radians(eDeg);
+    sun = vec3(cos(e), 0.0, sin(e));
+    int A = uSkyNodes.y;
+    int a; float fa; soraCell(soraAltitudeCoordinate(h, A), 0, A - 2, a, fa);
+    float fh = soraAltitudeShare(h, a, A);
+    float horizon = soraHorizonZenith(h);
+    vec3 v = vec3(sin(z) * cos(phi), sin(z) * sin(phi), cos(z));
+    above = z < horizon;
+    if (above) {
+      // The whole ray; in the first cell also the whole ray on the ground
+      // and the table's read there.
+      readCount = 0;
+      marchCount = 1;
+      views[0] = v;
+      marches[0] = vec4(h, soraWholeRaySplit(h, v), 1.0, 0.0);
+      if (!(a > 0 || fh >= 1.0)) {
+        float z0 = z * soraHorizonZenith(0.0) / horizon;
+        vec3 v0 = vec3(sin(z0) * cos(phi), sin(z0) * sin(phi), cos(z0));
+        views[1] = v0;
+        marches[1] = vec4(0.0, soraWholeRaySplit(0.0, v0), 1.0, 0.0);
+        marchCount = 2;
+        reads[0] = vec4(0.0, z0, phi, eDeg);
+        readCount = 1;
+        scaled = true;
+        share = 1.0 - fh;
+      }
+    } else {
+      // The composition at the lower node's sphere; between the nodes also
+      // the same from the upper node and the table's read there.
+      float hA = soraAltitudeOfNode(a, A);
+      views[0] = v;
+      float t0 = soraComposedBelowGeometry(h, v, sun, hA, reads[0]);
+      marches[0] = vec4(h, t0, 0.0, 0.0);
+      marchCount = 1;
+      if (fh > 0.0) {
+        float hB = soraAltitudeOfNode(a + 1, A);
+        float zB = SORA_PI - (SORA_PI - z) * (SORA_PI - soraHorizonZenith(hB)) / (SORA_PI - horizon);
+        vec3 vB = vec3(sin(zB) * cos(phi), sin(zB) * sin(phi), cos(zB));
+        views[1] = vB;
+        float t1 = soraComposedBelowGeometry(hB, vB, sun, hA, reads[1]);
+        marches[1] = vec4(hB, t1, 0.0, 0.0);
+        marchCount = 2;
+        reads[2] = vec4(hB, zB, phi, eDeg);
+        readCount = 3;
+        scaled = true;
+        share = fh;
+      }
+    }
+  }
+  vec3 tables[3];
+  for (int k = 0; k < readCount; k++) {
+    tables[k] = soraSkyXyz(reads[k].x, reads[k].y, reads[k].z, reads[k].w);
+  }
+  if (!raised) return tables[0];
+  // Each march's light: the whole ray's, or the composition (the table's
+  // read itself where the segment has no length).
+  vec3 lights[2];
+  for (int k = 0; k < marchCount; k++) {
+    bool whole = marches[k].z > 0.5;
+    if (!whole && marches[k].y <= 0.0) {
+      lights[k] = tables[k];
+      continue;
+    }
+    vec3 light, transmittance;
+    soraMarchXyz(marches[k].x, views[k], sun, marches[k].y, whole, light, transmittance);
+    lights[k] = whole ? light : light + transmittance * tables[k];
+  }
+  if (!scaled) return lights[0];
+  return soraScaledXyz(lights[0], tables[above ? 0 : 2], lights[1], share);
 }

@@ -267,7 +267,9 @@ fn sora_layers_xyz(table: texture_2d_array<f32>, zn: i32, zf: vec2<i32>, kn: i32
 }
 
 // Sky radiance (XYZ, W m^-2 sr^-1 nm^-1) at altitude h (m) toward zenith
-// angle `zenith` and azimuth `phi` from the sun's (rad), sun at e_deg.
+// angle `zenith` and azimuth `phi` from the sun's (rad), sun at e_deg. The
+// sky table's read (lookup.rs's table_sky_xyz; for a raised eye with march
+// tables the Rust lookup's sky_xyz is sora_raised_sky_xyz, below).
 fn sora_sky_xyz(h_in: f32, zenith: f32, phi: f32, e_in: f32) -> vec3<f32> {
   return sora_layers_xyz(sora_sky, sora.sky_nodes.z, sora.transmittance_nodes.zw, sora.sky_nodes.w, SORA_ZENITH_CAP_CELLS, 0, 0.0, h_in, zenith, phi, e_in);
 }
@@ -777,7 +779,24 @@ fn sora_march_altitude_along(h: f32, v: vec3<f32>, t: f32) -> vec2<f32> {
 // (F_beyond + G_sky) + P(forward) - P(behind). As the GLSL twin, the
 // forward-peak species rows are kept summed with their weights beta_sca,j
 // q_j, and each row only where it is read.
+//
+// sora_march_xyz is lookup.rs's MarchTables::march_xyz: with `whole` false
+// the above; with `whole` true (MarchTables::whole_ray_xyz, d the split)
+// the nodes beyond d are counted as the segment's too, so that the light
+// and the transmittance are the whole ray's, its nodes crowded toward the
+// eye and toward d.
 fn sora_aerial_perspective_march(h_in: f32, v: vec3<f32>, sun: vec3<f32>, d: f32) -> SoraAerial {
+  return sora_march_xyz(h_in, v, sun, d, false);
+}
+
+// The march's light of the whole ray from the eye at altitude h along v to
+// its end (the top or the ground) and the whole ray's transmittance, its
+// two stretches of nodes split at split_m (MarchTables::whole_ray_xyz).
+fn sora_whole_ray_march(h_in: f32, v: vec3<f32>, sun: vec3<f32>, split_m: f32) -> SoraAerial {
+  return sora_march_xyz(h_in, v, sun, split_m, true);
+}
+
+fn sora_march_xyz(h_in: f32, v: vec3<f32>, sun: vec3<f32>, d: f32, whole: bool) -> SoraAerial {
   let w = sora_march.counts.x;
   let s = sora_march.counts.y;
   let ground = sora.planet_sun.x;
@@ -841,9 +860,10 @@ fn sora_aerial_perspective_march(h_in: f32, v: vec3<f32>, sun: vec3<f32>, d: f32
   let peaks = sora_march.columns_beam.w == 1;
   var segment_done = false;
   for (var node = 0; node < steps + steps_beyond; node++) {
-    let in_segment = node < steps;
+    // Beyond the first stretch, the whole ray's nodes are the segment's.
+    let in_segment = node < steps || whole;
     var at_ds: vec2<f32>;
-    if (in_segment) {
+    if (node < steps) {
       at_ds = sora_march_node(length_, node, steps);
     } else {
       at_ds = sora_march_node(beyond, node - steps, steps_beyond) + vec2<f32>(length_, 0.0);
@@ -969,4 +989,165 @@ fn sora_aerial_perspective_march(h_in: f32, v: vec3<f32>, sun: vec3<f32>, d: f32
     solar_xyz += solar * spike;
   }
   return SoraAerial(light, clamp(through_xyz / max(solar_xyz, vec3<f32>(1e-30)), vec3<f32>(0.0), vec3<f32>(1.0)));
+}
+
+// ---------------------------------------------------------------------------
+// The sky for an eye above the ground from the march's tables (lookup.rs's
+// EngineTables::raised_sky_xyz, whole_ray_sky_xyz, composed_below_xyz; the
+// GLSL twin's soraRaisedSkyXyz and its helpers; docs/engine-tables.md, "An
+// eye between the altitude nodes").
+
+// The eye's height above a view's perigee (a share of the thickness) from
+// which the whole ray's march splits at the perigee (PERIGEE_SPLIT_RAMP).
+const SORA_PERIGEE_SPLIT_RAMP: f32 = 0.05;
+
+// Zenith angle of the horizon (rad) at altitude h (axes::horizon_zenith,
+// pi - asin(R / r), written for float precision as pi / 2 + atan2(sqrt(h
+// (2 R + h)), R)).
+fn sora_horizon_zenith(h_in: f32) -> f32 {
+  let ground = sora.planet_sun.x;
+  let h = max(h_in, 0.0);
+  return 0.5 * SORA_PI + atan2(sqrt(h * (2.0 * ground + h)), ground);
+}
+
+// The split of the whole ray's march from an eye at h toward the unit v,
+// a view above the eye's horizon (whole_ray_sky_xyz; as soraWholeRaySplit
+// in sora_sky.glsl): for a view going down, between the perigee (the eye
+// at least SORA_PERIGEE_SPLIT_RAMP times the thickness above it) and the
+// ray's end (the eye at the perigee's altitude), smoothstep in the eye's
+// height above the perigee; the ray's end otherwise.
+fn sora_whole_ray_split(h: f32, v: vec3<f32>) -> f32 {
+  let r = sora.planet_sun.x + h;
+  let length_ = sora_ray_length(h, v.z);
+  if (v.z >= 0.0) { return length_; }
+  let perigee = -r * v.z;
+  // r - sqrt(r^2 - perigee^2) = r v.z^2 / (1 + sin z), without cancellation.
+  let above = r * v.z * v.z / (1.0 + sqrt(max((1.0 - v.z) * (1.0 + v.z), 0.0)));
+  let w = smoothstep(0.0, SORA_PERIGEE_SPLIT_RAMP * sora_thickness(), above);
+  return length_ + (min(perigee, length_) - length_) * w;
+}
+
+// Where the ray from an eye at h toward the unit v first meets the sphere
+// of altitude h_node (composed_below_xyz's t, 0 where the eye is on it; the
+// near root as c / (-b + sqrt(b^2 - c))) and the table's read there
+// (altitude, zenith angle, azimuth from the sun, sun elevation in the
+// point's own frame).
+struct SoraComposed { t: f32, read: vec4<f32> };
+
+fn sora_composed_below_geometry(h: f32, v: vec3<f32>, sun: vec3<f32>, h_node: f32) -> SoraComposed {
+  let ground = sora.planet_sun.x;
+  let r = ground + h;
+  let b = r * v.z;
+  let c = (h - h_node) * (2.0 * ground + h + h_node);
+  let disc = max(b * b - c, 0.0);
+  var t = 0.0;
+  if (h > h_node) {
+    let q = -b + sqrt(disc);
+    if (q > 0.0) { t = max(c / q, 0.0); }
+  }
+  let p = vec3<f32>(v.xy * t, r + v.z * t);
+  let up = p / length(p);
+  let zp = sora_local_view(v, up, sun);
+  return SoraComposed(t, vec4<f32>(h_node, zp.x, zp.y, degrees(asin(clamp(dot(sun, up), -1.0, 1.0)))));
+}
+
+// value times (want / got)^share per channel, each floored at SORA_FLOOR
+// (raised_sky_xyz's `scaled`).
+fn sora_scaled_xyz(value: vec3<f32>, want: vec3<f32>, got: vec3<f32>, share: f32) -> vec3<f32> {
+  let k = log(max(want, vec3<f32>(SORA_FLOOR))) - log(max(got, vec3<f32>(SORA_FLOOR)));
+  return value * exp(k * share);
+}
+
+// The sky for an eye above the ground, from the march's tables
+// (raised_sky_xyz; soraRaisedSkyXyz in sora_sky.glsl, in the same form:
+// at most three table reads and two marches, each from one call in a
+// loop): above the eye's horizon the whole ray's march, in the first
+// altitude cell times the table's ratio to the march on the ground fading
+// linearly in h to none at the first node; below it the composition at
+// the lower altitude node's sphere times the table's ratio to the same
+// composition at the upper node, that ratio's logarithm linear in h.
+// Without march tables or on the ground, the table's read. NOT YET what
+// sora_sky_xyz and sora_sky_view read (see the GLSL twin, which is
+// checked against the Rust lookup; this one is validated only).
+fn sora_raised_sky_xyz(h_in: f32, zenith: f32, phi: f32, e_deg: f32) -> vec3<f32> {
+  var reads: array<vec4<f32>, 3>;   // the table's reads: altitude, zenith, azimuth, sun elevation
+  var marches: array<vec4<f32>, 2>; // the marches: the eye's altitude, the distance (split), whole (1) or segment (0)
+  var views: array<vec3<f32>, 2>;
+  var read_count = 1;
+  var march_count = 0;
+  reads[0] = vec4<f32>(h_in, zenith, phi, e_deg);
+  let raised = sora_march.counts.w > 0 && h_in > 0.0;
+  var above = true;
+  var scaled = false;
+  var share = 0.0;
+  var sun = vec3<f32>(1.0, 0.0, 0.0);
+  if (raised) {
+    let h = clamp(h_in, 0.0, sora_thickness());
+    let z = zenith;
+    let e = radians(e_deg);
+    sun = vec3<f32>(cos(e), 0.0, sin(e));
+    let an = sora.sky_nodes.y;
+    let a = sora_cell(sora_altitude_coordinate(h, an), 0, an - 2).i;
+    let fh = sora_altitude_share(h, a, an);
+    let horizon = sora_horizon_zenith(h);
+    let v = vec3<f32>(sin(z) * cos(phi), sin(z) * sin(phi), cos(z));
+    above = z < horizon;
+    if (above) {
+      read_count = 0;
+      march_count = 1;
+      views[0] = v;
+      marches[0] = vec4<f32>(h, sora_whole_ray_split(h, v), 1.0, 0.0);
+      if (!(a > 0 || fh >= 1.0)) {
+        let z0 = z * sora_horizon_zenith(0.0) / horizon;
+        let v0 = vec3<f32>(sin(z0) * cos(phi), sin(z0) * sin(phi), cos(z0));
+        views[1] = v0;
+        marches[1] = vec4<f32>(0.0, sora_whole_ray_split(0.0, v0), 1.0, 0.0);
+        march_count = 2;
+        reads[0] = vec4<f32>(0.0, z0, phi, e_deg);
+        read_count = 1;
+        scaled = true;
+        share = 1.0 - fh;
+      }
+    } else {
+      let h_a = sora_altitude_of_node(a, an);
+      views[0] = v;
+      let c0 = sora_composed_below_geometry(h, v, sun, h_a);
+      reads[0] = c0.read;
+      marches[0] = vec4<f32>(h, c0.t, 0.0, 0.0);
+      march_count = 1;
+      if (fh > 0.0) {
+        let h_b = sora_altitude_of_node(a + 1, an);
+        let z_b = SORA_PI - (SORA_PI - z) * (SORA_PI - sora_horizon_zenith(h_b)) / (SORA_PI - horizon);
+        let v_b = vec3<f32>(sin(z_b) * cos(phi), sin(z_b) * sin(phi), cos(z_b));
+        views[1] = v_b;
+        let c1 = sora_composed_below_geometry(h_b, v_b, sun, h_a);
+        reads[1] = c1.read;
+        marches[1] = vec4<f32>(h_b, c1.t, 0.0, 0.0);
+        march_count = 2;
+        reads[2] = vec4<f32>(h_b, z_b, phi, e_deg);
+        read_count = 3;
+        scaled = true;
+        share = fh;
+      }
+    }
+  }
+  var tables: array<vec3<f32>, 3>;
+  for (var k = 0; k < read_count; k++) {
+    tables[k] = sora_sky_xyz(reads[k].x, reads[k].y, reads[k].z, reads[k].w);
+  }
+  if (!raised) { return tables[0]; }
+  // Each march's light: the whole ray's, or the composition (the table's
+  // read itself where the segment has no length).
+  var lights: array<vec3<f32>, 2>;
+  for (var k = 0; k < march_count; k++) {
+    let whole = marches[k].z > 0.5;
+    if (!whole && marches[k].y <= 0.0) {
+      lights[k] = tables[k];
+      continue;
+    }
+    let m = sora_march_xyz(marches[k].x, views[k], sun, marches[k].y, whole);
+    lights[k] = select(m.inscattered + m.transmittance * tables[k], m.inscattered, whole);
+  }
+  if (!scaled) { return lights[0]; }
+  return sora_scaled_xyz(lights[0], tables[select(2, 0, above)], lights[1], share);
 }

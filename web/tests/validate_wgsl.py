@@ -21,7 +21,8 @@ fn sora_check_main(@builtin(position) position: vec4<f32>) -> @location(0) vec4<
   let m = sora_aerial_perspective_march(10.0, v, sun, 1000.0);
   let c = sora_sky_view(10.0, v, sun) + sora_sun_disc_xyz(0.0, 5.0, 0.001)
     + sora_ground_irradiance_xyz(0.0, 5.0) + a.inscattered * a.transmittance
-    + b.inscattered * b.transmittance + m.inscattered * m.transmittance;
+    + b.inscattered * b.transmittance + m.inscattered * m.transmittance
+    + sora_raised_sky_xyz(5000.0, 1.2, 0.5, 10.0);
   return vec4<f32>(sora_xyz_to_linear_srgb(c), 1.0);
 }
 @vertex

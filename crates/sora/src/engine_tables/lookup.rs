@@ -54,8 +54,10 @@
 //!   two such layers, extended beyond the last; the curvature at the cut
 //!   dropped): a layer with the sun up has no shadow to give.
 //! - Sky for an eye above the ground, tables with the march's
-//!   (`EngineTables::raised_sky_xyz`; the shaders do not have it yet and
-//!   read the table as above): above the eye's horizon the march's light
+//!   (`EngineTables::raised_sky_xyz`; the manifest's
+//!   `lookup.sky_raised_eye`; the shaders have it as `soraRaisedSkyXyz` /
+//!   `sora_raised_sky_xyz`, the GLSL within 0.061 % of this, but not yet
+//!   what their sky reads, which is the table's as above): above the eye's horizon the march's light
 //!   of the whole ray (`MarchTables::whole_ray_xyz`, split at the
 //!   perigee for a view going down from well above it), in the first
 //!   altitude cell times the table's ratio to the march on the ground

@@ -3304,3 +3304,50 @@ fn probe_library_zenith_curve() {
         eprintln!("{line}");
     }
 }
+
+/// Reference values of a raised eye's sky for the shaders' check
+/// (ignored; `SORA_EYE_SHADER_OUT=DIR cargo test --release -p sora --lib
+/// -- --ignored raised_eye_reference`): bakes earth-clear as `sora
+/// tables --preset earth-clear --altitude-nodes 2` does, writes the
+/// tables to DIR and `EngineTables::sky_xyz` at eyes of 5 and 50 km for a
+/// set of views and suns to DIR/raised.json ([h, zenith, phi, e, X, Y, Z]),
+/// which `web/tests/raised-eye.mjs DIR` draws by the GLSL shader's
+/// `soraRaisedSkyXyz` and compares (measured within 0.061 %).
+#[test]
+#[ignore]
+fn raised_eye_reference() {
+    let out = std::path::PathBuf::from(std::env::var("SORA_EYE_SHADER_OUT").unwrap());
+    let atmosphere = Atmosphere::preset("earth-clear").unwrap();
+    let sky = Sky::builder(&atmosphere)
+        .wavelengths(WavelengthGrid::new(380.0, 780.0, 20.0).unwrap())
+        .scattering(Scattering::Multiple(MultipleScatteringSettings::default()))
+        .build()
+        .unwrap();
+    let settings = EngineTableSettings {
+        altitude_nodes: 2,
+        march: true,
+        ..EngineTableSettings::default()
+    };
+    let tables = EngineTables::bake(&sky, &settings, &|_| {}).unwrap();
+    tables.write(&out.join("tables")).unwrap();
+    let mut rows = Vec::new();
+    for h in [5000.0, 50000.0] {
+        for e in [30.0, 3.0, -4.0] {
+            for zenith in [0.2, 0.8, 1.4, 1.56, 1.6, 1.7, 2.2, 2.8] {
+                for phi in [0.3, 2.5] {
+                    let view = LocalView {
+                        zenith_rad: zenith,
+                        relative_azimuth_rad: phi,
+                    };
+                    let v = tables.sky_xyz(h, view, e);
+                    rows.push(serde_json::json!([h, zenith, phi, e, v[0], v[1], v[2]]));
+                }
+            }
+        }
+    }
+    std::fs::write(
+        out.join("raised.json"),
+        serde_json::to_string(&rows).unwrap(),
+    )
+    .unwrap();
+}
