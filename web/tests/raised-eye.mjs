@@ -5,7 +5,8 @@
 // `sora tables --preset earth-clear --altitude-nodes 2`, the tables in DIR/tables,
 // 96 reads at 5 and 50 km in DIR/raised.json); WebGL2 on SwiftShader draws the same
 // reads, one pixel each, and the relative error per channel is printed (measured
-// worst 0.061 %). Not run by CI. Run: cd web/tests && npm ci && node raised-eye.mjs DIR
+// worst 0.061 %); it fails above 0.5 % (32-bit floats against the lookup's 64) or if
+// the context is lost. Run by .ci/run; by hand: cd web/tests && npm ci && node raised-eye.mjs DIR
 import { readFileSync } from 'node:fs';
 import { chromium } from 'playwright-core';
 import { readExr } from './exr.mjs';
@@ -118,3 +119,7 @@ for (const [i, r] of rows.entries()) {
 }
 console.log(`worst |rel| ${(100 * worst).toFixed(3)} %; draw ${out.ms.toFixed(0)} ms; error ${out.err} lost ${out.lost}`);
 await browser.close();
+if (out.lost || out.err !== 0 || !(worst <= 0.005)) {
+  console.error(`raised eye: the shader's sky is not the Rust lookup's (worst ${(100 * worst).toFixed(3)} %, bound 0.5 %; error ${out.err}, lost ${out.lost})`);
+  process.exit(1);
+}

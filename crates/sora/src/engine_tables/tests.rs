@@ -3306,8 +3306,8 @@ fn probe_library_zenith_curve() {
 }
 
 /// Reference values of a raised eye's sky for the shaders' check
-/// (ignored; `SORA_EYE_SHADER_OUT=DIR cargo test --release -p sora --lib
-/// -- --ignored raised_eye_reference`): bakes earth-clear as `sora
+/// (ignored, run by `.ci/run`; `SORA_EYE_SHADER_OUT=DIR cargo test -p
+/// sora --lib -- --ignored --exact engine_tables::tests::raised_eye_reference`): bakes earth-clear as `sora
 /// tables --preset earth-clear --altitude-nodes 2` does, writes the
 /// tables to DIR and `EngineTables::sky_xyz` at eyes of 5 and 50 km for a
 /// set of views and suns to DIR/raised.json ([h, zenith, phi, e, X, Y, Z]),
@@ -3329,6 +3329,7 @@ fn raised_eye_reference() {
         ..EngineTableSettings::default()
     };
     let tables = EngineTables::bake(&sky, &settings, &|_| {}).unwrap();
+    std::fs::create_dir_all(&out).unwrap();
     tables.write(&out.join("tables")).unwrap();
     let mut rows = Vec::new();
     for h in [5000.0, 50000.0] {
