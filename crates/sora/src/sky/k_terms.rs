@@ -191,7 +191,8 @@
 //! 0.91 times the CPU of the air-mass-2 fold (`farm-bench -n 8`, paired,
 //! 0.86-0.98, 2-core machine at load 8-10), peak memory 130 MiB against
 //! 158, 2.37 times the gas-free image (`gases.sh`, 5 runs; the fold's 2.56
-//! the same hour). Exact views, spectra, irradiance and aerial
+//! the same hour; with the shared march above, 2.20 against 2.35 before
+//! both, idle, 5 runs each). Exact views, spectra, irradiance and aerial
 //! perspective of a default sky keep every term. Its spectral images
 //! are refused; see docs/atmosphere-file.md.
 //! A colour image of the terms is one pixel pass (`Sky::render_pixels_of`,
