@@ -768,13 +768,13 @@ fn merged_depth(members: &[usize], weights: &[f64], depths: &[f64], air: &AirMas
     let summed: Vec<f64> = (0..(steps + 1).min(air.m.len()))
         .map(|s| members.iter().map(|j| air.light[*j][s]).sum())
         .collect();
-    let dark: f64 = members
+    let unabsorbed: f64 = members
         .iter()
         .filter(|j| depths[**j] <= 0.0)
         .map(|j| weights[*j])
         .sum();
     let error = |tau: f64| -> f64 {
-        let mut worst = dark + total_weight * (-40.0f64).exp();
+        let mut worst = unabsorbed + total_weight * (-40.0f64).exp();
         for (m, summed) in air.m.iter().zip(&summed) {
             worst = worst.max((summed - total_weight * (-m * tau).exp()).abs());
         }
