@@ -710,7 +710,7 @@ impl EngineTables {
         scaled(below, table(h_b, z_b), from_b, fh)
     }
 
-    /// The march's light of the whole ray from an eye at `h` toward the
+    /// The march's light of the whole ray from an eye at altitude `h` (m) toward the
     /// unit `v` (the sun toward the unit `sun`, eye-local), a view above
     /// the eye's horizon: [`MarchTables::whole_ray_xyz`] split, for a view
     /// going down, between the perigee (where the eye is at least
@@ -737,9 +737,9 @@ impl EngineTables {
         march.whole_ray_xyz(h, v, sun, split).0
     }
 
-    /// The sky below the horizon of an eye at `h` toward the unit `v` (the
+    /// The sky below the horizon of an eye at altitude `h` (m) toward the unit `v` (the
     /// sun toward the unit `sun`, eye-local) composed at the sphere of
-    /// altitude `h_node` (at or below the eye; the ray meets it, as it
+    /// altitude `h_node` (m; at or below the eye; the ray meets it, as it
     /// meets the ground): the march's light of the segment to the
     /// crossing plus the segment's transmittance times the sky table's
     /// read there (`table_sky_xyz` at `h_node`, in the point's own frame),
