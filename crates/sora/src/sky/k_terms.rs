@@ -23,253 +23,113 @@
 //! line, Python, the explorer). The sky itself is then the single
 //! effective solve (each banded gas at the coefficient that matches the
 //! band model at air mass 2, `gas_bands::EFFECTIVE_AIR_MASS`): its optics
-//! ([`Sky::optics`]) are that solve's, and no radiance is taken from it.
-//! Without banded gases the sky has no terms and every answer is the one
-//! solve's, bit for bit as before.
+//! ([`Sky::optics`]) are that solve's, and no radiance is taken from it
+//! (it is never solved). Without banded gases the sky has no terms and
+//! every answer is the one solve's, bit for bit as before.
 //!
-//! Cost: the terms' atmospheres differ only at the samples where a banded
-//! gas absorbs, so only the span of them ([`term_span`]: from the first
-//! such sample to the last) takes every term. Term 0's sky covers the
-//! whole grid, weighted outside the span by the sum of all the terms'
-//! weights (there every term is the same atmosphere, so one solve is their
-//! sum); terms 1-4 are solved on the span's sub-grid alone. A grid without
-//! a band costs one solve, a band-free stretch (in the visible, below 580
-//! nm) one solve per sample. Inside a band the strong terms' light is
-//! absorbed before it scatters twice: every path from the top of the
-//! atmosphere to the eye crosses the water (or other banded gas) above the
-//! eye, so term j's higher orders of scattering are at most
+//! **Which terms are solved where.** The terms' atmospheres differ only at
+//! the samples where a banded gas absorbs, so only the span of them
+//! ([`term_span`]: from the first such sample to the last) takes every
+//! term. Term 0's sky covers the whole grid, weighted outside the span by
+//! the sum of all the terms' weights (there every term is the same
+//! atmosphere, so one solve is their sum); terms 1-4 are solved on the
+//! span's sub-grid alone (a sky's grid is one uniform run of samples: its
+//! optics are band averages over the grid's step). Every sample of the
+//! span keeps its five terms: their coefficients span a factor of about
+//! 1e4, so one solve at the weights' mean coefficient misses sum_j w_j
+//! exp(-tau_j) by 2e-2 to more than 1 in the visible bands (colour skies
+//! excepted, below). Inside a band, exact views leave out the higher
+//! orders of scattering of the terms that absorb too strongly for them to
+//! matter: every path from the top of the atmosphere to the eye crosses
+//! the gas above the eye, so term j's higher orders are at most
 //! exp(-dtau_j) times term 0's, dtau_j the difference of their vertical
-//! optical depths above the eye ([`higher_orders_needed`]). Where the sum
+//! optical depths above the eye ([`higher_orders_needed`]); where the sum
 //! of (w_j / w_0) exp(-dtau_j) over the terms left out is within
-//! [`HIGHER_ORDERS_BOUND`] (1e-3 of the radiance), exact views take those
-//! terms with single scattering (and the sunlit ground) alone, the span
-//! cut into runs with and without higher orders, one sky each
-//! ([`TermSkies::view_runs`]); images, views read from tables, irradiance
-//! and aerial perspective keep every term whole (a sky's image tables cost
-//! far more than its samples' fields). The single effective sky is never
-//! solved (its radiance is never asked for; only its optics are used).
-//! Each term's sky carries only the species that absorb or scatter on its
-//! grid ([`carried_species`]: the mixed gases are left out at 900-1000
-//! nm), bit for bit the same answers; measured 0.97 times the CPU of
-//! carrying them all (`farm-bench -n 12`, paired, the almucantar below).
-//! The terms' skies march the same view rays toward the same sun through
-//! the same profiles: each exact view's columns toward the sun are
-//! computed by the first term's sky and read by the others
-//! (`ExactSunColumns`, built with the term skies), bit for bit the same,
-//! and so are the polarisation correction's phase-matrix harmonics from
-//! the streams (`ViewHarmonicsCache`, keyed by the scattering species'
-//! phase functions and truncated phases, which the gases do not change).
-//! The terms' skies share one store of sun-column tables (the builder,
-//! `SingleScatteringScene::sharing_sun_column_tables_of`): a table holds
-//! the species' profile columns alone, no coefficient, so every term that
-//! carries the sky's species reads the one the first built (five tables
-//! took 17 % of a gas image's CPU; perf, the fisheye below). Their
-//! sky-view tables (images, and views read from tables) are built
-//! together, row by row, term after term (`Sky::prepare_term_tables`,
-//! `SkyViewTable::compute_sharing_geometry`): every term marches the same
-//! view rays through that one table, so the first term's march computes
-//! the other terms' single-scattering integrals with its own, node by
-//! node, their optical depths and exponentials one loop over every term's
-//! samples (`single_scattering::Together`): the columns toward the sun are
-//! looked up once, and a term's 7 samples no longer pay a march of their
-//! own (the per-node cost of a short run of samples was most of a term's
-//! integrals), bit for bit the tables each builds alone (a test). The
-//! fisheye below takes 0.92 times the CPU of the replay of the first
-//! term's sun columns before it (`farm-bench -n 8`, paired, 0.86-0.95).
-//! Their multiply scattered light is marched the same way: the first
-//! term's multiple-scattering march takes every term's light node by
-//! node (`MultipleScatteringTable::compute_radiance_parts_together`,
-//! `ViewRayOptics::march_alongside`): the nodes, their densities and
-//! columns, their geometry and their columns toward the sun are found
-//! once, and so are the source tables' sun and azimuth cells (the terms'
-//! altitude levels follow their absorption, so each term locates its own
-//! altitude cell, kept per node index as its own march keeps it); each
-//! term's source is read from its own table, every term's before any
-//! term's light (the reads of five tables overlap), bit for bit each
-//! term's own march (`compute_radiance_parts`, the slow path; the test
-//! of the tables built together asserts the shared path is taken). The fisheye below 0.969
-//! times the CPU of the march per term (`farm-bench -n 16`, paired,
-//! 0.92-1.05, 2-core machine at load 9-10), byte-identical (and a
-//! gas-free fisheye, and a gas one with the sun 4 degrees down), 2.49
-//! times the gas-free image (`gases.sh`, 7 runs; the march per term 2.68
-//! the same hour). What stays per term is the reads themselves: 60 % of
-//! the shared march's samples (perf: 97 of 162; memory-bound loads of a
-//! node's eight corners, each term's table its own); a software prefetch
-//! of the other terms' corners measured 1.01 times the CPU (0.95-1.03)
-//! and was left out.
-//! With the source
-//! table's buffers kept per thread (`source_table.rs`), the fisheye below
-//! takes 0.93 times the CPU of before (`farm-bench -n 16`, paired,
-//! 0.88-1.02, load 10-13), 3.27 times the gas-free image (3.17-3.49),
-//! byte-identical.
-//! One solve per sample at the weights' mean coefficient, where the terms
-//! hardly differ, does not pay in the visible: the terms' coefficients
-//! span a factor of about 1e4, so at even the weakest band sample the
-//! strongest term absorbs (water at 580 nm: term 4's vertical optical
-//! depth 2.3 with 2.92 cm), and sum_j w_j exp(-tau_j) - exp(-sum_j w_j
-//! tau_j), relative, at two air masses is 2.3e-2 at 580 nm, 3.4e-2 at 600,
-//! 0.16-0.19 at 680-700, 5.2e-2 at 740, above 1 at 720 and 760, and 1.4e-4
-//! at 780 nm alone (1.7e-3 at ten air masses; a horizontal view crosses
-//! tens): every sample of the span keeps its five terms.
-//! Measured (`farm-bench -n 40`, paired, release, whole
-//! process, CPU seconds, earth-clear-summer without aerosol with and
-//! without its `[gases]`, 2-core machine at load 4): one almucantar of 36 views at
-//! 900-1000 nm every 10 nm (2.92 cm of water; terms 3 and 4 leave out their
-//! higher orders at 900-980 nm, 4 at 990-1000 nm, term 2 at 930-960 nm: 31
-//! of the 55 samples' fields solved) 0.24-0.27 s, 2.90, 2.77 and 2.57
-//! times the gas-free 0.083-0.108 s (three runs' medians; pairs
-//! 2.16-3.46; the build before the shared harmonics and the kept Legendre
-//! tables of the field synthesis 2.90, 3.05 and 2.63 in the same runs,
-//! its gas runs 1.01-1.04 times the new's CPU, near the noise;
-//! 3.43 and 3.48 before the shared sun columns, the polarisation column's
-//! shared scalar solve and the faster source moments; 6.0 before the
-//! higher orders were left out). Above the fields' 31 / 11
-//! the cost is mostly the polarisation correction's columns: a term's
-//! anchors follow its absorption (`WavelengthAnchors::following_optics`),
-//! so every sample of a term is one, against 5 of the 11 gas-free
-//! samples. The radiances (zenith, almucantar
-//! and principal plane, suns 30 and 10 degrees, scalar and polarised)
-//! within 7e-6 of every term's higher orders, all but the sub-grids'
-//! rounding below them, against a bound of 1e-3 and the k-distribution's
-//! own 1.6 % of the absorption from the band model (1.0 % from line by line
-//! in the O2 A band). A 256 x 256 fisheye over 380-780 nm every 20 nm
-//! (terms 1-4 on 580-780 nm, 11 of 21 samples; images keep every term
-//! whole, the sun-column tables shared) 1.75-2.00 s, 3.8 times the
-//! gas-free 0.46-0.52 s (`farm-bench -n 8`, paired: 3.6-4.1; gases.sh:
-//! 3.80), against 4.6 times (4.3-4.8) with a table per term the same hour;
-//! 0.85 times that CPU, paired (0.78-0.96). The terms
-//! on the span against every term on the whole grid
-//! (`SkyBuilder::build_with_terms`, the oracle; 540-780 nm, sun 10
-//! degrees): the direct beam within 5e-9, views, irradiance, aerial
-//! perspective and images within 6.1e-4 (relative), what the fast method
-//! takes from its grid as a whole (the field's layers, the polarisation
-//! anchors); at 900-1000 nm (earth-clear with 2.9 cm of water, sun 30
-//! degrees) views within 6.7e-5, the rest equal.
+//! [`HIGHER_ORDERS_BOUND`] (1e-3 of the radiance), those terms take single
+//! scattering (and the sunlit ground) alone, the span cut into runs with
+//! and without higher orders, one sky each ([`TermSkies::view_runs`]).
+//! Images, views read from tables, irradiance and aerial perspective keep
+//! every term whole. Each term's sky carries only the species that absorb
+//! or scatter on its grid ([`carried_species`]: the mixed gases are left
+//! out at 900-1000 nm), bit for bit the same answers.
 //!
-//! A sky for colour images alone ([`SkyBuilder::for_colour_images`], what
-//! `sora render` builds) merges the terms ([`colour_plan`]): at each
-//! sample the terms, sorted by the vertical optical depth tau_j of the one
-//! banded gas that differs between them, are cut into runs, each carried
-//! by one sky with the run's weights summed (W_G) at one depth tau_G. A
-//! path with m vertical columns of that gas has depth m tau_j in term j
-//! (the correlated-k scaling), and every path from the top of the
-//! atmosphere to the eye crosses each shell above it, so m >= m_min (the
-//! gas' column above the eye over the ground's; 1 on the ground) whatever
-//! the sun and the orders of scattering; a run then moves each path's
-//! light by at most D_G = sup_{m >= m_min} |sum_{j in G} w_j exp(-m
-//! tau_j) - W_G exp(-m tau_G)| of its gas-free light (second order in the spread
-//! of the exp(-m tau_j), tau_G chosen to make it least), and a colour's X,
-//! Y or Z, relative, by at most sum_i s_i D_i (D_i the sum over the
-//! sample's runs, s_i its largest share of the colour-matching sums, for a
-//! pixel whose gas-free radiance there is at most its mean). Each sample
-//! takes as few runs as keep that sum within [`COLOUR_BOUND`] (1e-3) with
-//! the fewest skies: sky g carries each sample's g-th run (the weakest
-//! first), term 0's slot on the whole grid, the others on the samples from
-//! the first to the last with more runs (weight 0 between). The sup also
-//! covers m -> infinity, where the weakest term is the only light left, so
-//! one run (the whole fold) errs D about 0.14 wherever a band absorbs and
-//! weak terms merge only where their colour share is small. With the
-//! measured summer file (2.92 cm of water, O2-O2) on the default grid:
-//! four skies, terms {0}, {1}, {2}, {3, 4} at 580 and 600 nm (s D 3.1e-4
-//! each), {0}, {1}, {2-4} at 680 nm (1.3e-4), {0}, {1-4} at 700 nm
-//! (1.2e-4), one run at 720-780 nm (1.1e-4 together), 9.7e-4 in all; the
-//! extra skies cover 580-700, 580-680 and 580-600 nm (15 term samples,
-//! against four skies of 7 with the air-mass-2 fold before). The strong
-//! bands keep the terms whose light differs (760 nm: any merge errs D >
-//! 6e-3; 940 nm: only the terms dark along every path, 2-4, merge, D
-//! 1e-6; the default grid merges 760 nm only for its colour share of some
-//! 1e-4; a test). Measured against every term's image (the slow path,
-//! the default sky): the benchmark's 256 x 256 fisheye (summer file,
-//! polarised) luminance max 5.4e-4 (p99 5.2e-4) and xy 6.3e-5 (p99
-//! 6.2e-5) at a sun of 30 degrees, 4.8e-4 (4.7e-4) and 6.5e-5 (6.3e-5) at
-//! 5 degrees; 16 x 16 fisheyes of the summer file, 5 cm and earth-clear
-//! with 2.9 cm of water, suns 30 and 5: X, Y, Z within 5.7e-4, luminance
-//! p99 5.1e-4 at most (a test; the effective solve at every sample errs
-//! 2.1e-2 to 7.8e-2). The plan
-//! costs some 20 ms (the sup sampled 100 times a decade of m, widened by
-//! the most the difference can bend between samples). The fisheye takes
-//! 0.91 times the CPU of the air-mass-2 fold (`farm-bench -n 8`, paired,
-//! 0.86-0.98, 2-core machine at load 8-10), peak memory 130 MiB against
-//! 158, 2.37 times the gas-free image (`gases.sh`, 5 runs; the fold's 2.56
-//! the same hour; with the shared march above, 2.20 against 2.35 before
-//! both, idle, 5 runs each). Exact views, spectra, irradiance and aerial
-//! perspective of a default sky keep every term. Its spectral images
-//! are refused; see docs/atmosphere-file.md.
-//! A colour image of the terms is one pixel pass (`Sky::render_pixels_of`,
-//! colour and Stokes): each pixel's direction, its cell in the sky-view
-//! table, its scattering plane's rotation to the meridian frame and its
-//! azimuth from the sun are found once (`PixelGeometry`) and read by every
-//! term's sky (they share the sun and the tables' axes), and each term's
-//! colour is added into the pixel in term order, bit for bit the sum of
-//! the terms' own images (a test) without an image per term. The sky-view
-//! tables hold only the species that scatter (an absorber's integrals
-//! take its scattering coefficient, 0: the banded gases, ozone and NO2
-//! add no rows), so the gas image's tables are some 60 % smaller. With
-//! both, the gas fisheye below takes 0.935 times the CPU of the build
-//! before (`farm-bench -n 12`, paired, 0.90-0.98, 2-core machine at load
-//! 16-19), byte-identical, its peak memory 158 MiB against 187, and 2.50
-//! times the gas-free image (2.41-2.58; the build before 2.61 the same
-//! hour). What is left is the terms' samples themselves: their fields,
-//! tables and pixels cost about what the same number of gas-free samples
-//! cost, so one sky carrying the terms as channels would still take
-//! about 2 times the gas-free image (docs/atmosphere-file.md).
-//! Before the merge (the history, docs/atmosphere-file.md), colour skies
-//! folded the span's ends into the effective solve (the air-mass-2
-//! coefficient, air masses 1e-2 to 1e3). Measured then:
-//! fewer terms per sample, each with a weight and coefficient of its own
-//! fitted to the sample's five-term transmittance over the fold's air
-//! masses (1e-2 to 1e3, minimax; `scripts/gases/colour_term_refit.py`,
-//! which reproduces the fold's s D above), bounded as the fold is (s_i
-//! D_i, D_i the refit's largest error in transmittance): at 580 and 600
-//! nm (water, s 0.171 and 0.199) two terms err s D 2.0e-3 and 2.9e-3,
-//! three 8.4e-4 and 1.1e-3, four 2.0e-4 and 2.1e-4, so the bound holds
-//! there with four terms alone (with the fold's 2.8e-4 and two terms at
-//! 680-700 nm, 1.2e-4: 8.1e-4); a four-term colour sky saves 7 of the 28
-//! term samples (about 0.10 CPU-s of the fisheye's 1.04 at the measured
-//! 0.012 + 0.0027 a sample: some 2.3 times the gas-free image, not
-//! measured). One term with a free weight (v exp(-kappa u), v < 1: the
-//! weak terms' light absorbed at every air mass) in place of the fold's
-//! air-mass-2 coefficient errs s D 4.6e-4, 9.6e-5, 5.5e-5, 1.1e-5, 3e-6
-//! at 680, 700, 720, 740, 760 nm against 3.4e-3, 7.4e-4, 1.8e-4, 7.9e-5,
-//! 8.4e-6: folded so, 680-780 nm sum to 6.3e-4 and the terms stay at
-//! 580-600 nm alone (8 term samples, some 0.29 CPU-s saved, about 1.8
-//! times the gas-free image, not measured; 620-660 nm, inside the span,
-//! have no band at all and pay the terms today only because a term's
-//! sky is one contiguous sub-grid). The four-term refit is not built.
-//! The one-term fold was built and measured (the branch `fold1`, not
-//! merged): fitted to the dominant gas alone, as `GasBand::coefficient_of`
-//! gives the terms (the script's 680 nm figure multiplies in water at the
-//! O2 band's air mass, which holds only where the gases share a profile;
-//! water's scale height is 2 km, the mixed gases' 8 km), 680 nm keeps its
-//! terms (s D 7.8e-4 against the 2.4e-4 of 700-780 nm), so the terms stay
-//! at 580-680 nm (24 term samples, not 8): the fisheye 0.959 times the
-//! CPU (`farm-bench -n 8`, paired, 0.90-1.01), 2.29 times the gas-free
-//! image (`gases.sh`, 7 runs; 2.47 the same hour), its luminance against
-//! every term's image p99 up to 8.6e-4 at a sun of -4 degrees (6.0e-4
-//! with the air-mass-2 fold): set aside, 4 % of the CPU for an error
-//! nearer the bound.
+//! **What the terms share.** The terms' skies march the same view rays
+//! toward the same sun through the same profiles, so what depends on the
+//! geometry alone is found once and read by every term, bit for bit what
+//! each term finds alone (a test beside each):
+//! - an exact view's columns toward the sun (`ExactSunColumns`) and the
+//!   polarisation correction's phase-matrix harmonics
+//!   (`ViewHarmonicsCache`, keyed by the scattering species' phase
+//!   functions, which the gases do not change);
+//! - one store of sun-column tables, which hold the species' profile
+//!   columns without a coefficient
+//!   (`SingleScatteringScene::sharing_sun_column_tables_of`);
+//! - the sky-view tables of images and of views read from tables, built
+//!   together row by row (`Sky::prepare_term_tables`,
+//!   `SkyViewTable::compute_sharing_geometry`): term 0's march computes
+//!   every term's single-scattering integrals node by node
+//!   (`single_scattering::Together`) and every term's multiply scattered
+//!   light (`MultipleScatteringTable::compute_radiance_parts_together`,
+//!   `ViewRayOptics::march_alongside`: the nodes, their columns toward the
+//!   sun and the source tables' sun and azimuth cells found once, each
+//!   term's source read from its own table; each term's own march,
+//!   `compute_radiance_parts`, is the slow path, and the test of the
+//!   tables built together asserts the shared path is taken). The tables
+//!   hold only the species that scatter (the banded gases, ozone and NO2
+//!   add no rows);
+//! - an image's pixel geometry (`PixelGeometry`: the direction, its cell
+//!   in the sky-view table, its scattering plane's rotation, its azimuth
+//!   from the sun): a colour image of the terms is one pixel pass
+//!   (`Sky::render_pixels_of`) adding each term's colour into the pixel in
+//!   term order, bit for bit the sum of the terms' own images.
 //!
-//! Where the gas fisheye's extra CPU went before the shared
-//! multiple-scattering march (perf, call graphs, 1632 samples against
-//! the gas-free image's 623): the sky-view tables +357 (their multiply
-//! scattered march +216, of it the source-table reads +124: memory-bound
-//! loads of a node's eight corners, per node and per term sky whatever
-//! its samples), fields +189, source tables +169 (per sample), pixels
-//! +112, polarisation tables +75. With it (perf, dwarf call graphs, 1177
-//! samples of the gas fisheye alone): the sky-view tables' rows 28 %, of
-//! them the shared multiple-scattering march 14 % and single scattering
-//! 13 %; the source tables 17 %, the fields' solves 18 %, the pixels
-//! 10 %. The source table's
-//! phase kernel and the field's sun phase rows now skip the species that
-//! do not scatter (the banded gases, ozone, NO2: their rows were never
-//! read), byte-identical: 0.98 times the CPU (`farm-bench -n 6`,
-//! paired, 0.94-1.00), 2.42 times the gas-free image (`gases.sh`, 5
-//! runs; main's 2.55 just after). The terms 1-4's image tables marching their
-//! multiply scattered light at every 4th node (branch `gimg-stride`, set
-//! aside): (4, 4) 0.91 times the CPU but luminance up to 1.2e-3 from
-//! every other node's image (earth-clear with aerosol, sun -4, cubic
-//! fill); (4, 2) 5.8e-4 there (p99 1.7e-4), 8.9e-5 without aerosol: not
-//! far enough inside the colour bound (docs/atmosphere-file.md).
+//! **Colour skies merge terms.** A sky for colour images alone
+//! ([`SkyBuilder::for_colour_images`], what `sora render` builds) merges
+//! the terms ([`colour_plan`]): at each sample the terms, sorted by the
+//! vertical optical depth tau_j of the one banded gas that differs between
+//! them, are cut into runs, each carried by one sky with the run's weights
+//! summed (W_G) at one depth tau_G. A path with m vertical columns of that
+//! gas has depth m tau_j in term j (the correlated-k scaling), and every
+//! path from the top of the atmosphere to the eye crosses each shell above
+//! it, so m >= m_min (the gas' column above the eye over the ground's; 1
+//! on the ground) whatever the sun and the orders of scattering; a run
+//! then moves each path's light by at most D_G = sup_{m >= m_min} |sum_{j
+//! in G} w_j exp(-m tau_j) - W_G exp(-m tau_G)| of its gas-free light
+//! (tau_G chosen to make it least), and a colour's X, Y or Z, relative, by
+//! at most sum_i s_i D_i (D_i the sum over the sample's runs, s_i its
+//! largest share of the colour-matching sums, for a pixel whose gas-free
+//! radiance there is at most its mean). Each sample takes as few runs as
+//! keep that sum within [`COLOUR_BOUND`] (1e-3) with the fewest skies: sky
+//! g carries each sample's g-th run (the weakest first), term 0's slot on
+//! the whole grid, the others on the samples from the first to the last
+//! with more runs (weight 0 between). The sup covers m -> infinity, where
+//! the weakest term is the only light left, so one run (the whole fold)
+//! errs D about 0.14 wherever a band absorbs and weak terms merge only
+//! where their colour share is small. With the measured summer file (2.92
+//! cm of water, O2-O2) on the default grid: four skies, terms {0}, {1},
+//! {2}, {3, 4} at 580 and 600 nm (s D 3.1e-4 each), {0}, {1}, {2-4} at 680
+//! nm (1.3e-4), {0}, {1-4} at 700 nm (1.2e-4), one run at 720-780 nm
+//! (1.1e-4 together), 9.7e-4 in all; the extra skies cover 580-700,
+//! 580-680 and 580-600 nm. The strong bands keep the terms whose light
+//! differs (760 nm: any merge errs D > 6e-3; a test). Against every
+//! term's image (the slow path, the default sky): 16 x 16 fisheyes of the
+//! summer file, 5 cm and earth-clear with 2.9 cm of water, suns 30 and 5,
+//! X, Y, Z within 5.7e-4 (a test). The plan costs some 20 ms (the sup
+//! sampled 100 times a decade of m, widened by the most the difference
+//! can bend between samples). Exact views, spectra, irradiance and aerial
+//! perspective of a default sky keep every term; a colour sky's spectral
+//! images are refused (docs/atmosphere-file.md).
+//!
+//! **Cost.** On the summer file (`scripts/bench/gases.sh`, idle, 5 runs
+//! each, release) the 256 x 256 colour fisheye over 380-780 nm takes 2.20
+//! times the CPU of the gas-free image (1.01 against 0.46 CPU-s), and 36
+//! exact views at 900-1000 nm (every sample in the 940-nm water band)
+//! about 2.6 times the gas-free views. What is left is the term samples'
+//! own fields, source tables and pixels and, per term sky, the reads of
+//! its own source table in the shared march. How each saving was measured
+//! and what was tried and set aside (the air-mass-2 fold, refits with
+//! fewer terms, coarser term tables) is in docs/atmosphere-file.md
+//! ("`[gases]`").
 //!
 //! Standard errors (path tracing) add as sum_j w_j se_j, the bound for
 //! errors that may be correlated (the terms are traced with one seed).
