@@ -17,7 +17,9 @@
 // the scattering changes; the worker reports the bake's progress), and the
 // page draws the sky, a scene with aerial perspective, or the difference
 // from the exact image through WebGL2 from them: moving the sun redraws at
-// once, with no engine request.
+// once, with no engine request. With the eye above the ground (the observer
+// altitude) the sky is the tables' raised read, the march per pixel
+// (realtime.js's raised program): far slower on a software renderer.
 //
 // window.soraExplorer exposes the state the browser tests read (timings,
 // the last spectrum, counts); it is not an API.
@@ -379,6 +381,9 @@ function drawRealtime() {
       ? `aerial perspective from a ${VOLUME.columns}×${VOLUME.rows}×${VOLUME.slices} volume marched from the tables`
       : 'aerial perspective from the sky table (no march tables)';
     note = ` — ridges at ${RIDGES.map(([d]) => d / 1000).join(', ')} km, looking toward azimuth ${state.lookAzimuthDeg}°; ${air}`;
+  }
+  if (view.raisedSky(state)) {
+    note += ` — eye ${state.altitudeM} m up: its sky marched per pixel from the march's tables`;
   }
   const started = performance.now();
   view.draw(state);

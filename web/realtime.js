@@ -1,7 +1,10 @@
 // The explorer's real-time view: draws the sky, a scene with aerial
 // perspective, and the difference from the exact (CPU) image through WebGL2
 // from the engine tables the worker baked (crates/sora-web, request
-// "tables"). A frame is table reads only: the reference reader
+// "tables"). For an eye on the ground a frame is table reads only; above
+// the ground (tables with the march's) its sky is the Rust lookup's raised
+// read, the whole ray marched per pixel (soraRaisedSkyView, in a program of
+// its own: fragment's `raised`). The reference reader
 // web/shaders/sora_sky.glsl (fetched, not copied) does every lookup; this
 // file adds the cameras, the scene and the display mapping.
 //
@@ -106,12 +109,22 @@ void main() { vec2 p = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2
 // The fragment shader of the views (march false) or of the march's
 // program (march true: the volume's fill, mode 8, and the march per pixel,
 // modes 6 and 7), apart so that the views' program neither compiles the
-// march nor binds the volume it fills.
-function fragment(reader, march) {
+// march nor binds the volume it fills. The views' program comes in two:
+// raised false reads the sky as the table's read (soraSkyView), what an
+// eye on the ground reads, and raised true as the Rust lookup's sky_xyz at
+// any altitude (soraRaisedSkyView: for an eye above the ground with the
+// march's tables, the march of the whole ray per pixel). The host draws an
+// eye above the ground with the second and compiles it only then: a
+// program holding the march drew the ground eye's fisheye several times
+// slower on SwiftShader though the march never ran (docs/engine-tables.md,
+// "An eye between the altitude nodes"). Each program reads the sky from
+// one place (main), so that the march is inlined once.
+function fragment(reader, march, raised = false) {
   const float = (x) => x.toFixed(1);
   const ridges = RIDGES.map(([d, base, relief]) => `vec3(${d.toFixed(1)}, ${base.toFixed(1)}, ${relief.toFixed(1)})`).join(', ');
   return `#version 300 es
 #define SORA_SCENE_MARCH ${march ? 1 : 0}
+#define SORA_RAISED_SKY ${raised ? 1 : 0}
 precision highp float;
 precision highp int;
 ${reader}
@@ -163,9 +176,20 @@ bool fisheyeView(out vec3 v) {
   return true;
 }
 
-vec3 skyWithSun(vec3 v, vec3 sun) {
+// The sky toward v (no disc): the Rust lookup's sky_xyz (the raised
+// program) or the table's read (the eye on the ground). Called from main
+// alone.
+vec3 skyView(vec3 v, vec3 sun) {
+#if SORA_RAISED_SKY
+  return soraRaisedSkyView(uAltitudeM, v, sun);
+#else
+  return soraSkyView(uAltitudeM, v, sun);
+#endif
+}
+
+vec3 sunDisc(vec3 v, vec3 sun) {
   float gamma = acos(clamp(dot(v, sun), -1.0, 1.0));
-  return soraSkyView(uAltitudeM, v, sun) + soraSunDiscXyz(uAltitudeM, uSunElevationDeg, gamma);
+  return soraSunDiscXyz(uAltitudeM, uSunElevationDeg, gamma);
 }
 
 // The scene camera: forward, right and up (east-north-up), 12 degrees up.
@@ -320,9 +344,10 @@ float ridgeHeight(int i, float az) {
   return RIDGES[i].y + RIDGES[i].z * (0.5 + 0.5 * n);
 }
 
-// The scene along v (east-north-up at the eye): the sky, or a ridge or the
-// ground at slant distance d, lit where it stands, seen through the air.
-vec3 scene(vec3 v, vec3 sun) {
+// The scene along v (east-north-up at the eye): false where v sees the
+// sky, else true and into xyz a ridge or the ground at slant distance d,
+// lit where it stands, seen through the air.
+bool sceneSurface(vec3 v, vec3 sun, out vec3 xyz) {
   float R = uPlanetSun.x;
   float horizontal = max(length(v.xy), 1e-6);
   float tanElevation = v.z / horizontal;
@@ -343,7 +368,7 @@ vec3 scene(vec3 v, vec3 sun) {
       break;
     }
   }
-  if (d < 0.0) return skyWithSun(v, sun);
+  if (d < 0.0) return false;
   // The point's own altitude and vertical (as soraAerialPerspectiveFromSky finds them).
   vec3 p = vec3(v.xy * d, R + uAltitudeM + v.z * d);
   vec3 up = normalize(p);
@@ -358,7 +383,8 @@ vec3 scene(vec3 v, vec3 sun) {
   vec3 lit = ALBEDO / SORA_PI * (diffuse * 0.5 * (1.0 + dot(n, up)) + direct * max(dot(n, sun), 0.0));
   vec3 inscattered, transmittance;
   sceneAerialPerspective(v, sun, d, inscattered, transmittance);
-  return lit * transmittance + inscattered;
+  xyz = lit * transmittance + inscattered;
+  return true;
 }
 
 
@@ -390,24 +416,31 @@ void main() {
 #else
 void main() {
   vec3 sun = sunDirection();
-  vec3 v;
-  if (uMode == 1) {
-    colour = vec4(display(scene(perspectiveView(), sun)), 1.0);
-    return;
-  }
   if (uMode == 4 || uMode == 5) {
     vec3 inscattered, transmittance;
     sceneAerialPerspective(perspectiveView(), sun, uDistanceM, inscattered, transmittance);
     colour = vec4(uMode == 4 ? inscattered : transmittance, 1.0);
     return;
   }
-  if (!fisheyeView(v)) { colour = vec4(0.0); return; }
-  if (uMode == 0) {
-    colour = vec4(display(skyWithSun(v, sun)), 1.0);
+  // The view: the scene camera's (mode 1, where a ridge or the ground may
+  // stand in front of the sky) or the fisheye's; the sky read here alone.
+  vec3 v, xyz;
+  bool sky = true;
+  if (uMode == 1) {
+    v = perspectiveView();
+    sky = !sceneSurface(v, sun, xyz);
+  } else if (!fisheyeView(v)) {
+    colour = vec4(0.0);
+    return;
+  }
+  if (sky) xyz = skyView(v, sun);
+  if (uMode == 0 || uMode == 1) {
+    if (sky) xyz += sunDisc(v, sun);
+    colour = vec4(display(xyz), 1.0);
   } else if (uMode == 3) {
-    colour = vec4(soraSkyView(uAltitudeM, v, sun), 1.0);
+    colour = vec4(xyz, 1.0);
   } else {
-    vec3 realtime = soraSkyView(uAltitudeM, v, sun);
+    vec3 realtime = xyz;
     // The exact image's rows run top first.
     vec3 exact = texelFetch(uExact, ivec2(int(gl_FragCoord.x), int(uSize.y) - 1 - int(gl_FragCoord.y)), 0).xyz;
     if (!(exact.y > 0.0)) { colour = vec4(vec3(0.08), 1.0); return; } // a night sky: no difference
@@ -444,28 +477,22 @@ export class RealtimeView {
       return shader;
     };
     const reader = await response.text();
-    const link = (march) => {
+    this.link = (march, raised) => {
       const program = gl.createProgram();
       gl.attachShader(program, compile(gl.VERTEX_SHADER, VERTEX));
-      gl.attachShader(program, compile(gl.FRAGMENT_SHADER, fragment(reader, march)));
+      gl.attachShader(program, compile(gl.FRAGMENT_SHADER, fragment(reader, march, raised)));
       gl.linkProgram(program);
       if (!gl.getProgramParameter(program, gl.LINK_STATUS)) throw new Error(`real-time shader: ${gl.getProgramInfoLog(program)}`);
       return program;
     };
-    // The views' program and the march's.
-    this.programs = [link(false), link(true)];
-    this.forEachProgram(() => {
-      gl.uniform1i(this.uniform('uSky'), 0);
-      gl.uniform1i(this.uniform('uTransmittance'), 1);
-      gl.uniform1i(this.uniform('uIrradiance'), 2);
-      gl.uniform1i(this.uniform('uExact'), 3);
-      // Unit 4: readFloats' target.
-      gl.uniform1i(this.uniform('uMarchSource'), 5);
-      gl.uniform1i(this.uniform('uMarchTables'), 6);
-      gl.uniform1i(this.uniform('uVolumeSource'), 7);
-      gl.uniform1i(this.uniform('uVolumeDepth'), 8);
-      gl.uniform1i(this.uniform('uAerial'), 9);
-    });
+    // The views' program (the table's sky: an eye on the ground), the
+    // march's, and the views' for an eye above the ground (the Rust
+    // lookup's sky, the march per pixel), linked when first drawn
+    // (use(2)); how long that took (ms).
+    this.programs = [this.link(false, false), this.link(true, false), null];
+    this.raisedLinkMs = null;
+    this.tableUniforms = null;
+    this.forEachProgram(() => this.setUnits());
     this.textures = [0, 1, 2, 3, 4, 5, 6, 7, 8, 9].map(() => gl.createTexture());
     this.floatTarget = Boolean(gl.getExtension('EXT_color_buffer_float'));
     // Every sampler's unit holds a texture of its kind (the aerial table's
@@ -487,23 +514,51 @@ export class RealtimeView {
     this.volumeFills = 0;
   }
 
-  // Uses program 0 (the views') or 1 (the march's); uniform(name) is then
-  // its uniform's location.
+  // Each sampler's texture unit, in the program in use.
+  setUnits() {
+    const gl = this.gl;
+    gl.uniform1i(this.uniform('uSky'), 0);
+    gl.uniform1i(this.uniform('uTransmittance'), 1);
+    gl.uniform1i(this.uniform('uIrradiance'), 2);
+    gl.uniform1i(this.uniform('uExact'), 3);
+    // Unit 4: readFloats' target.
+    gl.uniform1i(this.uniform('uMarchSource'), 5);
+    gl.uniform1i(this.uniform('uMarchTables'), 6);
+    gl.uniform1i(this.uniform('uVolumeSource'), 7);
+    gl.uniform1i(this.uniform('uVolumeDepth'), 8);
+    gl.uniform1i(this.uniform('uAerial'), 9);
+  }
+
+  // Uses program 0 (the views', the table's sky), 1 (the march's) or 2
+  // (the views' with the raised eye's sky, linked now if not yet, its
+  // uniforms set as the others'); uniform(name) is then its uniform's
+  // location.
   use(index) {
+    if (!this.programs[index]) {
+      const started = performance.now();
+      this.programs[index] = this.link(false, true);
+      this.program = this.programs[index];
+      this.gl.useProgram(this.program);
+      this.setUnits();
+      if (this.tableUniforms) this.tableUniforms(this.program);
+      this.raisedLinkMs = performance.now() - started;
+    }
     this.program = this.programs[index];
     this.gl.useProgram(this.program);
+    this.lastProgram = index;
   }
 
   uniform(name) {
     return this.gl.getUniformLocation(this.program, name);
   }
 
-  // Runs `set` with each program in use, then the views'.
+  // Runs `set` with each linked program in use, then the views'.
   forEachProgram(set) {
-    this.use(1);
-    set(this.program);
-    this.use(0);
-    set(this.program);
+    for (const index of [2, 1, 0]) {
+      if (!this.programs[index]) continue;
+      this.use(index);
+      set(this.program);
+    }
   }
 
   // The march's tables (marchTextures' reply), or one texel each (null).
@@ -557,7 +612,8 @@ export class RealtimeView {
       ? marchTextures(m.tables.march, new Uint8Array(bytes, json.tables.march.offset_bytes, json.tables.march.length_bytes))
       : null;
     this.setMarch(march);
-    this.forEachProgram((program) => {
+    // The tables' uniforms, kept for the raised program when it is linked.
+    this.tableUniforms = (program) => {
       gl.uniform4i(this.uniform('uSkyNodes'), sky.sun_nodes, sky.altitude_nodes, sky.zenith_nodes_per_half, sky.azimuth_nodes);
       gl.uniform1i(this.uniform('uSkyZenithFineCells'), sky.zenith_fine_cells_per_half ?? 0);
       gl.uniform1i(this.uniform('uSkyZenithWideCells'), sky.zenith_wide_cells_per_half ?? 0);
@@ -566,7 +622,8 @@ export class RealtimeView {
       gl.uniform3fv(this.uniform('uSunIrradianceXyz'), m.sun.irradiance_xyz_w_m2_nm);
       gl.uniform1f(this.uniform('uSunAxisWidthDeg'), m.sun.axis_width_deg);
       if (march) setMarchUniforms(gl, program, m.tables.march, march);
-    });
+    };
+    this.forEachProgram(this.tableUniforms);
     this.tables = json;
   }
 
@@ -620,7 +677,7 @@ export class RealtimeView {
     }[state.mode];
     if (mode === 2 && !this.exact) return false;
     if (this.volumeUsed && (mode === 1 || mode === 4 || mode === 5)) this.fillVolume(state);
-    this.use(mode === 6 || mode === 7 ? 1 : 0);
+    this.use(mode === 6 || mode === 7 ? 1 : this.raisedSky(state) && mode <= 3 ? 2 : 0);
     this.setState(state);
     // state.fromSky: the sky table's difference even with a volume (the
     // browser test's comparison).
@@ -630,6 +687,13 @@ export class RealtimeView {
     gl.uniform2f(this.uniform('uSize'), width, height);
     gl.drawArrays(gl.TRIANGLES, 0, 3);
     return true;
+  }
+
+  // Whether `state`'s sky is drawn by the raised program: an eye above the
+  // ground and the march's tables (without them the raised read is the
+  // table's, what program 0 reads).
+  raisedSky(state) {
+    return this.hasMarch && state.altitudeM > 0;
   }
 
   // The uniforms of `state` in the program in use.

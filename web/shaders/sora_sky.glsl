@@ -283,8 +283,11 @@ vec3 soraLayersXyz(highp sampler2DArray table, int Z, ivec2 F, int K, int cap, i
 // Sky radiance (XYZ, W m^-2 sr^-1 nm^-1) seen at altitude h (m) toward
 // zenith angle `zenith` (rad) and azimuth `phi` (rad, 0..pi) from the
 // sun's, with the sun at elevation eDeg (degrees). No sun disc. The sky
-// table's read (lookup.rs's table_sky_xyz; for a raised eye with march
-// tables the Rust lookup's sky_xyz is soraRaisedSkyXyz, below).
+// table's read (lookup.rs's table_sky_xyz): the Rust lookup's sky_xyz for
+// an eye on the ground or tables without the march's. For an eye above
+// the ground with march tables sky_xyz is soraRaisedSkyXyz (below), a
+// separate entry, so that a host drawing an eye on the ground compiles
+// no march (docs/engine-tables.md, "The shader's functions").
 vec3 soraSkyXyz(float h, float zenith, float phi, float eDeg) {
   return soraLayersXyz(uSky, uSkyNodes.z, ivec2(uSkyZenithFineCells, uSkyZenithWideCells), uSkyNodes.w, SORA_ZENITH_CAP_CELLS, 0, 0.0, h, zenith, phi, eDeg);
 }
@@ -359,7 +362,9 @@ float soraSunElevationDeg(vec3 sun) {
 }
 
 // Sky radiance for an eye at altitude h looking along unit v, the sun
-// toward unit sun; v and sun in the eye's east-north-up frame (z up).
+// toward unit sun; v and sun in the eye's east-north-up frame (z up). The
+// table's read (soraSkyXyz): the entry for an eye on the ground; for an
+// eye above it soraRaisedSkyView (at the end of this file).
 vec3 soraSkyView(float h, vec3 v, vec3 sun) {
   vec2 zp = soraLocalView(v, vec3(0.0, 0.0, 1.0), sun);
   return soraSkyXyz(h, zp.x, zp.y, soraSunElevationDeg(sun));
@@ -1079,17 +1084,16 @@ vec3 soraScaledXyz(vec3 value, vec3 want, vec3 got, float share) {
 // logarithm linear in h. Without march tables or on the ground, the
 // table's read (soraSkyXyz): so this is the Rust lookup's sky_xyz.
 //
-// Within 0.061 % of EngineTables::sky_xyz per channel over 96 reads
-// (web/tests/raised-eye.mjs: earth-clear, 2 altitude nodes, eyes at 5 and
-// 50 km, suns 30, 3 and -4, views on both sides of the horizon; the first
-// altitude cell's branches only). NOT YET what soraSkyXyz and soraSkyView
-// read (docs/engine-tables.md, "An eye between the altitude nodes"): with
-// soraSkyXyz calling it, the browser test's shader
-// (four uses of the sky) lost its WebGL context on SwiftShader, and in
-// this form (at most three table reads and two marches, each from one
-// call in a loop, so that a compiler that inlines every call holds one
-// copy of each) the ground eye's fisheye took 2.9 s a frame there (0.26-
-// 0.41 s without it), though it never runs the march there.
+// Within 0.071 % of EngineTables::sky_xyz per channel over 96 reads
+// (web/tests/raised-eye.mjs: earth-clear, 3 altitude nodes, eyes at 5 and
+// 50 km, one in each altitude cell, suns 30, 3 and -4, views on both sides
+// of the horizon). Written as at most three table reads and two marches,
+// each from one call in a loop, so that a compiler that inlines every
+// call holds one copy of each. A separate entry (soraRaisedSkyView), not
+// soraSkyXyz's read: in a program, even where it never runs the march (an
+// eye on the ground), it drew the ground eye's fisheye at 2.9 s a frame on
+// SwiftShader against 0.26-0.41 s (docs/engine-tables.md, "An eye between
+// the altitude nodes").
 vec3 soraRaisedSkyXyz(float h, float zenith, float phi, float eDeg) {
   vec4 reads[3];        // the table's reads: altitude, zenith, azimuth, sun elevation
   vec4 marches[2];      // the marches: the eye's altitude, the distance (split), whole (1) or segment (0)
@@ -1172,4 +1176,17 @@ vec3 soraRaisedSkyXyz(float h, float zenith, float phi, float eDeg) {
   }
   if (!scaled) return lights[0];
   return soraScaledXyz(lights[0], tables[above ? 0 : 2], lights[1], share);
+}
+
+// Sky radiance for an eye at altitude h looking along unit v, the sun
+// toward unit sun (east-north-up, z up), as the Rust lookup's sky_xyz
+// reads it (soraRaisedSkyXyz): the entry for an eye above the ground. A
+// program that calls it compiles the march, which costs an eye on the
+// ground even where it never runs (see soraRaisedSkyXyz), so a host draws
+// an eye on the ground with a program calling soraSkyView instead (the
+// same read there): web/realtime.js compiles this one when the eye rises.
+// Call it from one place in a program (every call is inlined).
+vec3 soraRaisedSkyView(float h, vec3 v, vec3 sun) {
+  vec2 zp = soraLocalView(v, vec3(0.0, 0.0, 1.0), sun);
+  return soraRaisedSkyXyz(h, zp.x, zp.y, soraSunElevationDeg(sun));
 }

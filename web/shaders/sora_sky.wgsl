@@ -268,8 +268,11 @@ fn sora_layers_xyz(table: texture_2d_array<f32>, zn: i32, zf: vec2<i32>, kn: i32
 
 // Sky radiance (XYZ, W m^-2 sr^-1 nm^-1) at altitude h (m) toward zenith
 // angle `zenith` and azimuth `phi` from the sun's (rad), sun at e_deg. The
-// sky table's read (lookup.rs's table_sky_xyz; for a raised eye with march
-// tables the Rust lookup's sky_xyz is sora_raised_sky_xyz, below).
+// sky table's read (lookup.rs's table_sky_xyz): the Rust lookup's sky_xyz
+// for an eye on the ground or tables without the march's. For an eye above
+// the ground with march tables sky_xyz is sora_raised_sky_xyz (below), a
+// separate entry, so that a pipeline drawing an eye on the ground compiles
+// no march (as in sora_sky.glsl).
 fn sora_sky_xyz(h_in: f32, zenith: f32, phi: f32, e_in: f32) -> vec3<f32> {
   return sora_layers_xyz(sora_sky, sora.sky_nodes.z, sora.transmittance_nodes.zw, sora.sky_nodes.w, SORA_ZENITH_CAP_CELLS, 0, 0.0, h_in, zenith, phi, e_in);
 }
@@ -350,7 +353,9 @@ fn sora_sun_elevation_deg(sun: vec3<f32>) -> f32 {
 }
 
 // Sky radiance for an eye at altitude h along unit v, sun toward unit sun
-// (east-north-up, z up).
+// (east-north-up, z up). The table's read (sora_sky_xyz): the entry for an
+// eye on the ground; for an eye above it sora_raised_sky_view (at the end
+// of this file).
 fn sora_sky_view(h: f32, v: vec3<f32>, sun: vec3<f32>) -> vec3<f32> {
   let zp = sora_local_view(v, vec3<f32>(0.0, 0.0, 1.0), sun);
   return sora_sky_xyz(h, zp.x, zp.y, sora_sun_elevation_deg(sun));
@@ -1066,9 +1071,10 @@ fn sora_scaled_xyz(value: vec3<f32>, want: vec3<f32>, got: vec3<f32>, share: f32
 // linearly in h to none at the first node; below it the composition at
 // the lower altitude node's sphere times the table's ratio to the same
 // composition at the upper node, that ratio's logarithm linear in h.
-// Without march tables or on the ground, the table's read. NOT YET what
-// sora_sky_xyz and sora_sky_view read (see the GLSL twin, which is
-// checked against the Rust lookup; this one is validated only).
+// Without march tables or on the ground, the table's read. A separate
+// entry (sora_raised_sky_view), not sora_sky_xyz's read (see the GLSL
+// twin, which is checked against the Rust lookup; this one is validated
+// only).
 fn sora_raised_sky_xyz(h_in: f32, zenith: f32, phi: f32, e_deg: f32) -> vec3<f32> {
   var reads: array<vec4<f32>, 3>;   // the table's reads: altitude, zenith, azimuth, sun elevation
   var marches: array<vec4<f32>, 2>; // the marches: the eye's altitude, the distance (split), whole (1) or segment (0)
@@ -1150,4 +1156,15 @@ fn sora_raised_sky_xyz(h_in: f32, zenith: f32, phi: f32, e_deg: f32) -> vec3<f32
   }
   if (!scaled) { return lights[0]; }
   return sora_scaled_xyz(lights[0], tables[select(2, 0, above)], lights[1], share);
+}
+
+// Sky radiance for an eye at altitude h along unit v, sun toward unit sun
+// (east-north-up, z up), as the Rust lookup's sky_xyz reads it
+// (sora_raised_sky_xyz): the entry for an eye above the ground
+// (soraRaisedSkyView in sora_sky.glsl). A pipeline that calls it compiles
+// the march, so a host draws an eye on the ground with one calling
+// sora_sky_view instead (the same read there).
+fn sora_raised_sky_view(h: f32, v: vec3<f32>, sun: vec3<f32>) -> vec3<f32> {
+  let zp = sora_local_view(v, vec3<f32>(0.0, 0.0, 1.0), sun);
+  return sora_raised_sky_xyz(h, zp.x, zp.y, sora_sun_elevation_deg(sun));
 }

@@ -1,17 +1,29 @@
-// The reference shader's raised-eye sky (soraRaisedSkyXyz, web/shaders/sora_sky.glsl)
+// The raised eye's sky in the reference shader and in the real-time view,
 // against the Rust lookup's EngineTables::sky_xyz: DIR from the ignored test
 // engine_tables::tests::raised_eye_reference (SORA_EYE_SHADER_OUT=DIR cargo test
 // --release -p sora --lib -- --ignored raised_eye_reference: earth-clear baked as
-// `sora tables --preset earth-clear --altitude-nodes 2`, the tables in DIR/tables,
-// 96 reads at 5 and 50 km in DIR/raised.json); WebGL2 on SwiftShader draws the same
-// reads, one pixel each, and the relative error per channel is printed (measured
-// worst 0.061 %); it fails above 0.5 % (32-bit floats against the lookup's 64) or if
-// the context is lost. Run by .ci/run; by hand: cd web/tests && npm ci && node raised-eye.mjs DIR
+// `sora tables --preset earth-clear --altitude-nodes 3`, nodes at 0, 12.3 and 100
+// km, the tables in DIR/tables). WebGL2 on SwiftShader draws
+// - soraRaisedSkyXyz (web/shaders/sora_sky.glsl) at DIR/raised.json's 96 reads
+//   (eyes at 5 and 50 km: both altitude cells), one pixel each (measured worst
+//   0.071 %);
+// - the real-time view (web/realtime.js's RealtimeView, the same tables, its
+//   fisheye's XYZ read back) at DIR/fisheye.json's 32 x 32 fisheyes: eyes at 0
+//   (its views' program, the table's read), 5 and 30 km (its raised program,
+//   soraRaisedSkyView), suns 30, 3 and -4 (measured worst 0.32 %, p99 0.15 %);
+// and prints the relative error per channel. It fails above BOUND (0.5 %: 32-bit
+// floats against the lookup's 64), if a fisheye is drawn by the other program,
+// or if the context is lost. It then times the real-time fisheye at 256 x 256 for
+// the eye on the ground; with SORA_EYE_FRAMES=1 also at 5 km (about 47 s a frame on
+// SwiftShader, the march per pixel). Run by .ci/run; by hand: cd web/tests && npm ci
+// && node raised-eye.mjs DIR
 import { readFileSync } from 'node:fs';
 import { chromium } from 'playwright-core';
 import { readExr } from './exr.mjs';
 import { marchTextures, setMarchUniforms } from '../march.js';
 const dir = process.argv[2];
+// Relative error allowed per channel (32-bit floats against the lookup's 64).
+const BOUND = 0.005;
 const manifest = JSON.parse(readFileSync(`${dir}/tables/manifest.json`, 'utf8'));
 const rows = JSON.parse(readFileSync(`${dir}/raised.json`, 'utf8'));
 const table = (name) => {
@@ -33,7 +45,8 @@ const page = await browser.newPage();
 await page.route('http://check.test/**', (route) => {
   const path = new URL(route.request().url()).pathname;
   if (path === '/') return route.fulfill({ contentType: 'text/html', body: '<!doctype html><p>x</p>' });
-  return route.fulfill({ contentType: 'application/octet-stream', body: bodies[path] });
+  if (!bodies[path]) return route.fulfill({ status: 404, body: '' });
+  return route.fulfill({ contentType: path.endsWith('.js') ? 'text/javascript' : 'application/octet-stream', body: bodies[path] });
 });
 await page.goto('http://check.test/');
 const out = await page.evaluate(async ({ shader, manifest, march, rows, setMarch }) => {
@@ -117,9 +130,81 @@ for (const [i, r] of rows.entries()) {
   worst = Math.max(worst, ...rel.map(Math.abs));
   console.log(`h ${r[0]} e ${r[3]} z ${r[1]} phi ${r[2]}: Y rust ${r[5].toExponential(4)} shader ${s[1].toExponential(4)}  rel X ${(100*rel[0]).toFixed(3)} % Y ${(100*rel[1]).toFixed(3)} % Z ${(100*rel[2]).toFixed(3)} %`);
 }
-console.log(`worst |rel| ${(100 * worst).toFixed(3)} %; draw ${out.ms.toFixed(0)} ms; error ${out.err} lost ${out.lost}`);
+console.log(`soraRaisedSkyXyz: worst |rel| ${(100 * worst).toFixed(3)} %; draw ${out.ms.toFixed(0)} ms; error ${out.err} lost ${out.lost}`);
+const failures = [];
+if (out.lost || out.err !== 0 || !(worst <= BOUND)) {
+  failures.push(`soraRaisedSkyXyz is not the Rust lookup's (worst ${(100 * worst).toFixed(3)} %, bound ${100 * BOUND} %; error ${out.err}, lost ${out.lost})`);
+}
+
+// The real-time view's drawing (web/realtime.js, RealtimeView: its views'
+// program for the eye on the ground, the raised program above it) of
+// DIR/fisheye.json's fisheyes, XYZ read back, against EngineTables::sky_xyz
+// per pixel; then its frame times at 256 x 256 (each frame read back).
+const realtimeTables = (() => {
+  const blocks = [['sky', tex.sky], ['transmittance', tex.transmittance], ['irradiance', tex.irradiance]];
+  const json = { manifest, tables: {} };
+  let offset = 0;
+  for (const [name, bytes] of blocks) {
+    json.tables[name] = { offset_bytes: offset, width: manifest.tables[name].width, height: manifest.tables[name].height };
+    offset += bytes.length;
+  }
+  const marchBin = readFileSync(`${dir}/tables/march.bin`);
+  json.tables.march = { offset_bytes: offset, length_bytes: marchBin.length };
+  return { json, bytes: Buffer.concat([...blocks.map(([, b]) => b), marchBin]) };
+})();
+bodies['/realtimeTables'] = realtimeTables.bytes;
+for (const file of ['realtime.js', 'march.js', 'shaders/sora_sky.glsl']) {
+  bodies[`/${file}`] = readFileSync(new URL(`../${file}`, import.meta.url));
+}
+const fisheye = JSON.parse(readFileSync(`${dir}/fisheye.json`, 'utf8'));
+const drawn = await page.evaluate(async ({ json, fisheye, raisedFrames }) => {
+  const { RealtimeView } = await import('/realtime.js');
+  const canvas = document.createElement('canvas');
+  canvas.width = canvas.height = 256;
+  document.body.append(canvas);
+  const view = new RealtimeView(canvas);
+  await view.init();
+  view.setTables(json, await (await fetch('/realtimeTables')).arrayBuffer());
+  const state = (c) => ({ mode: 'xyz', sunElevationDeg: c.sun_elevation_deg, sunAzimuthDeg: c.sun_azimuth_deg, altitudeM: c.altitude_m, lookAzimuthDeg: 0 });
+  const cases = [];
+  for (const c of fisheye.cases) {
+    const started = performance.now();
+    const px = view.readXyz(state(c), fisheye.size);
+    cases.push({ px: Array.from(px), program: view.lastProgram, ms: performance.now() - started });
+  }
+  const gl = view.gl;
+  const frame = (altitudeM, frames) => view.timeFrames({ ...state(fisheye.cases[0]), mode: 'fisheye', sunElevationDeg: 3, altitudeM }, frames, true);
+  const frameMs = { ground: frame(0, 5) };
+  if (raisedFrames) Object.assign(frameMs, { raised5km: frame(5000, 1), groundAfter: frame(0, 5) });
+  return { cases, frameMs, raisedLinkMs: view.raisedLinkMs, err: gl.getError(), lost: gl.isContextLost() };
+}, { json: realtimeTables.json, fisheye, raisedFrames: process.env.SORA_EYE_FRAMES === '1' });
+const n = fisheye.size;
+for (const [k, c] of fisheye.cases.entries()) {
+  const d = drawn.cases[k];
+  const rel = [];
+  let where = '';
+  let caseWorst = 0;
+  for (let i = 0; i < n * n; i++) {
+    const ref = c.xyz[i];
+    if (!ref) continue;
+    for (let ch = 0; ch < 3; ch++) {
+      const r = d.px[4 * i + ch] / ref[ch] - 1;
+      rel.push(Math.abs(r));
+      if (!(Math.abs(r) <= caseWorst)) { caseWorst = Number.isNaN(r) ? Infinity : Math.abs(r); where = `pixel (${i % n}, ${Math.floor(i / n)}) channel ${'XYZ'[ch]}: rust ${ref[ch].toExponential(4)} drawn ${d.px[4 * i + ch].toExponential(4)}`; }
+    }
+  }
+  rel.sort((a, b) => a - b);
+  const p99 = rel[Math.floor(0.99 * (rel.length - 1))];
+  const program = c.altitude_m > 0 ? 2 : 0;
+  console.log(`real-time view, eye ${c.altitude_m / 1000} km, sun ${c.sun_elevation_deg}: ${rel.length / 3} pixels, |rel| worst ${(100 * caseWorst).toFixed(3)} % (${where}), p99 ${(100 * p99).toFixed(3)} %; program ${d.program}; drawn in ${d.ms.toFixed(0)} ms`);
+  if (d.program !== program) failures.push(`eye ${c.altitude_m} m: drawn by program ${d.program}, not ${program}`);
+  if (!(caseWorst <= BOUND)) failures.push(`real-time view, eye ${c.altitude_m} m, sun ${c.sun_elevation_deg}: worst ${(100 * caseWorst).toFixed(3)} % > ${100 * BOUND} % against the Rust lookup`);
+}
+const raisedFrame = drawn.frameMs.raised5km === undefined ? '' : `, at 5 km ${drawn.frameMs.raised5km.toFixed(0)} ms (the eye on the ground again ${drawn.frameMs.groundAfter.toFixed(0)} ms)`;
+console.log(`real-time view, fisheye 256 x 256 on SwiftShader: the eye on the ground ${drawn.frameMs.ground.toFixed(0)} ms a frame${raisedFrame}; the raised program linked in ${drawn.raisedLinkMs?.toFixed(0)} ms; error ${drawn.err} lost ${drawn.lost}`);
+if (drawn.lost || drawn.err !== 0) failures.push(`real-time view: error ${drawn.err}, lost ${drawn.lost}`);
 await browser.close();
-if (out.lost || out.err !== 0 || !(worst <= 0.005)) {
-  console.error(`raised eye: the shader's sky is not the Rust lookup's (worst ${(100 * worst).toFixed(3)} %, bound 0.5 %; error ${out.err}, lost ${out.lost})`);
+if (failures.length > 0) {
+  console.error(`raised eye: ${failures.join('; ')}`);
   process.exit(1);
 }

@@ -22,7 +22,7 @@ fn sora_check_main(@builtin(position) position: vec4<f32>) -> @location(0) vec4<
   let c = sora_sky_view(10.0, v, sun) + sora_sun_disc_xyz(0.0, 5.0, 0.001)
     + sora_ground_irradiance_xyz(0.0, 5.0) + a.inscattered * a.transmittance
     + b.inscattered * b.transmittance + m.inscattered * m.transmittance
-    + sora_raised_sky_xyz(5000.0, 1.2, 0.5, 10.0);
+    + sora_raised_sky_xyz(5000.0, 1.2, 0.5, 10.0) + sora_raised_sky_view(5000.0, v, sun);
   return vec4<f32>(sora_xyz_to_linear_srgb(c), 1.0);
 }
 @vertex

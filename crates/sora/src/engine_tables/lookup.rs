@@ -55,9 +55,11 @@
 //!   dropped): a layer with the sun up has no shadow to give.
 //! - Sky for an eye above the ground, tables with the march's
 //!   (`EngineTables::raised_sky_xyz`; the manifest's
-//!   `lookup.sky_raised_eye`; the shaders have it as `soraRaisedSkyXyz` /
-//!   `sora_raised_sky_xyz`, the GLSL within 0.061 % of this, but not yet
-//!   what their sky reads, which is the table's as above): above the eye's horizon the march's light
+//!   `lookup.sky_raised_eye`; the shaders have it as `soraRaisedSkyView` /
+//!   `sora_raised_sky_view`, the entry for a raised eye beside the
+//!   table's read for an eye on the ground, the GLSL within 0.071 % of
+//!   this and the explorer's real-time view drawing it within 0.32 %):
+//!   above the eye's horizon the march's light
 //!   of the whole ray (`MarchTables::whole_ray_xyz`, split at the
 //!   perigee for a view going down from well above it), in the first
 //!   altitude cell times the table's ratio to the march on the ground

@@ -3305,14 +3305,22 @@ fn probe_library_zenith_curve() {
     }
 }
 
-/// Reference values of a raised eye's sky for the shaders' check
+/// Reference values of a raised eye's sky for the shaders' checks
 /// (ignored, run by `.ci/run`; `SORA_EYE_SHADER_OUT=DIR cargo test -p
-/// sora --lib -- --ignored --exact engine_tables::tests::raised_eye_reference`): bakes earth-clear as `sora
-/// tables --preset earth-clear --altitude-nodes 2` does, writes the
-/// tables to DIR and `EngineTables::sky_xyz` at eyes of 5 and 50 km for a
-/// set of views and suns to DIR/raised.json ([h, zenith, phi, e, X, Y, Z]),
-/// which `web/tests/raised-eye.mjs DIR` draws by the GLSL shader's
-/// `soraRaisedSkyXyz` and compares (measured within 0.061 %).
+/// sora --lib -- --ignored --exact engine_tables::tests::raised_eye_reference`):
+/// bakes earth-clear as `sora tables --preset earth-clear --altitude-nodes
+/// 3` does (nodes at 0, 12.3 and 100 km, so that the eyes below lie in
+/// both altitude cells), writes the tables to DIR and
+/// `EngineTables::sky_xyz`
+/// - at eyes of 5 and 50 km for a set of views and suns to DIR/raised.json
+///   ([h, zenith, phi, e, X, Y, Z]), which `web/tests/raised-eye.mjs DIR`
+///   draws by the GLSL shader's `soraRaisedSkyXyz` and compares;
+/// - for every pixel of a [`RAISED_FISHEYE_SIZE`]-pixel fisheye (sora's,
+///   as `web/realtime.js` draws it: zenith at the centre, north up, east
+///   left, rows bottom first; null outside the circle) at eyes of 0, 5 and
+///   30 km with the sun at 30, 3 and -4 degrees (azimuth 150) to
+///   DIR/fisheye.json, which the same script compares with the real-time
+///   view's drawing (`RealtimeView`, its raised program above the ground).
 #[test]
 #[ignore]
 fn raised_eye_reference() {
@@ -3324,7 +3332,7 @@ fn raised_eye_reference() {
         .build()
         .unwrap();
     let settings = EngineTableSettings {
-        altitude_nodes: 2,
+        altitude_nodes: 3,
         march: true,
         ..EngineTableSettings::default()
     };
@@ -3351,4 +3359,45 @@ fn raised_eye_reference() {
         serde_json::to_string(&rows).unwrap(),
     )
     .unwrap();
+    let n = RAISED_FISHEYE_SIZE;
+    let sun_azimuth_deg: f64 = 150.0;
+    let mut cases = Vec::new();
+    for h in [0.0, 5000.0, 30000.0] {
+        for e in [30.0_f64, 3.0, -4.0] {
+            let (a, el) = (sun_azimuth_deg.to_radians(), e.to_radians());
+            let sun = [a.sin() * el.cos(), a.cos() * el.cos(), el.sin()];
+            let mut xyz = Vec::new();
+            for row in 0..n {
+                for column in 0..n {
+                    // realtime.js's fisheyeView at the pixel's centre.
+                    let sx = (2.0 * (column as f64 + 0.5) - n as f64) / n as f64;
+                    let sy = (2.0 * (row as f64 + 0.5) - n as f64) / n as f64;
+                    let radius = sx.hypot(sy);
+                    if radius > 1.0 {
+                        xyz.push(serde_json::Value::Null);
+                        continue;
+                    }
+                    let z = radius * 0.5 * std::f64::consts::PI;
+                    let horizontal = z.sin() / radius;
+                    let v = [-sx * horizontal, sy * horizontal, z.cos()];
+                    let view = LocalView::from_vectors(v, [0.0, 0.0, 1.0], sun);
+                    xyz.push(serde_json::json!(tables.sky_xyz(h, view, e)));
+                }
+            }
+            cases.push(serde_json::json!({
+                "altitude_m": h,
+                "sun_elevation_deg": e,
+                "sun_azimuth_deg": sun_azimuth_deg,
+                "xyz": xyz,
+            }));
+        }
+    }
+    std::fs::write(
+        out.join("fisheye.json"),
+        serde_json::to_string(&serde_json::json!({"size": n, "cases": cases})).unwrap(),
+    )
+    .unwrap();
 }
+
+/// Pixels across the fisheye of [`raised_eye_reference`].
+const RAISED_FISHEYE_SIZE: usize = 32;
