@@ -2515,8 +2515,9 @@ fn the_sky_between_the_sun_nodes_about_the_sunset_matches_the_library() {
     assert!(failures.is_empty(), "{failures:?}");
 }
 
-/// The sky lookup of the tables `sora tables` bakes (the default axes,
-/// with the march's tables, which a raised eye's sky reads) for an eye
+/// The sky lookup of the tables `sora tables` bakes (the default axes
+/// but the altitude's, which `SORA_EYE_ALTITUDE_NODES` sets, with the
+/// march's tables, which a raised eye's sky reads) for an eye
 /// between the altitude nodes and at them, against the library's image
 /// for the same eye (the sky's scene with the eye moved, as `sora render
 /// --observer-altitude-m` draws it): the browser test's fisheye
@@ -2528,7 +2529,9 @@ fn the_sky_between_the_sun_nodes_about_the_sunset_matches_the_library() {
 /// SORA_EYE_PRESETS (default earth-clear,earth-hazy), SORA_EYE_SUNS
 /// (degrees), SORA_EYE_KM (the eyes between the nodes, km; the nodes of
 /// the first axis are added), SORA_EYE_ALTITUDE_NODES (altitude axes,
-/// each baked and read on the same images; default 6), SORA_EYE_SIZE
+/// each baked and read on the same images; default 6, the default bake's
+/// before 4: the numbers below are 6's, 4's, 3's and 2's are in
+/// docs/engine-tables.md, "How many altitude nodes"), SORA_EYE_SIZE
 /// (pixels, default 256), SORA_EYE_NODES=0 (leave the nodes out),
 /// SORA_EYE_READS (the reads for a raised eye, each on the same bake and
 /// images: 0 the lookup's, 1-3 `lookup.rs`'s set-aside
