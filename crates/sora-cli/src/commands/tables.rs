@@ -47,7 +47,12 @@ pub struct TablesArgs {
     #[arg(long, value_name = "N", default_value_t = EngineTableSettings::default().sun_nodes)]
     sun_nodes: usize,
 
-    /// Eye altitude nodes over the atmosphere's thickness
+    /// Eye altitude nodes over the atmosphere's thickness (4: 0, 5.4, 25.5
+    /// and 100 km for Earth; a raised eye's sky is read from the march's
+    /// tables, which hold it as well as 6 nodes do; more nodes bring the
+    /// table's own read, the shaders' for now, and the irradiance of a
+    /// raised point closer between the nodes, each layer costing bake
+    /// time)
     #[arg(long, value_name = "N", default_value_t = EngineTableSettings::default().altitude_nodes)]
     altitude_nodes: usize,
 
@@ -83,7 +88,7 @@ pub struct TablesArgs {
     march: bool,
 
     /// Leave out the march's tables (the shaders' aerial perspective then
-    /// comes from the sky table, not within 2 %; 28 MB in all)
+    /// comes from the sky table, not within 2 %; 19 MB in all)
     #[arg(long, overrides_with = "march")]
     no_march: bool,
 

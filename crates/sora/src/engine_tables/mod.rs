@@ -150,8 +150,8 @@ pub struct EngineTableSettings {
     pub aerial_nodes: (usize, usize, usize),
     /// Whether to bake the aerial-perspective march's tables (`march.rs`;
     /// multiple scattering only). On by default: the aerial perspective
-    /// within 2 % of the library at 1-50 km, 29-33 MB (57-61 MB with the
-    /// sky table's 28 MB, under the 64 MB a GPU should hold; no bake time
+    /// within 2 % of the library at 1-50 km, 29-33 MB (48-52 MB with the
+    /// sky table's 19 MB, under the 64 MB a GPU should hold; no bake time
     /// measurable: the field's source is copied); the reference shaders
     /// march them (`soraAerialPerspectiveMarch`, `docs/engine-tables.md`).
     pub march: bool,
@@ -161,7 +161,14 @@ impl Default for EngineTableSettings {
     fn default() -> EngineTableSettings {
         EngineTableSettings {
             sun_nodes: 48,
-            altitude_nodes: 6,
+            // 4 altitude nodes (0, 5.4, 25.5 and 100 km for Earth): the
+            // raised eye's sky is read from the march's tables
+            // (`lookup.rs`, `raised_sky_xyz`), which hold it about as well
+            // as 6 nodes did (docs/engine-tables.md, "How many altitude
+            // nodes"), at two thirds of the layers and of the bake; the
+            // table's read alone (the shaders' for now) and the irradiance
+            // between the nodes are worse.
+            altitude_nodes: 4,
             zenith_nodes_per_half: 64,
             // 21 fine and 22 wide cells: the nodes of the last 21 cells
             // next to the horizon are the images' sky-view rows (up to 2.5
