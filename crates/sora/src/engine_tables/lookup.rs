@@ -91,9 +91,7 @@
 
 use super::EngineTables;
 use super::axes;
-use super::march::{
-    DARK_LOG_SOURCE, DENSITY_NODES, MARCH_STEPS, MarchTables, PHASE_NODES, SUN_COLUMN_NODES,
-};
+use super::march::{DARK_LOG_SOURCE, DENSITY_NODES, MARCH_STEPS, MarchTables, PHASE_NODES};
 use crate::geometry::{Vector3, segment_in_atmosphere};
 use crate::transport::multiple_scattering::{azimuth_cell, interpolate_log_source};
 
@@ -340,6 +338,30 @@ pub(crate) static CAP_OVERRIDE: std::sync::atomic::AtomicUsize =
 #[cfg(test)]
 pub(crate) static ALTITUDE_READ_OVERRIDE: std::sync::atomic::AtomicUsize =
     std::sync::atomic::AtomicUsize::new(0);
+
+/// Probe (`tests::probe_the_march_s_parts`): which parts of the march's light come back (0: all; 1:
+/// single scattering alone; 2: all but single scattering) and the march's
+/// steps (0: [`MARCH_STEPS`]).
+#[cfg(test)]
+pub(crate) static MARCH_PART: std::sync::atomic::AtomicUsize =
+    std::sync::atomic::AtomicUsize::new(0);
+#[cfg(test)]
+pub(crate) static MARCH_STEPS_OVERRIDE: std::sync::atomic::AtomicUsize =
+    std::sync::atomic::AtomicUsize::new(0);
+
+/// Probe (`tests::probe_the_march_s_parts`): the march's columns toward the sun (0: the table's,
+/// bilinear; 1: exact; 2: the table's, bilinear in ln column).
+#[cfg(test)]
+pub(crate) static SUN_COLUMNS_MODE: std::sync::atomic::AtomicUsize =
+    std::sync::atomic::AtomicUsize::new(0);
+
+fn march_steps() -> (usize, usize) {
+    #[cfg(test)]
+    if let n @ 1.. = MARCH_STEPS_OVERRIDE.load(std::sync::atomic::Ordering::Relaxed) {
+        return (n / 1000, n % 1000);
+    }
+    MARCH_STEPS
+}
 
 fn zenith_cap_cells() -> usize {
     #[cfg(test)]
@@ -1222,7 +1244,7 @@ impl MarchTables {
         let density =
             |at: f64| tables.densities(((eye + v * (enter + at)).length() - ground).max(0.0));
         let (mut previous, mut previous_rho) = (0.0, density(0.0));
-        let (steps, steps_beyond) = MARCH_STEPS;
+        let (steps, steps_beyond) = march_steps();
         let nodes = (0..steps)
             .map(|k| (march_node(length, k, steps), true))
             .chain((0..steps_beyond).map(|k| {
@@ -1378,6 +1400,12 @@ impl MarchTables {
             transmitted[i] = src.solar[i] * (-tau).exp();
             let (share, depth) = (1.0 - (tau_scaled - tau).exp(), tau - tau_scaled);
             light[i] = single[i] + field[i] + share * (field_beyond[i] + ground_light(i));
+            #[cfg(test)]
+            match MARCH_PART.load(std::sync::atomic::Ordering::Relaxed) {
+                1 => light[i] = single[i],
+                2 => light[i] -= single[i],
+                _ => {}
+            }
             for j in 0..s {
                 let k = j * w + i;
                 rows_forward[k] = forward_segment[k] + share * (scaled[k] - scaled_segment[k]);
@@ -1388,7 +1416,11 @@ impl MarchTables {
             rows_behind[q] = forward[q] - forward_segment[q];
             rows_behind[qx] = (forward[qx] - forward_segment[qx]) - depth * rows_behind[q];
         }
-        if src.has_forward_peaks {
+        #[cfg(test)]
+        let skip_peak = MARCH_PART.load(std::sync::atomic::Ordering::Relaxed) == 1;
+        #[cfg(not(test))]
+        let skip_peak = false;
+        if src.has_forward_peaks && !skip_peak {
             let peak = tables.peak_radiance(theta, &smooth_phase, &rows_forward);
             let hidden = tables.peak_radiance(theta, &smooth_phase, &rows_behind);
             for i in 0..w {
@@ -1512,11 +1544,33 @@ impl MarchTables {
     fn sun_columns(&self, r: f64, mu: f64) -> Option<Vec<f64>> {
         let (ground, thickness) = (self.ground_radius_m, self.thickness_m);
         let s = self.source.species;
-        let (a_count, m_count) = SUN_COLUMN_NODES;
+        let (a_count, m_count) = super::march::sun_column_nodes();
         let h = (r - ground).clamp(0.0, thickness);
         if mu < axes::horizon_cosine(ground + h, ground) {
             return None;
         }
+        #[cfg(test)]
+        let mode = SUN_COLUMNS_MODE.load(std::sync::atomic::Ordering::Relaxed);
+        #[cfg(test)]
+        if mode == 1 {
+            let mu = mu.max(axes::horizon_cosine(ground + h, ground) + 1e-9);
+            let direction = Vector3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
+            return Some(super::march::columns_to_top(
+                &self.source,
+                (ground, ground + thickness),
+                ground + h,
+                direction,
+            ));
+        }
+        #[cfg(not(test))]
+        let mode = 0;
+        let lerp = |p: f64, q: f64, f: f64| {
+            if mode == 2 && p > 0.0 && q > 0.0 {
+                (p.ln() + (q.ln() - p.ln()) * f).exp()
+            } else {
+                p + (q - p) * f
+            }
+        };
         let (a, fa) = axes::cell(
             axes::altitude_coordinate(h, thickness, a_count),
             0,
@@ -1535,12 +1589,12 @@ impl MarchTables {
                         self.sun_columns[(a * m_count + m) * s + j] as f64,
                         self.sun_columns[(a * m_count + m + 1) * s + j] as f64,
                     );
-                    p + (q - p) * fm
+                    lerp(p, q, fm)
                 })
                 .collect()
         };
         let (low, high) = (row(a), row(a + 1));
-        Some((0..s).map(|j| low[j] + (high[j] - low[j]) * fa).collect())
+        Some((0..s).map(|j| lerp(low[j], high[j], fa)).collect())
     }
 
     /// The peak beam B at radius `r` with the sun's zenith cosine `mu`

@@ -51,9 +51,29 @@ pub const DENSITY_NODES: usize = 1024;
 
 /// Nodes of the sun-column table: altitude, view cosine (the
 /// transmittance table's axes). At 32 x 128 the march was 2.3 % off at
-/// -4 degrees (earth-clear, 50 km); at 64 x 512 it matches exact
-/// columns (`docs/engine-tables.md`).
-pub const SUN_COLUMN_NODES: (usize, usize) = (64, 512);
+/// -4 degrees (earth-clear, 50 km); at 64 x 512 it matched exact
+/// columns for an eye on the ground, but not for a raised eye in
+/// twilight, whose sun rays graze the ground a few km down: the column
+/// linear between altitude rows is too large there (it falls about
+/// exponentially), and the raised eye's sky at 19.2 km with the sun at
+/// -4 degrees was 7.7 % dark (earth-clear, single scattering; 0.84 %
+/// with exact columns); 128 rows 2.4 %, 256 rows 1.17 %
+/// (`docs/engine-tables.md`).
+pub const SUN_COLUMN_NODES: (usize, usize) = (256, 512);
+
+/// Probe (`tests::probe_the_march_s_parts`): a test's sun-column nodes (a * 10000 + m; 0: none).
+#[cfg(test)]
+pub(crate) static SUN_COLUMN_NODES_OVERRIDE: std::sync::atomic::AtomicUsize =
+    std::sync::atomic::AtomicUsize::new(0);
+
+/// [`SUN_COLUMN_NODES`] (or a test's override).
+pub(crate) fn sun_column_nodes() -> (usize, usize) {
+    #[cfg(test)]
+    if let n @ 1.. = SUN_COLUMN_NODES_OVERRIDE.load(std::sync::atomic::Ordering::Relaxed) {
+        return (n / 10000, n % 10000);
+    }
+    SUN_COLUMN_NODES
+}
 
 /// Nodes of the phase tables in u = sqrt(theta / pi).
 pub const PHASE_NODES: usize = 1024;
@@ -187,6 +207,22 @@ impl MarchTables {
     /// every sun (`shared`). An error when the field's wavelengths are not
     /// the sky's.
     pub(crate) fn bake(sky: &Sky, shared: &SharedField) -> Result<MarchTables> {
+        // Probe (`tests::probe_the_march_s_parts`): the source kept at
+        // level stride, dense below (km), wavelength stride, half (0 / 1)
+        // as SORA_PROBE_FULL_SOURCE says ("1,0,1,0": the whole source, every
+        // level, sun node and wavelength in 32-bit floats).
+        #[cfg(test)]
+        if let Ok(v) = std::env::var("SORA_PROBE_FULL_SOURCE") {
+            let n: Vec<f64> = v.split(',').map(|n| n.parse().unwrap()).collect();
+            let full = SourceThinning {
+                level_stride: n[0] as usize,
+                dense_below_m: n[1] * 1e3,
+                wavelength_stride: n[2] as usize,
+                half: n[3] != 0.0,
+                ..SOURCE_THINNING
+            };
+            return MarchTables::bake_with(sky, shared, full);
+        }
         MarchTables::bake_with(sky, shared, SOURCE_THINNING)
     }
 
@@ -236,7 +272,7 @@ impl MarchTables {
                 density[node * species + j] = profile.relative_density(h) as f32;
             }
         }
-        let (a_count, m_count) = SUN_COLUMN_NODES;
+        let (a_count, m_count) = sun_column_nodes();
         // Altitude rows in parallel.
         let mut sun_columns = vec![0.0f32; a_count * m_count * species];
         crate::parallel::for_each_chunk_mut(&mut sun_columns, m_count * species, |a, row| {
@@ -304,7 +340,7 @@ pub(crate) fn phase_angle(t: usize) -> f64 {
 /// of the atmosphere along `direction` (midpoint rule in u = sqrt(s /
 /// length), 400 steps crowded toward the point, where the air is
 /// densest).
-fn columns_to_top(
+pub(crate) fn columns_to_top(
     source: &ExportedSource,
     (ground, top): (f64, f64),
     r: f64,
@@ -492,7 +528,7 @@ impl MarchTables {
             "view_zenith_nodes": s.view_zenith_nodes,
             "azimuth_nodes": s.azimuth_nodes,
             "density_nodes": DENSITY_NODES,
-            "sun_column_nodes": [SUN_COLUMN_NODES.0, SUN_COLUMN_NODES.1],
+            "sun_column_nodes": [sun_column_nodes().0, sun_column_nodes().1],
             "phase_nodes": PHASE_NODES,
             "kernel_angles": s.kernel.1,
             "kernel_blend_start_rad": s.kernel.2.0,

@@ -3463,5 +3463,167 @@ fn raised_eye_reference() {
     .unwrap();
 }
 
+/// Probe (docs/engine-tables.md "The raised eye in twilight"): the
+/// raised eye's read against the library's image, the march split into
+/// single scattering and the rest (against the library's sky with
+/// `Scattering::Single` and the difference), p99 and the worst pixels.
+/// Env: SORA_PROBE_PRESET, SORA_PROBE_KM, SORA_PROBE_SUNS, SORA_PROBE_SIZE;
+/// SORA_PROBE_STEPS the march's steps (steps * 1000 + steps beyond, 0 the
+/// default); SORA_PROBE_COLS the columns toward the sun (`SUN_COLUMNS_MODE`);
+/// SORA_PROBE_SCN the sun-column table's nodes (a * 10000 + m, each baked
+/// anew; 0 the default); SORA_PROBE_EXACT prints the library's exact path
+/// (`Sky::radiance`) against its image at the worst pixels; SORA_PROBE_GROUND
+/// draws the half below the horizon; SORA_PROBE_FULL_SOURCE bakes the whole
+/// source (`MarchTables::bake`).
+#[test]
+#[ignore]
+fn probe_the_march_s_parts() {
+    use super::lookup::{MARCH_PART, MARCH_STEPS_OVERRIDE, SUN_COLUMNS_MODE};
+    use super::march::SUN_COLUMN_NODES_OVERRIDE;
+    use std::sync::atomic::Ordering;
+    let preset = std::env::var("SORA_PROBE_PRESET").unwrap_or_else(|_| "earth-clear".into());
+    let kms: Vec<f64> = env_list("SORA_PROBE_KM", "19.2");
+    let suns: Vec<f64> = env_list("SORA_PROBE_SUNS", "-4");
+    let steps: Vec<usize> = env_list("SORA_PROBE_STEPS", "0");
+    let size = std::env::var("SORA_PROBE_SIZE").map_or(32, |s| s.parse().unwrap());
+    let sky = cli_sky(&preset);
+    let single_sky = Sky::builder(&Atmosphere::preset(&preset).unwrap())
+        .wavelengths(WavelengthGrid::new(380.0, 780.0, 20.0).unwrap())
+        .scattering(Scattering::Single)
+        .build()
+        .unwrap();
+    let settings = EngineTableSettings {
+        march: true,
+        ..EngineTableSettings::default()
+    };
+    let columns: Vec<usize> = env_list("SORA_PROBE_COLS", "0");
+    let column_nodes: Vec<usize> = env_list("SORA_PROBE_SCN", "0");
+    let mut tables = EngineTables::bake(&sky, &settings, &|_| {}).unwrap();
+    let mut images = Vec::new();
+    let half = || {
+        if std::env::var("SORA_PROBE_GROUND").is_ok() {
+            Half::Ground
+        } else {
+            Half::Sky
+        }
+    };
+    for &km in &kms {
+        for &sun in &suns {
+            let eye = km * 1e3;
+            images.push((
+                km,
+                sun,
+                eye_fisheye_pixels(&sky, &tables, (eye, sun), size, half()),
+                eye_fisheye_pixels(&single_sky, &tables, (eye, sun), size, half()),
+            ));
+        }
+    }
+    for &scn in &column_nodes {
+        SUN_COLUMN_NODES_OVERRIDE.store(scn, Ordering::Relaxed);
+        if scn != 0 {
+            tables = EngineTables::bake(&sky, &settings, &|_| {}).unwrap();
+        }
+        for (km, sun, full, single) in &images {
+            let (km, sun) = (*km, *sun);
+            let eye = km * 1e3;
+            for &mode in &columns {
+                SUN_COLUMNS_MODE.store(mode, Ordering::Relaxed);
+                let brightest = full.iter().map(|p| p.1[1]).fold(0.0, f64::max);
+                let horizon =
+                    axes::horizon_zenith(tables.ground_radius_m + eye, tables.ground_radius_m);
+                for &n in &steps {
+                    MARCH_STEPS_OVERRIDE.store(n, Ordering::Relaxed);
+                    let mut rows = Vec::new();
+                    for (p, q) in full.iter().zip(single.iter()) {
+                        if p.1[1] <= 1e-3 * brightest {
+                            continue;
+                        }
+                        let read = |part: usize| {
+                            MARCH_PART.store(part, Ordering::Relaxed);
+                            tables.sky_xyz(eye, p.0, sun)[1]
+                        };
+                        let (all, one, rest) = (read(0), read(1), read(2));
+                        let want = p.1[1];
+                        rows.push((
+                            all / want - 1.0,
+                            (one - q.1[1]) / want,
+                            (rest - (want - q.1[1])) / want,
+                            q.1[1] / want,
+                            p.0,
+                            p.2,
+                        ));
+                    }
+                    MARCH_PART.store(0, Ordering::Relaxed);
+                    type Row = (f64, f64, f64, f64, LocalView, bool);
+                    let p99 = |f: &dyn Fn(&Row) -> f64, band: bool| {
+                        let mut e: Vec<f64> = rows
+                            .iter()
+                            .filter(|r| !band || r.5)
+                            .map(|r| f(r).abs())
+                            .collect();
+                        e.sort_by(f64::total_cmp);
+                        e.get(((e.len() as f64 * 0.99) as usize).min(e.len().saturating_sub(1)))
+                            .copied()
+                            .unwrap_or(0.0)
+                    };
+                    eprintln!(
+                        "{preset} eye {km} km sun {sun} columns {scn} mode {mode} steps {n}: p99 all {:.2} % (band {:.2}), single {:.2} % (band {:.2}), rest {:.2} % (band {:.2})",
+                        100.0 * p99(&|r| r.0, false),
+                        100.0 * p99(&|r| r.0, true),
+                        100.0 * p99(&|r| r.1, false),
+                        100.0 * p99(&|r| r.1, true),
+                        100.0 * p99(&|r| r.2, false),
+                        100.0 * p99(&|r| r.2, true),
+                    );
+                    rows.sort_by(|a, b| b.0.abs().total_cmp(&a.0.abs()));
+                    let exact_skies = std::env::var("SORA_PROBE_EXACT").is_ok().then(|| {
+                        (
+                            node_sky(&sky, &tables, eye, sun).0,
+                            node_sky(&single_sky, &tables, eye, sun).0,
+                        )
+                    });
+                    for r in rows.iter().take(6) {
+                        if let Some((full_sky, one_sky)) = &exact_skies {
+                            let direction = ViewDirection::new(
+                                90.0 - r.4.zenith_rad.to_degrees(),
+                                180.0 + r.4.relative_azimuth_rad.to_degrees(),
+                            )
+                            .unwrap();
+                            let to_xyz = SpectrumToXyz::new(sky.wavelengths(), Observer::default());
+                            let y = |s: &Sky| {
+                                to_xyz
+                                    .to_xyz(&s.radiance(direction).unwrap().radiance_w_m2_sr_nm)
+                                    .unwrap()
+                                    .y
+                            };
+                            let (image_full, image_one) = (
+                                xyz_of(full_sky, direction)[1],
+                                xyz_of(one_sky, direction)[1],
+                            );
+                            eprintln!(
+                                "   the library exact / image: all {:+.4}, single {:+.4}",
+                                y(full_sky) / image_full - 1.0,
+                                y(one_sky) / image_one - 1.0
+                            );
+                        }
+                        eprintln!(
+                            "   all {:+.4} single {:+.4} rest {:+.4} (single share {:.3}) at {:.2} deg above horizon, az {:.1}",
+                            r.0,
+                            r.1,
+                            r.2,
+                            r.3,
+                            (horizon - r.4.zenith_rad).to_degrees(),
+                            r.4.relative_azimuth_rad.to_degrees()
+                        );
+                    }
+                }
+                MARCH_STEPS_OVERRIDE.store(0, Ordering::Relaxed);
+            }
+            SUN_COLUMNS_MODE.store(0, Ordering::Relaxed);
+        }
+    }
+    SUN_COLUMN_NODES_OVERRIDE.store(0, Ordering::Relaxed);
+}
+
 /// Pixels across the fisheye of [`raised_eye_reference`].
 const RAISED_FISHEYE_SIZE: usize = 32;
