@@ -2515,6 +2515,22 @@ fn the_sky_between_the_sun_nodes_about_the_sunset_matches_the_library() {
     assert!(failures.is_empty(), "{failures:?}");
 }
 
+/// The default tables of `sky` (with the march's tables or without), one
+/// bake per altitude node count in `axes_nodes`.
+fn bake_per_altitude_axis(sky: &Sky, axes_nodes: &[usize], march: bool) -> Vec<EngineTables> {
+    axes_nodes
+        .iter()
+        .map(|&altitude_nodes| {
+            let settings = EngineTableSettings {
+                altitude_nodes,
+                march,
+                ..EngineTableSettings::default()
+            };
+            EngineTables::bake(sky, &settings, &|_| {}).unwrap()
+        })
+        .collect()
+}
+
 /// The sky lookup of the tables `sora tables` bakes (the default axes
 /// but the altitude's, which `SORA_EYE_ALTITUDE_NODES` sets, with the
 /// march's tables, which a raised eye's sky reads) for an eye
@@ -2583,17 +2599,7 @@ fn the_sky_between_the_altitude_nodes_matches_the_library() {
     let mut failures = Vec::new();
     for preset in presets.split(',') {
         let sky = cli_sky(preset);
-        let baked: Vec<EngineTables> = axes_nodes
-            .iter()
-            .map(|&altitude_nodes| {
-                let settings = EngineTableSettings {
-                    altitude_nodes,
-                    march: true,
-                    ..EngineTableSettings::default()
-                };
-                EngineTables::bake(&sky, &settings, &|_| {}).unwrap()
-            })
-            .collect();
+        let baked = bake_per_altitude_axis(&sky, &axes_nodes, true);
         let thickness = baked[0].thickness_m();
         let with_nodes = std::env::var("SORA_EYE_NODES").map_or(true, |v| v != "0");
         let mut eyes: Vec<f64> = (0..axes_nodes[0] * usize::from(with_nodes))
@@ -2672,17 +2678,7 @@ fn probe_the_irradiance_between_the_altitude_nodes() {
     for preset in presets.split(',') {
         let sky = cli_sky(preset);
         let to_xyz = SpectrumToXyz::new(sky.wavelengths(), Observer::default());
-        let baked: Vec<EngineTables> = axes_nodes
-            .iter()
-            .map(|&altitude_nodes| {
-                let settings = EngineTableSettings {
-                    altitude_nodes,
-                    march: false,
-                    ..EngineTableSettings::default()
-                };
-                EngineTables::bake(&sky, &settings, &|_| {}).unwrap()
-            })
-            .collect();
+        let baked = bake_per_altitude_axis(&sky, &axes_nodes, false);
         for &km in &eyes_km {
             for &sun in &suns {
                 let (eye_sky, _) = node_sky(&sky, &baked[0], 1e3 * km, sun);
