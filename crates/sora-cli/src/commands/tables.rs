@@ -50,8 +50,8 @@ pub struct TablesArgs {
     /// Eye altitude nodes over the atmosphere's thickness (4: 0, 5.4, 25.5
     /// and 100 km for Earth; a raised eye's sky is read from the march's
     /// tables, which hold it as well as 6 nodes do; more nodes bring the
-    /// table's own read, the shaders' for now, and the irradiance of a
-    /// raised point closer between the nodes, each layer costing bake
+    /// table's own read (the shaders' soraSkyView) and the irradiance of
+    /// a raised point closer between the nodes, each layer costing bake
     /// time)
     #[arg(long, value_name = "N", default_value_t = EngineTableSettings::default().altitude_nodes)]
     altitude_nodes: usize,

@@ -166,8 +166,8 @@ impl Default for EngineTableSettings {
             // (`lookup.rs`, `raised_sky_xyz`), which hold it about as well
             // as 6 nodes did (docs/engine-tables.md, "How many altitude
             // nodes"), at two thirds of the layers and of the bake; the
-            // table's read alone (the shaders' for now) and the irradiance
-            // between the nodes are worse.
+            // table's read alone (the shaders' `soraSkyView`) and the
+            // irradiance between the nodes are worse.
             altitude_nodes: 4,
             zenith_nodes_per_half: 64,
             // 21 fine and 22 wide cells: the nodes of the last 21 cells
