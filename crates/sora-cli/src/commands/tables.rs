@@ -82,7 +82,7 @@ pub struct TablesArgs {
 
     /// Bake the aerial-perspective march's tables (march.bin: the field's
     /// source per wavelength and what a per-pixel march of the segment
-    /// reads; within 2 % of the library at 1-50 km; 29-33 MB; multiple
+    /// reads; within 2 % of the library at 1-50 km; 29-34 MB; multiple
     /// scattering only) [default]
     #[arg(long, overrides_with = "no_march")]
     march: bool,

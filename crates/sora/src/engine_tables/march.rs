@@ -127,7 +127,7 @@ impl SourceThinning {
 /// degrees up and every one below (0.75-3 degrees apart), every other
 /// wavelength (11 of the default 21, ln R linear between them; at most
 /// 40 nm apart, so a 40 nm grid keeps every one), the 19
-/// azimuths of [`AZIMUTHS_DEG`], 16-bit floats: 29-33 MB. The field for every sun has 41
+/// azimuths of [`AZIMUTHS_DEG`], 16-bit floats: 29-34 MB. The field for every sun has 41
 /// levels (22-25 of them below 6 km on Earth) and 82 sun nodes; the
 /// source at all of them is 200 MB as 32-bit floats. Measured against the
 /// library (`docs/engine-tables.md`): every other level and sun node

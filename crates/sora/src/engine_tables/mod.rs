@@ -150,7 +150,7 @@ pub struct EngineTableSettings {
     pub aerial_nodes: (usize, usize, usize),
     /// Whether to bake the aerial-perspective march's tables (`march.rs`;
     /// multiple scattering only). On by default: the aerial perspective
-    /// within 2 % of the library at 1-50 km, 29-33 MB (48-52 MB with the
+    /// within 2 % of the library at 1-50 km, 29-34 MB (48-53 MB with the
     /// sky table's 19 MB, under the 64 MB a GPU should hold; no bake time
     /// measurable: the field's source is copied); the reference shaders
     /// march them (`soraAerialPerspectiveMarch`, `docs/engine-tables.md`).
