@@ -577,9 +577,9 @@ pub struct RealtimeTables {
 /// sun, its nodes not placed at the eye's, so the steps between them are
 /// its error), and 48 suns x 3 altitudes x (2 x 32) x 32 views (3.6 MB;
 /// with the march's tables, which the scene's aerial-perspective volume is
-/// filled from, 11.0 MB: every wavelength and every level of the field
+/// filled from, 12.2 MB: every wavelength and every level of the field
 /// kept, `sora::engine_tables`' source thinning), against
-/// the library's default of the paper's 21 wavelengths and 48 suns x 6
+/// the library's default of the paper's 21 wavelengths and 48 suns x 4
 /// altitudes x (2 x 64) x 64 views (what `sora tables` bakes). The bake
 /// solves one multiple-scattering field for every layer; in headless
 /// Chromium on the 2-core machine it took 4.8-5.7 s without the march's
