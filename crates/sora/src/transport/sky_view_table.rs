@@ -80,6 +80,15 @@ impl MarchedRows {
     }
 }
 
+/// How far (rad) the zenith nodes next to the horizon sit inside their
+/// half, so that a ray along them is unambiguously sky or ground. A hair
+/// of 1e-9 rad was not enough: the ground test compares |p x d| with R,
+/// and R (1 - 5e-19) rounds either way, so at some azimuths the ground
+/// half's first node took the horizon's sky radiance (an eye on the
+/// ground saw the ground just below the horizon 1.8 times too bright in
+/// the table). At 1e-6 rad, |p x d| = R (1 - 5e-13).
+const HORIZON_MARGIN: f64 = 1e-6;
+
 /// In-scattering integrals over view directions (see the module docs).
 #[derive(Debug, Clone, PartialEq)]
 pub struct SkyViewTable {
@@ -575,17 +584,9 @@ impl SkyViewTable {
 
     /// Zenith angle (rad) of zenith-axis node `row` (0 = the zenith,
     /// half - 1 = just above the horizon, half = just below, 2 half - 1 =
-    /// the nadir).
+    /// the nadir), [`HORIZON_MARGIN`] inside its half next to the horizon.
     fn zenith_of_node(&self, row: usize) -> f64 {
         let half = self.half_zenith_nodes;
-        // The nodes next to the horizon sit a hair inside their half so a
-        // ray along them is unambiguously sky or ground. A hair of 1e-9 rad
-        // was not enough: the ground test compares |p x d| with R, and
-        // R (1 - 5e-19) rounds either way, so at some azimuths the ground
-        // half's first node took the horizon's sky radiance (an eye on the
-        // ground saw the ground just below the horizon 1.8 times too bright
-        // in the table). At 1e-6 rad, |p x d| = R (1 - 5e-13).
-        const HORIZON_MARGIN: f64 = 1e-6;
         if row < half {
             let v = row as f64 / (half - 1) as f64;
             let u = 1.0 - (1.0 - v) * (1.0 - v);
@@ -598,16 +599,21 @@ impl SkyViewTable {
         }
     }
 
-    /// Fractional node coordinate of a zenith angle, and which half.
+    /// Fractional node coordinate of a zenith angle, and which half: the
+    /// exact inverse of [`SkyViewTable::zenith_of_node`], margin included,
+    /// so that a read at a node's zenith angle takes that row alone (a
+    /// table that marches some rows only, `MarchedRows`, leaves the others
+    /// zero; with the margin left out, a read at the engine tables' row
+    /// next to the fine cells took 2.4e-4 of the unmarched row beside it).
     fn zenith_coordinate(&self, zenith: f64) -> f64 {
         let half = self.half_zenith_nodes;
         if zenith < self.horizon_zenith_rad {
-            let u = (zenith / self.horizon_zenith_rad).clamp(0.0, 1.0);
+            let u = (zenith / (self.horizon_zenith_rad - HORIZON_MARGIN)).clamp(0.0, 1.0);
             let v = 1.0 - (1.0 - u).sqrt();
             v * (half - 1) as f64
         } else {
             let u = ((std::f64::consts::PI - zenith)
-                / (std::f64::consts::PI - self.horizon_zenith_rad))
+                / (std::f64::consts::PI - self.horizon_zenith_rad - HORIZON_MARGIN))
                 .clamp(0.0, 1.0);
             let v = 1.0 - (1.0 - u).sqrt();
             (2 * half - 1) as f64 - v * (half - 1) as f64
