@@ -86,10 +86,11 @@ pub fn horizon_zenith(r_m: f64, ground_m: f64) -> f64 {
     std::f64::consts::PI - (ground_m / r_m).min(1.0).asin()
 }
 
-/// Keeps the nodes next to the horizon a hair inside their half, so that
-/// a ray along them is unambiguously sky or ground (as
-/// `transport/sky_view_table.rs` does, for the same reason).
-const HORIZON_MARGIN_RAD: f64 = 1e-6;
+// The nodes next to the horizon sit this hair (rad) inside their half,
+// so that a ray along them is unambiguously sky or ground: the sky-view
+// table's own margin, one constant, since the bake's layers read that
+// table at these nodes' zenith angles.
+use crate::transport::sky_view_table::HORIZON_MARGIN_RAD;
 
 /// The zenith axis's grid: with `half` nodes per half, `fine` fine cells
 /// next to the horizon and `wide` wide cells before them, the half's

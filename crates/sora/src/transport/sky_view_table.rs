@@ -87,7 +87,7 @@ impl MarchedRows {
 /// half's first node took the horizon's sky radiance (an eye on the
 /// ground saw the ground just below the horizon 1.8 times too bright in
 /// the table). At 1e-6 rad, |p x d| = R (1 - 5e-13).
-const HORIZON_MARGIN: f64 = 1e-6;
+pub(crate) const HORIZON_MARGIN_RAD: f64 = 1e-6;
 
 /// In-scattering integrals over view directions (see the module docs).
 #[derive(Debug, Clone, PartialEq)]
@@ -584,18 +584,18 @@ impl SkyViewTable {
 
     /// Zenith angle (rad) of zenith-axis node `row` (0 = the zenith,
     /// half - 1 = just above the horizon, half = just below, 2 half - 1 =
-    /// the nadir), [`HORIZON_MARGIN`] inside its half next to the horizon.
+    /// the nadir), [`HORIZON_MARGIN_RAD`] inside its half next to the horizon.
     fn zenith_of_node(&self, row: usize) -> f64 {
         let half = self.half_zenith_nodes;
         if row < half {
             let v = row as f64 / (half - 1) as f64;
             let u = 1.0 - (1.0 - v) * (1.0 - v);
-            u * (self.horizon_zenith_rad - HORIZON_MARGIN)
+            u * (self.horizon_zenith_rad - HORIZON_MARGIN_RAD)
         } else {
             let v = (2 * half - 1 - row) as f64 / (half - 1) as f64;
             let u = 1.0 - (1.0 - v) * (1.0 - v);
             std::f64::consts::PI
-                - u * (std::f64::consts::PI - self.horizon_zenith_rad - HORIZON_MARGIN)
+                - u * (std::f64::consts::PI - self.horizon_zenith_rad - HORIZON_MARGIN_RAD)
         }
     }
 
@@ -608,12 +608,12 @@ impl SkyViewTable {
     fn zenith_coordinate(&self, zenith: f64) -> f64 {
         let half = self.half_zenith_nodes;
         if zenith < self.horizon_zenith_rad {
-            let u = (zenith / (self.horizon_zenith_rad - HORIZON_MARGIN)).clamp(0.0, 1.0);
+            let u = (zenith / (self.horizon_zenith_rad - HORIZON_MARGIN_RAD)).clamp(0.0, 1.0);
             let v = 1.0 - (1.0 - u).sqrt();
             v * (half - 1) as f64
         } else {
             let u = ((std::f64::consts::PI - zenith)
-                / (std::f64::consts::PI - self.horizon_zenith_rad - HORIZON_MARGIN))
+                / (std::f64::consts::PI - self.horizon_zenith_rad - HORIZON_MARGIN_RAD))
                 .clamp(0.0, 1.0);
             let v = 1.0 - (1.0 - u).sqrt();
             (2 * half - 1) as f64 - v * (half - 1) as f64
