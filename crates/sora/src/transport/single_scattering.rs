@@ -776,10 +776,21 @@ impl SingleScatteringScene {
         // Computed without the lock (the computation runs on the thread
         // pool, whose workers may ask for a table too); two threads that
         // race compute the same table, and the first one is kept.
-        let table = Arc::new(SunColumnTable::compute(
+        // The absorbing gases on exponential profiles (the [gases] table's
+        // water vapour, mixed gases and O2-O2; none of the presets' own
+        // species) take the vector exponential: their columns enter only
+        // optical depths, where its 2e-12 is nothing; every other
+        // species' entries are the same bits as before.
+        let fast: Vec<bool> = self
+            .optics
+            .species
+            .iter()
+            .map(|s| s.kind == "absorbing gas")
+            .collect();
+        let table = Arc::new(SunColumnTable::compute_with_fast_exponentials(
             &self.profiles,
-            self.ground_radius_m,
-            self.top_radius_m,
+            &fast,
+            (self.ground_radius_m, self.top_radius_m),
             altitude_nodes,
             mu_nodes,
         ));
