@@ -120,27 +120,20 @@
 //! perspective of a default sky keep every term; a colour sky's spectral
 //! images are refused (docs/atmosphere-file.md).
 //!
-//! **Cost.** On the summer file (`scripts/bench/gases.sh`, idle, 5 runs
-//! each, release) the 256 x 256 colour fisheye over 380-780 nm takes 2.20
-//! times the CPU of the gas-free image (1.01 against 0.46 CPU-s; 2.20
-//! again, 2.11-2.39 paired, on the 2-core machine at load 16-21, after the
-//! change below), and 36 exact views at 900-1000 nm (every sample in the
-//! 940-nm water band) about 2.6 times the gas-free views. Of the
-//! extra CPU (perf, dwarf call graphs, each sample given to the outermost
-//! stage on its stack): the sky-view tables' single scattering 23 %, the
+//! **Cost.** On the summer file (`scripts/bench/gases.sh`, release) the
+//! 256 x 256 colour fisheye over 380-780 nm takes 2.20 times the CPU of the
+//! gas-free image (1.01 against 0.46 CPU-s idle; 2.11-2.39 paired at load
+//! 16-21), and 36 exact views at 900-1000 nm (every sample in the 940-nm
+//! water band) about 2.6 times the gas-free views. The extra CPU is spread
+//! over the stages (the sky-view tables' single scattering 23 %, the
 //! sun-column table 18 %, the tables' multiply scattered march 16 %, the
 //! pixels 13 %, the polarisation tables 10 %, the fields 10 %, the source
-//! tables 7 %. The sun-column table grew with the three exponentials of
-//! water, the mixed gases and O2-O2 at every node of its rays (four
-//! against the gas-free one's one); the absorbing gases on exponential
-//! profiles now take the vector exponential there, a ray's nodes at once
-//! (`SunColumnTable::compute_with_fast_exponentials`, within 2e-12 of
-//! `f64::exp`, so a gas column within 1e-11 and a transmittance exp(-tau)
-//! within 4e-10 where it is not dark, tau < 40: nothing against
-//! [`COLOUR_BOUND`]; the other species' entries bit for bit), a quarter of
-//! that table's time (0.95 of the image's CPU, paired, within the load's
-//! noise). The rest is per species and per sky, not one stage. How each
-//! saving was measured and what was tried and set aside (the air-mass-2 fold, refits with
+//! tables 7 %), per species and per sky. The sun-column table takes the
+//! absorbing gases on exponential profiles by the vector exponential, a
+//! ray's nodes at once (`SunColumnTable::compute_with_fast_exponentials`:
+//! a gas column within 1e-11 of `f64::exp`'s, nothing against
+//! [`COLOUR_BOUND`]). How each saving was measured and what was tried and
+//! set aside (the air-mass-2 fold, refits with
 //! fewer terms, coarser term tables) is in docs/atmosphere-file.md
 //! ("`[gases]`").
 //!
