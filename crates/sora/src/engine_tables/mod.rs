@@ -4,7 +4,8 @@
 //! atmosphere, by table reads only (`docs/engine-tables.md`, the reference
 //! shaders in `web/shaders/`). Within 2 % of the library for an eye on
 //! the ground and at the lowest altitude nodes; the diffuse irradiance
-//! at a raised point too (below 20 km, suns -4 to 60 degrees); the sky
+//! at a raised point below 20 km within 2.7 % (suns -4 to 60 degrees;
+//! `docs/engine-tables.md`); the sky
 //! table's own read between the altitude nodes not (the ignored test
 //! `the_sky_between_the_altitude_nodes_matches_the_library` measures 6-65 %
 //! on earth-hazy above the eye's horizon).

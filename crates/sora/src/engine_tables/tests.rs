@@ -714,8 +714,12 @@ fn the_layers_marched_in_fewer_panels_are_the_field_s() {
     let twilight = 2 * 2 * 24 * 16;
     assert_eq!(fast.sky[..twilight], slow.sky[..twilight]);
     assert_eq!(fast.transmittance, slow.transmittance);
+    // (Where the field is dark, between the nodes, both are zero.)
     for (f, s) in fast.irradiance.iter().zip(&slow.irradiance) {
-        assert!(((f[1] - s[1]) / s[1]).abs() < 1e-3, "{f:?} {s:?}");
+        assert!(
+            f[1] == s[1] || ((f[1] - s[1]) / s[1]).abs() < 1e-3,
+            "{f:?} {s:?}"
+        );
     }
 }
 
@@ -749,8 +753,12 @@ fn the_layers_filled_between_azimuths_are_every_azimuth_marched() {
     assert!(ground.1 < 2e-3 && ground.2 < 4e-3, "ground {ground:?}");
     assert!(top.1 < 4e-3 && top.2 < 2e-2, "top {top:?}");
     assert_eq!(fast.transmittance, slow.transmittance);
+    // (Where the field is dark, between the nodes, both are zero.)
     for (f, s) in fast.irradiance.iter().zip(&slow.irradiance) {
-        assert!(((f[1] - s[1]) / s[1]).abs() < 1e-3, "{f:?} {s:?}");
+        assert!(
+            f[1] == s[1] || ((f[1] - s[1]) / s[1]).abs() < 1e-3,
+            "{f:?} {s:?}"
+        );
     }
 }
 
@@ -2749,7 +2757,14 @@ fn the_irradiance_between_the_altitude_nodes_is_the_library_s() {
 /// "How many altitude nodes"): the global Y between the nodes below 20
 /// km within 3.0 % at 6 nodes but earth-hazy at 1 km with the sun at 5
 /// (-10.4 %); at 4 nodes to -18.8 % there, -13.5 % at 2.39 km, -2.1 to
-/// -11.5 % at -4; on the ground the same at every axis.
+/// -11.5 % at -4; on the ground the same at every axis. With the
+/// irradiance table on its own axis (the field's flux between the nodes;
+/// `linear` prints the old read): within 2 % below 20 km for suns 60 to
+/// -4 on earth-clear, earth-hazy and mars-dust but 12 km with the sun at
+/// 20 and 60 (-2.4 to -2.7 %); not in the top cell (docs/engine-tables.md,
+/// "The irradiance between the altitude nodes"). SORA_IRR_SHAPE=1 drops
+/// the sunlight delta-M moved into the beam from the field's flux, 2
+/// reads linear between the nodes.
 #[test]
 #[ignore]
 fn probe_the_irradiance_between_the_altitude_nodes() {
