@@ -10,7 +10,8 @@
 //                  distance_nodes texels per layer (the distance slices one above
 //                  another), the sky's sun_nodes*altitude_nodes layers
 //   uTransmittance sampler2D, transmittance.exr (x = mu node, y = altitude node)
-//   uIrradiance    sampler2D, irradiance.exr (x = sun node, y = altitude node)
+//   uIrradiance    sampler2D, irradiance.exr (x = sun node, y = altitude node of
+//                  its own axis, tables.irradiance.altitude_nodes = its height)
 // as RGBA32F (or RGB32F) textures holding X, Y, Z; no filtering is needed
 // (texelFetch only). Values are CIE XYZ in the units of manifest.json;
 // soraXyzToLinearSrgb converts to linear sRGB (Rec. 709 primaries, D65).
@@ -320,10 +321,12 @@ vec3 soraTransmittance(float h, float mu) {
 }
 
 // Global horizontal irradiance (XYZ, W m^-2 nm^-1) at altitude h with the
-// sun at eDeg: the diffuse table plus the direct beam.
+// sun at eDeg: the diffuse table plus the direct beam. The irradiance table
+// has its own altitude axis (the same mapping, its height's nodes:
+// manifest tables.irradiance.altitude_nodes).
 vec3 soraGroundIrradianceXyz(float h, float eDeg) {
   h = clamp(h, 0.0, soraThickness());
-  int A = uSkyNodes.y;
+  int A = textureSize(uIrradiance, 0).y;
   int a; float fa; soraCell(soraAltitudeCoordinate(h, A), 0, A - 2, a, fa);
   int s; float fs; soraCell(soraSunCoordinate(eDeg), 0, uSkyNodes.x - 2, s, fs);
   vec3 low = mix(texelFetch(uIrradiance, ivec2(s, a), 0).xyz, texelFetch(uIrradiance, ivec2(s, a + 1), 0).xyz, fa);

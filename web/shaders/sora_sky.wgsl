@@ -4,7 +4,8 @@
 // lookup.rs); table reads by textureLoad only. Bind (docs/engine-tables.md):
 //   group(0) binding(0) sky: texture_2d_array<f32>, sky.exr, layer = s * A + a
 //   group(0) binding(1) transmittance: texture_2d<f32>, transmittance.exr
-//   group(0) binding(2) irradiance: texture_2d<f32>, irradiance.exr
+//   group(0) binding(2) irradiance: texture_2d<f32>, irradiance.exr (its height
+//   the irradiance table's own altitude nodes)
 //   group(0) binding(3) params: SoraTables (values from manifest.json)
 //   group(0) binding(4) aerial: texture_2d_array<f32>, aerial.exr, layer = s * A + a,
 //                       its distance slices one above another in each layer
@@ -311,9 +312,11 @@ fn sora_irradiance_texel(s: i32, a: i32) -> vec3<f32> {
 }
 
 // Global horizontal irradiance (XYZ, W m^-2 nm^-1) at altitude h, sun at e_deg.
+// The irradiance table has its own altitude axis (the same mapping, its
+// height's nodes: manifest tables.irradiance.altitude_nodes).
 fn sora_ground_irradiance_xyz(h_in: f32, e_deg: f32) -> vec3<f32> {
   let h = clamp(h_in, 0.0, sora_thickness());
-  let an = sora.sky_nodes.y;
+  let an = i32(textureDimensions(sora_irradiance, 0).y);
   let a = sora_cell(sora_altitude_coordinate(h, an), 0, an - 2);
   let s = sora_cell(sora_sun_coordinate(e_deg), 0, sora.sky_nodes.x - 2);
   let low = mix(sora_irradiance_texel(s.i, a.i), sora_irradiance_texel(s.i, a.i + 1), a.f);

@@ -918,11 +918,20 @@ impl EngineTables {
 
     /// Global horizontal irradiance (XYZ, W m^-2 nm^-1 units) at
     /// `altitude_m` with the sun at `sun_elevation_deg`: the diffuse part
-    /// from the irradiance table and the direct beam.
+    /// from the irradiance table (linear in its own altitude axis's
+    /// coordinate, geometric between the sun nodes) and the direct beam.
     pub fn ground_irradiance_xyz(&self, altitude_m: f64, sun_elevation_deg: f64) -> [f64; 3] {
         let h = altitude_m.clamp(0.0, self.thickness_m());
         let s_count = self.settings.sun_nodes;
-        let ((a, fa), (s, fs)) = self.altitude_and_sun_cells(h, sun_elevation_deg);
+        let (_, (s, fs)) = self.altitude_and_sun_cells(h, sun_elevation_deg);
+        // The irradiance table's own altitude axis (the sky table's
+        // mapping, more nodes).
+        let n_count = self.settings.irradiance_altitude_nodes();
+        let (a, fa) = axes::cell(
+            axes::altitude_coordinate(h, self.thickness_m(), n_count),
+            0,
+            n_count - 2,
+        );
         let texel = |a: usize, s: usize| {
             let t = self.irradiance[a * s_count + s];
             [t[0] as f64, t[1] as f64, t[2] as f64]

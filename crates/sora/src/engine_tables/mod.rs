@@ -3,8 +3,10 @@
 //! sun elevation from -12 to 90 degrees and any eye altitude inside the
 //! atmosphere, by table reads only (`docs/engine-tables.md`, the reference
 //! shaders in `web/shaders/`). Within 2 % of the library for an eye on
-//! the ground and at the lowest altitude nodes; between the altitude
-//! nodes not (the ignored test
+//! the ground and at the lowest altitude nodes; the diffuse irradiance
+//! at a raised point below 20 km within 2.7 % (suns -4 to 60 degrees;
+//! `docs/engine-tables.md`); the sky
+//! table's own read between the altitude nodes not (the ignored test
 //! `the_sky_between_the_altitude_nodes_matches_the_library` measures 6-65 %
 //! on earth-hazy above the eye's horizon).
 //!
@@ -35,10 +37,16 @@
 //!   channel (so the sun's disc and direct light are right for the sun's
 //!   own spectrum).
 //! - **irradiance**: the diffuse (sky) irradiance on a horizontal plane at
-//!   altitude h with the sun at e (W m^-2 nm^-1 XYZ), integrated from the
-//!   sky table over the upper hemisphere (cosine-weighted midpoint rule,
-//!   64 x 64 directions); the shader adds the direct beam from the
-//!   transmittance table.
+//!   altitude h with the sun at e (W m^-2 nm^-1 XYZ) on an altitude axis
+//!   of its own (the sky table's mapping, 28 nodes at the default 4
+//!   altitude nodes, which are among them;
+//!   `EngineTableSettings::irradiance_altitude_nodes`): at the sky
+//!   table's altitude nodes integrated from the sky table over the upper
+//!   hemisphere (cosine-weighted midpoint rule, 64 x 64 directions),
+//!   between them that value scaled by the multiple-scattering field's
+//!   own downward diffuse flux at its levels (`raised_irradiance`; linear
+//!   between the nodes without a field); the shader adds the direct beam
+//!   from the transmittance table.
 //! - **aerial**: the aerial perspective, the light scattered into the
 //!   segment from the eye to a point at distance d, as a ratio R to
 //!   `S w` per channel (S the sky table's read at the eye, w = (1 - T) /
@@ -123,7 +131,8 @@ use crate::transport::sky_view_table::MarchedRows;
 pub struct EngineTableSettings {
     /// Sun elevation nodes over -12..90 degrees.
     pub sun_nodes: usize,
-    /// Eye altitude nodes of the sky and irradiance tables.
+    /// Eye altitude nodes of the sky table (and nodes of the irradiance
+    /// table's own altitude axis, `irradiance_altitude_nodes`).
     pub altitude_nodes: usize,
     /// View zenith nodes per half (above and below the horizon).
     pub zenith_nodes_per_half: usize,
@@ -166,8 +175,9 @@ impl Default for EngineTableSettings {
             // (`lookup.rs`, `raised_sky_xyz`), which hold it about as well
             // as 6 nodes did (docs/engine-tables.md, "How many altitude
             // nodes"), at two thirds of the layers and of the bake; the
-            // table's read alone (the shaders' `soraSkyView`) and the
-            // irradiance between the nodes are worse.
+            // table's read alone (the shaders' `soraSkyView`) is worse.
+            // The irradiance table has an altitude axis of its own
+            // (`irradiance_altitude_nodes`).
             altitude_nodes: 4,
             zenith_nodes_per_half: 64,
             // 21 fine and 22 wide cells: the nodes of the last 21 cells
@@ -259,6 +269,22 @@ impl EngineTableSettings {
         )
     }
 
+    /// Altitude nodes of the irradiance table: on the sky table's
+    /// mapping (`axes::altitude_of_node`) with every cell of the sky
+    /// table's altitude axis cut into the same number of cells, at least
+    /// [`IRRADIANCE_ALTITUDE_CELLS`] in all, so that the sky table's
+    /// nodes are among them (28 for the default 4: 9 cells per sky cell).
+    pub fn irradiance_altitude_nodes(&self) -> usize {
+        let cells = self.altitude_nodes.max(2) - 1;
+        cells * IRRADIANCE_ALTITUDE_CELLS.div_ceil(cells) + 1
+    }
+
+    /// The irradiance table's altitude nodes per cell of the sky table's
+    /// altitude axis.
+    fn irradiance_cells_per_altitude_cell(&self) -> usize {
+        (self.irradiance_altitude_nodes() - 1) / (self.altitude_nodes.max(2) - 1)
+    }
+
     /// Layers of the sky table (sun nodes x altitude nodes).
     pub fn sky_layers(&self) -> usize {
         self.sun_nodes * self.altitude_nodes
@@ -278,6 +304,23 @@ impl EngineTableSettings {
         self.sky_layers() * self.aerial_nodes.2 * self.aerial_slice_texels()
     }
 }
+
+/// Cells of the irradiance table's altitude axis, at least
+/// (`EngineTableSettings::irradiance_altitude_nodes`): the diffuse
+/// irradiance between the sky table's altitude nodes follows the
+/// multiple-scattering field's own downward flux
+/// (`EngineTables::raised_irradiance`), read linearly between these
+/// nodes; 27 cells (28 nodes, 16 kB) put the nodes at most 1.2 km apart
+/// below 5 km on Earth.
+pub const IRRADIANCE_ALTITUDE_CELLS: usize = 27;
+
+/// The tests' choice of the irradiance table's altitude shape between
+/// the sky table's nodes: 0 the field's flux with the sunlight delta-M
+/// moved into the beam (the bake's), 1 without it, 2 linear between the
+/// nodes.
+#[cfg(test)]
+pub(crate) static IRRADIANCE_SHAPE_OVERRIDE: std::sync::atomic::AtomicUsize =
+    std::sync::atomic::AtomicUsize::new(0);
 
 /// Most texels of the sky and aerial-perspective tables together: 64 MB
 /// of three 32-bit floats.
@@ -299,7 +342,9 @@ pub struct EngineTables {
     /// The aerial-perspective ratio R, [(((s * A + a) * D + j) * 2 Z + row)
     /// * K + k] (the aerial nodes' Z, K, D).
     aerial: Vec<[f32; 3]>,
-    /// Diffuse horizontal irradiance, [a * S + s].
+    /// Diffuse horizontal irradiance, [a * S + s], a the irradiance
+    /// table's own altitude node
+    /// (`EngineTableSettings::irradiance_altitude_nodes`).
     irradiance: Vec<[f32; 3]>,
     /// What the aerial-perspective march reads (`march.rs`; None for
     /// single scattering, whose tables have no field).
@@ -628,7 +673,18 @@ impl EngineTables {
                 },
             },
         };
-        tables.irradiance = tables.integrate_diffuse_irradiance();
+        let at_nodes = tables.integrate_diffuse_irradiance();
+        let field_flux = match &shared {
+            #[cfg(test)]
+            Some(_)
+                if IRRADIANCE_SHAPE_OVERRIDE.load(std::sync::atomic::Ordering::Relaxed) == 2 =>
+            {
+                None
+            }
+            Some(shared) => Some(tables.field_flux_xyz(shared, &xyz)?),
+            None => None,
+        };
+        tables.irradiance = tables.raised_irradiance(&at_nodes, field_flux.as_ref());
         if !aerial_light.is_empty() {
             tables.aerial = tables.aerial_ratios(&aerial_light);
         }
@@ -656,8 +712,9 @@ impl EngineTables {
     }
 
     /// The diffuse horizontal irradiance table's texels (XYZ, W m^-2
-    /// nm^-1), sun node s of altitude node a at index `a * sun_nodes + s`
-    /// (`irradiance.exr`).
+    /// nm^-1), sun node s of altitude node a of the irradiance table's own
+    /// axis (`EngineTableSettings::irradiance_altitude_nodes`) at index
+    /// `a * sun_nodes + s` (`irradiance.exr`).
     pub fn irradiance_table(&self) -> &[[f32; 3]] {
         &self.irradiance
     }
@@ -740,6 +797,115 @@ impl EngineTables {
         self.top_radius_m - self.ground_radius_m
     }
 
+    /// The shared field's diffuse irradiance
+    /// (`SharedField::downward_diffuse_flux`) in XYZ at each of the
+    /// tables' sun nodes (linear between the field's sun nodes in the sun
+    /// zenith angle), at the field's levels.
+    fn field_flux_xyz(
+        &self,
+        shared: &SharedField,
+        xyz: &dyn Fn(&[f64]) -> Result<[f64; 3]>,
+    ) -> Result<FieldFlux> {
+        let (altitudes_m, angles, flux, moved) = shared.downward_diffuse_flux();
+        #[cfg(test)]
+        let flux: Vec<f64> =
+            if IRRADIANCE_SHAPE_OVERRIDE.load(std::sync::atomic::Ordering::Relaxed) == 1 {
+                flux.iter().zip(&moved).map(|(f, m)| f - m).collect()
+            } else {
+                flux
+            };
+        #[cfg(not(test))]
+        let _ = moved;
+        let levels = altitudes_m.len();
+        let wavelengths = flux.len() / (levels * angles.len());
+        let s_count = self.settings.sun_nodes;
+        let mut values = Vec::with_capacity(s_count * levels);
+        let mut spectrum = vec![0.0; wavelengths];
+        for s in 0..s_count {
+            let theta = (90.0 - axes::sun_elevation_of_node(s, s_count)).to_radians();
+            let upper = angles.partition_point(|a| *a <= theta);
+            let n = upper.clamp(1, angles.len() - 1) - 1;
+            let t = ((theta - angles[n]) / (angles[n + 1] - angles[n])).clamp(0.0, 1.0);
+            for k in 0..levels {
+                let below = &flux[(n * levels + k) * wavelengths..][..wavelengths];
+                let above = &flux[((n + 1) * levels + k) * wavelengths..][..wavelengths];
+                for ((o, b), a) in spectrum.iter_mut().zip(below).zip(above) {
+                    *o = (b + t * (a - b)).max(0.0);
+                }
+                values.push(xyz(&spectrum)?);
+            }
+        }
+        Ok(FieldFlux {
+            altitudes_m,
+            values,
+        })
+    }
+
+    /// The irradiance table on its own altitude axis
+    /// (`EngineTableSettings::irradiance_altitude_nodes`) from the
+    /// irradiance at the sky table's nodes `at_nodes` ([a * S + s], the
+    /// layers' integral): at those nodes the same values; between two of
+    /// them, a and a + 1 with the point f of the way from a in the
+    /// altitude coordinate, per channel F(h) ((1 - f) E_a / F(h_a) + f
+    /// E_(a+1) / F(h_(a+1))), F the field's diffuse irradiance at h
+    /// (`field_flux`, linear between its levels): the field's altitude
+    /// shape, scaled to the layers' values at the nodes. Where F is zero
+    /// at the upper node (the top of the atmosphere: nothing above it)
+    /// F(h) E_a / F(h_a); where it is zero at the lower node too, or
+    /// without a field (single scattering), E linear between the nodes
+    /// (what the table read before it had an axis of its own).
+    fn raised_irradiance(
+        &self,
+        at_nodes: &[[f32; 3]],
+        field_flux: Option<&FieldFlux>,
+    ) -> Vec<[f32; 3]> {
+        let s_count = self.settings.sun_nodes;
+        let a_count = self.settings.altitude_nodes;
+        let n_count = self.settings.irradiance_altitude_nodes();
+        let per_cell = self.settings.irradiance_cells_per_altitude_cell();
+        let thickness = self.thickness_m();
+        let mut out = vec![[0.0f32; 3]; n_count * s_count];
+        for j in 0..n_count {
+            let a = (j / per_cell).min(a_count - 2);
+            let step = j - a * per_cell;
+            let f = step as f64 / per_cell as f64;
+            let h = axes::altitude_of_node(j, n_count, thickness);
+            let (h_low, h_high) = (
+                axes::altitude_of_node(a, a_count, thickness),
+                axes::altitude_of_node(a + 1, a_count, thickness),
+            );
+            for s in 0..s_count {
+                let (low, high) = (at_nodes[a * s_count + s], at_nodes[(a + 1) * s_count + s]);
+                let shape =
+                    field_flux.map(|flux| [flux.at(s, h), flux.at(s, h_low), flux.at(s, h_high)]);
+                out[j * s_count + s] = std::array::from_fn(|c| {
+                    let (e_low, e_high) = (low[c] as f64, high[c] as f64);
+                    if step == 0 {
+                        return low[c];
+                    }
+                    if step == per_cell {
+                        return high[c];
+                    }
+                    let linear = e_low + f * (e_high - e_low);
+                    let lit = |v: f64| v > 1e-30;
+                    match shape {
+                        Some([here, below, above]) if lit(below[c]) && lit(above[c]) => {
+                            (here[c] * ((1.0 - f) * e_low / below[c] + f * e_high / above[c]))
+                                as f32
+                        }
+                        // The top of the atmosphere, where the field has no
+                        // downward flux: the node below's ratio alone.
+                        Some([here, below, _]) if lit(below[c]) => {
+                            (here[c] * e_low / below[c]) as f32
+                        }
+                        _ => linear as f32,
+                    }
+                });
+            }
+        }
+        out
+    }
+
     /// Diffuse horizontal irradiance of every (sun, altitude) node from the
     /// sky table: 2 * sum over a 64 x 64 midpoint grid in (mu, phi) of
     /// L mu dmu dphi over mu in 0..1, phi in 0..pi.
@@ -773,6 +939,30 @@ impl EngineTables {
             }
         });
         out
+    }
+}
+
+/// The multiple-scattering field's diffuse irradiance (XYZ) at each of
+/// the tables' sun nodes and the field's levels
+/// (`EngineTables::field_flux_xyz`).
+struct FieldFlux {
+    /// The levels' altitudes, m, increasing from 0.
+    altitudes_m: Vec<f64>,
+    /// [s * levels + k].
+    values: Vec<[f64; 3]>,
+}
+
+impl FieldFlux {
+    /// The irradiance at sun node `s` and altitude `h` (m), linear
+    /// between the levels.
+    fn at(&self, s: usize, h: f64) -> [f64; 3] {
+        let levels = self.altitudes_m.len();
+        let upper = self.altitudes_m.partition_point(|z| *z <= h);
+        let k = upper.clamp(1, levels - 1) - 1;
+        let (z0, z1) = (self.altitudes_m[k], self.altitudes_m[k + 1]);
+        let t = ((h - z0) / (z1 - z0)).clamp(0.0, 1.0);
+        let (v0, v1) = (self.values[s * levels + k], self.values[s * levels + k + 1]);
+        std::array::from_fn(|c| v0[c] + t * (v1[c] - v0[c]))
     }
 }
 

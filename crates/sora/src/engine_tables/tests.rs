@@ -714,8 +714,12 @@ fn the_layers_marched_in_fewer_panels_are_the_field_s() {
     let twilight = 2 * 2 * 24 * 16;
     assert_eq!(fast.sky[..twilight], slow.sky[..twilight]);
     assert_eq!(fast.transmittance, slow.transmittance);
+    // (Where the field is dark, between the nodes, both are zero.)
     for (f, s) in fast.irradiance.iter().zip(&slow.irradiance) {
-        assert!(((f[1] - s[1]) / s[1]).abs() < 1e-3, "{f:?} {s:?}");
+        assert!(
+            f[1] == s[1] || ((f[1] - s[1]) / s[1]).abs() < 1e-3,
+            "{f:?} {s:?}"
+        );
     }
 }
 
@@ -749,8 +753,12 @@ fn the_layers_filled_between_azimuths_are_every_azimuth_marched() {
     assert!(ground.1 < 2e-3 && ground.2 < 4e-3, "ground {ground:?}");
     assert!(top.1 < 4e-3 && top.2 < 2e-2, "top {top:?}");
     assert_eq!(fast.transmittance, slow.transmittance);
+    // (Where the field is dark, between the nodes, both are zero.)
     for (f, s) in fast.irradiance.iter().zip(&slow.irradiance) {
-        assert!(((f[1] - s[1]) / s[1]).abs() < 1e-3, "{f:?} {s:?}");
+        assert!(
+            f[1] == s[1] || ((f[1] - s[1]) / s[1]).abs() < 1e-3,
+            "{f:?} {s:?}"
+        );
     }
 }
 
@@ -2652,6 +2660,89 @@ fn the_sky_between_the_altitude_nodes_matches_the_library() {
     assert!(failures.is_empty(), "{failures:?}");
 }
 
+/// The diffuse irradiance the old read gave between the sky table's
+/// altitude nodes: the irradiance table's values at those nodes, linear
+/// in the sky table's altitude coordinate, geometric between the sun
+/// nodes (the comparison of the tests below).
+fn linear_between_altitude_nodes(tables: &EngineTables, h: f64, sun: f64) -> [f64; 3] {
+    let s_count = tables.settings.sun_nodes;
+    let per = tables.settings.irradiance_cells_per_altitude_cell();
+    let a_count = tables.settings.altitude_nodes;
+    let (a, fa) = axes::cell(
+        axes::altitude_coordinate(h, tables.thickness_m(), a_count),
+        0,
+        a_count - 2,
+    );
+    let (s, fs) = axes::cell(axes::sun_coordinate(sun, s_count), 0, s_count - 2);
+    let texel = |a: usize, s: usize| tables.irradiance[a * per * s_count + s].map(f64::from);
+    let at = |s: usize| -> [f64; 3] {
+        let (low, high) = (texel(a, s), texel(a + 1, s));
+        std::array::from_fn(|c| low[c] + fa * (high[c] - low[c]))
+    };
+    let (low, high) = (at(s), at(s + 1));
+    std::array::from_fn(|c| {
+        (low[c].max(1e-30).ln() + fs * (high[c].max(1e-30).ln() - low[c].max(1e-30).ln())).exp()
+    })
+}
+
+/// The diffuse irradiance of a raised eye between the altitude nodes (the
+/// irradiance table on its own altitude axis, its values between the sky
+/// table's nodes shaped by the field's downward flux) against the
+/// library's at that eye (`Sky::irradiance`, the image path at the eye,
+/// diffuse Y): earth-hazy at 3 wavelengths, the default tables but for 6
+/// sun nodes (and no march tables), at the sun nodes 1.2, 7.3 and 26
+/// degrees and 1, 2.39 and 12 km; held within 2 % at 1.2 degrees (1, 2.39
+/// and 12 km) and 26 degrees (1 and 2.39 km). Measured: +0.25, -0.42,
+/// -0.57 % and -1.65, -0.98 % (the linear read -12.0, -17.4, +1.8 % and
+/// +2.6, +22.8 %). The old read (linear between the altitude nodes) is
+/// printed beside it.
+#[test]
+fn the_irradiance_between_the_altitude_nodes_is_the_library_s() {
+    let sky = hazy_sky_with_default_field();
+    let settings = EngineTableSettings {
+        sun_nodes: 6,
+        transmittance_nodes: (4, 8),
+        march: false,
+        ..EngineTableSettings::default()
+    };
+    assert_eq!(settings.altitude_nodes, 4);
+    let tables = EngineTables::bake(&sky, &settings, &|_| {}).unwrap();
+    assert_eq!(tables.irradiance.len(), 28 * 6);
+    let to_xyz = SpectrumToXyz::new(sky.wavelengths(), Observer::default());
+    let mut worst: f64 = 0.0;
+    for s in [2, 3, 4] {
+        let sun = axes::sun_elevation_of_node(s, settings.sun_nodes);
+        // The ground (a node, the layers' integral) printed for scale.
+        for km in [0.0, 1.0, 2.39, 12.0] {
+            let (eye_sky, _) = node_sky(&sky, &tables, 1e3 * km, sun);
+            let irradiance = eye_sky.irradiance(Plane::HORIZONTAL).unwrap();
+            let want = to_xyz.to_xyz(&irradiance.diffuse_w_m2_nm).unwrap().y;
+            let got = tables.ground_irradiance_xyz(1e3 * km, sun)[1]
+                - tables.solar_xyz[1]
+                    * tables.transmittance_xyz(1e3 * km, sun.to_radians().sin())[1]
+                    * sun.to_radians().sin().max(0.0);
+            let linear = linear_between_altitude_nodes(&tables, 1e3 * km, sun)[1];
+            let error = got / want - 1.0;
+            eprintln!(
+                "sun {sun:.2} eye {km} km: diffuse Y {:+.2} % (linear between the nodes {:+.2} %)",
+                100.0 * error,
+                100.0 * (linear / want - 1.0)
+            );
+            // Held where the nodes either side are themselves the
+            // library's: sun node 3 (7.3 degrees) is blended from its
+            // neighbours 6 and 19 degrees away (`multiple_from_neighbours`;
+            // its ground node -15.8 %), and at 12 km with the sun at 26
+            // degrees the read was -4.46 % (the node at 25.5 km not
+            // measured here; the default axes' probe measures -2.4 to
+            // -2.7 % at 12 km with the sun at 20 and 60 degrees).
+            if km > 0.0 && (s == 2 || (s == 4 && km < 5.0)) {
+                worst = worst.max(error.abs());
+            }
+        }
+    }
+    assert!(worst < 0.02, "{worst}");
+}
+
 /// The global and diffuse irradiance on a horizontal plane at an eye
 /// between the altitude nodes (the irradiance table linear in the
 /// altitude coordinate, the direct beam from the transmittance table)
@@ -2666,7 +2757,14 @@ fn the_sky_between_the_altitude_nodes_matches_the_library() {
 /// "How many altitude nodes"): the global Y between the nodes below 20
 /// km within 3.0 % at 6 nodes but earth-hazy at 1 km with the sun at 5
 /// (-10.4 %); at 4 nodes to -18.8 % there, -13.5 % at 2.39 km, -2.1 to
-/// -11.5 % at -4; on the ground the same at every axis.
+/// -11.5 % at -4; on the ground the same at every axis. With the
+/// irradiance table on its own axis (the field's flux between the nodes;
+/// `linear` prints the old read): within 2 % below 20 km for suns 60 to
+/// -4 on earth-clear, earth-hazy and mars-dust but 12 km with the sun at
+/// 20 and 60 (-2.4 to -2.7 %); not in the top cell (docs/engine-tables.md,
+/// "The irradiance between the altitude nodes"). SORA_IRR_SHAPE=1 drops
+/// the sunlight delta-M moved into the beam from the field's flux, 2
+/// reads linear between the nodes.
 #[test]
 #[ignore]
 fn probe_the_irradiance_between_the_altitude_nodes() {
@@ -2674,6 +2772,10 @@ fn probe_the_irradiance_between_the_altitude_nodes() {
         std::env::var("SORA_EYE_PRESETS").unwrap_or_else(|_| "earth-clear,earth-hazy".into());
     let suns: Vec<f64> = env_list("SORA_EYE_SUNS", "60,20,5,0,-4,-8,-12");
     let eyes_km: Vec<f64> = env_list("SORA_EYE_KM", "0,1,2.39,5,7.64,12,19.2,30,44.5,70,100");
+    // SORA_IRR_SHAPE: the altitude shape between the nodes
+    // (`IRRADIANCE_SHAPE_OVERRIDE`; 0 the bake's).
+    let shape: usize = std::env::var("SORA_IRR_SHAPE").map_or(0, |s| s.parse().unwrap());
+    super::IRRADIANCE_SHAPE_OVERRIDE.store(shape, std::sync::atomic::Ordering::Relaxed);
     let axes_nodes: Vec<usize> = env_list("SORA_EYE_ALTITUDE_NODES", "6,4,3,2");
     for preset in presets.split(',') {
         let sky = cli_sky(preset);
@@ -2691,10 +2793,12 @@ fn probe_the_irradiance_between_the_altitude_nodes() {
                     let mu_sun = sun.to_radians().sin();
                     let t = tables.transmittance_xyz(1e3 * km, mu_sun);
                     let got_diffuse = got[1] - tables.solar_xyz[1] * t[1] * mu_sun.max(0.0);
+                    let linear = linear_between_altitude_nodes(tables, 1e3 * km, sun)[1];
                     line += &format!(
-                        " | {nodes} nodes {:+.2} % / {:+.2} %",
+                        " | {nodes} nodes {:+.2} % / {:+.2} % (linear {:+.2} %)",
                         100.0 * (got_diffuse / diffuse - 1.0),
-                        100.0 * (got[1] / global - 1.0)
+                        100.0 * (got[1] / global - 1.0),
+                        100.0 * (linear / diffuse - 1.0)
                     );
                 }
                 eprintln!("{line}");
@@ -3292,9 +3396,16 @@ fn probe_zenith_cap() {
                 );
             }
             let irradiance = tables.integrate_diffuse_irradiance();
+            let (s_count, per) = (
+                tables.settings.sun_nodes,
+                tables.settings.irradiance_cells_per_altitude_cell(),
+            );
+            let at_nodes: Vec<[f32; 3]> = (0..irradiance.len())
+                .map(|i| tables.irradiance_table()[(i / s_count) * per * s_count + i % s_count])
+                .collect();
             let moved = irradiance
                 .iter()
-                .zip(tables.irradiance_table())
+                .zip(&at_nodes)
                 .flat_map(|(a, b)| (0..3).map(move |c| (a[c] as f64 / b[c] as f64 - 1.0).abs()))
                 .fold(0.0f64, f64::max);
             line += &format!(" | irradiance vs baked max {:.2e}", moved);

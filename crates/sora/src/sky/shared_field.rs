@@ -46,6 +46,15 @@ pub(crate) struct SharedField {
 }
 
 impl SharedField {
+    /// The field's diffuse irradiance on a horizontal plane at its levels
+    /// and sun nodes (`MultipleScatteringField::downward_diffuse_flux`):
+    /// the levels' altitudes (m), the sun nodes' zenith angles (rad) and
+    /// the flux and (in it) the sunlight delta-M moved into the beam (W
+    /// m^-2 nm^-1), each at [(s * levels + k) * wavelengths + i].
+    pub(crate) fn downward_diffuse_flux(&self) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
+        self.field.downward_diffuse_flux()
+    }
+
     /// The source table of the field, for every sun.
     pub(crate) fn table(&self) -> &MultipleScatteringTable {
         &self.table

@@ -506,6 +506,59 @@ impl MultipleScatteringField {
         &self.solutions[at..at + self.solution_len]
     }
 
+    /// The diffuse (sky) irradiance on a horizontal plane at every level
+    /// of the columns and every sun node, W m^-2 nm^-1: the field's own
+    /// downward flux 2 pi sum_{mu_b > 0} w_b mu_b L_0(z_k, mu_b) plus the
+    /// sunlight that delta-M moved into the scaled beam, E mu_s (T*_sun -
+    /// T_sun) (the forward peaks' light, as the ground's table counts it).
+    /// Returns the levels' altitudes (m, increasing from 0), the sun
+    /// nodes' zenith angles (rad, increasing) and the flux and (in it) the
+    /// moved sunlight, each at [(s * levels + k) * wavelengths + i]. What
+    /// the engine tables' irradiance takes its altitude shape from between
+    /// their altitude nodes.
+    pub(crate) fn downward_diffuse_flux(&self) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
+        let geometry = &self.optics.geometry;
+        let levels = geometry.grid.levels();
+        let streams = &geometry.streams;
+        let (n, degrees) = (streams.per_hemisphere(), streams.count());
+        let wavelengths = self.atmosphere.grid.len();
+        let suns = self.optics.sun_axis.count();
+        let mut flux = vec![0.0; suns * levels * wavelengths];
+        let mut moved = vec![0.0; suns * levels * wavelengths];
+        let mut columns = Vec::with_capacity(levels);
+        for s in 0..suns {
+            let theta = self.optics.sun_axis.angle(s);
+            columns.clear();
+            geometry.add_columns_toward_sun(theta, &mut columns);
+            let lit = theta.cos().max(0.0);
+            for i in 0..wavelengths {
+                let solution = self.solution(s, i);
+                let solar = self.atmosphere.solar_irradiance_w_m2_nm[i];
+                for k in 0..levels {
+                    let radiance = &solution[k * degrees..][..n];
+                    let mut down = 2.0
+                        * PI
+                        * (0..n)
+                            .map(|a| streams.weights()[a] * streams.cosines()[a] * radiance[a])
+                            .sum::<f64>();
+                    if let Some(column) = columns.get(k).and_then(|c| c.as_ref()) {
+                        let (tau_scaled, tau) = self.optics.scaled.optical_depths(i, column);
+                        let sunlight = solar * lit * ((-tau_scaled).exp() - (-tau).exp());
+                        moved[(s * levels + k) * wavelengths + i] = sunlight;
+                        down += sunlight;
+                    }
+                    flux[(s * levels + k) * wavelengths + i] = down;
+                }
+            }
+        }
+        (
+            geometry.grid.altitudes_m().to_vec(),
+            self.optics.sun_axis.angles_rad.clone(),
+            flux,
+            moved,
+        )
+    }
+
     /// The scattering source's moments per sun node s, wavelength i, level
     /// k, harmonic m and degree l >= m (the view direction factored out):
     ///
