@@ -180,19 +180,13 @@ fn azimuth_fraction(azimuths_rad: &[f64], (c, angle): (f64, f64), f: usize) -> (
 /// missed the address translations' cache (measured: the reads' CPU
 /// halved with huge pages, `docs/engine-tables.md`). Only advice: the
 /// values are the same, and where the system declines nothing changes.
-/// The one call is declared here rather than taken from the `libc` crate:
-/// a dependency for one function would enter every lock file (the wasm
-/// crate's too, where it is never built).
 fn advise_huge_pages(values: &mut [f32]) {
-    #[cfg(all(
-        target_os = "linux",
-        any(target_arch = "x86_64", target_arch = "aarch64")
-    ))]
+    #[cfg(target_os = "linux")]
     {
         unsafe extern "C" {
             fn madvise(address: *mut std::ffi::c_void, length: usize, advice: i32) -> i32;
         }
-        // Linux's MADV_HUGEPAGE on x86-64 and AArch64.
+        // Linux's MADV_HUGEPAGE, on every architecture.
         const MADV_HUGEPAGE: i32 = 14;
         const HUGE_PAGE: usize = 2 << 20;
         let start = values.as_mut_ptr() as usize;
@@ -207,10 +201,7 @@ fn advise_huge_pages(values: &mut [f32]) {
             unsafe { madvise(first as *mut std::ffi::c_void, last - first, MADV_HUGEPAGE) };
         }
     }
-    #[cfg(not(all(
-        target_os = "linux",
-        any(target_arch = "x86_64", target_arch = "aarch64")
-    )))]
+    #[cfg(not(target_os = "linux"))]
     let _ = values;
 }
 
