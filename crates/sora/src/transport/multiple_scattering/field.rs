@@ -151,32 +151,6 @@ impl SunZenithAxis {
         let t = (theta - angles[s]) / (angles[s + 1] - angles[s]);
         (s, t.clamp(0.0, 1.0))
     }
-
-    /// [`Self::locate`], the cell `hint` tried first (a march's nodes
-    /// follow each other, so the last node's cell is mostly the next's):
-    /// the same cell, so the same bits; `hint` becomes the cell found.
-    pub(super) fn locate_near(&self, sun_cosine: f64, hint: &mut usize) -> (usize, f64) {
-        let theta = sun_cosine.clamp(-1.0, 1.0).acos();
-        let angles = &self.angles_rad;
-        let s = lower_node_near(angles, theta, hint);
-        let t = (theta - angles[s]) / (angles[s + 1] - angles[s]);
-        (s, t.clamp(0.0, 1.0))
-    }
-}
-
-/// The lower node of `x`'s cell among the ascending `nodes` (at least 2),
-/// clamped to the first and the last cell: the number of nodes at or
-/// below `x`, less one, within 0..=len - 2 (as `partition_point` finds
-/// it), the cell `hint` tried first; `hint` becomes the cell found.
-pub(super) fn lower_node_near(nodes: &[f64], x: f64, hint: &mut usize) -> usize {
-    let last = nodes.len() - 2;
-    let h = *hint;
-    if h <= last && (h == 0 || nodes[h] <= x) && (h == last || x < nodes[h + 1]) {
-        return h;
-    }
-    let found = nodes.partition_point(|a| *a <= x).clamp(1, nodes.len() - 1) - 1;
-    *hint = found;
-    found
 }
 
 /// The diffuse (multiply scattered) light field of a sky, solved at the
@@ -1437,44 +1411,6 @@ mod tests {
     use crate::atmosphere::Atmosphere;
     use crate::spectrum::WavelengthGrid;
     use crate::transport::Observation;
-
-    /// The cell found from a hint is the binary search's, whatever the
-    /// hint (in the axis or not), at the nodes, between them, beyond both
-    /// ends and at NaN.
-    #[test]
-    fn a_cell_found_near_a_hint_is_the_cell_searched_for() {
-        for nodes in [
-            vec![0.0, 1.0],
-            vec![0.0, 0.5, 0.5, 2.0, 3.0],
-            SunZenithAxis::new(0.0, 1.9, None, 0.05, 0.013).angles_rad,
-        ] {
-            let searched =
-                |x: f64| nodes.partition_point(|a| *a <= x).clamp(1, nodes.len() - 1) - 1;
-            let mut xs: Vec<f64> = vec![-1.0, f64::NAN, 10.0, f64::INFINITY, -f64::INFINITY];
-            for (a, b) in nodes.iter().zip(&nodes[1..]) {
-                xs.extend([*a, *b, 0.5 * (a + b), a.next_up(), b.next_down()]);
-            }
-            for x in &xs {
-                for hint in 0..nodes.len() + 2 {
-                    let mut h = hint;
-                    assert_eq!(
-                        lower_node_near(&nodes, *x, &mut h),
-                        searched(*x),
-                        "{x} {hint}"
-                    );
-                    assert!(h <= nodes.len() - 2 || h == hint);
-                }
-            }
-            let axis = SunZenithAxis {
-                angles_rad: nodes.clone(),
-            };
-            let mut hint = 0;
-            for x in xs {
-                let (a, b) = (axis.locate(x.cos()), axis.locate_near(x.cos(), &mut hint));
-                assert_eq!((a.0, a.1.to_bits()), (b.0, b.1.to_bits()));
-            }
-        }
-    }
 
     /// A polarised field solves its correction's anchors with the scalar
     /// system and solve of its own sun node at the correction column's sun

@@ -33,9 +33,8 @@
 use std::f64::consts::PI;
 use std::sync::Arc;
 
-use super::field::lower_node_near;
 use super::phase_fourier::normalized_associated_legendre;
-use super::view_march::{Alongside, NodeCells, SourceCellCache};
+use super::view_march::{Alongside, NodeCells};
 use super::{
     LOG_FLOOR, MultipleScatteringField, MultipleScatteringScratch, NodeGeometry, SourceCells,
     floored_log,
@@ -145,23 +144,6 @@ pub(crate) fn azimuth_cell(azimuths_rad: &[f64], cos_azimuth: f64) -> (usize, f6
     let angle = c.acos();
     let upper = azimuths_rad.partition_point(|a| *a <= angle);
     let f = upper.clamp(1, azimuths_rad.len() - 1) - 1;
-    azimuth_fraction(azimuths_rad, (c, angle), f)
-}
-
-/// [`azimuth_cell`], the cell `hint` tried first (the march's last
-/// node's): the same cell, so the same bits; `hint` becomes the cell
-/// found.
-fn azimuth_cell_near(azimuths_rad: &[f64], cos_azimuth: f64, hint: &mut usize) -> (usize, f64) {
-    let c = cos_azimuth.clamp(-1.0, 1.0);
-    let angle = c.acos();
-    let f = lower_node_near(azimuths_rad, angle, hint);
-    azimuth_fraction(azimuths_rad, (c, angle), f)
-}
-
-/// The fraction within the azimuth cell `f` of an azimuth of cosine
-/// `c` and angle `angle` ([`azimuth_cell`]).
-#[inline(always)]
-fn azimuth_fraction(azimuths_rad: &[f64], (c, angle): (f64, f64), f: usize) -> (usize, f64) {
     if f == 0 || f + 2 == azimuths_rad.len() {
         let (a, b) = (azimuths_rad[f].cos(), azimuths_rad[f + 1].cos());
         (f, ((a - c) / (a - b)).clamp(0.0, 1.0))
@@ -169,40 +151,6 @@ fn azimuth_fraction(azimuths_rad: &[f64], (c, angle): (f64, f64), f: usize) -> (
         let (a, b) = (azimuths_rad[f], azimuths_rad[f + 1]);
         (f, ((angle - a) / (b - a)).clamp(0.0, 1.0))
     }
-}
-
-/// Asks the system to map `values` (not yet written: a zeroed allocation
-/// the system maps on first write) with huge pages where it can (Linux's
-/// transparent huge pages, where they are enabled for regions that ask:
-/// `madvise`). A march reads a source table of up to hundreds of
-/// megabytes (190 for the engine tables' shared field of earth-clear) at
-/// scattered places, 8 rows a node: in pages of 4 KiB those reads also
-/// missed the address translations' cache (measured: the reads' CPU
-/// halved with huge pages, `docs/engine-tables.md`). Only advice: the
-/// values are the same, and where the system declines nothing changes.
-fn advise_huge_pages(values: &mut [f32]) {
-    #[cfg(target_os = "linux")]
-    {
-        unsafe extern "C" {
-            fn madvise(address: *mut std::ffi::c_void, length: usize, advice: i32) -> i32;
-        }
-        // Linux's MADV_HUGEPAGE, on every architecture.
-        const MADV_HUGEPAGE: i32 = 14;
-        const HUGE_PAGE: usize = 2 << 20;
-        let start = values.as_mut_ptr() as usize;
-        let end = start + std::mem::size_of_val(values);
-        // Whole huge pages within the allocation (madvise takes a start
-        // on a page's boundary).
-        let (first, last) = (start.next_multiple_of(HUGE_PAGE), end & !(HUGE_PAGE - 1));
-        if last > first {
-            // SAFETY: the range lies within `values`' allocation, and the
-            // advice changes how it is mapped, never what it holds; a
-            // refusal (an error return) is ignored.
-            unsafe { madvise(first as *mut std::ffi::c_void, last - first, MADV_HUGEPAGE) };
-        }
-    }
-    #[cfg(not(target_os = "linux"))]
-    let _ = values;
 }
 
 /// ln R of `field` over its levels and sun nodes, `views` view zenith
@@ -264,7 +212,6 @@ fn source_values(field: &MultipleScatteringField, views: usize, azimuths_rad: &[
     // Every value is written by its level's transpose below: zeros (pages
     // the system maps on first write) rather than a fill of their own.
     let mut values = vec![0.0f32; levels * per_level];
-    advise_huge_pages(&mut values);
     // One level per task; within it one wavelength at a time into a
     // wavelength-major buffer, transposed at the end (in cache). Only
     // the sun nodes that view rays reach at the level are filled, the
@@ -504,18 +451,14 @@ impl MultipleScatteringTable {
                     }
                     let (k, t) = super::vertical_grid::locate_among(&kept, altitude_m);
                     let mut upper = vec![0.0; w];
-                    self.lookup_log_source(node(kept[k]), &mut Default::default(), &mut log_source);
-                    self.lookup_log_source(node(kept[k + 1]), &mut Default::default(), &mut upper);
+                    self.lookup_log_source(node(kept[k]), &mut Vec::new(), &mut log_source);
+                    self.lookup_log_source(node(kept[k + 1]), &mut Vec::new(), &mut upper);
                     for (l, u) in log_source.iter_mut().zip(&upper) {
                         *l += t * (u - *l);
                     }
                 }
                 _ => {
-                    self.lookup_log_source(
-                        node(altitude_m),
-                        &mut Default::default(),
-                        &mut log_source,
-                    );
+                    self.lookup_log_source(node(altitude_m), &mut Vec::new(), &mut log_source);
                 }
             }
             let rho = density(at);
@@ -654,7 +597,7 @@ impl MultipleScatteringTable {
                 march_node: None,
             };
             let mut log_source = vec![0.0; w];
-            self.lookup_log_source(node, &mut Default::default(), &mut log_source);
+            self.lookup_log_source(node, &mut Vec::new(), &mut log_source);
             let rho = density(at);
             for j in 0..s {
                 columns[j] += 0.5 * (previous_rho[j] + rho[j]) * (at - previous);
@@ -845,7 +788,7 @@ impl MultipleScatteringTable {
     fn lookup_log_source(
         &self,
         node: NodeGeometry,
-        cells: &mut SourceCellCache,
+        cells: &mut Vec<SourceCells>,
         log_source: &mut [f64],
     ) -> NodeCells {
         let at = self.node_cells(node, cells);
@@ -899,14 +842,13 @@ impl MultipleScatteringTable {
     /// fraction). A view ray's replayed node (`NodeGeometry::march_node`)
     /// takes its altitude's and view's cells from `cells` (per node
     /// index), the others keep theirs there.
-    fn node_cells(&self, node: NodeGeometry, cells: &mut SourceCellCache) -> NodeCells {
+    fn node_cells(&self, node: NodeGeometry, cells: &mut Vec<SourceCells>) -> NodeCells {
         let optics = &self.field.optics;
-        let (altitude, view) = self.altitude_and_view_cells(node, &mut cells.per_node);
-        let (sun_hint, azimuth_hint) = &mut cells.sun_and_azimuth;
+        let (altitude, view) = self.altitude_and_view_cells(node, cells);
         (
             altitude,
-            optics.sun_axis.locate_near(node.sun_cosine, sun_hint),
-            azimuth_cell_near(&self.azimuths_rad, node.cos_azimuth, azimuth_hint),
+            optics.sun_axis.locate(node.sun_cosine),
+            azimuth_cell(&self.azimuths_rad, node.cos_azimuth),
             view,
         )
     }
@@ -1028,7 +970,7 @@ impl MultipleScatteringTable {
                         let (_, sun, azimuth, _) = first.node_cells;
                         let (altitude, view) = source
                             .table
-                            .altitude_and_view_cells(node, &mut own.source_cells.per_node);
+                            .altitude_and_view_cells(node, &mut own.source_cells);
                         (altitude, sun, azimuth, view)
                     }
                     SharedCells::None => source.table.node_cells(node, &mut own.source_cells),
@@ -1106,117 +1048,29 @@ fn view_cell(view_cosine: f64, views: usize) -> (usize, f64) {
 /// ([`view_cell`]). Inlined, so that the march's AVX2 form
 /// ([`MultipleScatteringTable::lookup_log_source`]) compiles its loops
 /// for AVX2 (as a function of its own they took two lanes, SSE2's).
-///
-/// Each value is the sum over the 8 corners of (altitude, sun, azimuth)
-/// in the order of [`interpolate_log_source_by_corner`] (the slow path:
-/// a pass over the wavelengths per corner), starting at +0, so the same
-/// bits; but four wavelengths at a time through every corner, the sums in
-/// registers, with the corners' rows asked of memory first (prefetched:
-/// the engine tables' shared table is 190 MB, and a march node's 8 rows
-/// are far apart in it, so that their reads waited on memory one corner
-/// after another).
 #[inline(always)]
 fn interpolate_log_source_in_cells(
     values: &[f32],
-    dims: (usize, usize, usize),
-    cells: ((usize, f64), (usize, f64), (usize, f64)),
-    view: (usize, f64),
-    out: &mut [f64],
-) {
-    let w = out.len();
-    let corners = log_source_corners(dims, cells, view, w);
-    let rows = corners.map(|(start, a, b)| {
-        let (low, high) = values[start..start + 2 * w].split_at(w);
-        (low, high, a, b)
-    });
-    #[cfg(target_arch = "x86_64")]
-    {
-        for (low, ..) in &rows {
-            // The row's cache lines (its two view nodes, 8 w bytes).
-            let start = low.as_ptr() as usize;
-            let end = start + 8 * w;
-            let mut line = start & !63;
-            while line < end {
-                // SAFETY: a prefetch is a hint that never faults; SSE is
-                // in every x86_64 CPU.
-                unsafe {
-                    std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(
-                        line as *const i8,
-                    )
-                };
-                line += 64;
-            }
-        }
-    }
-    let mut chunks = out.chunks_exact_mut(4);
-    let mut i = 0;
-    for chunk in &mut chunks {
-        let mut sums = [0.0f64; 4];
-        for (low, high, a, b) in &rows {
-            let (low, high) = (&low[i..i + 4], &high[i..i + 4]);
-            for x in 0..4 {
-                sums[x] += (a * low[x] + b * high[x]) as f64;
-            }
-        }
-        chunk.copy_from_slice(&sums);
-        i += 4;
-    }
-    for (x, o) in chunks.into_remainder().iter_mut().enumerate() {
-        let mut sum = 0.0f64;
-        for (low, high, a, b) in &rows {
-            sum += (a * low[i + x] + b * high[i + x]) as f64;
-        }
-        *o = sum;
-    }
-}
-
-/// The 8 corners of a read of a source table ([`interpolate_log_source`]):
-/// per (altitude, sun, azimuth) corner in order, the start of its row of
-/// the view node `view.0` (the row of `view.0 + 1` follows it) and the
-/// weights of the two view nodes' values.
-#[inline(always)]
-fn log_source_corners(
     (suns, azimuths, views): (usize, usize, usize),
     ((k, tz), (s, ts), (f, tf)): ((usize, f64), (usize, f64), (usize, f64)),
     (v, tv): (usize, f64),
-    w: usize,
-) -> [(usize, f32, f32); 8] {
-    let mut corners = [(0, 0.0, 0.0); 8];
-    let mut c = 0;
-    for (kk, wk) in [(k, 1.0 - tz), (k + 1, tz)] {
-        for (ss, ws) in [(s, 1.0 - ts), (s + 1, ts)] {
-            for (ff, wf) in [(f, 1.0 - tf), (f + 1, tf)] {
-                let node = ((kk * suns + ss) * azimuths + ff) * views + v;
-                corners[c] = (
-                    node * w,
-                    (wk * ws * wf * (1.0 - tv)) as f32,
-                    (wk * ws * wf * tv) as f32,
-                );
-                c += 1;
-            }
-        }
-    }
-    corners
-}
-
-/// [`interpolate_log_source_in_cells`] corner by corner, each a pass over
-/// the wavelengths (the slow path, the sum as written: the fast form is
-/// held to it bit for bit by the test
-/// `the_source_read_through_every_corner_at_once_is_the_read_corner_by_corner`).
-#[cfg(test)]
-fn interpolate_log_source_by_corner(
-    values: &[f32],
-    dims: (usize, usize, usize),
-    cells: ((usize, f64), (usize, f64), (usize, f64)),
-    view: (usize, f64),
     out: &mut [f64],
 ) {
     let w = out.len();
     out.fill(0.0);
-    for (start, a, b) in log_source_corners(dims, cells, view, w) {
-        let (low, high) = values[start..start + 2 * w].split_at(w);
-        for ((o, l), h) in out.iter_mut().zip(low).zip(high) {
-            *o += (a * l + b * h) as f64;
+    for (kk, wk) in [(k, 1.0 - tz), (k + 1, tz)] {
+        for (ss, ws) in [(s, 1.0 - ts), (s + 1, ts)] {
+            for (ff, wf) in [(f, 1.0 - tf), (f + 1, tf)] {
+                let node = ((kk * suns + ss) * azimuths + ff) * views + v;
+                let (low, high) = values[node * w..(node + 2) * w].split_at(w);
+                let (a, b) = (
+                    (wk * ws * wf * (1.0 - tv)) as f32,
+                    (wk * ws * wf * tv) as f32,
+                );
+                for ((o, l), h) in out.iter_mut().zip(low).zip(high) {
+                    *o += (a * l + b * h) as f64;
+                }
+            }
         }
     }
 }
@@ -1267,48 +1121,4 @@ pub(crate) struct ExportedBeam {
     pub(crate) elevations: usize,
     pub(crate) ln_beam: Vec<f64>,
     pub(crate) range_deg: (f64, f64, f64),
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_source_read_through_every_corner_at_once_is_the_read_corner_by_corner() {
-        // A table of 3 levels, 4 suns, 5 azimuths, 6 views; wavelength
-        // counts with and without a remainder of 4; values of either sign
-        // and size (ln R spans -69..0), fractions at 0, 1 and between.
-        let dims = (4, 5, 6);
-        let mut state = 0x2545_f491_4f6c_dd1d_u64;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
-        for w in [1, 3, 4, 5, 8, 21, 22] {
-            let values: Vec<f32> = (0..3 * 4 * 5 * 6 * w)
-                .map(|_| (-69.0 * next() + 0.5) as f32)
-                .collect();
-            for case in 0..200 {
-                let fraction = |u: f64| match case % 5 {
-                    0 => 0.0,
-                    1 => 1.0,
-                    _ => u,
-                };
-                let cells = (
-                    ((next() * 2.0) as usize, fraction(next())),
-                    ((next() * 3.0) as usize, fraction(next())),
-                    ((next() * 4.0) as usize, fraction(next())),
-                );
-                let view = ((next() * 5.0) as usize, fraction(next()));
-                let (mut fast, mut slow) = (vec![1.0; w], vec![2.0; w]);
-                interpolate_log_source_in_cells(&values, dims, cells, view, &mut fast);
-                interpolate_log_source_by_corner(&values, dims, cells, view, &mut slow);
-                for (a, b) in fast.iter().zip(&slow) {
-                    assert_eq!(a.to_bits(), b.to_bits(), "w {w} case {case}: {a} vs {b}");
-                }
-            }
-        }
-    }
 }

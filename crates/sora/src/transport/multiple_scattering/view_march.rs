@@ -169,9 +169,8 @@ pub struct MultipleScatteringScratch {
     pub(super) view_exps_filled: Vec<bool>,
     /// Per node of the view ray: its altitude's and view's cells in a
     /// source table, kept for the replayed nodes
-    /// (`MultipleScatteringTable::compute_radiance_parts`), and the last
-    /// node's sun and azimuth cells.
-    pub(super) source_cells: SourceCellCache,
+    /// (`MultipleScatteringTable::compute_radiance_parts`).
+    pub(super) source_cells: Vec<SourceCells>,
     /// The current node's cells in the source table that the march reads
     /// (`MultipleScatteringTable::compute_radiance_parts_together`).
     pub(super) node_cells: NodeCells,
@@ -200,16 +199,6 @@ pub(crate) struct Alongside<'a> {
 /// A march node's altitude cell (level, fraction) and view zenith cell
 /// (node, fraction) in a source table.
 pub(super) type SourceCells = ((usize, f64), (usize, f64));
-
-/// A march's cells in a source table ([`SourceCells`]) per node index,
-/// kept for the replayed nodes, and the lower nodes of the sun's and the
-/// azimuth's cells of the node read last, the first tried for the next
-/// (`MultipleScatteringTable::node_cells`).
-#[derive(Debug, Clone, Default)]
-pub(super) struct SourceCellCache {
-    pub(super) per_node: Vec<SourceCells>,
-    pub(super) sun_and_azimuth: (usize, usize),
-}
 
 /// A march node's cells in a source table: its altitude's, its sun's, its
 /// azimuth's from the sun and its view's zenith (node, fraction).
@@ -297,7 +286,7 @@ impl ViewRayOptics {
             view_nodes: Vec::new(),
             view_terms: Vec::new(),
             view_exps_filled: Vec::new(),
-            source_cells: SourceCellCache::default(),
+            source_cells: Vec::new(),
             node_cells: ((0, 0.0), (0, 0.0), (0, 0.0), (0, 0.0)),
         }
     }
