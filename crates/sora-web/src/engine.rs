@@ -354,7 +354,7 @@ impl Engine {
                 "irradiance",
                 tables.irradiance_table(),
                 settings.sun_nodes,
-                settings.altitude_nodes,
+                settings.irradiance_altitude_nodes(),
             ),
         ] {
             layout.insert(
@@ -1028,7 +1028,7 @@ mod tests {
         let sky_texels = settings.sky_layers() * 2 * half * settings.azimuth_nodes;
         let texels = sky_texels
             + settings.transmittance_nodes.0 * settings.transmittance_nodes.1
-            + settings.sun_nodes * settings.altitude_nodes;
+            + settings.sun_nodes * settings.irradiance_altitude_nodes();
         // The march's tables after the three (`march.bin`'s bytes, the
         // manifest's arrays in them).
         let march = &reply["tables"]["march"];

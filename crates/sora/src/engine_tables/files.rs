@@ -22,8 +22,9 @@ pub const TABLE_FORMAT: &str = "sora-engine-tables";
 
 /// The table format's version (changes with the axes or the layout; 3: the
 /// sky table's `zenith_fine_cells_per_half`; 4: its
-/// `zenith_wide_cells_per_half`).
-pub const FORMAT_VERSION: u32 = 4;
+/// `zenith_wide_cells_per_half`; 5: the irradiance table's own altitude
+/// axis, `tables.irradiance.altitude_nodes`).
+pub const FORMAT_VERSION: u32 = 5;
 
 /// An error unless `directory` may receive tables: it does not exist (its
 /// parent does), or it is an empty directory, or it holds a manifest of
