@@ -121,9 +121,8 @@
 //! images are refused (docs/atmosphere-file.md).
 //!
 //! **Cost.** On the summer file (`scripts/bench/gases.sh`, release) the
-//! 256 x 256 colour fisheye over 380-780 nm takes 2.20 times the CPU of the
-//! gas-free image (1.01 against 0.46 CPU-s idle; 2.11-2.39 paired at load
-//! 16-21), and 36 exact views at 900-1000 nm (every sample in the 940-nm
+//! 256 x 256 colour fisheye over 380-780 nm takes 2.14 times the CPU of the
+//! gas-free image (0.90 against 0.42 CPU-s, idle, median of 5), and 36 exact views at 900-1000 nm (every sample in the 940-nm
 //! water band) about 2.6 times the gas-free views. The extra CPU is spread
 //! over the stages (the sky-view tables' single scattering 23 %, the
 //! sun-column table 18 %, the tables' multiply scattered march 16 %, the
