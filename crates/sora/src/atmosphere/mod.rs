@@ -140,6 +140,10 @@ pub enum RayleighScatterer {
     },
 }
 
+/// The kind's name of an absorbing gas ([`SpeciesModel::AbsorbingGas`])
+/// in listings and in `SpeciesOptics::kind`.
+pub(crate) const ABSORBING_GAS_KIND: &str = "absorbing gas";
+
 impl SpeciesModel {
     /// The kind's name in listings.
     pub(crate) fn kind(&self) -> &'static str {
@@ -147,7 +151,7 @@ impl SpeciesModel {
             SpeciesModel::Rayleigh(_) => "rayleigh",
             SpeciesModel::Mie(_) => "mie",
             SpeciesModel::ParametricAerosol(_) => "parametric aerosol",
-            SpeciesModel::AbsorbingGas(_) => "absorbing gas",
+            SpeciesModel::AbsorbingGas(_) => ABSORBING_GAS_KIND,
         }
     }
 }

@@ -785,7 +785,7 @@ impl SingleScatteringScene {
             .optics
             .species
             .iter()
-            .map(|s| s.kind == "absorbing gas")
+            .map(|s| s.kind == crate::atmosphere::ABSORBING_GAS_KIND)
             .collect();
         let table = Arc::new(SunColumnTable::compute_with_fast_exponentials(
             &self.profiles,

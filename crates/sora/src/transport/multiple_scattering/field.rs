@@ -509,12 +509,7 @@ impl MultipleScatteringField {
                 let solution = self.solution(s, i);
                 let solar = self.atmosphere.solar_irradiance_w_m2_nm[i];
                 for k in 0..levels {
-                    let radiance = &solution[k * degrees..][..n];
-                    let mut down = 2.0
-                        * PI
-                        * (0..n)
-                            .map(|a| streams.weights()[a] * streams.cosines()[a] * radiance[a])
-                            .sum::<f64>();
+                    let mut down = streams.downward_flux(&solution[k * degrees..][..n]);
                     if let Some(column) = columns.get(k).and_then(|c| c.as_ref()) {
                         let (tau_scaled, tau) = self.optics.scaled.optical_depths(i, column);
                         let sunlight = solar * lit * ((-tau_scaled).exp() - (-tau).exp());

@@ -191,6 +191,17 @@ impl Streams {
         &self.weights
     }
 
+    /// The downward flux (W m^-2 nm^-1 for a radiance in W m^-2 sr^-1
+    /// nm^-1) of the azimuth-mean radiance `field` at one level, its
+    /// upward-looking streams first: 2 pi sum_{mu_b > 0} w_b mu_b L_0(mu_b).
+    pub(crate) fn downward_flux(&self, field: &[f64]) -> f64 {
+        let n = self.per_hemisphere;
+        2.0 * PI
+            * (0..n)
+                .map(|a| self.weights[a] * self.cosines[a] * field[a])
+                .sum::<f64>()
+    }
+
     /// The Lambda table of stream `a` ([m * degrees + l]).
     pub(crate) fn legendre(&self, a: usize) -> &[f64] {
         let d = self.count();
@@ -521,11 +532,7 @@ impl<'a> ColumnSystem<'a> {
 
     /// 2 pi sum_{mu_b > 0} w_b mu_b L_0(ground, mu_b).
     pub(super) fn downward_flux(&self, field: &[f64]) -> f64 {
-        let n = self.streams.per_hemisphere();
-        2.0 * PI
-            * (0..n)
-                .map(|a| self.streams.weights()[a] * self.streams.cosines()[a] * field[a])
-                .sum::<f64>()
+        self.streams.downward_flux(field)
     }
 
     /// The spherical streams of `field` carried from `source` along piece
